@@ -1,0 +1,131 @@
+"""HF response of the end-effect model: psi maps, the compensation angle, saliency and the
+equilibrium of the uncompensated observer (paper eqs. 8-13, brief section 4).
+
+Conventions: the estimated frame leads the actual one by the error,
+``theta_est = theta + theta_err`` and ``x_dq = x_dq_est * exp(j theta_err)``.
+All angles in rad. Every function is vectorised and broadcasts ``theta`` against ``theta_err``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from linsense.model.frames import rot
+from linsense.model.inductance import InductanceModel
+
+
+def _model(m) -> InductanceModel:
+    """Accept a :class:`~linsense.model.motor.Motor` or an :class:`InductanceModel`."""
+    return m if isinstance(m, InductanceModel) else m.inductance
+
+
+def dq_components(model, theta: np.ndarray | float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(L_d, L_q, L_dq)`` at ``theta`` (H), from the transformed 3x3 matrix."""
+    L = _model(model).L_dq(theta)
+    return L[..., 0, 0], L[..., 1, 1], L[..., 0, 1]
+
+
+def saliency(model, theta: np.ndarray | float) -> np.ndarray:
+    """Saliency ``L_q - L_d`` (H)."""
+    L_d, L_q, _ = dq_components(model, theta)
+    return L_q - L_d
+
+
+def hf_current_est(model, theta, theta_err) -> np.ndarray:
+    """HF current per unit injected flux in the estimated frame (the operator R of eq. 10).
+
+    Pulsating flux ``lambda_d_est = 1`` on the estimated d-axis is rotated into the true frame,
+    mapped through the inverse dq model ``i_dq = L_dq^-1 lambda_dq`` (eq. 8) and rotated back.
+
+    Returns
+    -------
+    ndarray, shape ``broadcast(theta, theta_err).shape + (2,)``
+        ``(i_d_est, i_q_est)`` in A per Wb (1/H).
+    """
+    theta, theta_err = np.broadcast_arrays(np.asarray(theta, float), np.asarray(theta_err, float))
+    Gamma = np.linalg.inv(_model(model).L_dq(theta))
+    lam_dq = rot(theta_err)[..., :, 0]  # lambda_est = (1, 0) seen in the true frame
+    i_dq = np.einsum("...ij,...j->...i", Gamma, lam_dq)
+    return np.einsum("...ji,...j->...i", rot(theta_err), i_dq)  # rotate by -theta_err
+
+
+def psi(model, theta, theta_err) -> np.ndarray:
+    """Phase ``psi`` (rad) of the HF current relative to the injected flux, eq. (11)."""
+    i = hf_current_est(model, theta, theta_err)
+    return np.arctan2(i[..., 1], i[..., 0])
+
+
+def psi_lut(model, theta) -> np.ndarray:
+    """Compensation angle ``Psi_LUT = psi(theta, 0) = atan(-L_dq / L_q)`` (rad), eq. (12)."""
+    _, L_q, L_dq = dq_components(model, theta)
+    return np.arctan2(-L_dq, L_q)
+
+
+def psi_compensated(model, theta, theta_err, lut_at: str = "estimated") -> np.ndarray:
+    """Phase of the HF current in the compensated frame, ``psi - Psi_LUT`` (rad), eq. (13).
+
+    Parameters
+    ----------
+    lut_at : {"estimated", "actual"}
+        Where the LUT is read: at ``theta_est = theta + theta_err`` as a drive does (default)
+        or at the true position as drawn in the paper's Fig. 8b.
+    """
+    if lut_at not in ("estimated", "actual"):
+        raise ValueError("lut_at must be 'estimated' or 'actual'")
+    theta_lut = np.asarray(theta) + (np.asarray(theta_err) if lut_at == "estimated" else 0.0)
+    d = psi(model, theta, theta_err) - psi_lut(model, theta_lut)
+    return np.angle(np.exp(1j * d))
+
+
+def _sal_sign(L_d, L_q) -> float:
+    return 1.0 if np.mean(L_q - L_d) >= 0 else -1.0
+
+
+def equilibrium_error(model, theta) -> np.ndarray:
+    """Error ``e*`` (rad) at which the *uncompensated* observer settles (``psi(theta, e*) = 0``).
+
+    From eq. (11): ``tan(2 e*) = 2 L_dq / (L_d - L_q)``; the stable root is the one within
+    45 deg of zero, ``e* = atan2(-2 L_dq s, (L_q - L_d) s) / 2`` with ``s`` the saliency sign.
+    """
+    L_d, L_q, L_dq = dq_components(model, theta)
+    s = _sal_sign(L_d, L_q)
+    return 0.5 * np.arctan2(-2.0 * L_dq * s, (L_q - L_d) * s)
+
+
+def loop_gain_factor(model, theta) -> np.ndarray:
+    """Position-loop gain factor ``1 + de*/dtheta`` of the uncompensated observer (brief sec. 4).
+
+    The observer reports ``theta_est = theta + e*(theta)``, so the position loop sees the plant
+    gain multiplied by this factor. Computed analytically from ``dL_dq/dtheta``.
+    """
+    model = _model(model)
+    L = model.L_dq(theta)
+    dL = model.dL_dq(theta)
+    u = L[..., 1, 1] - L[..., 0, 0]
+    w = -2.0 * L[..., 0, 1]
+    du = dL[..., 1, 1] - dL[..., 0, 0]
+    dw = -2.0 * dL[..., 0, 1]
+    # d/dtheta of atan2(w, u) / 2 (the saliency sign cancels)
+    return 1.0 + 0.5 * (u * dw - w * du) / (u * u + w * w)
+
+
+def hf_current(
+    motor, theta, v_inj: float, f_inj: float, theta_err=0.0
+) -> np.ndarray:
+    """Complex HF current phasors ``(i_d_est, i_q_est)`` (A, peak) for a pulsating voltage.
+
+    Solves ``v = (R_s I + j omega L_dq) i`` in the true frame at standstill for a voltage of
+    amplitude ``v_inj`` (V) at ``f_inj`` (Hz) on the estimated d-axis. Returns shape ``(..., 2)``.
+    """
+    theta, theta_err = np.broadcast_arrays(np.asarray(theta, float), np.asarray(theta_err, float))
+    w = 2.0 * np.pi * f_inj
+    Z = motor.R_s * np.eye(2) + 1j * w * motor.inductance.L_dq(theta)
+    v_dq = v_inj * rot(theta_err)[..., :, 0]
+    i_dq = np.linalg.solve(Z, v_dq[..., None].astype(complex))[..., 0]
+    return np.einsum("...ji,...j->...i", rot(theta_err), i_dq)
+
+
+def hf_current_amplitude(motor, theta, v_inj: float = 12.0, f_inj: float = 1000.0) -> np.ndarray:
+    """Peak amplitude (A) of the HF current vector for a pulsating injection at zero error."""
+    i = hf_current(motor, theta, v_inj, f_inj)
+    return np.sqrt(np.sum(np.abs(i) ** 2, axis=-1))

@@ -1,0 +1,51 @@
+"""The model table written by ``linsense model``: one row per position, SI units."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from linsense.analysis.hf import equilibrium_error, loop_gain_factor, psi_lut
+from linsense.model.inductance import ENTRIES
+
+#: Columns of the model table, in order (the first fourteen are fixed by the CLI contract).
+MODEL_COLUMNS = (
+    ("theta_deg",) + ENTRIES
+    + ("L_d", "L_q", "L_dq", "saliency", "psi_lut_deg", "err_nolut_deg", "gain_nolut")
+    + ("L_alpha", "L_beta", "L_alphabeta")
+)
+
+
+def model_table(motor, points: int) -> dict[str, np.ndarray]:
+    """Model quantities at ``points`` equally spaced positions over [0, 360) deg.
+
+    Inductances in H; angles in electrical degrees; ``gain_nolut`` = ``1 + de*/dtheta``.
+    """
+    if points < 4:
+        raise ValueError("points must be >= 4")
+    theta = np.linspace(0.0, 2.0 * np.pi, points, endpoint=False)
+    ind = motor.inductance
+    e = ind.entries(theta)
+    L_dq = ind.L_dq(theta)
+    L_ab = ind.L_ab(theta)
+    cols = {"theta_deg": np.degrees(theta)}
+    cols.update({name: e[:, j] for j, name in enumerate(ENTRIES)})
+    cols["L_d"] = L_dq[:, 0, 0]
+    cols["L_q"] = L_dq[:, 1, 1]
+    cols["L_dq"] = L_dq[:, 0, 1]
+    cols["saliency"] = cols["L_q"] - cols["L_d"]
+    cols["psi_lut_deg"] = np.degrees(psi_lut(motor, theta))
+    cols["err_nolut_deg"] = np.degrees(equilibrium_error(motor, theta))
+    cols["gain_nolut"] = loop_gain_factor(motor, theta)
+    cols["L_alpha"] = L_ab[:, 0, 0]
+    cols["L_beta"] = L_ab[:, 1, 1]
+    cols["L_alphabeta"] = L_ab[:, 0, 1]
+    return cols
+
+
+def table_to_csv(cols: dict[str, np.ndarray]) -> str:
+    """CSV text with a header; floats with 12 significant digits (byte-reproducible)."""
+    names = list(cols)
+    data = np.column_stack([cols[n] for n in names])
+    lines = [",".join(names)]
+    lines += [",".join(f"{v:.12g}" for v in row) for row in data]
+    return "\n".join(lines) + "\n"

@@ -1,0 +1,224 @@
+"""The compensation look-up table Psi_LUT(theta) (paper eq. 12, Fig. 9) and its exports.
+
+Table rule (shared with the C core, ``csrc/ctrl/ls_lut.c``): ``N`` values at the equally spaced
+electrical positions ``theta_k = 2 pi k / N``, ``k = 0 .. N-1``, read with periodic linear
+interpolation::
+
+    u = theta / (2 pi) * N   wrapped into [0, N);   k = floor(u);   f = u - k
+    Psi(theta) = (1 - f) table[k] + f table[(k + 1) mod N]
+
+Exports are byte-reproducible (no timestamps): CSV (``theta_deg,psi_lut_deg``), JSON (radians,
+with provenance) and a C99 header with a ``static const float`` table in radians.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from linsense import __version__
+from linsense.analysis.hf import psi_lut
+from linsense.errors import InputError
+
+FORMATS = ("csv", "json", "c")
+
+
+@dataclass(frozen=True)
+class Lut:
+    """A compensation LUT.
+
+    Parameters
+    ----------
+    values : ndarray, shape (N,)
+        Psi_LUT at ``theta_k = 2 pi k / N``, rad.
+    name : str
+        Motor name, used in C identifiers and provenance.
+    provenance : dict
+        Motor parameters the table was computed from.
+    """
+
+    values: np.ndarray
+    name: str = "motor"
+    provenance: dict = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        v = np.array(self.values, dtype=float)
+        if v.ndim != 1 or v.size < 4:
+            raise ValueError("a LUT needs at least 4 points")
+        v.setflags(write=False)
+        object.__setattr__(self, "values", v)
+
+    @property
+    def points(self) -> int:
+        return self.values.size
+
+    @property
+    def theta(self) -> np.ndarray:
+        """Table positions, rad."""
+        return 2.0 * np.pi * np.arange(self.points) / self.points
+
+    def __call__(self, theta: np.ndarray | float) -> np.ndarray:
+        """Periodic linear interpolation at ``theta`` (rad), the rule of the C core."""
+        return interpolate(self.values, theta)
+
+
+def interpolate(table: np.ndarray, theta: np.ndarray | float) -> np.ndarray:
+    """Periodic linear interpolation of ``table`` (N equally spaced points over 2 pi) at ``theta``."""
+    table = np.asarray(table, dtype=float)
+    n = table.size
+    u = np.mod(np.asarray(theta, dtype=float) / (2.0 * np.pi) * n, n)
+    k = np.floor(u).astype(int) % n  # u may round up to n exactly
+    f = u - np.floor(u)
+    return (1.0 - f) * table[k] + f * table[(k + 1) % n]
+
+
+def build_lut(motor, points: int) -> Lut:
+    """Psi_LUT of ``motor`` sampled at ``points`` positions over one electrical period."""
+    if points < 4:
+        raise ValueError("points must be >= 4")
+    theta = 2.0 * np.pi * np.arange(points) / points
+    return Lut(psi_lut(motor, theta), name=motor.name, provenance=motor.provenance())
+
+
+# ---------------------------------------------------------------------- exports
+def to_csv(lut: Lut) -> str:
+    """``theta_deg,psi_lut_deg`` rows (electrical degrees, 12 significant digits)."""
+    lines = ["theta_deg,psi_lut_deg"]
+    lines += [f"{t:.12g},{p:.12g}" for t, p in zip(np.degrees(lut.theta), np.degrees(lut.values), strict=True)]
+    return "\n".join(lines) + "\n"
+
+
+def to_json(lut: Lut) -> str:
+    """JSON document in SI units (rad) with provenance and the interpolation rule."""
+    doc = {
+        "format": "linsense-lut",
+        "version": 1,
+        "generator": f"linsense {__version__}",
+        "quantity": "Psi_LUT = atan(-L_dq/L_q), paper eq. (12)",
+        "motor": lut.provenance or {"name": lut.name},
+        "points": lut.points,
+        "angle_unit": "rad (electrical)",
+        "interpolation": "periodic linear, theta_k = 2*pi*k/points",
+        "theta": [float(t) for t in lut.theta],
+        "psi_lut": [float(v) for v in lut.values],
+    }
+    return json.dumps(doc, indent=1) + "\n"
+
+
+def c_identifier(name: str) -> str:
+    """A valid lower-case C identifier derived from ``name``."""
+    ident = re.sub(r"[^0-9a-zA-Z_]", "_", name).lower().strip("_") or "motor"
+    return ident if not ident[0].isdigit() else f"m_{ident}"
+
+
+def _c_float(v: float) -> str:
+    """A float literal that round-trips float32 exactly (9 significant digits)."""
+    s = f"{float(np.float32(v)):.9g}"
+    if "e" not in s and "." not in s:
+        s += ".0"
+    return s + "f"
+
+
+def to_c_header(lut: Lut, symbol: str | None = None) -> str:
+    """C99 header: ``static const float <symbol>[<SYMBOL>_LEN]`` in rad, with provenance."""
+    sym = c_identifier(symbol or f"ls_lut_{lut.name}")
+    up = sym.upper()
+    prov = "\n".join(f" *   {k} = {v!r}" for k, v in (lut.provenance or {"name": lut.name}).items())
+    rows = []
+    vals = [_c_float(v) for v in lut.values]
+    for i in range(0, len(vals), 6):
+        rows.append("    " + ", ".join(vals[i : i + 6]) + ",")
+    return (
+        f"/* Generated by linsense {__version__}: do not edit.\n"
+        f" *\n"
+        f" * Compensation look-up table Psi_LUT(theta) = atan(-L_dq/L_q) (Giangrande et al.,\n"
+        f" * IEEE ECCE 2010, eq. 12) over one electrical period.\n"
+        f" * Table: {lut.points} points at theta_k = 2*pi*k/{lut.points} rad (electrical), k = 0..{lut.points - 1}.\n"
+        f" * Angle unit of the values: rad (electrical). Read with periodic linear interpolation\n"
+        f" * (ls_lut_interp in linsense/ls_lut.h).\n"
+        f" * Motor:\n{prov}\n"
+        f" */\n"
+        f"#ifndef {up}_H\n"
+        f"#define {up}_H\n\n"
+        f"#define {up}_LEN {lut.points}\n"
+        f"#define {up}_ANGLE_UNIT_RAD 1\n\n"
+        f"static const float {sym}[{up}_LEN] = {{\n" + "\n".join(rows) + "\n};\n\n"
+        f"#endif /* {up}_H */\n"
+    )
+
+
+def export(lut: Lut, fmt: str, symbol: str | None = None) -> str:
+    """Text of ``lut`` in ``fmt`` (``csv``, ``json`` or ``c``)."""
+    if fmt == "csv":
+        return to_csv(lut)
+    if fmt == "json":
+        return to_json(lut)
+    if fmt == "c":
+        return to_c_header(lut, symbol)
+    raise ValueError(f"unknown format {fmt!r} (one of {', '.join(FORMATS)})")
+
+
+# ---------------------------------------------------------------------- readers
+def _check_grid(theta: np.ndarray, src: str) -> None:
+    n = theta.size
+    if n < 4:
+        raise InputError(src, "", f"a LUT needs at least 4 points, got {n}")
+    expected = 2.0 * np.pi * np.arange(n) / n
+    bad = np.nonzero(np.abs(theta - expected) > 1e-9 * 2 * np.pi + 1e-9)[0]
+    if bad.size:
+        raise InputError(src, f"row {bad[0] + 2}", "positions are not the equally spaced grid 2*pi*k/N")
+
+
+def read_lut_csv(path: str | Path) -> Lut:
+    """Read a LUT written by :func:`to_csv`."""
+    src = str(path)
+    with open(path, newline="", encoding="utf-8") as f:
+        rows = list(csv.reader(f))
+    if not rows or [h.strip() for h in rows[0][:2]] != ["theta_deg", "psi_lut_deg"]:
+        raise InputError(src, "header", "expected columns theta_deg,psi_lut_deg")
+    data = []
+    for r, row in enumerate(rows[1:], start=2):
+        try:
+            vals = [float(row[0]), float(row[1])]
+        except (ValueError, IndexError):
+            raise InputError(src, f"row {r}", f"not two numbers: {row!r}") from None
+        if not all(math.isfinite(v) for v in vals):
+            raise InputError(src, f"row {r}", f"not finite: {row!r}")
+        data.append(vals)
+    arr = np.radians(np.array(data).reshape(-1, 2))
+    _check_grid(arr[:, 0], src)
+    return Lut(arr[:, 1], name=Path(src).stem)
+
+
+def read_lut_json(path: str | Path) -> Lut:
+    """Read a LUT written by :func:`to_json`."""
+    src = str(path)
+    doc = json.loads(Path(path).read_text(encoding="utf-8"))
+    if doc.get("format") != "linsense-lut":
+        raise InputError(src, "format", f"not a linsense LUT: {doc.get('format')!r}")
+    theta = np.asarray(doc["theta"], dtype=float)
+    _check_grid(theta, src)
+    motor = doc.get("motor", {})
+    return Lut(np.asarray(doc["psi_lut"], dtype=float), name=motor.get("name", "motor"), provenance=motor)
+
+
+def read_c_header(text: str) -> np.ndarray:
+    """Values of the (single) float table in a header written by :func:`to_c_header`."""
+    body = text[text.index("{") + 1 : text.index("};")]
+    return np.array([float(tok.strip().rstrip("f")) for tok in body.split(",") if tok.strip()])
+
+
+def read_lut(path: str | Path) -> Lut:
+    """Read a LUT from CSV or JSON, by the file's suffix."""
+    p = Path(path)
+    if p.suffix.lower() == ".json":
+        return read_lut_json(p)
+    return read_lut_csv(p)
+
+

@@ -1,0 +1,1 @@
+"""Inductance models, frames, motor files and presets."""

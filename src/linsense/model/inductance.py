@@ -1,0 +1,197 @@
+"""HF inductance models of a three-phase linear PM motor with the end-effect.
+
+Every model is held in one form: a Fourier series in the electrical position ``theta`` of the six
+independent entries of the symmetric 3x3 matrix, in the order ``L_A, L_B, L_C, M_AB, M_BC, M_CA``::
+
+    entry_j(theta) = sum_k  a[j, k] cos(k theta) + b[j, k] sin(k theta),   k = 0 .. K
+
+The five-parameter model of paper eq. (3), its higher even harmonics and tabulated measurements
+(bench or FEA) all map onto it, so the dq transform, the derivatives needed by the stability
+analysis and the coefficients handed to the C plant come from a single source of truth.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from linsense.model.frames import ab_to_dq_matrix, abc_to_ab_matrix
+
+#: Names of the six independent entries, in storage order.
+ENTRIES = ("L_A", "L_B", "L_C", "M_AB", "M_BC", "M_CA")
+#: (row, column) of each entry in the 3x3 matrix.
+_INDEX = ((0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (2, 0))
+
+
+@dataclass(frozen=True)
+class InductanceModel:
+    """Fourier-series model of ``L_abc(theta)``.
+
+    Parameters
+    ----------
+    a, b : ndarray, shape (6, K + 1)
+        Cosine and sine coefficients (H) of harmonic order ``k = 0..K`` of the entries
+        ``L_A, L_B, L_C, M_AB, M_BC, M_CA``. ``b[:, 0]`` is ignored (kept zero).
+    description : str
+        Human-readable provenance, e.g. ``"eq. 3 parameters"`` or the table file.
+    """
+
+    a: np.ndarray
+    b: np.ndarray
+    description: str = ""
+    params: dict = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        a = np.array(self.a, dtype=float)
+        b = np.array(self.b, dtype=float)
+        if a.ndim != 2 or a.shape[0] != 6 or a.shape != b.shape:
+            raise ValueError(f"coefficient arrays must be (6, K+1), got {a.shape} and {b.shape}")
+        b[:, 0] = 0.0
+        a.setflags(write=False)
+        b.setflags(write=False)
+        object.__setattr__(self, "a", a)
+        object.__setattr__(self, "b", b)
+
+    # ------------------------------------------------------------------ construction
+    @classmethod
+    def from_params(
+        cls,
+        L0: float,
+        L2: float,
+        M0: float,
+        M2: float,
+        dM0: float,
+        harmonics: dict[int, tuple[float, float]] | None = None,
+    ) -> InductanceModel:
+        """The sinusoidal model of paper eq. (3), optionally with higher even harmonics.
+
+        ``L_A = L0 + sum_n L_n cos(n theta)``, with ``n = 2, 4, 6 ...`` and ``L_2 = L2``;
+        ``L_B(theta) = L_A(theta - 2 pi/3)``, ``L_C(theta) = L_A(theta + 2 pi/3)``.
+        Each mutual is even about the axis midway between its two phases:
+        ``M_AB = M0 + sum_n M_n cos(n (theta - pi/3))``,
+        ``M_BC = M0 + dM0 + sum_n M_n cos(n theta)``,
+        ``M_CA = M0 + dM0 + sum_n M_n cos(n (theta + pi/3))``.
+        For ``n = 2`` these are exactly eq. (3); ``dM0`` is the end-effect.
+
+        Parameters
+        ----------
+        L0, L2, M0, M2, dM0 : float
+            Eq. (3) parameters, H.
+        harmonics : dict, optional
+            ``{n: (L_n, M_n)}`` for even orders ``n >= 4``, H.
+        """
+        orders = {2: (L2, M2)}
+        for n, (Ln, Mn) in (harmonics or {}).items():
+            if n < 4 or n % 2:
+                raise ValueError(f"harmonic order must be even and >= 4, got {n}")
+            orders[int(n)] = (Ln, Mn)
+        K = max(orders)
+        a = np.zeros((6, K + 1))
+        b = np.zeros((6, K + 1))
+        a[0:3, 0] = L0
+        a[3, 0] = M0
+        a[4:6, 0] = M0 + dM0
+        # cos(n (theta - phi)) = cos(n phi) cos(n theta) + sin(n phi) sin(n theta)
+        self_shift = (0.0, 2 * np.pi / 3, -2 * np.pi / 3)
+        mutual_shift = (np.pi / 3, 0.0, -np.pi / 3)
+        for n, (Ln, Mn) in orders.items():
+            for j, phi in enumerate(self_shift):
+                a[j, n] += Ln * np.cos(n * phi)
+                b[j, n] += Ln * np.sin(n * phi)
+            for j, phi in enumerate(mutual_shift):
+                a[3 + j, n] += Mn * np.cos(n * phi)
+                b[3 + j, n] += Mn * np.sin(n * phi)
+        params = {"L0": L0, "L2": L2, "M0": M0, "M2": M2, "dM0": dM0}
+        for n in sorted(orders):
+            if n >= 4:
+                params[f"L{n}"], params[f"M{n}"] = orders[n]
+        return cls(a, b, description="paper eq. (3) parameters", params=params)
+
+    @classmethod
+    def from_table(
+        cls,
+        theta: np.ndarray,
+        entries: np.ndarray,
+        max_order: int | None = None,
+        description: str = "table",
+    ) -> InductanceModel:
+        """Periodic (trigonometric) least-squares fit of tabulated ``L_abc(theta)``.
+
+        With ``N`` equally spaced samples and the default ``max_order = (N - 1) // 2`` the
+        series interpolates the table exactly; a smaller ``max_order`` smooths it.
+
+        Parameters
+        ----------
+        theta : ndarray, shape (N,)
+            Electrical positions, rad.
+        entries : ndarray, shape (N, 6)
+            ``L_A, L_B, L_C, M_AB, M_BC, M_CA`` at each position, H.
+        """
+        theta = np.asarray(theta, dtype=float)
+        entries = np.asarray(entries, dtype=float)
+        N = theta.size
+        K = (N - 1) // 2 if max_order is None else min(int(max_order), (N - 1) // 2)
+        k = np.arange(K + 1)
+        A = np.concatenate([np.cos(np.outer(theta, k)), np.sin(np.outer(theta, k[1:]))], axis=1)
+        coef, *_ = np.linalg.lstsq(A, entries, rcond=None)
+        a = coef[: K + 1].T
+        b = np.concatenate([np.zeros((6, 1)), coef[K + 1 :].T], axis=1)
+        return cls(a, b, description=description)
+
+    # ------------------------------------------------------------------ evaluation
+    @property
+    def max_order(self) -> int:
+        """Highest harmonic order ``K`` of the series."""
+        return self.a.shape[1] - 1
+
+    def entries(self, theta: np.ndarray | float, derivative: int = 0) -> np.ndarray:
+        """The six entries (or their ``derivative``-th derivative in theta), shape ``theta.shape + (6,)``."""
+        theta = np.asarray(theta, dtype=float)
+        k = np.arange(self.max_order + 1)
+        kt = theta[..., None] * k
+        c, s = np.cos(kt), np.sin(kt)
+        # d^m/dtheta^m of (a cos + b sin) = k^m (a cos(kt + m pi/2) + b sin(kt + m pi/2))
+        for _ in range(derivative):
+            c, s = -k * s, k * c
+        return c @ self.a.T + s @ self.b.T
+
+    def L_abc(self, theta: np.ndarray | float, derivative: int = 0) -> np.ndarray:
+        """Phase inductance matrix ``(..., 3, 3)``, H (or its theta-derivative, H/rad)."""
+        e = self.entries(theta, derivative)
+        L = np.empty(e.shape[:-1] + (3, 3))
+        for j, (r, c) in enumerate(_INDEX):
+            L[..., r, c] = e[..., j]
+            L[..., c, r] = e[..., j]
+        return L
+
+    def L_ab(self, theta: np.ndarray | float, derivative: int = 0) -> np.ndarray:
+        """Alpha-beta block ``(..., 2, 2)`` seen by currents with a floating star point."""
+        return abc_to_ab_matrix(self.L_abc(theta, derivative))
+
+    def L_dq(self, theta: np.ndarray | float) -> np.ndarray:
+        """dq inductance matrix ``[[L_d, L_dq], [L_dq, L_q]]`` ``(..., 2, 2)``, by transforming L_abc."""
+        return ab_to_dq_matrix(self.L_ab(theta), theta)
+
+    def dL_dq(self, theta: np.ndarray | float) -> np.ndarray:
+        """Derivative of :meth:`L_dq` with respect to theta, H/rad.
+
+        With ``L_dq = R' L_ab R`` and ``dR/dtheta = R J``, ``J = [[0, -1], [1, 0]]``:
+        ``dL_dq = R' L_ab' R + J' L_dq + L_dq J``.
+        """
+        J = np.array([[0.0, -1.0], [1.0, 0.0]])
+        Ldq = self.L_dq(theta)
+        return ab_to_dq_matrix(self.L_ab(theta, 1), theta) + J.T @ Ldq + Ldq @ J
+
+    def without_end_effect(self) -> InductanceModel:
+        """The same model with the end-effect removed (``dM0 = 0``), for paper Fig. 5.
+
+        Only defined for parametric models: a table has no separable end-effect term.
+        """
+        if not self.params:
+            raise ValueError("the end-effect is only separable for a parametric (eq. 3) model")
+        p = dict(self.params)
+        harm = {
+            int(k[1:]): (p[k], p[f"M{k[1:]}"]) for k in p if k.startswith("L") and k[1:] not in ("0", "2")
+        }
+        return InductanceModel.from_params(p["L0"], p["L2"], p["M0"], p["M2"], 0.0, harm)

@@ -1,0 +1,333 @@
+"""Motors: parameters, loading from presets or TOML files, and the physical checks.
+
+A motor file (TOML, SI units) has the sections ``[motor]`` and ``[inductance]`` (required) and
+``[friction]``, ``[pm_flux]`` (optional); see :mod:`linsense.model.schema` and docs/motor-files.md.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import tomllib
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+
+from linsense.errors import InputError, ModelError
+from linsense.model.inductance import ENTRIES, InductanceModel
+from linsense.model.schema import validate_motor_file
+
+#: Saliency |L_q - L_d| below this fraction of (L_d + L_q)/2 counts as vanished.
+MIN_SALIENCY_RATIO = 0.01
+#: Columns a tabulated inductance file must have (more are ignored).
+TABLE_COLUMNS = ("theta_deg",) + ENTRIES
+
+
+@dataclass(frozen=True)
+class Friction:
+    """Friction of the moving part."""
+
+    viscous: float = 0.0  # N s/m
+    coulomb: float = 0.0  # N
+
+
+@dataclass(frozen=True)
+class PmHarmonic:
+    """One harmonic of the PM flux linkage, relative to the fundamental."""
+
+    order: int  # harmonic order in theta
+    amplitude: float  # relative to psi_pm
+    phase: float  # rad (electrical)
+
+
+@dataclass(frozen=True)
+class Motor:
+    """A linear PM motor as linsense sees it (SI units, electrical radians).
+
+    Parameters
+    ----------
+    name : str
+        Motor name (used in provenance comments and file names).
+    R_s : float
+        Phase resistance, ohm.
+    pole_pitch : float
+        One electrical period ``tau``, m: ``theta = 2 pi x / tau``.
+    force_constant : float
+        Thrust per peak phase current, N/A.
+    mass : float
+        Moving mass, kg.
+    inductance : InductanceModel
+        HF inductance model ``L_abc(theta)``.
+    """
+
+    name: str
+    R_s: float
+    pole_pitch: float
+    force_constant: float
+    mass: float
+    inductance: InductanceModel
+    friction: Friction = field(default_factory=Friction)
+    pm_harmonics: tuple[PmHarmonic, ...] = ()
+    source: str = ""
+
+    @property
+    def psi_pm(self) -> float:
+        """PM flux-linkage amplitude, Wb: ``F = (3/2) (2 pi / tau) psi_pm i_q`` (amplitude-invariant)."""
+        return self.force_constant * self.pole_pitch / (3.0 * math.pi)
+
+    def theta_of_x(self, x: np.ndarray | float) -> np.ndarray:
+        """Electrical angle (rad) of a position (m)."""
+        return 2.0 * np.pi * np.asarray(x) / self.pole_pitch
+
+    def x_of_theta(self, theta: np.ndarray | float) -> np.ndarray:
+        """Position (m) of an electrical angle (rad)."""
+        return np.asarray(theta) * self.pole_pitch / (2.0 * np.pi)
+
+    def provenance(self) -> dict:
+        """Parameters that identify this motor, for provenance comments and JSON exports."""
+        p = {
+            "name": self.name,
+            "R_s": self.R_s,
+            "pole_pitch": self.pole_pitch,
+            "force_constant": self.force_constant,
+            "mass": self.mass,
+        }
+        if self.inductance.params:
+            p.update(self.inductance.params)
+        else:
+            p["inductance"] = self.inductance.description
+        return p
+
+
+# ---------------------------------------------------------------------- loading
+def preset_names() -> list[str]:
+    """Names of the built-in presets."""
+    folder = resources.files("linsense.model") / "presets"
+    return sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".toml"))
+
+
+def load_motor(spec: str | Path, check: bool = True) -> Motor:
+    """Load a motor from a preset name or a TOML file path.
+
+    Parameters
+    ----------
+    spec : str or Path
+        A preset name (``"ecce2010"``) or a path to a motor file.
+    check : bool
+        Run :func:`check_motor` (positive definiteness, saliency) after loading.
+
+    Raises
+    ------
+    InputError
+        Unknown preset, unreadable file, schema violations.
+    ModelError
+        The model is not usable for HF sensorless control (see :func:`check_motor`).
+    """
+    spec_s = str(spec)
+    path = Path(spec_s)
+    if path.suffix.lower() == ".toml" or path.exists() or any(c in spec_s for c in "/\\"):
+        if not path.is_file():
+            raise InputError(spec_s, "", "no such motor file")
+        try:
+            text = path.read_text(encoding="utf-8")
+        except (OSError, UnicodeDecodeError) as exc:
+            raise InputError(spec_s, "", f"cannot read: {exc}") from None
+        motor = motor_from_toml(text, source=spec_s, base_dir=path.parent)
+    else:
+        if spec_s not in preset_names():
+            raise InputError(
+                "--motor", "", f"unknown preset '{spec_s}' (presets: {', '.join(preset_names())}; "
+                "or give a path to a .toml motor file)"
+            )
+        text = (resources.files("linsense.model") / "presets" / f"{spec_s}.toml").read_text()
+        motor = motor_from_toml(text, source=f"preset {spec_s}", base_dir=None)
+    if check:
+        check_motor(motor)
+    return motor
+
+
+def motor_from_toml(text: str, source: str, base_dir: Path | None = None) -> Motor:
+    """Parse and validate the text of a motor file."""
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(source, "", f"not valid TOML: {exc}") from None
+    doc = validate_motor_file(data, source)
+    ind = doc.inductance
+    if ind.table is not None:
+        table_path = Path(ind.table)
+        if not table_path.is_absolute() and base_dir is not None:
+            table_path = base_dir / table_path
+        theta, entries = read_inductance_table(table_path)
+        inductance = InductanceModel.from_table(
+            theta, entries, ind.table_max_order, description=f"table {ind.table}"
+        )
+    else:
+        inductance = InductanceModel.from_params(
+            ind.L0, ind.L2, ind.M0, ind.M2, ind.dM0, ind.harmonics()
+        )
+    m = doc.motor
+    return Motor(
+        name=m.name,
+        R_s=m.R_s,
+        pole_pitch=m.pole_pitch,
+        force_constant=m.force_constant,
+        mass=m.mass,
+        inductance=inductance,
+        friction=Friction(doc.friction.viscous, doc.friction.coulomb),
+        pm_harmonics=tuple(
+            PmHarmonic(h.order, h.amplitude, math.radians(h.phase_deg)) for h in doc.pm_flux.harmonics
+        ),
+        source=source,
+    )
+
+
+def read_inductance_table(path: Path) -> tuple[np.ndarray, np.ndarray]:
+    """Read a tabulated ``L_abc(theta)`` CSV (columns ``theta_deg, L_A .. M_CA``; H).
+
+    Returns positions in rad and a ``(N, 6)`` array. Every problem names the row and column.
+    """
+    src = str(path)
+    try:
+        with open(path, newline="", encoding="utf-8") as f:
+            rows = list(csv.reader(f))
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(src, "", f"cannot read inductance table: {exc}") from None
+    if not rows:
+        raise InputError(src, "", "empty inductance table")
+    header = [h.strip() for h in rows[0]]
+    for col in TABLE_COLUMNS:
+        if col not in header:
+            raise InputError(src, f"column {col}", "missing column (need " + ",".join(TABLE_COLUMNS) + ")")
+    idx = [header.index(c) for c in TABLE_COLUMNS]
+    data = np.empty((len(rows) - 1, len(idx)))
+    for r, row in enumerate(rows[1:], start=2):
+        for j, (c, name) in enumerate(zip(idx, TABLE_COLUMNS, strict=True)):
+            cell = row[c].strip() if c < len(row) else ""
+            try:
+                v = float(cell)
+            except ValueError:
+                raise InputError(src, f"row {r}, column {name}", f"not a number: {cell!r}") from None
+            if not math.isfinite(v):
+                raise InputError(src, f"row {r}, column {name}", f"not finite: {cell!r}")
+            data[r - 2, j] = v
+    if data.shape[0] < 8:
+        raise InputError(src, "", f"need at least 8 positions, got {data.shape[0]}")
+    wrapped = np.mod(data[:, 0], 360.0)
+    order = np.argsort(wrapped)
+    ws = wrapped[order]
+    dup = np.nonzero(np.diff(ws) < 1e-9)[0]
+    if dup.size:
+        r = int(order[dup[0] + 1]) + 2
+        raise InputError(src, f"row {r}, column theta_deg", f"duplicate position {data[r - 2, 0]!r}")
+    gaps = np.diff(np.concatenate([ws, [ws[0] + 360.0]]))
+    if gaps.max() > 45.0:
+        g = int(np.argmax(gaps))
+        raise InputError(
+            src, "column theta_deg",
+            f"positions do not cover one electrical period: gap of {gaps[g]:.1f} deg after "
+            f"{ws[g]:.1f} deg (at most 45 deg allowed)",
+        )
+    return np.radians(data[:, 0]), data[:, 1:]
+
+
+# ---------------------------------------------------------------------- checks
+def check_grid(inductance: InductanceModel, n_min: int = 720) -> np.ndarray:
+    """Dense position grid (rad) fine enough to resolve every harmonic of ``inductance``."""
+    n = max(n_min, 16 * (inductance.max_order + 1))
+    return np.linspace(0.0, 2.0 * np.pi, n, endpoint=False)
+
+
+def _intervals_deg(theta: np.ndarray, bad: np.ndarray) -> str:
+    """Describe the positions where ``bad`` is true as wrapped degree intervals."""
+    deg = np.degrees(theta)
+    n = bad.size
+    parts = []
+    i = 0
+    if bad.all():
+        return "all positions"
+    start = int(np.argmin(bad))  # start scanning at a good point so intervals do not wrap
+    idx = [(start + k) % n for k in range(n)]
+    while i < n:
+        if bad[idx[i]]:
+            j = i
+            while j + 1 < n and bad[idx[j + 1]]:
+                j += 1
+            a, b = deg[idx[i]], deg[idx[j]]
+            parts.append(f"{a:.1f}" if i == j else f"{a:.1f}..{b:.1f}")
+            i = j + 1
+        else:
+            i += 1
+    return ", ".join(parts[:6]) + (" ..." if len(parts) > 6 else "") + " deg"
+
+
+def check_motor(motor: Motor) -> None:
+    """Refuse models that are unphysical or unusable for HF sensorless control.
+
+    * the alpha-beta inductance matrix (the block seen by currents with a floating star point)
+      must be positive definite at every position;
+    * the saliency ``L_q - L_d`` must keep one sign and stay above ``MIN_SALIENCY_RATIO`` of the
+      mean inductance everywhere, else the position error signal vanishes or reverses.
+
+    Raises
+    ------
+    ModelError
+        Naming the positions (electrical degrees) where the condition fails.
+    """
+    theta = check_grid(motor.inductance)
+    L_ab = motor.inductance.L_ab(theta)
+    eig_min = np.linalg.eigvalsh(L_ab)[..., 0]
+    bad = ~(eig_min > 0)
+    if bad.any():
+        raise ModelError(
+            motor.source, "inductance",
+            f"inductance matrix not positive definite at theta = {_intervals_deg(theta, bad)} "
+            f"(smallest eigenvalue {eig_min.min():.3g} H)",
+        )
+    L_dq = motor.inductance.L_dq(theta)
+    sal = L_dq[..., 1, 1] - L_dq[..., 0, 0]
+    L_mean = 0.5 * (L_dq[..., 1, 1] + L_dq[..., 0, 0])
+    sign = 1.0 if np.mean(sal) >= 0 else -1.0
+    bad = sign * sal <= MIN_SALIENCY_RATIO * L_mean
+    if bad.any():
+        raise ModelError(
+            motor.source, "inductance",
+            f"saliency L_q - L_d vanishes or changes sign at theta = {_intervals_deg(theta, bad)} "
+            f"(range {sal.min():.3g} .. {sal.max():.3g} H): HF sensorless control impossible there",
+        )
+
+
+def motor_to_toml(motor: Motor, table: str | None = None) -> str:
+    """Serialise a motor to the motor-file format (round-trips through :func:`load_motor`).
+
+    A parametric model writes its eq. (3) parameters; otherwise ``table`` must name the CSV.
+    """
+    f = motor.friction
+    lines = [
+        "[motor]",
+        f'name = "{motor.name}"',
+        f"R_s = {motor.R_s!r}              # ohm",
+        f"pole_pitch = {motor.pole_pitch!r}     # m, one electrical period",
+        f"force_constant = {motor.force_constant!r}  # N/A, per peak phase current",
+        f"mass = {motor.mass!r}             # kg, moving part",
+        "",
+        "[inductance]           # H",
+    ]
+    if table is not None:
+        lines.append(f'table = "{table}"')
+    elif motor.inductance.params:
+        lines += [f"{k} = {float(v)!r}" for k, v in motor.inductance.params.items()]
+    else:
+        raise ValueError("a tabulated inductance model needs the name of its table file")
+    if f.viscous or f.coulomb:
+        lines += ["", "[friction]", f"viscous = {f.viscous!r}  # N s/m", f"coulomb = {f.coulomb!r}  # N"]
+    if motor.pm_harmonics:
+        lines += ["", "[pm_flux]", "harmonics = ["]
+        lines += [
+            f"  {{ order = {h.order}, amplitude = {h.amplitude!r}, phase_deg = {math.degrees(h.phase)!r} }},"
+            for h in motor.pm_harmonics
+        ]
+        lines.append("]")
+    return "\n".join(lines) + "\n"

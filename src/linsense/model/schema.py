@@ -1,0 +1,140 @@
+"""Validation schema of motor files (TOML, SI units).
+
+Parsed with :mod:`tomllib` and validated with pydantic in strict mode: unknown keys, missing
+keys, wrong types (a string or a boolean where a number belongs) and non-finite numbers are all
+refused. Errors are turned into :class:`~linsense.errors.InputError` naming file, key and value.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from typing import Annotated
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+
+from linsense.errors import InputError
+
+_STRICT = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
+
+Positive = Annotated[float, Field(gt=0)]
+NonNegative = Annotated[float, Field(ge=0)]
+_HARMONIC_KEY = re.compile(r"^([LM])(\d+)$")
+
+
+class MotorSection(BaseModel):
+    model_config = _STRICT
+    name: str = Field(min_length=1)
+    R_s: NonNegative  # ohm
+    pole_pitch: Positive  # m, one electrical period
+    force_constant: Positive  # N/A per peak phase current
+    mass: Positive  # kg
+
+
+class InductanceSection(BaseModel):
+    """Either the eq. (3) parameters (plus optional ``L<n>``/``M<n>`` even harmonics) or a table."""
+
+    model_config = ConfigDict(extra="allow", strict=True, allow_inf_nan=False)
+    L0: float | None = None  # H
+    L2: float | None = None  # H
+    M0: float | None = None  # H
+    M2: float | None = None  # H
+    dM0: float | None = None  # H
+    table: str | None = Field(default=None, min_length=1)  # CSV path, relative to the motor file
+    table_max_order: int | None = Field(default=None, ge=1)  # Fourier order of the table fit
+
+    @model_validator(mode="after")
+    def _check(self) -> InductanceSection:
+        extra = self.model_extra or {}
+        for key, value in extra.items():
+            m = _HARMONIC_KEY.match(key)
+            if not m or int(m.group(2)) < 4 or int(m.group(2)) % 2:
+                raise _KeyError(key, "unknown key (harmonics are L4, M4, L6, M6 ...)")
+            if isinstance(value, bool) or not isinstance(value, int | float):
+                raise _KeyError(key, f"expected a number, got {value!r}")
+            if not math.isfinite(value):
+                raise _KeyError(key, f"expected a finite number, got {value!r}")
+        params = {k: getattr(self, k) for k in ("L0", "L2", "M0", "M2", "dM0")}
+        if self.table is not None:
+            given = [k for k, v in params.items() if v is not None] + list(extra)
+            if given:
+                raise _KeyError(given[0], "give either the eq. (3) parameters or 'table', not both")
+        else:
+            if self.table_max_order is not None:
+                raise _KeyError("table_max_order", "only valid together with 'table'")
+            for k, v in params.items():
+                if v is None:
+                    raise _KeyError(k, "missing required key (or give 'table = \"file.csv\"')")
+            if self.L0 <= 0:
+                raise _KeyError("L0", f"must be positive, got {self.L0!r}")
+        return self
+
+    def harmonics(self) -> dict[int, tuple[float, float]]:
+        """``{n: (L_n, M_n)}`` of the optional higher even harmonics (a missing partner is 0)."""
+        extra = self.model_extra or {}
+        orders = sorted({int(k[1:]) for k in extra})
+        return {n: (float(extra.get(f"L{n}", 0.0)), float(extra.get(f"M{n}", 0.0))) for n in orders}
+
+
+class FrictionSection(BaseModel):
+    model_config = _STRICT
+    viscous: NonNegative = 0.0  # N s/m
+    coulomb: NonNegative = 0.0  # N
+
+
+class PmHarmonicEntry(BaseModel):
+    model_config = _STRICT
+    order: int = Field(ge=2)  # harmonic order of the PM flux linkage in theta
+    amplitude: float  # relative to the fundamental PM flux linkage
+    phase_deg: float = 0.0  # electrical degrees
+
+
+class PmFluxSection(BaseModel):
+    model_config = _STRICT
+    harmonics: list[PmHarmonicEntry] = Field(default_factory=list)
+
+
+class MotorFile(BaseModel):
+    model_config = _STRICT
+    motor: MotorSection
+    inductance: InductanceSection
+    friction: FrictionSection = Field(default_factory=FrictionSection)
+    pm_flux: PmFluxSection = Field(default_factory=PmFluxSection)
+
+
+class _KeyError(ValueError):
+    """Raised inside validators to name the offending sub-key."""
+
+    def __init__(self, key: str, message: str) -> None:
+        self.key = key
+        self.message = message
+        super().__init__(message)
+
+
+def validate_motor_file(data: dict, source: str) -> MotorFile:
+    """Validate parsed TOML; raise :class:`InputError` naming ``source``, the key and the value."""
+    try:
+        return MotorFile.model_validate(data)
+    except ValidationError as exc:
+        raise _to_input_error(exc, source) from None
+
+
+def _to_input_error(exc: ValidationError, source: str) -> InputError:
+    err = exc.errors(include_url=False)[0]
+    loc = [str(p) for p in err["loc"]]
+    ctx = err.get("ctx") or {}
+    inner = ctx.get("error")
+    if isinstance(inner, _KeyError):
+        return InputError(source, ".".join(loc + [inner.key]), inner.message)
+    key = ".".join(loc)
+    kind = err["type"]
+    value = err.get("input")
+    if kind == "missing":
+        return InputError(source, key, "missing required key")
+    if kind == "extra_forbidden":
+        return InputError(source, key, f"unknown key (value {value!r})")
+    if kind == "finite_number":
+        return InputError(source, key, f"expected a finite number, got {value!r}")
+    msg = err["msg"]
+    msg = msg[0].lower() + msg[1:] if msg else msg
+    return InputError(source, key, f"{msg}, got {value!r}")

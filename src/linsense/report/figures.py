@@ -1,0 +1,164 @@
+"""Figures of the end-effect model (paper Figs. 5, 6, 8a, 8b, 9) as PNG files.
+
+Only plotting lives here; the numbers come from :mod:`linsense.analysis` and
+:mod:`linsense.compensation`. Inductances are drawn in mH, angles in electrical degrees, with a
+secondary axis in mm of travel.
+"""
+
+from __future__ import annotations
+
+import io
+from dataclasses import replace
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from linsense.analysis.hf import (  # noqa: E402
+    equilibrium_error,
+    loop_gain_factor,
+    psi,
+    psi_compensated,
+    psi_lut,
+    saliency,
+)
+from linsense.io import write_atomic  # noqa: E402
+from linsense.model.inductance import ENTRIES  # noqa: E402
+
+ERRORS_DEG = (-15, -10, -5, 0, 5, 10, 15)
+_MH = 1e3
+_DPI = 120
+
+
+def _theta(n: int = 721) -> np.ndarray:
+    return np.linspace(0.0, 2.0 * np.pi, n)
+
+
+def _position_axis(ax, motor) -> None:
+    ax.set_xlim(0, 360)
+    ax.set_xticks(np.arange(0, 361, 60))
+    ax.set_xlabel("position θ (electrical deg)")
+    ax.grid(True, alpha=0.3)
+    mm = motor.pole_pitch * 1e3 / 360.0
+    sec = ax.secondary_xaxis("top", functions=(lambda d: d * mm, lambda x: x / mm))
+    sec.set_xlabel("position x (mm)", fontsize=8)
+    sec.tick_params(labelsize=7)
+
+
+def _save(fig, path: Path) -> Path:
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=_DPI, metadata={"Software": None})
+    plt.close(fig)
+    return write_atomic(path, buf.getvalue())
+
+
+def fig_inductances(motor, path: Path, title: str) -> Path:
+    """Inductances in the ABC, alpha-beta and dq frames (paper Fig. 5 / Fig. 6 layout)."""
+    th = _theta()
+    deg = np.degrees(th)
+    ind = motor.inductance
+    e = ind.entries(th) * _MH
+    L_ab = ind.L_ab(th) * _MH
+    L_dq = ind.L_dq(th) * _MH
+    fig, axes = plt.subplots(3, 1, figsize=(7.5, 9.5), constrained_layout=True)
+    styles = ["-", "-", "-", "--", "--", "--"]
+    for j, name in enumerate(ENTRIES):
+        axes[0].plot(deg, e[:, j], styles[j], label=name.replace("_", "$_{") + "}$")
+    axes[0].set_title("(a) ABC frame: self (solid) and mutual (dashed) inductances")
+    axes[1].plot(deg, L_ab[:, 0, 0], label=r"$L_\alpha$")
+    axes[1].plot(deg, L_ab[:, 1, 1], label=r"$L_\beta$")
+    axes[1].plot(deg, L_ab[:, 0, 1], label=r"$L_{\alpha\beta}$")
+    axes[1].set_title(r"(b) $\alpha\beta$ frame")
+    axes[2].plot(deg, L_dq[:, 0, 0], label="$L_d$")
+    axes[2].plot(deg, L_dq[:, 1, 1], label="$L_q$")
+    axes[2].plot(deg, L_dq[:, 0, 1], label="$L_{dq}$")
+    axes[2].set_title("(c) dq frame")
+    for ax in axes:
+        _position_axis(ax, motor)
+        ax.set_ylabel("inductance (mH)")
+        ax.legend(loc="center left", bbox_to_anchor=(1.0, 0.5), fontsize=8)
+    fig.suptitle(title)
+    return _save(fig, path)
+
+
+def fig_psi(motor, path: Path, compensated: bool) -> Path:
+    """psi versus position for theta_err in -15..15 deg (paper Fig. 8a, or 8b if compensated)."""
+    th = _theta()
+    deg = np.degrees(th)
+    fig, ax = plt.subplots(figsize=(7.5, 4.8), constrained_layout=True)
+    cmap = plt.get_cmap("coolwarm")
+    for i, e_deg in enumerate(ERRORS_DEG):
+        e = np.radians(e_deg)
+        y = psi_compensated(motor, th, e) if compensated else psi(motor, th, e)
+        if e_deg == 0:
+            ax.plot(deg, np.degrees(y), "r--", lw=2, label="θ_err = 0°" + ("" if compensated else " (= Ψ_LUT)"))
+        else:
+            ax.plot(deg, np.degrees(y), color=cmap(i / (len(ERRORS_DEG) - 1)), label=f"θ_err = {e_deg:+d}°")
+    ax.axhline(0.0, color="k", lw=0.8)
+    _position_axis(ax, motor)
+    ax.set_ylabel("ψ − Ψ_LUT(θ_est) (deg)" if compensated else "ψ (deg)")
+    ax.set_title(
+        "(b) HF current phase in the compensated frame" if compensated
+        else "(a) HF current phase in the estimated frame"
+    )
+    ax.legend(loc="center left", bbox_to_anchor=(1.0, 0.5), fontsize=8)
+    return _save(fig, path)
+
+
+def fig_lut(motor, lut, path: Path) -> Path:
+    """The compensation LUT: model curve and the exported table points (paper Fig. 9)."""
+    th = _theta()
+    fig, ax = plt.subplots(figsize=(7.5, 4.2), constrained_layout=True)
+    ax.plot(np.degrees(th), np.degrees(psi_lut(motor, th)), "b-", label="model, eq. (12)")
+    ax.plot(np.degrees(lut.theta), np.degrees(lut.values), "o", ms=3, mfc="none", color="C1",
+            label=f"exported table ({lut.points} points)")
+    _position_axis(ax, motor)
+    ax.set_ylabel("Ψ_LUT (electrical deg)")
+    ax.set_title(f"Compensation LUT, motor {motor.name}")
+    ax.legend(fontsize=8)
+    return _save(fig, path)
+
+
+def fig_uncompensated(motor, path: Path) -> Path:
+    """Saliency, equilibrium error and loop-gain factor of the uncompensated observer."""
+    th = _theta()
+    deg = np.degrees(th)
+    fig, axes = plt.subplots(3, 1, figsize=(7.5, 8.0), constrained_layout=True)
+    axes[0].plot(deg, saliency(motor, th) * _MH)
+    axes[0].set_ylabel("$L_q - L_d$ (mH)")
+    axes[0].set_title("Saliency")
+    axes[1].plot(deg, np.degrees(equilibrium_error(motor, th)), label="e* without LUT")
+    axes[1].plot(deg, np.degrees(psi_lut(motor, th)), "--", label="Ψ_LUT")
+    axes[1].set_ylabel("angle (electrical deg)")
+    axes[1].set_title("Equilibrium estimation error of the uncompensated observer")
+    axes[1].legend(fontsize=8)
+    axes[2].plot(deg, loop_gain_factor(motor, th))
+    axes[2].axhline(1.0, color="k", lw=0.8)
+    axes[2].set_ylabel("1 + de*/dθ (-)")
+    axes[2].set_title("Position-loop gain factor without LUT")
+    for ax in axes:
+        _position_axis(ax, motor)
+    return _save(fig, path)
+
+
+def write_model_figures(motor, lut, out_dir: str | Path) -> list[Path]:
+    """Write every model figure of ``motor`` into ``out_dir``; return the paths.
+
+    ``fig5`` (no end-effect) needs a parametric model; it is skipped for tabulated ones.
+    """
+    out = Path(out_dir)
+    paths = []
+    if motor.inductance.params:
+        ideal = replace(motor, inductance=motor.inductance.without_end_effect())
+        paths.append(fig_inductances(ideal, out / "fig5_inductances_no_end_effect.png",
+                                     f"{motor.name}: model without end-effect (ΔM0 = 0)"))
+    paths.append(fig_inductances(motor, out / "fig6_inductances_end_effect.png",
+                                 f"{motor.name}: model with end-effect"))
+    paths.append(fig_psi(motor, out / "fig8a_psi_estimated.png", compensated=False))
+    paths.append(fig_psi(motor, out / "fig8b_psi_compensated.png", compensated=True))
+    paths.append(fig_lut(motor, lut, out / "fig9_lut.png"))
+    paths.append(fig_uncompensated(motor, out / "uncompensated_observer.png"))
+    return paths
