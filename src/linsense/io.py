@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import os
+import stat
+import sys
 import tempfile
 from collections.abc import Callable
 from pathlib import Path
@@ -17,9 +19,23 @@ def write_atomic_with(path: str | os.PathLike, writer: Callable) -> Path:
     """Call ``writer(binary_file)`` on a temporary file, then rename it onto ``path``.
 
     The parent folder is created if needed. On any exception the temporary file is removed
-    and ``path`` is left as it was.
+    and ``path`` is left as it was. ``"-"`` writes to standard output; an existing target that
+    is not a regular file (``/dev/null``, a FIFO, ``/dev/stdout``) is written in place, never
+    replaced.
     """
+    if str(path) == "-":
+        writer(sys.stdout.buffer)
+        sys.stdout.flush()
+        return Path("-")
     path = Path(path)
+    try:
+        special = not stat.S_ISREG(os.stat(path).st_mode)
+    except FileNotFoundError:
+        special = False
+    if special:
+        with open(path, "wb") as f:
+            writer(f)
+        return path
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     try:

@@ -90,7 +90,8 @@ def build_lut(motor, points: int) -> Lut:
 def to_csv(lut: Lut) -> str:
     """``theta_deg,psi_lut_deg`` rows (electrical degrees, 12 significant digits)."""
     lines = ["theta_deg,psi_lut_deg"]
-    lines += [f"{t:.12g},{p:.12g}" for t, p in zip(np.degrees(lut.theta), np.degrees(lut.values), strict=True)]
+    pairs = zip(np.degrees(lut.theta), np.degrees(lut.values), strict=True)
+    lines += [f"{t:.12g},{p:.12g}" for t, p in pairs]
     return "\n".join(lines) + "\n"
 
 
@@ -139,9 +140,10 @@ def to_c_header(lut: Lut, symbol: str | None = None) -> str:
         f" *\n"
         f" * Compensation look-up table Psi_LUT(theta) = atan(-L_dq/L_q) (Giangrande et al.,\n"
         f" * IEEE ECCE 2010, eq. 12) over one electrical period.\n"
-        f" * Table: {lut.points} points at theta_k = 2*pi*k/{lut.points} rad (electrical), k = 0..{lut.points - 1}.\n"
+        f" * Table: {lut.points} points at theta_k = 2*pi*k/{lut.points} rad (electrical),\n"
+        f" * k = 0..{lut.points - 1}.\n"
         f" * Angle unit of the values: rad (electrical). Read with periodic linear interpolation\n"
-        f" * (ls_lut_interp in linsense/ls_lut.h).\n"
+        f" * (ls_lut_step in linsense/ls_lut.h).\n"
         f" * Motor:\n{prov}\n"
         f" */\n"
         f"#ifndef {up}_H\n"

@@ -160,6 +160,8 @@ def motor_from_toml(text: str, source: str, base_dir: Path | None = None) -> Mot
         table_path = Path(ind.table)
         if not table_path.is_absolute() and base_dir is not None:
             table_path = base_dir / table_path
+        if not table_path.is_file():
+            raise InputError(source, "inductance.table", f"no such table file {str(table_path)!r}")
         theta, entries = read_inductance_table(table_path)
         inductance = InductanceModel.from_table(
             theta, entries, ind.table_max_order, description=f"table {ind.table}"

@@ -94,7 +94,8 @@ def fig_psi(motor, path: Path, compensated: bool) -> Path:
         e = np.radians(e_deg)
         y = psi_compensated(motor, th, e) if compensated else psi(motor, th, e)
         if e_deg == 0:
-            ax.plot(deg, np.degrees(y), "r--", lw=2, label="θ_err = 0°" + ("" if compensated else " (= Ψ_LUT)"))
+            label = "θ_err = 0°" + ("" if compensated else " (= Ψ_LUT)")
+            ax.plot(deg, np.degrees(y), "r--", lw=2, label=label)
         else:
             ax.plot(deg, np.degrees(y), color=cmap(i / (len(ERRORS_DEG) - 1)), label=f"θ_err = {e_deg:+d}°")
     ax.axhline(0.0, color="k", lw=0.8)

@@ -1,0 +1,73 @@
+# linsense: two commands on a fresh machine
+#   make demo   creates .venv, installs, runs the main job into out/
+#   make test   creates or reuses .venv, runs every C and Python test
+# Also: make bench (benchmarks), make lint, make clean.
+
+PYTHON ?= python3
+VENV   := .venv
+PY     := $(VENV)/bin/python
+STAMP  := $(VENV)/.installed
+CC     ?= cc
+BUILD  := build
+
+CSTD     := -std=c99 -Wall -Wextra -Wpedantic -Werror
+CLIBWARN := -Wdouble-promotion -Wconversion -Wshadow
+SAN      := -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
+CINC     := -Icsrc/include -Icsrc/tests -I$(BUILD)/gen
+CTRL_SRC := $(wildcard csrc/ctrl/*.c)
+CTESTS   := $(patsubst csrc/tests/%.c,%,$(wildcard csrc/tests/test_*.c))
+GEN_HDR  := $(BUILD)/gen/ls_lut_ecce2010.h
+# variant name : extra flags
+VARIANTS := float-san double-san float-plain
+
+.PHONY: all install demo test ctest pytest lint bench clean
+
+all: test
+
+$(STAMP): pyproject.toml
+	$(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install -q --upgrade pip
+	$(PY) -m pip install -q -e '.[dev]'
+	touch $@
+
+install: $(STAMP)
+
+demo: $(STAMP)
+	$(VENV)/bin/linsense reproduce --motor ecce2010 --out out
+
+test: lint ctest pytest
+
+$(GEN_HDR): $(STAMP) $(wildcard src/linsense/compensation/*.py src/linsense/model/*.py)
+	$(VENV)/bin/linsense lut --motor ecce2010 --points 360 --format c --out $@
+
+# Build and run every C test in three variants: float and double under ASan+UBSan, and float
+# without sanitizers. Library sources get the stricter warnings (-Wdouble-promotion ...).
+ctest: $(GEN_HDR)
+	@set -e; for v in $(VARIANTS); do \
+	  case $$v in \
+	    float-san)   flags="$(SAN) -O1 -g" ;; \
+	    double-san)  flags="$(SAN) -O1 -g -DLS_REAL_DOUBLE" ;; \
+	    float-plain) flags="-O2" ;; \
+	  esac; \
+	  dir=$(BUILD)/ctest/$$v; mkdir -p $$dir; objs=""; \
+	  for src in $(CTRL_SRC); do \
+	    obj=$$dir/$$(basename $$src .c).o; \
+	    $(CC) $(CSTD) $(CLIBWARN) $$flags $(CINC) -c $$src -o $$obj; objs="$$objs $$obj"; \
+	  done; \
+	  for t in $(CTESTS); do \
+	    $(CC) $(CSTD) $$flags $(CINC) csrc/tests/$$t.c $$objs -lm -o $$dir/$$t; \
+	    printf '[%s] ' $$v; $$dir/$$t; \
+	  done; \
+	done
+
+pytest: $(STAMP)
+	$(PY) -m pytest -q
+
+lint: $(STAMP)
+	$(VENV)/bin/ruff check src tests
+
+bench: $(STAMP)
+	@echo "no benchmarks yet (the C core and simulator issues add them)"
+
+clean:
+	rm -rf $(BUILD) out

@@ -1,0 +1,35 @@
+/* linsense firmware library: periodic look-up table over one electrical period.
+ *
+ * The table holds N values at theta_k = 2*pi*k/N rad, k = 0..N-1 (as written by
+ * `linsense lut --format c`), read with periodic linear interpolation:
+ *   u = theta*N/(2*pi) wrapped into [0, N), k = floor(u), f = u - k,
+ *   value = (1 - f)*table[k] + f*table[(k + 1) mod N].
+ * Python's linsense.compensation.lut.interpolate implements the same rule.
+ */
+#ifndef LINSENSE_LS_LUT_H
+#define LINSENSE_LS_LUT_H
+
+#include "linsense/ls_types.h"
+
+typedef struct {
+    const float *table; /* table values (unit of the table, e.g. rad); not copied */
+    uint32_t len;       /* number of points over one electrical period, >= 4 */
+} ls_lut_cfg;
+
+typedef struct {
+    const float *table; /* table values, borrowed from the configuration */
+    uint32_t len;       /* number of points */
+    LS_REAL points_per_rad; /* len / (2 pi), 1/rad */
+} ls_lut;
+
+/* Validate cfg and prepare lut. Returns LS_ERR_NULL or LS_ERR_PARAM (len < 4, non-finite
+ * value) without touching lut on failure. */
+ls_status ls_lut_init(ls_lut *lut, const ls_lut_cfg *cfg);
+
+/* A LUT holds no dynamic state; reset is provided for uniformity and does nothing. */
+void ls_lut_reset(ls_lut *lut);
+
+/* Interpolated value at electrical angle theta (rad, any value). A non-finite theta gives 0. */
+LS_REAL ls_lut_step(const ls_lut *lut, LS_REAL theta);
+
+#endif /* LINSENSE_LS_LUT_H */

@@ -1,0 +1,5 @@
+"""``python -m linsense`` runs the CLI."""
+
+from linsense.cli import main
+
+main()
