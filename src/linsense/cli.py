@@ -115,6 +115,84 @@ def reproduce(motor_spec: str, out: str) -> None:
     )
 
 
+def _finite(minimum: float, strict: bool):
+    """Click callback: a finite number ``> minimum`` (``>=`` unless ``strict``), or None."""
+
+    def check(ctx, param, value):
+        if value is None:
+            return value
+        ok = np.isfinite(value) and (value > minimum if strict else value >= minimum)
+        if not ok:
+            op = ">" if strict else ">="
+            raise click.BadParameter(f"must be a finite number {op} {minimum:g}, got {value!r}")
+        return value
+
+    return check
+
+
+@cli.command("bench-emulate")
+@click.option("--motor", "motor_spec", required=True, help=MOTOR_HELP)
+@click.option("--positions", default=56, show_default=True, type=click.IntRange(min=8),
+              help="equally spaced positions over one pole pitch")
+@click.option("--noise", default=0.0, show_default=True, type=float, callback=_finite(0.0, False),
+              help="relative complex Gaussian noise on every phasor (0.01 = 1 %)")
+@click.option("--seed", default=0, show_default=True, type=click.IntRange(min=0), help="random seed")
+@click.option("--freq", "freq_hz", default=1000.0, show_default=True, type=float, callback=_finite(0.0, True),
+              help="excitation frequency, Hz")
+@click.option("--current", default=1.0, show_default=True, type=float, callback=_finite(0.0, True),
+              help="nominal current amplitude, A peak (each row: random phase, 0.8..1.2 times this)")
+@click.option("--amplitude-only", is_flag=True, help="write magnitudes only (I, VA, VB, VC), as the paper")
+@click.option("--out", required=True, type=click.Path(dir_okay=False), help="output bench CSV file")
+def bench_emulate(motor_spec: str, positions: int, noise: float, seed: int, freq_hz: float, current: float,
+                  amplitude_only: bool, out: str) -> None:
+    """Emulate the bench test (each phase fed in turn at N positions) on a motor model (CSV)."""
+    from linsense.identify.bench import bench_to_csv, emulate_bench
+    from linsense.io import write_atomic
+
+    motor = _load(motor_spec)
+    data = emulate_bench(motor, positions, noise, seed, freq_hz, current, amplitude_only)
+    write_atomic(out, bench_to_csv(data))
+
+
+@cli.command()
+@click.argument("bench", type=click.Path(dir_okay=False))
+@click.option("--out", required=True, type=click.Path(file_okay=False), help="output folder")
+@click.option("--harmonics", default=1, show_default=True, type=click.IntRange(1, 20),
+              help="K: fit the even orders 2, 4, ..., 2K (1 = the five parameters of eq. 3)")
+@click.option("--motor", "motor_spec", default=None,
+              help="motor giving pole pitch, force constant, mass (and R_s for amplitude-only data)")
+@click.option("--pole-pitch", "pole_pitch_mm", type=float, callback=_finite(0.0, True), default=None,
+              help="one electrical period, mm (overrides --motor)")
+@click.option("--force-constant", type=float, callback=_finite(0.0, True), default=None,
+              help="N/A per peak phase current (overrides --motor)")
+@click.option("--mass", type=float, callback=_finite(0.0, True), default=None, help="kg (overrides --motor)")
+@click.option("--resistance", type=float, callback=_finite(0.0, False), default=None,
+              help="phase resistance, ohm, for amplitude-only data (0 neglects it as the paper does)")
+@click.option("--name", default=None, help="motor name in motor.toml (default: the bench file name)")
+@click.option("--points", default=360, show_default=True, callback=_points, help="length of lut_fit.csv")
+def identify(bench: str, out: str, harmonics: int, motor_spec: str | None, pole_pitch_mm: float | None,
+             force_constant: float | None, mass: float | None, resistance: float | None, name: str | None,
+             points: int) -> None:
+    """Identify the HF inductance model from a bench file: motor.toml, tables, LUTs, fit.json, figures."""
+    from linsense.identify.pipeline import identify as run_identify
+    from linsense.identify.pipeline import render_outputs, summary_lines
+    from linsense.io import write_atomic
+
+    base = _load(motor_spec) if motor_spec is not None else None
+    ident = run_identify(
+        bench, base=base, harmonics=harmonics,
+        pole_pitch=None if pole_pitch_mm is None else pole_pitch_mm * 1e-3,
+        force_constant=force_constant, mass=mass, resistance=resistance, name=name, points=points,
+    )
+    files = render_outputs(ident)
+    for rel, content in files.items():
+        click.echo(str(write_atomic(Path(out) / rel, content)))
+    for line in summary_lines(ident):
+        click.echo(line)
+    for w in ident.warnings:
+        click.echo(f"linsense: warning: {w}", err=True)
+
+
 def main(argv: list[str] | None = None) -> None:
     """Entry point: run the CLI, mapping every expected failure to exit code 2 and one line."""
     np.seterr(all="ignore")

@@ -1,0 +1,166 @@
+"""Least-squares fit of the HF inductance model (paper eq. 3 and its even harmonics) to a table.
+
+The model (docs/theory.md section 2) is linear in its parameters
+``p = (L0, M0, dM0, L2, M2, L4, M4, ..., L_2K, M_2K)``::
+
+    L_A  = L0 + sum_n L_n cos(n th),            L_B(th) = L_A(th - 2pi/3), L_C(th) = L_A(th + 2pi/3)
+    M_AB = M0 + sum_n M_n cos(n (th - pi/3)),   M_BC = M0 + dM0 + sum_n M_n cos(n th),
+    M_CA = M0 + dM0 + sum_n M_n cos(n (th + pi/3)),    n = 2, 4, ..., 2K
+
+so all six entries at all ``N`` positions give ``6 N`` equations ``A p = y``, solved by ordinary
+linear least squares. The columns of ``A`` are the model of
+:meth:`~linsense.model.inductance.InductanceModel.from_params` with one parameter set to 1, so
+the fit and the model share one convention.
+
+Standard errors come from the covariance ``sigma^2 (A' A)^-1`` with ``sigma^2 = RSS / (n - p)``,
+taken separately for the self and the mutual entries: the self inductances depend only on
+``L0, L_n`` and the mutuals only on ``M0, dM0, M_n``, so the problem splits exactly into two
+independent least-squares problems, and their noise differs (the fed phase's voltage carries the
+resistive drop; each mutual is the mean of two reciprocal measurements). One pooled ``sigma``
+would understate the errors of the ``L`` parameters and overstate those of the ``M`` ones.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from linsense.errors import InputError
+from linsense.model.inductance import InductanceModel
+
+#: |t| = |dM0| / stderr(dM0) above this: the end-effect term is significant.
+T_SIGNIFICANT = 3.0
+
+
+def parameter_names(harmonics: int = 1) -> list[str]:
+    """Names of the fitted parameters for ``harmonics = K`` even orders ``2 .. 2K``."""
+    names = ["L0", "L2", "M0", "M2", "dM0"]
+    for n in range(4, 2 * harmonics + 1, 2):
+        names += [f"L{n}", f"M{n}"]
+    return names
+
+
+def _model_of(values: dict[str, float], harmonics: int) -> InductanceModel:
+    harm = {n: (values[f"L{n}"], values[f"M{n}"]) for n in range(4, 2 * harmonics + 1, 2)}
+    return InductanceModel.from_params(values["L0"], values["L2"], values["M0"], values["M2"],
+                                       values["dM0"], harm)
+
+
+def design_matrix(theta: np.ndarray, harmonics: int = 1) -> np.ndarray:
+    """Matrix ``A`` (6 N, P): row ``6 i + j`` is entry ``j`` at ``theta[i]``, column per parameter."""
+    names = parameter_names(harmonics)
+    theta = np.asarray(theta, dtype=float)
+    cols = []
+    for name in names:
+        unit = dict.fromkeys(names, 0.0)
+        unit[name] = 1.0
+        cols.append(_model_of(unit, harmonics).entries(theta).reshape(-1))
+    return np.stack(cols, axis=1)
+
+
+@dataclass(frozen=True)
+class FitResult:
+    """Fitted HF model parameters.
+
+    Parameters
+    ----------
+    values, stderr : dict
+        Parameter values and their standard errors, H.
+    harmonics : int
+        ``K``: even orders ``2 .. 2K`` fitted.
+    residual_rms : float
+        RMS of the ``6 N`` residuals, H.
+    sigma : dict
+        Residual standard deviation ``sqrt(RSS / (n - p))`` of the ``"self"`` and ``"mutual"``
+        entries, H.
+    dof : dict
+        Degrees of freedom ``n - p`` of each group.
+    residuals : ndarray, shape (N, 6)
+        Table minus fit, H.
+    """
+
+    values: dict[str, float]
+    stderr: dict[str, float]
+    harmonics: int
+    residual_rms: float
+    sigma: dict[str, float]
+    dof: dict[str, int]
+    residuals: np.ndarray
+
+    @property
+    def end_effect_t(self) -> float:
+        """t-statistic ``dM0 / stderr(dM0)`` (inf for an exact fit with dM0 != 0)."""
+        se = self.stderr["dM0"]
+        if se == 0.0:
+            return 0.0 if self.values["dM0"] == 0.0 else float(np.copysign(np.inf, self.values["dM0"]))
+        return self.values["dM0"] / se
+
+    @property
+    def end_effect_significant(self) -> bool:
+        """True when ``|t| > T_SIGNIFICANT``."""
+        return bool(abs(self.end_effect_t) > T_SIGNIFICANT)
+
+    def model(self) -> InductanceModel:
+        """The fitted :class:`InductanceModel` (eq. 3 with the fitted harmonics)."""
+        return _model_of(self.values, self.harmonics)
+
+
+def fit_inductances(theta: np.ndarray, entries: np.ndarray, harmonics: int = 1,
+                    source: str = "table") -> FitResult:
+    """Fit eq. (3) with even orders ``2 .. 2 harmonics`` to a table by linear least squares.
+
+    Parameters
+    ----------
+    theta : ndarray, shape (N,)
+        Electrical positions, rad.
+    entries : ndarray, shape (N, 6)
+        ``L_A, L_B, L_C, M_AB, M_BC, M_CA``, H.
+    harmonics : int
+        ``K >= 1``: fit orders 2, 4, ..., 2K (``K = 1`` is the five parameters of eq. 3).
+    source : str
+        For messages.
+
+    Raises
+    ------
+    InputError
+        The positions cannot separate the requested harmonics (rank-deficient design matrix).
+    """
+    if harmonics < 1:
+        raise ValueError("harmonics must be >= 1")
+    theta = np.asarray(theta, dtype=float)
+    y = np.asarray(entries, dtype=float).reshape(-1)
+    A = design_matrix(theta, harmonics)
+    names = parameter_names(harmonics)
+    P = len(names)
+    if np.linalg.matrix_rank(A) < P or y.size <= P:
+        raise InputError(
+            source, "--harmonics",
+            f"{harmonics} (orders up to {2 * harmonics}) cannot be separated with {theta.size} "
+            "distinct positions: use fewer harmonics or measure more positions",
+        )
+    p, *_ = np.linalg.lstsq(A, y, rcond=None)
+    res = y - A @ p
+    is_self = np.tile(np.arange(6) < 3, theta.size)
+    cov = np.zeros((P, P))
+    sigma, dof = {}, {}
+    for group, rows in (("self", is_self), ("mutual", ~is_self)):
+        Ag = A[rows]
+        used = np.any(Ag != 0.0, axis=0)  # the parameters this group depends on
+        n_g, p_g = int(rows.sum()), int(used.sum())
+        if n_g <= p_g:
+            raise InputError(source, "--harmonics",
+                             f"{harmonics}: too many parameters for {theta.size} positions")
+        s2 = float(res[rows] @ res[rows]) / (n_g - p_g)
+        cov[np.ix_(used, used)] = s2 * np.linalg.inv(Ag[:, used].T @ Ag[:, used])
+        sigma[group], dof[group] = float(np.sqrt(s2)), n_g - p_g
+    se = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    return FitResult(
+        values={n: float(v) for n, v in zip(names, p, strict=True)},
+        stderr={n: float(s) for n, s in zip(names, se, strict=True)},
+        harmonics=harmonics,
+        residual_rms=float(np.sqrt(np.mean(res**2))),
+        sigma=sigma,
+        dof=dof,
+        residuals=res.reshape(-1, 6),
+    )

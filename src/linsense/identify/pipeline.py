@@ -1,0 +1,229 @@
+"""``linsense identify``: bench file -> measured table -> fit -> motor file, LUTs, report, figures.
+
+Everything is computed, checked and rendered in memory by :func:`identify` and
+:func:`render_outputs`; the caller writes the returned files only when all of it succeeded, so a
+failed run writes nothing.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from linsense import __version__
+from linsense.analysis.hf import psi_lut
+from linsense.analysis.tables import table_to_csv
+from linsense.compensation.lut import Lut, build_lut, export
+from linsense.errors import InputError
+from linsense.identify.bench import BenchData, read_bench_csv
+from linsense.identify.fit import T_SIGNIFICANT, FitResult, fit_inductances
+from linsense.identify.process import MeasuredTable, process_bench
+from linsense.identify.tables import measured_columns, measured_lut_csv
+from linsense.model.motor import Friction, Motor, check_motor, motor_to_toml
+
+
+@dataclass(frozen=True)
+class Identification:
+    """Result of identifying a motor from a bench file."""
+
+    data: BenchData
+    table: MeasuredTable
+    fit: FitResult
+    motor: Motor
+    measured: dict[str, np.ndarray]
+    psi_measured: np.ndarray
+    lut_fit: Lut
+    resistance_source: str
+    motor_sources: dict[str, str]
+    warnings: list[str] = field(default_factory=list)
+
+
+def _motor_name(name: str | None, bench: str) -> str:
+    raw = name if name else Path(bench).stem
+    return re.sub(r"[^0-9A-Za-z_.-]", "_", raw) or "identified"
+
+
+def identify(
+    bench: str | Path,
+    base: Motor | None = None,
+    harmonics: int = 1,
+    pole_pitch: float | None = None,
+    force_constant: float | None = None,
+    mass: float | None = None,
+    resistance: float | None = None,
+    name: str | None = None,
+    points: int = 360,
+) -> Identification:
+    """Identify the HF model of a motor from a bench file.
+
+    Parameters
+    ----------
+    bench : path
+        Bench file (docs/identify.md).
+    base : Motor, optional
+        A motor whose pole pitch, force constant, mass, friction, PM-flux harmonics (and, for
+        amplitude-only data, resistance) complete the identified one.
+    harmonics : int
+        ``K``: fit even orders 2 .. 2K (1 = the five parameters of eq. 3).
+    pole_pitch, force_constant, mass : float, optional
+        m, N/A, kg; override ``base``. Required without ``base``.
+    resistance : float, optional
+        Phase resistance, ohm, for amplitude-only data (0 neglects the resistive drop).
+        Ignored (with a warning) for phasor data, which measure it.
+    name : str, optional
+        Motor name (default: the bench file's stem).
+    points : int
+        Length of the LUT built from the fit.
+
+    Raises
+    ------
+    InputError, ModelError
+        Bad options or data; a fitted model that :func:`check_motor` refuses.
+    """
+    src = str(bench)
+    sources: dict[str, str] = {}
+
+    def pick(opt_value, key: str, option: str, why: str):
+        if opt_value is not None:
+            sources[key] = option
+            return float(opt_value)
+        if base is not None:
+            sources[key] = f"--motor {base.source or base.name}"
+            return float(getattr(base, key))
+        raise InputError(option, "", f"missing: {why}; give {option} or --motor NAME|PATH")
+
+    tau = pick(pole_pitch, "pole_pitch", "--pole-pitch", "the pole pitch converts position_mm to theta")
+    k_f = pick(force_constant, "force_constant", "--force-constant", "motor.toml needs the force constant")
+    m = pick(mass, "mass", "--mass", "motor.toml needs the moving mass")
+
+    data = read_bench_csv(bench)
+    warnings: list[str] = []
+    if data.amplitude_only:
+        if resistance is not None:
+            r_used, r_src = float(resistance), "--resistance"
+        elif base is not None:
+            r_used, r_src = float(base.R_s), f"R_s of --motor {base.source or base.name}"
+        else:
+            r_used, r_src = None, ""
+        table = process_bench(data, tau, r_used, r_src)
+        R_s, r_note = float(r_used), r_src
+    else:
+        if resistance is not None:
+            warnings.append(f"--resistance {resistance:g} ignored: phasor data measure the resistance")
+        table = process_bench(data, tau)
+        R_s = table.resistance
+        r_note = f"identified: mean Re(V_fed/I) over {data.rows} rows"
+    warnings = table.warnings + warnings
+
+    fit = fit_inductances(table.theta, table.entries, harmonics, source=src)
+    motor = Motor(
+        name=_motor_name(name, src), R_s=R_s, pole_pitch=tau, force_constant=k_f, mass=m,
+        inductance=fit.model(), friction=base.friction if base is not None else Friction(),
+        pm_harmonics=base.pm_harmonics if base is not None else (), source=f"{src} (fitted model)",
+    )
+    check_motor(motor)
+    measured = measured_columns(table.theta, table.entries)
+    psi_meas = np.radians(measured["psi_lut_deg"])
+    return Identification(
+        data=data, table=table, fit=fit, motor=motor, measured=measured, psi_measured=psi_meas,
+        lut_fit=build_lut(motor, points), resistance_source=r_note, motor_sources=sources,
+        warnings=warnings,
+    )
+
+
+def fit_report(ident: Identification) -> dict:
+    """The content of ``fit.json`` (SI units, rad)."""
+    t, f, mo = ident.table, ident.fit, ident.motor
+    i_worst, pair = t.reciprocity_worst()
+    lut_diff = np.angle(np.exp(1j * (ident.psi_measured - psi_lut(mo, t.theta))))
+    return {
+        "format": "linsense-identify",
+        "version": 1,
+        "generator": f"linsense {__version__}",
+        "source": ident.data.source,
+        "form": "amplitude-only" if ident.data.amplitude_only else "phasor",
+        "rows": ident.data.rows,
+        "positions": int(t.theta.size),
+        "frequency_hz": t.frequency,
+        "pole_pitch_m": mo.pole_pitch,
+        "motor": {"name": mo.name, "R_s": mo.R_s, "force_constant": mo.force_constant, "mass": mo.mass,
+                  "sources": {"R_s": ident.resistance_source, **ident.motor_sources}},
+        "resistance": {"R_s": mo.R_s, "std_over_rows": t.resistance_std, "source": ident.resistance_source},
+        "fit": {
+            "harmonics": f.harmonics,
+            "orders": list(range(2, 2 * f.harmonics + 1, 2)),
+            "unit": "H",
+            "parameters": f.values,
+            "standard_errors": f.stderr,
+            "residual_rms": f.residual_rms,
+            "sigma": f.sigma,
+            "dof": f.dof,
+            "method": "ordinary linear least squares over the six entries at every measured position; "
+                      "standard errors from sigma^2 (A'A)^-1, sigma^2 = RSS/(n-p) of the self and of "
+                      "the mutual entries",
+        },
+        "end_effect": {
+            "dM0": f.values["dM0"],
+            "stderr": f.stderr["dM0"],
+            "t": f.end_effect_t,
+            "threshold": T_SIGNIFICANT,
+            "significant": f.end_effect_significant,
+        },
+        "reciprocity": {
+            "max_relative": t.reciprocity_max,
+            "rms_relative": t.reciprocity_rms,
+            "worst_pair": pair,
+            "worst_position_m": float(t.position[i_worst]),
+            "definition": "(M_jk from k fed - M_kj from j fed) / |mean of the two|",
+        },
+        "lut": {
+            "measured_points": int(t.theta.size),
+            "fit_points": ident.lut_fit.points,
+            "psi_lut_peak_measured_rad": float(np.max(np.abs(ident.psi_measured))),
+            "psi_lut_peak_fit_rad": float(np.max(np.abs(psi_lut(mo, np.linspace(0, 2 * np.pi, 3600))))),
+            "measured_minus_fit_max_rad": float(np.max(np.abs(lut_diff))),
+        },
+        "warnings": list(ident.warnings),
+    }
+
+
+def render_outputs(ident: Identification) -> dict[str, str | bytes]:
+    """Every output file of ``linsense identify`` (relative path -> content), rendered in memory."""
+    from linsense.report.identify_figures import fig_identified_inductances, fig_identified_luts
+
+    mo = ident.motor
+    header = (
+        f"# Identified by linsense {__version__} from {Path(ident.data.source).name}: HF model fitted "
+        f"with even orders up to {2 * ident.fit.harmonics} (see fit.json).\n"
+    )
+    return {
+        "motor.toml": header + motor_to_toml(mo),
+        "inductances.csv": table_to_csv(ident.measured),
+        "lut.csv": measured_lut_csv(ident.table.theta, ident.psi_measured),
+        "lut_fit.csv": export(ident.lut_fit, "csv"),
+        "fit.json": json.dumps(fit_report(ident), indent=1) + "\n",
+        "figures/identify_inductances.png": fig_identified_inductances(
+            mo, ident.measured, f"{mo.name}: measured (markers) and fitted (lines) inductances"),
+        "figures/identify_lut.png": fig_identified_luts(mo, ident.table.theta, ident.psi_measured,
+                                                        ident.lut_fit),
+    }
+
+
+def summary_lines(ident: Identification) -> list[str]:
+    """Human-readable summary for stdout: parameters, end-effect significance, reciprocity."""
+    f, t = ident.fit, ident.table
+    lines = [f"{ident.motor.name}: {t.theta.size} positions, {ident.data.rows} rows, "
+             f"R_s = {ident.motor.R_s:.4g} ohm ({ident.resistance_source})"]
+    for k, v in f.values.items():
+        lines.append(f"  {k:>4} = {v * 1e3:+.5f} mH  +- {f.stderr[k] * 1e3:.5f} mH")
+    lines.append(f"  residual RMS {f.residual_rms * 1e6:.3g} uH")
+    verdict = "significant" if f.end_effect_significant else "not significant"
+    lines.append(f"end-effect dM0 = {f.values['dM0'] * 1e3:+.4f} mH, t = {f.end_effect_t:.1f}: {verdict} "
+                 f"(|t| > {T_SIGNIFICANT:g})")
+    lines.append(f"reciprocity error: max {100 * t.reciprocity_max:.2f} %, "
+                 f"RMS {100 * t.reciprocity_rms:.2f} %")
+    return lines

@@ -1,0 +1,226 @@
+"""From bench rows to the measured inductance table ``L_abc(theta)`` (paper eq. 2, with phasors).
+
+Each row (phase ``k`` fed with current ``I``, voltages ``V_j``) gives column ``k`` of the
+impedance matrix, ``Z_jk = V_j / I``. With phasors::
+
+    L_kk = Im(V_k / I) / omega,   R_k = Re(V_k / I),   L_jk = Im(V_j / I) / omega  (j != k, signed)
+
+With magnitudes only (the paper's eq. 2) the phase of ``V/I`` is unknown, so::
+
+    L_kk = sqrt((|V_k| / |I|)^2 - R^2) / omega   (R known; R = 0 neglects the resistive drop)
+    L_jk = -|V_j| / (omega |I|)                  (mutuals assumed negative)
+
+Rows at the same electrical position (positions one pole pitch apart included) are averaged per fed
+phase; the three excitations give the full 3x3 matrix, whose two reciprocal estimates of each
+mutual (``L_jk`` from ``k`` fed, ``L_kj`` from ``j`` fed) are averaged for the table and compared
+for the reciprocity error.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from linsense.errors import InputError
+from linsense.identify.bench import PHASES, BenchData
+
+#: Fewest distinct electrical positions accepted, and the largest gap between them (rad).
+MIN_POSITIONS = 8
+MAX_GAP = np.radians(45.0)
+#: (row, column) of the six table entries L_A, L_B, L_C, M_AB, M_BC, M_CA in the 3x3 matrix.
+_INDEX = ((0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (2, 0))
+_PAIRS = ("AB", "BC", "CA")
+
+
+@dataclass(frozen=True)
+class MeasuredTable:
+    """Measured inductances at the distinct electrical positions, sorted by ``theta``.
+
+    Parameters
+    ----------
+    theta : ndarray, shape (N,)
+        Electrical positions in [0, 2 pi), rad.
+    position : ndarray, shape (N,)
+        Position of each (first row at that electrical position), m.
+    entries : ndarray, shape (N, 6)
+        ``L_A, L_B, L_C, M_AB, M_BC, M_CA`` (mutuals averaged over both excitations), H.
+    matrix : ndarray, shape (N, 3, 3)
+        The unsymmetrised matrices: column ``k`` from phase ``k`` fed, H.
+    first_row : ndarray of int, shape (N,)
+        File line of the first row at each position, for messages.
+    resistance : float or None
+        Mean of ``Re(V_fed / I)`` over all rows, ohm (None for amplitude-only data).
+    resistance_std : float or None
+        Standard deviation of ``Re(V_fed / I)`` over the rows, ohm.
+    frequency : float
+        Mean excitation frequency, Hz.
+    reciprocity : ndarray, shape (N, 3)
+        Relative difference of the reciprocal mutuals ``(L_jk - L_kj) / mean`` for AB, BC, CA.
+    warnings : list of str
+        One line each: what was assumed (amplitude-only data).
+    """
+
+    theta: np.ndarray
+    position: np.ndarray
+    entries: np.ndarray
+    matrix: np.ndarray
+    first_row: np.ndarray
+    resistance: float | None
+    resistance_std: float | None
+    frequency: float
+    reciprocity: np.ndarray
+    rows: int
+    amplitude_only: bool = False
+    warnings: list[str] = field(default_factory=list)
+
+    @property
+    def reciprocity_max(self) -> float:
+        """Largest relative difference between reciprocal mutuals."""
+        return float(np.max(np.abs(self.reciprocity)))
+
+    @property
+    def reciprocity_rms(self) -> float:
+        """RMS relative difference between reciprocal mutuals."""
+        return float(np.sqrt(np.mean(self.reciprocity**2)))
+
+    def reciprocity_worst(self) -> tuple[int, str]:
+        """(position index, pair name) of the largest reciprocity error."""
+        i, j = np.unravel_index(int(np.argmax(np.abs(self.reciprocity))), self.reciprocity.shape)
+        return int(i), _PAIRS[j]
+
+
+def electrical_groups(data: BenchData, pole_pitch: float) -> tuple[np.ndarray, np.ndarray]:
+    """Electrical position of each row in [0, 2 pi) and the index of its distinct position.
+
+    Positions one or more pole pitches apart fall into the same group.
+    """
+    theta = np.mod(2.0 * np.pi * np.asarray(data.position) / pole_pitch, 2.0 * np.pi)
+    key = np.round(theta / (2.0 * np.pi) * 1e9).astype(np.int64) % 1_000_000_000
+    _, inverse = np.unique(key, return_inverse=True)
+    return theta, inverse.reshape(-1)
+
+
+def process_bench(data: BenchData, pole_pitch: float, resistance: float | None = None,
+                  resistance_source: str = "") -> MeasuredTable:
+    """The measured table of ``data`` with positions converted by ``pole_pitch`` (m).
+
+    Parameters
+    ----------
+    data : BenchData
+        Rows of a bench file (checked by :func:`~linsense.identify.bench.read_bench_csv`).
+    pole_pitch : float
+        One electrical period, m: ``theta = 2 pi x / pole_pitch``.
+    resistance : float, optional
+        Phase resistance (ohm) for amplitude-only data; required there (0 neglects the
+        resistive drop, as the paper does). Not used with phasors.
+    resistance_source : str
+        Where ``resistance`` came from, for the warning.
+
+    Raises
+    ------
+    InputError
+        A position without all three phases fed, too few positions, a gap over 45 deg, an
+        amplitude-only impedance below the resistance.
+    """
+    src = data.source
+    theta_row, grp = electrical_groups(data, pole_pitch)
+    n = int(grp.max()) + 1
+    rows = np.asarray(data.row)
+    k = np.asarray(data.phase)
+
+    # every distinct position needs every phase fed
+    count = np.zeros((n, 3))
+    np.add.at(count, (grp, k), 1.0)
+    first = np.full(n, -1)
+    order = np.argsort(rows, kind="stable")
+    for i in order[::-1]:  # the first (lowest) file row of each group wins
+        first[grp[i]] = i
+    missing = np.argwhere(count == 0)
+    if missing.size:
+        g, p = missing[0]
+        i = first[g]
+        raise InputError(
+            src, f"row {rows[i]}, column phase",
+            f"position {data.position[i] * 1e3:.6g} mm ({np.degrees(theta_row[i]):.1f} deg) has no row "
+            f"with phase {PHASES[p]} fed: every position needs all three excitations",
+        )
+    theta_g = theta_row[first]
+    pos_order = np.argsort(theta_g)
+    if n < MIN_POSITIONS:
+        raise InputError(src, "column position_mm",
+                         f"need at least {MIN_POSITIONS} distinct electrical positions, got {n}")
+    ts = theta_g[pos_order]
+    gaps = np.diff(np.concatenate([ts, [ts[0] + 2.0 * np.pi]]))
+    if gaps.max() > MAX_GAP + 1e-9:
+        g = int(np.argmax(gaps))
+        i = first[pos_order[g]]
+        raise InputError(
+            src, f"row {rows[i]}, column position_mm",
+            f"positions do not cover one electrical period: gap of {np.degrees(gaps[g]):.1f} deg after "
+            f"{data.position[i] * 1e3:.6g} mm ({np.degrees(ts[g]):.1f} deg) with pole pitch "
+            f"{pole_pitch * 1e3:.6g} mm (at most {np.degrees(MAX_GAP):.0f} deg allowed)",
+        )
+
+    w = 2.0 * np.pi * np.asarray(data.freq)
+    I = np.asarray(data.current)
+    V = np.asarray(data.voltage)
+    R = np.arange(data.rows)
+    warnings: list[str] = []
+    if data.amplitude_only:
+        if resistance is None:
+            raise InputError(src, "", "amplitude-only data carry no resistance: give --resistance "
+                             "(0 neglects the resistive drop, as the paper does) or --motor")
+        z = np.abs(V) / np.abs(I)[:, None]
+        z_fed = z[R, k]
+        bad = np.nonzero(z_fed < resistance)[0]
+        if bad.size:
+            i = bad[0]
+            raise InputError(
+                src, f"row {rows[i]}, column V{PHASES[k[i]]}",
+                f"|V|/|I| = {z_fed[i]:.6g} ohm is below the resistance {resistance:.6g} ohm "
+                f"({resistance_source or 'given'}): no inductance left",
+            )
+        col = -z / w[:, None]  # mutuals assumed negative
+        col[R, k] = np.sqrt(z_fed**2 - resistance**2) / w
+        r_row = None
+        warnings.append("amplitude-only data: the signs of the mutual inductances are not measured; "
+                        "all mutuals taken as negative")
+        if resistance > 0:
+            warnings.append(
+                f"amplitude-only data: self inductances from sqrt((|V|/|I|)^2 - R^2)/omega with "
+                f"R = {resistance:.6g} ohm ({resistance_source or 'given'}), not measured in this file"
+            )
+        else:
+            warnings.append("amplitude-only data: resistive drop neglected (R = 0, as the paper's eq. 2): "
+                            "self inductances are overestimated")
+    else:
+        z = V / I[:, None]
+        col = z.imag / w[:, None]
+        r_row = z[R, k].real
+
+    # average per (position, fed phase): matrix[g, :, p] = mean of column rows
+    acc = np.zeros((n, 3, 3))
+    np.add.at(acc, (grp, slice(None), k), col)
+    mat = acc / count[:, None, :]
+    mat = mat[pos_order]
+    sym = 0.5 * (mat + np.swapaxes(mat, -1, -2))
+    entries = np.stack([sym[:, r, c] for r, c in _INDEX], axis=1)
+    pair = [(0, 1), (1, 2), (2, 0)]
+    recip = np.stack(
+        [(mat[:, r, c] - mat[:, c, r]) / np.abs(sym[:, r, c]) for r, c in pair], axis=1
+    )
+    if r_row is not None:
+        res, res_std = float(np.mean(r_row)), float(np.std(r_row))
+        if res < 0:
+            raise InputError(src, "columns I_re, I_im, V*_re, V*_im",
+                             f"identified resistance Re(V/I) = {res:.6g} ohm is negative: "
+                             "are current and voltages on one time reference?")
+    else:
+        res, res_std = None, None
+    return MeasuredTable(
+        theta=theta_g[pos_order], position=np.asarray(data.position)[first[pos_order]], entries=entries,
+        matrix=mat, first_row=rows[first[pos_order]], resistance=res, resistance_std=res_std,
+        frequency=float(np.mean(data.freq)), reciprocity=recip, rows=data.rows,
+        amplitude_only=data.amplitude_only, warnings=warnings,
+    )
