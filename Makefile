@@ -56,7 +56,8 @@ ctest: $(GEN_HDR)
 	  done; \
 	  for t in $(CTESTS); do \
 	    $(CC) $(CSTD) $$flags $(CINC) csrc/tests/$$t.c $$objs -lm -o $$dir/$$t; \
-	    printf '[%s] ' $$v; $$dir/$$t; \
+	    out=$$($$dir/$$t) && rc=0 || rc=$$?; printf '%s\n' "$$out" | sed "s/^/[$$v] /"; \
+	    [ $$rc -eq 0 ] || exit $$rc; \
 	  done; \
 	done
 

@@ -1,7 +1,9 @@
-/* linsense firmware library: common types.
+/* linsense firmware library: common types, math macros and status codes.
  *
  * LS_REAL selects the arithmetic: float (default, as on an MCU with a single-precision FPU)
- * or double (define LS_REAL_DOUBLE). Angles are electrical radians.
+ * or double (compile with -DLS_REAL_DOUBLE). Angles are electrical radians, positions metres,
+ * everything else SI. No dynamic memory, no globals: every module keeps its state in a struct
+ * owned by the caller.
  */
 #ifndef LINSENSE_LS_TYPES_H
 #define LINSENSE_LS_TYPES_H
@@ -14,22 +16,44 @@
 typedef double LS_REAL;
 #define LS_R(x) (x)
 #define LS_FLOOR floor
-#define LS_ISFINITE(x) (((x) - (x)) == ((x) - (x)))
+#define LS_SIN sin
+#define LS_COS cos
+#define LS_SQRT sqrt
+#define LS_FABS fabs
+#define LS_EXP exp
+#define LS_TAN tan
+#define LS_ATAN2 atan2
 #else
 typedef float LS_REAL;
 #define LS_R(x) (x##f)
 #define LS_FLOOR floorf
-#define LS_ISFINITE(x) (((x) - (x)) == ((x) - (x)))
+#define LS_SIN sinf
+#define LS_COS cosf
+#define LS_SQRT sqrtf
+#define LS_FABS fabsf
+#define LS_EXP expf
+#define LS_TAN tanf
+#define LS_ATAN2 atan2f
 #endif
+
+/* True for a finite number (false for NaN and +-Inf), without isfinite's double promotion. */
+#define LS_ISFINITE(x) (((x) - (x)) == ((x) - (x)))
 
 #define LS_PI LS_R(3.14159265358979323846)
 #define LS_TWO_PI LS_R(6.28318530717958647692)
+#define LS_SQRT3 LS_R(1.73205080756887729353)
 
 /* Status codes returned by every ls_<module>_init. */
 typedef enum {
     LS_OK = 0,
     LS_ERR_NULL = 1,  /* a required pointer is NULL */
-    LS_ERR_PARAM = 2  /* a configuration value is out of its allowed range */
+    LS_ERR_PARAM = 2  /* a configuration value is out of its allowed range (or not finite) */
 } ls_status;
+
+/* Clamp x into [lo, hi]. */
+static inline LS_REAL ls_clamp(LS_REAL x, LS_REAL lo, LS_REAL hi)
+{
+    return x < lo ? lo : (x > hi ? hi : x);
+}
 
 #endif /* LINSENSE_LS_TYPES_H */

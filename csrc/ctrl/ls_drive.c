@@ -1,0 +1,474 @@
+/* The drive (see linsense/ls_drive.h). */
+#include <math.h>
+#include <string.h>
+
+#include "linsense/ls_drive.h"
+
+/* --------------------------------------------------------------------------- defaults */
+void ls_drive_default_cfg(ls_drive_cfg *c)
+{
+    const LS_REAL fs = LS_R(16000.0);
+    /* ecce2010 reference motor (docs/theory.md): mean L_d, L_q; psi_pm = K_f tau / (3 pi) */
+    const LS_REAL l_d = LS_R(3.508e-3), l_q = LS_R(4.459e-3);
+    const LS_REAL tau = LS_R(0.056), kf = LS_R(20.0), mass = LS_R(1.5), r_s = LS_R(9.0);
+    const LS_REAL w_i = LS_TWO_PI * LS_R(250.0); /* current-loop bandwidth, rad/s */
+    const LS_REAL w_v = LS_TWO_PI * LS_R(15.0);  /* speed-loop bandwidth, rad/s */
+    memset(c, 0, sizeof *c);
+    c->fs = fs;
+    c->pole_pitch = tau;
+    c->force_constant = kf;
+    c->i_max = LS_R(2.5);
+    c->delay_comp = LS_R(1.5);
+    c->enc_counts = 56000; /* 1 um per count */
+    c->inject_sensored = false;
+    c->inject.amplitude = LS_R(12.0);
+    c->inject.freq = LS_R(1000.0);
+    c->inject.fs = fs;
+    c->inject.ramp_rate = LS_R(1200.0);
+    c->bpf.type = LS_BIQUAD_BANDPASS;
+    c->bpf.f0 = LS_R(1000.0);
+    c->bpf.q = LS_R(2.0);
+    c->bpf.fs = fs;
+    c->sep.type = LS_BIQUAD_NOTCH;
+    c->sep.f0 = LS_R(1000.0);
+    c->sep.q = LS_R(2.0);
+    c->sep.fs = fs;
+    c->demod.method = LS_DEMOD_PRODUCT;
+    c->demod.f_lpf = LS_R(150.0);
+    c->demod.fs = fs;
+    c->demod.gain = l_q / (l_q - l_d);
+    c->demod.comp = NULL;
+    c->demod.gain_table = NULL;
+    c->demod.min_level = LS_R(0.005);
+    c->obs.type = LS_OBS_PLL;
+    c->obs.fs = fs;
+    c->obs.pole_pitch = tau;
+    c->obs.mass = mass;
+    c->obs.omega_max = LS_R(300.0);
+    c->obs.force_max = LS_R(200.0);
+    ls_observer_gains(&c->obs, LS_R(15.0));
+    c->enc_obs = c->obs;
+    c->enc_obs.type = LS_OBS_PLL;
+    ls_observer_gains(&c->enc_obs, LS_R(200.0));
+    c->current.kp = w_i * LS_R(0.5) * (l_d + l_q);
+    c->current.ki = w_i * r_s;
+    c->current.l_d = l_d;
+    c->current.l_q = l_q;
+    c->current.psi_pm = kf * tau / (LS_R(3.0) * LS_PI);
+    c->current.decouple = true;
+    c->current.fs = fs;
+    c->pos.type = LS_POSCTRL_P;
+    c->pos.kp_x = LS_R(25.0);
+    c->pos.kd_x = LS_R(0.0);
+    c->pos.v_max = LS_R(0.5);
+    c->pos.mass = mass;
+    c->pos.force_max = kf * c->i_max;
+    c->pos.speed.kp = mass * w_v;
+    c->pos.speed.ki = mass * w_v * w_v / LS_R(4.0);
+    c->pos.speed.out_min = -c->pos.force_max;
+    c->pos.speed.out_max = c->pos.force_max;
+    c->pos.speed.fs = fs;
+    c->traj.v_max = LS_R(0.2);
+    c->traj.a_max = LS_R(1.0);
+    c->traj.pole_pitch = tau;
+    c->traj.fs = fs;
+    c->mod.f_pwm = fs;
+    c->mod.dead_time = LS_R(0.8e-6);
+    c->mod.dtc = true;
+    c->mod.i_band = LS_R(0.05);
+    c->prot.i_max = LS_R(6.0);
+    c->prot.v_dc_min = LS_R(40.0);
+    c->prot.v_dc_max = LS_R(90.0);
+    c->prot.err_max = LS_R(0.6);
+    c->prot.err_time = LS_R(0.05);
+    c->prot.omega_max = LS_R(250.0);
+    c->prot.fs = fs;
+    c->cal.points = 56u;
+    c->cal.table = NULL;
+    c->cal.k_int = LS_R(20.0);
+    c->cal.t_settle = LS_R(0.15);
+    c->cal.t_hold = LS_R(0.05);
+    c->cal.tol = LS_R(0.002);
+    c->cal.t_max = LS_R(3.0);
+    c->cal.period = 0;
+}
+
+/* --------------------------------------------------------------------------- init */
+static bool pos_finite(LS_REAL x)
+{
+    return LS_ISFINITE(x) && x > LS_R(0.0);
+}
+
+ls_status ls_drive_init(ls_drive *d, const ls_drive_cfg *cfg)
+{
+    ls_pos zero = {0, LS_R(0.0)};
+    ls_status st = LS_OK;
+    LS_REAL v_inj_frac;
+    if (d == NULL || cfg == NULL) {
+        return LS_ERR_NULL;
+    }
+    memset(d, 0, sizeof *d);
+    if (!pos_finite(cfg->fs) || !pos_finite(cfg->pole_pitch) || !pos_finite(cfg->force_constant) ||
+        !pos_finite(cfg->i_max) || !LS_ISFINITE(cfg->delay_comp) || cfg->delay_comp < LS_R(0.0) ||
+        cfg->enc_counts <= 0 || cfg->bpf.type != LS_BIQUAD_BANDPASS ||
+        (cfg->sep.type != LS_BIQUAD_NOTCH && cfg->sep.type != LS_BIQUAD_LOWPASS)) {
+        return LS_ERR_PARAM;
+    }
+    /* every module samples at the drive rate */
+    if (cfg->inject.fs != cfg->fs || cfg->bpf.fs != cfg->fs || cfg->sep.fs != cfg->fs ||
+        cfg->demod.fs != cfg->fs || cfg->obs.fs != cfg->fs || cfg->enc_obs.fs != cfg->fs ||
+        cfg->current.fs != cfg->fs || cfg->traj.fs != cfg->fs || cfg->prot.fs != cfg->fs ||
+        cfg->pos.speed.fs != cfg->fs) {
+        return LS_ERR_PARAM;
+    }
+    if (cfg->cal.table != NULL &&
+        (cfg->cal.points < 4u || !pos_finite(cfg->cal.k_int) || !LS_ISFINITE(cfg->cal.t_settle) ||
+         cfg->cal.t_settle < LS_R(0.0) || !pos_finite(cfg->cal.t_hold) || !pos_finite(cfg->cal.tol) ||
+         !pos_finite(cfg->cal.t_max))) {
+        return LS_ERR_PARAM;
+    }
+    st |= ls_inject_init(&d->inj, &cfg->inject);
+    st |= ls_biquad_init(&d->bpf[0], &cfg->bpf);
+    st |= ls_biquad_init(&d->bpf[1], &cfg->bpf);
+    st |= ls_biquad_init(&d->sep[0], &cfg->sep);
+    st |= ls_biquad_init(&d->sep[1], &cfg->sep);
+    st |= ls_demod_init(&d->demod, &cfg->demod);
+    st |= ls_observer_init(&d->obs, &cfg->obs);
+    st |= ls_observer_init(&d->enc, &cfg->enc_obs);
+    st |= ls_current_init(&d->cur, &cfg->current);
+    st |= ls_posctrl_init(&d->pos, &cfg->pos);
+    st |= ls_traj_init(&d->traj, &cfg->traj);
+    st |= ls_mod_init(&d->mod, &cfg->mod);
+    st |= ls_protect_init(&d->prot, &cfg->prot);
+    if (st != LS_OK) {
+        memset(d, 0, sizeof *d);
+        return LS_ERR_PARAM;
+    }
+    /* the fundamental gets what the injection leaves of the linear modulation range */
+    v_inj_frac = cfg->inject.amplitude * LS_SQRT3 / cfg->prot.v_dc_min;
+    if (v_inj_frac >= LS_R(0.8)) {
+        memset(d, 0, sizeof *d);
+        return LS_ERR_PARAM;
+    }
+    d->cfg = *cfg;
+    d->ts = LS_R(1.0) / cfg->fs;
+    d->kx = LS_TWO_PI / cfg->pole_pitch;
+    d->initialised = true;
+    ls_drive_reset(d, zero);
+    return LS_OK;
+}
+
+void ls_drive_reset(ls_drive *d, ls_pos p)
+{
+    if (!d->initialised) {
+        return;
+    }
+    ls_inject_reset(&d->inj);
+    ls_biquad_reset(&d->bpf[0]);
+    ls_biquad_reset(&d->bpf[1]);
+    ls_biquad_reset(&d->sep[0]);
+    ls_biquad_reset(&d->sep[1]);
+    ls_demod_reset(&d->demod);
+    ls_observer_reset(&d->obs, p);
+    ls_observer_reset(&d->enc, p);
+    ls_current_reset(&d->cur);
+    ls_posctrl_reset(&d->pos);
+    ls_traj_reset(&d->traj, p);
+    ls_mod_reset(&d->mod);
+    ls_protect_reset(&d->prot);
+    d->mode = LS_MODE_OFF;
+    d->align = false;
+    d->f_ref = LS_R(0.0);
+    d->cal_phase = LS_CAL_DONE;
+    d->cal_index = 0u;
+    d->cal_timer = 0u;
+    d->cal_hold = 0u;
+    d->psi_cal = LS_R(0.0);
+}
+
+ls_status ls_drive_set_mode(ls_drive *d, ls_mode mode)
+{
+    if (d == NULL || !d->initialised) {
+        return LS_ERR_NULL;
+    }
+    switch (mode) {
+    case LS_MODE_OFF:
+    case LS_MODE_SENSORED:
+    case LS_MODE_SENSORLESS_NOLUT:
+        break;
+    case LS_MODE_SENSORLESS_LUT:
+        if (d->cfg.demod.comp == NULL) {
+            return LS_ERR_PARAM;
+        }
+        break;
+    case LS_MODE_CALIBRATION:
+        if (d->cfg.cal.table == NULL) {
+            return LS_ERR_PARAM;
+        }
+        d->cal_phase = LS_CAL_MOVE;
+        d->cal_index = 0u;
+        d->cal_timer = 0u;
+        d->cal_hold = 0u;
+        d->psi_cal = LS_R(0.0);
+        break;
+    default:
+        return LS_ERR_PARAM;
+    }
+    ls_demod_set_comp(&d->demod, mode == LS_MODE_SENSORLESS_LUT);
+    d->mode = mode;
+    d->align = true;
+    ls_inject_enable(&d->inj, mode == LS_MODE_SENSORLESS_LUT || mode == LS_MODE_SENSORLESS_NOLUT ||
+                                  mode == LS_MODE_CALIBRATION ||
+                                  (mode == LS_MODE_SENSORED && d->cfg.inject_sensored));
+    return LS_OK;
+}
+
+void ls_drive_set_position(ls_drive *d, ls_pos p)
+{
+    if (d == NULL || !d->initialised) {
+        return;
+    }
+    ls_observer_reset(&d->obs, p);
+    ls_traj_reset(&d->traj, p);
+    ls_posctrl_reset(&d->pos);
+}
+
+void ls_drive_move_to(ls_drive *d, ls_pos target)
+{
+    if (d != NULL && d->initialised && d->mode != LS_MODE_CALIBRATION) {
+        ls_traj_move(&d->traj, target);
+    }
+}
+
+void ls_drive_step_to(ls_drive *d, ls_pos target)
+{
+    if (d != NULL && d->initialised && d->mode != LS_MODE_CALIBRATION) {
+        ls_traj_jump(&d->traj, target);
+    }
+}
+
+/* --------------------------------------------------------------------------- step */
+static void disable(ls_drive *d, ls_cmd *cmd)
+{
+    cmd->duty[0] = cmd->duty[1] = cmd->duty[2] = LS_R(0.0);
+    cmd->enable = false;
+    cmd->v_dq[0] = cmd->v_dq[1] = LS_R(0.0);
+    cmd->v_hf = LS_R(0.0);
+    cmd->i_dq_ref[0] = cmd->i_dq_ref[1] = LS_R(0.0);
+    ls_current_reset(&d->cur);
+    ls_posctrl_reset(&d->pos);
+    d->f_ref = LS_R(0.0);
+}
+
+static ls_pos enc_pos(int32_t count, int32_t per_period)
+{
+    ls_pos p;
+    int32_t q = count / per_period;
+    int32_t r = count % per_period;
+    if (r < 0) {
+        r += per_period;
+        q -= 1;
+    }
+    p.period = q;
+    p.theta = (LS_REAL)r * (LS_TWO_PI / (LS_REAL)per_period);
+    return p;
+}
+
+static void calibration_step(ls_drive *d)
+{
+    const ls_cal_cfg *c = &d->cfg.cal;
+    ls_pos target;
+    LS_REAL e;
+    switch (d->cal_phase) {
+    case LS_CAL_MOVE:
+        if (d->cal_timer == 0u) {
+            target.period = c->period;
+            target.theta = LS_TWO_PI * (LS_REAL)d->cal_index / (LS_REAL)c->points;
+            ls_traj_move(&d->traj, target);
+        }
+        d->cal_timer++;
+        if (!d->traj.active) {
+            d->cal_phase = LS_CAL_SETTLE;
+            d->cal_timer = 0u;
+        }
+        break;
+    case LS_CAL_SETTLE:
+        if ((LS_REAL)(++d->cal_timer) * d->ts >= c->t_settle) {
+            d->cal_phase = LS_CAL_ADAPT;
+            d->cal_timer = 0u;
+            d->cal_hold = 0u;
+        }
+        break;
+    case LS_CAL_ADAPT:
+        e = ls_pos_diff(d->obs.pos, d->enc.pos); /* theta_est - theta_enc */
+        d->psi_cal = ls_clamp(d->psi_cal + c->k_int * e * d->ts, -LS_PI / LS_R(4.0), LS_PI / LS_R(4.0));
+        d->cal_hold = LS_FABS(e) < c->tol ? d->cal_hold + 1u : 0u;
+        d->cal_timer++;
+        if ((LS_REAL)d->cal_hold * d->ts >= c->t_hold) {
+            c->table[d->cal_index] = (float)d->psi_cal;
+            d->cal_index++;
+            d->cal_timer = 0u;
+            d->cal_phase = d->cal_index >= c->points ? LS_CAL_DONE : LS_CAL_MOVE;
+        } else if ((LS_REAL)d->cal_timer * d->ts > c->t_max) {
+            ls_protect_trip(&d->prot, LS_FAULT_OBSERVER);
+        }
+        break;
+    case LS_CAL_DONE:
+    default:
+        break;
+    }
+}
+
+void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
+{
+    const ls_drive_cfg *cfg;
+    LS_REAL i_a, i_b, ihf_a, ihf_b, if_a, if_b;
+    LS_REAL c_fb, s_fb, c_est, s_est, v_hf, v_d, v_q, v_a, v_b, dlt, c_adv, s_adv;
+    LS_REAL i_d, i_q, i_q_ref, v_lim, omega_fb, x_err, v_ff, a_ff, f;
+    ls_pos x_ref;
+    const ls_observer *fb;
+    bool sensorless, use_enc, hf_on;
+    uint32_t fault;
+
+    if (cmd == NULL) {
+        return;
+    }
+    memset(cmd, 0, sizeof *cmd);
+    if (d == NULL || meas == NULL || !d->initialised) {
+        cmd->fault = LS_FAULT_CONFIG;
+        return;
+    }
+    cfg = &d->cfg;
+    cmd->mode = d->mode;
+    sensorless = d->mode == LS_MODE_SENSORLESS_LUT || d->mode == LS_MODE_SENSORLESS_NOLUT;
+    use_enc = d->mode == LS_MODE_SENSORED || d->mode == LS_MODE_CALIBRATION;
+    hf_on = sensorless || d->mode == LS_MODE_CALIBRATION || (d->mode == LS_MODE_SENSORED && cfg->inject_sensored);
+
+    fault = ls_protect_check_power(&d->prot, meas->i_abc, meas->v_dc);
+    if (use_enc && !meas->enc_valid) {
+        ls_protect_trip(&d->prot, LS_FAULT_ENCODER);
+        fault = d->prot.fault;
+    }
+    if (fault != LS_FAULT_NONE || d->mode == LS_MODE_OFF) {
+        cmd->fault = fault;
+        cmd->pos_est = d->obs.pos;
+        cmd->pos_fb = d->obs.pos;
+        cmd->pos_ref = d->traj.target;
+        disable(d, cmd);
+        return;
+    }
+
+    /* measurements: Clarke, HF band-pass, fundamental separation */
+    i_a = meas->i_abc[0];
+    i_b = (meas->i_abc[1] - meas->i_abc[2]) * (LS_R(1.0) / LS_SQRT3);
+    ihf_a = ls_biquad_step(&d->bpf[0], i_a);
+    ihf_b = ls_biquad_step(&d->bpf[1], i_b);
+    if_a = ls_biquad_step(&d->sep[0], i_a);
+    if_b = ls_biquad_step(&d->sep[1], i_b);
+
+    /* encoder tracking loop */
+    if (use_enc) {
+        ls_pos pe = enc_pos(meas->enc_count, cfg->enc_counts);
+        if (d->align) {
+            ls_observer_reset(&d->enc, pe);
+            ls_observer_reset(&d->obs, pe);
+            ls_traj_reset(&d->traj, pe);
+        }
+        ls_observer_step(&d->enc, ls_pos_diff(pe, d->enc.pos), d->f_ref);
+    } else if (d->align) {
+        ls_traj_reset(&d->traj, d->obs.pos);
+    }
+    d->align = false;
+
+    /* HF demodulation and observer, on the axis the injection used */
+    c_est = LS_COS(d->obs.pos.theta);
+    s_est = LS_SIN(d->obs.pos.theta);
+    if (hf_on) {
+        LS_REAL err = ls_demod_step(&d->demod, ihf_a, ihf_b, d->obs.pos.theta, d->inj.c, d->inj.s,
+                                    d->mode == LS_MODE_CALIBRATION ? d->psi_cal : LS_R(0.0));
+        if (sensorless || d->mode == LS_MODE_CALIBRATION) {
+            ls_observer_step(&d->obs, err, d->f_ref);
+        }
+        if (sensorless) {
+            ls_protect_check_observer(&d->prot, err, d->demod.valid, d->obs.omega);
+        }
+    }
+    if (d->mode == LS_MODE_CALIBRATION) {
+        calibration_step(d);
+    }
+    if (d->prot.fault != LS_FAULT_NONE) {
+        cmd->fault = d->prot.fault;
+        cmd->pos_est = d->obs.pos;
+        cmd->pos_fb = d->obs.pos;
+        cmd->pos_ref = d->traj.target;
+        disable(d, cmd);
+        return;
+    }
+
+    /* feedback: encoder or HF estimate */
+    fb = use_enc ? &d->enc : &d->obs;
+    if (fb == &d->obs) {
+        c_fb = c_est;
+        s_fb = s_est;
+    } else {
+        c_fb = LS_COS(fb->pos.theta);
+        s_fb = LS_SIN(fb->pos.theta);
+    }
+    omega_fb = fb->omega;
+
+    /* position reference and control -> force -> current reference */
+    ls_traj_step(&d->traj, &x_ref, &v_ff, &a_ff);
+    x_err = ls_pos_diff(x_ref, fb->pos) / d->kx;
+    f = ls_posctrl_step(&d->pos, x_err, omega_fb / d->kx, v_ff, a_ff);
+    i_q_ref = ls_clamp(f / cfg->force_constant, -cfg->i_max, cfg->i_max);
+    d->f_ref = i_q_ref * cfg->force_constant;
+
+    /* current control in the feedback frame */
+    i_d = c_fb * if_a + s_fb * if_b;
+    i_q = -s_fb * if_a + c_fb * if_b;
+    v_lim = meas->v_dc * (LS_R(1.0) / LS_SQRT3) - (hf_on ? cfg->inject.amplitude : LS_R(0.0));
+    ls_current_step(&d->cur, i_d, i_q, LS_R(0.0), i_q_ref, omega_fb, v_lim, &v_d, &v_q);
+
+    /* fundamental voltage at the angle advanced over the computation delay (small-angle
+     * rotation), plus the HF injection on the estimated d-axis */
+    dlt = cfg->delay_comp * omega_fb * d->ts;
+    c_adv = c_fb - s_fb * dlt;
+    s_adv = s_fb + c_fb * dlt;
+    v_a = c_adv * v_d - s_adv * v_q;
+    v_b = s_adv * v_d + c_adv * v_q;
+    v_hf = hf_on ? ls_inject_step(&d->inj) : LS_R(0.0);
+    v_a += v_hf * c_est;
+    v_b += v_hf * s_est;
+    (void)ls_mod_step(&d->mod, v_a, v_b, meas->v_dc, meas->i_abc, cmd->duty);
+
+    /* nothing non-finite ever leaves a step */
+    if (!LS_ISFINITE(cmd->duty[0] + cmd->duty[1] + cmd->duty[2]) || !LS_ISFINITE(d->obs.pos.theta) ||
+        !LS_ISFINITE(fb->pos.theta) || !LS_ISFINITE(v_a + v_b)) {
+        ls_protect_trip(&d->prot, LS_FAULT_NONFINITE);
+        cmd->fault = d->prot.fault;
+        disable(d, cmd);
+        return;
+    }
+    cmd->enable = true;
+    cmd->fault = d->prot.fault;
+    cmd->pos_fb = fb->pos;
+    cmd->pos_est = d->obs.pos;
+    cmd->pos_ref = x_ref;
+    cmd->v_est = ls_observer_speed(&d->obs);
+    cmd->v_fb = omega_fb / d->kx;
+    cmd->f_load_est = d->obs.f_load;
+    cmd->err_sig = d->demod.err;
+    cmd->err_valid = d->demod.valid;
+    cmd->hf_level = d->demod.level;
+    cmd->psi_comp = d->demod.psi;
+    cmd->i_dq[0] = i_d;
+    cmd->i_dq[1] = i_q;
+    cmd->i_dq_ref[0] = LS_R(0.0);
+    cmd->i_dq_ref[1] = i_q_ref;
+    cmd->v_dq[0] = v_d;
+    cmd->v_dq[1] = v_q;
+    cmd->v_hf = v_hf;
+    cmd->cal_index = d->cal_index;
+    cmd->cal_done = d->mode == LS_MODE_CALIBRATION && d->cal_phase == LS_CAL_DONE;
+    cmd->psi_cal = d->psi_cal;
+}

@@ -1,0 +1,106 @@
+/* Trapezoidal trajectory generator (see linsense/ls_traj.h). */
+#include <math.h>
+
+#include "linsense/ls_traj.h"
+
+ls_status ls_traj_init(ls_traj *t, const ls_traj_cfg *cfg)
+{
+    ls_pos zero = {0, LS_R(0.0)};
+    if (t == NULL || cfg == NULL) {
+        return LS_ERR_NULL;
+    }
+    if (!LS_ISFINITE(cfg->v_max) || !LS_ISFINITE(cfg->a_max) || !LS_ISFINITE(cfg->fs) ||
+        !LS_ISFINITE(cfg->pole_pitch) || !(cfg->v_max > LS_R(0.0)) || !(cfg->a_max > LS_R(0.0)) ||
+        !(cfg->fs > LS_R(0.0)) || !(cfg->pole_pitch > LS_R(0.0))) {
+        return LS_ERR_PARAM;
+    }
+    t->cfg = *cfg;
+    t->ts = LS_R(1.0) / cfg->fs;
+    t->kx = LS_TWO_PI / cfg->pole_pitch;
+    ls_traj_reset(t, zero);
+    return LS_OK;
+}
+
+void ls_traj_reset(ls_traj *t, ls_pos p)
+{
+    t->start = ls_pos_norm(p);
+    t->target = t->start;
+    t->dist = LS_R(0.0);
+    t->sign = LS_R(1.0);
+    t->t_acc = LS_R(0.0);
+    t->t_total = LS_R(0.0);
+    t->v_peak = LS_R(0.0);
+    t->k = 0u;
+    t->active = false;
+}
+
+void ls_traj_jump(ls_traj *t, ls_pos target)
+{
+    ls_traj_reset(t, target);
+}
+
+void ls_traj_move(ls_traj *t, ls_pos target)
+{
+    ls_pos x;
+    LS_REAL v, a, d;
+    LS_REAL dummy_v, dummy_a;
+    /* start from where the reference is now (a move may interrupt another one) */
+    t->k = t->k > 0u ? t->k - 1u : 0u;
+    ls_traj_step(t, &x, &dummy_v, &dummy_a);
+    target = ls_pos_norm(target);
+    d = ls_pos_diff(target, x) / t->kx;
+    t->start = x;
+    t->target = target;
+    t->sign = d < LS_R(0.0) ? LS_R(-1.0) : LS_R(1.0);
+    t->dist = LS_FABS(d);
+    v = t->cfg.v_max;
+    a = t->cfg.a_max;
+    if (t->dist >= v * v / a) {
+        t->t_acc = v / a;
+        t->v_peak = v;
+        t->t_total = t->dist / v + v / a;
+    } else {
+        t->t_acc = LS_SQRT(t->dist / a);
+        t->v_peak = a * t->t_acc;
+        t->t_total = LS_R(2.0) * t->t_acc;
+    }
+    t->k = 0u;
+    t->active = t->dist > LS_R(0.0);
+}
+
+void ls_traj_step(ls_traj *t, ls_pos *x_ref, LS_REAL *v_ref, LS_REAL *a_ref)
+{
+    LS_REAL tt, s, v, a;
+    const LS_REAL am = t->cfg.a_max;
+    if (!t->active) {
+        *x_ref = t->target;
+        *v_ref = LS_R(0.0);
+        *a_ref = LS_R(0.0);
+        return;
+    }
+    tt = (LS_REAL)t->k * t->ts;
+    if (tt < t->t_acc) {
+        s = LS_R(0.5) * am * tt * tt;
+        v = am * tt;
+        a = am;
+    } else if (tt < t->t_total - t->t_acc) {
+        s = LS_R(0.5) * am * t->t_acc * t->t_acc + t->v_peak * (tt - t->t_acc);
+        v = t->v_peak;
+        a = LS_R(0.0);
+    } else if (tt < t->t_total) {
+        LS_REAL r = t->t_total - tt;
+        s = t->dist - LS_R(0.5) * am * r * r;
+        v = am * r;
+        a = -am;
+    } else {
+        t->active = false;
+        *x_ref = t->target;
+        *v_ref = LS_R(0.0);
+        *a_ref = LS_R(0.0);
+        return;
+    }
+    *x_ref = ls_pos_add(t->start, t->sign * s * t->kx);
+    *v_ref = t->sign * v;
+    *a_ref = t->sign * a;
+    t->k++;
+}

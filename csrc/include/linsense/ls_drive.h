@@ -1,0 +1,169 @@
+/* linsense firmware library: the drive, called once per PWM period.
+ *
+ *   ls_drive_step(drive, &meas, &cmd)
+ *
+ * in:  phase currents sampled at the carrier peak, DC-bus voltage, optional encoder count;
+ * out: duty cycles for the next period, enable, fault bits, estimates and diagnostics.
+ *
+ * Call order inside a step (docs/firmware.md): protection on the measurements; Clarke; HF
+ * band-pass and fundamental notch; encoder tracking loop (sensored, calibration); demodulator
+ * in the compensated frame and HF observer (sensorless, calibration); position reference
+ * (trajectory or step; calibration sequence); position/speed control -> force -> i_q reference;
+ * d/q current control on the feedback angle; HF injection added on the estimated d-axis;
+ * modulator with the angle advanced for the one-period computation delay; observer-loss checks.
+ *
+ * Modes:
+ *   LS_MODE_OFF              outputs disabled, estimators idle
+ *   LS_MODE_SENSORED         encoder closes every loop (HF injection optional)
+ *   LS_MODE_SENSORLESS_LUT   HF observer with the compensation table (cfg.demod.comp required)
+ *   LS_MODE_SENSORLESS_NOLUT HF observer without compensation (the paper's unstable case)
+ *   LS_MODE_CALIBRATION      encoder closes the position loop; at each of cal.points positions of
+ *                            one electrical period an integrator adjusts the compensation angle
+ *                            until the HF observer agrees with the encoder; the result is written
+ *                            to cal.table (paper Fig. 9, "measured" LUT)
+ */
+#ifndef LINSENSE_LS_DRIVE_H
+#define LINSENSE_LS_DRIVE_H
+
+#include "linsense/ls_ctrl.h"
+#include "linsense/ls_demod.h"
+#include "linsense/ls_filter.h"
+#include "linsense/ls_inject.h"
+#include "linsense/ls_lut.h"
+#include "linsense/ls_modulator.h"
+#include "linsense/ls_observer.h"
+#include "linsense/ls_pos.h"
+#include "linsense/ls_protect.h"
+#include "linsense/ls_traj.h"
+#include "linsense/ls_types.h"
+
+#define LS_FAULT_ENCODER 0x80u /* encoder needed by the mode but not valid */
+
+typedef enum {
+    LS_MODE_OFF = 0,
+    LS_MODE_SENSORED = 1,
+    LS_MODE_SENSORLESS_LUT = 2,
+    LS_MODE_SENSORLESS_NOLUT = 3,
+    LS_MODE_CALIBRATION = 4
+} ls_mode;
+
+typedef struct {
+    uint32_t points;  /* -, table length over one electrical period, >= 4 */
+    float *table;     /* rad, caller-owned output table of `points` values (NULL: no calibration) */
+    LS_REAL k_int;    /* 1/s, adaptation: d psi_cal/dt = k_int (theta_est - theta_enc), > 0 */
+    LS_REAL t_settle; /* s, wait after each move before adapting, >= 0 */
+    LS_REAL t_hold;   /* s, the error must stay below tol this long to accept a point, > 0 */
+    LS_REAL tol;      /* rad, acceptance threshold on |theta_est - theta_enc|, > 0 */
+    LS_REAL t_max;    /* s, a point not accepted within this time trips LS_FAULT_OBSERVER, > 0 */
+    int32_t period;   /* -, the electrical period (encoder periods) swept by the calibration */
+} ls_cal_cfg;
+
+typedef struct {
+    LS_REAL fs;             /* Hz, control sampling rate = PWM frequency, > 0 */
+    LS_REAL pole_pitch;     /* m, one electrical period tau, > 0 */
+    LS_REAL force_constant; /* N/A, per peak phase current, > 0 */
+    LS_REAL i_max;          /* A, limit of the current reference, > 0 */
+    LS_REAL delay_comp;     /* -, angle advance of the voltage in sampling periods (1.5 for a
+                               one-period computation delay plus the half-period average), >= 0 */
+    int32_t enc_counts;     /* -, encoder counts per electrical period, > 0 */
+    bool inject_sensored;   /* keep injecting in LS_MODE_SENSORED */
+    ls_inject_cfg inject;   /* HF injection */
+    ls_biquad_cfg bpf;      /* HF band-pass on the alpha-beta currents (LS_BIQUAD_BANDPASS) */
+    ls_biquad_cfg sep;      /* fundamental separation (LS_BIQUAD_NOTCH at the injection
+                               frequency, or LS_BIQUAD_LOWPASS) */
+    ls_demod_cfg demod;     /* demodulator; demod.comp is the compensation table */
+    ls_observer_cfg obs;    /* HF position observer */
+    ls_observer_cfg enc_obs; /* encoder tracking loop (speed from the encoder) */
+    ls_current_cfg current; /* d/q current controller */
+    ls_posctrl_cfg pos;     /* position (and speed) controller */
+    ls_traj_cfg traj;       /* trajectory generator */
+    ls_mod_cfg mod;         /* modulator */
+    ls_protect_cfg prot;    /* protection */
+    ls_cal_cfg cal;         /* LUT calibration */
+} ls_drive_cfg;
+
+typedef struct {
+    LS_REAL i_abc[3]; /* A, phase currents sampled at the carrier peak */
+    LS_REAL v_dc;     /* V, DC-bus voltage */
+    bool enc_valid;   /* encoder count available */
+    int32_t enc_count; /* -, encoder count (enc_counts per electrical period, 0 at theta = 0) */
+} ls_meas;
+
+typedef struct {
+    LS_REAL duty[3];     /* -, duty cycles for the next PWM period, [0, 1] */
+    bool enable;         /* gate drivers enabled */
+    uint32_t fault;      /* latched LS_FAULT_* bits */
+    ls_mode mode;        /* active mode */
+    ls_pos pos_fb;       /* position used by the controllers (encoder or HF estimate) */
+    ls_pos pos_est;      /* HF observer position estimate */
+    ls_pos pos_ref;      /* position reference */
+    LS_REAL v_est;       /* m/s, HF observer speed estimate */
+    LS_REAL v_fb;        /* m/s, speed used by the controllers */
+    LS_REAL f_load_est;  /* N, load-force estimate (mechanical observer) */
+    LS_REAL err_sig;     /* rad, demodulated error (estimate of theta - theta_est) */
+    bool err_valid;      /* HF signal strong enough */
+    LS_REAL hf_level;    /* A^2, mean-square HF current */
+    LS_REAL psi_comp;    /* rad, compensation angle used by the demodulator */
+    LS_REAL i_dq[2];     /* A, fundamental currents in the feedback frame */
+    LS_REAL i_dq_ref[2]; /* A, current references */
+    LS_REAL v_dq[2];     /* V, fundamental voltage references */
+    LS_REAL v_hf;        /* V, HF injection voltage of this step */
+    uint32_t cal_index;  /* -, calibration point in progress (= points when done) */
+    bool cal_done;       /* calibration finished, table written */
+    LS_REAL psi_cal;     /* rad, calibration compensation angle */
+} ls_cmd;
+
+typedef enum {
+    LS_CAL_MOVE = 0,
+    LS_CAL_SETTLE = 1,
+    LS_CAL_ADAPT = 2,
+    LS_CAL_DONE = 3
+} ls_cal_phase;
+
+typedef struct {
+    ls_drive_cfg cfg;    /* copy of the configuration */
+    bool initialised;    /* ls_drive_init succeeded */
+    ls_mode mode;        /* active mode */
+    bool align;          /* re-align estimators and reference at the next step */
+    ls_inject inj;
+    ls_biquad bpf[2];    /* alpha, beta */
+    ls_biquad sep[2];    /* alpha, beta */
+    ls_demod demod;
+    ls_observer obs;
+    ls_observer enc;
+    ls_current cur;
+    ls_posctrl pos;
+    ls_traj traj;
+    ls_mod mod;
+    ls_protect prot;
+    LS_REAL f_ref;       /* N, force reference of the last step */
+    LS_REAL ts;          /* s */
+    LS_REAL kx;          /* rad/m, 2 pi / tau */
+    LS_REAL v_lim;       /* -, fraction of V_dc/sqrt(3) left to the fundamental */
+    ls_cal_phase cal_phase;
+    uint32_t cal_index;
+    uint32_t cal_timer;  /* steps in the present phase */
+    uint32_t cal_hold;   /* steps with the error below tol */
+    LS_REAL psi_cal;     /* rad */
+} ls_drive;
+
+/* Fill cfg with the defaults documented in docs/firmware.md: 16 kHz, 12 V / 1 kHz injection and
+ * the ecce2010 reference motor; the caller then sets its tables, motor and gains. */
+void ls_drive_default_cfg(ls_drive_cfg *cfg);
+/* Validate every module's configuration; LS_ERR_PARAM names no field, but each module's
+ * ls_<module>_init can be called alone to find it. */
+ls_status ls_drive_init(ls_drive *d, const ls_drive_cfg *cfg);
+/* Clear every state and fault; mode OFF; position estimates at p. */
+void ls_drive_reset(ls_drive *d, ls_pos p);
+/* Change mode (LS_ERR_PARAM if the mode needs a table or encoder setting it lacks). */
+ls_status ls_drive_set_mode(ls_drive *d, ls_mode mode);
+/* Tell the HF observer where the mover is (sensorless start from a known position). */
+void ls_drive_set_position(ls_drive *d, ls_pos p);
+/* Minimum-time move of the reference to target. */
+void ls_drive_move_to(ls_drive *d, ls_pos target);
+/* Step the reference to target. */
+void ls_drive_step_to(ls_drive *d, ls_pos target);
+/* One PWM period. */
+void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd);
+
+#endif /* LINSENSE_LS_DRIVE_H */

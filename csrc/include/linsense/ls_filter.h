@@ -1,0 +1,45 @@
+/* linsense firmware library: second-order (biquad) IIR filters.
+ *
+ * Designed by the bilinear transform with pre-warping at f0 (R. Bristow-Johnson's audio-EQ
+ * cookbook): low-pass, band-pass (0 dB and zero phase at f0) and notch (zero gain at f0).
+ * Transposed direct form II. Used for signal separation (band-pass around the injected
+ * frequency, notch for the current loop) and for the demodulator's low-pass filters.
+ */
+#ifndef LINSENSE_LS_FILTER_H
+#define LINSENSE_LS_FILTER_H
+
+#include "linsense/ls_types.h"
+
+typedef enum {
+    LS_BIQUAD_LOWPASS = 0,
+    LS_BIQUAD_BANDPASS = 1,
+    LS_BIQUAD_NOTCH = 2
+} ls_biquad_type;
+
+typedef struct {
+    ls_biquad_type type; /* filter type */
+    LS_REAL f0;          /* Hz, corner (low-pass) or centre (band-pass, notch) frequency, < fs/2 */
+    LS_REAL q;           /* -, quality factor (0.7071 gives a Butterworth low-pass), > 0 */
+    LS_REAL fs;          /* Hz, sampling rate, > 0 */
+} ls_biquad_cfg;
+
+typedef struct {
+    LS_REAL b0, b1, b2; /* -, numerator coefficients (a0 normalised to 1) */
+    LS_REAL a1, a2;     /* -, denominator coefficients */
+    LS_REAL z1, z2;     /* state of the transposed direct form II, unit of the input */
+} ls_biquad;
+
+/* Design the filter. LS_ERR_PARAM for f0 <= 0, f0 >= fs/2, q <= 0, fs <= 0 or non-finite. */
+ls_status ls_biquad_init(ls_biquad *f, const ls_biquad_cfg *cfg);
+/* Clear the state (coefficients kept). */
+void ls_biquad_reset(ls_biquad *f);
+/* Filter one sample. */
+static inline LS_REAL ls_biquad_step(ls_biquad *f, LS_REAL x)
+{
+    LS_REAL y = f->b0 * x + f->z1;
+    f->z1 = f->b1 * x - f->a1 * y + f->z2;
+    f->z2 = f->b2 * x - f->a2 * y;
+    return y;
+}
+
+#endif /* LINSENSE_LS_FILTER_H */

@@ -1,0 +1,37 @@
+/* linsense firmware library: pulsating HF voltage injection on the estimated d-axis.
+ *
+ * v_d_hf[k] = A[k] cos(phi[k]), phi advancing by 2 pi f / fs per step. The carrier is a unit
+ * phasor rotated by a fixed step each sample (no trigonometry per step) and renormalised, so
+ * it is phase-continuous for any frequency, including through amplitude ramps.
+ */
+#ifndef LINSENSE_LS_INJECT_H
+#define LINSENSE_LS_INJECT_H
+
+#include "linsense/ls_types.h"
+
+typedef struct {
+    LS_REAL amplitude; /* V, peak HF voltage when on, >= 0 */
+    LS_REAL freq;      /* Hz, injection frequency, > 0 */
+    LS_REAL fs;        /* Hz, sampling rate, >= 4 freq */
+    LS_REAL ramp_rate; /* V/s, amplitude slew when switched on or off, > 0 */
+} ls_inject_cfg;
+
+typedef struct {
+    ls_inject_cfg cfg; /* copy of the configuration */
+    LS_REAL c, s;      /* -, cos and sin of the present carrier phase */
+    LS_REAL dc, ds;    /* -, cos and sin of the phase step 2 pi f / fs */
+    LS_REAL amp;       /* V, present amplitude */
+    LS_REAL amp_step;  /* V, amplitude change per step during a ramp */
+    bool on;           /* injection requested on */
+} ls_inject;
+
+ls_status ls_inject_init(ls_inject *inj, const ls_inject_cfg *cfg);
+/* Phase 0, amplitude 0, off. */
+void ls_inject_reset(ls_inject *inj);
+/* Request on (ramp up to cfg.amplitude) or off (ramp down to 0). */
+void ls_inject_enable(ls_inject *inj, bool on);
+/* HF voltage for this step (V), then advance the carrier by one step. The
+ * carrier phasor (c, s) in the state then belongs to the next sample. */
+LS_REAL ls_inject_step(ls_inject *inj);
+
+#endif /* LINSENSE_LS_INJECT_H */

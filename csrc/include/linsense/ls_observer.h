@@ -1,0 +1,59 @@
+/* linsense firmware library: tracking observer giving position and speed from an error signal.
+ *
+ * Input: eps = theta - theta_est (rad), from the demodulator (sensorless) or from an encoder.
+ * LS_OBS_PLL (type-2 tracking loop, paper Fig. 10):
+ *   omega += k2 eps Ts;   theta_est += (omega + k1 eps) Ts
+ * LS_OBS_MECH (mechanical model: mass, motor force from the current reference, load force):
+ *   theta_est += (omega + k1 eps) Ts
+ *   omega     += (kx (F_motor - F_load) / m + k2 eps) Ts,   kx = 2 pi / tau
+ *   F_load    -= k3 eps (m / kx) Ts
+ * Error dynamics: s^2 + k1 s + k2 (PLL) and s^3 + k1 s^2 + k2 s + k3 (MECH).
+ * ls_observer_gains() places all poles at -2 pi f_bw (critically damped); the gains stay
+ * explicit configuration fields. The position is an ls_pos (period count + angle).
+ */
+#ifndef LINSENSE_LS_OBSERVER_H
+#define LINSENSE_LS_OBSERVER_H
+
+#include "linsense/ls_pos.h"
+#include "linsense/ls_types.h"
+
+typedef enum {
+    LS_OBS_PLL = 0,
+    LS_OBS_MECH = 1
+} ls_observer_type;
+
+typedef struct {
+    ls_observer_type type;  /* observer structure */
+    LS_REAL fs;             /* Hz, sampling rate, > 0 */
+    LS_REAL k1;             /* 1/s, error to speed (proportional), > 0 */
+    LS_REAL k2;             /* 1/s^2, error to acceleration (integral), > 0 */
+    LS_REAL k3;             /* 1/s^3, error to load-force (MECH only), > 0 for MECH */
+    LS_REAL pole_pitch;     /* m, one electrical period tau, > 0 */
+    LS_REAL mass;           /* kg, moving mass (MECH), > 0 */
+    LS_REAL omega_max;      /* rad/s, electrical speed clamp of the estimate, > 0 */
+    LS_REAL force_max;      /* N, clamp of the load-force estimate (MECH), > 0 */
+} ls_observer_cfg;
+
+typedef struct {
+    ls_observer_cfg cfg; /* copy of the configuration */
+    ls_pos pos;          /* estimated position */
+    LS_REAL omega;       /* rad/s, estimated electrical speed */
+    LS_REAL f_load;      /* N, estimated load force (MECH) */
+    LS_REAL ts;          /* s, sampling period */
+    LS_REAL kx;          /* rad/m, 2 pi / tau */
+} ls_observer;
+
+/* Fill k1, k2, k3 for critically damped poles at -2 pi f_bw (f_bw in Hz). */
+void ls_observer_gains(ls_observer_cfg *cfg, LS_REAL f_bw);
+ls_status ls_observer_init(ls_observer *o, const ls_observer_cfg *cfg);
+/* Zero speed and load force; position set to p. */
+void ls_observer_reset(ls_observer *o, ls_pos p);
+/* One step with error eps (rad) and motor force f_motor (N, from the current reference). */
+void ls_observer_step(ls_observer *o, LS_REAL eps, LS_REAL f_motor);
+/* Estimated speed in m/s. */
+static inline LS_REAL ls_observer_speed(const ls_observer *o)
+{
+    return o->omega / o->kx;
+}
+
+#endif /* LINSENSE_LS_OBSERVER_H */

@@ -1,0 +1,46 @@
+/* linsense firmware library: position references.
+ *
+ * Minimum-time trapezoidal profile under |v| <= v_max, |a| <= a_max (triangular when the move is
+ * shorter than v_max^2 / a_max), evaluated in closed form at t = k Ts (no accumulated error), or
+ * a step (the reference jumps). Positions are ls_pos, so moves start anywhere on a long axis.
+ *   D >= v^2/a: T = D/v_max + v_max/a_max;  otherwise T = 2 sqrt(D/a_max).
+ */
+#ifndef LINSENSE_LS_TRAJ_H
+#define LINSENSE_LS_TRAJ_H
+
+#include "linsense/ls_pos.h"
+#include "linsense/ls_types.h"
+
+typedef struct {
+    LS_REAL v_max;      /* m/s, > 0 */
+    LS_REAL a_max;      /* m/s^2, > 0 */
+    LS_REAL pole_pitch; /* m, tau, > 0 */
+    LS_REAL fs;         /* Hz, sampling rate, > 0 */
+} ls_traj_cfg;
+
+typedef struct {
+    ls_traj_cfg cfg;  /* copy of the configuration */
+    ls_pos start;     /* start of the present move */
+    ls_pos target;    /* end of the present move */
+    LS_REAL dist;     /* m, |target - start| */
+    LS_REAL sign;     /* -, direction of the move, +1 or -1 */
+    LS_REAL t_acc;    /* s, acceleration time */
+    LS_REAL t_total;  /* s, duration of the move */
+    LS_REAL v_peak;   /* m/s, peak speed of the move */
+    uint32_t k;       /* -, steps since the start of the move */
+    bool active;      /* a move is in progress */
+    LS_REAL ts;       /* s, sampling period */
+    LS_REAL kx;       /* rad/m, 2 pi / tau */
+} ls_traj;
+
+ls_status ls_traj_init(ls_traj *t, const ls_traj_cfg *cfg);
+/* Hold at p. */
+void ls_traj_reset(ls_traj *t, ls_pos p);
+/* Start a minimum-time move from the present reference to target. */
+void ls_traj_move(ls_traj *t, ls_pos target);
+/* Step the reference to target (no profile). */
+void ls_traj_jump(ls_traj *t, ls_pos target);
+/* Reference for this step: position, speed (m/s), acceleration (m/s^2); then advance. */
+void ls_traj_step(ls_traj *t, ls_pos *x_ref, LS_REAL *v_ref, LS_REAL *a_ref);
+
+#endif /* LINSENSE_LS_TRAJ_H */
