@@ -16,7 +16,7 @@ SAN      := -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-fra
 CINC     := -Icsrc/include -Icsrc/tests -I$(BUILD)/gen
 CTRL_SRC := $(wildcard csrc/ctrl/*.c)
 CTESTS   := $(patsubst csrc/tests/%.c,%,$(wildcard csrc/tests/test_*.c))
-GEN_HDR  := $(BUILD)/gen/ls_lut_ecce2010.h
+GEN_HDR  := $(BUILD)/gen/ls_lut_ecce2010.h $(BUILD)/gen/ls_lut_ecce2010_r.h
 # variant name : extra flags
 VARIANTS := float-san double-san float-plain
 
@@ -37,8 +37,11 @@ demo: $(STAMP)
 
 test: lint ctest pytest
 
-$(GEN_HDR): $(STAMP) $(wildcard src/linsense/compensation/*.py src/linsense/model/*.py)
+GEN_DEPS := $(STAMP) $(wildcard src/linsense/compensation/*.py src/linsense/model/*.py src/linsense/analysis/*.py)
+$(BUILD)/gen/ls_lut_ecce2010.h: $(GEN_DEPS)
 	$(VENV)/bin/linsense lut --motor ecce2010 --points 360 --format c --out $@
+$(BUILD)/gen/ls_lut_ecce2010_r.h: $(GEN_DEPS)
+	$(VENV)/bin/linsense lut --motor ecce2010 --points 360 --format c --f-inj 1000 --symbol ls_lut_ecce2010_r --out $@
 
 # Build and run every C test in three variants: float and double under ASan+UBSan, and float
 # without sanitizers. Library sources get the stricter warnings (-Wdouble-promotion ...).

@@ -10,6 +10,7 @@ from hypothesis import given, settings
 
 from conftest import ECCE, make_motor, salient_params, theta_grid
 from linsense.analysis.hf import (
+    demod_ratio,
     dq_components,
     equilibrium_error,
     hf_current,
@@ -19,6 +20,7 @@ from linsense.analysis.hf import (
     psi,
     psi_compensated,
     psi_lut,
+    psi_lut_resistive,
     saliency,
 )
 from linsense.analysis.summary import summarize
@@ -152,3 +154,32 @@ def test_brief_section6_numbers(ecce):
 def test_hf_current_amplitude_scales_with_voltage(ecce):
     th = theta_grid(36)
     np.testing.assert_allclose(hf_current_amplitude(ecce, th, 24.0), 2 * hf_current_amplitude(ecce, th, 12.0))
+
+
+def test_resistive_lut_zeroes_the_demodulated_error(ecce):
+    """With R_s the eq. (12) LUT leaves a demodulated error at theta_err = 0 (a position bias of
+    up to ~2 deg for ecce2010 at 1 kHz); psi_lut_resistive removes it, and reduces to eq. (12)
+    when R_s = 0."""
+    th = theta_grid(720)
+    lut_r = psi_lut_resistive(ecce, th, 1000.0)
+    np.testing.assert_allclose(demod_ratio(ecce, th, 0.0, 12.0, 1000.0, lut_r), 0.0, atol=1e-14)
+    biased = demod_ratio(ecce, th, 0.0, 12.0, 1000.0, psi_lut(ecce, th))
+    assert np.abs(biased).max() > 3e-3  # clearly non-zero: ~0.2 deg of current phase
+    ideal = replace(ecce, R_s=0.0)
+    np.testing.assert_allclose(psi_lut_resistive(ideal, th, 1000.0), psi_lut(ecce, th), atol=1e-14)
+    np.testing.assert_allclose(demod_ratio(ideal, th, 0.0, 12.0, 1000.0, psi_lut(ecce, th)), 0.0, atol=1e-14)
+    # position bias of the eq. (12) LUT: the error at which the demodulated signal vanishes
+    from scipy.optimize import brentq
+
+    bias = [
+        brentq(lambda e, t=t: demod_ratio(ecce, t, e, 12.0, 1000.0, psi_lut(ecce, t + e)), -0.2, 0.2)
+        for t in np.radians([0.0, 15.0, 30.0, 60.0, 90.0])
+    ]
+    np.testing.assert_allclose(np.degrees(bias), [1.63, 1.95, 1.75, 0.0, -1.75], atol=0.02)
+
+
+def test_resistive_lut_sign_property(ecce):
+    th = theta_grid(720)[:, None]
+    e = np.radians([-15, -5, -0.5, 0.5, 5, 15])[None, :]
+    r = demod_ratio(ecce, th, e, 12.0, 1000.0, psi_lut_resistive(ecce, th + e, 1000.0))
+    assert np.all(np.sign(r) == -np.sign(e))

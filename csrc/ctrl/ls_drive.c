@@ -12,7 +12,7 @@ void ls_drive_default_cfg(ls_drive_cfg *c)
     const LS_REAL l_d = LS_R(3.508e-3), l_q = LS_R(4.459e-3);
     const LS_REAL tau = LS_R(0.056), kf = LS_R(20.0), mass = LS_R(1.5), r_s = LS_R(9.0);
     const LS_REAL w_i = LS_TWO_PI * LS_R(250.0); /* current-loop bandwidth, rad/s */
-    const LS_REAL w_v = LS_TWO_PI * LS_R(15.0);  /* speed-loop bandwidth, rad/s */
+    const LS_REAL w_v = LS_TWO_PI * LS_R(6.0);   /* speed-loop bandwidth, rad/s */
     memset(c, 0, sizeof *c);
     c->fs = fs;
     c->pole_pitch = tau;
@@ -46,7 +46,7 @@ void ls_drive_default_cfg(ls_drive_cfg *c)
     c->obs.mass = mass;
     c->obs.omega_max = LS_R(300.0);
     c->obs.force_max = LS_R(200.0);
-    ls_observer_gains(&c->obs, LS_R(15.0));
+    ls_observer_gains(&c->obs, LS_R(40.0)); /* well above the speed loop it feeds */
     c->enc_obs = c->obs;
     c->enc_obs.type = LS_OBS_PLL;
     ls_observer_gains(&c->enc_obs, LS_R(200.0));
@@ -58,7 +58,7 @@ void ls_drive_default_cfg(ls_drive_cfg *c)
     c->current.decouple = true;
     c->current.fs = fs;
     c->pos.type = LS_POSCTRL_P;
-    c->pos.kp_x = LS_R(25.0);
+    c->pos.kp_x = LS_R(10.0);
     c->pos.kd_x = LS_R(0.0);
     c->pos.v_max = LS_R(0.5);
     c->pos.mass = mass;
@@ -88,7 +88,7 @@ void ls_drive_default_cfg(ls_drive_cfg *c)
     c->cal.k_int = LS_R(20.0);
     c->cal.t_settle = LS_R(0.15);
     c->cal.t_hold = LS_R(0.05);
-    c->cal.tol = LS_R(0.002);
+    c->cal.tol = LS_R(0.0005);
     c->cal.t_max = LS_R(3.0);
     c->cal.period = 0;
 }
@@ -274,11 +274,16 @@ static ls_pos enc_pos(int32_t count, int32_t per_period)
     return p;
 }
 
+/* Calibration sequence (paper Fig. 9). The HF injection and the demodulator work on the encoder
+ * angle, so theta_err = 0 exactly, and the integrator drives the demodulated error to zero:
+ * d psi_cal/dt = k_int * ratio, ratio ~ Psi_true - psi_cal. That is the condition under which the
+ * sensorless observer's equilibrium error against the encoder vanishes, reached at the rate k_int
+ * whatever the local saliency (adapting on the observer's own error instead would scale the loop
+ * gain by L_q/(L_q - L_d), up to 13 for ecce2010, and let the observer slip). */
 static void calibration_step(ls_drive *d)
 {
     const ls_cal_cfg *c = &d->cfg.cal;
     ls_pos target;
-    LS_REAL e;
     switch (d->cal_phase) {
     case LS_CAL_MOVE:
         if (d->cal_timer == 0u) {
@@ -300,9 +305,11 @@ static void calibration_step(ls_drive *d)
         }
         break;
     case LS_CAL_ADAPT:
-        e = ls_pos_diff(d->obs.pos, d->enc.pos); /* theta_est - theta_enc */
-        d->psi_cal = ls_clamp(d->psi_cal + c->k_int * e * d->ts, -LS_PI / LS_R(4.0), LS_PI / LS_R(4.0));
-        d->cal_hold = LS_FABS(e) < c->tol ? d->cal_hold + 1u : 0u;
+        if (d->demod.valid) {
+            d->psi_cal = ls_clamp(d->psi_cal + c->k_int * d->demod.ratio * d->ts, -LS_PI / LS_R(4.0),
+                                  LS_PI / LS_R(4.0));
+        }
+        d->cal_hold = (d->demod.valid && LS_FABS(d->demod.ratio) < c->tol) ? d->cal_hold + 1u : 0u;
         d->cal_timer++;
         if ((LS_REAL)d->cal_hold * d->ts >= c->t_hold) {
             c->table[d->cal_index] = (float)d->psi_cal;
@@ -375,6 +382,10 @@ void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
             ls_traj_reset(&d->traj, pe);
         }
         ls_observer_step(&d->enc, ls_pos_diff(pe, d->enc.pos), d->f_ref);
+        if (d->mode == LS_MODE_CALIBRATION) {
+            /* the HF axis follows the encoder: theta_err = 0 by construction */
+            ls_observer_reset(&d->obs, d->enc.pos);
+        }
     } else if (d->align) {
         ls_traj_reset(&d->traj, d->obs.pos);
     }
@@ -386,7 +397,7 @@ void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
     if (hf_on) {
         LS_REAL err = ls_demod_step(&d->demod, ihf_a, ihf_b, d->obs.pos.theta, d->inj.c, d->inj.s,
                                     d->mode == LS_MODE_CALIBRATION ? d->psi_cal : LS_R(0.0));
-        if (sensorless || d->mode == LS_MODE_CALIBRATION) {
+        if (sensorless) {
             ls_observer_step(&d->obs, err, d->f_ref);
         }
         if (sensorless) {

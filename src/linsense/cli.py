@@ -56,14 +56,19 @@ def model(motor_spec: str, points: int, out: str) -> None:
 @click.option("--points", default=360, show_default=True, callback=_points, help="table length")
 @click.option("--format", "fmt", type=click.Choice(["csv", "json", "c"]), default="csv", show_default=True)
 @click.option("--symbol", default=None, help="C array name (default ls_lut_<motor name>)")
+@click.option("--f-inj", "f_inj", type=float, default=None,
+              help="injection frequency in Hz: include the winding resistance (exact zero of the "
+                   "demodulated error; default: the paper's eq. 12, which neglects it)")
 @click.option("--out", required=True, type=click.Path(dir_okay=False), help="output file")
-def lut(motor_spec: str, points: int, fmt: str, symbol: str | None, out: str) -> None:
+def lut(motor_spec: str, points: int, fmt: str, symbol: str | None, f_inj: float | None, out: str) -> None:
     """Export the compensation LUT Psi_LUT(theta) = atan(-L_dq/L_q) as CSV, JSON or a C header."""
     from linsense.compensation.lut import build_lut, export
     from linsense.io import write_atomic
 
+    if f_inj is not None and not (f_inj > 0 and np.isfinite(f_inj)):
+        raise InputError("--f-inj", "", f"must be a positive frequency in Hz, got {f_inj!r}")
     motor = _load(motor_spec)
-    write_atomic(out, export(build_lut(motor, points), fmt, symbol))
+    write_atomic(out, export(build_lut(motor, points, f_inj), fmt, symbol))
 
 
 @cli.command()

@@ -18,9 +18,11 @@
  *   LS_MODE_SENSORLESS_LUT   HF observer with the compensation table (cfg.demod.comp required)
  *   LS_MODE_SENSORLESS_NOLUT HF observer without compensation (the paper's unstable case)
  *   LS_MODE_CALIBRATION      encoder closes the position loop; at each of cal.points positions of
- *                            one electrical period an integrator adjusts the compensation angle
- *                            until the HF observer agrees with the encoder; the result is written
- *                            to cal.table (paper Fig. 9, "measured" LUT)
+ *                            one electrical period (move, settle, adapt) the HF injection and the
+ *                            demodulator run on the encoder angle and an integrator adjusts the
+ *                            compensation angle until the demodulated error is zero, i.e. until
+ *                            the sensorless observer's equilibrium agrees with the encoder; the
+ *                            result is written to cal.table (paper Fig. 9, "measured" LUT)
  */
 #ifndef LINSENSE_LS_DRIVE_H
 #define LINSENSE_LS_DRIVE_H
@@ -50,10 +52,10 @@ typedef enum {
 typedef struct {
     uint32_t points;  /* -, table length over one electrical period, >= 4 */
     float *table;     /* rad, caller-owned output table of `points` values (NULL: no calibration) */
-    LS_REAL k_int;    /* 1/s, adaptation: d psi_cal/dt = k_int (theta_est - theta_enc), > 0 */
+    LS_REAL k_int;    /* 1/s, adaptation: d psi_cal/dt = k_int * demodulated ratio, > 0 */
     LS_REAL t_settle; /* s, wait after each move before adapting, >= 0 */
     LS_REAL t_hold;   /* s, the error must stay below tol this long to accept a point, > 0 */
-    LS_REAL tol;      /* rad, acceptance threshold on |theta_est - theta_enc|, > 0 */
+    LS_REAL tol;      /* rad, acceptance threshold on the demodulated ratio (~ angle error), > 0 */
     LS_REAL t_max;    /* s, a point not accepted within this time trips LS_FAULT_OBSERVER, > 0 */
     int32_t period;   /* -, the electrical period (encoder periods) swept by the calibration */
 } ls_cal_cfg;

@@ -11,6 +11,7 @@
 #include <stdint.h>
 #include <stdbool.h>
 #include <stddef.h> /* NULL, size_t: a freestanding compiler header, not libc */
+#include <math.h>   /* the LS_SIN ... macros and the inline helpers use it */
 
 #ifdef LS_REAL_DOUBLE
 typedef double LS_REAL;

@@ -61,6 +61,36 @@ def psi_lut(model, theta) -> np.ndarray:
     return np.arctan2(-L_dq, L_q)
 
 
+def psi_lut_resistive(motor, theta, f_inj: float) -> np.ndarray:
+    """Compensation angle (rad) that zeroes the demodulated error at theta_err = 0 with R_s.
+
+    Eq. (12) assumes a purely inductive HF response. With the winding resistance the HF currents
+    on d and q are no longer in phase: for a pulsating voltage on d at ``f_inj`` (Hz) the ratio
+    ``r = i_q / i_d = -j w L_dq / (R_s + j w L_q)`` is complex. Both demodulators (the product
+    ``i_d i_q`` and the synchronous one) measure ``Re(i_q' conj(i_d'))`` in the rotated frame,
+    which vanishes for ``tan 2 Psi = 2 Re(r) / (1 - |r|^2)``. For ``R_s = 0`` this is eq. (12).
+    Because the position error is the angle error times ``L_q / (L_q - L_d)``, the difference
+    matters: for ecce2010 at 1 kHz eq. (12) leaves up to 2 electrical degrees of bias.
+    """
+    L_d, L_q, L_dq = dq_components(motor, theta)
+    w = 2.0 * np.pi * f_inj
+    r = -1j * w * L_dq / (motor.R_s + 1j * w * L_q)
+    return 0.5 * np.arctan2(2.0 * r.real, 1.0 - np.abs(r) ** 2)
+
+
+def demod_ratio(motor, theta, theta_err, v_inj: float, f_inj: float, psi_comp) -> np.ndarray:
+    """Normalised output of the product demodulator, ``<i_d' i_q'> / <i_d'^2 + i_q'^2>``.
+
+    HF currents from :func:`hf_current` (with R_s), rotated by ``psi_comp`` (rad) from the
+    estimated frame; the time averages of products of phasors are ``Re(a conj(b)) / 2``.
+    """
+    i = hf_current(motor, theta, v_inj, f_inj, theta_err)
+    c, s = np.cos(psi_comp), np.sin(psi_comp)
+    i_d = c * i[..., 0] + s * i[..., 1]
+    i_q = -s * i[..., 0] + c * i[..., 1]
+    return np.real(i_d * np.conj(i_q)) / (np.abs(i_d) ** 2 + np.abs(i_q) ** 2)
+
+
 def psi_compensated(model, theta, theta_err, lut_at: str = "estimated") -> np.ndarray:
     """Phase of the HF current in the compensated frame, ``psi - Psi_LUT`` (rad), eq. (13).
 
