@@ -20,7 +20,7 @@ GEN_HDR  := $(BUILD)/gen/ls_lut_ecce2010.h $(BUILD)/gen/ls_lut_ecce2010_r.h
 # variant name : extra flags
 VARIANTS := float-san double-san float-plain
 
-.PHONY: all install demo test ctest pytest lint bench clean
+.PHONY: all install demo test ctest mcu pytest lint bench tools clean
 
 all: test
 
@@ -35,7 +35,7 @@ install: $(STAMP)
 demo: $(STAMP)
 	$(VENV)/bin/linsense reproduce --motor ecce2010 --out out
 
-test: lint ctest pytest
+test: lint ctest mcu pytest
 
 GEN_DEPS := $(STAMP) $(wildcard src/linsense/compensation/*.py src/linsense/model/*.py src/linsense/analysis/*.py)
 $(BUILD)/gen/ls_lut_ecce2010.h: $(GEN_DEPS)
@@ -70,8 +70,26 @@ pytest: $(STAMP)
 lint: $(STAMP)
 	$(VENV)/bin/ruff check src tests
 
-bench: $(STAMP)
-	@echo "no benchmarks yet (the C core and simulator issues add them)"
+# Cortex-M4F cross build of the library: warning-free, float only, no libc beyond math/string
+mcu: tools
+	tools/check_mcu.sh build/arm
+
+# System tools the C checks need (Debian packages), installed when missing and possible
+tools:
+	@missing=""; \
+	command -v arm-none-eabi-gcc >/dev/null || missing="$$missing gcc-arm-none-eabi libnewlib-arm-none-eabi"; \
+	command -v valgrind >/dev/null || missing="$$missing valgrind"; \
+	if [ -n "$$missing" ]; then \
+	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null; then \
+	    echo "installing:$$missing"; \
+	    (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq $$missing >/dev/null); \
+	  else \
+	    echo "please install:$$missing" >&2; exit 1; \
+	  fi; \
+	fi
+
+bench: $(GEN_HDR) tools
+	tools/bench.sh
 
 clean:
 	rm -rf $(BUILD) out

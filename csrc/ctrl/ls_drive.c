@@ -178,6 +178,7 @@ void ls_drive_reset(ls_drive *d, ls_pos p)
     ls_protect_reset(&d->prot);
     d->mode = LS_MODE_OFF;
     d->align = false;
+    d->pending = false;
     d->f_ref = LS_R(0.0);
     d->cal_phase = LS_CAL_DONE;
     d->cal_index = 0u;
@@ -233,18 +234,30 @@ void ls_drive_set_position(ls_drive *d, ls_pos p)
     ls_posctrl_reset(&d->pos);
 }
 
+static void command(ls_drive *d, ls_pos target, bool move)
+{
+    if (d == NULL || !d->initialised || d->mode == LS_MODE_CALIBRATION) {
+        return;
+    }
+    if (d->align) { /* keep it until the reference is aligned at the next step */
+        d->pending = true;
+        d->pending_move = move;
+        d->pending_target = target;
+    } else if (move) {
+        ls_traj_move(&d->traj, target);
+    } else {
+        ls_traj_jump(&d->traj, target);
+    }
+}
+
 void ls_drive_move_to(ls_drive *d, ls_pos target)
 {
-    if (d != NULL && d->initialised && d->mode != LS_MODE_CALIBRATION) {
-        ls_traj_move(&d->traj, target);
-    }
+    command(d, target, true);
 }
 
 void ls_drive_step_to(ls_drive *d, ls_pos target)
 {
-    if (d != NULL && d->initialised && d->mode != LS_MODE_CALIBRATION) {
-        ls_traj_jump(&d->traj, target);
-    }
+    command(d, target, false);
 }
 
 /* --------------------------------------------------------------------------- step */
@@ -388,6 +401,14 @@ void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
         }
     } else if (d->align) {
         ls_traj_reset(&d->traj, d->obs.pos);
+    }
+    if (d->align && d->pending) {
+        d->pending = false;
+        if (d->pending_move) {
+            ls_traj_move(&d->traj, d->pending_target);
+        } else {
+            ls_traj_jump(&d->traj, d->pending_target);
+        }
     }
     d->align = false;
 

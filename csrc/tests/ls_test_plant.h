@@ -24,7 +24,7 @@ typedef struct {
     int32_t enc_counts;         /* counts per period */
 } tp_plant;
 
-static void tp_L_ab(const tp_plant *p, double th, double L[2][2])
+static inline void tp_L_ab(const tp_plant *p, double th, double L[2][2])
 {
     const double t3 = 2 * TP_PI / 3, s3 = sqrt(3.0) / 2;
     double la = p->L0 + p->L2 * cos(2 * th), lb = p->L0 + p->L2 * cos(2 * th + t3);
@@ -48,13 +48,13 @@ static void tp_L_ab(const tp_plant *p, double th, double L[2][2])
     }
 }
 
-static double tp_psi_pm(const tp_plant *p)
+static inline double tp_psi_pm(const tp_plant *p)
 {
     return p->kf * p->tau / (3 * TP_PI);
 }
 
 /* currents from fluxes at position x */
-static void tp_currents(const tp_plant *p, double x, const double lam[2], double i[2])
+static inline void tp_currents(const tp_plant *p, double x, const double lam[2], double i[2])
 {
     double th = 2 * TP_PI * x / p->tau, L[2][2], det, r0, r1;
     tp_L_ab(p, th, L);
@@ -65,7 +65,7 @@ static void tp_currents(const tp_plant *p, double x, const double lam[2], double
     i[1] = (-L[1][0] * r0 + L[0][0] * r1) / det;
 }
 
-static void tp_deriv(const tp_plant *p, const double s[4], const double v_ab[2], double ds[4])
+static inline void tp_deriv(const tp_plant *p, const double s[4], const double v_ab[2], double ds[4])
 {
     double i[2], th = 2 * TP_PI * s[2] / p->tau, iq, f;
     tp_currents(p, s[2], s, i);
@@ -77,7 +77,7 @@ static void tp_deriv(const tp_plant *p, const double s[4], const double v_ab[2],
     ds[3] = (f - p->f_load - p->visc * s[3]) / p->mass;
 }
 
-static void tp_init(tp_plant *p, double x0)
+static inline void tp_init(tp_plant *p, double x0)
 {
     p->L0 = 2.75e-3; p->L2 = -0.317e-3; p->M0 = -0.92e-3; p->M2 = -0.317e-3; p->dM0 = -0.47e-3;
     p->R = 9.0; p->tau = 0.056; p->kf = 20.0; p->mass = 1.5; p->visc = 5.0; p->f_load = 0.0;
@@ -89,7 +89,7 @@ static void tp_init(tp_plant *p, double x0)
 }
 
 /* measurements at the start of the period (carrier peak) */
-static void tp_measure(const tp_plant *p, ls_meas *m)
+static inline void tp_measure(const tp_plant *p, ls_meas *m)
 {
     double i[2], cnt;
     tp_currents(p, p->x, p->lam, i);
@@ -103,7 +103,7 @@ static void tp_measure(const tp_plant *p, ls_meas *m)
 }
 
 /* integrate one PWM period with the duties of the previous step, then latch the new ones */
-static void tp_advance(tp_plant *p, const ls_cmd *cmd)
+static inline void tp_advance(tp_plant *p, const ls_cmd *cmd)
 {
     const int n = 8;
     double h = 1.0 / (p->fs * n), v_abc[3], v_ab[2], s[4], k1[4], mid[4], k2[4];
@@ -128,7 +128,7 @@ static void tp_advance(tp_plant *p, const ls_cmd *cmd)
 
 /* dq inductances and the uncompensated equilibrium error of the plant's model (closed forms of
  * the brief, sections 3-4; the Python suite checks them against the 3x3 transform) */
-static void tp_dq(const tp_plant *p, double th, double *ld, double *lq, double *ldq)
+static inline void tp_dq(const tp_plant *p, double th, double *ld, double *lq, double *ldq)
 {
     double c = cos(2 * th - 2 * TP_PI / 3), s = sin(2 * th - 2 * TP_PI / 3);
     *ld = p->L0 + p->L2 / 2 - p->M0 + p->M2 - 2.0 / 3 * p->dM0 * (1 + c);
@@ -136,19 +136,19 @@ static void tp_dq(const tp_plant *p, double th, double *ld, double *lq, double *
     *ldq = 2.0 / 3 * p->dM0 * s;
 }
 
-static double tp_err_nolut(const tp_plant *p, double th)
+static inline double tp_err_nolut(const tp_plant *p, double th)
 {
     double ld, lq, ldq;
     tp_dq(p, th, &ld, &lq, &ldq);
     return 0.5 * atan2(-2 * ldq, lq - ld);
 }
 
-static double tp_pos_m(ls_pos q, double tau)
+static inline double tp_pos_m(ls_pos q, double tau)
 {
     return ((double)q.period + (double)q.theta / (2 * TP_PI)) * tau;
 }
 
-static ls_pos tp_pos_of_m(double x, double tau)
+static inline ls_pos tp_pos_of_m(double x, double tau)
 {
     ls_pos q;
     double u = x / tau;

@@ -188,7 +188,12 @@ static void test_sensored_step(void)
     setup(&d, &cfg);
     tp_init(&p, 0.010);
     LS_CHECK(ls_drive_set_mode(&d, LS_MODE_SENSORED) == LS_OK);
-    run(&d, &p, 0.2, &c);
+    /* a move commanded before the first step starts from the measured position once aligned */
+    ls_drive_move_to(&d, tp_pos_of_m(0.012, p.tau));
+    run(&d, &p, 0.4, &c);
+    LS_CHECK_NEAR(p.x, 0.012, 20e-6);
+    ls_drive_step_to(&d, tp_pos_of_m(0.010, p.tau));
+    run(&d, &p, 1.0, &c);
     LS_CHECK(c.fault == 0);
     LS_CHECK_NEAR(p.x, 0.010, 20e-6);
     ls_drive_step_to(&d, tp_pos_of_m(0.013, p.tau));

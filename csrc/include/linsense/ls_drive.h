@@ -127,6 +127,9 @@ typedef struct {
     bool initialised;    /* ls_drive_init succeeded */
     ls_mode mode;        /* active mode */
     bool align;          /* re-align estimators and reference at the next step */
+    bool pending;        /* a move or step commanded before the alignment, applied after it */
+    bool pending_move;   /* the pending command is a move (else a step) */
+    ls_pos pending_target; /* its target */
     ls_inject inj;
     ls_biquad bpf[2];    /* alpha, beta */
     ls_biquad sep[2];    /* alpha, beta */
@@ -161,7 +164,8 @@ void ls_drive_reset(ls_drive *d, ls_pos p);
 ls_status ls_drive_set_mode(ls_drive *d, ls_mode mode);
 /* Tell the HF observer where the mover is (sensorless start from a known position). */
 void ls_drive_set_position(ls_drive *d, ls_pos p);
-/* Minimum-time move of the reference to target. */
+/* Minimum-time move of the reference to target. Commanded right after ls_drive_set_mode, it
+ * starts once the mode has aligned its reference to the measured or estimated position. */
 void ls_drive_move_to(ls_drive *d, ls_pos target);
 /* Step the reference to target. */
 void ls_drive_step_to(ls_drive *d, ls_pos target);

@@ -1,0 +1,25 @@
+#!/usr/bin/env bash
+# Benchmarks (make bench): instructions per ls_drive_step (callgrind, float, -O2) and the
+# Cortex-M4F code size of the controller library.
+set -euo pipefail
+N=${N:-20000}
+B=build/bench
+mkdir -p "$B"
+cc -std=c99 -Wall -Wextra -Wpedantic -Werror -O2 -g -Icsrc/include -Icsrc/tests -Ibuild/gen \
+  csrc/tests/bench_drive.c csrc/ctrl/*.c -lm -o "$B/bench_drive"
+"$B/bench_drive" "$N"
+count() { # $1: dead-time compensation on (1) or off (0)
+  valgrind --tool=callgrind --toggle-collect=ls_drive_step --callgrind-out-file="$B/callgrind.$1.out" \
+    "$B/bench_drive" "$N" "$1" > /dev/null 2> "$B/callgrind.$1.log"
+  awk '/^(summary|totals):/ {print $2; exit}' "$B/callgrind.$1.out"
+}
+total_dtc=$(count 1)
+total=$(count 0)
+echo "ls_drive_step, sensorless with LUT, float, -O2, x86-64, $N steps during a move: $total instructions"
+echo "  with dead-time compensation on: $(( (total_dtc + N / 2) / N )) per step"
+echo "instructions per step: $(( (total + N / 2) / N ))"
+if command -v "${ARM_CC:-arm-none-eabi-gcc}" >/dev/null; then
+  tools/check_mcu.sh build/arm | tail -1
+else
+  echo "Cortex-M4F code size: arm-none-eabi-gcc not installed (make tools installs it)"
+fi
