@@ -20,7 +20,7 @@ GEN_HDR  := $(BUILD)/gen/ls_lut_ecce2010.h $(BUILD)/gen/ls_lut_ecce2010_r.h
 # variant name : extra flags
 VARIANTS := float-san double-san float-plain
 
-.PHONY: all install demo test ctest mcu pytest lint bench tools clean
+.PHONY: all install demo test ctest mcu example pytest lint bench tools clean
 
 all: test
 
@@ -35,7 +35,7 @@ install: $(STAMP)
 demo: $(STAMP)
 	$(VENV)/bin/linsense reproduce --motor ecce2010 --out out
 
-test: lint ctest mcu pytest
+test: lint ctest mcu example pytest
 
 GEN_DEPS := $(STAMP) $(wildcard src/linsense/compensation/*.py src/linsense/model/*.py src/linsense/analysis/*.py)
 $(BUILD)/gen/ls_lut_ecce2010.h: $(GEN_DEPS)
@@ -69,6 +69,14 @@ pytest: $(STAMP)
 
 lint: $(STAMP)
 	$(VENV)/bin/ruff check src tests
+
+# The firmware example: generated LUT header + library + host main, a few thousand steps
+EXAMPLE := $(BUILD)/example
+example: $(STAMP)
+	@mkdir -p $(EXAMPLE)
+	$(VENV)/bin/linsense lut --motor ecce2010 --points 360 --format c --f-inj 1000 --out $(EXAMPLE)/ls_lut_ecce2010.h
+	$(CC) $(CSTD) -O2 -Icsrc/include -I$(EXAMPLE) examples/firmware/main.c $(CTRL_SRC) -lm -o $(EXAMPLE)/firmware_example
+	$(EXAMPLE)/firmware_example
 
 # Cortex-M4F cross build of the library: warning-free, float only, no libc beyond math/string
 mcu: tools
