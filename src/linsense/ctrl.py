@@ -1,0 +1,793 @@
+"""Python binding of the C99 firmware library (``csrc/``), compiled into :mod:`linsense._ctrl`.
+
+A thin layer over the cffi extension: the raw ``ffi`` and ``lib`` objects give every C function
+and struct of ``linsense/ls_*.h``; the classes below create the module states from keyword
+arguments in SI units (electrical radians, Hz, s, A, V, N, m, kg), refuse bad configurations with
+:class:`ConfigError` (the C ``ls_<module>_init`` decides, Python only names the field), and run
+whole numpy arrays through the C code in one call (the loops are C helpers, no Python per
+sample). Samples are converted to ``LS_REAL`` (float, as on the MCU) on the way in and returned
+as float64 arrays.
+
+Example
+-------
+>>> from linsense import ctrl
+>>> bp = ctrl.Biquad("bandpass", f0=1000.0, q=2.0, fs=16000.0)
+>>> y = bp.run(x)                                          # doctest: +SKIP
+>>> b, a = bp.coefficients                                 # what the C code computed
+
+Angles passed to and returned by the observer and the drive helpers are *unwrapped* electrical
+angles, ``theta = 2 pi period + angle``, computed in double from the C ``ls_pos``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from linsense._ctrl import ffi, lib
+from linsense.errors import LinsenseError
+
+__all__ = [
+    "ffi",
+    "lib",
+    "REAL",
+    "ConfigError",
+    "Lut",
+    "make_lut",
+    "Biquad",
+    "Injection",
+    "Demodulator",
+    "DemodOutput",
+    "Observer",
+    "ObserverOutput",
+    "Drive",
+    "DriveOutput",
+    "drive_default_cfg",
+    "to_pos",
+    "from_pos",
+]
+
+#: numpy dtype of the C library's ``LS_REAL`` (float32 unless built with ``-DLS_REAL_DOUBLE``).
+REAL = np.dtype(np.float32) if lib.ls_py_real_size() == 4 else np.dtype(np.float64)
+
+_TWO_PI = 2.0 * np.pi
+_STATUS = {lib.LS_OK: "LS_OK", lib.LS_ERR_NULL: "LS_ERR_NULL", lib.LS_ERR_PARAM: "LS_ERR_PARAM"}
+
+# Allowed ranges of the configuration fields, as documented in the C headers (for messages only:
+# the C init functions decide what is refused).
+_RULES = {
+    "ls_lut": {"len": "number of points over one electrical period, >= 4", "table": "finite values"},
+    "ls_biquad": {
+        "type": "lowpass, bandpass or notch",
+        "f0": "Hz, > 0 and < fs/2",
+        "q": "quality factor, > 0",
+        "fs": "Hz, sampling rate, > 0 and > 2 f0",
+    },
+    "ls_inject": {
+        "amplitude": "V, >= 0",
+        "freq": "Hz, > 0",
+        "fs": "Hz, sampling rate, >= 4 freq",
+        "ramp_rate": "V/s, > 0",
+    },
+    "ls_demod": {
+        "method": "product or heterodyne",
+        "f_lpf": "Hz, low-pass corner, > 0 and < fs/2",
+        "fs": "Hz, sampling rate, > 2 f_lpf",
+        "gain": "L_q/(L_q - L_d), finite and non-zero",
+        "comp": "ls_lut with >= 4 points",
+        "gain_table": "ls_lut with >= 4 points",
+        "min_level": "A^2, >= 0",
+    },
+    "ls_observer": {
+        "type": "pll or mech",
+        "fs": "Hz, > 0",
+        "k1": "1/s, > 0",
+        "k2": "1/s^2, > 0",
+        "k3": "1/s^3, > 0 for mech",
+        "pole_pitch": "m, > 0",
+        "mass": "kg, > 0 for mech",
+        "omega_max": "rad/s, > 0 and finite",
+        "force_max": "N, > 0 for mech",
+    },
+}
+
+_ENUMS = {
+    ("ls_biquad", "type"): {"lowpass": lib.LS_BIQUAD_LOWPASS, "bandpass": lib.LS_BIQUAD_BANDPASS,
+                            "notch": lib.LS_BIQUAD_NOTCH},
+    ("ls_demod", "method"): {"product": lib.LS_DEMOD_PRODUCT, "heterodyne": lib.LS_DEMOD_HETERODYNE},
+    ("ls_observer", "type"): {"pll": lib.LS_OBS_PLL, "mech": lib.LS_OBS_MECH},
+    ("ls_drive", "mode"): {"off": lib.LS_MODE_OFF, "sensored": lib.LS_MODE_SENSORED,
+                           "sensorless_lut": lib.LS_MODE_SENSORLESS_LUT,
+                           "sensorless_nolut": lib.LS_MODE_SENSORLESS_NOLUT,
+                           "calibration": lib.LS_MODE_CALIBRATION},
+}
+
+
+class ConfigError(LinsenseError):
+    """A configuration refused by the C library's ``ls_<module>_init`` (non-zero ``ls_status``).
+
+    Parameters
+    ----------
+    module : str
+        C module, e.g. ``"ls_inject"``.
+    fields : dict
+        The offending field(s) and their values (empty when no single field could be named).
+    status : int
+        The ``ls_status`` returned (``LS_ERR_NULL`` = 1, ``LS_ERR_PARAM`` = 2).
+    detail : str, optional
+        Extra explanation appended to the message.
+    func : str, optional
+        The refusing C function (default ``<module>_init``).
+    """
+
+    def __init__(self, module: str, fields: dict, status: int, detail: str = "", func: str = "") -> None:
+        self.module = module
+        self.fields = dict(fields)
+        self.status = int(status)
+        rules = _RULES.get(module, {})
+        parts = []
+        for k, v in self.fields.items():
+            rule = rules.get(k)
+            parts.append(f"{k} = {_show(v)}" + (f" (allowed: {rule})" if rule else ""))
+        what = "; ".join(parts) if parts else "configuration"
+        func = func or f"{module}_init"
+        msg = f"{module}: {what} refused by {func} ({_STATUS.get(self.status, self.status)})"
+        super().__init__(msg + (f": {detail}" if detail else ""))
+
+
+def _show(v: Any) -> str:
+    if isinstance(v, Lut):
+        return f"<Lut of {v.len} points>"
+    if isinstance(v, float):
+        return f"{v:.6g}"
+    if isinstance(v, str):
+        return v
+    return repr(v)
+
+
+# ------------------------------------------------------------------------------ helpers
+def _in(x: Any, n: int | None = None) -> np.ndarray:
+    """Contiguous float64 copy/view of ``x``, broadcast to ``n`` samples if given."""
+    a = np.asarray(x, dtype=np.float64)
+    if n is not None:
+        a = np.broadcast_to(a, (n,))
+    return np.ascontiguousarray(a, dtype=np.float64)
+
+
+def _p(a: np.ndarray | None, ctype: str = "double[]"):
+    """cffi pointer to a numpy array's memory (NULL for None)."""
+    return ffi.NULL if a is None else ffi.from_buffer(ctype, a)
+
+
+def _struct_dict(cdata) -> dict:
+    """Fields of a struct (pointer or value) as a dict."""
+    t = ffi.typeof(cdata)
+    if t.kind == "pointer":
+        t = t.item
+    return {name: getattr(cdata, name) for name, _ in t.fields}
+
+
+def _enum(module: str, field: str, value: Any) -> int:
+    if isinstance(value, str):
+        table = _ENUMS[(module, field)]
+        try:
+            return table[value.lower()]
+        except KeyError:
+            raise ConfigError(module, {field: value}, lib.LS_ERR_PARAM,
+                              f"one of {', '.join(table)}") from None
+    return int(value)
+
+
+def _init_module(module: str, init: Callable, state_type: str, cfg_type: str, values: dict,
+                 good: dict, keep: list) -> tuple[Any, Any]:
+    """Fill a config struct from ``values``, run ``init``; on refusal name the culprit fields.
+
+    A field is named when substituting its value alone into the known-good configuration
+    ``good`` (the drive's defaults) makes the C init refuse; if no single field does, the fields
+    that differ from ``good`` are named together (a rule that combines fields).
+    """
+
+    def fill(vals: dict):
+        cfg = ffi.new(cfg_type + " *")
+        for k, v in vals.items():
+            if isinstance(v, Lut):
+                v = v.ptr
+            elif v is None:
+                v = ffi.NULL
+            setattr(cfg, k, v)
+        return cfg
+
+    cfg = fill({**good, **values})
+    state = ffi.new(state_type + " *")
+    status = init(state, cfg)
+    if status == lib.LS_OK:
+        keep.append(cfg)
+        return state, cfg
+    blamed = {}
+    for k, v in values.items():
+        if init(ffi.new(state_type + " *"), fill({**good, k: v})) != lib.LS_OK:
+            blamed[k] = v
+    if not blamed:
+        blamed = {k: v for k, v in values.items() if good.get(k) != v}
+    shown = {k: (_enum_name(module, k, v) if (module, k) in _ENUMS else v) for k, v in blamed.items()}
+    raise ConfigError(module, shown, status)
+
+
+def _enum_name(module: str, field: str, value: Any) -> Any:
+    for name, v in _ENUMS[(module, field)].items():
+        if v == value:
+            return name
+    return value
+
+
+def drive_default_cfg():
+    """``ls_drive_default_cfg``: the documented defaults (16 kHz, 12 V / 1 kHz, ecce2010 motor).
+
+    Returns
+    -------
+    cdata ``ls_drive_cfg *``
+        A fresh, caller-owned configuration to edit field by field.
+    """
+    cfg = ffi.new("ls_drive_cfg *")
+    lib.ls_drive_default_cfg(cfg)
+    return cfg
+
+
+def _good(section: str) -> dict:
+    """Known-good sub-configuration from the drive defaults (reference for naming bad fields)."""
+    return _struct_dict(getattr(drive_default_cfg(), section))
+
+
+def to_pos(theta: float):
+    """Unwrapped electrical angle (rad) -> ``ls_pos`` (period count + angle in [0, 2 pi))."""
+    period = int(np.floor(theta / _TWO_PI))
+    p = ffi.new("ls_pos *", {"period": period, "theta": theta - period * _TWO_PI})
+    return lib.ls_py_pos_norm(p[0])
+
+
+def from_pos(p) -> float:
+    """``ls_pos`` -> unwrapped electrical angle (rad), in double."""
+    return p.period * _TWO_PI + float(p.theta)
+
+
+# ------------------------------------------------------------------------------ LUT
+class Lut:
+    """An ``ls_lut`` over a float32 copy of ``values`` (kept alive by this object).
+
+    Parameters
+    ----------
+    values : array_like, shape (N,)
+        Table at ``theta_k = 2 pi k / N`` (unit of the table, e.g. rad), as written by
+        ``linsense lut``; a :class:`linsense.compensation.lut.Lut` is accepted too.
+
+    Attributes
+    ----------
+    ptr : cdata ``ls_lut *``
+        The initialised C table, to put into a ``comp`` or ``gain_table`` field.
+    table : ndarray of float32
+        The backing array the C table borrows (read-only).
+
+    Raises
+    ------
+    ConfigError
+        If ``ls_lut_init`` refuses the table (fewer than 4 points, non-finite values).
+    """
+
+    def __init__(self, values: Any) -> None:
+        values = getattr(values, "values", values)
+        table = np.array(values, dtype=np.float32).ravel()
+        table.setflags(write=False)
+        self.table = table
+        self.len = table.size
+        # the C struct stores this pointer: keep both the array and the cffi buffer alive
+        self._buf = ffi.from_buffer("float[]", table) if table.size else ffi.NULL
+        self._cfg = ffi.new("ls_lut_cfg *", {"table": self._buf, "len": table.size})
+        self.ptr = ffi.new("ls_lut *")
+        status = lib.ls_lut_init(self.ptr, self._cfg)
+        if status != lib.LS_OK:
+            if table.size >= 4:
+                bad = int(np.flatnonzero(~np.isfinite(table))[0]) if not np.all(np.isfinite(table)) else -1
+                fields = {f"table[{bad}]": float(table[bad])} if bad >= 0 else {}
+            else:
+                fields = {"len": table.size}
+            raise ConfigError("ls_lut", fields, status)
+
+    def __call__(self, theta: Any) -> np.ndarray:
+        """``ls_lut_step`` at each ``theta`` (rad); returns float64 of ``theta``'s shape."""
+        t = np.asarray(theta, dtype=np.float64)
+        flat = _in(t.ravel())
+        out = np.empty_like(flat)
+        lib.ls_py_lut_run(self.ptr, _p(flat), flat.size, _p(out))
+        return out.reshape(t.shape)
+
+
+def make_lut(values: Any) -> Lut:
+    """A :class:`Lut` from a numpy array (or a compensation ``Lut``); see :class:`Lut`."""
+    return values if isinstance(values, Lut) else Lut(values)
+
+
+# ------------------------------------------------------------------------------ filters
+class Biquad:
+    """``ls_biquad``: cookbook low-pass, band-pass or notch filter.
+
+    Parameters
+    ----------
+    type : {"lowpass", "bandpass", "notch"}
+        Filter type.
+    f0 : float
+        Corner (low-pass) or centre frequency, Hz.
+    q : float
+        Quality factor (0.7071 gives a Butterworth low-pass).
+    fs : float
+        Sampling rate, Hz.
+
+    Raises
+    ------
+    ConfigError
+        If ``ls_biquad_init`` refuses the configuration.
+    """
+
+    def __init__(self, type: str = "lowpass", *, f0: float, q: float = 0.70710678, fs: float) -> None:
+        self._keep: list = []
+        values = {"type": _enum("ls_biquad", "type", type), "f0": f0, "q": q, "fs": fs}
+        self.state, self.cfg = _init_module("ls_biquad", lib.ls_biquad_init, "ls_biquad", "ls_biquad_cfg",
+                                            values, _good("bpf"), self._keep)
+
+    @property
+    def coefficients(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(b, a)`` as computed by the C code: ``b = [b0, b1, b2]``, ``a = [1, a1, a2]``."""
+        s = self.state
+        return np.array([s.b0, s.b1, s.b2]), np.array([1.0, s.a1, s.a2])
+
+    def reset(self) -> None:
+        """Clear the filter state (``ls_biquad_reset``)."""
+        lib.ls_biquad_reset(self.state)
+
+    def run(self, x: Any) -> np.ndarray:
+        """Filter the samples ``x`` (continuing from the present state).
+
+        Parameters
+        ----------
+        x : array_like, shape (n,)
+
+        Returns
+        -------
+        ndarray of float64, shape (n,)
+        """
+        x = _in(x)
+        y = np.empty_like(x)
+        lib.ls_py_biquad_run(self.state, _p(x), x.size, _p(y))
+        return y
+
+
+# ------------------------------------------------------------------------------ injection
+class Injection:
+    """``ls_inject``: pulsating HF voltage ``A cos(phi)`` with a phase-continuous carrier.
+
+    Parameters
+    ----------
+    amplitude : float
+        Peak HF voltage when on, V.
+    freq : float
+        Injection frequency, Hz.
+    fs : float
+        Sampling rate, Hz (>= 4 freq).
+    ramp_rate : float
+        Amplitude slew when switched on or off, V/s.
+    on : bool
+        Switch the injection on after init (it then ramps up at ``ramp_rate``).
+
+    Raises
+    ------
+    ConfigError
+        If ``ls_inject_init`` refuses the configuration.
+    """
+
+    def __init__(self, *, amplitude: float, freq: float, fs: float, ramp_rate: float = 1200.0,
+                 on: bool = True) -> None:
+        self._keep: list = []
+        values = {"amplitude": amplitude, "freq": freq, "fs": fs, "ramp_rate": ramp_rate}
+        self.state, self.cfg = _init_module("ls_inject", lib.ls_inject_init, "ls_inject", "ls_inject_cfg",
+                                            values, _good("inject"), self._keep)
+        self.enable(on)
+
+    def enable(self, on: bool = True) -> None:
+        """Request the injection on (ramp up) or off (ramp down)."""
+        lib.ls_inject_enable(self.state, bool(on))
+
+    def reset(self) -> None:
+        """Phase 0, amplitude 0, off."""
+        lib.ls_inject_reset(self.state)
+
+    def run(self, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``n`` steps.
+
+        Returns
+        -------
+        v : ndarray, shape (n,)
+            HF voltage of each step, V.
+        car_c, car_s : ndarray, shape (n,)
+            The carrier phasor each step used (cos and sin of its phase), as the drive passes it
+            to the demodulator.
+        """
+        v, c, s = (np.empty(int(n)) for _ in range(3))
+        lib.ls_py_inject_run(self.state, int(n), _p(v), _p(c), _p(s))
+        return v, c, s
+
+
+# ------------------------------------------------------------------------------ demodulator
+class DemodOutput(NamedTuple):
+    """Per-sample outputs of :meth:`Demodulator.run`."""
+
+    err: np.ndarray  # rad, estimate of theta - theta_est (0 while the HF level is too low)
+    ratio: np.ndarray  # -, normalised error before the gain
+    level: np.ndarray  # A^2, mean-square HF current
+
+
+class Demodulator:
+    """``ls_demod``: HF currents -> position-error signal in the compensated frame.
+
+    Parameters
+    ----------
+    fs : float
+        Sampling rate, Hz.
+    f_lpf : float
+        Corner of the 2nd-order low-pass filters, Hz.
+    gain : float
+        ``g = L_q/(L_q - L_d)``: ``err = g * ratio``.
+    method : {"product", "heterodyne"}
+        Error estimator (see ``linsense/ls_demod.h``).
+    comp : array_like or Lut, optional
+        Compensation table ``Psi_LUT(theta_est)``, rad; None: no compensation.
+    gain_table : array_like or Lut, optional
+        Position-scheduled gain ``g(theta_est)``; replaces ``gain`` while enabled.
+    min_level : float
+        Mean-square HF current (A^2) below which ``err`` is held at 0.
+
+    Raises
+    ------
+    ConfigError
+        If ``ls_demod_init`` (or ``ls_lut_init`` for a table) refuses the configuration.
+    """
+
+    def __init__(self, *, fs: float, f_lpf: float = 150.0, gain: float, method: str = "product",
+                 comp: Any = None, gain_table: Any = None, min_level: float = 0.0) -> None:
+        self.comp = None if comp is None else make_lut(comp)
+        self.gain_table = None if gain_table is None else make_lut(gain_table)
+        self._keep: list = []
+        values = {"method": _enum("ls_demod", "method", method), "f_lpf": f_lpf, "fs": fs, "gain": gain,
+                  "comp": self.comp, "gain_table": self.gain_table, "min_level": min_level}
+        self.state, self.cfg = _init_module("ls_demod", lib.ls_demod_init, "ls_demod", "ls_demod_cfg",
+                                            values, _good("demod"), self._keep)
+
+    def reset(self) -> None:
+        """Clear the filters and outputs."""
+        lib.ls_demod_reset(self.state)
+
+    def set_comp(self, on: bool) -> None:
+        """Switch the compensation table on (only if one was given) or off."""
+        lib.ls_demod_set_comp(self.state, bool(on))
+
+    def set_gain_table(self, on: bool) -> None:
+        """Switch the position-scheduled gain on (only if a table was given) or off."""
+        lib.ls_demod_set_gain_table(self.state, bool(on))
+
+    def run(self, i_a: Any, i_b: Any, theta_est: Any, car_c: Any = None, car_s: Any = None,
+            psi_cal: Any = None) -> DemodOutput:
+        """Run ``ls_demod_step`` over whole arrays.
+
+        Parameters
+        ----------
+        i_a, i_b : array_like, shape (n,)
+            Band-passed alpha-beta HF currents, A.
+        theta_est : array_like, shape (n,) or scalar
+            Estimated electrical angle, rad.
+        car_c, car_s : array_like, optional
+            Injection carrier (cos, sin of its phase); required by the heterodyne method.
+        psi_cal : array_like or scalar, optional
+            Extra compensation angle, rad (0 if omitted).
+
+        Returns
+        -------
+        DemodOutput
+            ``err`` (rad), ``ratio`` and ``level`` (A^2) after each sample.
+        """
+        i_a = _in(i_a)
+        n = i_a.size
+        i_b = _in(i_b, n)
+        th = _in(theta_est, n)
+        if self.state.cfg.method == lib.LS_DEMOD_HETERODYNE and (car_c is None or car_s is None):
+            raise ValueError("the heterodyne demodulator needs the carrier (car_c, car_s)")
+        cc = None if car_c is None else _in(car_c, n)
+        cs = None if car_s is None else _in(car_s, n)
+        pc = None if psi_cal is None else _in(psi_cal, n)
+        err, ratio, level = (np.empty(n) for _ in range(3))
+        lib.ls_py_demod_run(self.state, _p(i_a), _p(i_b), _p(th), _p(cc), _p(cs), _p(pc), n,
+                            _p(err), _p(ratio), _p(level))
+        return DemodOutput(err, ratio, level)
+
+    @property
+    def err(self) -> float:
+        """Error estimate at the last step, rad."""
+        return float(self.state.err)
+
+    @property
+    def ratio(self) -> float:
+        """Normalised error before the gain at the last step."""
+        return float(self.state.ratio)
+
+    @property
+    def level(self) -> float:
+        """Mean-square HF current at the last step, A^2."""
+        return float(self.state.level)
+
+    @property
+    def psi(self) -> float:
+        """Total compensation angle used at the last step, rad."""
+        return float(self.state.psi)
+
+    @property
+    def valid(self) -> bool:
+        """HF level above ``min_level`` at the last step."""
+        return bool(self.state.valid)
+
+
+# ------------------------------------------------------------------------------ observer
+class ObserverOutput(NamedTuple):
+    """Per-sample outputs of :meth:`Observer.run` and :meth:`Observer.track`."""
+
+    theta: np.ndarray  # rad, unwrapped estimated electrical angle
+    omega: np.ndarray  # rad/s, estimated electrical speed
+    f_load: np.ndarray  # N, estimated load force (MECH)
+
+
+class Observer:
+    """``ls_observer``: PLL or mechanical-model tracking observer.
+
+    Parameters
+    ----------
+    type : {"pll", "mech"}
+        Observer structure.
+    fs : float
+        Sampling rate, Hz.
+    pole_pitch : float
+        Electrical period tau, m.
+    omega_max : float
+        Clamp of the speed estimate, electrical rad/s.
+    f_bw : float, optional
+        Bandwidth, Hz: gains from ``ls_observer_gains`` (all poles at ``-2 pi f_bw``).
+    k1, k2, k3 : float, optional
+        Explicit gains (1/s, 1/s^2, 1/s^3); override those from ``f_bw``.
+    mass : float, optional
+        Moving mass, kg (mech).
+    force_max : float, optional
+        Clamp of the load-force estimate, N (mech).
+
+    Raises
+    ------
+    ConfigError
+        If ``ls_observer_init`` refuses the configuration.
+    """
+
+    def __init__(self, type: str = "pll", *, fs: float, pole_pitch: float, omega_max: float,
+                 f_bw: float | None = None, k1: float | None = None, k2: float | None = None,
+                 k3: float | None = None, mass: float = 0.0, force_max: float = 0.0) -> None:
+        t = _enum("ls_observer", "type", type)
+        gains = {"k1": 0.0, "k2": 0.0, "k3": 0.0}
+        if f_bw is not None:
+            tmp = ffi.new("ls_observer_cfg *", {"type": t})
+            lib.ls_observer_gains(tmp, f_bw)
+            gains = {"k1": tmp.k1, "k2": tmp.k2, "k3": tmp.k3}
+        for k, v in (("k1", k1), ("k2", k2), ("k3", k3)):
+            if v is not None:
+                gains[k] = v
+        if f_bw is None and (k1 is None or k2 is None):
+            raise ValueError("give f_bw or the gains k1, k2 (and k3 for mech)")
+        values = {"type": t, "fs": fs, "pole_pitch": pole_pitch, "omega_max": omega_max, **gains,
+                  "mass": mass, "force_max": force_max}
+        good = _good("obs")
+        if t == lib.LS_OBS_MECH:
+            tmp = ffi.new("ls_observer_cfg *", {"type": t})
+            lib.ls_observer_gains(tmp, 40.0)
+            good.update(type=t, k1=tmp.k1, k2=tmp.k2, k3=tmp.k3)
+        self._keep: list = []
+        self.state, self.cfg = _init_module("ls_observer", lib.ls_observer_init, "ls_observer",
+                                            "ls_observer_cfg", values, good, self._keep)
+
+    def reset(self, theta: float = 0.0) -> None:
+        """Zero speed and load force; position at ``theta`` (unwrapped rad)."""
+        lib.ls_observer_reset(self.state, to_pos(theta))
+
+    def _run(self, fn, x: Any, f_motor: Any) -> ObserverOutput:
+        x = _in(x)
+        n = x.size
+        fm = None if f_motor is None else _in(f_motor, n)
+        th, om, fl = (np.empty(n) for _ in range(3))
+        fn(self.state, _p(x), _p(fm), n, _p(th), _p(om), _p(fl))
+        return ObserverOutput(th, om, fl)
+
+    def run(self, eps: Any, f_motor: Any = None) -> ObserverOutput:
+        """Open loop: step with the given errors ``eps`` (rad) and motor forces (N, default 0)."""
+        return self._run(lib.ls_py_observer_run, eps, f_motor)
+
+    def track(self, theta: Any, f_motor: Any = None) -> ObserverOutput:
+        """Closed loop on a known angle, as with an encoder: ``eps = theta[k] - theta_est``.
+
+        Parameters
+        ----------
+        theta : array_like, shape (n,)
+            True unwrapped electrical angle, rad.
+        f_motor : array_like or scalar, optional
+            Motor force from the current reference, N (MECH).
+        """
+        return self._run(lib.ls_py_observer_track, theta, f_motor)
+
+    @property
+    def theta(self) -> float:
+        """Estimated unwrapped angle, rad."""
+        return from_pos(self.state.pos)
+
+    @property
+    def omega(self) -> float:
+        """Estimated electrical speed, rad/s."""
+        return float(self.state.omega)
+
+    @property
+    def speed(self) -> float:
+        """Estimated speed, m/s (``ls_observer_speed``)."""
+        return float(lib.ls_py_observer_speed(self.state))
+
+    @property
+    def f_load(self) -> float:
+        """Estimated load force, N."""
+        return float(self.state.f_load)
+
+
+# ------------------------------------------------------------------------------ drive
+class DriveOutput(NamedTuple):
+    """Per-step outputs of :meth:`Drive.run`."""
+
+    duty: np.ndarray  # (n, 3), duty cycles
+    fault: np.ndarray  # (n,), uint32 LS_FAULT_* bits
+    enable: np.ndarray  # (n,), bool
+    theta_est: np.ndarray  # (n,), rad, unwrapped HF observer estimate
+    err: np.ndarray  # (n,), rad, demodulated error
+
+
+class Drive:
+    """``ls_drive``: the complete per-PWM-period controller.
+
+    Parameters
+    ----------
+    cfg : cdata ``ls_drive_cfg *``, optional
+        Configuration (default: :func:`drive_default_cfg`). It is copied by ``ls_drive_init``;
+        tables it points to must stay alive: pass them as ``comp``/``gain_table`` instead.
+    comp : array_like or Lut, optional
+        Compensation table for ``cfg.demod.comp`` (kept alive by this object).
+    gain_table : array_like or Lut, optional
+        Position-scheduled demodulator gain for ``cfg.demod.gain_table``.
+
+    Raises
+    ------
+    ConfigError
+        If ``ls_drive_init`` refuses; the message names the sub-configurations whose own init
+        refuses them, or the drive-level rule.
+    """
+
+    def __init__(self, cfg: Any = None, *, comp: Any = None, gain_table: Any = None) -> None:
+        self.cfg = drive_default_cfg() if cfg is None else cfg
+        self.comp = None if comp is None else make_lut(comp)
+        self.gain_table = None if gain_table is None else make_lut(gain_table)
+        if self.comp is not None:
+            self.cfg.demod.comp = self.comp.ptr
+        if self.gain_table is not None:
+            self.cfg.demod.gain_table = self.gain_table.ptr
+        self.state = ffi.new("ls_drive *")
+        status = lib.ls_drive_init(self.state, self.cfg)
+        if status != lib.LS_OK:
+            raise ConfigError("ls_drive", self._blame(), status, self._detail())
+        self.cmd = ffi.new("ls_cmd *")
+
+    _SECTIONS = (("inject", "ls_inject"), ("bpf", "ls_biquad"), ("sep", "ls_biquad"),
+                 ("demod", "ls_demod"), ("obs", "ls_observer"), ("enc_obs", "ls_observer"),
+                 ("current", "ls_current"), ("pos", "ls_posctrl"), ("traj", "ls_traj"),
+                 ("mod", "ls_mod"), ("prot", "ls_protect"))
+
+    def _blame(self) -> dict:
+        bad = {}
+        fs = float(self.cfg.fs)
+        for path in ("inject", "bpf", "sep", "demod", "obs", "enc_obs", "current", "traj", "prot",
+                     "pos.speed"):
+            obj = self.cfg
+            for part in path.split("."):
+                obj = getattr(obj, part)
+            if float(obj.fs) != fs:
+                bad[f"{path}.fs"] = f"{float(obj.fs):g} Hz differs from the drive's fs = {fs:g} Hz"
+        for section, module in self._SECTIONS:
+            init = getattr(lib, module + "_init")
+            if init(ffi.new(module + " *"), ffi.addressof(self.cfg, section)) != lib.LS_OK:
+                bad[section] = f"refused by {module}_init"
+        return bad
+
+    def _detail(self) -> str:
+        if self._blame():
+            return "see the named sections"
+        return ("a drive-level rule: every module at the drive's fs, bpf a band-pass, sep a notch or "
+                "low-pass, positive fs/pole_pitch/force_constant/i_max/enc_counts, delay_comp >= 0, "
+                "injection amplitude * sqrt(3) < 0.8 prot.v_dc_min, valid cal settings")
+
+    def set_mode(self, mode: str | int) -> None:
+        """``ls_drive_set_mode``; ``mode`` a name ("sensorless_lut", ...) or an ``LS_MODE_*`` value.
+
+        Raises
+        ------
+        ConfigError
+            If the mode needs a table or setting the configuration lacks.
+        """
+        m = _enum("ls_drive", "mode", mode)
+        status = lib.ls_drive_set_mode(self.state, m)
+        if status != lib.LS_OK:
+            raise ConfigError("ls_drive", {"mode": _enum_name("ls_drive", "mode", m)}, status,
+                              "the mode needs cfg.demod.comp (sensorless_lut) or cfg.cal.table (calibration)",
+                              func="ls_drive_set_mode")
+
+    def reset(self, theta: float = 0.0) -> None:
+        """Clear every state and fault; mode off; position estimates at ``theta`` (rad)."""
+        lib.ls_drive_reset(self.state, to_pos(theta))
+
+    def set_position(self, theta: float) -> None:
+        """Tell the HF observer where the mover is (unwrapped rad)."""
+        lib.ls_drive_set_position(self.state, to_pos(theta))
+
+    def step(self, i_abc: Any, v_dc: float, enc_count: int | None = None):
+        """One PWM period (``ls_drive_step``).
+
+        Parameters
+        ----------
+        i_abc : array_like, shape (3,)
+            Phase currents, A.
+        v_dc : float
+            DC-bus voltage, V.
+        enc_count : int, optional
+            Encoder count; None: encoder not valid.
+
+        Returns
+        -------
+        cdata ``ls_cmd *``
+            The command of this step (overwritten by the next call; copy fields you keep).
+        """
+        meas = ffi.new("ls_meas *")
+        for k, v in enumerate(np.asarray(i_abc, dtype=np.float64).ravel()[:3]):
+            meas.i_abc[k] = float(v)
+        meas.v_dc = float(v_dc)
+        meas.enc_valid = enc_count is not None
+        meas.enc_count = 0 if enc_count is None else int(enc_count)
+        lib.ls_drive_step(self.state, meas, self.cmd)
+        return self.cmd
+
+    def run(self, i_abc: Any, v_dc: Any, enc_count: Any = None) -> DriveOutput:
+        """Step the drive over recorded measurements (no plant in the loop).
+
+        Parameters
+        ----------
+        i_abc : array_like, shape (n, 3)
+            Phase currents, A.
+        v_dc : array_like, shape (n,) or scalar
+            DC-bus voltage, V.
+        enc_count : array_like of int, optional
+            Encoder counts; None: encoder not valid.
+        """
+        i = np.ascontiguousarray(np.asarray(i_abc, dtype=np.float64).reshape(-1, 3))
+        n = i.shape[0]
+        vdc = _in(v_dc, n)
+        enc = None if enc_count is None else np.ascontiguousarray(np.broadcast_to(enc_count, (n,)),
+                                                                   dtype=np.int32)
+        duty = np.empty((n, 3))
+        fault = np.empty(n, dtype=np.uint32)
+        enable = np.empty(n, dtype=np.uint8)
+        th, err = np.empty(n), np.empty(n)
+        lib.ls_py_drive_run(self.state, _p(i), _p(vdc), _p(enc, "int32_t[]"), n, _p(duty),
+                            _p(fault, "uint32_t[]"), _p(enable, "uint8_t[]"), _p(th), _p(err))
+        return DriveOutput(duty, fault, enable.astype(bool), th, err)
