@@ -75,6 +75,13 @@ def nominal_gain() -> float:
     return float(ctrl.drive_default_cfg().demod.gain)
 
 
+def test_extension_built_from_these_sources():
+    tree = ctrl.source_tree_digest()
+    if tree is None:
+        pytest.skip("not a source tree (installed from a wheel)")
+    assert ctrl.built_digest() == tree, "stale linsense._ctrl: csrc/ changed, rebuild with pip install -e ."
+
+
 # ------------------------------------------------------------------ 1. demodulator
 @pytest.mark.parametrize("method", ["product", "heterodyne"])
 def test_demod_zero_and_sign_with_resistive_lut(motor, lut_r, method):

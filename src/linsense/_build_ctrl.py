@@ -17,6 +17,7 @@ Run directly (``python src/linsense/_build_ctrl.py``) to compile in place for a 
 
 from __future__ import annotations
 
+import hashlib
 import os
 from pathlib import Path
 
@@ -29,6 +30,20 @@ SOURCES = sorted((CSRC / "ctrl").glob("*.c"))
 
 if not SOURCES or not (INCLUDE / "linsense" / "ls_drive.h").is_file():
     raise RuntimeError(f"linsense C sources not found under {CSRC} (expected csrc/ctrl/*.c, csrc/include)")
+
+
+def source_digest(csrc: Path, build_script: Path) -> str:
+    """SHA-256 over the C sources, the headers and this build script (kept in sync with
+    ``linsense.ctrl._source_digest``, which compares it at import to detect a stale extension)."""
+    h = hashlib.sha256()
+    files = sorted((csrc / "ctrl").glob("*.c")) + sorted((csrc / "include" / "linsense").glob("*.h"))
+    for f in [*files, build_script]:
+        h.update(f.name.encode())
+        h.update(f.read_bytes())
+    return h.hexdigest()
+
+
+DIGEST = source_digest(CSRC, Path(__file__).resolve())
 
 
 def _rel(p: Path) -> str:
@@ -293,6 +308,7 @@ void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd);
 
 /* binding helpers (defined in the set_source code below) */
 int ls_py_real_size(void);
+const char *ls_py_source_digest(void);
 LS_REAL ls_py_clamp(LS_REAL x, LS_REAL lo, LS_REAL hi);
 ls_pos ls_py_pos_norm(ls_pos p);
 ls_pos ls_py_pos_add(ls_pos p, LS_REAL dtheta);
@@ -328,6 +344,9 @@ SOURCE = r"""
 #include "linsense/ls_modulator.h"
 #include "linsense/ls_protect.h"
 #include "linsense/ls_drive.h"
+
+/* Digest of the sources this extension was compiled from (see source_digest in the build script). */
+static const char *ls_py_source_digest(void) { return "@DIGEST@"; }
 
 /* Non-inline copies of the header's static inline functions, callable from Python. */
 static int ls_py_real_size(void) { return (int)sizeof(LS_REAL); }
@@ -483,7 +502,7 @@ def make_ffibuilder(absolute_paths: bool = False) -> FFI:
     ffi.cdef(CDEF)
     ffi.set_source(
         "linsense._ctrl",
-        SOURCE,
+        SOURCE.replace("@DIGEST@", DIGEST),
         sources=[path(p) for p in SOURCES],
         include_dirs=[path(INCLUDE)],
         extra_compile_args=["-std=c99", "-O2"],

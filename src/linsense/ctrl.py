@@ -21,7 +21,10 @@ angles, ``theta = 2 pi period + angle``, computed in double from the C ``ls_pos`
 
 from __future__ import annotations
 
+import hashlib
+import warnings
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -48,6 +51,50 @@ __all__ = [
     "to_pos",
     "from_pos",
 ]
+
+
+
+def _source_digest(csrc: Path, build_script: Path) -> str:
+    """Same digest as ``source_digest`` in ``_build_ctrl.py`` (sources, headers, build script)."""
+    h = hashlib.sha256()
+    files = sorted((csrc / "ctrl").glob("*.c")) + sorted((csrc / "include" / "linsense").glob("*.h"))
+    for f in [*files, build_script]:
+        h.update(f.name.encode())
+        h.update(f.read_bytes())
+    return h.hexdigest()
+
+
+def built_digest() -> str:
+    """Digest of the sources the extension was compiled from ("" for an extension too old to say)."""
+    try:
+        return ffi.string(lib.ls_py_source_digest()).decode()
+    except AttributeError:
+        return ""
+
+
+def source_tree_digest() -> str | None:
+    """Digest of ``csrc/`` and ``_build_ctrl.py`` in the source tree, None outside one (wheel)."""
+    here = Path(__file__).resolve()
+    csrc = here.parents[2] / "csrc"
+    script = here.with_name("_build_ctrl.py")
+    if not (csrc / "ctrl").is_dir() or not script.is_file():
+        return None
+    return _source_digest(csrc, script)
+
+
+def _check_stale() -> None:
+    """In a source tree (editable install), warn if csrc/ changed since the extension was built."""
+    tree = source_tree_digest()
+    if tree is not None and built_digest() != tree:
+        warnings.warn(
+            "linsense._ctrl was compiled from other C sources than those in csrc/ (or another "
+            "_build_ctrl.py): rebuild it with `pip install -e .`",
+            RuntimeWarning,
+            stacklevel=3,
+        )
+
+
+_check_stale()
 
 #: numpy dtype of the C library's ``LS_REAL`` (float32 unless built with ``-DLS_REAL_DOUBLE``).
 REAL = np.dtype(np.float32) if lib.ls_py_real_size() == 4 else np.dtype(np.float64)
