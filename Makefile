@@ -24,7 +24,8 @@ VARIANTS := float-san double-san float-plain
 
 all: test
 
-$(STAMP): pyproject.toml
+# the install compiles the C library into the cffi extension: rebuild when any of it changes
+$(STAMP): pyproject.toml setup.py src/linsense/_build_ctrl.py $(wildcard csrc/ctrl/*.c csrc/include/linsense/*.h)
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install -q --upgrade pip
 	$(PY) -m pip install -q -e '.[dev]'
