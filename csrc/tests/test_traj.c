@@ -4,22 +4,19 @@
 
 #include "linsense/ls_traj.h"
 #include "ls_test.h"
+#include "ls_test_plant.h"
 
 #define PI 3.14159265358979323846
 #define TAU 0.056
 
 static double to_m(ls_pos p)
 {
-    return ((double)p.period + (double)p.theta / (2 * PI)) * TAU;
+    return tp_pos_m(p, TAU);
 }
 
 static ls_pos from_m(double x)
 {
-    ls_pos p;
-    double u = x / TAU;
-    p.period = (int32_t)floor(u);
-    p.theta = (LS_REAL)((u - floor(u)) * 2 * PI);
-    return ls_pos_norm(p);
+    return tp_pos_of_m(x, TAU);
 }
 
 /* float keeps the profile within a fraction of a micrometre over metres of travel */

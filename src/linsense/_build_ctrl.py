@@ -17,7 +17,7 @@ Run directly (``python src/linsense/_build_ctrl.py``) to compile in place for a 
 
 from __future__ import annotations
 
-import hashlib
+import importlib.util
 import os
 from pathlib import Path
 
@@ -32,15 +32,15 @@ if not SOURCES or not (INCLUDE / "linsense" / "ls_drive.h").is_file():
     raise RuntimeError(f"linsense C sources not found under {CSRC} (expected csrc/ctrl/*.c, csrc/include)")
 
 
-def source_digest(csrc: Path, build_script: Path) -> str:
-    """SHA-256 over the C sources, the headers and this build script (kept in sync with
-    ``linsense.ctrl._source_digest``, which compares it at import to detect a stale extension)."""
-    h = hashlib.sha256()
-    files = sorted((csrc / "ctrl").glob("*.c")) + sorted((csrc / "include" / "linsense").glob("*.h"))
-    for f in [*files, build_script]:
-        h.update(f.name.encode())
-        h.update(f.read_bytes())
-    return h.hexdigest()
+def _load_digest_module():
+    """Load ``_digest.py`` beside this file by path (the package is not importable at build time)."""
+    spec = importlib.util.spec_from_file_location("_linsense_digest", Path(__file__).with_name("_digest.py"))
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+source_digest = _load_digest_module().source_digest
 
 
 DIGEST = source_digest(CSRC, Path(__file__).resolve())

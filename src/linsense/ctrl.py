@@ -21,7 +21,6 @@ angles, ``theta = 2 pi period + angle``, computed in double from the C ``ls_pos`
 
 from __future__ import annotations
 
-import hashlib
 import warnings
 from collections.abc import Callable
 from pathlib import Path
@@ -30,6 +29,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from linsense._ctrl import ffi, lib
+from linsense._digest import source_digest
 from linsense.errors import LinsenseError
 
 __all__ = [
@@ -54,16 +54,6 @@ __all__ = [
 
 
 
-def _source_digest(csrc: Path, build_script: Path) -> str:
-    """Same digest as ``source_digest`` in ``_build_ctrl.py`` (sources, headers, build script)."""
-    h = hashlib.sha256()
-    files = sorted((csrc / "ctrl").glob("*.c")) + sorted((csrc / "include" / "linsense").glob("*.h"))
-    for f in [*files, build_script]:
-        h.update(f.name.encode())
-        h.update(f.read_bytes())
-    return h.hexdigest()
-
-
 def built_digest() -> str:
     """Digest of the sources the extension was compiled from ("" for an extension too old to say)."""
     try:
@@ -79,7 +69,7 @@ def source_tree_digest() -> str | None:
     script = here.with_name("_build_ctrl.py")
     if not (csrc / "ctrl").is_dir() or not script.is_file():
         return None
-    return _source_digest(csrc, script)
+    return source_digest(csrc, script)
 
 
 def _check_stale() -> None:

@@ -2,12 +2,26 @@
 
 from __future__ import annotations
 
+import math
 import os
 import stat
 import sys
 import tempfile
 from collections.abc import Callable
 from pathlib import Path
+
+
+def finite_cell(source: str, row: int, column: str, cell: str) -> float:
+    """Parse one CSV cell as a finite number, or raise InputError naming row and column."""
+    from linsense.errors import InputError
+
+    try:
+        v = float(cell)
+    except ValueError:
+        raise InputError(source, f"row {row}, column {column}", f"not a number: {cell!r}") from None
+    if not math.isfinite(v):
+        raise InputError(source, f"row {row}, column {column}", f"not finite: {cell!r}")
+    return v
 
 
 def write_atomic(path: str | os.PathLike, data: str | bytes) -> Path:

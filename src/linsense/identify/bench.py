@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from linsense.errors import InputError
+from linsense.io import finite_cell
 
 #: Phases in storage order (index 0, 1, 2).
 PHASES = ("A", "B", "C")
@@ -139,14 +140,7 @@ def read_bench_csv(path: str | Path) -> BenchData:
             raise InputError(src, f"row {r}, column phase", f"expected A, B or C, got {cell!r}")
         phase[i] = PHASES.index(cell.upper())
         for j, c in enumerate(numeric):
-            cell = row[idx[c]].strip() if idx[c] < len(row) else ""
-            try:
-                v = float(cell)
-            except ValueError:
-                raise InputError(src, f"row {r}, column {c}", f"not a number: {cell!r}") from None
-            if not math.isfinite(v):
-                raise InputError(src, f"row {r}, column {c}", f"not finite: {cell!r}")
-            data[i, j] = v
+            data[i, j] = finite_cell(src, r, c, row[idx[c]].strip() if idx[c] < len(row) else "")
     col = {c: data[:, j] for j, c in enumerate(numeric)}
 
     freq = col["freq_hz"]

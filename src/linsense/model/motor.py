@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from linsense.errors import InputError, ModelError
+from linsense.io import finite_cell
 from linsense.model.inductance import ENTRIES, InductanceModel
 from linsense.model.schema import validate_motor_file
 
@@ -207,14 +208,7 @@ def read_inductance_table(path: Path) -> tuple[np.ndarray, np.ndarray]:
     data = np.empty((len(rows) - 1, len(idx)))
     for r, row in enumerate(rows[1:], start=2):
         for j, (c, name) in enumerate(zip(idx, TABLE_COLUMNS, strict=True)):
-            cell = row[c].strip() if c < len(row) else ""
-            try:
-                v = float(cell)
-            except ValueError:
-                raise InputError(src, f"row {r}, column {name}", f"not a number: {cell!r}") from None
-            if not math.isfinite(v):
-                raise InputError(src, f"row {r}, column {name}", f"not finite: {cell!r}")
-            data[r - 2, j] = v
+            data[r - 2, j] = finite_cell(src, r, name, row[c].strip() if c < len(row) else "")
     if data.shape[0] < 8:
         raise InputError(src, "", f"need at least 8 positions, got {data.shape[0]}")
     wrapped = np.mod(data[:, 0], 360.0)
