@@ -25,10 +25,10 @@ VARIANTS := float-san double-san float-plain
 all: test
 
 # the install compiles the C library into the cffi extension: rebuild when any of it changes
-$(STAMP): pyproject.toml setup.py src/linsense/_build_ctrl.py $(wildcard csrc/ctrl/*.c csrc/include/linsense/*.h)
+$(STAMP): pyproject.toml setup.py src/linsense/_build_ctrl.py $(wildcard csrc/ctrl/*.c csrc/sim/*.c csrc/include/linsense/*.h)
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install -q --upgrade pip
-	$(PY) -m pip install -q -e '.[dev]'
+	LINSENSE_NATIVE=1 $(PY) -m pip install -q -e '.[dev]'
 	touch $@
 
 install: $(STAMP)

@@ -26,7 +26,7 @@ from cffi import FFI
 ROOT = Path(__file__).resolve().parents[2]
 CSRC = ROOT / "csrc"
 INCLUDE = CSRC / "include"
-SOURCES = sorted((CSRC / "ctrl").glob("*.c"))
+SOURCES = sorted((CSRC / "ctrl").glob("*.c")) + sorted((CSRC / "sim").glob("*.c"))
 
 if not SOURCES or not (INCLUDE / "linsense" / "ls_drive.h").is_file():
     raise RuntimeError(f"linsense C sources not found under {CSRC} (expected csrc/ctrl/*.c, csrc/include)")
@@ -306,6 +306,68 @@ void ls_drive_move_to(ls_drive *d, ls_pos target);
 void ls_drive_step_to(ls_drive *d, ls_pos target);
 void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd);
 
+/* simulator (csrc/sim, linsense/ls_sim.h) */
+#define LS_SIM_MAX_ORDER 64
+#define LS_SIM_MAX_PM 8
+typedef enum { LS_SIM_AVERAGE = 0, LS_SIM_SWITCHING = 1 } ls_sim_fidelity;
+typedef enum { LS_SIM_FREE = 0, LS_SIM_HELD = 1, LS_SIM_PRESCRIBED = 2 } ls_sim_motion;
+typedef enum { LS_SIM_LOAD_CONSTANT = 0, LS_SIM_LOAD_STEP = 1, LS_SIM_LOAD_INCLINE = 2 } ls_sim_load;
+#define LS_SIM_FAULT_TRAVEL 0x100
+#define LS_SIM_FAULT_DIVERGED 0x200
+typedef struct {
+    double r_s;
+    double pole_pitch;
+    double psi_pm;
+    int32_t n_order;
+    double lab_cos[3][64];
+    double lab_sin[3][64];
+    int32_t n_pm;
+    int32_t pm_order[8];
+    double pm_amp[8];
+    double pm_phase[8];
+    double mass;
+    double visc;
+    double coulomb;
+    double x_min, x_max;
+    ls_sim_load load;
+    double load_f0;
+    double load_f1;
+    double load_t;
+    double load_incline;
+    ls_sim_fidelity fidelity;
+    double v_dc;
+    double f_pwm;
+    double dead_time;
+    double i_gain[3];
+    double i_offset[3];
+    double i_noise;
+    int32_t adc_bits;
+    double adc_range;
+    int32_t enc_counts;
+    uint64_t seed;
+    ls_sim_motion motion;
+    double x0;
+    double v0;
+    int32_t decimate;
+    double i_abort;
+} ls_sim_cfg;
+typedef struct { double t; double x; int32_t move; } ls_sim_cmd;
+typedef struct {
+    double *t; double *x; double *v; double *x_est; double *v_est; double *x_ref; double *theta_err;
+    double *i_abc; double *i_dq; double *duty; double *force; double *err_sig; uint32_t *fault;
+} ls_sim_out;
+typedef struct {
+    int64_t steps_done; int64_t n_rec; uint32_t fault; double x_end; double v_end;
+} ls_sim_result;
+ls_status ls_sim_check(const ls_sim_cfg *cfg);
+ls_status ls_sim_run(const ls_sim_cfg *cfg, ls_drive *drive, const ls_sim_cmd *cmds, int32_t n_cmds,
+                     int64_t n_steps, const ls_sim_out *out, ls_sim_result *res);
+ls_status ls_sim_open_loop(const ls_sim_cfg *cfg, const double *seg_t, const double *seg_v, int64_t n_seg,
+                           const ls_sim_out *out, ls_sim_result *res);
+void ls_sim_plant_eval(const ls_sim_cfg *cfg, double theta, double lab[3], double dlab[3], double lpm[2],
+                       double dlpm[2]);
+double ls_sim_force(const ls_sim_cfg *cfg, double theta, const double i_ab[2]);
+
 /* binding helpers (defined in the set_source code below) */
 int ls_py_real_size(void);
 const char *ls_py_source_digest(void);
@@ -332,6 +394,7 @@ void ls_py_drive_run(ls_drive *d, const double *i_abc, const double *v_dc, const
 """
 
 SOURCE = r"""
+#include "linsense/ls_sim.h"
 #include "linsense/ls_types.h"
 #include "linsense/ls_pos.h"
 #include "linsense/ls_lut.h"
@@ -491,6 +554,11 @@ static void ls_py_drive_run(ls_drive *d, const double *i_abc, const double *v_dc
 }
 """
 
+#: -O3 for the simulator's time loop; LINSENSE_NATIVE=1 (set by the Makefile for the local venv)
+#: adds -march=native, which is faster but not portable, so wheels never get it by default.
+COMPILE_ARGS = ["-std=c99", "-O3"] + (["-march=native"] if os.environ.get("LINSENSE_NATIVE") == "1" else [])
+
+
 def make_ffibuilder(absolute_paths: bool = False) -> FFI:
     """The FFI builder of ``linsense._ctrl``.
 
@@ -505,7 +573,7 @@ def make_ffibuilder(absolute_paths: bool = False) -> FFI:
         SOURCE.replace("@DIGEST@", DIGEST),
         sources=[path(p) for p in SOURCES],
         include_dirs=[path(INCLUDE)],
-        extra_compile_args=["-std=c99", "-O2"],
+        extra_compile_args=COMPILE_ARGS,
         libraries=["m"] if os.name == "posix" else [],
     )
     return ffi

@@ -14,7 +14,11 @@ from pathlib import Path
 def source_digest(csrc: Path, build_script: Path) -> str:
     """SHA-256 over the C sources, the public headers and the build script."""
     h = hashlib.sha256()
-    files = sorted((csrc / "ctrl").glob("*.c")) + sorted((csrc / "include" / "linsense").glob("*.h"))
+    files = (
+        sorted((csrc / "ctrl").glob("*.c"))
+        + sorted((csrc / "sim").glob("*.c"))
+        + sorted((csrc / "include" / "linsense").glob("*.h"))
+    )
     for f in [*files, build_script]:
         h.update(f.name.encode())
         h.update(f.read_bytes())

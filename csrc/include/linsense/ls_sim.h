@@ -1,0 +1,160 @@
+/* linsense host-side simulator: plant, inverter and sensors around the unchanged controller.
+ *
+ * Not firmware: double precision, host only. One call runs a whole scenario in C and writes
+ * numpy-ready arrays; Python (linsense.sim) only configures it and reads the results.
+ *
+ * Plant (moving-armature linear motor, floating star point), state: alpha-beta currents i,
+ * position x, speed v. Flux linkage lambda = L_ab(theta) i + lambda_pm(theta), theta = 2 pi x/tau:
+ *   L_ab(theta): Fourier series of the three alpha-beta entries (L_aa, L_bb, L_ab), computed by
+ *                linsense from the motor's inductance model (eq. 3, harmonics or a table);
+ *   lambda_pm:   psi_pm (cos theta, sin theta) plus relative harmonics of order n with phase
+ *                phi_n: psi_pm a_n (cos(n theta + phi_n) ... ) as (alpha, beta) of the
+ *                three-phase set (see ls_sim_plant_eval);
+ *   voltage:     v = R i + d lambda/dt   (amplitude-invariant alpha-beta)
+ *   force:       co-energy, F = (3/2) (2 pi/tau) [ i' d lambda_pm/d theta + 1/2 i' dL_ab/d theta i ]
+ *   mechanics:   m dv/dt = F - F_load(t, x) - b v - F_c sign(v) (stiction: v held at 0 while
+ *                |F - F_load| <= F_c), travel limits -> LS_SIM_FAULT_TRAVEL.
+ * Each PWM period (or switching segment) the 2x2 electrical system is frozen at the mid-period
+ * position and propagated with a 4th-order Taylor polynomial of its matrix (error ~1e-6 per period
+ * at 16 kHz), the mechanics with the trapezoidal force average.
+ *
+ * Inverter, 2-level, centre-aligned PWM, period starting at the carrier peak (where currents are
+ * sampled); duties computed from sample k act during period k+1 (one-period computation delay):
+ *   LS_SIM_AVERAGE:   pole voltage d V_dc - sign(i) t_dead f_pwm V_dc over the whole period;
+ *   LS_SIM_SWITCHING: each period integrated segment by segment between switching instants; the
+ *                     upper switch of a leg is commanded on for |t - T/2| < d T/2, turn-on edges
+ *                     are delayed by the dead time, and during it the freewheeling diode chosen by
+ *                     the current sign fixes the pole voltage (i > 0: low, i < 0: high).
+ * Sensors: current gain, offset, Gaussian noise and ADC quantisation (bits over +-full scale);
+ * incremental encoder (counts per electrical period). */
+#ifndef LINSENSE_LS_SIM_H
+#define LINSENSE_LS_SIM_H
+
+#include <stdint.h>
+
+#include "linsense/ls_drive.h"
+
+#define LS_SIM_MAX_ORDER 64 /* highest harmonic order of L_ab(theta) */
+#define LS_SIM_MAX_PM 8     /* PM-flux harmonics */
+
+typedef enum {
+    LS_SIM_AVERAGE = 0,
+    LS_SIM_SWITCHING = 1
+} ls_sim_fidelity;
+
+typedef enum {
+    LS_SIM_FREE = 0,       /* mechanics integrated (closed loop) */
+    LS_SIM_HELD = 1,       /* mover held at x0 */
+    LS_SIM_PRESCRIBED = 2  /* mover at constant speed v0 from x0 */
+} ls_sim_motion;
+
+typedef enum {
+    LS_SIM_LOAD_CONSTANT = 0, /* F = load_f0 */
+    LS_SIM_LOAD_STEP = 1,     /* F = load_f0 before load_t, load_f1 after */
+    LS_SIM_LOAD_INCLINE = 2   /* F = load_f0 + mass * 9.81 * sin(load_incline) (gravity) */
+} ls_sim_load;
+
+/* faults of the simulation itself (the drive's own faults are reported separately) */
+#define LS_SIM_FAULT_NONE 0u
+#define LS_SIM_FAULT_TRAVEL 0x100u     /* the mover left [x_min, x_max] */
+#define LS_SIM_FAULT_DIVERGED 0x200u   /* a plant state became non-finite or absurd */
+
+typedef struct {
+    /* motor */
+    double r_s;                          /* ohm, phase resistance */
+    double pole_pitch;                   /* m, one electrical period tau */
+    double psi_pm;                       /* Wb, PM flux-linkage amplitude */
+    int32_t n_order;                     /* -, harmonic orders 0..n_order-1 used in lab_* (<= LS_SIM_MAX_ORDER) */
+    double lab_cos[3][LS_SIM_MAX_ORDER]; /* H, cos(k theta) coefficients of L_aa, L_bb, L_ab */
+    double lab_sin[3][LS_SIM_MAX_ORDER]; /* H, sin(k theta) coefficients of L_aa, L_bb, L_ab */
+    int32_t n_pm;                        /* -, number of PM-flux harmonics (<= LS_SIM_MAX_PM) */
+    int32_t pm_order[LS_SIM_MAX_PM];     /* -, harmonic order (odd, >= 3 in practice) */
+    double pm_amp[LS_SIM_MAX_PM];        /* -, amplitude relative to psi_pm */
+    double pm_phase[LS_SIM_MAX_PM];      /* rad, phase */
+    double mass;                         /* kg, moving mass */
+    double visc;                         /* N s/m, viscous friction */
+    double coulomb;                      /* N, Coulomb friction */
+    double x_min, x_max;                 /* m, travel limits */
+    /* load */
+    ls_sim_load load;                    /* load model */
+    double load_f0;                      /* N, constant (or initial) load, opposing positive motion when > 0 */
+    double load_f1;                      /* N, load after the step */
+    double load_t;                       /* s, time of the step */
+    double load_incline;                 /* rad, axis inclination (gravity load) */
+    /* inverter */
+    ls_sim_fidelity fidelity;            /* average or switching */
+    double v_dc;                         /* V, DC bus */
+    double f_pwm;                        /* Hz, PWM = control rate */
+    double dead_time;                    /* s */
+    /* sensors */
+    double i_gain[3];                    /* -, current-sensor gains */
+    double i_offset[3];                  /* A, current-sensor offsets */
+    double i_noise;                      /* A rms, Gaussian current-sensor noise */
+    int32_t adc_bits;                    /* -, ADC resolution (0: ideal) */
+    double adc_range;                    /* A, full scale (+-) of the current ADC */
+    int32_t enc_counts;                  /* -, encoder counts per electrical period */
+    uint64_t seed;                       /* -, noise seed */
+    /* run */
+    ls_sim_motion motion;                /* free, held or prescribed speed */
+    double x0;                           /* m, initial position */
+    double v0;                           /* m/s, initial (or prescribed) speed */
+    int32_t decimate;                    /* -, record every decimate-th period (>= 1) */
+    double i_abort;                      /* A, |phase current| beyond which the run is stopped as diverged */
+} ls_sim_cfg;
+
+/* A reference command issued at time t (s): move (minimum-time) or step to x (m). */
+typedef struct {
+    double t;     /* s */
+    double x;     /* m */
+    int32_t move; /* 1: ls_drive_move_to, 0: ls_drive_step_to */
+} ls_sim_cmd;
+
+/* Output arrays, each of n_rec = ceil(n_steps / decimate) samples (caller-allocated; any
+ * pointer may be NULL to skip that signal). Recorded at the start of each recorded period. */
+typedef struct {
+    double *t;         /* s */
+    double *x;         /* m, true position */
+    double *v;         /* m/s, true speed */
+    double *x_est;     /* m, HF observer estimate */
+    double *v_est;     /* m/s, HF observer speed */
+    double *x_ref;     /* m, position reference */
+    double *theta_err; /* rad, theta_est - theta wrapped to [-pi, pi) */
+    double *i_abc;     /* A, true phase currents, 3 per sample */
+    double *i_dq;      /* A, true currents in the true dq frame, 2 per sample */
+    double *duty;      /* -, duties applied during the period, 3 per sample (open loop: v_abc, V) */
+    double *force;     /* N, motor force (period average) */
+    double *err_sig;   /* rad, demodulated error */
+    uint32_t *fault;   /* drive fault bits | LS_SIM_FAULT_* */
+} ls_sim_out;
+
+typedef struct {
+    int64_t steps_done;  /* -, PWM periods simulated (< n_steps when stopped early) */
+    int64_t n_rec;       /* -, samples written */
+    uint32_t fault;      /* drive fault bits | LS_SIM_FAULT_* at the end */
+    double x_end;        /* m */
+    double v_end;        /* m/s */
+} ls_sim_result;
+
+/* Validate the configuration (LS_ERR_PARAM names nothing; linsense.sim validates first). */
+ls_status ls_sim_check(const ls_sim_cfg *cfg);
+
+/* Closed loop: drive (initialised, mode set by the caller) around the plant for n_steps PWM
+ * periods, issuing the commands at their times (sorted by t). */
+ls_status ls_sim_run(const ls_sim_cfg *cfg, ls_drive *drive, const ls_sim_cmd *cmds, int32_t n_cmds,
+                     int64_t n_steps, const ls_sim_out *out, ls_sim_result *res);
+
+/* Open loop: prescribed pole voltages (V, relative to the DC minus rail). n_seg segments of
+ * durations seg_t (s) and voltages seg_v (3 per segment), applied in order; one recorded sample
+ * per segment boundary (decimate ignored), i.e. n_rec = n_seg + 1 (the initial state first). */
+ls_status ls_sim_open_loop(const ls_sim_cfg *cfg, const double *seg_t, const double *seg_v, int64_t n_seg,
+                           const ls_sim_out *out, ls_sim_result *res);
+
+/* Plant maps at electrical angle theta (for the Python/C agreement test): L_ab (3 entries: aa, bb,
+ * ab, H), dL_ab/dtheta (3, H/rad), lambda_pm (2, Wb), d lambda_pm/dtheta (2, Wb/rad). */
+void ls_sim_plant_eval(const ls_sim_cfg *cfg, double theta, double lab[3], double dlab[3], double lpm[2],
+                       double dlpm[2]);
+
+/* Force (N) at theta for alpha-beta currents i (co-energy formula above). */
+double ls_sim_force(const ls_sim_cfg *cfg, double theta, const double i_ab[2]);
+
+#endif /* LINSENSE_LS_SIM_H */

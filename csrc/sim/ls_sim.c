@@ -1,0 +1,592 @@
+/* linsense host-side simulator (see linsense/ls_sim.h). Double precision. */
+#include <math.h>
+#include <string.h>
+
+#include "linsense/ls_sim.h"
+
+#define SIM_PI 3.14159265358979323846
+#define SQRT3 1.7320508075688772
+#define GRAVITY 9.81
+
+/* ------------------------------------------------------------------------------ plant maps */
+typedef struct {
+    double l[3];    /* H, L_aa, L_bb, L_ab */
+    double dl[3];   /* H/rad */
+    double lpm[2];  /* Wb */
+    double dlpm[2]; /* Wb/rad */
+} plant_maps;
+
+static void maps(const ls_sim_cfg *c, double theta, plant_maps *m)
+{
+    double c1 = cos(theta), s1 = sin(theta), ck = 1.0, sk = 0.0;
+    int32_t k, e, j;
+    for (e = 0; e < 3; ++e) {
+        m->l[e] = c->lab_cos[e][0];
+        m->dl[e] = 0.0;
+    }
+    for (k = 1; k < c->n_order; ++k) {
+        double cn = ck * c1 - sk * s1, sn = sk * c1 + ck * s1;
+        ck = cn;
+        sk = sn;
+        for (e = 0; e < 3; ++e) {
+            m->l[e] += c->lab_cos[e][k] * ck + c->lab_sin[e][k] * sk;
+            m->dl[e] += (double)k * (c->lab_sin[e][k] * ck - c->lab_cos[e][k] * sk);
+        }
+    }
+    m->lpm[0] = c->psi_pm * c1;
+    m->lpm[1] = c->psi_pm * s1;
+    m->dlpm[0] = -c->psi_pm * s1;
+    m->dlpm[1] = c->psi_pm * c1;
+    for (j = 0; j < c->n_pm; ++j) {
+        /* phase a: psi_pm a_n cos(n th + phi); b, c shifted by -+2 pi/3 in th. Clarke of that
+         * three-phase set: zero for triplen n, (cos, +sin) for n = 1 mod 3, (cos, -sin) for
+         * n = 2 mod 3 */
+        int32_t n = c->pm_order[j];
+        double a = c->psi_pm * c->pm_amp[j], arg = (double)n * theta + c->pm_phase[j];
+        double sg = (n % 3 == 1) ? 1.0 : ((n % 3 == 2) ? -1.0 : 0.0);
+        if (sg == 0.0) {
+            continue;
+        }
+        m->lpm[0] += a * cos(arg);
+        m->lpm[1] += sg * a * sin(arg);
+        m->dlpm[0] -= (double)n * a * sin(arg);
+        m->dlpm[1] += sg * (double)n * a * cos(arg);
+    }
+}
+
+void ls_sim_plant_eval(const ls_sim_cfg *cfg, double theta, double lab[3], double dlab[3], double lpm[2],
+                       double dlpm[2])
+{
+    plant_maps m;
+    maps(cfg, theta, &m);
+    memcpy(lab, m.l, sizeof m.l);
+    memcpy(dlab, m.dl, sizeof m.dl);
+    memcpy(lpm, m.lpm, sizeof m.lpm);
+    memcpy(dlpm, m.dlpm, sizeof m.dlpm);
+}
+
+static double force_of(const ls_sim_cfg *c, const plant_maps *m, const double i[2])
+{
+    double kx = 2.0 * SIM_PI / c->pole_pitch;
+    double pm = i[0] * m->dlpm[0] + i[1] * m->dlpm[1];
+    double rel = 0.5 * (m->dl[0] * i[0] * i[0] + 2.0 * m->dl[2] * i[0] * i[1] + m->dl[1] * i[1] * i[1]);
+    return 1.5 * kx * (pm + rel);
+}
+
+double ls_sim_force(const ls_sim_cfg *cfg, double theta, const double i_ab[2])
+{
+    plant_maps m;
+    maps(cfg, theta, &m);
+    return force_of(cfg, &m, i_ab);
+}
+
+/* ------------------------------------------------------------------------------ checks */
+static bool fin(double x)
+{
+    return x - x == x - x;
+}
+
+ls_status ls_sim_check(const ls_sim_cfg *c)
+{
+    int32_t k, e;
+    if (c == NULL) {
+        return LS_ERR_NULL;
+    }
+    if (!(fin(c->r_s) && c->r_s >= 0.0) || !(fin(c->pole_pitch) && c->pole_pitch > 0.0) ||
+        !(fin(c->psi_pm) && c->psi_pm >= 0.0) || c->n_order < 1 || c->n_order > LS_SIM_MAX_ORDER ||
+        c->n_pm < 0 || c->n_pm > LS_SIM_MAX_PM || !(fin(c->mass) && c->mass > 0.0) ||
+        !(fin(c->visc) && c->visc >= 0.0) || !(fin(c->coulomb) && c->coulomb >= 0.0) ||
+        !(c->x_min < c->x_max) || !(fin(c->v_dc) && c->v_dc > 0.0) || !(fin(c->f_pwm) && c->f_pwm > 0.0) ||
+        !(fin(c->dead_time) && c->dead_time >= 0.0 && c->dead_time * c->f_pwm < 0.1) ||
+        !(fin(c->i_noise) && c->i_noise >= 0.0) || c->adc_bits < 0 || c->adc_bits > 24 ||
+        (c->adc_bits > 0 && !(fin(c->adc_range) && c->adc_range > 0.0)) || c->enc_counts <= 0 ||
+        c->decimate < 1 || !(fin(c->x0) && c->x0 >= c->x_min && c->x0 <= c->x_max) || !fin(c->v0) ||
+        !(fin(c->i_abort) && c->i_abort > 0.0) || !fin(c->load_f0) || !fin(c->load_f1) || !fin(c->load_t) ||
+        !fin(c->load_incline) || (c->fidelity != LS_SIM_AVERAGE && c->fidelity != LS_SIM_SWITCHING) ||
+        (c->motion != LS_SIM_FREE && c->motion != LS_SIM_HELD && c->motion != LS_SIM_PRESCRIBED) ||
+        (c->load != LS_SIM_LOAD_CONSTANT && c->load != LS_SIM_LOAD_STEP && c->load != LS_SIM_LOAD_INCLINE)) {
+        return LS_ERR_PARAM;
+    }
+    for (k = 0; k < 3; ++k) {
+        if (!fin(c->i_gain[k]) || !fin(c->i_offset[k])) {
+            return LS_ERR_PARAM;
+        }
+    }
+    for (e = 0; e < 3; ++e) {
+        for (k = 0; k < c->n_order; ++k) {
+            if (!fin(c->lab_cos[e][k]) || !fin(c->lab_sin[e][k])) {
+                return LS_ERR_PARAM;
+            }
+        }
+    }
+    for (k = 0; k < c->n_pm; ++k) {
+        if (!fin(c->pm_amp[k]) || !fin(c->pm_phase[k]) || c->pm_order[k] < 1) {
+            return LS_ERR_PARAM;
+        }
+    }
+    return LS_OK;
+}
+
+/* ------------------------------------------------------------------------------ electrical */
+/* The 2x2 system frozen over one period at the mid-period position:
+ *   di/dt = M i + b,   M = -L^-1 (R I + omega L'),   b = L^-1 (v - omega lambda_pm')         */
+typedef struct {
+    double linv[4]; /* 1/H, L^-1 row-major */
+    double m[4];    /* 1/s */
+    double be[2];   /* A/s, -L^-1 omega lambda_pm' (the EMF part of b) */
+} frozen;
+
+static bool freeze(const ls_sim_cfg *c, const plant_maps *pm, double omega, frozen *f)
+{
+    double det = pm->l[0] * pm->l[1] - pm->l[2] * pm->l[2];
+    double a00, a01, a10, a11;
+    if (!(det > 0.0) || !(pm->l[0] > 0.0)) {
+        return false;
+    }
+    f->linv[0] = pm->l[1] / det;
+    f->linv[1] = -pm->l[2] / det;
+    f->linv[2] = -pm->l[2] / det;
+    f->linv[3] = pm->l[0] / det;
+    a00 = c->r_s + omega * pm->dl[0];
+    a01 = omega * pm->dl[2];
+    a10 = omega * pm->dl[2];
+    a11 = c->r_s + omega * pm->dl[1];
+    f->m[0] = -(f->linv[0] * a00 + f->linv[1] * a10);
+    f->m[1] = -(f->linv[0] * a01 + f->linv[1] * a11);
+    f->m[2] = -(f->linv[2] * a00 + f->linv[3] * a10);
+    f->m[3] = -(f->linv[2] * a01 + f->linv[3] * a11);
+    f->be[0] = -omega * (f->linv[0] * pm->dlpm[0] + f->linv[1] * pm->dlpm[1]);
+    f->be[1] = -omega * (f->linv[2] * pm->dlpm[0] + f->linv[3] * pm->dlpm[1]);
+    return true;
+}
+
+/* RK4 over h with constant voltage v_ab: for this linear system it equals the 4th-order Taylor
+ * polynomial of the exact propagator. Long intervals are split into sub-steps of <= h_max. */
+static void propagate(const frozen *f, const double v_ab[2], double h, double h_max, double i[2])
+{
+    double b0 = f->linv[0] * v_ab[0] + f->linv[1] * v_ab[1] + f->be[0];
+    double b1 = f->linv[2] * v_ab[0] + f->linv[3] * v_ab[1] + f->be[1];
+    int32_t n = h > h_max ? (int32_t)ceil(h / h_max) : 1, s;
+    double hs = h / (double)n;
+    for (s = 0; s < n; ++s) {
+        double k1a = f->m[0] * i[0] + f->m[1] * i[1] + b0, k1b = f->m[2] * i[0] + f->m[3] * i[1] + b1;
+        double ya = i[0] + 0.5 * hs * k1a, yb = i[1] + 0.5 * hs * k1b;
+        double k2a = f->m[0] * ya + f->m[1] * yb + b0, k2b = f->m[2] * ya + f->m[3] * yb + b1;
+        double za = i[0] + 0.5 * hs * k2a, zb = i[1] + 0.5 * hs * k2b;
+        double k3a = f->m[0] * za + f->m[1] * zb + b0, k3b = f->m[2] * za + f->m[3] * zb + b1;
+        double wa = i[0] + hs * k3a, wb = i[1] + hs * k3b;
+        double k4a = f->m[0] * wa + f->m[1] * wb + b0, k4b = f->m[2] * wa + f->m[3] * wb + b1;
+        i[0] += hs / 6.0 * (k1a + 2.0 * k2a + 2.0 * k3a + k4a);
+        i[1] += hs / 6.0 * (k1b + 2.0 * k2b + 2.0 * k3b + k4b);
+    }
+}
+
+static void poles_to_ab(const double p[3], double v_ab[2])
+{
+    v_ab[0] = (2.0 * p[0] - p[1] - p[2]) / 3.0;
+    v_ab[1] = (p[1] - p[2]) / SQRT3;
+}
+
+static void ab_to_abc(const double i[2], double abc[3])
+{
+    abc[0] = i[0];
+    abc[1] = -0.5 * i[0] + 0.5 * SQRT3 * i[1];
+    abc[2] = -0.5 * i[0] - 0.5 * SQRT3 * i[1];
+}
+
+/* ------------------------------------------------------------------------------ inverter */
+/* Average model: one segment with the dead-time voltage error. */
+static void period_average(const ls_sim_cfg *c, const frozen *f, const double duty[3], double h, double i[2])
+{
+    double iabc[3], p[3], v_ab[2];
+    int j;
+    ab_to_abc(i, iabc);
+    for (j = 0; j < 3; ++j) {
+        double d = duty[j];
+        if (d > 0.0 && d < 1.0) {
+            d -= (iabc[j] > 0.0 ? 1.0 : (iabc[j] < 0.0 ? -1.0 : 0.0)) * c->dead_time * c->f_pwm;
+        }
+        p[j] = c->v_dc * (d < 0.0 ? 0.0 : (d > 1.0 ? 1.0 : d));
+    }
+    poles_to_ab(p, v_ab);
+    propagate(f, v_ab, h, h, i);
+}
+
+/* Switching model: gate commands at (1 -+ d) T/2, turn-on edges delayed by the dead time, the
+ * diode picked by the current sign at the command instant. Returns the time-weighted force
+ * integral over the period through *f_int (trapezoid per segment). */
+static void period_switching(const ls_sim_cfg *c, const frozen *f, const plant_maps *pm, const double duty[3],
+                             double h, double i[2], double *f_int)
+{
+    double t = 0.0, p[3], cmd_t[6], edge_t[6], v_ab[2], iabc[3], f0, f1;
+    int cmd_leg[6], cmd_on[6], edge_leg[6], edge_on[6];
+    int n_cmd = 0, n_edge = 0, next_cmd = 0, j, k;
+    const double td = c->dead_time;
+    for (j = 0; j < 3; ++j) {
+        double d = duty[j];
+        p[j] = d >= 1.0 ? 1.0 : 0.0;
+        if (d > 0.0 && d < 1.0) {
+            cmd_t[n_cmd] = 0.5 * (1.0 - d) * h; cmd_leg[n_cmd] = j; cmd_on[n_cmd] = 1; n_cmd++;
+            cmd_t[n_cmd] = 0.5 * (1.0 + d) * h; cmd_leg[n_cmd] = j; cmd_on[n_cmd] = 0; n_cmd++;
+        }
+    }
+    /* sort the (<= 6) commands by time */
+    for (j = 1; j < n_cmd; ++j) {
+        for (k = j; k > 0 && cmd_t[k] < cmd_t[k - 1]; --k) {
+            double tt = cmd_t[k]; int tl = cmd_leg[k], to = cmd_on[k];
+            cmd_t[k] = cmd_t[k - 1]; cmd_leg[k] = cmd_leg[k - 1]; cmd_on[k] = cmd_on[k - 1];
+            cmd_t[k - 1] = tt; cmd_leg[k - 1] = tl; cmd_on[k - 1] = to;
+        }
+    }
+    f0 = force_of(c, pm, i);
+    *f_int = 0.0;
+    for (;;) {
+        /* the next event: a gate command or a delayed edge, whichever comes first */
+        double t_next = h;
+        int kind = 0, which = -1;
+        if (next_cmd < n_cmd && cmd_t[next_cmd] < t_next) {
+            t_next = cmd_t[next_cmd]; kind = 1; which = next_cmd;
+        }
+        for (k = 0; k < n_edge; ++k) {
+            if (edge_t[k] < t_next) {
+                t_next = edge_t[k]; kind = 2; which = k;
+            }
+        }
+        if (t_next > t) {
+            double pv[3] = {p[0] * c->v_dc, p[1] * c->v_dc, p[2] * c->v_dc};
+            poles_to_ab(pv, v_ab);
+            propagate(f, v_ab, t_next - t, h, i);
+            f1 = force_of(c, pm, i);
+            *f_int += 0.5 * (f0 + f1) * (t_next - t);
+            f0 = f1;
+            t = t_next;
+        }
+        if (kind == 0) {
+            break;
+        }
+        if (kind == 1) {
+            int leg = cmd_leg[which], on = cmd_on[which];
+            double delay;
+            ab_to_abc(i, iabc);
+            /* turn-on of the upper switch: delayed when the current flows out (lower diode
+             * conducting); turn-off: delayed when it flows in (upper diode conducting) */
+            delay = on ? (iabc[leg] > 0.0 ? td : 0.0) : (iabc[leg] < 0.0 ? td : 0.0);
+            next_cmd++;
+            if (delay <= 0.0) {
+                p[leg] = on ? 1.0 : 0.0;
+            } else {
+                edge_t[n_edge] = t + delay; edge_leg[n_edge] = leg; edge_on[n_edge] = on; n_edge++;
+            }
+        } else {
+            p[edge_leg[which]] = edge_on[which] ? 1.0 : 0.0;
+            edge_t[which] = edge_t[n_edge - 1];
+            edge_leg[which] = edge_leg[n_edge - 1];
+            edge_on[which] = edge_on[n_edge - 1];
+            n_edge--;
+        }
+    }
+}
+
+/* ------------------------------------------------------------------------------ sensors */
+static uint64_t rng_next(uint64_t *s)
+{
+    uint64_t x = *s;
+    x ^= x >> 12;
+    x ^= x << 25;
+    x ^= x >> 27;
+    *s = x;
+    return x * 2685821657736338717ull;
+}
+
+static double rng_gauss(uint64_t *s)
+{
+    double u1 = ((double)(rng_next(s) >> 11) + 0.5) * (1.0 / 9007199254740992.0);
+    double u2 = (double)(rng_next(s) >> 11) * (1.0 / 9007199254740992.0);
+    return sqrt(-2.0 * log(u1)) * cos(2.0 * SIM_PI * u2);
+}
+
+static void measure(const ls_sim_cfg *c, const double i_ab[2], double x, uint64_t *rng, ls_meas *m)
+{
+    double iabc[3], lsb = c->adc_bits > 0 ? 2.0 * c->adc_range / (double)(1L << c->adc_bits) : 0.0;
+    double u;
+    int j;
+    ab_to_abc(i_ab, iabc);
+    for (j = 0; j < 3; ++j) {
+        double y = c->i_gain[j] * iabc[j] + c->i_offset[j];
+        if (c->i_noise > 0.0) {
+            y += c->i_noise * rng_gauss(rng);
+        }
+        if (lsb > 0.0) {
+            y = lsb * floor(y / lsb + 0.5);
+            y = y > c->adc_range ? c->adc_range : (y < -c->adc_range ? -c->adc_range : y);
+        }
+        m->i_abc[j] = (LS_REAL)y;
+    }
+    m->v_dc = (LS_REAL)c->v_dc;
+    u = floor(x / c->pole_pitch * (double)c->enc_counts);
+    m->enc_valid = true;
+    m->enc_count = (int32_t)(int64_t)u;
+}
+
+/* ------------------------------------------------------------------------------ mechanics */
+static double load_force(const ls_sim_cfg *c, double t)
+{
+    switch (c->load) {
+    case LS_SIM_LOAD_STEP:
+        return t < c->load_t ? c->load_f0 : c->load_f1;
+    case LS_SIM_LOAD_INCLINE:
+        return c->load_f0 + c->mass * GRAVITY * sin(c->load_incline);
+    case LS_SIM_LOAD_CONSTANT:
+    default:
+        return c->load_f0;
+    }
+}
+
+/* advance x, v over h with the motor force average f_avg */
+static void mechanics(const ls_sim_cfg *c, double t, double h, double f_avg, double *x, double *v)
+{
+    double f_net, v_new;
+    if (c->motion == LS_SIM_HELD) {
+        *v = 0.0;
+        return;
+    }
+    if (c->motion == LS_SIM_PRESCRIBED) {
+        *x += c->v0 * h;
+        *v = c->v0;
+        return;
+    }
+    f_net = f_avg - load_force(c, t) - c->visc * *v;
+    if (*v == 0.0 && fabs(f_net) <= c->coulomb) { /* stiction */
+        return;
+    }
+    f_net -= c->coulomb * (*v > 0.0 ? 1.0 : (*v < 0.0 ? -1.0 : (f_net > 0.0 ? 1.0 : -1.0)));
+    v_new = *v + f_net / c->mass * h;
+    if (c->coulomb > 0.0 && (*v) * v_new < 0.0) { /* friction cannot reverse the motion */
+        v_new = 0.0;
+    }
+    *x += 0.5 * (*v + v_new) * h;
+    *v = v_new;
+}
+
+/* ------------------------------------------------------------------------------ recording */
+static double pos_m(ls_pos p, double tau)
+{
+    return ((double)p.period + (double)p.theta / (2.0 * SIM_PI)) * tau;
+}
+
+static ls_pos pos_of_m(double x, double tau)
+{
+    ls_pos p;
+    double u = x / tau, f = floor(u);
+    p.period = (int32_t)f;
+    p.theta = (LS_REAL)((u - f) * 2.0 * SIM_PI);
+    return ls_pos_norm(p);
+}
+
+static double wrap_pi(double a)
+{
+    return a - 2.0 * SIM_PI * floor((a + SIM_PI) / (2.0 * SIM_PI));
+}
+
+static void record(const ls_sim_out *o, int64_t r, double t, double x, double v, const double i[2], double theta,
+                   const double u[3], double force, const ls_cmd *cmd, double tau, uint32_t fault)
+{
+    if (o->t) o->t[r] = t;
+    if (o->x) o->x[r] = x;
+    if (o->v) o->v[r] = v;
+    if (o->i_abc) ab_to_abc(i, &o->i_abc[3 * r]);
+    if (o->i_dq) {
+        double c = cos(theta), s = sin(theta);
+        o->i_dq[2 * r] = c * i[0] + s * i[1];
+        o->i_dq[2 * r + 1] = -s * i[0] + c * i[1];
+    }
+    if (o->duty) {
+        o->duty[3 * r] = u[0];
+        o->duty[3 * r + 1] = u[1];
+        o->duty[3 * r + 2] = u[2];
+    }
+    if (o->force) o->force[r] = force;
+    if (cmd != NULL) {
+        double x_est = pos_m(cmd->pos_est, tau);
+        if (o->x_est) o->x_est[r] = x_est;
+        if (o->v_est) o->v_est[r] = (double)cmd->v_est;
+        if (o->x_ref) o->x_ref[r] = pos_m(cmd->pos_ref, tau);
+        if (o->theta_err) o->theta_err[r] = wrap_pi((x_est - x) / tau * 2.0 * SIM_PI);
+        if (o->err_sig) o->err_sig[r] = (double)cmd->err_sig;
+    } else {
+        if (o->x_est) o->x_est[r] = NAN;
+        if (o->v_est) o->v_est[r] = NAN;
+        if (o->x_ref) o->x_ref[r] = NAN;
+        if (o->theta_err) o->theta_err[r] = NAN;
+        if (o->err_sig) o->err_sig[r] = NAN;
+    }
+    if (o->fault) o->fault[r] = fault;
+}
+
+static bool plant_ok(const ls_sim_cfg *c, const double i[2], double x, double v)
+{
+    double iabc[3];
+    ab_to_abc(i, iabc);
+    return fin(i[0]) && fin(i[1]) && fin(x) && fin(v) && fabs(iabc[0]) < c->i_abort && fabs(iabc[1]) < c->i_abort &&
+           fabs(iabc[2]) < c->i_abort;
+}
+
+/* ------------------------------------------------------------------------------ runs */
+ls_status ls_sim_run(const ls_sim_cfg *c, ls_drive *drive, const ls_sim_cmd *cmds, int32_t n_cmds, int64_t n_steps,
+                     const ls_sim_out *out, ls_sim_result *res)
+{
+    const double h = 1.0 / c->f_pwm, tau = c->pole_pitch, kx = 2.0 * SIM_PI / tau;
+    double x = c->x0, v = c->motion == LS_SIM_HELD ? 0.0 : c->v0, i[2] = {0.0, 0.0};
+    double duty[3] = {0.5, 0.5, 0.5};
+    uint64_t rng = c->seed * 0x9E3779B97F4A7C15ull + 0x2545F4914F6CDD1Dull;
+    int64_t k, r = 0;
+    int32_t next = 0;
+    uint32_t fault = 0u;
+    ls_meas meas;
+    ls_cmd cmd;
+    plant_maps pm;
+    frozen fz;
+    if (c == NULL || drive == NULL || out == NULL || res == NULL || (n_cmds > 0 && cmds == NULL) || n_steps < 0) {
+        return LS_ERR_NULL;
+    }
+    if (ls_sim_check(c) != LS_OK) {
+        return LS_ERR_PARAM;
+    }
+    memset(res, 0, sizeof *res);
+    memset(&cmd, 0, sizeof cmd);
+    if (rng == 0u) {
+        rng = 1u;
+    }
+    for (k = 0; k < n_steps; ++k) {
+        double t = (double)k * h, theta = kx * x, x_mid, f_start, f_avg, u[3];
+        while (next < n_cmds && cmds[next].t <= t) {
+            if (cmds[next].move) {
+                ls_drive_move_to(drive, pos_of_m(cmds[next].x, tau));
+            } else {
+                ls_drive_step_to(drive, pos_of_m(cmds[next].x, tau));
+            }
+            next++;
+        }
+        /* sample at the carrier peak, run the controller; its duties act next period */
+        measure(c, i, x, &rng, &meas);
+        ls_drive_step(drive, &meas, &cmd);
+        fault |= cmd.fault;
+        u[0] = duty[0]; u[1] = duty[1]; u[2] = duty[2];
+        /* the plant over this period with the duties computed one period earlier */
+        x_mid = x + 0.5 * h * v;
+        maps(c, kx * x_mid, &pm);
+        if (!freeze(c, &pm, kx * v, &fz)) {
+            fault |= LS_SIM_FAULT_DIVERGED;
+        }
+        f_start = force_of(c, &pm, i);
+        if ((k % c->decimate) == 0) {
+            record(out, r++, t, x, v, i, theta, u, f_start, &cmd, tau, fault);
+        }
+        if (fault != 0u) {
+            break;
+        }
+        if (c->fidelity == LS_SIM_SWITCHING) {
+            double f_int;
+            period_switching(c, &fz, &pm, u, h, i, &f_int);
+            f_avg = f_int / h;
+        } else {
+            period_average(c, &fz, u, h, i);
+            f_avg = 0.5 * (f_start + force_of(c, &pm, i));
+        }
+        mechanics(c, t, h, f_avg, &x, &v);
+        if (cmd.enable) {
+            duty[0] = (double)cmd.duty[0];
+            duty[1] = (double)cmd.duty[1];
+            duty[2] = (double)cmd.duty[2];
+        } else {
+            duty[0] = duty[1] = duty[2] = 0.5;
+        }
+        if (!plant_ok(c, i, x, v)) {
+            fault |= LS_SIM_FAULT_DIVERGED;
+        } else if (x < c->x_min || x > c->x_max) {
+            fault |= LS_SIM_FAULT_TRAVEL;
+        }
+        if (fault != 0u) {
+            /* record the state that tripped, then stop */
+            double nan3[3] = {NAN, NAN, NAN};
+            if (fin(i[0]) && fin(i[1]) && fin(x)) {
+                maps(c, kx * x, &pm);
+            }
+            record(out, r++, t + h, x, v, i, kx * x, nan3, fin(i[0]) ? force_of(c, &pm, i) : NAN, &cmd, tau, fault);
+            k++;
+            break;
+        }
+    }
+    res->steps_done = k;
+    res->n_rec = r;
+    res->fault = fault;
+    res->x_end = x;
+    res->v_end = v;
+    return LS_OK;
+}
+
+ls_status ls_sim_open_loop(const ls_sim_cfg *c, const double *seg_t, const double *seg_v, int64_t n_seg,
+                           const ls_sim_out *out, ls_sim_result *res)
+{
+    const double tau = c->pole_pitch, kx = 2.0 * SIM_PI / tau, h_max = 0.25 / c->f_pwm;
+    double x = c->x0, v = c->motion == LS_SIM_HELD ? 0.0 : c->v0, i[2] = {0.0, 0.0}, t = 0.0;
+    int64_t s;
+    uint32_t fault = 0u;
+    plant_maps pm;
+    frozen fz;
+    if (c == NULL || seg_t == NULL || seg_v == NULL || out == NULL || res == NULL || n_seg < 0) {
+        return LS_ERR_NULL;
+    }
+    if (ls_sim_check(c) != LS_OK) {
+        return LS_ERR_PARAM;
+    }
+    memset(res, 0, sizeof *res);
+    for (s = 0; s < n_seg && fault == 0u; ++s) {
+        double h = seg_t[s], v_ab[2], f_start;
+        if (!(fin(h) && h >= 0.0) || !fin(seg_v[3 * s]) || !fin(seg_v[3 * s + 1]) || !fin(seg_v[3 * s + 2])) {
+            return LS_ERR_PARAM;
+        }
+        maps(c, kx * x, &pm);
+        f_start = force_of(c, &pm, i);
+        record(out, s, t, x, v, i, kx * x, &seg_v[3 * s], f_start, NULL, tau, fault);
+        poles_to_ab(&seg_v[3 * s], v_ab);
+        {
+            /* segments longer than a quarter PWM period are split, each sub-step frozen at its
+             * own mid position, so long open-loop segments stay accurate while moving */
+            int32_t n = h > h_max ? (int32_t)ceil(h / h_max) : 1, q;
+            double hs = h / (double)n;
+            for (q = 0; q < n && fault == 0u; ++q) {
+                double fa, fb;
+                maps(c, kx * (x + 0.5 * hs * v), &pm);
+                if (!freeze(c, &pm, kx * v, &fz)) {
+                    fault |= LS_SIM_FAULT_DIVERGED;
+                    break;
+                }
+                fa = force_of(c, &pm, i);
+                propagate(&fz, v_ab, hs, hs, i);
+                fb = force_of(c, &pm, i);
+                mechanics(c, t + (double)q * hs, hs, 0.5 * (fa + fb), &x, &v);
+            }
+        }
+        t += h;
+        if (!plant_ok(c, i, x, v)) {
+            fault |= LS_SIM_FAULT_DIVERGED;
+            break;
+        }
+    }
+    {
+        double last[3] = {NAN, NAN, NAN};
+        if (fin(x) && fin(i[0]) && fin(i[1])) {
+            maps(c, kx * x, &pm);
+            record(out, s, t, x, v, i, kx * x, last, force_of(c, &pm, i), NULL, tau, fault);
+        } else {
+            record(out, s, t, x, v, i, kx * x, last, NAN, NULL, tau, fault);
+        }
+    }
+    res->steps_done = s;
+    res->n_rec = s + 1;
+    res->fault = fault;
+    res->x_end = x;
+    res->v_end = v;
+    return LS_OK;
+}

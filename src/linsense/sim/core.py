@@ -1,0 +1,178 @@
+"""Low-level access to the C simulator (``csrc/sim/ls_sim.c``): configure, run, collect arrays.
+
+Everything per step happens in C; Python only fills the configuration structs, allocates the
+numpy output arrays and hands pointers over. Higher layers (scenario files, metrics, the CLI)
+are in :mod:`linsense.sim.scenario`, :mod:`linsense.sim.run` and friends.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from linsense._ctrl import ffi, lib
+from linsense.errors import LinsenseError
+from linsense.sim.plant import fill_plant
+
+FIDELITIES = {"average": lib.LS_SIM_AVERAGE, "switching": lib.LS_SIM_SWITCHING}
+MOTIONS = {"free": lib.LS_SIM_FREE, "held": lib.LS_SIM_HELD, "prescribed": lib.LS_SIM_PRESCRIBED}
+LOADS = {
+    "constant": lib.LS_SIM_LOAD_CONSTANT,
+    "step": lib.LS_SIM_LOAD_STEP,
+    "incline": lib.LS_SIM_LOAD_INCLINE,
+}
+MODES = {
+    "off": lib.LS_MODE_OFF,
+    "sensored": lib.LS_MODE_SENSORED,
+    "sensorless_lut": lib.LS_MODE_SENSORLESS_LUT,
+    "sensorless_nolut": lib.LS_MODE_SENSORLESS_NOLUT,
+    "calibration": lib.LS_MODE_CALIBRATION,
+}
+#: Recorded signals: name -> values per sample.
+SIGNALS = {
+    "t": 1, "x": 1, "v": 1, "x_est": 1, "v_est": 1, "x_ref": 1, "theta_err": 1,
+    "i_abc": 3, "i_dq": 2, "duty": 3, "force": 1, "err_sig": 1,
+}
+#: Fault bits of the simulation itself (the drive's LS_FAULT_* bits are below 0x100).
+SIM_FAULT_TRAVEL = int(lib.LS_SIM_FAULT_TRAVEL)
+SIM_FAULT_DIVERGED = int(lib.LS_SIM_FAULT_DIVERGED)
+
+
+class SimulationError(LinsenseError):
+    """The C simulator refused its configuration or inputs."""
+
+
+@dataclass
+class PlantSetup:
+    """Everything of ``ls_sim_cfg`` that is not the motor (SI units)."""
+
+    fidelity: str = "average"        # "average" or "switching"
+    v_dc: float = 72.0               # V
+    f_pwm: float = 16000.0           # Hz, PWM = control rate
+    dead_time: float = 0.8e-6        # s
+    i_gain: tuple[float, float, float] = (1.0, 1.0, 1.0)    # -
+    i_offset: tuple[float, float, float] = (0.0, 0.0, 0.0)  # A
+    i_noise: float = 0.0             # A rms
+    adc_bits: int = 0                # 0: ideal
+    adc_range: float = 10.0          # A, +- full scale
+    enc_counts: int = 56000          # counts per electrical period
+    seed: int = 0
+    motion: str = "free"             # "free", "held", "prescribed"
+    x0: float = 0.0                  # m
+    v0: float = 0.0                  # m/s
+    x_min: float = -1.0              # m, travel limits
+    x_max: float = 1.0               # m
+    load: str = "constant"           # "constant", "step", "incline"
+    load_f0: float = 0.0             # N (opposes positive motion when > 0)
+    load_f1: float = 0.0             # N, after the step
+    load_t: float = 0.0              # s, time of the step
+    load_incline: float = 0.0        # rad
+    decimate: int = 1                # record every n-th period
+    i_abort: float = 20.0            # A, |phase current| treated as divergence
+
+
+def sim_cfg(motor, setup: PlantSetup):
+    """A filled ``ls_sim_cfg`` (cffi) for ``motor`` and ``setup``; checked by the C side."""
+    c = ffi.new("ls_sim_cfg *")
+    fill_plant(c, motor)
+    c.fidelity = FIDELITIES[setup.fidelity]
+    c.motion = MOTIONS[setup.motion]
+    c.load = LOADS[setup.load]
+    for name in ("v_dc", "f_pwm", "dead_time", "i_noise", "adc_bits", "adc_range", "enc_counts", "seed",
+                 "x0", "v0", "x_min", "x_max", "load_f0", "load_f1", "load_t", "load_incline", "decimate",
+                 "i_abort"):
+        setattr(c, name, getattr(setup, name))
+    c.i_gain = list(setup.i_gain)
+    c.i_offset = list(setup.i_offset)
+    if lib.ls_sim_check(c) != lib.LS_OK:
+        raise SimulationError(f"simulator configuration refused: {setup}")
+    return c
+
+
+def _outputs(n_rec: int) -> tuple[dict[str, np.ndarray], object]:
+    arrays = {k: np.full((n_rec, w) if w > 1 else n_rec, np.nan) for k, w in SIGNALS.items()}
+    arrays["fault"] = np.zeros(n_rec, dtype=np.uint32)
+    out = ffi.new("ls_sim_out *")
+    for k, a in arrays.items():
+        ctype = "uint32_t *" if k == "fault" else "double *"
+        setattr(out, k, ffi.cast(ctype, ffi.from_buffer(a)))
+    return arrays, out
+
+
+@dataclass
+class RawRun:
+    """Arrays and end state of one C run (arrays cut to the samples written)."""
+
+    arrays: dict[str, np.ndarray]
+    steps_done: int
+    fault: int
+    x_end: float
+    v_end: float
+    extra: dict = field(default_factory=dict)
+
+
+def _collect(arrays, res) -> RawRun:
+    n = int(res.n_rec)
+    return RawRun({k: a[:n] for k, a in arrays.items()}, int(res.steps_done), int(res.fault),
+                  float(res.x_end), float(res.v_end))
+
+
+def run_closed_loop(cfg, drive, n_steps: int, commands=()) -> RawRun:
+    """Run ``n_steps`` PWM periods of ``drive`` (an initialised ``ls_drive *`` with its mode set)
+    around the plant ``cfg``. ``commands``: iterable of ``(t [s], x [m], move: bool)``."""
+    cmds = sorted(commands, key=lambda c: c[0])
+    c_cmds = ffi.new("ls_sim_cmd[]", max(1, len(cmds)))
+    for j, (t, x, move) in enumerate(cmds):
+        c_cmds[j].t, c_cmds[j].x, c_cmds[j].move = float(t), float(x), int(bool(move))
+    n_rec = int(math.ceil(n_steps / cfg.decimate)) + 2
+    arrays, out = _outputs(n_rec)
+    res = ffi.new("ls_sim_result *")
+    st = lib.ls_sim_run(cfg, drive, c_cmds, len(cmds), int(n_steps), out, res)
+    if st != lib.LS_OK:
+        raise SimulationError(f"ls_sim_run refused its inputs (status {st})")
+    return _collect(arrays, res)
+
+
+def run_open_loop(cfg, seg_t: np.ndarray, seg_v: np.ndarray) -> RawRun:
+    """Apply pole voltages ``seg_v`` (n, 3; V) for durations ``seg_t`` (n; s) to the plant.
+
+    Returns ``n + 1`` samples at the segment boundaries (``duty`` holds the applied voltages).
+    """
+    seg_t = np.ascontiguousarray(seg_t, dtype=float)
+    seg_v = np.ascontiguousarray(seg_v, dtype=float).reshape(-1, 3)
+    if seg_t.shape[0] != seg_v.shape[0]:
+        raise SimulationError("seg_t and seg_v must have the same number of segments")
+    arrays, out = _outputs(seg_t.size + 1)
+    res = ffi.new("ls_sim_result *")
+    st = lib.ls_sim_open_loop(cfg, ffi.cast("double *", ffi.from_buffer(seg_t)),
+                              ffi.cast("double *", ffi.from_buffer(seg_v)), seg_t.size, out, res)
+    if st != lib.LS_OK:
+        raise SimulationError(f"ls_sim_open_loop refused its inputs (status {st})")
+    return _collect(arrays, res)
+
+
+def plant_eval(cfg, theta: float) -> dict[str, np.ndarray]:
+    """The C plant's maps at ``theta`` (rad): L_ab entries (aa, bb, ab), their derivative,
+    the PM flux linkage and its derivative (alpha-beta)."""
+    lab, dlab = ffi.new("double[3]"), ffi.new("double[3]")
+    lpm, dlpm = ffi.new("double[2]"), ffi.new("double[2]")
+    lib.ls_sim_plant_eval(cfg, float(theta), lab, dlab, lpm, dlpm)
+    return {"L_ab": np.array(list(lab)), "dL_ab": np.array(list(dlab)),
+            "lambda_pm": np.array(list(lpm)), "dlambda_pm": np.array(list(dlpm))}
+
+
+def plant_force(cfg, theta: float, i_ab) -> float:
+    """The C plant's force (N) at ``theta`` for alpha-beta currents ``i_ab`` (A)."""
+    i = ffi.new("double[2]", [float(i_ab[0]), float(i_ab[1])])
+    return float(lib.ls_sim_force(cfg, float(theta), i))
+
+
+def pos(x: float, pole_pitch: float):
+    """``ls_pos`` (cffi value) of a position in m."""
+    p = ffi.new("ls_pos *")
+    u = x / pole_pitch
+    p.period = math.floor(u)
+    p.theta = (u - math.floor(u)) * 2.0 * math.pi
+    return lib.ls_py_pos_norm(p[0])
