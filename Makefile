@@ -15,6 +15,7 @@ CLIBWARN := -Wdouble-promotion -Wconversion -Wshadow
 SAN      := -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
 CINC     := -Icsrc/include -Icsrc/tests -I$(BUILD)/gen
 CTRL_SRC := $(wildcard csrc/ctrl/*.c)
+SIM_SRC  := $(wildcard csrc/sim/*.c)
 CTESTS   := $(patsubst csrc/tests/%.c,%,$(wildcard csrc/tests/test_*.c))
 GEN_HDR  := $(BUILD)/gen/ls_lut_ecce2010.h $(BUILD)/gen/ls_lut_ecce2010_r.h
 # variant name : extra flags
@@ -57,6 +58,10 @@ ctest: $(GEN_HDR)
 	  for src in $(CTRL_SRC); do \
 	    obj=$$dir/$$(basename $$src .c).o; \
 	    $(CC) $(CSTD) $(CLIBWARN) $$flags $(CINC) -c $$src -o $$obj; objs="$$objs $$obj"; \
+	  done; \
+	  for src in $(SIM_SRC); do \
+	    obj=$$dir/$$(basename $$src .c).o; \
+	    $(CC) $(CSTD) -Wshadow $$flags $(CINC) -c $$src -o $$obj; objs="$$objs $$obj"; \
 	  done; \
 	  for t in $(CTESTS); do \
 	    $(CC) $(CSTD) $$flags $(CINC) csrc/tests/$$t.c $$objs -lm -o $$dir/$$t; \

@@ -76,6 +76,7 @@ void ls_drive_default_cfg(ls_drive_cfg *c)
     c->mod.dead_time = LS_R(0.8e-6);
     c->mod.dtc = true;
     c->mod.i_band = LS_R(0.05);
+    c->mod.dtc_lead = LS_R(1.5);
     c->prot.i_max = LS_R(6.0);
     c->prot.v_dc_min = LS_R(40.0);
     c->prot.v_dc_max = LS_R(90.0);

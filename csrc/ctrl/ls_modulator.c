@@ -10,17 +10,20 @@ ls_status ls_mod_init(ls_mod *m, const ls_mod_cfg *cfg)
     }
     if (!LS_ISFINITE(cfg->f_pwm) || !LS_ISFINITE(cfg->dead_time) || !LS_ISFINITE(cfg->i_band) ||
         !(cfg->f_pwm > LS_R(0.0)) || cfg->dead_time < LS_R(0.0) ||
-        cfg->dead_time * cfg->f_pwm >= LS_R(0.1) || !(cfg->i_band > LS_R(0.0))) {
+        cfg->dead_time * cfg->f_pwm >= LS_R(0.1) || !(cfg->i_band > LS_R(0.0)) || !LS_ISFINITE(cfg->dtc_lead) ||
+        cfg->dtc_lead < LS_R(0.0) || cfg->dtc_lead > LS_R(4.0)) {
         return LS_ERR_PARAM;
     }
     m->cfg = *cfg;
     m->d_dead = cfg->dead_time * cfg->f_pwm;
+    ls_mod_reset(m);
     return LS_OK;
 }
 
 void ls_mod_reset(ls_mod *m)
 {
-    (void)m;
+    m->i_prev[0] = m->i_prev[1] = m->i_prev[2] = LS_R(0.0);
+    m->have_prev = false;
 }
 
 bool ls_mod_step(ls_mod *m, LS_REAL v_a, LS_REAL v_b, LS_REAL v_dc, const LS_REAL i_abc[3],
@@ -45,12 +48,18 @@ bool ls_mod_step(ls_mod *m, LS_REAL v_a, LS_REAL v_b, LS_REAL v_dc, const LS_REA
     for (k = 0; k < 3; ++k) {
         LS_REAL d = LS_R(0.5) + (v[k] + off) * inv;
         if (m->cfg.dtc && i_abc != NULL && LS_ISFINITE(i_abc[k])) {
-            d += m->d_dead * ls_clamp(i_abc[k] / m->cfg.i_band, LS_R(-1.0), LS_R(1.0));
+            LS_REAL i_pred = i_abc[k];
+            if (m->have_prev) {
+                i_pred += m->cfg.dtc_lead * (i_abc[k] - m->i_prev[k]);
+            }
+            m->i_prev[k] = i_abc[k];
+            d += m->d_dead * ls_clamp(i_pred / m->cfg.i_band, LS_R(-1.0), LS_R(1.0));
         }
         if (d > LS_R(1.0) || d < LS_R(0.0)) {
             clipped = true;
         }
         duty[k] = ls_clamp(d, LS_R(0.0), LS_R(1.0));
     }
+    m->have_prev = m->cfg.dtc && i_abc != NULL;
     return clipped;
 }

@@ -16,9 +16,9 @@ typedef struct {
     double dlpm[2]; /* Wb/rad */
 } plant_maps;
 
-static void maps(const ls_sim_cfg *c, double theta, plant_maps *m)
+static void maps_cs(const ls_sim_cfg *c, double theta, double c1, double s1, plant_maps *m)
 {
-    double c1 = cos(theta), s1 = sin(theta), ck = 1.0, sk = 0.0;
+    double ck = 1.0, sk = 0.0;
     int32_t k, e, j;
     for (e = 0; e < 3; ++e) {
         m->l[e] = c->lab_cos[e][0];
@@ -52,6 +52,11 @@ static void maps(const ls_sim_cfg *c, double theta, plant_maps *m)
         m->dlpm[0] -= (double)n * a * sin(arg);
         m->dlpm[1] += sg * (double)n * a * cos(arg);
     }
+}
+
+static void maps(const ls_sim_cfg *c, double theta, plant_maps *m)
+{
+    maps_cs(c, theta, cos(theta), sin(theta), m);
 }
 
 void ls_sim_plant_eval(const ls_sim_cfg *cfg, double theta, double lab[3], double dlab[3], double lpm[2],
@@ -138,15 +143,16 @@ typedef struct {
 
 static bool freeze(const ls_sim_cfg *c, const plant_maps *pm, double omega, frozen *f)
 {
-    double det = pm->l[0] * pm->l[1] - pm->l[2] * pm->l[2];
+    double det = pm->l[0] * pm->l[1] - pm->l[2] * pm->l[2], idet;
     double a00, a01, a10, a11;
     if (!(det > 0.0) || !(pm->l[0] > 0.0)) {
         return false;
     }
-    f->linv[0] = pm->l[1] / det;
-    f->linv[1] = -pm->l[2] / det;
-    f->linv[2] = -pm->l[2] / det;
-    f->linv[3] = pm->l[0] / det;
+    idet = 1.0 / det;
+    f->linv[0] = pm->l[1] * idet;
+    f->linv[1] = -pm->l[2] * idet;
+    f->linv[2] = f->linv[1];
+    f->linv[3] = pm->l[0] * idet;
     a00 = c->r_s + omega * pm->dl[0];
     a01 = omega * pm->dl[2];
     a10 = omega * pm->dl[2];
@@ -195,12 +201,20 @@ static void ab_to_abc(const double i[2], double abc[3])
 }
 
 /* ------------------------------------------------------------------------------ inverter */
-/* Average model: one segment with the dead-time voltage error. */
+/* Average model: one segment with the dead-time voltage error, its sign taken from the current
+ * predicted at mid-period (one Euler half step with the ideal voltage), where the switching
+ * instants are on average. */
 static void period_average(const ls_sim_cfg *c, const frozen *f, const double duty[3], double h, double i[2])
 {
-    double iabc[3], p[3], v_ab[2];
+    double iabc[3], p[3], v_ab[2], i_mid[2];
     int j;
-    ab_to_abc(i, iabc);
+    for (j = 0; j < 3; ++j) {
+        p[j] = c->v_dc * duty[j];
+    }
+    poles_to_ab(p, v_ab);
+    i_mid[0] = i[0] + 0.5 * h * (f->m[0] * i[0] + f->m[1] * i[1] + f->linv[0] * v_ab[0] + f->linv[1] * v_ab[1] + f->be[0]);
+    i_mid[1] = i[1] + 0.5 * h * (f->m[2] * i[0] + f->m[3] * i[1] + f->linv[2] * v_ab[0] + f->linv[3] * v_ab[1] + f->be[1]);
+    ab_to_abc(i_mid, iabc);
     for (j = 0; j < 3; ++j) {
         double d = duty[j];
         if (d > 0.0 && d < 1.0) {
@@ -305,7 +319,7 @@ static double rng_gauss(uint64_t *s)
     return sqrt(-2.0 * log(u1)) * cos(2.0 * SIM_PI * u2);
 }
 
-static void measure(const ls_sim_cfg *c, const double i_ab[2], double x, uint64_t *rng, ls_meas *m)
+static void measure(const ls_sim_cfg *c, const double i_ab[2], double x, bool encoder, uint64_t *rng, ls_meas *m)
 {
     double iabc[3], lsb = c->adc_bits > 0 ? 2.0 * c->adc_range / (double)(1L << c->adc_bits) : 0.0;
     double u;
@@ -323,9 +337,12 @@ static void measure(const ls_sim_cfg *c, const double i_ab[2], double x, uint64_
         m->i_abc[j] = (LS_REAL)y;
     }
     m->v_dc = (LS_REAL)c->v_dc;
-    u = floor(x / c->pole_pitch * (double)c->enc_counts);
     m->enc_valid = true;
-    m->enc_count = (int32_t)(int64_t)u;
+    m->enc_count = 0;
+    if (encoder) { /* only modes that read it pay for the conversion */
+        u = floor(x / c->pole_pitch * (double)c->enc_counts);
+        m->enc_count = (int32_t)(int64_t)u;
+    }
 }
 
 /* ------------------------------------------------------------------------------ mechanics */
@@ -388,17 +405,16 @@ static double wrap_pi(double a)
     return a - 2.0 * SIM_PI * floor((a + SIM_PI) / (2.0 * SIM_PI));
 }
 
-static void record(const ls_sim_out *o, int64_t r, double t, double x, double v, const double i[2], double theta,
-                   const double u[3], double force, const ls_cmd *cmd, double tau, uint32_t fault)
+static void record(const ls_sim_out *o, int64_t r, double t, double x, double v, const double i[2], double cth,
+                   double sth, const double u[3], double force, const ls_cmd *cmd, double tau, uint32_t fault)
 {
     if (o->t) o->t[r] = t;
     if (o->x) o->x[r] = x;
     if (o->v) o->v[r] = v;
     if (o->i_abc) ab_to_abc(i, &o->i_abc[3 * r]);
     if (o->i_dq) {
-        double c = cos(theta), s = sin(theta);
-        o->i_dq[2 * r] = c * i[0] + s * i[1];
-        o->i_dq[2 * r + 1] = -s * i[0] + c * i[1];
+        o->i_dq[2 * r] = cth * i[0] + sth * i[1];
+        o->i_dq[2 * r + 1] = -sth * i[0] + cth * i[1];
     }
     if (o->duty) {
         o->duty[3 * r] = u[0];
@@ -440,7 +456,7 @@ ls_status ls_sim_run(const ls_sim_cfg *c, ls_drive *drive, const ls_sim_cmd *cmd
     double duty[3] = {0.5, 0.5, 0.5};
     uint64_t rng = c->seed * 0x9E3779B97F4A7C15ull + 0x2545F4914F6CDD1Dull;
     int64_t k, r = 0;
-    int32_t next = 0;
+    int32_t next = 0, rec_count = 1;
     uint32_t fault = 0u;
     ls_meas meas;
     ls_cmd cmd;
@@ -458,7 +474,7 @@ ls_status ls_sim_run(const ls_sim_cfg *c, ls_drive *drive, const ls_sim_cmd *cmd
         rng = 1u;
     }
     for (k = 0; k < n_steps; ++k) {
-        double t = (double)k * h, theta = kx * x, x_mid, f_start, f_avg, u[3];
+        double t = (double)k * h, x_mid, f_start, f_avg, u[3], th_mid, cm, sm, dl, cd, sd;
         while (next < n_cmds && cmds[next].t <= t) {
             if (cmds[next].move) {
                 ls_drive_move_to(drive, pos_of_m(cmds[next].x, tau));
@@ -468,19 +484,28 @@ ls_status ls_sim_run(const ls_sim_cfg *c, ls_drive *drive, const ls_sim_cmd *cmd
             next++;
         }
         /* sample at the carrier peak, run the controller; its duties act next period */
-        measure(c, i, x, &rng, &meas);
+        measure(c, i, x, drive->mode == LS_MODE_SENSORED || drive->mode == LS_MODE_CALIBRATION, &rng, &meas);
         ls_drive_step(drive, &meas, &cmd);
         fault |= cmd.fault;
         u[0] = duty[0]; u[1] = duty[1]; u[2] = duty[2];
-        /* the plant over this period with the duties computed one period earlier */
+        /* the plant over this period with the duties computed one period earlier, frozen at the
+         * predicted mid-period position (one sincos per period; the start angle for recording
+         * follows by a small rotation, |dl| < 1e-2 rad, series exact to 1e-13) */
         x_mid = x + 0.5 * h * v;
-        maps(c, kx * x_mid, &pm);
+        th_mid = kx * x_mid;
+        cm = cos(th_mid);
+        sm = sin(th_mid);
+        maps_cs(c, th_mid, cm, sm, &pm);
         if (!freeze(c, &pm, kx * v, &fz)) {
             fault |= LS_SIM_FAULT_DIVERGED;
         }
         f_start = force_of(c, &pm, i);
-        if ((k % c->decimate) == 0) {
-            record(out, r++, t, x, v, i, theta, u, f_start, &cmd, tau, fault);
+        if (--rec_count == 0) {
+            rec_count = c->decimate;
+            dl = kx * (x - x_mid);
+            cd = 1.0 - 0.5 * dl * dl * (1.0 - dl * dl / 12.0);
+            sd = dl * (1.0 - dl * dl / 6.0 * (1.0 - dl * dl / 20.0));
+            record(out, r++, t, x, v, i, cm * cd - sm * sd, sm * cd + cm * sd, u, f_start, &cmd, tau, fault);
         }
         if (fault != 0u) {
             break;
@@ -508,11 +533,12 @@ ls_status ls_sim_run(const ls_sim_cfg *c, ls_drive *drive, const ls_sim_cmd *cmd
         }
         if (fault != 0u) {
             /* record the state that tripped, then stop */
-            double nan3[3] = {NAN, NAN, NAN};
+            double nan3[3] = {NAN, NAN, NAN}, f_end = NAN;
             if (fin(i[0]) && fin(i[1]) && fin(x)) {
                 maps(c, kx * x, &pm);
+                f_end = force_of(c, &pm, i);
             }
-            record(out, r++, t + h, x, v, i, kx * x, nan3, fin(i[0]) ? force_of(c, &pm, i) : NAN, &cmd, tau, fault);
+            record(out, r++, t + h, x, v, i, cos(kx * x), sin(kx * x), nan3, f_end, &cmd, tau, fault);
             k++;
             break;
         }
@@ -548,7 +574,7 @@ ls_status ls_sim_open_loop(const ls_sim_cfg *c, const double *seg_t, const doubl
         }
         maps(c, kx * x, &pm);
         f_start = force_of(c, &pm, i);
-        record(out, s, t, x, v, i, kx * x, &seg_v[3 * s], f_start, NULL, tau, fault);
+        record(out, s, t, x, v, i, cos(kx * x), sin(kx * x), &seg_v[3 * s], f_start, NULL, tau, fault);
         poles_to_ab(&seg_v[3 * s], v_ab);
         {
             /* segments longer than a quarter PWM period are split, each sub-step frozen at its
@@ -578,9 +604,9 @@ ls_status ls_sim_open_loop(const ls_sim_cfg *c, const double *seg_t, const doubl
         double last[3] = {NAN, NAN, NAN};
         if (fin(x) && fin(i[0]) && fin(i[1])) {
             maps(c, kx * x, &pm);
-            record(out, s, t, x, v, i, kx * x, last, force_of(c, &pm, i), NULL, tau, fault);
+            record(out, s, t, x, v, i, cos(kx * x), sin(kx * x), last, force_of(c, &pm, i), NULL, tau, fault);
         } else {
-            record(out, s, t, x, v, i, kx * x, last, NAN, NULL, tau, fault);
+            record(out, s, t, x, v, i, 1.0, 0.0, last, NAN, NULL, tau, fault);
         }
     }
     res->steps_done = s;

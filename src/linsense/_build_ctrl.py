@@ -193,8 +193,8 @@ void ls_traj_jump(ls_traj *t, ls_pos target);
 void ls_traj_step(ls_traj *t, ls_pos *x_ref, LS_REAL *v_ref, LS_REAL *a_ref);
 
 /* ls_modulator.h */
-typedef struct { LS_REAL f_pwm; LS_REAL dead_time; bool dtc; LS_REAL i_band; } ls_mod_cfg;
-typedef struct { ls_mod_cfg cfg; LS_REAL d_dead; } ls_mod;
+typedef struct { LS_REAL f_pwm; LS_REAL dead_time; bool dtc; LS_REAL i_band; LS_REAL dtc_lead; } ls_mod_cfg;
+typedef struct { ls_mod_cfg cfg; LS_REAL d_dead; LS_REAL i_prev[3]; bool have_prev; } ls_mod;
 ls_status ls_mod_init(ls_mod *m, const ls_mod_cfg *cfg);
 void ls_mod_reset(ls_mod *m);
 bool ls_mod_step(ls_mod *m, LS_REAL v_a, LS_REAL v_b, LS_REAL v_dc, const LS_REAL i_abc[3],

@@ -1,0 +1,134 @@
+/* The simulator core under the sanitizers: a closed-loop sensorless run on the ecce2010 plant
+ * (alpha-beta Fourier coefficients obtained here by a DFT of the closed-form L_ab of the test
+ * plant), the open-loop path, the travel-limit fault and configuration refusals. The physics
+ * (accuracy against a 3x3 ABC reference, agreement with the Python model) is tested in Python:
+ * tests/test_sim_accuracy.py, tests/test_sim_plant.py. */
+#include <math.h>
+#include <string.h>
+
+#include "linsense/ls_sim.h"
+#include "ls_lut_ecce2010_r.h"
+#include "ls_test.h"
+#include "ls_test_plant.h"
+
+static void make_cfg(ls_sim_cfg *c, ls_sim_fidelity fid)
+{
+    tp_plant p;
+    const int n = 16;
+    int k, e, m;
+    memset(c, 0, sizeof *c);
+    tp_init(&p, 0.0);
+    c->n_order = 3;
+    for (m = 0; m < n; ++m) { /* DFT of L_ab(theta) over one period, orders 0..2 */
+        double th = 2 * TP_PI * m / n, L[2][2], ent[3];
+        tp_L_ab(&p, th, L);
+        ent[0] = L[0][0]; ent[1] = L[1][1]; ent[2] = L[0][1];
+        for (e = 0; e < 3; ++e) {
+            for (k = 0; k < 3; ++k) {
+                double w = (k == 0 ? 1.0 : 2.0) / n;
+                c->lab_cos[e][k] += w * ent[e] * cos(k * th);
+                c->lab_sin[e][k] += w * ent[e] * sin(k * th);
+            }
+        }
+    }
+    c->r_s = p.R; c->pole_pitch = p.tau; c->psi_pm = tp_psi_pm(&p); c->mass = p.mass;
+    c->x_min = -0.5; c->x_max = 0.5; c->fidelity = fid; c->v_dc = 72.0; c->f_pwm = 16000.0;
+    c->dead_time = 0.8e-6; c->i_gain[0] = c->i_gain[1] = c->i_gain[2] = 1.0; c->enc_counts = 56000;
+    c->seed = 3; c->i_noise = 0.002; c->adc_bits = 12; c->adc_range = 10.0;
+    c->motion = LS_SIM_FREE; c->decimate = 4; c->i_abort = 20.0;
+}
+
+static void closed_loop(ls_sim_fidelity fid)
+{
+    static double t[6000], x[6000], xe[6000], te[6000], i3[18000], fo[6000];
+    static uint32_t fa[6000];
+    ls_sim_cfg c;
+    ls_sim_out o;
+    ls_sim_cmd cmd = {0.05, 0.003, 1};
+    ls_sim_result r;
+    ls_lut_cfg lc = {ls_lut_ecce2010_r, LS_LUT_ECCE2010_R_LEN};
+    ls_lut lut;
+    ls_drive_cfg dc;
+    ls_drive d;
+    ls_pos p0 = {0, LS_R(0.0)};
+    int64_t k;
+    double worst = 0.0;
+    make_cfg(&c, fid);
+    LS_CHECK(ls_sim_check(&c) == LS_OK);
+    memset(&o, 0, sizeof o);
+    o.t = t; o.x = x; o.x_est = xe; o.theta_err = te; o.i_abc = i3; o.force = fo; o.fault = fa;
+    LS_CHECK(ls_lut_init(&lut, &lc) == LS_OK);
+    ls_drive_default_cfg(&dc);
+    dc.demod.comp = &lut;
+    LS_CHECK(ls_drive_init(&d, &dc) == LS_OK);
+    ls_drive_set_position(&d, p0);
+    LS_CHECK(ls_drive_set_mode(&d, LS_MODE_SENSORLESS_LUT) == LS_OK);
+    LS_CHECK(ls_sim_run(&c, &d, &cmd, 1, 24000, &o, &r) == LS_OK); /* 1.5 s, 3 mm move */
+    LS_CHECK(r.fault == 0u && r.steps_done == 24000 && r.n_rec == 6000);
+    for (k = 400; k < r.n_rec; ++k) {
+        if (fabs(te[k]) > worst) worst = fabs(te[k]);
+    }
+    printf("  %s: 3 mm sensorless move, final %.3f mm, max estimation error %.2f deg\n",
+           fid == LS_SIM_SWITCHING ? "switching" : "average", r.x_end * 1e3, worst * 180 / TP_PI);
+    LS_CHECK_NEAR(r.x_end, 0.003, 0.2e-3);
+    LS_CHECK(worst < 10.0 * TP_PI / 180); /* the paper: ~9 deg in transients */
+    LS_CHECK_NEAR(t[1], 4.0 / 16000.0, 1e-12);
+}
+
+static void open_loop_and_faults(void)
+{
+    static double t[16002], x[16002], i3[3 * 16002]; /* room for every step of the travel run */
+    static uint32_t fa[16002];
+    double seg_t[100], seg_v[300], bad_v[3] = {NAN, 0.0, 0.0};
+    ls_sim_cfg c;
+    ls_sim_out o;
+    ls_sim_result r;
+    ls_drive_cfg dc;
+    ls_drive d;
+    ls_sim_cmd far = {0.0, 0.4, 0};
+    int k;
+    make_cfg(&c, LS_SIM_AVERAGE);
+    c.motion = LS_SIM_PRESCRIBED;
+    c.v0 = 0.2;
+    memset(&o, 0, sizeof o);
+    o.t = t; o.x = x; o.i_abc = i3; o.fault = fa;
+    for (k = 0; k < 100; ++k) {
+        seg_t[k] = 1.0 / 16000.0;
+        seg_v[3 * k] = 36.0 + 12.0 * cos(2 * TP_PI * 1000.0 * k / 16000.0);
+        seg_v[3 * k + 1] = seg_v[3 * k + 2] = 36.0 - 6.0 * cos(2 * TP_PI * 1000.0 * k / 16000.0);
+    }
+    LS_CHECK(ls_sim_open_loop(&c, seg_t, seg_v, 100, &o, &r) == LS_OK);
+    LS_CHECK(r.n_rec == 101 && r.fault == 0u);
+    LS_CHECK_NEAR(x[100], 0.2 * 100.0 / 16000.0, 1e-12); /* prescribed speed */
+    LS_CHECK(fabs(i3[300]) > 0.05 && fabs(i3[300]) < 2.0);
+    LS_CHECK(ls_sim_open_loop(&c, seg_t, bad_v, 1, &o, &r) == LS_ERR_PARAM);
+    /* refusals */
+    c.n_order = 0;
+    LS_CHECK(ls_sim_check(&c) == LS_ERR_PARAM);
+    make_cfg(&c, LS_SIM_AVERAGE);
+    c.x0 = 1.0; /* outside the travel */
+    LS_CHECK(ls_sim_check(&c) == LS_ERR_PARAM);
+    make_cfg(&c, LS_SIM_AVERAGE);
+    c.lab_cos[0][0] = NAN;
+    LS_CHECK(ls_sim_check(&c) == LS_ERR_PARAM);
+    /* travel limit: a sensored step far beyond x_max stops the run cleanly */
+    make_cfg(&c, LS_SIM_AVERAGE);
+    c.x_max = 0.002;
+    c.decimate = 1;
+    ls_drive_default_cfg(&dc);
+    LS_CHECK(ls_drive_init(&d, &dc) == LS_OK);
+    LS_CHECK(ls_drive_set_mode(&d, LS_MODE_SENSORED) == LS_OK);
+    LS_CHECK(ls_sim_run(&c, &d, &far, 1, 16000, &o, &r) == LS_OK);
+    LS_CHECK((r.fault & LS_SIM_FAULT_TRAVEL) != 0u);
+    LS_CHECK(r.steps_done < 16000 && r.n_rec == r.steps_done + 1);
+    LS_CHECK(fa[r.n_rec - 1] == r.fault);
+    LS_CHECK(LS_ISFINITE(x[r.n_rec - 1]) && x[r.n_rec - 1] > 0.002);
+}
+
+int main(void)
+{
+    closed_loop(LS_SIM_AVERAGE);
+    closed_loop(LS_SIM_SWITCHING);
+    open_loop_and_faults();
+    return ls_test_report("test_sim");
+}
