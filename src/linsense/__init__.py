@@ -10,4 +10,14 @@ from linsense.model.motor import Motor, load_motor
 
 __version__ = "0.1.0"
 
-__all__ = ["InputError", "LinsenseError", "ModelError", "Motor", "load_motor", "__version__"]
+__all__ = ["InputError", "LinsenseError", "ModelError", "Motor", "load_motor", "simulate", "simulate_many",
+           "__version__"]
+
+
+def __getattr__(name: str):
+    # the simulator needs the compiled extension: import it only when asked for
+    if name in ("simulate", "simulate_many"):
+        from linsense.sim import run
+
+        return getattr(run, name)
+    raise AttributeError(f"module 'linsense' has no attribute {name!r}")

@@ -1,0 +1,235 @@
+"""From a validated scenario to the C objects of one run: plant, drive, commands.
+
+The drive starts from ``ls_drive_default_cfg`` and gets the scenario's values; the motor
+parameters the controller uses (mean L_d and L_q over a period for the decoupling and the
+demodulator gain, psi_pm, mass, force constant, R_s) come from the motor model unless
+``[controller.model]`` overrides them. The compensation table and the optional gain table are
+:class:`linsense.ctrl.Lut` objects kept alive by the :class:`Built` that owns the drive.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from linsense.analysis.hf import dq_components
+from linsense.compensation.lut import build_lut
+from linsense.ctrl import ConfigError, Drive, drive_default_cfg, ffi, lib
+from linsense.errors import InputError, LinsenseError
+from linsense.model.motor import Motor, load_motor, preset_names
+from linsense.sim.core import PlantSetup, SimulationError, sim_cfg
+from linsense.sim.scenario import Scenario
+
+#: drive sub-configuration -> scenario section (for messages)
+_SECTION = {"inject": "injection", "bpf": "injection", "sep": "injection", "demod": "observer",
+            "obs": "observer", "enc_obs": "sensors", "current": "controller", "pos": "controller",
+            "pos.speed": "controller", "traj": "reference", "mod": "inverter", "prot": "protection"}
+
+
+@dataclass
+class Built:
+    """Everything one run needs; keeps the cffi objects (drive, tables) alive together."""
+
+    scenario: Scenario
+    motor: Motor
+    setup: PlantSetup
+    cfg: object  # ls_sim_cfg *
+    drive: Drive
+    commands: list[tuple[float, float, bool]]
+    n_steps: int
+    moves: list[tuple[float, float, float, float]]  # (t_start, t_end, x_from, x_to), m and s
+    known: dict = field(default_factory=dict)  # motor values the controller uses
+
+
+def resolve_motor(sc: Scenario) -> Motor:
+    """The scenario's motor: a preset name or a file path relative to the scenario file."""
+    spec = sc.spec.motor
+    looks_like_path = spec.lower().endswith(".toml") or any(c in spec for c in "/\\")
+    if not looks_like_path:
+        if spec not in preset_names():
+            raise InputError(sc.source, "motor", f"unknown preset {spec!r} "
+                             f"(presets: {', '.join(preset_names())}; "
+                             "or a path to a .toml motor file, relative to the scenario)")
+        return load_motor(spec)
+    p = Path(spec)
+    if not p.is_absolute():
+        p = sc.base_dir / p
+    if not p.is_file():
+        raise InputError(sc.source, "motor", f"no such motor file {str(p)!r} (value {spec!r})")
+    return load_motor(p)
+
+
+def trapezoid_time(distance: float, v_max: float, a_max: float) -> float:
+    """Duration (s) of a minimum-time move over ``distance`` (m), as ``ls_traj`` plans it."""
+    d = abs(distance)
+    if d <= v_max * v_max / a_max:
+        return 2.0 * math.sqrt(d / a_max)
+    return d / v_max + v_max / a_max
+
+
+def reference_commands(sc: Scenario) -> tuple[list, list]:
+    """Commands ``(t, x, move)`` for run_closed_loop and the planned moves ``(t0, t1, x0, x1)``."""
+    ref = sc.spec.reference
+    x0 = sc.spec.initial.position_mm * 1e-3
+    if ref.type == "hold":
+        return [], []
+    if ref.type == "step":
+        x1 = ref.position_mm * 1e-3
+        return [(ref.at, x1, False)], [(ref.at, ref.at, x0, x1)]
+    f_pwm = sc.spec.inverter.f_pwm
+    cmds, moves = [], []
+    t, x = ref.at, x0
+    for w in ref.waypoints_mm:
+        x1 = w * 1e-3
+        dur = trapezoid_time(x1 - x, ref.v_max, ref.a_max)
+        # the C core issues a command at the first period start >= t and the profile advances one
+        # sample per period: allow two periods so a move is never cut by the next command
+        cmds.append((t, x1, True))
+        moves.append((t, t + dur, x, x1))
+        t = t + dur + 2.0 / f_pwm + ref.dwell
+        x = x1
+    return cmds, moves
+
+
+def _mean_dq(motor: Motor) -> tuple[float, float]:
+    th = np.linspace(0.0, 2.0 * np.pi, 720, endpoint=False)
+    L_d, L_q, _ = dq_components(motor, th)
+    return float(np.mean(L_d)), float(np.mean(L_q))
+
+
+def build(sc: Scenario) -> Built:
+    """Configure the plant and the drive of ``sc``; bad values end in :class:`InputError` naming
+    the scenario file."""
+    s = sc.spec
+    motor = resolve_motor(sc)
+    inv, ctl, inj, obs, con, prot = s.inverter, s.control, s.injection, s.observer, s.controller, s.protection
+    fs = inv.f_pwm
+    tau = motor.pole_pitch
+
+    # --- what the controller knows about the motor
+    L_d, L_q = _mean_dq(motor)
+    ov = con.model
+    known = {
+        "L_d": ov.L_d if ov.L_d is not None else L_d,
+        "L_q": ov.L_q if ov.L_q is not None else L_q,
+        "R_s": ov.R_s if ov.R_s is not None else motor.R_s,
+        "psi_pm": ov.psi_pm if ov.psi_pm is not None else motor.psi_pm,
+        "mass": ov.mass if ov.mass is not None else motor.mass,
+        "force_constant": ov.force_constant if ov.force_constant is not None else motor.force_constant,
+    }
+    if ov.demod_gain is not None:
+        known["demod_gain"] = ov.demod_gain
+    else:
+        if known["L_q"] == known["L_d"]:
+            raise InputError(sc.source, "controller.model.L_q",
+                             "equals L_d: no saliency, no demodulator gain")
+        known["demod_gain"] = known["L_q"] / (known["L_q"] - known["L_d"])
+
+    # --- plant
+    tr = s.travel
+    load_f0 = s.load.force
+    sens = s.sensors
+    gain = sens.current_gain if isinstance(sens.current_gain, list) else [sens.current_gain] * 3
+    offs = sens.current_offset if isinstance(sens.current_offset, list) else [sens.current_offset] * 3
+    setup = PlantSetup(
+        fidelity=inv.fidelity, v_dc=inv.v_dc, f_pwm=fs, dead_time=inv.dead_time,
+        i_gain=tuple(gain), i_offset=tuple(offs), i_noise=sens.current_noise, adc_bits=sens.adc_bits,
+        adc_range=sens.adc_range, enc_counts=sens.encoder_counts_per_period, seed=s.scenario.seed,
+        motion="free", x0=s.initial.position_mm * 1e-3, v0=0.0,
+        x_min=tr.min_mm * 1e-3, x_max=tr.max_mm * 1e-3,
+        load=s.load.type, load_f0=load_f0, load_f1=s.load.force_after, load_t=s.load.time,
+        load_incline=math.radians(s.load.incline_deg), decimate=s.record.decimate, i_abort=prot.i_abort,
+    )
+    try:
+        cfg = sim_cfg(motor, setup)
+    except (SimulationError, LinsenseError) as exc:
+        raise InputError(sc.source, "", f"simulator configuration refused: {exc}") from None
+
+    # --- drive
+    d = drive_default_cfg()
+    d.fs = fs
+    d.pole_pitch = tau
+    d.force_constant = known["force_constant"]
+    d.i_max = con.i_max
+    d.delay_comp = ctl.delay_comp
+    d.enc_counts = sens.encoder_counts_per_period
+    d.inject_sensored = ctl.inject_sensored
+    d.inject.amplitude = inj.amplitude
+    d.inject.freq = inj.frequency
+    d.inject.ramp_rate = inj.ramp_rate
+    d.bpf.f0 = d.sep.f0 = inj.frequency
+    d.bpf.q = d.sep.q = inj.filter_q
+    d.demod.method = lib.LS_DEMOD_PRODUCT if obs.demod_method == "product" else lib.LS_DEMOD_HETERODYNE
+    d.demod.f_lpf = obs.demod_lpf_hz
+    d.demod.gain = known["demod_gain"]
+    d.demod.min_level = obs.min_level
+    d.obs.type = lib.LS_OBS_PLL if obs.type == "pll" else lib.LS_OBS_MECH
+    d.obs.pole_pitch = tau
+    d.obs.mass = known["mass"]
+    d.obs.omega_max = obs.omega_max
+    d.obs.force_max = obs.force_max
+    lib.ls_observer_gains(ffi.addressof(d, "obs"), obs.bandwidth_hz)
+    if obs.k1 is not None:
+        d.obs.k1, d.obs.k2 = obs.k1, obs.k2
+        if obs.k3 is not None:
+            d.obs.k3 = obs.k3
+    d.enc_obs.pole_pitch = tau
+    w_i = 2.0 * math.pi * con.current_bandwidth_hz
+    d.current.kp = con.current_kp if con.current_kp is not None else w_i * 0.5 * (known["L_d"] + known["L_q"])
+    d.current.ki = con.current_ki if con.current_ki is not None else w_i * known["R_s"]
+    d.current.l_d, d.current.l_q = known["L_d"], known["L_q"]
+    d.current.psi_pm = known["psi_pm"]
+    d.current.decouple = con.decouple
+    d.pos.type = lib.LS_POSCTRL_P if con.position_type == "p" else lib.LS_POSCTRL_PD
+    d.pos.kp_x = con.kp_x if con.kp_x is not None else 10.0
+    d.pos.kd_x = con.kd_x
+    d.pos.v_max = con.v_max
+    d.pos.mass = known["mass"]
+    d.pos.force_max = known["force_constant"] * con.i_max
+    w_v = 2.0 * math.pi * con.speed_bandwidth_hz
+    d.pos.speed.kp = con.speed_kp if con.speed_kp is not None else known["mass"] * w_v
+    d.pos.speed.ki = con.speed_ki if con.speed_ki is not None else known["mass"] * w_v * w_v / 4.0
+    d.pos.speed.out_min, d.pos.speed.out_max = -d.pos.force_max, d.pos.force_max
+    d.traj.v_max, d.traj.a_max = s.reference.v_max, s.reference.a_max
+    d.traj.pole_pitch = tau
+    d.mod.f_pwm = fs
+    d.mod.dead_time = inv.dead_time
+    d.mod.dtc = inv.dead_time_compensation
+    d.mod.i_band = inv.dtc_current_band
+    d.prot.i_max, d.prot.v_dc_min, d.prot.v_dc_max = prot.i_max, prot.v_dc_min, prot.v_dc_max
+    d.prot.err_max, d.prot.err_time, d.prot.omega_max = prot.err_max, prot.err_time, prot.omega_max
+    d.cal.period = int(math.floor(s.initial.position_mm * 1e-3 / tau))
+    for sub in ("inject", "bpf", "sep", "demod", "obs", "enc_obs", "current", "traj", "prot"):
+        getattr(d, sub).fs = fs
+    d.pos.speed.fs = fs
+
+    compensation = obs.compensation or ("lut" if ctl.mode == "sensorless_lut" else "none")
+    comp = None
+    if compensation == "lut":
+        f_inj = inj.frequency if obs.lut_model == "resistive" else None
+        comp = build_lut(motor, obs.lut_points, f_inj=f_inj).values
+    gain_table = None
+    if obs.gain_schedule:
+        th = 2.0 * np.pi * np.arange(obs.lut_points) / obs.lut_points
+        ld, lq, _ = dq_components(motor, th)
+        gain_table = lq / (lq - ld)
+    try:
+        drive = Drive(d, comp=comp, gain_table=gain_table)  # a given gain table is used by default
+    except ConfigError as exc:
+        sections = sorted({_SECTION.get(k.split(".")[0] if k != "pos.speed" else k, k) for k in exc.fields})
+        key = ",".join(sections)
+        raise InputError(sc.source, key, f"refused by the controller library: {exc}") from None
+    drive.set_position(2.0 * math.pi * setup.x0 / tau)
+    try:
+        drive.set_mode(ctl.mode)
+    except ConfigError as exc:
+        raise InputError(sc.source, "control.mode", f"{ctl.mode!r} refused: {exc}") from None
+    cmds, moves = reference_commands(sc)
+    n_steps = int(round(s.scenario.duration * fs))
+    if n_steps < 1:
+        raise InputError(sc.source, "scenario.duration",
+                         f"shorter than one PWM period, got {s.scenario.duration!r}")
+    return Built(sc, motor, setup, cfg, drive, cmds, n_steps, moves, known)

@@ -1,0 +1,63 @@
+"""The result of one simulation: recorded arrays (SI units), metrics and the scenario."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from linsense.sim.metrics import fault_reason
+
+#: Array attributes of :class:`Result`, in trace order.
+ARRAYS = ("t", "x", "x_est", "v", "v_est", "x_ref", "theta_err", "i_abc", "i_dq", "duty", "force",
+          "err_sig", "fault")
+
+
+@dataclass(eq=False)
+class Result:
+    """Arrays of one closed-loop run, one sample per recorded PWM period.
+
+    Attributes
+    ----------
+    t : s.  x, x_est, x_ref : m (true, HF observer estimate, reference).  v, v_est : m/s.
+    theta_err : rad, electrical ``theta_est - theta`` wrapped to [-pi, pi).
+    i_abc : (n, 3) A, true phase currents.  i_dq : (n, 2) A, true currents in the true dq frame.
+    duty : (n, 3) duties applied during the period (NaN in the sample that tripped a fault).
+    force : N, motor force.  err_sig : rad, demodulated error.  fault : uint32 fault bits so far.
+    metrics : dict (see :mod:`linsense.sim.metrics`).  scenario : the :class:`Scenario` run.
+    """
+
+    t: np.ndarray
+    x: np.ndarray
+    x_est: np.ndarray
+    v: np.ndarray
+    v_est: np.ndarray
+    x_ref: np.ndarray
+    theta_err: np.ndarray
+    i_abc: np.ndarray
+    i_dq: np.ndarray
+    duty: np.ndarray
+    force: np.ndarray
+    err_sig: np.ndarray
+    fault: np.ndarray
+    metrics: dict = field(default_factory=dict)
+    scenario: object = None
+    fault_bits: int = 0
+
+    @property
+    def fault_reason(self) -> str:
+        """``"none"`` or the fault names, e.g. ``"observer"`` or ``"travel"``."""
+        return fault_reason(self.fault_bits)
+
+    @property
+    def stable(self) -> bool:
+        return bool(self.metrics.get("stable", False))
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """The recorded arrays by name."""
+        return {k: getattr(self, k) for k in ARRAYS}
+
+    def __repr__(self) -> str:
+        name = getattr(self.scenario, "name", "?")
+        return (f"Result({name!r}, {self.t.size} samples, stable={self.stable}, "
+                f"fault={self.fault_reason!r})")

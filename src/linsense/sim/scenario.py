@@ -1,0 +1,368 @@
+"""Scenario files of the closed-loop simulator (TOML), validated like motor files.
+
+A scenario names a motor (preset or path, relative to the scenario file), the inverter, the
+controller mode and gains, the observer, the reference, the load, the sensors and the run
+settings. SI units inside; millimetres and degrees only where a person types them (keys ending in
+``_mm`` and ``_deg``). Every key has a default (docs/simulator.md) except ``motor`` and
+``scenario.duration``; the defaults are the firmware's (``ls_drive_default_cfg``) and the paper's
+drive (72 V, 16 kHz, 0.8 us, 12 V / 1 kHz).
+
+Validation is pydantic in strict mode: unknown or missing keys, wrong types, non-finite numbers and
+out-of-range values end in :class:`~linsense.errors.InputError` naming the file, the dotted key and
+the value.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import tomllib
+from pathlib import Path
+from typing import Annotated, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+
+from linsense.errors import InputError
+from linsense.model.schema import _KeyError, _to_input_error
+
+_BRANCH = re.compile(r"^(float|int|bool|str|list\[.*\]|constrained-.*|function-.*)$")
+_STRICT = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
+
+Positive = Annotated[float, Field(gt=0)]
+NonNegative = Annotated[float, Field(ge=0)]
+Triple = Annotated[list[float], Field(min_length=3, max_length=3)]
+
+
+class ScenarioSection(BaseModel):
+    model_config = _STRICT
+    name: str = Field(default="scenario", min_length=1)
+    duration: Positive  # s, simulated time
+    seed: int = Field(default=0, ge=0, lt=2**63)  # noise seed
+
+
+class InverterSection(BaseModel):
+    model_config = _STRICT
+    fidelity: Literal["average", "switching"] = "average"
+    v_dc: Positive = 72.0  # V
+    f_pwm: Positive = 16000.0  # Hz, PWM frequency = control rate
+    dead_time: NonNegative = 0.8e-6  # s
+    dead_time_compensation: bool = True
+    dtc_current_band: Positive = 0.05  # A, smooth-sign band of the dead-time compensation
+
+
+class ControlSection(BaseModel):
+    model_config = _STRICT
+    mode: Literal["sensorless_lut", "sensorless_nolut", "sensored"] = "sensorless_lut"
+    fs: Positive | None = None  # Hz, must equal inverter.f_pwm (default: equal)
+    delay_comp: NonNegative = 1.5  # sampling periods of angle advance
+    inject_sensored: bool = False  # keep injecting (and observing) in sensored mode
+
+
+class InjectionSection(BaseModel):
+    model_config = _STRICT
+    amplitude: NonNegative = 12.0  # V, peak, on the estimated d-axis
+    frequency: Positive = 1000.0  # Hz
+    ramp_rate: Positive = 1200.0  # V/s
+    filter_q: Positive = 2.0  # quality factor of the HF band-pass and the fundamental notch
+
+
+class ObserverSection(BaseModel):
+    model_config = _STRICT
+    compensation: Literal["lut", "none"] | None = None  # default: lut in sensorless_lut, else none
+    lut_model: Literal["resistive", "eq12"] = "resistive"
+    lut_points: int = Field(default=256, ge=4, le=65536)
+    type: Literal["pll", "mech"] = "pll"
+    bandwidth_hz: Positive = 40.0  # Hz, all poles at -2 pi f (ls_observer_gains)
+    k1: Positive | None = None  # 1/s, overrides the bandwidth
+    k2: Positive | None = None  # 1/s^2
+    k3: Positive | None = None  # 1/s^3 (mech)
+    gain_schedule: bool = False  # demodulator gain table L_q/(L_q - L_d)(theta)
+    demod_method: Literal["product", "heterodyne"] = "product"
+    demod_lpf_hz: Positive = 150.0  # Hz
+    min_level: NonNegative = 0.005  # A^2
+    omega_max: Positive = 300.0  # rad/s electrical, clamp of the speed estimate
+    force_max: Positive = 200.0  # N, clamp of the load estimate (mech)
+
+
+class ModelOverride(BaseModel):
+    """What the controller believes about the motor (default: the motor model itself)."""
+
+    model_config = _STRICT
+    L_d: Positive | None = None  # H, decoupling
+    L_q: Positive | None = None  # H
+    R_s: NonNegative | None = None  # ohm, current-loop integral gain
+    psi_pm: NonNegative | None = None  # Wb, back-EMF feed-forward
+    mass: Positive | None = None  # kg, feed-forward, speed-loop gains, mech observer
+    force_constant: Positive | None = None  # N/A, force -> i_q
+    demod_gain: float | None = None  # -, L_q/(L_q - L_d)
+
+
+class ControllerSection(BaseModel):
+    model_config = _STRICT
+    position_type: Literal["p", "pd"] = "p"
+    kp_x: Positive | None = None  # p: 1/s (default 10); pd: N/m (required)
+    kd_x: NonNegative = 0.0  # pd: N s/m
+    v_max: Positive = 0.5  # m/s, speed-reference limit (p)
+    speed_bandwidth_hz: Positive = 6.0  # Hz: kp = m w, ki = m w^2 / 4
+    speed_kp: Positive | None = None  # N s/m, overrides the bandwidth
+    speed_ki: NonNegative | None = None  # N/m
+    current_bandwidth_hz: Positive = 250.0  # Hz: kp = w (L_d + L_q)/2, ki = w R_s
+    current_kp: Positive | None = None  # V/A
+    current_ki: NonNegative | None = None  # V/(A s)
+    decouple: bool = True
+    i_max: Positive = 2.5  # A, current-reference limit (force limit = K_f i_max)
+    model: ModelOverride = Field(default_factory=ModelOverride)
+
+
+class ReferenceSection(BaseModel):
+    model_config = _STRICT
+    type: Literal["step", "trajectory", "hold"] = "step"
+    position_mm: float | None = None  # step: target, mm
+    at: NonNegative = 0.1  # s, step time or first move start
+    waypoints_mm: list[float] | None = None  # trajectory: targets in order, mm
+    v_max: Positive = 0.2  # m/s, trajectory speed limit
+    a_max: Positive = 1.0  # m/s^2, trajectory acceleration limit
+    dwell: float = 0.2  # s, pause after each move
+
+    @model_validator(mode="after")
+    def _check(self) -> ReferenceSection:
+        if self.type == "step":
+            if self.position_mm is None:
+                raise _KeyError("position_mm", "missing required key for type = \"step\"")
+            if self.waypoints_mm is not None:
+                raise _KeyError("waypoints_mm", "only valid with type = \"trajectory\"")
+        elif self.type == "trajectory":
+            if self.waypoints_mm is None:
+                raise _KeyError("waypoints_mm", "missing required key for type = \"trajectory\"")
+            if not self.waypoints_mm:
+                raise _KeyError("waypoints_mm", "needs at least one waypoint, got []")
+            if self.position_mm is not None:
+                raise _KeyError("position_mm", "only valid with type = \"step\" (use waypoints_mm)")
+        else:
+            for k in ("position_mm", "waypoints_mm"):
+                if getattr(self, k) is not None:
+                    raise _KeyError(k, "not valid with type = \"hold\"")
+        if self.dwell < 0:
+            raise _KeyError("dwell", f"must be >= 0 s, got {self.dwell!r}")
+        return self
+
+
+class LoadSection(BaseModel):
+    model_config = _STRICT
+    type: Literal["constant", "step", "incline"] = "constant"
+    force: float = 0.0  # N, opposing positive motion when > 0 (step: before `time`)
+    force_after: float = 0.0  # N, step: after `time`
+    time: NonNegative = 0.0  # s, step time
+    incline_deg: float = Field(default=0.0, ge=-90.0, le=90.0)  # deg, gravity adds m g sin
+
+
+class SensorsSection(BaseModel):
+    model_config = _STRICT
+    current_gain: float | Triple = 1.0  # -, one for all phases or [a, b, c]
+    current_offset: float | Triple = 0.0  # A
+    current_noise: NonNegative = 0.0  # A rms
+    adc_bits: int = Field(default=0, ge=0, le=24)  # 0: ideal
+    adc_range: Positive = 10.0  # A, +- full scale
+    encoder_counts_per_period: int = Field(default=56000, ge=1, lt=2**31)
+
+
+class InitialSection(BaseModel):
+    model_config = _STRICT
+    position_mm: float = 0.0
+
+
+class TravelSection(BaseModel):
+    model_config = _STRICT
+    min_mm: float = -1000.0
+    max_mm: float = 1000.0
+
+
+class ProtectionSection(BaseModel):
+    model_config = _STRICT
+    i_max: Positive = 6.0  # A, phase over-current trip
+    v_dc_min: NonNegative = 40.0  # V
+    v_dc_max: Positive = 90.0  # V
+    err_max: Positive = 0.6  # rad, observer error-signal limit
+    err_time: Positive = 0.05  # s
+    omega_max: Positive = 250.0  # rad/s electrical
+    i_abort: Positive = 20.0  # A, the simulator stops the run as diverged beyond this
+
+
+class RecordSection(BaseModel):
+    model_config = _STRICT
+    decimate: int = Field(default=1, ge=1, le=1_000_000)
+
+
+class MetricsSection(BaseModel):
+    model_config = _STRICT
+    convergence_s: NonNegative = 0.1  # s, initial observer convergence excluded from the errors
+    settle_s: NonNegative = 0.3  # s, after a step or the end of a move: still transient
+    tolerance_mm: Positive = 0.5  # mm, |x - target| over the end window for `accurate`
+    bound_mm: Positive = 3.5  # mm, |x - target| over the end window for `stable` (bounded)
+    settle_band_mm: Positive = 0.2  # mm, peak-to-peak x over the end window for `stable` (settled)
+    final_window_s: Positive = 0.1  # s, end window
+
+
+class ScenarioFile(BaseModel):
+    model_config = _STRICT
+    motor: str = Field(min_length=1)  # preset name or motor-file path (relative to the scenario)
+    scenario: ScenarioSection
+    inverter: InverterSection = Field(default_factory=InverterSection)
+    control: ControlSection = Field(default_factory=ControlSection)
+    injection: InjectionSection = Field(default_factory=InjectionSection)
+    observer: ObserverSection = Field(default_factory=ObserverSection)
+    controller: ControllerSection = Field(default_factory=ControllerSection)
+    reference: ReferenceSection = Field(default_factory=ReferenceSection)
+    load: LoadSection = Field(default_factory=LoadSection)
+    sensors: SensorsSection = Field(default_factory=SensorsSection)
+    initial: InitialSection = Field(default_factory=InitialSection)
+    travel: TravelSection = Field(default_factory=TravelSection)
+    protection: ProtectionSection = Field(default_factory=ProtectionSection)
+    record: RecordSection = Field(default_factory=RecordSection)
+    metrics: MetricsSection = Field(default_factory=MetricsSection)
+
+    @model_validator(mode="after")
+    def _check(self) -> ScenarioFile:
+        inv, ctl = self.inverter, self.control
+        if ctl.fs is not None and ctl.fs != inv.f_pwm:
+            raise _KeyError("control.fs", f"must equal inverter.f_pwm = {inv.f_pwm:g} Hz "
+                            f"(the controller runs "
+                            f"once per PWM period), got {ctl.fs:g}")
+        if inv.dead_time * inv.f_pwm >= 0.1:
+            raise _KeyError("inverter.dead_time", f"must be below 10 % of the PWM period "
+                            f"({0.1 / inv.f_pwm:g} s), got {inv.dead_time!r}")
+        if self.injection.frequency * 4 > inv.f_pwm:
+            raise _KeyError("injection.frequency", f"must be <= f_pwm / 4 = {inv.f_pwm / 4:g} Hz, "
+                            f"got {self.injection.frequency:g}")
+        comp = self.observer.compensation
+        if ctl.mode == "sensorless_lut" and comp == "none":
+            raise _KeyError("observer.compensation", "\"none\" contradicts control.mode = \"sensorless_lut\" "
+                            "(use mode = \"sensorless_nolut\")")
+        if ctl.mode != "sensorless_lut" and comp == "lut":
+            raise _KeyError("observer.compensation", f"\"lut\" is only used by control.mode = "
+                            f"\"sensorless_lut\", got mode = {ctl.mode!r}")
+        if self.observer.type == "mech" and (self.observer.k1 is not None) != (self.observer.k3 is not None):
+            raise _KeyError("observer.k3",
+                            "give k1, k2 and k3 together for the mech observer (or bandwidth_hz)")
+        if (self.observer.k1 is None) != (self.observer.k2 is None):
+            raise _KeyError("observer.k2" if self.observer.k2 is None else "observer.k1",
+                            "give k1 and k2 together (or only bandwidth_hz)")
+        c = self.controller
+        if c.position_type == "pd" and c.kp_x is None:
+            raise _KeyError("controller.kp_x", "missing required key for position_type = \"pd\" (N/m)")
+        if c.position_type == "p" and c.kd_x != 0.0:
+            raise _KeyError("controller.kd_x", f"only used with position_type = \"pd\", got {c.kd_x!r}")
+        if (c.speed_kp is None) != (c.speed_ki is None):
+            raise _KeyError("controller.speed_ki" if c.speed_ki is None else "controller.speed_kp",
+                            "give speed_kp and speed_ki together (or speed_bandwidth_hz)")
+        if (c.current_kp is None) != (c.current_ki is None):
+            raise _KeyError("controller.current_ki" if c.current_ki is None else "controller.current_kp",
+                            "give current_kp and current_ki together (or current_bandwidth_hz)")
+        g = c.model.demod_gain
+        if g is not None and g == 0.0:
+            raise _KeyError("controller.model.demod_gain", "must be non-zero, got 0.0")
+        tr = self.travel
+        if not tr.min_mm < tr.max_mm:
+            raise _KeyError("travel.max_mm",
+                            f"must be above travel.min_mm = {tr.min_mm:g}, got {tr.max_mm:g}")
+        x0 = self.initial.position_mm
+        if not tr.min_mm <= x0 <= tr.max_mm:
+            raise _KeyError("initial.position_mm", f"outside the travel [{tr.min_mm:g}, {tr.max_mm:g}] mm, "
+                            f"got {x0:g}")
+        p = self.protection
+        if not p.v_dc_min < p.v_dc_max:
+            raise _KeyError("protection.v_dc_max",
+                            f"must be above v_dc_min = {p.v_dc_min:g}, got {p.v_dc_max:g}")
+        if self.injection.amplitude * math.sqrt(3.0) >= 0.8 * p.v_dc_min and p.v_dc_min > 0:
+            raise _KeyError("injection.amplitude", "too large for the bus: amplitude * sqrt(3) must be below "
+                            f"0.8 protection.v_dc_min = {0.8 * p.v_dc_min:g} V, "
+                            f"got {self.injection.amplitude:g}")
+        if self.injection.amplitude == 0.0 and ctl.mode != "sensored":
+            raise _KeyError("injection.amplitude", "the sensorless modes need an HF injection, got 0")
+        return self
+
+
+class Scenario:
+    """A validated scenario: the parsed file plus where it came from.
+
+    Attributes
+    ----------
+    spec : ScenarioFile
+        Every key, defaults filled in.
+    source : str
+        File name (or ``"<dict>"``) used in error messages.
+    base_dir : Path
+        Folder against which a relative motor path is resolved.
+    """
+
+    def __init__(self, spec: ScenarioFile, source: str, base_dir: Path) -> None:
+        self.spec = spec
+        self.source = source
+        self.base_dir = Path(base_dir)
+
+    @property
+    def name(self) -> str:
+        return self.spec.scenario.name
+
+    def to_dict(self) -> dict:
+        """Plain data (every key, defaults filled in; ``None`` for unset optional keys dropped)."""
+        return self.spec.model_dump(exclude_none=True)
+
+    def replace(self, **sections) -> Scenario:
+        """A copy with some keys changed, e.g. ``replace(inverter={"fidelity": "switching"})``;
+        validated again."""
+        data = self.to_dict()
+        for sec, vals in sections.items():
+            if isinstance(vals, dict):
+                data.setdefault(sec, {}).update(vals)
+            else:
+                data[sec] = vals
+        return scenario_from_dict(data, self.source, self.base_dir)
+
+    def __reduce__(self):  # picklable for simulate_many (the pydantic model re-validates on load)
+        return (scenario_from_dict, (self.to_dict(), self.source, str(self.base_dir)))
+
+    def __repr__(self) -> str:
+        return f"Scenario({self.name!r}, source={self.source!r})"
+
+
+def scenario_from_dict(data: dict, source: str = "<dict>", base_dir: str | Path | None = None) -> Scenario:
+    """Validate parsed scenario data; raise :class:`InputError` naming ``source``, key and value."""
+    if not isinstance(data, dict):
+        raise InputError(source, "", f"a scenario is a table of sections, got {type(data).__name__}")
+    try:
+        spec = ScenarioFile.model_validate(data)
+    except ValidationError as exc:
+        err = _to_input_error(exc, source)
+        # drop the union-branch names pydantic puts into the location ("current_gain.float")
+        key = ".".join(p for p in err.key.split(".") if not _BRANCH.match(p))
+        raise InputError(source, key, err.message) from None
+    return Scenario(spec, source, Path(base_dir) if base_dir is not None else Path.cwd())
+
+
+def load_scenario(path: str | Path) -> Scenario:
+    """Read and validate a scenario TOML file."""
+    p = Path(path)
+    src = str(path)
+    if not p.is_file():
+        raise InputError(src, "", "no such scenario file")
+    try:
+        text = p.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(src, "", f"cannot read: {exc}") from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(src, "", f"not valid TOML: {exc}") from None
+    return scenario_from_dict(data, src, p.parent)
+
+
+def as_scenario(obj) -> Scenario:
+    """A :class:`Scenario` from a Scenario, a path (str or Path) or a dict."""
+    if isinstance(obj, Scenario):
+        return obj
+    if isinstance(obj, dict):
+        return scenario_from_dict(obj)
+    if isinstance(obj, str | Path):
+        return load_scenario(obj)
+    raise TypeError(f"expected a Scenario, a path or a dict, got {type(obj).__name__}")

@@ -1,0 +1,147 @@
+"""linsense.simulate / simulate_many and `linsense simulate`: sane metrics on short scenarios, clean
+ends of diverging runs, process-pool results equal to sequential ones, trace round trips."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import linsense
+from linsense.sim.metrics import REQUIRED_KEYS
+from linsense.sim.scenario import scenario_from_dict
+from linsense.sim.trace import read_trace_csv
+
+
+def sc(duration=0.5, mode="sensorless_lut", step=3.0, **sections):
+    d = {"motor": "ecce2010", "scenario": {"name": "t", "duration": duration},
+         "control": {"mode": mode}, "reference": {"type": "step", "position_mm": step}}
+    for k, v in sections.items():
+        d.setdefault(k, {}).update(v)
+    return scenario_from_dict(d)
+
+
+def _finite_metrics(m):
+    for k, v in m.items():
+        if isinstance(v, float):
+            assert math.isfinite(v), (k, v)
+
+
+EXAMPLES = Path(__file__).parents[1] / "examples" / "scenarios"
+
+
+def test_step3_lut_stable_with_sane_metrics():
+    r = linsense.simulate(EXAMPLES / "step3_lut.toml")
+    m = r.metrics
+    assert set(REQUIRED_KEYS) <= set(m)
+    _finite_metrics(m)
+    assert m["stable"] and m["fault"] == "none"
+    assert abs(m["final_position_mm"] - 3.0) < 1.0
+    assert 0.0 < m["max_abs_err_deg"] < 10.0
+    assert m["max_abs_err_deg"] == pytest.approx(max(m["transient_max_err_deg"], m["steady_max_err_deg"]))
+    assert m["sim_s"] == pytest.approx(1.5)
+    assert m["realtime_factor"] == pytest.approx(m["sim_s"] / m["wall_s"], rel=0.01)
+    n = r.t.size
+    assert n == 24000 and r.i_abc.shape == (n, 3) and r.i_dq.shape == (n, 2) and r.duty.shape == (n, 3)
+    assert np.all(np.isfinite(r.x)) and np.all(r.fault == 0)
+    # the recorded error is the estimate minus the truth, in electrical radians
+    err = 2 * np.pi * (r.x_est - r.x) / 0.056
+    np.testing.assert_allclose(np.angle(np.exp(1j * err)), r.theta_err, atol=1e-9)
+    assert r.x_ref[-1] == pytest.approx(3e-3, abs=1e-6)
+
+
+def test_uncompensated_observer_settles_off_target():
+    """Without the LUT the observer's equilibrium error biases the position (brief section 4)."""
+    lut = linsense.simulate(sc(0.8))
+    nolut = linsense.simulate(sc(0.8, mode="sensorless_nolut"))
+    assert nolut.metrics["steady_max_err_deg"] > 2 * lut.metrics["steady_max_err_deg"]
+
+
+def test_sensored_has_no_estimation_metrics():
+    r = linsense.simulate(sc(0.5, mode="sensored"))
+    m = r.metrics
+    assert m["max_abs_err_deg"] is None and m["stable"]
+    assert abs(m["final_position_mm"] - 3.0) < 0.1
+
+
+def test_divergence_ends_cleanly():
+    """Without the LUT, a fast speed loop and a 20 Hz observer, a 6 mm step slips; a travel limit
+    stops it: stable false, the fault named, no NaN, no exception."""
+    s = sc(1.0, mode="sensorless_nolut", step=6.0, observer={"bandwidth_hz": 20.0},
+           controller={"kp_x": 30.0, "speed_bandwidth_hz": 4.0}, travel={"min_mm": -15.0, "max_mm": 15.0})
+    r = linsense.simulate(s)
+    m = r.metrics
+    assert not m["stable"] and m["fault"] == "travel" and m["fault_bits"] == 0x100
+    assert m["sim_s"] < 1.0 and r.t.size < 16000
+    _finite_metrics(m)
+    json.dumps(m, allow_nan=False)
+    assert r.fault[-1] & 0x100 and r.fault_reason == "travel"
+
+
+def test_drive_fault_is_reported():
+    s = sc(0.3, protection={"i_max": 0.3})  # the 0.5 A HF current alone trips it
+    r = linsense.simulate(s)
+    assert not r.metrics["stable"] and "overcurrent" in r.metrics["fault"]
+    json.dumps(r.metrics, allow_nan=False)
+
+
+def test_simulate_many_equals_sequential():
+    items = [sc(0.3, step=1.0), sc(0.3, mode="sensorless_nolut", step=2.0),
+             sc(0.3, sensors={"current_noise": 0.01}, scenario={"seed": 3})]
+    seq = [linsense.simulate(s) for s in items]
+    par = linsense.simulate_many(items, workers=2)
+    assert [p.scenario.spec == s.scenario.spec for p, s in zip(par, seq, strict=True)] == [True] * 3
+    for p, s in zip(par, seq, strict=True):
+        for k, a in s.arrays().items():
+            np.testing.assert_array_equal(getattr(p, k), a, err_msg=k)
+        drop = {"wall_s", "realtime_factor"}
+        assert {k: v for k, v in p.metrics.items() if k not in drop} == \
+               {k: v for k, v in s.metrics.items() if k not in drop}
+    assert seq[0].metrics["final_position_mm"] != seq[1].metrics["final_position_mm"]
+
+
+def test_noise_seed_changes_the_run():
+    a = linsense.simulate(sc(0.2, sensors={"current_noise": 0.02}, scenario={"seed": 1}))
+    b = linsense.simulate(sc(0.2, sensors={"current_noise": 0.02}, scenario={"seed": 2}))
+    assert not np.array_equal(a.x, b.x)
+
+
+def test_cli_outputs_and_round_trip(run_cli, tmp_path):
+    from scipy.io import loadmat
+
+    p = tmp_path / "s.toml"
+    p.write_text('motor = "ecce2010"\n[scenario]\nname = "cli"\nduration = 0.3\n'
+                 '[reference]\nposition_mm = 2.0\n[record]\ndecimate = 4\n')
+    out = tmp_path / "out"
+    r = run_cli("simulate", p, "--out", out, "--mat")
+    assert r.code == 0, r.err
+    m = json.loads((out / "metrics.json").read_text())
+    assert set(REQUIRED_KEYS) <= set(m)
+    assert (out / "sim.png").read_bytes()[:4] == b"\x89PNG"
+    tr = read_trace_csv(out / "trace.csv")
+    assert tr["t_s"].size == 1200
+    np.testing.assert_allclose(np.diff(tr["t_s"]), 4 / 16000, rtol=1e-6)
+    res = linsense.simulate(p)  # deterministic: the same run in-process
+    np.testing.assert_allclose(tr["x_m"], res.x, rtol=1e-9, atol=1e-15)
+    np.testing.assert_allclose(tr["i_b_A"], res.i_abc[:, 1], rtol=1e-9, atol=1e-12)
+    mat = loadmat(out / "trace.mat")
+    np.testing.assert_allclose(mat["x_m"].ravel(), res.x)
+    np.testing.assert_allclose(mat["theta_err_rad"].ravel(), res.theta_err)
+    assert json.loads(str(mat["metrics_json"][0]))["stable"] == m["stable"]
+    r2 = run_cli("simulate", p, "--out", tmp_path / "o2", "--no-plot", "--fidelity", "switching")
+    assert r2.code == 0 and not (tmp_path / "o2" / "sim.png").exists()
+    assert json.loads((tmp_path / "o2" / "metrics.json").read_text())["fidelity"] == "switching"
+
+
+def test_parquet_refused_without_pyarrow(run_cli, tmp_path):
+    from linsense.sim.trace import have_parquet
+
+    if have_parquet():
+        pytest.skip("pyarrow installed")
+    p = tmp_path / "s.toml"
+    p.write_text('motor = "ecce2010"\n[scenario]\nduration = 0.1\n[reference]\nposition_mm = 1.0\n')
+    r = run_cli("simulate", p, "--out", tmp_path / "o", "--trace", "parquet")
+    assert r.code == 2 and "pyarrow" in r.err and not (tmp_path / "o").exists()
