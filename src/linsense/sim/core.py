@@ -8,6 +8,7 @@ are in :mod:`linsense.sim.scenario`, :mod:`linsense.sim.run` and friends.
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -110,13 +111,14 @@ class RawRun:
     fault: int
     x_end: float
     v_end: float
+    wall_s: float = math.nan  # s, wall time of the C run alone (outputs allocated before)
     extra: dict = field(default_factory=dict)
 
 
-def _collect(arrays, res) -> RawRun:
+def _collect(arrays, res, wall_s: float) -> RawRun:
     n = int(res.n_rec)
     return RawRun({k: a[:n] for k, a in arrays.items()}, int(res.steps_done), int(res.fault),
-                  float(res.x_end), float(res.v_end))
+                  float(res.x_end), float(res.v_end), wall_s)
 
 
 def run_closed_loop(cfg, drive, n_steps: int, commands=()) -> RawRun:
@@ -129,10 +131,12 @@ def run_closed_loop(cfg, drive, n_steps: int, commands=()) -> RawRun:
     n_rec = int(math.ceil(n_steps / cfg.decimate)) + 2
     arrays, out = _outputs(n_rec)
     res = ffi.new("ls_sim_result *")
+    t0 = time.perf_counter()
     st = lib.ls_sim_run(cfg, drive, c_cmds, len(cmds), int(n_steps), out, res)
+    wall = time.perf_counter() - t0
     if st != lib.LS_OK:
         raise SimulationError(f"ls_sim_run refused its inputs (status {st})")
-    return _collect(arrays, res)
+    return _collect(arrays, res, wall)
 
 
 def run_open_loop(cfg, seg_t: np.ndarray, seg_v: np.ndarray) -> RawRun:
@@ -146,11 +150,13 @@ def run_open_loop(cfg, seg_t: np.ndarray, seg_v: np.ndarray) -> RawRun:
         raise SimulationError("seg_t and seg_v must have the same number of segments")
     arrays, out = _outputs(seg_t.size + 1)
     res = ffi.new("ls_sim_result *")
+    t0 = time.perf_counter()
     st = lib.ls_sim_open_loop(cfg, ffi.cast("double *", ffi.from_buffer(seg_t)),
                               ffi.cast("double *", ffi.from_buffer(seg_v)), seg_t.size, out, res)
+    wall = time.perf_counter() - t0
     if st != lib.LS_OK:
         raise SimulationError(f"ls_sim_open_loop refused its inputs (status {st})")
-    return _collect(arrays, res)
+    return _collect(arrays, res, wall)
 
 
 def plant_eval(cfg, theta: float) -> dict[str, np.ndarray]:
