@@ -201,24 +201,32 @@ static void ab_to_abc(const double i[2], double abc[3])
 }
 
 /* ------------------------------------------------------------------------------ inverter */
-/* Average model: one segment with the dead-time voltage error, its sign taken from the current
- * predicted at mid-period (one Euler half step with the ideal voltage), where the switching
- * instants are on average. */
+/* Average model: one segment with the period-averaged dead-time error. Per leg, the upper switch
+ * is commanded on at t_on = (1 - d)T/2 and off at t_off = (1 + d)T/2; the turn-on loses t_dead
+ * when the current flows out (i > 0) and the turn-off gains t_dead when it flows in (i < 0), so the
+ * duty error is exactly -(sign i(t_on) + sign i(t_off))/2 * t_dead/T, with the currents at the two
+ * edges predicted linearly from the period start (the switching model resolves them exactly). */
 static void period_average(const ls_sim_cfg *c, const frozen *f, const double duty[3], double h, double i[2])
 {
-    double iabc[3], p[3], v_ab[2], i_mid[2];
+    double p[3], v_ab[2], di[2], iabc[3], diabc[3];
+    const double dd = c->dead_time * c->f_pwm;
     int j;
     for (j = 0; j < 3; ++j) {
         p[j] = c->v_dc * duty[j];
     }
     poles_to_ab(p, v_ab);
-    i_mid[0] = i[0] + 0.5 * h * (f->m[0] * i[0] + f->m[1] * i[1] + f->linv[0] * v_ab[0] + f->linv[1] * v_ab[1] + f->be[0]);
-    i_mid[1] = i[1] + 0.5 * h * (f->m[2] * i[0] + f->m[3] * i[1] + f->linv[2] * v_ab[0] + f->linv[3] * v_ab[1] + f->be[1]);
-    ab_to_abc(i_mid, iabc);
+    di[0] = f->m[0] * i[0] + f->m[1] * i[1] + f->linv[0] * v_ab[0] + f->linv[1] * v_ab[1] + f->be[0];
+    di[1] = f->m[2] * i[0] + f->m[3] * i[1] + f->linv[2] * v_ab[0] + f->linv[3] * v_ab[1] + f->be[1];
+    ab_to_abc(i, iabc);
+    ab_to_abc(di, diabc);
     for (j = 0; j < 3; ++j) {
         double d = duty[j];
-        if (d > 0.0 && d < 1.0) {
-            d -= (iabc[j] > 0.0 ? 1.0 : (iabc[j] < 0.0 ? -1.0 : 0.0)) * c->dead_time * c->f_pwm;
+        if (d > 0.0 && d < 1.0 && dd > 0.0) {
+            double i_on = iabc[j] + 0.5 * (1.0 - d) * h * diabc[j];
+            double i_off = iabc[j] + 0.5 * (1.0 + d) * h * diabc[j];
+            double s_on = i_on > 0.0 ? 1.0 : (i_on < 0.0 ? -1.0 : 0.0);
+            double s_off = i_off > 0.0 ? 1.0 : (i_off < 0.0 ? -1.0 : 0.0);
+            d -= 0.5 * (s_on + s_off) * dd;
         }
         p[j] = c->v_dc * (d < 0.0 ? 0.0 : (d > 1.0 ? 1.0 : d));
     }
@@ -281,6 +289,17 @@ static void period_switching(const ls_sim_cfg *c, const frozen *f, const plant_m
         if (kind == 1) {
             int leg = cmd_leg[which], on = cmd_on[which];
             double delay;
+            /* a new command for a leg supersedes its edge still pending in the dead time (a pulse
+             * shorter than the dead time never reaches the pole) */
+            for (k = 0; k < n_edge; ++k) {
+                if (edge_leg[k] == leg) {
+                    edge_t[k] = edge_t[n_edge - 1];
+                    edge_leg[k] = edge_leg[n_edge - 1];
+                    edge_on[k] = edge_on[n_edge - 1];
+                    n_edge--;
+                    break;
+                }
+            }
             ab_to_abc(i, iabc);
             /* turn-on of the upper switch: delayed when the current flows out (lower diode
              * conducting); turn-off: delayed when it flows in (upper diode conducting) */
