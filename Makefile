@@ -104,6 +104,7 @@ tools:
 
 bench: $(GEN_HDR) tools
 	tools/bench.sh
+	$(PY) tools/bench_sim.py
 
 clean:
 	rm -rf $(BUILD) out
