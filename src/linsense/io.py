@@ -24,6 +24,20 @@ def finite_cell(source: str, row: int, column: str, cell: str) -> float:
     return v
 
 
+def read_text_file(path: str | os.PathLike, what: str) -> str:
+    """Text of a user file, or InputError naming it: ``what`` says what was expected."""
+    from linsense.errors import InputError
+
+    src = str(path)
+    p = Path(path)
+    if not p.is_file():
+        raise InputError(src, "", f"no such {what}")
+    try:
+        return p.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(src, "", f"cannot read: {exc}") from None
+
+
 def write_atomic(path: str | os.PathLike, data: str | bytes) -> Path:
     """Write ``data`` to ``path`` through a temporary file in the same folder and a rename."""
     return write_atomic_with(path, lambda f: f.write(data.encode() if isinstance(data, str) else data))

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from linsense.errors import InputError, ModelError
-from linsense.io import finite_cell
+from linsense.io import finite_cell, read_text_file
 from linsense.model.inductance import ENTRIES, InductanceModel
 from linsense.model.schema import validate_motor_file
 
@@ -129,12 +129,7 @@ def load_motor(spec: str | Path, check: bool = True) -> Motor:
     spec_s = str(spec)
     path = Path(spec_s)
     if path.suffix.lower() == ".toml" or path.exists() or any(c in spec_s for c in "/\\"):
-        if not path.is_file():
-            raise InputError(spec_s, "", "no such motor file")
-        try:
-            text = path.read_text(encoding="utf-8")
-        except (OSError, UnicodeDecodeError) as exc:
-            raise InputError(spec_s, "", f"cannot read: {exc}") from None
+        text = read_text_file(spec_s, "motor file")
         motor = motor_from_toml(text, source=spec_s, base_dir=path.parent)
     else:
         if spec_s not in preset_names():

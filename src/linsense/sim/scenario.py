@@ -23,6 +23,7 @@ from typing import Annotated, Literal
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 from linsense.errors import InputError
+from linsense.io import read_text_file
 from linsense.model.schema import _KeyError, _to_input_error
 
 _BRANCH = re.compile(r"^(float|int|bool|str|list\[.*\]|constrained-.*|function-.*)$")
@@ -344,12 +345,7 @@ def load_scenario(path: str | Path) -> Scenario:
     """Read and validate a scenario TOML file."""
     p = Path(path)
     src = str(path)
-    if not p.is_file():
-        raise InputError(src, "", "no such scenario file")
-    try:
-        text = p.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(src, "", f"cannot read: {exc}") from None
+    text = read_text_file(p, "scenario file")
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
