@@ -86,46 +86,41 @@ double ls_sim_force(const ls_sim_cfg *cfg, double theta, const double i_ab[2])
 }
 
 /* ------------------------------------------------------------------------------ checks */
-static bool fin(double x)
-{
-    return x - x == x - x;
-}
-
 ls_status ls_sim_check(const ls_sim_cfg *c)
 {
     int32_t k, e;
     if (c == NULL) {
         return LS_ERR_NULL;
     }
-    if (!(fin(c->r_s) && c->r_s >= 0.0) || !(fin(c->pole_pitch) && c->pole_pitch > 0.0) ||
-        !(fin(c->psi_pm) && c->psi_pm >= 0.0) || c->n_order < 1 || c->n_order > LS_SIM_MAX_ORDER ||
-        c->n_pm < 0 || c->n_pm > LS_SIM_MAX_PM || !(fin(c->mass) && c->mass > 0.0) ||
-        !(fin(c->visc) && c->visc >= 0.0) || !(fin(c->coulomb) && c->coulomb >= 0.0) ||
-        !(c->x_min < c->x_max) || !(fin(c->v_dc) && c->v_dc > 0.0) || !(fin(c->f_pwm) && c->f_pwm > 0.0) ||
-        !(fin(c->dead_time) && c->dead_time >= 0.0 && c->dead_time * c->f_pwm < 0.1) ||
-        !(fin(c->i_noise) && c->i_noise >= 0.0) || c->adc_bits < 0 || c->adc_bits > 24 ||
-        (c->adc_bits > 0 && !(fin(c->adc_range) && c->adc_range > 0.0)) || c->enc_counts <= 0 ||
-        c->decimate < 1 || !(fin(c->x0) && c->x0 >= c->x_min && c->x0 <= c->x_max) || !fin(c->v0) ||
-        !(fin(c->i_abort) && c->i_abort > 0.0) || !fin(c->load_f0) || !fin(c->load_f1) || !fin(c->load_t) ||
-        !fin(c->load_incline) || (c->fidelity != LS_SIM_AVERAGE && c->fidelity != LS_SIM_SWITCHING) ||
+    if (!(LS_ISFINITE(c->r_s) && c->r_s >= 0.0) || !(LS_ISFINITE(c->pole_pitch) && c->pole_pitch > 0.0) ||
+        !(LS_ISFINITE(c->psi_pm) && c->psi_pm >= 0.0) || c->n_order < 1 || c->n_order > LS_SIM_MAX_ORDER ||
+        c->n_pm < 0 || c->n_pm > LS_SIM_MAX_PM || !(LS_ISFINITE(c->mass) && c->mass > 0.0) ||
+        !(LS_ISFINITE(c->visc) && c->visc >= 0.0) || !(LS_ISFINITE(c->coulomb) && c->coulomb >= 0.0) ||
+        !(c->x_min < c->x_max) || !(LS_ISFINITE(c->v_dc) && c->v_dc > 0.0) || !(LS_ISFINITE(c->f_pwm) && c->f_pwm > 0.0) ||
+        !(LS_ISFINITE(c->dead_time) && c->dead_time >= 0.0 && c->dead_time * c->f_pwm < 0.1) ||
+        !(LS_ISFINITE(c->i_noise) && c->i_noise >= 0.0) || c->adc_bits < 0 || c->adc_bits > 24 ||
+        (c->adc_bits > 0 && !(LS_ISFINITE(c->adc_range) && c->adc_range > 0.0)) || c->enc_counts <= 0 ||
+        c->decimate < 1 || !(LS_ISFINITE(c->x0) && c->x0 >= c->x_min && c->x0 <= c->x_max) || !LS_ISFINITE(c->v0) ||
+        !(LS_ISFINITE(c->i_abort) && c->i_abort > 0.0) || !LS_ISFINITE(c->load_f0) || !LS_ISFINITE(c->load_f1) || !LS_ISFINITE(c->load_t) ||
+        !LS_ISFINITE(c->load_incline) || (c->fidelity != LS_SIM_AVERAGE && c->fidelity != LS_SIM_SWITCHING) ||
         (c->motion != LS_SIM_FREE && c->motion != LS_SIM_HELD && c->motion != LS_SIM_PRESCRIBED) ||
         (c->load != LS_SIM_LOAD_CONSTANT && c->load != LS_SIM_LOAD_STEP && c->load != LS_SIM_LOAD_INCLINE)) {
         return LS_ERR_PARAM;
     }
     for (k = 0; k < 3; ++k) {
-        if (!fin(c->i_gain[k]) || !fin(c->i_offset[k])) {
+        if (!LS_ISFINITE(c->i_gain[k]) || !LS_ISFINITE(c->i_offset[k])) {
             return LS_ERR_PARAM;
         }
     }
     for (e = 0; e < 3; ++e) {
         for (k = 0; k < c->n_order; ++k) {
-            if (!fin(c->lab_cos[e][k]) || !fin(c->lab_sin[e][k])) {
+            if (!LS_ISFINITE(c->lab_cos[e][k]) || !LS_ISFINITE(c->lab_sin[e][k])) {
                 return LS_ERR_PARAM;
             }
         }
     }
     for (k = 0; k < c->n_pm; ++k) {
-        if (!fin(c->pm_amp[k]) || !fin(c->pm_phase[k]) || c->pm_order[k] < 1) {
+        if (!LS_ISFINITE(c->pm_amp[k]) || !LS_ISFINITE(c->pm_phase[k]) || c->pm_order[k] < 1) {
             return LS_ERR_PARAM;
         }
     }
@@ -462,7 +457,7 @@ static bool plant_ok(const ls_sim_cfg *c, const double i[2], double x, double v)
 {
     double iabc[3];
     ab_to_abc(i, iabc);
-    return fin(i[0]) && fin(i[1]) && fin(x) && fin(v) && fabs(iabc[0]) < c->i_abort && fabs(iabc[1]) < c->i_abort &&
+    return LS_ISFINITE(i[0]) && LS_ISFINITE(i[1]) && LS_ISFINITE(x) && LS_ISFINITE(v) && fabs(iabc[0]) < c->i_abort && fabs(iabc[1]) < c->i_abort &&
            fabs(iabc[2]) < c->i_abort;
 }
 
@@ -553,7 +548,7 @@ ls_status ls_sim_run(const ls_sim_cfg *c, ls_drive *drive, const ls_sim_cmd *cmd
         if (fault != 0u) {
             /* record the state that tripped, then stop */
             double nan3[3] = {NAN, NAN, NAN}, f_end = NAN;
-            if (fin(i[0]) && fin(i[1]) && fin(x)) {
+            if (LS_ISFINITE(i[0]) && LS_ISFINITE(i[1]) && LS_ISFINITE(x)) {
                 maps(c, kx * x, &pm);
                 f_end = force_of(c, &pm, i);
             }
@@ -588,7 +583,7 @@ ls_status ls_sim_open_loop(const ls_sim_cfg *c, const double *seg_t, const doubl
     memset(res, 0, sizeof *res);
     for (s = 0; s < n_seg && fault == 0u; ++s) {
         double h = seg_t[s], v_ab[2], f_start;
-        if (!(fin(h) && h >= 0.0) || !fin(seg_v[3 * s]) || !fin(seg_v[3 * s + 1]) || !fin(seg_v[3 * s + 2])) {
+        if (!(LS_ISFINITE(h) && h >= 0.0) || !LS_ISFINITE(seg_v[3 * s]) || !LS_ISFINITE(seg_v[3 * s + 1]) || !LS_ISFINITE(seg_v[3 * s + 2])) {
             return LS_ERR_PARAM;
         }
         maps(c, kx * x, &pm);
@@ -621,7 +616,7 @@ ls_status ls_sim_open_loop(const ls_sim_cfg *c, const double *seg_t, const doubl
     }
     {
         double last[3] = {NAN, NAN, NAN};
-        if (fin(x) && fin(i[0]) && fin(i[1])) {
+        if (LS_ISFINITE(x) && LS_ISFINITE(i[0]) && LS_ISFINITE(i[1])) {
             maps(c, kx * x, &pm);
             record(out, s, t, x, v, i, cos(kx * x), sin(kx * x), last, force_of(c, &pm, i), NULL, tau, fault);
         } else {

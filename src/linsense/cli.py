@@ -100,18 +100,18 @@ def reproduce(motor_spec: str, out: str) -> None:
     out_dir = Path(out)
     tab = model_table(motor, 360)
     lut_ = build_lut(motor, 360)
+    s = summarize(motor)
     texts = {
         "model.csv": table_to_csv(tab),
         "lut.csv": export(lut_, "csv"),
         "lut.json": export(lut_, "json"),
         f"ls_lut_{motor.name}.h": export(lut_, "c"),
-        "summary.json": json.dumps(summarize(motor), indent=1) + "\n",
+        "summary.json": json.dumps(s, indent=1) + "\n",
     }
     for name, text in texts.items():
         click.echo(str(write_atomic(out_dir / name, text)))
     for p in write_model_figures(motor, build_lut(motor, 56), out_dir / "figures"):
         click.echo(str(p))
-    s = summarize(motor)
     click.echo(
         f"{motor.name}: Psi_LUT peak {s['psi_lut_peak_deg']:.2f} deg; saliency minima at "
         f"{', '.join(f'{d:.0f}' for d in s['saliency_min_at_deg'])} deg; HF current "

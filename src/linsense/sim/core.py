@@ -174,11 +174,3 @@ def plant_force(cfg, theta: float, i_ab) -> float:
     i = ffi.new("double[2]", [float(i_ab[0]), float(i_ab[1])])
     return float(lib.ls_sim_force(cfg, float(theta), i))
 
-
-def pos(x: float, pole_pitch: float):
-    """``ls_pos`` (cffi value) of a position in m."""
-    p = ffi.new("ls_pos *")
-    u = x / pole_pitch
-    p.period = math.floor(u)
-    p.theta = (u - math.floor(u)) * 2.0 * math.pi
-    return lib.ls_py_pos_norm(p[0])
