@@ -8,6 +8,13 @@
 #define SQRT3 1.7320508075688772
 #define GRAVITY 9.81
 
+/* the time loop's helpers are inlined into it (GCC and Clang), so its state stays in registers */
+#if defined(__GNUC__)
+#define SIM_HOT static inline __attribute__((always_inline))
+#else
+#define SIM_HOT static inline
+#endif
+
 /* ------------------------------------------------------------------------------ plant maps */
 /* Per-run constants of the plant: the L_ab series rearranged order-major for the inner loop (the
  * derivative's coefficients precomputed) and reciprocals kept out of the time loop. */
@@ -46,7 +53,7 @@ static void coef_init(const ls_sim_cfg *c, plant_coef *q)
     }
 }
 
-static inline void maps_cs(const ls_sim_cfg *c, const plant_coef *q, double theta, double c1, double s1, plant_maps *m)
+SIM_HOT void maps_cs(const ls_sim_cfg *c, const plant_coef *q, double theta, double c1, double s1, plant_maps *m)
 {
     double ck = c1, sk = s1;
     double l0 = q->a[0][0], l1 = q->a[0][1], l2 = q->a[0][2], d0 = 0.0, d1 = 0.0, d2 = 0.0;
@@ -108,7 +115,7 @@ void ls_sim_plant_eval(const ls_sim_cfg *cfg, double theta, double lab[3], doubl
     memcpy(dlpm, m.dlpm, sizeof m.dlpm);
 }
 
-static double force_of(const plant_coef *q, const plant_maps *m, const double i[2])
+SIM_HOT double force_of(const plant_coef *q, const plant_maps *m, const double i[2])
 {
     double pm = i[0] * m->dlpm[0] + i[1] * m->dlpm[1];
     double rel = 0.5 * (m->dl[0] * i[0] * i[0] + 2.0 * m->dl[2] * i[0] * i[1] + m->dl[1] * i[1] * i[1]);
@@ -175,7 +182,7 @@ typedef struct {
     double be[2];   /* A/s, -L^-1 omega lambda_pm' (the EMF part of b) */
 } frozen;
 
-static bool freeze(const ls_sim_cfg *c, const plant_maps *pm, double omega, frozen *f)
+SIM_HOT bool freeze(const ls_sim_cfg *c, const plant_maps *pm, double omega, frozen *f)
 {
     /* L^-1 = adj(L)/det: the products with the adjugate run alongside the division */
     const double l0 = pm->l[0], l1 = pm->l[1], l2 = pm->l[2];
@@ -211,7 +218,7 @@ typedef struct {
     double gam[4]; /* s, row-major */
 } period_prop;
 
-static void prop_make(const frozen *f, double h, period_prop *pp)
+SIM_HOT void prop_make(const frozen *f, double h, period_prop *pp)
 {
     const double a0 = h * f->m[0], a1 = h * f->m[1], a2 = h * f->m[2], a3 = h * f->m[3];
     const double tr = a0 + a3, dt = a0 * a3 - a1 * a2;
@@ -232,14 +239,19 @@ static void prop_make(const frozen *f, double h, period_prop *pp)
     pp->gam[3] = h * (p0 + p1 * a3);
 }
 
-static void prop_apply(const period_prop *pp, const frozen *f, const double v_ab[2], double i[2])
+/* i <- Phi i + Gam b, b = L^-1 v_ab + be */
+SIM_HOT void prop_apply_b(const period_prop *pp, double b0, double b1, double i[2])
 {
-    double b0 = f->linv[0] * v_ab[0] + f->linv[1] * v_ab[1] + f->be[0];
-    double b1 = f->linv[2] * v_ab[0] + f->linv[3] * v_ab[1] + f->be[1];
     double i0 = pp->phi[0] * i[0] + pp->phi[1] * i[1] + pp->gam[0] * b0 + pp->gam[1] * b1;
     double i1 = pp->phi[2] * i[0] + pp->phi[3] * i[1] + pp->gam[2] * b0 + pp->gam[3] * b1;
     i[0] = i0;
     i[1] = i1;
+}
+
+SIM_HOT void prop_apply(const period_prop *pp, const frozen *f, const double v_ab[2], double i[2])
+{
+    prop_apply_b(pp, f->linv[0] * v_ab[0] + f->linv[1] * v_ab[1] + f->be[0],
+                 f->linv[2] * v_ab[0] + f->linv[3] * v_ab[1] + f->be[1], i);
 }
 
 static void propagate(const frozen *f, const double v_ab[2], double h, double i[2])
@@ -249,13 +261,13 @@ static void propagate(const frozen *f, const double v_ab[2], double h, double i[
     prop_apply(&pp, f, v_ab, i);
 }
 
-static void poles_to_ab(const double p[3], double v_ab[2])
+SIM_HOT void poles_to_ab(const double p[3], double v_ab[2])
 {
     v_ab[0] = (2.0 * p[0] - p[1] - p[2]) * (1.0 / 3.0);
     v_ab[1] = (p[1] - p[2]) * (1.0 / SQRT3);
 }
 
-static void ab_to_abc(const double i[2], double abc[3])
+SIM_HOT void ab_to_abc(const double i[2], double abc[3])
 {
     abc[0] = i[0];
     abc[1] = -0.5 * i[0] + 0.5 * SQRT3 * i[1];
@@ -268,37 +280,41 @@ static void ab_to_abc(const double i[2], double abc[3])
  * when the current flows out (i > 0) and the turn-off gains t_dead when it flows in (i < 0), so the
  * duty error is exactly -(sign i(t_on) + sign i(t_off))/2 * t_dead/T, with the currents at the two
  * edges predicted linearly from the period start (the switching model resolves them exactly). */
-static void period_average(const ls_sim_cfg *c, const plant_coef *q, const frozen *f, const double duty[3],
+SIM_HOT void period_average(const ls_sim_cfg *c, const plant_coef *q, const frozen *f, const double duty[3],
                            double h, double i[2])
 {
     const double dd = q->d_dead, vdc = c->v_dc;
-    double p[3] = {vdc * duty[0], vdc * duty[1], vdc * duty[2]}, v_ab[2];
+    double p[3] = {vdc * duty[0], vdc * duty[1], vdc * duty[2]}, v_ab[2], b0, b1;
     period_prop pp;
     int j;
     prop_make(f, h, &pp);
     poles_to_ab(p, v_ab);
+    b0 = f->linv[0] * v_ab[0] + f->linv[1] * v_ab[1] + f->be[0];
+    b1 = f->linv[2] * v_ab[0] + f->linv[3] * v_ab[1] + f->be[1];
     if (dd > 0.0) {
-        double di[2], iabc[3], diabc[3];
-        di[0] = f->m[0] * i[0] + f->m[1] * i[1] + f->linv[0] * v_ab[0] + f->linv[1] * v_ab[1] + f->be[0];
-        di[1] = f->m[2] * i[0] + f->m[3] * i[1] + f->linv[2] * v_ab[0] + f->linv[3] * v_ab[1] + f->be[1];
-        ab_to_abc(i, iabc);
-        ab_to_abc(di, diabc);
+        /* phase currents and their slopes at the period start, the currents at the two edges of
+         * each leg, and the pole-voltage errors e_j (V) they cause */
+        const double di0 = f->m[0] * i[0] + f->m[1] * i[1] + b0, di1 = f->m[2] * i[0] + f->m[3] * i[1] + b1;
+        const double ia[3] = {i[0], -0.5 * i[0] + 0.5 * SQRT3 * i[1], -0.5 * i[0] - 0.5 * SQRT3 * i[1]};
+        const double da[3] = {di0, -0.5 * di0 + 0.5 * SQRT3 * di1, -0.5 * di0 - 0.5 * SQRT3 * di1};
+        double e[3], dv0, dv1;
         for (j = 0; j < 3; ++j) {
-            double d = duty[j];
-            double i_on = iabc[j] + 0.5 * (1.0 - d) * h * diabc[j];
-            double i_off = iabc[j] + 0.5 * (1.0 + d) * h * diabc[j];
+            const double d = duty[j], i_mid = ia[j] + 0.5 * h * da[j], w = 0.5 * h * d * da[j];
+            const double i_on = i_mid - w, i_off = i_mid + w;
             /* sign(i_on) + sign(i_off), for a leg that switches at all (0 < d < 1); computed
              * without branches: the HF current crosses zero all the time */
-            double sg = (double)(i_on > 0.0) - (double)(i_on < 0.0) + (double)(i_off > 0.0) - (double)(i_off < 0.0);
-            double sw = (double)((d > 0.0) & (d < 1.0));
-            d -= 0.5 * dd * sw * sg;
-            d = d < 0.0 ? 0.0 : d;
-            d = d > 1.0 ? 1.0 : d;
-            p[j] = vdc * d;
+            const int sg = (i_on > 0.0) - (i_on < 0.0) + (i_off > 0.0) - (i_off < 0.0);
+            double dn = d - ((d > 0.0 && d < 1.0) ? 0.5 * dd : 0.0) * (double)sg;
+            dn = dn < 0.0 ? 0.0 : dn;
+            dn = dn > 1.0 ? 1.0 : dn;
+            e[j] = vdc * (dn - d);
         }
-        poles_to_ab(p, v_ab);
+        dv0 = (2.0 * e[0] - e[1] - e[2]) * (1.0 / 3.0);
+        dv1 = (e[1] - e[2]) * (1.0 / SQRT3);
+        b0 += f->linv[0] * dv0 + f->linv[1] * dv1;
+        b1 += f->linv[2] * dv0 + f->linv[3] * dv1;
     }
-    prop_apply(&pp, f, v_ab, i);
+    prop_apply_b(&pp, b0, b1, i);
 }
 
 /* Switching model: gate commands at (1 -+ d) T/2, turn-on edges delayed by the dead time, the
@@ -406,7 +422,7 @@ static double rng_gauss(uint64_t *s)
     return sqrt(-2.0 * log(u1)) * cos(2.0 * SIM_PI * u2);
 }
 
-static void measure(const ls_sim_cfg *c, const double i_ab[2], double x, bool encoder, uint64_t *rng, ls_meas *m)
+SIM_HOT void measure(const ls_sim_cfg *c, const double i_ab[2], double x, bool encoder, uint64_t *rng, ls_meas *m)
 {
     double iabc[3], lsb = c->adc_bits > 0 ? 2.0 * c->adc_range / (double)(1L << c->adc_bits) : 0.0;
     double u;
@@ -433,7 +449,7 @@ static void measure(const ls_sim_cfg *c, const double i_ab[2], double x, bool en
 }
 
 /* ------------------------------------------------------------------------------ mechanics */
-static double load_force(const ls_sim_cfg *c, double t)
+SIM_HOT double load_force(const ls_sim_cfg *c, double t)
 {
     switch (c->load) {
     case LS_SIM_LOAD_STEP:
@@ -447,7 +463,7 @@ static double load_force(const ls_sim_cfg *c, double t)
 }
 
 /* advance x, v over h with the motor force average f_avg */
-static inline void mechanics(const ls_sim_cfg *c, const plant_coef *q, double t, double h, double f_avg, double *x, double *v)
+SIM_HOT void mechanics(const ls_sim_cfg *c, const plant_coef *q, double t, double h, double f_avg, double *x, double *v)
 {
     double f_net, v_new;
     if (c->motion == LS_SIM_HELD) {
@@ -526,7 +542,7 @@ static void record(const ls_sim_out *o, int64_t r, double t, double x, double v,
     if (o->fault) o->fault[r] = fault;
 }
 
-static bool plant_ok(const ls_sim_cfg *c, const double i[2], double x, double v)
+SIM_HOT bool plant_ok(const ls_sim_cfg *c, const double i[2], double x, double v)
 {
     double iabc[3];
     ab_to_abc(i, iabc);
@@ -545,7 +561,7 @@ typedef struct {
     int32_t left; /* -, rotations before the next exact evaluation */
 } angle_track;
 
-static void angle_to(angle_track *a, double th)
+SIM_HOT void angle_to(angle_track *a, double th)
 {
     double d = th - a->th;
     if (a->left > 0 && fabs(d) <= 0.05) {
