@@ -22,9 +22,13 @@ typedef struct {
     int32_t n;                      /* -, orders 0..n-1 */
     double a[LS_SIM_MAX_ORDER][3];  /* H, cos(k theta) coefficients of L_aa, L_bb, L_ab */
     double b[LS_SIM_MAX_ORDER][3];  /* H, sin(k theta) coefficients */
+    double da[LS_SIM_MAX_ORDER][3]; /* H/rad, k b: cos(k theta) coefficients of dL/dtheta */
+    double db[LS_SIM_MAX_ORDER][3]; /* H/rad, -k a: sin(k theta) coefficients of dL/dtheta */
     double kf;                      /* 1/m, (3/2) 2 pi/tau: the force factor of the co-energy */
     double inv_mass;                /* 1/kg */
     double d_dead;                  /* -, dead time / PWM period */
+    double lsb;                     /* A, current ADC step (0: ideal) */
+    bool sensor_effects;            /* noise or quantisation on the current sensors */
 } plant_coef;
 
 typedef struct {
@@ -41,14 +45,20 @@ static void coef_init(const ls_sim_cfg *c, plant_coef *q)
     q->kf = 1.5 * 2.0 * SIM_PI / c->pole_pitch;
     q->inv_mass = 1.0 / c->mass;
     q->d_dead = c->dead_time * c->f_pwm;
+    q->lsb = c->adc_bits > 0 ? 2.0 * c->adc_range / (double)(1L << c->adc_bits) : 0.0;
+    q->sensor_effects = c->i_noise > 0.0 || q->lsb > 0.0;
     for (e = 0; e < 3; ++e) { /* n_order >= 1 after ls_sim_check; defined even before it */
         q->a[0][e] = 0.0;
         q->b[0][e] = 0.0;
+        q->da[0][e] = 0.0;
+        q->db[0][e] = 0.0;
     }
     for (k = 0; k < c->n_order; ++k) {
         for (e = 0; e < 3; ++e) {
             q->a[k][e] = c->lab_cos[e][k];
             q->b[k][e] = c->lab_sin[e][k];
+            q->da[k][e] = (double)k * c->lab_sin[e][k];
+            q->db[k][e] = -(double)k * c->lab_cos[e][k];
         }
     }
 }
@@ -59,14 +69,14 @@ SIM_HOT void maps_cs(const ls_sim_cfg *c, const plant_coef *q, double theta, dou
     double l0 = q->a[0][0], l1 = q->a[0][1], l2 = q->a[0][2], d0 = 0.0, d1 = 0.0, d2 = 0.0;
     int32_t k, j;
     for (k = 1; k < q->n; ++k) {
-        const double *a = q->a[k], *b = q->b[k];
-        double fk = (double)k, cn = ck * c1 - sk * s1;
+        const double *a = q->a[k], *b = q->b[k], *da = q->da[k], *db = q->db[k];
+        double cn = ck * c1 - sk * s1;
         l0 += a[0] * ck + b[0] * sk;
         l1 += a[1] * ck + b[1] * sk;
         l2 += a[2] * ck + b[2] * sk;
-        d0 += fk * (b[0] * ck - a[0] * sk);
-        d1 += fk * (b[1] * ck - a[1] * sk);
-        d2 += fk * (b[2] * ck - a[2] * sk);
+        d0 += da[0] * ck + db[0] * sk;
+        d1 += da[1] * ck + db[1] * sk;
+        d2 += da[2] * ck + db[2] * sk;
         sk = sk * c1 + ck * s1;
         ck = cn;
     }
@@ -422,20 +432,22 @@ static double rng_gauss(uint64_t *s)
     return sqrt(-2.0 * log(u1)) * cos(2.0 * SIM_PI * u2);
 }
 
-SIM_HOT void measure(const ls_sim_cfg *c, const double i_ab[2], double x, bool encoder, uint64_t *rng, ls_meas *m)
+SIM_HOT void measure(const ls_sim_cfg *c, const plant_coef *q, const double i_ab[2], double x, bool encoder,
+                     uint64_t *rng, ls_meas *m)
 {
-    double iabc[3], lsb = c->adc_bits > 0 ? 2.0 * c->adc_range / (double)(1L << c->adc_bits) : 0.0;
-    double u;
+    double iabc[3], u;
     int j;
     ab_to_abc(i_ab, iabc);
     for (j = 0; j < 3; ++j) {
         double y = c->i_gain[j] * iabc[j] + c->i_offset[j];
-        if (c->i_noise > 0.0) {
-            y += c->i_noise * rng_gauss(rng);
-        }
-        if (lsb > 0.0) {
-            y = lsb * floor(y / lsb + 0.5);
-            y = y > c->adc_range ? c->adc_range : (y < -c->adc_range ? -c->adc_range : y);
+        if (q->sensor_effects) {
+            if (c->i_noise > 0.0) {
+                y += c->i_noise * rng_gauss(rng);
+            }
+            if (q->lsb > 0.0) {
+                y = q->lsb * floor(y / q->lsb + 0.5);
+                y = y > c->adc_range ? c->adc_range : (y < -c->adc_range ? -c->adc_range : y);
+            }
         }
         m->i_abc[j] = (LS_REAL)y;
     }
@@ -546,8 +558,9 @@ SIM_HOT bool plant_ok(const ls_sim_cfg *c, const double i[2], double x, double v
 {
     double iabc[3];
     ab_to_abc(i, iabc);
-    return LS_ISFINITE(i[0]) && LS_ISFINITE(i[1]) && LS_ISFINITE(x) && LS_ISFINITE(v) && fabs(iabc[0]) < c->i_abort && fabs(iabc[1]) < c->i_abort &&
-           fabs(iabc[2]) < c->i_abort;
+    /* false for a non-finite current too */
+    return fabs(iabc[0]) < c->i_abort && fabs(iabc[1]) < c->i_abort && fabs(iabc[2]) < c->i_abort && LS_ISFINITE(x) &&
+           LS_ISFINITE(v);
 }
 
 /* ------------------------------------------------------------------------------ runs */
@@ -619,7 +632,7 @@ ls_status ls_sim_run(const ls_sim_cfg *c, ls_drive *drive, const ls_sim_cmd *cmd
             next++;
         }
         /* sample at the carrier peak, run the controller; its duties act next period */
-        measure(c, i, x, drive->mode == LS_MODE_SENSORED || drive->mode == LS_MODE_CALIBRATION, &rng, &meas);
+        measure(c, &q, i, x, drive->mode == LS_MODE_SENSORED || drive->mode == LS_MODE_CALIBRATION, &rng, &meas);
         ls_drive_step(drive, &meas, &cmd);
         fault |= cmd.fault;
         u[0] = duty[0]; u[1] = duty[1]; u[2] = duty[2];
