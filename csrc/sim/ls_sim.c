@@ -290,41 +290,62 @@ SIM_HOT void ab_to_abc(const double i[2], double abc[3])
  * when the current flows out (i > 0) and the turn-off gains t_dead when it flows in (i < 0), so the
  * duty error is exactly -(sign i(t_on) + sign i(t_off))/2 * t_dead/T, with the currents at the two
  * edges predicted linearly from the period start (the switching model resolves them exactly). */
+/* Duty error of one leg over a period in the average model, -(dd/2) (sign i_on + sign i_off),
+ * zero for a leg that does not switch (half_dd = 0), clamped so the duty stays in [0, 1]. The sign
+ * is computed without branches: the HF current crosses zero all the time. */
+SIM_HOT double leg_error(double d, double half_dd, double i_on, double i_off)
+{
+    const int sg = (i_on > 0.0) - (i_on < 0.0) + (i_off > 0.0) - (i_off < 0.0);
+    const double e = -half_dd * (double)sg, dn = d + e;
+    if (dn < 0.0 || dn > 1.0) { /* within the dead time of a rail: rare */
+        return (dn < 0.0 ? 0.0 : 1.0) - d;
+    }
+    return e;
+}
+
+SIM_HOT double half_dead(double d, double dd)
+{
+    return (d > 0.0 && d < 1.0) ? 0.5 * dd : 0.0;
+}
+
 SIM_HOT void period_average(const ls_sim_cfg *c, const plant_coef *q, const frozen *f, const double duty[3],
                            double h, double i[2])
 {
-    const double dd = q->d_dead, vdc = c->v_dc;
+    const double dd = q->d_dead, vdc = c->v_dc, i0 = i[0], i1 = i[1];
     double p[3] = {vdc * duty[0], vdc * duty[1], vdc * duty[2]}, v_ab[2], b0, b1;
     period_prop pp;
-    int j;
     prop_make(f, h, &pp);
     poles_to_ab(p, v_ab);
     b0 = f->linv[0] * v_ab[0] + f->linv[1] * v_ab[1] + f->be[0];
     b1 = f->linv[2] * v_ab[0] + f->linv[3] * v_ab[1] + f->be[1];
+    prop_apply_b(&pp, b0, b1, i); /* without the dead time */
     if (dd > 0.0) {
-        /* phase currents and their slopes at the period start, the currents at the two edges of
-         * each leg, and the pole-voltage errors e_j (V) they cause */
-        const double di0 = f->m[0] * i[0] + f->m[1] * i[1] + b0, di1 = f->m[2] * i[0] + f->m[3] * i[1] + b1;
-        const double ia[3] = {i[0], -0.5 * i[0] + 0.5 * SQRT3 * i[1], -0.5 * i[0] - 0.5 * SQRT3 * i[1]};
-        const double da[3] = {di0, -0.5 * di0 + 0.5 * SQRT3 * di1, -0.5 * di0 - 0.5 * SQRT3 * di1};
-        double e[3], dv0, dv1;
-        for (j = 0; j < 3; ++j) {
-            const double d = duty[j], i_mid = ia[j] + 0.5 * h * da[j], w = 0.5 * h * d * da[j];
-            const double i_on = i_mid - w, i_off = i_mid + w;
-            /* sign(i_on) + sign(i_off), for a leg that switches at all (0 < d < 1); computed
-             * without branches: the HF current crosses zero all the time */
-            const int sg = (i_on > 0.0) - (i_on < 0.0) + (i_off > 0.0) - (i_off < 0.0);
-            double dn = d - ((d > 0.0 && d < 1.0) ? 0.5 * dd : 0.0) * (double)sg;
-            dn = dn < 0.0 ? 0.0 : dn;
-            dn = dn > 1.0 ? 1.0 : dn;
-            e[j] = vdc * (dn - d);
-        }
-        dv0 = (2.0 * e[0] - e[1] - e[2]) * (1.0 / 3.0);
-        dv1 = (e[1] - e[2]) * (1.0 / SQRT3);
-        b0 += f->linv[0] * dv0 + f->linv[1] * dv1;
-        b1 += f->linv[2] * dv0 + f->linv[3] * dv1;
+        /* The phase currents at the edges of leg j, i_j + t di_j/dt with di/dt = M i + b, as rows
+         * times the period-start current (rows prepared off the current's dependency chain); the
+         * duty errors e_j they cause; their effect on the period's end current, linear in e:
+         * Gam L^-1 V_dc (Clarke of e). */
+        const double sq = 0.5 * SQRT3, m0 = f->m[0], m1 = f->m[1], m2 = f->m[2], m3 = f->m[3];
+        const double ra0 = m0, ra1 = m1, rac = b0;
+        const double rb0 = -0.5 * m0 + sq * m2, rb1 = -0.5 * m1 + sq * m3, rbc = -0.5 * b0 + sq * b1;
+        const double rc0 = -0.5 * m0 - sq * m2, rc1 = -0.5 * m1 - sq * m3, rcc = -0.5 * b0 - sq * b1;
+        const double ta = 0.5 * (1.0 - duty[0]) * h, tb = 0.5 * (1.0 - duty[1]) * h, tc = 0.5 * (1.0 - duty[2]) * h;
+        const double ua = 0.5 * (1.0 + duty[0]) * h, ub = 0.5 * (1.0 + duty[1]) * h, uc = 0.5 * (1.0 + duty[2]) * h;
+        const double g00 = vdc * (pp.gam[0] * f->linv[0] + pp.gam[1] * f->linv[2]);
+        const double g01 = vdc * (pp.gam[0] * f->linv[1] + pp.gam[1] * f->linv[3]);
+        const double g10 = vdc * (pp.gam[2] * f->linv[0] + pp.gam[3] * f->linv[2]);
+        const double g11 = vdc * (pp.gam[2] * f->linv[1] + pp.gam[3] * f->linv[3]);
+        const double ea = leg_error(duty[0], half_dead(duty[0], dd), (1.0 + ta * ra0) * i0 + ta * ra1 * i1 + ta * rac,
+                                    (1.0 + ua * ra0) * i0 + ua * ra1 * i1 + ua * rac);
+        const double eb = leg_error(duty[1], half_dead(duty[1], dd),
+                                    (-0.5 + tb * rb0) * i0 + (sq + tb * rb1) * i1 + tb * rbc,
+                                    (-0.5 + ub * rb0) * i0 + (sq + ub * rb1) * i1 + ub * rbc);
+        const double ec = leg_error(duty[2], half_dead(duty[2], dd),
+                                    (-0.5 + tc * rc0) * i0 + (-sq + tc * rc1) * i1 + tc * rcc,
+                                    (-0.5 + uc * rc0) * i0 + (-sq + uc * rc1) * i1 + uc * rcc);
+        const double dv0 = (2.0 * ea - eb - ec) * (1.0 / 3.0), dv1 = (eb - ec) * (1.0 / SQRT3);
+        i[0] += g00 * dv0 + g01 * dv1;
+        i[1] += g10 * dv0 + g11 * dv1;
     }
-    prop_apply_b(&pp, b0, b1, i);
 }
 
 /* Switching model: gate commands at (1 -+ d) T/2, turn-on edges delayed by the dead time, the
@@ -608,6 +629,7 @@ ls_status ls_sim_run(const ls_sim_cfg *c, ls_drive *drive, const ls_sim_cmd *cmd
     plant_maps pm;
     plant_coef q;
     angle_track ang = {0.0, 1.0, 0.0, 0};
+    double x_lag = x, v_lag = v, v_lag2 = v; /* m, m/s: x and v one period back, v two back */
     frozen fz;
     if (c == NULL || drive == NULL || out == NULL || res == NULL || (n_cmds > 0 && cmds == NULL) || n_steps < 0) {
         return LS_ERR_NULL;
@@ -637,16 +659,18 @@ ls_status ls_sim_run(const ls_sim_cfg *c, ls_drive *drive, const ls_sim_cmd *cmd
         fault |= cmd.fault;
         u[0] = duty[0]; u[1] = duty[1]; u[2] = duty[2];
         /* the plant over this period with the duties computed one period earlier, frozen at the
-         * predicted mid-period position (cos and sin tracked from the previous period; the start
-         * angle for recording follows by a small rotation, |dl| < 1e-2 rad, series exact to
-         * 1e-13) */
-        x_mid = x + 0.5 * h * v;
+         * mid-period position predicted from the state one period back (exact for a constant
+         * acceleration; see ls_sim.h), so that this period's matrices do not wait for the last
+         * period's force; cos and sin tracked from the previous period; the start angle for
+         * recording follows by a small rotation, |dl| < 1e-2 rad, series exact to 1e-13 */
+        x_mid = k == 0 ? x + 0.5 * h * v : x_lag + h * (2.5 * v_lag - v_lag2);
         th_mid = kx * x_mid;
         angle_to(&ang, th_mid);
         cm = ang.c;
         sm = ang.s;
         maps_cs(c, &q, th_mid, cm, sm, &pm);
-        if (!freeze(c, &pm, kx * v, &fz)) {
+        /* the speed at mid-period likewise (exact for a constant acceleration) */
+        if (!freeze(c, &pm, kx * (1.5 * v - 0.5 * v_lag), &fz)) {
             fault |= LS_SIM_FAULT_DIVERGED;
         }
         f_start = force_of(&q, &pm, i);
@@ -668,6 +692,9 @@ ls_status ls_sim_run(const ls_sim_cfg *c, ls_drive *drive, const ls_sim_cmd *cmd
             period_average(c, &q, &fz, u, h, i);
             f_avg = 0.5 * (f_start + force_of(&q, &pm, i));
         }
+        x_lag = x;
+        v_lag2 = v_lag;
+        v_lag = v;
         mechanics(c, &q, t, h, f_avg, &x, &v);
         if (cmd.enable) {
             duty[0] = (double)cmd.duty[0];
