@@ -127,9 +127,10 @@ void ls_sim_plant_eval(const ls_sim_cfg *cfg, double theta, double lab[3], doubl
 
 SIM_HOT double force_of(const plant_coef *q, const plant_maps *m, const double i[2])
 {
-    double pm = i[0] * m->dlpm[0] + i[1] * m->dlpm[1];
-    double rel = 0.5 * (m->dl[0] * i[0] * i[0] + 2.0 * m->dl[2] * i[0] * i[1] + m->dl[1] * i[1] * i[1]);
-    return q->kf * (pm + rel);
+    /* i' lambda_pm' + 1/2 i' L' i, factored as i0 u0 + i1 u1 */
+    const double u0 = m->dlpm[0] + 0.5 * m->dl[0] * i[0] + m->dl[2] * i[1];
+    const double u1 = m->dlpm[1] + 0.5 * m->dl[1] * i[1];
+    return q->kf * (i[0] * u0 + i[1] * u1);
 }
 
 double ls_sim_force(const ls_sim_cfg *cfg, double theta, const double i_ab[2])
@@ -290,13 +291,18 @@ SIM_HOT void ab_to_abc(const double i[2], double abc[3])
  * when the current flows out (i > 0) and the turn-off gains t_dead when it flows in (i < 0), so the
  * duty error is exactly -(sign i(t_on) + sign i(t_off))/2 * t_dead/T, with the currents at the two
  * edges predicted linearly from the period start (the switching model resolves them exactly). */
+/* sign of x (0 for 0) without a data-dependent branch: the HF current changes sign all the time,
+ * while an exactly zero current (only at rest) is a predictable exception */
+SIM_HOT double sign_of(double x)
+{
+    return x != 0.0 ? copysign(1.0, x) : 0.0;
+}
+
 /* Duty error of one leg over a period in the average model, -(dd/2) (sign i_on + sign i_off),
- * zero for a leg that does not switch (half_dd = 0), clamped so the duty stays in [0, 1]. The sign
- * is computed without branches: the HF current crosses zero all the time. */
+ * zero for a leg that does not switch (half_dd = 0), clamped so the duty stays in [0, 1]. */
 SIM_HOT double leg_error(double d, double half_dd, double i_on, double i_off)
 {
-    const int sg = (i_on > 0.0) - (i_on < 0.0) + (i_off > 0.0) - (i_off < 0.0);
-    const double e = -half_dd * (double)sg, dn = d + e;
+    const double e = -half_dd * (sign_of(i_on) + sign_of(i_off)), dn = d + e;
     if (dn < 0.0 || dn > 1.0) { /* within the dead time of a rail: rare */
         return (dn < 0.0 ? 0.0 : 1.0) - d;
     }
