@@ -348,9 +348,12 @@ SIM_HOT void period_average(const ls_sim_cfg *c, const plant_coef *q, const froz
         const double ec = leg_error(duty[2], half_dead(duty[2], dd),
                                     (-0.5 + tc * rc0) * i0 + (-sq + tc * rc1) * i1 + tc * rcc,
                                     (-0.5 + uc * rc0) * i0 + (-sq + uc * rc1) * i1 + uc * rcc);
-        const double dv0 = (2.0 * ea - eb - ec) * (1.0 / 3.0), dv1 = (eb - ec) * (1.0 / SQRT3);
-        i[0] += g00 * dv0 + g01 * dv1;
-        i[1] += g10 * dv0 + g11 * dv1;
+        /* G times the Clarke column of each leg */
+        const double ka0 = g00 * (2.0 / 3.0), ka1 = g10 * (2.0 / 3.0);
+        const double kb0 = g01 * (1.0 / SQRT3) - g00 * (1.0 / 3.0), kb1 = g11 * (1.0 / SQRT3) - g10 * (1.0 / 3.0);
+        const double kc0 = -g01 * (1.0 / SQRT3) - g00 * (1.0 / 3.0), kc1 = -g11 * (1.0 / SQRT3) - g10 * (1.0 / 3.0);
+        i[0] += ka0 * ea + kb0 * eb + kc0 * ec;
+        i[1] += ka1 * ea + kb1 * eb + kc1 * ec;
     }
 }
 
