@@ -15,12 +15,17 @@
  *   mechanics:   m dv/dt = F - F_load(t, x) - b v - F_c sign(v) (stiction: v held at 0 while
  *                |F - F_load| <= F_c), travel limits -> LS_SIM_FAULT_TRAVEL.
  * Each PWM period (or switching segment) the 2x2 electrical system is frozen at the mid-period
- * position and propagated with a 4th-order Taylor polynomial of its matrix (error ~1e-6 per period
- * at 16 kHz), the mechanics with the trapezoidal force average.
+ * position and speed and propagated with the 4th-order Taylor polynomial of its matrix (error ~1e-6
+ * per period at 16 kHz), the mechanics with the trapezoidal force average. In the closed loop the
+ * mid-period position and speed are extrapolated from the two previous periods (exact for a
+ * constant acceleration; otherwise off by h^2 times the change of acceleration, nanometres), so
+ * that a period's matrices do not wait for the previous period's force.
  *
  * Inverter, 2-level, centre-aligned PWM, period starting at the carrier peak (where currents are
  * sampled); duties computed from sample k act during period k+1 (one-period computation delay):
- *   LS_SIM_AVERAGE:   pole voltage d V_dc - sign(i) t_dead f_pwm V_dc over the whole period;
+ *   LS_SIM_AVERAGE:   pole voltage (d - (t_dead f_pwm / 2)(sign i_on + sign i_off)) V_dc over the
+ *                     whole period, i_on/i_off the phase current predicted at the leg's turn-on
+ *                     and turn-off instants from the period-start current and slope;
  *   LS_SIM_SWITCHING: each period integrated segment by segment between switching instants; the
  *                     upper switch of a leg is commanded on for |t - T/2| < d T/2, turn-on edges
  *                     are delayed by the dead time, and during it the freewheeling diode chosen by
