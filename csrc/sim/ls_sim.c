@@ -334,8 +334,9 @@ SIM_HOT void period_average(const ls_sim_cfg *c, const plant_coef *q, const froz
         const double ra0 = m0, ra1 = m1, rac = b0;
         const double rb0 = -0.5 * m0 + sq * m2, rb1 = -0.5 * m1 + sq * m3, rbc = -0.5 * b0 + sq * b1;
         const double rc0 = -0.5 * m0 - sq * m2, rc1 = -0.5 * m1 - sq * m3, rcc = -0.5 * b0 - sq * b1;
-        const double ta = 0.5 * (1.0 - duty[0]) * h, tb = 0.5 * (1.0 - duty[1]) * h, tc = 0.5 * (1.0 - duty[2]) * h;
-        const double ua = 0.5 * (1.0 + duty[0]) * h, ub = 0.5 * (1.0 + duty[1]) * h, uc = 0.5 * (1.0 + duty[2]) * h;
+        /* turn-on and turn-off instants (1 -+ d) h/2 */
+        const double hh = 0.5 * h, ta = hh - hh * duty[0], tb = hh - hh * duty[1], tc = hh - hh * duty[2];
+        const double ua = hh + hh * duty[0], ub = hh + hh * duty[1], uc = hh + hh * duty[2];
         const double g00 = vdc * (pp.gam[0] * f->linv[0] + pp.gam[1] * f->linv[2]);
         const double g01 = vdc * (pp.gam[0] * f->linv[1] + pp.gam[1] * f->linv[3]);
         const double g10 = vdc * (pp.gam[2] * f->linv[0] + pp.gam[3] * f->linv[2]);
