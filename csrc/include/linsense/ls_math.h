@@ -1,0 +1,79 @@
+/* linsense firmware library: sine and cosine of one angle.
+ *
+ *   ls_sincos(x, &c, &s)        c = cos(x), s = sin(x), x in rad; inline
+ *   ls_sincos_full(x, &c, &s)   the same, out of line (for init code: no inline copy)
+ *
+ * Float build: no libm call. x is reduced to r = x - j pi/2, |r| <= pi/4 (a little more), by a
+ * three-part Cody-Waite subtraction, exact for |x| <= LS_SINCOS_FAST_MAX; r goes through the
+ * Cephes minimax polynomials of degree 7 (sin) and 8 (cos), and the quadrant j mod 4 swaps and
+ * negates them. Maximum absolute error 9.5e-8 over every float with |x| <= 8192, 1.3e-7 beyond
+ * (csrc/tests/test_math.c checks <= 2e-7 against double sin/cos). Larger |x| take an exact
+ * Payne-Hanek reduction in 32/64-bit integer arithmetic (no double, no libm), valid for every
+ * finite float; NaN and +-Inf give NaN. The drive uses it every step, and with it the library
+ * needs no sinf/cosf (on a Cortex-M4F, newlib's are slow and large).
+ *
+ * Double build (-DLS_REAL_DOUBLE): libm sin and cos.
+ */
+#ifndef LINSENSE_LS_MATH_H
+#define LINSENSE_LS_MATH_H
+
+#include "linsense/ls_types.h"
+
+/* rad, largest |x| reduced inline (2^13: j < 2^13 keeps every product j * PIO2_* exact). */
+#define LS_SINCOS_FAST_MAX LS_R(8192.0)
+
+/* cos and sin of any x (rad), out of line; NaN for a non-finite x. */
+void ls_sincos_full(LS_REAL x, LS_REAL *c, LS_REAL *s);
+
+#ifdef LS_REAL_DOUBLE
+
+static inline void ls_sincos(LS_REAL x, LS_REAL *c, LS_REAL *s)
+{
+    *c = cos(x);
+    *s = sin(x);
+}
+
+#else
+
+/* cos and sin of r (rad, |r| <= pi/4 + a little) rotated by q quarter turns: cos(r + q pi/2),
+ * sin(r + q pi/2). Coefficients: Cephes sinf/cosf (minimax on [-pi/4, pi/4]). */
+static inline void ls_sincos_kernel(float r, uint32_t q, float *c, float *s)
+{
+    /* Estrin's scheme: two short chains instead of one long Horner chain */
+    const float r2 = r * r;
+    const float r4 = r2 * r2;
+    const float sp = r + (r * r2) * ((-1.6666654611e-1f + r2 * 8.3321608736e-3f) + r4 * -1.9515295891e-4f);
+    const float cp = (1.0f - 0.5f * r2) +
+                     r4 * ((4.166664568298827e-2f + r2 * -1.388731625493765e-3f) + r4 * 2.443315711809948e-5f);
+    const float c0 = (q & 1u) != 0u ? sp : cp; /* cos(r + q pi/2) = +-cos r or -+sin r */
+    const float s0 = (q & 1u) != 0u ? cp : sp;
+    *c = ((q + 1u) & 2u) != 0u ? -c0 : c0;      /* q = 1, 2: negative */
+    *s = (q & 2u) != 0u ? -s0 : s0;             /* q = 2, 3: negative */
+}
+
+static inline void ls_sincos(float x, float *c, float *s)
+{
+    float t, j, r;
+    int32_t q;
+    if (!(LS_FABS(x) <= LS_SINCOS_FAST_MAX)) { /* also NaN */
+        float c1, s1; /* (the caller's c and s stay in registers: their address does not escape) */
+        ls_sincos_full(x, &c1, &s1);
+        *c = c1;
+        *s = s1;
+        return;
+    }
+    /* j = nearest integer to x 2/pi: |x 2/pi| < 5216, so x 2/pi + 8192.5 > 0 truncates to
+     * floor(x 2/pi + 1/2) + 8192 (its rounding, at most 2^-11, only moves |r| a little past
+     * pi/4, where the polynomials are still accurate) */
+    t = x * 0.636619772367581343f + 8192.5f;
+    q = (int32_t)t - 8192;
+    j = (float)q;
+    /* pi/2 = 1.5703125 + 4.837512969970703125e-4 + 7.54978995489188216e-8 (8 and 11 bits, so
+     * j * the first two is exact) */
+    r = ((x - j * 1.5703125f) - j * 4.837512969970703125e-4f) - j * 7.54978995489188216e-8f;
+    ls_sincos_kernel(r, (uint32_t)q, c, s);
+}
+
+#endif /* LS_REAL_DOUBLE */
+
+#endif /* LINSENSE_LS_MATH_H */
