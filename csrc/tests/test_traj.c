@@ -26,8 +26,8 @@ static void run(double dist, double v_max, double a_max, ls_pos start)
 {
     ls_traj_cfg cfg;
     ls_traj t;
-    ls_pos x, target;
-    LS_REAL v, a;
+    ls_pos x = {0, LS_R(0.0)}, target;
+    LS_REAL v = LS_R(-1.0), a = LS_R(-1.0); /* (set by every ls_traj_step) */
     double T_expected, v_peak, t_end = -1, x0 = to_m(start), vmax_seen = 0, prev = x0, dx_max = 0;
     long k;
     cfg.v_max = (LS_REAL)v_max; cfg.a_max = (LS_REAL)a_max; cfg.pole_pitch = (LS_REAL)TAU; cfg.fs = LS_R(16000.0);
