@@ -3,6 +3,7 @@
 #include <string.h>
 
 #include "linsense/ls_drive.h"
+#include "linsense/ls_math.h"
 
 /* --------------------------------------------------------------------------- defaults */
 void ls_drive_default_cfg(ls_drive_cfg *c)
@@ -154,6 +155,9 @@ ls_status ls_drive_init(ls_drive *d, const ls_drive_cfg *cfg)
     d->cfg = *cfg;
     d->ts = LS_R(1.0) / cfg->fs;
     d->kx = LS_TWO_PI / cfg->pole_pitch;
+    d->inv_kx = cfg->pole_pitch / LS_TWO_PI;
+    d->inv_kf = LS_R(1.0) / cfg->force_constant;
+    d->delay_ts = cfg->delay_comp * d->ts;
     d->initialised = true;
     ls_drive_reset(d, zero);
     return LS_OK;
@@ -262,16 +266,24 @@ void ls_drive_step_to(ls_drive *d, ls_pos target)
 }
 
 /* --------------------------------------------------------------------------- step */
-static void disable(ls_drive *d, ls_cmd *cmd)
+/* Outputs off: every command field cleared, then mode and fault; controllers reset. */
+static void disable(ls_drive *d, ls_cmd *cmd, uint32_t fault)
 {
-    cmd->duty[0] = cmd->duty[1] = cmd->duty[2] = LS_R(0.0);
-    cmd->enable = false;
-    cmd->v_dq[0] = cmd->v_dq[1] = LS_R(0.0);
-    cmd->v_hf = LS_R(0.0);
-    cmd->i_dq_ref[0] = cmd->i_dq_ref[1] = LS_R(0.0);
+    memset(cmd, 0, sizeof *cmd);
+    cmd->mode = d->mode;
+    cmd->fault = fault;
     ls_current_reset(&d->cur);
     ls_posctrl_reset(&d->pos);
     d->f_ref = LS_R(0.0);
+}
+
+/* Outputs off after a fault or in LS_MODE_OFF, reporting the estimate and the reference. */
+static void disable_report(ls_drive *d, ls_cmd *cmd, uint32_t fault)
+{
+    disable(d, cmd, fault);
+    cmd->pos_est = d->obs.pos;
+    cmd->pos_fb = d->obs.pos;
+    cmd->pos_ref = d->traj.target;
 }
 
 static ls_pos enc_pos(int32_t count, int32_t per_period)
@@ -345,37 +357,34 @@ void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
     const ls_drive_cfg *cfg;
     LS_REAL i_a, i_b, ihf_a, ihf_b, if_a, if_b;
     LS_REAL c_fb, s_fb, c_est, s_est, v_hf, v_d, v_q, v_a, v_b, dlt, c_adv, s_adv;
-    LS_REAL i_d, i_q, i_q_ref, v_lim, omega_fb, x_err, v_ff, a_ff, f;
-    ls_pos x_ref;
-    const ls_observer *fb;
-    bool sensorless, use_enc, hf_on;
+    LS_REAL i_d, i_q, i_q_ref, v_lim, omega_fb, x_err, v_ff, a_ff, f, duty[3];
+    ls_pos x_ref, pos_fb;
+    ls_mode mode;
+    bool sensorless, calibrating, use_enc, hf_on;
     uint32_t fault;
 
     if (cmd == NULL) {
         return;
     }
-    memset(cmd, 0, sizeof *cmd);
     if (d == NULL || meas == NULL || !d->initialised) {
+        memset(cmd, 0, sizeof *cmd);
         cmd->fault = LS_FAULT_CONFIG;
         return;
     }
     cfg = &d->cfg;
-    cmd->mode = d->mode;
-    sensorless = d->mode == LS_MODE_SENSORLESS_LUT || d->mode == LS_MODE_SENSORLESS_NOLUT;
-    use_enc = d->mode == LS_MODE_SENSORED || d->mode == LS_MODE_CALIBRATION;
-    hf_on = sensorless || d->mode == LS_MODE_CALIBRATION || (d->mode == LS_MODE_SENSORED && cfg->inject_sensored);
+    mode = d->mode;
+    sensorless = mode == LS_MODE_SENSORLESS_LUT || mode == LS_MODE_SENSORLESS_NOLUT;
+    calibrating = mode == LS_MODE_CALIBRATION;
+    use_enc = mode == LS_MODE_SENSORED || calibrating;
+    hf_on = sensorless || calibrating || (mode == LS_MODE_SENSORED && cfg->inject_sensored);
 
     fault = ls_protect_check_power(&d->prot, meas->i_abc, meas->v_dc);
     if (use_enc && !meas->enc_valid) {
         ls_protect_trip(&d->prot, LS_FAULT_ENCODER);
         fault = d->prot.fault;
     }
-    if (fault != LS_FAULT_NONE || d->mode == LS_MODE_OFF) {
-        cmd->fault = fault;
-        cmd->pos_est = d->obs.pos;
-        cmd->pos_fb = d->obs.pos;
-        cmd->pos_ref = d->traj.target;
-        disable(d, cmd);
+    if (fault != LS_FAULT_NONE || mode == LS_MODE_OFF) {
+        disable_report(d, cmd, fault);
         return;
     }
 
@@ -396,75 +405,74 @@ void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
             ls_traj_reset(&d->traj, pe);
         }
         ls_observer_step(&d->enc, ls_pos_diff(pe, d->enc.pos), d->f_ref);
-        if (d->mode == LS_MODE_CALIBRATION) {
+        if (calibrating) {
             /* the HF axis follows the encoder: theta_err = 0 by construction */
             ls_observer_reset(&d->obs, d->enc.pos);
         }
     } else if (d->align) {
         ls_traj_reset(&d->traj, d->obs.pos);
     }
-    if (d->align && d->pending) {
-        d->pending = false;
-        if (d->pending_move) {
-            ls_traj_move(&d->traj, d->pending_target);
-        } else {
-            ls_traj_jump(&d->traj, d->pending_target);
+    if (d->align) {
+        if (d->pending) {
+            d->pending = false;
+            if (d->pending_move) {
+                ls_traj_move(&d->traj, d->pending_target);
+            } else {
+                ls_traj_jump(&d->traj, d->pending_target);
+            }
         }
+        d->align = false;
     }
-    d->align = false;
 
     /* HF demodulation and observer, on the axis the injection used */
-    c_est = LS_COS(d->obs.pos.theta);
-    s_est = LS_SIN(d->obs.pos.theta);
+    ls_sincos(d->obs.pos.theta, &c_est, &s_est);
     if (hf_on) {
-        LS_REAL err = ls_demod_step(&d->demod, ihf_a, ihf_b, d->obs.pos.theta, d->inj.c, d->inj.s,
-                                    d->mode == LS_MODE_CALIBRATION ? d->psi_cal : LS_R(0.0));
+        LS_REAL err = ls_demod_step_cs(&d->demod, ihf_a, ihf_b, d->obs.pos.theta, c_est, s_est, d->inj.c,
+                                       d->inj.s, calibrating ? d->psi_cal : LS_R(0.0));
         if (sensorless) {
             ls_observer_step(&d->obs, err, d->f_ref);
-        }
-        if (sensorless) {
             ls_protect_check_observer(&d->prot, err, d->demod.valid, d->obs.omega);
         }
     }
-    if (d->mode == LS_MODE_CALIBRATION) {
+    if (calibrating) {
         calibration_step(d);
     }
     if (d->prot.fault != LS_FAULT_NONE) {
-        cmd->fault = d->prot.fault;
-        cmd->pos_est = d->obs.pos;
-        cmd->pos_fb = d->obs.pos;
-        cmd->pos_ref = d->traj.target;
-        disable(d, cmd);
+        disable_report(d, cmd, d->prot.fault);
         return;
     }
 
-    /* feedback: encoder or HF estimate */
-    fb = use_enc ? &d->enc : &d->obs;
-    if (fb == &d->obs) {
+    /* feedback: encoder or HF estimate (copied, so that the values just computed stay in
+     * registers) */
+    if (use_enc) {
+        pos_fb = d->enc.pos;
+        omega_fb = d->enc.omega;
+        ls_sincos(pos_fb.theta, &c_fb, &s_fb);
+    } else {
+        pos_fb = d->obs.pos;
+        omega_fb = d->obs.omega;
         c_fb = c_est;
         s_fb = s_est;
-    } else {
-        c_fb = LS_COS(fb->pos.theta);
-        s_fb = LS_SIN(fb->pos.theta);
     }
-    omega_fb = fb->omega;
 
     /* position reference and control -> force -> current reference */
     ls_traj_step(&d->traj, &x_ref, &v_ff, &a_ff);
-    x_err = ls_pos_diff(x_ref, fb->pos) / d->kx;
-    f = ls_posctrl_step(&d->pos, x_err, omega_fb / d->kx, v_ff, a_ff);
-    i_q_ref = ls_clamp(f / cfg->force_constant, -cfg->i_max, cfg->i_max);
+    x_err = ls_pos_diff(x_ref, pos_fb) * d->inv_kx;
+    /* finite by construction from here on: the measurements passed the checks above, positions
+     * are normalised, speeds limited; the final check below catches anything else */
+    f = ls_posctrl_step_finite(&d->pos, x_err, omega_fb * d->inv_kx, v_ff, a_ff);
+    i_q_ref = ls_clamp(f * d->inv_kf, -cfg->i_max, cfg->i_max);
     d->f_ref = i_q_ref * cfg->force_constant;
 
     /* current control in the feedback frame */
     i_d = c_fb * if_a + s_fb * if_b;
     i_q = -s_fb * if_a + c_fb * if_b;
     v_lim = meas->v_dc * (LS_R(1.0) / LS_SQRT3) - (hf_on ? cfg->inject.amplitude : LS_R(0.0));
-    ls_current_step(&d->cur, i_d, i_q, LS_R(0.0), i_q_ref, omega_fb, v_lim, &v_d, &v_q);
+    ls_current_step_finite(&d->cur, i_d, i_q, LS_R(0.0), i_q_ref, omega_fb, v_lim, &v_d, &v_q);
 
     /* fundamental voltage at the angle advanced over the computation delay (small-angle
      * rotation), plus the HF injection on the estimated d-axis */
-    dlt = cfg->delay_comp * omega_fb * d->ts;
+    dlt = d->delay_ts * omega_fb;
     c_adv = c_fb - s_fb * dlt;
     s_adv = s_fb + c_fb * dlt;
     v_a = c_adv * v_d - s_adv * v_q;
@@ -472,23 +480,26 @@ void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
     v_hf = hf_on ? ls_inject_step(&d->inj) : LS_R(0.0);
     v_a += v_hf * c_est;
     v_b += v_hf * s_est;
-    (void)ls_mod_step(&d->mod, v_a, v_b, meas->v_dc, meas->i_abc, cmd->duty);
+    (void)ls_mod_step_finite(&d->mod, v_a, v_b, meas->v_dc, meas->i_abc, duty);
 
     /* nothing non-finite ever leaves a step */
-    if (!LS_ISFINITE(cmd->duty[0] + cmd->duty[1] + cmd->duty[2]) || !LS_ISFINITE(d->obs.pos.theta) ||
-        !LS_ISFINITE(fb->pos.theta) || !LS_ISFINITE(v_a + v_b)) {
+    if (!LS_ISFINITE4(duty[0] + duty[1] + duty[2], d->obs.pos.theta, pos_fb.theta, v_a + v_b)) {
         ls_protect_trip(&d->prot, LS_FAULT_NONFINITE);
-        cmd->fault = d->prot.fault;
-        disable(d, cmd);
+        disable(d, cmd, d->prot.fault);
         return;
     }
+    /* every field exactly once */
+    cmd->duty[0] = duty[0];
+    cmd->duty[1] = duty[1];
+    cmd->duty[2] = duty[2];
     cmd->enable = true;
     cmd->fault = d->prot.fault;
-    cmd->pos_fb = fb->pos;
+    cmd->mode = mode;
+    cmd->pos_fb = pos_fb;
     cmd->pos_est = d->obs.pos;
     cmd->pos_ref = x_ref;
     cmd->v_est = ls_observer_speed(&d->obs);
-    cmd->v_fb = omega_fb / d->kx;
+    cmd->v_fb = omega_fb * d->inv_kx;
     cmd->f_load_est = d->obs.f_load;
     cmd->err_sig = d->demod.err;
     cmd->err_valid = d->demod.valid;
@@ -502,6 +513,6 @@ void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
     cmd->v_dq[1] = v_q;
     cmd->v_hf = v_hf;
     cmd->cal_index = d->cal_index;
-    cmd->cal_done = d->mode == LS_MODE_CALIBRATION && d->cal_phase == LS_CAL_DONE;
+    cmd->cal_done = calibrating && d->cal_phase == LS_CAL_DONE;
     cmd->psi_cal = d->psi_cal;
 }

@@ -2,10 +2,11 @@
 #include <math.h>
 
 #include "linsense/ls_filter.h"
+#include "linsense/ls_math.h"
 
 ls_status ls_biquad_init(ls_biquad *f, const ls_biquad_cfg *cfg)
 {
-    LS_REAL w0, cw, alpha, a0;
+    LS_REAL w0, cw, sw, alpha, a0;
     if (f == NULL || cfg == NULL) {
         return LS_ERR_NULL;
     }
@@ -14,8 +15,8 @@ ls_status ls_biquad_init(ls_biquad *f, const ls_biquad_cfg *cfg)
         return LS_ERR_PARAM;
     }
     w0 = LS_TWO_PI * cfg->f0 / cfg->fs;
-    cw = LS_COS(w0);
-    alpha = LS_SIN(w0) / (LS_R(2.0) * cfg->q);
+    ls_sincos_full(w0, &cw, &sw); /* (out of line: init code) */
+    alpha = sw / (LS_R(2.0) * cfg->q);
     a0 = LS_R(1.0) + alpha;
     switch (cfg->type) {
     case LS_BIQUAD_LOWPASS:

@@ -27,25 +27,3 @@ void ls_lut_reset(ls_lut *lut)
 {
     (void)lut;
 }
-
-LS_REAL ls_lut_step(const ls_lut *lut, LS_REAL theta)
-{
-    const LS_REAL n = (LS_REAL)lut->len;
-    LS_REAL u;
-    LS_REAL f;
-    uint32_t k;
-    uint32_t k1;
-    if (!LS_ISFINITE(theta)) {
-        return LS_R(0.0);
-    }
-    u = theta * lut->points_per_rad;
-    u -= n * LS_FLOOR(u / n); /* wrap into [0, n] */
-    k = (uint32_t)u;
-    f = u - (LS_REAL)k;
-    if (k >= lut->len) { /* u rounded up to n */
-        k = 0u;
-        f = LS_R(0.0);
-    }
-    k1 = (k + 1u == lut->len) ? 0u : k + 1u;
-    return (LS_R(1.0) - f) * (LS_REAL)lut->table[k] + f * (LS_REAL)lut->table[k1];
-}

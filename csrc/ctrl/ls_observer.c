@@ -40,6 +40,16 @@ ls_status ls_observer_init(ls_observer *o, const ls_observer_cfg *cfg)
     o->cfg = *cfg;
     o->ts = LS_R(1.0) / cfg->fs;
     o->kx = LS_TWO_PI / cfg->pole_pitch;
+    o->inv_kx = cfg->pole_pitch / LS_TWO_PI;
+    o->k1_ts = cfg->k1 * o->ts;
+    o->k2_ts = cfg->k2 * o->ts;
+    if (cfg->type == LS_OBS_MECH) {
+        o->acc_ts = o->kx * o->ts / cfg->mass;
+        o->k3_ts = cfg->k3 * (cfg->mass / o->kx) * o->ts;
+    } else {
+        o->acc_ts = LS_R(0.0);
+        o->k3_ts = LS_R(0.0);
+    }
     ls_observer_reset(o, zero);
     return LS_OK;
 }
@@ -49,27 +59,4 @@ void ls_observer_reset(ls_observer *o, ls_pos p)
     o->pos = ls_pos_norm(p);
     o->omega = LS_R(0.0);
     o->f_load = LS_R(0.0);
-}
-
-void ls_observer_step(ls_observer *o, LS_REAL eps, LS_REAL f_motor)
-{
-    const ls_observer_cfg *c = &o->cfg;
-    LS_REAL dtheta;
-    if (!LS_ISFINITE(eps)) {
-        eps = LS_R(0.0);
-    }
-    if (!LS_ISFINITE(f_motor)) {
-        f_motor = LS_R(0.0);
-    }
-    dtheta = (o->omega + c->k1 * eps) * o->ts;
-    if (c->type == LS_OBS_MECH) {
-        LS_REAL acc = o->kx * (f_motor - o->f_load) / c->mass;
-        o->omega += (acc + c->k2 * eps) * o->ts;
-        o->f_load -= c->k3 * eps * (c->mass / o->kx) * o->ts;
-        o->f_load = ls_clamp(o->f_load, -c->force_max, c->force_max);
-    } else {
-        o->omega += c->k2 * eps * o->ts;
-    }
-    o->omega = ls_clamp(o->omega, -c->omega_max, c->omega_max);
-    o->pos = ls_pos_add(o->pos, dtheta);
 }

@@ -140,6 +140,11 @@ typedef struct {
     LS_REAL f_load;
     LS_REAL ts;
     LS_REAL kx;
+    LS_REAL inv_kx;
+    LS_REAL k1_ts;
+    LS_REAL k2_ts;
+    LS_REAL acc_ts;
+    LS_REAL k3_ts;
 } ls_observer;
 void ls_observer_gains(ls_observer_cfg *cfg, LS_REAL f_bw);
 ls_status ls_observer_init(ls_observer *o, const ls_observer_cfg *cfg);
@@ -148,7 +153,7 @@ void ls_observer_step(ls_observer *o, LS_REAL eps, LS_REAL f_motor);
 
 /* ls_ctrl.h */
 typedef struct { LS_REAL kp; LS_REAL ki; LS_REAL out_min; LS_REAL out_max; LS_REAL fs; } ls_pi_cfg;
-typedef struct { ls_pi_cfg cfg; LS_REAL integ; LS_REAL ts; bool saturated; } ls_pi;
+typedef struct { ls_pi_cfg cfg; LS_REAL integ; LS_REAL ts; bool saturated; LS_REAL ki_ts; } ls_pi;
 ls_status ls_pi_init(ls_pi *pi, const ls_pi_cfg *cfg);
 void ls_pi_reset(ls_pi *pi);
 LS_REAL ls_pi_step(ls_pi *pi, LS_REAL err, LS_REAL ff);
@@ -156,7 +161,7 @@ typedef struct {
     LS_REAL kp; LS_REAL ki; LS_REAL l_d; LS_REAL l_q; LS_REAL psi_pm; bool decouple; LS_REAL fs;
 } ls_current_cfg;
 typedef struct {
-    ls_current_cfg cfg; LS_REAL integ_d; LS_REAL integ_q; LS_REAL ts; bool saturated;
+    ls_current_cfg cfg; LS_REAL integ_d; LS_REAL integ_q; LS_REAL ts; bool saturated; LS_REAL ki_ts;
 } ls_current;
 ls_status ls_current_init(ls_current *c, const ls_current_cfg *cfg);
 void ls_current_reset(ls_current *c);
@@ -194,7 +199,9 @@ void ls_traj_step(ls_traj *t, ls_pos *x_ref, LS_REAL *v_ref, LS_REAL *a_ref);
 
 /* ls_modulator.h */
 typedef struct { LS_REAL f_pwm; LS_REAL dead_time; bool dtc; LS_REAL i_band; LS_REAL dtc_lead; } ls_mod_cfg;
-typedef struct { ls_mod_cfg cfg; LS_REAL d_dead; LS_REAL i_prev[3]; bool have_prev; } ls_mod;
+typedef struct {
+    ls_mod_cfg cfg; LS_REAL d_dead; LS_REAL i_prev[3]; bool have_prev; LS_REAL inv_band;
+} ls_mod;
 ls_status ls_mod_init(ls_mod *m, const ls_mod_cfg *cfg);
 void ls_mod_reset(ls_mod *m);
 bool ls_mod_step(ls_mod *m, LS_REAL v_a, LS_REAL v_b, LS_REAL v_dc, const LS_REAL i_abc[3],

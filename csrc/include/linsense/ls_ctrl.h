@@ -29,12 +29,45 @@ typedef struct {
     LS_REAL integ;   /* integrator state, output unit */
     LS_REAL ts;      /* s, sampling period */
     bool saturated;  /* output was limited at the last step */
+    LS_REAL ki_ts;   /* output unit per input unit, ki ts */
 } ls_pi;
 
 ls_status ls_pi_init(ls_pi *pi, const ls_pi_cfg *cfg);
 void ls_pi_reset(ls_pi *pi);
-/* u = kp e + integ + ff, limited; see the anti-windup rule above. */
-LS_REAL ls_pi_step(ls_pi *pi, LS_REAL err, LS_REAL ff);
+/* The step functions are inline (called every PWM period). Each ls_<x>_step guards its inputs
+ * against NaN and Inf; ls_<x>_step_finite is the same step without that guard, for a caller whose
+ * inputs are finite by construction (the drive, after its own checks). */
+
+/* ls_pi_step for finite err and ff. */
+static inline LS_REAL ls_pi_step_finite(ls_pi *pi, LS_REAL err, LS_REAL ff)
+{
+    LS_REAL integ, u, u_lim;
+    integ = pi->integ + pi->ki_ts * err;
+    /* = kp err + integ + ff, with err entering late through a single product */
+    u = (pi->cfg.kp + pi->ki_ts) * err + (pi->integ + ff);
+    u_lim = ls_clamp(u, pi->cfg.out_min, pi->cfg.out_max);
+    pi->saturated = u_lim != u;
+    /* conditional integration: no integration that would push further into the limit */
+    if (!(pi->saturated && (u > pi->cfg.out_max) == (err > LS_R(0.0)))) {
+        pi->integ = ls_clamp(integ, pi->cfg.out_min, pi->cfg.out_max);
+    }
+    return u_lim;
+}
+
+/* u = kp e + integ + ff, limited; see the anti-windup rule above. A non-finite err or ff counts
+ * as 0. */
+static inline LS_REAL ls_pi_step(ls_pi *pi, LS_REAL err, LS_REAL ff)
+{
+    if (!LS_ISFINITE2(err, ff)) {
+        if (!LS_ISFINITE(err)) {
+            err = LS_R(0.0);
+        }
+        if (!LS_ISFINITE(ff)) {
+            ff = LS_R(0.0);
+        }
+    }
+    return ls_pi_step_finite(pi, err, ff);
+}
 
 /* ------------------------------------------------------------------------------- current */
 typedef struct {
@@ -53,14 +86,68 @@ typedef struct {
     LS_REAL integ_q;    /* V, q integrator */
     LS_REAL ts;         /* s, sampling period */
     bool saturated;     /* voltage limited at the last step */
+    LS_REAL ki_ts;      /* V/A, ki ts */
 } ls_current;
 
 ls_status ls_current_init(ls_current *c, const ls_current_cfg *cfg);
 void ls_current_reset(ls_current *c);
+/* ls_current_step for finite currents, references, omega and v_max. */
+static inline void ls_current_step_finite(ls_current *c, LS_REAL i_d, LS_REAL i_q, LS_REAL i_d_ref,
+                                          LS_REAL i_q_ref, LS_REAL omega, LS_REAL v_max, LS_REAL *v_d,
+                                          LS_REAL *v_q)
+{
+    const ls_current_cfg *k = &c->cfg;
+    const LS_REAL e_d = i_d_ref - i_d;
+    const LS_REAL e_q = i_q_ref - i_q;
+    LS_REAL ff_d = LS_R(0.0), ff_q = LS_R(0.0);
+    LS_REAL ud, uq, mag2, vmax2, id_step, iq_step, kpi;
+    if (!(v_max > LS_R(0.0))) {
+        *v_d = LS_R(0.0);
+        *v_q = LS_R(0.0);
+        return;
+    }
+    if (k->decouple) {
+        ff_d = -omega * k->l_q * i_q;
+        ff_q = omega * (k->l_d * i_d + k->psi_pm);
+    }
+    id_step = c->ki_ts * e_d;
+    iq_step = c->ki_ts * e_q;
+    /* = kp e + integ + ki ts e + ff, with e entering late through a single product */
+    kpi = k->kp + c->ki_ts;
+    ud = kpi * e_d + (c->integ_d + ff_d);
+    uq = kpi * e_q + (c->integ_q + ff_q);
+    mag2 = ud * ud + uq * uq;
+    vmax2 = v_max * v_max;
+    c->saturated = mag2 > vmax2;
+    /* conditional integration: an axis integrates unless the vector is limited and that axis'
+     * error pushes its voltage further out */
+    if (!c->saturated || (e_d > LS_R(0.0)) != (ud > LS_R(0.0))) {
+        c->integ_d = ls_clamp(c->integ_d + id_step, -v_max, v_max);
+    }
+    if (!c->saturated || (e_q > LS_R(0.0)) != (uq > LS_R(0.0))) {
+        c->integ_q = ls_clamp(c->integ_q + iq_step, -v_max, v_max);
+    }
+    if (c->saturated) {
+        LS_REAL scale = v_max / LS_SQRT(mag2);
+        ud *= scale;
+        uq *= scale;
+    }
+    *v_d = ud;
+    *v_q = uq;
+}
+
 /* i_d, i_q: measured (A); i_d_ref, i_q_ref (A); omega: electrical speed (rad/s); v_max (V):
- * radius of the allowed voltage circle. Writes v_d, v_q (V). */
-void ls_current_step(ls_current *c, LS_REAL i_d, LS_REAL i_q, LS_REAL i_d_ref, LS_REAL i_q_ref,
-                     LS_REAL omega, LS_REAL v_max, LS_REAL *v_d, LS_REAL *v_q);
+ * radius of the allowed voltage circle. Writes v_d, v_q (V); 0 for non-finite inputs. */
+static inline void ls_current_step(ls_current *c, LS_REAL i_d, LS_REAL i_q, LS_REAL i_d_ref,
+                                   LS_REAL i_q_ref, LS_REAL omega, LS_REAL v_max, LS_REAL *v_d, LS_REAL *v_q)
+{
+    if (!LS_ISFINITE3(i_d_ref - i_d, i_q_ref - i_q, omega)) {
+        *v_d = LS_R(0.0);
+        *v_q = LS_R(0.0);
+        return;
+    }
+    ls_current_step_finite(c, i_d, i_q, i_d_ref, i_q_ref, omega, v_max, v_d, v_q);
+}
 
 /* ------------------------------------------------------------------------------- position */
 typedef enum {
@@ -86,7 +173,33 @@ typedef struct {
 
 ls_status ls_posctrl_init(ls_posctrl *p, const ls_posctrl_cfg *cfg);
 void ls_posctrl_reset(ls_posctrl *p);
-/* x_err = x_ref - x (m), v (m/s), v_ff (m/s), a_ff (m/s^2). Returns the force reference (N). */
-LS_REAL ls_posctrl_step(ls_posctrl *p, LS_REAL x_err, LS_REAL v, LS_REAL v_ff, LS_REAL a_ff);
+/* ls_posctrl_step for finite x_err, v, v_ff and mass a_ff (and a finite v_ref - v). */
+static inline LS_REAL ls_posctrl_step_finite(ls_posctrl *p, LS_REAL x_err, LS_REAL v, LS_REAL v_ff,
+                                             LS_REAL a_ff)
+{
+    const ls_posctrl_cfg *k = &p->cfg;
+    const LS_REAL f_ff = k->mass * a_ff;
+    if (k->type == LS_POSCTRL_P) {
+        p->v_ref = ls_clamp(k->kp_x * x_err + v_ff, -k->v_max, k->v_max);
+        return ls_pi_step_finite(&p->speed, p->v_ref - v, f_ff);
+    }
+    return ls_clamp(k->kp_x * x_err + k->kd_x * (v_ff - v) + f_ff, -k->force_max, k->force_max);
+}
+
+/* x_err = x_ref - x (m), v (m/s), v_ff (m/s), a_ff (m/s^2). Returns the force reference (N); 0
+ * for non-finite inputs. */
+static inline LS_REAL ls_posctrl_step(ls_posctrl *p, LS_REAL x_err, LS_REAL v, LS_REAL v_ff, LS_REAL a_ff)
+{
+    const ls_posctrl_cfg *k = &p->cfg;
+    const LS_REAL f_ff = k->mass * a_ff;
+    if (!LS_ISFINITE4(x_err, v, v_ff, f_ff)) {
+        return LS_R(0.0);
+    }
+    if (k->type == LS_POSCTRL_P) {
+        p->v_ref = ls_clamp(k->kp_x * x_err + v_ff, -k->v_max, k->v_max);
+        return ls_pi_step(&p->speed, p->v_ref - v, f_ff); /* v_ref - v may still overflow */
+    }
+    return ls_clamp(k->kp_x * x_err + k->kd_x * (v_ff - v) + f_ff, -k->force_max, k->force_max);
+}
 
 #endif /* LINSENSE_LS_CTRL_H */

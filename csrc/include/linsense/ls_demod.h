@@ -19,6 +19,7 @@
 
 #include "linsense/ls_filter.h"
 #include "linsense/ls_lut.h"
+#include "linsense/ls_math.h"
 #include "linsense/ls_types.h"
 
 typedef enum {
@@ -54,10 +55,74 @@ void ls_demod_reset(ls_demod *d);
 void ls_demod_set_comp(ls_demod *d, bool on);
 /* Switch the position-scheduled gain on (only if cfg.gain_table was given) or off. */
 void ls_demod_set_gain_table(ls_demod *d, bool on);
+/* ls_demod_step given c_est = cos(theta_est), s_est = sin(theta_est) (the drive has them): the
+ * rotation into theta_est + psi is that of theta_est turned by the small angle psi, whose sine
+ * and cosine need no range reduction. Inline (called every PWM period). */
+static inline LS_REAL ls_demod_step_cs(ls_demod *d, LS_REAL i_a, LS_REAL i_b, LS_REAL theta_est,
+                                       LS_REAL c_est, LS_REAL s_est, LS_REAL car_c, LS_REAL car_s,
+                                       LS_REAL psi_cal)
+{
+    LS_REAL psi = psi_cal;
+    LS_REAL c, s, c_psi, s_psi, i_d, i_q, num, den, g, inv;
+    const bool product = d->cfg.method == LS_DEMOD_PRODUCT;
+    if (product) {
+        /* i_d^2 + i_q^2 = i_a^2 + i_b^2 (a rotation keeps the length): the level, and the
+         * division below, do not wait for the angle */
+        den = ls_biquad_step(&d->lp[1], i_a * i_a + i_b * i_b);
+        d->level = den;
+    }
+    if (d->use_comp) {
+        psi += ls_lut_step(d->cfg.comp, theta_est);
+    }
+#ifdef LS_REAL_DOUBLE
+    c_psi = cos(psi);
+    s_psi = sin(psi);
+#else
+    if (LS_FABS(psi) <= LS_PI / LS_R(4.0)) {
+        ls_sincos_kernel(psi, 0u, &c_psi, &s_psi);
+    } else {
+        ls_sincos(psi, &c_psi, &s_psi); /* also NaN */
+    }
+#endif
+    /* cos and sin of theta_est + psi */
+    c = c_est * c_psi - s_est * s_psi;
+    s = s_est * c_psi + c_est * s_psi;
+    i_d = c * i_a + s * i_b;
+    i_q = -s * i_a + c * i_b;
+    if (product) {
+        num = ls_biquad_step(&d->lp[0], i_d * i_q);
+    } else {
+        LS_REAL id_i = ls_biquad_step(&d->lp[0], i_d * car_c);
+        LS_REAL id_q = ls_biquad_step(&d->lp[1], i_d * car_s);
+        LS_REAL iq_i = ls_biquad_step(&d->lp[2], i_q * car_c);
+        LS_REAL iq_q = ls_biquad_step(&d->lp[3], i_q * car_s);
+        num = iq_i * id_i + iq_q * id_q;
+        den = id_i * id_i + id_q * id_q;
+        d->level = LS_R(2.0) * den;
+    }
+    d->psi = psi;
+    d->valid = LS_ISFINITE(d->level) && d->level > d->cfg.min_level && den > LS_R(1e-30);
+    if (!d->valid) {
+        d->ratio = LS_R(0.0);
+        d->err = LS_R(0.0);
+        return d->err;
+    }
+    inv = LS_R(1.0) / den; /* the demodulator's one division */
+    g = d->use_gain_table ? ls_lut_step(d->cfg.gain_table, theta_est) : d->cfg.gain;
+    d->ratio = num * inv;
+    d->err = num * (g * inv); /* = g ratio */
+    return d->err;
+}
+
 /* One step. i_a, i_b: band-passed HF currents (A); theta_est (rad); (car_c, car_s): the
  * injection carrier (used by the heterodyne); psi_cal: extra compensation angle (rad).
- * Returns err (rad), 0 while the HF level is too low. */
-LS_REAL ls_demod_step(ls_demod *d, LS_REAL i_a, LS_REAL i_b, LS_REAL theta_est, LS_REAL car_c,
-                      LS_REAL car_s, LS_REAL psi_cal);
+ * Returns err (rad), 0 while the HF level is too low. Inline (called every PWM period). */
+static inline LS_REAL ls_demod_step(ls_demod *d, LS_REAL i_a, LS_REAL i_b, LS_REAL theta_est,
+                                    LS_REAL car_c, LS_REAL car_s, LS_REAL psi_cal)
+{
+    LS_REAL c_est, s_est;
+    ls_sincos(theta_est, &c_est, &s_est);
+    return ls_demod_step_cs(d, i_a, i_b, theta_est, c_est, s_est, car_c, car_s, psi_cal);
+}
 
 #endif /* LINSENSE_LS_DEMOD_H */

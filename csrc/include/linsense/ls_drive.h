@@ -144,6 +144,9 @@ typedef struct {
     LS_REAL f_ref;       /* N, force reference of the last step */
     LS_REAL ts;          /* s */
     LS_REAL kx;          /* rad/m, 2 pi / tau */
+    LS_REAL inv_kx;      /* m/rad, tau / (2 pi) */
+    LS_REAL inv_kf;      /* A/N, 1 / force_constant */
+    LS_REAL delay_ts;    /* s, delay_comp ts: angle advance per rad/s of speed */
     LS_REAL v_lim;       /* -, fraction of V_dc/sqrt(3) left to the fundamental */
     ls_cal_phase cal_phase;
     uint32_t cal_index;

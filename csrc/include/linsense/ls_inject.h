@@ -31,7 +31,25 @@ void ls_inject_reset(ls_inject *inj);
 /* Request on (ramp up to cfg.amplitude) or off (ramp down to 0). */
 void ls_inject_enable(ls_inject *inj, bool on);
 /* HF voltage for this step (V), then advance the carrier by one step. The
- * carrier phasor (c, s) in the state then belongs to the next sample. */
-LS_REAL ls_inject_step(ls_inject *inj);
+ * carrier phasor (c, s) in the state then belongs to the next sample. Inline (every PWM period). */
+static inline LS_REAL ls_inject_step(ls_inject *inj)
+{
+    LS_REAL v, c, s, g;
+    LS_REAL target = inj->on ? inj->cfg.amplitude : LS_R(0.0);
+    if (inj->amp < target) {
+        inj->amp = inj->amp + inj->amp_step < target ? inj->amp + inj->amp_step : target;
+    } else if (inj->amp > target) {
+        inj->amp = inj->amp - inj->amp_step > target ? inj->amp - inj->amp_step : target;
+    }
+    v = inj->amp * inj->c;
+    /* rotate the carrier by one step and pull it back onto the unit circle (first-order
+     * Newton step for 1/|z|, exact to O(err^2) per step, so the error never accumulates) */
+    c = inj->c * inj->dc - inj->s * inj->ds;
+    s = inj->s * inj->dc + inj->c * inj->ds;
+    g = LS_R(1.5) - LS_R(0.5) * (c * c + s * s);
+    inj->c = c * g;
+    inj->s = s * g;
+    return v;
+}
 
 #endif /* LINSENSE_LS_INJECT_H */

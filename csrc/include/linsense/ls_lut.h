@@ -29,7 +29,36 @@ ls_status ls_lut_init(ls_lut *lut, const ls_lut_cfg *cfg);
 /* A LUT holds no dynamic state; reset is provided for uniformity and does nothing. */
 void ls_lut_reset(ls_lut *lut);
 
-/* Interpolated value at electrical angle theta (rad, any value). A non-finite theta gives 0. */
-LS_REAL ls_lut_step(const ls_lut *lut, LS_REAL theta);
+/* Interpolated value at electrical angle theta (rad, any value). A non-finite theta gives 0.
+ * Inline (called every PWM period); an angle in [0, 2 pi), as ls_pos keeps it, needs no wrap. */
+static inline LS_REAL ls_lut_step(const ls_lut *lut, LS_REAL theta)
+{
+    LS_REAL u;
+    LS_REAL f;
+    LS_REAL t0;
+    LS_REAL t1;
+    uint32_t k;
+    if (theta >= LS_R(0.0) && theta < LS_TWO_PI) {
+        u = theta * lut->points_per_rad; /* in [0, n] */
+    } else if (!LS_ISFINITE(theta)) {
+        return LS_R(0.0);
+    } else {
+        const LS_REAL n = (LS_REAL)lut->len;
+        u = theta * lut->points_per_rad;
+        u -= n * LS_FLOOR(u / n); /* wrap into [0, n] */
+    }
+    k = (uint32_t)u;
+    f = u - (LS_REAL)k;
+    if (k + 1u < lut->len) {
+        t0 = (LS_REAL)lut->table[k];
+        t1 = (LS_REAL)lut->table[k + 1u];
+    } else if (k < lut->len) { /* the last interval wraps to the first point */
+        t0 = (LS_REAL)lut->table[k];
+        t1 = (LS_REAL)lut->table[0];
+    } else { /* u rounded up to n */
+        return (LS_REAL)lut->table[0];
+    }
+    return t0 + f * (t1 - t0); /* = (1 - f) t0 + f t1 */
+}
 
 #endif /* LINSENSE_LS_LUT_H */

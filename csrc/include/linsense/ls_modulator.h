@@ -29,14 +29,91 @@ typedef struct {
     LS_REAL d_dead;    /* -, duty equivalent of the dead time */
     LS_REAL i_prev[3]; /* A, phase currents of the previous step (for the extrapolation) */
     bool have_prev;    /* i_prev is valid */
+    LS_REAL inv_band;  /* 1/A, 1 / i_band */
 } ls_mod;
 
 ls_status ls_mod_init(ls_mod *m, const ls_mod_cfg *cfg);
 void ls_mod_reset(ls_mod *m);
+/* The step is inline (called every PWM period). ls_mod_step_finite is ls_mod_step for finite
+ * v_a, v_b, v_dc and i_abc (the drive checks them), without those guards; ls_mod_step_impl is
+ * the implementation of both. */
+static inline bool ls_mod_step_impl(ls_mod *m, LS_REAL v_a, LS_REAL v_b, LS_REAL v_dc,
+                                    const LS_REAL i_abc[3], LS_REAL duty[3], bool check)
+{
+    LS_REAL v[3], dt[3], vmax, vmin, off, inv;
+    const bool dtc = m->cfg.dtc && i_abc != NULL;
+    bool clipped = false;
+    int k;
+    if (check && (!LS_ISFINITE3(v_a, v_b, v_dc) || !(v_dc > LS_R(0.0)))) {
+        duty[0] = duty[1] = duty[2] = LS_R(0.5);
+        return true;
+    }
+    if (!check && !(v_dc > LS_R(0.0))) {
+        duty[0] = duty[1] = duty[2] = LS_R(0.5);
+        return true;
+    }
+    /* dead-time compensation: the duty correction of each leg from its predicted current
+     * (computed first: it does not depend on the voltage) */
+    dt[0] = dt[1] = dt[2] = LS_R(0.0);
+    if (dtc) {
+        if (m->have_prev && (!check || LS_ISFINITE3(i_abc[0], i_abc[1], i_abc[2]))) {
+            for (k = 0; k < 3; ++k) {
+                const LS_REAL i_pred = i_abc[k] + m->cfg.dtc_lead * (i_abc[k] - m->i_prev[k]);
+                const LS_REAL x = i_pred * m->inv_band;
+                /* = ls_clamp(x, -1, 1), in a form compilers select without branching (the HF
+                 * current crosses zero twice per injection period: a branch on it mispredicts) */
+                const LS_REAL x1 = x > LS_R(1.0) ? LS_R(1.0) : x;
+                m->i_prev[k] = i_abc[k];
+                dt[k] = m->d_dead * (x < LS_R(-1.0) ? LS_R(-1.0) : x1);
+            }
+        } else {
+            for (k = 0; k < 3; ++k) {
+                if (LS_ISFINITE(i_abc[k])) { /* none for a non-finite current */
+                    LS_REAL i_pred = i_abc[k];
+                    if (m->have_prev) {
+                        i_pred += m->cfg.dtc_lead * (i_abc[k] - m->i_prev[k]);
+                    }
+                    m->i_prev[k] = i_abc[k];
+                    dt[k] = m->d_dead * ls_clamp(i_pred * m->inv_band, LS_R(-1.0), LS_R(1.0));
+                }
+            }
+        }
+    }
+    m->have_prev = dtc;
+    v[0] = v_a;
+    v[1] = LS_R(-0.5) * v_a + LS_R(0.5) * LS_SQRT3 * v_b;
+    v[2] = LS_R(-0.5) * v_a - LS_R(0.5) * LS_SQRT3 * v_b;
+    vmax = v[0] > v[1] ? v[0] : v[1];
+    vmax = vmax > v[2] ? vmax : v[2];
+    vmin = v[0] < v[1] ? v[0] : v[1];
+    vmin = vmin < v[2] ? vmin : v[2];
+    off = LS_R(-0.5) * (vmax + vmin);
+    inv = LS_R(1.0) / v_dc;
+    for (k = 0; k < 3; ++k) {
+        LS_REAL d = LS_R(0.5) + (v[k] + off) * inv;
+        if (dtc) {
+            d += dt[k]; /* (+ 0, exact, for a non-finite current) */
+        }
+        clipped = clipped || d > LS_R(1.0) || d < LS_R(0.0);
+        duty[k] = ls_clamp(d, LS_R(0.0), LS_R(1.0));
+    }
+    return clipped;
+}
+
 /* v_a, v_b: alpha-beta voltage reference (V); v_dc (V); i_abc: phase currents (A) for the
  * dead-time compensation (may be NULL when off). Writes duty[3] in [0, 1]. Returns true when
  * the reference was beyond the linear range (over-modulation clipped). */
-bool ls_mod_step(ls_mod *m, LS_REAL v_a, LS_REAL v_b, LS_REAL v_dc, const LS_REAL i_abc[3],
-                 LS_REAL duty[3]);
+static inline bool ls_mod_step(ls_mod *m, LS_REAL v_a, LS_REAL v_b, LS_REAL v_dc, const LS_REAL i_abc[3],
+                               LS_REAL duty[3])
+{
+    return ls_mod_step_impl(m, v_a, v_b, v_dc, i_abc, duty, true);
+}
+
+/* ls_mod_step for finite v_a, v_b, v_dc and i_abc. */
+static inline bool ls_mod_step_finite(ls_mod *m, LS_REAL v_a, LS_REAL v_b, LS_REAL v_dc,
+                                      const LS_REAL i_abc[3], LS_REAL duty[3])
+{
+    return ls_mod_step_impl(m, v_a, v_b, v_dc, i_abc, duty, false);
+}
 
 #endif /* LINSENSE_LS_MODULATOR_H */

@@ -41,6 +41,11 @@ typedef struct {
     LS_REAL f_load;      /* N, estimated load force (MECH) */
     LS_REAL ts;          /* s, sampling period */
     LS_REAL kx;          /* rad/m, 2 pi / tau */
+    LS_REAL inv_kx;      /* m/rad, tau / (2 pi) */
+    LS_REAL k1_ts;       /* -, k1 ts */
+    LS_REAL k2_ts;       /* 1/s, k2 ts */
+    LS_REAL acc_ts;      /* rad/(s N), kx ts / mass (MECH; 0 for PLL) */
+    LS_REAL k3_ts;       /* N/rad, k3 (mass / kx) ts (MECH; 0 for PLL) */
 } ls_observer;
 
 /* Fill k1, k2, k3 for critically damped poles at -2 pi f_bw (f_bw in Hz). */
@@ -48,12 +53,35 @@ void ls_observer_gains(ls_observer_cfg *cfg, LS_REAL f_bw);
 ls_status ls_observer_init(ls_observer *o, const ls_observer_cfg *cfg);
 /* Zero speed and load force; position set to p. */
 void ls_observer_reset(ls_observer *o, ls_pos p);
-/* One step with error eps (rad) and motor force f_motor (N, from the current reference). */
-void ls_observer_step(ls_observer *o, LS_REAL eps, LS_REAL f_motor);
+/* One step with error eps (rad) and motor force f_motor (N, from the current reference); a
+ * non-finite eps or f_motor counts as 0. Inline (called every PWM period). */
+static inline void ls_observer_step(ls_observer *o, LS_REAL eps, LS_REAL f_motor)
+{
+    const ls_observer_cfg *c = &o->cfg;
+    LS_REAL dtheta;
+    if (!LS_ISFINITE2(eps, f_motor)) {
+        if (!LS_ISFINITE(eps)) {
+            eps = LS_R(0.0);
+        }
+        if (!LS_ISFINITE(f_motor)) {
+            f_motor = LS_R(0.0);
+        }
+    }
+    dtheta = o->omega * o->ts + o->k1_ts * eps;
+    if (c->type == LS_OBS_MECH) {
+        o->omega += o->acc_ts * (f_motor - o->f_load) + o->k2_ts * eps;
+        o->f_load = ls_clamp(o->f_load - o->k3_ts * eps, -c->force_max, c->force_max);
+    } else {
+        o->omega += o->k2_ts * eps;
+    }
+    o->omega = ls_clamp(o->omega, -c->omega_max, c->omega_max);
+    o->pos = ls_pos_add(o->pos, dtheta);
+}
+
 /* Estimated speed in m/s. */
 static inline LS_REAL ls_observer_speed(const ls_observer *o)
 {
-    return o->omega / o->kx;
+    return o->omega * o->inv_kx;
 }
 
 #endif /* LINSENSE_LS_OBSERVER_H */

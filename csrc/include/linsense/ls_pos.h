@@ -18,11 +18,11 @@ typedef struct {
 static inline ls_pos ls_pos_norm(ls_pos p)
 {
     LS_REAL k;
-    if (!LS_ISFINITE(p.theta)) {
-        p.theta = LS_R(0.0);
+    if (p.theta >= LS_R(0.0) && p.theta < LS_TWO_PI) { /* the usual case (false for NaN, Inf) */
         return p;
     }
-    if (p.theta >= LS_R(0.0) && p.theta < LS_TWO_PI) {
+    if (!LS_ISFINITE(p.theta)) {
+        p.theta = LS_R(0.0);
         return p;
     }
     k = LS_FLOOR(p.theta / LS_TWO_PI);

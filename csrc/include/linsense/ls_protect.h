@@ -38,11 +38,58 @@ typedef struct {
 ls_status ls_protect_init(ls_protect *p, const ls_protect_cfg *cfg);
 /* Clear the latched faults. */
 void ls_protect_reset(ls_protect *p);
+/* The checks are inline (called every PWM period). */
 /* Latch extra fault bits (e.g. LS_FAULT_NONFINITE found elsewhere). */
-void ls_protect_trip(ls_protect *p, uint32_t bits);
+static inline void ls_protect_trip(ls_protect *p, uint32_t bits)
+{
+    p->fault |= bits;
+}
+
 /* Electrical checks (currents and bus); returns the latched faults. */
-uint32_t ls_protect_check_power(ls_protect *p, const LS_REAL i_abc[3], LS_REAL v_dc);
+static inline uint32_t ls_protect_check_power(ls_protect *p, const LS_REAL i_abc[3], LS_REAL v_dc)
+{
+    const LS_REAL i_max = p->cfg.i_max;
+    int k;
+    /* fast path: everything in range (false for NaN and Inf, which take the full checks) */
+    if (LS_FABS(i_abc[0]) <= i_max && LS_FABS(i_abc[1]) <= i_max && LS_FABS(i_abc[2]) <= i_max &&
+        v_dc >= p->cfg.v_dc_min && v_dc <= p->cfg.v_dc_max) {
+        return p->fault;
+    }
+    for (k = 0; k < 3; ++k) {
+        if (!LS_ISFINITE(i_abc[k])) {
+            p->fault |= LS_FAULT_NONFINITE;
+        } else if (LS_FABS(i_abc[k]) > i_max) {
+            p->fault |= LS_FAULT_OVERCURRENT;
+        }
+    }
+    if (!LS_ISFINITE(v_dc)) {
+        p->fault |= LS_FAULT_NONFINITE;
+    } else if (v_dc < p->cfg.v_dc_min) {
+        p->fault |= LS_FAULT_UNDERVOLTAGE;
+    } else if (v_dc > p->cfg.v_dc_max) {
+        p->fault |= LS_FAULT_OVERVOLTAGE;
+    }
+    return p->fault;
+}
+
 /* Observer checks: err (rad) and its validity, estimated electrical speed (rad/s). */
-uint32_t ls_protect_check_observer(ls_protect *p, LS_REAL err, bool valid, LS_REAL omega);
+static inline uint32_t ls_protect_check_observer(ls_protect *p, LS_REAL err, bool valid, LS_REAL omega)
+{
+    if (!LS_ISFINITE2(err, omega)) {
+        p->fault |= LS_FAULT_NONFINITE;
+        return p->fault;
+    }
+    if (!valid || LS_FABS(err) > p->cfg.err_max) {
+        if (++p->err_count > p->err_limit) {
+            p->fault |= LS_FAULT_OBSERVER;
+        }
+    } else {
+        p->err_count = 0u;
+    }
+    if (LS_FABS(omega) > p->cfg.omega_max) {
+        p->fault |= LS_FAULT_OVERSPEED;
+    }
+    return p->fault;
+}
 
 #endif /* LINSENSE_LS_PROTECT_H */

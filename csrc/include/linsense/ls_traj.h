@@ -40,7 +40,43 @@ void ls_traj_reset(ls_traj *t, ls_pos p);
 void ls_traj_move(ls_traj *t, ls_pos target);
 /* Step the reference to target (no profile). */
 void ls_traj_jump(ls_traj *t, ls_pos target);
-/* Reference for this step: position, speed (m/s), acceleration (m/s^2); then advance. */
-void ls_traj_step(ls_traj *t, ls_pos *x_ref, LS_REAL *v_ref, LS_REAL *a_ref);
+/* Reference for this step: position, speed (m/s), acceleration (m/s^2); then advance.
+ * Inline (every PWM period). */
+static inline void ls_traj_step(ls_traj *t, ls_pos *x_ref, LS_REAL *v_ref, LS_REAL *a_ref)
+{
+    LS_REAL tt, s, v, a;
+    const LS_REAL am = t->cfg.a_max;
+    if (!t->active) {
+        *x_ref = t->target;
+        *v_ref = LS_R(0.0);
+        *a_ref = LS_R(0.0);
+        return;
+    }
+    tt = (LS_REAL)t->k * t->ts;
+    if (tt < t->t_acc) {
+        s = LS_R(0.5) * am * tt * tt;
+        v = am * tt;
+        a = am;
+    } else if (tt < t->t_total - t->t_acc) {
+        s = LS_R(0.5) * am * t->t_acc * t->t_acc + t->v_peak * (tt - t->t_acc);
+        v = t->v_peak;
+        a = LS_R(0.0);
+    } else if (tt < t->t_total) {
+        LS_REAL r = t->t_total - tt;
+        s = t->dist - LS_R(0.5) * am * r * r;
+        v = am * r;
+        a = -am;
+    } else {
+        t->active = false;
+        *x_ref = t->target;
+        *v_ref = LS_R(0.0);
+        *a_ref = LS_R(0.0);
+        return;
+    }
+    *x_ref = ls_pos_add(t->start, t->sign * s * t->kx);
+    *v_ref = t->sign * v;
+    *a_ref = t->sign * a;
+    t->k++;
+}
 
 #endif /* LINSENSE_LS_TRAJ_H */

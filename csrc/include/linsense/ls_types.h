@@ -39,6 +39,11 @@ typedef float LS_REAL;
 
 /* True for a finite number (false for NaN and +-Inf), without isfinite's double promotion. */
 #define LS_ISFINITE(x) (((x) - (x)) == ((x) - (x)))
+/* True when both are finite: x - x is exactly 0 for every finite x and NaN otherwise, so one
+ * comparison checks several values (exactly LS_ISFINITE(a) && LS_ISFINITE(b)). */
+#define LS_ISFINITE2(a, b) ((((a) - (a)) + ((b) - (b))) == LS_R(0.0))
+#define LS_ISFINITE3(a, b, c) ((((a) - (a)) + ((b) - (b)) + ((c) - (c))) == LS_R(0.0))
+#define LS_ISFINITE4(a, b, c, d) ((((a) - (a)) + ((b) - (b)) + ((c) - (c)) + ((d) - (d))) == LS_R(0.0))
 
 #define LS_PI LS_R(3.14159265358979323846)
 #define LS_TWO_PI LS_R(6.28318530717958647692)
