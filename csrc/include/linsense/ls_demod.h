@@ -72,7 +72,8 @@ static inline LS_REAL ls_demod_step_cs(ls_demod *d, LS_REAL i_a, LS_REAL i_b, LS
         d->level = den;
     }
     if (d->use_comp) {
-        psi += ls_lut_step(d->cfg.comp, theta_est);
+        const LS_REAL lut = ls_lut_step(d->cfg.comp, theta_est);
+        psi = psi_cal == LS_R(0.0) ? lut : psi_cal + lut; /* (no addition on the usual path) */
     }
 #ifdef LS_REAL_DOUBLE
     c_psi = cos(psi);
