@@ -190,7 +190,6 @@ void ls_drive_reset(ls_drive *d, ls_pos p)
     d->cal_timer = 0u;
     d->cal_hold = 0u;
     d->psi_cal = LS_R(0.0);
-    d->est_theta = LS_R(-1.0); /* no angle in [0, 2 pi) */
 }
 
 ls_status ls_drive_set_mode(ls_drive *d, ls_mode mode)
@@ -426,21 +425,12 @@ void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
     }
 
     /* HF demodulation and observer, on the axis the injection used */
-    if (d->obs.pos.theta != d->est_theta) { /* set or reset since the last step */
-        d->est_theta = d->obs.pos.theta;
-        ls_sincos_full(d->est_theta, &d->est_c, &d->est_s);
-    }
-    c_est = d->est_c;
-    s_est = d->est_s;
+    ls_sincos(d->obs.pos.theta, &c_est, &s_est);
     if (hf_on) {
         LS_REAL err = ls_demod_step_cs(&d->demod, ihf_a, ihf_b, d->obs.pos.theta, c_est, s_est, d->inj.c,
                                        d->inj.s, calibrating ? d->psi_cal : LS_R(0.0));
         if (sensorless) {
             ls_observer_step(&d->obs, err, d->f_ref);
-            /* the next step's cos and sin of the new estimate, started now (they do not wait
-             * for the rest of this step) */
-            d->est_theta = d->obs.pos.theta;
-            ls_sincos(d->est_theta, &d->est_c, &d->est_s);
             ls_protect_check_observer(&d->prot, err, d->demod.valid, d->obs.omega);
         }
     }
@@ -493,7 +483,7 @@ void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
     (void)ls_mod_step_finite(&d->mod, v_a, v_b, meas->v_dc, meas->i_abc, duty);
 
     /* nothing non-finite ever leaves a step */
-    if (!LS_ISFINITE4(d->obs.pos.theta, pos_fb.theta, v_a + v_b, duty[0] + duty[1] + duty[2])) {
+    if (!LS_ISFINITE4(duty[0] + duty[1] + duty[2], d->obs.pos.theta, pos_fb.theta, v_a + v_b)) {
         ls_protect_trip(&d->prot, LS_FAULT_NONFINITE);
         disable(d, cmd, d->prot.fault);
         return;

@@ -153,10 +153,6 @@ typedef struct {
     uint32_t cal_timer;  /* steps in the present phase */
     uint32_t cal_hold;   /* steps with the error below tol */
     LS_REAL psi_cal;     /* rad */
-    LS_REAL est_theta;   /* rad, angle of the HF estimate whose cos and sin are est_c, est_s
-                            (-1: none), computed right after the observer for the next step */
-    LS_REAL est_c;       /* -, cos(est_theta) */
-    LS_REAL est_s;       /* -, sin(est_theta) */
 } ls_drive;
 
 /* Fill cfg with the defaults documented in docs/firmware.md: 16 kHz, 12 V / 1 kHz injection and
