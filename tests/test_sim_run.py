@@ -149,12 +149,27 @@ def test_parquet_refused_without_pyarrow(run_cli, tmp_path):
 
 def test_paper_fig11_fig12_qualitatively():
     """The shipped paper scenarios (under-damped position loop): 3 mm is stable with and without
-    the LUT, 6 mm is stable with the LUT and keeps oscillating without it (paper Figs. 11, 12)."""
-    expect = {"step3_lut": True, "step3_nolut": True, "step6_lut": True, "step6_nolut": False}
-    got = {n: linsense.simulate(EXAMPLES / f"{n}.toml").metrics for n in expect}
-    for n, stable in expect.items():
-        assert got[n]["stable"] is stable, (n, got[n]["unstable_reason"])
+    the LUT; 6 mm without the LUT keeps a large oscillation, with the LUT only a small one that
+    dies out (paper Figs. 11, 12).
+
+    With the LUT the 6 mm step first oscillates by about 0.3-0.4 mm (5-7 deg estimation error),
+    then, after 1 to 5 s, collapses to rest; when depends on rounding (a 1 nm change of the start,
+    or FMA contraction, moves it), so whether it has settled within the 2 s run is not asserted,
+    only the size of what is left at the end, against 1.3-1.9 mm without the LUT (12 perturbed
+    starts each: at most 0.36 mm with, at least 1.44 mm without)."""
+    runs = {n: linsense.simulate(EXAMPLES / f"{n}.toml") for n in
+            ("step3_lut", "step3_nolut", "step6_lut", "step6_nolut")}
+    got = {n: r.metrics for n, r in runs.items()}
+    for n in runs:
         assert got[n]["fault"] == "none"
+    for n in ("step3_lut", "step3_nolut"):
+        assert got[n]["stable"] is True, (n, got[n]["unstable_reason"])
+    assert got["step6_nolut"]["stable"] is False
+
+    def end_band_mm(r):
+        return float(np.ptp(r.x[r.t >= r.t[-1] - 0.1])) * 1e3
+
+    assert end_band_mm(runs["step6_lut"]) < 0.6 < 1.0 < end_band_mm(runs["step6_nolut"])
     # with the LUT the estimation error stays small; without it, it is the uncompensated bias
     assert got["step6_lut"]["max_abs_err_deg"] < 10.0
     assert got["step6_nolut"]["max_abs_err_deg"] > 18.0
