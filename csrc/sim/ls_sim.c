@@ -291,18 +291,14 @@ SIM_HOT void ab_to_abc(const double i[2], double abc[3])
  * when the current flows out (i > 0) and the turn-off gains t_dead when it flows in (i < 0), so the
  * duty error is exactly -(sign i(t_on) + sign i(t_off))/2 * t_dead/T, with the currents at the two
  * edges predicted linearly from the period start (the switching model resolves them exactly). */
-/* sign of x (0 for 0) without a data-dependent branch: the HF current changes sign all the time,
- * while an exactly zero current (only at rest) is a predictable exception */
-SIM_HOT double sign_of(double x)
-{
-    return x != 0.0 ? copysign(1.0, x) : 0.0;
-}
-
 /* Duty error of one leg over a period in the average model, -(dd/2) (sign i_on + sign i_off),
  * zero for a leg that does not switch (half_dd = 0), clamped so the duty stays in [0, 1]. */
-SIM_HOT double leg_error(double d, double half_dd, double i_on, double i_off)
+SIM_HOT double leg_error(double d, double half_dd, double i_mid, double w)
 {
-    const double e = -half_dd * (sign_of(i_on) + sign_of(i_off)), dn = d + e;
+    /* i_on, i_off = i_mid -+ w: the two signs add to 2 sign(i_mid), or cancel when the current
+     * crosses zero between the edges (an edge current of exactly zero, a convention, counts as
+     * a crossing) */
+    const double e = fabs(i_mid) > fabs(w) ? -copysign(2.0 * half_dd, i_mid) : 0.0, dn = d + e;
     if (dn < 0.0 || dn > 1.0) { /* within the dead time of a rail: rare */
         return (dn < 0.0 ? 0.0 : 1.0) - d;
     }
@@ -334,21 +330,19 @@ SIM_HOT void period_average(const ls_sim_cfg *c, const plant_coef *q, const froz
         const double ra0 = m0, ra1 = m1, rac = b0;
         const double rb0 = -0.5 * m0 + sq * m2, rb1 = -0.5 * m1 + sq * m3, rbc = -0.5 * b0 + sq * b1;
         const double rc0 = -0.5 * m0 - sq * m2, rc1 = -0.5 * m1 - sq * m3, rcc = -0.5 * b0 - sq * b1;
-        /* turn-on and turn-off instants (1 -+ d) h/2 */
-        const double hh = 0.5 * h, ta = hh - hh * duty[0], tb = hh - hh * duty[1], tc = hh - hh * duty[2];
-        const double ua = hh + hh * duty[0], ub = hh + hh * duty[1], uc = hh + hh * duty[2];
+        /* the edges of leg j are at (1 -+ d_j) h/2 */
+        const double hh = 0.5 * h;
         const double g00 = vdc * (pp.gam[0] * f->linv[0] + pp.gam[1] * f->linv[2]);
         const double g01 = vdc * (pp.gam[0] * f->linv[1] + pp.gam[1] * f->linv[3]);
         const double g10 = vdc * (pp.gam[2] * f->linv[0] + pp.gam[3] * f->linv[2]);
         const double g11 = vdc * (pp.gam[2] * f->linv[1] + pp.gam[3] * f->linv[3]);
-        const double ea = leg_error(duty[0], half_dead(duty[0], dd), (1.0 + ta * ra0) * i0 + ta * ra1 * i1 + ta * rac,
-                                    (1.0 + ua * ra0) * i0 + ua * ra1 * i1 + ua * rac);
-        const double eb = leg_error(duty[1], half_dead(duty[1], dd),
-                                    (-0.5 + tb * rb0) * i0 + (sq + tb * rb1) * i1 + tb * rbc,
-                                    (-0.5 + ub * rb0) * i0 + (sq + ub * rb1) * i1 + ub * rbc);
-        const double ec = leg_error(duty[2], half_dead(duty[2], dd),
-                                    (-0.5 + tc * rc0) * i0 + (-sq + tc * rc1) * i1 + tc * rcc,
-                                    (-0.5 + uc * rc0) * i0 + (-sq + uc * rc1) * i1 + uc * rcc);
+        /* slope of each phase current, its value mid-way between the leg's edges, half their
+         * distance times the slope */
+        const double sa = ra0 * i0 + ra1 * i1 + rac, sb = rb0 * i0 + rb1 * i1 + rbc, sc = rc0 * i0 + rc1 * i1 + rcc;
+        const double ma = i0 + hh * sa, mb = -0.5 * i0 + sq * i1 + hh * sb, mc = -0.5 * i0 - sq * i1 + hh * sc;
+        const double ea = leg_error(duty[0], half_dead(duty[0], dd), ma, hh * duty[0] * sa);
+        const double eb = leg_error(duty[1], half_dead(duty[1], dd), mb, hh * duty[1] * sb);
+        const double ec = leg_error(duty[2], half_dead(duty[2], dd), mc, hh * duty[2] * sc);
         /* G times the Clarke column of each leg */
         const double ka0 = g00 * (2.0 / 3.0), ka1 = g10 * (2.0 / 3.0);
         const double kb0 = g01 * (1.0 / SQRT3) - g00 * (1.0 / 3.0), kb1 = g11 * (1.0 / SQRT3) - g10 * (1.0 / 3.0);
