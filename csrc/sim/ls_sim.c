@@ -291,23 +291,23 @@ SIM_HOT void ab_to_abc(const double i[2], double abc[3])
  * when the current flows out (i > 0) and the turn-off gains t_dead when it flows in (i < 0), so the
  * duty error is exactly -(sign i(t_on) + sign i(t_off))/2 * t_dead/T, with the currents at the two
  * edges predicted linearly from the period start (the switching model resolves them exactly). */
-/* Duty error of one leg over a period in the average model, -(dd/2) (sign i_on + sign i_off),
- * zero for a leg that does not switch (half_dd = 0), clamped so the duty stays in [0, 1]. */
-SIM_HOT double leg_error(double d, double half_dd, double i_mid, double w)
+/* Duty error of one leg over a period in the average model, -(dd/2) (sign i_on + sign i_off)
+ * (dd = dead time / period), zero for a leg that does not switch, clamped so the duty stays in
+ * [0, 1]. With i_on, i_off = i_mid -+ w the two signs add to 2 sign(i_mid), or cancel when the
+ * current crosses zero between the edges (an edge current of exactly zero, a convention, counts
+ * as a crossing). */
+SIM_HOT double leg_error(double d, double dd, double i_mid, double w)
 {
-    /* i_on, i_off = i_mid -+ w: the two signs add to 2 sign(i_mid), or cancel when the current
-     * crosses zero between the edges (an edge current of exactly zero, a convention, counts as
-     * a crossing) */
-    const double e = fabs(i_mid) > fabs(w) ? -copysign(2.0 * half_dd, i_mid) : 0.0, dn = d + e;
+    double e, dn;
+    if (!(d > 0.0 && d < 1.0)) {
+        return 0.0;
+    }
+    e = fabs(i_mid) > fabs(w) ? -copysign(dd, i_mid) : 0.0;
+    dn = d + e;
     if (dn < 0.0 || dn > 1.0) { /* within the dead time of a rail: rare */
         return (dn < 0.0 ? 0.0 : 1.0) - d;
     }
     return e;
-}
-
-SIM_HOT double half_dead(double d, double dd)
-{
-    return (d > 0.0 && d < 1.0) ? 0.5 * dd : 0.0;
 }
 
 SIM_HOT void period_average(const ls_sim_cfg *c, const plant_coef *q, const frozen *f, const double duty[3],
@@ -340,9 +340,9 @@ SIM_HOT void period_average(const ls_sim_cfg *c, const plant_coef *q, const froz
          * distance times the slope */
         const double sa = ra0 * i0 + ra1 * i1 + rac, sb = rb0 * i0 + rb1 * i1 + rbc, sc = rc0 * i0 + rc1 * i1 + rcc;
         const double ma = i0 + hh * sa, mb = -0.5 * i0 + sq * i1 + hh * sb, mc = -0.5 * i0 - sq * i1 + hh * sc;
-        const double ea = leg_error(duty[0], half_dead(duty[0], dd), ma, hh * duty[0] * sa);
-        const double eb = leg_error(duty[1], half_dead(duty[1], dd), mb, hh * duty[1] * sb);
-        const double ec = leg_error(duty[2], half_dead(duty[2], dd), mc, hh * duty[2] * sc);
+        const double ea = leg_error(duty[0], dd, ma, hh * duty[0] * sa);
+        const double eb = leg_error(duty[1], dd, mb, hh * duty[1] * sb);
+        const double ec = leg_error(duty[2], dd, mc, hh * duty[2] * sc);
         /* G times the Clarke column of each leg */
         const double ka0 = g00 * (2.0 / 3.0), ka1 = g10 * (2.0 / 3.0);
         const double kb0 = g01 * (1.0 / SQRT3) - g00 * (1.0 / 3.0), kb1 = g11 * (1.0 / SQRT3) - g10 * (1.0 / 3.0);
