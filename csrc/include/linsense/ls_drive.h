@@ -147,7 +147,6 @@ typedef struct {
     LS_REAL inv_kx;      /* m/rad, tau / (2 pi) */
     LS_REAL inv_kf;      /* A/N, 1 / force_constant */
     LS_REAL delay_ts;    /* s, delay_comp ts: angle advance per rad/s of speed */
-    LS_REAL v_lim;       /* -, fraction of V_dc/sqrt(3) left to the fundamental */
     ls_cal_phase cal_phase;
     uint32_t cal_index;
     uint32_t cal_timer;  /* steps in the present phase */
