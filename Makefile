@@ -17,6 +17,8 @@ CINC     := -Icsrc/include -Icsrc/tests -I$(BUILD)/gen
 CTRL_SRC := $(wildcard csrc/ctrl/*.c)
 SIM_SRC  := $(wildcard csrc/sim/*.c)
 CTESTS   := $(patsubst csrc/tests/%.c,%,$(wildcard csrc/tests/test_*.c))
+# tests of the simulator's internal (static) functions: they include csrc/sim/ls_sim.c themselves
+ITESTS   := $(patsubst csrc/tests/%.c,%,$(wildcard csrc/tests/itest_*.c))
 GEN_HDR  := $(BUILD)/gen/ls_lut_ecce2010.h $(BUILD)/gen/ls_lut_ecce2010_r.h
 # variant name : extra flags
 VARIANTS := float-san double-san float-plain
@@ -62,9 +64,15 @@ ctest: $(GEN_HDR)
 	    obj=$$dir/$$(basename $$src .c).o; \
 	    $(CC) $(CSTD) $(CLIBWARN) $$flags $(CINC) -c $$src -o $$obj; objs="$$objs $$obj"; \
 	  done; \
+	  cobjs="$$objs"; \
 	  for src in $(SIM_SRC); do \
 	    obj=$$dir/$$(basename $$src .c).o; \
 	    $(CC) $(CSTD) -Wshadow $$flags $(CINC) -c $$src -o $$obj; objs="$$objs $$obj"; \
+	  done; \
+	  for t in $(ITESTS); do \
+	    $(CC) $(CSTD) -Wshadow $$flags $(CINC) csrc/tests/$$t.c $$cobjs -lm -o $$dir/$$t; \
+	    out=$$($$dir/$$t) && rc=0 || rc=$$?; printf '%s\n' "$$out" | sed "s/^/[$$v] /"; \
+	    [ $$rc -eq 0 ] || exit $$rc; \
 	  done; \
 	  for t in $(CTESTS); do \
 	    $(CC) $(CSTD) $$flags $(CINC) csrc/tests/$$t.c $$objs -lm -o $$dir/$$t; \

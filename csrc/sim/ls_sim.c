@@ -291,27 +291,42 @@ SIM_HOT void ab_to_abc(const double i[2], double abc[3])
  * when the current flows out (i > 0) and the turn-off gains t_dead when it flows in (i < 0), so the
  * duty error is exactly -(sign i(t_on) + sign i(t_off))/2 * t_dead/T, with the currents at the two
  * edges predicted linearly from the period start (the switching model resolves them exactly). */
+/* What the dead time carries from one period into the next: a turn-off delayed past the period
+ * end (only with a duty within the dead time of 1 and the current flowing in) keeps the pole high
+ * into the next period. The switching model carries the pending edge, the average model the
+ * excess duty. Nothing is carried into a period whose duty is 1 (the pole stays high anyway). */
+typedef struct {
+    double t[3];      /* s, switching: time into the next period of leg j's pending edge; < 0: none */
+    int on[3];        /* -, switching: pole state that edge sets (1 high, 0 low) */
+    double excess[3]; /* -, average: duty beyond 1 carried into the next period */
+} dead_carry;
+
+static const dead_carry no_carry = {{-1.0, -1.0, -1.0}, {0, 0, 0}, {0.0, 0.0, 0.0}};
+
 /* Duty error of one leg over a period in the average model, -(dd/2) (sign i_on + sign i_off)
- * (dd = dead time / period), zero for a leg that does not switch, clamped so the duty stays in
- * [0, 1]. With i_on, i_off = i_mid -+ w the two signs add to 2 sign(i_mid), or cancel when the
- * current crosses zero between the edges (an edge current of exactly zero, a convention, counts
- * as a crossing). */
-SIM_HOT double leg_error(double d, double dd, double i_mid, double w)
+ * (dd = dead time / period), zero for a leg that does not switch, plus what the previous period
+ * carried in, clamped so the duty stays in [0, 1] (an excess beyond 1 is carried on). With i_on,
+ * i_off = i_mid -+ w the two signs add to 2 sign(i_mid), or cancel when the current crosses zero
+ * between the edges (an edge current of exactly zero, a convention, counts as a crossing). */
+SIM_HOT double leg_error(double d, double dd, double i_mid, double w, double *excess)
 {
-    double e, dn;
-    if (!(d > 0.0 && d < 1.0)) {
-        return 0.0;
+    double e = d < 1.0 ? *excess : 0.0, dn;
+    *excess = 0.0;
+    if (d > 0.0 && d < 1.0) {
+        e += fabs(i_mid) > fabs(w) ? -copysign(dd, i_mid) : 0.0;
     }
-    e = fabs(i_mid) > fabs(w) ? -copysign(dd, i_mid) : 0.0;
     dn = d + e;
     if (dn < 0.0 || dn > 1.0) { /* within the dead time of a rail: rare */
+        if (dn > 1.0) {
+            *excess = dn - 1.0;
+        }
         return (dn < 0.0 ? 0.0 : 1.0) - d;
     }
     return e;
 }
 
 SIM_HOT void period_average(const ls_sim_cfg *c, const plant_coef *q, const frozen *f, const double duty[3],
-                           double h, double i[2])
+                           double h, double i[2], dead_carry *carry)
 {
     const double dd = q->d_dead, vdc = c->v_dc, i0 = i[0], i1 = i[1];
     double p[3] = {vdc * duty[0], vdc * duty[1], vdc * duty[2]}, v_ab[2], b0, b1;
@@ -340,9 +355,9 @@ SIM_HOT void period_average(const ls_sim_cfg *c, const plant_coef *q, const froz
          * distance times the slope */
         const double sa = ra0 * i0 + ra1 * i1 + rac, sb = rb0 * i0 + rb1 * i1 + rbc, sc = rc0 * i0 + rc1 * i1 + rcc;
         const double ma = i0 + hh * sa, mb = -0.5 * i0 + sq * i1 + hh * sb, mc = -0.5 * i0 - sq * i1 + hh * sc;
-        const double ea = leg_error(duty[0], dd, ma, hh * duty[0] * sa);
-        const double eb = leg_error(duty[1], dd, mb, hh * duty[1] * sb);
-        const double ec = leg_error(duty[2], dd, mc, hh * duty[2] * sc);
+        const double ea = leg_error(duty[0], dd, ma, hh * duty[0] * sa, &carry->excess[0]);
+        const double eb = leg_error(duty[1], dd, mb, hh * duty[1] * sb, &carry->excess[1]);
+        const double ec = leg_error(duty[2], dd, mc, hh * duty[2] * sc, &carry->excess[2]);
         /* G times the Clarke column of each leg */
         const double ka0 = g00 * (2.0 / 3.0), ka1 = g10 * (2.0 / 3.0);
         const double kb0 = g01 * (1.0 / SQRT3) - g00 * (1.0 / 3.0), kb1 = g11 * (1.0 / SQRT3) - g10 * (1.0 / 3.0);
@@ -356,8 +371,7 @@ SIM_HOT void period_average(const ls_sim_cfg *c, const plant_coef *q, const froz
  * diode picked by the current sign at the command instant. Returns the time-weighted force
  * integral over the period through *f_int (trapezoid per segment). */
 static void period_switching(const ls_sim_cfg *c, const plant_coef *q, const frozen *f, const plant_maps *pm,
-                             const double duty[3],
-                             double h, double i[2], double *f_int)
+                             const double duty[3], double h, double i[2], double *f_int, dead_carry *carry)
 {
     double t = 0.0, p[3], cmd_t[6], edge_t[6], v_ab[2], iabc[3], f0, f1;
     int cmd_leg[6], cmd_on[6], edge_leg[6], edge_on[6];
@@ -370,6 +384,14 @@ static void period_switching(const ls_sim_cfg *c, const plant_coef *q, const fro
             cmd_t[n_cmd] = 0.5 * (1.0 - d) * h; cmd_leg[n_cmd] = j; cmd_on[n_cmd] = 1; n_cmd++;
             cmd_t[n_cmd] = 0.5 * (1.0 + d) * h; cmd_leg[n_cmd] = j; cmd_on[n_cmd] = 0; n_cmd++;
         }
+    }
+    /* an edge carried in from the previous period: the pole keeps its level until then */
+    for (j = 0; j < 3; ++j) {
+        if (carry->t[j] >= 0.0 && duty[j] < 1.0) {
+            p[j] = carry->on[j] ? 0.0 : 1.0;
+            edge_t[n_edge] = carry->t[j]; edge_leg[n_edge] = j; edge_on[n_edge] = carry->on[j]; n_edge++;
+        }
+        carry->t[j] = -1.0;
     }
     /* sort the (<= 6) commands by time */
     for (j = 1; j < n_cmd; ++j) {
@@ -436,6 +458,11 @@ static void period_switching(const ls_sim_cfg *c, const plant_coef *q, const fro
             edge_on[which] = edge_on[n_edge - 1];
             n_edge--;
         }
+    }
+    /* edges still pending at the period end happen in the next one */
+    for (k = 0; k < n_edge; ++k) {
+        carry->t[edge_leg[k]] = edge_t[k] - h;
+        carry->on[edge_leg[k]] = edge_on[k];
     }
 }
 
@@ -633,6 +660,7 @@ ls_status ls_sim_run(const ls_sim_cfg *c, ls_drive *drive, const ls_sim_cmd *cmd
     plant_maps pm;
     plant_coef q;
     angle_track ang = {0.0, 1.0, 0.0, 0};
+    dead_carry carry = no_carry;
     double x_lag = x, v_lag = v, v_lag2 = v; /* m, m/s: x and v one period back, v two back */
     frozen fz;
     if (c == NULL || drive == NULL || out == NULL || res == NULL || (n_cmds > 0 && cmds == NULL) || n_steps < 0) {
@@ -690,10 +718,10 @@ ls_status ls_sim_run(const ls_sim_cfg *c, ls_drive *drive, const ls_sim_cmd *cmd
         }
         if (c->fidelity == LS_SIM_SWITCHING) {
             double f_int;
-            period_switching(c, &q, &fz, &pm, u, h, i, &f_int);
+            period_switching(c, &q, &fz, &pm, u, h, i, &f_int, &carry);
             f_avg = f_int / h;
         } else {
-            period_average(c, &q, &fz, u, h, i);
+            period_average(c, &q, &fz, u, h, i, &carry);
             f_avg = 0.5 * (f_start + force_of(&q, &pm, i));
         }
         x_lag = x;

@@ -25,11 +25,14 @@
  * sampled); duties computed from sample k act during period k+1 (one-period computation delay):
  *   LS_SIM_AVERAGE:   pole voltage (d - (t_dead f_pwm / 2)(sign i_on + sign i_off)) V_dc over the
  *                     whole period, i_on/i_off the phase current predicted at the leg's turn-on
- *                     and turn-off instants from the period-start current and slope;
+ *                     and turn-off instants from the period-start current and slope (a duty
+ *                     pushed beyond 1 carries the excess into the next period);
  *   LS_SIM_SWITCHING: each period integrated segment by segment between switching instants; the
  *                     upper switch of a leg is commanded on for |t - T/2| < d T/2, turn-on edges
  *                     are delayed by the dead time, and during it the freewheeling diode chosen by
- *                     the current sign fixes the pole voltage (i > 0: low, i < 0: high).
+ *                     the current sign fixes the pole voltage (i > 0: low, i < 0: high); a new
+ *                     command cancels an edge still pending in its dead time, and an edge
+ *                     delayed past the period end happens in the next period.
  * Sensors: current gain, offset, Gaussian noise and ADC quantisation (bits over +-full scale);
  * incremental encoder (counts per electrical period). */
 #ifndef LINSENSE_LS_SIM_H
