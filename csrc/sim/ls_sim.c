@@ -299,19 +299,19 @@ typedef struct {
     double t[3];      /* s, switching: time into the next period of leg j's pending edge; < 0: none */
     int on[3];        /* -, switching: pole state that edge sets (1 high, 0 low) */
     double excess[3]; /* -, average: duty beyond 1 carried into the next period */
+    bool any_excess;  /* -, average: some excess[j] != 0 */
 } dead_carry;
 
-static const dead_carry no_carry = {{-1.0, -1.0, -1.0}, {0, 0, 0}, {0.0, 0.0, 0.0}};
+static const dead_carry no_carry = {{-1.0, -1.0, -1.0}, {0, 0, 0}, {0.0, 0.0, 0.0}, false};
 
 /* Duty error of one leg over a period in the average model, -(dd/2) (sign i_on + sign i_off)
  * (dd = dead time / period), zero for a leg that does not switch, plus what the previous period
  * carried in, clamped so the duty stays in [0, 1] (an excess beyond 1 is carried on). With i_on,
  * i_off = i_mid -+ w the two signs add to 2 sign(i_mid), or cancel when the current crosses zero
  * between the edges (an edge current of exactly zero, a convention, counts as a crossing). */
-SIM_HOT double leg_error(double d, double dd, double i_mid, double w, double *excess)
+SIM_HOT double leg_error(double d, double dd, double i_mid, double w, double e_in, double *excess, bool *any)
 {
-    double e = d < 1.0 ? *excess : 0.0, dn;
-    *excess = 0.0;
+    double e = d < 1.0 ? e_in : 0.0, dn;
     if (d > 0.0 && d < 1.0) {
         e += fabs(i_mid) > fabs(w) ? -copysign(dd, i_mid) : 0.0;
     }
@@ -319,6 +319,7 @@ SIM_HOT double leg_error(double d, double dd, double i_mid, double w, double *ex
     if (dn < 0.0 || dn > 1.0) { /* within the dead time of a rail: rare */
         if (dn > 1.0) {
             *excess = dn - 1.0;
+            *any = true;
         }
         return (dn < 0.0 ? 0.0 : 1.0) - d;
     }
@@ -355,9 +356,18 @@ SIM_HOT void period_average(const ls_sim_cfg *c, const plant_coef *q, const froz
          * distance times the slope */
         const double sa = ra0 * i0 + ra1 * i1 + rac, sb = rb0 * i0 + rb1 * i1 + rbc, sc = rc0 * i0 + rc1 * i1 + rcc;
         const double ma = i0 + hh * sa, mb = -0.5 * i0 + sq * i1 + hh * sb, mc = -0.5 * i0 - sq * i1 + hh * sc;
-        const double ea = leg_error(duty[0], dd, ma, hh * duty[0] * sa, &carry->excess[0]);
-        const double eb = leg_error(duty[1], dd, mb, hh * duty[1] * sb, &carry->excess[1]);
-        const double ec = leg_error(duty[2], dd, mc, hh * duty[2] * sc, &carry->excess[2]);
+        double in[3] = {0.0, 0.0, 0.0}, ea, eb, ec;
+        if (carry->any_excess) { /* rare: what the last period carried in */
+            int j;
+            for (j = 0; j < 3; ++j) {
+                in[j] = carry->excess[j];
+                carry->excess[j] = 0.0;
+            }
+            carry->any_excess = false;
+        }
+        ea = leg_error(duty[0], dd, ma, hh * duty[0] * sa, in[0], &carry->excess[0], &carry->any_excess);
+        eb = leg_error(duty[1], dd, mb, hh * duty[1] * sb, in[1], &carry->excess[1], &carry->any_excess);
+        ec = leg_error(duty[2], dd, mc, hh * duty[2] * sc, in[2], &carry->excess[2], &carry->any_excess);
         /* G times the Clarke column of each leg */
         const double ka0 = g00 * (2.0 / 3.0), ka1 = g10 * (2.0 / 3.0);
         const double kb0 = g01 * (1.0 / SQRT3) - g00 * (1.0 / 3.0), kb1 = g11 * (1.0 / SQRT3) - g10 * (1.0 / 3.0);
