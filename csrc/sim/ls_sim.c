@@ -19,7 +19,6 @@
 /* Per-run constants of the plant: the L_ab series rearranged order-major for the inner loop (the
  * derivative's coefficients precomputed) and reciprocals kept out of the time loop. */
 typedef struct {
-    int32_t n;                      /* -, orders 0..n-1 */
     double a[LS_SIM_MAX_ORDER][3];  /* H, cos(k theta) coefficients of L_aa, L_bb, L_ab */
     double b[LS_SIM_MAX_ORDER][3];  /* H, sin(k theta) coefficients */
     double da[LS_SIM_MAX_ORDER][3]; /* H/rad, k b: cos(k theta) coefficients of dL/dtheta */
@@ -28,7 +27,6 @@ typedef struct {
     double inv_mass;                /* 1/kg */
     double d_dead;                  /* -, dead time / PWM period */
     double lsb;                     /* A, current ADC step (0: ideal) */
-    bool sensor_effects;            /* noise or quantisation on the current sensors */
 } plant_coef;
 
 typedef struct {
@@ -41,12 +39,10 @@ typedef struct {
 static void coef_init(const ls_sim_cfg *c, plant_coef *q)
 {
     int32_t k, e;
-    q->n = c->n_order;
     q->kf = 1.5 * 2.0 * SIM_PI / c->pole_pitch;
     q->inv_mass = 1.0 / c->mass;
     q->d_dead = c->dead_time * c->f_pwm;
     q->lsb = c->adc_bits > 0 ? 2.0 * c->adc_range / (double)(1L << c->adc_bits) : 0.0;
-    q->sensor_effects = c->i_noise > 0.0 || q->lsb > 0.0;
     for (e = 0; e < 3; ++e) { /* n_order >= 1 after ls_sim_check; defined even before it */
         q->a[0][e] = 0.0;
         q->b[0][e] = 0.0;
@@ -68,7 +64,7 @@ SIM_HOT void maps_cs(const ls_sim_cfg *c, const plant_coef *q, double theta, dou
     double ck = c1, sk = s1;
     double l0 = q->a[0][0], l1 = q->a[0][1], l2 = q->a[0][2], d0 = 0.0, d1 = 0.0, d2 = 0.0;
     int32_t k, j;
-    for (k = 1; k < q->n; ++k) {
+    for (k = 1; k < c->n_order; ++k) {
         const double *a = q->a[k], *b = q->b[k], *da = q->da[k], *db = q->db[k];
         double cn = ck * c1 - sk * s1;
         l0 += a[0] * ck + b[0] * sk;
@@ -251,7 +247,7 @@ SIM_HOT void prop_make(const frozen *f, double h, period_prop *pp)
 }
 
 /* i <- Phi i + Gam b, b = L^-1 v_ab + be */
-SIM_HOT void prop_apply_b(const period_prop *pp, double b0, double b1, double i[2])
+SIM_HOT void prop_apply(const period_prop *pp, double b0, double b1, double i[2])
 {
     double i0 = pp->phi[0] * i[0] + pp->phi[1] * i[1] + pp->gam[0] * b0 + pp->gam[1] * b1;
     double i1 = pp->phi[2] * i[0] + pp->phi[3] * i[1] + pp->gam[2] * b0 + pp->gam[3] * b1;
@@ -259,17 +255,12 @@ SIM_HOT void prop_apply_b(const period_prop *pp, double b0, double b1, double i[
     i[1] = i1;
 }
 
-SIM_HOT void prop_apply(const period_prop *pp, const frozen *f, const double v_ab[2], double i[2])
-{
-    prop_apply_b(pp, f->linv[0] * v_ab[0] + f->linv[1] * v_ab[1] + f->be[0],
-                 f->linv[2] * v_ab[0] + f->linv[3] * v_ab[1] + f->be[1], i);
-}
-
 static void propagate(const frozen *f, const double v_ab[2], double h, double i[2])
 {
     period_prop pp;
     prop_make(f, h, &pp);
-    prop_apply(&pp, f, v_ab, i);
+    prop_apply(&pp, f->linv[0] * v_ab[0] + f->linv[1] * v_ab[1] + f->be[0],
+               f->linv[2] * v_ab[0] + f->linv[3] * v_ab[1] + f->be[1], i);
 }
 
 SIM_HOT void poles_to_ab(const double p[3], double v_ab[2])
@@ -286,11 +277,6 @@ SIM_HOT void ab_to_abc(const double i[2], double abc[3])
 }
 
 /* ------------------------------------------------------------------------------ inverter */
-/* Average model: one segment with the period-averaged dead-time error. Per leg, the upper switch
- * is commanded on at t_on = (1 - d)T/2 and off at t_off = (1 + d)T/2; the turn-on loses t_dead
- * when the current flows out (i > 0) and the turn-off gains t_dead when it flows in (i < 0), so the
- * duty error is exactly -(sign i(t_on) + sign i(t_off))/2 * t_dead/T, with the currents at the two
- * edges predicted linearly from the period start (the switching model resolves them exactly). */
 /* What the dead time carries from one period into the next: a turn-off delayed past the period
  * end (only with a duty within the dead time of 1 and the current flowing in) keeps the pole high
  * into the next period. The switching model carries the pending edge, the average model the
@@ -326,6 +312,11 @@ SIM_HOT double leg_error(double d, double dd, double i_mid, double w, double e_i
     return e;
 }
 
+/* Average model: one segment with the period-averaged dead-time error. Per leg, the upper switch
+ * is commanded on at t_on = (1 - d)T/2 and off at t_off = (1 + d)T/2; the turn-on loses t_dead
+ * when the current flows out (i > 0) and the turn-off gains t_dead when it flows in (i < 0), so the
+ * duty error is exactly -(sign i(t_on) + sign i(t_off))/2 * t_dead/T, with the currents at the two
+ * edges predicted linearly from the period start (the switching model resolves them exactly). */
 SIM_HOT void period_average(const ls_sim_cfg *c, const plant_coef *q, const frozen *f, const double duty[3],
                            double h, double i[2], dead_carry *carry)
 {
@@ -336,7 +327,7 @@ SIM_HOT void period_average(const ls_sim_cfg *c, const plant_coef *q, const froz
     poles_to_ab(p, v_ab);
     b0 = f->linv[0] * v_ab[0] + f->linv[1] * v_ab[1] + f->be[0];
     b1 = f->linv[2] * v_ab[0] + f->linv[3] * v_ab[1] + f->be[1];
-    prop_apply_b(&pp, b0, b1, i); /* without the dead time */
+    prop_apply(&pp, b0, b1, i); /* without the dead time */
     if (dd > 0.0) {
         /* The phase currents at the edges of leg j, i_j + t di_j/dt with di/dt = M i + b, as rows
          * times the period-start current (rows prepared off the current's dependency chain); the
@@ -502,14 +493,12 @@ SIM_HOT void measure(const ls_sim_cfg *c, const plant_coef *q, const double i_ab
     ab_to_abc(i_ab, iabc);
     for (j = 0; j < 3; ++j) {
         double y = c->i_gain[j] * iabc[j] + c->i_offset[j];
-        if (q->sensor_effects) {
-            if (c->i_noise > 0.0) {
-                y += c->i_noise * rng_gauss(rng);
-            }
-            if (q->lsb > 0.0) {
-                y = q->lsb * floor(y / q->lsb + 0.5);
-                y = y > c->adc_range ? c->adc_range : (y < -c->adc_range ? -c->adc_range : y);
-            }
+        if (c->i_noise > 0.0) {
+            y += c->i_noise * rng_gauss(rng);
+        }
+        if (q->lsb > 0.0) {
+            y = q->lsb * floor(y / q->lsb + 0.5);
+            y = y > c->adc_range ? c->adc_range : (y < -c->adc_range ? -c->adc_range : y);
         }
         m->i_abc[j] = (LS_REAL)y;
     }
