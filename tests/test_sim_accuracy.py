@@ -88,6 +88,15 @@ def _bordered(L: np.ndarray, A: np.ndarray | None = None) -> np.ndarray:
     return A
 
 
+def didt_abc(m: Motor, th: float, omega: float, i: np.ndarray, vp: np.ndarray, A: np.ndarray,
+             b: np.ndarray) -> np.ndarray:
+    """di/dt of the phase currents at angle ``th`` (rad) and electrical speed ``omega`` (rad/s)
+    for pole voltages ``vp``: the bordered system above (``A``, ``b``: 4x4 and 4 work arrays)."""
+    ind = m.inductance
+    b[:3] = vp - m.R_s * i - omega * (ind.L_abc(th, 1) @ i + pm_abc(m, th, 1))
+    return np.linalg.solve(_bordered(ind.L_abc(th), A), b)[:3]
+
+
 def reference(m: Motor, seg_t: np.ndarray, seg_v: np.ndarray, x0: float, speed: float):
     """Phase currents (n + 1, 3) and angles (n + 1) at the segment boundaries."""
     kx = 2.0 * np.pi / m.pole_pitch
@@ -100,9 +109,7 @@ def reference(m: Motor, seg_t: np.ndarray, seg_v: np.ndarray, x0: float, speed: 
     def rhs(t, i, vp):
         if speed == 0.0:
             return K_held @ (vp - m.R_s * i)
-        th = th0 + omega * t
-        b[:3] = vp - m.R_s * i - omega * (ind.L_abc(th, 1) @ i + pm_abc(m, th, 1))
-        return np.linalg.solve(_bordered(ind.L_abc(th), A), b)[:3]
+        return didt_abc(m, th0 + omega * t, omega, i, vp, A, b)
 
     t_b = np.concatenate([[0.0], np.cumsum(seg_t)])
     i = np.zeros((seg_t.size + 1, 3))
@@ -193,14 +200,11 @@ def reference_along(m: Motor, u: np.ndarray, x: np.ndarray, v: np.ndarray, i0: n
     motion: within period k the mover accelerates uniformly from ``v[k]`` to ``v[k + 1]`` from
     ``x[k]`` (the simulator's trapezoidal mechanics), so theta(t) and omega(t) are exact."""
     kx, h = 2.0 * np.pi / m.pole_pitch, 1.0 / F_PWM
-    ind = m.inductance
     A, b = _bordered(np.zeros((3, 3))), np.zeros(4)
 
     def rhs(tau, i, k, acc, vp):
         th = kx * (x[k] + v[k] * tau + 0.5 * acc * tau * tau)
-        omega = kx * (v[k] + acc * tau)
-        b[:3] = vp - m.R_s * i - omega * (ind.L_abc(th, 1) @ i + pm_abc(m, th, 1))
-        return np.linalg.solve(_bordered(ind.L_abc(th), A), b)[:3]
+        return didt_abc(m, th, kx * (v[k] + acc * tau), i, vp, A, b)
 
     out = np.zeros((u.shape[0] + 1, 3))
     out[0] = i0
