@@ -12,7 +12,7 @@ import pytest
 
 import linsense
 from linsense.sim.metrics import REQUIRED_KEYS
-from linsense.sim.scenario import scenario_from_dict
+from linsense.sim.scenario import load_scenario, scenario_from_dict
 from linsense.sim.trace import read_trace_csv
 
 
@@ -41,7 +41,10 @@ def test_step3_lut_stable_with_sane_metrics():
     assert m["stable"] and m["fault"] == "none"
     assert abs(m["final_position_mm"] - 3.0) < 1.0
     assert 0.0 < m["max_abs_err_deg"] < 10.0
-    assert m["max_abs_err_deg"] == pytest.approx(max(m["transient_max_err_deg"], m["steady_max_err_deg"]))
+    # the whole-run peak includes the first convergence_s, which the two windowed peaks leave out
+    assert m["max_abs_err_deg"] >= max(m["transient_max_err_deg"], m["steady_max_err_deg"])
+    assert m["max_abs_err_window_s"] == [0.0, pytest.approx(2.0 - 1 / 16000)]
+    assert m["errors_from_s"] == 0.1
     assert m["sim_s"] == pytest.approx(2.0)
     assert m["realtime_factor"] == pytest.approx(m["sim_s"] / m["wall_s"], rel=0.01)
     n = r.t.size
@@ -61,9 +64,10 @@ def test_uncompensated_observer_settles_off_target():
 
 
 def test_sensored_has_no_estimation_metrics():
-    r = linsense.simulate(sc(0.5, mode="sensored"))
+    r = linsense.simulate(sc(1.0, mode="sensored"))
     m = r.metrics
-    assert m["max_abs_err_deg"] is None and m["stable"]
+    assert m["max_abs_err_deg"] is None and m["bias_deg"] is None and m["reached"]
+    # (the dead time makes the sensored hold hunt by 30-50 um: docs/simulator.md, not asserted)
     assert abs(m["final_position_mm"] - 3.0) < 0.1
 
 
@@ -164,7 +168,15 @@ def test_paper_fig11_fig12_qualitatively():
         assert got[n]["fault"] == "none"
     for n in ("step3_lut", "step3_nolut"):
         assert got[n]["stable"] is True, (n, got[n]["unstable_reason"])
+        # the same verdict with the switching inverter (PWM edges and dead time resolved)
+        sw_sc = load_scenario(EXAMPLES / f"{n}.toml").replace(inverter={"fidelity": "switching"})
+        sw = linsense.simulate(sw_sc)
+        assert sw.metrics["stable"] is True, (n, sw.metrics["unstable_reason"])
     assert got["step6_nolut"]["stable"] is False
+    assert "limit cycle" in got["step6_nolut"]["unstable_reason"]
+    assert got["step6_nolut"]["limit_cycle_mm"] > 0.02
+    # the 3 mm step without the LUT settles beside the target: an offset, not an overshoot
+    assert got["step3_nolut"]["final_offset_mm"] > 2.5 and got["step3_nolut"]["overshoot_mm"] < 0.5
 
     def end_band_mm(r):
         return float(np.ptp(r.x[r.t >= r.t[-1] - 0.1])) * 1e3

@@ -76,7 +76,7 @@ void ls_drive_default_cfg(ls_drive_cfg *c)
     c->mod.f_pwm = fs;
     c->mod.dead_time = LS_R(0.8e-6);
     c->mod.dtc = true;
-    c->mod.i_band = LS_R(0.05);
+    c->mod.i_band = LS_R(0.05); /* A: a trade-off under dead time, see docs/simulator.md */
     c->mod.dtc_lead = LS_R(1.5);
     c->prot.i_max = LS_R(6.0);
     c->prot.v_dc_min = LS_R(40.0);
@@ -237,6 +237,20 @@ void ls_drive_set_position(ls_drive *d, ls_pos p)
     ls_observer_reset(&d->obs, p);
     ls_traj_reset(&d->traj, p);
     ls_posctrl_reset(&d->pos);
+}
+
+void ls_drive_set_load(ls_drive *d, LS_REAL f_load)
+{
+    if (d == NULL || !d->initialised || !LS_ISFINITE(f_load)) {
+        return;
+    }
+    if (d->cfg.pos.type == LS_POSCTRL_P) {
+        d->pos.speed.integ = ls_clamp(f_load, d->cfg.pos.speed.out_min, d->cfg.pos.speed.out_max);
+    }
+    if (d->cfg.obs.type == LS_OBS_MECH) {
+        d->obs.f_load = ls_clamp(f_load, -d->cfg.obs.force_max, d->cfg.obs.force_max);
+    }
+    d->f_ref = ls_clamp(f_load, -d->cfg.pos.force_max, d->cfg.pos.force_max);
 }
 
 static void command(ls_drive *d, ls_pos target, bool move)

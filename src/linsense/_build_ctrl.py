@@ -309,6 +309,7 @@ ls_status ls_drive_init(ls_drive *d, const ls_drive_cfg *cfg);
 void ls_drive_reset(ls_drive *d, ls_pos p);
 ls_status ls_drive_set_mode(ls_drive *d, ls_mode mode);
 void ls_drive_set_position(ls_drive *d, ls_pos p);
+void ls_drive_set_load(ls_drive *d, LS_REAL f_load);
 void ls_drive_move_to(ls_drive *d, ls_pos target);
 void ls_drive_step_to(ls_drive *d, ls_pos target);
 void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd);

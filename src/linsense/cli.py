@@ -207,8 +207,13 @@ def identify(bench: str, out: str, harmonics: int, motor_spec: str | None, pole_
               help="trace format (parquet needs pyarrow installed)")
 @click.option("--mat", is_flag=True, help="also write the trace as MATLAB trace.mat")
 @click.option("--no-plot", is_flag=True, help="skip sim.png")
-def simulate(scenario: str, out: str, fidelity: str | None, trace_fmt: str, mat: bool, no_plot: bool) -> None:
-    """Run a closed-loop drive simulation: metrics.json, trace.csv (or .parquet), sim.png."""
+@click.option("--check", is_flag=True, help="exit with code 1 when the run is not stable (for CI)")
+def simulate(scenario: str, out: str, fidelity: str | None, trace_fmt: str, mat: bool, no_plot: bool,
+             check: bool) -> None:
+    """Run a closed-loop drive simulation: metrics.json, trace.csv (or .parquet), sim.png.
+
+    Exit codes: 0 done (with --check: and stable), 1 with --check: not stable, 2 bad input (the
+    scenario, or a configuration that trips the drive at t = 0)."""
     from linsense.io import write_atomic
     from linsense.sim.run import simulate as run_sim
     from linsense.sim.scenario import load_scenario
@@ -243,17 +248,24 @@ def simulate(scenario: str, out: str, fidelity: str | None, trace_fmt: str, mat:
         f"{res.scenario.name}: {'stable' if m['stable'] else 'UNSTABLE'} (fault {m['fault']}); "
         f"max |err| {show(m['max_abs_err_deg'], 'deg')} "
         f"(transient {show(m['transient_max_err_deg'], 'deg')}, "
-        f"steady {show(m['steady_max_err_deg'], 'deg')}); final x {m['final_position_mm']} mm, overshoot "
+        f"steady {show(m['steady_max_err_deg'], 'deg')}, bias {show(m['bias_deg'], 'deg')}); "
+        f"final x {m['final_position_mm']} mm, limit cycle {m['limit_cycle_mm']} mm, overshoot "
         f"{m['overshoot_mm']} mm; {m['sim_s']} s simulated in {m['wall_s']} s "
         f"({m['realtime_factor']}x real time)"
     )
+    if check and not m["stable"]:
+        click.echo(f"linsense: not stable: {m['unstable_reason']}", err=True)
+        raise click.exceptions.Exit(1)
 
 
 def main(argv: list[str] | None = None) -> None:
     """Entry point: run the CLI, mapping every expected failure to exit code 2 and one line."""
     np.seterr(all="ignore")
     try:
-        cli.main(args=argv, prog_name="linsense", standalone_mode=False)
+        # in this mode click returns the code of a click.exceptions.Exit instead of exiting
+        rc = cli.main(args=argv, prog_name="linsense", standalone_mode=False)
+        if isinstance(rc, int) and rc != 0:
+            sys.exit(rc)
     except click.exceptions.Exit as exc:
         sys.exit(exc.exit_code)
     except click.Abort:

@@ -778,6 +778,11 @@ class Drive:
         """Tell the HF observer where the mover is (unwrapped rad)."""
         lib.ls_drive_set_position(self.state, to_pos(theta))
 
+    def set_load(self, f_load: float) -> None:
+        """``ls_drive_set_load``: start in equilibrium with the load force ``f_load`` (N, opposing
+        positive motion when > 0); call after :meth:`set_position`."""
+        lib.ls_drive_set_load(self.state, float(f_load))
+
     def step(self, i_abc: Any, v_dc: float, enc_count: int | None = None):
         """One PWM period (``ls_drive_step``).
 

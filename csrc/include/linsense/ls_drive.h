@@ -166,6 +166,13 @@ void ls_drive_reset(ls_drive *d, ls_pos p);
 ls_status ls_drive_set_mode(ls_drive *d, ls_mode mode);
 /* Tell the HF observer where the mover is (sensorless start from a known position). */
 void ls_drive_set_position(ls_drive *d, ls_pos p);
+/* Start in equilibrium with a known load force f_load (N, opposing positive motion when > 0,
+ * e.g. gravity on an incline): the speed controller's integrator (position type P) and the
+ * mechanical observer's load estimate are preset to it, so that the drive produces the force from
+ * the first step instead of sagging until its integrators catch up. Call after
+ * ls_drive_set_position (which clears the controllers). A non-finite f_load is ignored; it is
+ * limited to the force limits of the speed controller and of the observer. */
+void ls_drive_set_load(ls_drive *d, LS_REAL f_load);
 /* Minimum-time move of the reference to target. Commanded right after ls_drive_set_mode, it
  * starts once the mode has aligned its reference to the measured or estimated position. */
 void ls_drive_move_to(ls_drive *d, ls_pos target);

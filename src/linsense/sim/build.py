@@ -94,6 +94,16 @@ def reference_commands(sc: Scenario) -> tuple[list, list]:
     return cmds, moves
 
 
+def initial_load(sc: Scenario, motor: Motor) -> float:
+    """The load force at t = 0 (N, opposing positive motion when > 0), as the plant applies it."""
+    ld = sc.spec.load
+    if ld.type == "step":
+        return ld.force_after if ld.time <= 0.0 else ld.force
+    if ld.type == "incline":
+        return ld.force + motor.mass * 9.81 * math.sin(math.radians(ld.incline_deg))
+    return ld.force
+
+
 def _mean_dq(motor: Motor) -> tuple[float, float]:
     th = np.linspace(0.0, 2.0 * np.pi, 720, endpoint=False)
     L_d, L_q, _ = dq_components(motor, th)
@@ -223,6 +233,8 @@ def build(sc: Scenario) -> Built:
         key = ",".join(sections)
         raise InputError(sc.source, key, f"refused by the controller library: {exc}") from None
     drive.set_position(2.0 * math.pi * setup.x0 / tau)
+    if s.initial.load_balanced:
+        drive.set_load(initial_load(sc, motor))
     try:
         drive.set_mode(ctl.mode)
     except ConfigError as exc:

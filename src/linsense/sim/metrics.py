@@ -1,7 +1,9 @@
 """Metrics of one closed-loop run (definitions in docs/simulator.md, section "Metrics").
 
 Every value is a finite number, a bool, a string or ``None`` (JSON ``null``, when a quantity is
-not defined, e.g. the estimation error of an idle HF observer): never NaN.
+not defined, e.g. the estimation error of an idle HF observer): never NaN. Every error peak says
+which window it covers (``max_abs_err_deg`` covers the whole run; ``*_window_s`` keys give the
+others).
 """
 
 from __future__ import annotations
@@ -28,7 +30,8 @@ FAULT_NAMES = {
 
 #: Keys every metrics dict (and metrics.json) has.
 REQUIRED_KEYS = ("stable", "max_abs_err_deg", "transient_max_err_deg", "steady_max_err_deg",
-                 "final_position_mm", "overshoot_mm", "fault", "sim_s", "wall_s", "realtime_factor")
+                 "bias_deg", "limit_cycle_mm", "settling_time_s", "final_position_mm", "overshoot_mm",
+                 "fault", "sim_s", "wall_s", "realtime_factor")
 
 
 def fault_reason(bits: int) -> str:
@@ -60,13 +63,27 @@ def transient_mask(t: np.ndarray, moves, settle_s: float) -> np.ndarray:
     return m
 
 
+def settling_time(t: np.ndarray, x: np.ndarray, x_to: float, t0: float, band: float) -> float | None:
+    """Time (s) from ``t0`` after which ``|x - x_to| <= band`` holds to the end; None if it does
+    not hold at the last sample."""
+    sel = t >= t0
+    if not np.any(sel):
+        return None
+    out = np.abs(x[sel] - x_to) > band
+    if out[-1]:
+        return None
+    if not np.any(out):
+        return 0.0
+    last_out = np.flatnonzero(out)[-1]
+    return float(t[sel][last_out + 1] - t0)
+
+
 def compute_metrics(arrays: dict, *, fault: int, steps_done: int, f_pwm: float, moves, wall_s: float,
                     observer_active: bool, convergence_s: float, settle_s: float, tolerance_mm: float,
-                    bound_mm: float,
-                    settle_band_mm: float,
-                    final_window_s: float, x_target: float) -> dict:
-    """Metrics of a run. ``x_target`` (m) is the last commanded position; ``moves`` the planned
-    moves ``(t0, t1, x_from, x_to)``."""
+                    bound_mm: float, settle_band_mm: float, settling_band_mm: float,
+                    final_window_s: float, x_target: float, x_start: float) -> dict:
+    """Metrics of a run. ``x_target`` (m) is the last commanded position, ``x_start`` (m) the initial
+    one; ``moves`` the planned moves ``(t0, t1, x_from, x_to)``. Definitions: docs/simulator.md."""
     t = arrays["t"]
     x = arrays["x"]
     sim_s = steps_done / f_pwm
@@ -74,45 +91,68 @@ def compute_metrics(arrays: dict, *, fault: int, steps_done: int, f_pwm: float, 
     if fault:
         # the last sample is the state that tripped: keep it out of the error statistics
         ok[-1:] = False
-    err = np.degrees(np.abs(arrays["theta_err"]))
-    after = ok & (t >= convergence_s) & np.isfinite(err)
+    err_signed = np.degrees(arrays["theta_err"])
+    err = np.abs(err_signed)
+    good = ok & np.isfinite(err)
+    after = good & (t >= convergence_s)
     tr = transient_mask(t, moves, settle_s)
+    t_end = float(t[ok][-1]) if np.any(ok) else 0.0
+    win = ok & (t >= t_end - final_window_s)
     if observer_active:
-        max_err = _fmax(err[after])
+        max_err = _fmax(err[good])
         tr_err = _fmax(err[after & tr])
         st_err = _fmax(err[after & ~tr])
+        bias = float(np.mean(err_signed[win & good])) if np.any(win & good) else None
     else:
-        max_err = tr_err = st_err = None
+        max_err = tr_err = st_err = bias = None
 
-    # overshoot beyond the final target, in the direction of the last move
-    overshoot = 0.0
+    # the final window: limit cycle (peak to peak of the true position) and offset from the target
+    x_fin = np.isfinite(x)
+    final_x = float(x[x_fin][-1]) if np.any(x_fin) else float("nan")
+    xw = x[win & x_fin]
+    limit_cycle = float(np.ptp(xw)) * 1e3 if xw.size else None
+    end_err_mm = float(np.max(np.abs(xw - x_target))) * 1e3 if xw.size else None
+    offset_mm = float(np.mean(xw - x_target)) * 1e3 if xw.size else None
+
+    # the last move: overshoot beyond the reference (not counting the steady offset), settling time,
+    # and whether the drive reached the reference region at all
+    overshoot, settle_t, reached = 0.0, None, True
+    t_last = moves[-1][0] if moves else 0.0
     if moves:
         t0, _, x_from, x_to = moves[-1]
         direction = np.sign(x_to - x_from)
-        sel = ok & (t >= t0) & np.isfinite(x)
+        sel = ok & (t >= t0) & x_fin
         if direction != 0 and np.any(sel):
-            overshoot = max(0.0, float(np.max(direction * (x[sel] - x_to))) * 1e3)
+            peak = float(np.max(direction * (x[sel] - x_to))) * 1e3
+            steady = max(0.0, float(direction) * offset_mm) if offset_mm is not None else 0.0
+            overshoot = max(0.0, peak - steady)
+        dist = abs(x_to - x_from)
+        if dist > 0 and np.any(sel):
+            # at some time the true position came within half the move (and the bound) of the target
+            closest = float(np.min(np.abs(x[sel] - x_to)))
+            reached = closest <= min(0.5 * dist, bound_mm * 1e-3)
+        settle_t = settling_time(t[ok & x_fin], x[ok & x_fin], x_to, t0, settling_band_mm * 1e-3)
+    else:
+        settle_t = settling_time(t[ok & x_fin], x[ok & x_fin], x_target, 0.0, settling_band_mm * 1e-3)
 
-    x_fin = np.isfinite(x)
-    final_x = float(x[x_fin][-1]) if np.any(x_fin) else float("nan")
-    # stability: no fault; bounded (end window within bound_mm of the target) and settled
-    # (the position varies by less than settle_band_mm over the end window)
+    # stability: no fault; finite; reached the reference region; bounded (end window within
+    # bound_mm of the target) and settled (true position varies by at most settle_band_mm there)
     reason = ""
-    end_err_mm = None
     if fault:
         reason = f"fault: {fault_reason(fault)}"
-    elif not np.all(np.isfinite(x)):
+    elif not np.all(x_fin):
         reason = "non-finite position"
-    else:
-        win = t >= t[-1] - final_window_s
-        end_err_mm = float(np.max(np.abs(x[win] - x_target))) * 1e3
-        band = float(np.ptp(x[win])) * 1e3
-        if end_err_mm > bound_mm:
-            reason = (f"|x - target| reaches {end_err_mm:.3g} mm in the last {final_window_s:g} s "
-                      f"(bound {bound_mm:g} mm)")
-        elif band > settle_band_mm:
-            reason = (f"not settled: x varies by {band:.3g} mm in the last {final_window_s:g} s "
-                      f"(band {settle_band_mm:g} mm)")
+    elif not reached:
+        reason = (f"never reached the target: the true position came no closer than half the move "
+                  f"({abs(moves[-1][3] - moves[-1][2]) * 1e3:.3g} mm)")
+    elif end_err_mm is None:
+        reason = "no samples in the end window"
+    elif end_err_mm > bound_mm:
+        reason = (f"|x - target| reaches {end_err_mm:.3g} mm in the last {final_window_s:g} s "
+                  f"(bound {bound_mm:g} mm)")
+    elif limit_cycle > settle_band_mm:
+        reason = (f"not settled (limit cycle): x varies by {limit_cycle:.3g} mm in the last "
+                  f"{final_window_s:g} s (tolerance {settle_band_mm:g} mm)")
     stable = reason == ""
     rt = sim_s / wall_s if wall_s > 0 else None
     return {
@@ -120,18 +160,30 @@ def compute_metrics(arrays: dict, *, fault: int, steps_done: int, f_pwm: float, 
         "max_abs_err_deg": _round(max_err),
         "transient_max_err_deg": _round(tr_err),
         "steady_max_err_deg": _round(st_err),
+        "bias_deg": _round(bias),
+        "limit_cycle_mm": _round(limit_cycle),
+        "settling_time_s": _round(settle_t),
         "final_position_mm": _round(final_x * 1e3),
         "overshoot_mm": _round(overshoot),
         "fault": fault_reason(fault),
         "sim_s": _round(sim_s, 9),
         "wall_s": _round(wall_s, 6),
         "realtime_factor": _round(rt, 2),
+        # the windows the figures above cover (s): the whole run for max_abs_err_deg; transient and
+        # steady from convergence_s on; bias and limit cycle over the end window
+        "max_abs_err_window_s": [0.0, _round(t_end, 9)],
+        "errors_from_s": _round(convergence_s, 9),
+        "final_window_s": [_round(max(0.0, t_end - final_window_s), 9), _round(t_end, 9)],
+        "settling_from_s": _round(t_last, 9),
         # extras
         "fault_bits": int(fault),
         "fault_time_s": _round(float(t[-1]), 9) if fault and t.size else None,
         "unstable_reason": reason or None,
         "target_mm": _round(x_target * 1e3),
+        "start_mm": _round(x_start * 1e3),
         "final_error_mm": _round(end_err_mm),
+        "final_offset_mm": _round(offset_mm),
+        "reached": bool(reached),
         "accurate": bool(stable and end_err_mm is not None and end_err_mm <= tolerance_mm),
         "steps": int(steps_done),
         "samples": int(t.size),

@@ -10,11 +10,17 @@ import multiprocessing
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
+from linsense.errors import InputError
 from linsense.sim.build import build
 from linsense.sim.core import run_closed_loop
 from linsense.sim.metrics import compute_metrics
 from linsense.sim.result import Result
 from linsense.sim.scenario import Scenario, as_scenario
+
+#: fault at t = 0 -> the scenario key most likely responsible
+_FAULT_KEYS = {"undervoltage": "inverter.v_dc", "overvoltage": "inverter.v_dc",
+               "overcurrent": "protection.i_max", "encoder": "sensors.encoder_counts_per_period",
+               "config": "control"}
 
 
 def simulate(scenario: Scenario | str | Path | dict) -> Result:
@@ -26,7 +32,8 @@ def simulate(scenario: Scenario | str | Path | dict) -> Result:
     Raises
     ------
     InputError
-        The scenario (or its motor) is invalid; the message names the file, key and value.
+        The scenario (or its motor) is invalid, or the drive trips at its very first step (a
+        configuration that cannot run); the message names the file, key and value.
     """
     sc = as_scenario(scenario)
     b = build(sc)
@@ -39,9 +46,13 @@ def simulate(scenario: Scenario | str | Path | dict) -> Result:
         raw.arrays, fault=raw.fault, steps_done=raw.steps_done, f_pwm=s.inverter.f_pwm, moves=b.moves,
         wall_s=wall, observer_active=observer_active, convergence_s=s.metrics.convergence_s,
         settle_s=s.metrics.settle_s, tolerance_mm=s.metrics.tolerance_mm, bound_mm=s.metrics.bound_mm,
-        settle_band_mm=s.metrics.settle_band_mm,
-        final_window_s=s.metrics.final_window_s, x_target=x_target,
+        settle_band_mm=s.metrics.settle_band_mm, settling_band_mm=s.metrics.settling_band_mm,
+        final_window_s=s.metrics.final_window_s, x_target=x_target, x_start=b.setup.x0,
     )
+    if raw.fault and raw.steps_done <= 1:
+        # a trip at the very first step is the configuration's doing, not the closed loop's
+        raise InputError(sc.source, _FAULT_KEYS.get(m["fault"], ""),
+                         f"the drive trips at t = 0 ({m['fault']}): the configuration cannot run")
     m["scenario"] = sc.name
     m["mode"] = s.control.mode
     m["fidelity"] = s.inverter.fidelity

@@ -22,12 +22,22 @@ from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
+from linsense.ctrl import drive_default_cfg
 from linsense.errors import InputError
 from linsense.io import read_text_file
 from linsense.model.schema import _KeyError, _to_input_error
 
 _BRANCH = re.compile(r"^(float|int|bool|str|list\[.*\]|constrained-.*|function-.*)$")
 _STRICT = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
+
+#: the firmware's defaults (ls_drive_default_cfg), the one source of the drive defaults below
+_C = drive_default_cfg()
+
+
+def _c(value) -> float:
+    """A C default as a Python float, rounded to the 7 digits a float holds (0.01, not 0.009999999776)."""
+    return float(f"{float(value):.7g}")
+
 
 Positive = Annotated[float, Field(gt=0)]
 NonNegative = Annotated[float, Field(ge=0)]
@@ -45,26 +55,26 @@ class InverterSection(BaseModel):
     model_config = _STRICT
     fidelity: Literal["average", "switching"] = "average"
     v_dc: Positive = 72.0  # V
-    f_pwm: Positive = 16000.0  # Hz, PWM frequency = control rate
-    dead_time: NonNegative = 0.8e-6  # s
-    dead_time_compensation: bool = True
-    dtc_current_band: Positive = 0.05  # A, smooth-sign band of the dead-time compensation
+    f_pwm: Positive = _c(_C.fs)  # Hz, PWM frequency = control rate
+    dead_time: NonNegative = _c(_C.mod.dead_time)  # s
+    dead_time_compensation: bool = bool(_C.mod.dtc)
+    dtc_current_band: Positive = _c(_C.mod.i_band)  # A, smooth-sign band of the dead-time compensation
 
 
 class ControlSection(BaseModel):
     model_config = _STRICT
     mode: Literal["sensorless_lut", "sensorless_nolut", "sensored"] = "sensorless_lut"
     fs: Positive | None = None  # Hz, must equal inverter.f_pwm (default: equal)
-    delay_comp: NonNegative = 1.5  # sampling periods of angle advance
+    delay_comp: NonNegative = _c(_C.delay_comp)  # sampling periods of angle advance
     inject_sensored: bool = False  # keep injecting (and observing) in sensored mode
 
 
 class InjectionSection(BaseModel):
     model_config = _STRICT
-    amplitude: NonNegative = 12.0  # V, peak, on the estimated d-axis
-    frequency: Positive = 1000.0  # Hz
-    ramp_rate: Positive = 1200.0  # V/s
-    filter_q: Positive = 2.0  # quality factor of the HF band-pass and the fundamental notch
+    amplitude: NonNegative = _c(_C.inject.amplitude)  # V, peak, on the estimated d-axis
+    frequency: Positive = _c(_C.inject.freq)  # Hz
+    ramp_rate: Positive = _c(_C.inject.ramp_rate)  # V/s
+    filter_q: Positive = _c(_C.bpf.q)  # quality factor of the HF band-pass and the fundamental notch
 
 
 class ObserverSection(BaseModel):
@@ -79,10 +89,10 @@ class ObserverSection(BaseModel):
     k3: Positive | None = None  # 1/s^3 (mech)
     gain_schedule: bool = False  # demodulator gain table L_q/(L_q - L_d)(theta)
     demod_method: Literal["product", "heterodyne"] = "product"
-    demod_lpf_hz: Positive = 150.0  # Hz
-    min_level: NonNegative = 0.005  # A^2
-    omega_max: Positive = 300.0  # rad/s electrical, clamp of the speed estimate
-    force_max: Positive = 200.0  # N, clamp of the load estimate (mech)
+    demod_lpf_hz: Positive = _c(_C.demod.f_lpf)  # Hz
+    min_level: NonNegative = _c(_C.demod.min_level)  # A^2
+    omega_max: Positive = _c(_C.obs.omega_max)  # rad/s electrical, clamp of the speed estimate
+    force_max: Positive = _c(_C.obs.force_max)  # N, clamp of the load estimate (mech)
 
 
 class ModelOverride(BaseModel):
@@ -164,12 +174,13 @@ class SensorsSection(BaseModel):
     current_noise: NonNegative = 0.0  # A rms
     adc_bits: int = Field(default=0, ge=0, le=24)  # 0: ideal
     adc_range: Positive = 10.0  # A, +- full scale
-    encoder_counts_per_period: int = Field(default=56000, ge=1, lt=2**31)
+    encoder_counts_per_period: int = Field(default=int(_C.enc_counts), ge=1, lt=2**31)
 
 
 class InitialSection(BaseModel):
     model_config = _STRICT
     position_mm: float = 0.0
+    load_balanced: bool = False  # start in equilibrium with the load at t = 0 (ls_drive_set_load)
 
 
 class TravelSection(BaseModel):
@@ -180,12 +191,12 @@ class TravelSection(BaseModel):
 
 class ProtectionSection(BaseModel):
     model_config = _STRICT
-    i_max: Positive = 6.0  # A, phase over-current trip
-    v_dc_min: NonNegative = 40.0  # V
-    v_dc_max: Positive = 90.0  # V
-    err_max: Positive = 0.6  # rad, observer error-signal limit
-    err_time: Positive = 0.05  # s
-    omega_max: Positive = 250.0  # rad/s electrical
+    i_max: Positive = _c(_C.prot.i_max)  # A, phase over-current trip
+    v_dc_min: NonNegative = _c(_C.prot.v_dc_min)  # V
+    v_dc_max: Positive = _c(_C.prot.v_dc_max)  # V
+    err_max: Positive = _c(_C.prot.err_max)  # rad, observer error-signal limit
+    err_time: Positive = _c(_C.prot.err_time)  # s
+    omega_max: Positive = _c(_C.prot.omega_max)  # rad/s electrical
     i_abort: Positive = 20.0  # A, the simulator stops the run as diverged beyond this
 
 
@@ -196,12 +207,13 @@ class RecordSection(BaseModel):
 
 class MetricsSection(BaseModel):
     model_config = _STRICT
-    convergence_s: NonNegative = 0.1  # s, initial observer convergence excluded from the errors
+    convergence_s: NonNegative = 0.1  # s, start of the transient/steady error windows
     settle_s: NonNegative = 0.3  # s, after a step or the end of a move: still transient
     tolerance_mm: Positive = 0.5  # mm, |x - target| over the end window for `accurate`
     bound_mm: Positive = 3.5  # mm, |x - target| over the end window for `stable` (bounded)
-    settle_band_mm: Positive = 0.2  # mm, peak-to-peak x over the end window for `stable` (settled)
-    final_window_s: Positive = 0.1  # s, end window
+    settle_band_mm: Positive = 0.02  # mm, peak-to-peak true x over the end window for `stable` (settled)
+    settling_band_mm: Positive = 0.1  # mm, |x - target| band that defines settling_time_s
+    final_window_s: Positive = 0.3  # s, end window
 
 
 class ScenarioFile(BaseModel):
@@ -274,6 +286,10 @@ class ScenarioFile(BaseModel):
         if not p.v_dc_min < p.v_dc_max:
             raise _KeyError("protection.v_dc_max",
                             f"must be above v_dc_min = {p.v_dc_min:g}, got {p.v_dc_max:g}")
+        if not p.v_dc_min <= inv.v_dc <= p.v_dc_max:
+            raise _KeyError("inverter.v_dc", f"outside the protection's bus range [{p.v_dc_min:g}, "
+                            f"{p.v_dc_max:g}] V (the drive would trip at t = 0), got {inv.v_dc:g}")
+
         if self.injection.amplitude * math.sqrt(3.0) >= 0.8 * p.v_dc_min and p.v_dc_min > 0:
             raise _KeyError("injection.amplitude", "too large for the bus: amplitude * sqrt(3) must be below "
                             f"0.8 protection.v_dc_min = {0.8 * p.v_dc_min:g} V, "

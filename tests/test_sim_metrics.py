@@ -1,0 +1,143 @@
+"""The closed-loop metrics: what `stable` means, and the keys that say how a run ended."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import linsense
+from linsense.cli import main
+from linsense.sim.metrics import compute_metrics, settling_time
+from linsense.sim.scenario import scenario_from_dict
+
+F_PWM = 1000.0
+DEFAULTS = dict(convergence_s=0.1, settle_s=0.3, tolerance_mm=0.5, bound_mm=3.5, settle_band_mm=0.02,
+                settling_band_mm=0.1, final_window_s=0.3)
+
+
+def _arrays(x: np.ndarray, err_rad: np.ndarray | None = None) -> dict:
+    t = np.arange(x.size) / F_PWM
+    return {"t": t, "x": x, "theta_err": np.zeros_like(x) if err_rad is None else err_rad}
+
+
+def _metrics(x, moves, x_target, x_start=0.0, err_rad=None, **kw):
+    a = _arrays(np.asarray(x, dtype=float), err_rad)
+    return compute_metrics(a, fault=0, steps_done=a["t"].size, f_pwm=F_PWM, moves=moves, wall_s=0.01,
+                           observer_active=True, x_target=x_target, x_start=x_start, **{**DEFAULTS, **kw})
+
+
+def test_a_drive_that_never_moved_is_not_stable():
+    """A 3 mm step that the mover never follows stays within the 3.5 mm bound: bounded and settled,
+    and still not stable, because it never reached the reference region."""
+    x = np.zeros(2000)
+    m = _metrics(x, [(0.1, 0.1, 0.0, 3e-3)], 3e-3)
+    assert not m["stable"] and not m["reached"] and "never reached" in m["unstable_reason"]
+    assert m["limit_cycle_mm"] == 0.0 and m["settling_time_s"] is None
+
+
+def test_a_limit_cycle_is_not_stable_and_is_measured():
+    t = np.arange(2000) / F_PWM
+    x = 3e-3 + 0.06e-3 * np.sin(2 * np.pi * 10.0 * t) * (t > 0.3)
+    x[t < 0.3] = np.linspace(0, 3e-3, np.sum(t < 0.3))
+    err = np.radians(2.0) + np.radians(5.0) * np.sin(2 * np.pi * 10.0 * t)
+    m = _metrics(x, [(0.0, 0.0, 0.0, 3e-3)], 3e-3, err_rad=err)
+    assert not m["stable"] and "limit cycle" in m["unstable_reason"]
+    assert m["limit_cycle_mm"] == pytest.approx(0.12, rel=0.01)
+    assert m["bias_deg"] == pytest.approx(2.0, abs=0.05)  # mean over the final window (3 periods)
+    assert m["final_window_s"] == [pytest.approx(1.699), pytest.approx(1.999)]
+
+
+def test_settled_run_and_its_keys():
+    t = np.arange(3000) / F_PWM
+    tt = (t - 0.1).clip(0)
+    x = 3e-3 * (1 - np.exp(-tt / 0.1) * np.cos(2 * np.pi * 5 * tt))  # under-damped step at 0.1 s
+    m = _metrics(x, [(0.1, 0.1, 0.0, 3e-3)], 3e-3)
+    assert m["stable"] and m["reached"] and m["unstable_reason"] is None
+    assert 0.5 < m["overshoot_mm"] < 3.0
+    st = m["settling_time_s"]
+    # after st the position stays within 0.1 mm of the target, just before it did not
+    after = t >= 0.1 + st - 0.5 / F_PWM
+    assert np.all(np.abs(x[after] - 3e-3) <= 1e-4) and np.abs(x[~after][-1] - 3e-3) > 1e-4
+
+
+def test_overshoot_is_measured_beyond_the_steady_offset():
+    """A drive that settles 3 mm beyond its target (the uncompensated observer's bias) has an
+    offset, not an overshoot."""
+    t = np.arange(2000) / F_PWM
+    x = 6e-3 * (1 - np.exp(-t / 0.05))
+    m = _metrics(x, [(0.0, 0.0, 0.0, 3e-3)], 3e-3)
+    assert m["final_offset_mm"] == pytest.approx(3.0, abs=1e-3)
+    assert m["overshoot_mm"] == pytest.approx(0.0, abs=1e-6)
+
+
+def test_error_peak_covers_the_whole_run():
+    x = np.full(2000, 1e-3)
+    err = np.zeros(2000)
+    err[10] = np.radians(30.0)  # inside the first convergence_s
+    m = _metrics(x, [], 1e-3, x_start=1e-3, err_rad=err)
+    assert m["max_abs_err_deg"] == pytest.approx(30.0)
+    assert m["transient_max_err_deg"] is None and m["steady_max_err_deg"] == 0.0
+    assert m["max_abs_err_window_s"][0] == 0.0 and m["errors_from_s"] == 0.1
+
+
+def test_settling_time_none_when_outside_at_the_end():
+    t = np.linspace(0, 1, 101)
+    assert settling_time(t, np.ones(101), 0.0, 0.0, 0.1) is None
+    assert settling_time(t, np.zeros(101), 0.0, 0.0, 0.1) == 0.0
+
+
+def _fig13_like(balanced: bool):
+    return scenario_from_dict({
+        "motor": "ecce2010", "scenario": {"name": "load", "duration": 0.3},
+        "reference": {"type": "hold"}, "load": {"force": 20.0},
+        "initial": {"position_mm": 0.0, "load_balanced": balanced},
+    })
+
+
+def test_load_balanced_start_does_not_sag():
+    """20 N from t = 0: without the preset the mover sags by millimetres before the integrators
+    catch up; with initial.load_balanced the drive produces the force from the first step."""
+    sag = {b: float(np.max(np.abs(linsense.simulate(_fig13_like(b)).x))) * 1e3 for b in (False, True)}
+    assert sag[False] > 5.0
+    assert sag[True] < 0.3
+
+
+def test_cli_check_exit_codes(tmp_path, capsys):
+    ok = tmp_path / "ok.toml"
+    ok.write_text('motor = "ecce2010"\n[scenario]\nduration = 1.0\n[control]\nmode = "sensored"\n'
+                  '[reference]\ntype = "hold"\n')
+    with pytest.raises(SystemExit) as e:
+        main([ "simulate", str(ok), "--out", str(tmp_path / "a"), "--no-plot", "--check"])
+    assert e.value.code == 0
+    cyc = Path(__file__).parents[1] / "examples" / "scenarios" / "step6_nolut.toml"  # a limit cycle
+    with pytest.raises(SystemExit) as e:
+        main(["simulate", str(cyc), "--out", str(tmp_path / "b"), "--no-plot", "--check"])
+    assert e.value.code == 1
+    assert "not stable" in capsys.readouterr().err
+    m = json.loads((tmp_path / "b" / "metrics.json").read_text())
+    assert m["stable"] is False and m["limit_cycle_mm"] > 0.02
+
+
+def test_configuration_that_trips_at_t0_is_an_input_error(tmp_path, capsys):
+    """A bus outside the protection's range is refused when the scenario is read; a drive that
+    trips at its first step anyway (here: over-current limit below the injection's current) is a
+    configuration error too: exit 2, one line naming the file and key, nothing written."""
+    low = tmp_path / "low.toml"
+    low.write_text('motor = "ecce2010"\n[scenario]\nduration = 0.1\n[inverter]\nv_dc = 30.0\n'
+                   '[reference]\ntype = "hold"\n')
+    with pytest.raises(SystemExit) as e:
+        main(["simulate", str(low), "--out", str(tmp_path / "c")])
+    err = capsys.readouterr().err.strip()
+    assert e.value.code == 2 and err.count("\n") == 0
+    assert "low.toml: inverter.v_dc" in err and "30" in err
+    trip = tmp_path / "trip.toml"
+    trip.write_text('motor = "ecce2010"\n[scenario]\nduration = 0.1\n[reference]\ntype = "hold"\n'
+                    '[protection]\ni_max = 0.5\n[sensors]\ncurrent_offset = 0.6\n')
+    with pytest.raises(SystemExit) as e:
+        main(["simulate", str(trip), "--out", str(tmp_path / "d")])
+    err = capsys.readouterr().err.strip()
+    assert e.value.code == 2 and "trip.toml: protection.i_max" in err and "t = 0" in err
+    assert not (tmp_path / "d").exists()
