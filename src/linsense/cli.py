@@ -245,7 +245,8 @@ def simulate(scenario: str, out: str, fidelity: str | None, trace_fmt: str, mat:
         return "n/a" if v is None else f"{v:.2f} {unit}"
 
     click.echo(
-        f"{res.scenario.name}: {'stable' if m['stable'] else 'UNSTABLE'} (fault {m['fault']}); "
+        f"{res.scenario.name}: "
+        f"{'stable' if m['stable'] else 'not stable: ' + str(m['unstable_reason'])} (fault {m['fault']}); "
         f"max |err| {show(m['max_abs_err_deg'], 'deg')} "
         f"(transient {show(m['transient_max_err_deg'], 'deg')}, "
         f"steady {show(m['steady_max_err_deg'], 'deg')}, bias {show(m['bias_deg'], 'deg')}); "

@@ -51,12 +51,15 @@ def sim_figure_png(result) -> bytes:
         return "n/a" if v is None else f"{v:.2f} {unit}"
 
     name = getattr(result.scenario, "name", "")
-    title = (f"{name} ({m.get('mode', '')}, {m.get('fidelity', '')}): "
-             f"{'stable' if m.get('stable') else 'UNSTABLE'}, fault {m.get('fault', '?')}\n"
+    # the reason's first clause ("not settled (limit cycle)", "fault"): the numbers are on line two
+    reason = (m.get("unstable_reason") or "?").split(":")[0]
+    verdict = "stable" if m.get("stable") else f"not stable: {reason}"
+    title = (f"{name} ({m.get('mode', '')}, {m.get('fidelity', '')}): {verdict}\n"
              f"max |err| {fmt(m.get('max_abs_err_deg'), 'deg')} (transient "
              f"{fmt(m.get('transient_max_err_deg'), 'deg')}, "
-             f"steady {fmt(m.get('steady_max_err_deg'), 'deg')}), "
-             f"final x {fmt(m.get('final_position_mm'), 'mm')}, overshoot {fmt(m.get('overshoot_mm'), 'mm')}")
+             f"steady {fmt(m.get('steady_max_err_deg'), 'deg')}, bias {fmt(m.get('bias_deg'), 'deg')}), "
+             f"limit cycle {fmt(m.get('limit_cycle_mm'), 'mm')}, "
+             f"overshoot {fmt(m.get('overshoot_mm'), 'mm')}")
     fig.suptitle(title, fontsize=9)
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=_DPI, metadata={"Software": None})
