@@ -5,14 +5,14 @@
 
 ls_status ls_demod_init(ls_demod *d, const ls_demod_cfg *cfg)
 {
-    ls_biquad_cfg lp;
+    ls_biquad_cfg lp, nt;
     int k;
     if (d == NULL || cfg == NULL) {
         return LS_ERR_NULL;
     }
     if ((cfg->method != LS_DEMOD_PRODUCT && cfg->method != LS_DEMOD_HETERODYNE) ||
         !LS_ISFINITE(cfg->gain) || cfg->gain == LS_R(0.0) || !LS_ISFINITE(cfg->min_level) ||
-        cfg->min_level < LS_R(0.0)) {
+        cfg->min_level < LS_R(0.0) || !LS_ISFINITE(cfg->f_notch) || cfg->f_notch < LS_R(0.0)) {
         return LS_ERR_PARAM;
     }
     if ((cfg->comp != NULL && cfg->comp->len < 4u) || (cfg->gain_table != NULL && cfg->gain_table->len < 4u)) {
@@ -22,11 +22,17 @@ ls_status ls_demod_init(ls_demod *d, const ls_demod_cfg *cfg)
     lp.f0 = cfg->f_lpf;
     lp.q = LS_R(0.70710678);
     lp.fs = cfg->fs;
+    nt.type = LS_BIQUAD_NOTCH;
+    nt.f0 = cfg->f_notch;
+    nt.q = LS_R(1.0);
+    nt.fs = cfg->fs;
     for (k = 0; k < 4; ++k) {
-        if (ls_biquad_init(&d->lp[k], &lp) != LS_OK) {
+        if (ls_biquad_init(&d->lp[k], &lp) != LS_OK ||
+            (cfg->f_notch > LS_R(0.0) && ls_biquad_init(&d->nt[k], &nt) != LS_OK)) {
             return LS_ERR_PARAM;
         }
     }
+    d->use_notch = cfg->f_notch > LS_R(0.0);
     d->cfg = *cfg;
     d->use_comp = cfg->comp != NULL;
     d->use_gain_table = cfg->gain_table != NULL;
@@ -39,6 +45,7 @@ void ls_demod_reset(ls_demod *d)
     int k;
     for (k = 0; k < 4; ++k) {
         ls_biquad_reset(&d->lp[k]);
+        ls_biquad_reset(&d->nt[k]);
     }
     d->psi = LS_R(0.0);
     d->level = LS_R(0.0);

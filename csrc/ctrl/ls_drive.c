@@ -13,7 +13,7 @@ void ls_drive_default_cfg(ls_drive_cfg *c)
     const LS_REAL l_d = LS_R(3.508e-3), l_q = LS_R(4.459e-3);
     const LS_REAL tau = LS_R(0.056), kf = LS_R(20.0), mass = LS_R(1.5), r_s = LS_R(9.0);
     const LS_REAL w_i = LS_TWO_PI * LS_R(250.0); /* current-loop bandwidth, rad/s */
-    const LS_REAL w_v = LS_TWO_PI * LS_R(6.0);   /* speed-loop bandwidth, rad/s */
+    const LS_REAL w_v = LS_TWO_PI * LS_R(4.0);   /* speed-loop bandwidth, rad/s */
     memset(c, 0, sizeof *c);
     c->fs = fs;
     c->pole_pitch = tau;
@@ -21,11 +21,12 @@ void ls_drive_default_cfg(ls_drive_cfg *c)
     c->i_max = LS_R(2.5);
     c->delay_comp = LS_R(1.5);
     c->enc_counts = 56000; /* 1 um per count */
-    c->inject_sensored = false;
+    c->inject_sensored = true; /* the HF current dithers the dead time: no hunting (docs/simulator.md) */
     c->inject.amplitude = LS_R(12.0);
     c->inject.freq = LS_R(1000.0);
     c->inject.fs = fs;
     c->inject.ramp_rate = LS_R(1200.0);
+    c->inject.quad = LS_R(0.9); /* elliptical: robust to the dead time (docs/theory.md) */
     c->bpf.type = LS_BIQUAD_BANDPASS;
     c->bpf.f0 = LS_R(1000.0);
     c->bpf.q = LS_R(2.0);
@@ -35,7 +36,8 @@ void ls_drive_default_cfg(ls_drive_cfg *c)
     c->sep.q = LS_R(2.0);
     c->sep.fs = fs;
     c->demod.method = LS_DEMOD_PRODUCT;
-    c->demod.f_lpf = LS_R(150.0);
+    c->demod.f_lpf = LS_R(300.0);
+    c->demod.f_notch = LS_R(2000.0); /* 2 f_inj: the products' ripple */
     c->demod.fs = fs;
     c->demod.gain = l_q / (l_q - l_d);
     c->demod.comp = NULL;
@@ -78,6 +80,12 @@ void ls_drive_default_cfg(ls_drive_cfg *c)
     c->mod.dtc = true;
     c->mod.i_band = LS_R(0.05); /* A: a trade-off under dead time, see docs/simulator.md */
     c->mod.dtc_lead = LS_R(1.5);
+    c->hf_dtres = true;
+    c->dtres.fs = fs;
+    c->dtres.r_s = r_s;
+    c->dtres.l_d = l_d;
+    c->dtres.l_q = l_q;
+    c->dtres.ripple = true;
     c->prot.i_max = LS_R(6.0);
     c->prot.v_dc_min = LS_R(40.0);
     c->prot.v_dc_max = LS_R(90.0);
@@ -141,6 +149,9 @@ ls_status ls_drive_init(ls_drive *d, const ls_drive_cfg *cfg)
     st |= ls_posctrl_init(&d->pos, &cfg->pos);
     st |= ls_traj_init(&d->traj, &cfg->traj);
     st |= ls_mod_init(&d->mod, &cfg->mod);
+    if (cfg->hf_dtres) {
+        st |= cfg->dtres.fs == cfg->fs ? ls_dtres_init(&d->dtres, &cfg->dtres) : LS_ERR_PARAM;
+    }
     st |= ls_protect_init(&d->prot, &cfg->prot);
     if (st != LS_OK) {
         memset(d, 0, sizeof *d);
@@ -180,6 +191,7 @@ void ls_drive_reset(ls_drive *d, ls_pos p)
     ls_posctrl_reset(&d->pos);
     ls_traj_reset(&d->traj, p);
     ls_mod_reset(&d->mod);
+    ls_dtres_reset(&d->dtres);
     ls_protect_reset(&d->prot);
     d->mode = LS_MODE_OFF;
     d->align = false;
@@ -402,14 +414,9 @@ void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
         return;
     }
 
-    /* measurements: Clarke, HF band-pass, fundamental separation */
+    /* measurements: Clarke */
     i_a = meas->i_abc[0];
     i_b = (meas->i_abc[1] - meas->i_abc[2]) * (LS_R(1.0) / LS_SQRT3);
-    ihf_a = ls_biquad_step(&d->bpf[0], i_a);
-    ihf_b = ls_biquad_step(&d->bpf[1], i_b);
-    if_a = ls_biquad_step(&d->sep[0], i_a);
-    if_b = ls_biquad_step(&d->sep[1], i_b);
-
     /* encoder tracking loop */
     if (use_enc) {
         ls_pos pe = enc_pos(meas->enc_count, cfg->enc_counts);
@@ -438,14 +445,34 @@ void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
         d->align = false;
     }
 
-    /* HF demodulation and observer, on the axis the injection used */
+    /* the estimated axis (the HF estimate of the previous step, or the encoder's while calibrating) */
     ls_sincos(d->obs.pos.theta, &c_est, &s_est);
+
+    /* HF band-pass of the currents less what the dead-time residual drove (ls_dtres.h), and the
+     * fundamental separation of the measured currents */
+    if (hf_on && cfg->hf_dtres) {
+        LS_REAL v_err[2], i_res[2];
+        (void)ls_mod_residual(&d->mod, meas->i_abc, meas->v_dc, d->dtres.k_rip, v_err);
+        ls_dtres_step(&d->dtres, v_err, c_est, s_est, i_res);
+        ihf_a = ls_biquad_step(&d->bpf[0], i_a - i_res[0]);
+        ihf_b = ls_biquad_step(&d->bpf[1], i_b - i_res[1]);
+    } else {
+        ihf_a = ls_biquad_step(&d->bpf[0], i_a);
+        ihf_b = ls_biquad_step(&d->bpf[1], i_b);
+    }
+    if_a = ls_biquad_step(&d->sep[0], i_a);
+    if_b = ls_biquad_step(&d->sep[1], i_b);
+
+    /* HF demodulation and observer, on the axis the injection used */
     if (hf_on) {
         LS_REAL err = ls_demod_step_cs(&d->demod, ihf_a, ihf_b, d->obs.pos.theta, c_est, s_est, d->inj.c,
                                        d->inj.s, calibrating ? d->psi_cal : LS_R(0.0));
         if (sensorless) {
-            ls_observer_step(&d->obs, err, d->f_ref);
-            ls_protect_check_observer(&d->prot, err, d->demod.valid, d->obs.omega);
+            /* the error counts once the injection has reached its amplitude: while it ramps up,
+             * the band-pass still rings on the fundamental current's first steps */
+            const LS_REAL e_obs = d->inj.amp >= cfg->inject.amplitude ? err : LS_R(0.0);
+            ls_observer_step(&d->obs, e_obs, d->f_ref);
+            ls_protect_check_observer(&d->prot, e_obs, d->demod.valid, d->obs.omega);
         }
     }
     if (calibrating) {
@@ -491,9 +518,14 @@ void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
     s_adv = s_fb + c_fb * dlt;
     v_a = c_adv * v_d - s_adv * v_q;
     v_b = s_adv * v_d + c_adv * v_q;
-    v_hf = hf_on ? ls_inject_step(&d->inj) : LS_R(0.0);
-    v_a += v_hf * c_est;
-    v_b += v_hf * s_est;
+    if (hf_on) {
+        /* on the estimated d-axis, plus the optional quadrature component on q */
+        v_hf = ls_inject_step(&d->inj);
+        v_a += v_hf * c_est - d->inj.v_q * s_est;
+        v_b += v_hf * s_est + d->inj.v_q * c_est;
+    } else {
+        v_hf = LS_R(0.0);
+    }
     (void)ls_mod_step_finite(&d->mod, v_a, v_b, meas->v_dc, meas->i_abc, duty);
 
     /* nothing non-finite ever leaves a step */

@@ -12,7 +12,8 @@ ls_status ls_inject_init(ls_inject *inj, const ls_inject_cfg *cfg)
     }
     if (!LS_ISFINITE(cfg->amplitude) || !LS_ISFINITE(cfg->freq) || !LS_ISFINITE(cfg->fs) ||
         !LS_ISFINITE(cfg->ramp_rate) || cfg->amplitude < LS_R(0.0) || cfg->freq <= LS_R(0.0) ||
-        cfg->fs < LS_R(4.0) * cfg->freq || cfg->ramp_rate <= LS_R(0.0)) {
+        cfg->fs < LS_R(4.0) * cfg->freq || cfg->ramp_rate <= LS_R(0.0) || !LS_ISFINITE(cfg->quad) ||
+        cfg->quad < LS_R(0.0) || cfg->quad >= LS_R(1.0)) {
         return LS_ERR_PARAM;
     }
     inj->cfg = *cfg;
@@ -29,6 +30,7 @@ void ls_inject_reset(ls_inject *inj)
     inj->s = LS_R(0.0);
     inj->amp = LS_R(0.0);
     inj->on = false;
+    inj->v_q = LS_R(0.0);
 }
 
 void ls_inject_enable(ls_inject *inj, bool on)

@@ -23,6 +23,12 @@ ls_status ls_mod_init(ls_mod *m, const ls_mod_cfg *cfg)
 
 void ls_mod_reset(ls_mod *m)
 {
-    m->i_prev[0] = m->i_prev[1] = m->i_prev[2] = LS_R(0.0);
+    int k;
+    for (k = 0; k < 3; ++k) {
+        m->i_prev[k] = LS_R(0.0);
+        m->hist_d[0][k] = m->hist_d[1][k] = LS_R(0.5);
+        m->hist_c[0][k] = m->hist_c[1][k] = LS_R(0.0);
+    }
     m->have_prev = false;
+    m->n_hist = 0u;
 }

@@ -312,11 +312,32 @@ SIM_HOT double leg_error(double d, double dd, double i_mid, double w, double e_i
     return e;
 }
 
+/* PWM current ripple of phase j at the turn-on of its leg, relative to the straight line between
+ * the period's end currents (centred PWM: at the turn-off it is the opposite): the flux of the pole
+ * voltages less their period averages from the period start to t_on = (1 - d_j) T/2, pole k
+ * contributing V_dc T/2 (max(0, d_k - d_j) - d_k (1 - d_j)), through the frozen L^-1 and projected
+ * on phase j (the common mode does not reach a floating star). Negative: the leg's own pole is still
+ * low. vh = V_dc T / 2. */
+SIM_HOT double ripple_on(const frozen *f, const double duty[3], double vh, int j)
+{
+    double lam[3], la, lb, ia, ib;
+    int k;
+    for (k = 0; k < 3; ++k) {
+        lam[k] = vh * ((duty[k] > duty[j] ? duty[k] - duty[j] : 0.0) - duty[k] * (1.0 - duty[j]));
+    }
+    la = (2.0 * lam[0] - lam[1] - lam[2]) * (1.0 / 3.0);
+    lb = (lam[1] - lam[2]) * (1.0 / SQRT3);
+    ia = f->linv[0] * la + f->linv[1] * lb;
+    ib = f->linv[2] * la + f->linv[3] * lb;
+    return j == 0 ? ia : (j == 1 ? -0.5 * ia + 0.5 * SQRT3 * ib : -0.5 * ia - 0.5 * SQRT3 * ib);
+}
+
 /* Average model: one segment with the period-averaged dead-time error. Per leg, the upper switch
  * is commanded on at t_on = (1 - d)T/2 and off at t_off = (1 + d)T/2; the turn-on loses t_dead
  * when the current flows out (i > 0) and the turn-off gains t_dead when it flows in (i < 0), so the
  * duty error is exactly -(sign i(t_on) + sign i(t_off))/2 * t_dead/T, with the currents at the two
- * edges predicted linearly from the period start (the switching model resolves them exactly). */
+ * edges predicted linearly from the period start plus the PWM ripple there (ripple_on; the
+ * switching model resolves them exactly): i_on, i_off = i_mid -+ (w - r_on). */
 SIM_HOT void period_average(const ls_sim_cfg *c, const plant_coef *q, const frozen *f, const double duty[3],
                            double h, double i[2], dead_carry *carry)
 {
@@ -356,9 +377,15 @@ SIM_HOT void period_average(const ls_sim_cfg *c, const plant_coef *q, const froz
             }
             carry->any_excess = false;
         }
-        ea = leg_error(duty[0], dd, ma, hh * duty[0] * sa, in[0], &carry->excess[0], &carry->any_excess);
-        eb = leg_error(duty[1], dd, mb, hh * duty[1] * sb, in[1], &carry->excess[1], &carry->any_excess);
-        ec = leg_error(duty[2], dd, mc, hh * duty[2] * sc, in[2], &carry->excess[2], &carry->any_excess);
+        {
+            const double vh = 0.5 * vdc * h;
+            ea = leg_error(duty[0], dd, ma, hh * duty[0] * sa - ripple_on(f, duty, vh, 0), in[0], &carry->excess[0],
+                           &carry->any_excess);
+            eb = leg_error(duty[1], dd, mb, hh * duty[1] * sb - ripple_on(f, duty, vh, 1), in[1], &carry->excess[1],
+                           &carry->any_excess);
+            ec = leg_error(duty[2], dd, mc, hh * duty[2] * sc - ripple_on(f, duty, vh, 2), in[2], &carry->excess[2],
+                           &carry->any_excess);
+        }
         const double ka0 = g00 * (2.0 / 3.0), ka1 = g10 * (2.0 / 3.0);
         const double kb0 = g01 * (1.0 / SQRT3) - g00 * (1.0 / 3.0), kb1 = g11 * (1.0 / SQRT3) - g10 * (1.0 / 3.0);
         const double kc0 = -g01 * (1.0 / SQRT3) - g00 * (1.0 / 3.0), kc1 = -g11 * (1.0 / SQRT3) - g10 * (1.0 / 3.0);

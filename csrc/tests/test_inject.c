@@ -1,5 +1,6 @@
 /* HF injection: amplitude, frequency and phase continuity against cos(2 pi f k / fs) over a
- * long run (no drift), amplitude ramps at the configured rate, refusal of fs < 4 f. */
+ * long run (no drift), amplitude ramps at the configured rate, the elliptical q component
+ * kappa A sin(2 pi f k / fs), refusal of fs < 4 f and of kappa outside [0, 1). */
 #include <math.h>
 
 #include "linsense/ls_inject.h"
@@ -9,7 +10,7 @@
 
 int main(void)
 {
-    ls_inject_cfg cfg = {LS_R(12.0), LS_R(1000.0), LS_R(16000.0), LS_R(1200.0)};
+    ls_inject_cfg cfg = {LS_R(12.0), LS_R(1000.0), LS_R(16000.0), LS_R(1200.0), LS_R(0.0)};
     ls_inject inj;
     long k;
     double max_dev = 0.0;
@@ -43,6 +44,29 @@ int main(void)
     }
     LS_CHECK(inj.amp == 0);
     LS_CHECK(ls_inject_step(&inj) == 0);
+    LS_CHECK(inj.v_q == 0); /* pulsating: nothing on q */
+    /* elliptical: kappa A sin on q, in quadrature with the d carrier */
+    cfg.quad = LS_R(0.5);
+    LS_CHECK(ls_inject_init(&inj, &cfg) == LS_OK);
+    ls_inject_enable(&inj, true);
+    max_dev = 0.0;
+    for (k = 0; k < 16000; ++k) {
+        double v = (double)ls_inject_step(&inj);
+        if (k >= 160) {
+            double ph = 2 * PI * 1000.0 * (double)k / 16000.0;
+            double dev = fabs(v - 12.0 * cos(ph)) + fabs((double)inj.v_q - 6.0 * sin(ph));
+            max_dev = dev > max_dev ? dev : max_dev;
+        }
+    }
+    printf("  elliptical injection: max deviation over 1 s: %.3g V\n", max_dev);
+    LS_CHECK(max_dev < (sizeof(LS_REAL) == 4 ? 0.01 : 1e-6));
+    cfg.quad = LS_R(1.0);
+    LS_CHECK(ls_inject_init(&inj, &cfg) == LS_ERR_PARAM);
+    cfg.quad = LS_R(-0.1);
+    LS_CHECK(ls_inject_init(&inj, &cfg) == LS_ERR_PARAM);
+    cfg.quad = (LS_REAL)NAN;
+    LS_CHECK(ls_inject_init(&inj, &cfg) == LS_ERR_PARAM);
+    cfg.quad = LS_R(0.0);
     /* refusals */
     cfg.fs = LS_R(3999.0);
     LS_CHECK(ls_inject_init(&inj, &cfg) == LS_ERR_PARAM);

@@ -7,7 +7,7 @@
 #include <string.h>
 
 #include "linsense/ls_sim.h"
-#include "ls_lut_ecce2010_r.h"
+#include "ls_lut_ecce2010_q.h" /* the table of the default (elliptical) injection */
 #include "ls_test.h"
 #include "ls_test_plant.h"
 
@@ -46,7 +46,7 @@ static void closed_loop(ls_sim_fidelity fid)
     ls_sim_out o;
     ls_sim_cmd cmd = {0.05, 0.003, 1};
     ls_sim_result r;
-    ls_lut_cfg lc = {ls_lut_ecce2010_r, LS_LUT_ECCE2010_R_LEN};
+    ls_lut_cfg lc = {ls_lut_ecce2010_q, LS_LUT_ECCE2010_Q_LEN};
     ls_lut lut;
     ls_drive_cfg dc;
     ls_drive d;

@@ -96,7 +96,8 @@ int main(void)
     }
     ls_drive_default_cfg(&cfg);   /* 16 kHz, 12 V / 1 kHz injection, ecce2010 gains */
     cfg.demod.comp = &comp_lut;   /* the generated compensation table */
-    cfg.mod.dtc = false;          /* the synthetic motor has an ideal inverter */
+    cfg.mod.dtc = false;          /* the synthetic motor has an ideal inverter: nothing to */
+    cfg.mod.dead_time = 0.0f;     /* compensate, and no dead-time residual to take out */
     cfg.obs.type = LS_OBS_PLL;
     if (ls_drive_init(&drive, &cfg) != LS_OK) {
         fprintf(stderr, "configuration refused\n");

@@ -77,7 +77,9 @@ ls_status ls_biquad_init(ls_biquad *f, const ls_biquad_cfg *cfg);
 void ls_biquad_reset(ls_biquad *f);
 
 /* ls_inject.h */
-typedef struct { LS_REAL amplitude; LS_REAL freq; LS_REAL fs; LS_REAL ramp_rate; } ls_inject_cfg;
+typedef struct {
+    LS_REAL amplitude; LS_REAL freq; LS_REAL fs; LS_REAL ramp_rate; LS_REAL quad;
+} ls_inject_cfg;
 typedef struct {
     ls_inject_cfg cfg;
     LS_REAL c, s;
@@ -85,6 +87,7 @@ typedef struct {
     LS_REAL amp;
     LS_REAL amp_step;
     bool on;
+    LS_REAL v_q;
 } ls_inject;
 ls_status ls_inject_init(ls_inject *inj, const ls_inject_cfg *cfg);
 void ls_inject_reset(ls_inject *inj);
@@ -101,10 +104,13 @@ typedef struct {
     const ls_lut *comp;
     const ls_lut *gain_table;
     LS_REAL min_level;
+    LS_REAL f_notch;
 } ls_demod_cfg;
 typedef struct {
     ls_demod_cfg cfg;
     ls_biquad lp[4];
+    ls_biquad nt[4];
+    bool use_notch;
     bool use_comp;
     bool use_gain_table;
     LS_REAL psi;
@@ -197,10 +203,19 @@ void ls_traj_move(ls_traj *t, ls_pos target);
 void ls_traj_jump(ls_traj *t, ls_pos target);
 void ls_traj_step(ls_traj *t, ls_pos *x_ref, LS_REAL *v_ref, LS_REAL *a_ref);
 
+/* ls_dtres.h */
+typedef struct { LS_REAL fs; LS_REAL r_s; LS_REAL l_d; LS_REAL l_q; bool ripple; } ls_dtres_cfg;
+typedef struct {
+    ls_dtres_cfg cfg; LS_REAL a_d, a_q; LS_REAL b_d, b_q; LS_REAL i_d, i_q; LS_REAL k_rip;
+} ls_dtres;
+ls_status ls_dtres_init(ls_dtres *r, const ls_dtres_cfg *cfg);
+void ls_dtres_reset(ls_dtres *r);
+
 /* ls_modulator.h */
 typedef struct { LS_REAL f_pwm; LS_REAL dead_time; bool dtc; LS_REAL i_band; LS_REAL dtc_lead; } ls_mod_cfg;
 typedef struct {
     ls_mod_cfg cfg; LS_REAL d_dead; LS_REAL i_prev[3]; bool have_prev; LS_REAL inv_band;
+    LS_REAL hist_d[2][3]; LS_REAL hist_c[2][3]; uint32_t n_hist;
 } ls_mod;
 ls_status ls_mod_init(ls_mod *m, const ls_mod_cfg *cfg);
 void ls_mod_reset(ls_mod *m);
@@ -251,6 +266,7 @@ typedef struct {
     LS_REAL delay_comp;
     int32_t enc_counts;
     bool inject_sensored;
+    bool hf_dtres;
     ls_inject_cfg inject;
     ls_biquad_cfg bpf;
     ls_biquad_cfg sep;
@@ -261,6 +277,7 @@ typedef struct {
     ls_posctrl_cfg pos;
     ls_traj_cfg traj;
     ls_mod_cfg mod;
+    ls_dtres_cfg dtres;
     ls_protect_cfg prot;
     ls_cal_cfg cal;
 } ls_drive_cfg;

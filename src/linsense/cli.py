@@ -59,16 +59,27 @@ def model(motor_spec: str, points: int, out: str) -> None:
 @click.option("--f-inj", "f_inj", type=float, default=None,
               help="injection frequency in Hz: include the winding resistance (exact zero of the "
                    "demodulated error; default: the paper's eq. 12, which neglects it)")
+@click.option("--quad", type=float, default=None,
+              help="with --f-inj: the injection's q-axis share kappa (elliptical injection, 0 = the "
+                   "paper's pulsating one; default: the firmware's, ls_drive_default_cfg)")
 @click.option("--out", required=True, type=click.Path(dir_okay=False), help="output file")
-def lut(motor_spec: str, points: int, fmt: str, symbol: str | None, f_inj: float | None, out: str) -> None:
+def lut(motor_spec: str, points: int, fmt: str, symbol: str | None, f_inj: float | None, quad: float | None,
+        out: str) -> None:
     """Export the compensation LUT Psi_LUT(theta) = atan(-L_dq/L_q) as CSV, JSON or a C header."""
     from linsense.compensation.lut import build_lut, export
+    from linsense.ctrl import drive_default_cfg
     from linsense.io import write_atomic
 
     if f_inj is not None and not (f_inj > 0 and np.isfinite(f_inj)):
         raise InputError("--f-inj", "", f"must be a positive frequency in Hz, got {f_inj!r}")
+    if quad is not None and f_inj is None:
+        raise InputError("--quad", "", "only with --f-inj (eq. 12 neglects R_s, where kappa changes nothing)")
+    if quad is None:
+        quad = round(float(drive_default_cfg().inject.quad), 6) if f_inj is not None else 0.0
+    if not (np.isfinite(quad) and 0.0 <= quad < 1.0):
+        raise InputError("--quad", "", f"must be in [0, 1), got {quad!r}")
     motor = _load(motor_spec)
-    write_atomic(out, export(build_lut(motor, points, f_inj), fmt, symbol))
+    write_atomic(out, export(build_lut(motor, points, f_inj, quad=quad), fmt, symbol))
 
 
 @cli.command()

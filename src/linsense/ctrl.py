@@ -736,7 +736,7 @@ class Drive:
         bad = {}
         fs = float(self.cfg.fs)
         for path in ("inject", "bpf", "sep", "demod", "obs", "enc_obs", "current", "traj", "prot",
-                     "pos.speed"):
+                     "pos.speed", "dtres"):
             obj = self.cfg
             for part in path.split("."):
                 obj = getattr(obj, part)

@@ -5,8 +5,9 @@
  * in:  phase currents sampled at the carrier peak, DC-bus voltage, optional encoder count;
  * out: duty cycles for the next period, enable, fault bits, estimates and diagnostics.
  *
- * Call order inside a step (docs/firmware.md): protection on the measurements; Clarke; HF
- * band-pass and fundamental notch; encoder tracking loop (sensored, calibration); demodulator
+ * Call order inside a step (docs/firmware.md): protection on the measurements; Clarke; encoder
+ * tracking loop (sensored, calibration); the dead-time residual's current taken out of the HF
+ * path (hf_dtres); HF band-pass and fundamental notch; demodulator
  * in the compensated frame and HF observer (sensorless, calibration); position reference
  * (trajectory or step; calibration sequence); position/speed control -> force -> i_q reference;
  * d/q current control on the feedback angle; HF injection added on the estimated d-axis;
@@ -29,6 +30,7 @@
 
 #include "linsense/ls_ctrl.h"
 #include "linsense/ls_demod.h"
+#include "linsense/ls_dtres.h"
 #include "linsense/ls_filter.h"
 #include "linsense/ls_inject.h"
 #include "linsense/ls_lut.h"
@@ -69,6 +71,7 @@ typedef struct {
                                one-period computation delay plus the half-period average), >= 0 */
     int32_t enc_counts;     /* -, encoder counts per electrical period, > 0 */
     bool inject_sensored;   /* keep injecting in LS_MODE_SENSORED */
+    bool hf_dtres;          /* take the current the dead-time residual drove out of the HF path */
     ls_inject_cfg inject;   /* HF injection */
     ls_biquad_cfg bpf;      /* HF band-pass on the alpha-beta currents (LS_BIQUAD_BANDPASS) */
     ls_biquad_cfg sep;      /* fundamental separation (LS_BIQUAD_NOTCH at the injection
@@ -80,6 +83,7 @@ typedef struct {
     ls_posctrl_cfg pos;     /* position (and speed) controller */
     ls_traj_cfg traj;       /* trajectory generator */
     ls_mod_cfg mod;         /* modulator */
+    ls_dtres_cfg dtres;     /* response model of the dead-time residual (used if hf_dtres) */
     ls_protect_cfg prot;    /* protection */
     ls_cal_cfg cal;         /* LUT calibration */
 } ls_drive_cfg;
@@ -140,6 +144,7 @@ typedef struct {
     ls_posctrl pos;
     ls_traj traj;
     ls_mod mod;
+    ls_dtres dtres;
     ls_protect prot;
     LS_REAL f_ref;       /* N, force reference of the last step */
     LS_REAL ts;          /* s */

@@ -1,6 +1,9 @@
-/* linsense firmware library: pulsating HF voltage injection on the estimated d-axis.
+/* linsense firmware library: HF voltage injection on the estimated d-axis.
  *
- * v_d_hf[k] = A[k] cos(phi[k]), phi advancing by 2 pi f / fs per step. The carrier is a unit
+ * v_d_hf[k] = A[k] cos(phi[k]), phi advancing by 2 pi f / fs per step (pulsating, the paper's), and
+ * optionally v_q_hf[k] = kappa A[k] sin(phi[k]) on the estimated q-axis (elliptical): then no phase
+ * current stays near zero through the HF period, which is what makes the estimate robust to the
+ * inverter's dead time (docs/theory.md). The carrier is a unit
  * phasor rotated by a fixed step each sample (no trigonometry per step) and renormalised, so
  * it is phase-continuous for any frequency, including through amplitude ramps.
  */
@@ -14,6 +17,8 @@ typedef struct {
     LS_REAL freq;      /* Hz, injection frequency, > 0 */
     LS_REAL fs;        /* Hz, sampling rate, >= 4 freq */
     LS_REAL ramp_rate; /* V/s, amplitude slew when switched on or off, > 0 */
+    LS_REAL quad;      /* -, kappa in [0, 1): kappa A sin(phi) added on the estimated q-axis (elliptical
+                          injection, docs/theory.md; 0: pulsating, as the paper) */
 } ls_inject_cfg;
 
 typedef struct {
@@ -23,6 +28,7 @@ typedef struct {
     LS_REAL amp;       /* V, present amplitude */
     LS_REAL amp_step;  /* V, amplitude change per step during a ramp */
     bool on;           /* injection requested on */
+    LS_REAL v_q;       /* V, q-axis component of the last step, kappa A sin(phi) */
 } ls_inject;
 
 ls_status ls_inject_init(ls_inject *inj, const ls_inject_cfg *cfg);
@@ -42,6 +48,7 @@ static inline LS_REAL ls_inject_step(ls_inject *inj)
         inj->amp = inj->amp - inj->amp_step > target ? inj->amp - inj->amp_step : target;
     }
     v = inj->amp * inj->c;
+    inj->v_q = inj->cfg.quad * inj->amp * inj->s;
     /* rotate the carrier by one step and pull it back onto the unit circle (first-order
      * Newton step for 1/|z|, exact to O(err^2) per step, so the error never accumulates) */
     c = inj->c * inj->dc - inj->s * inj->ds;

@@ -30,6 +30,9 @@ typedef struct {
     LS_REAL i_prev[3]; /* A, phase currents of the previous step (for the extrapolation) */
     bool have_prev;    /* i_prev is valid */
     LS_REAL inv_band;  /* 1/A, 1 / i_band */
+    LS_REAL hist_d[2][3]; /* -, duties of the last two steps as applied ([0] the newest) */
+    LS_REAL hist_c[2][3]; /* -, the dead-time compensation they contain */
+    uint32_t n_hist;      /* -, valid history entries (0 to 2) */
 } ls_mod;
 
 ls_status ls_mod_init(ls_mod *m, const ls_mod_cfg *cfg);
@@ -79,7 +82,14 @@ static inline bool ls_mod_step_impl(ls_mod *m, LS_REAL v_a, LS_REAL v_b, LS_REAL
             }
         }
     }
-    m->have_prev = dtc;
+    if (!dtc && i_abc != NULL) { /* the residual estimate needs them too */
+        for (k = 0; k < 3; ++k) {
+            if (LS_ISFINITE(i_abc[k])) {
+                m->i_prev[k] = i_abc[k];
+            }
+        }
+    }
+    m->have_prev = i_abc != NULL;
     v[0] = v_a;
     v[1] = LS_R(-0.5) * v_a + LS_R(0.5) * LS_SQRT3 * v_b;
     v[2] = LS_R(-0.5) * v_a - LS_R(0.5) * LS_SQRT3 * v_b;
@@ -96,8 +106,53 @@ static inline bool ls_mod_step_impl(ls_mod *m, LS_REAL v_a, LS_REAL v_b, LS_REAL
         }
         clipped = clipped || d > LS_R(1.0) || d < LS_R(0.0);
         duty[k] = ls_clamp(d, LS_R(0.0), LS_R(1.0));
+        m->hist_d[1][k] = m->hist_d[0][k];
+        m->hist_c[1][k] = m->hist_c[0][k];
+        m->hist_d[0][k] = duty[k];
+        m->hist_c[0][k] = dtc ? dt[k] : LS_R(0.0);
     }
+    m->n_hist = m->n_hist < 2u ? m->n_hist + 1u : 2u;
     return clipped;
+}
+
+/* The dead-time voltage error, net of the compensation, that the inverter left in the PWM period
+ * that has just ended: call with the currents sampled at its end, before ls_mod_step. Its duties
+ * were computed two steps ago; each leg switches at (1 -+ d)/2 of the period, loses the dead time
+ * at turn-on when its current flows out and gains it at turn-off when it flows in (duty error
+ * -(t_dead f_pwm)(sign i_on + sign i_off)/2), with i_on and i_off interpolated between the
+ * period's start current (i_prev) and end current (i_abc). A leg that does not switch (d = 0 or 1)
+ * has no error. Writes the alpha-beta voltage error (V) and returns true, or writes 0 and returns
+ * false while the history is not complete. i_abc and v_dc must be finite. */
+static inline bool ls_mod_residual(const ls_mod *m, const LS_REAL i_abc[3], LS_REAL v_dc, LS_REAL k_rip,
+                                   LS_REAL v_ab[2])
+{
+    LS_REAL e[3], dm;
+    int k;
+    if (m->n_hist < 2u || !m->have_prev) {
+        v_ab[0] = v_ab[1] = LS_R(0.0);
+        return false;
+    }
+    dm = (m->hist_d[1][0] + m->hist_d[1][1] + m->hist_d[1][2]) * (LS_R(1.0) / LS_R(3.0));
+    for (k = 0; k < 3; ++k) {
+        const LS_REAL d = m->hist_d[1][k];
+        const LS_REAL di = i_abc[k] - m->i_prev[k];
+        LS_REAL acc = LS_R(0.0), rip;
+        int j;
+        for (j = 0; j < 3; ++j) {
+            acc += m->hist_d[1][j] > d ? m->hist_d[1][j] - d : LS_R(0.0);
+        }
+        rip = -k_rip * v_dc * (acc * (LS_R(1.0) / LS_R(6.0)) + LS_R(0.5) * (LS_R(1.0) - d) * (d - dm));
+        const LS_REAL i_on = m->i_prev[k] + di * (LS_R(0.5) - LS_R(0.5) * d) + rip;
+        const LS_REAL i_off = m->i_prev[k] + di * (LS_R(0.5) + LS_R(0.5) * d) - rip;
+        const LS_REAL sg = (LS_REAL)((i_on > LS_R(0.0)) - (i_on < LS_R(0.0)) + (i_off > LS_R(0.0)) -
+                                     (i_off < LS_R(0.0)));
+        const bool switches = d > LS_R(0.0) && d < LS_R(1.0);
+        e[k] = switches ? m->hist_c[1][k] - LS_R(0.5) * m->d_dead * sg : LS_R(0.0);
+    }
+    /* pole-voltage errors to alpha-beta (the common mode does not reach a floating star) */
+    v_ab[0] = v_dc * (LS_R(2.0) * e[0] - e[1] - e[2]) * (LS_R(1.0) / LS_R(3.0));
+    v_ab[1] = v_dc * (e[1] - e[2]) * (LS_R(1.0) / LS_SQRT3);
+    return true;
 }
 
 /* v_a, v_b: alpha-beta voltage reference (V); v_dc (V); i_abc: phase currents (A) for the

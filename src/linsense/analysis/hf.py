@@ -61,30 +61,35 @@ def psi_lut(model, theta) -> np.ndarray:
     return np.arctan2(-L_dq, L_q)
 
 
-def psi_lut_resistive(motor, theta, f_inj: float) -> np.ndarray:
+def psi_lut_resistive(motor, theta, f_inj: float, quad: float = 0.0) -> np.ndarray:
     """Compensation angle (rad) that zeroes the demodulated error at theta_err = 0 with R_s.
 
     Eq. (12) assumes a purely inductive HF response. With the winding resistance the HF currents
     on d and q are no longer in phase: for a pulsating voltage on d at ``f_inj`` (Hz) the ratio
     ``r = i_q / i_d = -j w L_dq / (R_s + j w L_q)`` is complex. Both demodulators (the product
-    ``i_d i_q`` and the synchronous one) measure ``Re(i_q' conj(i_d'))`` in the rotated frame,
-    which vanishes for ``tan 2 Psi = 2 Re(r) / (1 - |r|^2)``. For ``R_s = 0`` this is eq. (12).
-    Because the position error is the angle error times ``L_q / (L_q - L_d)``, the difference
-    matters: for ecce2010 at 1 kHz eq. (12) leaves up to 2 electrical degrees of bias.
+    ``i_d i_q`` and the synchronous one) measure ``Re(i_d' conj(i_q'))`` in the rotated frame,
+    which vanishes for ``tan 2 Psi = 2 Re(i_d conj(i_q)) / (|i_d|^2 - |i_q|^2)`` (for the pulsating
+    injection ``= 2 Re(r) / (1 - |r|^2)``; for ``R_s = 0`` this is eq. 12). Because the position
+    error is the angle error times ``L_q / (L_q - L_d)``, the difference matters: for ecce2010 at
+    1 kHz eq. (12) leaves up to 2 electrical degrees of bias.
+
+    ``quad`` (kappa) adds ``kappa sin`` on the estimated q-axis to the ``cos`` on d (elliptical
+    injection, docs/theory.md): its direct q response is in quadrature with i_d only without
+    resistance, so the angle then also cancels ``kappa Im((R + j w L_d)/(R + j w L_q))``.
     """
-    L_d, L_q, L_dq = dq_components(motor, theta)
-    w = 2.0 * np.pi * f_inj
-    r = -1j * w * L_dq / (motor.R_s + 1j * w * L_q)
-    return 0.5 * np.arctan2(2.0 * r.real, 1.0 - np.abs(r) ** 2)
+    i = hf_current(motor, theta, 1.0, f_inj, 0.0, quad=quad)
+    p = np.real(i[..., 0] * np.conj(i[..., 1]))
+    return 0.5 * np.arctan2(2.0 * p, np.abs(i[..., 0]) ** 2 - np.abs(i[..., 1]) ** 2)
 
 
-def demod_ratio(motor, theta, theta_err, v_inj: float, f_inj: float, psi_comp) -> np.ndarray:
+def demod_ratio(motor, theta, theta_err, v_inj: float, f_inj: float, psi_comp,
+                quad: float = 0.0) -> np.ndarray:
     """Normalised output of the product demodulator, ``<i_d' i_q'> / <i_d'^2 + i_q'^2>``.
 
     HF currents from :func:`hf_current` (with R_s), rotated by ``psi_comp`` (rad) from the
     estimated frame; the time averages of products of phasors are ``Re(a conj(b)) / 2``.
     """
-    i = hf_current(motor, theta, v_inj, f_inj, theta_err)
+    i = hf_current(motor, theta, v_inj, f_inj, theta_err, quad=quad)
     c, s = np.cos(psi_comp), np.sin(psi_comp)
     i_d = c * i[..., 0] + s * i[..., 1]
     i_q = -s * i[..., 0] + c * i[..., 1]
@@ -140,17 +145,19 @@ def loop_gain_factor(model, theta) -> np.ndarray:
 
 
 def hf_current(
-    motor, theta, v_inj: float, f_inj: float, theta_err=0.0
+    motor, theta, v_inj: float, f_inj: float, theta_err=0.0, quad: float = 0.0
 ) -> np.ndarray:
     """Complex HF current phasors ``(i_d_est, i_q_est)`` (A, peak) for a pulsating voltage.
 
     Solves ``v = (R_s I + j omega L_dq) i`` in the true frame at standstill for a voltage of
-    amplitude ``v_inj`` (V) at ``f_inj`` (Hz) on the estimated d-axis. Returns shape ``(..., 2)``.
+    amplitude ``v_inj`` (V) at ``f_inj`` (Hz) on the estimated d-axis, plus ``quad v_inj sin`` on
+    the estimated q-axis (phasor ``-j quad v_inj``; 0: pulsating). Returns shape ``(..., 2)``.
     """
     theta, theta_err = np.broadcast_arrays(np.asarray(theta, float), np.asarray(theta_err, float))
     w = 2.0 * np.pi * f_inj
     Z = motor.R_s * np.eye(2) + 1j * w * motor.inductance.L_dq(theta)
-    v_dq = v_inj * rot(theta_err)[..., :, 0]
+    R = rot(theta_err)
+    v_dq = v_inj * (R[..., :, 0] - 1j * quad * R[..., :, 1])
     i_dq = np.linalg.solve(Z, v_dq[..., None].astype(complex))[..., 0]
     return np.einsum("...ji,...j->...i", rot(theta_err), i_dq)
 

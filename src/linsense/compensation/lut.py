@@ -78,11 +78,12 @@ def interpolate(table: np.ndarray, theta: np.ndarray | float) -> np.ndarray:
     return (1.0 - f) * table[k] + f * table[(k + 1) % n]
 
 
-def build_lut(motor, points: int, f_inj: float | None = None) -> Lut:
+def build_lut(motor, points: int, f_inj: float | None = None, quad: float = 0.0) -> Lut:
     """Psi_LUT of ``motor`` sampled at ``points`` positions over one electrical period.
 
     Without ``f_inj`` this is eq. (12); with it (Hz), the resistance-aware angle of
-    :func:`~linsense.analysis.hf.psi_lut_resistive` for that injection frequency.
+    :func:`~linsense.analysis.hf.psi_lut_resistive` for that injection frequency and the
+    injection's quadrature share ``quad`` (0: pulsating, as the paper).
     """
     if points < 4:
         raise ValueError("points must be >= 4")
@@ -93,8 +94,10 @@ def build_lut(motor, points: int, f_inj: float | None = None) -> Lut:
     else:
         if not f_inj > 0:
             raise ValueError("f_inj must be positive")
-        values = psi_lut_resistive(motor, theta, f_inj)
+        values = psi_lut_resistive(motor, theta, f_inj, quad=quad)
         prov = {**prov, "f_inj": f_inj, "lut_model": "with R_s at f_inj"}
+        if quad:
+            prov["inject_quad"] = quad
     return Lut(values, name=motor.name, provenance=prov)
 
 

@@ -9,6 +9,7 @@ demodulator gain, psi_pm, mass, force constant, R_s) come from the motor model u
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -170,10 +171,12 @@ def build(sc: Scenario) -> Built:
     d.inject.amplitude = inj.amplitude
     d.inject.freq = inj.frequency
     d.inject.ramp_rate = inj.ramp_rate
+    d.inject.quad = inj.quadrature
     d.bpf.f0 = d.sep.f0 = inj.frequency
     d.bpf.q = d.sep.q = inj.filter_q
     d.demod.method = lib.LS_DEMOD_PRODUCT if obs.demod_method == "product" else lib.LS_DEMOD_HETERODYNE
     d.demod.f_lpf = obs.demod_lpf_hz
+    d.demod.f_notch = 2.0 * inj.frequency if obs.demod_notch else 0.0
     d.demod.gain = known["demod_gain"]
     d.demod.min_level = obs.min_level
     d.obs.type = lib.LS_OBS_PLL if obs.type == "pll" else lib.LS_OBS_MECH
@@ -209,10 +212,13 @@ def build(sc: Scenario) -> Built:
     d.mod.dead_time = inv.dead_time
     d.mod.dtc = inv.dead_time_compensation
     d.mod.i_band = inv.dtc_current_band
+    d.hf_dtres = obs.dead_time_residual
+    d.dtres.r_s, d.dtres.l_d, d.dtres.l_q = known["R_s"], known["L_d"], known["L_q"]
+    d.dtres.ripple = obs.dead_time_ripple
     d.prot.i_max, d.prot.v_dc_min, d.prot.v_dc_max = prot.i_max, prot.v_dc_min, prot.v_dc_max
     d.prot.err_max, d.prot.err_time, d.prot.omega_max = prot.err_max, prot.err_time, prot.omega_max
     d.cal.period = int(math.floor(s.initial.position_mm * 1e-3 / tau))
-    for sub in ("inject", "bpf", "sep", "demod", "obs", "enc_obs", "current", "traj", "prot"):
+    for sub in ("inject", "bpf", "sep", "demod", "obs", "enc_obs", "current", "traj", "prot", "dtres"):
         getattr(d, sub).fs = fs
     d.pos.speed.fs = fs
 
@@ -220,7 +226,9 @@ def build(sc: Scenario) -> Built:
     comp = None
     if compensation == "lut":
         f_inj = inj.frequency if obs.lut_model == "resistive" else None
-        comp = build_lut(motor, obs.lut_points, f_inj=f_inj).values
+        # the table the controller can know: the motor model with the resistance it believes
+        lut_motor = dataclasses.replace(motor, R_s=known["R_s"])
+        comp = build_lut(lut_motor, obs.lut_points, f_inj=f_inj, quad=inj.quadrature if f_inj else 0.0).values
     gain_table = None
     if obs.gain_schedule:
         th = 2.0 * np.pi * np.arange(obs.lut_points) / obs.lut_points

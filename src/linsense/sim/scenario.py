@@ -66,7 +66,7 @@ class ControlSection(BaseModel):
     mode: Literal["sensorless_lut", "sensorless_nolut", "sensored"] = "sensorless_lut"
     fs: Positive | None = None  # Hz, must equal inverter.f_pwm (default: equal)
     delay_comp: NonNegative = _c(_C.delay_comp)  # sampling periods of angle advance
-    inject_sensored: bool = False  # keep injecting (and observing) in sensored mode
+    inject_sensored: bool = bool(_C.inject_sensored)  # keep injecting (and observing) in sensored mode
 
 
 class InjectionSection(BaseModel):
@@ -74,6 +74,7 @@ class InjectionSection(BaseModel):
     amplitude: NonNegative = _c(_C.inject.amplitude)  # V, peak, on the estimated d-axis
     frequency: Positive = _c(_C.inject.freq)  # Hz
     ramp_rate: Positive = _c(_C.inject.ramp_rate)  # V/s
+    quadrature: float = Field(default=_c(_C.inject.quad), ge=0.0, lt=1.0)  # -, kappa: kappa A sin on q
     filter_q: Positive = _c(_C.bpf.q)  # quality factor of the HF band-pass and the fundamental notch
 
 
@@ -90,7 +91,10 @@ class ObserverSection(BaseModel):
     gain_schedule: bool = False  # demodulator gain table L_q/(L_q - L_d)(theta)
     demod_method: Literal["product", "heterodyne"] = "product"
     demod_lpf_hz: Positive = _c(_C.demod.f_lpf)  # Hz
+    demod_notch: bool = bool(_C.demod.f_notch > 0)  # notch at 2 f_inj before the low-pass
     min_level: NonNegative = _c(_C.demod.min_level)  # A^2
+    dead_time_residual: bool = bool(_C.hf_dtres)  # take the dead-time residual's current out (ls_dtres.h)
+    dead_time_ripple: bool = bool(_C.dtres.ripple)  # the residual's edge currents include the PWM ripple
     omega_max: Positive = _c(_C.obs.omega_max)  # rad/s electrical, clamp of the speed estimate
     force_max: Positive = _c(_C.obs.force_max)  # N, clamp of the load estimate (mech)
 
@@ -114,7 +118,8 @@ class ControllerSection(BaseModel):
     kp_x: Positive | None = None  # p: 1/s (default 10); pd: N/m (required)
     kd_x: NonNegative = 0.0  # pd: N s/m
     v_max: Positive = 0.5  # m/s, speed-reference limit (p)
-    speed_bandwidth_hz: Positive = 6.0  # Hz: kp = m w, ki = m w^2 / 4
+    # Hz: kp = m w, ki = m w^2 / 4 (the C default's w)
+    speed_bandwidth_hz: Positive = _c(_C.pos.speed.kp / _C.pos.mass / (2.0 * math.pi))
     speed_kp: Positive | None = None  # N s/m, overrides the bandwidth
     speed_ki: NonNegative | None = None  # N/m
     current_bandwidth_hz: Positive = 250.0  # Hz: kp = w (L_d + L_q)/2, ki = w R_s

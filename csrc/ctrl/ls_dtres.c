@@ -1,0 +1,39 @@
+/* Dead-time residual response model (see linsense/ls_dtres.h). */
+#include <math.h>
+
+
+
+#include "linsense/ls_dtres.h"
+
+static void axis(LS_REAL r_s, LS_REAL l, LS_REAL ts, LS_REAL *a, LS_REAL *b)
+{
+    const LS_REAL x = r_s * ts / l;
+    *a = LS_EXP(-x);
+    /* (1 - a) / R = (T / L) (1 - e^-x) / x, with its series where x is tiny (no 0/0 at R = 0) */
+    *b = (ts / l) * (x > LS_R(1e-4) ? (LS_R(1.0) - *a) / x : LS_R(1.0) - LS_R(0.5) * x);
+}
+
+ls_status ls_dtres_init(ls_dtres *r, const ls_dtres_cfg *cfg)
+{
+    LS_REAL ts;
+    if (r == NULL || cfg == NULL) {
+        return LS_ERR_NULL;
+    }
+    if (!LS_ISFINITE4(cfg->fs, cfg->r_s, cfg->l_d, cfg->l_q) || !(cfg->fs > LS_R(0.0)) ||
+        cfg->r_s < LS_R(0.0) || !(cfg->l_d > LS_R(0.0)) || !(cfg->l_q > LS_R(0.0))) {
+        return LS_ERR_PARAM;
+    }
+    r->cfg = *cfg;
+    ts = LS_R(1.0) / cfg->fs;
+    axis(cfg->r_s, cfg->l_d, ts, &r->a_d, &r->b_d);
+    axis(cfg->r_s, cfg->l_q, ts, &r->a_q, &r->b_q);
+    r->k_rip = cfg->ripple ? LS_R(2.0) * ts / (cfg->l_d + cfg->l_q) : LS_R(0.0);
+    ls_dtres_reset(r);
+    return LS_OK;
+}
+
+void ls_dtres_reset(ls_dtres *r)
+{
+    r->i_d = LS_R(0.0);
+    r->i_q = LS_R(0.0);
+}
