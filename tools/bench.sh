@@ -16,8 +16,8 @@ count() { # $1: dead-time compensation on (1) or off (0)
 total_dtc=$(count 1)
 total=$(count 0)
 echo "ls_drive_step, sensorless with LUT, float, -O2, x86-64, $N steps during a move: $total instructions"
-echo "  with dead-time compensation on: $(( (total_dtc + N / 2) / N )) per step"
-echo "instructions per step: $(( (total + N / 2) / N ))"
+echo "  with dead-time compensation off: $(( (total + N / 2) / N )) per step"
+echo "instructions per step (everything on: compensation, residual, elliptical injection, notch): $(( (total_dtc + N / 2) / N ))"
 if command -v "${ARM_CC:-arm-none-eabi-gcc}" >/dev/null; then
   tools/check_mcu.sh build/arm | tail -1
 else

@@ -60,7 +60,8 @@ def main() -> int:
         except OSError:
             pass
     motor = load_motor("ecce2010")
-    lut = build_lut(motor, 360, f_inj=1000.0)
+    # the table of the firmware's default injection (kappa from ls_drive_default_cfg)
+    lut = build_lut(motor, 360, f_inj=1000.0, quad=float(ctrl.drive_default_cfg().inject.quad))
     print(f"simulator benchmark: ecce2010, sensorless with LUT, {args.seconds:g} s moves 0 -> 20 mm -> 0 "
           f"(0.2 m/s, 1 m/s^2), 16 kHz, every period recorded, best/median of {args.repeat}, one core")
     for fidelity in ("average", "switching"):

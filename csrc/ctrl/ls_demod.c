@@ -5,14 +5,16 @@
 
 ls_status ls_demod_init(ls_demod *d, const ls_demod_cfg *cfg)
 {
-    ls_biquad_cfg lp, nt;
+    ls_biquad_cfg lp;
+    LS_REAL cn, sn, g;
     int k;
     if (d == NULL || cfg == NULL) {
         return LS_ERR_NULL;
     }
     if ((cfg->method != LS_DEMOD_PRODUCT && cfg->method != LS_DEMOD_HETERODYNE) ||
         !LS_ISFINITE(cfg->gain) || cfg->gain == LS_R(0.0) || !LS_ISFINITE(cfg->min_level) ||
-        cfg->min_level < LS_R(0.0) || !LS_ISFINITE(cfg->f_notch) || cfg->f_notch < LS_R(0.0)) {
+        cfg->min_level < LS_R(0.0) || !LS_ISFINITE(cfg->f_notch) || cfg->f_notch < LS_R(0.0) ||
+        cfg->f_notch >= LS_R(0.5) * cfg->fs) {
         return LS_ERR_PARAM;
     }
     if ((cfg->comp != NULL && cfg->comp->len < 4u) || (cfg->gain_table != NULL && cfg->gain_table->len < 4u)) {
@@ -22,17 +24,20 @@ ls_status ls_demod_init(ls_demod *d, const ls_demod_cfg *cfg)
     lp.f0 = cfg->f_lpf;
     lp.q = LS_R(0.70710678);
     lp.fs = cfg->fs;
-    nt.type = LS_BIQUAD_NOTCH;
-    nt.f0 = cfg->f_notch;
-    nt.q = LS_R(1.0);
-    nt.fs = cfg->fs;
     for (k = 0; k < 4; ++k) {
-        if (ls_biquad_init(&d->lp[k], &lp) != LS_OK ||
-            (cfg->f_notch > LS_R(0.0) && ls_biquad_init(&d->nt[k], &nt) != LS_OK)) {
+        if (ls_biquad_init(&d->lp[k], &lp) != LS_OK) {
             return LS_ERR_PARAM;
         }
+        if (cfg->f_notch > LS_R(0.0)) {
+            /* the numerator's zeros moved from z = -1 to exp(+-j w_n): g (1 - 2 cos w_n z^-1 + z^-2),
+             * g for unity DC gain, the poles unchanged (one biquad, the ripple at f_notch nulled) */
+            ls_sincos_full(LS_TWO_PI * cfg->f_notch / cfg->fs, &cn, &sn);
+            g = (LS_R(1.0) + d->lp[k].a1 + d->lp[k].a2) / (LS_R(2.0) - LS_R(2.0) * cn);
+            d->lp[k].b0 = g;
+            d->lp[k].b1 = LS_R(-2.0) * cn * g;
+            d->lp[k].b2 = g;
+        }
     }
-    d->use_notch = cfg->f_notch > LS_R(0.0);
     d->cfg = *cfg;
     d->use_comp = cfg->comp != NULL;
     d->use_gain_table = cfg->gain_table != NULL;
@@ -45,7 +50,6 @@ void ls_demod_reset(ls_demod *d)
     int k;
     for (k = 0; k < 4; ++k) {
         ls_biquad_reset(&d->lp[k]);
-        ls_biquad_reset(&d->nt[k]);
     }
     d->psi = LS_R(0.0);
     d->level = LS_R(0.0);

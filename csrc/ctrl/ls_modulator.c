@@ -30,5 +30,6 @@ void ls_mod_reset(ls_mod *m)
         m->hist_c[0][k] = m->hist_c[1][k] = LS_R(0.0);
     }
     m->have_prev = false;
+    m->newest = 0u;
     m->n_hist = 0u;
 }

@@ -6,14 +6,14 @@
 #include <stdlib.h>
 
 #include "linsense/ls_drive.h"
-#include "ls_lut_ecce2010_r.h"
+#include "ls_lut_ecce2010_q.h" /* the table of the default (elliptical) injection */
 #include "ls_test_plant.h"
 
 int main(int argc, char **argv)
 {
     long n = argc > 1 ? atol(argv[1]) : 20000;
     long k;
-    ls_lut_cfg lc = {ls_lut_ecce2010_r, LS_LUT_ECCE2010_R_LEN};
+    ls_lut_cfg lc = {ls_lut_ecce2010_q, LS_LUT_ECCE2010_Q_LEN};
     ls_lut lut;
     ls_drive_cfg cfg;
     ls_drive d;

@@ -109,8 +109,6 @@ typedef struct {
 typedef struct {
     ls_demod_cfg cfg;
     ls_biquad lp[4];
-    ls_biquad nt[4];
-    bool use_notch;
     bool use_comp;
     bool use_gain_table;
     LS_REAL psi;
@@ -215,7 +213,7 @@ void ls_dtres_reset(ls_dtres *r);
 typedef struct { LS_REAL f_pwm; LS_REAL dead_time; bool dtc; LS_REAL i_band; LS_REAL dtc_lead; } ls_mod_cfg;
 typedef struct {
     ls_mod_cfg cfg; LS_REAL d_dead; LS_REAL i_prev[3]; bool have_prev; LS_REAL inv_band;
-    LS_REAL hist_d[2][3]; LS_REAL hist_c[2][3]; uint32_t n_hist;
+    LS_REAL hist_d[2][3]; LS_REAL hist_c[2][3]; uint32_t newest; uint32_t n_hist;
 } ls_mod;
 ls_status ls_mod_init(ls_mod *m, const ls_mod_cfg *cfg);
 void ls_mod_reset(ls_mod *m);

@@ -35,15 +35,13 @@ typedef struct {
     const ls_lut *comp;       /* compensation table Psi_LUT(theta_est), rad; NULL: none */
     const ls_lut *gain_table; /* g(theta_est), -; replaces `gain` when not NULL and enabled */
     LS_REAL min_level;        /* A^2, HF mean-square current below which err is held at 0, >= 0 */
-    LS_REAL f_notch;          /* Hz, notch before the low-pass filters, 2 f_inj: removes the products'
-                                 ripple at twice the injection frequency (0: none), < fs/2 */
+    LS_REAL f_notch;          /* Hz, the low-pass filters' zeros (instead of at fs/2), 2 f_inj: nulls the
+                                 products' ripple at twice the injection frequency (0: plain), < fs/2 */
 } ls_demod_cfg;
 
 typedef struct {
     ls_demod_cfg cfg;  /* copy of the configuration */
-    ls_biquad lp[4];   /* low-pass filters (product: 2 used; heterodyne: 4) */
-    ls_biquad nt[4];   /* notches at f_notch before them (used if f_notch > 0) */
-    bool use_notch;    /* f_notch > 0 */
+    ls_biquad lp[4];   /* low-pass filters (product: 2 used; heterodyne: 4), zeros at f_notch */
     bool use_comp;     /* compensation table in use */
     bool use_gain_table; /* gain table in use */
     LS_REAL psi;       /* rad, total compensation angle used at the last step */
@@ -72,8 +70,7 @@ static inline LS_REAL ls_demod_step_cs(ls_demod *d, LS_REAL i_a, LS_REAL i_b, LS
     if (product) {
         /* i_d^2 + i_q^2 = i_a^2 + i_b^2 (a rotation keeps the length): the level, and the
          * division below, do not wait for the angle */
-        const LS_REAL sq = i_a * i_a + i_b * i_b;
-        den = ls_biquad_step(&d->lp[1], d->use_notch ? ls_biquad_step(&d->nt[1], sq) : sq);
+        den = ls_biquad_step(&d->lp[1], i_a * i_a + i_b * i_b);
         d->level = den;
     }
     if (d->use_comp) {
@@ -96,24 +93,12 @@ static inline LS_REAL ls_demod_step_cs(ls_demod *d, LS_REAL i_a, LS_REAL i_b, LS
     i_d = c * i_a + s * i_b;
     i_q = -s * i_a + c * i_b;
     if (product) {
-        const LS_REAL pr = i_d * i_q;
-        num = ls_biquad_step(&d->lp[0], d->use_notch ? ls_biquad_step(&d->nt[0], pr) : pr);
+        num = ls_biquad_step(&d->lp[0], i_d * i_q);
     } else {
-        LS_REAL x[4], id_i, id_q, iq_i, iq_q;
-        int k;
-        x[0] = i_d * car_c;
-        x[1] = i_d * car_s;
-        x[2] = i_q * car_c;
-        x[3] = i_q * car_s;
-        if (d->use_notch) {
-            for (k = 0; k < 4; ++k) {
-                x[k] = ls_biquad_step(&d->nt[k], x[k]);
-            }
-        }
-        id_i = ls_biquad_step(&d->lp[0], x[0]);
-        id_q = ls_biquad_step(&d->lp[1], x[1]);
-        iq_i = ls_biquad_step(&d->lp[2], x[2]);
-        iq_q = ls_biquad_step(&d->lp[3], x[3]);
+        LS_REAL id_i = ls_biquad_step(&d->lp[0], i_d * car_c);
+        LS_REAL id_q = ls_biquad_step(&d->lp[1], i_d * car_s);
+        LS_REAL iq_i = ls_biquad_step(&d->lp[2], i_q * car_c);
+        LS_REAL iq_q = ls_biquad_step(&d->lp[3], i_q * car_s);
         num = iq_i * id_i + iq_q * id_q;
         den = id_i * id_i + id_q * id_q;
         d->level = LS_R(2.0) * den;

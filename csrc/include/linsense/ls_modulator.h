@@ -30,8 +30,9 @@ typedef struct {
     LS_REAL i_prev[3]; /* A, phase currents of the previous step (for the extrapolation) */
     bool have_prev;    /* i_prev is valid */
     LS_REAL inv_band;  /* 1/A, 1 / i_band */
-    LS_REAL hist_d[2][3]; /* -, duties of the last two steps as applied ([0] the newest) */
+    LS_REAL hist_d[2][3]; /* -, duties of the last two steps as applied ([newest] and [newest ^ 1]) */
     LS_REAL hist_c[2][3]; /* -, the dead-time compensation they contain */
+    uint32_t newest;      /* -, index of the last step's entry (0 or 1) */
     uint32_t n_hist;      /* -, valid history entries (0 to 2) */
 } ls_mod;
 
@@ -99,6 +100,7 @@ static inline bool ls_mod_step_impl(ls_mod *m, LS_REAL v_a, LS_REAL v_b, LS_REAL
     vmin = vmin < v[2] ? vmin : v[2];
     off = LS_R(-0.5) * (vmax + vmin);
     inv = LS_R(1.0) / v_dc;
+    m->newest ^= 1u; /* this step's entry replaces the one of two steps ago */
     for (k = 0; k < 3; ++k) {
         LS_REAL d = LS_R(0.5) + (v[k] + off) * inv;
         if (dtc) {
@@ -106,10 +108,8 @@ static inline bool ls_mod_step_impl(ls_mod *m, LS_REAL v_a, LS_REAL v_b, LS_REAL
         }
         clipped = clipped || d > LS_R(1.0) || d < LS_R(0.0);
         duty[k] = ls_clamp(d, LS_R(0.0), LS_R(1.0));
-        m->hist_d[1][k] = m->hist_d[0][k];
-        m->hist_c[1][k] = m->hist_c[0][k];
-        m->hist_d[0][k] = duty[k];
-        m->hist_c[0][k] = dtc ? dt[k] : LS_R(0.0);
+        m->hist_d[m->newest][k] = duty[k];
+        m->hist_c[m->newest][k] = dt[k]; /* (0 without compensation) */
     }
     m->n_hist = m->n_hist < 2u ? m->n_hist + 1u : 2u;
     return clipped;
@@ -126,28 +126,30 @@ static inline bool ls_mod_step_impl(ls_mod *m, LS_REAL v_a, LS_REAL v_b, LS_REAL
 static inline bool ls_mod_residual(const ls_mod *m, const LS_REAL i_abc[3], LS_REAL v_dc, LS_REAL k_rip,
                                    LS_REAL v_ab[2])
 {
-    LS_REAL e[3], dm;
+    const uint32_t old = m->newest ^ 1u; /* the entry of two steps ago (this step has not pushed yet) */
+    const LS_REAL *d = m->hist_d[old], *c = m->hist_c[old], *ip = m->i_prev;
+    const LS_REAL kv = k_rip * v_dc, dm = (d[0] + d[1] + d[2]) * (LS_R(1.0) / LS_R(3.0));
+    LS_REAL acc[3], e[3];
     int k;
     if (m->n_hist < 2u || !m->have_prev) {
         v_ab[0] = v_ab[1] = LS_R(0.0);
         return false;
     }
-    dm = (m->hist_d[1][0] + m->hist_d[1][1] + m->hist_d[1][2]) * (LS_R(1.0) / LS_R(3.0));
+    /* sum over the other legs of max(0, d_j - d_k): how long they are high before leg k rises */
+    acc[0] = (d[1] > d[0] ? d[1] - d[0] : LS_R(0.0)) + (d[2] > d[0] ? d[2] - d[0] : LS_R(0.0));
+    acc[1] = (d[0] > d[1] ? d[0] - d[1] : LS_R(0.0)) + (d[2] > d[1] ? d[2] - d[1] : LS_R(0.0));
+    acc[2] = (d[0] > d[2] ? d[0] - d[2] : LS_R(0.0)) + (d[1] > d[2] ? d[1] - d[2] : LS_R(0.0));
     for (k = 0; k < 3; ++k) {
-        const LS_REAL d = m->hist_d[1][k];
-        const LS_REAL di = i_abc[k] - m->i_prev[k];
-        LS_REAL acc = LS_R(0.0), rip;
-        int j;
-        for (j = 0; j < 3; ++j) {
-            acc += m->hist_d[1][j] > d ? m->hist_d[1][j] - d : LS_R(0.0);
-        }
-        rip = -k_rip * v_dc * (acc * (LS_R(1.0) / LS_R(6.0)) + LS_R(0.5) * (LS_R(1.0) - d) * (d - dm));
-        const LS_REAL i_on = m->i_prev[k] + di * (LS_R(0.5) - LS_R(0.5) * d) + rip;
-        const LS_REAL i_off = m->i_prev[k] + di * (LS_R(0.5) + LS_R(0.5) * d) - rip;
-        const LS_REAL sg = (LS_REAL)((i_on > LS_R(0.0)) - (i_on < LS_R(0.0)) + (i_off > LS_R(0.0)) -
-                                     (i_off < LS_R(0.0)));
-        const bool switches = d > LS_R(0.0) && d < LS_R(1.0);
-        e[k] = switches ? m->hist_c[1][k] - LS_R(0.5) * m->d_dead * sg : LS_R(0.0);
+        /* the edge currents are i_mid -+ s: the period's mid current, and half the edges' distance
+         * times the slope plus the ripple's magnitude at the edges, (V_dc T / L)(acc/6 +
+         * (1 - d)(d - d_mean)/2); the two signs add to 2 sign(i_mid) when |i_mid| > |s|, else cancel */
+        const LS_REAL i_mid = LS_R(0.5) * (ip[k] + i_abc[k]);
+        const LS_REAL sp = LS_R(0.5) * d[k] * (i_abc[k] - ip[k]) +
+                           kv * (acc[k] * (LS_R(1.0) / LS_R(6.0)) + LS_R(0.5) * (LS_R(1.0) - d[k]) * (d[k] - dm));
+        const LS_REAL dd = i_mid > LS_R(0.0) ? m->d_dead : -m->d_dead;
+        /* (a leg at 0 or 1 does not switch: no error, and no compensation reached it) */
+        e[k] = d[k] * (LS_R(1.0) - d[k]) > LS_R(0.0) ? c[k] - (LS_FABS(i_mid) > LS_FABS(sp) ? dd : LS_R(0.0))
+                                                      : LS_R(0.0);
     }
     /* pole-voltage errors to alpha-beta (the common mode does not reach a floating star) */
     v_ab[0] = v_dc * (LS_R(2.0) * e[0] - e[1] - e[2]) * (LS_R(1.0) / LS_R(3.0));
