@@ -95,12 +95,14 @@ void ls_drive_default_cfg(ls_drive_cfg *c)
     c->prot.fs = fs;
     c->cal.points = 56u;
     c->cal.table = NULL;
-    c->cal.k_int = LS_R(20.0);
+    c->cal.k_int = LS_R(60.0);
     c->cal.t_settle = LS_R(0.15);
-    c->cal.t_hold = LS_R(0.05);
+    c->cal.t_hold = LS_R(0.1);
     c->cal.tol = LS_R(0.0005);
     c->cal.t_max = LS_R(3.0);
     c->cal.period = 0;
+    c->cal.dither_amp = LS_R(0.4);
+    c->cal.dither_freq = LS_R(150.0); /* not a submultiple of the injection (200 Hz is: 5 x 200 = 1 kHz) */
 }
 
 /* --------------------------------------------------------------------------- init */
@@ -134,7 +136,9 @@ ls_status ls_drive_init(ls_drive *d, const ls_drive_cfg *cfg)
     if (cfg->cal.table != NULL &&
         (cfg->cal.points < 4u || !pos_finite(cfg->cal.k_int) || !LS_ISFINITE(cfg->cal.t_settle) ||
          cfg->cal.t_settle < LS_R(0.0) || !pos_finite(cfg->cal.t_hold) || !pos_finite(cfg->cal.tol) ||
-         !pos_finite(cfg->cal.t_max))) {
+         !pos_finite(cfg->cal.t_max) || !LS_ISFINITE(cfg->cal.dither_amp) || cfg->cal.dither_amp < LS_R(0.0) ||
+         (cfg->cal.dither_amp > LS_R(0.0) &&
+          (!pos_finite(cfg->cal.dither_freq) || cfg->cal.dither_freq >= LS_R(0.25) * cfg->fs)))) {
         return LS_ERR_PARAM;
     }
     st |= ls_inject_init(&d->inj, &cfg->inject);
@@ -169,6 +173,9 @@ ls_status ls_drive_init(ls_drive *d, const ls_drive_cfg *cfg)
     d->inv_kx = cfg->pole_pitch / LS_TWO_PI;
     d->inv_kf = LS_R(1.0) / cfg->force_constant;
     d->delay_ts = cfg->delay_comp * d->ts;
+    if (cfg->cal.dither_amp > LS_R(0.0)) {
+        ls_sincos_full(LS_TWO_PI * cfg->cal.dither_freq * d->ts, &d->cal_dc, &d->cal_ds);
+    }
     d->initialised = true;
     ls_drive_reset(d, zero);
     return LS_OK;
@@ -202,6 +209,8 @@ void ls_drive_reset(ls_drive *d, ls_pos p)
     d->cal_timer = 0u;
     d->cal_hold = 0u;
     d->psi_cal = LS_R(0.0);
+    d->cal_c = LS_R(1.0);
+    d->cal_s = LS_R(0.0);
 }
 
 ls_status ls_drive_set_mode(ls_drive *d, ls_mode mode)
@@ -354,6 +363,8 @@ static void calibration_step(ls_drive *d)
             d->cal_phase = LS_CAL_ADAPT;
             d->cal_timer = 0u;
             d->cal_hold = 0u;
+            d->cal_sum_err = LS_R(0.0);
+            d->cal_sum_psi = LS_R(0.0);
         }
         break;
     case LS_CAL_ADAPT:
@@ -361,14 +372,26 @@ static void calibration_step(ls_drive *d)
             d->psi_cal = ls_clamp(d->psi_cal + c->k_int * d->demod.ratio * d->ts, -LS_PI / LS_R(4.0),
                                   LS_PI / LS_R(4.0));
         }
-        d->cal_hold = (d->demod.valid && LS_FABS(d->demod.ratio) < c->tol) ? d->cal_hold + 1u : 0u;
+        /* windows of t_hold: a point is accepted when the mean of the demodulated error (the
+         * observer's error against the encoder) over a whole window is below tol; the table gets the
+         * window's mean angle (the HF currents and the dead time make both ripple) */
+        d->cal_sum_err += d->demod.err;
+        d->cal_sum_psi += d->psi_cal;
+        d->cal_hold++;
         d->cal_timer++;
         if ((LS_REAL)d->cal_hold * d->ts >= c->t_hold) {
-            c->table[d->cal_index] = (float)d->psi_cal;
-            d->cal_index++;
-            d->cal_timer = 0u;
-            d->cal_phase = d->cal_index >= c->points ? LS_CAL_DONE : LS_CAL_MOVE;
-        } else if ((LS_REAL)d->cal_timer * d->ts > c->t_max) {
+            const LS_REAL inv_n = LS_R(1.0) / (LS_REAL)d->cal_hold;
+            if (LS_FABS(d->cal_sum_err * inv_n) < c->tol) {
+                c->table[d->cal_index] = (float)(d->cal_sum_psi * inv_n);
+                d->cal_index++;
+                d->cal_timer = 0u;
+                d->cal_phase = d->cal_index >= c->points ? LS_CAL_DONE : LS_CAL_MOVE;
+            }
+            d->cal_hold = 0u;
+            d->cal_sum_err = LS_R(0.0);
+            d->cal_sum_psi = LS_R(0.0);
+        }
+        if (d->cal_phase == LS_CAL_ADAPT && (LS_REAL)d->cal_timer * d->ts > c->t_max) {
             ls_protect_trip(&d->prot, LS_FAULT_OBSERVER);
         }
         break;
@@ -502,7 +525,17 @@ void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
     /* finite by construction from here on: the measurements passed the checks above, positions
      * are normalised, speeds limited; the final check below catches anything else */
     f = ls_posctrl_step_finite(&d->pos, x_err, omega_fb * d->inv_kx, v_ff, a_ff);
-    i_q_ref = ls_clamp(f * d->inv_kf, -cfg->i_max, cfg->i_max);
+    i_q_ref = f * d->inv_kf;
+    if (calibrating && d->cal_phase != LS_CAL_MOVE && d->cal_phase != LS_CAL_DONE && cfg->cal.dither_amp > LS_R(0.0)) {
+        /* the dither (a phasor rotated each step, renormalised as the injection's carrier) */
+        const LS_REAL c = d->cal_c * d->cal_dc - d->cal_s * d->cal_ds;
+        const LS_REAL s = d->cal_s * d->cal_dc + d->cal_c * d->cal_ds;
+        const LS_REAL g = LS_R(1.5) - LS_R(0.5) * (c * c + s * s);
+        d->cal_c = c * g;
+        d->cal_s = s * g;
+        i_q_ref += cfg->cal.dither_amp * d->cal_s;
+    }
+    i_q_ref = ls_clamp(i_q_ref, -cfg->i_max, cfg->i_max);
     d->f_ref = i_q_ref * cfg->force_constant;
 
     /* current control in the feedback frame */

@@ -738,7 +738,7 @@ ls_status ls_sim_run(const ls_sim_cfg *c, ls_drive *drive, const ls_sim_cmd *cmd
             sd = dl * (1.0 - dl * dl * (1.0 / 6.0) * (1.0 - dl * dl * (1.0 / 20.0)));
             record(out, r++, t, x, v, i, cm * cd - sm * sd, sm * cd + cm * sd, u, f_start, &cmd, tau, kx, fault);
         }
-        if (fault != 0u) {
+        if (fault != 0u || cmd.cal_done) { /* a calibration run ends with the calibration */
             break;
         }
         if (c->fidelity == LS_SIM_SWITCHING) {

@@ -255,6 +255,8 @@ typedef struct {
     LS_REAL tol;
     LS_REAL t_max;
     int32_t period;
+    LS_REAL dither_amp;
+    LS_REAL dither_freq;
 } ls_cal_cfg;
 typedef struct {
     LS_REAL fs;
@@ -317,6 +319,8 @@ typedef struct {
     ls_observer obs;
     ls_observer enc;
     ls_protect prot;
+    uint32_t cal_index;
+    LS_REAL psi_cal;
     ...;
 } ls_drive;
 void ls_drive_default_cfg(ls_drive_cfg *cfg);

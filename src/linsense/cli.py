@@ -8,6 +8,7 @@ output is checked before anything is written, and written atomically.
 from __future__ import annotations
 
 import json
+import math
 import sys
 from pathlib import Path
 
@@ -267,6 +268,46 @@ def simulate(scenario: str, out: str, fidelity: str | None, trace_fmt: str, mat:
     )
     if check and not m["stable"]:
         click.echo(f"linsense: not stable: {m['unstable_reason']}", err=True)
+        raise click.exceptions.Exit(1)
+
+
+@cli.command()
+@click.option("--motor", "motor_spec", required=True, help=MOTOR_HELP)
+@click.option("--positions", default=56, show_default=True, type=click.IntRange(4, 4096),
+              help="points over one electrical period")
+@click.option("--load", default=0.0, show_default=True, type=float, callback=_finite(-math.inf, False),
+              help="constant load force, N (opposing positive motion when > 0)")
+@click.option("--fidelity", type=click.Choice(["switching", "average"]), default="switching",
+              show_default=True, help="inverter model (both with the 0.8 us dead time)")
+@click.option("--quad", default=0.0, show_default=True, type=float,
+              help="the injection's q-axis share kappa (0: the paper's pulsating injection)")
+@click.option("--out", required=True, type=click.Path(file_okay=False), help="output folder")
+def calibrate(motor_spec: str, positions: int, load: float, fidelity: str, quad: float, out: str) -> None:
+    """Run the firmware's LUT calibration in the simulator (paper Fig. 9): lut_measured.csv,
+    metrics.json, calibration.png. Exit code 1 if it does not complete."""
+    from linsense.io import write_atomic
+    from linsense.report.figures import fig_calibration
+    from linsense.sim.calibrate import calibrate as run_calibration
+    from linsense.sim.calibrate import lut_csv
+
+    if not (np.isfinite(quad) and 0.0 <= quad < 1.0):
+        raise InputError("--quad", "", f"must be in [0, 1), got {quad!r}")
+    motor = _load(motor_spec)
+    cal = run_calibration(motor, positions, load, fidelity, quad=quad, source=motor_spec)
+    out_dir = Path(out)
+    files = [write_atomic(out_dir / "lut_measured.csv", lut_csv(cal)),
+             write_atomic(out_dir / "metrics.json", json.dumps(cal.metrics, indent=1) + "\n"),
+             fig_calibration(cal, motor, out_dir / "calibration.png")]
+    for f in files:
+        click.echo(str(f))
+    m = cal.metrics
+    click.echo(f"{m['motor']}: {m['points_done']}/{m['points']} points, load {m['load_n']:g} N, "
+               f"{m['fidelity']}: "
+               f"max |measured - model with R_s| {m['max_diff_deg']} deg, against eq. 12 "
+               f"{m['max_diff_eq12_deg']} deg; {m['sim_s']} s simulated in {m['wall_s']} s")
+    if not cal.completed:
+        click.echo(f"linsense: calibration did not complete ({m['points_done']} of {m['points']} points, "
+                   f"fault {m['fault']})", err=True)
         raise click.exceptions.Exit(1)
 
 

@@ -56,10 +56,17 @@ typedef struct {
     float *table;     /* rad, caller-owned output table of `points` values (NULL: no calibration) */
     LS_REAL k_int;    /* 1/s, adaptation: d psi_cal/dt = k_int * demodulated ratio, > 0 */
     LS_REAL t_settle; /* s, wait after each move before adapting, >= 0 */
-    LS_REAL t_hold;   /* s, the error must stay below tol this long to accept a point, > 0 */
-    LS_REAL tol;      /* rad, acceptance threshold on the demodulated ratio (~ angle error), > 0 */
+    LS_REAL t_hold;   /* s, averaging window: a point is accepted after a window whose mean
+                         demodulated error is below tol, with the window's mean angle, > 0 */
+    LS_REAL tol;      /* rad, acceptance threshold on that mean error (the observer's error against
+                         the encoder, electrical rad), > 0 */
     LS_REAL t_max;    /* s, a point not accepted within this time trips LS_FAULT_OBSERVER, > 0 */
     int32_t period;   /* -, the electrical period (encoder periods) swept by the calibration */
+    LS_REAL dither_amp;  /* A, q-current dither added while settling and adapting: it sweeps the
+                            phase currents through zero so that the dead time averages out instead
+                            of acting as a relay on the near-zero force current (0: none), >= 0 */
+    LS_REAL dither_freq; /* Hz, its frequency (well above the position loop, below the demodulator
+                            low-pass; its motion is amp K_f / (m w^2)), > 0 if dither_amp > 0 */
 } ls_cal_cfg;
 
 typedef struct {
@@ -155,8 +162,12 @@ typedef struct {
     ls_cal_phase cal_phase;
     uint32_t cal_index;
     uint32_t cal_timer;  /* steps in the present phase */
-    uint32_t cal_hold;   /* steps with the error below tol */
+    uint32_t cal_hold;   /* steps in the present averaging window */
     LS_REAL psi_cal;     /* rad */
+    LS_REAL cal_sum_err; /* rad, sum of the demodulated error over the window */
+    LS_REAL cal_sum_psi; /* rad, sum of psi_cal over the window */
+    LS_REAL cal_dc, cal_ds; /* -, cos and sin of the dither's phase step */
+    LS_REAL cal_c, cal_s;   /* -, cos and sin of the dither's phase */
 } ls_drive;
 
 /* Fill cfg with the defaults documented in docs/firmware.md: 16 kHz, 12 V / 1 kHz injection and

@@ -136,7 +136,8 @@ typedef struct {
 } ls_sim_out;
 
 typedef struct {
-    int64_t steps_done;  /* -, PWM periods simulated (< n_steps when stopped early) */
+    int64_t steps_done;  /* -, PWM periods simulated (< n_steps when stopped early: a fault, or the end of
+                            the drive's calibration in LS_MODE_CALIBRATION) */
     int64_t n_rec;       /* -, samples written */
     uint32_t fault;      /* drive fault bits | LS_SIM_FAULT_* at the end */
     double x_end;        /* m */

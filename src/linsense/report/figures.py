@@ -163,3 +163,24 @@ def write_model_figures(motor, lut, out_dir: str | Path) -> list[Path]:
     paths.append(fig_lut(motor, lut, out / "fig9_lut.png"))
     paths.append(fig_uncompensated(motor, out / "uncompensated_observer.png"))
     return paths
+
+
+def fig_calibration(cal, motor, path: Path) -> Path:
+    """The calibration's measured table against the model (paper Fig. 9: LUT from the model and
+    measured at 56 positions under sensored control)."""
+    th = _theta()
+    m = cal.metrics
+    fig, ax = plt.subplots(figsize=(7.5, 4.2), constrained_layout=True)
+    ax.plot(np.degrees(th), np.degrees(psi_lut(motor, th)), "-", color="0.6", lw=1.0, label="model, eq. (12)")
+    ax.plot(np.degrees(cal.theta), np.degrees(cal.psi_model), "b-", lw=1.2,
+            label="model with R_s (the injection used)")
+    ok = np.isfinite(cal.psi_measured)
+    ax.plot(np.degrees(cal.theta[ok]), np.degrees(cal.psi_measured[ok]), "o", ms=4, mfc="none", color="C3",
+            label=f"measured ({int(ok.sum())} of {m['points']} points)")
+    _position_axis(ax, motor)
+    ax.set_ylabel("Ψ_LUT (electrical deg)")
+    ax.set_title(f"Calibration, motor {m['motor']}: {m['fidelity']} inverter, dead time "
+                 f"{m['dead_time_s'] * 1e6:g} µs, load {m['load_n']:g} N; max |measured - model| "
+                 f"{m['max_diff_deg']:.2f} deg", fontsize=9)
+    ax.legend(fontsize=8)
+    return _save(fig, path)

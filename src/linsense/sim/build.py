@@ -43,6 +43,7 @@ class Built:
     n_steps: int
     moves: list[tuple[float, float, float, float]]  # (t_start, t_end, x_from, x_to), m and s
     known: dict = field(default_factory=dict)  # motor values the controller uses
+    extra: dict = field(default_factory=dict)  # cffi objects kept alive with the drive (calibration table)
 
 
 def resolve_motor(sc: Scenario) -> Motor:
@@ -111,11 +112,11 @@ def _mean_dq(motor: Motor) -> tuple[float, float]:
     return float(np.mean(L_d)), float(np.mean(L_q))
 
 
-def build(sc: Scenario) -> Built:
+def build(sc: Scenario, motor: Motor | None = None) -> Built:
     """Configure the plant and the drive of ``sc``; bad values end in :class:`InputError` naming
-    the scenario file."""
+    the scenario file. ``motor`` replaces the scenario's motor (a Motor object from Python)."""
     s = sc.spec
-    motor = resolve_motor(sc)
+    motor = resolve_motor(sc) if motor is None else motor
     inv, ctl, inj, obs, con, prot = s.inverter, s.control, s.injection, s.observer, s.controller, s.protection
     fs = inv.f_pwm
     tau = motor.pole_pitch
@@ -218,6 +219,14 @@ def build(sc: Scenario) -> Built:
     d.prot.i_max, d.prot.v_dc_min, d.prot.v_dc_max = prot.i_max, prot.v_dc_min, prot.v_dc_max
     d.prot.err_max, d.prot.err_time, d.prot.omega_max = prot.err_max, prot.err_time, prot.omega_max
     d.cal.period = int(math.floor(s.initial.position_mm * 1e-3 / tau))
+    cal_table = None
+    if ctl.mode == "calibration":
+        cs = s.calibration
+        cal_table = ffi.new("float[]", cs.points)  # caller-owned: kept alive by Built.extra
+        d.cal.points, d.cal.table = cs.points, cal_table
+        d.cal.k_int, d.cal.t_settle, d.cal.t_hold = cs.k_int, cs.t_settle, cs.t_hold
+        d.cal.tol, d.cal.t_max = math.radians(cs.tol_deg), cs.t_max
+        d.cal.dither_amp, d.cal.dither_freq = cs.dither_a, cs.dither_hz
     for sub in ("inject", "bpf", "sep", "demod", "obs", "enc_obs", "current", "traj", "prot", "dtres"):
         getattr(d, sub).fs = fs
     d.pos.speed.fs = fs
@@ -252,4 +261,5 @@ def build(sc: Scenario) -> Built:
     if n_steps < 1:
         raise InputError(sc.source, "scenario.duration",
                          f"shorter than one PWM period, got {s.scenario.duration!r}")
-    return Built(sc, motor, setup, cfg, drive, cmds, n_steps, moves, known)
+    return Built(sc, motor, setup, cfg, drive, cmds, n_steps, moves, known,
+                 extra={} if cal_table is None else {"cal_table": cal_table})

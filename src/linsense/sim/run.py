@@ -17,6 +17,12 @@ from linsense.sim.metrics import compute_metrics
 from linsense.sim.result import Result
 from linsense.sim.scenario import Scenario, as_scenario
 
+#: what the average inverter model cannot be trusted for (docs/simulator.md, "Fidelity")
+AVERAGE_NOTE = ("average inverter: the dead time's effect on the HF estimate is approximated (edge "
+                "currents predicted linearly, with the PWM ripple's dead zone); its steady bias can "
+                "differ from the switching model's by up to about 0.8 deg and it can show or miss limit "
+                "cycles below about 0.05 mm: check bias and limit-cycle claims with fidelity = switching")
+
 #: fault at t = 0 -> the scenario key most likely responsible
 _FAULT_KEYS = {"undervoltage": "inverter.v_dc", "overvoltage": "inverter.v_dc",
                "overcurrent": "protection.i_max", "encoder": "sensors.encoder_counts_per_period",
@@ -53,6 +59,8 @@ def simulate(scenario: Scenario | str | Path | dict) -> Result:
         # a trip at the very first step is the configuration's doing, not the closed loop's
         raise InputError(sc.source, _FAULT_KEYS.get(m["fault"], ""),
                          f"the drive trips at t = 0 ({m['fault']}): the configuration cannot run")
+    if s.inverter.fidelity == "average" and s.inverter.dead_time > 0:
+        m["fidelity_note"] = AVERAGE_NOTE
     m["scenario"] = sc.name
     m["mode"] = s.control.mode
     m["fidelity"] = s.inverter.fidelity

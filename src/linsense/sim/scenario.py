@@ -44,6 +44,20 @@ NonNegative = Annotated[float, Field(ge=0)]
 Triple = Annotated[list[float], Field(min_length=3, max_length=3)]
 
 
+class CalibrationSection(BaseModel):
+    """The firmware's LUT calibration (paper Fig. 9), control.mode = "calibration" (ls_cal_cfg)."""
+
+    model_config = _STRICT
+    points: int = Field(default=int(_C.cal.points), ge=4, le=4096)  # positions over one period
+    k_int: Positive = _c(_C.cal.k_int)  # 1/s, adaptation rate of the compensation angle
+    t_settle: NonNegative = _c(_C.cal.t_settle)  # s, wait after each move
+    t_hold: Positive = _c(_C.cal.t_hold)  # s, window over which a point must have converged
+    tol_deg: Positive = round(math.degrees(float(_C.cal.tol)), 6)  # deg, acceptance (see ls_drive.h)
+    t_max: Positive = _c(_C.cal.t_max)  # s, a point not accepted by then trips the observer fault
+    dither_a: NonNegative = _c(_C.cal.dither_amp)  # A, q-current dither while adapting (0: none)
+    dither_hz: Positive = _c(_C.cal.dither_freq)  # Hz
+
+
 class ScenarioSection(BaseModel):
     model_config = _STRICT
     name: str = Field(default="scenario", min_length=1)
@@ -63,7 +77,7 @@ class InverterSection(BaseModel):
 
 class ControlSection(BaseModel):
     model_config = _STRICT
-    mode: Literal["sensorless_lut", "sensorless_nolut", "sensored"] = "sensorless_lut"
+    mode: Literal["sensorless_lut", "sensorless_nolut", "sensored", "calibration"] = "sensorless_lut"
     fs: Positive | None = None  # Hz, must equal inverter.f_pwm (default: equal)
     delay_comp: NonNegative = _c(_C.delay_comp)  # sampling periods of angle advance
     inject_sensored: bool = bool(_C.inject_sensored)  # keep injecting (and observing) in sensored mode
@@ -238,6 +252,7 @@ class ScenarioFile(BaseModel):
     protection: ProtectionSection = Field(default_factory=ProtectionSection)
     record: RecordSection = Field(default_factory=RecordSection)
     metrics: MetricsSection = Field(default_factory=MetricsSection)
+    calibration: CalibrationSection = Field(default_factory=CalibrationSection)
 
     @model_validator(mode="after")
     def _check(self) -> ScenarioFile:

@@ -1,0 +1,82 @@
+"""The closed loop under the inverter's dead time (issue "closed loop", docs/simulator.md):
+sensorless hold anywhere in the period and the LUT calibration, on the switching inverter."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+import linsense
+from linsense.cli import main
+from linsense.sim.calibrate import calibrate
+
+POSITIONS_MM = [56.0 * k / 8 for k in range(8)]
+
+
+def _hold(x_mm: float, fidelity: str, seconds: float = 3.0):
+    r = linsense.simulate({"motor": "ecce2010", "scenario": {"name": "hold", "duration": seconds},
+                           "inverter": {"fidelity": fidelity}, "initial": {"position_mm": x_mm},
+                           "reference": {"type": "hold"}})
+    w = r.t >= r.t[-1] - 0.3
+    err = np.degrees(r.theta_err[w])
+    return r.metrics, float(np.mean(err)), float(np.max(np.abs(err))), float(np.ptp(r.x[w])) * 1e3
+
+
+@pytest.mark.parametrize("x_mm", POSITIONS_MM)
+def test_sensorless_hold_switching_no_limit_cycle(x_mm):
+    """Switching inverter, 0.8 us dead time, 12 V / 1 kHz on d (the default elliptical injection):
+    steady estimation error at most 1.0 deg and no limit cycle (true position within 0.02 mm peak
+    to peak) at 8 positions over the period. (Measured: |bias| <= 0.48 deg, pp <= 0.009 mm.)"""
+    m, bias, peak, pp = _hold(x_mm, "switching")
+    assert m["fault"] == "none" and m["stable"], m["unstable_reason"]
+    assert abs(bias) <= 1.0, bias
+    assert pp <= 0.02, pp
+    assert m["bias_deg"] == pytest.approx(bias, abs=1e-3)
+    assert m["limit_cycle_mm"] == pytest.approx(pp, abs=1e-5)
+
+
+def test_average_model_within_what_it_says():
+    """The average inverter model does not reach the 0.2 deg agreement on the bias nor every
+    limit-cycle verdict at this margin (measured: up to 0.74 deg apart, one 0.03 mm cycle that the
+    switching model does not show); it says so in metrics.json, and stays within what it says."""
+    for x_mm in POSITIONS_MM:
+        ms, bs, _, _ = _hold(x_mm, "switching")
+        ma, ba, _, ppa = _hold(x_mm, "average")
+        assert "fidelity_note" in ma and "switching" in ma["fidelity_note"] and "fidelity_note" not in ms
+        assert abs(ba - bs) <= 0.8 and abs(ba) <= 1.0, (x_mm, ba, bs)
+        assert ppa <= 0.05, (x_mm, ppa)
+
+
+@pytest.mark.parametrize("load", [0.0, 40.0])
+def test_calibration_as_the_paper(load):
+    """The firmware's calibration (paper Fig. 9) completes at no load and with 40 N, on the switching
+    inverter with dead time, and the measured table is within 0.3 deg of the model LUT with R_s
+    (measured: 0.08 deg at 0 N, 0.05 deg at 40 N; about 0.8 deg at 0 N without the dither)."""
+    cal = calibrate("ecce2010", 56, load, "switching")
+    m = cal.metrics
+    assert cal.completed and m["points_done"] == 56 and m["fault"] == "none", m
+    assert m["max_diff_deg"] <= 0.3, m
+    # the table differs from eq. 12 (no resistance) by the resistive correction, as the model says
+    assert m["max_diff_eq12_deg"] > 0.2
+    # and without the dither the no-load table would carry the dead-time bias (not a vacuous test)
+    if load == 0.0:
+        plain = calibrate("ecce2010", 56, load, "switching", calibration={"dither_a": 0.0})
+        assert plain.metrics["max_diff_deg"] > 0.4
+
+
+def test_calibrate_cli(tmp_path, capsys):
+    with pytest.raises(SystemExit) as e:
+        main(["calibrate", "--motor", "ecce2010", "--positions", "16", "--load", "20",
+              "--fidelity", "average", "--out", str(tmp_path / "c")])
+    assert e.value.code == 0
+    m = json.loads((tmp_path / "c" / "metrics.json").read_text())
+    assert m["completed"] and m["points"] == 16 and m["max_diff_deg"] <= 0.3
+    rows = (tmp_path / "c" / "lut_measured.csv").read_text().splitlines()
+    assert rows[0] == "theta_deg,psi_lut_deg" and len(rows) == 17
+    assert (tmp_path / "c" / "calibration.png").stat().st_size > 10000
+    with pytest.raises(SystemExit) as e:
+        main(["calibrate", "--motor", "ecce2010", "--quad", "1.5", "--out", str(tmp_path / "d")])
+    err = capsys.readouterr().err.strip()
+    assert e.value.code == 2 and "--quad" in err and "1.5" in err and err.count("\n") == 0
