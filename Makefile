@@ -93,7 +93,7 @@ lint: $(STAMP)
 EXAMPLE := $(BUILD)/example
 example: $(STAMP)
 	@mkdir -p $(EXAMPLE)
-	$(VENV)/bin/linsense lut --motor ecce2010 --points 360 --format c --f-inj 1000 --out $(EXAMPLE)/ls_lut_ecce2010.h
+	$(VENV)/bin/linsense tune --motor ecce2010 --format c --out $(EXAMPLE)/ls_cfg_ecce2010.h
 	$(CC) $(CSTD) -O2 -Icsrc/include -I$(EXAMPLE) examples/firmware/main.c $(CTRL_SRC) -lm -o $(EXAMPLE)/firmware_example
 	$(EXAMPLE)/firmware_example
 

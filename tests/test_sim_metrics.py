@@ -14,8 +14,15 @@ from linsense.sim.metrics import compute_metrics, settling_time
 from linsense.sim.scenario import scenario_from_dict
 
 F_PWM = 1000.0
-DEFAULTS = dict(convergence_s=0.1, settle_s=0.3, tolerance_mm=0.5, bound_mm=3.5, settle_band_mm=0.02,
-                settling_band_mm=0.1, final_window_s=0.3)
+DEFAULTS = dict(
+    convergence_s=0.1,
+    settle_s=0.3,
+    tolerance_mm=0.5,
+    bound_mm=3.5,
+    settle_band_mm=0.02,
+    settling_band_mm=0.1,
+    final_window_s=0.3,
+)
 
 
 def _arrays(x: np.ndarray, err_rad: np.ndarray | None = None) -> dict:
@@ -25,8 +32,18 @@ def _arrays(x: np.ndarray, err_rad: np.ndarray | None = None) -> dict:
 
 def _metrics(x, moves, x_target, x_start=0.0, err_rad=None, **kw):
     a = _arrays(np.asarray(x, dtype=float), err_rad)
-    return compute_metrics(a, fault=0, steps_done=a["t"].size, f_pwm=F_PWM, moves=moves, wall_s=0.01,
-                           observer_active=True, x_target=x_target, x_start=x_start, **{**DEFAULTS, **kw})
+    return compute_metrics(
+        a,
+        fault=0,
+        steps_done=a["t"].size,
+        f_pwm=F_PWM,
+        moves=moves,
+        wall_s=0.01,
+        observer_active=True,
+        x_target=x_target,
+        x_start=x_start,
+        **{**DEFAULTS, **kw},
+    )
 
 
 def test_a_drive_that_never_moved_is_not_stable():
@@ -90,11 +107,15 @@ def test_settling_time_none_when_outside_at_the_end():
 
 
 def _fig13_like(balanced: bool):
-    return scenario_from_dict({
-        "motor": "ecce2010", "scenario": {"name": "load", "duration": 0.3},
-        "reference": {"type": "hold"}, "load": {"force": 20.0},
-        "initial": {"position_mm": 0.0, "load_balanced": balanced},
-    })
+    return scenario_from_dict(
+        {
+            "motor": "ecce2010",
+            "scenario": {"name": "load", "duration": 0.3},
+            "reference": {"type": "hold"},
+            "load": {"force": 20.0},
+            "initial": {"position_mm": 0.0, "load_balanced": balanced},
+        }
+    )
 
 
 def test_load_balanced_start_does_not_sag():
@@ -107,10 +128,12 @@ def test_load_balanced_start_does_not_sag():
 
 def test_cli_check_exit_codes(tmp_path, capsys):
     ok = tmp_path / "ok.toml"
-    ok.write_text('motor = "ecce2010"\n[scenario]\nduration = 1.0\n[control]\nmode = "sensored"\n'
-                  '[reference]\ntype = "hold"\n')
+    ok.write_text(
+        'motor = "ecce2010"\n[scenario]\nduration = 1.0\n[control]\nmode = "sensored"\n'
+        '[reference]\ntype = "hold"\n'
+    )
     with pytest.raises(SystemExit) as e:
-        main([ "simulate", str(ok), "--out", str(tmp_path / "a"), "--no-plot", "--check"])
+        main(["simulate", str(ok), "--out", str(tmp_path / "a"), "--no-plot", "--check"])
     assert e.value.code == 0
     cyc = Path(__file__).parents[1] / "examples" / "scenarios" / "step6_nolut.toml"  # a limit cycle
     with pytest.raises(SystemExit) as e:
@@ -126,16 +149,20 @@ def test_configuration_that_trips_at_t0_is_an_input_error(tmp_path, capsys):
     trips at its first step anyway (here: over-current limit below the injection's current) is a
     configuration error too: exit 2, one line naming the file and key, nothing written."""
     low = tmp_path / "low.toml"
-    low.write_text('motor = "ecce2010"\n[scenario]\nduration = 0.1\n[inverter]\nv_dc = 30.0\n'
-                   '[reference]\ntype = "hold"\n')
+    low.write_text(
+        'motor = "ecce2010"\n[scenario]\nduration = 0.1\n[inverter]\nv_dc = 30.0\n'
+        '[reference]\ntype = "hold"\n'
+    )
     with pytest.raises(SystemExit) as e:
         main(["simulate", str(low), "--out", str(tmp_path / "c")])
     err = capsys.readouterr().err.strip()
     assert e.value.code == 2 and err.count("\n") == 0
     assert "low.toml: inverter.v_dc" in err and "30" in err
     trip = tmp_path / "trip.toml"
-    trip.write_text('motor = "ecce2010"\n[scenario]\nduration = 0.1\n[reference]\ntype = "hold"\n'
-                    '[protection]\ni_max = 0.5\n[sensors]\ncurrent_offset = 0.6\n')
+    trip.write_text(
+        'motor = "ecce2010"\n[scenario]\nduration = 0.1\n[reference]\ntype = "hold"\n'
+        "[protection]\ni_max = 0.5\n[sensors]\ncurrent_offset = 0.6\n"
+    )
     with pytest.raises(SystemExit) as e:
         main(["simulate", str(trip), "--out", str(tmp_path / "d")])
     err = capsys.readouterr().err.strip()

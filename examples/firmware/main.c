@@ -1,9 +1,11 @@
 /* linsense firmware example: how an MCU project uses the controller library.
  *
  * Build and run:  make example   (from the repository root)
- * The build generates the compensation table with
- *   linsense lut --motor ecce2010 --points 360 --format c --f-inj 1000 --out ls_lut_ecce2010.h
- * and compiles this file with the sources in csrc/ctrl, exactly as a firmware project would.
+ * The build generates the drive's configuration for the motor (designed gains, the compensation
+ * table and the demodulator's gain table) with
+ *   linsense tune --motor ecce2010 --format c --out ls_cfg_ecce2010.h
+ * and compiles this file with the sources in csrc/ctrl, exactly as a firmware project would: the
+ * library holds no motor's numbers.
  *
  * Hardware access is replaced by two stubs: adc_read() returns phase currents from a small
  * synthetic motor model (an ecce2010 armature held at a fixed position, the HF response only)
@@ -16,10 +18,10 @@
 #include <string.h>
 
 #include "linsense/ls_drive.h"
-#include "ls_lut_ecce2010.h" /* generated: static const float ls_lut_ecce2010[LS_LUT_ECCE2010_LEN] */
+#include "ls_cfg_ecce2010.h" /* generated: tables and ls_cfg_ecce2010(&cfg, &comp, &gain) */
 
 /* ---- application state: statically allocated, as on an MCU (the library has no globals) ---- */
-static ls_lut comp_lut;
+static ls_lut comp_lut, gain_lut;
 static ls_drive drive;
 static ls_cmd cmd;
 
@@ -85,17 +87,17 @@ static void pwm_isr(void)
 int main(void)
 {
     const double deg = 3.14159265358979323846 / 180.0;
-    ls_lut_cfg lut_cfg = {ls_lut_ecce2010, LS_LUT_ECCE2010_LEN};
+    ls_lut_cfg lut_cfg = {ls_cfg_ecce2010_comp, ECCE2010_LEN};
+    ls_lut_cfg gain_cfg = {ls_cfg_ecce2010_gain, ECCE2010_LEN};
     ls_drive_cfg cfg;
     ls_pos start;
     long k;
     double est_deg = 0.0;
 
-    if (ls_lut_init(&comp_lut, &lut_cfg) != LS_OK) {
+    if (ls_lut_init(&comp_lut, &lut_cfg) != LS_OK || ls_lut_init(&gain_lut, &gain_cfg) != LS_OK) {
         return 2;
     }
-    ls_drive_default_cfg(&cfg);   /* 16 kHz, 12 V / 1 kHz injection, ecce2010 gains */
-    cfg.demod.comp = &comp_lut;   /* the generated compensation table */
+    ls_cfg_ecce2010(&cfg, &comp_lut, &gain_lut); /* the designed configuration and its tables */
     cfg.mod.dtc = false;          /* the synthetic motor has an ideal inverter: nothing to */
     cfg.mod.dead_time = 0.0f;     /* compensate, and no dead-time residual to take out */
     cfg.obs.type = LS_OBS_PLL;

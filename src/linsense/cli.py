@@ -311,6 +311,94 @@ def calibrate(motor_spec: str, positions: int, load: float, fidelity: str, quad:
         raise click.exceptions.Exit(1)
 
 
+@cli.command()
+@click.option("--motor", "motor_spec", required=True, help=MOTOR_HELP)
+@click.option("--scenario", "scenario_path", type=click.Path(dir_okay=False), default=None,
+              help="scenario whose drive data (bus, PWM, dead time, i_max, injection) and other keys "
+                   "are kept")
+@click.option("--v-dc", type=float, default=None, callback=_finite(0.0, True),
+              help="bus voltage, V (default 72)")
+@click.option("--f-pwm", type=float, default=None, callback=_finite(0.0, True),
+              help="PWM rate, Hz (default 16000)")
+@click.option("--dead-time", type=float, default=None, callback=_finite(0.0, False),
+              help="s (default 0.8e-6)")
+@click.option("--i-max", type=float, default=None, callback=_finite(0.0, True),
+              help="current limit, A (default 2.5)")
+@click.option("--v-inj", type=float, default=None, callback=_finite(0.0, True), help="injection amplitude, V")
+@click.option("--f-inj", type=float, default=None, callback=_finite(0.0, True),
+              help="injection frequency, Hz")
+@click.option("--quad", type=float, default=None,
+              help="elliptical share kappa on q (0: pulsating; default 0.9)")
+@click.option("--format", "fmt", type=click.Choice(["toml", "c"]), default="toml", show_default=True,
+              help="toml: a complete scenario; c: an ls_drive_cfg set-up header for the firmware")
+@click.option("--name", default=None, help="C name suffix (default: the motor name)")
+@click.option("--out", required=True, type=click.Path(dir_okay=False), help="output file")
+def tune(motor_spec: str, scenario_path: str | None, v_dc, f_pwm, dead_time, i_max, v_inj, f_inj, quad,
+         fmt: str, name: str | None, out: str) -> None:
+    """Design the drive for a motor: injection, current loop, demodulator, observer, speed and
+    position loops (docs/tuning.md); print the design and its margins; write a scenario or a C header."""
+    from linsense.io import write_atomic
+    from linsense.sim.scenario import load_scenario
+    from linsense.tune.design import DriveData, design
+    from linsense.tune.export import c_header, scenario_toml
+
+    base, base_dir, src = None, None, motor_spec
+    dd = DriveData()
+    if scenario_path is not None:
+        sc = load_scenario(scenario_path)
+        s = sc.spec
+        base, base_dir, src = sc.given(), sc.base_dir, scenario_path
+        base.pop("motor", None)
+        given_inj = s.injection.model_fields_set
+        dd = DriveData(v_dc=s.inverter.v_dc, f_pwm=s.inverter.f_pwm, dead_time=s.inverter.dead_time,
+                       i_max=s.controller.i_max, v_max=s.reference.v_max,
+                       v_inj=s.injection.amplitude if "amplitude" in given_inj else None,
+                       f_inj=s.injection.frequency if "frequency" in given_inj else None,
+                       quad=s.injection.quadrature)
+    for key, val in (("v_dc", v_dc), ("f_pwm", f_pwm), ("dead_time", dead_time), ("i_max", i_max),
+                     ("v_inj", v_inj), ("f_inj", f_inj), ("quad", quad)):
+        if val is not None:
+            setattr(dd, key, val)
+    if not (np.isfinite(dd.quad) and 0.0 <= dd.quad < 1.0):
+        raise InputError("--quad", "", f"must be in [0, 1), got {dd.quad!r}")
+    motor = _load(motor_spec)
+    dz = design(motor, dd, src)
+    if fmt == "c":
+        text = c_header(dz, dd, motor, name)
+    else:
+        text = scenario_toml(dz, dd, motor_spec, Path(out), base, base_dir)
+    click.echo(str(write_atomic(out, text)))
+    for line in design_lines(dz, motor.name, dd):
+        click.echo(line)
+    for w in dz.warnings:
+        click.echo(f"linsense: warning: {w}", err=True)
+
+
+def design_lines(dz, motor_name: str, dd) -> list[str]:
+    """The design as a person reads it."""
+    lines = [
+        f"design for {motor_name}: {dd.v_dc:g} V bus, {dd.f_pwm:g} Hz PWM, "
+        f"{dd.dead_time * 1e6:g} us dead time, "
+        f"i_max {dd.i_max:g} A",
+        f"  injection      {dz.v_inj:.4g} V at {dz.f_inj:g} Hz on d, kappa {dz.quad:g} on q: HF current "
+        f"{dz.i_hf:.3g} A; fundamental fits up to {dz.headroom_speed:.3g} m/s at i_max",
+        f"  current loop   {dz.current_bw:.4g} Hz (f_inj / 4): kp {dz.current_kp:.4g} V/A, "
+        f"ki {dz.current_ki:.4g} V/(A s)",
+        f"  demodulator    low-pass {dz.demod_lpf:.4g} Hz (0.3 f_inj), zeros at {dz.demod_notch:g} Hz; gain "
+        f"{dz.demod_gain:.4g}, scheduled (local error gain {dz.k_e_min:.2f}..{dz.k_e_max:.2f} unscheduled)",
+        f"  observer       {dz.observer_bw:.4g} Hz PLL (low-pass / 7.5)",
+        f"  speed loop     {dz.speed_bw:.4g} Hz (observer / 10): kp {dz.speed_kp:.4g} N s/m, "
+        f"ki {dz.speed_ki:.4g} N/m",
+        f"  position loop  kp_x {dz.kp_x:.4g} 1/s (speed w / 2.5)",
+        f"  calibration    dither {dz.dither_a:.3g} A at {dz.dither_hz:.4g} Hz",
+        "  margins (linearised model: phase margin, gain margin up / down, crossover):",
+    ]
+    for k, m in dz.margins.items():
+        lines.append(f"    {k:44s} {m['pm_deg']} deg, {m['gm_up_db']} dB / {m['gm_down_db']} dB, "
+                     f"{m['crossover_hz']} Hz")
+    return lines
+
+
 def main(argv: list[str] | None = None) -> None:
     """Entry point: run the CLI, mapping every expected failure to exit code 2 and one line."""
     np.seterr(all="ignore")

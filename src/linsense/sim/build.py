@@ -112,11 +112,53 @@ def _mean_dq(motor: Motor) -> tuple[float, float]:
     return float(np.mean(L_d)), float(np.mean(L_q))
 
 
+#: DriveData field -> scenario key (for messages)
+_DESIGN_KEYS = {"v_dc": "inverter.v_dc", "f_pwm": "inverter.f_pwm", "i_max": "controller.i_max",
+                "v_max": "reference.v_max", "v_inj": "injection.amplitude", "f_inj": "injection.frequency",
+                "quad": "injection.quadrature"}
+
+
+def designed(sc: Scenario, motor: Motor) -> Scenario:
+    """``sc`` with every gain it leaves unset taken from the design for its motor and drive
+    (:func:`linsense.tune.design`, docs/tuning.md); what the file gives is kept."""
+    from linsense.tune.design import DriveData, design
+
+    s = sc.spec
+    inj, con = s.injection, s.controller
+    sections = ("injection", "observer", "controller", "calibration")
+    given = {sec: getattr(s, sec).model_fields_set for sec in sections}
+    try:
+        dz = design(motor, DriveData(v_dc=s.inverter.v_dc, f_pwm=s.inverter.f_pwm,
+                                     dead_time=s.inverter.dead_time, i_max=con.i_max, v_max=s.reference.v_max,
+                                     v_inj=inj.amplitude if "amplitude" in given["injection"] else None,
+                                     f_inj=inj.frequency if "frequency" in given["injection"] else None,
+                                     quad=inj.quadrature), sc.source, analyse=False)
+    except InputError as exc:  # the design's drive-data names -> the scenario's keys
+        raise InputError(sc.source, _DESIGN_KEYS.get(exc.key, exc.key), exc.message) from None
+    want = {
+        "injection": {"amplitude": dz.v_inj, "frequency": dz.f_inj},
+        "observer": {"bandwidth_hz": dz.observer_bw, "demod_lpf_hz": dz.demod_lpf, "gain_schedule": True},
+        "controller": {"speed_bandwidth_hz": dz.speed_bw, "current_bandwidth_hz": dz.current_bw},
+        "calibration": {"dither_a": dz.dither_a, "dither_hz": dz.dither_hz},
+    }
+    if con.position_type == "p":
+        want["controller"]["kp_x"] = dz.kp_x
+    if "k1" in given["observer"]:
+        want["observer"].pop("bandwidth_hz")
+    for k in ("speed_kp", "current_kp"):
+        if k in given["controller"]:
+            want["controller"].pop(k.replace("_kp", "_bandwidth_hz"))
+    changes = {sec: {k: v for k, v in vals.items() if k not in given[sec]} for sec, vals in want.items()}
+    return sc.replace(**{sec: vals for sec, vals in changes.items() if vals})
+
+
 def build(sc: Scenario, motor: Motor | None = None) -> Built:
     """Configure the plant and the drive of ``sc``; bad values end in :class:`InputError` naming
-    the scenario file. ``motor`` replaces the scenario's motor (a Motor object from Python)."""
-    s = sc.spec
+    the scenario file. ``motor`` replaces the scenario's motor (a Motor object from Python). Gains
+    the scenario leaves unset are designed for its motor (:func:`designed`)."""
     motor = resolve_motor(sc) if motor is None else motor
+    sc = designed(sc, motor)
+    s = sc.spec
     inv, ctl, inj, obs, con, prot = s.inverter, s.control, s.injection, s.observer, s.controller, s.protection
     fs = inv.f_pwm
     tau = motor.pole_pitch
@@ -198,7 +240,7 @@ def build(sc: Scenario, motor: Motor | None = None) -> Built:
     d.current.psi_pm = known["psi_pm"]
     d.current.decouple = con.decouple
     d.pos.type = lib.LS_POSCTRL_P if con.position_type == "p" else lib.LS_POSCTRL_PD
-    d.pos.kp_x = con.kp_x if con.kp_x is not None else 10.0
+    d.pos.kp_x = con.kp_x
     d.pos.kd_x = con.kd_x
     d.pos.v_max = con.v_max
     d.pos.mass = known["mass"]
@@ -240,9 +282,13 @@ def build(sc: Scenario, motor: Motor | None = None) -> Built:
         comp = build_lut(lut_motor, obs.lut_points, f_inj=f_inj, quad=inj.quadrature if f_inj else 0.0).values
     gain_table = None
     if obs.gain_schedule:
-        th = 2.0 * np.pi * np.arange(obs.lut_points) / obs.lut_points
-        ld, lq, _ = dq_components(motor, th)
-        gain_table = lq / (lq - ld)
+        # the demodulator gain that makes the error's local slope 1 everywhere (the saliency and,
+        # with the elliptical injection and R_s, its phase set it; docs/tuning.md)
+        from linsense.tune.design import error_gain
+
+        lut_motor_g = dataclasses.replace(motor, R_s=known["R_s"])
+        k_e = error_gain(lut_motor_g, inj.frequency, inj.quadrature, 1.0, n=obs.lut_points)
+        gain_table = 1.0 / k_e
     try:
         drive = Drive(d, comp=comp, gain_table=gain_table)  # a given gain table is used by default
     except ConfigError as exc:

@@ -37,10 +37,10 @@ class CalibrationError(LinsenseError):
 class Calibration:
     """A measured compensation table and how it compares with the model (angles in rad)."""
 
-    theta: np.ndarray          # rad, table positions, 2 pi k / points
-    psi_measured: np.ndarray   # rad, the calibration's table (NaN where not reached)
-    psi_model: np.ndarray      # rad, the model LUT with R_s for the same injection
-    psi_eq12: np.ndarray       # rad, paper eq. (12)
+    theta: np.ndarray  # rad, table positions, 2 pi k / points
+    psi_measured: np.ndarray  # rad, the calibration's table (NaN where not reached)
+    psi_model: np.ndarray  # rad, the model LUT with R_s for the same injection
+    psi_eq12: np.ndarray  # rad, paper eq. (12)
     metrics: dict = field(default_factory=dict)
 
     @property
@@ -48,8 +48,15 @@ class Calibration:
         return bool(self.metrics.get("completed"))
 
 
-def calibrate(motor: Motor | str, positions: int = 56, load: float = 0.0, fidelity: str = "switching",
-              quad: float = 0.0, source: str = "<calibrate>", **sections) -> Calibration:
+def calibrate(
+    motor: Motor | str,
+    positions: int = 56,
+    load: float = 0.0,
+    fidelity: str = "switching",
+    quad: float = 0.0,
+    source: str = "<calibrate>",
+    **sections,
+) -> Calibration:
     """Run the calibration on ``motor`` (a Motor, a preset name or a motor-file path).
 
     Parameters

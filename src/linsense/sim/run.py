@@ -20,7 +20,7 @@ from linsense.sim.scenario import Scenario, as_scenario
 #: what the average inverter model cannot be trusted for (docs/simulator.md, "Fidelity")
 AVERAGE_NOTE = ("average inverter: the dead time's effect on the HF estimate is approximated (edge "
                 "currents predicted linearly, with the PWM ripple's dead zone); its steady bias can "
-                "differ from the switching model's by up to about 0.8 deg and it can show or miss limit "
+                "differ from the switching model's by up to about 1 deg and it can show or miss limit "
                 "cycles below about 0.05 mm: check bias and limit-cycle claims with fidelity = switching")
 
 #: fault at t = 0 -> the scenario key most likely responsible

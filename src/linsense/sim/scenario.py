@@ -102,7 +102,7 @@ class ObserverSection(BaseModel):
     k1: Positive | None = None  # 1/s, overrides the bandwidth
     k2: Positive | None = None  # 1/s^2
     k3: Positive | None = None  # 1/s^3 (mech)
-    gain_schedule: bool = False  # demodulator gain table L_q/(L_q - L_d)(theta)
+    gain_schedule: bool = True  # demodulator gain table normalising the local error gain (designed)
     demod_method: Literal["product", "heterodyne"] = "product"
     demod_lpf_hz: Positive = _c(_C.demod.f_lpf)  # Hz
     demod_notch: bool = bool(_C.demod.f_notch > 0)  # notch at 2 f_inj before the low-pass
@@ -303,6 +303,11 @@ class ScenarioFile(BaseModel):
             raise _KeyError("initial.position_mm", f"outside the travel [{tr.min_mm:g}, {tr.max_mm:g}] mm, "
                             f"got {x0:g}")
         p = self.protection
+        # bus limits not given follow the bus: 5/9 and 5/4 of it (40 and 90 V at the paper's 72 V)
+        if "v_dc_min" not in p.model_fields_set:
+            p.v_dc_min = round(inv.v_dc * 5.0 / 9.0, 6)
+        if "v_dc_max" not in p.model_fields_set:
+            p.v_dc_max = round(1.25 * inv.v_dc, 6)
         if not p.v_dc_min < p.v_dc_max:
             raise _KeyError("protection.v_dc_max",
                             f"must be above v_dc_min = {p.v_dc_min:g}, got {p.v_dc_max:g}")
@@ -310,7 +315,9 @@ class ScenarioFile(BaseModel):
             raise _KeyError("inverter.v_dc", f"outside the protection's bus range [{p.v_dc_min:g}, "
                             f"{p.v_dc_max:g}] V (the drive would trip at t = 0), got {inv.v_dc:g}")
 
-        if self.injection.amplitude * math.sqrt(3.0) >= 0.8 * p.v_dc_min and p.v_dc_min > 0:
+        # (an amplitude the file does not give is designed for the bus, and checked there)
+        if ("amplitude" in self.injection.model_fields_set and p.v_dc_min > 0
+                and self.injection.amplitude * math.sqrt(3.0) >= 0.8 * p.v_dc_min):
             raise _KeyError("injection.amplitude", "too large for the bus: amplitude * sqrt(3) must be below "
                             f"0.8 protection.v_dc_min = {0.8 * p.v_dc_min:g} V, "
                             f"got {self.injection.amplitude:g}")
@@ -345,10 +352,15 @@ class Scenario:
         """Plain data (every key, defaults filled in; ``None`` for unset optional keys dropped)."""
         return self.spec.model_dump(exclude_none=True)
 
+    def given(self) -> dict:
+        """The keys the file (or dict) gave, without the defaults (the rest is designed or defaulted
+        when the scenario is built)."""
+        return self.spec.model_dump(exclude_unset=True, exclude_none=True)
+
     def replace(self, **sections) -> Scenario:
         """A copy with some keys changed, e.g. ``replace(inverter={"fidelity": "switching"})``;
-        validated again."""
-        data = self.to_dict()
+        validated again. Keys left unset stay unset (their gains are still designed)."""
+        data = self.given()
         for sec, vals in sections.items():
             if isinstance(vals, dict):
                 data.setdefault(sec, {}).update(vals)
@@ -357,7 +369,7 @@ class Scenario:
         return scenario_from_dict(data, self.source, self.base_dir)
 
     def __reduce__(self):  # picklable for simulate_many (the pydantic model re-validates on load)
-        return (scenario_from_dict, (self.to_dict(), self.source, str(self.base_dir)))
+        return (scenario_from_dict, (self.given(), self.source, str(self.base_dir)))
 
     def __repr__(self) -> str:
         return f"Scenario({self.name!r}, source={self.source!r})"

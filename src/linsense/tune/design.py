@@ -1,0 +1,322 @@
+"""Design of the sensorless drive for a motor: injection, current loop, demodulator, observer,
+speed and position loops, calibration dither; with the margins of a linearised model.
+
+The method (docs/tuning.md) is bandwidth separation with stated ratios, from the PWM rate down:
+
+====================  ===================================  ==========================
+quantity              rule                                  ecce2010, 16 kHz, 72 V
+====================  ===================================  ==========================
+injection frequency   f_inj = f_pwm / 16                    1 kHz
+injection amplitude   V_inj = V_dc / 6 (HF current <= 0.3   12 V (0.45 A)
+                      i_max), kappa = 0.9 on q
+current loop          f_i = f_inj / 4; kp = w (L_d+L_q)/2,  250 Hz
+                      ki = w R_s (pole-zero cancellation)
+demodulator low-pass  f_lpf = 0.3 f_inj, zeros at 2 f_inj   300 Hz
+observer (PLL)        f_obs = f_lpf / 7.5                   40 Hz
+speed loop            f_v = f_obs / 10; kp = m w,           4 Hz
+                      ki = m w^2 / 4
+position loop         kp_x = w_v / 2.5                      10 1/s
+calibration dither    0.16 i_max at 0.15 f_inj              0.4 A, 150 Hz
+====================  ===================================  ==========================
+
+The C library's defaults (``ls_drive_default_cfg``) are this design for the ecce2010 motor and the
+paper's drive; ``tests/test_tune.py`` checks that they agree.
+
+The margins come from a linearised small-signal model (python-control): the observer loop
+``k_e H_lpf(s) e^{-s T_bp} (k1 s + k2) / s^2`` with the demodulator's low-pass and the band-pass
+envelope delay, and the motion loop broken at the force reference, ``C_v(s) (kp_x T(s) + S_v(s))
+P(s) C_i(s)`` with the mass ``P = 1/(m s^2)``, the current loop ``C_i``, the speed PI ``C_v`` and the
+observer's position and speed transfers ``T``, ``S_v`` (the drive feeds back the estimates). Both
+are evaluated over the range of the local error gain ``k_e(theta)``: the demodulated error's slope
+against the position error, normalised by the demodulator gain, which the saliency sets (paper
+eq. 11; ``linsense.analysis.hf.demod_ratio``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+
+from linsense.analysis.hf import demod_ratio, dq_components, hf_current_amplitude, psi_lut_resistive
+from linsense.errors import InputError
+from linsense.model.motor import Motor
+
+#: the stated ratios (docs/tuning.md)
+RATIO_PWM_INJ = 16.0
+RATIO_INJ_CURRENT = 4.0
+RATIO_LPF = 0.3
+RATIO_LPF_OBS = 7.5
+RATIO_OBS_SPEED = 10.0
+RATIO_SPEED_POS = 2.5
+INJ_BUS_FRACTION = 1.0 / 6.0
+INJ_CURRENT_MAX = 0.3  # of i_max
+QUAD = 0.9
+DITHER_CURRENT = 0.16  # of i_max
+DITHER_FREQ = 0.15  # of f_inj
+
+
+@dataclass
+class DriveData:
+    """The drive around the motor (SI units)."""
+
+    v_dc: float = 72.0  # V
+    f_pwm: float = 16000.0  # Hz, PWM = control rate
+    dead_time: float = 0.8e-6  # s
+    i_max: float = 2.5  # A, current-reference limit
+    v_max: float = 0.2  # m/s, the fastest move the drive must make (bus headroom check)
+    v_inj: float | None = None  # V, injection amplitude (None: designed)
+    f_inj: float | None = None  # Hz, injection frequency (None: designed)
+    quad: float = QUAD  # -, elliptical share on q (0: the paper's pulsating injection)
+
+
+@dataclass
+class Design:
+    """The designed values (SI; bandwidths in Hz) and what the analysis found."""
+
+    f_inj: float
+    v_inj: float
+    quad: float
+    i_hf: float  # A, mean HF current amplitude
+    current_bw: float
+    current_kp: float
+    current_ki: float
+    demod_lpf: float
+    demod_notch: float
+    demod_gain: float
+    observer_bw: float
+    speed_bw: float
+    speed_kp: float
+    speed_ki: float
+    kp_x: float
+    dither_a: float
+    dither_hz: float
+    k_e_min: float  # local error gain over the period, relative
+    k_e_max: float
+    margins: dict = field(default_factory=dict)
+    headroom_speed: float = math.nan  # m/s, speed up to which the fundamental fits beside the injection
+    warnings: list = field(default_factory=list)
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+def current_gains(bw_hz: float, L_d: float, L_q: float, R_s: float) -> tuple[float, float]:
+    """PI gains of the d/q current loop for a bandwidth (Hz): pole-zero cancellation."""
+    w = 2.0 * math.pi * bw_hz
+    return w * 0.5 * (L_d + L_q), w * R_s
+
+
+def speed_gains(bw_hz: float, mass: float) -> tuple[float, float]:
+    """Speed PI gains for a bandwidth (Hz): kp = m w, ki = m w^2 / 4 (a double real closed-loop pole)."""
+    w = 2.0 * math.pi * bw_hz
+    return mass * w, mass * w * w / 4.0
+
+
+def mean_dq(motor: Motor, n: int = 720) -> tuple[float, float]:
+    """Mean L_d, L_q over one period (H)."""
+    th = np.linspace(0.0, 2.0 * np.pi, n, endpoint=False)
+    L_d, L_q, _ = dq_components(motor, th)
+    return float(np.mean(L_d)), float(np.mean(L_q))
+
+
+def error_gain(motor: Motor, f_inj: float, quad: float, gain: float, n: int = 180) -> np.ndarray:
+    """Local slope of the demodulated error against the position error over the period (1 = the
+    nominal), with the resistance-aware LUT of the injection: ``-gain d ratio / d theta_err``."""
+    th = np.linspace(0.0, 2.0 * np.pi, n, endpoint=False)
+    psi = psi_lut_resistive(motor, th, f_inj, quad=quad)
+    h = 1e-3
+    r_p = demod_ratio(motor, th, h, 1.0, f_inj, psi, quad=quad)
+    r_m = demod_ratio(motor, th, -h, 1.0, f_inj, psi, quad=quad)
+    return -gain * (r_p - r_m) / (2.0 * h)
+
+
+def design(
+    motor: Motor, drive: DriveData | None = None, source: str = "<tune>", analyse: bool = True
+) -> Design:
+    """Design the drive for ``motor``; bad drive data end in :class:`InputError` naming ``source``.
+    ``analyse``: also compute the margins of the linearised model (python-control)."""
+    d = drive or DriveData()
+    for key in ("v_dc", "f_pwm", "i_max", "v_max"):
+        v = getattr(d, key)
+        if not (math.isfinite(v) and v > 0):
+            raise InputError(source, key, f"must be a positive number, got {v!r}")
+    if not (0.0 <= d.quad < 1.0):
+        raise InputError(source, "quad", f"must be in [0, 1), got {d.quad!r}")
+    warnings: list[str] = []
+    L_d, L_q = mean_dq(motor)
+    if L_q == L_d:
+        raise InputError(
+            source, "motor", "no mean saliency (L_q = L_d): HF injection cannot see the position"
+        )
+    f_inj = d.f_inj if d.f_inj is not None else d.f_pwm / RATIO_PWM_INJ
+    if not (f_inj > 0 and 4.0 * f_inj <= d.f_pwm):
+        raise InputError(
+            source, "f_inj", f"must be positive and at most f_pwm / 4 = {d.f_pwm / 4:g} Hz, got {f_inj:g}"
+        )
+    z = abs(complex(motor.R_s, 2.0 * math.pi * f_inj * 0.5 * (L_d + L_q)))
+    if d.v_inj is not None:
+        v_inj = d.v_inj
+    else:
+        v_inj = min(d.v_dc * INJ_BUS_FRACTION, INJ_CURRENT_MAX * d.i_max * z)
+    if not (v_inj > 0):
+        raise InputError(source, "v_inj", f"must be positive, got {v_inj!r}")
+    v_lin = d.v_dc / math.sqrt(3.0)
+    if v_inj * math.sqrt(3.0) >= 0.8 * d.v_dc:
+        raise InputError(
+            source,
+            "v_inj",
+            f"{v_inj:g} V leaves no voltage for the fundamental on a "
+            f"{d.v_dc:g} V bus (amplitude * sqrt(3) must be below {0.8 * d.v_dc:g} V)",
+        )
+    i_hf = float(
+        np.mean(hf_current_amplitude(motor, np.linspace(0, 2 * np.pi, 90, endpoint=False), v_inj, f_inj))
+    )
+    if i_hf > d.i_max:
+        warnings.append(f"the HF current ({i_hf:.2f} A) exceeds i_max ({d.i_max:g} A): lower v_inj")
+    # the fundamental beside the injection: R i + (omega L i, back-EMF) at i_max
+    w_e = 2.0 * math.pi / motor.pole_pitch
+    v_avail = v_lin - v_inj
+    v_r = motor.R_s * d.i_max
+    if v_avail <= v_r:
+        raise InputError(
+            source,
+            "v_dc",
+            f"{d.v_dc:g} V: after the injection ({v_inj:.3g} V) there is "
+            f"{v_avail:.3g} V left, below R_s i_max = {v_r:.3g} V",
+        )
+    # |V| = |R i + j w (L_q i + psi_pm)| at speed v: solve for the speed where it reaches v_avail
+    lq_i = L_q * d.i_max + motor.psi_pm
+    headroom = w_e**-1 * math.sqrt(max(v_avail**2 - v_r**2, 0.0)) / lq_i
+    if headroom < d.v_max:
+        warnings.append(
+            f"the bus leaves room for the fundamental up to {headroom:.3g} m/s at i_max, below "
+            f"v_max = {d.v_max:g} m/s"
+        )
+    f_i = f_inj / RATIO_INJ_CURRENT
+    kp_i, ki_i = current_gains(f_i, L_d, L_q, motor.R_s)
+    f_lpf = RATIO_LPF * f_inj
+    f_obs = f_lpf / RATIO_LPF_OBS
+    f_v = f_obs / RATIO_OBS_SPEED
+    kp_v, ki_v = speed_gains(f_v, motor.mass)
+    kp_x = 2.0 * math.pi * f_v / RATIO_SPEED_POS
+    gain = L_q / (L_q - L_d)
+    k_e = error_gain(motor, f_inj, d.quad, gain)
+    if np.any(k_e <= 0):
+        raise InputError(
+            source,
+            "motor",
+            "the demodulated error changes sign at some positions (saliency "
+            "vanishes or reverses): the HF observer cannot hold there",
+        )
+    if k_e.min() < 0.3:
+        warnings.append(
+            f"the error gain drops to {k_e.min():.2f} of nominal at some positions "
+            "(low saliency): consider observer.gain_schedule = true"
+        )
+    dz = Design(
+        f_inj=f_inj,
+        v_inj=v_inj,
+        quad=d.quad,
+        i_hf=i_hf,
+        current_bw=f_i,
+        current_kp=kp_i,
+        current_ki=ki_i,
+        demod_lpf=f_lpf,
+        demod_notch=2.0 * f_inj,
+        demod_gain=gain,
+        observer_bw=f_obs,
+        speed_bw=f_v,
+        speed_kp=kp_v,
+        speed_ki=ki_v,
+        kp_x=kp_x,
+        dither_a=DITHER_CURRENT * d.i_max,
+        dither_hz=DITHER_FREQ * f_inj,
+        k_e_min=float(k_e.min()),
+        k_e_max=float(k_e.max()),
+        headroom_speed=headroom,
+        warnings=warnings,
+    )
+    if not analyse:
+        return dz
+    dz.margins = margins(dz, motor, d)
+    for name, m in dz.margins.items():
+        if "unscheduled" in name:
+            continue  # informative: the design schedules the gain
+        pm, gm = m["pm_deg"], m["gm_up_db"]
+        if pm is None or pm < 30.0 or (gm is not None and gm < 6.0):
+            warnings.append(f"{name}: phase margin {pm} deg, gain margin {gm} dB (below 30 deg / 6 dB)")
+    return dz
+
+
+def _observer_gains(f_bw: float) -> tuple[float, float]:
+    """k1, k2 of the PLL with both poles at -2 pi f (ls_observer_gains)."""
+    w = 2.0 * math.pi * f_bw
+    return 2.0 * w, w * w
+
+
+def margins(dz: Design, motor: Motor, drive: DriveData) -> dict:
+    """Gain and phase margins of the observer loop and of the motion loop (python-control), with the
+    demodulator's gain schedule that makes the local error gain 1 everywhere (the design's), at
+    0.8, 1 and 1.25 of it (model error), and without the schedule at its lowest and highest."""
+    import control as ct
+
+    s = ct.tf("s")
+    w_l = 2.0 * math.pi * dz.demod_lpf
+    h_lpf = w_l**2 / (s**2 + math.sqrt(2.0) * w_l * s + w_l**2)
+    # envelope delay of the HF band-pass (Q = 2): Q / (pi f_inj), plus 1.5 sampling periods
+    t_d = 2.0 / (math.pi * dz.f_inj) + 1.5 / drive.f_pwm
+    num, den = ct.pade(t_d, 2)
+    delay = ct.tf(num, den)
+    k1, k2 = _observer_gains(dz.observer_bw)
+    g_o = (k1 * s + k2) / s**2
+    w_i = 2.0 * math.pi * dz.current_bw
+    c_i = w_i / (s + w_i)
+    plant = 1.0 / (motor.mass * s**2)
+    c_v = dz.speed_kp + dz.speed_ki / s
+    out = {}
+    cases = (
+        ("scheduled, x0.8", 0.8),
+        ("scheduled", 1.0),
+        ("scheduled, x1.25", 1.25),
+        ("unscheduled min", dz.k_e_min),
+        ("unscheduled max", dz.k_e_max),
+    )
+    for label, k in cases:
+        kh = k * h_lpf * delay
+        out[f"observer loop ({label}, k_e = {k:.2f})"] = loop_margins(kh * g_o)
+        # the observer's position and speed estimates of the true position (x units)
+        t_pos = ct.minreal(kh * g_o / (1 + kh * g_o), verbose=False)
+        s_v = ct.minreal((k2 / s) * kh / (1 + kh * g_o), verbose=False)
+        l_mot = ct.minreal(c_v * (dz.kp_x * t_pos + s_v) * plant * c_i, verbose=False)
+        out[f"motion loop ({label}, k_e = {k:.2f})"] = loop_margins(l_mot)
+    return out
+
+
+def loop_margins(loop, f_lo: float = 0.01, f_hi: float = 5000.0) -> dict:
+    """Phase margin at the (highest) gain crossover, and the gain margins above it (upward: how much
+    more gain makes it unstable) and below it (downward, for conditionally stable loops such as a
+    double integrator under a PI: how much less gain does), from the frequency response."""
+    w = 2.0 * np.pi * np.logspace(np.log10(f_lo), np.log10(f_hi), 6000)
+    resp = loop(1j * w)
+    mag = np.abs(resp)
+    ph = np.unwrap(np.angle(resp))
+    above = np.flatnonzero((mag[:-1] >= 1.0) & (mag[1:] < 1.0))
+    if above.size == 0:
+        return {"pm_deg": None, "gm_up_db": None, "gm_down_db": None, "crossover_hz": None}
+    kc = above[-1]
+    pm = 180.0 + math.degrees(ph[kc]) % 360.0 - 360.0 * (math.degrees(ph[kc]) % 360.0 > 180.0)
+    pm = (math.degrees(ph[kc]) + 180.0) % 360.0
+    pm = pm - 360.0 if pm > 180.0 else pm
+    # phase crossings of -180 (mod 360)
+    x = (np.degrees(ph) + 180.0) / 360.0
+    cross = np.flatnonzero(np.floor(x[:-1]) != np.floor(x[1:]))
+    up = [20 * math.log10(1.0 / mag[i]) for i in cross if i > kc]
+    down = [20 * math.log10(mag[i]) for i in cross if i < kc and mag[i] > 1.0]
+    return {
+        "pm_deg": round(pm, 1),
+        "gm_up_db": round(min(up), 2) if up else None,
+        "gm_down_db": round(min(down), 2) if down else None,
+        "crossover_hz": round(float(w[kc]) / (2 * math.pi), 2),
+    }

@@ -1,0 +1,201 @@
+"""What ``linsense tune`` writes: a complete scenario (TOML) and a firmware configuration (C99)."""
+
+from __future__ import annotations
+
+import math
+import os
+from pathlib import Path
+
+import numpy as np
+import tomli_w
+
+from linsense.compensation.lut import build_lut, c_identifier
+from linsense.model.motor import Motor
+from linsense.tune.design import Design, DriveData, error_gain, mean_dq
+
+
+def scenario_dict(dz: Design, drive: DriveData, motor_ref: str, base: dict | None = None) -> dict:
+    """A complete scenario: ``base`` (a scenario's given keys, or a 2 s hold) with the design's
+    drive data and gains written out."""
+    sc = {k: (dict(v) if isinstance(v, dict) else v) for k, v in (base or {}).items()}
+    sc["motor"] = motor_ref
+    sc.setdefault("scenario", {"name": "tuned", "duration": 2.0})
+    sc.setdefault("reference", {"type": "hold"})
+    sc.setdefault("inverter", {}).update(
+        {"v_dc": drive.v_dc, "f_pwm": drive.f_pwm, "dead_time": drive.dead_time}
+    )
+    sc.setdefault("injection", {}).update(
+        {"amplitude": _r(dz.v_inj), "frequency": _r(dz.f_inj), "quadrature": _r(dz.quad)}
+    )
+    sc.setdefault("observer", {}).update(
+        {
+            "bandwidth_hz": _r(dz.observer_bw),
+            "demod_lpf_hz": _r(dz.demod_lpf),
+            "demod_notch": True,
+            "gain_schedule": True,
+        }
+    )
+    for k in ("k1", "k2", "k3"):
+        sc["observer"].pop(k, None)
+    con = sc.setdefault("controller", {})
+    for k in ("speed_kp", "speed_ki", "current_kp", "current_ki"):
+        con.pop(k, None)
+    con.update(
+        {
+            "current_bandwidth_hz": _r(dz.current_bw),
+            "speed_bandwidth_hz": _r(dz.speed_bw),
+            "i_max": drive.i_max,
+        }
+    )
+    if con.get("position_type", "p") == "p":
+        con["kp_x"] = _r(dz.kp_x)
+    sc.setdefault("calibration", {}).update({"dither_a": _r(dz.dither_a), "dither_hz": _r(dz.dither_hz)})
+    sc.setdefault("protection", {}).update(
+        {"v_dc_min": _r(drive.v_dc * 5.0 / 9.0), "v_dc_max": _r(1.25 * drive.v_dc)}
+    )
+    return sc
+
+
+def scenario_toml(
+    dz: Design,
+    drive: DriveData,
+    motor_spec: str,
+    out: Path,
+    base: dict | None = None,
+    base_dir: Path | None = None,
+) -> str:
+    """The scenario as TOML; a motor-file path is made relative to the output file's folder."""
+    ref = motor_spec
+    looks_like_path = motor_spec.lower().endswith(".toml") or any(c in motor_spec for c in "/\\")
+    if looks_like_path:
+        p = Path(motor_spec)
+        if not p.is_absolute():
+            p = (base_dir or Path.cwd()) / p
+        ref = os.path.relpath(p.resolve(), Path(out).resolve().parent)
+    head = (
+        f"# Designed by `linsense tune` for motor {ref!r} (docs/tuning.md): {dz.v_inj:.3g} V / "
+        f"{dz.f_inj:g} Hz injection, current loop {dz.current_bw:.3g} Hz, observer {dz.observer_bw:.3g} Hz, "
+        f"speed loop {dz.speed_bw:.3g} Hz, position {dz.kp_x:.3g} 1/s.\n"
+    )
+    return head + tomli_w.dumps(scenario_dict(dz, drive, ref, base))
+
+
+def _r(v: float) -> float:
+    return float(f"{v:.6g}")
+
+
+def c_header(dz: Design, drive: DriveData, motor: Motor, name: str | None = None, points: int = 256) -> str:
+    """``ls_cfg_<name>.h``: the compensation and gain tables and ``ls_cfg_<name>(cfg, comp, gain)``,
+    which fills an ``ls_drive_cfg`` from ``ls_drive_default_cfg`` with the design (the library holds
+    no motor's numbers)."""
+    sym = c_identifier(name or motor.name)
+    fn = f"ls_cfg_{sym}"
+    lut = build_lut(motor, points, f_inj=dz.f_inj, quad=dz.quad).values
+    k_e = error_gain(motor, dz.f_inj, dz.quad, 1.0, n=points)
+    gain = 1.0 / k_e
+    L_d, L_q = mean_dq(motor)
+    w_o = 2.0 * math.pi * dz.observer_bw
+
+    def f(v: float) -> str:
+        return f"LS_R({v:.9e})"
+
+    def table(vals: np.ndarray) -> str:
+        rows = [", ".join(f"{v:.9e}f" for v in vals[i : i + 4]) for i in range(0, len(vals), 4)]
+        return ",\n    ".join(rows)
+
+    force_max = motor.force_constant * drive.i_max
+    sets = [
+        ("fs", drive.f_pwm),
+        ("pole_pitch", motor.pole_pitch),
+        ("force_constant", motor.force_constant),
+        ("i_max", drive.i_max),
+        ("inject.amplitude", dz.v_inj),
+        ("inject.freq", dz.f_inj),
+        ("inject.fs", drive.f_pwm),
+        ("inject.quad", dz.quad),
+        ("bpf.f0", dz.f_inj),
+        ("bpf.fs", drive.f_pwm),
+        ("sep.f0", dz.f_inj),
+        ("sep.fs", drive.f_pwm),
+        ("demod.f_lpf", dz.demod_lpf),
+        ("demod.f_notch", dz.demod_notch),
+        ("demod.fs", drive.f_pwm),
+        ("demod.gain", dz.demod_gain),
+        ("obs.fs", drive.f_pwm),
+        ("obs.pole_pitch", motor.pole_pitch),
+        ("obs.mass", motor.mass),
+        ("obs.k1", 2.0 * w_o),
+        ("obs.k2", w_o * w_o),  # the PLL's (ls_observer_gains)
+        ("enc_obs.fs", drive.f_pwm),
+        ("enc_obs.pole_pitch", motor.pole_pitch),
+        ("enc_obs.mass", motor.mass),
+        ("current.kp", dz.current_kp),
+        ("current.ki", dz.current_ki),
+        ("current.l_d", L_d),
+        ("current.l_q", L_q),
+        ("current.psi_pm", motor.psi_pm),
+        ("current.fs", drive.f_pwm),
+        ("pos.kp_x", dz.kp_x),
+        ("pos.mass", motor.mass),
+        ("pos.force_max", force_max),
+        ("pos.speed.kp", dz.speed_kp),
+        ("pos.speed.ki", dz.speed_ki),
+        ("pos.speed.out_min", -force_max),
+        ("pos.speed.out_max", force_max),
+        ("pos.speed.fs", drive.f_pwm),
+        ("traj.pole_pitch", motor.pole_pitch),
+        ("traj.fs", drive.f_pwm),
+        ("mod.f_pwm", drive.f_pwm),
+        ("mod.dead_time", drive.dead_time),
+        ("prot.v_dc_min", drive.v_dc * 5.0 / 9.0),
+        ("prot.v_dc_max", 1.25 * drive.v_dc),
+        ("prot.fs", drive.f_pwm),
+        ("dtres.fs", drive.f_pwm),
+        ("dtres.r_s", motor.R_s),
+        ("dtres.l_d", L_d),
+        ("dtres.l_q", L_q),
+        ("cal.dither_amp", dz.dither_a),
+        ("cal.dither_freq", dz.dither_hz),
+    ]
+    body = "\n".join(f"    cfg->{k} = {f(v)};" for k, v in sets)
+    guard = f"LS_CFG_{sym.upper()}_H"
+    return f"""/* Drive configuration for motor {motor.name}, designed by `linsense tune` (docs/tuning.md).
+ * Drive: {drive.v_dc:g} V bus, {drive.f_pwm:g} Hz PWM, {drive.dead_time * 1e6:g} us dead time,
+ * i_max {drive.i_max:g} A.
+ * Injection {dz.v_inj:.4g} V / {dz.f_inj:g} Hz (kappa {dz.quad:g}), current loop {dz.current_bw:.4g} Hz,
+ * demodulator {dz.demod_lpf:.4g} Hz (zeros at {dz.demod_notch:g} Hz), observer {dz.observer_bw:.4g} Hz,
+ * speed loop {dz.speed_bw:.4g} Hz, position {dz.kp_x:.4g} 1/s.
+ *
+ *   ls_lut comp, gain;
+ *   ls_lut_cfg cc = {{{fn}_comp, {sym.upper()}_LEN}}, gc = {{{fn}_gain, {sym.upper()}_LEN}};
+ *   ls_lut_init(&comp, &cc); ls_lut_init(&gain, &gc);
+ *   {fn}(&cfg, &comp, &gain);      then ls_drive_init(&drive, &cfg)
+ */
+#ifndef {guard}
+#define {guard}
+
+#include "linsense/ls_drive.h"
+
+#define {sym.upper()}_LEN {points}u
+
+/* Psi_LUT (rad) over one electrical period for this injection, with R_s */
+static const float {fn}_comp[{points}] = {{
+    {table(lut)}
+}};
+
+/* demodulator gain (-) that makes the local error gain 1 everywhere */
+static const float {fn}_gain[{points}] = {{
+    {table(gain)}
+}};
+
+/* ls_drive_default_cfg, then the design; comp and gain: ls_lut objects over the tables above */
+static inline void {fn}(ls_drive_cfg *cfg, const ls_lut *comp, const ls_lut *gain)
+{{
+    ls_drive_default_cfg(cfg);
+{body}
+    cfg->demod.comp = comp;
+    cfg->demod.gain_table = gain;
+}}
+
+#endif /* {guard} */
+"""
