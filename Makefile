@@ -118,6 +118,7 @@ tools:
 bench: $(GEN_HDR) tools
 	tools/bench.sh
 	$(PY) tools/bench_sim.py
+	$(PY) tools/bench_closed_loop.py
 
 clean:
 	rm -rf $(BUILD) out

@@ -23,6 +23,7 @@ from linsense.errors import InputError, LinsenseError
 from linsense.model.motor import Motor, load_motor, preset_names
 from linsense.sim.core import PlantSetup, SimulationError, sim_cfg
 from linsense.sim.scenario import Scenario
+from linsense.tune.design import DriveData, current_gains, design, error_gain, speed_gains
 
 #: drive sub-configuration -> scenario section (for messages)
 _SECTION = {"inject": "injection", "bpf": "injection", "sep": "injection", "demod": "observer",
@@ -121,8 +122,6 @@ _DESIGN_KEYS = {"v_dc": "inverter.v_dc", "f_pwm": "inverter.f_pwm", "i_max": "co
 def designed(sc: Scenario, motor: Motor) -> Scenario:
     """``sc`` with every gain it leaves unset taken from the design for its motor and drive
     (:func:`linsense.tune.design`, docs/tuning.md); what the file gives is kept."""
-    from linsense.tune.design import DriveData, design
-
     s = sc.spec
     inj, con = s.injection, s.controller
     sections = ("injection", "observer", "controller", "calibration")
@@ -233,9 +232,10 @@ def build(sc: Scenario, motor: Motor | None = None) -> Built:
         if obs.k3 is not None:
             d.obs.k3 = obs.k3
     d.enc_obs.pole_pitch = tau
-    w_i = 2.0 * math.pi * con.current_bandwidth_hz
-    d.current.kp = con.current_kp if con.current_kp is not None else w_i * 0.5 * (known["L_d"] + known["L_q"])
-    d.current.ki = con.current_ki if con.current_ki is not None else w_i * known["R_s"]
+    # the gain rules of the design (linsense.tune.design), unless the file gives the gains
+    kp_i, ki_i = current_gains(con.current_bandwidth_hz, known["L_d"], known["L_q"], known["R_s"])
+    d.current.kp = con.current_kp if con.current_kp is not None else kp_i
+    d.current.ki = con.current_ki if con.current_ki is not None else ki_i
     d.current.l_d, d.current.l_q = known["L_d"], known["L_q"]
     d.current.psi_pm = known["psi_pm"]
     d.current.decouple = con.decouple
@@ -245,9 +245,9 @@ def build(sc: Scenario, motor: Motor | None = None) -> Built:
     d.pos.v_max = con.v_max
     d.pos.mass = known["mass"]
     d.pos.force_max = known["force_constant"] * con.i_max
-    w_v = 2.0 * math.pi * con.speed_bandwidth_hz
-    d.pos.speed.kp = con.speed_kp if con.speed_kp is not None else known["mass"] * w_v
-    d.pos.speed.ki = con.speed_ki if con.speed_ki is not None else known["mass"] * w_v * w_v / 4.0
+    kp_v, ki_v = speed_gains(con.speed_bandwidth_hz, known["mass"])
+    d.pos.speed.kp = con.speed_kp if con.speed_kp is not None else kp_v
+    d.pos.speed.ki = con.speed_ki if con.speed_ki is not None else ki_v
     d.pos.speed.out_min, d.pos.speed.out_max = -d.pos.force_max, d.pos.force_max
     d.traj.v_max, d.traj.a_max = s.reference.v_max, s.reference.a_max
     d.traj.pole_pitch = tau
@@ -284,8 +284,6 @@ def build(sc: Scenario, motor: Motor | None = None) -> Built:
     if obs.gain_schedule:
         # the demodulator gain that makes the error's local slope 1 everywhere (the saliency and,
         # with the elliptical injection and R_s, its phase set it; docs/tuning.md)
-        from linsense.tune.design import error_gain
-
         lut_motor_g = dataclasses.replace(motor, R_s=known["R_s"])
         k_e = error_gain(lut_motor_g, inj.frequency, inj.quadrature, 1.0, n=obs.lut_points)
         gain_table = 1.0 / k_e
