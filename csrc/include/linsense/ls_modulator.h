@@ -120,9 +120,11 @@ static inline bool ls_mod_step_impl(ls_mod *m, LS_REAL v_a, LS_REAL v_b, LS_REAL
  * were computed two steps ago; each leg switches at (1 -+ d)/2 of the period, loses the dead time
  * at turn-on when its current flows out and gains it at turn-off when it flows in (duty error
  * -(t_dead f_pwm)(sign i_on + sign i_off)/2), with i_on and i_off interpolated between the
- * period's start current (i_prev) and end current (i_abc). A leg that does not switch (d = 0 or 1)
- * has no error. Writes the alpha-beta voltage error (V) and returns true, or writes 0 and returns
- * false while the history is not complete. i_abc and v_dc must be finite. */
+ * period's start current (i_prev) and end current (i_abc) plus the PWM ripple at the edges
+ * (k_rip = T / L in 1/(H Hz), the phase inductance seen by the ripple; 0 ignores it). A leg that
+ * does not switch (d = 0 or 1) has no error. Writes the alpha-beta voltage error (V) and returns
+ * true, or writes 0 and returns false while the history is not complete. i_abc and v_dc must be
+ * finite. (Used by ls_drive with hf_dtres; see linsense/ls_dtres.h.) */
 static inline bool ls_mod_residual(const ls_mod *m, const LS_REAL i_abc[3], LS_REAL v_dc, LS_REAL k_rip,
                                    LS_REAL v_ab[2])
 {
