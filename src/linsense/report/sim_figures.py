@@ -17,6 +17,27 @@ _DPI = 110
 _MAX_POINTS = 20000  # plotted samples per line (decimated for drawing only)
 
 
+def _hf_period_samples(result) -> int:
+    """Recorded samples per injection period (1 when unknown)."""
+    spec = getattr(result.scenario, "spec", None)
+    if spec is None or result.t.size < 2:
+        return 1
+    dt = float(result.t[1] - result.t[0])
+    return max(1, int(round(1.0 / (spec.injection.frequency * dt))))
+
+
+def _period_mean(x: np.ndarray, n: int) -> np.ndarray:
+    """Centred moving mean over n samples (the HF injection's period): the fundamental."""
+    if n <= 1 or x.size < n:
+        return x
+    ok = np.isfinite(x)
+    m = np.convolve(np.where(ok, x, 0.0), np.ones(n) / n, mode="same")
+    # no whole period around the first and last half period: not drawn
+    m[: n // 2] = np.nan
+    m[x.size - n // 2:] = np.nan
+    return m
+
+
 def sim_figure_png(result) -> bytes:
     """PNG bytes of the four-panel run figure."""
     t = result.t
@@ -37,12 +58,18 @@ def sim_figure_png(result) -> bytes:
     ax = axes[2]
     for k, name in enumerate("abc"):
         ax.plot(t[sl], result.i_abc[sl, k], lw=0.5, label=f"$i_{name}$")
-    ax.plot(t[sl], result.i_dq[sl, 1], "k", lw=0.8, label="$i_q$ (true frame)")
+    ax.plot(t[sl], result.i_dq[sl, 1], "k", lw=0.5, alpha=0.35, label="$i_q$ (true frame)")
+    n_hf = _hf_period_samples(result)
+    ax.plot(t[sl], _period_mean(result.i_dq[:, 1], n_hf)[sl], "k", lw=1.2,
+            label="$i_q$, mean over an HF period")
     ax.set_ylabel("current (A)")
-    ax.legend(loc="upper right", fontsize=7, ncol=4)
+    ax.legend(loc="upper right", fontsize=7, ncol=5)
     ax = axes[3]
-    ax.plot(t[sl], result.force[sl], lw=0.6, color="tab:green")
+    ax.plot(t[sl], result.force[sl], lw=0.5, alpha=0.35, color="tab:green", label="force")
+    ax.plot(t[sl], _period_mean(result.force, n_hf)[sl], lw=1.2, color="darkgreen",
+            label="mean over an HF period")
     ax.set_ylabel("motor force (N)")
+    ax.legend(loc="upper right", fontsize=7)
     ax.set_xlabel("time (s)")
     for a in axes:
         a.grid(True, alpha=0.3)

@@ -17,7 +17,6 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from linsense.analysis.hf import psi_lut, psi_lut_resistive
-from linsense.errors import LinsenseError
 from linsense.model.motor import Motor
 from linsense.sim.build import build
 from linsense.sim.core import run_closed_loop
@@ -27,10 +26,6 @@ from linsense.sim.scenario import scenario_from_dict
 #: simulated-time budget per point (s) beyond the move and the settling: the drive's own t_max trips
 #: an unconverged point long before
 _BUDGET_PER_POINT = 1.5
-
-
-class CalibrationError(LinsenseError):
-    """The calibration did not complete (a fault, or out of time)."""
 
 
 @dataclass
