@@ -63,9 +63,11 @@ def main() -> int:
         peak = max(r[2] for r in rows)
         lc = max(r[3] for r in rows)
         passed = bias <= 1.0 and lc <= 0.02
+        verdict = ("PASS" if passed else "FAIL") if fid == "switching" else \
+            "(the targets are judged on switching; the average model's limits: docs/simulator.md)"
         ok &= passed or fid == "average"
         print(f"hold, 16 positions, {fid:9s}: steady error |mean| max {bias:.2f} deg (|err| max {peak:.2f} deg), "
-              f"limit cycle max {lc:.4f} mm (targets <= 1.0 deg, <= 0.02 mm) {'PASS' if passed else 'FAIL'}")
+              f"limit cycle max {lc:.4f} mm (targets <= 1.0 deg, <= 0.02 mm) {verdict}")
     for load, m in cals:
         passed = m["completed"] and m["max_diff_deg"] <= 0.3
         ok &= passed

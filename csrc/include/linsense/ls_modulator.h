@@ -61,15 +61,23 @@ static inline bool ls_mod_step_impl(ls_mod *m, LS_REAL v_a, LS_REAL v_b, LS_REAL
     dt[0] = dt[1] = dt[2] = LS_R(0.0);
     if (dtc) {
         if (m->have_prev && (!check || LS_ISFINITE3(i_abc[0], i_abc[1], i_abc[2]))) {
-            for (k = 0; k < 3; ++k) {
-                const LS_REAL i_pred = i_abc[k] + m->cfg.dtc_lead * (i_abc[k] - m->i_prev[k]);
-                const LS_REAL x = i_pred * m->inv_band;
-                /* = ls_clamp(x, -1, 1), in a form compilers select without branching (the HF
-                 * current crosses zero twice per injection period: a branch on it mispredicts) */
-                const LS_REAL x1 = x > LS_R(1.0) ? LS_R(1.0) : x;
-                m->i_prev[k] = i_abc[k];
-                dt[k] = m->d_dead * (x < LS_R(-1.0) ? LS_R(-1.0) : x1);
-            }
+            /* x = i_pred / i_band with i_pred = i + lead (i - i_prev); the three legs written out on
+             * local copies (stores to i_prev would otherwise make the compiler reload i_abc) */
+            const LS_REAL ka = (LS_R(1.0) + m->cfg.dtc_lead) * m->inv_band, kb = m->cfg.dtc_lead * m->inv_band;
+            const LS_REAL i0 = i_abc[0], i1 = i_abc[1], i2 = i_abc[2];
+            const LS_REAL x0 = ka * i0 - kb * m->i_prev[0];
+            const LS_REAL x1 = ka * i1 - kb * m->i_prev[1];
+            const LS_REAL x2 = ka * i2 - kb * m->i_prev[2];
+            /* = ls_clamp(x, -1, 1), in a form compilers select without branching (the HF current
+             * crosses zero twice per injection period: a branch on it mispredicts) */
+            const LS_REAL y0 = x0 > LS_R(1.0) ? LS_R(1.0) : x0, y1 = x1 > LS_R(1.0) ? LS_R(1.0) : x1;
+            const LS_REAL y2 = x2 > LS_R(1.0) ? LS_R(1.0) : x2;
+            dt[0] = m->d_dead * (x0 < LS_R(-1.0) ? LS_R(-1.0) : y0);
+            dt[1] = m->d_dead * (x1 < LS_R(-1.0) ? LS_R(-1.0) : y1);
+            dt[2] = m->d_dead * (x2 < LS_R(-1.0) ? LS_R(-1.0) : y2);
+            m->i_prev[0] = i0;
+            m->i_prev[1] = i1;
+            m->i_prev[2] = i2;
         } else {
             for (k = 0; k < 3; ++k) {
                 if (LS_ISFINITE(i_abc[k])) { /* none for a non-finite current */
@@ -125,37 +133,47 @@ static inline bool ls_mod_step_impl(ls_mod *m, LS_REAL v_a, LS_REAL v_b, LS_REAL
  * does not switch (d = 0 or 1) has no error. Writes the alpha-beta voltage error (V) and returns
  * true, or writes 0 and returns false while the history is not complete. i_abc and v_dc must be
  * finite. (Used by ls_drive with hf_dtres; see linsense/ls_dtres.h.) */
+static inline LS_REAL ls_mod_leg_error_(LS_REAL d, LS_REAL c, LS_REAL i0, LS_REAL i1, LS_REAL rip,
+                                        LS_REAL d_dead)
+{
+    /* the edge currents are i_mid -+ s (s: half the edges' distance times the slope plus the ripple
+     * at the edges); the two signs add to 2 sign(i_mid) when |i_mid| > |s|, else cancel; a leg at
+     * 0 or 1 does not switch: no error, and no compensation reached it */
+    const LS_REAL i_mid = LS_R(0.5) * (i0 + i1);
+    const LS_REAL sp = LS_R(0.5) * d * (i1 - i0) + rip;
+    const LS_REAL lost = LS_FABS(i_mid) > LS_FABS(sp) ? (i_mid > LS_R(0.0) ? d_dead : -d_dead) : LS_R(0.0);
+    return d * (LS_R(1.0) - d) > LS_R(0.0) ? c - lost : LS_R(0.0);
+}
+
 static inline bool ls_mod_residual(const ls_mod *m, const LS_REAL i_abc[3], LS_REAL v_dc, LS_REAL k_rip,
                                    LS_REAL v_ab[2])
 {
     const uint32_t old = m->newest ^ 1u; /* the entry of two steps ago (this step has not pushed yet) */
-    const LS_REAL *d = m->hist_d[old], *c = m->hist_c[old], *ip = m->i_prev;
-    const LS_REAL kv = k_rip * v_dc, dm = (d[0] + d[1] + d[2]) * (LS_R(1.0) / LS_R(3.0));
-    LS_REAL acc[3], e[3];
-    int k;
+    /* (local copies: the loads are not repeated for fear of aliasing) */
+    const LS_REAL d0 = m->hist_d[old][0], d1 = m->hist_d[old][1], d2 = m->hist_d[old][2];
+    const LS_REAL kv = k_rip * v_dc, dm = (d0 + d1 + d2) * (LS_R(1.0) / LS_R(3.0));
+    const LS_REAL k6 = kv * (LS_R(1.0) / LS_R(6.0)), kh = LS_R(0.5) * kv, dd = m->d_dead;
+    LS_REAL e0, e1, e2;
     if (m->n_hist < 2u || !m->have_prev) {
         v_ab[0] = v_ab[1] = LS_R(0.0);
         return false;
     }
-    /* sum over the other legs of max(0, d_j - d_k): how long they are high before leg k rises */
-    acc[0] = (d[1] > d[0] ? d[1] - d[0] : LS_R(0.0)) + (d[2] > d[0] ? d[2] - d[0] : LS_R(0.0));
-    acc[1] = (d[0] > d[1] ? d[0] - d[1] : LS_R(0.0)) + (d[2] > d[1] ? d[2] - d[1] : LS_R(0.0));
-    acc[2] = (d[0] > d[2] ? d[0] - d[2] : LS_R(0.0)) + (d[1] > d[2] ? d[1] - d[2] : LS_R(0.0));
-    for (k = 0; k < 3; ++k) {
-        /* the edge currents are i_mid -+ s: the period's mid current, and half the edges' distance
-         * times the slope plus the ripple's magnitude at the edges, (V_dc T / L)(acc/6 +
-         * (1 - d)(d - d_mean)/2); the two signs add to 2 sign(i_mid) when |i_mid| > |s|, else cancel */
-        const LS_REAL i_mid = LS_R(0.5) * (ip[k] + i_abc[k]);
-        const LS_REAL sp = LS_R(0.5) * d[k] * (i_abc[k] - ip[k]) +
-                           kv * (acc[k] * (LS_R(1.0) / LS_R(6.0)) + LS_R(0.5) * (LS_R(1.0) - d[k]) * (d[k] - dm));
-        const LS_REAL dd = i_mid > LS_R(0.0) ? m->d_dead : -m->d_dead;
-        /* (a leg at 0 or 1 does not switch: no error, and no compensation reached it) */
-        e[k] = d[k] * (LS_R(1.0) - d[k]) > LS_R(0.0) ? c[k] - (LS_FABS(i_mid) > LS_FABS(sp) ? dd : LS_R(0.0))
-                                                      : LS_R(0.0);
+    /* the PWM ripple at leg k's edges: (V_dc T / L)(acc_k / 6 + (1 - d_k)(d_k - d_mean) / 2), acc_k the
+     * sum over the other legs of max(0, d_j - d_k) (how long they are high before leg k rises) */
+    {
+        const LS_REAL p01 = d1 > d0 ? d1 - d0 : LS_R(0.0), p10 = d0 > d1 ? d0 - d1 : LS_R(0.0);
+        const LS_REAL p02 = d2 > d0 ? d2 - d0 : LS_R(0.0), p20 = d0 > d2 ? d0 - d2 : LS_R(0.0);
+        const LS_REAL p12 = d2 > d1 ? d2 - d1 : LS_R(0.0), p21 = d1 > d2 ? d1 - d2 : LS_R(0.0);
+        const LS_REAL r0 = k6 * (p01 + p02) + kh * (LS_R(1.0) - d0) * (d0 - dm);
+        const LS_REAL r1 = k6 * (p10 + p12) + kh * (LS_R(1.0) - d1) * (d1 - dm);
+        const LS_REAL r2 = k6 * (p20 + p21) + kh * (LS_R(1.0) - d2) * (d2 - dm);
+        e0 = ls_mod_leg_error_(d0, m->hist_c[old][0], m->i_prev[0], i_abc[0], r0, dd);
+        e1 = ls_mod_leg_error_(d1, m->hist_c[old][1], m->i_prev[1], i_abc[1], r1, dd);
+        e2 = ls_mod_leg_error_(d2, m->hist_c[old][2], m->i_prev[2], i_abc[2], r2, dd);
     }
     /* pole-voltage errors to alpha-beta (the common mode does not reach a floating star) */
-    v_ab[0] = v_dc * (LS_R(2.0) * e[0] - e[1] - e[2]) * (LS_R(1.0) / LS_R(3.0));
-    v_ab[1] = v_dc * (e[1] - e[2]) * (LS_R(1.0) / LS_SQRT3);
+    v_ab[0] = v_dc * (LS_R(2.0) * e0 - e1 - e2) * (LS_R(1.0) / LS_R(3.0));
+    v_ab[1] = v_dc * (e1 - e2) * (LS_R(1.0) / LS_SQRT3);
     return true;
 }
 
