@@ -294,6 +294,33 @@ static void test_sensorless_hold_elliptical(void)
     }
 }
 
+/* ls_drive_set_load: the speed integrator (P type) and the mechanical observer start with the load */
+static void test_set_load(void)
+{
+    ls_drive d;
+    ls_drive_cfg cfg;
+    ls_pos p0 = {0, LS_R(0.0)};
+    setup(&d, &cfg);
+    ls_drive_set_position(&d, p0);
+    ls_drive_set_load(&d, LS_R(20.0));
+    LS_CHECK_NEAR(d.pos.speed.integ, 20.0, 1e-6);
+    LS_CHECK_NEAR(d.f_ref, 20.0, 1e-6);
+    ls_drive_set_load(&d, (LS_REAL)NAN); /* ignored */
+    LS_CHECK_NEAR(d.pos.speed.integ, 20.0, 1e-6);
+    ls_drive_set_load(&d, LS_R(1e6)); /* limited to the force range */
+    LS_CHECK_NEAR(d.pos.speed.integ, (double)cfg.pos.speed.out_max, 1e-3);
+    ls_drive_set_position(&d, p0); /* clears the controllers */
+    LS_CHECK_NEAR(d.pos.speed.integ, 0.0, 1e-9);
+    cfg.obs.type = LS_OBS_MECH;
+    ls_observer_gains(&cfg.obs, LS_R(40.0));
+    cfg.pos.type = LS_POSCTRL_PD;
+    cfg.pos.kp_x = LS_R(2000.0);
+    LS_CHECK(ls_drive_init(&d, &cfg) == LS_OK);
+    ls_drive_set_load(&d, LS_R(-15.0));
+    LS_CHECK_NEAR(d.obs.f_load, -15.0, 1e-6);
+    LS_CHECK_NEAR(d.pos.speed.integ, 0.0, 1e-9); /* PD: no integrator to preset */
+}
+
 static void test_sensorless_move(void)
 {
     ls_drive d;
@@ -389,6 +416,7 @@ int main(void)
     test_sensored_step();
     test_sensorless_hold();
     test_sensorless_hold_elliptical();
+    test_set_load();
     test_sensorless_move();
     test_observer_loss();
     test_calibration();
