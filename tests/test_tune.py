@@ -132,6 +132,8 @@ def test_tune_outputs(tmp_path, capsys):
             "-Wpedantic",
             "-Werror",
             "-Wdouble-promotion",
+            "-Wconversion",
+            "-Wshadow",
             "-O1",
             f"-I{ROOT / 'csrc' / 'include'}",
             f"-I{tmp_path}",
@@ -164,5 +166,69 @@ def test_tune_refuses_an_impossible_drive(tmp_path, capsys):
             ]
         )
     err = capsys.readouterr().err.strip()
-    assert e.value.code == 2 and err.count("\n") == 0 and "v_dc" in err and "30 V" in err
+    assert e.value.code == 2 and err.count("\n") == 0 and "v_inj" in err and "30 V bus" in err
     assert not (tmp_path / "x.toml").exists()
+
+
+def test_review_regressions(tmp_path, capsys):
+    """Cases a review found: a sensored scenario without injection still builds; an injection at
+    f_pwm / 4 (no room for the demodulator's zeros at 2 f_inj) still runs; an injection the drive
+    would refuse (above 0.8 of the under-voltage limit) is refused by tune; derived bus limits do not
+    stick to a scenario through replace()."""
+    sc = scenario_from_dict(
+        {
+            "motor": "ecce2010",
+            "scenario": {"duration": 0.05},
+            "reference": {"type": "hold"},
+            "control": {"mode": "sensored"},
+            "injection": {"amplitude": 0.0},
+        }
+    )
+    assert float(build(sc).drive.cfg.inject.amplitude) == 0.0
+    out = tmp_path / "f4.toml"
+    with pytest.raises(SystemExit) as e:
+        main(["tune", "--motor", "ecce2010", "--f-inj", "4000", "--out", str(out)])
+    assert e.value.code == 0
+    b = build(load_scenario(out))
+    assert float(b.drive.cfg.demod.f_notch) == 0.0
+    with pytest.raises(SystemExit) as e:
+        main(
+            [
+                "tune",
+                "--motor",
+                "ecce2010",
+                "--v-inj",
+                "20",
+                "--i-max",
+                "1.5",
+                "--out",
+                str(tmp_path / "x.toml"),
+            ]
+        )
+    err = capsys.readouterr().err
+    assert e.value.code == 2 and "v_inj" in err and "under-voltage limit" in err
+    sc = scenario_from_dict(
+        {
+            "motor": "ecce2010",
+            "scenario": {"duration": 0.05},
+            "reference": {"type": "hold"},
+            "protection": {"i_max": 5.0},
+        }
+    )
+    assert "v_dc_min" not in sc.given().get("protection", {})
+    assert sc.replace(inverter={"v_dc": 30.0}).spec.protection.v_dc_min == pytest.approx(30.0 * 5 / 9)
+
+
+def test_sensored_observer_beside_the_encoder():
+    """In sensored mode the injection (on by default) feeds the HF observer beside the encoder, with
+    the table: its estimation metrics are the sensorless estimate's, not the frozen start position."""
+    r = linsense.simulate(
+        {
+            "motor": "ecce2010",
+            "scenario": {"duration": 2.0},
+            "control": {"mode": "sensored"},
+            "reference": {"type": "step", "position_mm": 3.0},
+        }
+    )
+    m = r.metrics
+    assert m["stable"] and abs(m["bias_deg"]) < 1.0 and m["max_abs_err_deg"] < 3.0

@@ -33,6 +33,9 @@ ls_status ls_demod_init(ls_demod *d, const ls_demod_cfg *cfg)
              * g for unity DC gain, the poles unchanged (one biquad, the ripple at f_notch nulled) */
             ls_sincos_full(LS_TWO_PI * cfg->f_notch / cfg->fs, &cn, &sn);
             g = (LS_R(1.0) + d->lp[k].a1 + d->lp[k].a2) / (LS_R(2.0) - LS_R(2.0) * cn);
+            if (!LS_ISFINITE(g) || !(cn < LS_R(1.0))) { /* a notch too low for the arithmetic */
+                return LS_ERR_PARAM;
+            }
             d->lp[k].b0 = g;
             d->lp[k].b1 = LS_R(-2.0) * cn * g;
             d->lp[k].b2 = g;

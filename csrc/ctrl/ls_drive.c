@@ -241,7 +241,12 @@ ls_status ls_drive_set_mode(ls_drive *d, ls_mode mode)
     default:
         return LS_ERR_PARAM;
     }
-    ls_demod_set_comp(&d->demod, mode == LS_MODE_SENSORLESS_LUT);
+    /* the table in sensorless_lut, and for the HF observer that runs beside the encoder in sensored
+     * mode (inject_sensored) when there is one; not without LUT, nor while calibrating it */
+    ls_demod_set_comp(&d->demod, mode == LS_MODE_SENSORLESS_LUT || mode == LS_MODE_SENSORED);
+    /* the modulator's history and the residual model start again (the outputs may have been off) */
+    ls_mod_reset(&d->mod);
+    ls_dtres_reset(&d->dtres);
     d->mode = mode;
     d->align = true;
     ls_inject_enable(&d->inj, mode == LS_MODE_SENSORLESS_LUT || mode == LS_MODE_SENSORLESS_NOLUT ||
@@ -375,9 +380,15 @@ static void calibration_step(ls_drive *d)
         /* windows of t_hold: a point is accepted when the mean of the demodulated error (the
          * observer's error against the encoder) over a whole window is below tol; the table gets the
          * window's mean angle (the HF currents and the dead time make both ripple) */
-        d->cal_sum_err += d->demod.err;
-        d->cal_sum_psi += d->psi_cal;
-        d->cal_hold++;
+        if (!d->demod.valid) { /* a window counts whole and valid only */
+            d->cal_hold = 0u;
+            d->cal_sum_err = LS_R(0.0);
+            d->cal_sum_psi = LS_R(0.0);
+        } else {
+            d->cal_sum_err += d->demod.err;
+            d->cal_sum_psi += d->psi_cal;
+            d->cal_hold++;
+        }
         d->cal_timer++;
         if ((LS_REAL)d->cal_hold * d->ts >= c->t_hold) {
             const LS_REAL inv_n = LS_R(1.0) / (LS_REAL)d->cal_hold;
@@ -490,12 +501,15 @@ void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
     if (hf_on) {
         LS_REAL err = ls_demod_step_cs(&d->demod, ihf_a, ihf_b, d->obs.pos.theta, c_est, s_est, d->inj.c,
                                        d->inj.s, calibrating ? d->psi_cal : LS_R(0.0));
-        if (sensorless) {
+        if (!calibrating) {
             /* the error counts once the injection has reached its amplitude: while it ramps up,
-             * the band-pass still rings on the fundamental current's first steps */
+             * the band-pass still rings on the fundamental current's first steps. In sensored mode
+             * (inject_sensored) the HF observer runs beside the encoder, unchecked (commissioning) */
             const LS_REAL e_obs = d->inj.amp >= cfg->inject.amplitude ? err : LS_R(0.0);
             ls_observer_step(&d->obs, e_obs, d->f_ref);
-            ls_protect_check_observer(&d->prot, e_obs, d->demod.valid, d->obs.omega);
+            if (sensorless) {
+                ls_protect_check_observer(&d->prot, e_obs, d->demod.valid, d->obs.omega);
+            }
         }
     }
     if (calibrating) {

@@ -112,6 +112,55 @@ static double relative_error(ls_sim_fidelity fid, double i_amp, int n)
     return sqrt(err2 / tot2);
 }
 
+/* The history: the residual must use the duties of two steps ago (not the last ones) and count
+ * the compensation they carried (c - lost). Two different duty sets are pushed with the
+ * compensation on; the plant runs the older, compensated duties with dead time, and the nominal
+ * ones (without the compensation) on an ideal inverter: their difference is the net error. */
+static void history_and_compensation(void)
+{
+    bench bt, b0;
+    ls_mod m;
+    ls_mod_cfg mc;
+    const double g = (1.0 - exp(-R_PH / 16000.0 / L_PH)) / R_PH;
+    const LS_REAL k_rip = (LS_REAL)(1.0 / (16000.0 * L_PH));
+    /* the older entry compensates for currents of the wrong sign (its net error is then twice the
+     * dead time's), the newer for the right ones (net error about 0): taking the wrong entry, or
+     * leaving the compensation out, is a large error */
+    const LS_REAL i_wrong[3] = {LS_R(-0.6), LS_R(0.2), LS_R(0.4)};
+    const LS_REAL i_right[3] = {LS_R(0.6), LS_R(-0.2), LS_R(-0.4)};
+    double duty[3], nominal[3], i0[2] = {0.6, 0.1}, it[2], iz[2], vt[2];
+    LS_REAL d_old[3], d_new[3], a0[3], a1[3], v_est[2];
+    int j;
+    bench_init(&bt, 0.8e-6, LS_SIM_AVERAGE);
+    bench_init(&b0, 0.0, LS_SIM_AVERAGE);
+    mc.f_pwm = LS_R(16000.0); mc.dead_time = LS_R(0.8e-6); mc.dtc = true; mc.i_band = LS_R(0.05);
+    mc.dtc_lead = LS_R(1.5);
+    LS_CHECK(ls_mod_init(&m, &mc) == LS_OK);
+    (void)ls_mod_step(&m, LS_R(10.0), LS_R(2.0), LS_R(72.0), i_wrong, d_old);
+    (void)ls_mod_step(&m, LS_R(-8.0), LS_R(5.0), LS_R(72.0), i_right, d_new);
+    LS_CHECK(fabs((double)(d_old[0] - d_new[0])) > 0.1); /* the two sets differ */
+    for (j = 0; j < 3; ++j) {
+        duty[j] = (double)d_old[j];
+        nominal[j] = (double)(d_old[j] - m.hist_c[m.newest ^ 1u][j]);
+        LS_CHECK(fabs((double)m.hist_c[m.newest ^ 1u][j]) > 0.5 * 0.8e-6 * 16000.0); /* compensated */
+    }
+    period(&bt, duty, i0, it);
+    period(&b0, nominal, i0, iz);
+    vt[0] = (it[0] - iz[0]) / g;
+    vt[1] = (it[1] - iz[1]) / g;
+    to_abc(i0, a0);
+    to_abc(it, a1);
+    for (j = 0; j < 3; ++j) {
+        m.i_prev[j] = a0[j];
+    }
+    LS_CHECK(ls_mod_residual(&m, a1, LS_R(72.0), k_rip, v_est));
+    printf("  history: net error %+.3f %+.3f V, estimate %+.3f %+.3f V\n", vt[0], vt[1], (double)v_est[0],
+           (double)v_est[1]);
+    LS_CHECK(sqrt(vt[0] * vt[0] + vt[1] * vt[1]) > 1.0); /* the wrong compensation shows */
+    LS_CHECK_NEAR(v_est[0], vt[0], 0.05);
+    LS_CHECK_NEAR(v_est[1], vt[1], 0.05);
+}
+
 static void dtres_response(void)
 {
     /* a constant d-axis voltage: i_d -> V/R with the time constant L_d/R, exactly per step */
@@ -150,6 +199,7 @@ int main(void)
     /* small currents, where the ripple decides the signs: most of it (measured 0.215; 0.309 without
      * the ripple term) */
     LS_CHECK(e_small_sw < 0.27);
+    history_and_compensation();
     dtres_response();
     return ls_test_report("itest_residual");
 }

@@ -742,7 +742,8 @@ class Drive:
                 obj = getattr(obj, part)
             if float(obj.fs) != fs:
                 bad[f"{path}.fs"] = f"{float(obj.fs):g} Hz differs from the drive's fs = {fs:g} Hz"
-        for section, module in self._SECTIONS:
+        sections = self._SECTIONS + ((("dtres", "ls_dtres"),) if self.cfg.hf_dtres else ())
+        for section, module in sections:
             init = getattr(lib, module + "_init")
             if init(ffi.new(module + " *"), ffi.addressof(self.cfg, section)) != lib.LS_OK:
                 bad[section] = f"refused by {module}_init"

@@ -15,7 +15,8 @@
  *
  * Modes:
  *   LS_MODE_OFF              outputs disabled, estimators idle
- *   LS_MODE_SENSORED         encoder closes every loop (HF injection optional)
+ *   LS_MODE_SENSORED         encoder closes every loop (HF injection optional: with inject_sensored the
+ *                            HF observer runs beside the encoder, with the table when there is one)
  *   LS_MODE_SENSORLESS_LUT   HF observer with the compensation table (cfg.demod.comp required)
  *   LS_MODE_SENSORLESS_NOLUT HF observer without compensation (the paper's unstable case)
  *   LS_MODE_CALIBRATION      encoder closes the position loop; at each of cal.points positions of
@@ -183,9 +184,10 @@ ls_status ls_drive_set_mode(ls_drive *d, ls_mode mode);
 /* Tell the HF observer where the mover is (sensorless start from a known position). */
 void ls_drive_set_position(ls_drive *d, ls_pos p);
 /* Start in equilibrium with a known load force f_load (N, opposing positive motion when > 0,
- * e.g. gravity on an incline): the speed controller's integrator (position type P) and the
- * mechanical observer's load estimate are preset to it, so that the drive produces the force from
- * the first step instead of sagging until its integrators catch up. Call after
+ * e.g. gravity on an incline): the speed controller's integrator (position type P) and the HF
+ * mechanical observer's load estimate (sensorless modes: in sensored and calibration modes the
+ * alignment to the encoder resets that observer) are preset to it, so that the drive produces the
+ * force from the first step instead of sagging until its integrators catch up. Call after
  * ls_drive_set_position (which clears the controllers). A non-finite f_load is ignored; it is
  * limited to the force limits of the speed controller and of the observer. */
 void ls_drive_set_load(ls_drive *d, LS_REAL f_load);

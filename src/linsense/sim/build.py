@@ -129,7 +129,9 @@ def designed(sc: Scenario, motor: Motor) -> Scenario:
     try:
         dz = design(motor, DriveData(v_dc=s.inverter.v_dc, f_pwm=s.inverter.f_pwm,
                                      dead_time=s.inverter.dead_time, i_max=con.i_max, v_max=s.reference.v_max,
-                                     v_inj=inj.amplitude if "amplitude" in given["injection"] else None,
+                                     # (an explicit 0, sensored without injection, is kept as given)
+                                     v_inj=inj.amplitude if "amplitude" in given["injection"]
+                                     and inj.amplitude > 0 else None,
                                      f_inj=inj.frequency if "frequency" in given["injection"] else None,
                                      quad=inj.quadrature), sc.source, analyse=False)
     except InputError as exc:  # the design's drive-data names -> the scenario's keys
@@ -218,7 +220,8 @@ def build(sc: Scenario, motor: Motor | None = None) -> Built:
     d.bpf.q = d.sep.q = inj.filter_q
     d.demod.method = lib.LS_DEMOD_PRODUCT if obs.demod_method == "product" else lib.LS_DEMOD_HETERODYNE
     d.demod.f_lpf = obs.demod_lpf_hz
-    d.demod.f_notch = 2.0 * inj.frequency if obs.demod_notch else 0.0
+    # the low-pass's zeros at 2 f_inj, where that is below fs / 2 (f_inj < f_pwm / 4)
+    d.demod.f_notch = 2.0 * inj.frequency if obs.demod_notch and 4.0 * inj.frequency < fs else 0.0
     d.demod.gain = known["demod_gain"]
     d.demod.min_level = obs.min_level
     d.obs.type = lib.LS_OBS_PLL if obs.type == "pll" else lib.LS_OBS_MECH
@@ -273,7 +276,8 @@ def build(sc: Scenario, motor: Motor | None = None) -> Built:
         getattr(d, sub).fs = fs
     d.pos.speed.fs = fs
 
-    compensation = obs.compensation or ("lut" if ctl.mode == "sensorless_lut" else "none")
+    # the table for sensorless_lut, and for the HF observer beside the encoder in sensored mode
+    compensation = obs.compensation or ("lut" if ctl.mode in ("sensorless_lut", "sensored") else "none")
     comp = None
     if compensation == "lut":
         f_inj = inj.frequency if obs.lut_model == "resistive" else None

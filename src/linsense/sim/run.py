@@ -57,7 +57,8 @@ def simulate(scenario: Scenario | str | Path | dict) -> Result:
     )
     if raw.fault and raw.steps_done <= 1:
         # a trip at the very first step is the configuration's doing, not the closed loop's
-        raise InputError(sc.source, _FAULT_KEYS.get(m["fault"], ""),
+        first = m["fault"].split("+")[0]  # the first fault named (several can trip together)
+        raise InputError(sc.source, _FAULT_KEYS.get(first, ""),
                          f"the drive trips at t = 0 ({m['fault']}): the configuration cannot run")
     if s.inverter.fidelity == "average" and s.inverter.dead_time > 0:
         m["fidelity_note"] = AVERAGE_NOTE

@@ -26,6 +26,7 @@ from linsense.ctrl import drive_default_cfg
 from linsense.errors import InputError
 from linsense.io import read_text_file
 from linsense.model.schema import _KeyError, _to_input_error
+from linsense.tune.design import V_DC_MAX_FRACTION, V_DC_MIN_FRACTION
 
 _BRANCH = re.compile(r"^(float|int|bool|str|list\[.*\]|constrained-.*|function-.*)$")
 _STRICT = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
@@ -264,16 +265,17 @@ class ScenarioFile(BaseModel):
         if inv.dead_time * inv.f_pwm >= 0.1:
             raise _KeyError("inverter.dead_time", f"must be below 10 % of the PWM period "
                             f"({0.1 / inv.f_pwm:g} s), got {inv.dead_time!r}")
-        if self.injection.frequency * 4 > inv.f_pwm:
+        if "frequency" in self.injection.model_fields_set and self.injection.frequency * 4 > inv.f_pwm:
             raise _KeyError("injection.frequency", f"must be <= f_pwm / 4 = {inv.f_pwm / 4:g} Hz, "
                             f"got {self.injection.frequency:g}")
         comp = self.observer.compensation
         if ctl.mode == "sensorless_lut" and comp == "none":
             raise _KeyError("observer.compensation", "\"none\" contradicts control.mode = \"sensorless_lut\" "
                             "(use mode = \"sensorless_nolut\")")
-        if ctl.mode != "sensorless_lut" and comp == "lut":
+        if ctl.mode not in ("sensorless_lut", "sensored") and comp == "lut":
             raise _KeyError("observer.compensation", f"\"lut\" is only used by control.mode = "
-                            f"\"sensorless_lut\", got mode = {ctl.mode!r}")
+                            f"\"sensorless_lut\" (or \"sensored\", for the HF observer beside the encoder), "
+                            f"got mode = {ctl.mode!r}")
         if self.observer.type == "mech" and (self.observer.k1 is not None) != (self.observer.k3 is not None):
             raise _KeyError("observer.k3",
                             "give k1, k2 and k3 together for the mech observer (or bandwidth_hz)")
@@ -304,10 +306,13 @@ class ScenarioFile(BaseModel):
                             f"got {x0:g}")
         p = self.protection
         # bus limits not given follow the bus: 5/9 and 5/4 of it (40 and 90 V at the paper's 72 V)
+        # (derived, not given: taken out of the fields set again, so given() does not carry them)
         if "v_dc_min" not in p.model_fields_set:
-            p.v_dc_min = round(inv.v_dc * 5.0 / 9.0, 6)
+            p.v_dc_min = round(inv.v_dc * V_DC_MIN_FRACTION, 6)
+            p.__pydantic_fields_set__.discard("v_dc_min")
         if "v_dc_max" not in p.model_fields_set:
-            p.v_dc_max = round(1.25 * inv.v_dc, 6)
+            p.v_dc_max = round(inv.v_dc * V_DC_MAX_FRACTION, 6)
+            p.__pydantic_fields_set__.discard("v_dc_max")
         if not p.v_dc_min < p.v_dc_max:
             raise _KeyError("protection.v_dc_max",
                             f"must be above v_dc_min = {p.v_dc_min:g}, got {p.v_dc_max:g}")

@@ -55,6 +55,8 @@ INJ_CURRENT_MAX = 0.3  # of i_max
 QUAD = 0.9
 DITHER_CURRENT = 0.16  # of i_max
 DITHER_FREQ = 0.15  # of f_inj
+V_DC_MIN_FRACTION = 5.0 / 9.0  # under-voltage limit, of the bus (40 V at 72 V)
+V_DC_MAX_FRACTION = 5.0 / 4.0  # over-voltage limit (90 V at 72 V)
 
 
 @dataclass
@@ -163,12 +165,14 @@ def design(
     if not (v_inj > 0):
         raise InputError(source, "v_inj", f"must be positive, got {v_inj!r}")
     v_lin = d.v_dc / math.sqrt(3.0)
-    if v_inj * math.sqrt(3.0) >= 0.8 * d.v_dc:
+    # the drive refuses an injection above 0.8 of the under-voltage limit (ls_drive_init)
+    v_dc_min = d.v_dc * V_DC_MIN_FRACTION
+    if v_inj * math.sqrt(3.0) >= 0.8 * v_dc_min:
         raise InputError(
             source,
             "v_inj",
-            f"{v_inj:g} V leaves no voltage for the fundamental on a "
-            f"{d.v_dc:g} V bus (amplitude * sqrt(3) must be below {0.8 * d.v_dc:g} V)",
+            f"{v_inj:g} V leaves no voltage for the fundamental on a {d.v_dc:g} V bus (amplitude * "
+            f"sqrt(3) must be below 0.8 of the {v_dc_min:.3g} V under-voltage limit, {0.8 * v_dc_min:.3g} V)",
         )
     i_hf = float(
         np.mean(hf_current_amplitude(motor, np.linspace(0, 2 * np.pi, 90, endpoint=False), v_inj, f_inj))
@@ -224,7 +228,7 @@ def design(
         current_kp=kp_i,
         current_ki=ki_i,
         demod_lpf=f_lpf,
-        demod_notch=2.0 * f_inj,
+        demod_notch=2.0 * f_inj if 4.0 * f_inj < d.f_pwm else 0.0,  # (below fs / 2 only)
         demod_gain=gain,
         observer_bw=f_obs,
         speed_bw=f_v,

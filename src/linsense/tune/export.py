@@ -11,7 +11,14 @@ import tomli_w
 
 from linsense.compensation.lut import build_lut, c_identifier
 from linsense.model.motor import Motor
-from linsense.tune.design import Design, DriveData, error_gain, mean_dq
+from linsense.tune.design import (
+    V_DC_MAX_FRACTION,
+    V_DC_MIN_FRACTION,
+    Design,
+    DriveData,
+    error_gain,
+    mean_dq,
+)
 
 
 def scenario_dict(dz: Design, drive: DriveData, motor_ref: str, base: dict | None = None) -> dict:
@@ -31,7 +38,6 @@ def scenario_dict(dz: Design, drive: DriveData, motor_ref: str, base: dict | Non
         {
             "bandwidth_hz": _r(dz.observer_bw),
             "demod_lpf_hz": _r(dz.demod_lpf),
-            "demod_notch": True,
             "gain_schedule": True,
         }
     )
@@ -50,9 +56,10 @@ def scenario_dict(dz: Design, drive: DriveData, motor_ref: str, base: dict | Non
     if con.get("position_type", "p") == "p":
         con["kp_x"] = _r(dz.kp_x)
     sc.setdefault("calibration", {}).update({"dither_a": _r(dz.dither_a), "dither_hz": _r(dz.dither_hz)})
-    sc.setdefault("protection", {}).update(
-        {"v_dc_min": _r(drive.v_dc * 5.0 / 9.0), "v_dc_max": _r(1.25 * drive.v_dc)}
-    )
+    # limits the scenario gives are kept (they are not gains); otherwise they follow the bus
+    prot = sc.setdefault("protection", {})
+    prot.setdefault("v_dc_min", _r(drive.v_dc * V_DC_MIN_FRACTION))
+    prot.setdefault("v_dc_max", _r(drive.v_dc * V_DC_MAX_FRACTION))
     return sc
 
 
@@ -147,8 +154,8 @@ def c_header(dz: Design, drive: DriveData, motor: Motor, name: str | None = None
         ("traj.fs", drive.f_pwm),
         ("mod.f_pwm", drive.f_pwm),
         ("mod.dead_time", drive.dead_time),
-        ("prot.v_dc_min", drive.v_dc * 5.0 / 9.0),
-        ("prot.v_dc_max", 1.25 * drive.v_dc),
+        ("prot.v_dc_min", drive.v_dc * V_DC_MIN_FRACTION),
+        ("prot.v_dc_max", drive.v_dc * V_DC_MAX_FRACTION),
         ("prot.fs", drive.f_pwm),
         ("dtres.fs", drive.f_pwm),
         ("dtres.r_s", motor.R_s),
