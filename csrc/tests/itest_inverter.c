@@ -9,55 +9,7 @@
  *     average model (carried excess duty) alike. */
 #include "../sim/ls_sim.c"
 
-#include "ls_test.h"
-
-#define L_PH 4e-3 /* H */
-
-static void make_cfg(ls_sim_cfg *c)
-{
-    memset(c, 0, sizeof *c);
-    c->n_order = 1;
-    c->lab_cos[0][0] = L_PH; /* L_aa */
-    c->lab_cos[1][0] = L_PH; /* L_bb */
-    c->r_s = 9.0; c->pole_pitch = 0.056; c->psi_pm = 0.0; c->mass = 1.5;
-    c->x_min = -0.5; c->x_max = 0.5; c->fidelity = LS_SIM_SWITCHING; c->v_dc = 72.0; c->f_pwm = 16000.0;
-    c->dead_time = 0.8e-6; c->i_gain[0] = c->i_gain[1] = c->i_gain[2] = 1.0; c->enc_counts = 56000;
-    c->motion = LS_SIM_HELD; c->decimate = 1; c->i_abort = 20.0;
-}
-
-typedef struct {
-    ls_sim_cfg c;
-    plant_coef q;
-    plant_maps pm;
-    frozen fz;
-    double h;
-} bench;
-
-static void bench_init(bench *b)
-{
-    make_cfg(&b->c);
-    LS_CHECK(ls_sim_check(&b->c) == LS_OK);
-    coef_init(&b->c, &b->q);
-    maps(&b->c, &b->q, 0.0, &b->pm);
-    LS_CHECK(freeze(&b->c, &b->pm, 0.0, &b->fz));
-    b->h = 1.0 / b->c.f_pwm;
-}
-
-/* one switching period from i0 (alpha-beta) with the given duties and carry */
-static void sw(const bench *b, const double duty[3], const double i0[2], double i1[2], dead_carry *carry)
-{
-    double f_int;
-    i1[0] = i0[0];
-    i1[1] = i0[1];
-    period_switching(&b->c, &b->q, &b->fz, &b->pm, duty, b->h, i1, &f_int, carry);
-}
-
-static void av(const bench *b, const double duty[3], const double i0[2], double i1[2], dead_carry *carry)
-{
-    i1[0] = i0[0];
-    i1[1] = i0[1];
-    period_average(&b->c, &b->q, &b->fz, duty, b->h, i1, carry);
-}
+#include "itest_bench.h"
 
 /* alpha current change at the period end from pole a held high for s more seconds around t_c:
  * (2/3) V_dc s / L, decayed with L/R over the rest of the period */
@@ -73,7 +25,7 @@ static void tiny_pulse(void)
     const double tiny[3] = {0.3 * dd, 0.5, 0.5}, none[3] = {0.0, 0.5, 0.5};
     double a[2], z[2];
     dead_carry c1 = no_carry, c2 = no_carry;
-    bench_init(&b);
+    bench_init(&b, 0.8e-6);
     /* current out of phase a: the turn-on waits for the dead time, the turn-off command comes
      * first and cancels it: no pulse at all */
     sw(&b, tiny, i_out, a, &c1);
@@ -109,7 +61,7 @@ static void spill(void)
     const double t_spill = 0.5 * (1.0 + d) / 16000.0 + 0.8e-6 - 1.0 / 16000.0; /* s */
     double i1[2], with[2], without[2], sw_eff, av_eff;
     dead_carry c = no_carry, none = no_carry;
-    bench_init(&b);
+    bench_init(&b, 0.8e-6);
     LS_CHECK(t_spill > 0.0);
     /* switching: the delayed turn-off lies past the period end and is carried */
     sw(&b, high, i_in, i1, &c);

@@ -5,48 +5,18 @@
  * from the period's start and end currents. Held mover, constant L (no saliency), no PM flux. */
 #include "../sim/ls_sim.c"
 
+#include "itest_bench.h"
 #include "linsense/ls_dtres.h"
 #include "linsense/ls_modulator.h"
-#include "ls_test.h"
 
-#define L_PH 4e-3 /* H */
-#define R_PH 9.0  /* ohm */
-
-typedef struct {
-    ls_sim_cfg c;
-    plant_coef q;
-    plant_maps pm;
-    frozen fz;
-    double h;
-} bench;
-
-static void bench_init(bench *b, double td, ls_sim_fidelity fid)
+/* one period of the chosen model, from i0 with no carried edge */
+static void period(const bench *b, bool switching, const double duty[3], const double i0[2], double i1[2])
 {
-    memset(&b->c, 0, sizeof b->c);
-    b->c.n_order = 1;
-    b->c.lab_cos[0][0] = L_PH;
-    b->c.lab_cos[1][0] = L_PH;
-    b->c.r_s = R_PH; b->c.pole_pitch = 0.056; b->c.mass = 1.5; b->c.x_min = -0.5; b->c.x_max = 0.5;
-    b->c.fidelity = fid; b->c.v_dc = 72.0; b->c.f_pwm = 16000.0; b->c.dead_time = td;
-    b->c.i_gain[0] = b->c.i_gain[1] = b->c.i_gain[2] = 1.0; b->c.enc_counts = 56000;
-    b->c.motion = LS_SIM_HELD; b->c.decimate = 1; b->c.i_abort = 20.0;
-    LS_CHECK(ls_sim_check(&b->c) == LS_OK);
-    coef_init(&b->c, &b->q);
-    maps(&b->c, &b->q, 0.0, &b->pm);
-    LS_CHECK(freeze(&b->c, &b->pm, 0.0, &b->fz));
-    b->h = 1.0 / b->c.f_pwm;
-}
-
-static void period(const bench *b, const double duty[3], const double i0[2], double i1[2])
-{
-    double f_int;
     dead_carry carry = no_carry;
-    i1[0] = i0[0];
-    i1[1] = i0[1];
-    if (b->c.fidelity == LS_SIM_SWITCHING) {
-        period_switching(&b->c, &b->q, &b->fz, &b->pm, duty, b->h, i1, &f_int, &carry);
+    if (switching) {
+        sw(b, duty, i0, i1, &carry);
     } else {
-        period_average(&b->c, &b->q, &b->fz, duty, b->h, i1, &carry);
+        av(b, duty, i0, i1, &carry);
     }
 }
 
@@ -63,26 +33,57 @@ static void to_abc(const double ab[2], LS_REAL abc[3])
     abc[2] = (LS_REAL)(-0.5 * ab[0] - 0.8660254037844386 * ab[1]);
 }
 
+/* The period run with the applied duties and dead time, and with the nominal duties (the applied
+ * ones less the compensation) on an ideal inverter: their end-current difference is the net
+ * voltage error the inverter left (vt, V, alpha-beta), which the modulator's residual estimates
+ * from the period's start and end currents (v_est). */
+static void net_error(ls_mod *m, const bench *bt, const bench *b0, bool switching, const double duty[3],
+                      const double nominal[3], const double i0[2], double vt[2], LS_REAL v_est[2])
+{
+    /* the voltage error over the period reaches the end current through (1 - e^{-RT/L}) / R */
+    const double g = (1.0 - exp(-R_PH / 16000.0 / L_PH)) / R_PH;
+    double it[2], iz[2];
+    LS_REAL a0[3], a1[3];
+    int j;
+    period(bt, switching, duty, i0, it);
+    period(b0, switching, nominal, i0, iz);
+    vt[0] = (it[0] - iz[0]) / g;
+    vt[1] = (it[1] - iz[1]) / g;
+    to_abc(i0, a0);
+    to_abc(it, a1);
+    for (j = 0; j < 3; ++j) {
+        m->i_prev[j] = a0[j];
+    }
+    m->have_prev = true;
+    LS_CHECK(ls_mod_residual(m, a1, LS_R(72.0), (LS_REAL)(1.0 / (16000.0 * L_PH)), v_est));
+}
+
+/* the modulator at the drive's PWM rate and dead time, with or without the compensation */
+static void mod_init(ls_mod *m, bool dtc)
+{
+    ls_mod_cfg mc;
+    mc.f_pwm = LS_R(16000.0);
+    mc.dead_time = LS_R(0.8e-6);
+    mc.dtc = dtc;
+    mc.i_band = LS_R(0.05);
+    mc.dtc_lead = LS_R(1.5);
+    LS_CHECK(ls_mod_init(m, &mc) == LS_OK);
+}
+
 /* rms of (estimate - truth) over rms of truth, for start currents of amplitude i_amp */
-static double relative_error(ls_sim_fidelity fid, double i_amp, int n)
+static double relative_error(bool switching, double i_amp, int n)
 {
     bench bt, b0;
     ls_mod m;
-    ls_mod_cfg mc;
     uint64_t s = 7;
     double err2 = 0.0, tot2 = 0.0;
-    /* the voltage error over the period reaches the end current through (1 - e^{-RT/L}) / R */
-    const double g = (1.0 - exp(-R_PH / 16000.0 / L_PH)) / R_PH;
-    const LS_REAL k_rip = (LS_REAL)(1.0 / (16000.0 * L_PH));
     int k, j;
-    bench_init(&bt, 0.8e-6, fid);
-    bench_init(&b0, 0.0, fid);
-    mc.f_pwm = LS_R(16000.0); mc.dead_time = LS_R(0.8e-6); mc.dtc = false; mc.i_band = LS_R(0.05);
-    mc.dtc_lead = LS_R(1.5);
-    LS_CHECK(ls_mod_init(&m, &mc) == LS_OK);
+    bench_init(&bt, 0.8e-6);
+    bench_init(&b0, 0.0);
+    mod_init(&m, false);
     for (k = 0; k < n; ++k) {
-        double duty[3], i0[2], it[2], iz[2], vt[2];
-        LS_REAL a0[3], a1[3], dd[3], v_est[2], v_ab;
+        double duty[3], i0[2], vt[2];
+        LS_REAL dd[3], v_est[2], v_ab;
         const double ph = 2.0 * 3.14159265358979 * urand(&s);
         i0[0] = i_amp * cos(ph) + 0.02 * (2.0 * urand(&s) - 1.0);
         i0[1] = i_amp * sin(ph) + 0.02 * (2.0 * urand(&s) - 1.0);
@@ -94,18 +95,7 @@ static double relative_error(ls_sim_fidelity fid, double i_amp, int n)
         for (j = 0; j < 3; ++j) {
             duty[j] = (double)dd[j];
         }
-        period(&bt, duty, i0, it);
-        period(&b0, duty, i0, iz);
-        vt[0] = (it[0] - iz[0]) / g;
-        vt[1] = (it[1] - iz[1]) / g;
-        /* the estimate from the period's start (as the previous sample) and end currents */
-        to_abc(i0, a0);
-        to_abc(it, a1);
-        for (j = 0; j < 3; ++j) {
-            m.i_prev[j] = a0[j];
-        }
-        m.have_prev = true;
-        LS_CHECK(ls_mod_residual(&m, a1, LS_R(72.0), k_rip, v_est));
+        net_error(&m, &bt, &b0, switching, duty, duty, i0, vt, v_est); /* (no compensation) */
         err2 += (v_est[0] - vt[0]) * (v_est[0] - vt[0]) + (v_est[1] - vt[1]) * (v_est[1] - vt[1]);
         tot2 += vt[0] * vt[0] + vt[1] * vt[1];
     }
@@ -120,22 +110,17 @@ static void history_and_compensation(void)
 {
     bench bt, b0;
     ls_mod m;
-    ls_mod_cfg mc;
-    const double g = (1.0 - exp(-R_PH / 16000.0 / L_PH)) / R_PH;
-    const LS_REAL k_rip = (LS_REAL)(1.0 / (16000.0 * L_PH));
     /* the older entry compensates for currents of the wrong sign (its net error is then twice the
      * dead time's), the newer for the right ones (net error about 0): taking the wrong entry, or
      * leaving the compensation out, is a large error */
     const LS_REAL i_wrong[3] = {LS_R(-0.6), LS_R(0.2), LS_R(0.4)};
     const LS_REAL i_right[3] = {LS_R(0.6), LS_R(-0.2), LS_R(-0.4)};
-    double duty[3], nominal[3], i0[2] = {0.6, 0.1}, it[2], iz[2], vt[2];
-    LS_REAL d_old[3], d_new[3], a0[3], a1[3], v_est[2];
+    double duty[3], nominal[3], i0[2] = {0.6, 0.1}, vt[2];
+    LS_REAL d_old[3], d_new[3], v_est[2];
     int j;
-    bench_init(&bt, 0.8e-6, LS_SIM_AVERAGE);
-    bench_init(&b0, 0.0, LS_SIM_AVERAGE);
-    mc.f_pwm = LS_R(16000.0); mc.dead_time = LS_R(0.8e-6); mc.dtc = true; mc.i_band = LS_R(0.05);
-    mc.dtc_lead = LS_R(1.5);
-    LS_CHECK(ls_mod_init(&m, &mc) == LS_OK);
+    bench_init(&bt, 0.8e-6);
+    bench_init(&b0, 0.0);
+    mod_init(&m, true);
     (void)ls_mod_step(&m, LS_R(10.0), LS_R(2.0), LS_R(72.0), i_wrong, d_old);
     (void)ls_mod_step(&m, LS_R(-8.0), LS_R(5.0), LS_R(72.0), i_right, d_new);
     LS_CHECK(fabs((double)(d_old[0] - d_new[0])) > 0.1); /* the two sets differ */
@@ -144,16 +129,7 @@ static void history_and_compensation(void)
         nominal[j] = (double)(d_old[j] - m.hist_c[m.newest ^ 1u][j]);
         LS_CHECK(fabs((double)m.hist_c[m.newest ^ 1u][j]) > 0.5 * 0.8e-6 * 16000.0); /* compensated */
     }
-    period(&bt, duty, i0, it);
-    period(&b0, nominal, i0, iz);
-    vt[0] = (it[0] - iz[0]) / g;
-    vt[1] = (it[1] - iz[1]) / g;
-    to_abc(i0, a0);
-    to_abc(it, a1);
-    for (j = 0; j < 3; ++j) {
-        m.i_prev[j] = a0[j];
-    }
-    LS_CHECK(ls_mod_residual(&m, a1, LS_R(72.0), k_rip, v_est));
+    net_error(&m, &bt, &b0, false, duty, nominal, i0, vt, v_est);
     printf("  history: net error %+.3f %+.3f V, estimate %+.3f %+.3f V\n", vt[0], vt[1], (double)v_est[0],
            (double)v_est[1]);
     LS_CHECK(sqrt(vt[0] * vt[0] + vt[1] * vt[1]) > 1.0); /* the wrong compensation shows */
@@ -187,9 +163,9 @@ static void dtres_response(void)
 
 int main(void)
 {
-    double e_big_av = relative_error(LS_SIM_AVERAGE, 1.0, 4000);
-    double e_big_sw = relative_error(LS_SIM_SWITCHING, 1.0, 4000);
-    double e_small_sw = relative_error(LS_SIM_SWITCHING, 0.1, 4000);
+    double e_big_av = relative_error(false, 1.0, 4000);
+    double e_big_sw = relative_error(true, 1.0, 4000);
+    double e_small_sw = relative_error(true, 0.1, 4000);
     printf("  dead-time residual estimate vs the inverter models: relative rms error %.3f (average, 1 A), "
            "%.3f (switching, 1 A), %.3f (switching, 0.1 A)\n", e_big_av, e_big_sw, e_small_sw);
     /* currents well away from zero: the estimate is the error the inverter made (measured 0.066 and
