@@ -181,6 +181,14 @@ ls_status ls_drive_init(ls_drive *d, const ls_drive_cfg *cfg)
     return LS_OK;
 }
 
+/* A new averaging window of the calibration (see calibration_step). */
+static void cal_window_reset(ls_drive *d)
+{
+    d->cal_hold = 0u;
+    d->cal_sum_err = LS_R(0.0);
+    d->cal_sum_psi = LS_R(0.0);
+}
+
 void ls_drive_reset(ls_drive *d, ls_pos p)
 {
     if (!d->initialised) {
@@ -207,10 +215,10 @@ void ls_drive_reset(ls_drive *d, ls_pos p)
     d->cal_phase = LS_CAL_DONE;
     d->cal_index = 0u;
     d->cal_timer = 0u;
-    d->cal_hold = 0u;
+    cal_window_reset(d);
     d->psi_cal = LS_R(0.0);
-    d->cal_c = LS_R(1.0);
-    d->cal_s = LS_R(0.0);
+    d->cal_osc.c = LS_R(1.0);
+    d->cal_osc.s = LS_R(0.0);
 }
 
 ls_status ls_drive_set_mode(ls_drive *d, ls_mode mode)
@@ -235,7 +243,7 @@ ls_status ls_drive_set_mode(ls_drive *d, ls_mode mode)
         d->cal_phase = LS_CAL_MOVE;
         d->cal_index = 0u;
         d->cal_timer = 0u;
-        d->cal_hold = 0u;
+        cal_window_reset(d);
         d->psi_cal = LS_R(0.0);
         break;
     default:
@@ -367,9 +375,7 @@ static void calibration_step(ls_drive *d)
         if ((LS_REAL)(++d->cal_timer) * d->ts >= c->t_settle) {
             d->cal_phase = LS_CAL_ADAPT;
             d->cal_timer = 0u;
-            d->cal_hold = 0u;
-            d->cal_sum_err = LS_R(0.0);
-            d->cal_sum_psi = LS_R(0.0);
+            cal_window_reset(d);
         }
         break;
     case LS_CAL_ADAPT:
@@ -381,9 +387,7 @@ static void calibration_step(ls_drive *d)
          * observer's error against the encoder) over a whole window is below tol; the table gets the
          * window's mean angle (the HF currents and the dead time make both ripple) */
         if (!d->demod.valid) { /* a window counts whole and valid only */
-            d->cal_hold = 0u;
-            d->cal_sum_err = LS_R(0.0);
-            d->cal_sum_psi = LS_R(0.0);
+            cal_window_reset(d);
         } else {
             d->cal_sum_err += d->demod.err;
             d->cal_sum_psi += d->psi_cal;
@@ -398,9 +402,7 @@ static void calibration_step(ls_drive *d)
                 d->cal_timer = 0u;
                 d->cal_phase = d->cal_index >= c->points ? LS_CAL_DONE : LS_CAL_MOVE;
             }
-            d->cal_hold = 0u;
-            d->cal_sum_err = LS_R(0.0);
-            d->cal_sum_psi = LS_R(0.0);
+            cal_window_reset(d);
         }
         if (d->cal_phase == LS_CAL_ADAPT && (LS_REAL)d->cal_timer * d->ts > c->t_max) {
             ls_protect_trip(&d->prot, LS_FAULT_OBSERVER);
@@ -484,6 +486,7 @@ void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
 
     /* HF band-pass of the currents less what the dead-time residual drove (ls_dtres.h), and the
      * fundamental separation of the measured currents */
+    /* (two branches: one path through a zeroed i_res costs 7 instructions per step) */
     if (hf_on && cfg->hf_dtres) {
         LS_REAL v_err[2], i_res[2];
         (void)ls_mod_residual(&d->mod, meas->i_abc, meas->v_dc, d->dtres.k_rip, v_err);
@@ -541,13 +544,8 @@ void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
     f = ls_posctrl_step_finite(&d->pos, x_err, omega_fb * d->inv_kx, v_ff, a_ff);
     i_q_ref = f * d->inv_kf;
     if (calibrating && d->cal_phase != LS_CAL_MOVE && d->cal_phase != LS_CAL_DONE && cfg->cal.dither_amp > LS_R(0.0)) {
-        /* the dither (a phasor rotated each step, renormalised as the injection's carrier) */
-        const LS_REAL c = d->cal_c * d->cal_dc - d->cal_s * d->cal_ds;
-        const LS_REAL s = d->cal_s * d->cal_dc + d->cal_c * d->cal_ds;
-        const LS_REAL g = LS_R(1.5) - LS_R(0.5) * (c * c + s * s);
-        d->cal_c = c * g;
-        d->cal_s = s * g;
-        i_q_ref += cfg->cal.dither_amp * d->cal_s;
+        d->cal_osc = ls_phasor_advance(d->cal_osc, d->cal_dc, d->cal_ds); /* the dither, one step on */
+        i_q_ref += cfg->cal.dither_amp * d->cal_osc.s;
     }
     i_q_ref = ls_clamp(i_q_ref, -cfg->i_max, cfg->i_max);
     d->f_ref = i_q_ref * cfg->force_constant;

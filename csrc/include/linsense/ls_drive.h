@@ -168,7 +168,7 @@ typedef struct {
     LS_REAL cal_sum_err; /* rad, sum of the demodulated error over the window */
     LS_REAL cal_sum_psi; /* rad, sum of psi_cal over the window */
     LS_REAL cal_dc, cal_ds; /* -, cos and sin of the dither's phase step */
-    LS_REAL cal_c, cal_s;   /* -, cos and sin of the dither's phase */
+    ls_phasor cal_osc;      /* -, cos and sin of the dither's phase */
 } ls_drive;
 
 /* Fill cfg with the defaults documented in docs/firmware.md: 16 kHz, 12 V / 1 kHz injection and

@@ -10,6 +10,7 @@
 #ifndef LINSENSE_LS_INJECT_H
 #define LINSENSE_LS_INJECT_H
 
+#include "linsense/ls_math.h"
 #include "linsense/ls_types.h"
 
 typedef struct {
@@ -40,7 +41,7 @@ void ls_inject_enable(ls_inject *inj, bool on);
  * carrier phasor (c, s) in the state then belongs to the next sample. Inline (every PWM period). */
 static inline LS_REAL ls_inject_step(ls_inject *inj)
 {
-    LS_REAL v, c, s, g;
+    LS_REAL v;
     LS_REAL target = inj->on ? inj->cfg.amplitude : LS_R(0.0);
     if (inj->amp < target) {
         inj->amp = inj->amp + inj->amp_step < target ? inj->amp + inj->amp_step : target;
@@ -49,13 +50,14 @@ static inline LS_REAL ls_inject_step(ls_inject *inj)
     }
     v = inj->amp * inj->c;
     inj->v_q = inj->cfg.quad * inj->amp * inj->s;
-    /* rotate the carrier by one step and pull it back onto the unit circle (first-order
-     * Newton step for 1/|z|, exact to O(err^2) per step, so the error never accumulates) */
-    c = inj->c * inj->dc - inj->s * inj->ds;
-    s = inj->s * inj->dc + inj->c * inj->ds;
-    g = LS_R(1.5) - LS_R(0.5) * (c * c + s * s);
-    inj->c = c * g;
-    inj->s = s * g;
+    {
+        ls_phasor p; /* the carrier, one step on */
+        p.c = inj->c;
+        p.s = inj->s;
+        p = ls_phasor_advance(p, inj->dc, inj->ds);
+        inj->c = p.c;
+        inj->s = p.s;
+    }
     return v;
 }
 

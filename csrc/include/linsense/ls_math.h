@@ -2,6 +2,7 @@
  *
  *   ls_sincos(x, &c, &s)        c = cos(x), s = sin(x), x in rad; inline
  *   ls_sincos_full(x, &c, &s)   the same, out of line (for init code: no inline copy)
+ *   ls_phasor_advance(p, dc, ds)   the unit phasor p = (c, s) turned by the step (dc, ds)
  *
  * Float build: no libm call. x is reduced to r = x - j pi/2, |r| <= pi/4 (a little more), by a
  * three-part Cody-Waite subtraction, exact for |x| <= LS_SINCOS_FAST_MAX; r goes through the
@@ -24,6 +25,25 @@
 
 /* cos and sin of any x (rad), out of line; NaN for a non-finite x. */
 void ls_sincos_full(LS_REAL x, LS_REAL *c, LS_REAL *s);
+
+/* Turn the unit phasor (c, s) by the step (dc, ds) = (cos, sin) of a fixed angle and pull it back
+ * onto the unit circle (first-order Newton step for 1/|z|, exact to O(err^2) per step, so the error
+ * never accumulates): an oscillator at any frequency with no trigonometry per step. Inline. */
+typedef struct {
+    LS_REAL c, s; /* -, cos and sin */
+} ls_phasor;
+
+static inline ls_phasor ls_phasor_advance(ls_phasor p, LS_REAL dc, LS_REAL ds)
+{
+    /* (by value: through pointers into the callers' structs it cost 4 instructions per step) */
+    const LS_REAL cn = p.c * dc - p.s * ds;
+    const LS_REAL sn = p.s * dc + p.c * ds;
+    const LS_REAL g = LS_R(1.5) - LS_R(0.5) * (cn * cn + sn * sn);
+    ls_phasor r;
+    r.c = cn * g;
+    r.s = sn * g;
+    return r;
+}
 
 #ifdef LS_REAL_DOUBLE
 
