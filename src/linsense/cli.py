@@ -39,6 +39,13 @@ def cli() -> None:
     """End-effect-aware HF-injection sensorless control of linear PM motors."""
 
 
+def _quad(ctx, param, value):
+    """Click callback: the injection's q-axis share kappa, in [0, 1), or None."""
+    if value is not None and not (np.isfinite(value) and 0.0 <= value < 1.0):
+        raise click.BadParameter(f"must be in [0, 1), got {value!r}")
+    return value
+
+
 @cli.command()
 @click.option("--motor", "motor_spec", required=True, help=MOTOR_HELP)
 @click.option("--points", default=360, show_default=True, callback=_points, help="positions over one period")
@@ -60,7 +67,7 @@ def model(motor_spec: str, points: int, out: str) -> None:
 @click.option("--f-inj", "f_inj", type=float, default=None,
               help="injection frequency in Hz: include the winding resistance (exact zero of the "
                    "demodulated error; default: the paper's eq. 12, which neglects it)")
-@click.option("--quad", type=float, default=None,
+@click.option("--quad", type=float, default=None, callback=_quad,
               help="with --f-inj: the injection's q-axis share kappa (elliptical injection, 0 = the "
                    "paper's pulsating one; default: the firmware's, ls_drive_default_cfg)")
 @click.option("--out", required=True, type=click.Path(dir_okay=False), help="output file")
@@ -77,8 +84,6 @@ def lut(motor_spec: str, points: int, fmt: str, symbol: str | None, f_inj: float
         raise InputError("--quad", "", "only with --f-inj (eq. 12 neglects R_s, where kappa changes nothing)")
     if quad is None:
         quad = round(float(drive_default_cfg().inject.quad), 6) if f_inj is not None else 0.0
-    if not (np.isfinite(quad) and 0.0 <= quad < 1.0):
-        raise InputError("--quad", "", f"must be in [0, 1), got {quad!r}")
     motor = _load(motor_spec)
     write_atomic(out, export(build_lut(motor, points, f_inj, quad=quad), fmt, symbol))
 
@@ -279,7 +284,7 @@ def simulate(scenario: str, out: str, fidelity: str | None, trace_fmt: str, mat:
               help="constant load force, N (opposing positive motion when > 0)")
 @click.option("--fidelity", type=click.Choice(["switching", "average"]), default="switching",
               show_default=True, help="inverter model (both with the 0.8 us dead time)")
-@click.option("--quad", default=0.0, show_default=True, type=float,
+@click.option("--quad", default=0.0, show_default=True, type=float, callback=_quad,
               help="the injection's q-axis share kappa (0: the paper's pulsating injection)")
 @click.option("--out", required=True, type=click.Path(file_okay=False), help="output folder")
 def calibrate(motor_spec: str, positions: int, load: float, fidelity: str, quad: float, out: str) -> None:
@@ -290,8 +295,6 @@ def calibrate(motor_spec: str, positions: int, load: float, fidelity: str, quad:
     from linsense.sim.calibrate import calibrate as run_calibration
     from linsense.sim.calibrate import lut_csv
 
-    if not (np.isfinite(quad) and 0.0 <= quad < 1.0):
-        raise InputError("--quad", "", f"must be in [0, 1), got {quad!r}")
     motor = _load(motor_spec)
     cal = run_calibration(motor, positions, load, fidelity, quad=quad, source=motor_spec)
     out_dir = Path(out)
@@ -327,7 +330,7 @@ def calibrate(motor_spec: str, positions: int, load: float, fidelity: str, quad:
 @click.option("--v-inj", type=float, default=None, callback=_finite(0.0, True), help="injection amplitude, V")
 @click.option("--f-inj", type=float, default=None, callback=_finite(0.0, True),
               help="injection frequency, Hz")
-@click.option("--quad", type=float, default=None,
+@click.option("--quad", type=float, default=None, callback=_quad,
               help="elliptical share kappa on q (0: pulsating; default 0.9)")
 @click.option("--format", "fmt", type=click.Choice(["toml", "c"]), default="toml", show_default=True,
               help="toml: a complete scenario; c: an ls_drive_cfg set-up header for the firmware")
@@ -338,6 +341,7 @@ def tune(motor_spec: str, scenario_path: str | None, v_dc, f_pwm, dead_time, i_m
     """Design the drive for a motor: injection, current loop, demodulator, observer, speed and
     position loops (docs/tuning.md); print the design and its margins; write a scenario or a C header."""
     from linsense.io import write_atomic
+    from linsense.sim.build import drive_data
     from linsense.sim.scenario import load_scenario
     from linsense.tune.design import DriveData, design
     from linsense.tune.export import c_header, scenario_toml
@@ -346,21 +350,13 @@ def tune(motor_spec: str, scenario_path: str | None, v_dc, f_pwm, dead_time, i_m
     dd = DriveData()
     if scenario_path is not None:
         sc = load_scenario(scenario_path)
-        s = sc.spec
         base, base_dir, src = sc.given(), sc.base_dir, scenario_path
         base.pop("motor", None)
-        given_inj = s.injection.model_fields_set
-        dd = DriveData(v_dc=s.inverter.v_dc, f_pwm=s.inverter.f_pwm, dead_time=s.inverter.dead_time,
-                       i_max=s.controller.i_max, v_max=s.reference.v_max,
-                       v_inj=s.injection.amplitude if "amplitude" in given_inj else None,
-                       f_inj=s.injection.frequency if "frequency" in given_inj else None,
-                       quad=s.injection.quadrature)
+        dd = drive_data(sc)
     for key, val in (("v_dc", v_dc), ("f_pwm", f_pwm), ("dead_time", dead_time), ("i_max", i_max),
                      ("v_inj", v_inj), ("f_inj", f_inj), ("quad", quad)):
         if val is not None:
             setattr(dd, key, val)
-    if not (np.isfinite(dd.quad) and 0.0 <= dd.quad < 1.0):
-        raise InputError("--quad", "", f"must be in [0, 1), got {dd.quad!r}")
     motor = _load(motor_spec)
     dz = design(motor, dd, src)
     if fmt == "c":

@@ -14,16 +14,13 @@ import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import numpy as np
-
-from linsense.analysis.hf import dq_components
 from linsense.compensation.lut import build_lut
 from linsense.ctrl import ConfigError, Drive, drive_default_cfg, ffi, lib
 from linsense.errors import InputError, LinsenseError
 from linsense.model.motor import Motor, load_motor, preset_names
 from linsense.sim.core import PlantSetup, SimulationError, sim_cfg
 from linsense.sim.scenario import Scenario
-from linsense.tune.design import DriveData, current_gains, design, error_gain, speed_gains
+from linsense.tune.design import DriveData, current_gains, design, error_gain, mean_dq, speed_gains
 
 #: drive sub-configuration -> scenario section (for messages)
 _SECTION = {"inject": "injection", "bpf": "injection", "sep": "injection", "demod": "observer",
@@ -107,33 +104,35 @@ def initial_load(sc: Scenario, motor: Motor) -> float:
     return ld.force
 
 
-def _mean_dq(motor: Motor) -> tuple[float, float]:
-    th = np.linspace(0.0, 2.0 * np.pi, 720, endpoint=False)
-    L_d, L_q, _ = dq_components(motor, th)
-    return float(np.mean(L_d)), float(np.mean(L_q))
-
-
 #: DriveData field -> scenario key (for messages)
 _DESIGN_KEYS = {"v_dc": "inverter.v_dc", "f_pwm": "inverter.f_pwm", "i_max": "controller.i_max",
                 "v_max": "reference.v_max", "v_inj": "injection.amplitude", "f_inj": "injection.frequency",
                 "quad": "injection.quadrature"}
 
 
+def drive_data(sc: Scenario) -> DriveData:
+    """The drive a scenario describes, as the design takes it: the injection's amplitude and
+    frequency only where the file gives them."""
+    s = sc.spec
+    inj, given = s.injection, s.injection.model_fields_set
+    return DriveData(v_dc=s.inverter.v_dc, f_pwm=s.inverter.f_pwm, dead_time=s.inverter.dead_time,
+                     i_max=s.controller.i_max, v_max=s.reference.v_max,
+                     v_inj=inj.amplitude if "amplitude" in given else None,
+                     f_inj=inj.frequency if "frequency" in given else None, quad=inj.quadrature)
+
+
 def designed(sc: Scenario, motor: Motor) -> Scenario:
     """``sc`` with every gain it leaves unset taken from the design for its motor and drive
     (:func:`linsense.tune.design`, docs/tuning.md); what the file gives is kept."""
     s = sc.spec
-    inj, con = s.injection, s.controller
+    con = s.controller
     sections = ("injection", "observer", "controller", "calibration")
     given = {sec: getattr(s, sec).model_fields_set for sec in sections}
     try:
-        dz = design(motor, DriveData(v_dc=s.inverter.v_dc, f_pwm=s.inverter.f_pwm,
-                                     dead_time=s.inverter.dead_time, i_max=con.i_max, v_max=s.reference.v_max,
-                                     # (an explicit 0, sensored without injection, is kept as given)
-                                     v_inj=inj.amplitude if "amplitude" in given["injection"]
-                                     and inj.amplitude > 0 else None,
-                                     f_inj=inj.frequency if "frequency" in given["injection"] else None,
-                                     quad=inj.quadrature), sc.source, analyse=False)
+        dd = drive_data(sc)
+        if dd.v_inj == 0.0:  # an explicit 0, sensored without injection: the other gains still designed
+            dd.v_inj = None
+        dz = design(motor, dd, sc.source, analyse=False)
     except InputError as exc:  # the design's drive-data names -> the scenario's keys
         raise InputError(sc.source, _DESIGN_KEYS.get(exc.key, exc.key), exc.message) from None
     want = {
@@ -165,7 +164,7 @@ def build(sc: Scenario, motor: Motor | None = None) -> Built:
     tau = motor.pole_pitch
 
     # --- what the controller knows about the motor
-    L_d, L_q = _mean_dq(motor)
+    L_d, L_q = mean_dq(motor)
     ov = con.model
     known = {
         "L_d": ov.L_d if ov.L_d is not None else L_d,
@@ -278,18 +277,17 @@ def build(sc: Scenario, motor: Motor | None = None) -> Built:
 
     # the table for sensorless_lut, and for the HF observer beside the encoder in sensored mode
     compensation = obs.compensation or ("lut" if ctl.mode in ("sensorless_lut", "sensored") else "none")
+    # the tables the controller can know: the motor model with the resistance it believes
+    lut_motor = dataclasses.replace(motor, R_s=known["R_s"])
     comp = None
     if compensation == "lut":
         f_inj = inj.frequency if obs.lut_model == "resistive" else None
-        # the table the controller can know: the motor model with the resistance it believes
-        lut_motor = dataclasses.replace(motor, R_s=known["R_s"])
         comp = build_lut(lut_motor, obs.lut_points, f_inj=f_inj, quad=inj.quadrature if f_inj else 0.0).values
     gain_table = None
     if obs.gain_schedule:
         # the demodulator gain that makes the error's local slope 1 everywhere (the saliency and,
         # with the elliptical injection and R_s, its phase set it; docs/tuning.md)
-        lut_motor_g = dataclasses.replace(motor, R_s=known["R_s"])
-        k_e = error_gain(lut_motor_g, inj.frequency, inj.quadrature, 1.0, n=obs.lut_points)
+        k_e = error_gain(lut_motor, inj.frequency, inj.quadrature, 1.0, n=obs.lut_points)
         gain_table = 1.0 / k_e
     try:
         drive = Drive(d, comp=comp, gain_table=gain_table)  # a given gain table is used by default
