@@ -1,8 +1,4 @@
 /* Dead-time residual response model (see linsense/ls_dtres.h). */
-#include <math.h>
-
-
-
 #include "linsense/ls_dtres.h"
 
 static void axis(LS_REAL r_s, LS_REAL l, LS_REAL ts, LS_REAL *a, LS_REAL *b)

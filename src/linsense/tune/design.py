@@ -310,7 +310,6 @@ def loop_margins(loop, f_lo: float = 0.01, f_hi: float = 5000.0) -> dict:
     if above.size == 0:
         return {"pm_deg": None, "gm_up_db": None, "gm_down_db": None, "crossover_hz": None}
     kc = above[-1]
-    pm = 180.0 + math.degrees(ph[kc]) % 360.0 - 360.0 * (math.degrees(ph[kc]) % 360.0 > 180.0)
     pm = (math.degrees(ph[kc]) + 180.0) % 360.0
     pm = pm - 360.0 if pm > 180.0 else pm
     # phase crossings of -180 (mod 360)

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 import os
 from pathlib import Path
 
@@ -101,7 +100,6 @@ def c_header(dz: Design, drive: DriveData, motor: Motor, name: str | None = None
     k_e = error_gain(motor, dz.f_inj, dz.quad, 1.0, n=points)
     gain = 1.0 / k_e
     L_d, L_q = mean_dq(motor)
-    w_o = 2.0 * math.pi * dz.observer_bw
 
     def f(v: float) -> str:
         return f"LS_R({v:.9e})"
@@ -131,8 +129,6 @@ def c_header(dz: Design, drive: DriveData, motor: Motor, name: str | None = None
         ("obs.fs", drive.f_pwm),
         ("obs.pole_pitch", motor.pole_pitch),
         ("obs.mass", motor.mass),
-        ("obs.k1", 2.0 * w_o),
-        ("obs.k2", w_o * w_o),  # the PLL's (ls_observer_gains)
         ("enc_obs.fs", drive.f_pwm),
         ("enc_obs.pole_pitch", motor.pole_pitch),
         ("enc_obs.mass", motor.mass),
@@ -200,6 +196,7 @@ static inline void {fn}(ls_drive_cfg *cfg, const ls_lut *comp, const ls_lut *gai
 {{
     ls_drive_default_cfg(cfg);
 {body}
+    ls_observer_gains(&cfg->obs, {f(dz.observer_bw)}); /* the library's rule for the bandwidth (Hz) */
     cfg->demod.comp = comp;
     cfg->demod.gain_table = gain;
 }}
