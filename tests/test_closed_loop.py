@@ -99,3 +99,14 @@ def test_calibrate_cli(tmp_path, capsys):
         main(["calibrate", "--motor", "ecce2010", "--quad", "1.5", "--out", str(tmp_path / "d")])
     err = capsys.readouterr().err.strip()
     assert e.value.code == 2 and "--quad" in err and "1.5" in err and err.count("\n") == 0
+    # a load beyond the drive's force (K_f i_max = 50 N): no point is reached; exit 1 with one line,
+    # and the figure and metrics still written (no traceback on the empty table)
+    with pytest.raises(SystemExit) as e:
+        main(["calibrate", "--motor", "ecce2010", "--positions", "4", "--load", "1000", "--fidelity",
+              "average", "--out", str(tmp_path / "e")])
+    out, err = capsys.readouterr()
+    assert e.value.code == 1 and err.count("\n") == 1 and "did not complete (0 of 4 points" in err, err
+    assert "n/a" in out
+    m = json.loads((tmp_path / "e" / "metrics.json").read_text())
+    assert not m["completed"] and m["points_done"] == 0 and m["max_diff_deg"] is None
+    assert (tmp_path / "e" / "calibration.png").stat().st_size > 10000

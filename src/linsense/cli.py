@@ -39,6 +39,11 @@ def cli() -> None:
     """End-effect-aware HF-injection sensorless control of linear PM motors."""
 
 
+def _show(v: float | None, unit: str, fmt: str = ".2f") -> str:
+    """A metric for a person: 'n/a' where it is not defined."""
+    return "n/a" if v is None else f"{v:{fmt}} {unit}"
+
+
 def _quad(ctx, param, value):
     """Click callback: the injection's q-axis share kappa, in [0, 1), or None."""
     if value is not None and not (np.isfinite(value) and 0.0 <= value < 1.0):
@@ -258,15 +263,12 @@ def simulate(scenario: str, out: str, fidelity: str | None, trace_fmt: str, mat:
         click.echo(str(f))
     m = res.metrics
 
-    def show(v, unit):
-        return "n/a" if v is None else f"{v:.2f} {unit}"
-
     click.echo(
         f"{res.scenario.name}: "
         f"{'stable' if m['stable'] else 'not stable: ' + str(m['unstable_reason'])} (fault {m['fault']}); "
-        f"max |err| {show(m['max_abs_err_deg'], 'deg')} "
-        f"(transient {show(m['transient_max_err_deg'], 'deg')}, "
-        f"steady {show(m['steady_max_err_deg'], 'deg')}, bias {show(m['bias_deg'], 'deg')}); "
+        f"max |err| {_show(m['max_abs_err_deg'], 'deg')} "
+        f"(transient {_show(m['transient_max_err_deg'], 'deg')}, "
+        f"steady {_show(m['steady_max_err_deg'], 'deg')}, bias {_show(m['bias_deg'], 'deg')}); "
         f"final x {m['final_position_mm']} mm, limit cycle {m['limit_cycle_mm']} mm, overshoot "
         f"{m['overshoot_mm']} mm; {m['sim_s']} s simulated in {m['wall_s']} s "
         f"({m['realtime_factor']}x real time)"
@@ -306,8 +308,8 @@ def calibrate(motor_spec: str, positions: int, load: float, fidelity: str, quad:
     m = cal.metrics
     click.echo(f"{m['motor']}: {m['points_done']}/{m['points']} points, load {m['load_n']:g} N, "
                f"{m['fidelity']}: "
-               f"max |measured - model with R_s| {m['max_diff_deg']} deg, against eq. 12 "
-               f"{m['max_diff_eq12_deg']} deg; {m['sim_s']} s simulated in {m['wall_s']} s")
+               f"max |measured - model with R_s| {_show(m['max_diff_deg'], 'deg', '.3g')}, against eq. 12 "
+               f"{_show(m['max_diff_eq12_deg'], 'deg', '.3g')}; {m['sim_s']} s simulated in {m['wall_s']} s")
     if not cal.completed:
         click.echo(f"linsense: calibration did not complete ({m['points_done']} of {m['points']} points, "
                    f"fault {m['fault']})", err=True)

@@ -23,6 +23,7 @@ from linsense.analysis.hf import (  # noqa: E402
     psi,
     psi_compensated,
     psi_lut,
+    psi_lut_resistive,
     saliency,
 )
 from linsense.io import write_atomic  # noqa: E402
@@ -172,15 +173,16 @@ def fig_calibration(cal, motor, path: Path) -> Path:
     m = cal.metrics
     fig, ax = plt.subplots(figsize=(7.5, 4.2), constrained_layout=True)
     ax.plot(np.degrees(th), np.degrees(psi_lut(motor, th)), "-", color="0.6", lw=1.0, label="model, eq. (12)")
-    ax.plot(np.degrees(cal.theta), np.degrees(cal.psi_model), "b-", lw=1.2,
-            label="model with R_s (the injection used)")
+    ax.plot(np.degrees(th), np.degrees(psi_lut_resistive(motor, th, m["f_inj_hz"], quad=m["injection_quad"])),
+            "b-", lw=1.2, label="model with R_s (the injection used)")
     ok = np.isfinite(cal.psi_measured)
     ax.plot(np.degrees(cal.theta[ok]), np.degrees(cal.psi_measured[ok]), "o", ms=4, mfc="none", color="C3",
             label=f"measured ({int(ok.sum())} of {m['points']} points)")
     _position_axis(ax, motor)
     ax.set_ylabel("Ψ_LUT (electrical deg)")
+    md = m["max_diff_deg"]
+    diff = "no point reached" if md is None else f"max |measured - model| {md:.2f} deg"
     ax.set_title(f"Calibration, motor {m['motor']}: {m['fidelity']} inverter, dead time "
-                 f"{m['dead_time_s'] * 1e6:g} µs, load {m['load_n']:g} N; max |measured - model| "
-                 f"{m['max_diff_deg']:.2f} deg", fontsize=9)
+                 f"{m['dead_time_s'] * 1e6:g} µs, load {m['load_n']:g} N; {diff}", fontsize=9)
     ax.legend(fontsize=8)
     return _save(fig, path)

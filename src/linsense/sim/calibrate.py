@@ -101,6 +101,7 @@ def calibrate(
         "max_diff_eq12_deg": _max_deg(table[ok] - eq12[ok]),
         "load_n": float(load),
         "fidelity": fidelity,
+        "f_inj_hz": float(f_inj),
         "injection_quad": float(quad),
         "dead_time_s": float(sc.spec.inverter.dead_time),
         "fault": fault_reason(raw.fault),
