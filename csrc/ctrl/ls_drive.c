@@ -461,7 +461,7 @@ void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
             ls_observer_reset(&d->obs, pe);
             ls_traj_reset(&d->traj, pe);
         }
-        ls_observer_step(&d->enc, ls_pos_diff(pe, d->enc.pos), d->f_ref);
+        ls_observer_step_finite(&d->enc, ls_pos_diff(pe, d->enc.pos), d->f_ref);
         if (calibrating) {
             /* the HF axis follows the encoder: theta_err = 0 by construction */
             ls_observer_reset(&d->obs, d->enc.pos);
@@ -509,7 +509,7 @@ void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
              * the band-pass still rings on the fundamental current's first steps. In sensored mode
              * (inject_sensored) the HF observer runs beside the encoder, unchecked (commissioning) */
             const LS_REAL e_obs = d->inj.amp >= cfg->inject.amplitude ? err : LS_R(0.0);
-            ls_observer_step(&d->obs, e_obs, d->f_ref);
+            ls_observer_step_finite(&d->obs, e_obs, d->f_ref);
             if (sensorless) {
                 ls_protect_check_observer(&d->prot, e_obs, d->demod.valid, d->obs.omega);
             }
@@ -573,8 +573,9 @@ void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
     }
     (void)ls_mod_step_finite(&d->mod, v_a, v_b, meas->v_dc, meas->i_abc, duty);
 
-    /* nothing non-finite ever leaves a step */
-    if (!LS_ISFINITE4(duty[0] + duty[1] + duty[2], d->obs.pos.theta, pos_fb.theta, v_a + v_b)) {
+    /* nothing non-finite ever leaves a step: a non-finite v_a or v_b makes every duty NaN (the
+     * zero-sequence offset is then Inf - Inf), and the positions are finite by ls_pos_norm */
+    if (!LS_ISFINITE(duty[0] + duty[1] + duty[2])) {
         ls_protect_trip(&d->prot, LS_FAULT_NONFINITE);
         disable(d, cmd, d->prot.fault);
         return;

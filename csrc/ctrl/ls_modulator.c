@@ -17,6 +17,8 @@ ls_status ls_mod_init(ls_mod *m, const ls_mod_cfg *cfg)
     m->cfg = *cfg;
     m->d_dead = cfg->dead_time * cfg->f_pwm;
     m->inv_band = LS_R(1.0) / cfg->i_band;
+    m->k_now = (LS_R(1.0) + cfg->dtc_lead) * m->inv_band;
+    m->k_prev = cfg->dtc_lead * m->inv_band;
     ls_mod_reset(m);
     return LS_OK;
 }
@@ -26,10 +28,10 @@ void ls_mod_reset(ls_mod *m)
     int k;
     for (k = 0; k < 3; ++k) {
         m->i_prev[k] = LS_R(0.0);
-        m->hist_d[0][k] = m->hist_d[1][k] = LS_R(0.5);
-        m->hist_c[0][k] = m->hist_c[1][k] = LS_R(0.0);
+        /* no leg switched (the inverter was off): the residual is 0 until two steps are known */
+        m->hist[0].d[k] = m->hist[1].d[k] = LS_R(0.0);
+        m->hist[0].c[k] = m->hist[1].c[k] = LS_R(0.0);
     }
     m->have_prev = false;
     m->newest = 0u;
-    m->n_hist = 0u;
 }

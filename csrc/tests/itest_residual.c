@@ -126,8 +126,8 @@ static void history_and_compensation(void)
     LS_CHECK(fabs((double)(d_old[0] - d_new[0])) > 0.1); /* the two sets differ */
     for (j = 0; j < 3; ++j) {
         duty[j] = (double)d_old[j];
-        nominal[j] = (double)(d_old[j] - m.hist_c[m.newest ^ 1u][j]);
-        LS_CHECK(fabs((double)m.hist_c[m.newest ^ 1u][j]) > 0.5 * 0.8e-6 * 16000.0); /* compensated */
+        nominal[j] = (double)(d_old[j] - m.hist[m.newest ^ 1u].c[j]);
+        LS_CHECK(fabs((double)m.hist[m.newest ^ 1u].c[j]) > 0.5 * 0.8e-6 * 16000.0); /* compensated */
     }
     net_error(&m, &bt, &b0, false, duty, nominal, i0, vt, v_est);
     printf("  history: net error %+.3f %+.3f V, estimate %+.3f %+.3f V\n", vt[0], vt[1], (double)v_est[0],

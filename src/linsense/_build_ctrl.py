@@ -211,9 +211,10 @@ void ls_dtres_reset(ls_dtres *r);
 
 /* ls_modulator.h */
 typedef struct { LS_REAL f_pwm; LS_REAL dead_time; bool dtc; LS_REAL i_band; LS_REAL dtc_lead; } ls_mod_cfg;
+typedef struct { LS_REAL d[3]; LS_REAL c[3]; } ls_mod_hist;
 typedef struct {
     ls_mod_cfg cfg; LS_REAL d_dead; LS_REAL i_prev[3]; bool have_prev; LS_REAL inv_band;
-    LS_REAL hist_d[2][3]; LS_REAL hist_c[2][3]; uint32_t newest; uint32_t n_hist;
+    LS_REAL k_now; LS_REAL k_prev; ls_mod_hist hist[2]; uint32_t newest;
 } ls_mod;
 ls_status ls_mod_init(ls_mod *m, const ls_mod_cfg *cfg);
 void ls_mod_reset(ls_mod *m);

@@ -58,8 +58,7 @@ void ls_demod_set_comp(ls_demod *d, bool on);
 /* Switch the position-scheduled gain on (only if cfg.gain_table was given) or off. */
 void ls_demod_set_gain_table(ls_demod *d, bool on);
 /* ls_demod_step given c_est = cos(theta_est), s_est = sin(theta_est) (the drive has them): the
- * rotation into theta_est + psi is that of theta_est turned by the small angle psi, whose sine
- * and cosine need no range reduction. Inline (called every PWM period). */
+ * rotation into theta_est + psi is that of theta_est turned by psi. Inline (called every PWM period). */
 static inline LS_REAL ls_demod_step_cs(ls_demod *d, LS_REAL i_a, LS_REAL i_b, LS_REAL theta_est,
                                        LS_REAL c_est, LS_REAL s_est, LS_REAL car_c, LS_REAL car_s,
                                        LS_REAL psi_cal)
@@ -74,14 +73,13 @@ static inline LS_REAL ls_demod_step_cs(ls_demod *d, LS_REAL i_a, LS_REAL i_b, LS
         d->level = den;
     }
     if (d->use_comp) {
-        const LS_REAL lut = ls_lut_step(d->cfg.comp, theta_est);
-        psi = psi_cal == LS_R(0.0) ? lut : psi_cal + lut; /* (no addition on the usual path) */
+        psi = psi_cal + ls_lut_step(d->cfg.comp, theta_est);
     }
 #ifdef LS_REAL_DOUBLE
     c_psi = cos(psi);
     s_psi = sin(psi);
 #else
-    if (LS_FABS(psi) <= LS_PI / LS_R(4.0)) {
+    if (LS_FABS(psi) <= LS_PI / LS_R(4.0)) { /* a compensation angle: no range reduction */
         ls_sincos_kernel(psi, 0u, &c_psi, &s_psi);
     } else {
         ls_sincos(psi, &c_psi, &s_psi); /* also NaN */

@@ -4,11 +4,16 @@
  *   ls_sincos_full(x, &c, &s)   the same, out of line (for init code: no inline copy)
  *   ls_phasor_advance(p, dc, ds)   the unit phasor p = (c, s) turned by the step (dc, ds)
  *
- * Float build: no libm call. x is reduced to r = x - j pi/2, |r| <= pi/4 (a little more), by a
- * three-part Cody-Waite subtraction, exact for |x| <= LS_SINCOS_FAST_MAX; r goes through the
- * Cephes minimax polynomials of degree 7 (sin) and 8 (cos), and the quadrant j mod 4 swaps and
- * negates them. Maximum absolute error 9.5e-8 over every float with |x| <= 8192, 1.3e-7 beyond
- * (csrc/tests/test_math.c checks <= 2e-7 against double sin/cos). Larger |x| take an exact
+ * Float build: no libm call. Where the drive works, |x| <= LS_SINCOS_TAB_MAX (25 rad: the
+ * position within the period, a compensation angle), x = k 2 pi / N + r with |r| <= pi / N
+ * (N = 256, two-part Cody-Waite subtraction, exact), the sine table gives cos and sin of k 2 pi / N
+ * and short Taylor polynomials those of r, combined by one rotation (as CMSIS-DSP's
+ * arm_sin_cos_f32; about half the instructions of the polynomial path). Beyond, up to
+ * LS_SINCOS_FAST_MAX, x is reduced to r = x - j pi/2, |r| <= pi/4 (a little more), by a
+ * three-part Cody-Waite subtraction, exact; r goes through the Cephes minimax polynomials of
+ * degree 7 (sin) and 8 (cos), and the quadrant j mod 4 swaps and negates them. Maximum absolute
+ * error 9.5e-8 over every float with 25 < |x| <= 8192, 1.3e-7 beyond (csrc/tests/test_math.c
+ * checks <= 2e-7 against double sin/cos, and measures the table path). Larger |x| take an exact
  * Payne-Hanek reduction in 32/64-bit integer arithmetic (no double, no libm), valid for every
  * finite float; NaN and +-Inf give NaN. The drive uses it every step, and with it the library
  * needs no sinf/cosf (on a Cortex-M4F, newlib's are slow and large).
@@ -22,6 +27,16 @@
 
 /* rad, largest |x| reduced inline (2^13: j < 2^13 keeps every product j * PIO2_* exact). */
 #define LS_SINCOS_FAST_MAX LS_R(8192.0)
+
+#ifndef LS_REAL_DOUBLE
+/* rad, largest |x| taken by the table (8 pi a little less: |k| < 2^10 keeps k 2 pi / N exact). */
+#define LS_SINCOS_TAB_MAX 25.0f
+/* points of the sine table over one turn (a power of 2) */
+#define LS_SIN_TAB_N 256u
+/* sin(2 pi k / N), k = 0 ... N - 1, rounded to float (1 kB of read-only data, as in CMSIS-DSP's
+ * arm_sin_cos_f32; csrc/tests/test_math.c checks it against double sin). */
+extern const float ls_sin_tab[LS_SIN_TAB_N];
+#endif
 
 /* cos and sin of any x (rad), out of line; NaN for a non-finite x. */
 void ls_sincos_full(LS_REAL x, LS_REAL *c, LS_REAL *s);
@@ -71,27 +86,44 @@ static inline void ls_sincos_kernel(float r, uint32_t q, float *c, float *s)
     *s = (q & 2u) != 0u ? -s0 : s0;             /* q = 2, 3: negative */
 }
 
+/* The Cody-Waite path, for |x| <= LS_SINCOS_FAST_MAX (ls_sincos_full takes it there). */
+static inline void ls_sincos_reduce_(float x, float *c, float *s)
+{
+    /* j = nearest integer to x 2/pi: |x 2/pi| < 5216, so x 2/pi + 8192.5 > 0 truncates to
+     * floor(x 2/pi + 1/2) + 8192 (its rounding, at most 2^-11, only moves |r| a little past
+     * pi/4, where the polynomials are still accurate) */
+    const float t = x * 0.636619772367581343f + 8192.5f;
+    const int32_t q = (int32_t)t - 8192;
+    const float j = (float)q;
+    /* pi/2 = 1.5703125 + 4.837512969970703125e-4 + 7.54978995489188216e-8 (8 and 11 bits, so
+     * j * the first two is exact) */
+    const float r = ((x - j * 1.5703125f) - j * 4.837512969970703125e-4f) - j * 7.54978995489188216e-8f;
+    ls_sincos_kernel(r, (uint32_t)q, c, s);
+}
+
 static inline void ls_sincos(float x, float *c, float *s)
 {
-    float t, j, r;
-    int32_t q;
-    if (!(LS_FABS(x) <= LS_SINCOS_FAST_MAX)) { /* also NaN */
+    if (LS_FABS(x) <= LS_SINCOS_TAB_MAX) { /* (false for NaN) */
+        /* k = nearest integer to x N / (2 pi): |x N / (2 pi)| <= 1019, so + 1024.5 > 0 truncates to
+         * floor(x N / (2 pi) + 1/2) + 1024 (its rounding only moves |r| a little past pi / N) */
+        const int32_t k = (int32_t)(x * 40.7436654315f + 1024.5f) - 1024;
+        const float kf = (float)k;
+        /* r = x - k 2 pi / N, |r| <= pi / N = 0.0123: 2 pi / N = 0.02454376220703125 (13 bits, so
+         * k times it is exact) - 6.960085841e-8 */
+        const float r = (x - kf * 0.02454376220703125f) - kf * -6.960085841e-8f;
+        const uint32_t i = (uint32_t)k & (LS_SIN_TAB_N - 1u); /* (k mod N, also for k < 0) */
+        const float s0 = ls_sin_tab[i], c0 = ls_sin_tab[(i + LS_SIN_TAB_N / 4u) & (LS_SIN_TAB_N - 1u)];
+        const float r2 = r * r;
+        const float cr = 1.0f - 0.5f * r2;             /* cos r, to r^4 / 24 < 1e-9 */
+        const float sr = r - (r * r2) * (1.0f / 6.0f); /* sin r, to r^5 / 120 < 3e-12 */
+        *c = c0 * cr - s0 * sr;
+        *s = s0 * cr + c0 * sr;
+    } else {
         float c1, s1; /* (the caller's c and s stay in registers: their address does not escape) */
         ls_sincos_full(x, &c1, &s1);
         *c = c1;
         *s = s1;
-        return;
     }
-    /* j = nearest integer to x 2/pi: |x 2/pi| < 5216, so x 2/pi + 8192.5 > 0 truncates to
-     * floor(x 2/pi + 1/2) + 8192 (its rounding, at most 2^-11, only moves |r| a little past
-     * pi/4, where the polynomials are still accurate) */
-    t = x * 0.636619772367581343f + 8192.5f;
-    q = (int32_t)t - 8192;
-    j = (float)q;
-    /* pi/2 = 1.5703125 + 4.837512969970703125e-4 + 7.54978995489188216e-8 (8 and 11 bits, so
-     * j * the first two is exact) */
-    r = ((x - j * 1.5703125f) - j * 4.837512969970703125e-4f) - j * 7.54978995489188216e-8f;
-    ls_sincos_kernel(r, (uint32_t)q, c, s);
 }
 
 #endif /* LS_REAL_DOUBLE */

@@ -24,16 +24,23 @@ typedef struct {
     LS_REAL dtc_lead;  /* -, periods of current extrapolation for the compensation sign, [0, 4] */
 } ls_mod_cfg;
 
+/* One step's duties as the inverter applies them, and the compensation they contain. */
+typedef struct {
+    LS_REAL d[3]; /* -, duties */
+    LS_REAL c[3]; /* -, their dead-time compensation (0 without) */
+} ls_mod_hist;
+
 typedef struct {
     ls_mod_cfg cfg;    /* copy of the configuration */
     LS_REAL d_dead;    /* -, duty equivalent of the dead time */
     LS_REAL i_prev[3]; /* A, phase currents of the previous step (for the extrapolation) */
     bool have_prev;    /* i_prev is valid */
     LS_REAL inv_band;  /* 1/A, 1 / i_band */
-    LS_REAL hist_d[2][3]; /* -, duties of the last two steps as applied ([newest] and [newest ^ 1]) */
-    LS_REAL hist_c[2][3]; /* -, the dead-time compensation they contain */
-    uint32_t newest;      /* -, index of the last step's entry (0 or 1) */
-    uint32_t n_hist;      /* -, valid history entries (0 to 2) */
+    LS_REAL k_now;     /* 1/A, (1 + dtc_lead) / i_band: i_pred / i_band = k_now i - k_prev i_prev */
+    LS_REAL k_prev;    /* 1/A, dtc_lead / i_band */
+    ls_mod_hist hist[2]; /* the last two steps ([newest] and [newest ^ 1]); after a reset, legs
+                          * that did not switch (d = 0) */
+    uint32_t newest;     /* -, index of the last step's entry (0 or 1) */
 } ls_mod;
 
 ls_status ls_mod_init(ls_mod *m, const ls_mod_cfg *cfg);
@@ -46,7 +53,7 @@ static inline bool ls_mod_step_impl(ls_mod *m, LS_REAL v_a, LS_REAL v_b, LS_REAL
 {
     LS_REAL v[3], dt[3], vmax, vmin, off, inv;
     const bool dtc = m->cfg.dtc && i_abc != NULL;
-    bool clipped = false;
+    bool clipped;
     int k;
     if (check && (!LS_ISFINITE3(v_a, v_b, v_dc) || !(v_dc > LS_R(0.0)))) {
         duty[0] = duty[1] = duty[2] = LS_R(0.5);
@@ -63,7 +70,7 @@ static inline bool ls_mod_step_impl(ls_mod *m, LS_REAL v_a, LS_REAL v_b, LS_REAL
         if (m->have_prev && (!check || LS_ISFINITE3(i_abc[0], i_abc[1], i_abc[2]))) {
             /* x = i_pred / i_band with i_pred = i + lead (i - i_prev); the three legs written out on
              * local copies (stores to i_prev would otherwise make the compiler reload i_abc) */
-            const LS_REAL ka = (LS_R(1.0) + m->cfg.dtc_lead) * m->inv_band, kb = m->cfg.dtc_lead * m->inv_band;
+            const LS_REAL ka = m->k_now, kb = m->k_prev;
             const LS_REAL i0 = i_abc[0], i1 = i_abc[1], i2 = i_abc[2];
             const LS_REAL x0 = ka * i0 - kb * m->i_prev[0];
             const LS_REAL x1 = ka * i1 - kb * m->i_prev[1];
@@ -108,18 +115,21 @@ static inline bool ls_mod_step_impl(ls_mod *m, LS_REAL v_a, LS_REAL v_b, LS_REAL
     vmin = vmin < v[2] ? vmin : v[2];
     off = LS_R(-0.5) * (vmax + vmin);
     inv = LS_R(1.0) / v_dc;
-    m->newest ^= 1u; /* this step's entry replaces the one of two steps ago */
-    for (k = 0; k < 3; ++k) {
-        LS_REAL d = LS_R(0.5) + (v[k] + off) * inv;
-        if (dtc) {
-            d += dt[k]; /* (+ 0, exact, for a non-finite current) */
-        }
-        clipped = clipped || d > LS_R(1.0) || d < LS_R(0.0);
-        duty[k] = ls_clamp(d, LS_R(0.0), LS_R(1.0));
-        m->hist_d[m->newest][k] = duty[k];
-        m->hist_c[m->newest][k] = dt[k]; /* (0 without compensation) */
+    {
+        /* this step's entry replaces the one of two steps ago */
+        ls_mod_hist *h = &m->hist[m->newest ^= 1u];
+        const LS_REAL d0 = LS_R(0.5) + (v[0] + off) * inv + dt[0]; /* (+ 0, exact, without compensation) */
+        const LS_REAL d1 = LS_R(0.5) + (v[1] + off) * inv + dt[1];
+        const LS_REAL d2 = LS_R(0.5) + (v[2] + off) * inv + dt[2];
+        clipped = d0 > LS_R(1.0) || d0 < LS_R(0.0) || d1 > LS_R(1.0) || d1 < LS_R(0.0) || d2 > LS_R(1.0) ||
+                  d2 < LS_R(0.0);
+        h->d[0] = duty[0] = ls_clamp(d0, LS_R(0.0), LS_R(1.0));
+        h->d[1] = duty[1] = ls_clamp(d1, LS_R(0.0), LS_R(1.0));
+        h->d[2] = duty[2] = ls_clamp(d2, LS_R(0.0), LS_R(1.0));
+        h->c[0] = dt[0];
+        h->c[1] = dt[1];
+        h->c[2] = dt[2];
     }
-    m->n_hist = m->n_hist < 2u ? m->n_hist + 1u : 2u;
     return clipped;
 }
 
@@ -130,46 +140,57 @@ static inline bool ls_mod_step_impl(ls_mod *m, LS_REAL v_a, LS_REAL v_b, LS_REAL
  * -(t_dead f_pwm)(sign i_on + sign i_off)/2), with i_on and i_off interpolated between the
  * period's start current (i_prev) and end current (i_abc) plus the PWM ripple at the edges
  * (k_rip = T / L in 1/(H Hz), the phase inductance seen by the ripple; 0 ignores it). A leg that
- * does not switch (d = 0 or 1) has no error. Writes the alpha-beta voltage error (V) and returns
- * true, or writes 0 and returns false while the history is not complete. i_abc and v_dc must be
+ * does not switch (d = 0 or 1) has no error (after a reset, the history holds legs that did not
+ * switch). Writes the alpha-beta voltage error (V) and returns true, or writes 0 and returns false
+ * without the previous step's currents. i_abc and v_dc must be
  * finite. (Used by ls_drive with hf_dtres; see linsense/ls_dtres.h.) */
-static inline LS_REAL ls_mod_leg_error_(LS_REAL d, LS_REAL c, LS_REAL i0, LS_REAL i1, LS_REAL rip,
-                                        LS_REAL d_dead)
+static inline LS_REAL ls_mod_lost_(LS_REAL d, LS_REAL i0, LS_REAL i1, LS_REAL rip2, LS_REAL d_dead)
 {
-    /* the edge currents are i_mid -+ s (s: half the edges' distance times the slope plus the ripple
-     * at the edges); the two signs add to 2 sign(i_mid) when |i_mid| > |s|, else cancel; a leg at
-     * 0 or 1 does not switch: no error, and no compensation reached it */
-    const LS_REAL i_mid = LS_R(0.5) * (i0 + i1);
-    const LS_REAL sp = LS_R(0.5) * d * (i1 - i0) + rip;
-    const LS_REAL lost = LS_FABS(i_mid) > LS_FABS(sp) ? (i_mid > LS_R(0.0) ? d_dead : -d_dead) : LS_R(0.0);
-    return d * (LS_R(1.0) - d) > LS_R(0.0) ? c - lost : LS_R(0.0);
+    /* the duty the dead time took from a switching leg: the edge currents are i_mid -+ s (s: half
+     * the edges' distance times the slope plus the ripple at the edges); the two signs add to
+     * 2 sign(i_mid) when |i_mid| > |s|, else cancel (here on twice the currents: i_sum = 2 i_mid,
+     * s2 = 2 s) */
+    const LS_REAL i_sum = i0 + i1;
+    const LS_REAL s2 = d * (i1 - i0) + rip2;
+    return LS_FABS(i_sum) > LS_FABS(s2) ? (i_sum > LS_R(0.0) ? d_dead : -d_dead) : LS_R(0.0);
 }
 
 static inline bool ls_mod_residual(const ls_mod *m, const LS_REAL i_abc[3], LS_REAL v_dc, LS_REAL k_rip,
                                    LS_REAL v_ab[2])
 {
-    const uint32_t old = m->newest ^ 1u; /* the entry of two steps ago (this step has not pushed yet) */
-    /* (local copies: the loads are not repeated for fear of aliasing) */
-    const LS_REAL d0 = m->hist_d[old][0], d1 = m->hist_d[old][1], d2 = m->hist_d[old][2];
-    const LS_REAL kv = k_rip * v_dc, dm = (d0 + d1 + d2) * (LS_R(1.0) / LS_R(3.0));
-    const LS_REAL k6 = kv * (LS_R(1.0) / LS_R(6.0)), kh = LS_R(0.5) * kv, dd = m->d_dead;
+    /* the entry of two steps ago (this step has not pushed yet); local copies: the loads are not
+     * repeated for fear of aliasing */
+    const ls_mod_hist *h = &m->hist[m->newest ^ 1u];
+    const LS_REAL d0 = h->d[0], d1 = h->d[1], d2 = h->d[2];
     LS_REAL e0, e1, e2;
-    if (m->n_hist < 2u || !m->have_prev) {
+    if (!m->have_prev) {
         v_ab[0] = v_ab[1] = LS_R(0.0);
         return false;
     }
-    /* the PWM ripple at leg k's edges: (V_dc T / L)(acc_k / 6 + (1 - d_k)(d_k - d_mean) / 2), acc_k the
-     * sum over the other legs of max(0, d_j - d_k) (how long they are high before leg k rises) */
+    /* twice the PWM ripple at leg k's edges: with V_dc T / L = k_rip v_dc and d_mean the mean duty,
+     *   r_k = (V_dc T / L)(acc_k / 6 + (1 - d_k)(d_k - d_mean) / 2),
+     * acc_k the sum over the other legs of max(0, d_j - d_k) (how long they are high before leg k
+     * rises); with max(0, x) = (x + |x|) / 2 this is
+     *   2 r_k = (V_dc T / L)((d_mean - d_k)(2 d_k - 1) / 2 + A_k / 6),  A_k = sum_j |d_j - d_k| */
     {
-        const LS_REAL p01 = d1 > d0 ? d1 - d0 : LS_R(0.0), p10 = d0 > d1 ? d0 - d1 : LS_R(0.0);
-        const LS_REAL p02 = d2 > d0 ? d2 - d0 : LS_R(0.0), p20 = d0 > d2 ? d0 - d2 : LS_R(0.0);
-        const LS_REAL p12 = d2 > d1 ? d2 - d1 : LS_R(0.0), p21 = d1 > d2 ? d1 - d2 : LS_R(0.0);
-        const LS_REAL r0 = k6 * (p01 + p02) + kh * (LS_R(1.0) - d0) * (d0 - dm);
-        const LS_REAL r1 = k6 * (p10 + p12) + kh * (LS_R(1.0) - d1) * (d1 - dm);
-        const LS_REAL r2 = k6 * (p20 + p21) + kh * (LS_R(1.0) - d2) * (d2 - dm);
-        e0 = ls_mod_leg_error_(d0, m->hist_c[old][0], m->i_prev[0], i_abc[0], r0, dd);
-        e1 = ls_mod_leg_error_(d1, m->hist_c[old][1], m->i_prev[1], i_abc[1], r1, dd);
-        e2 = ls_mod_leg_error_(d2, m->hist_c[old][2], m->i_prev[2], i_abc[2], r2, dd);
+        const LS_REAL kv = k_rip * v_dc, kh = LS_R(0.5) * kv, k6 = kv * (LS_R(1.0) / LS_R(6.0));
+        const LS_REAL dm = (d0 + d1 + d2) * (LS_R(1.0) / LS_R(3.0));
+        const LS_REAL a01 = LS_FABS(d0 - d1), a02 = LS_FABS(d0 - d2), a12 = LS_FABS(d1 - d2);
+        const LS_REAL r0 = kh * (dm - d0) * (d0 + d0 - LS_R(1.0)) + k6 * (a01 + a02);
+        const LS_REAL r1 = kh * (dm - d1) * (d1 + d1 - LS_R(1.0)) + k6 * (a01 + a12);
+        const LS_REAL r2 = kh * (dm - d2) * (d2 + d2 - LS_R(1.0)) + k6 * (a02 + a12);
+        const LS_REAL dd = m->d_dead;
+        e0 = h->c[0] - ls_mod_lost_(d0, m->i_prev[0], i_abc[0], r0, dd);
+        e1 = h->c[1] - ls_mod_lost_(d1, m->i_prev[1], i_abc[1], r1, dd);
+        e2 = h->c[2] - ls_mod_lost_(d2, m->i_prev[2], i_abc[2], r2, dd);
+    }
+    /* a leg at 0 or 1 does not switch: no error, and no compensation reached it (one test for the
+     * usual case, every leg switching) */
+    if (!((d0 < d1 ? d0 : d1) > LS_R(0.0) && (d0 > d1 ? d0 : d1) < LS_R(1.0) && d2 > LS_R(0.0) &&
+          d2 < LS_R(1.0))) {
+        e0 = d0 * (LS_R(1.0) - d0) > LS_R(0.0) ? e0 : LS_R(0.0);
+        e1 = d1 * (LS_R(1.0) - d1) > LS_R(0.0) ? e1 : LS_R(0.0);
+        e2 = d2 * (LS_R(1.0) - d2) > LS_R(0.0) ? e2 : LS_R(0.0);
     }
     /* pole-voltage errors to alpha-beta (the common mode does not reach a floating star) */
     v_ab[0] = v_dc * (LS_R(2.0) * e0 - e1 - e2) * (LS_R(1.0) / LS_R(3.0));

@@ -53,21 +53,11 @@ void ls_observer_gains(ls_observer_cfg *cfg, LS_REAL f_bw);
 ls_status ls_observer_init(ls_observer *o, const ls_observer_cfg *cfg);
 /* Zero speed and load force; position set to p. */
 void ls_observer_reset(ls_observer *o, ls_pos p);
-/* One step with error eps (rad) and motor force f_motor (N, from the current reference); a
- * non-finite eps or f_motor counts as 0. Inline (called every PWM period). */
-static inline void ls_observer_step(ls_observer *o, LS_REAL eps, LS_REAL f_motor)
+/* ls_observer_step for finite eps and f_motor (the drive's, by construction). */
+static inline void ls_observer_step_finite(ls_observer *o, LS_REAL eps, LS_REAL f_motor)
 {
     const ls_observer_cfg *c = &o->cfg;
-    LS_REAL dtheta;
-    if (!LS_ISFINITE2(eps, f_motor)) {
-        if (!LS_ISFINITE(eps)) {
-            eps = LS_R(0.0);
-        }
-        if (!LS_ISFINITE(f_motor)) {
-            f_motor = LS_R(0.0);
-        }
-    }
-    dtheta = o->omega * o->ts + o->k1_ts * eps;
+    const LS_REAL dtheta = o->omega * o->ts + o->k1_ts * eps;
     if (c->type == LS_OBS_MECH) {
         o->omega += o->acc_ts * (f_motor - o->f_load) + o->k2_ts * eps;
         o->f_load = ls_clamp(o->f_load - o->k3_ts * eps, -c->force_max, c->force_max);
@@ -76,6 +66,13 @@ static inline void ls_observer_step(ls_observer *o, LS_REAL eps, LS_REAL f_motor
     }
     o->omega = ls_clamp(o->omega, -c->omega_max, c->omega_max);
     o->pos = ls_pos_add(o->pos, dtheta);
+}
+
+/* One step with error eps (rad) and motor force f_motor (N, from the current reference); a
+ * non-finite eps or f_motor counts as 0. Inline (called every PWM period). */
+static inline void ls_observer_step(ls_observer *o, LS_REAL eps, LS_REAL f_motor)
+{
+    ls_observer_step_finite(o, LS_ISFINITE(eps) ? eps : LS_R(0.0), LS_ISFINITE(f_motor) ? f_motor : LS_R(0.0));
 }
 
 /* Estimated speed in m/s. */
