@@ -189,6 +189,15 @@ static void cal_window_reset(ls_drive *d)
     d->cal_sum_psi = LS_R(0.0);
 }
 
+/* The mode and what it runs. */
+static void mode_set(ls_drive *d, ls_mode mode)
+{
+    d->mode = mode;
+    d->hf_on = mode == LS_MODE_SENSORLESS_LUT || mode == LS_MODE_SENSORLESS_NOLUT ||
+               mode == LS_MODE_CALIBRATION || (mode == LS_MODE_SENSORED && d->cfg.inject_sensored);
+    d->v_hf_max = d->hf_on ? d->cfg.inject.amplitude : LS_R(0.0);
+}
+
 void ls_drive_reset(ls_drive *d, ls_pos p)
 {
     if (!d->initialised) {
@@ -208,7 +217,7 @@ void ls_drive_reset(ls_drive *d, ls_pos p)
     ls_mod_reset(&d->mod);
     ls_dtres_reset(&d->dtres);
     ls_protect_reset(&d->prot);
-    d->mode = LS_MODE_OFF;
+    mode_set(d, LS_MODE_OFF);
     d->align = false;
     d->pending = false;
     d->f_ref = LS_R(0.0);
@@ -255,11 +264,9 @@ ls_status ls_drive_set_mode(ls_drive *d, ls_mode mode)
     /* the modulator's history and the residual model start again (the outputs may have been off) */
     ls_mod_reset(&d->mod);
     ls_dtres_reset(&d->dtres);
-    d->mode = mode;
+    mode_set(d, mode);
     d->align = true;
-    ls_inject_enable(&d->inj, mode == LS_MODE_SENSORLESS_LUT || mode == LS_MODE_SENSORLESS_NOLUT ||
-                                  mode == LS_MODE_CALIBRATION ||
-                                  (mode == LS_MODE_SENSORED && d->cfg.inject_sensored));
+    ls_inject_enable(&d->inj, d->hf_on);
     return LS_OK;
 }
 
@@ -438,7 +445,7 @@ void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
     sensorless = mode == LS_MODE_SENSORLESS_LUT || mode == LS_MODE_SENSORLESS_NOLUT;
     calibrating = mode == LS_MODE_CALIBRATION;
     use_enc = mode == LS_MODE_SENSORED || calibrating;
-    hf_on = sensorless || calibrating || (mode == LS_MODE_SENSORED && cfg->inject_sensored);
+    hf_on = d->hf_on;
 
     fault = ls_protect_check_power(&d->prot, meas->i_abc, meas->v_dc);
     if (use_enc && !meas->enc_valid) {
@@ -484,8 +491,10 @@ void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
     /* the estimated axis (the HF estimate of the previous step, or the encoder's while calibrating) */
     ls_sincos(d->obs.pos.theta, &c_est, &s_est);
 
-    /* HF band-pass of the currents less what the dead-time residual drove (ls_dtres.h), and the
-     * fundamental separation of the measured currents */
+    /* fundamental separation of the measured currents, and HF band-pass of the currents less what
+     * the dead-time residual drove (ls_dtres.h) */
+    if_a = ls_biquad_step(&d->sep[0], i_a);
+    if_b = ls_biquad_step(&d->sep[1], i_b);
     /* (two branches: one path through a zeroed i_res costs 7 instructions per step) */
     if (hf_on && cfg->hf_dtres) {
         LS_REAL v_err[2], i_res[2];
@@ -497,8 +506,6 @@ void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
         ihf_a = ls_biquad_step(&d->bpf[0], i_a);
         ihf_b = ls_biquad_step(&d->bpf[1], i_b);
     }
-    if_a = ls_biquad_step(&d->sep[0], i_a);
-    if_b = ls_biquad_step(&d->sep[1], i_b);
 
     /* HF demodulation and observer, on the axis the injection used */
     if (hf_on) {
@@ -553,7 +560,7 @@ void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
     /* current control in the feedback frame */
     i_d = c_fb * if_a + s_fb * if_b;
     i_q = -s_fb * if_a + c_fb * if_b;
-    v_lim = meas->v_dc * (LS_R(1.0) / LS_SQRT3) - (hf_on ? cfg->inject.amplitude : LS_R(0.0));
+    v_lim = meas->v_dc * (LS_R(1.0) / LS_SQRT3) - d->v_hf_max;
     ls_current_step_finite(&d->cur, i_d, i_q, LS_R(0.0), i_q_ref, omega_fb, v_lim, &v_d, &v_q);
 
     /* fundamental voltage at the angle advanced over the computation delay (small-angle

@@ -138,6 +138,8 @@ typedef struct {
     ls_drive_cfg cfg;    /* copy of the configuration */
     bool initialised;    /* ls_drive_init succeeded */
     ls_mode mode;        /* active mode */
+    bool hf_on;          /* the mode injects and estimates (set with it) */
+    LS_REAL v_hf_max;    /* V, voltage kept for the injection (its amplitude with hf_on, else 0) */
     bool align;          /* re-align estimators and reference at the next step */
     bool pending;        /* a move or step commanded before the alignment, applied after it */
     bool pending_move;   /* the pending command is a move (else a step) */

@@ -48,10 +48,26 @@ void ls_mod_reset(ls_mod *m);
 /* The step is inline (called every PWM period). ls_mod_step_finite is ls_mod_step for finite
  * v_a, v_b, v_dc and i_abc (the drive checks them), without those guards; ls_mod_step_impl is
  * the implementation of both. */
+/* The compensation of leg k on the general path (no previous current, or a check of it): none for
+ * a non-finite current. */
+static inline LS_REAL ls_mod_dtc_leg_(ls_mod *m, int k, LS_REAL i)
+{
+    LS_REAL i_pred = i;
+    if (!LS_ISFINITE(i)) {
+        return LS_R(0.0);
+    }
+    if (m->have_prev) {
+        i_pred += m->cfg.dtc_lead * (i - m->i_prev[k]);
+    }
+    m->i_prev[k] = i;
+    return m->d_dead * ls_clamp(i_pred * m->inv_band, LS_R(-1.0), LS_R(1.0));
+}
+
 static inline bool ls_mod_step_impl(ls_mod *m, LS_REAL v_a, LS_REAL v_b, LS_REAL v_dc,
                                     const LS_REAL i_abc[3], LS_REAL duty[3], bool check)
 {
-    LS_REAL v[3], dt[3], vmax, vmin, off, inv;
+    LS_REAL v[3], vmax, vmin, off, inv;
+    LS_REAL dt0 = LS_R(0.0), dt1 = LS_R(0.0), dt2 = LS_R(0.0); /* (scalars: an array would live in memory) */
     const bool dtc = m->cfg.dtc && i_abc != NULL;
     bool clipped;
     int k;
@@ -65,7 +81,6 @@ static inline bool ls_mod_step_impl(ls_mod *m, LS_REAL v_a, LS_REAL v_b, LS_REAL
     }
     /* dead-time compensation: the duty correction of each leg from its predicted current
      * (computed first: it does not depend on the voltage) */
-    dt[0] = dt[1] = dt[2] = LS_R(0.0);
     if (dtc) {
         if (m->have_prev && (!check || LS_ISFINITE3(i_abc[0], i_abc[1], i_abc[2]))) {
             /* x = i_pred / i_band with i_pred = i + lead (i - i_prev); the three legs written out on
@@ -79,23 +94,16 @@ static inline bool ls_mod_step_impl(ls_mod *m, LS_REAL v_a, LS_REAL v_b, LS_REAL
              * crosses zero twice per injection period: a branch on it mispredicts) */
             const LS_REAL y0 = x0 > LS_R(1.0) ? LS_R(1.0) : x0, y1 = x1 > LS_R(1.0) ? LS_R(1.0) : x1;
             const LS_REAL y2 = x2 > LS_R(1.0) ? LS_R(1.0) : x2;
-            dt[0] = m->d_dead * (x0 < LS_R(-1.0) ? LS_R(-1.0) : y0);
-            dt[1] = m->d_dead * (x1 < LS_R(-1.0) ? LS_R(-1.0) : y1);
-            dt[2] = m->d_dead * (x2 < LS_R(-1.0) ? LS_R(-1.0) : y2);
+            dt0 = m->d_dead * (x0 < LS_R(-1.0) ? LS_R(-1.0) : y0);
+            dt1 = m->d_dead * (x1 < LS_R(-1.0) ? LS_R(-1.0) : y1);
+            dt2 = m->d_dead * (x2 < LS_R(-1.0) ? LS_R(-1.0) : y2);
             m->i_prev[0] = i0;
             m->i_prev[1] = i1;
             m->i_prev[2] = i2;
         } else {
-            for (k = 0; k < 3; ++k) {
-                if (LS_ISFINITE(i_abc[k])) { /* none for a non-finite current */
-                    LS_REAL i_pred = i_abc[k];
-                    if (m->have_prev) {
-                        i_pred += m->cfg.dtc_lead * (i_abc[k] - m->i_prev[k]);
-                    }
-                    m->i_prev[k] = i_abc[k];
-                    dt[k] = m->d_dead * ls_clamp(i_pred * m->inv_band, LS_R(-1.0), LS_R(1.0));
-                }
-            }
+            dt0 = ls_mod_dtc_leg_(m, 0, i_abc[0]);
+            dt1 = ls_mod_dtc_leg_(m, 1, i_abc[1]);
+            dt2 = ls_mod_dtc_leg_(m, 2, i_abc[2]);
         }
     }
     if (!dtc && i_abc != NULL) { /* the residual estimate needs them too */
@@ -118,17 +126,17 @@ static inline bool ls_mod_step_impl(ls_mod *m, LS_REAL v_a, LS_REAL v_b, LS_REAL
     {
         /* this step's entry replaces the one of two steps ago */
         ls_mod_hist *h = &m->hist[m->newest ^= 1u];
-        const LS_REAL d0 = LS_R(0.5) + (v[0] + off) * inv + dt[0]; /* (+ 0, exact, without compensation) */
-        const LS_REAL d1 = LS_R(0.5) + (v[1] + off) * inv + dt[1];
-        const LS_REAL d2 = LS_R(0.5) + (v[2] + off) * inv + dt[2];
+        const LS_REAL d0 = LS_R(0.5) + (v[0] + off) * inv + dt0; /* (+ 0, exact, without compensation) */
+        const LS_REAL d1 = LS_R(0.5) + (v[1] + off) * inv + dt1;
+        const LS_REAL d2 = LS_R(0.5) + (v[2] + off) * inv + dt2;
         clipped = d0 > LS_R(1.0) || d0 < LS_R(0.0) || d1 > LS_R(1.0) || d1 < LS_R(0.0) || d2 > LS_R(1.0) ||
                   d2 < LS_R(0.0);
         h->d[0] = duty[0] = ls_clamp(d0, LS_R(0.0), LS_R(1.0));
         h->d[1] = duty[1] = ls_clamp(d1, LS_R(0.0), LS_R(1.0));
         h->d[2] = duty[2] = ls_clamp(d2, LS_R(0.0), LS_R(1.0));
-        h->c[0] = dt[0];
-        h->c[1] = dt[1];
-        h->c[2] = dt[2];
+        h->c[0] = dt0;
+        h->c[1] = dt1;
+        h->c[2] = dt2;
     }
     return clipped;
 }
@@ -171,14 +179,16 @@ static inline bool ls_mod_residual(const ls_mod *m, const LS_REAL i_abc[3], LS_R
      *   r_k = (V_dc T / L)(acc_k / 6 + (1 - d_k)(d_k - d_mean) / 2),
      * acc_k the sum over the other legs of max(0, d_j - d_k) (how long they are high before leg k
      * rises); with max(0, x) = (x + |x|) / 2 this is
-     *   2 r_k = (V_dc T / L)((d_mean - d_k)(2 d_k - 1) / 2 + A_k / 6),  A_k = sum_j |d_j - d_k| */
+     *   2 r_k = (V_dc T / L)((d_mean - d_k)(d_k - 1/2) + A_k / 6),  A_k = sum_j |d_j - d_k| */
     {
-        const LS_REAL kv = k_rip * v_dc, kh = LS_R(0.5) * kv, k6 = kv * (LS_R(1.0) / LS_R(6.0));
+        const LS_REAL kv = k_rip * v_dc;
         const LS_REAL dm = (d0 + d1 + d2) * (LS_R(1.0) / LS_R(3.0));
-        const LS_REAL a01 = LS_FABS(d0 - d1), a02 = LS_FABS(d0 - d2), a12 = LS_FABS(d1 - d2);
-        const LS_REAL r0 = kh * (dm - d0) * (d0 + d0 - LS_R(1.0)) + k6 * (a01 + a02);
-        const LS_REAL r1 = kh * (dm - d1) * (d1 + d1 - LS_R(1.0)) + k6 * (a01 + a12);
-        const LS_REAL r2 = kh * (dm - d2) * (d2 + d2 - LS_R(1.0)) + k6 * (a02 + a12);
+        const LS_REAL a01 = LS_FABS(d0 - d1) * (LS_R(1.0) / LS_R(6.0));
+        const LS_REAL a02 = LS_FABS(d0 - d2) * (LS_R(1.0) / LS_R(6.0));
+        const LS_REAL a12 = LS_FABS(d1 - d2) * (LS_R(1.0) / LS_R(6.0));
+        const LS_REAL r0 = kv * ((dm - d0) * (d0 - LS_R(0.5)) + (a01 + a02));
+        const LS_REAL r1 = kv * ((dm - d1) * (d1 - LS_R(0.5)) + (a01 + a12));
+        const LS_REAL r2 = kv * ((dm - d2) * (d2 - LS_R(0.5)) + (a02 + a12));
         const LS_REAL dd = m->d_dead;
         e0 = h->c[0] - ls_mod_lost_(d0, m->i_prev[0], i_abc[0], r0, dd);
         e1 = h->c[1] - ls_mod_lost_(d1, m->i_prev[1], i_abc[1], r1, dd);

@@ -75,6 +75,11 @@ static inline uint32_t ls_protect_check_power(ls_protect *p, const LS_REAL i_abc
 /* Observer checks: err (rad) and its validity, estimated electrical speed (rad/s). */
 static inline uint32_t ls_protect_check_observer(ls_protect *p, LS_REAL err, bool valid, LS_REAL omega)
 {
+    /* fast path: a valid error and a speed in range (false for NaN, which takes the full checks) */
+    if (valid && LS_FABS(err) <= p->cfg.err_max && LS_FABS(omega) <= p->cfg.omega_max) {
+        p->err_count = 0u;
+        return p->fault;
+    }
     if (!LS_ISFINITE2(err, omega)) {
         p->fault |= LS_FAULT_NONFINITE;
         return p->fault;

@@ -56,10 +56,12 @@ typedef enum {
     LS_ERR_PARAM = 2  /* a configuration value is out of its allowed range (or not finite) */
 } ls_status;
 
-/* Clamp x into [lo, hi]. */
+/* Clamp x into [lo, hi] (lo <= hi; NaN stays NaN). Written as min then max, each a form compilers
+ * map onto one min/max instruction without branching. */
 static inline LS_REAL ls_clamp(LS_REAL x, LS_REAL lo, LS_REAL hi)
 {
-    return x < lo ? lo : (x > hi ? hi : x);
+    const LS_REAL t = hi < x ? hi : x;
+    return lo > t ? lo : t;
 }
 
 #endif /* LINSENSE_LS_TYPES_H */
