@@ -1,5 +1,6 @@
-/* Unit tests of ls_sincos (linsense/ls_math.h): maximum absolute error against double sin/cos on a
- * dense grid of [-4 pi, 4 pi] (where the drive uses it), on a coarser grid up to the end of the
+/* Unit tests of ls_sincos (linsense/ls_math.h): the float build's sine table against double sin;
+ * maximum absolute error against double sin/cos on a dense grid of [-4 pi, 4 pi] (where the drive
+ * uses it: the table path), on a coarser grid up to the end of the
  * inline reduction, across the whole float range (the Payne-Hanek path), at the quadrant
  * boundaries, and NaN/Inf inputs (NaN out, no crash). */
 #include <float.h>
@@ -132,8 +133,33 @@ static void test_nonfinite(void)
     LS_CHECK_NEAR(s, sin(0.5), TOL);
 }
 
+#ifndef LS_REAL_DOUBLE
+/* the sine table: every point the float nearest sin(2 pi k / N) (half an ulp, at most 3e-8), and
+ * the table path's edges: |x| = LS_SINCOS_TAB_MAX and just beyond (the polynomial path) */
+static void test_table(void)
+{
+    unsigned k;
+    double worst_tab = 0.0;
+    for (k = 0u; k < LS_SIN_TAB_N; ++k) {
+        const double e = fabs((double)ls_sin_tab[k] - sin(2.0 * PI_D * (double)k / (double)LS_SIN_TAB_N));
+        worst_tab = e > worst_tab ? e : worst_tab;
+    }
+    printf("  sine table, %u points: max error %.3g\n", (unsigned)LS_SIN_TAB_N, worst_tab);
+    LS_CHECK(worst_tab <= 3e-8);
+    worst = 0.0;
+    probe(LS_SINCOS_TAB_MAX);
+    probe(-LS_SINCOS_TAB_MAX);
+    probe(nextafterf(LS_SINCOS_TAB_MAX, 100.0f));
+    probe(nextafterf(-LS_SINCOS_TAB_MAX, -100.0f));
+    LS_CHECK(worst <= TOL);
+}
+#endif
+
 int main(void)
 {
+#ifndef LS_REAL_DOUBLE
+    test_table();
+#endif
     test_dense();
     test_boundaries();
     test_wide();
