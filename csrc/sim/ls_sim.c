@@ -702,6 +702,10 @@ ls_status ls_sim_run(const ls_sim_cfg *c, ls_drive *drive, const ls_sim_cmd *cmd
     }
     for (k = 0; k < n_steps; ++k) {
         double t = (double)k * h, x_mid, f_start, f_avg, u[3], th_mid, cm, sm, dl, cd, sd;
+        if (k % LS_SIM_STOP_POLL == 0 && out->stop != NULL && *out->stop != 0) {
+            fault |= LS_SIM_FAULT_STOPPED;
+            break;
+        }
         while (next < n_cmds && cmds[next].t <= t) {
             if (cmds[next].move) {
                 ls_drive_move_to(drive, pos_of_m(cmds[next].x, tau));

@@ -73,6 +73,17 @@ static void closed_loop(ls_sim_fidelity fid)
     LS_CHECK_NEAR(r.x_end, 0.003, 3.0 / 360.0 * 0.056); /* the paper: < 3 deg at steady state */
     LS_CHECK(worst < 10.0 * TP_PI / 180); /* the paper: ~9 deg in transients */
     LS_CHECK_NEAR(t[1], 4.0 / 16000.0, 1e-12);
+    /* stopped from outside: the run ends at its next poll, the fault says why */
+    {
+        volatile int32_t stop = 1;
+        o.stop = &stop;
+        LS_CHECK(ls_sim_run(&c, &d, &cmd, 1, 24000, &o, &r) == LS_OK);
+        LS_CHECK(r.steps_done == 0 && (r.fault & LS_SIM_FAULT_STOPPED) != 0u);
+        stop = 0;
+        LS_CHECK(ls_sim_run(&c, &d, &cmd, 1, 2 * LS_SIM_STOP_POLL, &o, &r) == LS_OK);
+        LS_CHECK(r.steps_done == 2 * LS_SIM_STOP_POLL && (r.fault & LS_SIM_FAULT_STOPPED) == 0u);
+        o.stop = NULL;
+    }
 }
 
 static void open_loop_and_faults(void)

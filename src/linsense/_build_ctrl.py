@@ -342,6 +342,7 @@ typedef enum { LS_SIM_FREE = 0, LS_SIM_HELD = 1, LS_SIM_PRESCRIBED = 2 } ls_sim_
 typedef enum { LS_SIM_LOAD_CONSTANT = 0, LS_SIM_LOAD_STEP = 1, LS_SIM_LOAD_INCLINE = 2 } ls_sim_load;
 #define LS_SIM_FAULT_TRAVEL 0x100
 #define LS_SIM_FAULT_DIVERGED 0x200
+#define LS_SIM_FAULT_STOPPED 0x400
 typedef struct {
     double r_s;
     double pole_pitch;
@@ -383,6 +384,7 @@ typedef struct { double t; double x; int32_t move; } ls_sim_cmd;
 typedef struct {
     double *t; double *x; double *v; double *x_est; double *v_est; double *x_ref; double *theta_err;
     double *i_abc; double *i_dq; double *duty; double *force; double *err_sig; uint32_t *fault;
+    const volatile int32_t *stop;
 } ls_sim_out;
 typedef struct {
     int64_t steps_done; int64_t n_rec; uint32_t fault; double x_end; double v_end;

@@ -410,6 +410,9 @@ def main(argv: list[str] | None = None) -> None:
     except click.Abort:
         click.echo("linsense: aborted", err=True)
         sys.exit(1)
+    except KeyboardInterrupt:  # Ctrl-C: the run stops within a second, its outputs not written
+        click.echo("linsense: interrupted", err=True)
+        sys.exit(130)
     except click.UsageError as exc:
         ctx = f"{exc.ctx.command_path}: " if exc.ctx else ""
         click.echo(f"linsense: error: {ctx}{exc.format_message()}".replace("\n", " "), err=True)

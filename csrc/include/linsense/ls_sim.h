@@ -66,6 +66,8 @@ typedef enum {
 #define LS_SIM_FAULT_NONE 0u
 #define LS_SIM_FAULT_TRAVEL 0x100u     /* the mover left [x_min, x_max] */
 #define LS_SIM_FAULT_DIVERGED 0x200u   /* a plant state became non-finite or absurd */
+#define LS_SIM_FAULT_STOPPED 0x400u    /* stopped from outside (ls_sim_out.stop) */
+#define LS_SIM_STOP_POLL 4096          /* periods between two polls of ls_sim_out.stop */
 
 typedef struct {
     /* motor */
@@ -133,6 +135,9 @@ typedef struct {
     double *force;     /* N, motor force (period average) */
     double *err_sig;   /* rad, demodulated error */
     uint32_t *fault;   /* drive fault bits | LS_SIM_FAULT_* */
+    /* not an output: polled every LS_SIM_STOP_POLL periods by ls_sim_run; nonzero ends the run
+     * there with LS_SIM_FAULT_STOPPED (another thread sets it, e.g. on Ctrl-C; NULL: never) */
+    const volatile int32_t *stop;
 } ls_sim_out;
 
 typedef struct {

@@ -7,7 +7,10 @@ are in :mod:`linsense.sim.scenario`, :mod:`linsense.sim.run` and friends.
 
 from __future__ import annotations
 
+import contextlib
 import math
+import signal
+import threading
 import time
 from dataclasses import dataclass, field
 
@@ -39,6 +42,7 @@ SIGNALS = {
 #: Fault bits of the simulation itself (the drive's LS_FAULT_* bits are below 0x100).
 SIM_FAULT_TRAVEL = int(lib.LS_SIM_FAULT_TRAVEL)
 SIM_FAULT_DIVERGED = int(lib.LS_SIM_FAULT_DIVERGED)
+SIM_FAULT_STOPPED = int(lib.LS_SIM_FAULT_STOPPED)
 
 
 class SimulationError(LinsenseError):
@@ -121,6 +125,19 @@ def _collect(arrays, res, wall_s: float) -> RawRun:
                   float(res.x_end), float(res.v_end), wall_s)
 
 
+@contextlib.contextmanager
+def _sigint_held():
+    """Hold SIGINT back in this thread (POSIX) for the duration; it is delivered at the end."""
+    if not hasattr(signal, "pthread_sigmask"):
+        yield
+        return
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+
+
 def run_closed_loop(cfg, drive, n_steps: int, commands=()) -> RawRun:
     """Run ``n_steps`` PWM periods of ``drive`` (an initialised ``ls_drive *`` with its mode set)
     around the plant ``cfg``. ``commands``: iterable of ``(t [s], x [m], move: bool)``."""
@@ -131,9 +148,44 @@ def run_closed_loop(cfg, drive, n_steps: int, commands=()) -> RawRun:
     n_rec = int(math.ceil(n_steps / cfg.decimate)) + 2
     arrays, out = _outputs(n_rec)
     res = ffi.new("ls_sim_result *")
-    t0 = time.perf_counter()
-    st = lib.ls_sim_run(cfg, drive, c_cmds, len(cmds), int(n_steps), out, res)
-    wall = time.perf_counter() - t0
+    stop = ffi.new("int32_t *", 0)
+    out.stop = stop
+    status = []
+
+    done = threading.Event()
+
+    def work() -> None:  # (the wall time of the C run alone, not of the thread around it)
+        try:
+            t0 = time.perf_counter()
+            status.append(lib.ls_sim_run(cfg, drive, c_cmds, len(cmds), int(n_steps), out, res))
+            status.append(time.perf_counter() - t0)
+        finally:
+            done.set()
+
+    if threading.current_thread() is threading.main_thread():
+        # the C loop runs in a thread (it releases the GIL) so that Ctrl-C reaches Python here:
+        # the loop polls the flag every LS_SIM_STOP_POLL periods (milliseconds) and stops
+        worker = threading.Thread(target=work, name="linsense-sim")
+        started = False
+        try:
+            with _sigint_held():  # (an interrupt inside start() would leave the thread running)
+                worker.start()
+                started = True
+            while not done.wait(0.05):
+                pass
+        except BaseException:
+            stop[0] = 1
+            # the C loop holds pointers into this frame's buffers: wait for it to stop (an event,
+            # not Thread.join, which an interrupt can leave believing the thread has ended)
+            while started and not done.is_set():
+                try:
+                    done.wait(0.05)
+                except KeyboardInterrupt:
+                    pass
+            raise
+    else:
+        work()
+    st, wall = status
     if st != lib.LS_OK:
         raise SimulationError(f"ls_sim_run refused its inputs (status {st})")
     return _collect(arrays, res, wall)
