@@ -87,11 +87,11 @@ def test_plot_writes_figures(run_cli, tmp_path, ecce):
     assert r.code == 0, r.err
     names = sorted(p.name for p in (tmp_path / "figs").iterdir())
     assert names == sorted([
-        "fig5_inductances_no_end_effect.png", "fig6_inductances_end_effect.png",
+        ".linsense-set.json", "fig5_inductances_no_end_effect.png", "fig6_inductances_end_effect.png",
         "fig8a_psi_estimated.png", "fig8b_psi_compensated.png", "fig9_lut.png",
         "uncompensated_observer.png",
     ])
-    for p in (tmp_path / "figs").iterdir():
+    for p in (tmp_path / "figs").glob("*.png"):
         data = p.read_bytes()
         assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 20_000
 

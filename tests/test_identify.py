@@ -246,7 +246,8 @@ def test_cli_end_to_end(run_cli, tmp_path, motors):
     assert "end-effect dM0" in r.out and ": significant" in r.out
     names = sorted(str(p.relative_to(out)) for p in out.rglob("*") if p.is_file())
     assert names == sorted(["motor.toml", "inductances.csv", "lut.csv", "lut_fit.csv", "fit.json",
-                            "figures/identify_inductances.png", "figures/identify_lut.png"])
+                            "figures/identify_inductances.png", "figures/identify_lut.png",
+                            ".linsense-set.json"])
     for p in (out / "figures").iterdir():
         data = p.read_bytes()
         assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 20_000

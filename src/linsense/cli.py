@@ -100,11 +100,14 @@ def lut(motor_spec: str, points: int, fmt: str, symbol: str | None, f_inj: float
 def plot(motor_spec: str, points: int, out: str) -> None:
     """Draw paper Figs. 5, 6, 8a, 8b, the LUT and the uncompensated-observer analysis (PNG)."""
     from linsense.compensation.lut import build_lut
+    from linsense.io import output_set
     from linsense.report.figures import write_model_figures
 
     motor = _load(motor_spec)
-    for p in write_model_figures(motor, build_lut(motor, points), out):
-        click.echo(str(p))
+    with output_set(out, "plot") as s:
+        write_model_figures(motor, build_lut(motor, points), s.root)
+    for f in s.files:
+        click.echo(str(f))
 
 
 @cli.command()
@@ -115,11 +118,10 @@ def reproduce(motor_spec: str, out: str) -> None:
     from linsense.analysis.summary import summarize
     from linsense.analysis.tables import model_table, table_to_csv
     from linsense.compensation.lut import build_lut, export
-    from linsense.io import write_atomic
+    from linsense.io import output_set, safe_name
     from linsense.report.figures import write_model_figures
 
     motor = _load(motor_spec)
-    out_dir = Path(out)
     tab = model_table(motor, 360)
     lut_ = build_lut(motor, 360)
     s = summarize(motor)
@@ -127,13 +129,15 @@ def reproduce(motor_spec: str, out: str) -> None:
         "model.csv": table_to_csv(tab),
         "lut.csv": export(lut_, "csv"),
         "lut.json": export(lut_, "json"),
-        f"ls_lut_{motor.name}.h": export(lut_, "c"),
+        f"ls_lut_{safe_name(motor.name)}.h": export(lut_, "c"),
         "summary.json": json.dumps(s, indent=1) + "\n",
     }
-    for name, text in texts.items():
-        click.echo(str(write_atomic(out_dir / name, text)))
-    for p in write_model_figures(motor, build_lut(motor, 56), out_dir / "figures"):
-        click.echo(str(p))
+    with output_set(out, "reproduce") as st:
+        for name, text in texts.items():
+            st.write(name, text)
+        write_model_figures(motor, build_lut(motor, 56), st.path("figures"))
+    for f in st.files:
+        click.echo(str(f))
     click.echo(
         f"{motor.name}: Psi_LUT peak {s['psi_lut_peak_deg']:.2f} deg; saliency minima at "
         f"{', '.join(f'{d:.0f}' for d in s['saliency_min_at_deg'])} deg; HF current "
@@ -203,7 +207,7 @@ def identify(bench: str, out: str, harmonics: int, motor_spec: str | None, pole_
     """Identify the HF inductance model from a bench file: motor.toml, tables, LUTs, fit.json, figures."""
     from linsense.identify.pipeline import identify as run_identify
     from linsense.identify.pipeline import render_outputs, summary_lines
-    from linsense.io import write_atomic
+    from linsense.io import output_set
 
     base = _load(motor_spec) if motor_spec is not None else None
     ident = run_identify(
@@ -212,8 +216,11 @@ def identify(bench: str, out: str, harmonics: int, motor_spec: str | None, pole_
         force_constant=force_constant, mass=mass, resistance=resistance, name=name, points=points,
     )
     files = render_outputs(ident)
-    for rel, content in files.items():
-        click.echo(str(write_atomic(Path(out) / rel, content)))
+    with output_set(out, "identify") as s:
+        for rel, content in files.items():
+            s.write(rel, content)
+    for f in s.files:
+        click.echo(str(f))
     for line in summary_lines(ident):
         click.echo(line)
     for w in ident.warnings:
@@ -236,7 +243,7 @@ def simulate(scenario: str, out: str, fidelity: str | None, trace_fmt: str, mat:
 
     Exit codes: 0 done (with --check: and stable), 1 with --check: not stable, 2 bad input (the
     scenario, or a configuration that trips the drive at t = 0)."""
-    from linsense.io import write_atomic
+    from linsense.io import output_set, split_timing
     from linsense.sim.run import simulate as run_sim
     from linsense.sim.scenario import load_scenario
     from linsense.sim.trace import have_parquet, trace_csv, write_mat, write_trace
@@ -247,19 +254,21 @@ def simulate(scenario: str, out: str, fidelity: str | None, trace_fmt: str, mat:
     if fidelity is not None:
         sc = sc.replace(inverter={"fidelity": fidelity})
     res = run_sim(sc)
-    out_dir = Path(out)
-    files = [write_atomic(out_dir / "metrics.json", json.dumps(res.metrics, indent=1) + "\n")]
-    if trace_fmt == "csv":
-        files.append(write_atomic(out_dir / "trace.csv", trace_csv(res)))
-    else:
-        files.append(write_trace(res, out_dir / "trace.parquet", "parquet"))
-    if mat:
-        files.append(write_mat(res, out_dir / "trace.mat"))
-    if not no_plot:
-        from linsense.report.sim_figures import write_sim_figure
+    metrics, timing = split_timing(res.metrics)
+    with output_set(out, "simulate") as s:
+        s.write("metrics.json", json.dumps(metrics, indent=1) + "\n")
+        s.write("timing.json", json.dumps(timing, indent=1) + "\n")
+        if trace_fmt == "csv":
+            s.write("trace.csv", trace_csv(res))
+        else:
+            write_trace(res, s.path("trace.parquet"), "parquet")
+        if mat:
+            write_mat(res, s.path("trace.mat"))
+        if not no_plot:
+            from linsense.report.sim_figures import write_sim_figure
 
-        files.append(write_sim_figure(res, out_dir / "sim.png"))
-    for f in files:
+            write_sim_figure(res, s.path("sim.png"))
+    for f in s.files:
         click.echo(str(f))
     m = res.metrics
 
@@ -292,18 +301,20 @@ def simulate(scenario: str, out: str, fidelity: str | None, trace_fmt: str, mat:
 def calibrate(motor_spec: str, positions: int, load: float, fidelity: str, quad: float, out: str) -> None:
     """Run the firmware's LUT calibration in the simulator (paper Fig. 9): lut_measured.csv,
     metrics.json, calibration.png. Exit code 1 if it does not complete."""
-    from linsense.io import write_atomic
+    from linsense.io import output_set, split_timing
     from linsense.report.figures import fig_calibration
     from linsense.sim.calibrate import calibrate as run_calibration
     from linsense.sim.calibrate import lut_csv
 
     motor = _load(motor_spec)
     cal = run_calibration(motor, positions, load, fidelity, quad=quad, source=motor_spec)
-    out_dir = Path(out)
-    files = [write_atomic(out_dir / "lut_measured.csv", lut_csv(cal)),
-             write_atomic(out_dir / "metrics.json", json.dumps(cal.metrics, indent=1) + "\n"),
-             fig_calibration(cal, motor, out_dir / "calibration.png")]
-    for f in files:
+    metrics, timing = split_timing(cal.metrics)
+    with output_set(out, "calibrate") as s:
+        s.write("lut_measured.csv", lut_csv(cal))
+        s.write("metrics.json", json.dumps(metrics, indent=1) + "\n")
+        s.write("timing.json", json.dumps(timing, indent=1) + "\n")
+        fig_calibration(cal, motor, s.path("calibration.png"))
+    for f in s.files:
         click.echo(str(f))
     m = cal.metrics
     click.echo(f"{m['motor']}: {m['points_done']}/{m['points']} points, load {m['load_n']:g} N, "

@@ -39,3 +39,11 @@ class ModelError(LinsenseError):
         self.key = key
         where = f"{self.source}: {key}" if key else self.source
         super().__init__(f"{where}: {message}")
+
+
+class OutputError(InputError):
+    """An output (``--out``) that linsense refuses to write or replace, e.g. a folder holding
+    files no linsense run wrote. Names the path and why."""
+
+    def __init__(self, path, message: str) -> None:
+        super().__init__(str(path), "", message)

@@ -1,13 +1,26 @@
-"""Atomic file output: a failed run never leaves a half-written file behind."""
+"""Atomic file output: a failed run never leaves a half-written file behind.
+
+Single files go through :func:`write_atomic` (a temporary file and a rename); the commands that
+write several files write them as one set with :func:`output_set` (a temporary sibling folder
+swapped into place, with a manifest :data:`MANIFEST`). Names a user controls go into file names
+only through :func:`safe_name`.
+"""
 
 from __future__ import annotations
 
+import errno
+import json
 import math
 import os
+import re
+import secrets
+import shutil
+import signal
 import stat
 import sys
 import tempfile
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 
@@ -79,4 +92,396 @@ def write_atomic_with(path: str | os.PathLike, writer: Callable) -> Path:
         except FileNotFoundError:
             pass
         raise
+    if _ACTIVE:
+        _written(path)
     return path
+
+
+# ------------------------------------------------------------------ reproducible files
+#: metrics that depend on the machine and the moment (wall-clock time): written to ``timing.json``,
+#: kept out of ``metrics.json`` and ``trace.mat`` so that those are byte-reproducible
+TIMING_KEYS = ("wall_s", "realtime_factor")
+
+
+def split_timing(metrics: dict) -> tuple[dict, dict]:
+    """``(reproducible metrics, timing)``: the :data:`TIMING_KEYS` moved to the second dict."""
+    keep = {k: v for k, v in metrics.items() if k not in TIMING_KEYS}
+    timing = {k: metrics[k] for k in TIMING_KEYS if k in metrics}
+    if "sim_s" in metrics and timing:
+        timing = {"sim_s": metrics["sim_s"], **timing}
+    return keep, timing
+
+
+# ------------------------------------------------------------------ names in file names
+def safe_name(name: str, max_len: int = 64) -> str:
+    """A file-name part made from a user-controlled name (a motor or scenario name).
+
+    Only ``A-Z a-z 0-9 _ -`` survive (accents are dropped, anything else becomes ``_``, so no
+    ``/``, ``..``, NUL or leading ``-``/``.``); an empty result becomes ``unnamed``; a result
+    longer than ``max_len`` is cut and ends with 8 hex digits of the name's SHA-1 (distinct names
+    stay distinct).
+    """
+    import hashlib
+    import unicodedata
+
+    raw = str(name)
+    ascii_ = unicodedata.normalize("NFKD", raw).encode("ascii", "ignore").decode("ascii")
+    s = re.sub(r"[^0-9A-Za-z_-]+", "_", ascii_).strip("_-") or "unnamed"
+    if len(s) > max_len:
+        digest = hashlib.sha1(raw.encode("utf-8", "surrogatepass")).hexdigest()[:8]
+        s = s[: max_len - 9].rstrip("_-") + "_" + digest
+    return s
+
+
+# ------------------------------------------------------------------ output sets
+#: the manifest of an output set: which command wrote it and every file it holds
+MANIFEST = ".linsense-set.json"
+#: test hooks: the stage at which a run kills itself (SIGKILL) or fails with an OSError
+KILL_ENV = "LINSENSE_TEST_KILL_AT"
+FAIL_ENV = "LINSENSE_TEST_FAIL_AT"
+#: the stages, in order: the first file written, everything written (before the swap), one
+#: foreign entry carried over, the old set renamed aside (between the swap's two renames), the new
+#: set renamed in (before the old one is deleted)
+STAGES = ("first-file", "before-swap", "carry", "mid-swap", "after-swap")
+
+
+def _hook(stage: str, where: Path) -> None:
+    if os.environ.get(KILL_ENV) == stage:
+        os.kill(os.getpid(), signal.SIGKILL)
+    if os.environ.get(FAIL_ENV) == stage:
+        raise OSError(errno.ENOSPC, f"{os.strerror(errno.ENOSPC)} (injected at {stage})", str(where))
+
+
+def _stem(target: Path) -> str:
+    """The name part of the sibling temporaries of ``target`` (bounded: file names <= 255 bytes)."""
+    name = target.name
+    if len(name.encode("utf-8", "surrogateescape")) <= 150:
+        return name
+    import hashlib
+
+    return safe_name(name, 64) + "-" + hashlib.sha1(name.encode("utf-8", "surrogateescape")).hexdigest()[:16]
+
+
+def _alive(pid: int) -> bool:
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:  # EPERM: someone else's live process
+        return True
+    return True
+
+
+def _rmtree(p: Path) -> None:
+    if p.is_symlink() or not p.is_dir():
+        p.unlink(missing_ok=True)
+    else:
+        shutil.rmtree(p, ignore_errors=True)
+
+
+def _listed_files(folder: Path) -> list[str]:
+    """Every non-folder entry under ``folder`` as a relative POSIX path (symlinks not followed)."""
+    out = []
+
+    def walk(d: Path, rel: str) -> None:
+        for e in sorted(os.scandir(d), key=lambda e: e.name):
+            r = f"{rel}{e.name}"
+            if e.is_dir(follow_symlinks=False):
+                walk(Path(e.path), r + "/")
+            else:
+                out.append(r)
+
+    walk(folder, "")
+    return out
+
+
+def _manifest_files(tmp: Path) -> set[str]:
+    try:
+        return set(json.loads((tmp / MANIFEST).read_text(encoding="utf-8"))["files"])
+    except (OSError, ValueError, KeyError, TypeError):
+        return set()
+
+
+def _restore(old: Path, tmp: Path, target: Path) -> None:
+    """Undo an unfinished swap: the entries carried from ``old`` into ``tmp`` go back (they are
+    the top-level entries of ``tmp`` its manifest does not list), ``old`` is renamed back onto
+    ``target``, ``tmp`` is removed."""
+    if tmp.is_dir():
+        own = {f.split("/")[0] for f in _manifest_files(tmp)} | {MANIFEST}
+        for e in os.listdir(tmp):
+            if e not in own and not os.path.lexists(old / e):
+                os.rename(tmp / e, old / e)
+    os.rename(old, target)
+    _rmtree(tmp)
+
+
+def recover(out: str | os.PathLike) -> None:
+    """Finish or undo what an interrupted run (its process is dead) left next to ``out``.
+
+    ``.<name>.tmp-<pid>-<token>`` is a set being written (removed) and ``.<name>.old-<pid>-<token>``
+    the previous set during the swap: restored onto ``out`` when ``out`` is missing (the run died
+    between the two renames; what it had carried over goes back), removed when the new set is in
+    place. Temporaries of live processes are left alone. Every command writing an output set calls
+    this (under a lock on the parent folder) before it looks at ``out``.
+    """
+    target = _target(out)
+    with _locked(target.parent):
+        _recover(target)
+
+
+def _recover(target: Path) -> None:
+    parent = target.parent
+    pat = re.compile(re.escape(f".{_stem(target)}.") + r"(tmp|old)-(\d+)-([0-9a-f]{8})")
+    tokens = set()
+    try:
+        names = os.listdir(parent)
+    except FileNotFoundError:
+        return
+    for n in names:
+        m = pat.fullmatch(n)
+        if m and not _alive(int(m.group(2))):
+            tokens.add(f"{m.group(2)}-{m.group(3)}")
+    for tok in sorted(tokens):
+        old, tmp = _sibling(target, "old", tok), _sibling(target, "tmp", tok)
+        if old.exists():
+            if not os.path.lexists(target):
+                _restore(old, tmp, target)
+            elif not tmp.exists():
+                _rmtree(old)  # the swap finished: the old set is garbage
+            # else: something else appeared at target meanwhile; touch nothing
+        else:
+            _rmtree(tmp)
+
+
+def _sibling(target: Path, kind: str, token: str) -> Path:
+    return target.parent / f".{_stem(target)}.{kind}-{token}"
+
+
+def _target(out: str | os.PathLike) -> Path:
+    """The real folder an ``--out`` names (symlinks resolved, so the swap replaces the folder the
+    link points to, not the link)."""
+    return Path(os.path.realpath(os.fspath(out)))
+
+
+class _Locked:
+    def __init__(self, folder: Path) -> None:
+        self.folder = folder
+
+    def __enter__(self) -> int:
+        self.folder.mkdir(parents=True, exist_ok=True)
+        self.fd = os.open(self.folder, os.O_RDONLY)
+        try:
+            import fcntl
+
+            fcntl.flock(self.fd, fcntl.LOCK_EX)
+        except ImportError:  # pragma: no cover - not POSIX
+            pass
+        return self.fd
+
+    def __exit__(self, *exc) -> None:
+        os.close(self.fd)  # releases the lock
+
+
+def _locked(folder: Path) -> _Locked:
+    """An exclusive lock on ``folder`` (flock on the folder itself: no lock file to leave behind)."""
+    return _Locked(folder)
+
+
+def _check_existing(target: Path, shown: Path) -> list[str]:
+    """The rule for an ``--out`` that exists; return its foreign top-level entries (kept).
+
+    Accepted: a missing or empty folder, or a linsense output set (it has :data:`MANIFEST`). In a
+    set, every file under a top-level entry the manifest names must be listed in it (else the user
+    put something there: refused); top-level entries the manifest does not name are the user's
+    and are carried over unchanged into the new set.
+    """
+    from linsense.errors import OutputError
+
+    if not os.path.lexists(target):
+        return []
+    if not target.is_dir():
+        raise OutputError(shown, "exists and is not a folder")
+    entries = sorted(os.listdir(target))
+    if not entries:
+        return []
+    if MANIFEST not in entries:
+        raise OutputError(shown, f"not empty and not a linsense output folder (no {MANIFEST}): refusing to "
+                                 "replace it; remove it or choose a new or empty folder")
+    try:
+        listed = json.loads((target / MANIFEST).read_text(encoding="utf-8"))["files"]
+        if not (isinstance(listed, list) and all(isinstance(f, str) for f in listed)):
+            raise TypeError
+    except (OSError, ValueError, KeyError, TypeError):
+        raise OutputError(shown / MANIFEST, "unreadable linsense manifest: refusing to replace the folder; "
+                                            "remove it or choose a new or empty folder") from None
+    listed_set = set(listed)
+    owned = {f.split("/")[0] for f in listed}
+    for e in entries:
+        if e in owned:
+            p = target / e
+            found = [e] if p.is_symlink() or not p.is_dir() else [f"{e}/{r}" for r in _listed_files(p)]
+            for f in found:
+                if f not in listed_set:
+                    raise OutputError(shown / f, f"not written by linsense (not in {MANIFEST}): refusing to "
+                                                 "replace the folder; move it away")
+    return [e for e in entries if e not in owned and e != MANIFEST]
+
+
+def _check_rel(rel: str) -> str:
+    parts = str(rel).split("/")
+    if any(p in ("", ".", "..") or "\0" in p or len(p.encode("utf-8", "surrogateescape")) > 255
+           for p in parts) or parts[0] == MANIFEST:
+        raise ValueError(f"not a file name inside an output set: {rel!r}")
+    return "/".join(parts)
+
+
+class OutputSet:
+    """The files of one command run, written into a temporary sibling folder of ``out`` and
+    swapped into place as a whole (see :func:`output_set`)."""
+
+    def __init__(self, out: str | os.PathLike, command: str) -> None:
+        self.shown = Path(out)
+        self.target = _target(out)
+        if self.target.parent == self.target:
+            from linsense.errors import OutputError
+
+            raise OutputError(self.shown, "cannot replace the root folder")
+        self.command = command
+        self.tmp: Path | None = None
+        self.token = ""
+        self.any_written = False
+        self._made: Path | None = None
+        self.files: list[Path] = []  # after the swap: every file of the set, as shown to the user
+
+    # -- writing
+    def path(self, rel: str) -> Path:
+        """Where to write the set's file (or folder) ``rel`` (a fixed name, ``/``-separated, or
+        made with :func:`safe_name`); the folders above it exist."""
+        rel = _check_rel(rel)
+        p = self.tmp / rel
+        p.parent.mkdir(parents=True, exist_ok=True)
+        return p
+
+    @property
+    def root(self) -> Path:
+        """The set's temporary folder itself (for writers that take a folder)."""
+        return self.tmp
+
+    def write(self, rel: str, data: str | bytes) -> Path:
+        return write_atomic(self.path(rel), data)
+
+    def write_with(self, rel: str, writer: Callable) -> Path:
+        return write_atomic_with(self.path(rel), writer)
+
+    # -- life cycle
+    def open(self) -> None:
+        missing = self.target.parent
+        while not missing.parent.exists() and missing.parent != missing:
+            missing = missing.parent
+        self._made = None if missing.exists() else missing  # the first folder this run creates
+        with _locked(self.target.parent):
+            _recover(self.target)
+            _check_existing(self.target, self.shown)
+            while True:
+                self.token = f"{os.getpid()}-{secrets.token_hex(4)}"
+                tmp = _sibling(self.target, "tmp", self.token)
+                try:
+                    os.mkdir(tmp)
+                    break
+                except FileExistsError:  # pragma: no cover - a 32-bit token collision
+                    continue
+        self.tmp = tmp
+
+    def abort(self) -> None:
+        if self.tmp is not None:
+            _rmtree(self.tmp)
+        if self._made is not None:  # the folders above out this run created, if still empty
+            d = self.target.parent
+            while True:
+                try:
+                    os.rmdir(d)
+                except OSError:
+                    break
+                if d == self._made:
+                    break
+                d = d.parent
+
+    def commit(self) -> None:
+        from linsense import __version__
+        from linsense.errors import OutputError
+
+        files = _listed_files(self.tmp)
+        doc = {"command": self.command, "files": files, "linsense": __version__}
+        write_atomic(self.tmp / MANIFEST, json.dumps(doc, indent=1) + "\n")
+        new_top = {f.split("/")[0] for f in files}
+        target, tmp = self.target, self.tmp
+        old = _sibling(target, "old", self.token)
+        with _locked(target.parent) as fd:
+            _recover(target)
+            foreign = _check_existing(target, self.shown)
+            clash = [e for e in foreign if e in new_top]
+            if clash:
+                raise OutputError(self.shown / clash[0], "exists and is not part of the previous linsense "
+                                                         "output: refusing to replace it; move it away")
+            _hook("before-swap", self.shown)
+            if os.path.lexists(target):
+                os.rename(target, old)
+                try:
+                    for e in foreign:
+                        os.rename(old / e, tmp / e)
+                        _hook("carry", self.shown)
+                    _hook("mid-swap", self.shown)
+                    os.rename(tmp, target)
+                except BaseException:
+                    _restore(old, tmp, target)
+                    raise
+                _hook("after-swap", self.shown)
+                _rmtree(old)
+            else:
+                os.rename(tmp, target)
+            try:
+                os.fsync(fd)
+            except OSError:  # pragma: no cover - folders that cannot be synced
+                pass
+        self.files = [self.shown / f for f in files]
+
+
+@contextmanager
+def output_set(out: str | os.PathLike, command: str) -> Iterator[OutputSet]:
+    """Write a command's whole output set atomically into folder ``out``.
+
+    Yields an :class:`OutputSet`; write every file through ``s.write(rel, data)`` or into
+    ``s.path(rel)``. On success the set, with its manifest :data:`MANIFEST`, replaces ``out``:
+    ``out`` is renamed aside to ``.<name>.old-<pid>-<token>``, the entries the previous set did not
+    own are moved into the new one, the new folder ``.<name>.tmp-<pid>-<token>`` is renamed onto
+    ``out``, and the old one is deleted. On any exception the temporary folder is removed and
+    ``out`` is as it was. A SIGKILL leaves at most these two siblings: the next run on ``out``
+    (:func:`recover`) puts the old set back or deletes what is garbage, so at every instant
+    ``out`` holds the complete old or new set, or is recovered to the old one. ``out`` must be
+    missing, empty or a previous output set (:func:`_check_existing`); else
+    :class:`~linsense.errors.OutputError` (exit code 2) before anything is computed.
+    """
+    s = OutputSet(out, command)
+    s.open()
+    _ACTIVE.append(s)
+    try:
+        yield s
+        s.commit()
+    except BaseException:
+        s.abort()
+        raise
+    finally:
+        _ACTIVE.remove(s)
+
+
+#: the output sets being written (for the ``first-file`` test hook of :func:`write_atomic_with`)
+_ACTIVE: list[OutputSet] = []
+
+
+def _written(path: Path) -> None:
+    for s in _ACTIVE:
+        if s.tmp is not None and s.tmp in path.parents and not s.any_written:
+            s.any_written = True
+            _hook("first-file", s.shown)

@@ -74,14 +74,24 @@ def write_trace(result, path: str | Path, fmt: str = "csv") -> Path:
     raise ValueError(f"unknown trace format {fmt!r}")
 
 
+#: the .mat file's 116-byte text header (scipy writes the date there): fixed, for byte-reproducible files
+MAT_HEADER = b"MATLAB 5.0 MAT-file, written by linsense".ljust(116, b" ")
+
+
 def write_mat(result, path: str | Path) -> Path:
-    """MATLAB .mat (v5): one variable per column plus ``metrics_json`` (the metrics as JSON text)."""
+    """MATLAB .mat (v5): one variable per column plus ``metrics_json`` (the metrics as JSON text,
+    without the wall-clock ones: :data:`linsense.io.TIMING_KEYS`). Byte-reproducible: the header
+    carries no date."""
     from scipy.io import savemat
 
+    from linsense.io import split_timing
+
     data = {k: np.asarray(v, dtype=float) for k, v in trace_columns(result).items()}
-    data["metrics_json"] = json.dumps(result.metrics)
+    data["metrics_json"] = json.dumps(split_timing(result.metrics)[0])
 
     def writer(f):
-        savemat(f, data, do_compression=True, oned_as="column")
+        buf = io.BytesIO()
+        savemat(buf, data, do_compression=True, oned_as="column")
+        f.write(MAT_HEADER + buf.getvalue()[len(MAT_HEADER):])
 
     return write_atomic_with(path, writer)
