@@ -225,3 +225,18 @@ def test_identical_runs_write_identical_bytes(tmp_path, run_cli):
     assert b"Created on" not in (tmp_path / "simulate1" / "trace.mat").read_bytes()[:116]
     assert set(json.loads((tmp_path / "simulate1" / "timing.json").read_text())) == {
         "sim_s", "wall_s", "realtime_factor"}
+
+
+def test_nested_sets_survive_the_outer_run(tmp_path, run_cli):
+    """As make demo: a set inside another one's folder (out/sim/x in out) is the user's entry for
+    the outer set: carried over when the outer set is replaced."""
+    sc = tmp_path / "s.toml"
+    sc.write_text(SCENARIO.format(x=1.0))
+    out = tmp_path / "out"
+    cal = ("calibrate", "--motor", "ecce2010", "--positions", 8, "--fidelity", "average", "--out", out)
+    assert run_cli(*cal).code == 0
+    assert run_cli("simulate", sc, "--out", out / "sim" / "x", "--no-plot").code == 0
+    inner = snapshot(out / "sim")
+    assert run_cli(*cal).code == 0
+    assert snapshot(out / "sim") == inner and (out / "lut_measured.csv").is_file()
+    assert not [f for f in json.loads((out / MANIFEST).read_text())["files"] if f.startswith("sim/")]
