@@ -193,6 +193,10 @@ def test_reproduce_keeps_hostile_motor_names_inside_out(tmp_path, run_cli, toml_
     f.write_text(BASE.replace('name = "m1"', f"name = {toml_name}"))
     out = tmp_path / "a" / "b" / "out"
     r = run_cli("reproduce", "--motor", f, "--out", out)
+    if r.code == 2:  # a motor file may refuse such a name: then one line and nothing written
+        assert "motor.name" in r.err and len(r.err.strip().splitlines()) == 1
+        assert [p for p in tmp_path.rglob("*")] == [f]
+        return
     assert r.code == 0, r.err
     inside = {p for p in tmp_path.rglob("*") if p.is_file()} - {f}
     assert inside and all(out in p.parents for p in inside), inside
