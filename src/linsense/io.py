@@ -114,12 +114,12 @@ def split_timing(metrics: dict) -> tuple[dict, dict]:
 
 # ------------------------------------------------------------------ names in file names
 def safe_name(name: str, max_len: int = 64) -> str:
-    """A file-name part made from a user-controlled name (a motor or scenario name).
+    """A file-name part made from a user-controlled name (e.g. the motor name in ``ls_lut_<name>.h``).
 
-    Only ``A-Z a-z 0-9 _ -`` survive (accents are dropped, anything else becomes ``_``, so no
-    ``/``, ``..``, NUL or leading ``-``/``.``); an empty result becomes ``unnamed``; a result
-    longer than ``max_len`` is cut and ends with 8 hex digits of the name's SHA-1 (distinct names
-    stay distinct).
+    Only ``A-Z a-z 0-9 _ -`` survive (accents are dropped, any run of other characters becomes one
+    ``_``, so no ``/``, ``..``, NUL or leading ``-``/``.``); an empty result becomes ``unnamed``; a
+    result longer than ``max_len`` is cut and ends with 8 hex digits of the name's SHA-1 (long
+    names that differ anywhere stay distinct). Deterministic.
     """
     import hashlib
     import unicodedata
