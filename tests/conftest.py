@@ -40,6 +40,15 @@ class CliResult:
     def __init__(self, code: int, out: str, err: str) -> None:
         self.code, self.out, self.err = code, out, err
 
+    def refused(self, *words: str) -> str:
+        """Assert exit code 2 and one ``linsense: error:`` line containing every word; return it."""
+        assert self.code == 2, (self.code, self.err)
+        lines = self.err.strip().splitlines()
+        assert len(lines) == 1 and lines[0].startswith("linsense: error: "), self.err
+        for w in words:
+            assert w in lines[0], (w, lines[0])
+        return lines[0]
+
 
 @pytest.fixture
 def run_cli(capsys):

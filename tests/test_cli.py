@@ -136,14 +136,16 @@ BAD_MOTORS = {
     "table and params": (BASE + 'table = "t.csv"\n', ["inductance.L0", "not both"]),
     "missing table": (BASE.split("[inductance]")[0] + '[inductance]\ntable = "t.csv"\n',
                       ["inductance.table", "t.csv"]),
-    "not positive definite": (edit(BASE, "L2 = -0.317e-3", "L2 = -7.3e-3"),
-                              ["inductance", "not positive definite", "..", " deg"]),
+    "not positive definite": (edit(BASE, "L2 = -0.317e-3", "L2 = -1.5e-3"),
+                              ["inductance", "3x3", "not positive definite", "45.5..74.5", " deg"]),
     "saliency vanishes": (
         edit(edit(edit(BASE, "L2 = -0.317e-3", "L2 = 0.0"), "M2 = -0.317e-3", "M2 = 0.0"),
              "dM0 = -0.47e-3", "dM0 = 0.0"),
         ["inductance", "saliency", "vanishes", "all positions"],
     ),
-    "saliency changes sign": (edit(BASE, "dM0 = -0.47e-3", "dM0 = -1.0e-3"),
+    # (L0 up with it: the 3x3 matrix stays positive definite, the saliency does not move)
+    "saliency changes sign": (edit(edit(BASE, "dM0 = -0.47e-3", "dM0 = -1.0e-3"),
+                                   "L0 = 2.75e-3", "L0 = 3.75e-3"),
                               ["inductance", "saliency", "changes sign", "36.5..83.5", "216.5..263.5"]),
 }
 

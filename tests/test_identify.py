@@ -217,7 +217,8 @@ def test_harmonics_the_positions_cannot_separate(motors):
 def test_fitted_model_refused_by_check_motor(motors, tmp_path):
     """A motor whose saliency changes sign: the fit is refused with the bench file named."""
     motor, _ = motors["ecce2010"]
-    p = dict(motor.inductance.params, dM0=-1.0e-3)
+    # (L0 up with dM0: the 3x3 matrix stays positive definite)
+    p = dict(motor.inductance.params, dM0=-1.0e-3, L0=3.75e-3)
     bad = replace(motor, inductance=InductanceModel.from_params(**p))
     f = tmp_path / "bad.csv"
     f.write_text(bench_to_csv(emulate_bench(bad, 56, 0.0, 0)))
@@ -453,7 +454,8 @@ def test_bad_identify_options(run_cli, tmp_path, case, args, words):
 
 def test_cli_fitted_model_refused(run_cli, tmp_path):
     motor = load_motor("ecce2010")
-    p = dict(motor.inductance.params, dM0=-1.0e-3)
+    # (L0 up with dM0: the 3x3 matrix stays positive definite)
+    p = dict(motor.inductance.params, dM0=-1.0e-3, L0=3.75e-3)
     bad = replace(motor, inductance=InductanceModel.from_params(**p))
     f = tmp_path / "bad.csv"
     f.write_text(bench_to_csv(emulate_bench(bad, 56, 0.0, 0)))

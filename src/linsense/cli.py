@@ -17,6 +17,7 @@ import numpy as np
 
 from linsense import __version__
 from linsense.errors import InputError, LinsenseError
+from linsense.limits import MAX_POINTS, MAX_POSITIONS
 
 MOTOR_HELP = "preset name (e.g. ecce2010) or path to a motor .toml file"
 
@@ -24,6 +25,8 @@ MOTOR_HELP = "preset name (e.g. ecce2010) or path to a motor .toml file"
 def _points(ctx, param, value: int) -> int:
     if value < 4:
         raise click.BadParameter(f"must be >= 4, got {value}")
+    if value > MAX_POINTS:
+        raise click.BadParameter(f"{value:,} is beyond the limit of {MAX_POINTS:,} (docs/limits.md)")
     return value
 
 
@@ -163,7 +166,7 @@ def _finite(minimum: float, strict: bool):
 
 @cli.command("bench-emulate")
 @click.option("--motor", "motor_spec", required=True, help=MOTOR_HELP)
-@click.option("--positions", default=56, show_default=True, type=click.IntRange(min=8),
+@click.option("--positions", default=56, show_default=True, type=click.IntRange(8, MAX_POSITIONS),
               help="equally spaced positions over one pole pitch")
 @click.option("--noise", default=0.0, show_default=True, type=float, callback=_finite(0.0, False),
               help="relative complex Gaussian noise on every phasor (0.01 = 1 %)")
@@ -418,7 +421,10 @@ def main(argv: list[str] | None = None) -> None:
             sys.exit(rc)
     except click.exceptions.Exit as exc:
         sys.exit(exc.exit_code)
-    except click.Abort:
+    except click.Abort as exc:
+        if isinstance(exc.__cause__, KeyboardInterrupt):  # (click turns Ctrl-C into Abort)
+            click.echo("linsense: interrupted", err=True)
+            sys.exit(130)
         click.echo("linsense: aborted", err=True)
         sys.exit(1)
     except KeyboardInterrupt:  # Ctrl-C: the run stops within a second, its outputs not written

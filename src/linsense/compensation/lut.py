@@ -203,8 +203,11 @@ def _check_grid(theta: np.ndarray, src: str) -> None:
 def read_lut_csv(path: str | Path) -> Lut:
     """Read a LUT written by :func:`to_csv`."""
     src = str(path)
-    with open(path, newline="", encoding="utf-8") as f:
-        rows = list(csv.reader(f))
+    try:
+        with open(path, newline="", encoding="utf-8") as f:
+            rows = list(csv.reader(f))
+    except (OSError, UnicodeDecodeError, csv.Error) as exc:
+        raise InputError(src, "", f"cannot read the LUT: {exc}") from None
     if not rows or [h.strip() for h in rows[0][:2]] != ["theta_deg", "psi_lut_deg"]:
         raise InputError(src, "header", "expected columns theta_deg,psi_lut_deg")
     data = []
@@ -224,13 +227,29 @@ def read_lut_csv(path: str | Path) -> Lut:
 def read_lut_json(path: str | Path) -> Lut:
     """Read a LUT written by :func:`to_json`."""
     src = str(path)
-    doc = json.loads(Path(path).read_text(encoding="utf-8"))
-    if doc.get("format") != "linsense-lut":
-        raise InputError(src, "format", f"not a linsense LUT: {doc.get('format')!r}")
-    theta = np.asarray(doc["theta"], dtype=float)
-    _check_grid(theta, src)
+    try:
+        doc = json.loads(Path(path).read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, ValueError) as exc:  # (JSONDecodeError is a ValueError)
+        raise InputError(src, "", f"cannot read the LUT: {exc}") from None
+    if not isinstance(doc, dict) or doc.get("format") != "linsense-lut":
+        got = doc.get("format") if isinstance(doc, dict) else type(doc).__name__
+        raise InputError(src, "format", f"not a linsense LUT: {got!r}")
+    arrays = {}
+    for key in ("theta", "psi_lut"):
+        try:
+            arrays[key] = np.asarray(doc[key], dtype=float).reshape(-1)
+        except (KeyError, TypeError, ValueError):
+            got = str(doc.get(key))[:60]
+            raise InputError(src, key, f"missing or not a list of numbers: {got!r}") from None
+        if not np.all(np.isfinite(arrays[key])):
+            raise InputError(src, key, "not finite")
+    if arrays["theta"].size != arrays["psi_lut"].size:
+        n_psi, n_theta = arrays["psi_lut"].size, arrays["theta"].size
+        raise InputError(src, "psi_lut", f"{n_psi} values for {n_theta} positions")
+    _check_grid(arrays["theta"], src)
     motor = doc.get("motor", {})
-    return Lut(np.asarray(doc["psi_lut"], dtype=float), name=motor.get("name", "motor"), provenance=motor)
+    motor = motor if isinstance(motor, dict) else {}
+    return Lut(arrays["psi_lut"], name=str(motor.get("name", "motor")), provenance=motor)
 
 
 def read_c_header(text: str) -> np.ndarray:

@@ -127,6 +127,9 @@ def load_motor(spec: str | Path, check: bool = True) -> Motor:
         The model is not usable for HF sensorless control (see :func:`check_motor`).
     """
     spec_s = str(spec)
+    if not spec_s.strip():
+        raise InputError("--motor", "", "empty: give a preset name (" + ", ".join(preset_names())
+                         + ") or the path of a motor .toml file")
     path = Path(spec_s)
     if path.suffix.lower() == ".toml" or path.exists() or any(c in spec_s for c in "/\\"):
         text = read_text_file(spec_s, "motor file")
@@ -139,6 +142,7 @@ def load_motor(spec: str | Path, check: bool = True) -> Motor:
             )
         text = (resources.files("linsense.model") / "presets" / f"{spec_s}.toml").read_text()
         motor = motor_from_toml(text, source=f"preset {spec_s}", base_dir=None)
+    check_plausible(motor)
     if check:
         check_motor(motor)
     return motor
@@ -191,7 +195,7 @@ def read_inductance_table(path: Path) -> tuple[np.ndarray, np.ndarray]:
     try:
         with open(path, newline="", encoding="utf-8") as f:
             rows = list(csv.reader(f))
-    except (OSError, UnicodeDecodeError) as exc:
+    except (OSError, UnicodeDecodeError, csv.Error) as exc:
         raise InputError(src, "", f"cannot read inductance table: {exc}") from None
     if not rows:
         raise InputError(src, "", "empty inductance table")
@@ -254,11 +258,58 @@ def _intervals_deg(theta: np.ndarray, bad: np.ndarray) -> str:
     return ", ".join(parts[:6]) + (" ..." if len(parts) > 6 else "") + " deg"
 
 
+#: Ranges that hold every real linear PM motor with margin, SI units: (low, high, unit, the
+#: likely mistake above, below). A value outside names the probable slip of unit.
+PLAUSIBLE = {
+    "motor.pole_pitch": (1e-3, 1.0, "m", "mm", None),
+    "motor.R_s": (0.0, 1e3, "ohm", "milliohm", None),
+    "motor.force_constant": (1e-2, 1e4, "N/A", None, None),
+    "motor.mass": (1e-3, 1e4, "kg", "g", None),
+    "inductance": (1e-6, 1.0, "H", "mH", "uH or nH"),
+}
+
+
+def _implausible(key: str, value: float, what: str = "") -> str | None:
+    lo, hi, unit, above, below = PLAUSIBLE[key]
+    name = what or key.split(".")[-1]
+    if lo <= value <= hi:
+        return None
+    hint = above if value > hi else below
+    typed = f" Did you type {hint}? Motor files are in SI units ({unit})." if hint else ""
+    return (f"{name} = {value:g} {unit} is outside the range of real linear motors "
+            f"[{lo:g}, {hi:g}] {unit}.{typed}")
+
+
+def check_plausible(motor: Motor) -> None:
+    """Refuse values off by a unit prefix from any real linear motor (mm for m, mH for H ...).
+
+    Raises
+    ------
+    InputError
+        Naming the key, the value, the range (:data:`PLAUSIBLE`) and the likely mistake.
+    """
+    for key, value in (("motor.pole_pitch", motor.pole_pitch), ("motor.R_s", motor.R_s),
+                       ("motor.force_constant", motor.force_constant), ("motor.mass", motor.mass)):
+        msg = _implausible(key, value)
+        if msg:
+            raise InputError(motor.source, key, msg)
+    if motor.inductance.params:
+        key, what, L_self = "inductance.L0", "L0", float(motor.inductance.params["L0"])
+    else:
+        theta = check_grid(motor.inductance)
+        key, what = "inductance.table", "the mean phase self-inductance"
+        L_self = float(np.mean(motor.inductance.entries(theta)[..., :3]))
+    msg = _implausible("inductance", L_self, what)
+    if msg:
+        raise InputError(motor.source, key, msg)
+
+
 def check_motor(motor: Motor) -> None:
     """Refuse models that are unphysical or unusable for HF sensorless control.
 
-    * the alpha-beta inductance matrix (the block seen by currents with a floating star point)
-      must be positive definite at every position;
+    * the 3x3 phase inductance matrix must be positive definite at every position (the magnetic
+      energy of any phase currents is positive; then so is the alpha-beta block, the one seen by
+      currents with a floating star point);
     * the saliency ``L_q - L_d`` must keep one sign and stay above ``MIN_SALIENCY_RATIO`` of the
       mean inductance everywhere, else the position error signal vanishes or reverses.
 
@@ -268,14 +319,13 @@ def check_motor(motor: Motor) -> None:
         Naming the positions (electrical degrees) where the condition fails.
     """
     theta = check_grid(motor.inductance)
-    L_ab = motor.inductance.L_ab(theta)
-    eig_min = np.linalg.eigvalsh(L_ab)[..., 0]
+    eig_min = np.linalg.eigvalsh(motor.inductance.L_abc(theta))[..., 0]
     bad = ~(eig_min > 0)
     if bad.any():
         raise ModelError(
             motor.source, "inductance",
-            f"inductance matrix not positive definite at theta = {_intervals_deg(theta, bad)} "
-            f"(smallest eigenvalue {eig_min.min():.3g} H)",
+            f"3x3 phase inductance matrix not positive definite at theta = {_intervals_deg(theta, bad)} "
+            f"(smallest eigenvalue {eig_min.min():.3g} H): no real winding has it",
         )
     L_dq = motor.inductance.L_dq(theta)
     sal = L_dq[..., 1, 1] - L_dq[..., 0, 0]

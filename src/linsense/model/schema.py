@@ -13,7 +13,8 @@ from typing import Annotated
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
-from linsense.errors import InputError
+from linsense.limits import MAX_HARMONIC_ORDER
+from linsense.validation import KeyProblem, closest_key, to_input_error
 
 _STRICT = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
 
@@ -41,7 +42,7 @@ class InductanceSection(BaseModel):
     M2: float | None = None  # H
     dM0: float | None = None  # H
     table: str | None = Field(default=None, min_length=1)  # CSV path, relative to the motor file
-    table_max_order: int | None = Field(default=None, ge=1)  # Fourier order of the table fit
+    table_max_order: int | None = Field(default=None, ge=1, le=MAX_HARMONIC_ORDER)  # Fourier order of the fit
 
     @model_validator(mode="after")
     def _check(self) -> InductanceSection:
@@ -49,24 +50,29 @@ class InductanceSection(BaseModel):
         for key, value in extra.items():
             m = _HARMONIC_KEY.match(key)
             if not m or int(m.group(2)) < 4 or int(m.group(2)) % 2:
-                raise _KeyError(key, "unknown key (harmonics are L4, M4, L6, M6 ...)")
+                known = [k for k in type(self).model_fields] + ["L4", "M4", "L6", "M6"]
+                hint = closest_key(key, known)
+                raise KeyProblem(key, f"unknown key (harmonics are L4, M4, L6, M6 ...){hint}")
+            if int(m.group(2)) > MAX_HARMONIC_ORDER:
+                raise KeyProblem(key, f"harmonic order {int(m.group(2))} beyond the limit of "
+                                 f"{MAX_HARMONIC_ORDER} (docs/limits.md)")
             if isinstance(value, bool) or not isinstance(value, int | float):
-                raise _KeyError(key, f"expected a number, got {value!r}")
+                raise KeyProblem(key, f"expected a number, got {value!r}")
             if not math.isfinite(value):
-                raise _KeyError(key, f"expected a finite number, got {value!r}")
+                raise KeyProblem(key, f"expected a finite number, got {value!r}")
         params = {k: getattr(self, k) for k in ("L0", "L2", "M0", "M2", "dM0")}
         if self.table is not None:
             given = [k for k, v in params.items() if v is not None] + list(extra)
             if given:
-                raise _KeyError(given[0], "give either the eq. (3) parameters or 'table', not both")
+                raise KeyProblem(given[0], "give either the eq. (3) parameters or 'table', not both")
         else:
             if self.table_max_order is not None:
-                raise _KeyError("table_max_order", "only valid together with 'table'")
+                raise KeyProblem("table_max_order", "only valid together with 'table'")
             for k, v in params.items():
                 if v is None:
-                    raise _KeyError(k, "missing required key (or give 'table = \"file.csv\"')")
+                    raise KeyProblem(k, "missing required key (or give 'table = \"file.csv\"')")
             if self.L0 <= 0:
-                raise _KeyError("L0", f"must be positive, got {self.L0!r}")
+                raise KeyProblem("L0", f"must be positive, got {self.L0!r}")
         return self
 
     def harmonics(self) -> dict[int, tuple[float, float]]:
@@ -84,7 +90,7 @@ class FrictionSection(BaseModel):
 
 class PmHarmonicEntry(BaseModel):
     model_config = _STRICT
-    order: int = Field(ge=2)  # harmonic order of the PM flux linkage in theta
+    order: int = Field(ge=2, le=MAX_HARMONIC_ORDER)  # harmonic order of the PM flux linkage in theta
     amplitude: float  # relative to the fundamental PM flux linkage
     phase_deg: float = 0.0  # electrical degrees
 
@@ -102,39 +108,9 @@ class MotorFile(BaseModel):
     pm_flux: PmFluxSection = Field(default_factory=PmFluxSection)
 
 
-class _KeyError(ValueError):
-    """Raised inside validators to name the offending sub-key."""
-
-    def __init__(self, key: str, message: str) -> None:
-        self.key = key
-        self.message = message
-        super().__init__(message)
-
-
 def validate_motor_file(data: dict, source: str) -> MotorFile:
     """Validate parsed TOML; raise :class:`InputError` naming ``source``, the key and the value."""
     try:
         return MotorFile.model_validate(data)
     except ValidationError as exc:
-        raise _to_input_error(exc, source) from None
-
-
-def _to_input_error(exc: ValidationError, source: str) -> InputError:
-    err = exc.errors(include_url=False)[0]
-    loc = [str(p) for p in err["loc"]]
-    ctx = err.get("ctx") or {}
-    inner = ctx.get("error")
-    if isinstance(inner, _KeyError):
-        return InputError(source, ".".join(loc + [inner.key]), inner.message)
-    key = ".".join(loc)
-    kind = err["type"]
-    value = err.get("input")
-    if kind == "missing":
-        return InputError(source, key, "missing required key")
-    if kind == "extra_forbidden":
-        return InputError(source, key, f"unknown key (value {value!r})")
-    if kind == "finite_number":
-        return InputError(source, key, f"expected a finite number, got {value!r}")
-    msg = err["msg"]
-    msg = msg[0].lower() + msg[1:] if msg else msg
-    return InputError(source, key, f"{msg}, got {value!r}")
+        raise to_input_error(exc, source, MotorFile) from None

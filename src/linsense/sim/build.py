@@ -17,8 +17,9 @@ from pathlib import Path
 from linsense.compensation.lut import build_lut
 from linsense.ctrl import ConfigError, Drive, drive_default_cfg, ffi, lib
 from linsense.errors import InputError, LinsenseError
+from linsense.limits import MAX_STEPS, MAX_TRACE_BYTES
 from linsense.model.motor import Motor, load_motor, preset_names
-from linsense.sim.core import PlantSetup, SimulationError, sim_cfg
+from linsense.sim.core import SIGNALS, PlantSetup, SimulationError, sim_cfg
 from linsense.sim.scenario import Scenario
 from linsense.tune.design import DriveData, current_gains, design, error_gain, mean_dq, speed_gains
 
@@ -150,6 +151,24 @@ def designed(sc: Scenario, motor: Motor) -> Scenario:
             want["controller"].pop(k.replace("_kp", "_bandwidth_hz"))
     changes = {sec: {k: v for k, v in vals.items() if k not in given[sec]} for sec, vals in want.items()}
     return sc.replace(**{sec: vals for sec, vals in changes.items() if vals})
+
+
+def check_run_size(source: str, n_steps: int, decimate: int, fs: float) -> None:
+    """Refuse a run beyond :data:`~linsense.limits.MAX_STEPS` periods or whose trace would not fit
+    in :data:`~linsense.limits.MAX_TRACE_BYTES`, before anything is allocated."""
+    if n_steps > MAX_STEPS:
+        raise InputError(source, "scenario.duration",
+                         f"{n_steps / fs:g} s at {fs:g} Hz is {n_steps:.3g} PWM periods, beyond the limit "
+                         f"of {MAX_STEPS:.3g} (docs/limits.md)")
+    per_sample = 8 * sum(SIGNALS.values()) + 4
+    n_rec = math.ceil(n_steps / decimate) + 2
+    if n_rec * per_sample > MAX_TRACE_BYTES:
+        need = math.ceil(n_steps * per_sample / MAX_TRACE_BYTES)
+        gib = n_rec * per_sample / 2**30
+        raise InputError(source, "record.decimate",
+                         f"= {decimate} keeps {n_rec:.3g} samples of the {n_steps / fs:g} s run in memory "
+                         f"({gib:.3g} GiB), beyond the limit of {MAX_TRACE_BYTES / 2**30:g} GiB: set "
+                         f"record.decimate to at least {need} or shorten scenario.duration (docs/limits.md)")
 
 
 def build(sc: Scenario, motor: Motor | None = None) -> Built:
@@ -307,5 +326,6 @@ def build(sc: Scenario, motor: Motor | None = None) -> Built:
     if n_steps < 1:
         raise InputError(sc.source, "scenario.duration",
                          f"shorter than one PWM period, got {s.scenario.duration!r}")
+    check_run_size(sc.source, n_steps, s.record.decimate, fs)
     return Built(sc, motor, setup, cfg, drive, cmds, n_steps, moves, known,
                  extra={} if cal_table is None else {"cal_table": cal_table})

@@ -11,14 +11,15 @@ from __future__ import annotations
 
 import numpy as np
 
+from linsense._ctrl import lib
 from linsense.errors import ModelError
 from linsense.model.frames import abc_to_ab_matrix
 from linsense.model.inductance import InductanceModel
 
 #: Highest number of harmonic orders the C plant accepts (LS_SIM_MAX_ORDER).
-MAX_ORDER = 64
+MAX_ORDER = int(lib.LS_SIM_MAX_ORDER)
 #: Most PM-flux harmonics the C plant accepts (LS_SIM_MAX_PM).
-MAX_PM = 8
+MAX_PM = int(lib.LS_SIM_MAX_PM)
 
 
 def _entries_to_matrix(e: np.ndarray) -> np.ndarray:

@@ -25,8 +25,8 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 from linsense.ctrl import drive_default_cfg
 from linsense.errors import InputError
 from linsense.io import read_text_file
-from linsense.model.schema import _KeyError, _to_input_error
 from linsense.tune.design import V_DC_MAX_FRACTION, V_DC_MIN_FRACTION
+from linsense.validation import KeyProblem, to_input_error
 
 _BRANCH = re.compile(r"^(float|int|bool|str|list\[.*\]|constrained-.*|function-.*)$")
 _STRICT = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
@@ -150,7 +150,7 @@ class ReferenceSection(BaseModel):
     type: Literal["step", "trajectory", "hold"] = "step"
     position_mm: float | None = None  # step: target, mm
     at: NonNegative = 0.1  # s, step time or first move start
-    waypoints_mm: list[float] | None = None  # trajectory: targets in order, mm
+    waypoints_mm: list[float] | None = Field(default=None, max_length=10_000)  # trajectory targets, mm
     v_max: Positive = 0.2  # m/s, trajectory speed limit
     a_max: Positive = 1.0  # m/s^2, trajectory acceleration limit
     dwell: float = 0.2  # s, pause after each move
@@ -159,22 +159,22 @@ class ReferenceSection(BaseModel):
     def _check(self) -> ReferenceSection:
         if self.type == "step":
             if self.position_mm is None:
-                raise _KeyError("position_mm", "missing required key for type = \"step\"")
+                raise KeyProblem("position_mm", "missing required key for type = \"step\"")
             if self.waypoints_mm is not None:
-                raise _KeyError("waypoints_mm", "only valid with type = \"trajectory\"")
+                raise KeyProblem("waypoints_mm", "only valid with type = \"trajectory\"")
         elif self.type == "trajectory":
             if self.waypoints_mm is None:
-                raise _KeyError("waypoints_mm", "missing required key for type = \"trajectory\"")
+                raise KeyProblem("waypoints_mm", "missing required key for type = \"trajectory\"")
             if not self.waypoints_mm:
-                raise _KeyError("waypoints_mm", "needs at least one waypoint, got []")
+                raise KeyProblem("waypoints_mm", "needs at least one waypoint, got []")
             if self.position_mm is not None:
-                raise _KeyError("position_mm", "only valid with type = \"step\" (use waypoints_mm)")
+                raise KeyProblem("position_mm", "only valid with type = \"step\" (use waypoints_mm)")
         else:
             for k in ("position_mm", "waypoints_mm"):
                 if getattr(self, k) is not None:
-                    raise _KeyError(k, "not valid with type = \"hold\"")
+                    raise KeyProblem(k, "not valid with type = \"hold\"")
         if self.dwell < 0:
-            raise _KeyError("dwell", f"must be >= 0 s, got {self.dwell!r}")
+            raise KeyProblem("dwell", f"must be >= 0 s, got {self.dwell!r}")
         return self
 
 
@@ -259,50 +259,51 @@ class ScenarioFile(BaseModel):
     def _check(self) -> ScenarioFile:
         inv, ctl = self.inverter, self.control
         if ctl.fs is not None and ctl.fs != inv.f_pwm:
-            raise _KeyError("control.fs", f"must equal inverter.f_pwm = {inv.f_pwm:g} Hz "
+            raise KeyProblem("control.fs", f"must equal inverter.f_pwm = {inv.f_pwm:g} Hz "
                             f"(the controller runs "
                             f"once per PWM period), got {ctl.fs:g}")
         if inv.dead_time * inv.f_pwm >= 0.1:
-            raise _KeyError("inverter.dead_time", f"must be below 10 % of the PWM period "
+            raise KeyProblem("inverter.dead_time", f"must be below 10 % of the PWM period "
                             f"({0.1 / inv.f_pwm:g} s), got {inv.dead_time!r}")
         if "frequency" in self.injection.model_fields_set and self.injection.frequency * 4 > inv.f_pwm:
-            raise _KeyError("injection.frequency", f"must be <= f_pwm / 4 = {inv.f_pwm / 4:g} Hz, "
+            raise KeyProblem("injection.frequency", f"must be <= f_pwm / 4 = {inv.f_pwm / 4:g} Hz, "
                             f"got {self.injection.frequency:g}")
         comp = self.observer.compensation
         if ctl.mode == "sensorless_lut" and comp == "none":
-            raise _KeyError("observer.compensation", "\"none\" contradicts control.mode = \"sensorless_lut\" "
-                            "(use mode = \"sensorless_nolut\")")
+            raise KeyProblem("observer.compensation",
+                             "\"none\" contradicts control.mode = \"sensorless_lut\" "
+                             "(use mode = \"sensorless_nolut\")")
         if ctl.mode not in ("sensorless_lut", "sensored") and comp == "lut":
-            raise _KeyError("observer.compensation", f"\"lut\" is only used by control.mode = "
+            raise KeyProblem("observer.compensation", f"\"lut\" is only used by control.mode = "
                             f"\"sensorless_lut\" (or \"sensored\", for the HF observer beside the encoder), "
                             f"got mode = {ctl.mode!r}")
         if self.observer.type == "mech" and (self.observer.k1 is not None) != (self.observer.k3 is not None):
-            raise _KeyError("observer.k3",
+            raise KeyProblem("observer.k3",
                             "give k1, k2 and k3 together for the mech observer (or bandwidth_hz)")
         if (self.observer.k1 is None) != (self.observer.k2 is None):
-            raise _KeyError("observer.k2" if self.observer.k2 is None else "observer.k1",
+            raise KeyProblem("observer.k2" if self.observer.k2 is None else "observer.k1",
                             "give k1 and k2 together (or only bandwidth_hz)")
         c = self.controller
         if c.position_type == "pd" and c.kp_x is None:
-            raise _KeyError("controller.kp_x", "missing required key for position_type = \"pd\" (N/m)")
+            raise KeyProblem("controller.kp_x", "missing required key for position_type = \"pd\" (N/m)")
         if c.position_type == "p" and c.kd_x != 0.0:
-            raise _KeyError("controller.kd_x", f"only used with position_type = \"pd\", got {c.kd_x!r}")
+            raise KeyProblem("controller.kd_x", f"only used with position_type = \"pd\", got {c.kd_x!r}")
         if (c.speed_kp is None) != (c.speed_ki is None):
-            raise _KeyError("controller.speed_ki" if c.speed_ki is None else "controller.speed_kp",
+            raise KeyProblem("controller.speed_ki" if c.speed_ki is None else "controller.speed_kp",
                             "give speed_kp and speed_ki together (or speed_bandwidth_hz)")
         if (c.current_kp is None) != (c.current_ki is None):
-            raise _KeyError("controller.current_ki" if c.current_ki is None else "controller.current_kp",
+            raise KeyProblem("controller.current_ki" if c.current_ki is None else "controller.current_kp",
                             "give current_kp and current_ki together (or current_bandwidth_hz)")
         g = c.model.demod_gain
         if g is not None and g == 0.0:
-            raise _KeyError("controller.model.demod_gain", "must be non-zero, got 0.0")
+            raise KeyProblem("controller.model.demod_gain", "must be non-zero, got 0.0")
         tr = self.travel
         if not tr.min_mm < tr.max_mm:
-            raise _KeyError("travel.max_mm",
+            raise KeyProblem("travel.max_mm",
                             f"must be above travel.min_mm = {tr.min_mm:g}, got {tr.max_mm:g}")
         x0 = self.initial.position_mm
         if not tr.min_mm <= x0 <= tr.max_mm:
-            raise _KeyError("initial.position_mm", f"outside the travel [{tr.min_mm:g}, {tr.max_mm:g}] mm, "
+            raise KeyProblem("initial.position_mm", f"outside the travel [{tr.min_mm:g}, {tr.max_mm:g}] mm, "
                             f"got {x0:g}")
         p = self.protection
         # bus limits not given follow the bus: 5/9 and 5/4 of it (40 and 90 V at the paper's 72 V)
@@ -314,20 +315,21 @@ class ScenarioFile(BaseModel):
             p.v_dc_max = round(inv.v_dc * V_DC_MAX_FRACTION, 6)
             p.__pydantic_fields_set__.discard("v_dc_max")
         if not p.v_dc_min < p.v_dc_max:
-            raise _KeyError("protection.v_dc_max",
+            raise KeyProblem("protection.v_dc_max",
                             f"must be above v_dc_min = {p.v_dc_min:g}, got {p.v_dc_max:g}")
         if not p.v_dc_min <= inv.v_dc <= p.v_dc_max:
-            raise _KeyError("inverter.v_dc", f"outside the protection's bus range [{p.v_dc_min:g}, "
+            raise KeyProblem("inverter.v_dc", f"outside the protection's bus range [{p.v_dc_min:g}, "
                             f"{p.v_dc_max:g}] V (the drive would trip at t = 0), got {inv.v_dc:g}")
 
         # (an amplitude the file does not give is designed for the bus, and checked there)
         if ("amplitude" in self.injection.model_fields_set and p.v_dc_min > 0
                 and self.injection.amplitude * math.sqrt(3.0) >= 0.8 * p.v_dc_min):
-            raise _KeyError("injection.amplitude", "too large for the bus: amplitude * sqrt(3) must be below "
-                            f"0.8 protection.v_dc_min = {0.8 * p.v_dc_min:g} V, "
-                            f"got {self.injection.amplitude:g}")
+            raise KeyProblem("injection.amplitude",
+                             "too large for the bus: amplitude * sqrt(3) must be below "
+                             f"0.8 protection.v_dc_min = {0.8 * p.v_dc_min:g} V, "
+                             f"got {self.injection.amplitude:g}")
         if self.injection.amplitude == 0.0 and ctl.mode != "sensored":
-            raise _KeyError("injection.amplitude", "the sensorless modes need an HF injection, got 0")
+            raise KeyProblem("injection.amplitude", "the sensorless modes need an HF injection, got 0")
         return self
 
 
@@ -387,7 +389,7 @@ def scenario_from_dict(data: dict, source: str = "<dict>", base_dir: str | Path 
     try:
         spec = ScenarioFile.model_validate(data)
     except ValidationError as exc:
-        err = _to_input_error(exc, source)
+        err = to_input_error(exc, source, ScenarioFile)
         # drop the union-branch names pydantic puts into the location ("current_gain.float")
         key = ".".join(p for p in err.key.split(".") if not _BRANCH.match(p))
         raise InputError(source, key, err.message) from None

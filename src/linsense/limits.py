@@ -1,0 +1,31 @@
+"""Limits on every size a user can type, checked before anything is allocated (docs/limits.md).
+
+Each limit is far above what a real motor, bench or study needs and far below what exhausts a
+machine's memory; the message of a refused value names the option or key, the value and the limit.
+The simulator's own sizes come from the C library (``LS_SIM_MAX_ORDER``), not restated here.
+"""
+
+from __future__ import annotations
+
+from linsense._ctrl import lib
+from linsense.errors import InputError
+
+#: highest Fourier order of L_abc(theta) and of the PM flux (the C plant keeps orders 0 .. 63)
+MAX_HARMONIC_ORDER = int(lib.LS_SIM_MAX_ORDER) - 1
+#: positions per electrical period of a table, a LUT or a figure (--points)
+MAX_POINTS = 100_000
+#: positions of an emulated bench measurement or of a calibration (--positions)
+MAX_POSITIONS = 10_000
+#: PWM periods of one simulated run (duration x f_pwm): about an hour of computing
+MAX_STEPS = 10_000_000_000
+#: bytes of the trace one run keeps in memory (recorded samples x about 140 B)
+MAX_TRACE_BYTES = 2 * 1024**3
+
+
+def check_count(source: str, key: str, value: int, limit: int, what: str) -> int:
+    """``value`` if ``1 <= value <= limit``, else :class:`InputError` naming ``key`` and the limit."""
+    if value < 1:
+        raise InputError(source, key, f"must be at least 1, got {value}")
+    if value > limit:
+        raise InputError(source, key, f"{value:,} {what} is beyond the limit of {limit:,} (docs/limits.md)")
+    return value

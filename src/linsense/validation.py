@@ -1,0 +1,96 @@
+"""Turning pydantic's validation errors into the project's one-line :class:`InputError`.
+
+Motor files (:mod:`linsense.model.schema`) and scenario files (:mod:`linsense.sim.scenario`) are
+validated by pydantic models in strict mode. The first problem becomes an ``InputError`` naming the
+file, the dotted key and the value; an unknown key is answered with the closest known key of its
+section ("did you mean 'pole_pitch'?"), and it is reported before a missing key, which a misspelled
+key usually also causes.
+"""
+
+from __future__ import annotations
+
+import difflib
+import types
+import typing
+
+from pydantic import BaseModel, ValidationError
+
+from linsense.errors import InputError
+
+
+class KeyProblem(ValueError):
+    """Raised inside a validator to name the offending sub-key of the section it checks.
+
+    Parameters
+    ----------
+    key : str
+        The key, relative to the section (dotted for deeper keys).
+    message : str
+        What is wrong, including the value.
+    """
+
+    def __init__(self, key: str, message: str) -> None:
+        self.key = key
+        self.message = message
+        super().__init__(message)
+
+
+def closest_key(key: str, known) -> str:
+    """`` (did you mean 'x'?)`` for the known key closest to ``key``, or an empty string."""
+    match = difflib.get_close_matches(key, list(known), n=1, cutoff=0.6)
+    if not match:
+        lowered = {k.lower(): k for k in known}
+        match = [lowered[key.lower()]] if key.lower() in lowered else []
+    return f" (did you mean '{match[0]}'?)" if match else ""
+
+
+def _section_model(root: type[BaseModel], loc: list) -> type[BaseModel] | None:
+    """The pydantic model class of the section at ``loc`` (field names and list indices) below ``root``."""
+    model: type[BaseModel] | None = root
+    for part in loc:
+        if isinstance(part, int) or model is None:
+            continue
+        field = model.model_fields.get(str(part))
+        if field is None:
+            return None
+        model = _model_in(field.annotation)
+    return model
+
+
+def _model_in(annotation) -> type[BaseModel] | None:
+    """The BaseModel class inside an annotation (``X``, ``X | None``, ``list[X]``, ``Annotated``)."""
+    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
+        return annotation
+    if isinstance(annotation, types.UnionType) or typing.get_origin(annotation) is not None:
+        for arg in typing.get_args(annotation):
+            found = _model_in(arg)
+            if found is not None:
+                return found
+    return None
+
+
+def to_input_error(exc: ValidationError, source: str, root: type[BaseModel]) -> InputError:
+    """The first problem of ``exc`` (an unknown key first) as an :class:`InputError`."""
+    errors = exc.errors(include_url=False)
+    extra = [e for e in errors if e["type"] == "extra_forbidden"]
+    err = extra[0] if extra else errors[0]
+    loc = list(err["loc"])
+    names = [str(p) for p in loc]
+    ctx = err.get("ctx") or {}
+    inner = ctx.get("error")
+    if isinstance(inner, KeyProblem):
+        return InputError(source, ".".join(names + [inner.key]), inner.message)
+    key = ".".join(names)
+    kind = err["type"]
+    value = err.get("input")
+    if kind == "missing":
+        return InputError(source, key, "missing required key")
+    if kind == "extra_forbidden":
+        section = _section_model(root, loc[:-1])
+        hint = closest_key(names[-1], section.model_fields) if section is not None else ""
+        return InputError(source, key, f"unknown key (value {value!r}){hint}")
+    if kind == "finite_number":
+        return InputError(source, key, f"expected a finite number, got {value!r}")
+    msg = err["msg"]
+    msg = msg[0].lower() + msg[1:] if msg else msg
+    return InputError(source, key, f"{msg}, got {value!r}")
