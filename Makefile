@@ -1,7 +1,7 @@
 # linsense: two commands on a fresh machine
 #   make demo   creates .venv, installs, runs the main job into out/
 #   make test   creates or reuses .venv, runs every C and Python test
-# Also: make bench (benchmarks), make lint, make clean.
+# Also: make bench (benchmarks), make fuzz (libFuzzer, FUZZ_TIME s per variant), make lint, make clean.
 
 PYTHON ?= python3
 VENV   := .venv
@@ -23,7 +23,7 @@ GEN_HDR  := $(BUILD)/gen/ls_lut_ecce2010.h $(BUILD)/gen/ls_lut_ecce2010_r.h $(BU
 # variant name : extra flags
 VARIANTS := float-san double-san float-plain
 
-.PHONY: all install demo test ctest mcu example pytest lint bench tools clean
+.PHONY: all install demo test ctest mcu example pytest lint bench tools fuzz fuzztest clean
 
 all: test
 
@@ -42,7 +42,7 @@ demo: $(STAMP)
 	  n=$$(basename $$f .toml); $(VENV)/bin/linsense simulate $$f --out out/sim/$$n || exit 1; \
 	done
 
-test: lint ctest mcu example pytest
+test: lint ctest mcu example pytest fuzztest
 
 GEN_DEPS := $(STAMP) $(wildcard src/linsense/compensation/*.py src/linsense/model/*.py src/linsense/analysis/*.py)
 $(BUILD)/gen/ls_lut_ecce2010.h: $(GEN_DEPS)
@@ -97,21 +97,54 @@ example: $(STAMP)
 	$(CC) $(CSTD) -O2 -Icsrc/include -I$(EXAMPLE) examples/firmware/main.c $(CTRL_SRC) -lm -o $(EXAMPLE)/firmware_example
 	$(EXAMPLE)/firmware_example
 
+# Fuzzing ls_drive_step and the ls_drive_* setters (csrc/tests/fuzz_drive.c) with clang's libFuzzer
+# under ASan+UBSan, float and double, FUZZ_TIME seconds each. The committed corpus
+# (csrc/tests/fuzz_corpus/) is read, never written: new inputs go to build/fuzz/<variant>/corpus,
+# a crash to build/fuzz/<variant>/crash-* (make fuzz fails). `make test` runs 30 s of each when
+# clang with libFuzzer is available (make tools installs it), and says so when it is not.
+FUZZ_CC     ?= clang
+FUZZ_TIME   ?= 60
+FUZZ_CORPUS := csrc/tests/fuzz_corpus
+FUZZ_FLAGS  := -std=c99 -Wall -Wextra -Wpedantic -Werror -O1 -g -fsanitize=fuzzer,address,undefined \
+               -fno-sanitize-recover=all -fno-omit-frame-pointer
+fuzz:
+	@set -e; for v in float double; do \
+	  dir=$(BUILD)/fuzz/$$v; mkdir -p $$dir/corpus; \
+	  case $$v in double) def=-DLS_REAL_DOUBLE ;; *) def= ;; esac; \
+	  $(FUZZ_CC) $(FUZZ_FLAGS) $$def -Icsrc/include csrc/tests/fuzz_drive.c $(CTRL_SRC) -lm -o $$dir/fuzz_drive; \
+	  echo "fuzz_drive ($$v): $(FUZZ_TIME) s"; \
+	  $$dir/fuzz_drive -max_total_time=$(FUZZ_TIME) -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 \
+	    -artifact_prefix=$$dir/ $$dir/corpus $(FUZZ_CORPUS) 2> $$dir/fuzz.log || { tail -40 $$dir/fuzz.log; exit 1; }; \
+	  grep -E "^stat::number_of_executed_units|^Done" $$dir/fuzz.log | sed "s/^/[$$v] /"; \
+	done
+
+fuzztest: tools
+	@if printf 'int LLVMFuzzerTestOneInput(const char *d, unsigned long n) { (void)d; (void)n; return 0; }\n' | \
+	    $(FUZZ_CC) -x c -fsanitize=fuzzer - -o /dev/null 2>/dev/null; then \
+	  $(MAKE) --no-print-directory fuzz FUZZ_TIME=30; \
+	else \
+	  echo "fuzz: skipped ($(FUZZ_CC) with libFuzzer not available; make tools installs it as root)"; \
+	fi
+
 # Cortex-M4F cross build of the library: warning-free, float only, no libc beyond math/string
 mcu: tools
 	tools/check_mcu.sh build/arm
 
 # System tools the C checks need (Debian packages), installed when missing and possible
 tools:
-	@missing=""; \
+	@missing=""; optional=""; \
 	command -v arm-none-eabi-gcc >/dev/null || missing="$$missing gcc-arm-none-eabi libnewlib-arm-none-eabi"; \
 	command -v valgrind >/dev/null || missing="$$missing valgrind"; \
-	if [ -n "$$missing" ]; then \
+	printf 'int LLVMFuzzerTestOneInput(const char *d, unsigned long n) { (void)d; (void)n; return 0; }\n' | \
+	  $(FUZZ_CC) -x c -fsanitize=fuzzer - -o /dev/null 2>/dev/null || optional="clang libclang-rt-dev"; \
+	if [ -n "$$missing$$optional" ]; then \
 	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null; then \
-	    echo "installing:$$missing"; \
-	    (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq $$missing >/dev/null); \
-	  else \
+	    echo "installing:$$missing $$optional"; \
+	    (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq $$missing $$optional >/dev/null); \
+	  elif [ -n "$$missing" ]; then \
 	    echo "please install:$$missing" >&2; exit 1; \
+	  else \
+	    echo "note: $$optional (libFuzzer, for make fuzz) not installed" >&2; \
 	  fi; \
 	fi
 

@@ -43,7 +43,9 @@ ls_status ls_current_init(ls_current *c, const ls_current_cfg *cfg)
         return LS_ERR_NULL;
     }
     if (!finite_pos(cfg->kp) || !finite_nonneg(cfg->ki) || !finite_nonneg(cfg->l_d) ||
-        !finite_nonneg(cfg->l_q) || !finite_nonneg(cfg->psi_pm) || !finite_pos(cfg->fs)) {
+        !finite_nonneg(cfg->l_q) || !finite_nonneg(cfg->psi_pm) || !finite_pos(cfg->fs) ||
+        cfg->kp > LS_CURRENT_KP_MAX || !(cfg->ki / cfg->fs <= LS_CURRENT_KP_MAX) || cfg->l_d > LS_CURRENT_L_MAX ||
+        cfg->l_q > LS_CURRENT_L_MAX || cfg->psi_pm > LS_CURRENT_PSI_MAX) {
         return LS_ERR_PARAM;
     }
     c->cfg = *cfg;
@@ -51,6 +53,22 @@ ls_status ls_current_init(ls_current *c, const ls_current_cfg *cfg)
     c->ki_ts = cfg->ki * c->ts;
     ls_current_reset(c);
     return LS_OK;
+}
+
+void ls_current_limit_wide(LS_REAL v_max, LS_REAL *v_d, LS_REAL *v_q)
+{
+    /* scaled before squaring: a, b in [-1, 1], a^2 + b^2 in [1, 2] */
+    const LS_REAL ad = LS_FABS(*v_d), aq = LS_FABS(*v_q);
+    const LS_REAL m = ad > aq ? ad : aq;
+    LS_REAL a, b, r;
+    if (!(m > LS_R(0.0)) || !LS_ISFINITE(m)) { /* 0, or a non-finite component: nothing to scale */
+        return;
+    }
+    a = *v_d / m;
+    b = *v_q / m;
+    r = v_max / LS_SQRT(a * a + b * b);
+    *v_d = a * r;
+    *v_q = b * r;
 }
 
 void ls_current_reset(ls_current *c)

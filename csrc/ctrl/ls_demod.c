@@ -12,7 +12,7 @@ ls_status ls_demod_init(ls_demod *d, const ls_demod_cfg *cfg)
         return LS_ERR_NULL;
     }
     if ((cfg->method != LS_DEMOD_PRODUCT && cfg->method != LS_DEMOD_HETERODYNE) ||
-        !LS_ISFINITE(cfg->gain) || cfg->gain == LS_R(0.0) || !LS_ISFINITE(cfg->min_level) ||
+        !LS_ISFINITE(cfg->gain) || cfg->gain == LS_R(0.0) || !(LS_FABS(cfg->gain) <= LS_DEMOD_GAIN_MAX) || !LS_ISFINITE(cfg->min_level) ||
         cfg->min_level < LS_R(0.0) || !LS_ISFINITE(cfg->f_notch) || cfg->f_notch < LS_R(0.0) ||
         cfg->f_notch >= LS_R(0.5) * cfg->fs) {
         return LS_ERR_PARAM;

@@ -21,6 +21,7 @@ void ls_drive_default_cfg(ls_drive_cfg *c)
     c->i_max = LS_R(2.5);
     c->delay_comp = LS_R(1.5);
     c->enc_counts = 56000; /* 1 um per count */
+    c->enc_v_max = LS_R(5.0); /* twice the over-speed limit below (250 rad/s: 2.2 m/s) */
     c->inject_sensored = true; /* the HF current dithers the dead time: no hunting (docs/simulator.md) */
     c->inject.amplitude = LS_R(12.0);
     c->inject.freq = LS_R(1000.0);
@@ -115,14 +116,16 @@ ls_status ls_drive_init(ls_drive *d, const ls_drive_cfg *cfg)
 {
     ls_pos zero = {0, LS_R(0.0)};
     ls_status st = LS_OK;
-    LS_REAL v_inj_frac;
+    LS_REAL v_inj_frac, enc_jump;
     if (d == NULL || cfg == NULL) {
         return LS_ERR_NULL;
     }
     memset(d, 0, sizeof *d);
     if (!pos_finite(cfg->fs) || !pos_finite(cfg->pole_pitch) || !pos_finite(cfg->force_constant) ||
         !pos_finite(cfg->i_max) || !LS_ISFINITE(cfg->delay_comp) || cfg->delay_comp < LS_R(0.0) ||
-        cfg->enc_counts <= 0 || cfg->bpf.type != LS_BIQUAD_BANDPASS ||
+        cfg->enc_counts <= 0 || !pos_finite(cfg->enc_v_max) || cfg->fs > LS_DRIVE_FS_MAX ||
+        cfg->i_max > LS_DRIVE_I_MAX || cfg->prot.i_max > LS_DRIVE_I_MAX || cfg->prot.v_dc_max > LS_DRIVE_V_DC_MAX ||
+        cfg->bpf.type != LS_BIQUAD_BANDPASS ||
         (cfg->sep.type != LS_BIQUAD_NOTCH && cfg->sep.type != LS_BIQUAD_LOWPASS)) {
         return LS_ERR_PARAM;
     }
@@ -133,8 +136,13 @@ ls_status ls_drive_init(ls_drive *d, const ls_drive_cfg *cfg)
         cfg->pos.speed.fs != cfg->fs) {
         return LS_ERR_PARAM;
     }
+    /* the encoder's plausible count change per step (checked before its conversion) */
+    enc_jump = cfg->enc_v_max / cfg->fs * ((LS_REAL)cfg->enc_counts / cfg->pole_pitch);
+    if (!(enc_jump <= LS_DRIVE_ENC_JUMP_MAX)) {
+        return LS_ERR_PARAM;
+    }
     if (cfg->cal.table != NULL &&
-        (cfg->cal.points < 4u || !pos_finite(cfg->cal.k_int) || !LS_ISFINITE(cfg->cal.t_settle) ||
+        (cfg->cal.points < 4u || cfg->cal.period > LS_POS_PERIOD_MAX || cfg->cal.period < -LS_POS_PERIOD_MAX || !pos_finite(cfg->cal.k_int) || !LS_ISFINITE(cfg->cal.t_settle) ||
          cfg->cal.t_settle < LS_R(0.0) || !pos_finite(cfg->cal.t_hold) || !pos_finite(cfg->cal.tol) ||
          !pos_finite(cfg->cal.t_max) || !LS_ISFINITE(cfg->cal.dither_amp) || cfg->cal.dither_amp < LS_R(0.0) ||
          (cfg->cal.dither_amp > LS_R(0.0) &&
@@ -173,6 +181,13 @@ ls_status ls_drive_init(ls_drive *d, const ls_drive_cfg *cfg)
     d->inv_kx = cfg->pole_pitch / LS_TWO_PI;
     d->inv_kf = LS_R(1.0) / cfg->force_constant;
     d->delay_ts = cfg->delay_comp * d->ts;
+    d->enc_jump_max = enc_jump >= LS_R(1.0) ? (int64_t)(int32_t)enc_jump : 1; /* a one-count change is always plausible */
+    /* derived gains that a tiny or huge value could overflow (every input was finite) */
+    if (!LS_ISFINITE4(d->kx, d->inv_kx, d->inv_kf, d->delay_ts) || !(d->inv_kx > LS_R(0.0)) ||
+        !(d->inv_kf > LS_R(0.0)) || !LS_ISFINITE(cfg->i_max * cfg->force_constant)) {
+        memset(d, 0, sizeof *d);
+        return LS_ERR_PARAM;
+    }
     if (cfg->cal.dither_amp > LS_R(0.0)) {
         ls_sincos_full(LS_TWO_PI * cfg->cal.dither_freq * d->ts, &d->cal_dc, &d->cal_ds);
     }
@@ -196,6 +211,7 @@ static void mode_set(ls_drive *d, ls_mode mode)
     d->hf_on = mode == LS_MODE_SENSORLESS_LUT || mode == LS_MODE_SENSORLESS_NOLUT ||
                mode == LS_MODE_CALIBRATION || (mode == LS_MODE_SENSORED && d->cfg.inject_sensored);
     d->v_hf_max = d->hf_on ? d->cfg.inject.amplitude : LS_R(0.0);
+    d->enc_have_prev = false; /* the encoder's jump check starts again */
 }
 
 void ls_drive_reset(ls_drive *d, ls_pos p)
@@ -270,20 +286,27 @@ ls_status ls_drive_set_mode(ls_drive *d, ls_mode mode)
     return LS_OK;
 }
 
-void ls_drive_set_position(ls_drive *d, ls_pos p)
+ls_status ls_drive_set_position(ls_drive *d, ls_pos p)
 {
     if (d == NULL || !d->initialised) {
-        return;
+        return LS_ERR_NULL;
+    }
+    if (!ls_pos_check(&p)) {
+        return LS_ERR_PARAM;
     }
     ls_observer_reset(&d->obs, p);
     ls_traj_reset(&d->traj, p);
     ls_posctrl_reset(&d->pos);
+    return LS_OK;
 }
 
-void ls_drive_set_load(ls_drive *d, LS_REAL f_load)
+ls_status ls_drive_set_load(ls_drive *d, LS_REAL f_load)
 {
-    if (d == NULL || !d->initialised || !LS_ISFINITE(f_load)) {
-        return;
+    if (d == NULL || !d->initialised) {
+        return LS_ERR_NULL;
+    }
+    if (!LS_ISFINITE(f_load)) {
+        return LS_ERR_PARAM;
     }
     if (d->cfg.pos.type == LS_POSCTRL_P) {
         d->pos.speed.integ = ls_clamp(f_load, d->cfg.pos.speed.out_min, d->cfg.pos.speed.out_max);
@@ -292,12 +315,19 @@ void ls_drive_set_load(ls_drive *d, LS_REAL f_load)
         d->obs.f_load = ls_clamp(f_load, -d->cfg.obs.force_max, d->cfg.obs.force_max);
     }
     d->f_ref = ls_clamp(f_load, -d->cfg.pos.force_max, d->cfg.pos.force_max);
+    return LS_OK;
 }
 
-static void command(ls_drive *d, ls_pos target, bool move)
+static ls_status command(ls_drive *d, ls_pos target, bool move)
 {
-    if (d == NULL || !d->initialised || d->mode == LS_MODE_CALIBRATION) {
-        return;
+    if (d == NULL || !d->initialised) {
+        return LS_ERR_NULL;
+    }
+    if (!ls_pos_check(&target)) { /* refused: never a saturated or wrapped target */
+        return LS_ERR_PARAM;
+    }
+    if (d->mode == LS_MODE_CALIBRATION) {
+        return LS_OK;
     }
     if (d->align) { /* keep it until the reference is aligned at the next step */
         d->pending = true;
@@ -308,16 +338,17 @@ static void command(ls_drive *d, ls_pos target, bool move)
     } else {
         ls_traj_jump(&d->traj, target);
     }
+    return LS_OK;
 }
 
-void ls_drive_move_to(ls_drive *d, ls_pos target)
+ls_status ls_drive_move_to(ls_drive *d, ls_pos target)
 {
-    command(d, target, true);
+    return command(d, target, true);
 }
 
-void ls_drive_step_to(ls_drive *d, ls_pos target)
+ls_status ls_drive_step_to(ls_drive *d, ls_pos target)
 {
-    command(d, target, false);
+    return command(d, target, false);
 }
 
 /* --------------------------------------------------------------------------- step */
@@ -339,6 +370,18 @@ static void disable_report(ls_drive *d, ls_cmd *cmd, uint32_t fault)
     cmd->pos_est = d->obs.pos;
     cmd->pos_fb = d->obs.pos;
     cmd->pos_ref = d->traj.target;
+}
+
+/* The encoder's sample plausible: a count change from the last sample of at most enc_jump_max
+ * (int64_t: no overflow whatever the counts), and its position pe within +-LS_POS_PERIOD_MAX
+ * periods (beyond only with enc_counts < 128). */
+static bool enc_plausible(ls_drive *d, int32_t count, ls_pos pe)
+{
+    const int64_t jump = (int64_t)count - (int64_t)d->enc_prev;
+    const bool ok = !d->enc_have_prev || (jump <= d->enc_jump_max && jump >= -d->enc_jump_max);
+    d->enc_prev = count;
+    d->enc_have_prev = true;
+    return ok && pe.period <= LS_POS_PERIOD_MAX && pe.period >= -LS_POS_PERIOD_MAX;
 }
 
 static ls_pos enc_pos(int32_t count, int32_t per_period)
@@ -463,6 +506,11 @@ void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
     /* encoder tracking loop */
     if (use_enc) {
         ls_pos pe = enc_pos(meas->enc_count, cfg->enc_counts);
+        if (!enc_plausible(d, meas->enc_count, pe)) {
+            ls_protect_trip(&d->prot, LS_FAULT_ENCODER);
+            disable_report(d, cmd, d->prot.fault);
+            return;
+        }
         if (d->align) {
             ls_observer_reset(&d->enc, pe);
             ls_observer_reset(&d->obs, pe);

@@ -11,7 +11,8 @@ ls_status ls_biquad_init(ls_biquad *f, const ls_biquad_cfg *cfg)
         return LS_ERR_NULL;
     }
     if (!LS_ISFINITE(cfg->f0) || !LS_ISFINITE(cfg->q) || !LS_ISFINITE(cfg->fs) || cfg->fs <= LS_R(0.0) ||
-        cfg->f0 <= LS_R(0.0) || cfg->f0 >= LS_R(0.5) * cfg->fs || cfg->q <= LS_R(0.0)) {
+        cfg->f0 <= LS_R(0.0) || cfg->f0 >= LS_R(0.5) * cfg->fs || !(cfg->q >= LS_BIQUAD_Q_MIN) ||
+        !(cfg->q <= LS_BIQUAD_Q_MAX)) {
         return LS_ERR_PARAM;
     }
     w0 = LS_TWO_PI * cfg->f0 / cfg->fs;
@@ -39,6 +40,9 @@ ls_status ls_biquad_init(ls_biquad *f, const ls_biquad_cfg *cfg)
     }
     f->a1 = LS_R(-2.0) * cw / a0;
     f->a2 = (LS_R(1.0) - alpha) / a0;
+    if (!LS_ISFINITE4(f->b0, f->b1, f->b2, f->a1) || !LS_ISFINITE(f->a2)) { /* (f0 / fs too small) */
+        return LS_ERR_PARAM;
+    }
     ls_biquad_reset(f);
     return LS_OK;
 }

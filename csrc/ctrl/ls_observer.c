@@ -50,13 +50,22 @@ ls_status ls_observer_init(ls_observer *o, const ls_observer_cfg *cfg)
         o->acc_ts = LS_R(0.0);
         o->k3_ts = LS_R(0.0);
     }
+    /* per-step gains (see the header): beyond them the discrete observer is unstable; and the
+     * derived values a tiny or huge input could overflow */
+    if (!(o->k1_ts <= LS_OBS_K1_TS_MAX) || !(o->k2_ts * o->ts <= LS_OBS_K2_TS2_MAX) ||
+        (cfg->type == LS_OBS_MECH && !(o->k3_ts * (o->kx / cfg->mass) * o->ts * o->ts <= LS_OBS_K3_TS3_MAX)) ||
+        !(cfg->omega_max * o->ts <= LS_PI) ||
+        !LS_ISFINITE4(o->kx, o->inv_kx, o->acc_ts, o->k3_ts) || !(o->inv_kx > LS_R(0.0))) {
+        return LS_ERR_PARAM;
+    }
     ls_observer_reset(o, zero);
     return LS_OK;
 }
 
 void ls_observer_reset(ls_observer *o, ls_pos p)
 {
-    o->pos = ls_pos_norm(p);
+    (void)ls_pos_norm_full(&p); /* any p: normalised, within the range */
+    o->pos = p;
     o->omega = LS_R(0.0);
     o->f_load = LS_R(0.0);
 }

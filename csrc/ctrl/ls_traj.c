@@ -23,7 +23,8 @@ ls_status ls_traj_init(ls_traj *t, const ls_traj_cfg *cfg)
 
 void ls_traj_reset(ls_traj *t, ls_pos p)
 {
-    t->start = ls_pos_norm(p);
+    (void)ls_pos_norm_full(&p); /* any p: normalised, within the range */
+    t->start = p;
     t->target = t->start;
     t->dist = LS_R(0.0);
     t->sign = LS_R(1.0);
@@ -47,7 +48,7 @@ void ls_traj_move(ls_traj *t, ls_pos target)
     /* start from where the reference is now (a move may interrupt another one) */
     t->k = t->k > 0u ? t->k - 1u : 0u;
     ls_traj_step(t, &x, &dummy_v, &dummy_a);
-    target = ls_pos_norm(target);
+    (void)ls_pos_norm_full(&target);
     d = ls_pos_diff(target, x) / t->kx;
     t->start = x;
     t->target = target;

@@ -533,7 +533,14 @@ SIM_HOT void measure(const ls_sim_cfg *c, const plant_coef *q, const double i_ab
     m->enc_count = 0;
     if (encoder) { /* only modes that read it pay for the conversion */
         u = floor(x / c->pole_pitch * (double)c->enc_counts);
-        m->enc_count = (int32_t)(int64_t)u;
+        /* a 32-bit counter: beyond its range (or a diverged plant's NaN) the count saturates, range-
+         * checked before the conversion; the drive's plausibility check sees the jump */
+        if (!(u >= -2147483648.0)) {
+            u = -2147483648.0;
+        } else if (u > 2147483647.0) {
+            u = 2147483647.0;
+        }
+        m->enc_count = (int32_t)u;
     }
 }
 
@@ -587,6 +594,13 @@ static ls_pos pos_of_m(double x, double tau)
 {
     ls_pos p;
     double u = x / tau, f = floor(u);
+    if (!(fabs(f) <= (double)LS_POS_PERIOD_MAX)) { /* beyond the drive's range (or not finite): a
+                                                     * target its setters refuse (range-checked
+                                                     * before the conversion) */
+        p.period = LS_POS_PERIOD_MAX;
+        p.theta = (LS_REAL)NAN;
+        return p;
+    }
     p.period = (int32_t)f;
     p.theta = (LS_REAL)((u - f) * 2.0 * SIM_PI);
     return ls_pos_norm(p);

@@ -266,6 +266,7 @@ typedef struct {
     LS_REAL i_max;
     LS_REAL delay_comp;
     int32_t enc_counts;
+    LS_REAL enc_v_max;
     bool inject_sensored;
     bool hf_dtres;
     ls_inject_cfg inject;
@@ -328,10 +329,10 @@ void ls_drive_default_cfg(ls_drive_cfg *cfg);
 ls_status ls_drive_init(ls_drive *d, const ls_drive_cfg *cfg);
 void ls_drive_reset(ls_drive *d, ls_pos p);
 ls_status ls_drive_set_mode(ls_drive *d, ls_mode mode);
-void ls_drive_set_position(ls_drive *d, ls_pos p);
-void ls_drive_set_load(ls_drive *d, LS_REAL f_load);
-void ls_drive_move_to(ls_drive *d, ls_pos target);
-void ls_drive_step_to(ls_drive *d, ls_pos target);
+ls_status ls_drive_set_position(ls_drive *d, ls_pos p);
+ls_status ls_drive_set_load(ls_drive *d, LS_REAL f_load);
+ls_status ls_drive_move_to(ls_drive *d, ls_pos target);
+ls_status ls_drive_step_to(ls_drive *d, ls_pos target);
 void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd);
 
 /* simulator (csrc/sim, linsense/ls_sim.h) */

@@ -70,12 +70,20 @@ static inline LS_REAL ls_pi_step(ls_pi *pi, LS_REAL err, LS_REAL ff)
 }
 
 /* ------------------------------------------------------------------------------- current */
+/* Bounds ls_current_init enforces: far beyond any drive (a 1 H motor at 100 kHz of bandwidth
+ * needs kp = 6e5 V/A), and with them and the drive's bounds on currents (1e5 A), speed
+ * (omega_max Ts <= pi at fs <= 1 MHz) and bus (1e5 V) the voltage vector stays below 1e18 V, so
+ * its square cannot overflow a float (the limit is overflow-proof anyway, see below). */
+#define LS_CURRENT_KP_MAX LS_R(1.0e6)  /* V/A, largest kp, and largest ki Ts */
+#define LS_CURRENT_L_MAX LS_R(100.0)   /* H, largest l_d, l_q */
+#define LS_CURRENT_PSI_MAX LS_R(100.0) /* Wb, largest psi_pm */
+
 typedef struct {
-    LS_REAL kp;       /* V/A, proportional gain (both axes), > 0 */
-    LS_REAL ki;       /* V/(A s), integral gain (both axes), >= 0 */
-    LS_REAL l_d;      /* H, d-axis inductance for decoupling, >= 0 */
-    LS_REAL l_q;      /* H, q-axis inductance for decoupling, >= 0 */
-    LS_REAL psi_pm;   /* Wb, PM flux linkage for back-EMF feed-forward, >= 0 */
+    LS_REAL kp;       /* V/A, proportional gain (both axes), > 0, <= LS_CURRENT_KP_MAX */
+    LS_REAL ki;       /* V/(A s), integral gain (both axes), >= 0, ki Ts <= LS_CURRENT_KP_MAX */
+    LS_REAL l_d;      /* H, d-axis inductance for decoupling, [0, LS_CURRENT_L_MAX] */
+    LS_REAL l_q;      /* H, q-axis inductance for decoupling, [0, LS_CURRENT_L_MAX] */
+    LS_REAL psi_pm;   /* Wb, PM flux linkage for back-EMF feed-forward, [0, LS_CURRENT_PSI_MAX] */
     bool decouple;    /* add the decoupling and back-EMF terms */
     LS_REAL fs;       /* Hz, sampling rate, > 0 */
 } ls_current_cfg;
@@ -91,6 +99,9 @@ typedef struct {
 
 ls_status ls_current_init(ls_current *c, const ls_current_cfg *cfg);
 void ls_current_reset(ls_current *c);
+/* (v_d, v_q) scaled onto the circle of radius v_max > 0 without squaring them (no overflow for
+ * any finite components); out of line: the current step's slow path when |v|^2 overflowed. */
+void ls_current_limit_wide(LS_REAL v_max, LS_REAL *v_d, LS_REAL *v_q);
 /* ls_current_step for finite currents, references, omega and v_max. */
 static inline void ls_current_step_finite(ls_current *c, LS_REAL i_d, LS_REAL i_q, LS_REAL i_d_ref,
                                           LS_REAL i_q_ref, LS_REAL omega, LS_REAL v_max, LS_REAL *v_d,
@@ -128,9 +139,13 @@ static inline void ls_current_step_finite(ls_current *c, LS_REAL i_d, LS_REAL i_
         c->integ_q = ls_clamp(c->integ_q + iq_step, -v_max, v_max);
     }
     if (c->saturated) {
-        LS_REAL scale = v_max / LS_SQRT(mag2);
-        ud *= scale;
-        uq *= scale;
+        const LS_REAL scale = v_max / LS_SQRT(mag2);
+        if (scale > LS_R(0.0)) {
+            ud *= scale;
+            uq *= scale;
+        } else { /* ud^2 + uq^2 overflowed to Inf (scale 0): scale before squaring */
+            ls_current_limit_wide(v_max, &ud, &uq);
+        }
     }
     *v_d = ud;
     *v_q = uq;

@@ -22,6 +22,10 @@
 #include "linsense/ls_math.h"
 #include "linsense/ls_types.h"
 
+/* -, largest |gain| ls_demod_init accepts: L_q/(L_q - L_d) = 1e4 is a saliency of 0.01 %, far too
+ * little to estimate a position from */
+#define LS_DEMOD_GAIN_MAX LS_R(1.0e4)
+
 typedef enum {
     LS_DEMOD_PRODUCT = 0,
     LS_DEMOD_HETERODYNE = 1
@@ -31,7 +35,8 @@ typedef struct {
     ls_demod_method method;   /* error estimator */
     LS_REAL f_lpf;            /* Hz, corner of the 2nd-order low-pass filters, < fs/2 */
     LS_REAL fs;               /* Hz, sampling rate */
-    LS_REAL gain;             /* -, g = L_q/(L_q - L_d) (nominal); non-zero, negative if L_d > L_q */
+    LS_REAL gain;             /* -, g = L_q/(L_q - L_d) (nominal); non-zero, negative if L_d > L_q,
+                                 |g| <= LS_DEMOD_GAIN_MAX */
     const ls_lut *comp;       /* compensation table Psi_LUT(theta_est), rad; NULL: none */
     const ls_lut *gain_table; /* g(theta_est), -; replaces `gain` when not NULL and enabled */
     LS_REAL min_level;        /* A^2, HF mean-square current below which err is held at 0, >= 0 */

@@ -42,7 +42,14 @@
 #include "linsense/ls_traj.h"
 #include "linsense/ls_types.h"
 
-#define LS_FAULT_ENCODER 0x80u /* encoder needed by the mode but not valid */
+#define LS_FAULT_ENCODER 0x80u /* encoder needed by the mode but not valid, a count jump beyond
+                                  enc_v_max, or a count beyond +-LS_POS_PERIOD_MAX periods */
+
+/* Bounds ls_drive_init enforces beyond each module's own (docs/firmware.md) */
+#define LS_DRIVE_FS_MAX LS_R(1.0e6)    /* Hz, largest sampling rate */
+#define LS_DRIVE_I_MAX LS_R(1.0e5)     /* A, largest current limit (i_max, prot.i_max) */
+#define LS_DRIVE_V_DC_MAX LS_R(1.0e5)  /* V, largest bus-voltage limit (prot.v_dc_max) */
+#define LS_DRIVE_ENC_JUMP_MAX LS_R(1.0e9) /* -, largest enc_v_max in counts per step */
 
 typedef enum {
     LS_MODE_OFF = 0,
@@ -78,6 +85,9 @@ typedef struct {
     LS_REAL delay_comp;     /* -, angle advance of the voltage in sampling periods (1.5 for a
                                one-period computation delay plus the half-period average), >= 0 */
     int32_t enc_counts;     /* -, encoder counts per electrical period, > 0 */
+    LS_REAL enc_v_max;      /* m/s, encoder plausibility: a count change between two samples of
+                               more than enc_v_max / fs of travel (and more than one count) trips
+                               LS_FAULT_ENCODER; > 0, at most LS_DRIVE_ENC_JUMP_MAX counts per step */
     bool inject_sensored;   /* keep injecting in LS_MODE_SENSORED */
     bool hf_dtres;          /* take the current the dead-time residual drove out of the HF path */
     ls_inject_cfg inject;   /* HF injection */
@@ -171,6 +181,9 @@ typedef struct {
     LS_REAL cal_sum_psi; /* rad, sum of psi_cal over the window */
     LS_REAL cal_dc, cal_ds; /* -, cos and sin of the dither's phase step */
     ls_phasor cal_osc;      /* -, cos and sin of the dither's phase */
+    bool enc_have_prev;  /* enc_prev holds the last sample's count */
+    int32_t enc_prev;    /* -, encoder count of the last sample (encoder modes) */
+    int64_t enc_jump_max; /* -, largest plausible count change per step (>= 1) */
 } ls_drive;
 
 /* Fill cfg with the defaults documented in docs/firmware.md: 16 kHz, 12 V / 1 kHz injection and
@@ -179,25 +192,32 @@ void ls_drive_default_cfg(ls_drive_cfg *cfg);
 /* Validate every module's configuration; LS_ERR_PARAM names no field, but each module's
  * ls_<module>_init can be called alone to find it. */
 ls_status ls_drive_init(ls_drive *d, const ls_drive_cfg *cfg);
-/* Clear every state and fault; mode OFF; position estimates at p. */
+/* Clear every state and fault; mode OFF; position estimates at p (normalised; a non-finite theta
+ * counts as 0, a position beyond +-LS_POS_PERIOD_MAX periods saturates at that end). */
 void ls_drive_reset(ls_drive *d, ls_pos p);
 /* Change mode (LS_ERR_PARAM if the mode needs a table or encoder setting it lacks). */
 ls_status ls_drive_set_mode(ls_drive *d, ls_mode mode);
+/* The setters below return LS_OK, LS_ERR_NULL (no drive or not initialised) or LS_ERR_PARAM and
+ * then change nothing: a position whose theta is not finite or which lies beyond
+ * +-LS_POS_PERIOD_MAX periods once normalised (ls_pos_check) is refused, never saturated, so that
+ * the drive never moves towards a target it was not given. */
 /* Tell the HF observer where the mover is (sensorless start from a known position). */
-void ls_drive_set_position(ls_drive *d, ls_pos p);
+ls_status ls_drive_set_position(ls_drive *d, ls_pos p);
 /* Start in equilibrium with a known load force f_load (N, opposing positive motion when > 0,
  * e.g. gravity on an incline): the speed controller's integrator (position type P) and the HF
  * mechanical observer's load estimate (sensorless modes: in sensored and calibration modes the
  * alignment to the encoder resets that observer) are preset to it, so that the drive produces the
  * force from the first step instead of sagging until its integrators catch up. Call after
- * ls_drive_set_position (which clears the controllers). A non-finite f_load is ignored; it is
- * limited to the force limits of the speed controller and of the observer. */
-void ls_drive_set_load(ls_drive *d, LS_REAL f_load);
+ * ls_drive_set_position (which clears the controllers). A non-finite f_load is refused
+ * (LS_ERR_PARAM); a finite one is limited to the force limits of the speed controller and of the
+ * observer. */
+ls_status ls_drive_set_load(ls_drive *d, LS_REAL f_load);
 /* Minimum-time move of the reference to target. Commanded right after ls_drive_set_mode, it
- * starts once the mode has aligned its reference to the measured or estimated position. */
-void ls_drive_move_to(ls_drive *d, ls_pos target);
-/* Step the reference to target. */
-void ls_drive_step_to(ls_drive *d, ls_pos target);
+ * starts once the mode has aligned its reference to the measured or estimated position. Ignored
+ * (LS_OK, nothing changes) in calibration mode, which moves by itself. */
+ls_status ls_drive_move_to(ls_drive *d, ls_pos target);
+/* Step the reference to target (as ls_drive_move_to, without the profile). */
+ls_status ls_drive_step_to(ls_drive *d, ls_pos target);
 /* One PWM period. */
 void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd);
 

@@ -16,10 +16,16 @@ typedef enum {
     LS_BIQUAD_NOTCH = 2
 } ls_biquad_type;
 
+/* Bounds on q (ls_biquad_init): a low-pass resonates by q at f0, and its poles approach the unit
+ * circle as q grows; 1000 is far beyond any filter here (0.7 ... 2) */
+#define LS_BIQUAD_Q_MIN LS_R(1.0e-3) /* - */
+#define LS_BIQUAD_Q_MAX LS_R(1.0e3)  /* - */
+
 typedef struct {
     ls_biquad_type type; /* filter type */
     LS_REAL f0;          /* Hz, corner (low-pass) or centre (band-pass, notch) frequency, < fs/2 */
-    LS_REAL q;           /* -, quality factor (0.7071 gives a Butterworth low-pass), > 0 */
+    LS_REAL q;           /* -, quality factor (0.7071 gives a Butterworth low-pass),
+                            [LS_BIQUAD_Q_MIN, LS_BIQUAD_Q_MAX] */
     LS_REAL fs;          /* Hz, sampling rate, > 0 */
 } ls_biquad_cfg;
 

@@ -29,7 +29,11 @@ ls_status ls_lut_init(ls_lut *lut, const ls_lut_cfg *cfg);
 /* A LUT holds no dynamic state; reset is provided for uniformity and does nothing. */
 void ls_lut_reset(ls_lut *lut);
 
-/* Interpolated value at electrical angle theta (rad, any value). A non-finite theta gives 0.
+/* ls_lut_step for an angle outside [0, 2 pi): out of line (the per-step path never takes it). */
+LS_REAL ls_lut_step_wide(const ls_lut *lut, LS_REAL theta);
+
+/* Interpolated value at electrical angle theta (rad, any value). A non-finite theta gives 0; one
+ * so large that it has no fraction of a period left (|theta| >= 2^24 2 pi in float) gives table[0].
  * Inline (called every PWM period); an angle in [0, 2 pi), as ls_pos keeps it, needs no wrap. */
 static inline LS_REAL ls_lut_step(const ls_lut *lut, LS_REAL theta)
 {
@@ -38,15 +42,10 @@ static inline LS_REAL ls_lut_step(const ls_lut *lut, LS_REAL theta)
     LS_REAL t0;
     LS_REAL t1;
     uint32_t k;
-    if (theta >= LS_R(0.0) && theta < LS_TWO_PI) {
-        u = theta * lut->points_per_rad; /* in [0, n] */
-    } else if (!LS_ISFINITE(theta)) {
-        return LS_R(0.0);
-    } else {
-        const LS_REAL n = (LS_REAL)lut->len;
-        u = theta * lut->points_per_rad;
-        u -= n * LS_FLOOR(u / n); /* wrap into [0, n] */
+    if (!(theta >= LS_R(0.0) && theta < LS_TWO_PI)) { /* (true for NaN, Inf) */
+        return ls_lut_step_wide(lut, theta);
     }
+    u = theta * lut->points_per_rad; /* in [0, n]: the conversion is in range */
     k = (uint32_t)u;
     f = u - (LS_REAL)k;
     if (k + 1u < lut->len) {

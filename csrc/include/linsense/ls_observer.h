@@ -22,15 +22,25 @@ typedef enum {
     LS_OBS_MECH = 1
 } ls_observer_type;
 
+/* Per-step gain bounds ls_observer_init enforces (Ts = 1/fs). The observer is a discrete loop: a
+ * step that corrects more than the whole error (k1 Ts > 1) overshoots, and with k2 Ts^2 or
+ * k3 Ts^3 beyond 1 its poles leave the unit circle; critically damped gains
+ * (ls_observer_gains) meet the bounds up to f_bw = fs / (6 pi) (PLL: fs / (4 pi)). */
+#define LS_OBS_K1_TS_MAX LS_R(1.0)  /* -, k1 Ts */
+#define LS_OBS_K2_TS2_MAX LS_R(1.0) /* -, k2 Ts^2 */
+#define LS_OBS_K3_TS3_MAX LS_R(1.0) /* -, k3 Ts^3 */
+
 typedef struct {
     ls_observer_type type;  /* observer structure */
     LS_REAL fs;             /* Hz, sampling rate, > 0 */
-    LS_REAL k1;             /* 1/s, error to speed (proportional), > 0 */
-    LS_REAL k2;             /* 1/s^2, error to acceleration (integral), > 0 */
-    LS_REAL k3;             /* 1/s^3, error to load-force (MECH only), > 0 for MECH */
-    LS_REAL pole_pitch;     /* m, one electrical period tau, > 0 */
-    LS_REAL mass;           /* kg, moving mass (MECH), > 0 */
-    LS_REAL omega_max;      /* rad/s, electrical speed clamp of the estimate, > 0 */
+    LS_REAL k1;             /* 1/s, error to speed (proportional), > 0, k1 Ts <= LS_OBS_K1_TS_MAX */
+    LS_REAL k2;             /* 1/s^2, error to acceleration (integral), > 0, k2 Ts^2 <= LS_OBS_K2_TS2_MAX */
+    LS_REAL k3;             /* 1/s^3, error to load-force (MECH only), > 0 for MECH,
+                               k3 Ts^3 <= LS_OBS_K3_TS3_MAX */
+    LS_REAL pole_pitch;     /* m, one electrical period tau, > 0 (2 pi / tau and tau / (2 pi) finite) */
+    LS_REAL mass;           /* kg, moving mass (MECH), > 0 (2 pi Ts / (tau mass) finite) */
+    LS_REAL omega_max;      /* rad/s, electrical speed clamp of the estimate, > 0, omega_max Ts <= pi
+                               (at most half a period per step: beyond, the angle aliases) */
     LS_REAL force_max;      /* N, clamp of the load-force estimate (MECH), > 0 */
 } ls_observer_cfg;
 
@@ -51,7 +61,8 @@ typedef struct {
 /* Fill k1, k2, k3 for critically damped poles at -2 pi f_bw (f_bw in Hz). */
 void ls_observer_gains(ls_observer_cfg *cfg, LS_REAL f_bw);
 ls_status ls_observer_init(ls_observer *o, const ls_observer_cfg *cfg);
-/* Zero speed and load force; position set to p. */
+/* Zero speed and load force; position set to p (normalised by ls_pos_norm_full: a non-finite
+ * theta counts as 0, a position beyond +-LS_POS_PERIOD_MAX periods saturates at that end). */
 void ls_observer_reset(ls_observer *o, ls_pos p);
 /* ls_observer_step for finite eps and f_motor (the drive's, by construction). */
 static inline void ls_observer_step_finite(ls_observer *o, LS_REAL eps, LS_REAL f_motor)

@@ -1,0 +1,58 @@
+/* Long-travel position: the general normalisation (see linsense/ls_pos.h). */
+#include <math.h>
+
+#include "linsense/ls_pos.h"
+
+bool ls_pos_norm_full(ls_pos *p)
+{
+    /* |k| beyond this cannot come back into the range from a period within it */
+    const LS_REAL k_lim = LS_R(2.0) * (LS_REAL)LS_POS_PERIOD_MAX + LS_R(4.0);
+    LS_REAL th = p->theta, k;
+    int32_t n = p->period;
+    int round;
+    if (!LS_ISFINITE(th)) {
+        th = LS_R(0.0);
+    }
+    if (n > LS_POS_PERIOD_MAX || n < -LS_POS_PERIOD_MAX) {
+        p->period = n > 0 ? LS_POS_PERIOD_MAX : -LS_POS_PERIOD_MAX;
+        p->theta = LS_R(0.0);
+        return true;
+    }
+    /* two rounds: a large theta leaves a remainder of a few periods after the first (its
+     * rounding), which the second takes exactly */
+    for (round = 0; round < 2 && !(th >= LS_R(0.0) && th < LS_TWO_PI); ++round) {
+        k = LS_FLOOR(th / LS_TWO_PI);
+        if (!(LS_FABS(k) <= k_lim)) { /* (th / 2 pi is finite: k is too) */
+            p->period = k > LS_R(0.0) ? LS_POS_PERIOD_MAX : -LS_POS_PERIOD_MAX;
+            p->theta = LS_R(0.0);
+            return true;
+        }
+        n += (int32_t)k; /* |n| <= 3 2^24 + 8 */
+        th -= k * LS_TWO_PI;
+    }
+    if (th >= LS_TWO_PI) { /* rounding */
+        th -= LS_TWO_PI;
+        n += 1;
+    } else if (th < LS_R(0.0)) {
+        th += LS_TWO_PI;
+        n -= 1;
+    }
+    if (!(th >= LS_R(0.0) && th < LS_TWO_PI)) { /* (not reached; an angle in range whatever) */
+        th = LS_R(0.0);
+    }
+    if (n > LS_POS_PERIOD_MAX || n < -LS_POS_PERIOD_MAX) {
+        p->period = n > 0 ? LS_POS_PERIOD_MAX : -LS_POS_PERIOD_MAX;
+        p->theta = LS_R(0.0);
+        return true;
+    }
+    p->period = n;
+    p->theta = th;
+    return false;
+}
+
+
+ls_pos ls_pos_norm_wide(ls_pos p)
+{
+    (void)ls_pos_norm_full(&p);
+    return p;
+}
