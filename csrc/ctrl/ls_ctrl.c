@@ -61,11 +61,16 @@ void ls_current_limit_wide(LS_REAL v_max, LS_REAL *v_d, LS_REAL *v_q)
     const LS_REAL ad = LS_FABS(*v_d), aq = LS_FABS(*v_q);
     const LS_REAL m = ad > aq ? ad : aq;
     LS_REAL a, b, r;
-    if (!(m > LS_R(0.0)) || !LS_ISFINITE(m)) { /* 0, or a non-finite component: nothing to scale */
+    if (!(m > LS_R(0.0))) { /* 0, or NaN: nothing to scale */
         return;
     }
-    a = *v_d / m;
-    b = *v_q / m;
+    if (LS_ISFINITE(m)) {
+        a = *v_d / m;
+        b = *v_q / m;
+    } else { /* a component overflowed to +-Inf: the direction of the infinite ones */
+        a = LS_ISFINITE(*v_d) ? LS_R(0.0) : (*v_d > LS_R(0.0) ? LS_R(1.0) : LS_R(-1.0));
+        b = LS_ISFINITE(*v_q) ? LS_R(0.0) : (*v_q > LS_R(0.0) ? LS_R(1.0) : LS_R(-1.0));
+    }
     r = v_max / LS_SQRT(a * a + b * b);
     *v_d = a * r;
     *v_q = b * r;

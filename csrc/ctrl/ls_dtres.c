@@ -24,6 +24,10 @@ ls_status ls_dtres_init(ls_dtres *r, const ls_dtres_cfg *cfg)
     axis(cfg->r_s, cfg->l_d, ts, &r->a_d, &r->b_d);
     axis(cfg->r_s, cfg->l_q, ts, &r->a_q, &r->b_q);
     r->k_rip = cfg->ripple ? LS_R(2.0) * ts / (cfg->l_d + cfg->l_q) : LS_R(0.0);
+    /* an inductance so small against R Ts that the response overflows: refused */
+    if (!LS_ISFINITE4(r->a_d, r->b_d, r->a_q, r->b_q) || !LS_ISFINITE(r->k_rip)) {
+        return LS_ERR_PARAM;
+    }
     ls_dtres_reset(r);
     return LS_OK;
 }

@@ -55,7 +55,8 @@ ls_status ls_observer_init(ls_observer *o, const ls_observer_cfg *cfg)
     if (!(o->k1_ts <= LS_OBS_K1_TS_MAX) || !(o->k2_ts * o->ts <= LS_OBS_K2_TS2_MAX) ||
         (cfg->type == LS_OBS_MECH && !(o->k3_ts * (o->kx / cfg->mass) * o->ts * o->ts <= LS_OBS_K3_TS3_MAX)) ||
         !(cfg->omega_max * o->ts <= LS_PI) ||
-        !LS_ISFINITE4(o->kx, o->inv_kx, o->acc_ts, o->k3_ts) || !(o->inv_kx > LS_R(0.0))) {
+        !LS_ISFINITE4(o->kx, o->inv_kx, o->acc_ts, o->k3_ts) || !(o->inv_kx > LS_R(0.0)) ||
+        (cfg->type == LS_OBS_MECH && !(cfg->force_max * o->acc_ts * o->ts <= LS_PI))) {
         return LS_ERR_PARAM;
     }
     ls_observer_reset(o, zero);

@@ -15,6 +15,7 @@
  * including an out-of-range float-to-int conversion.
  */
 #include <float.h>
+#include <stdio.h>
 #include <stddef.h>
 #include <stdint.h>
 #include <stdlib.h>
@@ -196,10 +197,8 @@ static void overrides(reader *r, ls_drive_cfg *c)
     }
 }
 
-static void fail(void)
-{
-    abort();
-}
+/* a broken property: say which, then abort (libFuzzer saves the input) */
+#define fail() (fprintf(stderr, "fuzz_drive: property violated at line %d\n", __LINE__), abort())
 
 static void check_pos(ls_pos p)
 {

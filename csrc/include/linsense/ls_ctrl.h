@@ -99,8 +99,9 @@ typedef struct {
 
 ls_status ls_current_init(ls_current *c, const ls_current_cfg *cfg);
 void ls_current_reset(ls_current *c);
-/* (v_d, v_q) scaled onto the circle of radius v_max > 0 without squaring them (no overflow for
- * any finite components); out of line: the current step's slow path when |v|^2 overflowed. */
+/* (v_d, v_q) scaled onto the circle of radius v_max > 0 without squaring them (no overflow; an
+ * infinite component gives its direction, NaN stays NaN); out of line: the current step's slow
+ * path when |v|^2 overflowed. */
 void ls_current_limit_wide(LS_REAL v_max, LS_REAL *v_d, LS_REAL *v_q);
 /* ls_current_step for finite currents, references, omega and v_max. */
 static inline void ls_current_step_finite(ls_current *c, LS_REAL i_d, LS_REAL i_q, LS_REAL i_d_ref,

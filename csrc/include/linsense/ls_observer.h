@@ -38,7 +38,8 @@ typedef struct {
     LS_REAL k3;             /* 1/s^3, error to load-force (MECH only), > 0 for MECH,
                                k3 Ts^3 <= LS_OBS_K3_TS3_MAX */
     LS_REAL pole_pitch;     /* m, one electrical period tau, > 0 (2 pi / tau and tau / (2 pi) finite) */
-    LS_REAL mass;           /* kg, moving mass (MECH), > 0 (2 pi Ts / (tau mass) finite) */
+    LS_REAL mass;           /* kg, moving mass (MECH), > 0; the largest load force moves the estimate
+                               by at most half a period per step: force_max (2 pi / tau) Ts^2 / mass <= pi */
     LS_REAL omega_max;      /* rad/s, electrical speed clamp of the estimate, > 0, omega_max Ts <= pi
                                (at most half a period per step: beyond, the angle aliases) */
     LS_REAL force_max;      /* N, clamp of the load-force estimate (MECH), > 0 */
