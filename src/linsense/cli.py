@@ -386,6 +386,41 @@ def tune(motor_spec: str, scenario_path: str | None, v_dc, f_pwm, dead_time, i_m
         click.echo(f"linsense: warning: {w}", err=True)
 
 
+@cli.command("sweep")
+@click.argument("sweep_file", type=click.Path(dir_okay=False))
+@click.option("--out", required=True, type=click.Path(file_okay=False),
+              help="output folder (the same folder again resumes a killed sweep)")
+@click.option("--workers", type=click.IntRange(1, 1024), default=None,
+              help="workers of the local cluster (default: one per core)")
+@click.option("--scheduler", default=None, help="address of a running dask scheduler (tcp://host:8786)")
+@click.option("--processes", is_flag=True, help="local workers as processes instead of threads")
+@click.option("--no-progress", is_flag=True, help="no progress bar")
+def sweep_cmd(sweep_file: str, out: str, workers: int | None, scheduler: str | None, processes: bool,
+              no_progress: bool) -> None:
+    """Run a sweep: a base scenario with keys varied, on dask.distributed (docs/sweeps.md)."""
+    from linsense.io import write_atomic, write_atomic_with
+    from linsense.report.sweep_figures import FIGURES
+    from linsense.sweep import load_sweep, sweep
+    from linsense.sweep.studies import summary_line
+
+    sw = load_sweep(sweep_file)
+    df = sweep(sw, out, workers=workers, scheduler=scheduler, processes=processes,
+               progress=not no_progress and sys.stderr.isatty())
+    out_dir = Path(out)
+    axes = [a.key for a in sw.spec.axis]
+    relative = {a.key: a.relative for a in sw.spec.axis}
+    click.echo(str(write_atomic_with(out_dir / "results.parquet", lambda f: df.to_parquet(f, index=False))))
+    study = sw.spec.sweep.study
+    line = summary_line(study, df, axes)
+    click.echo(str(write_atomic(out_dir / "summary.txt", f"{sw.name}: {line}\n")))
+    if study:
+        fig = FIGURES[study](df, axes, relative)
+        png = out_dir / f"{study}.png"
+        click.echo(str(write_atomic_with(png, lambda f: fig.savefig(f, format="png", dpi=110,
+                                                                    metadata={"Software": None}))))
+    click.echo(f"{sw.name}: {line}")
+
+
 def design_lines(dz, motor_name: str, dd) -> list[str]:
     """The design as a person reads it."""
     lines = [

@@ -45,13 +45,14 @@ class Built:
     extra: dict = field(default_factory=dict)  # cffi objects kept alive with the drive (calibration table)
 
 
-def resolve_motor(sc: Scenario) -> Motor:
-    """The scenario's motor: a preset name or a file path relative to the scenario file."""
-    spec = sc.spec.motor
+def resolve_motor(sc: Scenario, spec: str | None = None, key: str = "motor") -> Motor:
+    """The scenario's motor (or the motor ``spec`` given at ``key``): a preset name or a file path
+    relative to the scenario file."""
+    spec = sc.spec.motor if spec is None else spec
     looks_like_path = spec.lower().endswith(".toml") or any(c in spec for c in "/\\")
     if not looks_like_path:
         if spec not in preset_names():
-            raise InputError(sc.source, "motor", f"unknown preset {spec!r} "
+            raise InputError(sc.source, key, f"unknown preset {spec!r} "
                              f"(presets: {', '.join(preset_names())}; "
                              "or a path to a .toml motor file, relative to the scenario)")
         return load_motor(spec)
@@ -59,7 +60,7 @@ def resolve_motor(sc: Scenario) -> Motor:
     if not p.is_absolute():
         p = sc.base_dir / p
     if not p.is_file():
-        raise InputError(sc.source, "motor", f"no such motor file {str(p)!r} (value {spec!r})")
+        raise InputError(sc.source, key, f"no such motor file {str(p)!r} (value {spec!r})")
     return load_motor(p)
 
 
@@ -176,22 +177,29 @@ def build(sc: Scenario, motor: Motor | None = None) -> Built:
     the scenario file. ``motor`` replaces the scenario's motor (a Motor object from Python). Gains
     the scenario leaves unset are designed for its motor (:func:`designed`)."""
     motor = resolve_motor(sc) if motor is None else motor
-    sc = designed(sc, motor)
+    # the motor the controller believes in (its tables, gains and feed-forwards): the plant's unless
+    # controller.model.motor names another (e.g. one with a parameter off, to test the LUT's robustness)
+    ov = sc.spec.controller.model
+    model_motor = motor if ov.motor is None else resolve_motor(sc, ov.motor, "controller.model.motor")
+    if not math.isclose(model_motor.pole_pitch, motor.pole_pitch, rel_tol=1e-9):
+        raise InputError(sc.source, "controller.model.motor",
+                         f"pole pitch {model_motor.pole_pitch:g} m differs from the motor's "
+                         f"{motor.pole_pitch:g} m: a controller cannot believe in another pole pitch")
+    sc = designed(sc, model_motor)
     s = sc.spec
     inv, ctl, inj, obs, con, prot = s.inverter, s.control, s.injection, s.observer, s.controller, s.protection
     fs = inv.f_pwm
     tau = motor.pole_pitch
 
     # --- what the controller knows about the motor
-    L_d, L_q = mean_dq(motor)
-    ov = con.model
+    L_d, L_q = mean_dq(model_motor)
     known = {
         "L_d": ov.L_d if ov.L_d is not None else L_d,
         "L_q": ov.L_q if ov.L_q is not None else L_q,
-        "R_s": ov.R_s if ov.R_s is not None else motor.R_s,
-        "psi_pm": ov.psi_pm if ov.psi_pm is not None else motor.psi_pm,
-        "mass": ov.mass if ov.mass is not None else motor.mass,
-        "force_constant": ov.force_constant if ov.force_constant is not None else motor.force_constant,
+        "R_s": ov.R_s if ov.R_s is not None else model_motor.R_s,
+        "psi_pm": ov.psi_pm if ov.psi_pm is not None else model_motor.psi_pm,
+        "mass": ov.mass if ov.mass is not None else model_motor.mass,
+        "force_constant": ov.force_constant if ov.force_constant is not None else model_motor.force_constant,
     }
     if ov.demod_gain is not None:
         known["demod_gain"] = ov.demod_gain
@@ -297,7 +305,7 @@ def build(sc: Scenario, motor: Motor | None = None) -> Built:
     # the table for sensorless_lut, and for the HF observer beside the encoder in sensored mode
     compensation = obs.compensation or ("lut" if ctl.mode in ("sensorless_lut", "sensored") else "none")
     # the tables the controller can know: the motor model with the resistance it believes
-    lut_motor = dataclasses.replace(motor, R_s=known["R_s"])
+    lut_motor = dataclasses.replace(model_motor, R_s=known["R_s"])
     comp = None
     if compensation == "lut":
         f_inj = inj.frequency if obs.lut_model == "resistive" else None

@@ -118,6 +118,9 @@ class ModelOverride(BaseModel):
     """What the controller believes about the motor (default: the motor model itself)."""
 
     model_config = _STRICT
+    # preset or motor file (relative to the scenario) the controller's tables and gains are built
+    # from; the keys below override single values of it
+    motor: str | None = Field(default=None, min_length=1)
     L_d: Positive | None = None  # H, decoupling
     L_q: Positive | None = None  # H
     R_s: NonNegative | None = None  # ohm, current-loop integral gain

@@ -1,0 +1,175 @@
+"""The sweep engine: runs in batches on dask.distributed, rows in Parquet partitions, resumable.
+
+``sweep(spec, out)`` expands the sweep's points, groups them in batches of ``[sweep] batch`` runs
+and submits one task per batch to a dask cluster: a local one by default (worker threads: the C
+loop releases the GIL, so threads run in parallel without starting processes), or any cluster by
+address (``scheduler="tcp://host:8786"``). Each finished batch is written as one Parquet
+partition ``parts/part-NNNNNN.parquet`` through a temporary file and a rename, so a partition is
+either complete or absent; a sweep killed at any point and started again with the same command
+runs only the batches without a partition: no row is lost, none is duplicated. The table of all
+rows is returned as a pandas DataFrame, sorted by run. docs/sweeps.md.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import tempfile
+import time
+from contextlib import contextmanager, nullcontext
+from pathlib import Path
+
+import pandas as pd
+
+from linsense import __version__
+from linsense.errors import InputError
+from linsense.sweep.points import points
+from linsense.sweep.runner import context, run_batch
+from linsense.sweep.spec import SweepSpec, as_sweep
+
+MANIFEST = "sweep.json"
+
+
+def _manifest(sweep: SweepSpec, n_runs: int) -> dict:
+    return {"format": "linsense-sweep", "version": __version__, "spec": sweep.spec.model_dump(mode="json"),
+            "scenario": str(sweep.scenario_path.resolve()), "runs": n_runs, "batch": sweep.spec.sweep.batch}
+
+
+def _check_out(out: Path, manifest: dict) -> None:
+    """``out`` is new, empty, or holds this same sweep (to resume); anything else is refused."""
+    m = out / MANIFEST
+    if m.is_file():
+        try:
+            old = json.loads(m.read_text(encoding="utf-8"))
+        except (OSError, ValueError) as exc:
+            raise InputError(str(m), "", f"cannot read the sweep manifest: {exc}") from None
+        if {k: old.get(k) for k in ("spec", "scenario", "runs", "batch")} != {
+                k: manifest[k] for k in ("spec", "scenario", "runs", "batch")}:
+            raise InputError("--out", "", f"{str(out)!r} holds another sweep (its {MANIFEST} differs): "
+                             "give a new folder, or delete it to start again")
+        return
+    if out.exists() and (not out.is_dir() or any(out.iterdir())):
+        raise InputError("--out", "", f"{str(out)!r} exists and is not a sweep folder (no {MANIFEST}): "
+                         "give a new or empty folder")
+
+
+def _write_partition(parts: Path, b: int, rows: list[dict]) -> Path:
+    path = parts / f"part-{b:06d}.parquet"
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=parts)
+    os.close(fd)
+    try:
+        pd.DataFrame(rows).to_parquet(tmp, index=False)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path
+
+
+def _done_batches(parts: Path) -> set[int]:
+    for stale in parts.glob(".part-*.tmp"):  # a temporary file of a killed run: never a result
+        stale.unlink(missing_ok=True)
+    return {int(p.stem.split("-")[1]) for p in parts.glob("part-*.parquet")}
+
+
+@contextmanager
+def _client(workers: int | None, scheduler: str | None, processes: bool):
+    from dask.distributed import Client, LocalCluster
+
+    if scheduler:
+        with Client(scheduler) as c:
+            yield c
+        return
+    n = workers or os.cpu_count() or 1
+    with LocalCluster(n_workers=n, threads_per_worker=1, processes=processes, dashboard_address=None,
+                      silence_logs=40) as cluster, Client(cluster) as c:
+        yield c
+
+
+def _progress(total: int, done: int, enabled: bool):
+    if not enabled:
+        return nullcontext(None)
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+
+    class Rate(TextColumn):
+        def render(self, task):  # runs per second
+            return f"{task.speed or 0:.1f} runs/s"
+
+    p = Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), Rate(""),
+                 TimeRemainingColumn(), transient=False)
+    return p
+
+
+def sweep(spec, out: str | Path | None = None, *, workers: int | None = None, scheduler: str | None = None,
+          processes: bool = False, progress: bool = False) -> pd.DataFrame:
+    """Run a sweep (a :class:`SweepSpec`, a sweep TOML path or a dict) and return its rows.
+
+    Parameters
+    ----------
+    out : path, optional
+        Folder of the partitions (``parts/``), the manifest and the edited motor files; a sweep
+        given the same ``out`` again resumes. Without it, a temporary folder is used.
+    workers : int, optional
+        Workers of the local cluster (default: one per core).
+    scheduler : str, optional
+        Address of a running dask scheduler (``tcp://host:8786``); ``workers`` is then ignored.
+    processes : bool
+        Local workers as processes instead of threads (threads are the default: faster to start,
+        and the C loop runs without the GIL).
+    progress : bool
+        Show a progress bar (runs done, rate, time left).
+    """
+    sw = as_sweep(spec)
+    pts = points(sw)
+    batch = sw.spec.sweep.batch
+    relative = {a.key: a.relative for a in sw.spec.axis}
+    batches = [list(enumerate(pts))[i:i + batch] for i in range(0, len(pts), batch)]
+    holder = tempfile.TemporaryDirectory(prefix="linsense-sweep-") if out is None else nullcontext(out)
+    with holder as out_dir:
+        out_dir = Path(out_dir)
+        manifest = _manifest(sw, len(pts))
+        _check_out(out_dir, manifest)
+        parts = out_dir / "parts"
+        parts.mkdir(parents=True, exist_ok=True)
+        (out_dir / "motors").mkdir(exist_ok=True)
+        if not (out_dir / MANIFEST).is_file():
+            tmp = out_dir / f".{MANIFEST}.tmp"
+            tmp.write_text(json.dumps(manifest, indent=1) + "\n", encoding="utf-8")
+            os.replace(tmp, out_dir / MANIFEST)
+        ctx = context(sw, out_dir / "motors")
+        done = _done_batches(parts)
+        todo = [b for b in range(len(batches)) if b not in done]
+        n_done = sum(len(batches[b]) for b in done)
+        if todo:
+            bar_ctx = _progress(len(pts), n_done, progress)
+            with _client(workers, scheduler, processes) as client, bar_ctx as bar:
+                task = bar.add_task(sw.name, total=len(pts), completed=n_done) if bar else None
+                from dask.distributed import as_completed
+
+                ctx_f = client.scatter(ctx, broadcast=True)
+                futures = {client.submit(run_batch, ctx_f, batches[b], relative, pure=False): b
+                           for b in todo}
+                kill_after = int(os.environ.get("LINSENSE_TEST_KILL_AFTER_PARTS", "0"))  # (tests only)
+                for written, fut in enumerate(as_completed(futures), start=1):
+                    b = futures[fut]
+                    _write_partition(parts, b, fut.result())
+                    if bar:
+                        bar.advance(task, len(batches[b]))
+                    if kill_after and written >= kill_after:
+                        os.kill(os.getpid(), signal.SIGKILL)
+        frames = [pd.read_parquet(p) for p in sorted(parts.glob("part-*.parquet"))]
+        df = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()
+        if not df.empty:
+            df = df.sort_values("run", kind="stable").reset_index(drop=True)
+        if len(df) != len(pts) or (not df.empty and df["run"].duplicated().any()):
+            raise InputError(str(out_dir), "parts", f"{len(df)} rows for {len(pts)} runs: the partitions "
+                             "do not belong to this sweep")
+        return df
+
+
+def timed(fn, *args, **kwargs):
+    """``(result, seconds)`` of one call (for the benchmark)."""
+    t0 = time.perf_counter()
+    r = fn(*args, **kwargs)
+    return r, time.perf_counter() - t0

@@ -1,0 +1,198 @@
+"""One run of a sweep: the base scenario with the point's values set, simulated, as one table row.
+
+A point that the scenario or motor checks refuse (a bus too low for the injection, a motor whose
+saliency vanishes) is not an error of the sweep: its row has ``error`` set and ``stable = False``.
+"""
+
+from __future__ import annotations
+
+import copy
+import hashlib
+import math
+import tomllib
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+
+import tomli_w
+
+from linsense.errors import InputError, LinsenseError
+from linsense.io import write_atomic
+from linsense.model.motor import preset_names
+from linsense.sweep.spec import SweepSpec
+
+#: scalar metrics copied into a sweep's rows (lists and the long texts stay out)
+ROW_METRICS = ("stable", "accurate", "reached", "max_abs_err_deg", "transient_max_err_deg",
+               "steady_max_err_deg", "bias_deg", "limit_cycle_mm", "settling_time_s", "final_position_mm",
+               "final_error_mm", "final_offset_mm", "overshoot_mm", "fault", "unstable_reason",
+               "hf_current_a", "sim_s", "wall_s")
+
+
+@dataclass
+class SweepContext:
+    """What every run of one sweep shares (pickled once per task): the base scenario's data and
+    folder, the base motor's data and folder, and where edited motor files go."""
+
+    source: str
+    scenario_data: dict
+    scenario_dir: str
+    motor_data: dict
+    motor_dir: str
+    motors_out: str
+    trace: bool
+    fixed: dict
+
+
+def _motor_data(spec: str, scenario_dir: Path, source: str) -> tuple[dict, Path]:
+    """The base motor's TOML data (a preset's or a file's, table paths made absolute)."""
+    looks_like_path = spec.lower().endswith(".toml") or any(c in spec for c in "/\\")
+    if not looks_like_path and spec in preset_names():
+        text = (resources.files("linsense.model") / "presets" / f"{spec}.toml").read_text()
+        return tomllib.loads(text), scenario_dir
+    p = Path(spec) if Path(spec).is_absolute() else scenario_dir / spec
+    try:
+        data = tomllib.loads(p.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
+        raise InputError(source, "motor", f"cannot read the scenario's motor {spec!r}: {exc}") from None
+    table = data.get("inductance", {}).get("table")
+    if isinstance(table, str) and not Path(table).is_absolute():
+        data["inductance"]["table"] = str((p.parent / table).resolve())
+    return data, p.parent
+
+
+def context(sweep: SweepSpec, motors_out: Path) -> SweepContext:
+    """The shared context of ``sweep``; edited motor files will be written under ``motors_out``."""
+    p = sweep.scenario_path
+    if not p.is_file():
+        raise InputError(sweep.source, "sweep.scenario", f"no such scenario file {str(p)!r}")
+    try:
+        data = tomllib.loads(p.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
+        raise InputError(str(p), "", f"cannot read the base scenario: {exc}") from None
+    motor_spec = data.get("motor")
+    if not isinstance(motor_spec, str):
+        raise InputError(str(p), "motor", "missing (a preset name or a motor file)")
+    motor_data, motor_dir = _motor_data(motor_spec, p.parent, str(p))
+    return SweepContext(sweep.source, data, str(p.parent), motor_data, str(motor_dir), str(motors_out),
+                        sweep.spec.sweep.trace, dict(sweep.spec.sweep.set))
+
+
+def _get(data: dict, keys: list[str]):
+    for k in keys:
+        if not isinstance(data, dict) or k not in data:
+            return None
+        data = data[k]
+    return data
+
+
+def _set(data: dict, keys: list[str], value) -> None:
+    for k in keys[:-1]:
+        data = data.setdefault(k, {})
+        if not isinstance(data, dict):
+            raise InputError("sweep", ".".join(keys), "is not inside a table of the file")
+    data[keys[-1]] = value
+
+
+def _relative(base, factor: float, key: str, source: str) -> float:
+    if isinstance(base, bool) or not isinstance(base, int | float):
+        raise InputError(source, key, f"relative = true needs a number in the base file, got {base!r}")
+    return float(base) * float(factor)
+
+
+def _scenario_default(data: dict, keys: list[str], source: str):
+    """The value of a scenario key as the validated base scenario has it (defaults included)."""
+    from linsense.sim.scenario import scenario_from_dict
+
+    sc = scenario_from_dict(copy.deepcopy(data), source)
+    node = sc.spec
+    for k in keys:
+        node = getattr(node, k, None)
+    return node
+
+
+def _motor_file(ctx: SweepContext, motor: dict) -> str:
+    """Write an edited motor (content-addressed, so every worker writes the same bytes) and give
+    its path."""
+    text = tomli_w.dumps(motor)
+    digest = hashlib.sha256(text.encode()).hexdigest()[:16]
+    path = Path(ctx.motors_out) / f"motor-{digest}.toml"
+    if not path.exists():
+        write_atomic(path, text)
+    return str(path)
+
+
+def scenario_for(ctx: SweepContext, point: dict, relative: dict) -> dict:
+    """The base scenario's data with the sweep's fixed keys and the point's values set (motor keys
+    through edited files)."""
+    data = copy.deepcopy(ctx.scenario_data)
+    motors = {"motor": None, "lut_motor": None}
+    for key, value in [*ctx.fixed.items(), *point.items()]:
+        head, *rest = key.split(".")
+        if head in motors:
+            if motors[head] is None:
+                motors[head] = copy.deepcopy(ctx.motor_data)
+            if relative.get(key):
+                value = _relative(_get(ctx.motor_data, rest), value, key, ctx.source)
+            _set(motors[head], rest, value)
+        else:
+            keys = key.split(".")
+            if relative.get(key):
+                base = _scenario_default(ctx.scenario_data, keys, ctx.source)
+                value = _relative(base, value, key, ctx.source)
+            _set(data, keys, value)
+    if motors["motor"] is not None:
+        data["motor"] = _motor_file(ctx, motors["motor"])
+    if motors["lut_motor"] is not None:
+        _set(data, ["controller", "model", "motor"], _motor_file(ctx, motors["lut_motor"]))
+    return data
+
+
+def hf_current(result) -> float | None:
+    """A, mean half peak-to-peak of phase a's current over injection periods of the end window
+    (the HF current's amplitude; None without a trace of the currents)."""
+    import numpy as np
+
+    i = getattr(result, "i_abc", None)
+    t = getattr(result, "t", None)
+    s = result.scenario.spec
+    if i is None or t is None or len(t) < 4 or s.injection.amplitude == 0:
+        return None
+    n = max(1, round(s.inverter.f_pwm / s.injection.frequency / max(1, s.record.decimate)))
+    ia = np.asarray(i)[:, 0]
+    ok = np.isfinite(ia)
+    ia = ia[ok][-(len(ia[ok]) // n) * n:] if len(ia[ok]) >= n else ia[ok]
+    if ia.size < n:
+        return None
+    win = max(1, int(round(s.metrics.final_window_s * s.inverter.f_pwm / max(1, s.record.decimate))) // n)
+    blocks = ia.reshape(-1, n)[-win:]
+    return float(np.mean(0.5 * (blocks.max(axis=1) - blocks.min(axis=1))))
+
+
+def run_point(ctx: SweepContext, index: int, point: dict, relative: dict) -> dict:
+    """Simulate one point; the row holds ``run``, the swept values, the metrics and ``error``."""
+    from linsense.sim.run import simulate
+    from linsense.sim.scenario import scenario_from_dict
+
+    row: dict = {"run": index, **point}
+    try:
+        sc = scenario_from_dict(scenario_for(ctx, point, relative), f"{ctx.source} (run {index})",
+                                ctx.scenario_dir)
+        res = simulate(sc)
+        m = dict(res.metrics)
+        m["hf_current_a"] = hf_current(res)
+        if "wall_s" not in m:
+            m["wall_s"] = getattr(res, "wall_s", None)
+        for k in ROW_METRICS:
+            v = m.get(k)
+            row[k] = None if isinstance(v, float) and not math.isfinite(v) else v
+        row["error"] = None
+    except LinsenseError as exc:
+        row.update({k: None for k in ROW_METRICS})
+        row["stable"] = False
+        row["error"] = str(exc)
+    return row
+
+
+def run_batch(ctx: SweepContext, batch: list[tuple[int, dict]], relative: dict) -> list[dict]:
+    """The rows of one batch of runs (one task of the engine, one Parquet partition)."""
+    return [run_point(ctx, i, p, relative) for i, p in batch]

@@ -1,0 +1,175 @@
+"""Sweep files (TOML): a base scenario and the axes to vary (docs/sweeps.md).
+
+::
+
+    [sweep]
+    name = "stability-map"
+    scenario = "../scenarios/step6_lut.toml"   # the base, relative to this file
+    sampling = "grid"                          # grid | random | lhs
+    samples = 64                               # random, lhs: number of runs
+    seed = 1
+    study = "stability-map"                    # optional: its figure and summary line
+    set = { "inverter.fidelity" = "switching" }   # optional: keys set in every run
+
+    [[axis]]
+    key = "reference.position_mm"              # any scenario key (dotted)
+    values = [1.5, 3.0, 4.5, 6.0]
+
+    [[axis]]
+    key = "observer.bandwidth_hz"
+    min = 10.0
+    max = 80.0
+    n = 8                                      # grid points between min and max (grid only)
+    log = true
+
+    [[axis]]
+    key = "lut_motor.inductance.L0"            # the motor the controller's tables are built from
+    relative = true                            # values, min, max are factors of the base value
+    min = 0.8
+    max = 1.2
+
+Keys: a scenario key (``observer.bandwidth_hz``), a key of the plant's motor file
+(``motor.inductance.dM0``), or a key of the motor the controller believes in
+(``lut_motor.inductance.L0``: the LUT, gain table and gains are built from it, the plant keeps the
+true motor; :mod:`linsense.sim.build`, ``controller.model.motor``).
+"""
+
+from __future__ import annotations
+
+import tomllib
+from pathlib import Path
+from typing import Annotated, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+
+from linsense.errors import InputError
+from linsense.io import read_text_file
+from linsense.validation import KeyProblem, to_input_error
+
+_STRICT = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
+#: most runs one sweep file may ask for (docs/limits.md)
+MAX_RUNS = 1_000_000
+Value = float | int | bool | str
+
+
+class Axis(BaseModel):
+    model_config = _STRICT
+    key: str
+    values: Annotated[list[Value], Field(min_length=1, max_length=100_000)] | None = None
+    min: float | None = None
+    max: float | None = None
+    n: int | None = Field(default=None, ge=1, le=100_000)  # grid points between min and max
+    log: bool = False  # grid/random/lhs spaced in log between min and max
+    relative: bool = False  # values, min, max are factors of the base value
+
+    @model_validator(mode="after")
+    def _check(self) -> Axis:
+        parts = self.key.split(".")
+        if len(parts) < 2 or not all(parts):
+            raise KeyProblem("key", f"expected a dotted key (e.g. 'observer.bandwidth_hz'), got {self.key!r}")
+        if self.values is None:
+            if self.min is None or self.max is None:
+                raise KeyProblem("values", "give 'values', or 'min' and 'max'")
+            if not self.min < self.max:
+                raise KeyProblem("max", f"must be above min = {self.min:g}, got {self.max:g}")
+            if self.log and self.min <= 0:
+                raise KeyProblem("min", f"must be positive with log = true, got {self.min:g}")
+        else:
+            if self.min is not None or self.max is not None or self.n is not None:
+                raise KeyProblem("values", "give 'values' or 'min'/'max'/'n', not both")
+            if self.log:
+                raise KeyProblem("log", "only with 'min' and 'max' (the values are given)")
+        if self.relative and self.values is not None and not all(
+                isinstance(v, int | float) and not isinstance(v, bool) for v in self.values):
+            raise KeyProblem("values", "relative values must be numbers (factors of the base value)")
+        return self
+
+
+class SweepSection(BaseModel):
+    model_config = _STRICT
+    name: str = Field(default="sweep", min_length=1)
+    scenario: str = Field(min_length=1)  # base scenario file, relative to the sweep file
+    sampling: Literal["grid", "random", "lhs"] = "grid"
+    samples: int | None = Field(default=None, ge=1, le=MAX_RUNS)  # random, lhs
+    seed: int = Field(default=0, ge=0, lt=2**63)
+    study: Literal["stability-map", "lut-robustness", "injection"] | None = None
+    batch: int = Field(default=16, ge=1, le=10_000)  # runs per task and per Parquet partition
+    trace: bool = False  # keep each run's trace (memory grows with duration); default: metrics only
+    # keys set in every run before the axes' values (same keys as an axis: scenario, motor., lut_motor.)
+    set: dict[str, Value] = Field(default_factory=dict)
+
+
+class SweepFile(BaseModel):
+    model_config = _STRICT
+    sweep: SweepSection
+    axis: Annotated[list[Axis], Field(min_length=1, max_length=16)]
+
+    @model_validator(mode="after")
+    def _check(self) -> SweepFile:
+        s = self.sweep
+        keys = [a.key for a in self.axis]
+        dup = {k for k in keys if keys.count(k) > 1}
+        if dup:
+            raise KeyProblem("axis", f"key {sorted(dup)[0]!r} appears twice")
+        if s.sampling == "grid":
+            if s.samples is not None:
+                raise KeyProblem("sweep.samples", "only with sampling = \"random\" or \"lhs\" (a grid has "
+                                 "the product of its axes)")
+            for i, a in enumerate(self.axis):
+                if a.values is None and a.n is None:
+                    raise KeyProblem(f"axis.{i}.n", f"{a.key}: a grid axis with min and max needs n")
+        else:
+            if s.samples is None:
+                raise KeyProblem("sweep.samples", f"required with sampling = {s.sampling!r}")
+        return self
+
+
+class SweepSpec:
+    """A validated sweep file: ``spec`` (the pydantic model), ``source`` and ``base_dir``."""
+
+    def __init__(self, spec: SweepFile, source: str, base_dir: Path) -> None:
+        self.spec = spec
+        self.source = source
+        self.base_dir = base_dir
+
+    @property
+    def name(self) -> str:
+        return self.spec.sweep.name
+
+    @property
+    def scenario_path(self) -> Path:
+        p = Path(self.spec.sweep.scenario)
+        return p if p.is_absolute() else self.base_dir / p
+
+
+def sweep_from_dict(data: dict, source: str = "<dict>", base_dir: str | Path | None = None) -> SweepSpec:
+    """Validate parsed sweep data; :class:`InputError` names ``source``, the key and the value."""
+    if not isinstance(data, dict):
+        raise InputError(source, "", f"a sweep is a table of sections, got {type(data).__name__}")
+    try:
+        spec = SweepFile.model_validate(data)
+    except ValidationError as exc:
+        raise to_input_error(exc, source, SweepFile) from None
+    return SweepSpec(spec, source, Path(base_dir) if base_dir is not None else Path.cwd())
+
+
+def load_sweep(path: str | Path) -> SweepSpec:
+    """Read and validate a sweep TOML file."""
+    p = Path(path)
+    text = read_text_file(p, "sweep file")
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(str(path), "", f"not valid TOML: {exc}") from None
+    return sweep_from_dict(data, str(path), p.parent)
+
+
+def as_sweep(obj) -> SweepSpec:
+    """A :class:`SweepSpec` from a SweepSpec, a path or a dict."""
+    if isinstance(obj, SweepSpec):
+        return obj
+    if isinstance(obj, dict):
+        return sweep_from_dict(obj)
+    if isinstance(obj, str | Path):
+        return load_sweep(obj)
+    raise TypeError(f"expected a SweepSpec, a path or a dict, got {type(obj).__name__}")
