@@ -10,9 +10,14 @@ demodulator gain, psi_pm, mass, force constant, R_s) come from the motor model u
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 import math
+import threading
+from collections import OrderedDict
 from dataclasses import dataclass, field
 from pathlib import Path
+
+import numpy as np
 
 from linsense.compensation.lut import build_lut
 from linsense.ctrl import ConfigError, Drive, drive_default_cfg, ffi, lib
@@ -45,6 +50,43 @@ class Built:
     extra: dict = field(default_factory=dict)  # cffi objects kept alive with the drive (calibration table)
 
 
+# ---------------------------------------------------------------------- caches
+# A sweep builds thousands of scenarios of a few motors: loading and checking a motor file, the
+# design and the controller's tables are pure functions of the motor and a few numbers, kept here
+# (bounded, thread-safe: sweeps run in worker threads). Cached values are never mutated.
+_CACHE: OrderedDict = OrderedDict()
+_CACHE_LOCK = threading.Lock()
+_CACHE_SIZE = 256
+
+
+def _memo(key: tuple, fn):
+    with _CACHE_LOCK:
+        if key in _CACHE:
+            _CACHE.move_to_end(key)
+            return _CACHE[key]
+    value = fn()
+    with _CACHE_LOCK:
+        _CACHE[key] = value
+        while len(_CACHE) > _CACHE_SIZE:
+            _CACHE.popitem(last=False)
+    return value
+
+
+def motor_key(motor: Motor) -> str:
+    """A fingerprint of everything that defines ``motor`` (parameters and inductance series)."""
+    h = hashlib.sha256(repr((motor.name, motor.R_s, motor.pole_pitch, motor.force_constant, motor.mass,
+                             motor.friction, motor.pm_harmonics)).encode())
+    h.update(np.ascontiguousarray(motor.inductance.a).tobytes())
+    h.update(np.ascontiguousarray(motor.inductance.b).tobytes())
+    return h.hexdigest()
+
+
+def _load_motor_cached(spec: str | Path) -> Motor:
+    p = Path(spec)
+    stamp = (str(p.resolve()), p.stat().st_mtime_ns, p.stat().st_size) if p.is_file() else (str(spec),)
+    return _memo(("motor",) + stamp, lambda: load_motor(spec))
+
+
 def resolve_motor(sc: Scenario, spec: str | None = None, key: str = "motor") -> Motor:
     """The scenario's motor (or the motor ``spec`` given at ``key``): a preset name or a file path
     relative to the scenario file."""
@@ -55,13 +97,13 @@ def resolve_motor(sc: Scenario, spec: str | None = None, key: str = "motor") -> 
             raise InputError(sc.source, key, f"unknown preset {spec!r} "
                              f"(presets: {', '.join(preset_names())}; "
                              "or a path to a .toml motor file, relative to the scenario)")
-        return load_motor(spec)
+        return _load_motor_cached(spec)
     p = Path(spec)
     if not p.is_absolute():
         p = sc.base_dir / p
     if not p.is_file():
         raise InputError(sc.source, key, f"no such motor file {str(p)!r} (value {spec!r})")
-    return load_motor(p)
+    return _load_motor_cached(p)
 
 
 def trapezoid_time(distance: float, v_max: float, a_max: float) -> float:
@@ -134,7 +176,8 @@ def designed(sc: Scenario, motor: Motor) -> Scenario:
         dd = drive_data(sc)
         if dd.v_inj == 0.0:  # an explicit 0, sensored without injection: the other gains still designed
             dd.v_inj = None
-        dz = design(motor, dd, sc.source, analyse=False)
+        dz = _memo(("design", motor_key(motor), tuple(dataclasses.astuple(dd))),
+                   lambda: design(motor, dd, sc.source, analyse=False))
     except InputError as exc:  # the design's drive-data names -> the scenario's keys
         raise InputError(sc.source, _DESIGN_KEYS.get(exc.key, exc.key), exc.message) from None
     want = {
@@ -192,7 +235,8 @@ def build(sc: Scenario, motor: Motor | None = None) -> Built:
     tau = motor.pole_pitch
 
     # --- what the controller knows about the motor
-    L_d, L_q = mean_dq(model_motor)
+    model_key = motor_key(model_motor)
+    L_d, L_q = _memo(("mean_dq", model_key), lambda: mean_dq(model_motor))
     known = {
         "L_d": ov.L_d if ov.L_d is not None else L_d,
         "L_q": ov.L_q if ov.L_q is not None else L_q,
@@ -309,12 +353,15 @@ def build(sc: Scenario, motor: Motor | None = None) -> Built:
     comp = None
     if compensation == "lut":
         f_inj = inj.frequency if obs.lut_model == "resistive" else None
-        comp = build_lut(lut_motor, obs.lut_points, f_inj=f_inj, quad=inj.quadrature if f_inj else 0.0).values
+        quad = inj.quadrature if f_inj else 0.0
+        comp = _memo(("lut", model_key, known["R_s"], obs.lut_points, f_inj, quad),
+                     lambda: build_lut(lut_motor, obs.lut_points, f_inj=f_inj, quad=quad).values)
     gain_table = None
     if obs.gain_schedule:
         # the demodulator gain that makes the error's local slope 1 everywhere (the saliency and,
         # with the elliptical injection and R_s, its phase set it; docs/tuning.md)
-        k_e = error_gain(lut_motor, inj.frequency, inj.quadrature, 1.0, n=obs.lut_points)
+        k_e = _memo(("error_gain", model_key, known["R_s"], inj.frequency, inj.quadrature, obs.lut_points),
+                    lambda: error_gain(lut_motor, inj.frequency, inj.quadrature, 1.0, n=obs.lut_points))
         gain_table = 1.0 / k_e
     try:
         drive = Drive(d, comp=comp, gain_table=gain_table)  # a given gain table is used by default
