@@ -257,7 +257,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     ls_status (*const setters[3])(ls_drive *, ls_pos) = {ls_drive_set_position, ls_drive_move_to,
                                                           ls_drive_step_to};
     int32_t enc = 0;
-    unsigned ops = 0u;
+    unsigned ops = 0u, steps = 0u;
     r.p = data;
     r.n = size;
     cc.table = comp_tab;
@@ -287,7 +287,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     m.v_dc = LS_R(72.0);
     m.enc_valid = true;
     m.enc_count = 0;
-    while (r.n > 0u && ops < 4096u) {
+    while (r.n > 0u && ops < 4096u && steps < 65536u) { /* (bounded: no input runs for long) */
         const uint8_t op = rd_u8(&r);
         ++ops;
         switch (op & 15u) {
@@ -332,7 +332,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             default:
                 break;
             }
-            for (k = 0u; k < n; ++k) {
+            for (k = 0u; k < n; ++k, ++steps) {
                 m.enc_count = enc;
                 ls_drive_step(&d, &m, &cmd);
                 check_cmd(&cmd);
