@@ -81,15 +81,16 @@ def motor_key(motor: Motor) -> str:
     return h.hexdigest()
 
 
-def _load_motor_cached(spec: str | Path) -> Motor:
+def _load_motor_cached(spec: str | Path, check: bool) -> Motor:
     p = Path(spec)
     stamp = (str(p.resolve()), p.stat().st_mtime_ns, p.stat().st_size) if p.is_file() else (str(spec),)
-    return _memo(("motor",) + stamp, lambda: load_motor(spec))
+    return _memo(("motor", check) + stamp, lambda: load_motor(spec, check=check))
 
 
-def resolve_motor(sc: Scenario, spec: str | None = None, key: str = "motor") -> Motor:
+def resolve_motor(sc: Scenario, spec: str | None = None, key: str = "motor", check: bool = True) -> Motor:
     """The scenario's motor (or the motor ``spec`` given at ``key``): a preset name or a file path
-    relative to the scenario file."""
+    relative to the scenario file. ``check = False`` skips :func:`check_motor` (for a motor the
+    controller only believes in: its tables need not describe a realisable winding)."""
     spec = sc.spec.motor if spec is None else spec
     looks_like_path = spec.lower().endswith(".toml") or any(c in spec for c in "/\\")
     if not looks_like_path:
@@ -97,13 +98,13 @@ def resolve_motor(sc: Scenario, spec: str | None = None, key: str = "motor") -> 
             raise InputError(sc.source, key, f"unknown preset {spec!r} "
                              f"(presets: {', '.join(preset_names())}; "
                              "or a path to a .toml motor file, relative to the scenario)")
-        return _load_motor_cached(spec)
+        return _load_motor_cached(spec, check)
     p = Path(spec)
     if not p.is_absolute():
         p = sc.base_dir / p
     if not p.is_file():
         raise InputError(sc.source, key, f"no such motor file {str(p)!r} (value {spec!r})")
-    return _load_motor_cached(p)
+    return _load_motor_cached(p, check)
 
 
 def trapezoid_time(distance: float, v_max: float, a_max: float) -> float:
@@ -223,7 +224,8 @@ def build(sc: Scenario, motor: Motor | None = None) -> Built:
     # the motor the controller believes in (its tables, gains and feed-forwards): the plant's unless
     # controller.model.motor names another (e.g. one with a parameter off, to test the LUT's robustness)
     ov = sc.spec.controller.model
-    model_motor = motor if ov.motor is None else resolve_motor(sc, ov.motor, "controller.model.motor")
+    model_motor = motor if ov.motor is None else resolve_motor(sc, ov.motor, "controller.model.motor",
+                                                               check=False)
     if not math.isclose(model_motor.pole_pitch, motor.pole_pitch, rel_tol=1e-9):
         raise InputError(sc.source, "controller.model.motor",
                          f"pole pitch {model_motor.pole_pitch:g} m differs from the motor's "
