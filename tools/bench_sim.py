@@ -8,7 +8,12 @@ and the best and median realtime factor (simulated seconds / wall seconds of the
 are reported with the time per PWM period. It is a report: the exit status is 0 whatever the
 result, and each target line says PASS or FAIL.
 
-Usage: ``python tools/bench_sim.py [--repeat N] [--seconds S]``
+Then the memory of a long run (issue 10): a 600 s hold (ecce2010, sensorless with the LUT, average
+inverter) in metrics-only mode (``simulate(..., record="metrics")``) in a subprocess, its peak RSS
+against 150 MB, and ``linsense simulate`` of the same scenario with the default outputs (trace.csv,
+sim.png) against 400 MB (``--rss-seconds 0`` skips both; the CLI run gets ``--cli-timeout`` s).
+
+Usage: ``python tools/bench_sim.py [--repeat N] [--seconds S] [--rss-seconds S] [--cli-timeout S]``
 """
 
 from __future__ import annotations
@@ -17,7 +22,11 @@ import argparse
 import math
 import os
 import statistics
+import subprocess
+import sys
+import tempfile
 import time
+from pathlib import Path
 
 from linsense import ctrl
 from linsense.compensation.lut import build_lut
@@ -25,6 +34,64 @@ from linsense.model.motor import load_motor
 from linsense.sim import core
 
 TARGETS = {"average": 500.0, "switching": 100.0}  # realtime factor, the issue's targets
+RSS_TARGETS = {"metrics": 150.0, "cli": 400.0}  # MB, peak RSS of a 600 s run (issue 10)
+
+#: runs argv[1:] and prints the peak RSS (kB on Linux) of that child alone, then its exit code
+_RSS_WRAPPER = ("import resource, subprocess, sys\n"
+                "rc = subprocess.run(sys.argv[1:], stdout=subprocess.DEVNULL).returncode\n"
+                "print(resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss, rc)\n")
+
+#: the long run: a hold, so that the run is stable whatever its duration
+LONG_SCENARIO = """motor = "ecce2010"
+[scenario]
+name = "hold_long"
+duration = {seconds}
+seed = 1
+[control]
+mode = "sensorless_lut"
+[reference]
+type = "hold"
+"""
+
+
+def peak_rss(argv: list[str], timeout: float) -> tuple[float | None, float, str]:
+    """Peak RSS (MB) of the process ``argv`` (measured by a wrapper process of its own, so that no
+    earlier child counts), its wall time (s) and a note (exit status, timeout)."""
+    t0 = time.perf_counter()
+    try:
+        p = subprocess.run([sys.executable, "-c", _RSS_WRAPPER, *argv], capture_output=True, text=True,
+                           timeout=timeout)
+    except subprocess.TimeoutExpired:
+        return None, time.perf_counter() - t0, f"did not finish within {timeout:g} s"
+    wall = time.perf_counter() - t0
+    try:
+        kb, rc = p.stdout.split()
+    except ValueError:
+        return None, wall, f"wrapper failed: {p.stderr.strip()[-200:]}"
+    return int(kb) / 1024.0, wall, "" if rc == "0" else f"exit status {rc}"
+
+
+def memory_bench(seconds: float, cli_timeout: float) -> None:
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "hold_long.toml"
+        path.write_text(LONG_SCENARIO.format(seconds=seconds), encoding="utf-8")
+        code = ("import sys; from linsense.sim.run import simulate; "
+                "r = simulate(sys.argv[1], record='metrics'); "
+                "assert r.metrics['stable'], r.metrics['unstable_reason']")
+        runs = {
+            "metrics": (f"{seconds:g} s run, metrics-only (simulate(record='metrics'))",
+                        [sys.executable, "-c", code, str(path)], 3600.0),
+            "cli": (f"{seconds:g} s run, linsense simulate with the default outputs",
+                    [sys.executable, "-m", "linsense", "simulate", str(path), "--out",
+                     str(Path(tmp) / "out")], cli_timeout),
+        }
+        for key, (label, argv, timeout) in runs.items():
+            mb, wall, note = peak_rss(argv, timeout)
+            target = RSS_TARGETS[key]
+            verdict = "FAIL" if mb is None or mb > target else "PASS"
+            shown = "n/a" if mb is None else f"{mb:.0f} MB"
+            print(f"peak RSS, {label}: {shown} (target <= {target:.0f} MB) {verdict}; {wall:.1f} s wall"
+                  + (f" ({note})" if note else ""))
 
 
 def one_run(motor, lut, fidelity: str, seconds: float) -> tuple[float, int, int, dict]:
@@ -53,6 +120,10 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--seconds", type=float, default=2.0)
+    ap.add_argument("--rss-seconds", type=float, default=600.0,
+                    help="simulated duration of the memory benchmark (0: skip it)")
+    ap.add_argument("--cli-timeout", type=float, default=900.0,
+                    help="wall-time limit (s) of the CLI run of the memory benchmark")
     args = ap.parse_args()
     if hasattr(os, "sched_setaffinity"):
         try:
@@ -81,6 +152,8 @@ def main() -> int:
         e_max = math.degrees(abs(rec["theta_err"]).max())
         print(f"  scenario check: peak |x| {1e3 * abs(rec['x']).max():.2f} mm, "
               f"final x {1e3 * rec['x'][-1]:+.3f} mm, max |theta_err| {e_max:.2f} deg")
+    if args.rss_seconds > 0:
+        memory_bench(args.rss_seconds, args.cli_timeout)
     return 0
 
 

@@ -611,6 +611,16 @@ static double wrap_pi(double a)
     return a - 2.0 * SIM_PI * floor((a + SIM_PI) * (1.0 / (2.0 * SIM_PI)));
 }
 
+/* theta_err of the drive's estimate against the true position x (rad, wrapped); one compiled copy
+ * for the samples and the block statistics, so that both round alike (-ffp-contract) */
+#if defined(__GNUC__)
+__attribute__((noinline))
+#endif
+static double est_err(const ls_cmd *cmd, double x, double tau, double kx)
+{
+    return wrap_pi((pos_m(cmd->pos_est, tau) - x) * kx);
+}
+
 static void record(const ls_sim_out *o, int64_t r, double t, double x, double v, const double i[2], double cth,
                    double sth, const double u[3], double force, const ls_cmd *cmd, double tau, double kx, uint32_t fault)
 {
@@ -633,7 +643,7 @@ static void record(const ls_sim_out *o, int64_t r, double t, double x, double v,
         if (o->x_est) o->x_est[r] = x_est;
         if (o->v_est) o->v_est[r] = (double)cmd->v_est;
         if (o->x_ref) o->x_ref[r] = pos_m(cmd->pos_ref, tau);
-        if (o->theta_err) o->theta_err[r] = wrap_pi((x_est - x) * kx);
+        if (o->theta_err) o->theta_err[r] = est_err(cmd, x, tau, kx);
         if (o->err_sig) o->err_sig[r] = (double)cmd->err_sig;
     } else {
         if (o->x_est) o->x_est[r] = NAN;
@@ -684,37 +694,168 @@ SIM_HOT void angle_to(angle_track *a, double th)
     a->th = th;
 }
 
-ls_status ls_sim_run(const ls_sim_cfg *c, ls_drive *drive, const ls_sim_cmd *cmds, int32_t n_cmds, int64_t n_steps,
-                     const ls_sim_out *out, ls_sim_result *res)
+ls_status ls_sim_begin(const ls_sim_cfg *c, ls_sim_state *s)
 {
-    const double h = 1.0 / c->f_pwm, tau = c->pole_pitch, kx = 2.0 * SIM_PI / tau;
-    double x = c->x0, v = c->motion == LS_SIM_HELD ? 0.0 : c->v0, i[2] = {0.0, 0.0};
-    double duty[3] = {0.5, 0.5, 0.5};
-    uint64_t rng = c->seed * 0x9E3779B97F4A7C15ull + 0x2545F4914F6CDD1Dull;
-    int64_t k, r = 0;
-    int32_t next = 0, rec_count = 1;
-    uint32_t fault = 0u;
-    ls_meas meas;
-    ls_cmd cmd;
-    plant_maps pm;
-    plant_coef q;
-    angle_track ang = {0.0, 1.0, 0.0, 0};
-    dead_carry carry = no_carry;
-    double x_lag = x, v_lag = v, v_lag2 = v; /* m, m/s: x and v one period back, v two back */
-    frozen fz;
-    if (c == NULL || drive == NULL || out == NULL || res == NULL || (n_cmds > 0 && cmds == NULL) || n_steps < 0) {
+    int j;
+    if (c == NULL || s == NULL) {
         return LS_ERR_NULL;
     }
     if (ls_sim_check(c) != LS_OK) {
         return LS_ERR_PARAM;
     }
+    memset(s, 0, sizeof *s);
+    s->rec_count = 1;
+    s->rng = c->seed * 0x9E3779B97F4A7C15ull + 0x2545F4914F6CDD1Dull;
+    if (s->rng == 0u) {
+        s->rng = 1u;
+    }
+    s->x = c->x0;
+    s->v = c->motion == LS_SIM_HELD ? 0.0 : c->v0;
+    s->x_lag = s->x;
+    s->v_lag = s->v;
+    s->v_lag2 = s->v;
+    for (j = 0; j < 3; ++j) {
+        s->duty[j] = 0.5;
+        s->carry_t[j] = no_carry.t[j];
+        s->carry_on[j] = no_carry.on[j];
+        s->carry_excess[j] = no_carry.excess[j];
+    }
+    s->carry_any = no_carry.any_excess ? 1 : 0;
+    s->ang_th = 0.0;
+    s->ang_c = 1.0;
+    s->ang_s = 0.0;
+    s->ang_left = 0;
+    return LS_OK;
+}
+
+/* Block statistics of the samples being recorded (ls_sim_out x_min ... i_abc_max) */
+typedef struct {
+    int64_t r;                   /* -, local index of the sample whose block is open; < 0: none */
+    int32_t n;                   /* -, periods in it so far */
+    double x_lo, x_hi, x_sum;    /* m */
+    double e_lo, e_hi, e_sum;    /* rad */
+    double i_lo[3], i_hi[3];     /* A */
+} block_acc;
+
+static void block_open(block_acc *b, int64_t r, double x, double e, const double i[2])
+{
+    double iabc[3];
+    int j;
+    ab_to_abc(i, iabc);
+    b->r = r;
+    b->n = 1;
+    b->x_lo = b->x_hi = b->x_sum = x;
+    b->e_lo = b->e_hi = b->e_sum = e;
+    for (j = 0; j < 3; ++j) {
+        b->i_lo[j] = b->i_hi[j] = iabc[j];
+    }
+}
+
+static void block_add(block_acc *b, double x, double e, const double i[2])
+{
+    double iabc[3];
+    int j;
+    ab_to_abc(i, iabc);
+    b->n++;
+    b->x_lo = x < b->x_lo ? x : b->x_lo;
+    b->x_hi = x > b->x_hi ? x : b->x_hi;
+    b->x_sum += x;
+    b->e_lo = e < b->e_lo ? e : b->e_lo;
+    b->e_hi = e > b->e_hi ? e : b->e_hi;
+    b->e_sum += e;
+    for (j = 0; j < 3; ++j) {
+        b->i_lo[j] = iabc[j] < b->i_lo[j] ? iabc[j] : b->i_lo[j];
+        b->i_hi[j] = iabc[j] > b->i_hi[j] ? iabc[j] : b->i_hi[j];
+    }
+}
+
+static void block_write(const ls_sim_out *o, const block_acc *b)
+{
+    const int64_t r = b->r;
+    int j;
+    if (r < 0 || b->n == 0) {
+        return;
+    }
+    if (o->x_min) o->x_min[r] = b->x_lo;
+    if (o->x_max) o->x_max[r] = b->x_hi;
+    if (o->x_mean) o->x_mean[r] = b->n == 1 ? b->x_sum : b->x_sum / (double)b->n;
+    if (o->err_min) o->err_min[r] = b->e_lo;
+    if (o->err_max) o->err_max[r] = b->e_hi;
+    if (o->err_mean) o->err_mean[r] = b->n == 1 ? b->e_sum : b->e_sum / (double)b->n;
+    for (j = 0; j < 3; ++j) {
+        if (o->i_abc_min) o->i_abc_min[3 * r + j] = b->i_lo[j];
+        if (o->i_abc_max) o->i_abc_max[3 * r + j] = b->i_hi[j];
+    }
+}
+
+ls_status ls_sim_continue(const ls_sim_cfg *c, ls_drive *drive, const ls_sim_cmd *cmds, int32_t n_cmds,
+                          ls_sim_state *s, int64_t n_more, const ls_sim_out *out, ls_sim_result *res)
+{
+    const double h = 1.0 / c->f_pwm, tau = c->pole_pitch, kx = 2.0 * SIM_PI / tau;
+    double x, v, i[2], duty[3], x_lag, v_lag, v_lag2; /* m, m/s: x and v one period back, v two back */
+    uint64_t rng;
+    int64_t k, k_end, r = 0;
+    int32_t next, rec_count, j;
+    uint32_t fault;
+    bool blk, blk_err;
+    ls_meas meas;
+    ls_cmd cmd;
+    plant_maps pm;
+    plant_coef q;
+    angle_track ang;
+    dead_carry carry;
+    block_acc acc;
+    frozen fz;
+    if (c == NULL || drive == NULL || s == NULL || out == NULL || res == NULL || (n_cmds > 0 && cmds == NULL) ||
+        n_more < 0) {
+        return LS_ERR_NULL;
+    }
+    if (ls_sim_check(c) != LS_OK) {
+        return LS_ERR_PARAM;
+    }
+    blk_err = out->err_min != NULL || out->err_max != NULL || out->err_mean != NULL;
+    blk = blk_err || out->x_min != NULL || out->x_max != NULL || out->x_mean != NULL || out->i_abc_min != NULL ||
+          out->i_abc_max != NULL;
+    if (blk && !s->ended && s->rec_count != 1) { /* a block begun in the previous call */
+        return LS_ERR_PARAM;
+    }
     memset(res, 0, sizeof *res);
+    res->steps_done = s->k;
+    res->fault = s->fault;
+    res->x_end = s->x;
+    res->v_end = s->v;
+    if (s->ended) {
+        return LS_OK;
+    }
+    /* the state in locals for the time loop (registers), written back at the end */
+    x = s->x;
+    v = s->v;
+    i[0] = s->i[0];
+    i[1] = s->i[1];
+    x_lag = s->x_lag;
+    v_lag = s->v_lag;
+    v_lag2 = s->v_lag2;
+    rng = s->rng;
+    next = s->next;
+    rec_count = s->rec_count;
+    fault = s->fault;
+    for (j = 0; j < 3; ++j) {
+        duty[j] = s->duty[j];
+        carry.t[j] = s->carry_t[j];
+        carry.on[j] = s->carry_on[j];
+        carry.excess[j] = s->carry_excess[j];
+    }
+    carry.any_excess = s->carry_any != 0;
+    ang.th = s->ang_th;
+    ang.c = s->ang_c;
+    ang.s = s->ang_s;
+    ang.left = s->ang_left;
+    acc.r = -1;
+    acc.n = 0;
     coef_init(c, &q);
     memset(&cmd, 0, sizeof cmd);
-    if (rng == 0u) {
-        rng = 1u;
-    }
-    for (k = 0; k < n_steps; ++k) {
+    k_end = s->k + n_more;
+    for (k = s->k; k < k_end; ++k) {
         double t = (double)k * h, x_mid, f_start, f_avg, u[3], th_mid, cm, sm, dl, cd, sd;
         if (k % LS_SIM_STOP_POLL == 0 && out->stop != NULL && *out->stop != 0) {
             fault |= LS_SIM_FAULT_STOPPED;
@@ -754,9 +895,16 @@ ls_status ls_sim_run(const ls_sim_cfg *c, ls_drive *drive, const ls_sim_cmd *cmd
             dl = kx * (x - x_mid);
             cd = 1.0 - 0.5 * dl * dl * (1.0 - dl * dl * (1.0 / 12.0));
             sd = dl * (1.0 - dl * dl * (1.0 / 6.0) * (1.0 - dl * dl * (1.0 / 20.0)));
+            if (blk) { /* the previous sample's block is complete; this sample opens the next */
+                block_write(out, &acc);
+                block_open(&acc, r, x, blk_err ? est_err(&cmd, x, tau, kx) : 0.0, i);
+            }
             record(out, r++, t, x, v, i, cm * cd - sm * sd, sm * cd + cm * sd, u, f_start, &cmd, tau, kx, fault);
+        } else if (blk) {
+            block_add(&acc, x, blk_err ? est_err(&cmd, x, tau, kx) : 0.0, i);
         }
         if (fault != 0u || cmd.cal_done) { /* a calibration run ends with the calibration */
+            s->ended = 1;
             break;
         }
         if (c->fidelity == LS_SIM_SWITCHING) {
@@ -784,23 +932,73 @@ ls_status ls_sim_run(const ls_sim_cfg *c, ls_drive *drive, const ls_sim_cmd *cmd
             fault |= LS_SIM_FAULT_TRAVEL;
         }
         if (fault != 0u) {
-            /* record the state that tripped, then stop */
+            /* record the state that tripped (a block of its own), then stop */
             double nan3[3] = {NAN, NAN, NAN}, f_end = NAN;
             if (LS_ISFINITE(i[0]) && LS_ISFINITE(i[1]) && LS_ISFINITE(x)) {
                 maps(c, &q, kx * x, &pm);
                 f_end = force_of(&q, &pm, i);
             }
+            if (blk) {
+                block_write(out, &acc);
+                block_open(&acc, r, x, blk_err ? est_err(&cmd, x, tau, kx) : 0.0, i);
+            }
             record(out, r++, t + h, x, v, i, cos(kx * x), sin(kx * x), nan3, f_end, &cmd, tau, kx, fault);
             k++;
+            s->ended = 1;
             break;
         }
     }
+    if (fault & LS_SIM_FAULT_STOPPED) {
+        s->ended = 1;
+    }
+    if (blk) {
+        block_write(out, &acc); /* complete when the call ends where a block does, or the run ends */
+    }
+    s->k = k;
+    s->n_rec += r;
+    s->fault = fault;
+    s->x = x;
+    s->v = v;
+    s->i[0] = i[0];
+    s->i[1] = i[1];
+    s->x_lag = x_lag;
+    s->v_lag = v_lag;
+    s->v_lag2 = v_lag2;
+    s->rng = rng;
+    s->next = next;
+    s->rec_count = rec_count;
+    for (j = 0; j < 3; ++j) {
+        s->duty[j] = duty[j];
+        s->carry_t[j] = carry.t[j];
+        s->carry_on[j] = carry.on[j];
+        s->carry_excess[j] = carry.excess[j];
+    }
+    s->carry_any = carry.any_excess ? 1 : 0;
+    s->ang_th = ang.th;
+    s->ang_c = ang.c;
+    s->ang_s = ang.s;
+    s->ang_left = ang.left;
     res->steps_done = k;
     res->n_rec = r;
     res->fault = fault;
     res->x_end = x;
     res->v_end = v;
     return LS_OK;
+}
+
+ls_status ls_sim_run(const ls_sim_cfg *c, ls_drive *drive, const ls_sim_cmd *cmds, int32_t n_cmds, int64_t n_steps,
+                     const ls_sim_out *out, ls_sim_result *res)
+{
+    ls_sim_state s;
+    ls_status st;
+    if (c == NULL || drive == NULL || out == NULL || res == NULL || (n_cmds > 0 && cmds == NULL) || n_steps < 0) {
+        return LS_ERR_NULL;
+    }
+    st = ls_sim_begin(c, &s);
+    if (st != LS_OK) {
+        return st;
+    }
+    return ls_sim_continue(c, drive, cmds, n_cmds, &s, n_steps, out, res);
 }
 
 ls_status ls_sim_open_loop(const ls_sim_cfg *c, const double *seg_t, const double *seg_v, int64_t n_seg,

@@ -86,6 +86,113 @@ static void closed_loop(ls_sim_fidelity fid)
     }
 }
 
+/* ls_sim_begin/ls_sim_continue: a run in chunks (each a multiple of decimate but the last) writes bit
+ * for bit the samples of one ls_sim_run; block statistics equal min/max/mean of a decimate = 1 run
+ * over the same periods; a chunk that would continue a block is refused */
+#define CH_STEPS 9001 /* not a multiple of the block: the last block is short */
+#define CH_DEC 8
+#define CH_REC (CH_STEPS / CH_DEC + 2)
+/* a sensorless drive with the LUT at position 0 */
+static void sensorless_drive(ls_drive *d, const ls_drive_cfg *dc)
+{
+    ls_pos p0 = {0, LS_R(0.0)};
+    LS_CHECK(ls_drive_init(d, dc) == LS_OK);
+    ls_drive_set_position(d, p0);
+    LS_CHECK(ls_drive_set_mode(d, LS_MODE_SENSORLESS_LUT) == LS_OK);
+}
+
+static void chunks_and_blocks(ls_sim_fidelity fid)
+{
+    static double t1[CH_STEPS + 2], x1[CH_STEPS + 2], te1[CH_STEPS + 2], i1[3 * (CH_STEPS + 2)];
+    static double tA[CH_REC], xA[CH_REC], xloA[CH_REC], xhiA[CH_REC], xmA[CH_REC], eloA[CH_REC], ehiA[CH_REC],
+        emA[CH_REC], iloA[3 * CH_REC], ihiA[3 * CH_REC];
+    static double tB[CH_REC], xB[CH_REC], xloB[CH_REC], xhiB[CH_REC], xmB[CH_REC], eloB[CH_REC], ehiB[CH_REC],
+        emB[CH_REC], iloB[3 * CH_REC], ihiB[3 * CH_REC];
+    static double buf[11][CH_REC], ibuf[2][3 * CH_REC];
+    ls_sim_cfg c;
+    ls_sim_out o1, oA, oB;
+    ls_sim_cmd cmd = {0.05, 0.003, 1};
+    ls_sim_result r1, rA, rB;
+    ls_sim_state st;
+    ls_lut_cfg lc = {ls_lut_ecce2010_q, LS_LUT_ECCE2010_Q_LEN};
+    ls_lut lut;
+    ls_drive_cfg dc;
+    ls_drive d;
+    int64_t k, n, done, chunk = 3 * CH_DEC * 50, rec = 0;
+    int j, bad_blk = 0, bad_chunk = 0;
+    make_cfg(&c, fid);
+    c.seed = 11;
+    ls_lut_init(&lut, &lc);
+    ls_drive_default_cfg(&dc);
+    dc.demod.comp = &lut;
+    /* the reference: every period */
+    c.decimate = 1;
+    memset(&o1, 0, sizeof o1);
+    o1.t = t1; o1.x = x1; o1.theta_err = te1; o1.i_abc = i1;
+    sensorless_drive(&d, &dc);
+    LS_CHECK(ls_sim_run(&c, &d, &cmd, 1, CH_STEPS, &o1, &r1) == LS_OK);
+    LS_CHECK(r1.fault == 0u && r1.n_rec == CH_STEPS);
+    /* one run with blocks */
+    c.decimate = CH_DEC;
+    memset(&oA, 0, sizeof oA);
+    oA.t = tA; oA.x = xA; oA.x_min = xloA; oA.x_max = xhiA; oA.x_mean = xmA;
+    oA.err_min = eloA; oA.err_max = ehiA; oA.err_mean = emA; oA.i_abc_min = iloA; oA.i_abc_max = ihiA;
+    sensorless_drive(&d, &dc);
+    LS_CHECK(ls_sim_run(&c, &d, &cmd, 1, CH_STEPS, &oA, &rA) == LS_OK);
+    LS_CHECK(rA.n_rec == (CH_STEPS + CH_DEC - 1) / CH_DEC);
+    for (k = 0; k < rA.n_rec; ++k) { /* against the decimate = 1 run over the same periods */
+        int64_t a = k * CH_DEC, b = a + CH_DEC < CH_STEPS ? a + CH_DEC : CH_STEPS, m;
+        double lo = x1[a], hi = x1[a], sum = 0.0, elo = te1[a], ehi = te1[a], esum = 0.0;
+        for (m = a; m < b; ++m) {
+            lo = fmin(lo, x1[m]); hi = fmax(hi, x1[m]); sum += x1[m];
+            elo = fmin(elo, te1[m]); ehi = fmax(ehi, te1[m]); esum += te1[m];
+            for (j = 0; j < 3; ++j) {
+                if (i1[3 * m + j] < iloA[3 * k + j] || i1[3 * m + j] > ihiA[3 * k + j]) bad_blk++;
+            }
+        }
+        if (xA[k] != x1[a] || tA[k] != t1[a] || xloA[k] != lo || xhiA[k] != hi || eloA[k] != elo || ehiA[k] != ehi ||
+            fabs(xmA[k] - sum / (double)(b - a)) > 1e-15 || fabs(emA[k] - esum / (double)(b - a)) > 1e-15) {
+            bad_blk++;
+        }
+    }
+    LS_CHECK(bad_blk == 0);
+    /* the same run in chunks of 1200 periods into one reused buffer */
+    memset(&oB, 0, sizeof oB);
+    oB.t = buf[0]; oB.x = buf[1]; oB.x_min = buf[2]; oB.x_max = buf[3]; oB.x_mean = buf[4];
+    oB.err_min = buf[5]; oB.err_max = buf[6]; oB.err_mean = buf[7]; oB.i_abc_min = ibuf[0]; oB.i_abc_max = ibuf[1];
+    sensorless_drive(&d, &dc);
+    LS_CHECK(ls_sim_begin(&c, &st) == LS_OK);
+    for (done = 0; done < CH_STEPS; done += n) {
+        n = CH_STEPS - done < chunk ? CH_STEPS - done : chunk;
+        LS_CHECK(ls_sim_continue(&c, &d, &cmd, 1, &st, n, &oB, &rB) == LS_OK);
+        LS_CHECK(rB.steps_done == done + n);
+        for (k = 0; k < rB.n_rec; ++k, ++rec) {
+            tB[rec] = buf[0][k]; xB[rec] = buf[1][k]; xloB[rec] = buf[2][k]; xhiB[rec] = buf[3][k];
+            xmB[rec] = buf[4][k]; eloB[rec] = buf[5][k]; ehiB[rec] = buf[6][k]; emB[rec] = buf[7][k];
+            for (j = 0; j < 3; ++j) {
+                iloB[3 * rec + j] = ibuf[0][3 * k + j];
+                ihiB[3 * rec + j] = ibuf[1][3 * k + j];
+            }
+        }
+    }
+    LS_CHECK(rec == rA.n_rec && st.n_rec == rec && rB.x_end == rA.x_end && rB.v_end == rA.v_end);
+    for (k = 0; k < rec; ++k) {
+        if (memcmp(&tA[k], &tB[k], 8) || memcmp(&xA[k], &xB[k], 8) || memcmp(&xloA[k], &xloB[k], 8) ||
+            memcmp(&xhiA[k], &xhiB[k], 8) || memcmp(&xmA[k], &xmB[k], 8) || memcmp(&eloA[k], &eloB[k], 8) ||
+            memcmp(&ehiA[k], &ehiB[k], 8) || memcmp(&emA[k], &emB[k], 8) ||
+            memcmp(&iloA[3 * k], &iloB[3 * k], 24) || memcmp(&ihiA[3 * k], &ihiB[3 * k], 24)) {
+            bad_chunk++;
+        }
+    }
+    LS_CHECK(bad_chunk == 0);
+    /* a chunk that would continue a block begun in the previous one: refused */
+    LS_CHECK(ls_sim_begin(&c, &st) == LS_OK);
+    LS_CHECK(ls_sim_continue(&c, &d, &cmd, 1, &st, CH_DEC + 1, &oB, &rB) == LS_OK && rB.n_rec == 2);
+    LS_CHECK(ls_sim_continue(&c, &d, &cmd, 1, &st, CH_DEC, &oB, &rB) == LS_ERR_PARAM);
+    printf("  %s: chunks of %d periods == one run; blocks of %d == the decimate = 1 run\n",
+           fid == LS_SIM_SWITCHING ? "switching" : "average", (int)chunk, CH_DEC);
+}
+
 static void open_loop_and_faults(void)
 {
     static double t[16002], x[16002], i3[3 * 16002]; /* room for every step of the travel run */
@@ -140,6 +247,8 @@ int main(void)
 {
     closed_loop(LS_SIM_AVERAGE);
     closed_loop(LS_SIM_SWITCHING);
+    chunks_and_blocks(LS_SIM_AVERAGE);
+    chunks_and_blocks(LS_SIM_SWITCHING);
     open_loop_and_faults();
     return ls_test_report("test_sim");
 }

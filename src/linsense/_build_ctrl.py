@@ -385,14 +385,20 @@ typedef struct { double t; double x; int32_t move; } ls_sim_cmd;
 typedef struct {
     double *t; double *x; double *v; double *x_est; double *v_est; double *x_ref; double *theta_err;
     double *i_abc; double *i_dq; double *duty; double *force; double *err_sig; uint32_t *fault;
+    double *x_min, *x_max, *x_mean; double *err_min, *err_max, *err_mean; double *i_abc_min, *i_abc_max;
     const volatile int32_t *stop;
 } ls_sim_out;
 typedef struct {
     int64_t steps_done; int64_t n_rec; uint32_t fault; double x_end; double v_end;
 } ls_sim_result;
+typedef struct { int64_t k; int64_t n_rec; uint32_t fault; int32_t ended; ...; } ls_sim_state;
 ls_status ls_sim_check(const ls_sim_cfg *cfg);
 ls_status ls_sim_run(const ls_sim_cfg *cfg, ls_drive *drive, const ls_sim_cmd *cmds, int32_t n_cmds,
                      int64_t n_steps, const ls_sim_out *out, ls_sim_result *res);
+ls_status ls_sim_begin(const ls_sim_cfg *cfg, ls_sim_state *state);
+ls_status ls_sim_continue(const ls_sim_cfg *cfg, ls_drive *drive, const ls_sim_cmd *cmds, int32_t n_cmds,
+                          ls_sim_state *state, int64_t n_more_steps, const ls_sim_out *out,
+                          ls_sim_result *res);
 ls_status ls_sim_open_loop(const ls_sim_cfg *cfg, const double *seg_t, const double *seg_v, int64_t n_seg,
                            const ls_sim_out *out, ls_sim_result *res);
 void ls_sim_plant_eval(const ls_sim_cfg *cfg, double theta, double lab[3], double dlab[3], double lpm[2],

@@ -120,7 +120,15 @@ typedef struct {
 } ls_sim_cmd;
 
 /* Output arrays, each of n_rec = ceil(n_steps / decimate) samples (caller-allocated; any
- * pointer may be NULL to skip that signal). Recorded at the start of each recorded period. */
+ * pointer may be NULL to skip that signal). Recorded at the start of each recorded period.
+ *
+ * Block statistics (the *_min, *_max, *_mean arrays; NULL: not kept, and then not computed): the
+ * minimum, maximum and mean over the block of `decimate` PWM periods that sample r opens (periods
+ * r decimate .. r decimate + decimate - 1), of the same quantity the point array holds, taken at the
+ * start of each period of the block. With decimate = 1 they equal the sample itself. A block cut
+ * short by the end of the run covers the periods run; the sample that tripped a fault (recorded
+ * after the last period) is a block of its own. Unlike the point values, they cannot alias: a
+ * component at the decimated rate shows its whole envelope in min and max. */
 typedef struct {
     double *t;         /* s */
     double *x;         /* m, true position */
@@ -135,6 +143,12 @@ typedef struct {
     double *force;     /* N, motor force (period average) */
     double *err_sig;   /* rad, demodulated error */
     uint32_t *fault;   /* drive fault bits | LS_SIM_FAULT_* */
+    /* block statistics (closed loop only; ls_sim_open_loop ignores them) */
+    double *x_min, *x_max, *x_mean;       /* m, true position over the block */
+    double *err_min, *err_max, *err_mean; /* rad, theta_err over the block (computed every period
+                                             only when one of these is requested) */
+    double *i_abc_min, *i_abc_max;        /* A, true phase currents over the block, 3 per sample
+                                             (the envelope of the HF and PWM ripple) */
     /* not an output: polled every LS_SIM_STOP_POLL periods by ls_sim_run; nonzero ends the run
      * there with LS_SIM_FAULT_STOPPED (another thread sets it, e.g. on Ctrl-C; NULL: never) */
     const volatile int32_t *stop;
@@ -142,20 +156,58 @@ typedef struct {
 
 typedef struct {
     int64_t steps_done;  /* -, PWM periods simulated (< n_steps when stopped early: a fault, or the end of
-                            the drive's calibration in LS_MODE_CALIBRATION) */
-    int64_t n_rec;       /* -, samples written */
+                            the drive's calibration in LS_MODE_CALIBRATION); ls_sim_continue: since
+                            ls_sim_begin */
+    int64_t n_rec;       /* -, samples written (ls_sim_continue: by this call, from out[0]) */
     uint32_t fault;      /* drive fault bits | LS_SIM_FAULT_* at the end */
     double x_end;        /* m */
     double v_end;        /* m/s */
 } ls_sim_result;
 
+/* The state of a closed-loop run between two ls_sim_continue calls (caller-allocated, filled by
+ * ls_sim_begin; read-only to the caller). A run split into calls gives bit for bit the samples of
+ * one ls_sim_run call of the total length. */
+typedef struct {
+    int64_t k;              /* -, PWM periods simulated since ls_sim_begin */
+    int64_t n_rec;          /* -, samples recorded since ls_sim_begin */
+    uint32_t fault;         /* drive fault bits | LS_SIM_FAULT_* so far */
+    int32_t ended;          /* -, 1: a fault, a stop or the end of the calibration ended the run */
+    int32_t next;           /* -, index of the next command */
+    int32_t rec_count;      /* -, periods until the next recorded one (1: the next period) */
+    uint64_t rng;           /* -, sensor-noise generator */
+    double x, v;            /* m, m/s, plant position and speed */
+    double i[2];            /* A, alpha-beta currents */
+    double x_lag, v_lag, v_lag2; /* m, m/s: x and v one period back, v two back */
+    double duty[3];         /* -, duties computed for the next period */
+    double carry_t[3];      /* s, dead time carried into the next period (see ls_sim.c) */
+    int32_t carry_on[3];    /* - */
+    double carry_excess[3]; /* - */
+    int32_t carry_any;      /* - */
+    int32_t ang_left;       /* -, cos/sin tracker of the mid-period angle */
+    double ang_th, ang_c, ang_s; /* rad, - , - */
+} ls_sim_state;
+
 /* Validate the configuration (LS_ERR_PARAM names nothing; linsense.sim validates first). */
 ls_status ls_sim_check(const ls_sim_cfg *cfg);
 
 /* Closed loop: drive (initialised, mode set by the caller) around the plant for n_steps PWM
- * periods, issuing the commands at their times (sorted by t). */
+ * periods, issuing the commands at their times (sorted by t). ls_sim_begin then one
+ * ls_sim_continue of n_steps. */
 ls_status ls_sim_run(const ls_sim_cfg *cfg, ls_drive *drive, const ls_sim_cmd *cmds, int32_t n_cmds,
                      int64_t n_steps, const ls_sim_out *out, ls_sim_result *res);
+
+/* The same run in chunks, so that a long run reuses small output buffers: ls_sim_begin sets the
+ * plant to the configuration's initial state (t = 0), then each ls_sim_continue runs n_more_steps
+ * PWM periods more (fewer when the run ends: res->fault, state->ended) with the same cfg, drive and
+ * commands (times from t = 0 of the run), writing its samples from out[0] (at most
+ * ceil(n_more_steps / decimate) + 1 of them; res->n_rec says how many). With block statistics a
+ * chunk must start where a block starts: every chunk but the last a multiple of decimate periods
+ * (otherwise LS_ERR_PARAM; a sample's block is complete when its call returns). After the run has
+ * ended a call does nothing (res->n_rec = 0). */
+ls_status ls_sim_begin(const ls_sim_cfg *cfg, ls_sim_state *state);
+ls_status ls_sim_continue(const ls_sim_cfg *cfg, ls_drive *drive, const ls_sim_cmd *cmds, int32_t n_cmds,
+                          ls_sim_state *state, int64_t n_more_steps, const ls_sim_out *out,
+                          ls_sim_result *res);
 
 /* Open loop: prescribed pole voltages (V, relative to the DC minus rail). n_seg segments of
  * durations seg_t (s) and voltages seg_v (3 per segment), applied in order; one recorded sample

@@ -39,6 +39,14 @@ SIGNALS = {
     "t": 1, "x": 1, "v": 1, "x_est": 1, "v_est": 1, "x_ref": 1, "theta_err": 1,
     "i_abc": 3, "i_dq": 2, "duty": 3, "force": 1, "err_sig": 1,
 }
+#: Block statistics (``ls_sim_out`` x_min ... i_abc_max): name -> values per sample. The min, max
+#: and mean over the ``decimate`` periods each sample opens (docs/simulator.md, "Block statistics").
+BLOCKS = {
+    "x_min": 1, "x_max": 1, "x_mean": 1, "err_min": 1, "err_max": 1, "err_mean": 1,
+    "i_abc_min": 3, "i_abc_max": 3,
+}
+#: PWM periods per call of the C loop in :func:`run_closed_loop_chunks` (rounded to whole blocks).
+CHUNK = 2**18
 #: Fault bits of the simulation itself (the drive's LS_FAULT_* bits are below 0x100).
 SIM_FAULT_TRAVEL = int(lib.LS_SIM_FAULT_TRAVEL)
 SIM_FAULT_DIVERGED = int(lib.LS_SIM_FAULT_DIVERGED)
@@ -96,8 +104,16 @@ def sim_cfg(motor, setup: PlantSetup):
     return c
 
 
-def _outputs(n_rec: int) -> tuple[dict[str, np.ndarray], object]:
-    arrays = {k: np.full((n_rec, w) if w > 1 else n_rec, np.nan) for k, w in SIGNALS.items()}
+def _outputs(n_rec: int, signals=None, blocks=()) -> tuple[dict[str, np.ndarray], object]:
+    """Output arrays of ``n_rec`` samples (NaN until written) and the ``ls_sim_out`` pointing at
+    them: the point ``signals`` (names of :data:`SIGNALS`; None: all) and the ``blocks`` (names of
+    :data:`BLOCKS`); ``fault`` always."""
+    width = {**SIGNALS, **BLOCKS}
+    names = list(SIGNALS if signals is None else signals) + list(blocks)
+    unknown = [k for k in names if k not in width]
+    if unknown:
+        raise ValueError(f"unknown recorded signal(s) {unknown}; known: {sorted(width)}")
+    arrays = {k: np.full((n_rec, width[k]) if width[k] > 1 else n_rec, np.nan) for k in names}
     arrays["fault"] = np.zeros(n_rec, dtype=np.uint32)
     out = ffi.new("ls_sim_out *")
     for k, a in arrays.items():
@@ -138,33 +154,31 @@ def _sigint_held():
         signal.pthread_sigmask(signal.SIG_SETMASK, old)
 
 
-def run_closed_loop(cfg, drive, n_steps: int, commands=()) -> RawRun:
-    """Run ``n_steps`` PWM periods of ``drive`` (an initialised ``ls_drive *`` with its mode set)
-    around the plant ``cfg``. ``commands``: iterable of ``(t [s], x [m], move: bool)``."""
+def _c_commands(commands):
     cmds = sorted(commands, key=lambda c: c[0])
     c_cmds = ffi.new("ls_sim_cmd[]", max(1, len(cmds)))
     for j, (t, x, move) in enumerate(cmds):
         c_cmds[j].t, c_cmds[j].x, c_cmds[j].move = float(t), float(x), int(bool(move))
-    n_rec = int(math.ceil(n_steps / cfg.decimate)) + 2
-    arrays, out = _outputs(n_rec)
-    res = ffi.new("ls_sim_result *")
-    stop = ffi.new("int32_t *", 0)
-    out.stop = stop
-    status = []
+    return c_cmds, len(cmds)
 
+
+def _call_interruptible(call, stop) -> tuple[int, float]:
+    """``call()`` (a C function that releases the GIL and polls ``stop[0]``), in a thread when this
+    is the main thread, so that Ctrl-C reaches Python: the flag is set, the C loop stops at its next
+    poll (milliseconds) and the interrupt is raised once it has let go of its buffers. Returns the
+    status and the wall time (s) of the call alone."""
+    status = []
     done = threading.Event()
 
     def work() -> None:  # (the wall time of the C run alone, not of the thread around it)
         try:
             t0 = time.perf_counter()
-            status.append(lib.ls_sim_run(cfg, drive, c_cmds, len(cmds), int(n_steps), out, res))
+            status.append(call())
             status.append(time.perf_counter() - t0)
         finally:
             done.set()
 
     if threading.current_thread() is threading.main_thread():
-        # the C loop runs in a thread (it releases the GIL) so that Ctrl-C reaches Python here:
-        # the loop polls the flag every LS_SIM_STOP_POLL periods (milliseconds) and stops
         worker = threading.Thread(target=work, name="linsense-sim")
         started = False
         try:
@@ -175,7 +189,7 @@ def run_closed_loop(cfg, drive, n_steps: int, commands=()) -> RawRun:
                 pass
         except BaseException:
             stop[0] = 1
-            # the C loop holds pointers into this frame's buffers: wait for it to stop (an event,
+            # the C loop holds pointers into the caller's buffers: wait for it to stop (an event,
             # not Thread.join, which an interrupt can leave believing the thread has ended)
             while started and not done.is_set():
                 try:
@@ -185,10 +199,58 @@ def run_closed_loop(cfg, drive, n_steps: int, commands=()) -> RawRun:
             raise
     else:
         work()
-    st, wall = status
+    return status[0], status[1]
+
+
+def run_closed_loop(cfg, drive, n_steps: int, commands=(), *, signals=None, blocks=()) -> RawRun:
+    """Run ``n_steps`` PWM periods of ``drive`` (an initialised ``ls_drive *`` with its mode set)
+    around the plant ``cfg``. ``commands``: iterable of ``(t [s], x [m], move: bool)``.
+    ``signals``: the point signals to record (names of :data:`SIGNALS`; None: all), ``blocks``: the
+    block statistics (names of :data:`BLOCKS`); ``fault`` is always recorded."""
+    c_cmds, n_cmds = _c_commands(commands)
+    n_rec = int(math.ceil(n_steps / cfg.decimate)) + 2
+    arrays, out = _outputs(n_rec, signals, blocks)
+    res = ffi.new("ls_sim_result *")
+    stop = ffi.new("int32_t *", 0)
+    out.stop = stop
+    st, wall = _call_interruptible(
+        lambda: lib.ls_sim_run(cfg, drive, c_cmds, n_cmds, int(n_steps), out, res), stop)
     if st != lib.LS_OK:
         raise SimulationError(f"ls_sim_run refused its inputs (status {st})")
     return _collect(arrays, res, wall)
+
+
+def run_closed_loop_chunks(cfg, drive, n_steps: int, commands=(), *, on_chunk, chunk: int = CHUNK,
+                           signals=None, blocks=()) -> RawRun:
+    """The run of :func:`run_closed_loop` in chunks of about ``chunk`` PWM periods (rounded up to
+    whole blocks of ``cfg.decimate``) that reuse one set of output buffers, so memory does not grow
+    with the duration: ``on_chunk(arrays)`` receives each chunk's samples (``{name: array}``, views
+    into the buffers, valid until it returns: copy or write them out) in order. The samples are bit
+    for bit those of one :func:`run_closed_loop`. Returns the end state with empty ``arrays``;
+    ``wall_s`` is the time spent in C alone."""
+    c_cmds, n_cmds = _c_commands(commands)
+    dec = int(cfg.decimate)
+    per_call = max(1, -(-int(chunk) // dec)) * dec
+    arrays, out = _outputs(per_call // dec + 2, signals, blocks)
+    res = ffi.new("ls_sim_result *")
+    state = ffi.new("ls_sim_state *")
+    stop = ffi.new("int32_t *", 0)
+    out.stop = stop
+    if lib.ls_sim_begin(cfg, state) != lib.LS_OK:
+        raise SimulationError("ls_sim_begin refused the configuration")
+    wall, done = 0.0, 0
+    while done < n_steps and not state.ended:
+        n = min(per_call, int(n_steps) - done)
+        st, w = _call_interruptible(
+            lambda n=n: lib.ls_sim_continue(cfg, drive, c_cmds, n_cmds, state, n, out, res), stop)
+        wall += w
+        if st != lib.LS_OK:
+            raise SimulationError(f"ls_sim_continue refused its inputs (status {st})")
+        done += n
+        k = int(res.n_rec)
+        if k:
+            on_chunk({name: a[:k] for name, a in arrays.items()})
+    return RawRun({}, int(res.steps_done), int(res.fault), float(res.x_end), float(res.v_end), wall)
 
 
 def run_open_loop(cfg, seg_t: np.ndarray, seg_v: np.ndarray) -> RawRun:

@@ -4,6 +4,11 @@ Every value is a finite number, a bool, a string or ``None`` (JSON ``null``, whe
 not defined, e.g. the estimation error of an idle HF observer): never NaN. Every error peak says
 which window it covers (``max_abs_err_deg`` covers the whole run; ``*_window_s`` keys give the
 others).
+
+With block statistics (``x_min``, ``x_max``, ``x_mean``, ``err_min``, ``err_max``, ``err_mean`` in
+the arrays, :data:`linsense.sim.core.BLOCKS`) every metric reads the envelope of each block instead
+of its point value, so nothing between two samples is missed; times (settling, the windows) then
+have the resolution of one block. With ``decimate = 1`` the result is exactly the point one.
 """
 
 from __future__ import annotations
@@ -63,13 +68,18 @@ def transient_mask(t: np.ndarray, moves, settle_s: float) -> np.ndarray:
     return m
 
 
-def settling_time(t: np.ndarray, x: np.ndarray, x_to: float, t0: float, band: float) -> float | None:
+def settling_time(t: np.ndarray, x: np.ndarray, x_to: float, t0: float, band: float,
+                  x_hi: np.ndarray | None = None) -> float | None:
     """Time (s) from ``t0`` after which ``|x - x_to| <= band`` holds to the end; None if it does
-    not hold at the last sample."""
+    not hold at the last sample. With ``x_hi``, ``x`` and ``x_hi`` are each sample's block minimum
+    and maximum (the time then has the resolution of a block)."""
     sel = t >= t0
     if not np.any(sel):
         return None
-    out = np.abs(x[sel] - x_to) > band
+    dev = np.abs(x[sel] - x_to)
+    if x_hi is not None:
+        dev = np.maximum(dev, np.abs(x_hi[sel] - x_to))
+    out = dev > band
     if out[-1]:
         return None
     if not np.any(out):
@@ -85,14 +95,19 @@ def compute_metrics(arrays: dict, *, fault: int, steps_done: int, f_pwm: float, 
     """Metrics of a run. ``x_target`` (m) is the last commanded position, ``x_start`` (m) the initial
     one; ``moves`` the planned moves ``(t0, t1, x_from, x_to)``. Definitions: docs/simulator.md."""
     t = arrays["t"]
-    x = arrays["x"]
+    # each sample's block: lowest, highest and mean value (the point value itself without blocks)
+    x = arrays.get("x_mean", arrays.get("x"))
+    x_lo, x_hi = arrays.get("x_min", x), arrays.get("x_max", x)
+    e_pt = arrays.get("theta_err", arrays.get("err_mean"))
+    e_lo = np.degrees(arrays.get("err_min", e_pt))
+    e_hi = np.degrees(arrays.get("err_max", e_pt))
+    err_signed = np.degrees(arrays.get("err_mean", e_pt))
     sim_s = steps_done / f_pwm
     ok = np.isfinite(t)
     if fault:
         # the last sample is the state that tripped: keep it out of the error statistics
         ok[-1:] = False
-    err_signed = np.degrees(arrays["theta_err"])
-    err = np.abs(err_signed)
+    err = np.maximum(np.abs(e_lo), np.abs(e_hi))
     good = ok & np.isfinite(err)
     after = good & (t >= convergence_s)
     tr = transient_mask(t, moves, settle_s)
@@ -107,33 +122,42 @@ def compute_metrics(arrays: dict, *, fault: int, steps_done: int, f_pwm: float, 
         max_err = tr_err = st_err = bias = None
 
     # the final window: limit cycle (peak to peak of the true position) and offset from the target
-    x_fin = np.isfinite(x)
-    final_x = float(x[x_fin][-1]) if np.any(x_fin) else float("nan")
-    xw = x[win & x_fin]
-    limit_cycle = float(np.ptp(xw)) * 1e3 if xw.size else None
-    end_err_mm = float(np.max(np.abs(xw - x_target))) * 1e3 if xw.size else None
+    x_fin = np.isfinite(x_lo) & np.isfinite(x_hi) & np.isfinite(x)
+    x_last = arrays.get("x", x)  # the point value at the last sample (the block mean without it)
+    final_x = float(x_last[x_fin][-1]) if np.any(x_fin) else float("nan")
+    wsel = win & x_fin
+    xw = x[wsel]
+    limit_cycle = float(np.max(x_hi[wsel]) - np.min(x_lo[wsel])) * 1e3 if xw.size else None
+    end_err_mm = float(max(np.max(np.abs(x_lo[wsel] - x_target)),
+                           np.max(np.abs(x_hi[wsel] - x_target)))) * 1e3 if xw.size else None
     offset_mm = float(np.mean(xw - x_target)) * 1e3 if xw.size else None
 
     # the last move: overshoot beyond the reference (not counting the steady offset), settling time,
     # and whether the drive reached the reference region at all
-    overshoot, settle_t, reached = 0.0, None, True
+    overshoot, reached = 0.0, True
     t_last = moves[-1][0] if moves else 0.0
     if moves:
         t0, _, x_from, x_to = moves[-1]
         direction = np.sign(x_to - x_from)
         sel = ok & (t >= t0) & x_fin
         if direction != 0 and np.any(sel):
-            peak = float(np.max(direction * (x[sel] - x_to))) * 1e3
+            x_far = x_hi if direction > 0 else x_lo  # the block's extreme in the move's direction
+            peak = float(np.max(direction * (x_far[sel] - x_to))) * 1e3
             steady = max(0.0, float(direction) * offset_mm) if offset_mm is not None else 0.0
             overshoot = max(0.0, peak - steady)
         dist = abs(x_to - x_from)
         if dist > 0 and np.any(sel):
             # at some time the true position came within half the move (and the bound) of the target
-            closest = float(np.min(np.abs(x[sel] - x_to)))
+            # (a block whose range contains the target came within 0 of it)
+            gap = np.maximum(np.maximum(x_lo[sel] - x_to, x_to - x_hi[sel]), 0.0) if x_lo is not x_hi \
+                else np.abs(x[sel] - x_to)
+            closest = float(np.min(gap))
             reached = closest <= min(0.5 * dist, bound_mm * 1e-3)
-        settle_t = settling_time(t[ok & x_fin], x[ok & x_fin], x_to, t0, settling_band_mm * 1e-3)
-    else:
-        settle_t = settling_time(t[ok & x_fin], x[ok & x_fin], x_target, 0.0, settling_band_mm * 1e-3)
+    x_to = moves[-1][3] if moves else x_target
+    t_from = moves[-1][0] if moves else 0.0
+    s_sel = ok & x_fin
+    settle_t = settling_time(t[s_sel], x_lo[s_sel], x_to, t_from, settling_band_mm * 1e-3,
+                             None if x_lo is x_hi else x_hi[s_sel])
 
     # stability: no fault; finite; reached the reference region; bounded (end window within
     # bound_mm of the target) and settled (true position varies by at most settle_band_mm there)

@@ -11,6 +11,8 @@ from linsense.sim.metrics import fault_reason
 #: Array attributes of :class:`Result`, in trace order.
 ARRAYS = ("t", "x", "x_est", "v", "v_est", "x_ref", "theta_err", "i_abc", "i_dq", "duty", "force",
           "err_sig", "fault")
+#: Block statistics of :class:`Result` (None when not recorded): min, max, mean over each sample's block.
+BLOCK_ARRAYS = ("x_min", "x_max", "x_mean", "err_min", "err_max", "err_mean", "i_abc_min", "i_abc_max")
 
 
 @dataclass(eq=False)
@@ -25,6 +27,10 @@ class Result:
     duty : (n, 3) duties applied during the period (NaN in the sample that tripped a fault).
     force : N, motor force.  err_sig : rad, demodulated error.  fault : uint32 fault bits so far.
     metrics : dict (see :mod:`linsense.sim.metrics`).  scenario : the :class:`Scenario` run.
+    x_min, x_max, x_mean : m, err_min, err_max, err_mean : rad, i_abc_min, i_abc_max : (n, 3) A:
+    block statistics, the min, max and mean over the ``decimate`` periods each sample opens (None
+    when not recorded; recorded in metrics-only runs and whenever ``decimate > 1``). Unlike the
+    point values they cannot alias (docs/simulator.md, "Block statistics").
     """
 
     t: np.ndarray
@@ -43,6 +49,14 @@ class Result:
     metrics: dict = field(default_factory=dict)
     scenario: object = None
     fault_bits: int = 0
+    x_min: np.ndarray | None = None
+    x_max: np.ndarray | None = None
+    x_mean: np.ndarray | None = None
+    err_min: np.ndarray | None = None
+    err_max: np.ndarray | None = None
+    err_mean: np.ndarray | None = None
+    i_abc_min: np.ndarray | None = None
+    i_abc_max: np.ndarray | None = None
 
     @property
     def fault_reason(self) -> str:
@@ -56,6 +70,10 @@ class Result:
     def arrays(self) -> dict[str, np.ndarray]:
         """The recorded arrays by name."""
         return {k: getattr(self, k) for k in ARRAYS}
+
+    def blocks(self) -> dict[str, np.ndarray]:
+        """The block statistics recorded, by name (empty when none were)."""
+        return {k: getattr(self, k) for k in BLOCK_ARRAYS if getattr(self, k) is not None}
 
     def __repr__(self) -> str:
         name = getattr(self.scenario, "name", "?")

@@ -12,7 +12,7 @@ from pathlib import Path
 
 from linsense.errors import InputError
 from linsense.sim.build import build
-from linsense.sim.core import run_closed_loop
+from linsense.sim.core import BLOCKS, run_closed_loop
 from linsense.sim.metrics import compute_metrics
 from linsense.sim.result import Result
 from linsense.sim.scenario import Scenario, as_scenario
@@ -29,8 +29,27 @@ _FAULT_KEYS = {"undervoltage": "inverter.v_dc", "overvoltage": "inverter.v_dc",
                "config": "control"}
 
 
-def simulate(scenario: Scenario | str | Path | dict) -> Result:
+#: samples a metrics-only run keeps at most, whatever its duration
+METRICS_SAMPLES = 20_000
+RECORD_MODES = ("trace", "metrics")
+
+
+def metrics_decimate(n_steps: int, decimate: int = 1) -> int:
+    """Block length (PWM periods) of a metrics-only run of ``n_steps`` periods: the scenario's
+    ``decimate`` or more, so that at most :data:`METRICS_SAMPLES` samples are kept."""
+    return max(int(decimate), -(-int(n_steps) // METRICS_SAMPLES))
+
+
+def simulate(scenario: Scenario | str | Path | dict, record: str = "trace") -> Result:
     """Run one scenario (a :class:`Scenario`, a TOML path or a dict of sections).
+
+    ``record="trace"`` keeps one sample every ``record.decimate`` periods (with the block
+    statistics when ``decimate > 1``). ``record="metrics"`` keeps at most :data:`METRICS_SAMPLES`
+    samples whatever the duration (memory does not grow with it): the block length is raised to
+    :func:`metrics_decimate`, and the metrics come from the block statistics (the min, max and
+    mean of every period), so peaks, bias and limit cycle miss nothing between samples; times
+    (settling, the windows) have the resolution of one block (``metrics["block_s"]``). The point
+    arrays are then one value per block (aliased: plot the envelopes ``x_min``/``x_max``...).
 
     A run that diverges or trips a protection ends early and cleanly: ``metrics["stable"]`` is
     False and ``metrics["fault"]`` names the reason; no exception, no NaN in the metrics.
@@ -41,20 +60,20 @@ def simulate(scenario: Scenario | str | Path | dict) -> Result:
         The scenario (or its motor) is invalid, or the drive trips at its very first step (a
         configuration that cannot run); the message names the file, key and value.
     """
+    if record not in RECORD_MODES:
+        raise ValueError(f"record must be one of {RECORD_MODES}, got {record!r}")
     sc = as_scenario(scenario)
+    if record == "metrics":
+        sp = sc.spec
+        n = int(round(sp.scenario.duration * sp.inverter.f_pwm))
+        dec = metrics_decimate(n, sp.record.decimate)
+        if dec != sp.record.decimate:
+            sc = sc.replace(record={"decimate": dec})
     b = build(sc)
-    raw = run_closed_loop(b.cfg, b.drive.state, b.n_steps, b.commands)
-    wall = raw.wall_s  # the C run alone
+    blocks = tuple(BLOCKS) if record == "metrics" or b.cfg.decimate > 1 else ()
+    raw = run_closed_loop(b.cfg, b.drive.state, b.n_steps, b.commands, blocks=blocks)
     s = sc.spec
-    x_target = b.commands[-1][1] if b.commands else b.setup.x0
-    observer_active = s.control.mode != "sensored" or s.control.inject_sensored
-    m = compute_metrics(
-        raw.arrays, fault=raw.fault, steps_done=raw.steps_done, f_pwm=s.inverter.f_pwm, moves=b.moves,
-        wall_s=wall, observer_active=observer_active, convergence_s=s.metrics.convergence_s,
-        settle_s=s.metrics.settle_s, tolerance_mm=s.metrics.tolerance_mm, bound_mm=s.metrics.bound_mm,
-        settle_band_mm=s.metrics.settle_band_mm, settling_band_mm=s.metrics.settling_band_mm,
-        final_window_s=s.metrics.final_window_s, x_target=x_target, x_start=b.setup.x0,
-    )
+    m = run_metrics(b, raw)
     if raw.fault and raw.steps_done <= 1:
         # a trip at the very first step is the configuration's doing, not the closed loop's
         first = m["fault"].split("+")[0]  # the first fault named (several can trip together)
@@ -66,7 +85,28 @@ def simulate(scenario: Scenario | str | Path | dict) -> Result:
     m["mode"] = s.control.mode
     m["fidelity"] = s.inverter.fidelity
     m["motor"] = b.motor.name
+    m["block_s"] = _round_s(b.cfg.decimate / s.inverter.f_pwm)
     return Result(**raw.arrays, metrics=m, scenario=sc, fault_bits=raw.fault)
+
+
+def run_metrics(b, raw, arrays: dict | None = None) -> dict:
+    """The metrics of the run ``raw`` of the built scenario ``b`` (from ``arrays``, by default the
+    run's own: with block statistics among them, from those)."""
+    s = b.scenario.spec
+    x_target = b.commands[-1][1] if b.commands else b.setup.x0
+    observer_active = s.control.mode != "sensored" or s.control.inject_sensored
+    return compute_metrics(
+        raw.arrays if arrays is None else arrays, fault=raw.fault, steps_done=raw.steps_done,
+        f_pwm=s.inverter.f_pwm, moves=b.moves, wall_s=raw.wall_s,  # the C run alone
+        observer_active=observer_active, convergence_s=s.metrics.convergence_s,
+        settle_s=s.metrics.settle_s, tolerance_mm=s.metrics.tolerance_mm, bound_mm=s.metrics.bound_mm,
+        settle_band_mm=s.metrics.settle_band_mm, settling_band_mm=s.metrics.settling_band_mm,
+        final_window_s=s.metrics.final_window_s, x_target=x_target, x_start=b.setup.x0,
+    )
+
+
+def _round_s(v: float) -> float:
+    return round(float(v), 9)
 
 
 def _worker(item) -> Result:
