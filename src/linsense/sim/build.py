@@ -24,7 +24,7 @@ from linsense.ctrl import ConfigError, Drive, drive_default_cfg, ffi, lib
 from linsense.errors import InputError, LinsenseError
 from linsense.limits import MAX_STEPS, MAX_TRACE_BYTES
 from linsense.model.motor import Motor, load_motor, preset_names
-from linsense.sim.core import SIGNALS, PlantSetup, SimulationError, sim_cfg
+from linsense.sim.core import BLOCKS, SIGNALS, PlantSetup, SimulationError, sim_cfg
 from linsense.sim.scenario import Scenario
 from linsense.tune.design import DriveData, current_gains, design, error_gain, mean_dq, speed_gains
 
@@ -205,10 +205,12 @@ def check_run_size(source: str, n_steps: int, decimate: int, fs: float) -> None:
         raise InputError(source, "scenario.duration",
                          f"{n_steps / fs:g} s at {fs:g} Hz is {n_steps:.3g} PWM periods, beyond the limit "
                          f"of {MAX_STEPS:.3g} (docs/limits.md)")
-    per_sample = 8 * sum(SIGNALS.values()) + 4
+    # with decimate > 1 every sample also keeps its block statistics (linsense.sim.run.simulate)
+    with_blocks = 8 * (sum(SIGNALS.values()) + sum(BLOCKS.values())) + 4
+    per_sample = with_blocks if decimate > 1 else 8 * sum(SIGNALS.values()) + 4
     n_rec = math.ceil(n_steps / decimate) + 2
     if n_rec * per_sample > MAX_TRACE_BYTES:
-        need = math.ceil(n_steps * per_sample / MAX_TRACE_BYTES)
+        need = math.ceil(n_steps * with_blocks / MAX_TRACE_BYTES)
         gib = n_rec * per_sample / 2**30
         raise InputError(source, "record.decimate",
                          f"= {decimate} keeps {n_rec:.3g} samples of the {n_steps / fs:g} s run in memory "
