@@ -7,6 +7,7 @@ A motor file (TOML, SI units) has the sections ``[motor]`` and ``[inductance]`` 
 from __future__ import annotations
 
 import csv
+import functools
 import math
 import tomllib
 from dataclasses import dataclass, field
@@ -105,8 +106,13 @@ class Motor:
 # ---------------------------------------------------------------------- loading
 def preset_names() -> list[str]:
     """Names of the built-in presets."""
+    return list(_preset_names())
+
+
+@functools.cache
+def _preset_names() -> tuple[str, ...]:  # (the package's files do not change while it runs)
     folder = resources.files("linsense.model") / "presets"
-    return sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".toml"))
+    return tuple(sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".toml")))
 
 
 def load_motor(spec: str | Path, check: bool = True) -> Motor:

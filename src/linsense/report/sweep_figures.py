@@ -21,8 +21,10 @@ def _ordered(values) -> list:
 
 
 #: outcome of a run -> (code, colour, legend)
-OUTCOMES = [("refused", "#bbbbbb", "refused by the checks"), ("fault", "#7a1c1c", "fault or never reached"),
-            ("cycle", "#d9544d", "limit cycle"), ("offset", "#f0a742", "ends off the target (beyond the bound)"),
+OUTCOMES = [("refused", "#bbbbbb", "refused by the checks"),
+            ("fault", "#7a1c1c", "fault or never reached"),
+            ("cycle", "#d9544d", "limit cycle"),
+            ("offset", "#f0a742", "ends off the target (beyond the bound)"),
             ("stable", "#3f9b5a", "stable")]
 
 

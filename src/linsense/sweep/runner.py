@@ -10,7 +10,7 @@ import copy
 import hashlib
 import math
 import tomllib
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
 
@@ -41,6 +41,7 @@ class SweepContext:
     motors_out: str
     trace: bool
     fixed: dict
+    defaults: dict = field(default_factory=dict)  # base values of relative scenario keys, found once
 
 
 def _motor_data(spec: str, scenario_dir: Path, source: str) -> tuple[dict, Path]:
@@ -86,10 +87,14 @@ def _get(data: dict, keys: list[str]):
 
 
 def _set(data: dict, keys: list[str], value) -> None:
+    """Set ``data[k0][k1]... = value``, copying each table on the way (the base is shared by every
+    run and never changed; only the tables on the key's path are new)."""
     for k in keys[:-1]:
-        data = data.setdefault(k, {})
-        if not isinstance(data, dict):
+        child = data.get(k, {})
+        if not isinstance(child, dict):
             raise InputError("sweep", ".".join(keys), "is not inside a table of the file")
+        data[k] = child = dict(child)
+        data = child
     data[keys[-1]] = value
 
 
@@ -124,20 +129,22 @@ def _motor_file(ctx: SweepContext, motor: dict) -> str:
 def scenario_for(ctx: SweepContext, point: dict, relative: dict) -> dict:
     """The base scenario's data with the sweep's fixed keys and the point's values set (motor keys
     through edited files)."""
-    data = copy.deepcopy(ctx.scenario_data)
+    data = dict(ctx.scenario_data)
     motors = {"motor": None, "lut_motor": None}
     for key, value in [*ctx.fixed.items(), *point.items()]:
         head, *rest = key.split(".")
         if head in motors:
             if motors[head] is None:
-                motors[head] = copy.deepcopy(ctx.motor_data)
+                motors[head] = dict(ctx.motor_data)
             if relative.get(key):
                 value = _relative(_get(ctx.motor_data, rest), value, key, ctx.source)
             _set(motors[head], rest, value)
         else:
             keys = key.split(".")
             if relative.get(key):
-                base = _scenario_default(ctx.scenario_data, keys, ctx.source)
+                if key not in ctx.defaults:
+                    ctx.defaults[key] = _scenario_default(ctx.scenario_data, keys, ctx.source)
+                base = ctx.defaults[key]
                 value = _relative(base, value, key, ctx.source)
             _set(data, keys, value)
     if motors["motor"] is not None:
@@ -177,9 +184,11 @@ def run_point(ctx: SweepContext, index: int, point: dict, relative: dict) -> dic
     try:
         sc = scenario_from_dict(scenario_for(ctx, point, relative), f"{ctx.source} (run {index})",
                                 ctx.scenario_dir)
-        res = simulate(sc)
+        # metrics only (block statistics in C, memory independent of the duration) unless the
+        # sweep keeps the traces (the HF current is measured on a trace)
+        res = simulate(sc, record="trace" if ctx.trace else "metrics")
         m = dict(res.metrics)
-        m["hf_current_a"] = hf_current(res)
+        m["hf_current_a"] = hf_current(res) if ctx.trace else None
         if "wall_s" not in m:
             m["wall_s"] = getattr(res, "wall_s", None)
         for k in ROW_METRICS:

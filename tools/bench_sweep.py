@@ -1,0 +1,69 @@
+"""Sweep benchmark (make bench): throughput of the sweep engine on 1 and 2 workers and its overhead
+above the C loop's own time (issue 10's targets: 2 workers >= 1.8x one worker, overhead <= 10 %).
+
+Runs N copies (seeds) of the 2 s benchmark scenario on the switching inverter, metrics only, with
+1 worker thread, 2 worker threads and 2 worker processes (the processes' start-up counted apart).
+Prints each figure. Usage: python tools/bench_sweep.py [N]
+"""
+
+from __future__ import annotations
+
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from linsense.sweep import sweep
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def spec(n: int, folder: Path) -> Path:
+    folder.mkdir(parents=True, exist_ok=True)
+    f = folder / "bench_sweep.toml"
+    f.write_text(f"""[sweep]
+name = "bench"
+scenario = "{ROOT / 'examples' / 'scenarios' / 'benchmark.toml'}"
+batch = 16
+set = {{ "inverter.fidelity" = "switching", "scenario.duration" = 2.0 }}
+
+[[axis]]
+key = "scenario.seed"
+values = {list(range(n))}
+""")
+    return f
+
+
+def run(f: Path, **kw) -> tuple[float, float, int]:
+    t0 = time.perf_counter()
+    df = sweep(f, **kw)
+    return time.perf_counter() - t0, float(df["wall_s"].sum()), len(df)
+
+
+def main() -> int:
+    n = int(sys.argv[1]) if len(sys.argv) > 1 else 400
+    with tempfile.TemporaryDirectory() as tmp:
+        f = spec(n, Path(tmp))
+        run(spec(8, Path(tmp) / "warm"), workers=1)  # imports and caches
+        t1, c1, _ = run(f, workers=1)
+        t2, c2, _ = run(f, workers=2)
+        from dask.distributed import Client, LocalCluster
+
+        t0 = time.perf_counter()
+        with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None,
+                          silence_logs=40) as cluster, Client(cluster):
+            start = time.perf_counter() - t0
+            tp, cp, _ = run(f, scheduler=cluster.scheduler_address)
+    print(f"sweep benchmark: {n} runs of a 2 s switching scenario, metrics only")
+    print(f"  1 worker thread : {n / t1:6.1f} runs/s, C loop {c1 / t1:.0%} of the time, "
+          f"overhead {1 - c1 / t1:.0%} (target <= 10 %)")
+    print(f"  2 worker threads: {n / t2:6.1f} runs/s, {t1 / t2:.2f}x one worker (target >= 1.8x)")
+    print(f"  2 worker processes: {n / tp:6.1f} runs/s, {t1 / tp:.2f}x one worker thread "
+          f"(their start-up, {start:.1f} s, apart)")
+    ok = 1 - c1 / t1 <= 0.10 and t1 / max(t2, tp) >= 1.8
+    print(f"  sweep targets: {'PASS' if ok else 'FAIL'}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
