@@ -191,3 +191,16 @@ def test_study_figure_and_summary(run_cli, tmp_path):
 def test_sweep_from_a_dict():
     with pytest.raises(Exception, match="scenario"):
         sweep_from_dict({"sweep": {}, "axis": [{"key": "a.b", "values": [1]}]})
+
+
+def test_simulate_many_from_a_script_without_a_main_guard(tmp_path):
+    """simulate_many runs on the engine's worker threads: a plain script works (no spawn guard)."""
+    (tmp_path / "base.toml").write_text(SCENARIO)
+    script = tmp_path / "many.py"
+    script.write_text(
+        "import linsense\n"
+        f"rs = linsense.simulate_many([{str(tmp_path / 'base.toml')!r}] * 3, workers=2)\n"
+        "print(sum(r.metrics['final_position_mm'] > 1.5 for r in rs), len(rs))\n")
+    r = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.split() == ["3", "3"]

@@ -6,8 +6,6 @@ configuration before and computes the metrics after. ``wall_s`` is measured arou
 
 from __future__ import annotations
 
-import multiprocessing
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 from linsense.errors import InputError
@@ -109,22 +107,23 @@ def _round_s(v: float) -> float:
     return round(float(v), 9)
 
 
-def _worker(item) -> Result:
-    return simulate(item)
+def simulate_many(scenarios, workers: int = 1, *, scheduler: str | None = None,
+                  record: str = "trace") -> list[Result]:
+    """Run several scenarios on the sweep engine's cluster (docs/sweeps.md); results in input order.
 
-
-def simulate_many(scenarios, workers: int = 1) -> list[Result]:
-    """Run several scenarios on ``workers`` processes (spawned); results in input order.
-
-    Scenarios may be :class:`Scenario` objects, paths or dicts (all picklable; no cffi object
-    crosses a process boundary). ``workers=1`` runs them one after the other in this process.
-    Every scenario is validated here first, so a bad one raises before any run starts.
+    Scenarios may be :class:`Scenario` objects, paths or dicts. Every scenario is validated here
+    first, so a bad one raises before any run starts. ``workers=1`` runs them one after the other
+    in this process; more run on a local dask cluster of worker threads (the C loop releases the
+    GIL), so a script needs no ``if __name__ == "__main__"`` guard; ``scheduler`` sends them to a
+    running cluster by address. For thousands of runs, or runs that must survive a kill, use
+    :func:`linsense.sweep.sweep`, which keeps only the metrics.
     """
     items = [as_scenario(s) for s in scenarios]
     if workers < 1:
         raise ValueError(f"workers must be >= 1, got {workers}")
-    if workers == 1 or len(items) <= 1:
-        return [simulate(s) for s in items]
-    ctx = multiprocessing.get_context("spawn")
-    with ProcessPoolExecutor(max_workers=min(workers, len(items)), mp_context=ctx) as pool:
-        return list(pool.map(_worker, items))
+    if scheduler is None and (workers == 1 or len(items) <= 1):
+        return [simulate(s, record=record) for s in items]
+    from linsense.sweep.engine import cluster_client
+
+    with cluster_client(min(workers, len(items)), scheduler, processes=False) as client:
+        return client.gather(client.map(simulate, items, record=record, pure=False))

@@ -74,7 +74,9 @@ def _done_batches(parts: Path) -> set[int]:
 
 
 @contextmanager
-def _client(workers: int | None, scheduler: str | None, processes: bool):
+def cluster_client(workers: int | None, scheduler: str | None, processes: bool):
+    """A dask client: of the cluster at ``scheduler``, or of a local cluster of ``workers`` (default
+    one per core) worker threads or processes, closed at the end."""
     from dask.distributed import Client, LocalCluster
 
     if scheduler:
@@ -143,7 +145,7 @@ def sweep(spec, out: str | Path | None = None, *, workers: int | None = None, sc
         n_done = sum(len(batches[b]) for b in done)
         if todo:
             bar_ctx = _progress(len(pts), n_done, progress)
-            with _client(workers, scheduler, processes) as client, bar_ctx as bar:
+            with cluster_client(workers, scheduler, processes) as client, bar_ctx as bar:
                 task = bar.add_task(sw.name, total=len(pts), completed=n_done) if bar else None
                 from dask.distributed import as_completed
 
