@@ -195,16 +195,22 @@ def designed(sc: Scenario, motor: Motor) -> Scenario:
         if k in given["controller"]:
             want["controller"].pop(k.replace("_kp", "_bandwidth_hz"))
     changes = {sec: {k: v for k, v in vals.items() if k not in given[sec]} for sec, vals in want.items()}
-    return sc.replace(**{sec: vals for sec, vals in changes.items() if vals})
+    # the designed values are valid by construction (the design keeps the injection within the bus
+    # and f_pwm / 4): set them without validating the whole scenario again (a sweep builds thousands)
+    update = {sec: getattr(s, sec).model_copy(update=vals) for sec, vals in changes.items() if vals}
+    return Scenario(s.model_copy(update=update), sc.source, sc.base_dir)
 
 
-def check_run_size(source: str, n_steps: int, decimate: int, fs: float) -> None:
-    """Refuse a run beyond :data:`~linsense.limits.MAX_STEPS` periods or whose trace would not fit
-    in :data:`~linsense.limits.MAX_TRACE_BYTES`, before anything is allocated."""
+def check_run_size(source: str, n_steps: int, decimate: int, fs: float, trace_in_memory: bool = True) -> None:
+    """Refuse a run beyond :data:`~linsense.limits.MAX_STEPS` periods or (``trace_in_memory``)
+    whose trace would not fit in :data:`~linsense.limits.MAX_TRACE_BYTES`, before anything is
+    allocated. A run streamed in chunks (``linsense simulate``) keeps no trace in memory."""
     if n_steps > MAX_STEPS:
         raise InputError(source, "scenario.duration",
                          f"{n_steps / fs:g} s at {fs:g} Hz is {n_steps:.3g} PWM periods, beyond the limit "
                          f"of {MAX_STEPS:.3g} (docs/limits.md)")
+    if not trace_in_memory:
+        return
     # with decimate > 1 every sample also keeps its block statistics (linsense.sim.run.simulate)
     with_blocks = 8 * (sum(SIGNALS.values()) + sum(BLOCKS.values())) + 4
     per_sample = with_blocks if decimate > 1 else 8 * sum(SIGNALS.values()) + 4
