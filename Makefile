@@ -39,7 +39,7 @@ install: $(STAMP)
 demo: $(STAMP)
 	$(VENV)/bin/linsense reproduce --motor ecce2010 --out out
 	@for f in examples/scenarios/*.toml; do \
-	  n=$$(basename $$f .toml); $(VENV)/bin/linsense simulate $$f --out out/sim/$$n || exit 1; \
+	  n=$$(basename $$f .toml); $(VENV)/bin/linsense simulate $$f --out out/sim/$$n --plot || exit 1; \
 	done
 
 test: lint ctest mcu example pytest fuzztest

@@ -139,12 +139,12 @@ def test_out_rule(tmp_path, run_cli, sets):
     empty.mkdir()
     assert run_cli(*args[:2], "--out", empty, "--no-plot").code == 0
     # a user's file inside an entry the set owns: refused before running
-    (out / "trace.csv").unlink()
-    (out / "trace.csv").mkdir()  # a folder where a file of the set goes
-    (out / "trace.csv" / "keep.me").write_text("x")
+    (out / "trace.parquet").unlink()
+    (out / "trace.parquet").mkdir()  # a folder where a file of the set goes
+    (out / "trace.parquet" / "keep.me").write_text("x")
     before = snapshot(out)
     r = run_cli(*args)
-    assert r.code == 2 and "trace.csv/keep.me" in r.err and len(r.err.strip().splitlines()) == 1
+    assert r.code == 2 and "trace.parquet/keep.me" in r.err and len(r.err.strip().splitlines()) == 1
     assert snapshot(out) == before and debris(out.parent) == []
 
 
@@ -155,7 +155,7 @@ def test_foreign_entry_where_a_new_file_goes(sets, run_cli):
     (out / "sim.png").mkdir()
     (out / "sim.png" / "x").write_text("x")
     before = snapshot(out)
-    r = run_cli(*args[:4])  # with the plot
+    r = run_cli(*args[:4], "--plot")
     assert r.code == 2 and "sim.png" in r.err and len(r.err.strip().splitlines()) == 1
     assert snapshot(out) == before and debris(out.parent) == []
 
@@ -214,7 +214,7 @@ def test_identical_runs_write_identical_bytes(tmp_path, run_cli):
     assert run_cli("bench-emulate", "--motor", "ecce2010", "--positions", 16, "--noise", 0.01,
                    "--out", bench).code == 0
     runs = {
-        "simulate": ("simulate", sc, "--mat"),
+        "simulate": ("simulate", sc, "--mat", "--plot"),
         "calibrate": ("calibrate", "--motor", "ecce2010", "--positions", 8, "--fidelity", "average"),
         "identify": ("identify", bench, "--motor", "ecce2010", "--points", 8),
     }

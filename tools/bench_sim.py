@@ -10,10 +10,18 @@ result, and each target line says PASS or FAIL.
 
 Then the memory of a long run (issue 10): a 600 s hold (ecce2010, sensorless with the LUT, average
 inverter) in metrics-only mode (``simulate(..., record="metrics")``) in a subprocess, its peak RSS
-against 150 MB, and ``linsense simulate`` of the same scenario with the default outputs (trace.csv,
-sim.png) against 400 MB (``--rss-seconds 0`` skips both; the CLI run gets ``--cli-timeout`` s).
+against 150 MB, and ``linsense simulate`` of the same scenario with the default outputs
+(metrics.json, timing.json, trace.parquet written chunk by chunk, no plot) against 400 MB
+(``--rss-seconds 0`` skips both; the CLI run gets ``--cli-timeout`` s).
 
-Usage: ``python tools/bench_sim.py [--repeat N] [--seconds S] [--rss-seconds S] [--cli-timeout S]``
+And the cost of a short single run (issue 10): ``linsense simulate`` of a 2 s scenario
+(examples/scenarios/step3_lut.toml) with its default outputs, the whole process's CPU time (user +
+sys of the child, imports included) against 0.6 s: the best and the median of ``--cli-repeat``
+runs after one warm-up run (which lets Python cache the bytecode, as an installed package has it:
+the child runs without PYTHONDONTWRITEBYTECODE).
+
+Usage: ``python tools/bench_sim.py [--repeat N] [--seconds S] [--rss-seconds S] [--cli-timeout S]
+[--cli-repeat N]``
 """
 
 from __future__ import annotations
@@ -35,11 +43,19 @@ from linsense.sim import core
 
 TARGETS = {"average": 500.0, "switching": 100.0}  # realtime factor, the issue's targets
 RSS_TARGETS = {"metrics": 150.0, "cli": 400.0}  # MB, peak RSS of a 600 s run (issue 10)
+CPU_TARGET = 0.6  # s, CPU (user + sys) of linsense simulate of a 2 s scenario, default outputs (issue 10)
+CPU_SCENARIO = Path(__file__).resolve().parent.parent / "examples" / "scenarios" / "step3_lut.toml"
 
 #: runs argv[1:] and prints the peak RSS (kB on Linux) of that child alone, then its exit code
 _RSS_WRAPPER = ("import resource, subprocess, sys\n"
                 "rc = subprocess.run(sys.argv[1:], stdout=subprocess.DEVNULL).returncode\n"
                 "print(resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss, rc)\n")
+
+#: runs argv[1:] and prints the CPU time (user + sys, s) of that child alone, then its exit code
+_CPU_WRAPPER = ("import resource, subprocess, sys\n"
+                "rc = subprocess.run(sys.argv[1:], stdout=subprocess.DEVNULL).returncode\n"
+                "r = resource.getrusage(resource.RUSAGE_CHILDREN)\n"
+                "print(r.ru_utime + r.ru_stime, rc)\n")
 
 #: the long run: a hold, so that the run is stable whatever its duration
 LONG_SCENARIO = """motor = "ecce2010"
@@ -71,6 +87,43 @@ def peak_rss(argv: list[str], timeout: float) -> tuple[float | None, float, str]
     return int(kb) / 1024.0, wall, "" if rc == "0" else f"exit status {rc}"
 
 
+def child_cpu(argv: list[str], env: dict) -> tuple[float | None, str]:
+    """CPU time (user + sys, s) of the process ``argv`` (measured by a wrapper of its own) and a note."""
+    p = subprocess.run([sys.executable, "-c", _CPU_WRAPPER, *argv], capture_output=True, text=True, env=env,
+                       timeout=300)
+    try:
+        cpu, rc = p.stdout.split()
+    except ValueError:
+        return None, f"wrapper failed: {p.stderr.strip()[-200:]}"
+    return float(cpu), "" if rc == "0" else f"exit status {rc}"
+
+
+def cpu_bench(repeat: int) -> None:
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
+    exe = Path(sys.executable).with_name("linsense")
+    cmd = [str(exe)] if exe.exists() else [sys.executable, "-m", "linsense"]
+    with tempfile.TemporaryDirectory() as tmp:
+        argv = [*cmd, "simulate", str(CPU_SCENARIO), "--out", str(Path(tmp) / "out")]
+        child_cpu(argv, env)  # warm-up: bytecode caches
+        runs, notes = [], set()
+        for _ in range(repeat):
+            cpu, note = child_cpu(argv, env)
+            if note:
+                notes.add(note)
+            if cpu is not None:
+                runs.append(cpu)
+        files = sorted(p.name for p in (Path(tmp) / "out").iterdir() if not p.name.startswith("."))
+    if not runs:
+        print(f"CPU of linsense simulate, 2 s scenario: n/a (target <= {CPU_TARGET:g} s) FAIL "
+              f"({'; '.join(sorted(notes))})")
+        return
+    med = statistics.median(runs)
+    verdict = "PASS" if med <= CPU_TARGET and not notes else "FAIL"
+    print(f"CPU of linsense simulate {CPU_SCENARIO.name} (2 s, default outputs: {', '.join(files)}): "
+          f"{min(runs):.2f} s best, {med:.2f} s median of {len(runs)} (user + sys, whole process; target <= "
+          f"{CPU_TARGET:g} s) {verdict} (median)" + (f" ({'; '.join(sorted(notes))})" if notes else ""))
+
+
 def memory_bench(seconds: float, cli_timeout: float) -> None:
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "hold_long.toml"
@@ -81,7 +134,7 @@ def memory_bench(seconds: float, cli_timeout: float) -> None:
         runs = {
             "metrics": (f"{seconds:g} s run, metrics-only (simulate(record='metrics'))",
                         [sys.executable, "-c", code, str(path)], 3600.0),
-            "cli": (f"{seconds:g} s run, linsense simulate with the default outputs",
+            "cli": (f"{seconds:g} s run, linsense simulate with the default outputs (trace.parquet)",
                     [sys.executable, "-m", "linsense", "simulate", str(path), "--out",
                      str(Path(tmp) / "out")], cli_timeout),
         }
@@ -124,6 +177,8 @@ def main() -> int:
                     help="simulated duration of the memory benchmark (0: skip it)")
     ap.add_argument("--cli-timeout", type=float, default=900.0,
                     help="wall-time limit (s) of the CLI run of the memory benchmark")
+    ap.add_argument("--cli-repeat", type=int, default=5,
+                    help="runs of the CPU benchmark of a 2 s linsense simulate (0: skip it)")
     args = ap.parse_args()
     if hasattr(os, "sched_setaffinity"):
         try:
@@ -152,6 +207,8 @@ def main() -> int:
         e_max = math.degrees(abs(rec["theta_err"]).max())
         print(f"  scenario check: peak |x| {1e3 * abs(rec['x']).max():.2f} mm, "
               f"final x {1e3 * rec['x'][-1]:+.3f} mm, max |theta_err| {e_max:.2f} deg")
+    if args.cli_repeat > 0:
+        cpu_bench(args.cli_repeat)
     if args.rss_seconds > 0:
         memory_bench(args.rss_seconds, args.cli_timeout)
     return 0

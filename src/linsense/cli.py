@@ -235,48 +235,88 @@ def identify(bench: str, out: str, harmonics: int, motor_spec: str | None, pole_
 @click.option("--out", required=True, type=click.Path(file_okay=False), help="output folder")
 @click.option("--fidelity", type=click.Choice(["average", "switching"]), default=None,
               help="override the scenario's inverter fidelity")
-@click.option("--trace", "trace_fmt", type=click.Choice(["csv", "parquet"]), default="csv", show_default=True,
-              help="trace format (parquet needs pyarrow installed)")
-@click.option("--mat", is_flag=True, help="also write the trace as MATLAB trace.mat")
-@click.option("--no-plot", is_flag=True, help="skip sim.png")
+@click.option("--trace", "trace_fmt", type=click.Choice(["parquet", "csv", "none"]), default="parquet",
+              show_default=True, help="trace file format (written chunk by chunk while the run goes)")
+@click.option("--decimate", type=click.IntRange(1, 1_000_000), default=None,
+              help="record one sample every N PWM periods (1 .. 1e6; overrides the scenario's "
+                   "record.decimate)")
+@click.option("--mat", is_flag=True, help="also write the trace as MATLAB trace.mat (held in memory: at most "
+                                          "1,000,000 samples)")
+@click.option("--plot/--no-plot", default=False, show_default=True, help="draw sim.png")
 @click.option("--check", is_flag=True, help="exit with code 1 when the run is not stable (for CI)")
-def simulate(scenario: str, out: str, fidelity: str | None, trace_fmt: str, mat: bool, no_plot: bool,
-             check: bool) -> None:
-    """Run a closed-loop drive simulation: metrics.json, trace.csv (or .parquet), sim.png.
+def simulate(scenario: str, out: str, fidelity: str | None, trace_fmt: str, decimate: int | None, mat: bool,
+             plot: bool, check: bool) -> None:
+    """Run a closed-loop drive simulation: metrics.json, timing.json, trace.parquet (or .csv; and
+    trace.mat), sim.png with --plot.
 
     Exit codes: 0 done (with --check: and stable), 1 with --check: not stable, 2 bad input (the
     scenario, or a configuration that trips the drive at t = 0)."""
     from linsense.io import output_set, split_timing
-    from linsense.sim.run import simulate as run_sim
+    from linsense.sim.build import build, check_trace_file
     from linsense.sim.scenario import load_scenario
-    from linsense.sim.trace import have_parquet, trace_csv, write_mat, write_trace
+    from linsense.sim.stream import simulate_streamed
+    from linsense.sim.trace import MAT_MAX_SAMPLES, TraceWriter, trace_columns, write_mat
 
-    if trace_fmt == "parquet" and not have_parquet():
-        raise InputError("--trace", "", "parquet needs the pyarrow package (not installed); use --trace csv")
     sc = load_scenario(scenario)
     if fidelity is not None:
         sc = sc.replace(inverter={"fidelity": fidelity})
-    res = run_sim(sc)
-    metrics, timing = split_timing(res.metrics)
+    if decimate is not None:
+        sc = sc.replace(record={"decimate": decimate})
+    b = build(sc, trace_in_memory=False)  # streamed: the trace is never whole in memory
+    if trace_fmt != "none":
+        check_trace_file(b)
+    n_rec = -(-b.n_steps // int(b.cfg.decimate))
+    if mat and n_rec > MAT_MAX_SAMPLES:
+        need = -(-b.n_steps // MAT_MAX_SAMPLES)
+        raise InputError("--mat", "", f"trace.mat is written from the whole trace held in memory: {n_rec:,} "
+                                      f"samples is beyond the limit of {MAT_MAX_SAMPLES:,} (docs/limits.md); "
+                                      f"record fewer (--decimate {need}) or use the Parquet trace")
+    mat_parts: list[dict] = []
+
+    def run(f=None):
+        writer = TraceWriter(f, trace_fmt) if f is not None else None
+
+        def on_chunk(arrays):
+            if writer is not None:
+                writer.write(arrays)
+            if mat:
+                mat_parts.append({k: np.array(v, dtype=float) for k, v in trace_columns(arrays).items()})
+
+        try:
+            sr = simulate_streamed(b, on_chunk=on_chunk if writer is not None or mat else None, plot=plot)
+        except BaseException:
+            if writer is not None:
+                writer.abort()
+            raise
+        if writer is not None:
+            writer.close()
+        return sr
+
     with output_set(out, "simulate") as s:
+        if trace_fmt == "none":
+            sr = run()
+        else:
+            done = []
+            s.write_with(f"trace.{trace_fmt}", lambda f: done.append(run(f)))
+            sr = done[0]
+        metrics, timing = split_timing(sr.metrics)
         s.write("metrics.json", json.dumps(metrics, indent=1) + "\n")
         s.write("timing.json", json.dumps(timing, indent=1) + "\n")
-        if trace_fmt == "csv":
-            s.write("trace.csv", trace_csv(res))
-        else:
-            write_trace(res, s.path("trace.parquet"), "parquet")
         if mat:
-            write_mat(res, s.path("trace.mat"))
-        if not no_plot:
-            from linsense.report.sim_figures import write_sim_figure
+            cols = {k: np.concatenate([p[k] for p in mat_parts]) for k in mat_parts[0]}
+            mat_parts.clear()
+            write_mat(cols, s.path("trace.mat"), metrics=sr.metrics)
+        if plot:
+            from linsense.report.figures import save_png
+            from linsense.report.sim_figures import DPI, sim_figure
 
-            write_sim_figure(res, s.path("sim.png"))
+            save_png(sim_figure(sr.plot), s.path("sim.png"), DPI)
     for f in s.files:
         click.echo(str(f))
-    m = res.metrics
+    m = sr.metrics
 
     click.echo(
-        f"{res.scenario.name}: "
+        f"{m['scenario']}: "
         f"{'stable' if m['stable'] else 'not stable: ' + str(m['unstable_reason'])} (fault {m['fault']}); "
         f"max |err| {_show(m['max_abs_err_deg'], 'deg')} "
         f"(transient {_show(m['transient_max_err_deg'], 'deg')}, "
@@ -305,7 +345,7 @@ def calibrate(motor_spec: str, positions: int, load: float, fidelity: str, quad:
     """Run the firmware's LUT calibration in the simulator (paper Fig. 9): lut_measured.csv,
     metrics.json, calibration.png. Exit code 1 if it does not complete."""
     from linsense.io import output_set, split_timing
-    from linsense.report.figures import fig_calibration
+    from linsense.report.figures import fig_calibration, save_png
     from linsense.sim.calibrate import calibrate as run_calibration
     from linsense.sim.calibrate import lut_csv
 
@@ -316,7 +356,7 @@ def calibrate(motor_spec: str, positions: int, load: float, fidelity: str, quad:
         s.write("lut_measured.csv", lut_csv(cal))
         s.write("metrics.json", json.dumps(metrics, indent=1) + "\n")
         s.write("timing.json", json.dumps(timing, indent=1) + "\n")
-        fig_calibration(cal, motor, s.path("calibration.png"))
+        save_png(fig_calibration(cal, motor), s.path("calibration.png"))
     for f in s.files:
         click.echo(str(f))
     m = cal.metrics

@@ -20,6 +20,9 @@ MAX_POSITIONS = 10_000
 MAX_STEPS = 10_000_000_000
 #: bytes of the trace one run keeps in memory (recorded samples x about 140 B)
 MAX_TRACE_BYTES = 2 * 1024**3
+#: bytes of the trace file a streamed run (``linsense simulate``) writes, counted as 144 B per sample
+#: (the columns uncompressed; a Parquet file is about 110 B per sample): 240 million samples
+MAX_TRACE_FILE_BYTES = 32 * 1024**3
 
 
 def check_count(source: str, key: str, value: int, limit: int, what: str) -> int:

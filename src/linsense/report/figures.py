@@ -1,8 +1,10 @@
-"""Figures of the end-effect model (paper Figs. 5, 6, 8a, 8b, 9) as PNG files.
+"""Figures of the end-effect model (paper Figs. 5, 6, 8a, 8b, 9).
 
 Only plotting lives here; the numbers come from :mod:`linsense.analysis` and
 :mod:`linsense.compensation`. Inductances are drawn in mH, angles in electrical degrees, with a
-secondary axis in mm of travel.
+secondary axis in mm of travel. Every ``fig_*`` function builds a :class:`matplotlib.figure.Figure`
+directly (no pyplot state, no backend switch) and returns it; :func:`png_bytes` and
+:func:`save_png` render one, :func:`write_model_figures` writes the whole set.
 """
 
 from __future__ import annotations
@@ -12,12 +14,10 @@ from dataclasses import replace
 from pathlib import Path
 
 import matplotlib
+import numpy as np
+from matplotlib.figure import Figure
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from linsense.analysis.hf import (  # noqa: E402
+from linsense.analysis.hf import (
     equilibrium_error,
     loop_gain_factor,
     psi,
@@ -26,8 +26,8 @@ from linsense.analysis.hf import (  # noqa: E402
     psi_lut_resistive,
     saliency,
 )
-from linsense.io import write_atomic  # noqa: E402
-from linsense.model.inductance import ENTRIES  # noqa: E402
+from linsense.io import write_atomic
+from linsense.model.inductance import ENTRIES
 
 ERRORS_DEG = (-15, -10, -5, 0, 5, 10, 15)
 _MH = 1e3
@@ -49,14 +49,19 @@ def _position_axis(ax, motor) -> None:
     sec.tick_params(labelsize=7)
 
 
-def _save(fig, path: Path) -> Path:
+def png_bytes(fig: Figure, dpi: int = _DPI) -> bytes:
+    """The PNG of ``fig`` (no software or date metadata: byte-reproducible)."""
     buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=_DPI, metadata={"Software": None})
-    plt.close(fig)
-    return write_atomic(path, buf.getvalue())
+    fig.savefig(buf, format="png", dpi=dpi, metadata={"Software": None})
+    return buf.getvalue()
 
 
-def fig_inductances(motor, path: Path, title: str) -> Path:
+def save_png(fig: Figure, path: str | Path, dpi: int = _DPI) -> Path:
+    """Write ``fig`` as PNG to ``path`` (atomically)."""
+    return write_atomic(path, png_bytes(fig, dpi))
+
+
+def fig_inductances(motor, title: str) -> Figure:
     """Inductances in the ABC, alpha-beta and dq frames (paper Fig. 5 / Fig. 6 layout)."""
     th = _theta()
     deg = np.degrees(th)
@@ -64,7 +69,8 @@ def fig_inductances(motor, path: Path, title: str) -> Path:
     e = ind.entries(th) * _MH
     L_ab = ind.L_ab(th) * _MH
     L_dq = ind.L_dq(th) * _MH
-    fig, axes = plt.subplots(3, 1, figsize=(7.5, 9.5), constrained_layout=True)
+    fig = Figure(figsize=(7.5, 9.5), layout="constrained")
+    axes = fig.subplots(3, 1)
     styles = ["-", "-", "-", "--", "--", "--"]
     for j, name in enumerate(ENTRIES):
         axes[0].plot(deg, e[:, j], styles[j], label=name.replace("_", "$_{") + "}$")
@@ -82,15 +88,16 @@ def fig_inductances(motor, path: Path, title: str) -> Path:
         ax.set_ylabel("inductance (mH)")
         ax.legend(loc="center left", bbox_to_anchor=(1.0, 0.5), fontsize=8)
     fig.suptitle(title)
-    return _save(fig, path)
+    return fig
 
 
-def fig_psi(motor, path: Path, compensated: bool) -> Path:
+def fig_psi(motor, compensated: bool) -> Figure:
     """psi versus position for theta_err in -15..15 deg (paper Fig. 8a, or 8b if compensated)."""
     th = _theta()
     deg = np.degrees(th)
-    fig, ax = plt.subplots(figsize=(7.5, 4.8), constrained_layout=True)
-    cmap = plt.get_cmap("coolwarm")
+    fig = Figure(figsize=(7.5, 4.8), layout="constrained")
+    ax = fig.subplots()
+    cmap = matplotlib.colormaps["coolwarm"]
     for i, e_deg in enumerate(ERRORS_DEG):
         e = np.radians(e_deg)
         y = psi_compensated(motor, th, e) if compensated else psi(motor, th, e)
@@ -107,13 +114,14 @@ def fig_psi(motor, path: Path, compensated: bool) -> Path:
         else "(a) HF current phase in the estimated frame"
     )
     ax.legend(loc="center left", bbox_to_anchor=(1.0, 0.5), fontsize=8)
-    return _save(fig, path)
+    return fig
 
 
-def fig_lut(motor, lut, path: Path) -> Path:
+def fig_lut(motor, lut) -> Figure:
     """The compensation LUT: model curve and the exported table points (paper Fig. 9)."""
     th = _theta()
-    fig, ax = plt.subplots(figsize=(7.5, 4.2), constrained_layout=True)
+    fig = Figure(figsize=(7.5, 4.2), layout="constrained")
+    ax = fig.subplots()
     ax.plot(np.degrees(th), np.degrees(psi_lut(motor, th)), "b-", label="model, eq. (12)")
     ax.plot(np.degrees(lut.theta), np.degrees(lut.values), "o", ms=3, mfc="none", color="C1",
             label=f"exported table ({lut.points} points)")
@@ -121,14 +129,15 @@ def fig_lut(motor, lut, path: Path) -> Path:
     ax.set_ylabel("Ψ_LUT (electrical deg)")
     ax.set_title(f"Compensation LUT, motor {motor.name}")
     ax.legend(fontsize=8)
-    return _save(fig, path)
+    return fig
 
 
-def fig_uncompensated(motor, path: Path) -> Path:
+def fig_uncompensated(motor) -> Figure:
     """Saliency, equilibrium error and loop-gain factor of the uncompensated observer."""
     th = _theta()
     deg = np.degrees(th)
-    fig, axes = plt.subplots(3, 1, figsize=(7.5, 8.0), constrained_layout=True)
+    fig = Figure(figsize=(7.5, 8.0), layout="constrained")
+    axes = fig.subplots(3, 1)
     axes[0].plot(deg, saliency(motor, th) * _MH)
     axes[0].set_ylabel("$L_q - L_d$ (mH)")
     axes[0].set_title("Saliency")
@@ -143,7 +152,7 @@ def fig_uncompensated(motor, path: Path) -> Path:
     axes[2].set_title("Position-loop gain factor without LUT")
     for ax in axes:
         _position_axis(ax, motor)
-    return _save(fig, path)
+    return fig
 
 
 def write_model_figures(motor, lut, out_dir: str | Path) -> list[Path]:
@@ -152,26 +161,26 @@ def write_model_figures(motor, lut, out_dir: str | Path) -> list[Path]:
     ``fig5`` (no end-effect) needs a parametric model; it is skipped for tabulated ones.
     """
     out = Path(out_dir)
-    paths = []
+    figs = {}
     if motor.inductance.params:
         ideal = replace(motor, inductance=motor.inductance.without_end_effect())
-        paths.append(fig_inductances(ideal, out / "fig5_inductances_no_end_effect.png",
-                                     f"{motor.name}: model without end-effect (ΔM0 = 0)"))
-    paths.append(fig_inductances(motor, out / "fig6_inductances_end_effect.png",
-                                 f"{motor.name}: model with end-effect"))
-    paths.append(fig_psi(motor, out / "fig8a_psi_estimated.png", compensated=False))
-    paths.append(fig_psi(motor, out / "fig8b_psi_compensated.png", compensated=True))
-    paths.append(fig_lut(motor, lut, out / "fig9_lut.png"))
-    paths.append(fig_uncompensated(motor, out / "uncompensated_observer.png"))
-    return paths
+        figs["fig5_inductances_no_end_effect.png"] = fig_inductances(
+            ideal, f"{motor.name}: model without end-effect (ΔM0 = 0)")
+    figs["fig6_inductances_end_effect.png"] = fig_inductances(motor, f"{motor.name}: model with end-effect")
+    figs["fig8a_psi_estimated.png"] = fig_psi(motor, compensated=False)
+    figs["fig8b_psi_compensated.png"] = fig_psi(motor, compensated=True)
+    figs["fig9_lut.png"] = fig_lut(motor, lut)
+    figs["uncompensated_observer.png"] = fig_uncompensated(motor)
+    return [save_png(fig, out / name) for name, fig in figs.items()]
 
 
-def fig_calibration(cal, motor, path: Path) -> Path:
+def fig_calibration(cal, motor) -> Figure:
     """The calibration's measured table against the model (paper Fig. 9: LUT from the model and
     measured at 56 positions under sensored control)."""
     th = _theta()
     m = cal.metrics
-    fig, ax = plt.subplots(figsize=(7.5, 4.2), constrained_layout=True)
+    fig = Figure(figsize=(7.5, 4.2), layout="constrained")
+    ax = fig.subplots()
     ax.plot(np.degrees(th), np.degrees(psi_lut(motor, th)), "-", color="0.6", lw=1.0, label="model, eq. (12)")
     ax.plot(np.degrees(th), np.degrees(psi_lut_resistive(motor, th, m["f_inj_hz"], quad=m["injection_quad"])),
             "b-", lw=1.2, label="model with R_s (the injection used)")
@@ -185,4 +194,4 @@ def fig_calibration(cal, motor, path: Path) -> Path:
     ax.set_title(f"Calibration, motor {m['motor']}: {m['fidelity']} inverter, dead time "
                  f"{m['dead_time_s'] * 1e6:g} µs, load {m['load_n']:g} N; {diff}", fontsize=9)
     ax.legend(fontsize=8)
-    return _save(fig, path)
+    return fig

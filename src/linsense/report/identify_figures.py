@@ -1,39 +1,28 @@
 """Figures of a bench identification: measured versus fitted inductances in the ABC and dq frames
 (the layout of the paper's Fig. 3) and the LUTs from the measured table and from the fit.
 
-Only plotting lives here. The functions return PNG bytes, so the caller can render every figure
-before it writes anything.
+Only plotting lives here. The functions return :class:`matplotlib.figure.Figure` objects (built
+directly, no pyplot state, no backend switch); the caller renders them
+(:func:`linsense.report.figures.png_bytes`) before it writes anything.
 """
 
 from __future__ import annotations
 
-import io
+import numpy as np
+from matplotlib.figure import Figure
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from linsense.analysis.hf import psi_lut  # noqa: E402
-from linsense.model.inductance import ENTRIES  # noqa: E402
-from linsense.report.figures import _DPI, _MH, _position_axis  # noqa: E402
+from linsense.analysis.hf import psi_lut
+from linsense.model.inductance import ENTRIES
+from linsense.report.figures import _MH, _position_axis
 
 _UH = 1e6
-
-
-def _png(fig) -> bytes:
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=_DPI, metadata={"Software": None})
-    plt.close(fig)
-    return buf.getvalue()
 
 
 def _label(name: str) -> str:
     return name.replace("_", "$_{") + "}$"
 
 
-def fig_identified_inductances(motor, measured: dict[str, np.ndarray], title: str) -> bytes:
+def fig_identified_inductances(motor, measured: dict[str, np.ndarray], title: str) -> Figure:
     """Measured (markers) and fitted (lines) inductances in ABC and dq, and the fit residuals.
 
     Parameters
@@ -50,7 +39,8 @@ def fig_identified_inductances(motor, measured: dict[str, np.ndarray], title: st
     fit = ind.entries(th) * _MH
     fit_dq = ind.L_dq(th) * _MH
     mdeg = measured["theta_deg"]
-    fig, axes = plt.subplots(3, 1, figsize=(7.5, 10.0), constrained_layout=True)
+    fig = Figure(figsize=(7.5, 10.0), layout="constrained")
+    axes = fig.subplots(3, 1)
     for j, name in enumerate(ENTRIES):
         color = f"C{j}"
         marker = "o" if j < 3 else "^"
@@ -76,10 +66,10 @@ def fig_identified_inductances(motor, measured: dict[str, np.ndarray], title: st
         _position_axis(ax, motor)
         ax.legend(loc="center left", bbox_to_anchor=(1.0, 0.5), fontsize=7)
     fig.suptitle(title)
-    return _png(fig)
+    return fig
 
 
-def fig_identified_luts(motor, theta_measured: np.ndarray, psi_measured: np.ndarray, lut_fit) -> bytes:
+def fig_identified_luts(motor, theta_measured: np.ndarray, psi_measured: np.ndarray, lut_fit) -> Figure:
     """Psi_LUT from the measured table (markers) and from the fitted model (line and table).
 
     Parameters
@@ -92,8 +82,8 @@ def fig_identified_luts(motor, theta_measured: np.ndarray, psi_measured: np.ndar
         The LUT built from the fit (``lut_fit.csv``).
     """
     th = np.linspace(0.0, 2.0 * np.pi, 721)
-    fig, axes = plt.subplots(2, 1, figsize=(7.5, 6.5), constrained_layout=True,
-                             gridspec_kw={"height_ratios": [2, 1]})
+    fig = Figure(figsize=(7.5, 6.5), layout="constrained")
+    axes = fig.subplots(2, 1, gridspec_kw={"height_ratios": [2, 1]})
     ax = axes[0]
     ax.plot(np.degrees(th), np.degrees(psi_lut(motor, th)), "b-", label="from the fit (lut_fit.csv)")
     ax.plot(np.degrees(theta_measured), np.degrees(psi_measured), "o", ms=4, mfc="none", color="C1",
@@ -110,4 +100,4 @@ def fig_identified_luts(motor, theta_measured: np.ndarray, psi_measured: np.ndar
     axes[1].set_title(f"difference (max {np.abs(diff).max():.2f} deg)")
     for a in axes:
         _position_axis(a, motor)
-    return _png(fig)
+    return fig

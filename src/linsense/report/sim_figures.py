@@ -1,99 +1,132 @@
-"""Figure of one simulation run (PNG): position, estimation error, currents, force."""
+"""Figure of one simulation run: position, estimation error, fundamental currents, the HF current's
+envelope, force.
+
+Drawn from bins of whole injection periods (:func:`linsense.sim.stream.plot_bin`, at most 2,000
+bins): the position and the error as their min-max envelope over every PWM period of a bin (the
+block statistics) with the bin mean, the phase currents as their fundamental (the middle of each
+bin's min-max envelope: the HF swing and the PWM ripple cancel) and the HF current as half that
+envelope's width. Envelopes come from every PWM period, not from the recorded samples, so a
+decimated trace never aliases (the 1 kHz injection sampled every 16 periods at 16 kHz would look
+constant). The force has no block statistics: it is drawn as the bin mean of the samples only when
+they resolve the injection (4 samples per injection period or more).
+
+:func:`sim_figure` builds a :class:`matplotlib.figure.Figure` directly (no pyplot state, no
+backend switch) and returns it; the caller saves it (:func:`linsense.report.figures.save_png`).
+"""
 
 from __future__ import annotations
 
-import io
 from pathlib import Path
 
-import matplotlib
+import numpy as np
+from matplotlib.figure import Figure
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+from linsense.sim.stream import PlotData, plot_data
 
-from linsense.io import write_atomic  # noqa: E402
-
-_DPI = 110
-_MAX_POINTS = 20000  # plotted samples per line (decimated for drawing only)
+DPI = 110
+_PHASES = (("a", "tab:blue"), ("b", "tab:orange"), ("c", "tab:green"))
 
 
-def _hf_period_samples(result) -> int:
-    """Recorded samples per injection period (1 when unknown)."""
-    spec = getattr(result.scenario, "spec", None)
-    if spec is None or result.t.size < 2:
-        return 1
-    dt = float(result.t[1] - result.t[0])
-    return max(1, int(round(1.0 / (spec.injection.frequency * dt))))
-
-
-def _period_mean(x: np.ndarray, n: int) -> np.ndarray:
-    """Centred moving mean over n samples (the HF injection's period): the fundamental."""
-    if n <= 1 or x.size < n:
-        return x
-    ok = np.isfinite(x)
-    m = np.convolve(np.where(ok, x, 0.0), np.ones(n) / n, mode="same")
-    # no whole period around the first and last half period: not drawn
-    m[: n // 2] = np.nan
-    m[x.size - n // 2:] = np.nan
-    return m
-
-
-def sim_figure_png(result) -> bytes:
-    """PNG bytes of the four-panel run figure."""
-    t = result.t
-    step = max(1, t.size // _MAX_POINTS)
-    sl = slice(None, None, step)
+def result_plot_data(result) -> PlotData:
+    """The figure's bins of a :class:`~linsense.sim.result.Result` (with its block statistics when
+    it has them)."""
     m = result.metrics
-    fig, axes = plt.subplots(4, 1, figsize=(8.0, 9.5), sharex=True, constrained_layout=True)
+    spec = getattr(result.scenario, "spec", None)
+    f_pwm = float(spec.inverter.f_pwm) if spec is not None else 16000.0
+    if "block_s" in m:  # (a metrics-only run's blocks are longer than the scenario's decimate)
+        dec = max(1, int(round(m["block_s"] * f_pwm)))
+    else:
+        dec = int(spec.record.decimate) if spec is not None else 1
+    inj = spec.injection if spec is not None else None
+    f_inj = float(inj.frequency) if inj is not None and inj.frequency and inj.amplitude else None
+    arrays = {**result.arrays(), **result.blocks()}
+    return plot_data([arrays], n_rec=result.t.size, decimate=dec, f_pwm=f_pwm, f_inj=f_inj, metrics=m,
+                     name=getattr(result.scenario, "name", ""))
+
+
+def _fmt(v, unit: str) -> str:
+    return "n/a" if v is None else f"{v:.2f} {unit}"
+
+
+def sim_figure(data) -> Figure:
+    """The five-panel run figure of a :class:`~linsense.sim.result.Result` or a streamed run's
+    :class:`~linsense.sim.stream.PlotData`."""
+    if not isinstance(data, PlotData):
+        data = result_plot_data(data)
+    b, m = data.bins, data.metrics
+    t = b["t"]
+    fig = Figure(figsize=(8.0, 11.0), layout="constrained")
+    axes = fig.subplots(5, 1, sharex=True)
+
     ax = axes[0]
-    ax.plot(t[sl], result.x_ref[sl] * 1e3, "k--", lw=1.0, label="reference")
-    ax.plot(t[sl], result.x[sl] * 1e3, lw=1.2, label="true")
-    ax.plot(t[sl], result.x_est[sl] * 1e3, lw=1.0, alpha=0.8, label="estimate")
+    ax.plot(t, b["x_ref"] * 1e3, "k--", lw=1.0, label="reference")
+    ax.fill_between(t, b["x_lo"] * 1e3, b["x_hi"] * 1e3, color="tab:blue", alpha=0.3, lw=0)
+    ax.plot(t, b["x_mean"] * 1e3, color="tab:blue", lw=1.2, label="true (band: min-max)")
+    ax.plot(t, b["x_est"] * 1e3, color="tab:red", lw=1.0, alpha=0.8, label="estimate")
     ax.set_ylabel("position (mm)")
     ax.legend(loc="best", fontsize=8)
+
     ax = axes[1]
-    ax.plot(t[sl], np.degrees(result.theta_err[sl]), lw=0.8, color="tab:red")
+    ax.fill_between(t, np.degrees(b["err_lo"]), np.degrees(b["err_hi"]), color="tab:red", alpha=0.3, lw=0,
+                    label="min-max")
+    ax.plot(t, np.degrees(b["err_mean"]), color="tab:red", lw=1.0, label="mean")
     ax.axhline(0.0, color="k", lw=0.5)
     ax.set_ylabel("estimation error\n(electrical deg)")
+    ax.legend(loc="upper right", fontsize=7, ncol=2)
+
+    i_lo, i_hi = b["i_lo"], b["i_hi"]
     ax = axes[2]
-    for k, name in enumerate("abc"):
-        ax.plot(t[sl], result.i_abc[sl, k], lw=0.5, label=f"$i_{name}$")
-    ax.plot(t[sl], result.i_dq[sl, 1], "k", lw=0.5, alpha=0.35, label="$i_q$ (true frame)")
-    n_hf = _hf_period_samples(result)
-    ax.plot(t[sl], _period_mean(result.i_dq[:, 1], n_hf)[sl], "k", lw=1.2,
-            label="$i_q$, mean over an HF period")
-    ax.set_ylabel("current (A)")
-    ax.legend(loc="upper right", fontsize=7, ncol=5)
+    for k, (ph, color) in enumerate(_PHASES):
+        ax.plot(t, 0.5 * (i_lo[:, k] + i_hi[:, k]), color=color, lw=1.2, label=f"$i_{ph}$")
+    ax.axhline(0.0, color="k", lw=0.5)
+    ax.set_ylabel("phase currents,\nfundamental (A)")
+    ax.legend(loc="upper right", fontsize=7, ncol=3)
+
     ax = axes[3]
-    ax.plot(t[sl], result.force[sl], lw=0.5, alpha=0.35, color="tab:green", label="force")
-    ax.plot(t[sl], _period_mean(result.force, n_hf)[sl], lw=1.2, color="darkgreen",
-            label="mean over an HF period")
+    for k, (ph, color) in enumerate(_PHASES):
+        ax.plot(t, 0.5 * (i_hi[:, k] - i_lo[:, k]), color=color, lw=1.0, label=f"$i_{ph}$")
+    ax.set_ylim(bottom=0.0)
+    ax.set_ylabel("HF current,\nhalf peak-to-peak (A)")
+    ax.legend(loc="upper right", fontsize=7, ncol=3)
+
+    ax = axes[4]
+    spi = data.samples_per_injection
+    if spi is None or spi >= 4.0:
+        ax.plot(t, b["force"], color="darkgreen", lw=1.2, label="mean over each bin")
+        ax.legend(loc="upper right", fontsize=7)
+    else:
+        ax.text(0.5, 0.5, f"not drawn: the trace, one sample every {data.decimate} PWM periods\n"
+                          f"({spi:.3g} per injection period), does not resolve the HF force "
+                          f"(record every period, --decimate 1, to draw it)",
+                ha="center", va="center", transform=ax.transAxes, fontsize=8)
     ax.set_ylabel("motor force (N)")
-    ax.legend(loc="upper right", fontsize=7)
     ax.set_xlabel("time (s)")
     for a in axes:
         a.grid(True, alpha=0.3)
 
-    def fmt(v, unit):
-        return "n/a" if v is None else f"{v:.2f} {unit}"
-
-    name = getattr(result.scenario, "name", "")
-    # the reason's first clause ("not settled (limit cycle)", "fault"): the numbers are on line two
+    bin_ms = data.bin_s * 1e3
     reason = (m.get("unstable_reason") or "?").split(":")[0]
     verdict = "stable" if m.get("stable") else f"not stable: {reason}"
-    title = (f"{name} ({m.get('mode', '')}, {m.get('fidelity', '')}): {verdict}\n"
-             f"max |err| {fmt(m.get('max_abs_err_deg'), 'deg')} (transient "
-             f"{fmt(m.get('transient_max_err_deg'), 'deg')}, "
-             f"steady {fmt(m.get('steady_max_err_deg'), 'deg')}, bias {fmt(m.get('bias_deg'), 'deg')}), "
-             f"limit cycle {fmt(m.get('limit_cycle_mm'), 'mm')}, "
-             f"overshoot {fmt(m.get('overshoot_mm'), 'mm')}")
+    title = (f"{data.name} ({m.get('mode', '')}, {m.get('fidelity', '')}): {verdict}\n"
+             f"max |err| {_fmt(m.get('max_abs_err_deg'), 'deg')} (transient "
+             f"{_fmt(m.get('transient_max_err_deg'), 'deg')}, "
+             f"steady {_fmt(m.get('steady_max_err_deg'), 'deg')}, bias {_fmt(m.get('bias_deg'), 'deg')}), "
+             f"limit cycle {_fmt(m.get('limit_cycle_mm'), 'mm')}, "
+             f"overshoot {_fmt(m.get('overshoot_mm'), 'mm')}\n"
+             f"bins of {bin_ms:.3g} ms; bands and envelopes over every PWM period")
     fig.suptitle(title, fontsize=9)
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=_DPI, metadata={"Software": None})
-    plt.close(fig)
-    return buf.getvalue()
+    return fig
+
+
+def sim_figure_png(result) -> bytes:
+    """PNG bytes of :func:`sim_figure`."""
+    from linsense.report.figures import png_bytes
+
+    return png_bytes(sim_figure(result), DPI)
 
 
 def write_sim_figure(result, path: str | Path) -> Path:
     """Write the run figure to ``path`` (atomically)."""
-    return write_atomic(path, sim_figure_png(result))
+    from linsense.report.figures import save_png
+
+    return save_png(sim_figure(result), path, DPI)

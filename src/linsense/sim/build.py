@@ -22,7 +22,7 @@ import numpy as np
 from linsense.compensation.lut import build_lut
 from linsense.ctrl import ConfigError, Drive, drive_default_cfg, ffi, lib
 from linsense.errors import InputError, LinsenseError
-from linsense.limits import MAX_STEPS, MAX_TRACE_BYTES
+from linsense.limits import MAX_STEPS, MAX_TRACE_BYTES, MAX_TRACE_FILE_BYTES
 from linsense.model.motor import Motor, load_motor, preset_names
 from linsense.sim.core import BLOCKS, SIGNALS, PlantSetup, SimulationError, sim_cfg
 from linsense.sim.scenario import Scenario
@@ -224,10 +224,33 @@ def check_run_size(source: str, n_steps: int, decimate: int, fs: float, trace_in
                          f"record.decimate to at least {need} or shorten scenario.duration (docs/limits.md)")
 
 
-def build(sc: Scenario, motor: Motor | None = None) -> Built:
+def check_trace_file(b: Built) -> None:
+    """Refuse a streamed run whose trace file would exceed :data:`~linsense.limits.MAX_TRACE_FILE_BYTES`
+    (144 B per sample), before it starts."""
+    from linsense.sim.trace import COLUMNS
+
+    s = b.scenario.spec
+    per_sample = 8 * len(COLUMNS)
+    dec = int(b.cfg.decimate)
+    n_rec = math.ceil(b.n_steps / dec)
+    if n_rec * per_sample > MAX_TRACE_FILE_BYTES:
+        need = math.ceil(b.n_steps * per_sample / MAX_TRACE_FILE_BYTES)
+        gib = n_rec * per_sample / 2**30
+        raise InputError(
+            b.scenario.source, "record.decimate",
+            f"= {dec} writes {n_rec:.3g} samples of the {s.scenario.duration:g} s run to the trace file "
+            f"(about "
+            f"{gib:.3g} GiB), beyond the limit of {MAX_TRACE_FILE_BYTES / 2**30:g} GiB: set record.decimate "
+            f"(--decimate) to at least {need}, shorten scenario.duration or write no trace (--trace none) "
+            "(docs/limits.md)")
+
+
+def build(sc: Scenario, motor: Motor | None = None, trace_in_memory: bool = True) -> Built:
     """Configure the plant and the drive of ``sc``; bad values end in :class:`InputError` naming
     the scenario file. ``motor`` replaces the scenario's motor (a Motor object from Python). Gains
-    the scenario leaves unset are designed for its motor (:func:`designed`)."""
+    the scenario leaves unset are designed for its motor (:func:`designed`). ``trace_in_memory``
+    False: the run is streamed in chunks (:mod:`linsense.sim.stream`), its trace not kept, so the
+    limit on the trace kept in memory does not apply."""
     motor = resolve_motor(sc) if motor is None else motor
     # the motor the controller believes in (its tables, gains and feed-forwards): the plant's unless
     # controller.model.motor names another (e.g. one with a parameter off, to test the LUT's robustness)
@@ -391,6 +414,6 @@ def build(sc: Scenario, motor: Motor | None = None) -> Built:
     if n_steps < 1:
         raise InputError(sc.source, "scenario.duration",
                          f"shorter than one PWM period, got {s.scenario.duration!r}")
-    check_run_size(sc.source, n_steps, s.record.decimate, fs)
+    check_run_size(sc.source, n_steps, s.record.decimate, fs, trace_in_memory)
     return Built(sc, motor, setup, cfg, drive, cmds, n_steps, moves, known,
                  extra={} if cal_table is None else {"cal_table": cal_table})

@@ -75,6 +75,28 @@ class Result:
         """The block statistics recorded, by name (empty when none were)."""
         return {k: getattr(self, k) for k in BLOCK_ARRAYS if getattr(self, k) is not None}
 
+    def to_dataframe(self, blocks: bool = False):
+        """A pandas DataFrame, one row per sample, the trace's columns (:data:`linsense.sim.trace.COLUMNS`:
+        ``t_s, x_m, ..., i_a_A, i_b_A, i_c_A, i_d_A, i_q_A, duty_a, ..., fault``; the same frame as
+        ``pandas.read_parquet`` of the run's ``trace.parquet``). ``blocks``: also the block statistics
+        recorded (``x_min_m, x_max_m, x_mean_m, err_min_rad, err_max_rad, err_mean_rad, i_a_min_A,
+        i_b_min_A, i_c_min_A, i_a_max_A, ...``; none when the run kept none). Imports pandas."""
+        import pandas as pd
+
+        from linsense.sim.trace import trace_columns
+
+        cols = trace_columns(self)
+        if blocks:
+            units = {"x": "m", "err": "rad"}
+            for name, a in self.blocks().items():
+                if a.ndim == 2:
+                    stat = name.rsplit("_", 1)[1]
+                    for k, ph in enumerate("abc"):
+                        cols[f"i_{ph}_{stat}_A"] = a[:, k]
+                else:
+                    cols[f"{name}_{units[name.split('_')[0]]}"] = a
+        return pd.DataFrame(cols)
+
     def __repr__(self) -> str:
         name = getattr(self.scenario, "name", "?")
         return (f"Result({name!r}, {self.t.size} samples, stable={self.stable}, "

@@ -1,8 +1,11 @@
-"""Trace files of a run: CSV (default), Parquet (only if pyarrow is installed) and MATLAB .mat.
+"""Trace files of a run: Parquet (``linsense simulate``'s default), CSV and MATLAB .mat.
 
 One column per signal, SI units, named with the unit: ``t_s, x_m, x_est_m, v_m_s, v_est_m_s,
 x_ref_m, theta_err_rad, i_a_A, i_b_A, i_c_A, i_d_A, i_q_A, duty_a, duty_b, duty_c, force_N,
-err_sig_rad, fault``. Written atomically (:func:`linsense.io.write_atomic`).
+err_sig_rad, fault``. Whole traces of a :class:`~linsense.sim.result.Result` are written atomically
+(:func:`linsense.io.write_atomic`); a streamed run (:mod:`linsense.sim.stream`) writes its trace
+chunk by chunk through a :class:`TraceWriter` (Parquet: one row group per chunk; CSV: rows
+appended), never holding it whole. pyarrow is imported only to write or read Parquet.
 """
 
 from __future__ import annotations
@@ -27,22 +30,85 @@ COLUMNS = (
 
 
 def trace_columns(result) -> dict[str, np.ndarray]:
-    """The trace as ``{column: 1-D array}``."""
+    """The trace as ``{column: 1-D array}``, from a :class:`~linsense.sim.result.Result` or from a
+    chunk's ``{array name: array}``."""
+    get = result.__getitem__ if isinstance(result, dict) else (lambda n: getattr(result, n))
     out = {}
     for col, name, k in COLUMNS:
-        a = getattr(result, name)
+        a = get(name)
         out[col] = a if k is None else a[:, k]
     return out
 
 
+_CSV_FMT = ["%.10g"] * (len(COLUMNS) - 1) + ["%d"]
+
+
+def _csv_rows(cols: dict[str, np.ndarray], f, header: bool) -> None:
+    data = np.column_stack([np.asarray(v, dtype=float) for v in cols.values()])
+    np.savetxt(f, data, delimiter=",", header=",".join(cols) if header else "", comments="", fmt=_CSV_FMT)
+
+
 def trace_csv(result) -> str:
     """CSV text: a header line, then one row per sample (``%.10g``; NaN written as ``nan``)."""
-    cols = trace_columns(result)
-    data = np.column_stack([np.asarray(v, dtype=float) for v in cols.values()])
     buf = io.StringIO()
-    fmt = ["%.10g"] * (data.shape[1] - 1) + ["%d"]
-    np.savetxt(buf, data, delimiter=",", header=",".join(cols), comments="", fmt=fmt)
+    _csv_rows(trace_columns(result), buf, True)
     return buf.getvalue()
+
+
+class TraceWriter:
+    """Writes a trace chunk by chunk into an open binary file: ``write(arrays)`` per chunk (a
+    chunk's ``{array name: array}``), then ``close()``. ``fmt``: ``parquet`` (one row group per
+    chunk, pyarrow's default compression; the file is a valid Parquet file only once closed) or
+    ``csv`` (the header, then the rows of each chunk, as :func:`trace_csv`)."""
+
+    def __init__(self, f, fmt: str) -> None:
+        if fmt not in ("parquet", "csv"):
+            raise ValueError(f"unknown trace format {fmt!r}")
+        self.f, self.fmt, self.rows = f, fmt, 0
+        self._pq = None
+        self._text = None
+
+    def write(self, arrays: dict[str, np.ndarray]) -> None:
+        cols = trace_columns(arrays)
+        if self.fmt == "parquet":
+            import pyarrow as pa
+            import pyarrow.parquet as pq
+
+            # (from the buffers: pa.array and pa.table would import pandas, 0.3 s)
+            arrays = [pa.Array.from_buffers(pa.from_numpy_dtype(a.dtype), len(a), [None, pa.py_buffer(a)])
+                      for a in (np.ascontiguousarray(v) for v in cols.values())]
+            table = pa.Table.from_arrays(arrays, names=list(cols))
+            if self._pq is None:
+                self._pq = pq.ParquetWriter(self.f, table.schema)
+            self._pq.write_table(table)
+        else:
+            if self._text is None:
+                self._text = io.TextIOWrapper(self.f, encoding="utf-8", newline="\n", write_through=True)
+            _csv_rows(cols, self._text, self.rows == 0)
+        self.rows += len(cols["t_s"])
+
+    def abort(self) -> None:
+        """Let go of the file after a failure (its owner deletes it): nothing more is written."""
+        if self._pq is not None:
+            try:
+                self._pq.close()
+            except Exception:  # noqa: BLE001 - the file is being thrown away
+                pass
+            self._pq = None
+        if self._text is not None:
+            self._text.detach()
+            self._text = None
+
+    def close(self) -> None:
+        if self.fmt == "parquet":
+            if self._pq is None:  # no sample at all: an empty file with the columns
+                self.write({name: np.empty((0, 3) if name in ("i_abc", "duty") else (0, 2) if name == "i_dq"
+                                           else 0, dtype=np.uint32 if name == "fault" else float)
+                            for _, name, _ in COLUMNS})
+            self._pq.close()
+        elif self._text is not None:
+            self._text.flush()
+            self._text.detach()  # (the file itself is its owner's to close)
 
 
 def read_trace_csv(path: str | Path) -> dict[str, np.ndarray]:
@@ -61,8 +127,18 @@ def have_parquet() -> bool:
     return True
 
 
+def read_trace(path: str | Path) -> dict[str, np.ndarray]:
+    """Read a trace file back (``.parquet`` or ``.csv``) as ``{column: array}``."""
+    if str(path).endswith(".parquet"):
+        import pyarrow.parquet as pq
+
+        t = pq.read_table(path)
+        return {c: t.column(c).to_numpy() for c in t.column_names}
+    return read_trace_csv(path)
+
+
 def write_trace(result, path: str | Path, fmt: str = "csv") -> Path:
-    """Write the trace as ``csv`` or ``parquet`` (needs pyarrow, not a linsense dependency)."""
+    """Write the trace of ``result`` as ``csv`` or ``parquet``."""
     if fmt == "csv":
         return write_atomic(path, trace_csv(result))
     if fmt == "parquet":
@@ -78,16 +154,23 @@ def write_trace(result, path: str | Path, fmt: str = "csv") -> Path:
 MAT_HEADER = b"MATLAB 5.0 MAT-file, written by linsense".ljust(116, b" ")
 
 
-def write_mat(result, path: str | Path) -> Path:
+#: trace samples ``linsense simulate --mat`` accepts: the .mat file is written from the whole trace
+#: held in memory (144 B per sample, plus scipy's copy while it writes)
+MAT_MAX_SAMPLES = 1_000_000
+
+
+def write_mat(result, path: str | Path, metrics: dict | None = None) -> Path:
     """MATLAB .mat (v5): one variable per column plus ``metrics_json`` (the metrics as JSON text,
     without the wall-clock ones: :data:`linsense.io.TIMING_KEYS`). Byte-reproducible: the header
-    carries no date."""
+    carries no date. ``result``: a :class:`~linsense.sim.result.Result`, or the trace's columns
+    ``{column: array}`` with ``metrics``."""
     from scipy.io import savemat
 
     from linsense.io import split_timing
 
-    data = {k: np.asarray(v, dtype=float) for k, v in trace_columns(result).items()}
-    data["metrics_json"] = json.dumps(split_timing(result.metrics)[0])
+    cols = result if metrics is not None else trace_columns(result)
+    data = {k: np.asarray(v, dtype=float) for k, v in cols.items()}
+    data["metrics_json"] = json.dumps(split_timing(result.metrics if metrics is None else metrics)[0])
 
     def writer(f):
         buf = io.BytesIO()

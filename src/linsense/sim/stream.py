@@ -1,0 +1,234 @@
+"""One run streamed in chunks: the trace handed on chunk by chunk, never whole in memory.
+
+``linsense simulate`` runs this way (docs/simulator.md, "Single runs in chunks"): the C loop runs
+in chunks of reused buffers (:func:`linsense.sim.core.run_closed_loop_chunks`); each chunk goes to
+the trace writer and into two :class:`Reducer` objects, one keeping what the metrics need (the
+point values, and the block statistics when ``decimate > 1``; merged into blocks of several
+samples when the run has more than :data:`METRICS_CAP` samples), one the binned envelopes the
+figure draws (:data:`PLOT_BINS` bins at most). Memory does not grow with the duration.
+
+With up to :data:`METRICS_CAP` samples the metrics are exactly those of
+:func:`linsense.sim.run.simulate` on the same scenario; beyond, they are computed from the block
+envelopes as in a metrics-only run (times to one block, ``metrics["block_s"]``).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from linsense.sim.build import Built
+from linsense.sim.core import BLOCKS, CHUNK, run_closed_loop_chunks
+from linsense.sim.run import finish_metrics, run_metrics
+
+#: samples the metrics keep at most (beyond, consecutive samples are merged into blocks): 2**19,
+#: 33 s at 16 kHz with ``decimate = 1``; at most 40 MB
+METRICS_CAP = 2**19
+#: bins of the figure at most (each at least one injection period)
+PLOT_BINS = 2000
+
+#: (operation, sources in order of preference): the first source a chunk has is reduced
+Spec = dict[str, tuple[str, tuple[str, ...]]]
+
+#: the metrics of a run with point values only (decimate 1, no merging): the samples themselves
+POINT_SPEC: Spec = {"t": ("first", ("t",)), "x": ("last", ("x",)), "theta_err": ("first", ("theta_err",))}
+#: the metrics from block envelopes (``decimate > 1`` or merged samples); ``x`` is the last point
+#: value of each block (``final_position_mm`` is the last sample's), ``t`` the block's start
+BLOCK_SPEC: Spec = {
+    **POINT_SPEC,
+    "x_min": ("min", ("x_min", "x")), "x_max": ("max", ("x_max", "x")), "x_mean": ("mean", ("x_mean", "x")),
+    "err_min": ("min", ("err_min", "theta_err")), "err_max": ("max", ("err_max", "theta_err")),
+    "err_mean": ("mean", ("err_mean", "theta_err")),
+}
+#: the figure's bins (:func:`linsense.report.sim_figures.sim_figure`)
+PLOT_SPEC: Spec = {
+    "t": ("mean", ("t",)), "x_ref": ("mean", ("x_ref",)), "x_est": ("mean", ("x_est",)),
+    "x_lo": ("min", ("x_min", "x")), "x_hi": ("max", ("x_max", "x")), "x_mean": ("mean", ("x_mean", "x")),
+    "err_lo": ("min", ("err_min", "theta_err")), "err_hi": ("max", ("err_max", "theta_err")),
+    "err_mean": ("mean", ("err_mean", "theta_err")),
+    "i_lo": ("min", ("i_abc_min", "i_abc")), "i_hi": ("max", ("i_abc_max", "i_abc")),
+    "force": ("mean", ("force",)),
+}
+
+
+def _nanmean(a: np.ndarray, axis: int) -> np.ndarray:
+    ok = np.isfinite(a)
+    n = ok.sum(axis=axis)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(n > 0, np.where(ok, a, 0.0).sum(axis=axis) / np.maximum(n, 1), np.nan)
+
+
+_OPS = {
+    "first": lambda g: g[:, 0].copy(),  # (a copy: g views the reused buffers of the C run)
+    "last": lambda g: g[:, -1].copy(),
+    "min": lambda g: np.fmin.reduce(g, axis=1),  # NaN only where the whole group is NaN
+    "max": lambda g: np.fmax.reduce(g, axis=1),
+    "mean": lambda g: _nanmean(g, 1),
+}
+
+
+class Reducer:
+    """Groups of ``k`` consecutive samples of a streamed trace reduced to one sample each.
+
+    ``spec``: output name -> (operation, sources): ``first``, ``last``, ``min``, ``max`` or ``mean``
+    (NaN ignored) of the first source the chunks have (e.g. ``x_min`` when the run records block
+    statistics, else the point value ``x``). Feed chunks with :meth:`add` (views are fine: what
+    is kept is copied), then :meth:`finish`. ``k = 1`` keeps every sample (min of one = itself).
+    """
+
+    def __init__(self, k: int, spec: Spec) -> None:
+        if k < 1:
+            raise ValueError(f"k must be >= 1, got {k}")
+        self.k, self.spec = int(k), spec
+        self.src: dict[str, str] | None = None
+        self.pending: dict[str, np.ndarray] = {}
+        self.parts: list[dict[str, np.ndarray]] = []
+        self.n_in = 0
+
+    def _reduce(self, arrays: dict[str, np.ndarray], k: int) -> None:
+        n = len(next(iter(arrays.values())))
+        m = n // k
+        if m:
+            part = {}
+            for out, (op, _) in self.spec.items():
+                a = arrays[self.src[out]]
+                part[out] = _OPS[op](a[: m * k].reshape(m, k, *a.shape[1:]))
+            self.parts.append(part)
+
+    def add(self, arrays: dict[str, np.ndarray]) -> None:
+        if self.src is None:
+            self.src = {}
+            for out, (_, sources) in self.spec.items():
+                have = [s for s in sources if s in arrays]
+                if not have:
+                    raise ValueError(f"no source for {out!r} among {sorted(arrays)}")
+                self.src[out] = have[0]
+        names = set(self.src.values())
+        n = len(arrays[next(iter(names))])
+        self.n_in += n
+        if self.pending:
+            arrays = {s: np.concatenate([self.pending[s], arrays[s]]) for s in names}
+            n = len(arrays[next(iter(names))])
+        m = n // self.k
+        self._reduce({s: arrays[s][: m * self.k] for s in names}, self.k)
+        self.pending = {s: np.array(arrays[s][m * self.k:]) for s in names}
+
+    def finish(self, split_last: bool = False) -> dict[str, np.ndarray]:
+        """The reduced arrays; an unfinished last group is reduced as it is. ``split_last``: the last
+        sample (the state that tripped a fault) becomes a group of its own."""
+        rest = self.pending
+        n = len(next(iter(rest.values()))) if rest else 0
+        if n:
+            if split_last and n > 1:
+                self._reduce({s: a[:-1] for s, a in rest.items()}, n - 1)
+                self._reduce({s: a[-1:] for s, a in rest.items()}, 1)
+            else:
+                self._reduce(rest, n)
+        self.pending = {}
+        if not self.parts:
+            return {out: np.empty(0) for out in self.spec}
+        return {out: np.concatenate([p[out] for p in self.parts]) for out in self.spec}
+
+
+def plot_bin(n_rec: int, decimate: int, f_pwm: float, f_inj: float | None) -> int:
+    """Samples per figure bin: at least one injection period (so the envelope holds the whole HF
+    swing) and at most :data:`PLOT_BINS` bins; a whole number of injection periods when one is a
+    whole number of samples."""
+    per_inj = f_pwm / f_inj / decimate if f_inj else 1.0
+    k = max(math.ceil(per_inj - 1e-9), math.ceil(n_rec / PLOT_BINS), 1)
+    q = round(per_inj)
+    if q >= 1 and abs(per_inj - q) < 1e-9:
+        k = -(-k // q) * q
+    return k
+
+
+@dataclass
+class PlotData:
+    """What :func:`linsense.report.sim_figures.sim_figure` draws: the bins of :data:`PLOT_SPEC`
+    (``t`` the bins' mean time, ``*_lo``/``*_hi`` envelopes, ``*_mean``/``x_ref``/``x_est``/``force``
+    means; ``i_lo``/``i_hi`` (n, 3)), the metrics, the scenario's name, the recording period and the
+    samples per injection period of the trace (the force is drawn only when the samples resolve
+    the injection)."""
+
+    bins: dict[str, np.ndarray]
+    metrics: dict
+    name: str
+    f_pwm: float
+    decimate: int
+    bin_samples: int
+    samples_per_injection: float | None
+
+    @property
+    def bin_s(self) -> float:
+        """The length of a bin (s)."""
+        return self.bin_samples * self.decimate / self.f_pwm
+
+
+def plot_data(arrays_chunks, *, n_rec: int, decimate: int, f_pwm: float, f_inj: float | None, metrics: dict,
+              name: str) -> PlotData:
+    """:class:`PlotData` from an iterable of chunks (``{name: array}``) of ``n_rec`` samples."""
+    k = plot_bin(n_rec, decimate, f_pwm, f_inj)
+    red = Reducer(k, PLOT_SPEC)
+    for a in arrays_chunks:
+        red.add(a)
+    spi = f_pwm / f_inj / decimate if f_inj else None
+    return PlotData(red.finish(), metrics, name, f_pwm, decimate, k, spi)
+
+
+@dataclass
+class StreamedRun:
+    """The end of a streamed run: its metrics, fault bits, trace samples and (when asked) the
+    figure's :class:`PlotData`."""
+
+    metrics: dict
+    fault_bits: int
+    samples: int
+    plot: PlotData | None = None
+
+
+def injection_hz(b: Built) -> float | None:
+    """The injection frequency of the built scenario (None without injection)."""
+    inj = b.scenario.spec.injection
+    return float(inj.frequency) if inj.frequency and inj.amplitude else None
+
+
+def simulate_streamed(b: Built, *, on_chunk: Callable | None = None, plot: bool = False, chunk: int = CHUNK,
+                      metrics_cap: int = METRICS_CAP) -> StreamedRun:
+    """Run the built scenario ``b`` (:func:`linsense.sim.build.build`, ``trace_in_memory=False``)
+    in chunks of about ``chunk`` PWM periods: ``on_chunk(arrays)`` gets each chunk's samples (every
+    point signal, and the block statistics when ``decimate > 1``; views valid until it returns),
+    the metrics are accumulated as the run goes (see the module's doc), and with ``plot`` the
+    figure's bins. Raises InputError as :func:`linsense.sim.run.simulate` when the drive trips at
+    t = 0."""
+    s = b.scenario.spec
+    dec = int(b.cfg.decimate)
+    n_rec = -(-int(b.n_steps) // dec)
+    k = max(1, -(-n_rec // int(metrics_cap)))
+    blocks = tuple(BLOCKS) if dec > 1 else ()
+    mred = Reducer(k, BLOCK_SPEC if (k > 1 or dec > 1) else POINT_SPEC)
+    f_inj = injection_hz(b)
+    kp = plot_bin(n_rec, dec, s.inverter.f_pwm, f_inj)
+    pred = Reducer(kp, PLOT_SPEC) if plot else None
+
+    def take(arrays: dict[str, np.ndarray]) -> None:
+        if on_chunk is not None:
+            on_chunk(arrays)
+        mred.add(arrays)
+        if pred is not None:
+            pred.add(arrays)
+
+    chunk = min(int(chunk), int(b.n_steps))  # (a short run needs no buffers of a whole chunk)
+    raw = run_closed_loop_chunks(b.cfg, b.drive.state, b.n_steps, b.commands, on_chunk=take, chunk=chunk,
+                                 blocks=blocks)
+    arrays = mred.finish(split_last=bool(raw.fault))
+    m = run_metrics(b, raw, arrays)
+    finish_metrics(b, raw, m, k * dec)
+    m["samples"] = int(mred.n_in)
+    pd_ = None
+    if pred is not None:
+        pd_ = PlotData(pred.finish(), m, b.scenario.name, s.inverter.f_pwm, dec, kp,
+                       s.inverter.f_pwm / f_inj / dec if f_inj else None)
+    return StreamedRun(m, int(raw.fault), int(mred.n_in), pd_)
