@@ -95,10 +95,12 @@ def sim_figure(data) -> Figure:
         ax.plot(t, b["force"], color="darkgreen", lw=1.2, label="mean over each bin")
         ax.legend(loc="upper right", fontsize=7)
     else:
+        fit = max(1, int(spi * data.decimate / 4.0))  # the decimation giving 4 samples per injection period
         ax.text(0.5, 0.5, f"not drawn: the trace, one sample every {data.decimate} PWM periods\n"
                           f"({spi:.3g} per injection period), does not resolve the HF force "
-                          f"(record every period, --decimate 1, to draw it)",
+                          f"(--decimate {fit} or less draws it)",
                 ha="center", va="center", transform=ax.transAxes, fontsize=8)
+        ax.set_yticks([])
     ax.set_ylabel("motor force (N)")
     ax.set_xlabel("time (s)")
     for a in axes:
