@@ -56,6 +56,16 @@ void ls_traj_move(ls_traj *t, ls_pos target)
     t->dist = LS_FABS(d);
     v = t->cfg.v_max;
     a = t->cfg.a_max;
+    /* the step counter k covers LS_TRAJ_STEPS_MAX steps: a longer move stops, in its direction,
+     * where that many steps take it (its end becomes the target; command the rest again) */
+    {
+        const LS_REAL t_lim = LS_TRAJ_STEPS_MAX * t->ts;
+        const LS_REAL d_lim = t_lim >= LS_R(2.0) * v / a ? v * (t_lim - v / a) : LS_R(0.25) * a * t_lim * t_lim;
+        if (t->dist > d_lim) {
+            t->dist = d_lim;
+            t->target = ls_pos_add(x, t->sign * d_lim * t->kx);
+        }
+    }
     if (t->dist >= v * v / a) {
         t->t_acc = v / a;
         t->v_peak = v;

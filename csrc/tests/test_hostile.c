@@ -116,6 +116,35 @@ static void test_lut_huge_angle(void)
     LS_CHECK_NEAR(ls_lut_step(&l, -LS_R(1e-30)), comp_tab[0], 1e-6);
 }
 
+/* A move across the whole range lasts longer than the step counter counts (2^32 steps): it ends
+ * where 2^31 steps take it, in its direction, instead of wrapping back to its start. */
+static void test_traj_long_move(void)
+{
+    ls_traj t;
+    ls_traj_cfg tc;
+    ls_pos x;
+    LS_REAL v, a;
+    int sgn, k;
+    tc.v_max = LS_R(0.2);
+    tc.a_max = LS_R(1.0);
+    tc.pole_pitch = LS_R(0.056);
+    tc.fs = LS_R(16000.0);
+    for (sgn = -1; sgn <= 1; sgn += 2) {
+        LS_CHECK(ls_traj_init(&t, &tc) == LS_OK);
+        ls_traj_move(&t, mkpos(sgn * LS_POS_PERIOD_MAX, LS_R(0.0)));
+        LS_CHECK(t.active && (double)t.t_total * 16000.0 <= 2147483648.0 * 1.0001);
+        LS_CHECK(pos_ok(t.target) && sgn * t.target.period > 100000 && sgn * t.target.period < LS_POS_PERIOD_MAX);
+        for (k = 0; k < 2000; ++k) {
+            ls_traj_step(&t, &x, &v, &a);
+        }
+        LS_CHECK((LS_REAL)sgn * v > LS_R(0.0) && sgn * x.period >= 0);
+    }
+    /* a move within the limit is not shortened */
+    LS_CHECK(ls_traj_init(&t, &tc) == LS_OK);
+    ls_traj_move(&t, mkpos(1000, LS_R(0.0)));
+    LS_CHECK(t.target.period == 1000 && t.target.theta == LS_R(0.0));
+}
+
 /* ------------------------------------------------------------------------------ setters */
 static void test_setters_refuse(void)
 {
@@ -377,6 +406,7 @@ int main(void)
 {
     test_pos();
     test_lut_huge_angle();
+    test_traj_long_move();
     test_setters_refuse();
     test_setters_ends();
     test_init_refuses();

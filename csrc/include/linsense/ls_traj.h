@@ -27,7 +27,7 @@ typedef struct {
     LS_REAL t_acc;    /* s, acceleration time */
     LS_REAL t_total;  /* s, duration of the move */
     LS_REAL v_peak;   /* m/s, peak speed of the move */
-    uint32_t k;       /* -, steps since the start of the move */
+    uint32_t k;       /* -, steps since the start of the move (< LS_TRAJ_STEPS_MAX + 1) */
     bool active;      /* a move is in progress */
     LS_REAL ts;       /* s, sampling period */
     LS_REAL kx;       /* rad/m, 2 pi / tau */
@@ -36,7 +36,13 @@ typedef struct {
 ls_status ls_traj_init(ls_traj *t, const ls_traj_cfg *cfg);
 /* Hold at p. */
 void ls_traj_reset(ls_traj *t, ls_pos p);
-/* Start a minimum-time move from the present reference to target. */
+/* -, longest move in steps (2^31: 37 h at 16 kHz); the step counter k stays within uint32_t */
+#define LS_TRAJ_STEPS_MAX LS_R(2147483648.0)
+
+/* Start a minimum-time move from the present reference to target (any position: normalised, and
+ * saturated at the end of the range beyond it). A move that would last more than
+ * LS_TRAJ_STEPS_MAX steps ends, in its direction, where that many steps take it: the reference
+ * never wraps back (command the rest again). */
 void ls_traj_move(ls_traj *t, ls_pos target);
 /* Step the reference to target (no profile). */
 void ls_traj_jump(ls_traj *t, ls_pos target);
