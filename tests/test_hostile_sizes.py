@@ -83,12 +83,12 @@ def test_ctrl_c_stops_a_long_run_within_a_second(tmp_path):
 
 def test_ctrl_c_on_the_command_line(run_cli, tmp_path, monkeypatch):
     """The CLI answers an interrupt with one line and exit 130, and writes nothing."""
-    import linsense.sim.run
+    import linsense.sim.stream
 
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(linsense.sim.run, "simulate", interrupted)
+    monkeypatch.setattr(linsense.sim.stream, "simulate_streamed", interrupted)
     (tmp_path / "s.toml").write_text(LONG)
     r = run_cli("simulate", tmp_path / "s.toml", "--out", tmp_path / "out")
     assert r.code == 130
