@@ -324,3 +324,14 @@ def test_drive_refusals():
     drive = ctrl.Drive(comp=np.zeros(56))
     drive.set_mode("sensorless_lut")
     assert drive.state.mode == ctrl.lib.LS_MODE_SENSORLESS_LUT
+
+
+@pytest.mark.parametrize("theta", [1e300, float("nan"), float("inf"), -2.0 * np.pi * 2**25])
+def test_positions_beyond_the_firmware_range_are_refused(theta):
+    """The binding checks what the firmware's setters refuse (docs/firmware.md, "Hostile inputs")."""
+    from linsense.ctrl import ConfigError, Drive, drive_default_cfg
+
+    d = Drive(drive_default_cfg())
+    with pytest.raises(ConfigError, match="ls_pos"):
+        d.set_position(theta)
+    d.set_position(2.0 * np.pi * (2**24 - 1))  # the last period is still accepted

@@ -171,6 +171,7 @@ ls_status ls_current_init(ls_current *c, const ls_current_cfg *cfg);
 void ls_current_reset(ls_current *c);
 void ls_current_step(ls_current *c, LS_REAL i_d, LS_REAL i_q, LS_REAL i_d_ref, LS_REAL i_q_ref,
                      LS_REAL omega, LS_REAL v_max, LS_REAL *v_d, LS_REAL *v_q);
+#define LS_POS_PERIOD_MAX 16777216
 typedef enum { LS_POSCTRL_P = 0, LS_POSCTRL_PD = 1 } ls_posctrl_type;
 typedef struct {
     ls_posctrl_type type;

@@ -278,7 +278,19 @@ def _good(section: str) -> dict:
 
 
 def to_pos(theta: float):
-    """Unwrapped electrical angle (rad) -> ``ls_pos`` (period count + angle in [0, 2 pi))."""
+    """Unwrapped electrical angle (rad) -> ``ls_pos`` (period count + angle in [0, 2 pi)).
+
+    Raises
+    ------
+    ConfigError
+        ``theta`` not finite or beyond the firmware's position range (``LS_POS_PERIOD_MAX``
+        periods either side, docs/firmware.md).
+    """
+    theta = float(theta)
+    if not (np.isfinite(theta) and abs(theta) / _TWO_PI < lib.LS_POS_PERIOD_MAX):
+        raise ConfigError("ls_pos", {"theta": theta}, lib.LS_ERR_PARAM,
+                          f"a position is finite and within +-{lib.LS_POS_PERIOD_MAX} electrical periods",
+                          func="ls_pos_norm")
     period = int(np.floor(theta / _TWO_PI))
     p = ffi.new("ls_pos *", {"period": period, "theta": theta - period * _TWO_PI})
     return lib.ls_py_pos_norm(p[0])
@@ -776,13 +788,17 @@ class Drive:
         lib.ls_drive_reset(self.state, to_pos(theta))
 
     def set_position(self, theta: float) -> None:
-        """Tell the HF observer where the mover is (unwrapped rad)."""
-        lib.ls_drive_set_position(self.state, to_pos(theta))
+        """Tell the HF observer where the mover is (unwrapped rad); :class:`ConfigError` if refused."""
+        st = lib.ls_drive_set_position(self.state, to_pos(theta))
+        if st != lib.LS_OK:
+            raise ConfigError("ls_drive", {"theta": theta}, st, func="ls_drive_set_position")
 
     def set_load(self, f_load: float) -> None:
         """``ls_drive_set_load``: start in equilibrium with the load force ``f_load`` (N, opposing
         positive motion when > 0); call after :meth:`set_position`."""
-        lib.ls_drive_set_load(self.state, float(f_load))
+        st = lib.ls_drive_set_load(self.state, float(f_load))
+        if st != lib.LS_OK:
+            raise ConfigError("ls_drive", {"f_load": f_load}, st, func="ls_drive_set_load")
 
     def step(self, i_abc: Any, v_dc: float, enc_count: int | None = None):
         """One PWM period (``ls_drive_step``).
