@@ -152,6 +152,7 @@ bench: $(GEN_HDR) tools
 	tools/bench.sh
 	$(PY) tools/bench_sim.py
 	$(PY) tools/bench_closed_loop.py
+	$(PY) tools/bench_sweep.py
 
 clean:
 	rm -rf $(BUILD) out

@@ -204,3 +204,15 @@ def test_simulate_many_from_a_script_without_a_main_guard(tmp_path):
     r = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=120)
     assert r.returncode == 0, r.stderr
     assert r.stdout.split() == ["3", "3"]
+
+
+def test_metrics_only_equals_simulate_metrics(tmp_path):
+    """A sweep's lean run (only what the metrics read) gives simulate(record="metrics")'s metrics."""
+    from linsense.sim.run import metrics_only, simulate
+
+    (tmp_path / "base.toml").write_text(SCENARIO)
+    lean = metrics_only(tmp_path / "base.toml")
+    full = simulate(tmp_path / "base.toml", record="metrics").metrics
+    drop = {"wall_s", "realtime_factor"}
+    assert {k: v for k, v in lean.items() if k not in drop} == \
+        {k: v for k, v in full.items() if k not in drop}

@@ -24,7 +24,6 @@ def spec(n: int, folder: Path) -> Path:
     f.write_text(f"""[sweep]
 name = "bench"
 scenario = "{ROOT / 'examples' / 'scenarios' / 'benchmark.toml'}"
-batch = 16
 set = {{ "inverter.fidelity" = "switching", "scenario.duration" = 2.0 }}
 
 [[axis]]
@@ -56,12 +55,12 @@ def main() -> int:
             tp, cp, _ = run(f, scheduler=cluster.scheduler_address)
     print(f"sweep benchmark: {n} runs of a 2 s switching scenario, metrics only")
     print(f"  1 worker thread : {n / t1:6.1f} runs/s, C loop {c1 / t1:.0%} of the time, "
-          f"overhead {1 - c1 / t1:.0%} (target <= 10 %)")
+          f"overhead {1 - c1 / t1:.1%} (target <= 10 %)")
     print(f"  2 worker threads: {n / t2:6.1f} runs/s, {t1 / t2:.2f}x one worker (target >= 1.8x)")
     print(f"  2 worker processes: {n / tp:6.1f} runs/s, {t1 / tp:.2f}x one worker thread "
           f"(their start-up, {start:.1f} s, apart)")
-    ok = 1 - c1 / t1 <= 0.10 and t1 / max(t2, tp) >= 1.8
-    print(f"  sweep targets: {'PASS' if ok else 'FAIL'}")
+    ok = 1 - c1 / t1 <= 0.10 and t1 / t2 >= 1.8  # (the default engine: worker threads)
+    print(f"  sweep targets (overhead, 2 threads): {'PASS' if ok else 'FAIL'}")
     return 0
 
 

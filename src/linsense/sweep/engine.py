@@ -59,7 +59,10 @@ def _write_partition(parts: Path, b: int, rows: list[dict]) -> Path:
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=parts)
     os.close(fd)
     try:
-        pd.DataFrame(rows).to_parquet(tmp, index=False)
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+
+        pq.write_table(pa.Table.from_pylist(rows), tmp)  # (no pandas on the way: it costs per batch)
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)

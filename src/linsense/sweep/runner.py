@@ -177,7 +177,7 @@ def hf_current(result) -> float | None:
 
 def run_point(ctx: SweepContext, index: int, point: dict, relative: dict) -> dict:
     """Simulate one point; the row holds ``run``, the swept values, the metrics and ``error``."""
-    from linsense.sim.run import simulate
+    from linsense.sim.run import metrics_only, simulate
     from linsense.sim.scenario import scenario_from_dict
 
     row: dict = {"run": index, **point}
@@ -186,9 +186,12 @@ def run_point(ctx: SweepContext, index: int, point: dict, relative: dict) -> dic
                                 ctx.scenario_dir)
         # metrics only (block statistics in C, memory independent of the duration) unless the
         # sweep keeps the traces (the HF current is measured on a trace)
-        res = simulate(sc, record="trace" if ctx.trace else "metrics")
-        m = dict(res.metrics)
-        m["hf_current_a"] = hf_current(res) if ctx.trace else None
+        if ctx.trace:
+            res = simulate(sc)
+            m = dict(res.metrics)
+            m["hf_current_a"] = hf_current(res)
+        else:
+            m = metrics_only(sc)
         if "wall_s" not in m:
             m["wall_s"] = getattr(res, "wall_s", None)
         for k in ROW_METRICS:
