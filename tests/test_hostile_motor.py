@@ -112,3 +112,9 @@ def test_the_preset_passes_every_check(run_cli, tmp_path):
     (tmp_path / "m.toml").write_text(with_table())
     r = run_cli("model", "--motor", tmp_path / "m.toml", "--out", tmp_path / "model2.csv")
     assert r.code == 0, r.err
+
+
+def test_a_name_with_control_characters_is_refused(run_cli, tmp_path):
+    (tmp_path / "m.toml").write_text(PRESET.replace('name = "ecce2010"', 'name = "a\\u0000b"'))
+    run_cli("model", "--motor", tmp_path / "m.toml", "--out", tmp_path / "x.csv").refused(
+        "m.toml", "motor.name", "control characters")

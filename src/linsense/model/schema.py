@@ -31,6 +31,12 @@ class MotorSection(BaseModel):
     force_constant: Positive  # N/A per peak phase current
     mass: Positive  # kg
 
+    @model_validator(mode="after")
+    def _check(self) -> MotorSection:
+        if any(ord(c) < 32 or ord(c) == 127 for c in self.name):
+            raise KeyProblem("name", f"control characters are not allowed in a name, got {self.name!r}")
+        return self
+
 
 class InductanceSection(BaseModel):
     """Either the eq. (3) parameters (plus optional ``L<n>``/``M<n>`` even harmonics) or a table."""
