@@ -99,7 +99,7 @@ _RULES = {
     "ls_biquad": {
         "type": "lowpass, bandpass or notch",
         "f0": "Hz, > 0 and < fs/2",
-        "q": "quality factor, > 0",
+        "q": "quality factor, 1e-3 .. 1e3",
         "fs": "Hz, sampling rate, > 0 and > 2 f0",
     },
     "ls_inject": {
@@ -112,7 +112,7 @@ _RULES = {
         "method": "product or heterodyne",
         "f_lpf": "Hz, low-pass corner, > 0 and < fs/2",
         "fs": "Hz, sampling rate, > 2 f_lpf",
-        "gain": "L_q/(L_q - L_d), finite and non-zero",
+        "gain": "L_q/(L_q - L_d), finite, non-zero, |gain| <= 1e4",
         "comp": "ls_lut with >= 4 points",
         "gain_table": "ls_lut with >= 4 points",
         "min_level": "A^2, >= 0",
@@ -120,13 +120,13 @@ _RULES = {
     "ls_observer": {
         "type": "pll or mech",
         "fs": "Hz, > 0",
-        "k1": "1/s, > 0",
-        "k2": "1/s^2, > 0",
-        "k3": "1/s^3, > 0 for mech",
+        "k1": "1/s, > 0, k1 Ts <= 1 (beyond, the discrete observer is unstable)",
+        "k2": "1/s^2, > 0, k2 Ts^2 <= 1",
+        "k3": "1/s^3, > 0 for mech, k3 Ts^3 <= 1",
         "pole_pitch": "m, > 0",
         "mass": "kg, > 0 for mech",
-        "omega_max": "rad/s, > 0 and finite",
-        "force_max": "N, > 0 for mech",
+        "omega_max": "rad/s, > 0, omega_max Ts <= pi (half a period per step)",
+        "force_max": "N, > 0 for mech; it may move the estimate at most pi per step",
     },
 }
 
