@@ -153,6 +153,7 @@ bench: $(GEN_HDR) tools
 	$(PY) tools/bench_sim.py
 	$(PY) tools/bench_closed_loop.py
 	$(PY) tools/bench_sweep.py
+	$(PY) tools/bench_fea.py
 
 clean:
 	rm -rf $(BUILD) out

@@ -426,6 +426,26 @@ def tune(motor_spec: str, scenario_path: str | None, v_dc, f_pwm, dead_time, i_m
         click.echo(f"linsense: warning: {w}", err=True)
 
 
+@cli.command("fea")
+@click.argument("geometry")
+@click.option("--out", required=True, type=click.Path(file_okay=False), help="output folder")
+@click.option("--positions", type=click.IntRange(12, 720), default=56, show_default=True,
+              help="rod positions over one electrical period (12 .. 720)")
+@click.option("--mesh", "level", type=click.Choice(["coarse", "default", "fine"]), default="default",
+              show_default=True, help="mesh level")
+@click.option("--lut-points", default=360, show_default=True, callback=_points, help="length of lut.csv")
+def fea(geometry: str, out: str, positions: int, level: str, lut_points: int) -> None:
+    """Axisymmetric FEA of a tubular motor (GEOMETRY: .toml file or preset): inductances.csv, motor.toml,
+    lut.csv, geometry.json, fea.json and figures."""
+    from linsense.fea.pipeline import run_fea
+
+    files, lines = run_fea(geometry, out, positions, level, lut_points, progress=sys.stderr.isatty())
+    for f in files:
+        click.echo(str(f))
+    for line in lines:
+        click.echo(line)
+
+
 @cli.command("sweep")
 @click.argument("sweep_file", type=click.Path(dir_okay=False))
 @click.option("--out", required=True, type=click.Path(file_okay=False),

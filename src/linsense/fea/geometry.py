@@ -1,0 +1,264 @@
+"""Geometry files of axisymmetric tubular motors (TOML, SI units) and their r-z layout.
+
+A geometry file describes a tubular motor like the paper's Fig. 1: an inner rod of axially
+magnetised magnets of alternating polarity separated by iron spacers, a non-magnetic tube, an air
+gap, and a slotless armature (coils in front of a back iron) of finite length, so that the open
+ends are modelled. Validated with pydantic in strict mode; errors are one line naming the file,
+the key and the value (:func:`linsense.validation.to_input_error`). See docs/fea.md.
+"""
+
+from __future__ import annotations
+
+import tomllib
+from dataclasses import asdict, dataclass, field
+from importlib import resources
+from pathlib import Path
+from typing import Annotated, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+
+from linsense.errors import InputError
+from linsense.io import read_text_file
+from linsense.validation import KeyProblem, to_input_error
+
+_STRICT = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
+Positive = Annotated[float, Field(gt=0)]
+NonNegative = Annotated[float, Field(ge=0)]
+#: the largest number of coils a geometry may hold (bounds the mesh)
+MAX_COILS = 120
+_TOKEN_SIGN = {"+": 1, "-": -1}
+
+
+class MotorPart(BaseModel):
+    model_config = _STRICT
+    name: str = Field(min_length=1, max_length=200)
+    pole_pitch: Positive  # m, one electrical period (as in motor files)
+    mass: Positive = 1.0  # kg, written into motor.toml
+    R_s: NonNegative = 0.0  # ohm, written into motor.toml
+    force_constant: Positive | None = None  # N/A; default: from the computed PM flux linkage
+
+    @model_validator(mode="after")
+    def _check(self) -> MotorPart:
+        if any(ord(c) < 32 or ord(c) == 127 for c in self.name):
+            raise KeyProblem("name", f"control characters are not allowed in a name, got {self.name!r}")
+        return self
+
+
+class RodPart(BaseModel):
+    model_config = _STRICT
+    radius: Positive  # m, outer radius of magnets and spacers (solid to the axis)
+    magnet_length: Positive  # m, axial length of one magnet; spacer = pole_pitch / 2 - magnet_length
+    tube_thickness: NonNegative = 0.0  # m, non-magnetic tube around the rod
+    remanence: NonNegative = 1.2  # T, axial magnetisation, alternating sign
+    mu_r_magnet: Annotated[float, Field(ge=1.0, le=10.0)] = 1.05  # recoil permeability
+    mu_r_iron: Annotated[float, Field(ge=1.0, le=1e6)] = 1000.0  # spacers (linear)
+
+
+class CoilEntry(BaseModel):
+    model_config = _STRICT
+    phase: Literal["A", "B", "C"]
+    sign: Literal[1, -1]
+    turns: Annotated[int, Field(ge=1, le=100_000)]
+
+
+class ArmaturePart(BaseModel):
+    model_config = _STRICT
+    air_gap: Positive  # m, radial, tube to armature bore
+    coil_depth: Positive  # m, radial depth of the coils
+    back_iron: Positive  # m, radial thickness of the back iron
+    coil_pitch: Positive | None = None  # m, axial length per coil (default pole_pitch / 6)
+    end_length: NonNegative = 0.0  # m, back iron beyond the outer coils at each end
+    mu_r_iron: Annotated[float, Field(ge=1.0, le=1e6)] = 1000.0
+    # either an explicit coil list ...
+    coils: list[CoilEntry] | None = Field(default=None, min_length=1, max_length=MAX_COILS)
+    # ... or a sequence of tokens repeated
+    sequence: str | None = None  # e.g. "A+ C- B+ A- C+ B-"
+    repeat: Annotated[int, Field(ge=1, le=MAX_COILS)] = 1
+    turns: Annotated[int, Field(ge=1, le=100_000)] | None = None
+
+    @model_validator(mode="after")
+    def _check(self) -> ArmaturePart:
+        if self.coils is not None:
+            for k in ("sequence", "turns"):
+                if getattr(self, k) is not None:
+                    raise KeyProblem(k, "give either 'coils' or 'sequence' with 'turns', not both")
+            return self
+        if self.sequence is None:
+            raise KeyProblem("coils", "missing: give 'coils' or 'sequence' (e.g. \"A+ C- B+ A- C+ B-\")")
+        if self.turns is None:
+            raise KeyProblem("turns", "missing required key (with 'sequence')")
+        tokens = self.sequence.split()
+        if not tokens:
+            raise KeyProblem("sequence", f"empty, got {self.sequence!r}")
+        for t in tokens:
+            if len(t) != 2 or t[0] not in "ABC" or t[1] not in "+-":
+                raise KeyProblem("sequence", f"token {t!r} is not a phase A/B/C and a sign +/- (e.g. 'A+')")
+        if len(tokens) * self.repeat > MAX_COILS:
+            raise KeyProblem("repeat", f"{len(tokens) * self.repeat} coils, beyond the limit of {MAX_COILS}")
+        return self
+
+    def coil_list(self) -> list[CoilEntry]:
+        if self.coils is not None:
+            return list(self.coils)
+        tokens = self.sequence.split() * self.repeat
+        return [CoilEntry(phase=t[0], sign=_TOKEN_SIGN[t[1]], turns=self.turns) for t in tokens]
+
+
+class DomainPart(BaseModel):
+    model_config = _STRICT
+    far: Annotated[float, Field(ge=1.5, le=100.0)] = 4.0  # far boundary, in armature outer radii
+    margin_periods: Annotated[float, Field(ge=0.0, le=10.0)] = 1.0  # fine zone beyond the armature
+
+
+class GeometryFile(BaseModel):
+    model_config = _STRICT
+    motor: MotorPart
+    rod: RodPart
+    armature: ArmaturePart
+    domain: DomainPart = Field(default_factory=DomainPart)
+
+    @model_validator(mode="after")
+    def _check(self) -> GeometryFile:
+        half = self.motor.pole_pitch / 2
+        if self.rod.magnet_length > half:
+            raise KeyProblem("rod.magnet_length", f"{self.rod.magnet_length!r} m exceeds half the pole pitch "
+                             f"({half:g} m): magnets and spacers alternate within pole_pitch / 2")
+        outer = self.rod.radius + self.rod.tube_thickness + self.armature.air_gap
+        outer += self.armature.coil_depth + self.armature.back_iron
+        if outer > 10.0 or self.motor.pole_pitch > 10.0:
+            raise KeyProblem("armature", f"outer radius {outer:g} m or pole pitch beyond 10 m: "
+                             "check the units (m)")
+        if outer / self.armature.air_gap > 1e4:
+            raise KeyProblem("armature.air_gap", f"{self.armature.air_gap!r} m is below 1e-4 of the outer "
+                             "radius: not meshable")
+        return self
+
+
+# ---------------------------------------------------------------------- layout
+@dataclass
+class Coil:
+    """One coil as meshed: r and z extents (m), phase, sign, turns."""
+
+    index: int
+    phase: str
+    sign: int
+    turns: int
+    r0: float
+    r1: float
+    z0: float
+    z1: float
+
+    @property
+    def area(self) -> float:
+        return (self.r1 - self.r0) * (self.z1 - self.z0)
+
+
+@dataclass
+class Geometry:
+    """The r-z layout of a geometry file (SI units); z = 0 is the armature's centre."""
+
+    name: str
+    source: str
+    pole_pitch: float
+    mass: float
+    R_s: float
+    force_constant: float | None
+    r_rod: float
+    r_tube: float
+    r_bore: float
+    r_coil: float
+    r_out: float
+    magnet_length: float
+    remanence: float
+    mu_magnet: float
+    mu_rod_iron: float
+    mu_arm_iron: float
+    z_arm0: float
+    z_arm1: float
+    coils: list[Coil]
+    far: float
+    margin: float
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def r_far(self) -> float:
+        return self.far * self.r_out
+
+    @property
+    def z_far(self) -> tuple[float, float]:
+        ext = self.margin + self.far * self.r_out
+        return self.z_arm0 - ext, self.z_arm1 + ext
+
+    def regions(self) -> dict:
+        """Every region as meshed (for geometry.json)."""
+        return {
+            "units": "m, T",
+            "name": self.name,
+            "pole_pitch": self.pole_pitch,
+            "rod": {"r": [0.0, self.r_rod], "z": "whole domain (infinite rod)",
+                    "magnet_length": self.magnet_length,
+                    "spacer_length": self.pole_pitch / 2 - self.magnet_length,
+                    "remanence": self.remanence, "mu_r_magnet": self.mu_magnet, "mu_r_iron": self.mu_rod_iron,
+                    "pattern": "magnet +z centred at z = x, spacer, magnet -z centred at x + pole_pitch/2, "
+                               "spacer (x: the rod's position)"},
+            "tube": {"r": [self.r_rod, self.r_tube], "mu_r": 1.0},
+            "air_gap": {"r": [self.r_tube, self.r_bore]},
+            "back_iron": {"r": [self.r_coil, self.r_out], "z": [self.z_arm0, self.z_arm1],
+                          "mu_r": self.mu_arm_iron},
+            "coils": [asdict(c) for c in self.coils],
+            "domain": {"r": [0.0, self.r_far], "z": list(self.z_far),
+                       "boundary": "flux function r*A_phi = 0 on the axis and on the far boundary"},
+        }
+
+
+def geometry_from_doc(doc: GeometryFile, source: str) -> Geometry:
+    m, rod, arm = doc.motor, doc.rod, doc.armature
+    coils = arm.coil_list()
+    pitch = arm.coil_pitch if arm.coil_pitch is not None else m.pole_pitch / 6
+    r_tube = rod.radius + rod.tube_thickness
+    r_bore = r_tube + arm.air_gap
+    r_coil = r_bore + arm.coil_depth
+    r_out = r_coil + arm.back_iron
+    length = len(coils) * pitch + 2 * arm.end_length
+    z0 = -length / 2
+    out = []
+    for k, c in enumerate(coils):
+        za = z0 + arm.end_length + k * pitch
+        out.append(Coil(k, c.phase, int(c.sign), int(c.turns), r_bore, r_coil, za, za + pitch))
+    return Geometry(
+        name=m.name, source=source, pole_pitch=m.pole_pitch, mass=m.mass, R_s=m.R_s,
+        force_constant=m.force_constant, r_rod=rod.radius, r_tube=r_tube, r_bore=r_bore, r_coil=r_coil,
+        r_out=r_out, magnet_length=rod.magnet_length, remanence=rod.remanence, mu_magnet=rod.mu_r_magnet,
+        mu_rod_iron=rod.mu_r_iron, mu_arm_iron=arm.mu_r_iron, z_arm0=z0, z_arm1=-z0, coils=out,
+        far=doc.domain.far, margin=doc.domain.margin_periods * m.pole_pitch,
+    )
+
+
+def preset_names() -> list[str]:
+    return sorted(p.name[:-5] for p in (resources.files("linsense.fea") / "presets").iterdir()
+                  if p.name.endswith(".toml"))
+
+
+def geometry_from_toml(text: str, source: str) -> Geometry:
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(source, "", f"not valid TOML: {exc}") from None
+    try:
+        doc = GeometryFile.model_validate(data)
+    except ValidationError as exc:
+        raise to_input_error(exc, source, GeometryFile) from None
+    return geometry_from_doc(doc, source)
+
+
+def load_geometry(spec: str | Path) -> Geometry:
+    """A geometry from a file path or a preset name (``linsense/fea/presets/<name>.toml``)."""
+    s = str(spec)
+    p = Path(s)
+    if p.suffix.lower() == ".toml" or p.exists() or "/" in s:
+        return geometry_from_toml(read_text_file(s, "geometry file"), s)
+    if s not in preset_names():
+        raise InputError(s, "", f"no such geometry file or preset (presets: {', '.join(preset_names())})")
+    text = (resources.files("linsense.fea") / "presets" / f"{s}.toml").read_text()
+    return geometry_from_toml(text, f"preset {s}")
+

@@ -1,0 +1,197 @@
+"""Axisymmetric FEA (linsense.fea): validation against closed forms, convergence, end-effect, files.
+
+Coarse meshes throughout; docs/fea.md gives the figures of the default and fine meshes.
+"""
+
+from __future__ import annotations
+
+import copy
+import json
+import math
+import tomllib
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.special import ellipe, ellipk
+from skfem import asm
+
+from linsense.errors import InputError
+from linsense.fea.geometry import GeometryFile, geometry_from_doc, geometry_from_toml, load_geometry
+from linsense.fea.solver import MU0, Solver, _density, energy_of, run
+
+PRESET = tomllib.loads((resources.files("linsense.fea") / "presets" / "tubular56.toml").read_text())
+
+
+def _geom(doc: dict):
+    return geometry_from_doc(GeometryFile.model_validate(doc), "test")
+
+
+def _air(sequence="A+ B+ C-", turns=100, far=8.0):
+    return {"motor": {"name": "air", "pole_pitch": 0.056},
+            "rod": {"radius": 0.0125, "magnet_length": 0.01, "remanence": 0.0, "mu_r_magnet": 1.0,
+                    "mu_r_iron": 1.0},
+            "armature": {"air_gap": 0.001, "coil_depth": 0.006, "back_iron": 0.006, "mu_r_iron": 1.0,
+                         "sequence": sequence, "turns": turns},
+            "domain": {"far": far}}
+
+
+# ------------------------------------------------------------------ closed form (Maxwell)
+def _m_filaments(a, b, d):
+    """Mutual inductance of coaxial circular filaments (radii a, b, axial distance d), Maxwell."""
+    k2 = 4 * a * b / ((a + b) ** 2 + d ** 2)
+    k = np.sqrt(k2)
+    return MU0 * np.sqrt(a * b) * ((2 / k - k) * ellipk(k2) - 2 / k * ellipe(k2))
+
+
+def _m_coils(c1, c2, n1=20, n2=21):
+    """Filament formula integrated over both cross-sections by Gauss-Legendre (n1 != n2: the points
+    never coincide, so a coil's self inductance is the same integral)."""
+
+    def pts(c, n):
+        x, w = np.polynomial.legendre.leggauss(n)
+        r = c.r0 + (x + 1) / 2 * (c.r1 - c.r0)
+        z = c.z0 + (x + 1) / 2 * (c.z1 - c.z0)
+        R, Z = np.meshgrid(r, z, indexing="ij")
+        return R.ravel(), Z.ravel(), (np.outer(w, w) / 4).ravel()
+
+    ra, za, wa = pts(c1, n1)
+    rb, zb, wb = pts(c2, n2)
+    m = _m_filaments(ra[:, None], rb[None, :], za[:, None] - zb[None, :])
+    return c1.sign * c2.sign * c1.turns * c2.turns * float((wa[:, None] * wb[None, :] * m).sum())
+
+
+def test_air_cored_coils_match_maxwell():
+    g = _geom(_air())
+    ref = np.array([[_m_coils(a, b) for b in g.coils] for a in g.coils])
+    L = Solver(g, "coarse").solve(0.0).L
+    err = np.abs(L - ref) / np.abs(ref)
+    assert err.max() < 0.005, err  # measured 0.20 % (coarse), 0.19 % (default): see docs/fea.md
+    assert L[0, 1] > 0 > L[0, 2]  # signs follow the coil signs
+
+
+def test_energy_from_field_equals_half_iLi():
+    s = Solver(load_geometry("tubular56"), "coarse")
+    sol = s.solve(0.013, keep=True)
+    w, wl = energy_of(s, sol, [1.0, -0.4, 0.7])
+    assert w == pytest.approx(wl, rel=1e-9)
+    assert np.all(np.linalg.eigvalsh(sol.L) > 0)
+    assert np.allclose(sol.L, sol.L.T)
+
+
+def test_mesh_convergence():
+    g = load_geometry("tubular56")
+    a = Solver(g, "coarse", 56).solve(0.003).L
+    b = Solver(g, "default", 56).solve(0.003).L
+    assert np.abs((a - b) / b).max() < 0.005  # measured 0.39 % (default to fine: 0.21 %, docs/fea.md)
+
+
+def test_long_armature_has_no_end_effect_inside():
+    # 8 periods of coils on a long back iron, no rod saliency: the per-period phase mutuals of an
+    # interior period (linkage of its coils with the whole phase currents) are equal
+    d = _air("A+ C- B+ A- C+ B-", far=4.0)
+    d["armature"].update(repeat=8, mu_r_iron=1000.0, end_length=0.01)
+    g = _geom(d)
+    s = Solver(g, "coarse")
+    sol = s.solve(0.0, keep=True)
+    psi = sol.fields["psi"][:, :3]
+    mid = g.coils[24:30]  # period 5 of 8
+
+    def link(phase, k):
+        tot = 0.0
+        for c in mid:
+            if c.phase == phase:
+                inside = (s.r > c.r0) & (s.r < c.r1) & (s.z > c.z0) & (s.z < c.z1)
+                j = np.where(inside, c.sign * c.turns / c.area, 0)
+                tot += 2 * math.pi * asm(_density, s.basis, j=j) @ psi[:, k]
+        return tot
+
+    m_ab, m_bc, m_ca = link("A", 1), link("B", 2), link("C", 0)
+    m = np.array([m_ab, m_bc, m_ca])
+    assert np.ptp(m) / abs(m.mean()) < 0.01, m
+    # the whole short armature's phase mutuals are not equal
+    whole = sol.L
+    assert abs(whole[0, 1] - whole[1, 2]) / abs(whole[1, 2]) > 0.005
+
+
+def test_short_armature_end_effect_and_model_file(tmp_path):
+    from linsense.fea import outputs
+    from linsense.model.motor import load_motor
+
+    res = run(load_geometry("tubular56"), 14, "coarse")
+    fit = outputs.eq3_fit(res)["values_H"]
+    assert fit["dM0"] < 0
+    assert 2.0e-3 < fit["L0"] < 3.5e-3
+    (tmp_path / "inductances.csv").write_text(outputs.inductances_csv(res))
+    (tmp_path / "motor.toml").write_text(outputs.motor_toml(res))
+    m = load_motor(tmp_path / "motor.toml")  # plausibility: 3x3 PD, saliency sign
+    assert m.pole_pitch == pytest.approx(0.056)
+    assert res.energy_error < 1e-9
+
+
+def test_fig4_three_coils_middle_coil_couples_equally():
+    g = load_geometry(Path(__file__).resolve().parents[1] / "examples" / "fea" / "fig4_three_coils.toml")
+    res = run(g, 8, "coarse")
+    m = res.L.mean(axis=0)
+    assert abs(m[1, 2] - m[2, 0]) / abs(m[2, 0]) < 0.02  # M_BC = M_CA (C in the middle)
+    assert abs(m[0, 1]) < 0.5 * abs(m[2, 0])  # M_AB smaller
+
+
+def test_cli_writes_the_output_set(tmp_path):
+    from linsense.cli import main
+    from linsense.model.motor import load_motor
+
+    out = tmp_path / "fea"
+    with pytest.raises(SystemExit) as e:
+        main(["fea", "tubular56", "--out", str(out), "--positions", "14", "--mesh", "coarse",
+              "--lut-points", "36"])
+    assert e.value.code == 0
+    for f in ("inductances.csv", "motor.toml", "lut.csv", "geometry.json", "fea.json", "field_lines.png",
+              "inductances_fea.png", "lut.png"):
+        assert (out / f).is_file(), f
+    load_motor(out / "motor.toml")
+    doc = json.loads((out / "fea.json").read_text())
+    assert doc["mesh"]["triangles"] > 0 and doc["positions"] == 14
+    geo = json.loads((out / "geometry.json").read_text())
+    assert len(geo["coils"]) == 24 and geo["coils"][0]["phase"] == "A"
+
+
+# ------------------------------------------------------------------ hostile geometry files
+def _text(mut) -> str:
+    import tomli_w
+
+    d = copy.deepcopy(PRESET)
+    mut(d)
+    return tomli_w.dumps(d)
+
+
+@pytest.mark.parametrize("mut, expect", [
+    (lambda d: d["rod"].update(radus=0.01), "rod.radus: unknown key (value 0.01) (did you mean 'radius'?)"),
+    (lambda d: d["rod"].update(magnet_length=0.04), "rod.magnet_length"),
+    (lambda d: d["rod"].update(remanence="1.2"), "rod.remanence"),
+    (lambda d: d["rod"].update(radius=float("nan")), "rod.radius: expected a finite number"),
+    (lambda d: d["rod"].update(radius=-0.01), "rod.radius"),
+    (lambda d: d["armature"].update(sequence="A+ D-"), "armature.sequence: token 'D-'"),
+    (lambda d: d["armature"].update(repeat=1000), "armature.repeat"),
+    (lambda d: d["armature"].pop("turns"), "armature.turns: missing"),
+    (lambda d: d["armature"].update(coils=[{"phase": "A", "sign": 1, "turns": 5}]), "armature.sequence"),
+    (lambda d: d["armature"].update(air_gap=True), "armature.air_gap"),
+    (lambda d: d.pop("rod"), "rod: missing required key"),
+    (lambda d: d["motor"].update(name="a\x00b"), "motor.name: control characters"),
+    (lambda d: d["rod"].update(radius=50.0), "check the units"),
+])
+def test_hostile_geometry_refused_in_one_line(mut, expect):
+    with pytest.raises(InputError) as e:
+        geometry_from_toml(_text(mut), "g.toml")
+    msg = str(e.value)
+    assert "\n" not in msg and msg.startswith("g.toml: ") and expect in msg, msg
+
+
+def test_geometry_not_toml_and_missing_file(tmp_path):
+    with pytest.raises(InputError, match="not valid TOML"):
+        geometry_from_toml("[rod", "g.toml")
+    with pytest.raises(InputError, match="no such"):
+        load_geometry(tmp_path / "none.toml")
+    with pytest.raises(InputError, match="preset"):
+        load_geometry("nopreset")
