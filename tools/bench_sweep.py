@@ -1,7 +1,7 @@
 """Sweep benchmark (make bench): throughput of the sweep engine on 1 and 2 workers and its overhead
 above the C loop's own time (issue 10's targets: 2 workers >= 1.8x one worker, overhead <= 10 %).
 
-Runs N copies (seeds) of the 2 s benchmark scenario on the switching inverter, metrics only, with
+Runs N copies (seeds) of the paper's 2 s, 3 mm step (step3_lut) on the switching inverter, metrics only, with
 1 worker thread, 2 worker threads and 2 worker processes (the processes' start-up counted apart).
 Prints each figure. Usage: python tools/bench_sweep.py [N] (default 2,000 runs, as the issue's example;
 the local cluster's start-up, about 0.3 s, is then 1 % of the time)
@@ -24,8 +24,8 @@ def spec(n: int, folder: Path) -> Path:
     f = folder / "bench_sweep.toml"
     f.write_text(f"""[sweep]
 name = "bench"
-scenario = "{ROOT / 'examples' / 'scenarios' / 'benchmark.toml'}"
-set = {{ "inverter.fidelity" = "switching", "scenario.duration" = 2.0 }}
+scenario = "{ROOT / 'examples' / 'scenarios' / 'step3_lut.toml'}"
+set = {{ "inverter.fidelity" = "switching" }}
 
 [[axis]]
 key = "scenario.seed"
@@ -54,7 +54,7 @@ def main() -> int:
                           silence_logs=40) as cluster, Client(cluster):
             start = time.perf_counter() - t0
             tp, cp, _ = run(f, scheduler=cluster.scheduler_address)
-    print(f"sweep benchmark: {n} runs of a 2 s switching scenario, metrics only")
+    print(f"sweep benchmark: {n} runs of a 2 s switching scenario (step3_lut), metrics only")
     print(f"  1 worker thread : {n / t1:6.1f} runs/s, C loop {c1 / t1:.0%} of the time, "
           f"overhead {1 - c1 / t1:.1%} (target <= 10 %)")
     print(f"  2 worker threads: {n / t2:6.1f} runs/s, {t1 / t2:.2f}x one worker (target >= 1.8x)")
