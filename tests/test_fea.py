@@ -195,3 +195,15 @@ def test_geometry_not_toml_and_missing_file(tmp_path):
         load_geometry(tmp_path / "none.toml")
     with pytest.raises(InputError, match="preset"):
         load_geometry("nopreset")
+
+
+def test_no_saliency_still_writes_the_table_and_says_so(tmp_path):
+    from linsense.fea.pipeline import run_fea
+
+    geo = Path(__file__).resolve().parents[1] / "examples" / "fea" / "fig4_three_coils.toml"
+    files, lines, warnings = run_fea(str(geo), str(tmp_path / "o"), 14, "coarse", 36)
+    names = {f.name for f in files}
+    assert {"inductances.csv", "motor.toml", "fea.json"} <= names and "lut.csv" not in names
+    assert len(warnings) == 1 and "saliency" in warnings[0] and ".tmp-" not in warnings[0]
+    doc = json.loads((tmp_path / "o" / "fea.json").read_text())
+    assert doc["hf_sensorless"]["ok"] is False

@@ -439,11 +439,14 @@ def fea(geometry: str, out: str, positions: int, level: str, lut_points: int) ->
     lut.csv, geometry.json, fea.json and figures."""
     from linsense.fea.pipeline import run_fea
 
-    files, lines = run_fea(geometry, out, positions, level, lut_points, progress=sys.stderr.isatty())
+    files, lines, warnings = run_fea(geometry, out, positions, level, lut_points,
+                                     progress=sys.stderr.isatty())
     for f in files:
         click.echo(str(f))
     for line in lines:
         click.echo(line)
+    for w in warnings:
+        click.echo(f"linsense: warning: {w}", err=True)
 
 
 @cli.command("sweep")

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import sys
+from pathlib import Path
 
 from linsense.fea import outputs
 from linsense.fea.geometry import load_geometry
@@ -19,38 +20,50 @@ def _progress(k: int, n: int) -> None:
 
 def run_fea(spec: str, out: str, positions: int = 56, level: str = "default", lut_points: int = 360,
             progress: bool = False):
-    """Solve and write the output set; return (written files, summary lines)."""
+    """Solve and write the output set; return (written files, summary lines, warnings)."""
     from linsense.analysis.summary import summarize
     from linsense.compensation.lut import build_lut, to_csv
+    from linsense.errors import ModelError
     from linsense.io import output_set
     from linsense.model.motor import load_motor
     from linsense.report.figures import fig_inductances, fig_lut, png_bytes
 
     g = load_geometry(spec)
+    warnings: list[str] = []
     with output_set(out, "fea") as s:
         res = run(g, positions, level, progress=_progress if progress else None)
         s.write("inductances.csv", outputs.inductances_csv(res))
         s.write("motor.toml", outputs.motor_toml(res))
-        motor = load_motor(s.path("motor.toml"))
-        lut = build_lut(motor, lut_points)
-        s.write("lut.csv", to_csv(lut))
-        s.write("geometry.json", json.dumps(g.regions(), indent=2) + "\n")
-        summ = summarize(motor)
         fit = outputs.eq3_fit(res)
-        s.write("fea.json", outputs.fea_json(res, {"eq3_fit": fit, "summary": summ}))
+        try:
+            motor = load_motor(s.path("motor.toml"))
+        except ModelError as exc:  # a valid table, but no HF sensorless control with it
+            motor = None
+            shown = str(exc).replace(str(s.path("motor.toml")), str(Path(out) / "motor.toml"))
+            warnings.append(f"{shown}; motor.toml is written but does not pass load_motor's checks, "
+                            "no lut.csv")
+        summ = summarize(motor) if motor is not None else None
+        hf = {"ok": motor is not None, "problem": None if motor is not None else warnings[0]}
+        s.write("geometry.json", json.dumps(g.regions(), indent=2) + "\n")
+        s.write("fea.json", outputs.fea_json(res, {"eq3_fit": fit, "hf_sensorless": hf, "summary": summ}))
         s.write("field_lines.png", png_bytes(outputs.fig_field(res)))
         s.write("inductances_fea.png", png_bytes(outputs.fig_table(res)))
-        fig = fig_inductances(motor, f"{g.name}: table model (ABC, dq)")
-        s.write("inductances_model.png", png_bytes(fig))
-        s.write("lut.png", png_bytes(fig_lut(motor, lut)))
+        if motor is not None:
+            lut = build_lut(motor, lut_points)
+            s.write("lut.csv", to_csv(lut))
+            fig = fig_inductances(motor, f"{g.name}: table model (ABC, dq)")
+            s.write("inductances_model.png", png_bytes(fig))
+            s.write("lut.png", png_bytes(fig_lut(motor, lut)))
     v = fit["values_H"]
     names = ("L0", "L2", "M0", "M2", "dM0")
     lines = [
         f"{g.name}: {res.mesh.mesh.t.shape[1]} triangles, {res.keep['solver'].ndofs} dofs, "
         f"{positions} positions in {res.times['solve_s']:.1f} s",
         "eq. 3 fit: " + ", ".join(f"{k} {v[k] * 1e3:.3f} mH" for k in names if k in v),
-        f"psi_pm {res.psi_pm_amplitude:.4f} Wb, force constant {outputs.force_constant(res) or 0:.2f} N/A, "
-        f"saliency {summ['saliency_range_H'][0] * 1e3:.3f} .. {summ['saliency_range_H'][1] * 1e3:.3f} mH, "
-        f"Psi_LUT peak {summ['psi_lut_peak_deg']:.2f} deg",
+        f"psi_pm {res.psi_pm_amplitude:.4f} Wb, force constant {outputs.force_constant(res) or 0:.2f} N/A",
     ]
-    return s.files, lines
+    if summ is not None:
+        sal = summ["saliency_range_H"]
+        lines[-1] += (f", saliency {sal[0] * 1e3:.3f} .. {sal[1] * 1e3:.3f} mH, "
+                      f"Psi_LUT peak {summ['psi_lut_peak_deg']:.2f} deg")
+    return s.files, lines, warnings
