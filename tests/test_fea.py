@@ -207,3 +207,65 @@ def test_no_saliency_still_writes_the_table_and_says_so(tmp_path):
     assert len(warnings) == 1 and "saliency" in warnings[0] and ".tmp-" not in warnings[0]
     doc = json.loads((tmp_path / "o" / "fea.json").read_text())
     assert doc["hf_sensorless"]["ok"] is False
+
+
+# ------------------------------------------------------------------ saturating iron (B-H curve, Newton)
+def _bh_doc(bh, sequence="A+ C- B+ A- C+ B-"):
+    d = copy.deepcopy(PRESET)
+    d["rod"].pop("mu_r_iron")
+    d["armature"].pop("mu_r_iron")
+    d["rod"]["bh"] = bh
+    d["armature"]["bh"] = bh
+    d["armature"].update(sequence=sequence, repeat=1)
+    return d
+
+
+def test_incremental_inductances_are_the_derivative_of_the_flux_linkage():
+    # a soft curve that saturates hard: L_inc from the Jacobian against central differences of the
+    # total flux linkage (magnets + currents) at a loaded state
+    soft = {"B": [0.0, 0.2, 0.4, 0.6], "H": [0.0, 100.0, 1000.0, 10000.0]}
+    s = Solver(_geom(_bh_doc(soft)), "coarse", 14)
+    i0 = np.array([0.0, 3.0, -3.0])
+    base = s.solve_nonlinear(0.004, i0, tol=1e-10)
+    lin = Solver(_geom(_bh_doc(None)), "coarse", 14).solve(0.004).L
+    assert base.L[0, 0] < 0.97 * lin[0, 0]  # saturated: less inductance than with mu_r 1000
+    d = 0.01
+    e = np.array([0.0, 1.0, 0.0])
+    up = s.solve_nonlinear(0.004, i0 + d * e, tol=1e-10, psi0=s.last_state).psi_pm
+    dn = s.solve_nonlinear(0.004, i0 - d * e, tol=1e-10, psi0=s.last_state).psi_pm
+    fd = (up - dn) / (2 * d)
+    assert np.abs(fd - base.L[:, 1]).max() < 1e-5 * np.abs(base.L).max()  # measured 5e-9
+
+
+def test_linear_curve_gives_the_linear_inductances():
+    mu_r = 1000.0
+    h = 1.0 / (MU0 * mu_r)
+    lin_bh = {"B": [0.0, 1.0, 2.0, 3.0], "H": [0.0, h, 2 * h, 3 * h]}
+    a = Solver(_geom(_bh_doc(lin_bh)), "coarse", 14).solve_nonlinear(0.006)
+    b = Solver(_geom(_bh_doc(None)), "coarse", 14).solve(0.006)
+    assert np.allclose(a.L, b.L, rtol=1e-6)
+    assert np.allclose(a.psi_pm, b.psi_pm, rtol=1e-6)
+
+
+def test_load_current_refused_with_linear_iron(tmp_path):
+    from linsense.fea.pipeline import run_fea
+
+    with pytest.raises(InputError, match="linear iron"):
+        run_fea("tubular56", str(tmp_path / "o"), 14, "coarse", 36, load_current=1.0)
+    assert not (tmp_path / "o").exists()
+
+
+def test_bh_table_validated():
+    d = _bh_doc({"B": [0.0, 1.0, 0.5], "H": [0.0, 10.0, 20.0]})
+    with pytest.raises(InputError, match="rod.bh.B: B and H must increase"):
+        geometry_from_toml(_dump(d), "g.toml")
+    d = _bh_doc("default")
+    d["rod"]["mu_r_iron"] = 500.0
+    with pytest.raises(InputError, match="rod.bh: give either"):
+        geometry_from_toml(_dump(d), "g.toml")
+
+
+def _dump(d):
+    import tomli_w
+
+    return tomli_w.dumps(d)

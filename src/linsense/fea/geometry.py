@@ -44,6 +44,56 @@ class MotorPart(BaseModel):
         return self
 
 
+#: the default B-H curve of the iron (a typical non-oriented electrical steel, M270-35A class): T, A/m
+DEFAULT_BH = ((0.0, 0.5, 1.0, 1.2, 1.4, 1.5, 1.6, 1.7, 1.8, 1.9, 2.0, 2.1),
+              (0.0, 60.0, 120.0, 180.0, 320.0, 560.0, 1200.0, 3000.0, 7000.0, 15000.0, 30000.0, 60000.0))
+
+
+class BHTable(BaseModel):
+    model_config = _STRICT
+    B: list[Annotated[float, Field(ge=0, le=5)]] = Field(min_length=3, max_length=1000)  # T
+    H: list[Annotated[float, Field(ge=0, le=1e8)]] = Field(min_length=3, max_length=1000)  # A/m
+
+    @model_validator(mode="after")
+    def _check(self) -> BHTable:
+        if len(self.B) != len(self.H):
+            raise KeyProblem("H", f"{len(self.H)} values for {len(self.B)} values of B")
+        if self.B[0] != 0 or self.H[0] != 0:
+            raise KeyProblem("B", "the curve must start at B = 0, H = 0")
+        for k in range(1, len(self.B)):
+            if not (self.B[k] > self.B[k - 1] and self.H[k] > self.H[k - 1]):
+                raise KeyProblem("B", f"B and H must increase strictly (point {k}: B {self.B[k]!r}, "
+                                 f"H {self.H[k]!r})")
+            if (self.B[k] - self.B[k - 1]) / (self.H[k] - self.H[k - 1]) < 4e-7 * 3.141592653589793 * 0.999:
+                raise KeyProblem("B", f"slope below mu0 at point {k}: not a ferromagnetic curve")
+        return self
+
+
+BH = str | dict | None
+
+
+def _bh_of(bh) -> tuple | None:
+    if bh is None:
+        return None
+    if bh == "default":
+        return DEFAULT_BH
+    return (tuple(float(b) for b in bh["B"]), tuple(float(h) for h in bh["H"]))
+
+
+def _check_bh(part) -> None:
+    bh = part.bh
+    if bh is not None and "mu_r_iron" in part.model_fields_set:
+        raise KeyProblem("bh", "give either 'mu_r_iron' (linear) or 'bh' (a B-H curve), not both")
+    if isinstance(bh, str) and bh != "default":
+        raise KeyProblem("bh", f"unknown curve {bh!r} (give 'default' or a table {{ B = [...], H = [...] }})")
+    if isinstance(bh, dict):
+        try:
+            BHTable.model_validate(bh)
+        except ValidationError as exc:
+            err = to_input_error(exc, "", BHTable)
+            raise KeyProblem(f"bh.{err.key}", err.message) from None
+
+
 class RodPart(BaseModel):
     model_config = _STRICT
     radius: Positive  # m, outer radius of magnets and spacers (solid to the axis)
@@ -52,6 +102,12 @@ class RodPart(BaseModel):
     remanence: NonNegative = 1.2  # T, axial magnetisation, alternating sign
     mu_r_magnet: Annotated[float, Field(ge=1.0, le=10.0)] = 1.05  # recoil permeability
     mu_r_iron: Annotated[float, Field(ge=1.0, le=1e6)] = 1000.0  # spacers (linear)
+    bh: BH = None  # or a B-H curve: "default" or { B = [...], H = [...] } (saturating spacers)
+
+    @model_validator(mode="after")
+    def _check(self) -> RodPart:
+        _check_bh(self)
+        return self
 
 
 class CoilEntry(BaseModel):
@@ -69,6 +125,7 @@ class ArmaturePart(BaseModel):
     coil_pitch: Positive | None = None  # m, axial length per coil (default pole_pitch / 6)
     end_length: NonNegative = 0.0  # m, back iron beyond the outer coils at each end
     mu_r_iron: Annotated[float, Field(ge=1.0, le=1e6)] = 1000.0
+    bh: BH = None  # or a B-H curve: "default" or { B = [...], H = [...] } (saturating back iron)
     # either an explicit coil list ...
     coils: list[CoilEntry] | None = Field(default=None, min_length=1, max_length=MAX_COILS)
     # ... or a sequence of tokens repeated
@@ -78,6 +135,7 @@ class ArmaturePart(BaseModel):
 
     @model_validator(mode="after")
     def _check(self) -> ArmaturePart:
+        _check_bh(self)
         if self.coils is not None:
             for k in ("sequence", "turns"):
                 if getattr(self, k) is not None:
@@ -178,6 +236,8 @@ class Geometry:
     coils: list[Coil]
     far: float
     margin: float
+    bh_rod: tuple | None = None  # (B, H) of the spacers, None: linear mu_rod_iron
+    bh_arm: tuple | None = None  # (B, H) of the back iron, None: linear mu_arm_iron
     notes: list[str] = field(default_factory=list)
 
     @property
@@ -198,13 +258,16 @@ class Geometry:
             "rod": {"r": [0.0, self.r_rod], "z": "whole domain (infinite rod)",
                     "magnet_length": self.magnet_length,
                     "spacer_length": self.pole_pitch / 2 - self.magnet_length,
-                    "remanence": self.remanence, "mu_r_magnet": self.mu_magnet, "mu_r_iron": self.mu_rod_iron,
+                    "remanence": self.remanence, "mu_r_magnet": self.mu_magnet,
+                    "iron": {"B_T": self.bh_rod[0], "H_A_per_m": self.bh_rod[1]} if self.bh_rod
+                    else {"mu_r": self.mu_rod_iron},
                     "pattern": "magnet +z centred at z = x, spacer, magnet -z centred at x + pole_pitch/2, "
                                "spacer (x: the rod's position)"},
             "tube": {"r": [self.r_rod, self.r_tube], "mu_r": 1.0},
             "air_gap": {"r": [self.r_tube, self.r_bore]},
             "back_iron": {"r": [self.r_coil, self.r_out], "z": [self.z_arm0, self.z_arm1],
-                          "mu_r": self.mu_arm_iron},
+                          "iron": {"B_T": self.bh_arm[0], "H_A_per_m": self.bh_arm[1]} if self.bh_arm
+                          else {"mu_r": self.mu_arm_iron}},
             "coils": [asdict(c) for c in self.coils],
             "domain": {"r": [0.0, self.r_far], "z": list(self.z_far),
                        "boundary": "flux function r*A_phi = 0 on the axis and on the far boundary"},
@@ -231,6 +294,7 @@ def geometry_from_doc(doc: GeometryFile, source: str) -> Geometry:
         r_out=r_out, magnet_length=rod.magnet_length, remanence=rod.remanence, mu_magnet=rod.mu_r_magnet,
         mu_rod_iron=rod.mu_r_iron, mu_arm_iron=arm.mu_r_iron, z_arm0=z0, z_arm1=-z0, coils=out,
         far=doc.domain.far, margin=doc.domain.margin_periods * m.pole_pitch,
+        bh_rod=_bh_of(rod.bh), bh_arm=_bh_of(arm.bh),
     )
 
 

@@ -57,7 +57,8 @@ def motor_toml(res: Result) -> str:
         "inductance": {"table": "inductances.csv"},
     }
     how = "from the geometry file" if g.force_constant else "= 3 pi psi_pm / pole_pitch"
-    head = (f"# written by linsense fea from {g.source} (axisymmetric FEA, linear iron)\n"
+    iron = f"B-H curve, load {res.load_current:g} A q-axis" if res.newton is not None else "linear iron"
+    head = (f"# written by linsense fea from {g.source} (axisymmetric FEA, {iron})\n"
             f"# force_constant {how}\n")
     return head + tomli_w.dumps(doc)
 
@@ -82,12 +83,15 @@ def fea_json(res: Result, extra: dict) -> str:
         "positions": len(res.positions),
         "excitations_per_position": 3 + (1 if res.geometry.remanence > 0 else 0),
         "times_s": res.times,
-        "energy_balance_max_rel_error": res.energy_error,
+        "energy_balance_max_rel_error": res.energy_error,  # None with a B-H curve (not checked)
+        "newton_iterations": res.newton,
+        "load_current_q_A": res.load_current,
         "psi_pm_amplitude_Wb": res.psi_pm_amplitude,
         "theta": {"direction": res.direction, "offset_deg": math.degrees(res.theta_offset),
                   "rule": "theta = direction * 2 pi x / pole_pitch - offset: 0 where phase A's PM flux "
                           "linkage peaks (raw position when there are no magnets)"},
-        "materials": "linear (no saturation)",
+        "materials": ("B-H curve (Newton; incremental inductances at the magnets' and load current's state)"
+                      if res.newton is not None else "linear (no saturation)"),
         **extra,
     }
     return json.dumps(doc, indent=2) + "\n"
@@ -129,7 +133,8 @@ def fig_field(res: Result, excitation: int = 0) -> Figure:
     ax.set_ylim(0, g.r_out * 1.3e3)
     ax.set_xlabel("z (mm)")
     ax.set_ylabel("r (mm)")
-    ax.set_title(f"{g.name}: flux lines, phase {'ABC'[excitation]} at 1 A, magnets off, x = {x * 1e3:.1f} mm")
+    what = "incremental field" if res.newton is not None else "magnets off"
+    ax.set_title(f"{g.name}: flux lines, phase {'ABC'[excitation]} at 1 A ({what}), x = {x * 1e3:.1f} mm")
     ax.set_aspect("equal")
     fig.tight_layout()
     return fig

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 import sys
 from pathlib import Path
 
@@ -19,19 +20,24 @@ def _progress(k: int, n: int) -> None:
 
 
 def run_fea(spec: str, out: str, positions: int = 56, level: str = "default", lut_points: int = 360,
-            progress: bool = False):
+            progress: bool = False, load_current: float = 0.0):
     """Solve and write the output set; return (written files, summary lines, warnings)."""
     from linsense.analysis.summary import summarize
     from linsense.compensation.lut import build_lut, to_csv
-    from linsense.errors import ModelError
+    from linsense.errors import InputError, ModelError
     from linsense.io import output_set
     from linsense.model.motor import load_motor
     from linsense.report.figures import fig_inductances, fig_lut, png_bytes
 
     g = load_geometry(spec)
+    if not math.isfinite(load_current) or abs(load_current) > 1e6:
+        raise InputError("--load-current", "", f"must be a finite current in A, got {load_current!r}")
+    if load_current and g.bh_rod is None and g.bh_arm is None:
+        raise InputError("--load-current", "", f"{g.source} has linear iron: the incremental inductances do "
+                         "not depend on the load (give rod.bh or armature.bh, a B-H curve)")
     warnings: list[str] = []
     with output_set(out, "fea") as s:
-        res = run(g, positions, level, progress=_progress if progress else None)
+        res = run(g, positions, level, progress=_progress if progress else None, load_current=load_current)
         s.write("inductances.csv", outputs.inductances_csv(res))
         s.write("motor.toml", outputs.motor_toml(res))
         fit = outputs.eq3_fit(res)
@@ -58,7 +64,9 @@ def run_fea(spec: str, out: str, positions: int = 56, level: str = "default", lu
     names = ("L0", "L2", "M0", "M2", "dM0")
     lines = [
         f"{g.name}: {res.mesh.mesh.t.shape[1]} triangles, {res.keep['solver'].ndofs} dofs, "
-        f"{positions} positions in {res.times['solve_s']:.1f} s",
+        f"{positions} positions in {res.times['solve_s']:.1f} s"
+        + (f", Newton iterations max {res.newton['max']}, mean {res.newton['mean']:.1f}, load "
+           f"{res.load_current:g} A" if res.newton else ""),
         "eq. 3 fit: " + ", ".join(f"{k} {v[k] * 1e3:.3f} mH" for k in names if k in v),
         f"psi_pm {res.psi_pm_amplitude:.4f} Wb, force constant {outputs.force_constant(res) or 0:.2f} N/A",
     ]

@@ -55,6 +55,45 @@ def _magnet(v, w):
     return w.nubr * grad(v)[0]
 
 
+@BilinearForm
+def _tangent(u, v, w):  # the Jacobian of the nonlinear residual: nu_t = nu + 2 dnu/ds B B^T
+    g = grad(w.psi)
+    r = w.x[0]
+    return (w.nu / r * dot(grad(u), grad(v))
+            + 2.0 * w.dnu / r ** 3 * dot(g, grad(u)) * dot(g, grad(v)))
+
+
+@LinearForm
+def _internal(v, w):  # integral nu / r grad psi . grad v
+    return w.nu / w.x[0] * dot(grad(w.psi), grad(v))
+
+
+class Curve:
+    """A B-H curve: H(B) monotone cubic (PCHIP) through the table, slope 1/mu0 beyond its end;
+    ``nu(B) = H / B`` and ``dnu/ds`` with ``s = B^2`` at the quadrature points."""
+
+    def __init__(self, bh: tuple) -> None:
+        from scipy.interpolate import CubicHermiteSpline, PchipInterpolator
+
+        self.B = np.asarray(bh[0], float)
+        self.H = np.asarray(bh[1], float)
+        d = PchipInterpolator(self.B, self.H).derivative()(self.B)
+        d[0] = self.H[1] / self.B[1]  # the initial permeability: the first secant (pchip may give 0)
+        self.f = CubicHermiteSpline(self.B, self.H, d, extrapolate=False)
+        self.df = self.f.derivative()
+        self.nu0 = float(self.df(0.0))
+
+    def __call__(self, B: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        b = np.maximum(B, 1e-9)
+        inside = b <= self.B[-1]
+        H = np.where(inside, self.f(np.minimum(b, self.B[-1])), self.H[-1] + (b - self.B[-1]) / MU0)
+        dH = np.where(inside, self.df(np.minimum(b, self.B[-1])), 1.0 / MU0)
+        nu = H / b
+        dnu = (dH * b - H) / (2 * b ** 3)
+        small = B < 1e-6
+        return np.where(small, self.nu0, nu), np.where(small, 0.0, dnu)
+
+
 @Functional
 def _energy(w):  # W = integral nu |B|^2 / 2 * 2 pi r dr dz, B = grad psi / r
     return math.pi * w.nu / w.x[0] * dot(grad(w.psi), grad(w.psi))
@@ -148,6 +187,7 @@ class Solution:
     psi_pm: np.ndarray  # (3,), Wb, PM flux linkage per phase
     energy: np.ndarray  # (3,), J, field energy of each phase at 1 A
     energy_li: np.ndarray  # (3,), J, 1/2 L_pp for the same
+    newton: int = 0  # Newton iterations (0: linear materials)
     fields: dict | None = None  # psi per excitation (kept on request)
 
 
@@ -163,7 +203,9 @@ class Result:
     theta_offset: float  # rad, theta = direction * 2 pi x / P - offset
     direction: int
     times: dict = field(default_factory=dict)
-    energy_error: float = 0.0  # max |W_field - 1/2 i^T L i| / (1/2 i^T L i)
+    energy_error: float | None = 0.0  # max |W_field - 1/2 i^T L i| / (1/2 i^T L i); None: nonlinear
+    newton: dict | None = None  # Newton iterations per position (max, mean); None: linear
+    load_current: float = 0.0  # A, q-axis
     keep: dict = field(default_factory=dict)
 
 
@@ -180,6 +222,9 @@ class Solver:
         self.nu_fixed = np.full(r.shape, 1.0 / MU0)
         self.nu_fixed[in_arm & (r > g.r_coil) & (r < g.r_out)] = 1.0 / (MU0 * g.mu_arm_iron)
         self.in_rod = r < g.r_rod
+        self.arm_iron = in_arm & (r > g.r_coil) & (r < g.r_out)
+        self.curve_rod = Curve(g.bh_rod) if g.bh_rod else None
+        self.curve_arm = Curve(g.bh_arm) if g.bh_arm else None
         self.loads = []
         for p in PHASES:
             j = np.zeros(r.shape)
@@ -204,6 +249,82 @@ class Solver:
         s[np.abs(np.abs(u) - P / 2) < half] = -1.0
         return np.where(self.in_rod, s, 0.0)
 
+    @property
+    def nonlinear(self) -> bool:
+        return self.curve_rod is not None or self.curve_arm is not None
+
+    def solve_nonlinear(self, x: float, currents=(0.0, 0.0, 0.0), keep: bool = False, tol: float = 1e-7,
+                        max_iter: int = 40, psi0: np.ndarray | None = None) -> Solution:
+        """Newton iterations for the state set by the magnets and the phase ``currents`` (A), then the
+        incremental inductances ``2 pi F^T J^-1 F`` with J the Jacobian (the tangent reluctivity) there."""
+        g = self.g
+        pat = self.rod_pattern(x)
+        nu_mag = 1.0 / (MU0 * g.mu_magnet)
+        nu_lin = self.nu_fixed.copy()
+        nu_lin[self.in_rod] = np.where(pat[self.in_rod] != 0, nu_mag, 1.0 / (MU0 * g.mu_rod_iron))
+        masks = []
+        if self.curve_rod is not None:
+            masks.append((self.in_rod & (pat == 0), self.curve_rod))
+        if self.curve_arm is not None:
+            masks.append((self.arm_iron, self.curve_arm))
+        rhs = self.F @ np.asarray(currents, float)
+        if g.remanence > 0:
+            rhs = rhs + asm(_magnet, self.basis, nubr=nu_mag * g.remanence * pat)
+        I = self.I
+
+        def state(psi):
+            field = self.basis.interpolate(psi)
+            gr = field.grad
+            B = np.sqrt(gr[0] ** 2 + gr[1] ** 2) / self.r
+            nu, dnu = nu_lin.copy(), np.zeros(nu_lin.shape)
+            for mask, curve in masks:
+                nu[mask], dnu[mask] = curve(B[mask])
+            res = asm(_internal, self.basis, nu=nu, psi=field) - rhs
+            return field, nu, dnu, res[I], B
+
+        if psi0 is None:  # start from the linear solution with mu_r 1000 in the saturable iron
+            nu0 = nu_lin.copy()
+            for mask, _ in masks:
+                nu0[mask] = 1.0 / (MU0 * 1000.0)
+            K = asm(_stiffness, self.basis, nu=nu0)
+            psi = np.zeros(self.basis.N)
+            psi[I] = splu(K[I][:, I].tocsc()).solve(rhs[I])
+        else:
+            psi = np.array(psi0, float)
+        field, nu, dnu, res, B = state(psi)
+        it = 0
+        while True:
+            if it == max_iter:
+                raise RuntimeError(f"Newton did not converge in {max_iter} iterations at x = {x!r} m")
+            J = asm(_tangent, self.basis, nu=nu, dnu=dnu, psi=field)
+            du = -splu(J[I][:, I].tocsc()).solve(res)
+            norm0 = np.linalg.norm(res)
+            step = 1.0
+            for _ in range(12):  # backtracking: the residual must decrease
+                trial = psi.copy()
+                trial[I] += step * du
+                t_state = state(trial)
+                if np.linalg.norm(t_state[3]) < norm0 or step < 1e-3:
+                    break
+                step *= 0.5
+            psi = trial
+            field, nu, dnu, res, B = t_state
+            it += 1
+            if step * np.abs(du).max() <= tol * max(np.abs(psi).max(), 1e-30):
+                break
+        # the Jacobian at the converged state (one more assembly) gives the incremental inductances
+        J = asm(_tangent, self.basis, nu=nu, dnu=dnu, psi=field)
+        lu = splu(J[I][:, I].tocsc())
+        inc = np.zeros((self.basis.N, 3))
+        inc[I] = lu.solve(np.ascontiguousarray(self.F[I]))
+        L = 2 * math.pi * self.F.T @ inc
+        L = 0.5 * (L + L.T)
+        link = 2 * math.pi * self.F.T @ psi
+        fields = {"psi": np.column_stack([inc, psi]), "nu": nu, "B_max": float(B.max())} if keep else None
+        self.last_state = psi
+        half = 0.5 * np.diag(L)
+        return Solution(x, L, link, half, half, fields=fields, newton=it)
+
     def solve(self, x: float, keep: bool = False) -> Solution:
         g = self.g
         pat = self.rod_pattern(x)
@@ -224,7 +345,7 @@ class Solver:
         energy = np.array([asm(_energy, self.basis, nu=nu, psi=self.basis.interpolate(sol[:, k]))
                            for k in range(3)])
         fields = {"psi": sol, "nu": nu} if keep else None
-        return Solution(x, L, psi_pm, energy, 0.5 * np.diag(L), fields)
+        return Solution(x, L, psi_pm, energy, 0.5 * np.diag(L), fields=fields)
 
 
 def energy_of(solver: Solver, sol: Solution, currents) -> tuple[float, float]:
@@ -235,33 +356,74 @@ def energy_of(solver: Solver, sol: Solution, currents) -> tuple[float, float]:
     return float(w), float(0.5 * i @ sol.L @ i)
 
 
+def _theta_origin(raw: np.ndarray, pm: np.ndarray) -> tuple[float, float, int]:
+    """(amplitude of phase A's PM flux fundamental, offset, direction) from samples at ``raw`` (rad)."""
+    A = np.column_stack([np.ones_like(raw), np.cos(raw), np.sin(raw)])
+    coef = np.linalg.lstsq(A, pm, rcond=None)[0]  # (3, 3 phases)
+    c = coef[1] - 1j * coef[2]  # psi = Re(c e^{j raw})
+    amp = float(abs(c[0]))
+    if amp == 0:
+        return 0.0, 0.0, 1
+    direction = 1 if np.angle(c[1] / c[0]) < 0 else -1  # psi_B lags psi_A by 120 deg
+    return amp, float(-direction * np.angle(c[0])), direction
+
+
+def q_currents(theta: float, i_q: float) -> np.ndarray:
+    """Phase currents of q-axis current ``i_q`` (amplitude-invariant, i_d = 0) at electrical ``theta``."""
+    return -i_q * np.sin(theta - np.array([0.0, 2 * np.pi / 3, -2 * np.pi / 3]))
+
+
 def run(g: Geometry, positions: int = 56, level: str = "default", progress=None,
-        keep_first: bool = True) -> Result:
-    """Solve ``positions`` rod positions over one electrical period; 3 excitations (+ magnets) each."""
+        keep_first: bool = True, load_current: float = 0.0) -> Result:
+    """Solve ``positions`` rod positions over one electrical period; 3 excitations (+ magnets) each.
+
+    With a B-H curve (``rod.bh`` / ``armature.bh``) each position is a Newton solve at the state set
+    by the magnets and the q-axis ``load_current`` (A; its angle needs theta's origin first: a
+    linear pass over the positions), and the inductances are the incremental ones there.
+    """
     t0 = time.perf_counter()
     s = Solver(g, level, positions)
     t_setup = time.perf_counter() - t0
     xs = g.pole_pitch * np.arange(positions) / positions
-    sols = []
+    raw = 2 * np.pi * xs / g.pole_pitch
+    origin = None
+    if load_current and not s.nonlinear:
+        raise ValueError("a load current needs a B-H curve: with linear iron the incremental inductances "
+                         "do not depend on it")
     t1 = time.perf_counter()
+    if s.nonlinear and g.remanence > 0:
+        # theta's origin from a linear pass (mu_r 1000) at every position: by the rod's mirror symmetry
+        # the phase of the PM flux fundamental does not depend on the iron, and every load of a
+        # geometry then shares one theta grid
+        pm0 = np.array([s.solve(float(x)).psi_pm for x in xs])
+        origin = _theta_origin(raw, pm0)
+    sols = []
     for k, x in enumerate(xs):
-        sols.append(s.solve(float(x), keep=keep_first and k == 0))
+        keep = keep_first and k == 0
+        if s.nonlinear:
+            cur = np.zeros(3)
+            if load_current:
+                amp_, off_, dir_ = origin if origin is not None else (0.0, 0.0, 1)
+                cur = q_currents(dir_ * raw[k] - off_, load_current)
+            sols.append(s.solve_nonlinear(float(x), cur, keep=keep))
+        else:
+            sols.append(s.solve(float(x), keep=keep))
         if progress is not None:
             progress(k + 1, positions)
     t_solve = time.perf_counter() - t1
     L = np.array([q.L for q in sols])
     pm = np.array([q.psi_pm for q in sols])
-    raw = 2 * np.pi * xs / g.pole_pitch
     amp, offset, direction = 0.0, 0.0, 1
-    if g.remanence > 0 and positions >= 3:
-        c = (pm * np.exp(-1j * raw)[:, None]).mean(axis=0) * 2  # fundamental phasors
-        amp = float(abs(c[0]))
-        if amp > 0:
-            # psi_B lags psi_A by 120 deg for the positive direction
-            direction = 1 if np.angle(c[1] / c[0]) < 0 else -1
-            offset = float(-direction * np.angle(c[0]))
+    if origin is not None:
+        amp, offset, direction = origin
+    elif g.remanence > 0 and positions >= 3:
+        amp, offset, direction = _theta_origin(raw, pm)
     theta = np.mod(direction * raw - offset, 2 * np.pi)
-    err = max(abs(q.energy - q.energy_li).max() / q.energy_li.max() for q in sols)
-    return Result(g, s.m, xs, theta, L, pm, amp, offset, direction,
-                  {"setup_s": t_setup, "solve_s": t_solve, "per_position_s": t_solve / positions},
-                  float(err), {"solver": s, "first": sols[0]})
+    err = None
+    if not s.nonlinear:
+        err = max(float(abs(q.energy - q.energy_li).max() / q.energy_li.max()) for q in sols)
+    its = [q.newton for q in sols]
+    times = {"setup_s": t_setup, "solve_s": t_solve, "per_position_s": t_solve / positions}
+    newton = {"max": int(max(its)), "mean": float(np.mean(its))} if s.nonlinear else None
+    return Result(g, s.m, xs, theta, L, pm, amp, offset, direction, times, energy_error=err,
+                  newton=newton, load_current=float(load_current), keep={"solver": s, "first": sols[0]})
