@@ -269,3 +269,23 @@ def _dump(d):
     import tomli_w
 
     return tomli_w.dumps(d)
+
+
+def test_load_current_run_in_two_processes():
+    from linsense.fea.solver import q_currents
+
+    d = tomllib.loads((Path(__file__).resolve().parents[1] / "examples" / "fea" / "fig4_three_coils.toml")
+                      .read_text())
+    d["rod"]["bh"] = "default"
+    d["armature"]["bh"] = "default"
+    g = _geom(d)
+    res = run(g, 7, "coarse", load_current=1.5, workers=2)
+    assert res.newton["max"] >= 1 and res.energy_error is None
+    k = 5
+    ref = Solver(g, "coarse", 7).solve_nonlinear(float(res.positions[k]), q_currents(res.theta[k], 1.5))
+    assert np.allclose(res.L[k], ref.L, rtol=1e-9)
+    # the q-axis current: amplitude-invariant Park of the phase currents
+    th = res.theta[k]
+    i = q_currents(th, 1.5)
+    i_q = -2 / 3 * (i[0] * np.sin(th) + i[1] * np.sin(th - 2 * np.pi / 3) + i[2] * np.sin(th + 2 * np.pi / 3))
+    assert i_q == pytest.approx(1.5)

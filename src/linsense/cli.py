@@ -436,13 +436,16 @@ def tune(motor_spec: str, scenario_path: str | None, v_dc, f_pwm, dead_time, i_m
 @click.option("--lut-points", default=360, show_default=True, callback=_points, help="length of lut.csv")
 @click.option("--load-current", type=float, default=0.0, show_default=True,
               help="q-axis current (A) setting the state of a saturating iron (needs a B-H curve)")
-def fea(geometry: str, out: str, positions: int, level: str, lut_points: int, load_current: float) -> None:
+@click.option("--workers", type=click.IntRange(1, 64), default=1, show_default=True,
+              help="processes for the Newton solves of a saturating iron")
+def fea(geometry: str, out: str, positions: int, level: str, lut_points: int, load_current: float,
+        workers: int) -> None:
     """Axisymmetric FEA of a tubular motor (GEOMETRY: .toml file or preset): inductances.csv, motor.toml,
     lut.csv, geometry.json, fea.json and figures."""
     from linsense.fea.pipeline import run_fea
 
     files, lines, warnings = run_fea(geometry, out, positions, level, lut_points,
-                                     progress=sys.stderr.isatty(), load_current=load_current)
+                                     progress=sys.stderr.isatty(), load_current=load_current, workers=workers)
     for f in files:
         click.echo(str(f))
     for line in lines:

@@ -20,7 +20,7 @@ def _progress(k: int, n: int) -> None:
 
 
 def run_fea(spec: str, out: str, positions: int = 56, level: str = "default", lut_points: int = 360,
-            progress: bool = False, load_current: float = 0.0):
+            progress: bool = False, load_current: float = 0.0, workers: int = 1):
     """Solve and write the output set; return (written files, summary lines, warnings)."""
     from linsense.analysis.summary import summarize
     from linsense.compensation.lut import build_lut, to_csv
@@ -37,7 +37,8 @@ def run_fea(spec: str, out: str, positions: int = 56, level: str = "default", lu
                          "not depend on the load (give rod.bh or armature.bh, a B-H curve)")
     warnings: list[str] = []
     with output_set(out, "fea") as s:
-        res = run(g, positions, level, progress=_progress if progress else None, load_current=load_current)
+        res = run(g, positions, level, progress=_progress if progress else None, load_current=load_current,
+                  workers=workers)
         s.write("inductances.csv", outputs.inductances_csv(res))
         s.write("motor.toml", outputs.motor_toml(res))
         fit = outputs.eq3_fit(res)

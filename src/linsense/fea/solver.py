@@ -373,13 +373,22 @@ def q_currents(theta: float, i_q: float) -> np.ndarray:
     return -i_q * np.sin(theta - np.array([0.0, 2 * np.pi / 3, -2 * np.pi / 3]))
 
 
+def _solve_nonlinear_chunk(args) -> list[Solution]:
+    """Worker of :func:`run`: a solver of its own for some positions ``[(x, currents), ...]``."""
+    g, level, positions, items = args
+    s = Solver(g, level, positions)
+    return [s.solve_nonlinear(x, cur) for x, cur in items]
+
+
 def run(g: Geometry, positions: int = 56, level: str = "default", progress=None,
-        keep_first: bool = True, load_current: float = 0.0) -> Result:
+        keep_first: bool = True, load_current: float = 0.0, workers: int = 1) -> Result:
     """Solve ``positions`` rod positions over one electrical period; 3 excitations (+ magnets) each.
 
     With a B-H curve (``rod.bh`` / ``armature.bh``) each position is a Newton solve at the state set
     by the magnets and the q-axis ``load_current`` (A; its angle needs theta's origin first: a
-    linear pass over the positions), and the inductances are the incremental ones there.
+    linear pass over the positions), and the inductances are the incremental ones there. Those
+    Newton solves are spread over ``workers`` processes (forked where possible, each with its own
+    mesh).
     """
     t0 = time.perf_counter()
     s = Solver(g, level, positions)
@@ -398,18 +407,39 @@ def run(g: Geometry, positions: int = 56, level: str = "default", progress=None,
         pm0 = np.array([s.solve(float(x)).psi_pm for x in xs])
         origin = _theta_origin(raw, pm0)
     sols = []
-    for k, x in enumerate(xs):
-        keep = keep_first and k == 0
-        if s.nonlinear:
-            cur = np.zeros(3)
-            if load_current:
-                amp_, off_, dir_ = origin if origin is not None else (0.0, 0.0, 1)
-                cur = q_currents(dir_ * raw[k] - off_, load_current)
-            sols.append(s.solve_nonlinear(float(x), cur, keep=keep))
-        else:
-            sols.append(s.solve(float(x), keep=keep))
+    if s.nonlinear:
+        _, off_, dir_ = origin if origin is not None else (0.0, 0.0, 1)
+        items = [(float(x), q_currents(dir_ * raw[k] - off_, load_current) if load_current else np.zeros(3))
+                 for k, x in enumerate(xs)]
+        sols = [s.solve_nonlinear(*items[0], keep=keep_first)]
         if progress is not None:
-            progress(k + 1, positions)
+            progress(1, positions)
+        if workers > 1 and positions > 2:
+            import multiprocessing
+            from concurrent.futures import ProcessPoolExecutor
+
+            chunks = [list(range(1, positions))[w::workers] for w in range(workers)]
+            out: dict[int, Solution] = {}
+            methods = multiprocessing.get_all_start_methods()
+            ctx = multiprocessing.get_context("fork" if "fork" in methods else "spawn")
+            with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as ex:
+                futs = {ex.submit(_solve_nonlinear_chunk, (g, level, positions, [items[k] for k in c])): c
+                        for c in chunks}
+                for f, c in futs.items():
+                    out.update(zip(c, f.result(), strict=True))
+                    if progress is not None:
+                        progress(1 + len(out), positions)
+            sols += [out[k] for k in range(1, positions)]
+        else:
+            for k in range(1, positions):
+                sols.append(s.solve_nonlinear(*items[k]))
+                if progress is not None:
+                    progress(k + 1, positions)
+    else:
+        for k, x in enumerate(xs):
+            sols.append(s.solve(float(x), keep=keep_first and k == 0))
+            if progress is not None:
+                progress(k + 1, positions)
     t_solve = time.perf_counter() - t1
     L = np.array([q.L for q in sols])
     pm = np.array([q.psi_pm for q in sols])
