@@ -12,6 +12,7 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import math
+import os
 import threading
 from collections import OrderedDict
 from dataclasses import dataclass, field
@@ -25,6 +26,7 @@ from linsense.errors import InputError, LinsenseError
 from linsense.limits import MAX_STEPS, MAX_TRACE_BYTES, MAX_TRACE_FILE_BYTES
 from linsense.model.motor import Motor, load_motor, preset_names
 from linsense.sim.core import BLOCKS, SIGNALS, PlantSetup, SimulationError, sim_cfg
+from linsense.sim.plant import lab_fourier
 from linsense.sim.scenario import Scenario
 from linsense.tune.design import DriveData, current_gains, design, error_gain, mean_dq, speed_gains
 
@@ -74,6 +76,13 @@ def _memo(key: tuple, fn):
 
 def motor_key(motor: Motor) -> str:
     """A fingerprint of everything that defines ``motor`` (parameters and inductance series)."""
+    hit = _memo(("key", id(motor)), lambda: (motor, _fingerprint(motor)))
+    if hit[0] is motor:  # (the cache keeps the motor alive, so its id is not reused meanwhile)
+        return hit[1]
+    return _fingerprint(motor)
+
+
+def _fingerprint(motor: Motor) -> str:
     h = hashlib.sha256(repr((motor.name, motor.R_s, motor.pole_pitch, motor.force_constant, motor.mass,
                              motor.friction, motor.pm_harmonics)).encode())
     h.update(np.ascontiguousarray(motor.inductance.a).tobytes())
@@ -82,9 +91,15 @@ def motor_key(motor: Motor) -> str:
 
 
 def _load_motor_cached(spec: str | Path, check: bool) -> Motor:
-    p = Path(spec)
-    stamp = (str(p.resolve()), p.stat().st_mtime_ns, p.stat().st_size) if p.is_file() else (str(spec),)
+    if isinstance(spec, str) and spec in _preset_set():  # a preset (its file does not change)
+        return _memo(("motor", check, "preset", spec), lambda: load_motor(spec, check=check))
+    st = os.stat(spec)  # a file: its path, time and size (one stat; an edited file reloads)
+    stamp = (os.fspath(spec), st.st_mtime_ns, st.st_size)
     return _memo(("motor", check) + stamp, lambda: load_motor(spec, check=check))
+
+
+def _preset_set() -> frozenset:
+    return _memo(("presets",), lambda: frozenset(preset_names()))
 
 
 def resolve_motor(sc: Scenario, spec: str | None = None, key: str = "motor", check: bool = True) -> Motor:
@@ -177,7 +192,7 @@ def designed(sc: Scenario, motor: Motor) -> Scenario:
         dd = drive_data(sc)
         if dd.v_inj == 0.0:  # an explicit 0, sensored without injection: the other gains still designed
             dd.v_inj = None
-        dz = _memo(("design", motor_key(motor), tuple(dataclasses.astuple(dd))),
+        dz = _memo(("design", motor_key(motor), tuple(vars(dd).values())),
                    lambda: design(motor, dd, sc.source, analyse=False))
     except InputError as exc:  # the design's drive-data names -> the scenario's keys
         raise InputError(sc.source, _DESIGN_KEYS.get(exc.key, exc.key), exc.message) from None
@@ -302,7 +317,8 @@ def build(sc: Scenario, motor: Motor | None = None, trace_in_memory: bool = True
         load_incline=math.radians(s.load.incline_deg), decimate=s.record.decimate, i_abort=prot.i_abort,
     )
     try:
-        cfg = sim_cfg(motor, setup)
+        lab = _memo(("lab", motor_key(motor)), lambda: lab_fourier(motor.inductance, 1e-12))
+        cfg = sim_cfg(motor, setup, lab)
     except (SimulationError, LinsenseError) as exc:
         raise InputError(sc.source, "", f"simulator configuration refused: {exc}") from None
 

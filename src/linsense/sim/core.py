@@ -86,10 +86,10 @@ class PlantSetup:
     i_abort: float = 20.0            # A, |phase current| treated as divergence
 
 
-def sim_cfg(motor, setup: PlantSetup):
+def sim_cfg(motor, setup: PlantSetup, lab: tuple | None = None):
     """A filled ``ls_sim_cfg`` (cffi) for ``motor`` and ``setup``; checked by the C side."""
     c = ffi.new("ls_sim_cfg *")
-    fill_plant(c, motor)
+    fill_plant(c, motor, lab=lab)
     c.fidelity = FIDELITIES[setup.fidelity]
     c.motion = MOTIONS[setup.motion]
     c.load = LOADS[setup.load]

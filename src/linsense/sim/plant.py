@@ -55,9 +55,10 @@ def lab_fourier(inductance: InductanceModel, tol: float = 0.0) -> tuple[np.ndarr
     return cos[:, :n], sin[:, :n]
 
 
-def fill_plant(cfg, motor, tol: float = 1e-12) -> None:
-    """Write the motor part of an ``ls_sim_cfg`` (cffi struct) from a :class:`Motor`."""
-    cos, sin = lab_fourier(motor.inductance, tol)
+def fill_plant(cfg, motor, tol: float = 1e-12, lab: tuple | None = None) -> None:
+    """Write the motor part of an ``ls_sim_cfg`` (cffi struct) from a :class:`Motor` (``lab``: its
+    :func:`lab_fourier` with ``tol``, when the caller has it)."""
+    cos, sin = lab_fourier(motor.inductance, tol) if lab is None else lab
     cfg.r_s = motor.R_s
     cfg.pole_pitch = motor.pole_pitch
     cfg.psi_pm = motor.psi_pm

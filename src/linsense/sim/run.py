@@ -27,9 +27,9 @@ _FAULT_KEYS = {"undervoltage": "inverter.v_dc", "overvoltage": "inverter.v_dc",
                "config": "control"}
 
 
-#: samples a metrics-only run keeps at most, whatever its duration (2 s at 16 kHz: blocks of 8
-#: periods, 0.5 ms; few enough that a sweep's run costs little beyond its C loop)
-METRICS_SAMPLES = 4_000
+#: samples a metrics-only run keeps at most, whatever its duration (2 s at 16 kHz: blocks of 16
+#: periods, 1 ms; few enough that a sweep's run costs little beyond its C loop)
+METRICS_SAMPLES = 2_000
 RECORD_MODES = ("trace", "metrics")
 
 

@@ -31,9 +31,16 @@ from linsense.sweep.spec import SweepSpec, as_sweep
 MANIFEST = "sweep.json"
 
 
+def batch_size(sweep: SweepSpec, n_runs: int) -> int:
+    """Runs per batch: the file's ``batch``, or about 32 batches of at most 128 runs (a function of
+    the sweep alone, never of the workers: a resumed sweep cuts its batches the same way)."""
+    return sweep.spec.sweep.batch or max(1, min(128, -(-n_runs // 32)))
+
+
 def _manifest(sweep: SweepSpec, n_runs: int) -> dict:
     return {"format": "linsense-sweep", "version": __version__, "spec": sweep.spec.model_dump(mode="json"),
-            "scenario": str(sweep.scenario_path.resolve()), "runs": n_runs, "batch": sweep.spec.sweep.batch}
+            "scenario": str(sweep.scenario_path.resolve()), "runs": n_runs,
+            "batch": batch_size(sweep, n_runs)}
 
 
 def _check_out(out: Path, manifest: dict) -> None:
@@ -127,7 +134,7 @@ def sweep(spec, out: str | Path | None = None, *, workers: int | None = None, sc
     """
     sw = as_sweep(spec)
     pts = points(sw)
-    batch = sw.spec.sweep.batch
+    batch = batch_size(sw, len(pts))
     relative = {a.key: a.relative for a in sw.spec.axis}
     batches = [list(enumerate(pts))[i:i + batch] for i in range(0, len(pts), batch)]
     holder = tempfile.TemporaryDirectory(prefix="linsense-sweep-") if out is None else nullcontext(out)

@@ -93,7 +93,9 @@ class SweepSection(BaseModel):
     samples: int | None = Field(default=None, ge=1, le=MAX_RUNS)  # random, lhs
     seed: int = Field(default=0, ge=0, lt=2**63)
     study: Literal["stability-map", "lut-robustness", "injection"] | None = None
-    batch: int = Field(default=32, ge=1, le=10_000)  # runs per task and per Parquet partition
+    # runs per task and per Parquet partition; default: about 32 tasks, at most 128 runs each (a task
+    # costs a few ms of scheduling and writing: large sweeps want large batches, small ones several)
+    batch: int | None = Field(default=None, ge=1, le=10_000)
     trace: bool = False  # keep each run's trace (memory grows with duration); default: metrics only
     # keys set in every run before the axes' values (same keys as an axis: scenario, motor., lut_motor.)
     set: dict[str, Value] = Field(default_factory=dict)
