@@ -51,6 +51,23 @@ def read_text_file(path: str | os.PathLike, what: str) -> str:
         raise InputError(src, "", f"cannot read: {exc}") from None
 
 
+def parse_toml(text: str, source: str) -> dict:
+    """The data of a TOML text, or InputError naming ``source``."""
+    import tomllib
+
+    from linsense.errors import InputError
+
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(source, "", f"not valid TOML: {exc}") from None
+
+
+def read_toml(path: str | os.PathLike, what: str) -> dict:
+    """The data of a user's TOML file, or InputError naming it (``what`` says what was expected)."""
+    return parse_toml(read_text_file(path, what), str(path))
+
+
 def write_atomic(path: str | os.PathLike, data: str | bytes) -> Path:
     """Write ``data`` to ``path`` through a temporary file in the same folder and a rename."""
     return write_atomic_with(path, lambda f: f.write(data.encode() if isinstance(data, str) else data))

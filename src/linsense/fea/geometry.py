@@ -9,7 +9,6 @@ the key and the value (:func:`linsense.validation.to_input_error`). See docs/fea
 
 from __future__ import annotations
 
-import tomllib
 from dataclasses import asdict, dataclass, field
 from importlib import resources
 from pathlib import Path
@@ -18,7 +17,7 @@ from typing import Annotated, Literal
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 from linsense.errors import InputError
-from linsense.io import read_text_file
+from linsense.io import parse_toml, read_text_file
 from linsense.validation import KeyProblem, to_input_error
 
 _STRICT = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
@@ -304,10 +303,7 @@ def preset_names() -> list[str]:
 
 
 def geometry_from_toml(text: str, source: str) -> Geometry:
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError(source, "", f"not valid TOML: {exc}") from None
+    data = parse_toml(text, source)
     try:
         doc = GeometryFile.model_validate(data)
     except ValidationError as exc:

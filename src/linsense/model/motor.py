@@ -9,7 +9,6 @@ from __future__ import annotations
 import csv
 import functools
 import math
-import tomllib
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
@@ -17,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from linsense.errors import InputError, ModelError
-from linsense.io import finite_cell, read_text_file
+from linsense.io import finite_cell, parse_toml, read_text_file
 from linsense.model.inductance import ENTRIES, InductanceModel
 from linsense.model.schema import validate_motor_file
 
@@ -156,11 +155,7 @@ def load_motor(spec: str | Path, check: bool = True) -> Motor:
 
 def motor_from_toml(text: str, source: str, base_dir: Path | None = None) -> Motor:
     """Parse and validate the text of a motor file."""
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError(source, "", f"not valid TOML: {exc}") from None
-    doc = validate_motor_file(data, source)
+    doc = validate_motor_file(parse_toml(text, source), source)
     ind = doc.inductance
     if ind.table is not None:
         table_path = Path(ind.table)

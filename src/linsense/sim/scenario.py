@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import math
 import re
-import tomllib
 from pathlib import Path
 from typing import Annotated, Literal
 
@@ -24,7 +23,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 
 from linsense.ctrl import drive_default_cfg
 from linsense.errors import InputError
-from linsense.io import read_text_file
+from linsense.io import read_toml
 from linsense.tune.design import V_DC_MAX_FRACTION, V_DC_MIN_FRACTION
 from linsense.validation import KeyProblem, to_input_error
 
@@ -401,14 +400,7 @@ def scenario_from_dict(data: dict, source: str = "<dict>", base_dir: str | Path 
 
 def load_scenario(path: str | Path) -> Scenario:
     """Read and validate a scenario TOML file."""
-    p = Path(path)
-    src = str(path)
-    text = read_text_file(p, "scenario file")
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError(src, "", f"not valid TOML: {exc}") from None
-    return scenario_from_dict(data, src, p.parent)
+    return scenario_from_dict(read_toml(path, "scenario file"), str(path), Path(path).parent)
 
 
 def as_scenario(obj) -> Scenario:

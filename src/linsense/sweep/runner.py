@@ -9,7 +9,6 @@ from __future__ import annotations
 import copy
 import hashlib
 import math
-import tomllib
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
@@ -17,7 +16,7 @@ from pathlib import Path
 import tomli_w
 
 from linsense.errors import InputError, LinsenseError
-from linsense.io import write_atomic
+from linsense.io import parse_toml, read_toml, write_atomic
 from linsense.model.motor import preset_names
 from linsense.sweep.spec import SweepSpec
 
@@ -49,12 +48,9 @@ def _motor_data(spec: str, scenario_dir: Path, source: str) -> tuple[dict, Path]
     looks_like_path = spec.lower().endswith(".toml") or any(c in spec for c in "/\\")
     if not looks_like_path and spec in preset_names():
         text = (resources.files("linsense.model") / "presets" / f"{spec}.toml").read_text()
-        return tomllib.loads(text), scenario_dir
+        return parse_toml(text, f"preset {spec}"), scenario_dir
     p = Path(spec) if Path(spec).is_absolute() else scenario_dir / spec
-    try:
-        data = tomllib.loads(p.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
-        raise InputError(source, "motor", f"cannot read the scenario's motor {spec!r}: {exc}") from None
+    data = read_toml(p, "motor file (the base scenario's motor)")
     table = data.get("inductance", {}).get("table")
     if isinstance(table, str) and not Path(table).is_absolute():
         data["inductance"]["table"] = str((p.parent / table).resolve())
@@ -66,10 +62,7 @@ def context(sweep: SweepSpec, motors_out: Path) -> SweepContext:
     p = sweep.scenario_path
     if not p.is_file():
         raise InputError(sweep.source, "sweep.scenario", f"no such scenario file {str(p)!r}")
-    try:
-        data = tomllib.loads(p.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
-        raise InputError(str(p), "", f"cannot read the base scenario: {exc}") from None
+    data = read_toml(p, "scenario file")
     motor_spec = data.get("motor")
     if not isinstance(motor_spec, str):
         raise InputError(str(p), "motor", "missing (a preset name or a motor file)")

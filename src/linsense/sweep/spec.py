@@ -36,14 +36,13 @@ true motor; :mod:`linsense.sim.build`, ``controller.model.motor``).
 
 from __future__ import annotations
 
-import tomllib
 from pathlib import Path
 from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 from linsense.errors import InputError
-from linsense.io import read_text_file
+from linsense.io import read_toml
 from linsense.validation import KeyProblem, to_input_error
 
 _STRICT = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
@@ -157,13 +156,7 @@ def sweep_from_dict(data: dict, source: str = "<dict>", base_dir: str | Path | N
 
 def load_sweep(path: str | Path) -> SweepSpec:
     """Read and validate a sweep TOML file."""
-    p = Path(path)
-    text = read_text_file(p, "sweep file")
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError(str(path), "", f"not valid TOML: {exc}") from None
-    return sweep_from_dict(data, str(path), p.parent)
+    return sweep_from_dict(read_toml(path, "sweep file"), str(path), Path(path).parent)
 
 
 def as_sweep(obj) -> SweepSpec:
