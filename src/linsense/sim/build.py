@@ -90,16 +90,10 @@ def _fingerprint(motor: Motor) -> str:
     return h.hexdigest()
 
 
-def _load_motor_cached(spec: str | Path, check: bool) -> Motor:
-    if isinstance(spec, str) and spec in _preset_set():  # a preset (its file does not change)
-        return _memo(("motor", check, "preset", spec), lambda: load_motor(spec, check=check))
-    st = os.stat(spec)  # a file: its path, time and size (one stat; an edited file reloads)
-    stamp = (os.fspath(spec), st.st_mtime_ns, st.st_size)
-    return _memo(("motor", check) + stamp, lambda: load_motor(spec, check=check))
-
-
-def _preset_set() -> frozenset:
-    return _memo(("presets",), lambda: frozenset(preset_names()))
+def _load_motor_file_cached(path: Path, check: bool) -> Motor:
+    st = os.stat(path)  # its path, time and size (one stat; an edited file reloads)
+    stamp = (os.fspath(path), st.st_mtime_ns, st.st_size)
+    return _memo(("motor", check) + stamp, lambda: load_motor(path, check=check))
 
 
 def resolve_motor(sc: Scenario, spec: str | None = None, key: str = "motor", check: bool = True) -> Motor:
@@ -113,13 +107,13 @@ def resolve_motor(sc: Scenario, spec: str | None = None, key: str = "motor", che
             raise InputError(sc.source, key, f"unknown preset {spec!r} "
                              f"(presets: {', '.join(preset_names())}; "
                              "or a path to a .toml motor file, relative to the scenario)")
-        return _load_motor_cached(spec, check)
+        return _memo(("motor", check, "preset", spec), lambda: load_motor(spec, check=check))
     p = Path(spec)
     if not p.is_absolute():
         p = sc.base_dir / p
     if not p.is_file():
         raise InputError(sc.source, key, f"no such motor file {str(p)!r} (value {spec!r})")
-    return _load_motor_cached(p, check)
+    return _load_motor_file_cached(p, check)
 
 
 def trapezoid_time(distance: float, v_max: float, a_max: float) -> float:

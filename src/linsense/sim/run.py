@@ -64,12 +64,18 @@ def simulate(scenario: Scenario | str | Path | dict, record: str = "trace") -> R
     sc = as_scenario(scenario)
     if record == "metrics":
         sc = _metrics_blocks(sc)
+    blocks = tuple(BLOCKS) if record == "metrics" or sc.spec.record.decimate > 1 else ()
+    raw, m = _run(sc, None, blocks)
+    return Result(**raw.arrays, metrics=m, scenario=sc, fault_bits=raw.fault)
+
+
+def _run(sc: Scenario, signals, blocks) -> tuple:
+    """Build ``sc``, run it recording ``signals`` (None: all) and ``blocks``; its run and metrics."""
     b = build(sc)
-    blocks = tuple(BLOCKS) if record == "metrics" or b.cfg.decimate > 1 else ()
-    raw = run_closed_loop(b.cfg, b.drive.state, b.n_steps, b.commands, blocks=blocks)
+    raw = run_closed_loop(b.cfg, b.drive.state, b.n_steps, b.commands, signals=signals, blocks=blocks)
     m = run_metrics(b, raw)
     finish_metrics(b, raw, m, b.cfg.decimate)
-    return Result(**raw.arrays, metrics=m, scenario=sc, fault_bits=raw.fault)
+    return raw, m
 
 
 #: what the metrics read: the point signals beside the block statistics (linsense.sim.metrics)
@@ -80,13 +86,7 @@ METRICS_BLOCKS = ("x_min", "x_max", "x_mean", "err_min", "err_max", "err_mean")
 def metrics_only(scenario: Scenario | str | Path | dict) -> dict:
     """The metrics of ``simulate(scenario, record="metrics")``, recording only what they are
     computed from (no Result: a sweep's run; its cost beyond the C loop is about 1 ms)."""
-    sc = _metrics_blocks(as_scenario(scenario))
-    b = build(sc)
-    raw = run_closed_loop(b.cfg, b.drive.state, b.n_steps, b.commands, signals=METRICS_SIGNALS,
-                          blocks=METRICS_BLOCKS)
-    m = run_metrics(b, raw)
-    finish_metrics(b, raw, m, b.cfg.decimate)
-    return m
+    return _run(_metrics_blocks(as_scenario(scenario)), METRICS_SIGNALS, METRICS_BLOCKS)[1]
 
 
 def _metrics_blocks(sc: Scenario) -> Scenario:

@@ -16,7 +16,6 @@ import json
 import os
 import signal
 import tempfile
-import time
 from contextlib import contextmanager, nullcontext
 from pathlib import Path
 
@@ -179,9 +178,3 @@ def sweep(spec, out: str | Path | None = None, *, workers: int | None = None, sc
                              "do not belong to this sweep")
         return df
 
-
-def timed(fn, *args, **kwargs):
-    """``(result, seconds)`` of one call (for the benchmark)."""
-    t0 = time.perf_counter()
-    r = fn(*args, **kwargs)
-    return r, time.perf_counter() - t0
