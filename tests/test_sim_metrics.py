@@ -168,3 +168,53 @@ def test_configuration_that_trips_at_t0_is_an_input_error(tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert e.value.code == 2 and "trip.toml: protection.i_max" in err and "t = 0" in err
     assert not (tmp_path / "d").exists()
+
+
+# ---------------------------------------------------------------- the fast metrics = the reference
+def _random_run(rng: np.random.Generator, blocks: bool, n: int):
+    """Arrays of a run of ``n`` samples: a step with a limit cycle, noise, optionally non-finite
+    samples; moves and the keyword arguments of compute_metrics."""
+    t = np.arange(1, n + 1) / 1024.0  # (dyadic: windows that start exactly on a sample are exact)
+
+    def when(hi: float) -> float:  # a time, on a sample half of the time
+        return float(rng.integers(0, n + 1)) / 1024.0 if rng.random() < 0.5 else rng.uniform(0.0, hi)
+
+    x_to = rng.choice([0.0, 3e-3, -6e-3])
+    x0 = rng.choice([0.0, 1e-3])
+    t0 = when(0.5 * t[-1])
+    x = np.where(t < t0, x0, x_to + rng.normal(0, 2e-5, n) + 3e-5 * np.sin(40 * t))
+    e = rng.normal(0, 0.01, n)
+    arrays = {"t": t, "x": x.copy(), "theta_err": e.copy()}
+    if blocks:
+        w = np.abs(rng.normal(0, 1e-5, n))
+        arrays.update(x_min=x - w, x_max=x + w, x_mean=x, err_min=e - 0.002, err_max=e + 0.003, err_mean=e)
+    if rng.random() < 0.4:  # non-finite samples (a diverging run)
+        for k in rng.choice(list(arrays), size=2):
+            if k != "t":
+                arrays[k] = arrays[k].copy()
+                arrays[k][rng.integers(0, n, size=rng.integers(1, 4))] = rng.choice([np.nan, np.inf, -np.inf])
+    moves = [] if rng.random() < 0.2 else [(t0, t0 + rng.choice([0.0, 0.0625]), x0, x_to)]
+    if moves and rng.random() < 0.3:
+        moves.insert(0, (0.0, 0.015625, x0, x0))
+    kw = dict(fault=int(rng.choice([0, 0, 1, 0x200])), steps_done=n * 16, f_pwm=16e3, moves=moves,
+              wall_s=0.01, observer_active=bool(rng.random() < 0.85), convergence_s=when(0.2),
+              settle_s=when(0.3), tolerance_mm=0.05, bound_mm=1.0, settle_band_mm=0.05,
+              settling_band_mm=rng.choice([0.01, 0.1]), final_window_s=when(0.4),
+              x_target=x_to, x_start=x0)
+    return arrays, kw
+
+
+@pytest.mark.parametrize("blocks", [False, True])
+def test_metrics_equal_the_mask_based_reference(blocks):
+    """compute_metrics (index ranges by bisection, a sweep's hot path) gives the same metrics as the
+    first, mask-based implementation (tests/ref_metrics.py) on 400 random runs: steps, moves,
+    faults, NaN and inf samples, short runs, windows longer than the run."""
+    from ref_metrics import compute_metrics_ref
+
+    rng = np.random.default_rng(7 + blocks)
+    for k in range(400):
+        n = int(rng.choice([1, 2, 5, 50, 600]))
+        arrays, kw = _random_run(rng, blocks, n)
+        got = compute_metrics(arrays, **kw)
+        want = compute_metrics_ref(arrays, **kw)
+        assert got == want, (k, {key: (got[key], want[key]) for key in got if got[key] != want[key]})

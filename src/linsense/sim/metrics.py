@@ -51,9 +51,19 @@ def fault_reason(bits: int) -> str:
     return "+".join(names)
 
 
+#: radians -> degrees, the constant np.degrees multiplies by (so the results are the same bit for bit)
+_DEG = 180.0 / math.pi
+
+
 def _fmax(a: np.ndarray) -> float | None:
+    """Largest finite value of ``a`` (None if none); ``a`` holds no -inf (absolute values)."""
+    if a.size == 0:
+        return None
+    m = float(a.max())
+    if math.isfinite(m):  # (a NaN or +inf would have made the max non-finite)
+        return m
     a = a[np.isfinite(a)]
-    return float(np.max(a)) if a.size else None
+    return float(a.max()) if a.size else None
 
 
 def _round(v: float | None, nd: int = 6) -> float | None:
@@ -61,10 +71,11 @@ def _round(v: float | None, nd: int = 6) -> float | None:
 
 
 def transient_mask(t: np.ndarray, moves, settle_s: float) -> np.ndarray:
-    """True while the reference moves or within ``settle_s`` after a step or the end of a move."""
+    """True while the reference moves or within ``settle_s`` after a step or the end of a move
+    (``t`` ascending)."""
     m = np.zeros(t.shape, dtype=bool)
     for t0, t1, _, _ in moves:
-        m |= (t >= t0) & (t < t1 + settle_s)
+        m[t.searchsorted(t0):t.searchsorted(t1 + settle_s)] = True
     return m
 
 
@@ -72,20 +83,20 @@ def settling_time(t: np.ndarray, x: np.ndarray, x_to: float, t0: float, band: fl
                   x_hi: np.ndarray | None = None) -> float | None:
     """Time (s) from ``t0`` after which ``|x - x_to| <= band`` holds to the end; None if it does
     not hold at the last sample. With ``x_hi``, ``x`` and ``x_hi`` are each sample's block minimum
-    and maximum (the time then has the resolution of a block)."""
-    sel = t >= t0
-    if not np.any(sel):
+    and maximum (the time then has the resolution of a block). ``t`` ascending."""
+    i0 = int(t.searchsorted(t0))
+    if i0 >= t.size:
         return None
-    dev = np.abs(x[sel] - x_to)
+    dev = np.abs(x[i0:] - x_to)
     if x_hi is not None:
-        dev = np.maximum(dev, np.abs(x_hi[sel] - x_to))
+        dev = np.maximum(dev, np.abs(x_hi[i0:] - x_to))
     out = dev > band
     if out[-1]:
         return None
-    if not np.any(out):
+    last_out = np.flatnonzero(out)
+    if last_out.size == 0:
         return 0.0
-    last_out = np.flatnonzero(out)[-1]
-    return float(t[sel][last_out + 1] - t0)
+    return float(t[i0 + last_out[-1] + 1] - t0)
 
 
 def compute_metrics(arrays: dict, *, fault: int, steps_done: int, f_pwm: float, moves, wall_s: float,
@@ -93,78 +104,104 @@ def compute_metrics(arrays: dict, *, fault: int, steps_done: int, f_pwm: float, 
                     bound_mm: float, settle_band_mm: float, settling_band_mm: float,
                     final_window_s: float, x_target: float, x_start: float) -> dict:
     """Metrics of a run. ``x_target`` (m) is the last commanded position, ``x_start`` (m) the initial
-    one; ``moves`` the planned moves ``(t0, t1, x_from, x_to)``. Definitions: docs/simulator.md."""
+    one; ``moves`` the planned moves ``(t0, t1, x_from, x_to)``. Definitions: docs/simulator.md.
+
+    The samples' times ``t`` ascend, so every time window is a range of indices (found by
+    bisection): a sweep computes these metrics thousands of times, at about 0.1 ms each."""
     t = arrays["t"]
     # each sample's block: lowest, highest and mean value (the point value itself without blocks)
     x = arrays.get("x_mean", arrays.get("x"))
     x_lo, x_hi = arrays.get("x_min", x), arrays.get("x_max", x)
     e_pt = arrays.get("theta_err", arrays.get("err_mean"))
-    e_lo = np.degrees(arrays.get("err_min", e_pt))
-    e_hi = np.degrees(arrays.get("err_max", e_pt))
-    err_signed = np.degrees(arrays.get("err_mean", e_pt))
+    e_lo, e_hi = arrays.get("err_min", e_pt), arrays.get("err_max", e_pt)
+    e_mean = arrays.get("err_mean", e_pt)
     sim_s = steps_done / f_pwm
-    ok = np.isfinite(t)
-    if fault:
-        # the last sample is the state that tripped: keep it out of the error statistics
-        ok[-1:] = False
-    err = np.maximum(np.abs(e_lo), np.abs(e_hi))
-    good = ok & np.isfinite(err)
-    after = good & (t >= convergence_s)
-    tr = transient_mask(t, moves, settle_s)
-    t_end = float(t[ok][-1]) if np.any(ok) else 0.0
-    win = ok & (t >= t_end - final_window_s)
+    # the samples the error statistics use: [0, n_ok), all but the state that tripped (the last
+    # sample of a run with a fault), up to a non-finite time (none in a run of the C core)
+    n_ok = t.size - 1 if fault and t.size else t.size
+    bad_t = np.flatnonzero(~np.isfinite(t[:n_ok]))
+    if bad_t.size:
+        n_ok = int(bad_t[0])
+    ts = t[:n_ok]
+    t_end = float(ts[-1]) if n_ok else 0.0
+    i_conv = int(ts.searchsorted(convergence_s))
+    i_win = int(ts.searchsorted(t_end - final_window_s))
     if observer_active:
-        max_err = _fmax(err[good])
-        tr_err = _fmax(err[after & tr])
-        st_err = _fmax(err[after & ~tr])
-        bias = float(np.mean(err_signed[win & good])) if np.any(win & good) else None
+        err = np.maximum(np.abs(e_lo[:n_ok]), np.abs(e_hi[:n_ok]))  # rad
+        tr = transient_mask(ts[i_conv:], moves, settle_s)
+        after = err[i_conv:]
+        max_err = _fmax(err)
+        tr_err = _fmax(after[tr])
+        st_err = _fmax(after[~tr])
+        ew = e_mean[i_win:n_ok]
+        good = np.isfinite(err[i_win:])
+        if not good.all():
+            ew = ew[good]
+        bias = float((ew * _DEG).mean()) if ew.size else None  # (degrees first: as np.degrees did)
+        max_err, tr_err, st_err = (None if v is None else v * _DEG for v in (max_err, tr_err, st_err))
     else:
         max_err = tr_err = st_err = bias = None
 
     # the final window: limit cycle (peak to peak of the true position) and offset from the target
-    x_fin = np.isfinite(x_lo) & np.isfinite(x_hi) & np.isfinite(x)
+    x_fin = np.isfinite(x)
+    if x_lo is not x:
+        x_fin &= np.isfinite(x_lo) & np.isfinite(x_hi)
+    x_all = bool(x_fin.all())
     x_last = arrays.get("x", x)  # the point value at the last sample (the block mean without it)
-    final_x = float(x_last[x_fin][-1]) if np.any(x_fin) else float("nan")
-    wsel = win & x_fin
-    xw = x[wsel]
-    limit_cycle = float(np.max(x_hi[wsel]) - np.min(x_lo[wsel])) * 1e3 if xw.size else None
-    end_err_mm = float(max(np.max(np.abs(x_lo[wsel] - x_target)),
-                           np.max(np.abs(x_hi[wsel] - x_target)))) * 1e3 if xw.size else None
-    offset_mm = float(np.mean(xw - x_target)) * 1e3 if xw.size else None
+    if x_all:
+        final_x = float(x_last[-1]) if x_last.size else float("nan")
+    else:
+        k = np.flatnonzero(x_fin)
+        final_x = float(x_last[k[-1]]) if k.size else float("nan")
+
+    def finite(a: np.ndarray, i0: int) -> np.ndarray:
+        """``a`` over the samples [i0, n_ok) with a finite position."""
+        return a[i0:n_ok] if x_all else a[i0:n_ok][x_fin[i0:n_ok]]
+
+    xw, lo_w, hi_w = finite(x, i_win), finite(x_lo, i_win), finite(x_hi, i_win)
+    if xw.size:
+        limit_cycle = float(hi_w.max() - lo_w.min()) * 1e3
+        end_err_mm = float(max(np.abs(lo_w - x_target).max(), np.abs(hi_w - x_target).max())) * 1e3
+        offset_mm = float((xw - x_target).mean()) * 1e3
+    else:
+        limit_cycle = end_err_mm = offset_mm = None
 
     # the last move: overshoot beyond the reference (not counting the steady offset), settling time,
     # and whether the drive reached the reference region at all
     overshoot, reached = 0.0, True
     t_last = moves[-1][0] if moves else 0.0
+    i_last = int(ts.searchsorted(t_last))
+    ts_f, lo_f, hi_f = finite(t, i_last), finite(x_lo, i_last), finite(x_hi, i_last)
     if moves:
-        t0, _, x_from, x_to = moves[-1]
+        _, _, x_from, x_to = moves[-1]
         direction = np.sign(x_to - x_from)
-        sel = ok & (t >= t0) & x_fin
-        if direction != 0 and np.any(sel):
-            x_far = x_hi if direction > 0 else x_lo  # the block's extreme in the move's direction
-            peak = float(np.max(direction * (x_far[sel] - x_to))) * 1e3
+        if direction != 0 and lo_f.size:
+            x_far = hi_f if direction > 0 else lo_f  # the block's extreme in the move's direction
+            peak = float((direction * (x_far - x_to)).max()) * 1e3
             steady = max(0.0, float(direction) * offset_mm) if offset_mm is not None else 0.0
             overshoot = max(0.0, peak - steady)
         dist = abs(x_to - x_from)
-        if dist > 0 and np.any(sel):
+        if dist > 0 and lo_f.size:
             # at some time the true position came within half the move (and the bound) of the target
             # (a block whose range contains the target came within 0 of it)
-            gap = np.maximum(np.maximum(x_lo[sel] - x_to, x_to - x_hi[sel]), 0.0) if x_lo is not x_hi \
-                else np.abs(x[sel] - x_to)
-            closest = float(np.min(gap))
+            if x_lo is not x_hi:
+                gap = np.maximum(np.maximum(lo_f - x_to, x_to - hi_f), 0.0)
+                closest = float(gap.min())
+            else:
+                closest = float(np.abs(finite(x, i_last) - x_to).min())
             reached = closest <= min(0.5 * dist, bound_mm * 1e-3)
     x_to = moves[-1][3] if moves else x_target
-    t_from = moves[-1][0] if moves else 0.0
-    s_sel = ok & x_fin
-    settle_t = settling_time(t[s_sel], x_lo[s_sel], x_to, t_from, settling_band_mm * 1e-3,
-                             None if x_lo is x_hi else x_hi[s_sel])
+    settle_t = None
+    if ts_f.size:  # (the samples from t_last on: settling_time's own search starts at 0)
+        settle_t = settling_time(ts_f, lo_f, x_to, t_last, settling_band_mm * 1e-3,
+                                 None if x_lo is x_hi else hi_f)
 
     # stability: no fault; finite; reached the reference region; bounded (end window within
     # bound_mm of the target) and settled (true position varies by at most settle_band_mm there)
     reason = ""
     if fault:
         reason = f"fault: {fault_reason(fault)}"
-    elif not np.all(x_fin):
+    elif not x_all:
         reason = "non-finite position"
     elif not reached:
         reason = (f"never reached the target: the true position came no closer than half the move "
