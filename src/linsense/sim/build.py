@@ -21,11 +21,11 @@ from pathlib import Path
 import numpy as np
 
 from linsense.compensation.lut import build_lut
-from linsense.ctrl import ConfigError, Drive, drive_default_cfg, ffi, lib
+from linsense.ctrl import ConfigError, Drive, drive_default_cfg, ffi, lib, make_lut
 from linsense.errors import InputError, LinsenseError
 from linsense.limits import MAX_STEPS, MAX_TRACE_BYTES, MAX_TRACE_FILE_BYTES
 from linsense.model.motor import Motor, load_motor, preset_names
-from linsense.sim.core import BLOCKS, SIGNALS, PlantSetup, SimulationError, sim_cfg
+from linsense.sim.core import BLOCKS, SIGNALS, PlantSetup, SimulationError, plant_template, sim_cfg
 from linsense.sim.plant import lab_fourier
 from linsense.sim.scenario import Scenario
 from linsense.tune.design import DriveData, current_gains, design, error_gain, mean_dq, speed_gains
@@ -311,8 +311,9 @@ def build(sc: Scenario, motor: Motor | None = None, trace_in_memory: bool = True
         load_incline=math.radians(s.load.incline_deg), decimate=s.record.decimate, i_abort=prot.i_abort,
     )
     try:
-        lab = _memo(("lab", motor_key(motor)), lambda: lab_fourier(motor.inductance, 1e-12))
-        cfg = sim_cfg(motor, setup, lab)
+        plant = _memo(("plant", motor_key(motor)),
+                      lambda: plant_template(motor, lab_fourier(motor.inductance, 1e-12)))
+        cfg = sim_cfg(motor, setup, template=plant)
     except (SimulationError, LinsenseError) as exc:
         raise InputError(sc.source, "", f"simulator configuration refused: {exc}") from None
 
@@ -391,22 +392,26 @@ def build(sc: Scenario, motor: Motor | None = None, trace_in_memory: bool = True
 
     # the table for sensorless_lut, and for the HF observer beside the encoder in sensored mode
     compensation = obs.compensation or ("lut" if ctl.mode in ("sensorless_lut", "sensored") else "none")
-    # the tables the controller can know: the motor model with the resistance it believes
-    lut_motor = dataclasses.replace(model_motor, R_s=known["R_s"])
-    comp = None
-    if compensation == "lut":
-        f_inj = inj.frequency if obs.lut_model == "resistive" else None
-        quad = inj.quadrature if f_inj else 0.0
-        comp = _memo(("lut", model_key, known["R_s"], obs.lut_points, f_inj, quad),
-                     lambda: build_lut(lut_motor, obs.lut_points, f_inj=f_inj, quad=quad).values)
-    gain_table = None
-    if obs.gain_schedule:
-        # the demodulator gain that makes the error's local slope 1 everywhere (the saliency and,
-        # with the elliptical injection and R_s, its phase set it; docs/tuning.md)
-        k_e = _memo(("error_gain", model_key, known["R_s"], inj.frequency, inj.quadrature, obs.lut_points),
-                    lambda: error_gain(lut_motor, inj.frequency, inj.quadrature, 1.0, n=obs.lut_points))
-        gain_table = 1.0 / k_e
+    # the tables the controller can know, from the motor model with the resistance it believes (as
+    # cached ls_lut objects: the drive only reads them, through const pointers)
+    def lut_motor() -> Motor:
+        return dataclasses.replace(model_motor, R_s=known["R_s"])
+
     try:
+        comp = None
+        if compensation == "lut":
+            f_inj = inj.frequency if obs.lut_model == "resistive" else None
+            quad = inj.quadrature if f_inj else 0.0
+            comp = _memo(("lut", model_key, known["R_s"], obs.lut_points, f_inj, quad),
+                         lambda: make_lut(build_lut(lut_motor(), obs.lut_points, f_inj=f_inj, quad=quad)))
+        gain_table = None
+        if obs.gain_schedule:
+            # the demodulator gain that makes the error's local slope 1 everywhere (the saliency and,
+            # with the elliptical injection and R_s, its phase set it; docs/tuning.md)
+            gain_table = _memo(
+                ("gain_table", model_key, known["R_s"], inj.frequency, inj.quadrature, obs.lut_points),
+                lambda: make_lut(1.0 / error_gain(lut_motor(), inj.frequency, inj.quadrature, 1.0,
+                                                  n=obs.lut_points)))
         drive = Drive(d, comp=comp, gain_table=gain_table)  # a given gain table is used by default
     except ConfigError as exc:
         sections = sorted({_SECTION.get(k.split(".")[0] if k != "pos.speed" else k, k) for k in exc.fields})

@@ -86,10 +86,22 @@ class PlantSetup:
     i_abort: float = 20.0            # A, |phase current| treated as divergence
 
 
-def sim_cfg(motor, setup: PlantSetup, lab: tuple | None = None):
-    """A filled ``ls_sim_cfg`` (cffi) for ``motor`` and ``setup``; checked by the C side."""
+def plant_template(motor, lab: tuple | None = None):
+    """An ``ls_sim_cfg`` (cffi) with only the motor part filled (:func:`fill_plant`): what
+    :func:`sim_cfg` copies instead of filling it again (a sweep runs one motor thousands of times)."""
     c = ffi.new("ls_sim_cfg *")
     fill_plant(c, motor, lab=lab)
+    return c
+
+
+def sim_cfg(motor, setup: PlantSetup, lab: tuple | None = None, template=None):
+    """A filled ``ls_sim_cfg`` (cffi) for ``motor`` and ``setup``; checked by the C side.
+    ``template``: :func:`plant_template` of ``motor`` (copied; never changed)."""
+    c = ffi.new("ls_sim_cfg *")
+    if template is None:
+        fill_plant(c, motor, lab=lab)
+    else:
+        ffi.memmove(c, template, ffi.sizeof("ls_sim_cfg"))
     c.fidelity = FIDELITIES[setup.fidelity]
     c.motion = MOTIONS[setup.motion]
     c.load = LOADS[setup.load]
