@@ -13,9 +13,11 @@ rows is returned as a pandas DataFrame, sorted by run. docs/sweeps.md.
 from __future__ import annotations
 
 import json
+import logging
 import os
 import signal
 import tempfile
+import warnings
 from contextlib import contextmanager, nullcontext
 from pathlib import Path
 
@@ -93,9 +95,28 @@ def cluster_client(workers: int | None, scheduler: str | None, processes: bool):
             yield c
         return
     n = workers or os.cpu_count() or 1
-    with LocalCluster(n_workers=n, threads_per_worker=1, processes=processes, dashboard_address=None,
-                      silence_logs=40) as cluster, Client(cluster) as c:
-        yield c
+    with _quiet("distributed"):
+        with warnings.catch_warnings():
+            # the scheduler's HTTP server (health, metrics) takes port 8787 even with the dashboard
+            # off, and warns when another cluster has it: it then takes a free port, all we need
+            warnings.filterwarnings("ignore", message="Port .* is already in use", category=UserWarning)
+            cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=processes,
+                                   dashboard_address=None, silence_logs=40)
+        with cluster, Client(cluster) as c:
+            yield c
+
+
+@contextmanager
+def _quiet(name: str):
+    """Errors only from the logger ``name`` meanwhile: a local cluster that shuts down while a
+    message is in flight logs a harmless "Batched Comm Closed" with its traceback at INFO."""
+    log = logging.getLogger(name)
+    old = log.level
+    log.setLevel(logging.ERROR)
+    try:
+        yield
+    finally:
+        log.setLevel(old)
 
 
 def _progress(total: int, done: int, enabled: bool):
