@@ -53,6 +53,27 @@ __all__ = [
 ]
 
 
+def _realize_types() -> None:
+    """Realize every C type of the extension now, at import, in one thread. cffi realizes types
+    lazily on first use and, on GIL builds of CPython, without a lock (python-cffi/cffi#271): the
+    sweep's worker threads creating their first ``ls_sim_cfg`` together crashed once in
+    ``realize_c_type.c`` ("builder != NULL"). Realized types are only read afterwards."""
+    typedefs, structs, unions = ffi.list_types()
+    for name in typedefs:
+        ffi.typeof(name)
+    for name in structs:
+        ffi.typeof(f"struct {name}")
+    for name in unions:
+        ffi.typeof(f"union {name}")
+    for name in ("float", "double", "int32_t", "uint32_t", "uint8_t", "char", "float[]", "double[]",
+                 "float *", "double *", "int32_t *", "uint32_t *"):
+        ffi.typeof(name)
+    for name in dir(lib):  # (functions and constants: their types too)
+        getattr(lib, name)
+
+
+_realize_types()
+
 
 def built_digest() -> str:
     """Digest of the sources the extension was compiled from ("" for an extension too old to say)."""
