@@ -130,13 +130,15 @@ fuzztest: tools
 mcu: tools
 	tools/check_mcu.sh build/arm
 
-# System tools the C checks need (Debian packages), installed when missing and possible
+# System tools the checks need (Debian packages), installed when missing and possible: the ARM
+# cross compiler and valgrind; clang's libFuzzer and chromium (reproduce's report render test) optional
 tools:
 	@missing=""; optional=""; \
 	command -v arm-none-eabi-gcc >/dev/null || missing="$$missing gcc-arm-none-eabi libnewlib-arm-none-eabi"; \
 	command -v valgrind >/dev/null || missing="$$missing valgrind"; \
 	printf 'int LLVMFuzzerTestOneInput(const char *d, unsigned long n) { (void)d; (void)n; return 0; }\n' | \
 	  $(FUZZ_CC) -x c -fsanitize=fuzzer - -o /dev/null 2>/dev/null || optional="clang libclang-rt-dev"; \
+	command -v chromium >/dev/null || optional="$$optional chromium"; \
 	if [ -n "$$missing$$optional" ]; then \
 	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null; then \
 	    echo "installing:$$missing $$optional"; \
@@ -144,7 +146,7 @@ tools:
 	  elif [ -n "$$missing" ]; then \
 	    echo "please install:$$missing" >&2; exit 1; \
 	  else \
-	    echo "note: $$optional (libFuzzer, for make fuzz) not installed" >&2; \
+	    echo "note: $$optional (libFuzzer for make fuzz; chromium for the report's render test) not installed" >&2; \
 	  fi; \
 	fi
 
@@ -154,6 +156,7 @@ bench: $(GEN_HDR) tools
 	$(PY) tools/bench_closed_loop.py
 	$(PY) tools/bench_sweep.py
 	$(PY) tools/bench_fea.py
+	$(PY) tools/bench_reproduce.py
 
 clean:
 	rm -rf $(BUILD) out

@@ -97,7 +97,7 @@ def test_plot_writes_figures(run_cli, tmp_path, ecce):
 
 
 def test_reproduce_writes_everything(run_cli, tmp_path):
-    r = run_cli("reproduce", "--out", tmp_path / "out")
+    r = run_cli("reproduce", "--model-only", "--out", tmp_path / "out")
     assert r.code == 0, r.err
     s = json.loads((tmp_path / "out" / "summary.json").read_text())
     assert s["psi_lut_peak_deg"] == pytest.approx(4.03, abs=0.005)

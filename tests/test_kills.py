@@ -99,7 +99,7 @@ def test_failure_half_way_leaves_the_old_set(sets, run_cli, monkeypatch, stage):
 
 COMMANDS = {
     "plot": lambda t: ("plot", "--motor", "ecce2010", "--points", 8),
-    "reproduce": lambda t: ("reproduce",),
+    "reproduce": lambda t: ("reproduce", "--model-only"),
     "identify": lambda t: ("identify", t / "bench.csv", "--motor", "ecce2010", "--points", 8),
     "calibrate": lambda t: ("calibrate", "--motor", "ecce2010", "--positions", 8, "--fidelity", "average"),
 }
@@ -192,7 +192,7 @@ def test_reproduce_keeps_hostile_motor_names_inside_out(tmp_path, run_cli, toml_
     f = tmp_path / "m.toml"
     f.write_text(BASE.replace('name = "m1"', f"name = {toml_name}"))
     out = tmp_path / "a" / "b" / "out"
-    r = run_cli("reproduce", "--motor", f, "--out", out)
+    r = run_cli("reproduce", "--model-only", "--motor", f, "--out", out)
     if r.code == 2:  # a motor file may refuse such a name: then one line and nothing written
         assert "motor.name" in r.err and len(r.err.strip().splitlines()) == 1
         assert [p for p in tmp_path.rglob("*")] == [f]

@@ -260,25 +260,39 @@ def _observer_gains(f_bw: float) -> tuple[float, float]:
     return 2.0 * w, w * w
 
 
-def margins(dz: Design, motor: Motor, drive: DriveData) -> dict:
-    """Gain and phase margins of the observer loop and of the motion loop (python-control), with the
-    demodulator's gain schedule that makes the local error gain 1 everywhere (the design's), at
-    0.8, 1 and 1.25 of it (model error), and without the schedule at its lowest and highest."""
+def loops(*, mass: float, kp_x: float, speed_kp: float, speed_ki: float, observer_bw: float,
+          current_bw: float, demod_lpf: float, f_inj: float, f_pwm: float, k_e: float, g: float = 1.0):
+    """The observer loop and the motion loop (python-control transfer functions; docs/tuning.md).
+
+    The observer loop ``k_e H_lpf(s) e^{-s T_d} (k1 s + k2)/s^2``: the demodulator's low-pass, the HF
+    band-pass's envelope delay ``Q/(pi f_inj)`` (Q = 2) and 1.5 sampling periods (Pade, 2nd order),
+    with the local error gain ``k_e`` (1: the gain schedule's nominal). The motion loop broken at
+    the force reference, ``g C_v(s) (kp_x T(s) + S_v(s)) P(s) C_i(s)``: mass, current loop, speed
+    PI and the observer's transfers from the true position to its position and speed estimates;
+    ``g`` scales what the observer reports (``1 + de*/dtheta`` of an uncompensated observer,
+    ../shared/brief.md section 4 in the notes; 1 with the LUT)."""
     import control as ct
 
     s = ct.tf("s")
-    w_l = 2.0 * math.pi * dz.demod_lpf
+    w_l = 2.0 * math.pi * demod_lpf
     h_lpf = w_l**2 / (s**2 + math.sqrt(2.0) * w_l * s + w_l**2)
-    # envelope delay of the HF band-pass (Q = 2): Q / (pi f_inj), plus 1.5 sampling periods
-    t_d = 2.0 / (math.pi * dz.f_inj) + 1.5 / drive.f_pwm
+    t_d = 2.0 / (math.pi * f_inj) + 1.5 / f_pwm
     num, den = ct.pade(t_d, 2)
-    delay = ct.tf(num, den)
-    k1, k2 = _observer_gains(dz.observer_bw)
+    kh = k_e * h_lpf * ct.tf(num, den)
+    k1, k2 = _observer_gains(observer_bw)
     g_o = (k1 * s + k2) / s**2
-    w_i = 2.0 * math.pi * dz.current_bw
-    c_i = w_i / (s + w_i)
-    plant = 1.0 / (motor.mass * s**2)
-    c_v = dz.speed_kp + dz.speed_ki / s
+    w_i = 2.0 * math.pi * current_bw
+    t_pos = ct.minreal(kh * g_o / (1 + kh * g_o), verbose=False)
+    s_v = ct.minreal((k2 / s) * kh / (1 + kh * g_o), verbose=False)
+    c_v = speed_kp + speed_ki / s
+    l_mot = ct.minreal(g * c_v * (kp_x * t_pos + s_v) / (mass * s**2) * w_i / (s + w_i), verbose=False)
+    return kh * g_o, l_mot
+
+
+def margins(dz: Design, motor: Motor, drive: DriveData) -> dict:
+    """Gain and phase margins of the observer loop and of the motion loop (:func:`loops`), with the
+    demodulator's gain schedule that makes the local error gain 1 everywhere (the design's), at
+    0.8, 1 and 1.25 of it (model error), and without the schedule at its lowest and highest."""
     out = {}
     cases = (
         ("scheduled, x0.8", 0.8),
@@ -288,12 +302,10 @@ def margins(dz: Design, motor: Motor, drive: DriveData) -> dict:
         ("unscheduled max", dz.k_e_max),
     )
     for label, k in cases:
-        kh = k * h_lpf * delay
-        out[f"observer loop ({label}, k_e = {k:.2f})"] = loop_margins(kh * g_o)
-        # the observer's position and speed estimates of the true position (x units)
-        t_pos = ct.minreal(kh * g_o / (1 + kh * g_o), verbose=False)
-        s_v = ct.minreal((k2 / s) * kh / (1 + kh * g_o), verbose=False)
-        l_mot = ct.minreal(c_v * (dz.kp_x * t_pos + s_v) * plant * c_i, verbose=False)
+        l_obs, l_mot = loops(mass=motor.mass, kp_x=dz.kp_x, speed_kp=dz.speed_kp, speed_ki=dz.speed_ki,
+                             observer_bw=dz.observer_bw, current_bw=dz.current_bw, demod_lpf=dz.demod_lpf,
+                             f_inj=dz.f_inj, f_pwm=drive.f_pwm, k_e=k)
+        out[f"observer loop ({label}, k_e = {k:.2f})"] = loop_margins(l_obs)
         out[f"motion loop ({label}, k_e = {k:.2f})"] = loop_margins(l_mot)
     return out
 

@@ -1,0 +1,44 @@
+"""The self-contained HTML report of ``linsense reproduce`` (jinja2; figures embedded as data URIs,
+no script, no network): one page with the paper's claims, the figures and the scenarios used."""
+
+from __future__ import annotations
+
+import base64
+import math
+
+from markupsafe import Markup, escape
+
+
+def _fmt(v, nd: int = 2) -> str:
+    if v is None or (isinstance(v, float) and not math.isfinite(v)):
+        return "n/a"
+    return f"{v:.{nd}f}"
+
+
+def _absmax(values) -> float | None:
+    vals = [abs(v) for v in values if v is not None and math.isfinite(v)]
+    return max(vals) if vals else None
+
+
+def render_report(metrics: dict, figures: dict[str, bytes], scenarios: dict) -> str:
+    """The page for the reproduction's ``metrics`` (metrics.json's structure), ``figures`` (relative
+    path -> PNG bytes, embedded) and ``scenarios`` (figure -> variant -> Scenario, linked as
+    ``scenarios/<figure>_<variant>.toml``)."""
+    from jinja2 import Environment, PackageLoader, StrictUndefined
+
+    from linsense import __version__
+
+    def img(name: str, caption: str) -> Markup:
+        data = figures.get(name)
+        if data is None:  # (a figure the motor has not: Fig. 5 needs the parametric model)
+            return Markup("")
+        b64 = base64.b64encode(data).decode("ascii")
+        return Markup(f'<figure><img src="data:image/png;base64,{b64}" alt="{escape(caption)}">'
+                      f'<figcaption>{escape(caption)} <a href="{escape(name)}">PNG</a></figcaption></figure>')
+
+    env = Environment(loader=PackageLoader("linsense.report", "templates"), autoescape=True,
+                      undefined=StrictUndefined, trim_blocks=False)
+    tpl = env.get_template("report.html.j2")
+    held = sum(bool(c["holds"]) for c in metrics["claims"])
+    return tpl.render(m=metrics, scenarios=scenarios, img=img, fmt=_fmt, absmax=_absmax, held=held,
+                      version=__version__)

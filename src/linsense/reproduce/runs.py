@@ -1,0 +1,185 @@
+"""The closed-loop runs of ``linsense reproduce``: the paper's scenarios (package data, one TOML file
+each), the calibration at three loads, the hold study and the stability map (docs/reproduce.md).
+
+Every run is on the switching inverter with the paper's 0.8 us dead time unless its name says
+otherwise (``nolut_no_dead_time``): the scenario files set it, and :func:`paper_scenario` refuses a
+file that does not.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+
+from linsense.errors import InputError
+
+#: the paper's dead time (s) and inverter model, for every closed-loop claim
+DEAD_TIME = 0.8e-6
+FIDELITY = "switching"
+#: the scenario files of the paper's figures: figure -> variant -> file under scenarios/
+FIGURES = {
+    "fig11": {"lut": "paper_step3_lut.toml", "nolut": "paper_step3_nolut.toml"},
+    "fig12": {"lut": "paper_step6_lut.toml", "nolut": "paper_step6_nolut.toml"},
+    "fig13": {"lut": "paper_fig13_lut.toml", "nolut": "paper_fig13_nolut.toml"},
+}
+#: loads (N) of the calibration (paper Fig. 9: no load and loaded; 20 N per A of q-current)
+LOADS_N = (0.0, 20.0, 40.0)
+#: the hold study's variants: label -> (scenario sections changed, dead time on)
+HOLD_VARIANTS = {
+    "LUT with R_s": {},
+    "LUT of eq. (12)": {"observer": {"lut_model": "eq12"}},
+    "no LUT": {"control": {"mode": "sensorless_nolut"}},
+    "linsense default drive (elliptical, dead-time residual)": {
+        "injection": {"quadrature": None}, "observer": {"bandwidth_hz": None}},
+}
+
+
+def data_path(*parts: str) -> Path:
+    """A file of the package's reproduction data (scenarios/, sweeps/)."""
+    return Path(str(resources.files("linsense.reproduce").joinpath(*parts)))
+
+
+def paper_scenario(name: str, motor: str | None = None):
+    """The scenario file ``name`` of scenarios/, checked to be the paper's set-up (switching
+    inverter, 0.8 us dead time), with its motor replaced by ``motor`` (a preset name or an
+    absolute path) when given."""
+    from linsense.sim.scenario import load_scenario, scenario_from_dict
+
+    sc = load_scenario(data_path("scenarios", name))
+    inv = sc.spec.inverter
+    if inv.fidelity != FIDELITY or inv.dead_time != DEAD_TIME:
+        raise InputError(sc.source, "inverter", f"the paper's runs are on the {FIDELITY} inverter with "
+                         f"{DEAD_TIME * 1e6:g} us dead time, got {inv.fidelity}, {inv.dead_time:g} s")
+    if motor is None:
+        return sc
+    data = sc.given()
+    data["motor"] = motor
+    return scenario_from_dict(data, sc.source, sc.base_dir)
+
+
+def with_changes(sc, changes: dict):
+    """``sc`` with the sections in ``changes`` updated; a value None removes the key (back to its
+    default or its designed value)."""
+    from linsense.sim.scenario import scenario_from_dict
+
+    data = sc.given()
+    for sec, vals in changes.items():
+        d = data.setdefault(sec, {})
+        for k, v in vals.items():
+            if v is None:
+                d.pop(k, None)
+            else:
+                d[k] = v
+    return scenario_from_dict(data, sc.source, sc.base_dir)
+
+
+def figure_runs(motor: str | None, tick=lambda: None) -> tuple[dict, dict]:
+    """The runs of Figs. 11, 12, 13 (traces kept, for the figures) and Fig. 12's uncompensated run
+    without dead time. Returns ``(results, scenarios)``: figure -> variant -> Result / Scenario."""
+    from linsense.sim.run import simulate
+
+    results: dict = {}
+    scenarios: dict = {}
+    for fig, variants in FIGURES.items():
+        results[fig], scenarios[fig] = {}, {}
+        for var, name in variants.items():
+            sc = paper_scenario(name, motor)
+            scenarios[fig][var] = sc
+            results[fig][var] = simulate(with_changes(sc, {"record": {"decimate": 4}}))
+            tick()
+    sc = with_changes(scenarios["fig12"]["nolut"], {"inverter": {"dead_time": 0.0},
+                                                    "scenario": {"name": "paper_step6_nolut_no_dead_time"}})
+    scenarios["fig12"]["nolut_no_dead_time"] = sc
+    results["fig12"]["nolut_no_dead_time"] = simulate(with_changes(sc, {"record": {"decimate": 4}}))
+    tick()
+    return results, scenarios
+
+
+def calibrations(motor, positions: int, tick=lambda: None) -> dict:
+    """The calibration (paper Fig. 9) at each of :data:`LOADS_N`, pulsating injection, switching
+    inverter with dead time: load -> :class:`~linsense.sim.calibrate.Calibration`."""
+    from linsense.sim.calibrate import calibrate
+
+    out = {}
+    for load in LOADS_N:
+        out[load] = calibrate(motor, positions=positions, load=load, fidelity=FIDELITY, quad=0.0,
+                              inverter={"dead_time": DEAD_TIME})
+        tick()
+    return out
+
+
+@dataclass
+class HoldStudy:
+    """Steady estimation error (bias, deg) at hold positions for each variant, with and without
+    the dead time; and the largest limit cycle of each (mm)."""
+
+    positions_deg: np.ndarray  # the commanded (estimated) hold positions
+    bias_deg: dict = field(default_factory=dict)  # label -> array
+    true_deg: dict = field(default_factory=dict)  # label -> the true mean angle over the end window
+    limit_cycle_mm: dict = field(default_factory=dict)  # label -> max over positions
+
+
+def hold_study(motor: str | None, n_positions: int, tick=lambda: None) -> HoldStudy:
+    """The hold at ``n_positions`` over one period for :data:`HOLD_VARIANTS`, each with the
+    paper's dead time and without (metrics only)."""
+    from linsense.sim.run import metrics_only
+
+    base = paper_scenario("paper_hold.toml", motor)
+    from linsense.sim.build import resolve_motor
+
+    tau_mm = resolve_motor(base).pole_pitch * 1e3
+    pos_mm = tau_mm * np.arange(n_positions) / n_positions
+    st = HoldStudy(360.0 * np.arange(n_positions) / n_positions)
+    for label, changes in HOLD_VARIANTS.items():
+        for dt in (DEAD_TIME, 0.0):
+            key = f"{label}, {'dead time' if dt else 'no dead time'}"
+            bias, lc, true = [], [], []
+            for x in pos_mm:
+                sc = with_changes(base, {**changes, "initial": {"position_mm": float(x)},
+                                         "inverter": {"dead_time": dt}})
+                m = metrics_only(sc)
+                bias.append(np.nan if m["bias_deg"] is None else m["bias_deg"])
+                lc.append(np.nan if m["limit_cycle_mm"] is None else m["limit_cycle_mm"])
+                off = m["final_offset_mm"]  # (the drive holds its estimate: the mover sits beside x)
+                true.append(np.nan if off is None else 360.0 * (x + off) / tau_mm)
+            st.bias_deg[key] = np.array(bias)
+            st.true_deg[key] = np.array(true)
+            st.limit_cycle_mm[key] = float(np.nanmax(lc)) if np.isfinite(lc).any() else None
+            tick()
+    return st
+
+
+def stability_map(motor: str | None, quick: bool, out: Path):
+    """The stability map (step size x observer bandwidth, LUT on/off) on the sweep engine, one
+    worker thread per core; returns ``(DataFrame, axes, summary line)``."""
+    from linsense.io import read_toml
+    from linsense.sweep import sweep, sweep_from_dict
+    from linsense.sweep.studies import summary_line
+
+    path = data_path("sweeps", "stability_map.toml")
+    data = read_toml(path, "sweep file")
+    base = (path.parent / data["sweep"]["scenario"]).resolve()
+    if motor is not None:  # (the base scenario with the motor replaced, in scenarios/ beside ``out``)
+        import tomli_w
+
+        from linsense.io import write_atomic
+
+        sc = read_toml(base, "scenario file")
+        sc["motor"] = motor
+        base = out.parent / "scenarios" / "stability_map_base.toml"
+        base.parent.mkdir(parents=True, exist_ok=True)
+        write_atomic(base, tomli_w.dumps(sc))
+    data["sweep"]["scenario"] = str(base)
+    if quick:  # (a coarser grid: every other step size, 3 bandwidths)
+        for ax in data["axis"]:
+            if ax["key"] == "reference.position_mm":
+                ax["values"] = ax["values"][::2]
+            if ax["key"] == "observer.bandwidth_hz":
+                ax["n"] = 3
+    spec = sweep_from_dict(data, str(path), path.parent)
+    df = sweep(spec, out)
+    axes = [a.key for a in spec.spec.axis]
+    return df, axes, summary_line("stability-map", df, axes)

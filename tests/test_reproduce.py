@@ -1,0 +1,153 @@
+"""``linsense reproduce``: the paper's Section V claim by claim (docs/reproduce.md).
+
+One ``--quick`` run (module fixture) is checked for the issue's output contract: metrics.json's
+structure with the simulator's metrics per run, the claims computed from those metrics, every
+closed-loop run on the switching inverter with the paper's dead time, and a self-contained
+report.html that headless Chromium renders.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tomllib
+from pathlib import Path
+
+import pytest
+
+from linsense.errors import InputError
+from linsense.sim.metrics import REQUIRED_KEYS
+
+
+@pytest.fixture(scope="module")
+def rep(tmp_path_factory):
+    out = tmp_path_factory.mktemp("reproduce") / "out"
+    p = subprocess.run([sys.executable, "-m", "linsense", "reproduce", "--quick", "--out", str(out)],
+                       capture_output=True, text=True, timeout=600)
+    assert p.returncode == 0, p.stderr
+    return out, p.stdout, json.loads((out / "metrics.json").read_text())
+
+
+RUNS = {"fig11": ("lut", "nolut"), "fig12": ("lut", "nolut", "nolut_no_dead_time"), "fig13": ("lut", "nolut")}
+
+
+def test_metrics_json_has_the_issues_structure(rep):
+    _, _, m = rep
+    assert isinstance(m["lut"]["peak_deg"], float)
+    for k in ("model_peak_deg", "cal_0N_max_diff_deg", "cal_20N_max_diff_deg", "cal_40N_max_diff_deg"):
+        assert isinstance(m["fig9"][k], float), k
+    for fig, variants in RUNS.items():
+        for var in variants:
+            run = m[fig][var]
+            missing = [k for k in REQUIRED_KEYS if k not in run]
+            assert not missing, (fig, var, missing)
+            assert run["fidelity"] == "switching"
+    assert m["claims"] and all(set(c) >= {"claim", "paper", "ours", "holds"} for c in m["claims"])
+    assert all(isinstance(c["holds"], bool) for c in m["claims"])
+
+
+def test_claims_follow_the_runs_metrics(rep):
+    """Each step claim's verdict is the run's own 'stable' against the paper's outcome (no verdict
+    written by hand), and the stdout summary counts the same."""
+    _, stdout, m = rep
+    by = {c["claim"]: c for c in m["claims"]}
+    want = {("fig11", "lut"): True, ("fig11", "nolut"): True, ("fig12", "lut"): True,
+            ("fig12", "nolut"): False}
+    for (fig, var), stable in want.items():
+        step = 3 if fig == "fig11" else 6
+        name = "with the LUT" if var == "lut" else "without the LUT"
+        paper = "stable" if stable else "unstable"
+        c = by[f"Fig. {fig[3:]}: a {step} mm step is {paper} {name}"]
+        assert c["holds"] == (m[fig][var]["stable"] == stable)
+    c = next(c for c in m["claims"] if "dead_time = 0" in c["claim"])
+    assert c["holds"] == (not m["fig12"]["nolut_no_dead_time"]["stable"])
+    c = next(c for c in m["claims"] if "steady state" in c["claim"])
+    assert c["holds"] == (m["fig13"]["lut"]["steady_max_err_deg"] < 3.0)
+    held = sum(c["holds"] for c in m["claims"])
+    assert f"{held} of {len(m['claims'])} claims of the paper hold" in stdout
+
+
+def test_runs_are_on_the_switching_inverter_with_dead_time(rep):
+    out, _, _ = rep
+    files = sorted((out / "scenarios").glob("*.toml"))
+    assert len(files) == sum(len(v) for v in RUNS.values())
+    for f in files:
+        inv = tomllib.loads(f.read_text())["inverter"]
+        assert inv["fidelity"] == "switching", f.name
+        assert inv["dead_time"] == (0.0 if "no_dead_time" in f.name else 0.8e-6), f.name
+
+
+def test_a_scenario_written_runs_again(rep):
+    """The report's scenario files are runnable: the same metrics as the reproduction's run."""
+    import linsense
+
+    out, _, m = rep
+    r = linsense.simulate(out / "scenarios" / "fig12_nolut.toml", record="metrics")
+    for k in ("stable", "limit_cycle_mm", "final_offset_mm"):
+        assert r.metrics[k] == pytest.approx(m["fig12"]["nolut"][k], abs=1e-3), k
+
+
+def test_report_is_one_self_contained_page(rep):
+    out, _, m = rep
+    html = (out / "report.html").read_text()
+    assert not re.search(r"""(src|href)=["']https?://""", html), "no network"
+    assert "<script" not in html
+    imgs = re.findall(r'<img src="data:image/png;base64,', html)
+    assert len(imgs) >= 10
+    assert html.count('<td class="holds">') + html.count('<td class="fails">') == len(m["claims"])
+    for link in re.findall(r'href="(scenarios/[^"]+)"', html):
+        assert (out / link).is_file(), link
+
+
+def _chromium() -> str | None:
+    return shutil.which("chromium") or shutil.which("chromium-browser")
+
+
+def test_report_renders_in_headless_chromium(rep, tmp_path):
+    """Chromium (installed by `make tools`) renders the page: the DOM has the claims table and the
+    screenshot is not blank."""
+    exe = _chromium()
+    if exe is None:
+        if os.environ.get("CI"):
+            pytest.fail("chromium not found: `make tools` installs it (Debian package chromium)")
+        pytest.skip("chromium not installed (make tools installs it)")
+    out, _, m = rep
+    flags = [exe, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+             "--disable-background-networking", "--disable-component-update", "--disable-sync",
+             f"--user-data-dir={tmp_path / 'profile'}"]
+    url = (out / "report.html").resolve().as_uri()
+    dom = subprocess.run([*flags, "--dump-dom", url], capture_output=True, text=True, timeout=120)
+    assert dom.returncode == 0, dom.stderr[-2000:]
+    assert f"of {len(m['claims'])} claims hold" in dom.stdout
+    shot = tmp_path / "shot.png"
+    p = subprocess.run([*flags, "--window-size=1200,1600", f"--screenshot={shot}", url], capture_output=True,
+                       text=True, timeout=120)
+    assert p.returncode == 0 and shot.is_file(), p.stderr[-2000:]
+    import matplotlib.image as mpimg
+    import numpy as np
+
+    px = mpimg.imread(shot)[..., :3]
+    assert px.std() > 0.05, "blank page"
+    assert len(np.unique((px * 255).astype(int).reshape(-1, 3), axis=0)) > 200, "no figures drawn"
+
+
+def test_paper_scenario_refuses_another_inverter(tmp_path, monkeypatch):
+    from linsense.reproduce import runs
+
+    (tmp_path / "scenarios").mkdir()
+    (tmp_path / "scenarios" / "x.toml").write_text(
+        'motor = "ecce2010"\n[scenario]\nname = "x"\nduration = 1.0\n[inverter]\nfidelity = "average"\n'
+        '[reference]\ntype = "hold"\n')
+    monkeypatch.setattr(runs, "data_path", lambda *parts: Path(tmp_path).joinpath(*parts))
+    with pytest.raises(InputError, match="switching inverter with 0.8 us dead time"):
+        runs.paper_scenario("x.toml")
+
+
+def test_model_only_writes_no_report(run_cli, tmp_path):
+    r = run_cli("reproduce", "--model-only", "--out", tmp_path / "o")
+    assert r.code == 0, r.err
+    assert (tmp_path / "o" / "summary.json").is_file() and not (tmp_path / "o" / "report.html").exists()
