@@ -145,14 +145,15 @@ def test_cli_writes_the_output_set(tmp_path):
     out = tmp_path / "fea"
     with pytest.raises(SystemExit) as e:
         main(["fea", "tubular56", "--out", str(out), "--positions", "14", "--mesh", "coarse",
-              "--lut-points", "36"])
+              "--lut-points", "36", "--load-current", "0"])
     assert e.value.code == 0
-    for f in ("inductances.csv", "motor.toml", "lut.csv", "geometry.json", "fea.json", "field_lines.png",
-              "inductances_fea.png", "lut.png"):
-        assert (out / f).is_file(), f
+    # a single --load-current: the output set of before the load sweep, no per-load files
+    assert {f.name for f in out.iterdir() if not f.name.startswith(".")} == {
+        "inductances.csv", "motor.toml", "lut.csv", "geometry.json", "fea.json", "field_lines.png",
+        "inductances_fea.png", "inductances_model.png", "lut.png"}
     load_motor(out / "motor.toml")
     doc = json.loads((out / "fea.json").read_text())
-    assert doc["mesh"]["triangles"] > 0 and doc["positions"] == 14
+    assert doc["mesh"]["triangles"] > 0 and doc["positions"] == 14 and "lut_vs_load" not in doc
     geo = json.loads((out / "geometry.json").read_text())
     assert len(geo["coils"]) == 24 and geo["coils"][0]["phase"] == "A"
 
@@ -289,3 +290,88 @@ def test_load_current_run_in_two_processes():
     i = q_currents(th, 1.5)
     i_q = -2 / 3 * (i[0] * np.sin(th) + i[1] * np.sin(th - 2 * np.pi / 3) + i[2] * np.sin(th + 2 * np.pi / 3))
     assert i_q == pytest.approx(1.5)
+
+
+# ------------------------------------------------------------------ load sweep, fast assembly, Newton start
+def test_vectorised_assembly_equals_scikit_fem_forms():
+    from linsense.fea.solver import _internal, _tangent
+
+    s = Solver(_geom(_bh_doc("default")), "coarse", 14)
+    rng = np.random.default_rng(1)
+    psi = rng.standard_normal(s.basis.N) * 1e-3
+    nu = s.nu_fixed * (1 + rng.random(s.nu_fixed.shape))
+    dnu = np.where(s.arm_iron, rng.standard_normal(nu.shape) * 1e3, 0.0)
+    field = s.basis.interpolate(psi)
+    ref = asm(_tangent, s.basis, nu=nu, dnu=dnu, psi=field)[s.I][:, s.I]
+    g = s.asm.grad(psi)
+    assert abs(s.asm.tangent(nu, dnu, g) - ref).max() < 1e-12 * abs(ref).max()
+    r = asm(_internal, s.basis, nu=nu, psi=field)
+    assert np.abs(s.asm.residual(nu, g) - r).max() < 1e-12 * np.abs(r).max()
+
+
+def test_newton_from_the_previous_load_matches_the_linear_start():
+    from linsense.fea.solver import q_currents
+
+    s = Solver(_geom(_bh_doc("default")), "coarse", 14)
+    cur = q_currents(0.7, 2.0)
+    s.solve_nonlinear(0.01, np.zeros(3))
+    warm = s.solve_nonlinear(0.01, cur, psi0=s.last_state)
+    cold = s.solve_nonlinear(0.01, cur)
+    assert warm.newton < cold.newton
+    assert np.abs(warm.L - cold.L).max() < 1e-9 * np.abs(cold.L).max()
+    assert np.abs(warm.psi_pm - cold.psi_pm).max() < 1e-9 * np.abs(cold.psi_pm).max()
+
+
+@pytest.mark.parametrize("value, expect", [
+    ("1,x", "'x' is not a number"),
+    ("0,1,1", "1 A is given twice"),
+    ("0,nan", "must be finite currents"),
+    ("inf", "must be finite currents"),
+    ("", "no current given"),
+    ("0,,1", "'' is not a number"),
+])
+def test_load_current_list_refused_in_one_line(run_cli, tmp_path, value, expect):
+    r = run_cli("fea", "tubular56", "--out", tmp_path / "o", "--load-current", value, "--mesh", "coarse")
+    assert r.code == 2
+    assert len(r.err.strip().splitlines()) == 1 and expect in r.err and "--load-current" in r.err, r.err
+    assert not (tmp_path / "o").exists()
+
+
+def test_load_current_list_parsed():
+    from linsense.fea.pipeline import parse_currents
+
+    assert parse_currents("0, 1,2.5") == [0.0, 1.0, 2.5]
+    assert parse_currents(2.0) == [2.0] and parse_currents("-0") == [0.0]
+    assert parse_currents([0, -1]) == [0.0, -1.0]
+
+
+def test_linear_iron_takes_only_zero(run_cli, tmp_path):
+    r = run_cli("fea", "tubular56", "--out", tmp_path / "o", "--load-current", "0,1", "--mesh", "coarse")
+    assert r.code == 2 and "linear iron" in r.err and len(r.err.strip().splitlines()) == 1
+
+
+def test_load_sweep_writes_per_load_files_and_the_lut_against_load(tmp_path):
+    from linsense.fea.pipeline import run_fea
+
+    d = _bh_doc("default")
+    d["armature"]["repeat"] = 4
+    d["rod"]["magnet_length"] = 0.056 / 6  # the rod aligned on the coarse mesh with 12 positions
+    geo = tmp_path / "bh.toml"
+    geo.write_text(_dump(d))
+    files, lines, warnings = run_fea(str(geo), str(tmp_path / "o"), 12, "coarse", 36, load_current="0,2",
+                                     workers=2)
+    names = {f.name for f in files}
+    for f in ("inductances.csv", "motor.toml", "lut.csv", "lut_vs_load.png", "inductances_0A.csv",
+              "inductances_2A.csv", "lut_0A.csv", "lut_2A.csv", "motor_2A.toml"):
+        assert f in names, f
+    doc = json.loads((tmp_path / "o" / "fea.json").read_text())
+    v = doc["lut_vs_load"]
+    assert v["currents_A"] == [0.0, 2.0] and v["max_diff_deg"][0] == 0.0
+    assert 0 <= v["max_diff_deg"][1] < 0.05  # the paper's Fig. 9 claim on this slotless design
+    kf = tomllib.loads((tmp_path / "o" / "motor.toml").read_text())["motor"]["force_constant"]
+    assert v["force_N"] == pytest.approx([0.0, 2 * kf])
+    assert v["newton_iterations"][1]["mean"] < v["newton_iterations"][0]["mean"]  # warm start
+    out = tmp_path / "o"
+    assert (out / "inductances.csv").read_text() == (out / "inductances_0A.csv").read_text()
+    assert lines[-1].startswith("LUT against load (vs 0 A): 0 A") and "max difference" in lines[-1]
+    assert not warnings

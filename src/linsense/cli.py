@@ -418,11 +418,12 @@ def tune(motor_spec: str, scenario_path: str | None, v_dc, f_pwm, dead_time, i_m
 @click.option("--mesh", "level", type=click.Choice(["coarse", "default", "fine"]), default="default",
               show_default=True, help="mesh level")
 @click.option("--lut-points", default=360, show_default=True, callback=_points, help="length of lut.csv")
-@click.option("--load-current", type=float, default=0.0, show_default=True,
-              help="q-axis current (A) setting the state of a saturating iron (needs a B-H curve)")
+@click.option("--load-current", default="0", show_default=True,
+              help="q-axis current (A) setting the state of a saturating iron (needs a B-H curve); a "
+                   "comma list (0,1,2) sweeps the loads: per-load tables and LUTs, lut_vs_load.png")
 @click.option("--workers", type=click.IntRange(1, 64), default=1, show_default=True,
               help="processes for the Newton solves of a saturating iron")
-def fea(geometry: str, out: str, positions: int, level: str, lut_points: int, load_current: float,
+def fea(geometry: str, out: str, positions: int, level: str, lut_points: int, load_current: str,
         workers: int) -> None:
     """Axisymmetric FEA of a tubular motor (GEOMETRY: .toml file or preset): inductances.csv, motor.toml,
     lut.csv, geometry.json, fea.json and figures."""

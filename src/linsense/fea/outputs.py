@@ -43,7 +43,7 @@ def force_constant(res: Result) -> float | None:
     return None
 
 
-def motor_toml(res: Result) -> str:
+def motor_toml(res: Result, table_file: str = "inductances.csv") -> str:
     g = res.geometry
     kf = force_constant(res)
     if kf is None:
@@ -54,7 +54,7 @@ def motor_toml(res: Result) -> str:
     doc = {
         "motor": {"name": g.name, "R_s": g.R_s, "pole_pitch": g.pole_pitch, "force_constant": float(kf),
                   "mass": g.mass},
-        "inductance": {"table": "inductances.csv"},
+        "inductance": {"table": table_file},
     }
     how = "from the geometry file" if g.force_constant else "= 3 pi psi_pm / pole_pitch"
     iron = f"B-H curve, load {res.load_current:g} A q-axis" if res.newton is not None else "linear iron"
@@ -140,17 +140,75 @@ def fig_field(res: Result, excitation: int = 0) -> Figure:
     return fig
 
 
+def dq_table(res: Result) -> tuple[np.ndarray, np.ndarray]:
+    """(theta rad sorted, L_dq (N, 2, 2) H) of the FEA table by the model's frame transforms
+    (amplitude-invariant Clarke with a floating star point, then the rotation by theta)."""
+    from linsense.model.frames import ab_to_dq_matrix, abc_to_ab_matrix
+
+    order = np.argsort(res.theta)
+    theta = res.theta[order]
+    return theta, ab_to_dq_matrix(abc_to_ab_matrix(res.L[order]), theta)
+
+
 def fig_table(res: Result) -> Figure:
-    """The FEA inductances against position (ABC), as computed (markers)."""
+    """The FEA inductances against position as computed (markers): ABC, and dq (the paper's Fig. 3)."""
+    from types import SimpleNamespace
+
+    from linsense.report.figures import _position_axis
+
     theta, e, _ = table(res)
-    fig = Figure(figsize=(7, 4))
-    ax = fig.subplots()
+    _, dq = dq_table(res)
+    deg = np.degrees(theta)
+    fig = Figure(figsize=(7.5, 7.5), layout="constrained")
+    axes = fig.subplots(2, 1)
     for k, name in enumerate(COLUMNS):
-        ax.plot(np.degrees(theta), e[:, k] * 1e3, ".-" if k < 3 else "x--", label=name)
-    ax.set_xlabel("theta (electrical deg)")
-    ax.set_ylabel("inductance (mH)")
-    ax.set_title(f"{res.geometry.name}: FEA inductances ({len(theta)} positions)")
-    ax.grid(True, alpha=0.3)
-    ax.legend(ncol=2, fontsize=8)
-    fig.tight_layout()
+        axes[0].plot(deg, e[:, k] * 1e3, ".-" if k < 3 else "x--", label=name.replace("_", "$_{") + "}$")
+    axes[0].set_title("(a) ABC frame: self (solid) and mutual (dashed) inductances")
+    for (i, j), name in (((0, 0), "$L_d$"), ((1, 1), "$L_q$"), ((0, 1), "$L_{dq}$")):
+        axes[1].plot(deg, dq[:, i, j] * 1e3, ".-", label=name)
+    axes[1].set_title("(b) dq frame (Clarke, then Park at theta)")
+    motor = SimpleNamespace(pole_pitch=res.geometry.pole_pitch)
+    for ax in axes:
+        _position_axis(ax, motor)
+        ax.set_ylabel("inductance (mH)")
+        ax.legend(loc="center left", bbox_to_anchor=(1.0, 0.5), fontsize=8)
+    load = f", load {res.load_current:g} A" if res.newton is not None else ""
+    fig.suptitle(f"{res.geometry.name}: FEA inductances ({len(theta)} positions{load})")
+    return fig
+
+
+def fig_lut_vs_load(name: str, vs_load: dict, luts: list, pole_pitch: float) -> Figure:
+    """Psi_LUT against position, one curve per load current (the paper's Fig. 9), and each load's
+    difference from the first load's."""
+    from types import SimpleNamespace
+
+    from linsense.report.figures import _position_axis
+
+    fig = Figure(figsize=(7.5, 7.0), layout="constrained")
+    axes = fig.subplots(2, 1)
+    ref = luts[0]
+    styles = ["-", "--", ":", "-."]
+    for k, (lu, i, f) in enumerate(zip(luts, vs_load["currents_A"], vs_load["force_N"], strict=True)):
+        if lu is None:
+            continue
+        label = f"{i:g} A" + ("" if f is None else f" ({f:.0f} N)")
+        th = np.degrees(np.append(lu.theta, 2 * np.pi))
+        axes[0].plot(th, np.degrees(np.append(lu.values, lu.values[0])), styles[k % 4], color=f"C{k}",
+                     label=label)
+        if ref is not None and k > 0:
+            d = np.degrees(lu.values - ref.values)
+            axes[1].plot(th, np.append(d, d[0]), styles[k % 4], color=f"C{k}",
+                         label=f"{label}: max {np.abs(d).max():.2g} deg")
+    axes[0].set_ylabel("Ψ_LUT (electrical deg)")
+    axes[0].set_title("(a) compensation LUT against load (q-axis current)")
+    i0 = vs_load["currents_A"][0]
+    axes[1].axhline(0.0, color="k", lw=0.8)
+    axes[1].set_ylabel(f"Ψ_LUT − Ψ_LUT({i0:g} A) (deg)")
+    axes[1].set_title(f"(b) difference from {i0:g} A")
+    motor = SimpleNamespace(pole_pitch=pole_pitch)
+    for ax in axes:
+        _position_axis(ax, motor)
+        if ax.get_legend_handles_labels()[0]:
+            ax.legend(loc="center left", bbox_to_anchor=(1.0, 0.5), fontsize=8)
+    fig.suptitle(f"{name}: Psi_LUT against load (FEA, saturating iron)")
     return fig
