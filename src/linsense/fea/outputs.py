@@ -203,6 +203,7 @@ def fig_lut_vs_load(name: str, vs_load: dict, luts: list, pole_pitch: float) -> 
     axes[0].set_title("(a) compensation LUT against load (q-axis current)")
     i0 = vs_load["currents_A"][0]
     axes[1].axhline(0.0, color="k", lw=0.8)
+    axes[1].ticklabel_format(axis="y", style="plain", useOffset=False)  # no "1e-5" under the top axis
     axes[1].set_ylabel(f"Ψ_LUT − Ψ_LUT({i0:g} A) (deg)")
     axes[1].set_title(f"(b) difference from {i0:g} A")
     motor = SimpleNamespace(pole_pitch=pole_pitch)
