@@ -87,7 +87,7 @@ pytest: $(STAMP)
 	$(PY) -m pytest -q
 
 lint: $(STAMP)
-	$(VENV)/bin/ruff check src tests
+	$(VENV)/bin/ruff check src tests tools
 
 # The firmware example: generated LUT header + library + host main, a few thousand steps
 EXAMPLE := $(BUILD)/example

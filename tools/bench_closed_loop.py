@@ -44,7 +44,8 @@ def fig13(fid):
     import linsense
     from linsense.sim.scenario import load_scenario
 
-    sc = load_scenario(ROOT / "examples" / "scenarios" / "fig13_trajectory.toml").replace(inverter={"fidelity": fid})
+    path = ROOT / "examples" / "scenarios" / "fig13_trajectory.toml"
+    sc = load_scenario(path).replace(inverter={"fidelity": fid})
     return fid, linsense.simulate(sc).metrics
 
 
@@ -66,12 +67,14 @@ def main() -> int:
         verdict = ("PASS" if passed else "FAIL") if fid == "switching" else \
             "(the targets are judged on switching; the average model's limits: docs/simulator.md)"
         ok &= passed or fid == "average"
-        print(f"hold, 16 positions, {fid:9s}: steady error |mean| max {bias:.2f} deg (|err| max {peak:.2f} deg), "
+        print(f"hold, 16 positions, {fid:9s}: steady error |mean| max {bias:.2f} deg "
+              f"(|err| max {peak:.2f} deg), "
               f"limit cycle max {lc:.4f} mm (targets <= 1.0 deg, <= 0.02 mm) {verdict}")
     for load, m in cals:
         passed = m["completed"] and m["max_diff_deg"] <= 0.3
         ok &= passed
-        print(f"calibration, 56 points, {load:4.0f} N, switching: {m['points_done']}/56 points, max |measured - "
+        print(f"calibration, 56 points, {load:4.0f} N, switching: {m['points_done']}/56 points, "
+              f"max |measured - "
               f"model with R_s| {m['max_diff_deg']:.3f} deg (target <= 0.3) {'PASS' if passed else 'FAIL'}; "
               f"{m['sim_s']:.1f} s simulated in {m['wall_s']:.2f} s")
     for fid, m in figs:
