@@ -29,12 +29,20 @@ class LoopAlong:
     gm_up_db: np.ndarray  # gain margin upward (NaN: none)
     max_pole_re: np.ndarray  # 1/s, largest real part of the closed loop's poles (> 0: unstable)
 
-    def worst(self) -> dict:
-        """The angle of the smallest upward gain margin, and its numbers."""
-        k = int(np.nanargmin(np.where(np.isfinite(self.gm_up_db), self.gm_up_db, np.inf)))
+    def worst(self) -> dict | None:
+        """The angle of the smallest upward gain margin and its numbers (None if no angle has one)."""
+        ok = np.isfinite(self.gm_up_db)
+        if not ok.any():
+            return None
+        k = int(np.flatnonzero(ok)[np.argmin(self.gm_up_db[ok])])
         return {"theta_deg": float(self.theta_deg[k]), "g": float(self.g[k]), "k_e": float(self.k_e[k]),
                 "pm_deg": float(self.pm_deg[k]), "gm_up_db": float(self.gm_up_db[k]),
                 "max_pole_re": float(self.max_pole_re[k])}
+
+    def any_unstable(self) -> bool:
+        """A negative phase or gain margin, or a closed-loop pole in the right half-plane, at any angle."""
+        return bool(np.any(self.pm_deg < 0.0) or np.any(self.gm_up_db < 0.0)
+                    or np.any(self.max_pole_re > 0.0))
 
 
 def nolut_error_gain(motor, theta, f_inj: float, quad: float = 0.0, h: float = 1e-4) -> np.ndarray:

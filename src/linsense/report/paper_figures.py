@@ -93,31 +93,32 @@ def fig_runs(runs: dict[str, object], pole_pitch: float, title: str) -> Figure:
     return fig
 
 
-def fig_gain_factor(motor, res, title: str) -> Figure:
-    """Where an uncompensated run loses stability: the true position's electrical angle against
-    time beside the uncompensated loop-gain factor ``1 + de*/dtheta`` (brief section 4) against
-    angle, on a shared angle axis."""
-    b = result_plot_data(res).bins
-    tau = motor.pole_pitch
-    theta_deg = np.degrees(2.0 * np.pi * b["x_mean"] / tau)
-    th = _theta()
-    g = loop_gain_factor(motor, th)
-    fig = Figure(figsize=(9.0, 4.0), layout="constrained")
+def fig_gain_factor(motor, runs: dict, peak_deg: float, title: str) -> Figure:
+    """Where the uncompensated runs lose stability or not: the true position's electrical angle
+    against time (``runs``: label -> Result), beside the uncompensated loop-gain factor
+    ``1 + de*/dtheta`` (brief section 4) against angle, on a shared angle axis; ``peak_deg``: the
+    factor's peak the runs approach (marked)."""
+    th_deg = np.linspace(peak_deg - 180.0, peak_deg + 180.0, 1441)
+    g = loop_gain_factor(motor, np.radians(th_deg))
+    fig = Figure(figsize=(9.0, 4.2), layout="constrained")
     ax_g, ax_t = fig.subplots(1, 2, sharey=True, gridspec_kw={"width_ratios": [1, 2]})
-    ax_g.plot(g, np.degrees(th), "k-", lw=1.2)
+    ax_g.plot(g, th_deg, "k-", lw=1.2)
     ax_g.axvline(1.0, color="0.6", lw=0.7)
     ax_g.set_xlabel("1 + de*/dθ (uncompensated)")
     ax_g.set_ylabel("true position θ (electrical deg)")
-    k = int(np.argmax(g))
-    ax_g.plot(g[k], np.degrees(th[k]), "ro")
-    ax_g.annotate(f"max {g[k]:.2f} at {np.degrees(th[k]):.0f} deg", (g[k], np.degrees(th[k])), fontsize=8,
-                  xytext=(4, 4), textcoords="offset points")
+    g_pk = float(loop_gain_factor(motor, np.radians(peak_deg)))
+    ax_g.plot(g_pk, peak_deg, "ro")
+    ax_g.annotate(f"max {g_pk:.2f} at {peak_deg:.0f} deg", (g_pk, peak_deg), fontsize=8, xytext=(-60, 8),
+                  textcoords="offset points")
     ax_g.grid(True, alpha=0.3)
-    lo = min(theta_deg.min(), 0.0) - 10
-    hi = max(theta_deg.max(), 90.0) + 10
+    lo, hi = peak_deg - 70.0, peak_deg + 20.0
+    for k, (label, res) in enumerate(runs.items()):
+        b = result_plot_data(res).bins
+        ang = 360.0 * b["x_mean"] / motor.pole_pitch
+        ax_t.plot(b["t"], ang, color=f"C{k}", lw=1.2, label=label)
+        lo, hi = min(lo, float(np.nanmin(ang)) - 5.0), max(hi, float(np.nanmax(ang)) + 5.0)
     ax_g.set_ylim(lo, hi)
-    ax_t.plot(b["t"], theta_deg, color="tab:blue", lw=1.2, label="true position")
-    ax_t.axhline(np.degrees(th[k]) % 360.0, color="r", lw=0.8, ls=":", label="largest loop-gain factor")
+    ax_t.axhline(peak_deg, color="r", lw=0.8, ls=":", label="largest loop-gain factor")
     ax_t.set_xlabel("time (s)")
     ax_t.legend(fontsize=8, loc="best")
     ax_t.grid(True, alpha=0.3)
@@ -165,11 +166,19 @@ def fig_bias(angles_deg: dict[str, np.ndarray], curves: dict[str, np.ndarray], t
     return fig
 
 
-def fig_margins(nolut, lut, swing_deg, title: str) -> Figure:
+def fig_margins(nolut, lut, run, title: str) -> Figure:
     """The linearised motion loop against the true position's angle (:class:`~linsense.analysis.
     stability.LoopAlong`): above, the uncompensated loop-gain factor g = 1 + de*/dθ and the
     observer's local gain k_e; below, the phase margin and the upward gain margin without the LUT
-    and with it; ``swing_deg``: the angles an uncompensated run swings through (shaded), or None."""
+    and with it; ``run``: ``(Result, pole pitch)`` of an uncompensated run whose range of angles
+    after its step is shaded (or None)."""
+    swing_deg = None
+    if run is not None:
+        res, tau = run
+        x = res.x[res.t >= float(res.scenario.spec.reference.at)]
+        x = x[np.isfinite(x)]
+        if x.size:
+            swing_deg = (float(x.min()) * 360.0 / tau, float(x.max()) * 360.0 / tau)
     fig = Figure(figsize=(8.0, 6.0), layout="constrained")
     ax_g, ax_m = fig.subplots(2, 1, sharex=True)
     ax_g.plot(nolut.theta_deg, nolut.g, "k-", lw=1.2, label="g = 1 + de*/dθ (no LUT)")
@@ -183,15 +192,17 @@ def fig_margins(nolut, lut, swing_deg, title: str) -> Figure:
     ax_m.plot(lut.theta_deg, lut.gm_up_db, "C3--", lw=1.0, label="gain margin, LUT (dB)")
     ax_m.axhline(0.0, color="k", lw=0.7)
     w = nolut.worst()
-    ax_m.plot(w["theta_deg"], w["gm_up_db"], "ro")
-    ax_m.annotate(f"{w['pm_deg']:.1f} deg, {w['gm_up_db']:.2f} dB at {w['theta_deg']:.0f} deg",
-                  (w["theta_deg"], w["gm_up_db"]), xytext=(6, -12), textcoords="offset points", fontsize=8)
+    if w is not None:
+        ax_m.plot(w["theta_deg"], w["gm_up_db"], "ro")
+        ax_m.annotate(f"{w['pm_deg']:.1f} deg, {w['gm_up_db']:.2f} dB at {w['theta_deg']:.0f} deg",
+                      (w["theta_deg"], w["gm_up_db"]), xytext=(6, 4), textcoords="offset points", fontsize=8)
     ax_m.set_ylabel("margin")
     ax_m.set_xlabel("true position θ (electrical deg)")
     for ax in (ax_g, ax_m):
-        if swing_deg is not None:
-            ax.axvspan(swing_deg[0] % 360.0, swing_deg[1] % 360.0, color="tab:red", alpha=0.12,
-                       label="swing of the 6 mm run without the LUT" if ax is ax_g else None)
+        if swing_deg is not None:  # (within one period, where the axis is)
+            lo = swing_deg[0] - 360.0 * np.floor(swing_deg[0] / 360.0)
+            ax.axvspan(lo, min(360.0, lo + swing_deg[1] - swing_deg[0]), color="tab:red", alpha=0.12,
+                       label="range of the 6 mm run without the LUT" if ax is ax_g else None)
         ax.set_xlim(0, 360)
         ax.set_xticks(np.arange(0, 361, 60))
         ax.grid(True, alpha=0.3)

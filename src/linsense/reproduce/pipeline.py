@@ -32,10 +32,11 @@ def _stages(enabled: bool):
     if not enabled:
         yield None
         return
+    from rich.console import Console
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
     with Progress(TextColumn("{task.description:<34}"), BarColumn(), MofNCompleteColumn(),
-                  TimeElapsedColumn()) as p:
+                  TimeElapsedColumn(), console=Console(stderr=True)) as p:
         yield p
 
 
@@ -53,28 +54,30 @@ def _finite(v):
     return None if v is None or (isinstance(v, float) and not math.isfinite(v)) else v
 
 
-def _onset(motor, res) -> dict:
-    """Where an uncompensated run loses stability: the angle of the largest loop-gain factor
-    ``1 + de*/dtheta`` of the model, and the range of true electrical angles the run swings
-    through over its end window (None when it is stable)."""
+def _reach_deg(motor, res) -> float | None:
+    """The farthest true electrical angle a run reaches (deg; the block maxima, so nothing between
+    samples is missed)."""
+    x = res.x_max if res.x_max is not None else res.x
+    x = x[np.isfinite(x)]
+    return float(np.max(x) * 360.0 / motor.pole_pitch) if x.size else None
+
+
+def _onset(motor, res6, res3) -> dict:
+    """Where the uncompensated drive loses stability: how far the 6 mm run (``res6``) and the 3 mm
+    run (``res3``) reach, and the peak of the loop-gain factor ``1 + de*/dtheta`` nearest the 6 mm
+    run's reach (the factor repeats every 180 deg, so its two equal peaks are told apart by
+    where the run is, not by rounding)."""
     from linsense.analysis.hf import loop_gain_factor
 
-    th = np.linspace(0.0, 2.0 * np.pi, 3601)
+    th = np.linspace(0.0, np.pi, 1801)  # (one period of the factor)
     g = loop_gain_factor(motor, th)
     k = int(np.argmax(g))
-    out = {"gain_max": float(g[k]), "gain_max_at_deg": float(np.degrees(th[k])), "gain_min": float(g.min()),
-           "swing_deg": None, "unstable_at_deg": None}
-    if not res.metrics.get("stable"):
-        t = res.t
-        sel = t >= t[-1] - float(res.scenario.spec.metrics.final_window_s)
-        lo = res.x_min[sel] if res.x_min is not None else res.x[sel]
-        hi = res.x_max[sel] if res.x_max is not None else res.x[sel]
-        lo, hi = lo[np.isfinite(lo)], hi[np.isfinite(hi)]
-        if lo.size and hi.size:
-            deg = 360.0 / motor.pole_pitch
-            out["swing_deg"] = [float(lo.min() * deg), float(hi.max() * deg)]
-            out["unstable_at_deg"] = out["swing_deg"][1]  # the swing's far turning point
-    return out
+    peak = float(np.degrees(th[k]))
+    reach6, reach3 = _reach_deg(motor, res6), _reach_deg(motor, res3)
+    if reach6 is not None:
+        peak += 180.0 * round((reach6 - peak) / 180.0)
+    return {"gain_max": float(g[k]), "gain_peak_deg": peak, "gain_min": float(g.min()),
+            "reach6_deg": reach6, "reach3_deg": reach3}
 
 
 def reproduce(out: str, motor_spec: str = "ecce2010", quick: bool = False, progress: bool = False,
@@ -91,8 +94,11 @@ def reproduce(out: str, motor_spec: str = "ecce2010", quick: bool = False, progr
     t_start = time.perf_counter()
     motor = load_motor(motor_spec)
     # the scenarios name the motor: a preset by name, a file by its absolute path
-    scen_motor = None if motor_spec == "ecce2010" else (
-        motor_spec if not motor_spec.lower().endswith(".toml") else str(Path(motor_spec).resolve()))
+    # (a file as load_motor tells one: a .toml name, an existing path or a path with a separator)
+    as_file = (Path(motor_spec).suffix.lower() == ".toml" or Path(motor_spec).exists()
+               or any(c in motor_spec for c in "/\\"))
+    preset = None if motor_spec == "ecce2010" else motor_spec
+    scen_motor = str(Path(motor_spec).resolve()) if as_file else preset
     summ = summarize(motor)
     figs: dict[str, bytes] = {}
     with output_set(out, "reproduce") as st, _stages(progress) as bars:
@@ -110,20 +116,57 @@ def reproduce(out: str, motor_spec: str = "ecce2010", quick: bool = False, progr
         stage.tick()
         if not model_only:
             metrics = _closed_loop(st, bars, motor, scen_motor, summ, quick, figs, t_start)
+    model_line = (f"{motor.name}: Psi_LUT peak {summ['psi_lut_peak_deg']:.2f} deg; saliency minima at "
+                  f"{', '.join(f'{d:.0f}' for d in summ['saliency_min_at_deg'])} deg; HF current "
+                  f"{summ['hf_current_mean_A']:.2f} A; no-LUT error up to "
+                  f"{summ['err_nolut_max_deg']:.1f} deg, gain factor "
+                  f"{summ['gain_nolut_min']:.2f}..{summ['gain_nolut_max']:.2f}")
     if model_only:
-        return st.files, [f"{motor.name}: Psi_LUT peak {summ['psi_lut_peak_deg']:.2f} deg (model only)"]
+        return st.files, [model_line]
     held = sum(c["holds"] for c in metrics["claims"])
     lines = [f"{motor.name}: {held} of {len(metrics['claims'])} claims of the paper hold "
              f"(report.html); Psi_LUT peak {summ['psi_lut_peak_deg']:.2f} deg; {metrics['wall_s']:.0f} s"]
     for c in metrics["claims"]:
         verdict = "holds" if c["holds"] else "FAILS"
         lines.append(f"  [{verdict}] {c['claim']}: paper {c['paper']}, ours {c['ours']}")
-    return st.files, lines
+    return st.files, [model_line, *lines]
+
+
+def _step_title(fig: str, sc, motor) -> str:
+    """A figure's title from its scenario: the step in mm and electrical degrees, the inverter."""
+    sp = sc.spec
+    step = sp.reference.position_mm - sp.initial.position_mm
+    deg = 360.0 * step * 1e-3 / motor.pole_pitch
+    return (f"Fig. {fig[3:]}: {step:g} mm ({deg:.1f} electrical deg) position step, {sp.inverter.fidelity} "
+            f"inverter, dead time {sp.inverter.dead_time * 1e6:g} µs")
+
+
+def _trajectory_title(sc) -> str:
+    r = sc.spec.reference
+    path = " → ".join(f"{w:g}" for w in [sc.spec.initial.position_mm, *r.waypoints_mm])
+    return (f"Fig. 13: minimum-time trajectory {path} mm, {r.v_max:g} m/s, {r.a_max:g} m/s², "
+            f"{sc.spec.load.force:g} N load, {sc.spec.inverter.fidelity} inverter")
+
+
+def _map_robustness(df, lut_scenario) -> dict:
+    """How the tuned point's neighbourhood fares on the stability map: stable cells per mode, and
+    per step size at the tuned observer bandwidth."""
+    out = {}
+    bw = lut_scenario.spec.observer.bandwidth_hz
+    for mode, g in df.groupby("control.mode"):
+        stable = g["stable"].fillna(False).astype(bool)
+        near = g[np.isclose(g["observer.bandwidth_hz"].astype(float), bw)]
+        steps = near["reference.position_mm"].astype(float)
+        ok = near["stable"].fillna(False).astype(bool)
+        out[mode] = {"stable": int(stable.sum()), "runs": int(len(g)),
+                     "at_tuned_bandwidth": {f"{k:g} mm": bool(v) for k, v in zip(steps, ok, strict=True)}}
+    return {"tuned_bandwidth_hz": bw, "modes": out}
 
 
 def _closed_loop(st, bars, motor, scen_motor, summ: dict, quick: bool, figs: dict, t_start: float) -> dict:
     """The stages after the model (Figs. 9, 11-13, beyond the paper) into the output set ``st``:
     the figures, metrics.json and report.html; returns the metrics."""
+    from linsense.analysis.hf import psi_lut, psi_lut_resistive
     from linsense.analysis.stability import margins_along
     from linsense.report import paper_figures as pf
     from linsense.report.figures import png_bytes
@@ -141,9 +184,10 @@ def _closed_loop(st, bars, motor, scen_motor, summ: dict, quick: bool, figs: dic
     base = cals[runs.LOADS_N[0]].psi_measured
     load_diff = [float(np.degrees(np.nanmax(np.abs(c.psi_measured - base)))) for c in cals.values()
                  if np.isfinite(c.psi_measured - base).any()]
+    th = np.linspace(0.0, 2.0 * np.pi, 3601)
     fig9 = {
-        "model_peak_deg": float(np.degrees(np.max(np.abs(cals[0.0].psi_eq12)))),
-        "model_r_s_peak_deg": float(np.degrees(np.max(np.abs(cals[0.0].psi_model)))),
+        "model_peak_deg": float(np.degrees(np.max(np.abs(psi_lut(motor, th))))),
+        "model_r_s_peak_deg": float(np.degrees(np.max(np.abs(psi_lut_resistive(motor, th, f_inj))))),
         **{f"cal_{load:g}N_max_diff_deg": cal.metrics["max_diff_deg"] for load, cal in cals.items()},
         "load_max_diff_deg": max(load_diff) if load_diff else None,
         "positions": n_cal,
@@ -161,65 +205,71 @@ def _closed_loop(st, bars, motor, scen_motor, summ: dict, quick: bool, figs: dic
     tau = motor.pole_pitch
     figs["figures/fig11_step3.png"] = png_bytes(pf.fig_runs(
         {"a) with the LUT": results["fig11"]["lut"], "b) without the LUT": results["fig11"]["nolut"]},
-        tau, "Fig. 11: 3 mm (19.3 deg) position step, switching inverter, 0.8 µs dead time"))
+        tau, _step_title("fig11", scenarios["fig11"]["lut"], motor)))
     figs["figures/fig12_step6.png"] = png_bytes(pf.fig_runs(
         {"a) with the LUT": results["fig12"]["lut"], "b) without the LUT": results["fig12"]["nolut"],
          "c) without the LUT, no dead time": results["fig12"]["nolut_no_dead_time"]},
-        tau, "Fig. 12: 6 mm (38.6 deg) position step, switching inverter"))
-    onset = _onset(motor, results["fig12"]["nolut"])
+        tau, _step_title("fig12", scenarios["fig12"]["lut"], motor)))
+    onset = _onset(motor, results["fig12"]["nolut"], results["fig11"]["nolut"])
     step = 6.0 if quick else 2.0  # (deg between the angles of the linearised loop)
     angles = np.arange(0.0, 360.0, step)
     along = margins_along(scenarios["fig12"]["nolut"], angles)
     along_lut = margins_along(scenarios["fig12"]["lut"], angles, lut=True)
-    t6 = 360.0 * scenarios["fig12"]["lut"].spec.reference.position_mm * 1e-3 / motor.pole_pitch
-    linearised = {"worst": along.worst(), "lut": margins_along(scenarios["fig12"]["lut"], np.array([t6]),
-                                                               lut=True).worst(),
+    linearised = {"worst": along.worst(), "any_unstable": along.any_unstable(),
+                  "lut_worst": along_lut.worst(), "lut_any_unstable": along_lut.any_unstable(),
                   "angles_deg_step": step}
     figs["figures/fig12_linearised.png"] = png_bytes(pf.fig_margins(
-        along, along_lut, onset["swing_deg"],
+        along, along_lut, (results["fig12"]["nolut"], tau),
         "The linearised motion loop of the tuning command (linsense.tune.design.loops) along the position:\n"
-        "6 mm scenario's gains, without the LUT (solid) and with it (dashed)"))
+        "the 6 mm scenarios' gains, without the LUT (solid) and with it (dashed)"))
     figs["figures/fig12_loop_gain.png"] = png_bytes(pf.fig_gain_factor(
-        motor, results["fig12"]["nolut"], "Fig. 12 without the LUT: the true position's angle and the "
-                                         "uncompensated loop-gain factor 1 + de*/dθ"))
+        motor, {"6 mm, no LUT": results["fig12"]["nolut"], "3 mm, no LUT": results["fig11"]["nolut"]},
+        onset["gain_peak_deg"],
+        "Figs. 11/12 without the LUT: the true position's angle and the uncompensated loop-gain "
+        "factor 1 + de*/dθ"))
     figs["figures/fig13_trajectory.png"] = png_bytes(pf.fig_runs(
         {"a) with the LUT": results["fig13"]["lut"], "b) without the LUT": results["fig13"]["nolut"]},
-        tau, "Fig. 13: minimum-time trajectory 0 → 100 mm → 0, 0.2 m/s, 1 m/s², 20 N load"))
+        tau, _trajectory_title(scenarios["fig13"]["lut"])))
 
     # --- beyond the paper
     n_hold = HOLD_POSITIONS[quick]
     stage = _Stage(bars, f"beyond: hold study, {n_hold} positions", 2 * len(runs.HOLD_VARIANTS))
     hold = runs.hold_study(scen_motor, n_hold, stage.tick)
+    dt_us = runs.DEAD_TIME * 1e6
     figs["figures/hold_bias.png"] = png_bytes(pf.fig_bias(
         hold.true_deg, hold.bias_deg,
         "Steady estimation error at rest, switching inverter: the LUT of eq. (12) against the LUT\n"
-        "with R_s, and the dead time (0.8 µs; solid) against none (dashed); pulsating injection", motor))
+        f"with R_s, and the dead time ({dt_us:g} µs; solid) against none (dashed); pulsating injection",
+        motor))
     stage = _Stage(bars, "beyond: stability map (sweep)", 1)
     df, axes, map_line = runs.stability_map(scen_motor, quick, st.path("stability_map"))
     stage.tick()
     figs["figures/stability_map.png"] = png_bytes(fig_stability_map(df, axes))
 
+    lut6 = scenarios["fig12"]["lut"].spec
     metrics = {
         "motor": motor.name,
         "quick": quick,
-        "setup": {"fidelity": runs.FIDELITY, "dead_time_s": runs.DEAD_TIME},
+        "setup": {"fidelity": runs.FIDELITY, "dead_time_s": runs.DEAD_TIME, "f_pwm_hz": lut6.inverter.f_pwm,
+                  "v_inj_v": lut6.injection.amplitude, "f_inj_hz": lut6.injection.frequency},
         "lut": {"peak_deg": summ["psi_lut_peak_deg"]},
         "fig9": fig9,
         "fig11": {k: results["fig11"][k].metrics for k in ("lut", "nolut")},
-        "fig12": {**{k: results["fig12"][k].metrics for k in ("lut", "nolut", "nolut_no_dead_time")},
-                  "onset": onset, "linearised": linearised},
+        "fig12": {k: results["fig12"][k].metrics for k in ("lut", "nolut", "nolut_no_dead_time")},
+        "fig12_analysis": {"onset": onset, "linearised": linearised},
         "fig13": {k: results["fig13"][k].metrics for k in ("lut", "nolut")},
         "beyond": {
             "hold": {"positions_deg": hold.positions_deg.tolist(),
                      "true_deg": {k: [_finite(float(v)) for v in a] for k, a in hold.true_deg.items()},
                      "bias_deg": {k: [_finite(float(v)) for v in a] for k, a in hold.bias_deg.items()},
                      "limit_cycle_max_mm": hold.limit_cycle_mm},
-            "stability_map": {"summary": map_line, "runs": len(df)},
+            "stability_map": {"summary": map_line, "runs": len(df),
+                              **_map_robustness(df, scenarios["fig12"]["lut"])},
         },
     }
     metrics["claims"] = claims(metrics)
     metrics["wall_s"] = round(time.perf_counter() - t_start, 2)
-    st.write("metrics.json", json.dumps(metrics, indent=1, default=_json_default) + "\n")
+    st.write("metrics.json", json.dumps(metrics, indent=1, default=_json_default, allow_nan=False) + "\n")
     for name, data in figs.items():
         if not st.path(name).exists():
             st.write(name, data)
