@@ -78,22 +78,36 @@ def interpolate(table: np.ndarray, theta: np.ndarray | float) -> np.ndarray:
     return (1.0 - f) * table[k] + f * table[(k + 1) % n]
 
 
-def build_lut(motor, points: int, f_inj: float | None = None, quad: float = 0.0) -> Lut:
+def build_lut(motor, points: int, f_inj: float | None = None, quad: float = 0.0,
+              injection: str = "pulsating") -> Lut:
     """Psi_LUT of ``motor`` sampled at ``points`` positions over one electrical period.
 
     Without ``f_inj`` this is eq. (12); with it (Hz), the resistance-aware angle of
     :func:`~linsense.analysis.hf.psi_lut_resistive` for that injection frequency and the
-    injection's quadrature share ``quad`` (0: pulsating, as the paper).
+    injection's quadrature share ``quad`` (0: pulsating, as the paper). ``injection="rotating"``:
+    the table of the rotating-vector estimate instead, indexed by the estimate: the angle to take
+    from it (:func:`~linsense.analysis.rotating.rotating_lut`; without ``f_inj`` the R_s = 0 limit;
+    docs/theory.md).
     """
     if points < 4:
         raise ValueError("points must be >= 4")
+    if injection not in ("pulsating", "rotating"):
+        raise ValueError(f"injection must be 'pulsating' or 'rotating', got {injection!r}")
+    if f_inj is not None and not f_inj > 0:
+        raise ValueError("f_inj must be positive")
     theta = 2.0 * np.pi * np.arange(points) / points
     prov = motor.provenance()
-    if f_inj is None:
+    if injection == "rotating":
+        from linsense.analysis.rotating import rotating_lut
+
+        values = rotating_lut(motor, theta, f_inj)
+        prov = {**prov, "injection": "rotating",
+                "lut_model": "R_s = 0 (e*)" if f_inj is None else "with R_s at f_inj"}
+        if f_inj is not None:
+            prov["f_inj"] = f_inj
+    elif f_inj is None:
         values = psi_lut(motor, theta)
     else:
-        if not f_inj > 0:
-            raise ValueError("f_inj must be positive")
         values = psi_lut_resistive(motor, theta, f_inj, quad=quad)
         prov = {**prov, "f_inj": f_inj, "lut_model": "with R_s at f_inj"}
         if quad:
