@@ -122,14 +122,16 @@ def _quiet(name: str):
 def _progress(total: int, done: int, enabled: bool):
     if not enabled:
         return nullcontext(None)
+    from rich.console import Console
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
     class Rate(TextColumn):
         def render(self, task):  # runs per second
             return f"{task.speed or 0:.1f} runs/s"
 
+    # (on stderr, as the CLI decides to show it from stderr; stdout keeps the command's output)
     p = Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), Rate(""),
-                 TimeRemainingColumn(), transient=False)
+                 TimeRemainingColumn(), console=Console(stderr=True), transient=False)
     return p
 
 
