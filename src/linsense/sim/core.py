@@ -18,6 +18,7 @@ import numpy as np
 
 from linsense._ctrl import ffi, lib
 from linsense.errors import LinsenseError
+from linsense.sim import scenario as _sc
 from linsense.sim.plant import fill_plant
 
 FIDELITIES = {"average": lib.LS_SIM_AVERAGE, "switching": lib.LS_SIM_SWITCHING}
@@ -57,33 +58,40 @@ class SimulationError(LinsenseError):
     """The C simulator refused its configuration or inputs."""
 
 
+def _default(section, key: str):
+    """The scenario file's default of ``[section] key`` (one source: linsense.sim.scenario, which
+    reads the controller library's defaults from C)."""
+    return section.model_fields[key].default
+
+
 @dataclass
 class PlantSetup:
-    """Everything of ``ls_sim_cfg`` that is not the motor (SI units)."""
+    """Everything of ``ls_sim_cfg`` that is not the motor (SI units); the defaults are the scenario
+    file's (docs/simulator.md), converted to SI."""
 
-    fidelity: str = "average"        # "average" or "switching"
-    v_dc: float = 72.0               # V
-    f_pwm: float = 16000.0           # Hz, PWM = control rate
-    dead_time: float = 0.8e-6        # s
+    fidelity: str = _default(_sc.InverterSection, "fidelity")  # "average" or "switching"
+    v_dc: float = _default(_sc.InverterSection, "v_dc")  # V
+    f_pwm: float = _default(_sc.InverterSection, "f_pwm")  # Hz, PWM = control rate
+    dead_time: float = _default(_sc.InverterSection, "dead_time")  # s
     i_gain: tuple[float, float, float] = (1.0, 1.0, 1.0)    # -
     i_offset: tuple[float, float, float] = (0.0, 0.0, 0.0)  # A
-    i_noise: float = 0.0             # A rms
-    adc_bits: int = 0                # 0: ideal
-    adc_range: float = 10.0          # A, +- full scale
-    enc_counts: int = 56000          # counts per electrical period
-    seed: int = 0
-    motion: str = "free"             # "free", "held", "prescribed"
-    x0: float = 0.0                  # m
+    i_noise: float = _default(_sc.SensorsSection, "current_noise")  # A rms
+    adc_bits: int = _default(_sc.SensorsSection, "adc_bits")  # 0: ideal
+    adc_range: float = _default(_sc.SensorsSection, "adc_range")  # A, +- full scale
+    enc_counts: int = _default(_sc.SensorsSection, "encoder_counts_per_period")  # counts per period
+    seed: int = _default(_sc.ScenarioSection, "seed")
+    motion: str = "free"             # "free", "held", "prescribed" (not a scenario key)
+    x0: float = 1e-3 * _default(_sc.InitialSection, "position_mm")  # m
     v0: float = 0.0                  # m/s
-    x_min: float = -1.0              # m, travel limits
-    x_max: float = 1.0               # m
-    load: str = "constant"           # "constant", "step", "incline"
-    load_f0: float = 0.0             # N (opposes positive motion when > 0)
-    load_f1: float = 0.0             # N, after the step
-    load_t: float = 0.0              # s, time of the step
-    load_incline: float = 0.0        # rad
-    decimate: int = 1                # record every n-th period
-    i_abort: float = 20.0            # A, |phase current| treated as divergence
+    x_min: float = 1e-3 * _default(_sc.TravelSection, "min_mm")  # m, travel limits
+    x_max: float = 1e-3 * _default(_sc.TravelSection, "max_mm")  # m
+    load: str = _default(_sc.LoadSection, "type")  # "constant", "step", "incline"
+    load_f0: float = _default(_sc.LoadSection, "force")  # N (opposes positive motion when > 0)
+    load_f1: float = _default(_sc.LoadSection, "force_after")  # N, after the step
+    load_t: float = _default(_sc.LoadSection, "time")  # s, time of the step
+    load_incline: float = math.radians(_default(_sc.LoadSection, "incline_deg"))  # rad
+    decimate: int = _default(_sc.RecordSection, "decimate")  # record every n-th period
+    i_abort: float = _default(_sc.ProtectionSection, "i_abort")  # A, |phase current| treated as divergence
 
 
 def plant_template(motor, lab: tuple | None = None):
