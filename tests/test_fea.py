@@ -322,18 +322,23 @@ def test_newton_from_the_previous_load_matches_the_linear_start():
     assert np.abs(warm.psi_pm - cold.psi_pm).max() < 1e-9 * np.abs(cold.psi_pm).max()
 
 
-@pytest.mark.parametrize("value, expect", [
-    ("1,x", "'x' is not a number"),
-    ("0,1,1", "1 A is given twice"),
-    ("0,nan", "must be finite currents"),
-    ("inf", "must be finite currents"),
-    ("", "no current given"),
-    ("0,,1", "'' is not a number"),
+@pytest.mark.parametrize("option, value, expect", [
+    ("--load-current", "1,x", "'x' is not a number"),
+    ("--load-current", "0,1,1", "1 A is given twice"),
+    ("--load-current", "0,nan", "must be finite currents"),
+    ("--load-current", "inf", "must be finite currents"),
+    ("--load-current", "", "no current given"),
+    ("--load-current", "0,,1", "'' is not a number"),
+    ("--polarity", "1,x", "'x' is not a number (d-axis pulse amplitudes"),
+    ("--polarity", "1,-2", "must be positive amplitudes"),
+    ("--polarity", "0", "must be positive amplitudes"),
+    ("--polarity", "1,1", "1 A is given twice"),
+    ("--polarity", "", "no current given"),
 ])
-def test_load_current_list_refused_in_one_line(run_cli, tmp_path, value, expect):
-    r = run_cli("fea", "tubular56", "--out", tmp_path / "o", "--load-current", value, "--mesh", "coarse")
+def test_load_current_list_refused_in_one_line(run_cli, tmp_path, option, value, expect):
+    r = run_cli("fea", "tubular56", "--out", tmp_path / "o", option, value, "--mesh", "coarse")
     assert r.code == 2
-    assert len(r.err.strip().splitlines()) == 1 and expect in r.err and "--load-current" in r.err, r.err
+    assert len(r.err.strip().splitlines()) == 1 and expect in r.err and option in r.err, r.err
     assert not (tmp_path / "o").exists()
 
 
@@ -375,3 +380,59 @@ def test_load_sweep_writes_per_load_files_and_the_lut_against_load(tmp_path):
     assert (out / "inductances.csv").read_text() == (out / "inductances_0A.csv").read_text()
     assert lines[-1].startswith("LUT against load (vs 0 A): 0 A") and "max difference" in lines[-1]
     assert not warnings
+
+
+# ------------------------------------------------------------------ d-axis current, polarity signal
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "fea"
+
+
+def test_d_axis_current_strengthens_the_pm_flux():
+    from linsense.fea.solver import dq_currents, q_currents
+
+    g = load_geometry("tubular56")
+    res = run(g, 14, "coarse")  # theta's origin: 0 where phase A's PM flux linkage peaks
+    x0 = float(np.mod(res.theta_offset / res.direction * g.pole_pitch / (2 * np.pi), g.pole_pitch))
+    s = Solver(g, "coarse", 14)
+    psi = {i: s.solve_nonlinear(x0, dq_currents(0.0, i, 0.0)).psi_pm for i in (-1.0, 0.0, 1.0)}
+    side = [s.solve(x0 + dx, energy=False).psi_pm[0] for dx in (-g.pole_pitch / 8, g.pole_pitch / 8)]
+    assert psi[0.0][0] > max(side) and psi[0.0][0] > 0.9 * res.psi_pm_amplitude  # phase A at its PM peak
+    assert psi[1.0][0] > psi[0.0][0] > psi[-1.0][0]  # +i_d along the magnets' flux
+    # amplitude-invariant Park of the phase currents gives (i_d, i_q) back; i_d = 0 is q_currents
+    th = 1.1
+    i = dq_currents(th, 0.7, -0.4)
+    ph = th - np.array([0.0, 2 * np.pi / 3, -2 * np.pi / 3])
+    assert 2 / 3 * (i * np.cos(ph)).sum() == pytest.approx(0.7)
+    assert -2 / 3 * (i * np.sin(ph)).sum() == pytest.approx(-0.4)
+    assert np.array_equal(dq_currents(th, 0.0, 1.5), q_currents(th, 1.5))
+
+
+def test_polarity_signal_with_saturating_and_linear_iron():
+    from linsense.fea.polarity import polarity_signal
+
+    # a 1 mm back iron saturates: +d saturates it further, L_d(-I) > L_d(+I) at every position,
+    # more so with I (coarse, 4 positions)
+    thin = polarity_signal(load_geometry(EXAMPLES / "tubular56_bh_thin.toml"), [1, 4], 4, "coarse", workers=2)
+    a, b = thin["rows"]
+    assert 0 < a["diff_min_H"] and a["diff_mean_H"] < b["diff_min_H"]
+    assert 0.005 < a["rel"] < b["rel"] < 0.2
+    assert b["psi_d_plus_Wb"] > a["psi_d_plus_Wb"] > a["psi_d_minus_Wb"] > b["psi_d_minus_Wb"]
+    # linear iron (mu_r 1000), the same Newton solves: no signal, to the last bit
+    lin = polarity_signal(load_geometry("tubular56"), [4], 4, "coarse", workers=2)["rows"][0]
+    assert lin["diff_mean_H"] == 0 and lin["diff_min_H"] == 0 and lin["newton_max"] <= 2
+    assert lin["psi_d_plus_Wb"] > lin["psi_d_minus_Wb"]
+    with pytest.raises(ValueError, match="positive"):
+        polarity_signal(load_geometry("tubular56"), [0.0], 3, "coarse")
+
+
+def test_cli_polarity_writes_the_csv(run_cli, tmp_path):
+    out = tmp_path / "o"
+    r = run_cli("fea", "tubular56", "--out", out, "--positions", "14", "--mesh", "coarse", "--lut-points",
+                "36", "--polarity", "2,1", "--polarity-positions", "4")
+    assert r.code == 0, r.err
+    rows = (out / "polarity.csv").read_text().splitlines()
+    assert rows[0].startswith("I_A,L_d_plus_H,L_d_minus_H,diff_mean_H,diff_min_H,rel") and len(rows) == 3
+    assert rows[1].startswith("1,") and rows[2].startswith("2,")
+    doc = json.loads((out / "fea.json").read_text())
+    assert doc["polarity"]["currents_A"] == [1.0, 2.0] and doc["polarity"]["positions"] == 4
+    assert "polarity (L_d(-I) - L_d(+I), i_q = 0): 1 A 0 % (0 uH, min 0), 2 A 0 %" in r.out
+

@@ -428,14 +428,20 @@ def tune(motor_spec: str, scenario_path: str | None, v_dc, f_pwm, dead_time, i_m
                    "comma list (0,1,2) sweeps the loads: per-load tables and LUTs, lut_vs_load.png")
 @click.option("--workers", type=click.IntRange(1, 64), default=1, show_default=True,
               help="processes for the Newton solves of a saturating iron")
+@click.option("--polarity", default=None,
+              help="d-axis pulse amplitudes (A, comma list: 0.5,1,2): the saturation signal for magnet "
+                   "polarity detection, L_d(-I) - L_d(+I), in polarity.csv and fea.json")
+@click.option("--polarity-positions", type=click.IntRange(3, 720), default=4, show_default=True,
+              help="rod positions over one electrical period for --polarity")
 def fea(geometry: str, out: str, positions: int, level: str, lut_points: int, load_current: str,
-        workers: int) -> None:
+        workers: int, polarity: str | None, polarity_positions: int) -> None:
     """Axisymmetric FEA of a tubular motor (GEOMETRY: .toml file or preset): inductances.csv, motor.toml,
     lut.csv, geometry.json, fea.json and figures."""
     from linsense.fea.pipeline import run_fea
 
     files, lines, warnings = run_fea(geometry, out, positions, level, lut_points,
-                                     progress=sys.stderr.isatty(), load_current=load_current, workers=workers)
+                                     progress=sys.stderr.isatty(), load_current=load_current, workers=workers,
+                                     polarity=polarity, polarity_positions=polarity_positions)
     for f in files:
         click.echo(str(f))
     for line in lines:

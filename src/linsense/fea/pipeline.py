@@ -17,8 +17,10 @@ from linsense.fea.solver import run_loads
 _OPTION = "--load-current"
 
 
-def parse_currents(value) -> list[float]:
-    """The q-axis load currents (A) of ``--load-current``: a number or a comma list ("0,1,2")."""
+def parse_currents(value, option: str = _OPTION, what: str = "q-axis currents in A",
+                   positive: bool = False) -> list[float]:
+    """The q-axis load currents (A) of ``--load-current``: a number or a comma list ("0,1,2");
+    ``option``, ``what`` and ``positive`` (all > 0) for another list of currents (``--polarity``)."""
     from linsense.errors import InputError
 
     if isinstance(value, (int, float)):
@@ -27,19 +29,22 @@ def parse_currents(value) -> list[float]:
         items = [v.strip() for v in value.split(",")]
     else:
         items = list(value)
+    example = "0.5,1,2" if positive else "0,1,2"
     if not items or items == [""]:
-        raise InputError(_OPTION, "", "no current given (q-axis currents in A, e.g. 2 or 0,1,2)")
+        raise InputError(option, "", f"no current given ({what}, e.g. 2 or {example})")
     currents: list[float] = []
     for v in items:
         try:
             c = float(v)
         except (TypeError, ValueError):
-            raise InputError(_OPTION, "", f"{v!r} is not a number (q-axis currents in A, comma-separated, "
-                             "e.g. 0,1,2)") from None
+            raise InputError(option, "", f"{v!r} is not a number ({what}, comma-separated, "
+                             f"e.g. {example})") from None
         if not math.isfinite(c) or abs(c) > 1e6:
-            raise InputError(_OPTION, "", f"must be finite currents in A (|I| <= 1e6), got {v!r}")
+            raise InputError(option, "", f"must be finite currents in A (|I| <= 1e6), got {v!r}")
+        if positive and c <= 0:
+            raise InputError(option, "", f"must be positive amplitudes in A, got {v!r}")
         if c in currents:
-            raise InputError(_OPTION, "", f"{c:g} A is given twice")
+            raise InputError(option, "", f"{c:g} A is given twice")
         currents.append(c + 0.0)  # -0.0 -> 0.0
     return currents
 
@@ -51,7 +56,7 @@ def _tag(current: float) -> str:
 class _Bar:
     """A rich progress bar on stderr (positions done / total, rate, time left), one task per stage."""
 
-    def __init__(self, currents: list[float], name: str) -> None:
+    def __init__(self, currents: list[float], name: str, what: str = "load") -> None:
         from rich.console import Console
         from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
@@ -61,7 +66,7 @@ class _Bar:
 
         self.p = Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), Rate(""),
                           TimeRemainingColumn(), console=Console(stderr=True), transient=False)
-        self.currents, self.name, self.tasks = currents, name, {}
+        self.currents, self.name, self.what, self.tasks = currents, name, what, {}
 
     def __enter__(self):
         self.p.start()
@@ -73,7 +78,7 @@ class _Bar:
     def __call__(self, stage, k: int, n: int) -> None:
         if stage not in self.tasks:
             what = ("theta origin (linear)" if stage == "origin" else
-                    f"load {self.currents[stage]:g} A" if len(self.currents) > 1 else "positions")
+                    f"{self.what} {self.currents[stage]:g} A" if len(self.currents) > 1 else "positions")
             self.tasks[stage] = self.p.add_task(f"fea {self.name}: {what}", total=n)
         self.p.update(self.tasks[stage], completed=k)
 
@@ -104,12 +109,15 @@ def lut_of(res, points: int = 360) -> np.ndarray:
 
 
 def run_fea(spec: str, out: str, positions: int = 56, level: str = "default", lut_points: int = 360,
-            progress: bool = False, load_current=0.0, workers: int = 1):
+            progress: bool = False, load_current=0.0, workers: int = 1, polarity=None,
+            polarity_positions: int = 4):
     """Solve and write the output set; return (written files, summary lines, warnings).
 
     ``load_current``: a q-axis current in A, or several (a list or "0,1,2"): the main outputs are
     those of the first; each load adds ``inductances_<I>A.csv``, ``motor_<I>A.toml``, ``lut_<I>A.csv``,
-    and the set gets ``lut_vs_load.png`` and fea.json's ``lut_vs_load``.
+    and the set gets ``lut_vs_load.png`` and fea.json's ``lut_vs_load``. ``polarity``: d-axis pulse
+    amplitudes in A (a list or "0.5,1,2"): ``polarity.csv`` and fea.json's ``polarity``, the saturation
+    signal ``L_d(-I) - L_d(+I)`` at ``polarity_positions`` positions (:mod:`linsense.fea.polarity`).
     """
     from linsense.analysis.summary import summarize
     from linsense.compensation.lut import build_lut, to_csv
@@ -119,6 +127,8 @@ def run_fea(spec: str, out: str, positions: int = 56, level: str = "default", lu
 
     g = load_geometry(spec)
     currents = parse_currents(load_current)
+    pulses = (None if polarity is None else
+              parse_currents(polarity, "--polarity", "d-axis pulse amplitudes in A", positive=True))
     if any(currents) and g.bh_rod is None and g.bh_arm is None:
         raise InputError(_OPTION, "", f"{g.source} has linear iron: the incremental inductances do "
                          "not depend on the load (give rod.bh or armature.bh, a B-H curve)")
@@ -153,6 +163,17 @@ def run_fea(spec: str, out: str, positions: int = 56, level: str = "default", lu
                     s.write(f"lut{tag}.csv", to_csv(luts[-1]))
             vs_load = _vs_load(results, luts)
             extra["lut_vs_load"] = vs_load
+        sig = None
+        if pulses is not None:
+            from linsense.fea.polarity import polarity_csv, polarity_signal
+
+            points = [-p for p in sorted(pulses, reverse=True)] + sorted(pulses)
+            pbar = _Bar(points, g.name, "polarity i_d") if progress else contextlib.nullcontext(None)
+            with pbar as cb:
+                sig = polarity_signal(g, pulses, polarity_positions, level, workers=workers,
+                                      progress=cb)
+            s.write("polarity.csv", polarity_csv(sig))
+            extra["polarity"] = sig
         s.write("geometry.json", json.dumps(g.regions(), indent=2) + "\n")
         s.write("fea.json", outputs.fea_json(res, extra))
         s.write("field_lines.png", png_bytes(outputs.fig_field(res)))
@@ -181,6 +202,10 @@ def run_fea(spec: str, out: str, positions: int = 56, level: str = "default", lu
                       f"Psi_LUT peak {summ['psi_lut_peak_deg']:.2f} deg")
     if vs_load is not None:
         lines.append(_vs_load_line(vs_load))
+    if sig is not None:
+        from linsense.fea.polarity import polarity_line
+
+        lines.append(polarity_line(sig))
     return s.files, lines, warnings
 
 

@@ -271,6 +271,7 @@ class Result:
     newton: dict | None = None  # Newton iterations per position (max, mean); None: linear
     load_current: float = 0.0  # A, q-axis
     keep: dict = field(default_factory=dict)
+    d_current: float = 0.0  # A, d-axis (along the magnets' flux: > 0 strengthens it)
 
 
 class Solver:
@@ -438,6 +439,16 @@ def q_currents(theta: float, i_q: float) -> np.ndarray:
     return -i_q * np.sin(theta - np.array([0.0, 2 * np.pi / 3, -2 * np.pi / 3]))
 
 
+def dq_currents(theta: float, i_d: float, i_q: float) -> np.ndarray:
+    """Phase currents of ``(i_d, i_q)`` (amplitude-invariant) at electrical ``theta``: theta = 0 where
+    phase A's PM flux linkage peaks, so the d-axis is along the magnets' flux and ``i_d > 0``
+    strengthens it. With ``i_d = 0`` exactly :func:`q_currents`."""
+    if i_d == 0:
+        return q_currents(theta, i_q) if i_q else np.zeros(3)
+    phase = theta - np.array([0.0, 2 * np.pi / 3, -2 * np.pi / 3])
+    return i_d * np.cos(phase) - i_q * np.sin(phase)
+
+
 #: (token, Solver) of the running :func:`run_loads`: forked workers inherit it, spawned ones build
 #: their own once and keep it for the following positions
 _SHARED: tuple | None = None
@@ -455,21 +466,30 @@ def _solve_position(args) -> tuple[Solution, np.ndarray]:
 
 
 def run(g: Geometry, positions: int = 56, level: str = "default", progress=None,
-        keep_first: bool = True, load_current: float = 0.0, workers: int = 1) -> Result:
+        keep_first: bool = True, load_current: float = 0.0, workers: int = 1,
+        d_current: float = 0.0) -> Result:
     """Solve ``positions`` rod positions over one electrical period; 3 excitations (+ magnets) each.
 
     With a B-H curve (``rod.bh`` / ``armature.bh``) each position is a Newton solve at the state set
-    by the magnets and the q-axis ``load_current`` (A). :func:`run_loads` for several loads;
-    ``progress(k, n)`` after each position.
+    by the magnets, the q-axis ``load_current`` and the d-axis ``d_current`` (A; :func:`dq_currents`).
+    :func:`run_loads` for several loads; ``progress(k, n)`` after each position.
     """
     prog = None if progress is None else (lambda stage, k, n: progress(k, n) if stage != "origin" else None)
-    return run_loads(g, [load_current], positions, level, progress=prog, keep_first=keep_first,
+    return run_loads(g, [(d_current, load_current)], positions, level, progress=prog, keep_first=keep_first,
                      workers=workers)[0]
 
 
+def _operating_point(c) -> tuple[float, float]:
+    """(i_d, i_q) in A of a load: a q-axis current, or an ``(i_d, i_q)`` pair."""
+    if isinstance(c, (tuple, list, np.ndarray)):
+        return float(c[0]), float(c[1])
+    return 0.0, float(c)
+
+
 def run_loads(g: Geometry, currents, positions: int = 56, level: str = "default", progress=None,
-              keep_first: bool = True, workers: int = 1) -> list[Result]:
-    """:func:`run` for each q-axis load current of ``currents`` (A), on one mesh and one theta grid.
+              keep_first: bool = True, workers: int = 1, force_newton: bool = False) -> list[Result]:
+    """:func:`run` for each load of ``currents`` (A: a q-axis current, or an ``(i_d, i_q)`` pair), on one
+    mesh and one theta grid.
 
     With a B-H curve each position is a Newton solve at the state set by the magnets and the load
     (its angle needs theta's origin first: one linear pass over the positions serves every load),
@@ -477,19 +497,20 @@ def run_loads(g: Geometry, currents, positions: int = 56, level: str = "default"
     from the previous load's converged state at that position (3 iterations instead of about 11 from
     the linear start; the same solution to the Newton tolerance). The solves are spread over
     ``workers`` processes (forked where possible). ``progress(stage, k, n)``: stage ``"origin"``
-    for the linear pass, else the index of the load.
+    for the linear pass, else the index of the load. ``force_newton``: Newton solves at the loads' states
+    with linear iron too (the incremental inductances then equal the linear ones: a check).
     """
     global _SHARED
-    currents = [float(c) for c in currents]
+    points = [_operating_point(c) for c in currents]
     t0 = time.perf_counter()
     s = Solver(g, level, positions)
     t_setup = time.perf_counter() - t0
     xs = g.pole_pitch * np.arange(positions) / positions
     raw = 2 * np.pi * xs / g.pole_pitch
-    if any(currents) and not s.nonlinear:
+    if any(d or q for d, q in points) and not (s.nonlinear or force_newton):
         raise ValueError("a load current needs a B-H curve: with linear iron the incremental inductances "
                          "do not depend on it")
-    if not s.nonlinear:
+    if not (s.nonlinear or force_newton):
         t1 = time.perf_counter()
         sols = []
         for k, x in enumerate(xs):
@@ -533,11 +554,11 @@ def run_loads(g: Geometry, currents, positions: int = 56, level: str = "default"
         pool = ProcessPoolExecutor(max_workers=workers, mp_context=ctx)
     results, starts = [], [None] * positions
     try:
-        for n_load, cur in enumerate(currents):
+        for n_load, (i_d, cur) in enumerate(points):
             t2 = time.perf_counter()
             items = [(token, g, level, positions, float(x),
-                      q_currents(direction * raw[k] - offset, cur) if cur else np.zeros(3), starts[k],
-                      keep_first and k == 0) for k, x in enumerate(xs)]
+                      dq_currents(direction * raw[k] - offset, i_d, cur), starts[k], keep_first and k == 0)
+                     for k, x in enumerate(xs)]
             out: dict[int, tuple] = {}
             if pool is not None:
                 from concurrent.futures import as_completed
@@ -562,7 +583,7 @@ def run_loads(g: Geometry, currents, positions: int = 56, level: str = "default"
             results.append(Result(g, s.m, xs, theta, np.array([q.L for q in sols]),
                                   np.array([q.psi_pm for q in sols]), amp, offset, direction, times,
                                   energy_error=None, newton=newton, load_current=cur,
-                                  keep={"solver": s, "first": sols[0]}))
+                                  keep={"solver": s, "first": sols[0]}, d_current=i_d))
     finally:
         if pool is not None:
             pool.shutdown(cancel_futures=True)
