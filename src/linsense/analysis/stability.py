@@ -60,12 +60,13 @@ def nolut_error_gain(motor, theta, f_inj: float, quad: float = 0.0, h: float = 1
     return -g0 * (up - down) / (2.0 * h)
 
 
-def margins_along(sc, theta_deg: np.ndarray | None = None, lut: bool = False) -> LoopAlong:
+def margins_along(sc, theta_deg: np.ndarray | None = None, lut: bool = False, tick=None) -> LoopAlong:
     """The motion loop's margins of the scenario ``sc`` (its gains as built: the design fills what
     it leaves out) run without the LUT, at each angle (default every 2 deg), with the loop-gain
     factor and the local observer gain of the uncompensated drive there; ``lut``: run with the
     resistance-aware LUT instead (``g = 1``, the compensated observer's local gain). With the gain
-    schedule on (``observer.gain_schedule``) the observer gain is taken as nominal (1)."""
+    schedule on (``observer.gain_schedule``) the observer gain is taken as nominal (1). ``tick``:
+    called after each angle (progress)."""
     import control as ct
 
     from linsense.sim.build import designed, resolve_motor
@@ -100,4 +101,6 @@ def margins_along(sc, theta_deg: np.ndarray | None = None, lut: bool = False) ->
         pm[i] = math.nan if mg["pm_deg"] is None else mg["pm_deg"]
         gm[i] = math.nan if mg["gm_up_db"] is None else mg["gm_up_db"]
         pole[i] = float(np.max(np.real(ct.poles(ct.feedback(l_mot, 1)))))
+        if tick is not None:
+            tick()
     return LoopAlong(th_deg, g, k_e, pm, gm, pole)

@@ -213,8 +213,9 @@ def _closed_loop(st, bars, motor, scen_motor, summ: dict, quick: bool, figs: dic
     onset = _onset(motor, results["fig12"]["nolut"], results["fig11"]["nolut"])
     step = 6.0 if quick else 2.0  # (deg between the angles of the linearised loop)
     angles = np.arange(0.0, 360.0, step)
-    along = margins_along(scenarios["fig12"]["nolut"], angles)
-    along_lut = margins_along(scenarios["fig12"]["lut"], angles, lut=True)
+    stage = _Stage(bars, "Fig. 12: the linearised loop", 2 * angles.size)
+    along = margins_along(scenarios["fig12"]["nolut"], angles, tick=stage.tick)
+    along_lut = margins_along(scenarios["fig12"]["lut"], angles, lut=True, tick=stage.tick)
     linearised = {"worst": along.worst(), "any_unstable": along.any_unstable(),
                   "lut_worst": along_lut.worst(), "lut_any_unstable": along_lut.any_unstable(),
                   "angles_deg_step": step}

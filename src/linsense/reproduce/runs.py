@@ -125,11 +125,10 @@ class HoldStudy:
 def hold_study(motor: str | None, n_positions: int, tick=lambda: None) -> HoldStudy:
     """The hold at ``n_positions`` over one period for :data:`HOLD_VARIANTS`, each with the
     paper's dead time and without (metrics only)."""
+    from linsense.sim.build import resolve_motor
     from linsense.sim.run import metrics_only
 
     base = paper_scenario("paper_hold.toml", motor)
-    from linsense.sim.build import resolve_motor
-
     tau_mm = resolve_motor(base).pole_pitch * 1e3
     pos_mm = tau_mm * np.arange(n_positions) / n_positions
     st = HoldStudy(360.0 * np.arange(n_positions) / n_positions)
