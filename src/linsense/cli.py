@@ -78,8 +78,9 @@ def model(motor_spec: str, points: int, out: str) -> None:
 @click.option("--quad", type=float, default=None, callback=_quad,
               help="with --f-inj: the injection's q-axis share kappa (elliptical injection, 0 = the "
                    "paper's pulsating one; default: the firmware's, ls_drive_default_cfg)")
-@click.option("--injection", type=click.Choice(["pulsating", "rotating"]), default="pulsating",
-              show_default=True, help="rotating: the table of the rotating-vector estimate (docs/theory.md)")
+@click.option("--injection", type=click.Choice(["pulsating", "rotating", "square"]), default="pulsating",
+              show_default=True, help="rotating: the table of the rotating-vector estimate; square: of the "
+                                      "square wave at --f-inj, e.g. f_pwm/2 (docs/theory.md)")
 @click.option("--out", required=True, type=click.Path(dir_okay=False), help="output file")
 def lut(motor_spec: str, points: int, fmt: str, symbol: str | None, f_inj: float | None, quad: float | None,
         injection: str, out: str) -> None:
@@ -92,8 +93,8 @@ def lut(motor_spec: str, points: int, fmt: str, symbol: str | None, f_inj: float
         raise InputError("--f-inj", "", f"must be a positive frequency in Hz, got {f_inj!r}")
     if quad is not None and f_inj is None:
         raise InputError("--quad", "", "only with --f-inj (eq. 12 neglects R_s, where kappa changes nothing)")
-    if quad is not None and injection == "rotating":
-        raise InputError("--quad", "", "only with --injection pulsating (a rotating vector has no "
+    if quad is not None and injection != "pulsating":
+        raise InputError("--quad", "", f"only with --injection pulsating (the {injection} injection has no "
                          "q-axis share)")
     if quad is None:
         quad = round(float(drive_default_cfg().inject.quad), 6) if f_inj is not None else 0.0

@@ -87,12 +87,13 @@ def build_lut(motor, points: int, f_inj: float | None = None, quad: float = 0.0,
     injection's quadrature share ``quad`` (0: pulsating, as the paper). ``injection="rotating"``:
     the table of the rotating-vector estimate instead, indexed by the estimate: the angle to take
     from it (:func:`~linsense.analysis.rotating.rotating_lut`; without ``f_inj`` the R_s = 0 limit;
-    docs/theory.md).
+    docs/theory.md). ``injection="square"``: the square wave's table at ``f_inj`` (e.g. f_pwm / 2),
+    :func:`~linsense.analysis.square.psi_square` (without ``f_inj``: eq. 12, its R_s = 0 limit).
     """
     if points < 4:
         raise ValueError("points must be >= 4")
-    if injection not in ("pulsating", "rotating"):
-        raise ValueError(f"injection must be 'pulsating' or 'rotating', got {injection!r}")
+    if injection not in ("pulsating", "rotating", "square"):
+        raise ValueError(f"injection must be 'pulsating', 'rotating' or 'square', got {injection!r}")
     if f_inj is not None and not f_inj > 0:
         raise ValueError("f_inj must be positive")
     theta = 2.0 * np.pi * np.arange(points) / points
@@ -105,6 +106,11 @@ def build_lut(motor, points: int, f_inj: float | None = None, quad: float = 0.0,
                 "lut_model": "R_s = 0 (e*)" if f_inj is None else "with R_s at f_inj"}
         if f_inj is not None:
             prov["f_inj"] = f_inj
+    elif injection == "square" and f_inj is not None:
+        from linsense.analysis.square import psi_square
+
+        values = psi_square(motor, theta, f_inj)
+        prov = {**prov, "injection": "square", "f_inj": f_inj, "lut_model": "with R_s at f_inj"}
     elif f_inj is None:
         values = psi_lut(motor, theta)
     else:

@@ -1,0 +1,83 @@
+"""Square-wave HF injection with the end-effect (docs/theory.md, "Square-wave injection").
+
+A square wave ``+-V`` on the estimated d-axis at ``f_inj`` (half a period ``T = 1/(2 f_inj)`` at each
+sign; ``f_inj = f_pwm / 2`` switches every PWM period) and the difference-based demodulator: the
+change of the current over each half period, sign-corrected, rotated by the compensation angle,
+its q component is the error signal. At standstill in the true dq frame, ``L di/dt + R_s i = v``;
+in the periodic steady state the change over a half period with ``+V`` is, in closed form,
+
+    delta_i = (2 / R_s) tanh(R_s T L^-1 / 2) v        (R_s -> 0:  T L^-1 v)
+
+(:func:`delta_current`). The angle that zeroes its q component at zero estimation error is the
+square wave's compensation table :func:`psi_square`; without R_s it is exactly eq. (12),
+``atan(-L_dq / L_q)``, because the column of ``L^-1`` along d is ``(L_q, -L_dq)/det L``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from linsense.model.frames import rot
+
+
+def _l_dq(motor, theta) -> np.ndarray:
+    return motor.inductance.L_dq(np.asarray(theta, dtype=float))
+
+
+def _v_true(theta_err, v_inj: float) -> np.ndarray:
+    """The injected voltage along the estimated d-axis, in the true frame (``x_dq = R(e) x_dq_est``)."""
+    return v_inj * rot(np.asarray(theta_err, dtype=float))[..., :, 0]
+
+
+def delta_current(motor, theta, f_inj: float, v_inj: float = 1.0, theta_err=0.0) -> np.ndarray:
+    """Change of the current (A, true dq frame, shape ``(..., 2)``) over the ``+V`` half period of a
+    square wave of amplitude ``v_inj`` (V) at ``f_inj`` (Hz) in the periodic steady state, closed
+    form ``(2/R_s) tanh(R_s T L^-1 / 2) v`` (``T = 1/(2 f_inj)``; the series of tanh when R_s T is
+    small against L, exactly ``T L^-1 v`` for R_s = 0)."""
+    theta, theta_err = np.broadcast_arrays(np.asarray(theta, float), np.asarray(theta_err, float))
+    T = 0.5 / f_inj
+    L_inv = np.linalg.inv(_l_dq(motor, theta))
+    v = _v_true(theta_err, v_inj)
+    x = 0.5 * motor.R_s * T * L_inv  # (the argument of tanh, a 2x2 matrix)
+    # tanh of a symmetric-similar 2x2 matrix through its eigen-decomposition (L^-1 is symmetric
+    # positive definite, so x is too: real eigenvalues, orthogonal eigenvectors)
+    w, U = np.linalg.eigh(x)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ratio = np.where(w > 1e-300, np.tanh(w) / np.where(w > 1e-300, w, 1.0), 1.0)  # tanh(w)/w
+    f = U @ (ratio[..., :, None] * np.swapaxes(U, -1, -2))  # tanh(x) x^-1
+    return (T * (f @ L_inv) @ v[..., None])[..., 0]
+
+
+def delta_current_numeric(motor, theta: float, f_inj: float, v_inj: float = 1.0, theta_err: float = 0.0,
+                          steps: int = 2000, periods: int = 400) -> np.ndarray:
+    """The same change of the current by integrating ``L di/dt = v - R_s i`` (exact matrix
+    exponential per step, ``steps`` steps per half period) for ``periods`` square-wave periods from
+    rest, until the periodic steady state (the decay time L/R_s is about 0.3 ms for ecce2010)."""
+    from scipy.linalg import expm
+
+    T = 0.5 / f_inj
+    L = _l_dq(motor, theta)
+    L_inv = np.linalg.inv(L)
+    A = motor.R_s * L_inv
+    h = T / steps
+    Phi = expm(-A * h)
+    # zero-order hold of a constant voltage over one step: int_0^h e^{-A s} ds L^-1 v
+    Gam = (np.linalg.solve(A, np.eye(2) - Phi) if motor.R_s > 0 else h * np.eye(2)) @ L_inv
+    v = _v_true(theta_err, v_inj)
+    i = np.zeros(2)
+    for _ in range(periods):
+        start = i.copy()
+        for _ in range(steps):
+            i = Phi @ i + Gam @ v
+        rise = i - start
+        for _ in range(steps):
+            i = Phi @ i - Gam @ v
+    return rise
+
+
+def psi_square(motor, theta, f_inj: float) -> np.ndarray:
+    """Compensation angle (rad) of the square-wave injection: the angle of the current change over
+    the ``+V`` half period at zero estimation error, ``atan2(delta_i_q, delta_i_d)`` (rotating the
+    measured change by it zeroes its q component, as Psi_LUT does for the pulsating injection)."""
+    d = delta_current(motor, theta, f_inj)
+    return np.arctan2(d[..., 1], d[..., 0])
