@@ -34,18 +34,23 @@ def negative_sequence_numeric(motor, theta, v_inj: float, f_inj: float) -> np.nd
     return 0.5 * (np.conj(current[..., 0]) + 1j * np.conj(current[..., 1]))
 
 
+def _i_n(R_s: float, w: float, S, D, v_inj: float):
+    """``j w V D / (conj(a)^2 + w^2 |D|^2)``, ``a = R_s + j w S``: the negative sequence without its
+    ``exp(j 2 theta)`` (docs/theory.md)."""
+    a = R_s + 1j * w * S
+    return 1j * w * v_inj * D / (np.conj(a) ** 2 + w * w * np.abs(D) ** 2)
+
+
 def negative_sequence(motor, theta, v_inj: float, f_inj: float) -> np.ndarray:
     """Negative-sequence current phasor ``i_n`` (A, complex), closed form (docs/theory.md):
     ``i_n = j w V D exp(j 2 theta) / (conj(a)^2 + w^2 |D|^2)`` with ``a = R_s + j w S``: with the
     alpha-beta matrix ``L_ab x = S x + D exp(j 2 theta) conj(x)``, ``Z = a + j w K`` where ``K^2 = |D|^2``,
     so ``Z^-1 = (a - j w K) / (a^2 + w^2 |D|^2)``, and only the ``K`` part has a negative sequence."""
     theta = np.asarray(theta, dtype=float)
-    w = 2.0 * np.pi * f_inj
     L_d, L_q, L_dq = dq_components(motor, theta)
     S = 0.5 * (L_d + L_q)
     D = 0.5 * (L_d - L_q) + 1j * L_dq
-    a = motor.R_s + 1j * w * S
-    return 1j * w * v_inj * D * np.exp(2j * theta) / (np.conj(a) ** 2 + w * w * np.abs(D) ** 2)
+    return _i_n(motor.R_s, 2.0 * np.pi * f_inj, S, D, v_inj) * np.exp(2j * theta)
 
 
 def reference_phase(motor, f_inj: float) -> float:
@@ -54,10 +59,8 @@ def reference_phase(motor, f_inj: float) -> float:
     without the end-effect would use), so that ``theta_est = (arg(i_n) - c_ref) / 2``."""
     th = np.linspace(0.0, 2.0 * np.pi, 720, endpoint=False)
     L_d, L_q, _ = dq_components(motor, th)
-    w = 2.0 * np.pi * f_inj
     S, D = 0.5 * (L_d.mean() + L_q.mean()), 0.5 * (L_d.mean() - L_q.mean())
-    a = motor.R_s + 1j * w * S
-    return float(np.angle(1j * w * D / (np.conj(a) ** 2 + w * w * D * D)))
+    return float(np.angle(_i_n(motor.R_s, 2.0 * np.pi * f_inj, S, D, 1.0)))
 
 
 def psi_rotating(motor, theta, f_inj: float) -> np.ndarray:

@@ -42,8 +42,8 @@ def delta_current(motor, theta, f_inj: float, v_inj: float = 1.0, theta_err=0.0)
     # tanh of a symmetric-similar 2x2 matrix through its eigen-decomposition (L^-1 is symmetric
     # positive definite, so x is too: real eigenvalues, orthogonal eigenvectors)
     w, U = np.linalg.eigh(x)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        ratio = np.where(w > 1e-300, np.tanh(w) / np.where(w > 1e-300, w, 1.0), 1.0)  # tanh(w)/w
+    positive = w > 0.0  # (R_s = 0: w = 0, where tanh(w)/w -> 1)
+    ratio = np.where(positive, np.tanh(w) / np.where(positive, w, 1.0), 1.0)  # tanh(w)/w
     f = U @ (ratio[..., :, None] * np.swapaxes(U, -1, -2))  # tanh(x) x^-1
     return (T * (f @ L_inv) @ v[..., None])[..., 0]
 

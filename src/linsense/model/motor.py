@@ -114,6 +114,13 @@ def _preset_names() -> tuple[str, ...]:  # (the package's files do not change wh
     return tuple(sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".toml")))
 
 
+def names_a_file(spec: str | Path) -> bool:
+    """Whether :func:`load_motor` reads ``spec`` as a motor file (a ``.toml`` name, an existing path
+    or a path with a separator) rather than as a preset name."""
+    s = str(spec)
+    return Path(s).suffix.lower() == ".toml" or Path(s).exists() or any(c in s for c in "/\\")
+
+
 def load_motor(spec: str | Path, check: bool = True) -> Motor:
     """Load a motor from a preset name or a TOML file path.
 
@@ -136,7 +143,7 @@ def load_motor(spec: str | Path, check: bool = True) -> Motor:
         raise InputError("--motor", "", "empty: give a preset name (" + ", ".join(preset_names())
                          + ") or the path of a motor .toml file")
     path = Path(spec_s)
-    if path.suffix.lower() == ".toml" or path.exists() or any(c in spec_s for c in "/\\"):
+    if names_a_file(spec_s):
         text = read_text_file(spec_s, "motor file")
         motor = motor_from_toml(text, source=spec_s, base_dir=path.parent)
     else:

@@ -13,7 +13,8 @@ import math
 _INVALID_FAULTS = ("config", "nonfinite")
 
 
-def _num(v) -> float | None:
+def finite_or_none(v) -> float | None:
+    """``v`` as a float, or None when it is missing or not finite (JSON has no NaN)."""
     return None if v is None or (isinstance(v, float) and not math.isfinite(v)) else float(v)
 
 
@@ -31,8 +32,8 @@ def _unstable(run: dict) -> bool:
 
 
 def _verdict(run: dict) -> str:
-    off = _num(run.get("final_offset_mm"))
-    lc = _num(run.get("limit_cycle_mm"))
+    off = finite_or_none(run.get("final_offset_mm"))
+    lc = finite_or_none(run.get("limit_cycle_mm"))
     beside = f", {abs(off):.2f} mm beside the target" if off is not None and abs(off) >= 0.05 else ""
     if run.get("stable"):
         return "stable" + beside
@@ -50,7 +51,7 @@ def claims(m: dict) -> list[dict]:
     def add(claim: str, paper: str, ours: str, holds: bool, rule: str) -> None:
         out.append({"claim": claim, "paper": paper, "ours": ours, "holds": bool(holds), "rule": rule})
 
-    peak = _num(m["lut"]["peak_deg"])
+    peak = finite_or_none(m["lut"]["peak_deg"])
     add("Fig. 9: the compensation LUT peaks at about 4 electrical deg", "about 4 deg", _fmt(peak),
         peak is not None and abs(peak - 4.0) <= 1.0, "|peak - 4| <= 1 deg")
     f9 = m["fig9"]
@@ -58,11 +59,11 @@ def claims(m: dict) -> list[dict]:
     done = all(c.get("completed") for c in cals.values()) and bool(cals)
     incomplete = ", ".join(f"{k}: {c.get('points_done')}/{c.get('points')} points, fault {c.get('fault')}"
                            for k, c in cals.items() if not c.get("completed"))
-    d0 = _num(f9["cal_0N_max_diff_deg"])
+    d0 = finite_or_none(f9["cal_0N_max_diff_deg"])
     add("Fig. 9: the LUT measured under sensored control agrees with the model (no load)", "agree",
         f"max |measured - model with R_s| {_fmt(d0)}" if done else f"calibration incomplete ({incomplete})",
         done and d0 is not None and d0 <= 0.5, "every calibration completed; <= 0.5 deg")
-    dl = _num(f9.get("load_max_diff_deg"))
+    dl = finite_or_none(f9.get("load_max_diff_deg"))
     add("Fig. 9: the measured LUT does not depend on the load (0, 20, 40 N)", "independent of load",
         (f"max |LUT(load) - LUT(0 N)| {_fmt(dl)} (the simulator's plant is magnetically linear: "
          "the FEA with saturating iron tests the physics, docs/fea.md)") if done else
@@ -77,7 +78,7 @@ def claims(m: dict) -> list[dict]:
                 "stable" if want else "unstable", _verdict(run), ok,
                 "the run's 'stable'" if want else "the run is not stable (and did not trip on its set-up)")
     n6, nd = m["fig12"]["nolut"], m["fig12"]["nolut_no_dead_time"]
-    lc6, lcd = _num(n6.get("limit_cycle_mm")), _num(nd.get("limit_cycle_mm"))
+    lc6, lcd = finite_or_none(n6.get("limit_cycle_mm")), finite_or_none(nd.get("limit_cycle_mm"))
     add("Fig. 12: the uncompensated instability is the end-effect's, not the inverter's (it persists "
         "with dead_time = 0)", "(implied)",
         f"limit cycle {_fmt(lc6, 'mm')} with the dead time, {_fmt(lcd, 'mm')} without",
@@ -85,7 +86,7 @@ def claims(m: dict) -> list[dict]:
         "both unstable; without dead time at least half the limit cycle")
     an = m.get("fig12_analysis", {})
     on = an.get("onset", {})
-    a6, a3 = _num(on.get("reach6_deg")), _num(on.get("reach3_deg"))
+    a6, a3 = finite_or_none(on.get("reach6_deg")), finite_or_none(on.get("reach3_deg"))
     add("Fig. 12: the uncompensated drive loses stability once the position passes about 60 deg",
         "about 60 deg",
         f"the 6 mm run reaches {_fmt(a6, 'deg', 0)} and oscillates; the 3 mm run stays below "
@@ -93,7 +94,7 @@ def claims(m: dict) -> list[dict]:
         a6 is not None and a3 is not None and _unstable(n6) and bool(m["fig11"]["nolut"].get("stable"))
         and a6 >= 50.0 and a3 < 50.0,
         "the unstable run passes 50 deg (60 - 10), the stable one stays below")
-    g_at, g_max = _num(on.get("gain_peak_deg")), _num(on.get("gain_max"))
+    g_at, g_max = finite_or_none(on.get("gain_peak_deg")), finite_or_none(on.get("gain_max"))
     add("Fig. 12 (evidence): it sets in where the uncompensated loop-gain factor 1 + de*/dθ is largest",
         "(brief section 4)",
         f"largest factor {_fmt(g_max, '', 2)} at {_fmt(g_at, 'deg', 0)}; the 6 mm run reaches "
@@ -114,11 +115,11 @@ def claims(m: dict) -> list[dict]:
     add("Fig. 12 (evidence): the linearised loop of the tuning command predicts the uncompensated "
         "instability", "(implied)", ours, unstable, "a negative margin or an unstable pole at some angle")
     f13 = m["fig13"]["lut"]
-    pk = _num(f13.get("transient_max_err_deg"))
+    pk = finite_or_none(f13.get("transient_max_err_deg"))
     ok = pk is not None and pk <= 9.0 and _valid(f13)
     add("Fig. 13: peak estimation error in the transients about 9 electrical deg (< 1.4 mm), with the LUT",
         "about 9 deg", _fmt(pk) + (", below the paper's" if ok else ""), ok, "<= 9 deg")
-    ss = _num(f13.get("steady_max_err_deg"))
+    ss = finite_or_none(f13.get("steady_max_err_deg"))
     ok = ss is not None and ss < 3.0 and _valid(f13)
     add("Fig. 13: estimation error below 3 electrical deg (< 0.5 mm) at steady state, with the LUT",
         "< 3 deg", _fmt(ss), ok, "< 3 deg")

@@ -11,7 +11,6 @@ the sweep engine. Closed-loop runs are on the switching inverter with 0.8 us dea
 from __future__ import annotations
 
 import json
-import math
 import time
 from contextlib import contextmanager
 from pathlib import Path
@@ -19,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from linsense.reproduce import runs
-from linsense.reproduce.claims import claims
+from linsense.reproduce.claims import claims, finite_or_none
 
 #: positions of the calibration and of the hold study, full and --quick
 CAL_POSITIONS = {False: 56, True: 14}
@@ -48,10 +47,6 @@ class _Stage:
     def tick(self) -> None:
         if self.p is not None:
             self.p.advance(self.task)
-
-
-def _finite(v):
-    return None if v is None or (isinstance(v, float) and not math.isfinite(v)) else v
 
 
 def _reach_deg(motor, res) -> float | None:
@@ -88,17 +83,14 @@ def reproduce(out: str, motor_spec: str = "ecce2010", quick: bool = False, progr
     from linsense.analysis.tables import model_table, table_to_csv
     from linsense.compensation.lut import build_lut, export
     from linsense.io import output_set, safe_name
-    from linsense.model.motor import load_motor
+    from linsense.model.motor import load_motor, names_a_file
     from linsense.report.figures import write_model_figures
 
     t_start = time.perf_counter()
     motor = load_motor(motor_spec)
     # the scenarios name the motor: a preset by name, a file by its absolute path
-    # (a file as load_motor tells one: a .toml name, an existing path or a path with a separator)
-    as_file = (Path(motor_spec).suffix.lower() == ".toml" or Path(motor_spec).exists()
-               or any(c in motor_spec for c in "/\\"))
     preset = None if motor_spec == "ecce2010" else motor_spec
-    scen_motor = str(Path(motor_spec).resolve()) if as_file else preset
+    scen_motor = str(Path(motor_spec).resolve()) if names_a_file(motor_spec) else preset
     summ = summarize(motor)
     figs: dict[str, bytes] = {}
     with output_set(out, "reproduce") as st, _stages(progress) as bars:
@@ -261,8 +253,8 @@ def _closed_loop(st, bars, motor, scen_motor, summ: dict, quick: bool, figs: dic
         "fig13": {k: results["fig13"][k].metrics for k in ("lut", "nolut")},
         "beyond": {
             "hold": {"positions_deg": hold.positions_deg.tolist(),
-                     "true_deg": {k: [_finite(float(v)) for v in a] for k, a in hold.true_deg.items()},
-                     "bias_deg": {k: [_finite(float(v)) for v in a] for k, a in hold.bias_deg.items()},
+                     "true_deg": {k: [finite_or_none(v) for v in a] for k, a in hold.true_deg.items()},
+                     "bias_deg": {k: [finite_or_none(v) for v in a] for k, a in hold.bias_deg.items()},
                      "limit_cycle_max_mm": hold.limit_cycle_mm},
             "stability_map": {"summary": map_line, "runs": len(df),
                               **_map_robustness(df, scenarios["fig12"]["lut"])},

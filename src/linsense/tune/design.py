@@ -260,13 +260,14 @@ def _observer_gains(f_bw: float) -> tuple[float, float]:
     return 2.0 * w, w * w
 
 
-def loops(*, mass: float, kp_x: float, speed_kp: float, speed_ki: float, observer_bw: float,
+def loops(*, mass: float, kp_x: float, speed_kp: float, speed_ki: float, observer_k: tuple[float, float],
           current_bw: float, demod_lpf: float, f_inj: float, f_pwm: float, k_e: float, g: float = 1.0):
     """The observer loop and the motion loop (python-control transfer functions; docs/tuning.md).
 
     The observer loop ``k_e H_lpf(s) e^{-s T_d} (k1 s + k2)/s^2``: the demodulator's low-pass, the HF
     band-pass's envelope delay ``Q/(pi f_inj)`` (Q = 2) and 1.5 sampling periods (Pade, 2nd order),
-    with the local error gain ``k_e`` (1: the gain schedule's nominal). The motion loop broken at
+    with the local error gain ``k_e`` (1: the gain schedule's nominal) and the PLL's gains
+    ``observer_k = (k1, k2)``. The motion loop broken at
     the force reference, ``g C_v(s) (kp_x T(s) + S_v(s)) P(s) C_i(s)``: mass, current loop, speed
     PI and the observer's transfers from the true position to its position and speed estimates;
     ``g`` scales what the observer reports (``1 + de*/dtheta`` of an uncompensated observer,
@@ -279,7 +280,7 @@ def loops(*, mass: float, kp_x: float, speed_kp: float, speed_ki: float, observe
     t_d = 2.0 / (math.pi * f_inj) + 1.5 / f_pwm
     num, den = ct.pade(t_d, 2)
     kh = k_e * h_lpf * ct.tf(num, den)
-    k1, k2 = _observer_gains(observer_bw)
+    k1, k2 = observer_k
     g_o = (k1 * s + k2) / s**2
     w_i = 2.0 * math.pi * current_bw
     t_pos = ct.minreal(kh * g_o / (1 + kh * g_o), verbose=False)
@@ -303,7 +304,8 @@ def margins(dz: Design, motor: Motor, drive: DriveData) -> dict:
     )
     for label, k in cases:
         l_obs, l_mot = loops(mass=motor.mass, kp_x=dz.kp_x, speed_kp=dz.speed_kp, speed_ki=dz.speed_ki,
-                             observer_bw=dz.observer_bw, current_bw=dz.current_bw, demod_lpf=dz.demod_lpf,
+                             observer_k=_observer_gains(dz.observer_bw), current_bw=dz.current_bw,
+                             demod_lpf=dz.demod_lpf,
                              f_inj=dz.f_inj, f_pwm=drive.f_pwm, k_e=k)
         out[f"observer loop ({label}, k_e = {k:.2f})"] = loop_margins(l_obs)
         out[f"motion loop ({label}, k_e = {k:.2f})"] = loop_margins(l_mot)
