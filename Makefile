@@ -19,7 +19,8 @@ SIM_SRC  := $(wildcard csrc/sim/*.c)
 CTESTS   := $(patsubst csrc/tests/%.c,%,$(wildcard csrc/tests/test_*.c))
 # tests of the simulator's internal (static) functions: they include csrc/sim/ls_sim.c themselves
 ITESTS   := $(patsubst csrc/tests/%.c,%,$(wildcard csrc/tests/itest_*.c))
-GEN_HDR  := $(BUILD)/gen/ls_lut_ecce2010.h $(BUILD)/gen/ls_lut_ecce2010_r.h $(BUILD)/gen/ls_lut_ecce2010_q.h
+GEN_HDR  := $(BUILD)/gen/ls_lut_ecce2010.h $(BUILD)/gen/ls_lut_ecce2010_r.h $(BUILD)/gen/ls_lut_ecce2010_q.h \
+            $(BUILD)/gen/ls_lut_ecce2010_rot.h $(BUILD)/gen/ls_lut_ecce2010_sq.h
 # variant name : extra flags
 VARIANTS := float-san double-san float-plain
 
@@ -51,6 +52,10 @@ $(BUILD)/gen/ls_lut_ecce2010_r.h: $(GEN_DEPS)
 	$(VENV)/bin/linsense lut --motor ecce2010 --points 360 --format c --f-inj 1000 --quad 0 --symbol ls_lut_ecce2010_r --out $@
 $(BUILD)/gen/ls_lut_ecce2010_q.h: $(GEN_DEPS)
 	$(VENV)/bin/linsense lut --motor ecce2010 --points 360 --format c --f-inj 1000 --quad 0.9 --symbol ls_lut_ecce2010_q --out $@
+$(BUILD)/gen/ls_lut_ecce2010_rot.h: $(GEN_DEPS)
+	$(VENV)/bin/linsense lut --motor ecce2010 --points 360 --format c --f-inj 1000 --injection rotating --symbol ls_lut_ecce2010_rot --out $@
+$(BUILD)/gen/ls_lut_ecce2010_sq.h: $(GEN_DEPS)
+	$(VENV)/bin/linsense lut --motor ecce2010 --points 360 --format c --f-inj 8000 --injection square --symbol ls_lut_ecce2010_sq --out $@
 
 # Build and run every C test in three variants: float and double under ASan+UBSan, and float
 # without sanitizers. Library sources get the stricter warnings (-Wdouble-promotion ...).

@@ -72,7 +72,7 @@ def test_build_lut_and_cli_export_the_rotating_table(run_cli, tmp_path):
     m = load_motor("ecce2010")
     lut = build_lut(m, 360, 1000.0, injection="rotating")
     assert lut.provenance["injection"] == "rotating"
-    assert np.allclose(lut.values, rotating_lut(m, lut.theta, 1000.0))
+    assert np.allclose(lut.values, psi_rotating(m, lut.theta, 1000.0))  # the drive's, against the position
     r = run_cli("lut", "--motor", "ecce2010", "--injection", "rotating", "--f-inj", "1000", "--points", "36",
                 "--out", tmp_path / "r.csv")
     assert r.code == 0, r.err

@@ -122,11 +122,19 @@ ls_status ls_drive_init(ls_drive *d, const ls_drive_cfg *cfg)
     }
     memset(d, 0, sizeof *d);
     if (!pos_finite(cfg->fs) || !pos_finite(cfg->pole_pitch) || !pos_finite(cfg->force_constant) ||
-        !pos_finite(cfg->i_max) || !LS_ISFINITE(cfg->delay_comp) || cfg->delay_comp < LS_R(0.0) ||
+        !pos_finite(cfg->i_max) || !LS_ISFINITE(cfg->i_d_inj) || !(LS_FABS(cfg->i_d_inj) < cfg->i_max) ||
+        !LS_ISFINITE(cfg->delay_comp) || cfg->delay_comp < LS_R(0.0) ||
         cfg->enc_counts <= 0 || !pos_finite(cfg->enc_v_max) || cfg->fs > LS_DRIVE_FS_MAX ||
         cfg->i_max > LS_DRIVE_I_MAX || cfg->prot.i_max > LS_DRIVE_I_MAX || cfg->prot.v_dc_max > LS_DRIVE_V_DC_MAX ||
-        cfg->bpf.type != LS_BIQUAD_BANDPASS ||
+        cfg->bpf.type != (cfg->inject.shape == LS_INJ_SQUARE ? LS_BIQUAD_DIFF : LS_BIQUAD_BANDPASS) ||
         (cfg->sep.type != LS_BIQUAD_NOTCH && cfg->sep.type != LS_BIQUAD_LOWPASS)) {
+        return LS_ERR_PARAM;
+    }
+    /* the demodulation that goes with the injection's shape; the square wave is separated from
+     * the fundamental by a low-pass (zeros at fs/2), not a notch, and has no residual model (its
+     * current change is not a band-passed current: i_d_inj keeps the phase currents off zero) */
+    if ((cfg->inject.shape == LS_INJ_ROTATING) != (cfg->demod.method == LS_DEMOD_ROTATING) ||
+        (cfg->inject.shape == LS_INJ_SQUARE && (cfg->sep.type != LS_BIQUAD_LOWPASS || cfg->hf_dtres))) {
         return LS_ERR_PARAM;
     }
     /* every module samples at the drive rate */
@@ -211,6 +219,7 @@ static void mode_set(ls_drive *d, ls_mode mode)
     d->hf_on = mode == LS_MODE_SENSORLESS_LUT || mode == LS_MODE_SENSORLESS_NOLUT ||
                mode == LS_MODE_CALIBRATION || (mode == LS_MODE_SENSORED && d->cfg.inject_sensored);
     d->v_hf_max = d->hf_on ? d->cfg.inject.amplitude : LS_R(0.0);
+    d->i_d_ref = d->hf_on ? d->cfg.i_d_inj : LS_R(0.0);
     d->enc_have_prev = false; /* the encoder's jump check starts again */
 }
 
@@ -540,7 +549,11 @@ void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
     ls_sincos(d->obs.pos.theta, &c_est, &s_est);
 
     /* fundamental separation of the measured currents, and HF band-pass of the currents less what
-     * the dead-time residual drove (ls_dtres.h) */
+     * the dead-time residual drove (ls_dtres.h). With the square wave the "band-pass" is the first
+     * difference (LS_BIQUAD_DIFF): the current's change over one period, whose sign alternates with
+     * the carrier; unsigned, since the product demodulator's ratio does not depend on it and the
+     * fundamental's change then enters the products at fs/2, where the demodulator's low-pass has
+     * its zeros */
     if_a = ls_biquad_step(&d->sep[0], i_a);
     if_b = ls_biquad_step(&d->sep[1], i_b);
     /* (two branches: one path through a zeroed i_res costs 7 instructions per step) */
@@ -609,7 +622,7 @@ void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
     i_d = c_fb * if_a + s_fb * if_b;
     i_q = -s_fb * if_a + c_fb * if_b;
     v_lim = meas->v_dc * (LS_R(1.0) / LS_SQRT3) - d->v_hf_max;
-    ls_current_step_finite(&d->cur, i_d, i_q, LS_R(0.0), i_q_ref, omega_fb, v_lim, &v_d, &v_q);
+    ls_current_step_finite(&d->cur, i_d, i_q, d->i_d_ref, i_q_ref, omega_fb, v_lim, &v_d, &v_q);
 
     /* fundamental voltage at the angle advanced over the computation delay (small-angle
      * rotation), plus the HF injection on the estimated d-axis */
@@ -619,10 +632,16 @@ void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
     v_a = c_adv * v_d - s_adv * v_q;
     v_b = s_adv * v_d + c_adv * v_q;
     if (hf_on) {
-        /* on the estimated d-axis, plus the optional quadrature component on q */
+        /* on the estimated d-axis, plus the optional quadrature component on q (rotating: the
+         * stationary-frame vector) */
         v_hf = ls_inject_step(&d->inj);
-        v_a += v_hf * c_est - d->inj.v_q * s_est;
-        v_b += v_hf * s_est + d->inj.v_q * c_est;
+        if (cfg->inject.shape != LS_INJ_ROTATING) {
+            v_a += v_hf * c_est - d->inj.v_q * s_est;
+            v_b += v_hf * s_est + d->inj.v_q * c_est;
+        } else { /* in the stationary frame */
+            v_a += v_hf;
+            v_b += d->inj.v_q;
+        }
     } else {
         v_hf = LS_R(0.0);
     }
@@ -654,7 +673,7 @@ void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
     cmd->psi_comp = d->demod.psi;
     cmd->i_dq[0] = i_d;
     cmd->i_dq[1] = i_q;
-    cmd->i_dq_ref[0] = LS_R(0.0);
+    cmd->i_dq_ref[0] = d->i_d_ref;
     cmd->i_dq_ref[1] = i_q_ref;
     cmd->v_dq[0] = v_d;
     cmd->v_dq[1] = v_q;

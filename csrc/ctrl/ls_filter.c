@@ -10,6 +10,16 @@ ls_status ls_biquad_init(ls_biquad *f, const ls_biquad_cfg *cfg)
     if (f == NULL || cfg == NULL) {
         return LS_ERR_NULL;
     }
+    if (cfg->type == LS_BIQUAD_DIFF) {
+        if (!LS_ISFINITE(cfg->fs) || cfg->fs <= LS_R(0.0)) {
+            return LS_ERR_PARAM;
+        }
+        f->b0 = LS_R(1.0);
+        f->b1 = LS_R(-1.0);
+        f->b2 = f->a1 = f->a2 = LS_R(0.0);
+        ls_biquad_reset(f);
+        return LS_OK;
+    }
     if (!LS_ISFINITE(cfg->f0) || !LS_ISFINITE(cfg->q) || !LS_ISFINITE(cfg->fs) || cfg->fs <= LS_R(0.0) ||
         cfg->f0 <= LS_R(0.0) || cfg->f0 >= LS_R(0.5) * cfg->fs || !(cfg->q >= LS_BIQUAD_Q_MIN) ||
         !(cfg->q <= LS_BIQUAD_Q_MAX)) {

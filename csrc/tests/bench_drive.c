@@ -1,12 +1,16 @@
 /* Benchmark driver: ls_drive_step in sensorless mode with the LUT, float build, closed around
  * the compact test plant, during a minimum-time move (every block active). Run it under
- *   valgrind --tool=callgrind --toggle-collect=ls_drive_step ./bench_drive N
+ *   valgrind --tool=callgrind --toggle-collect=ls_drive_step ./bench_drive N [DTC [SHAPE]]
+ * SHAPE: 0 pulsating (elliptical, the default), 1 rotating, 2 square wave at fs/2 (each with a
+ * table and the gain schedule: the instructions do not depend on the tables' values)
  * so that only the instructions executed inside ls_drive_step are counted (tools/bench.sh). */
 #include <stdio.h>
 #include <stdlib.h>
 
 #include "linsense/ls_drive.h"
-#include "ls_lut_ecce2010_q.h" /* the table of the default (elliptical) injection */
+#include "ls_lut_ecce2010_q.h"   /* the table of the default (elliptical) injection */
+#include "ls_lut_ecce2010_rot.h" /* of the rotating injection */
+#include "ls_lut_ecce2010_sq.h"  /* of the square wave at fs/2 */
 #include "ls_test_plant.h"
 
 int main(int argc, char **argv)
@@ -14,18 +18,54 @@ int main(int argc, char **argv)
     long n = argc > 1 ? atol(argv[1]) : 20000;
     long k;
     ls_lut_cfg lc = {ls_lut_ecce2010_q, LS_LUT_ECCE2010_Q_LEN};
-    ls_lut lut;
+    ls_lut_cfg lc_rot = {ls_lut_ecce2010_rot, LS_LUT_ECCE2010_ROT_LEN};
+    ls_lut_cfg lc_sq = {ls_lut_ecce2010_sq, LS_LUT_ECCE2010_SQ_LEN};
+    ls_lut lut, lut_g;
+    static float gain_tab[64];
+    ls_lut_cfg gc = {gain_tab, 64u};
+    int shape, j;
     ls_drive_cfg cfg;
     ls_drive d;
     tp_plant p;
     ls_cmd c;
     ls_meas m;
-    if (ls_lut_init(&lut, &lc) != LS_OK) {
+    shape = argc > 3 ? atoi(argv[3]) : 0;
+    for (j = 0; j < 64; ++j) {
+        gain_tab[j] = 1.0f;
+    }
+    if (ls_lut_init(&lut, shape == 1 ? &lc_rot : shape == 2 ? &lc_sq : &lc) != LS_OK ||
+        ls_lut_init(&lut_g, &gc) != LS_OK) {
         return 2;
     }
     ls_drive_default_cfg(&cfg);
     cfg.demod.comp = &lut;
     cfg.mod.dtc = argc > 2 && atoi(argv[2]) != 0; /* the plant has no dead time: off unless asked */
+    cfg.hf_dtres = !(argc > 5 && atoi(argv[5]) != 0); /* the dead-time residual model (on unless asked) */
+    if (shape == 1) { /* rotating: stationary-frame vector, negative-sequence demodulation */
+        cfg.inject.shape = LS_INJ_ROTATING;
+        cfg.inject.quad = 0.0f;
+        cfg.demod.method = LS_DEMOD_ROTATING;
+        cfg.demod.gain = 1.0f;
+        cfg.demod.min_level = 3.8e-4f; /* linsense.tune.injection.rotating_design for ecce2010, */
+        cfg.demod.ref_phase = 1.4613f; /* 12 V at 1 kHz, 16 kHz, delay_comp 1.5 */
+        cfg.demod.gain_table = argc > 4 && atoi(argv[4]) != 0 ? &lut_g : NULL;
+    } else if (shape == 2) { /* square wave at fs/2: first difference, low-pass separation */
+        cfg.inject.shape = LS_INJ_SQUARE;
+        cfg.inject.quad = 0.0f;
+        cfg.inject.freq = 0.5f * cfg.fs;
+        cfg.bpf.type = LS_BIQUAD_DIFF;
+        cfg.sep.type = LS_BIQUAD_LOWPASS;
+        cfg.sep.f0 = 2000.0f;
+        cfg.sep.q = 0.7071f;
+        cfg.demod.f_notch = 0.0f;
+        cfg.mod.dtc_lead = -0.5f;
+        cfg.hf_dtres = false; /* (not with the square wave: i_d_inj instead) */
+        cfg.i_d_inj = 1.0f;
+        cfg.demod.gain_table = argc > 4 && atoi(argv[4]) != 0 ? &lut_g : NULL;
+        for (j = 0; j < 64; ++j) {
+            gain_tab[j] = (float)cfg.demod.gain; /* the nominal L_q / (L_q - L_d) */
+        }
+    }
     if (ls_drive_init(&d, &cfg) != LS_OK) {
         return 2;
     }

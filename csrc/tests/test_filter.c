@@ -96,6 +96,20 @@ int main(void)
     LS_CHECK(m < 1e-3); /* notch removes the injection from the current loop */
     measure(&bq, 5.0, 16000.0, &m, &p);
     LS_CHECK_NEAR(m, 1.0, 1e-3); /* and passes the fundamental */
+    /* the first difference (square-wave injection): y[k] = x[k] - x[k-1], exactly, whatever f0, q */
+    {
+        ls_biquad_cfg dc = {LS_BIQUAD_DIFF, LS_R(0.0), LS_R(0.0), LS_R(16000.0)};
+        LS_REAL x_prev = LS_R(0.0);
+        int k;
+        LS_CHECK(ls_biquad_init(&bq, &dc) == LS_OK);
+        for (k = 0; k < 100; ++k) {
+            const LS_REAL x = LS_R(0.37) * (LS_REAL)(k % 7) - LS_R(1.1) * (LS_REAL)(k % 3);
+            LS_CHECK(ls_biquad_step(&bq, x) == x - x_prev);
+            x_prev = x;
+        }
+        dc.fs = LS_R(0.0);
+        LS_CHECK(ls_biquad_init(&bq, &dc) == LS_ERR_PARAM);
+    }
     /* refusals */
     cfg.f0 = LS_R(8000.0);
     LS_CHECK(ls_biquad_init(&bq, &cfg) == LS_ERR_PARAM);

@@ -70,15 +70,18 @@ void ls_lut_reset(ls_lut *lut);
 LS_REAL ls_lut_step(const ls_lut *lut, LS_REAL theta);
 
 /* ls_filter.h */
-typedef enum { LS_BIQUAD_LOWPASS = 0, LS_BIQUAD_BANDPASS = 1, LS_BIQUAD_NOTCH = 2 } ls_biquad_type;
+typedef enum {
+    LS_BIQUAD_LOWPASS = 0, LS_BIQUAD_BANDPASS = 1, LS_BIQUAD_NOTCH = 2, LS_BIQUAD_DIFF = 3
+} ls_biquad_type;
 typedef struct { ls_biquad_type type; LS_REAL f0; LS_REAL q; LS_REAL fs; } ls_biquad_cfg;
 typedef struct { LS_REAL b0, b1, b2; LS_REAL a1, a2; LS_REAL z1, z2; } ls_biquad;
 ls_status ls_biquad_init(ls_biquad *f, const ls_biquad_cfg *cfg);
 void ls_biquad_reset(ls_biquad *f);
 
 /* ls_inject.h */
+typedef enum { LS_INJ_PULSATING = 0, LS_INJ_ROTATING = 1, LS_INJ_SQUARE = 2 } ls_inject_shape;
 typedef struct {
-    LS_REAL amplitude; LS_REAL freq; LS_REAL fs; LS_REAL ramp_rate; LS_REAL quad;
+    ls_inject_shape shape; LS_REAL amplitude; LS_REAL freq; LS_REAL fs; LS_REAL ramp_rate; LS_REAL quad;
 } ls_inject_cfg;
 typedef struct {
     ls_inject_cfg cfg;
@@ -95,7 +98,7 @@ void ls_inject_enable(ls_inject *inj, bool on);
 LS_REAL ls_inject_step(ls_inject *inj);
 
 /* ls_demod.h */
-typedef enum { LS_DEMOD_PRODUCT = 0, LS_DEMOD_HETERODYNE = 1 } ls_demod_method;
+typedef enum { LS_DEMOD_PRODUCT = 0, LS_DEMOD_HETERODYNE = 1, LS_DEMOD_ROTATING = 2 } ls_demod_method;
 typedef struct {
     ls_demod_method method;
     LS_REAL f_lpf;
@@ -105,6 +108,7 @@ typedef struct {
     const ls_lut *gain_table;
     LS_REAL min_level;
     LS_REAL f_notch;
+    LS_REAL ref_phase;
 } ls_demod_cfg;
 typedef struct {
     ls_demod_cfg cfg;
@@ -116,6 +120,7 @@ typedef struct {
     LS_REAL ratio;
     LS_REAL err;
     bool valid;
+    LS_REAL ref_c, ref_s;
 } ls_demod;
 ls_status ls_demod_init(ls_demod *d, const ls_demod_cfg *cfg);
 void ls_demod_reset(ls_demod *d);
@@ -283,6 +288,7 @@ typedef struct {
     ls_dtres_cfg dtres;
     ls_protect_cfg prot;
     ls_cal_cfg cal;
+    LS_REAL i_d_inj;
 } ls_drive_cfg;
 typedef struct {
     LS_REAL i_abc[3];

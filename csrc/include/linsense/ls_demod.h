@@ -8,7 +8,17 @@
  *   LS_DEMOD_PRODUCT:    LP(i_d i_q) / LP(i_d^2 + i_q^2) = sin(2 delta)/2  (the paper's product)
  *   LS_DEMOD_HETERODYNE: synchronous I/Q demodulation of i_d and i_q with the injection carrier,
  *                        Re(i_q / i_d) = tan(delta)
- * Both are ratios, so the result does not depend on the injection amplitude. Near zero
+ * Both are ratios, so the result does not depend on the injection amplitude.
+ * With the rotating injection (ls_inject.h), LS_DEMOD_ROTATING: the band-passed alpha-beta current
+ * times the carrier exp(j phi) brings the negative sequence i_n exp(-j phi) to DC (the positive
+ * sequence to 2 f_inj, nulled by f_notch); its phase is 2 theta + 2 psi_rot(theta) + c_ref
+ * (docs/theory.md, "Rotating-vector injection"), so with w = LP(i exp(j phi)) exp(-j (2 (theta_est
+ * + Psi(theta_est)) + ref_phase)):
+ *   ratio = Im(w) / (2 |w|) = sin(2 delta) / 2,  delta = theta + psi_rot(theta) - theta_est - Psi(theta_est)
+ * and err = g ratio with g = 1 (gain) or the scheduled 1 / (1 + dPsi/dtheta) (gain_table): the
+ * table Psi = psi_rot read at the estimate is the rotating injection's compensation.
+ * The square-wave injection (LS_INJ_SQUARE) uses LS_DEMOD_PRODUCT on the signed current
+ * differences the drive forms instead of the band-passed currents. Near zero
  * delta = -(L_q - L_d)/L_q * (theta_est - theta), so the output
  *   err = g * ratio,  g = L_q/(L_q - L_d)  (from `gain`, or position-scheduled from `gain_table`)
  * estimates theta - theta_est in rad. The scheduled gain normalises the error gain, which is
@@ -28,7 +38,8 @@
 
 typedef enum {
     LS_DEMOD_PRODUCT = 0,
-    LS_DEMOD_HETERODYNE = 1
+    LS_DEMOD_HETERODYNE = 1,
+    LS_DEMOD_ROTATING = 2
 } ls_demod_method;
 
 typedef struct {
@@ -42,6 +53,9 @@ typedef struct {
     LS_REAL min_level;        /* A^2, HF mean-square current below which err is held at 0, >= 0 */
     LS_REAL f_notch;          /* Hz, the low-pass filters' zeros (instead of at fs/2), 2 f_inj: nulls the
                                  products' ripple at twice the injection frequency (0: plain), < fs/2 */
+    LS_REAL ref_phase;        /* rad, LS_DEMOD_ROTATING: c_ref, the negative sequence's phase less
+                                 2 theta for a motor without end-effect, plus the carrier's delay
+                                 (delay_comp 2 pi f_inj / fs); finite, |ref_phase| <= 4 pi */
 } ls_demod_cfg;
 
 typedef struct {
@@ -54,6 +68,7 @@ typedef struct {
     LS_REAL ratio;     /* -, normalised error before the gain (~ delta) */
     LS_REAL err;       /* rad, estimate of theta - theta_est at the last step */
     bool valid;        /* level above min_level at the last step */
+    LS_REAL ref_c, ref_s; /* -, cos and sin of ref_phase (rotating) */
 } ls_demod;
 
 ls_status ls_demod_init(ls_demod *d, const ls_demod_cfg *cfg);
@@ -64,6 +79,12 @@ void ls_demod_set_comp(ls_demod *d, bool on);
 void ls_demod_set_gain_table(ls_demod *d, bool on);
 /* ls_demod_step given c_est = cos(theta_est), s_est = sin(theta_est) (the drive has them): the
  * rotation into theta_est + psi is that of theta_est turned by psi. Inline (called every PWM period). */
+/* LS_DEMOD_ROTATING's numerator (returned) and denominator (*den) of the ratio, and d->level,
+ * given the band-passed alpha-beta current, (c, s) = cos and sin of theta_est + psi and the
+ * rotating carrier (out of line: called from ls_demod_step_cs). */
+LS_REAL ls_demod_rot_(ls_demod *d, LS_REAL i_a, LS_REAL i_b, LS_REAL c, LS_REAL s, LS_REAL car_c, LS_REAL car_s,
+                      LS_REAL *den);
+
 static inline LS_REAL ls_demod_step_cs(ls_demod *d, LS_REAL i_a, LS_REAL i_b, LS_REAL theta_est,
                                        LS_REAL c_est, LS_REAL s_est, LS_REAL car_c, LS_REAL car_s,
                                        LS_REAL psi_cal)
@@ -97,6 +118,8 @@ static inline LS_REAL ls_demod_step_cs(ls_demod *d, LS_REAL i_a, LS_REAL i_b, LS
     i_q = -s * i_a + c * i_b;
     if (product) {
         num = ls_biquad_step(&d->lp[0], i_d * i_q);
+    } else if (d->cfg.method == LS_DEMOD_ROTATING) {
+        num = ls_demod_rot_(d, i_a, i_b, c, s, car_c, car_s, &den);
     } else {
         LS_REAL id_i = ls_biquad_step(&d->lp[0], i_d * car_c);
         LS_REAL id_q = ls_biquad_step(&d->lp[1], i_d * car_s);

@@ -13,6 +13,13 @@
  * d/q current control on the feedback angle; HF injection added on the estimated d-axis;
  * modulator with the angle advanced for the one-period computation delay; observer-loss checks.
  *
+ * HF injection shapes (cfg.inject.shape, docs/firmware.md): pulsating or elliptical on the estimated
+ * d-axis (the paper's; band-pass, product or heterodyne demodulation); rotating in the stationary
+ * frame (band-pass, negative-sequence demodulation LS_DEMOD_ROTATING, its own table psi_rot and gain
+ * schedule); square wave at fs/2 on the estimated d-axis (cfg.bpf is then the first difference
+ * LS_BIQUAD_DIFF, the current's change over one period, for the product demodulator, and cfg.sep
+ * a low-pass, whose zeros at fs/2 remove the square wave from the fundamental).
+ *
  * Modes:
  *   LS_MODE_OFF              outputs disabled, estimators idle
  *   LS_MODE_SENSORED         encoder closes every loop (HF injection optional: with inject_sensored the
@@ -89,9 +96,11 @@ typedef struct {
                                more than enc_v_max / fs of travel (and more than one count) trips
                                LS_FAULT_ENCODER; > 0, at most LS_DRIVE_ENC_JUMP_MAX counts per step */
     bool inject_sensored;   /* keep injecting in LS_MODE_SENSORED */
-    bool hf_dtres;          /* take the current the dead-time residual drove out of the HF path */
+    bool hf_dtres;          /* take the current the dead-time residual drove out of the HF path (not
+                               with the square wave) */
     ls_inject_cfg inject;   /* HF injection */
-    ls_biquad_cfg bpf;      /* HF band-pass on the alpha-beta currents (LS_BIQUAD_BANDPASS) */
+    ls_biquad_cfg bpf;      /* HF band-pass on the alpha-beta currents (LS_BIQUAD_BANDPASS; with the
+                               square wave LS_BIQUAD_DIFF) */
     ls_biquad_cfg sep;      /* fundamental separation (LS_BIQUAD_NOTCH at the injection
                                frequency, or LS_BIQUAD_LOWPASS) */
     ls_demod_cfg demod;     /* demodulator; demod.comp is the compensation table */
@@ -104,6 +113,9 @@ typedef struct {
     ls_dtres_cfg dtres;     /* response model of the dead-time residual (used if hf_dtres) */
     ls_protect_cfg prot;    /* protection */
     ls_cal_cfg cal;         /* LUT calibration */
+    LS_REAL i_d_inj;        /* A, d-axis current reference while the HF injection is on (0: none): keeps
+                               the phase currents off zero, where the dead time would act on the
+                               square wave's current change (docs/firmware.md), |i_d_inj| < i_max */
 } ls_drive_cfg;
 
 typedef struct {
@@ -184,6 +196,7 @@ typedef struct {
     bool enc_have_prev;  /* enc_prev holds the last sample's count */
     int32_t enc_prev;    /* -, encoder count of the last sample (encoder modes) */
     int64_t enc_jump_max; /* -, largest plausible count change per step (>= 1) */
+    LS_REAL i_d_ref;     /* A, d-current reference (cfg.i_d_inj with hf_on, else 0) */
 } ls_drive;
 
 /* Fill cfg with the defaults documented in docs/firmware.md: 16 kHz, 12 V / 1 kHz injection and

@@ -1,7 +1,8 @@
 /* linsense firmware library: second-order (biquad) IIR filters.
  *
  * Designed by the bilinear transform with pre-warping at f0 (R. Bristow-Johnson's audio-EQ
- * cookbook): low-pass, band-pass (0 dB and zero phase at f0) and notch (zero gain at f0).
+ * cookbook): low-pass, band-pass (0 dB and zero phase at f0) and notch (zero gain at f0); and the
+ * first difference (LS_BIQUAD_DIFF).
  * Transposed direct form II. Used for signal separation (band-pass around the injected
  * frequency, notch for the current loop) and for the demodulator's low-pass filters.
  */
@@ -13,7 +14,9 @@
 typedef enum {
     LS_BIQUAD_LOWPASS = 0,
     LS_BIQUAD_BANDPASS = 1,
-    LS_BIQUAD_NOTCH = 2
+    LS_BIQUAD_NOTCH = 2,
+    LS_BIQUAD_DIFF = 3 /* y[k] = x[k] - x[k-1] (f0 and q unused): the square-wave injection's
+                          current change over one period */
 } ls_biquad_type;
 
 /* Bounds on q (ls_biquad_init): a low-pass resonates by q at f0, and its poles approach the unit

@@ -1,9 +1,16 @@
-/* linsense firmware library: HF voltage injection on the estimated d-axis.
+/* linsense firmware library: HF voltage injection.
  *
- * v_d_hf[k] = A[k] cos(phi[k]), phi advancing by 2 pi f / fs per step (pulsating, the paper's), and
- * optionally v_q_hf[k] = kappa A[k] sin(phi[k]) on the estimated q-axis (elliptical): then no phase
- * current stays near zero through the HF period, which is what makes the estimate robust to the
- * inverter's dead time (docs/theory.md). The carrier is a unit
+ * Three shapes (docs/theory.md):
+ *   LS_INJ_PULSATING: v_d_hf[k] = A[k] cos(phi[k]) on the estimated d-axis, phi advancing by
+ *                     2 pi f / fs per step (the paper's), and optionally v_q_hf[k] = kappa A[k]
+ *                     sin(phi[k]) on the estimated q-axis (elliptical): then no phase current stays
+ *                     near zero through the HF period, which is what makes the estimate robust to
+ *                     the inverter's dead time;
+ *   LS_INJ_ROTATING:  v_alpha = A cos(phi), v_beta = A sin(phi) in the STATIONARY frame (the returned
+ *                     value is the alpha part, v_q the beta part: the drive adds them unrotated);
+ *   LS_INJ_SQUARE:    v_d_hf[k] = +-A alternating every step (f = fs / 2 exactly) on the estimated
+ *                     d-axis, for the difference-based demodulation (Kim, Ha, Sul, IEEE TIA 2012).
+ * The carrier is a unit
  * phasor rotated by a fixed step each sample (no trigonometry per step) and renormalised, so
  * it is phase-continuous for any frequency, including through amplitude ramps.
  */
@@ -13,23 +20,31 @@
 #include "linsense/ls_math.h"
 #include "linsense/ls_types.h"
 
+typedef enum {
+    LS_INJ_PULSATING = 0,
+    LS_INJ_ROTATING = 1,
+    LS_INJ_SQUARE = 2
+} ls_inject_shape;
+
 typedef struct {
+    ls_inject_shape shape; /* pulsating (default, 0), rotating or square */
     LS_REAL amplitude; /* V, peak HF voltage when on, >= 0 */
-    LS_REAL freq;      /* Hz, injection frequency, > 0 */
-    LS_REAL fs;        /* Hz, sampling rate, >= 4 freq */
+    LS_REAL freq;      /* Hz, injection frequency, > 0 (square: exactly fs / 2) */
+    LS_REAL fs;        /* Hz, sampling rate, >= 4 freq (pulsating, rotating) */
     LS_REAL ramp_rate; /* V/s, amplitude slew when switched on or off, > 0 */
     LS_REAL quad;      /* -, kappa in [0, 1): kappa A sin(phi) added on the estimated q-axis (elliptical
-                          injection, docs/theory.md; 0: pulsating, as the paper) */
+                          injection, docs/theory.md; 0: pulsating, as the paper); 0 unless pulsating */
 } ls_inject_cfg;
 
 typedef struct {
-    ls_inject_cfg cfg; /* copy of the configuration */
+    ls_inject_cfg cfg; /* copy of the configuration (rotating: with quad = 1, the beta part) */
     LS_REAL c, s;      /* -, cos and sin of the present carrier phase */
     LS_REAL dc, ds;    /* -, cos and sin of the phase step 2 pi f / fs */
     LS_REAL amp;       /* V, present amplitude */
     LS_REAL amp_step;  /* V, amplitude change per step during a ramp */
     bool on;           /* injection requested on */
-    LS_REAL v_q;       /* V, q-axis component of the last step, kappa A sin(phi) */
+    LS_REAL v_q;       /* V, q-axis component of the last step, kappa A sin(phi) (rotating: the
+                          beta component A sin(phi)) */
 } ls_inject;
 
 ls_status ls_inject_init(ls_inject *inj, const ls_inject_cfg *cfg);

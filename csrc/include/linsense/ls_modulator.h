@@ -21,7 +21,9 @@ typedef struct {
     LS_REAL dead_time; /* s, inverter dead time, >= 0 and < 0.1 / f_pwm */
     bool dtc;          /* dead-time compensation on */
     LS_REAL i_band;    /* A, current band of the smooth sign used by the compensation, > 0 */
-    LS_REAL dtc_lead;  /* -, periods of current extrapolation for the compensation sign, [0, 4] */
+    LS_REAL dtc_lead;  /* -, periods of current extrapolation for the compensation sign, [-1, 4]
+                          (-0.5 with the square wave at fs/2, whose current change reverses every
+                          period: the middle of the next period is then i - (i - i_prev)/2) */
 } ls_mod_cfg;
 
 /* One step's duties as the inverter applies them, and the compensation they contain. */

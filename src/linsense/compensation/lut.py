@@ -85,9 +85,10 @@ def build_lut(motor, points: int, f_inj: float | None = None, quad: float = 0.0,
     Without ``f_inj`` this is eq. (12); with it (Hz), the resistance-aware angle of
     :func:`~linsense.analysis.hf.psi_lut_resistive` for that injection frequency and the
     injection's quadrature share ``quad`` (0: pulsating, as the paper). ``injection="rotating"``:
-    the table of the rotating-vector estimate instead, indexed by the estimate: the angle to take
-    from it (:func:`~linsense.analysis.rotating.rotating_lut`; without ``f_inj`` the R_s = 0 limit;
-    docs/theory.md). ``injection="square"``: the square wave's table at ``f_inj`` (e.g. f_pwm / 2),
+    the rotating-vector injection's table as the drive reads it, ``psi_rot`` against the position
+    (:func:`~linsense.analysis.rotating.psi_rotating`; without ``f_inj`` the R_s = 0 limit;
+    docs/theory.md; :func:`~linsense.analysis.rotating.rotating_lut` is the open-loop inverse).
+    ``injection="square"``: the square wave's table at ``f_inj`` (e.g. f_pwm / 2),
     :func:`~linsense.analysis.square.psi_square` (without ``f_inj``: eq. 12, its R_s = 0 limit).
     """
     if points < 4:
@@ -99,9 +100,14 @@ def build_lut(motor, points: int, f_inj: float | None = None, quad: float = 0.0,
     theta = 2.0 * np.pi * np.arange(points) / points
     prov = motor.provenance()
     if injection == "rotating":
-        from linsense.analysis.rotating import rotating_lut
+        import dataclasses
 
-        values = rotating_lut(motor, theta, f_inj)
+        from linsense.analysis.rotating import psi_rotating
+
+        # the drive's table: read at the observer's estimate, which at the equilibrium is the true
+        # position, so sampled against the position (R_s = 0 without f_inj: any frequency then)
+        values = (psi_rotating(motor, theta, f_inj) if f_inj is not None
+                  else psi_rotating(dataclasses.replace(motor, R_s=0.0), theta, 1000.0))
         prov = {**prov, "injection": "rotating",
                 "lut_model": "R_s = 0 (e*)" if f_inj is None else "with R_s at f_inj"}
         if f_inj is not None:

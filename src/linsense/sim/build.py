@@ -29,6 +29,13 @@ from linsense.sim.core import BLOCKS, SIGNALS, PlantSetup, SimulationError, plan
 from linsense.sim.plant import lab_fourier
 from linsense.sim.scenario import Scenario
 from linsense.tune.design import DriveData, current_gains, design, error_gain, mean_dq, speed_gains
+from linsense.tune.injection import (
+    SQUARE_DTC_LEAD,
+    SQUARE_SEP_FRACTION,
+    injection_tables,
+    rotating_design,
+    square_d_current,
+)
 
 #: drive sub-configuration -> scenario section (for messages)
 _SECTION = {"inject": "injection", "bpf": "injection", "sep": "injection", "demod": "observer",
@@ -158,6 +165,9 @@ def initial_load(sc: Scenario, motor: Motor) -> float:
     return ld.force
 
 
+#: injection.shape -> the C library's ls_inject_shape
+_SHAPE = {"pulsating": lib.LS_INJ_PULSATING, "rotating": lib.LS_INJ_ROTATING, "square": lib.LS_INJ_SQUARE}
+
 #: DriveData field -> scenario key (for messages)
 _DESIGN_KEYS = {"v_dc": "inverter.v_dc", "f_pwm": "inverter.f_pwm", "i_max": "controller.i_max",
                 "v_max": "reference.v_max", "v_inj": "injection.amplitude", "f_inj": "injection.frequency",
@@ -172,7 +182,10 @@ def drive_data(sc: Scenario) -> DriveData:
     return DriveData(v_dc=s.inverter.v_dc, f_pwm=s.inverter.f_pwm, dead_time=s.inverter.dead_time,
                      i_max=s.controller.i_max, v_max=s.reference.v_max,
                      v_inj=inj.amplitude if "amplitude" in given else None,
-                     f_inj=inj.frequency if "frequency" in given else None, quad=inj.quadrature)
+                     # (the square wave's f_pwm / 2 is not a design choice: the other gains are
+                     # designed as for the default frequency)
+                     f_inj=inj.frequency if "frequency" in given and inj.shape != "square" else None,
+                     quad=inj.quadrature)
 
 
 def designed(sc: Scenario, motor: Motor) -> Scenario:
@@ -326,8 +339,14 @@ def build(sc: Scenario, motor: Motor | None = None, trace_in_memory: bool = True
     d.delay_comp = ctl.delay_comp
     d.enc_counts = sens.encoder_counts_per_period
     d.inject_sensored = ctl.inject_sensored
+    shape = inj.shape
+    f_inj = fs / 2.0 if shape == "square" else inj.frequency
+    d.inject.shape = _SHAPE[shape]
+    # (the square wave's d-current keeps the phase currents off zero, docs/firmware.md)
+    d.i_d_inj = (inj.d_current if inj.d_current is not None
+                 else square_d_current(con.i_max) if shape == "square" else 0.0)
     d.inject.amplitude = inj.amplitude
-    d.inject.freq = inj.frequency
+    d.inject.freq = f_inj
     d.inject.ramp_rate = inj.ramp_rate
     d.inject.quad = inj.quadrature
     d.bpf.f0 = d.sep.f0 = inj.frequency
@@ -338,6 +357,24 @@ def build(sc: Scenario, motor: Motor | None = None, trace_in_memory: bool = True
     d.demod.f_notch = 2.0 * inj.frequency if obs.demod_notch and 4.0 * inj.frequency < fs else 0.0
     d.demod.gain = known["demod_gain"]
     d.demod.min_level = obs.min_level
+    if shape == "rotating":
+        rot = rotating_design(model_motor, known["R_s"], inj.amplitude, f_inj, fs, ctl.delay_comp)
+        d.demod.method = lib.LS_DEMOD_ROTATING
+        d.demod.gain = 1.0  # the error is the angle itself (docs/theory.md)
+        d.demod.ref_phase = rot["ref_phase"]
+        if "min_level" not in obs.model_fields_set:
+            d.demod.min_level = rot["min_level"]
+    elif shape == "square":
+        # the fundamental: a low-pass whose zeros at fs / 2 remove the square wave; the
+        # demodulator's low-pass keeps its zeros at fs / 2 too, where the products' ripple is
+        d.bpf.type = lib.LS_BIQUAD_DIFF  # the current's change over one period
+        d.sep.type = lib.LS_BIQUAD_LOWPASS
+        d.sep.f0 = SQUARE_SEP_FRACTION * fs
+        d.sep.q = 0.5 ** 0.5
+        d.demod.f_notch = 0.0
+        # the current change reverses every period: the dead-time compensation's sign is taken
+        # from the middle of the next period, i - (i - i_prev) / 2 (ls_modulator.h)
+        d.mod.dtc_lead = SQUARE_DTC_LEAD
     d.obs.type = lib.LS_OBS_PLL if obs.type == "pll" else lib.LS_OBS_MECH
     d.obs.pole_pitch = tau
     d.obs.mass = known["mass"]
@@ -399,13 +436,21 @@ def build(sc: Scenario, motor: Motor | None = None, trace_in_memory: bool = True
 
     try:
         comp = None
-        if compensation == "lut":
-            f_inj = inj.frequency if obs.lut_model == "resistive" else None
-            quad = inj.quadrature if f_inj else 0.0
-            comp = _memo(("lut", model_key, known["R_s"], obs.lut_points, f_inj, quad),
-                         lambda: make_lut(build_lut(lut_motor(), obs.lut_points, f_inj=f_inj, quad=quad)))
+        if compensation == "lut" and shape != "pulsating":
+            f_lut = f_inj if obs.lut_model == "resistive" else None
+            comp = _memo(("lut", shape, model_key, known["R_s"], obs.lut_points, f_lut),
+                         lambda: make_lut(injection_tables(lut_motor(), shape, obs.lut_points, f_lut)[0]))
+        elif compensation == "lut":
+            f_lut = inj.frequency if obs.lut_model == "resistive" else None
+            quad = inj.quadrature if f_lut else 0.0
+            comp = _memo(("lut", model_key, known["R_s"], obs.lut_points, f_lut, quad),
+                         lambda: make_lut(build_lut(lut_motor(), obs.lut_points, f_inj=f_lut, quad=quad)))
         gain_table = None
-        if obs.gain_schedule:
+        if obs.gain_schedule and shape != "pulsating":
+            gain_table = _memo(("gain_table", shape, model_key, known["R_s"], f_inj, obs.lut_points),
+                               lambda: make_lut(injection_tables(lut_motor(), shape, obs.lut_points,
+                                                                 f_inj)[1]))
+        elif obs.gain_schedule:
             # the demodulator gain that makes the error's local slope 1 everywhere (the saliency and,
             # with the elliptical injection and R_s, its phase set it; docs/tuning.md)
             gain_table = _memo(

@@ -90,6 +90,12 @@ class InjectionSection(BaseModel):
     ramp_rate: Positive = _c(_C.inject.ramp_rate)  # V/s
     quadrature: float = Field(default=_c(_C.inject.quad), ge=0.0, lt=1.0)  # -, kappa: kappa A sin on q
     filter_q: Positive = _c(_C.bpf.q)  # quality factor of the HF band-pass and the fundamental notch
+    # pulsating (the paper's, on the estimated d-axis), rotating (stationary frame, negative-sequence
+    # demodulation) or square (+-amplitude every PWM period on the estimated d-axis, f = f_pwm / 2)
+    shape: Literal["pulsating", "rotating", "square"] = "pulsating"
+    # A, d-current reference while injecting (default: the design's, 0 except for the square wave,
+    # whose current change the dead time would bias at zero current; docs/firmware.md)
+    d_current: float | None = None
 
 
 class ObserverSection(BaseModel):
@@ -267,7 +273,35 @@ class ScenarioFile(BaseModel):
         if inv.dead_time * inv.f_pwm >= 0.1:
             raise KeyProblem("inverter.dead_time", f"must be below 10 % of the PWM period "
                             f"({0.1 / inv.f_pwm:g} s), got {inv.dead_time!r}")
-        if "frequency" in self.injection.model_fields_set and self.injection.frequency * 4 > inv.f_pwm:
+        inj = self.injection
+        if inj.shape != "pulsating":
+            if "quadrature" in inj.model_fields_set and inj.quadrature != 0.0:
+                raise KeyProblem("injection.quadrature", f"only with shape = \"pulsating\" (the {inj.shape} "
+                                f"injection has no q-axis share), got {inj.quadrature!r}")
+            inj.quadrature = 0.0  # (derived: not counted as given)
+            inj.__pydantic_fields_set__.discard("quadrature")
+            if self.observer.demod_method != "product" or (
+                    inj.shape == "rotating" and "demod_method" in self.observer.model_fields_set):
+                raise KeyProblem("observer.demod_method",
+                                f"only with shape = \"pulsating\" (the {inj.shape} injection has its own "
+                                f"demodulation), got {self.observer.demod_method!r}")
+        if inj.d_current is not None and not (math.isfinite(inj.d_current)
+                                              and abs(inj.d_current) < self.controller.i_max):
+            raise KeyProblem("injection.d_current", f"must be finite and below controller.i_max = "
+                            f"{self.controller.i_max:g} A in magnitude, got {inj.d_current!r}")
+        if inj.shape == "square":
+            obs = self.observer
+            if "dead_time_residual" in obs.model_fields_set and obs.dead_time_residual:
+                raise KeyProblem("observer.dead_time_residual", "not with shape = \"square\" (its current "
+                                "change is not a band-passed current; injection.d_current keeps the phase "
+                                "currents off zero instead)")
+            obs.dead_time_residual = False  # (derived: not counted as given)
+            obs.__pydantic_fields_set__.discard("dead_time_residual")
+            if "frequency" in inj.model_fields_set and inj.frequency != inv.f_pwm / 2.0:
+                raise KeyProblem("injection.frequency",
+                                 f"the square wave is at f_pwm / 2 = {inv.f_pwm / 2:g} Hz "
+                                f"(leave the key out), got {inj.frequency:g}")
+        elif "frequency" in self.injection.model_fields_set and self.injection.frequency * 4 > inv.f_pwm:
             raise KeyProblem("injection.frequency", f"must be <= f_pwm / 4 = {inv.f_pwm / 4:g} Hz, "
                             f"got {self.injection.frequency:g}")
         comp = self.observer.compensation

@@ -1,0 +1,115 @@
+"""The drive's tables and constants for the rotating and square-wave injections (docs/theory.md,
+"Rotating-vector injection" and "Square-wave injection"; docs/firmware.md).
+
+Inside the observer loop a compensation table is read at the estimate, which at the equilibrium
+is the true position: both tables are therefore sampled against the position, ``table[k] =
+psi(2 pi k / n)``, like Psi_LUT for the pulsating injection. The gain table makes the demodulated
+error's local slope against the position error 1 everywhere (the loop gain of the observer):
+
+- rotating: ``delta = theta + psi_rot(theta) - theta_est - Psi(theta_est)``, slope ``1 + Psi'``,
+  gain ``1 / (1 + dpsi_rot/dtheta)``;
+- square: the product demodulator's ratio ``sin(2 phi) / 2`` of the current change's angle ``phi``
+  in the compensated estimated frame, differentiated numerically against ``theta_est`` (the
+  saliency and the table's own slope both enter).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from linsense.analysis.rotating import negative_sequence, psi_rotating, reference_phase
+from linsense.analysis.square import delta_current, psi_square
+from linsense.model.motor import Motor
+
+#: the square wave's fundamental separation: a low-pass at this fraction of f_pwm (its zeros at
+#: f_pwm / 2 remove the square wave; 2 kHz at 16 kHz, well above a 250 Hz current loop)
+SQUARE_SEP_FRACTION = 0.125
+#: the dead-time compensation's current extrapolation with the square wave at f_pwm / 2, in periods:
+#: its change reverses every period, so the next period's middle is ``i - (i - i_prev) / 2``
+SQUARE_DTC_LEAD = -0.5
+#: the square wave's d-current while injecting, as a fraction of the current limit: it keeps the
+#: phase currents off zero, where the dead time would act on the current change in step with the
+#: square wave (measured on the switching model: up to 8 deg of bias without it; docs/firmware.md)
+SQUARE_D_FRACTION = 0.4
+#: the rotating demodulator's validity threshold, as a fraction of the model's smallest |i_n|^2 over
+#: the period (the end-effect makes it vary: 8 % to 193 % of its mean for ecce2010)
+ROTATING_LEVEL_FRACTION = 0.25
+#: the frequency at which the R_s = 0 tables are evaluated (any: without R_s they do not depend on it)
+_F_NO_R = 1000.0
+_H = 1e-4  # rad, step of the numerical derivatives
+
+
+def _model(motor: Motor, f_inj: float | None) -> tuple[Motor, float]:
+    """The motor and frequency a table is computed for: ``f_inj`` None is the R_s = 0 limit."""
+    if f_inj is None:
+        return dataclasses.replace(motor, R_s=0.0), _F_NO_R
+    return motor, f_inj
+
+
+def rotating_tables(motor: Motor, n: int, f_inj: float | None) -> tuple[np.ndarray, np.ndarray]:
+    """``(psi_rot, gain)`` on ``n`` positions over the period: the rotating injection's
+    compensation table (rad, :func:`linsense.analysis.rotating.psi_rotating`) and the gain
+    schedule ``1 / (1 + dpsi_rot/dtheta)``."""
+    m, f = _model(motor, f_inj)
+    th = 2.0 * np.pi * np.arange(n) / n
+    psi = psi_rotating(m, th, f)
+    slope = 1.0 + (psi_rotating(m, th + _H, f) - psi_rotating(m, th - _H, f)) / (2.0 * _H)
+    if np.any(slope <= 0.0):
+        raise ValueError("the rotating-vector estimate is not monotone in the position: no gain schedule")
+    return psi, 1.0 / slope
+
+
+def _square_ratio(motor: Motor, theta, theta_est, f_inj: float, psi_est) -> np.ndarray:
+    """The product demodulator's ratio ``sin(2 phi) / 2`` of the square wave at the true position
+    ``theta`` with the estimate ``theta_est`` and the table value ``psi_est`` read there."""
+    d = delta_current(motor, theta, f_inj, 1.0, theta_err=np.asarray(theta_est) - np.asarray(theta))
+    phi = np.arctan2(d[..., 1], d[..., 0]) - (np.asarray(theta_est) - np.asarray(theta)) - psi_est
+    return 0.5 * np.sin(2.0 * phi)
+
+
+def square_tables(motor: Motor, n: int, f_inj: float | None) -> tuple[np.ndarray, np.ndarray]:
+    """``(psi_square, gain)`` on ``n`` positions over the period: the square wave's compensation
+    table (rad, :func:`linsense.analysis.square.psi_square`) and the gain ``-1 / (d ratio / d
+    theta_est)`` that makes the error's slope against ``theta - theta_est`` one."""
+    m, f = _model(motor, f_inj)
+    th = 2.0 * np.pi * np.arange(n) / n
+    psi = psi_square(m, th, f)
+    r_p = _square_ratio(m, th, th + _H, f, psi_square(m, th + _H, f))
+    r_m = _square_ratio(m, th, th - _H, f, psi_square(m, th - _H, f))
+    slope = (r_p - r_m) / (2.0 * _H)
+    if np.any(slope >= 0.0):
+        raise ValueError("the square-wave error has no restoring slope somewhere over the period")
+    return psi, -1.0 / slope
+
+
+def injection_tables(motor: Motor, shape: str, n: int, f_inj: float | None) -> tuple[np.ndarray, np.ndarray]:
+    """The compensation and gain tables of the ``rotating`` or ``square`` injection."""
+    if shape == "rotating":
+        return rotating_tables(motor, n, f_inj)
+    if shape == "square":
+        return square_tables(motor, n, f_inj)
+    raise ValueError(f"shape must be 'rotating' or 'square', got {shape!r}")
+
+
+def square_d_current(i_max: float) -> float:
+    """The square wave's d-current reference while injecting (A): ``SQUARE_D_FRACTION i_max``."""
+    return SQUARE_D_FRACTION * i_max
+
+
+def rotating_design(motor: Motor, R_s: float, v_inj: float, f_inj: float, fs: float,
+                    delay_comp: float) -> dict:
+    """The rotating demodulator's constants: ``ref_phase`` (rad), the negative sequence's phase
+    less ``2 theta`` for the motor without its end-effect (:func:`reference_phase`) plus the
+    carrier's delay, ``delay_comp 2 pi f_inj / fs`` (the voltage computed at a sample acts, on
+    average, ``delay_comp`` periods later: the demodulator's carrier leads the current by that
+    much); ``min_level`` (A^2), a fraction of the model's smallest ``|i_n|^2`` over the period at
+    ``v_inj``."""
+    m = dataclasses.replace(motor, R_s=R_s)
+    ref = reference_phase(m, f_inj) + delay_comp * 2.0 * math.pi * f_inj / fs
+    ref = math.remainder(ref, 2.0 * math.pi)
+    th = np.linspace(0.0, 2.0 * np.pi, 720, endpoint=False)
+    level = float(np.min(np.abs(negative_sequence(m, th, v_inj, f_inj)) ** 2))
+    return {"ref_phase": ref, "min_level": ROTATING_LEVEL_FRACTION * level}

@@ -1,0 +1,145 @@
+"""Rotating-vector and square-wave injection in the closed loop (issue 14; docs/firmware.md,
+docs/theory.md): sensorless hold at 16 positions over the period on the switching inverter with
+the 0.8 us dead time, with the compensation table (steady error <= 1.0 deg) and without it (the
+error the model predicts, where the uncompensated loop holds at all)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.optimize import brentq
+
+import linsense
+from linsense.analysis.rotating import psi_rotating
+from linsense.model.motor import load_motor
+from linsense.tune.injection import _square_ratio
+
+TAU_MM = 56.0
+POSITIONS_MM = [TAU_MM * k / 16 for k in range(16)]
+F_PWM = 16000.0
+
+
+def _hold(shape: str, mode: str, x_mm: float, **extra):
+    spec = {
+        "motor": "ecce2010",
+        "scenario": {"name": "hold", "duration": 1.2},
+        "inverter": {"fidelity": "switching"},
+        "control": {"mode": mode},
+        "injection": {"shape": shape},
+        "initial": {"position_mm": x_mm},
+        "reference": {"type": "hold"},
+    }
+    for k, v in extra.items():
+        spec.setdefault(k, {}).update(v)
+    r = linsense.simulate(spec)
+    w = r.t >= r.t[-1] - 0.3
+    theta = 2.0 * np.pi * float(np.mean(r.x[w])) * 1e3 / TAU_MM  # the true position held
+    err = np.degrees(r.theta_err[w])  # theta_est - theta
+    return r.metrics, float(np.mean(err)), float(np.max(np.abs(err))), float(np.ptp(r.x[w])) * 1e3, theta
+
+
+@pytest.fixture(scope="module")
+def motor():
+    return load_motor("ecce2010")
+
+
+def test_rotating_with_its_table_holds_everywhere():
+    """Rotating vector, 12 V at 1 kHz, negative-sequence demodulation with the psi_rot table and
+    the gain schedule: |steady error| <= 1.0 deg and no fault at 16 positions; no limit cycle
+    beyond 0.05 mm (measured: |bias| <= 0.65 deg, peak 1.36 deg, pp <= 0.046 mm)."""
+    worst = 0.0
+    for x_mm in POSITIONS_MM:
+        m, bias, peak, pp, _ = _hold("rotating", "sensorless_lut", x_mm)
+        assert m["fault"] == "none", (x_mm, m["fault"])
+        assert abs(bias) <= 1.0, (x_mm, bias)
+        assert pp <= 0.05, (x_mm, pp)
+        worst = max(worst, abs(bias))
+    print(f"rotating, table: worst |bias| {worst:.3f} deg")
+
+
+def test_rotating_without_table_follows_the_model(motor):
+    """Without the table the observer settles where the negative sequence's phase says, theta_est -
+    theta = psi_rot(theta) (docs/theory.md), within 0.6 deg wherever the uncompensated loop holds;
+    as the paper's pulsating drive without its LUT, it loses the lock where 1 + dpsi/dtheta is small
+    (measured: 12 of 16 positions hold, within 0.54 deg of the model)."""
+    held = 0
+    for x_mm in POSITIONS_MM:
+        m, bias, _, pp, theta = _hold("rotating", "sensorless_nolut", x_mm)
+        if m["fault"] != "none" or pp > 0.1:
+            continue
+        held += 1
+        pred = math.degrees(float(psi_rotating(motor, theta, 1000.0)))
+        assert abs(bias - pred) <= 0.6, (x_mm, bias, pred)
+        assert abs(pred) > 4.0 or abs(bias) < 6.0  # the error is the end-effect's, not noise
+    assert held >= 12, held
+
+
+def test_square_with_its_table():
+    """Square wave +-12 V at f_pwm / 2 on the estimated d-axis, difference demodulation, the
+    psi_square table, 1 A on d while injecting (keeps the phase currents off zero, where the dead
+    time acts in step with the square wave): |steady error| <= 1.0 deg at 16 positions (measured:
+    <= 0.28 deg). Known limitation: at the two positions where the d-axis is normal to a phase axis
+    (theta = 90, 270 deg) that phase's current stays at zero and the loop limit-cycles (measured:
+    up to 0.07 mm peak to peak, 4.4 deg peak error); elsewhere no cycle beyond 0.01 mm."""
+    for x_mm in POSITIONS_MM:
+        m, bias, peak, pp, _ = _hold("square", "sensorless_lut", x_mm)
+        assert m["fault"] == "none", (x_mm, m["fault"])
+        assert abs(bias) <= 1.0, (x_mm, bias)
+        normal = x_mm in (TAU_MM / 4, 3 * TAU_MM / 4)
+        assert pp <= (0.15 if normal else 0.01), (x_mm, pp)
+
+
+def _square_equilibrium(motor, theta: float) -> float:
+    """theta_est - theta (deg) where the uncompensated square-wave error vanishes with a
+    restoring slope (the square wave's e*, with R_s at f_pwm / 2)."""
+    f = lambda te: float(_square_ratio(motor, theta, te, F_PWM / 2, 0.0))  # noqa: E731
+    grid = theta + np.radians(np.linspace(-40.0, 40.0, 161))
+    vals = [f(g) for g in grid]
+    roots = [brentq(f, grid[i], grid[i + 1]) for i in range(160) if vals[i] > 0.0 > vals[i + 1]]
+    assert len(roots) == 1
+    return math.degrees(roots[0] - theta)
+
+
+def test_square_without_table_follows_the_model(motor):
+    """Without the table: the error the model predicts (up to 20 deg) within 0.5 deg wherever the
+    uncompensated loop holds (measured: within 0.16 deg at the positions that hold)."""
+    held = 0
+    for x_mm in POSITIONS_MM[::2]:
+        m, bias, _, pp, theta = _hold("square", "sensorless_nolut", x_mm)
+        if m["fault"] != "none" or pp > 1.0:
+            continue
+        held += 1
+        assert abs(bias - _square_equilibrium(motor, theta)) <= 0.5, (x_mm, bias)
+    assert held >= 4, held
+
+
+def test_square_without_dead_time_is_exact():
+    """Without dead time the square wave's table leaves no error (measured: < 0.01 deg)."""
+    for x_mm in POSITIONS_MM[::4]:
+        m, bias, peak, _, _ = _hold("square", "sensorless_lut", x_mm, inverter={"dead_time": 0.0},
+                                    injection={"d_current": 0.0})
+        assert m["fault"] == "none" and peak <= 0.05, (x_mm, peak)
+
+
+@pytest.mark.parametrize("spec, key", [
+    ({"injection": {"shape": "rotating", "quadrature": 0.5}}, "injection.quadrature"),
+    ({"injection": {"shape": "square", "frequency": 1000.0}}, "injection.frequency"),
+    ({"injection": {"shape": "rotating"}, "observer": {"demod_method": "heterodyne"}},
+     "observer.demod_method"),
+    ({"injection": {"shape": "square", "d_current": 3.0}}, "injection.d_current"),
+    ({"injection": {"shape": "square"}, "observer": {"dead_time_residual": True}},
+     "observer.dead_time_residual"),
+    ({"injection": {"shape": "spiral"}}, "injection.shape"),
+])
+def test_bad_injection_keys_are_refused(spec, key, tmp_path, run_cli):
+    """Each contradiction is refused in one line naming the key (exit 2)."""
+    import tomli_w
+
+    path = tmp_path / "s.toml"
+    base = {"motor": "ecce2010", "scenario": {"name": "x", "duration": 0.01}, "reference": {"type": "hold"}}
+    path.write_text(tomli_w.dumps({**base, **spec}))
+    r = run_cli("simulate", str(path), "--out", str(tmp_path / "o"))
+    assert r.code == 2, r.err
+    assert key in r.err and "\n" not in r.err.strip()
