@@ -108,10 +108,12 @@ void ls_drive_default_cfg(ls_drive_cfg *c)
      * linsense tune designs them from the motor's saturation data */
     c->startup.fs = fs;
     c->startup.t_lock = LS_R(0.15);
+    c->startup.err_lock = LS_R(0.2);
+    c->startup.t_quiet = LS_R(0.012); /* 12 V at 1200 V/s, and 2 ms */
     c->startup.v_pulse = LS_R(24.0);
     c->startup.t_pulse = LS_R(0.5e-3);
     c->startup.t_rest = LS_R(2.0e-3);
-    c->startup.pairs = 4u;
+    c->startup.pairs = 16u;
     c->startup.i_min = LS_R(0.005);
     c->startup.t_settle = LS_R(0.05);
 }

@@ -16,10 +16,9 @@ ls_startup_phase ls_drive_startup_step_(ls_drive *d, const ls_meas *meas, ls_cmd
 {
     const ls_drive_cfg *cfg = &d->cfg;
     ls_startup *su = &d->su;
-    LS_REAL i_a, i_b, ihf_a, ihf_b, if_a, if_b, c_est, s_est, i_d, i_q, i_dr, i_qr, v_d, v_q, v_a, v_b;
+    LS_REAL i_a, i_b, ihf_a, ihf_b, if_a, if_b, c_est, s_est, i_d, i_q, i_dr, v_d, v_q, v_a, v_b;
     LS_REAL v_hf = LS_R(0.0), v_lim, duty[3];
     ls_startup_phase ph;
-    bool pulses;
 
     i_a = meas->i_abc[0];
     i_b = (meas->i_abc[1] - meas->i_abc[2]) * (LS_R(1.0) / LS_SQRT3);
@@ -39,14 +38,13 @@ ls_startup_phase ls_drive_startup_step_(ls_drive *d, const ls_meas *meas, ls_cmd
     {
         const LS_REAL err = ls_demod_step_cs(&d->demod, ihf_a, ihf_b, d->obs.pos.theta, c_est, s_est, d->inj.c,
                                              d->inj.s, LS_R(0.0));
-        if (su->phase != LS_SU_PULSE) { /* frozen during the pulses */
+        if (su->phase == LS_SU_LOCK || su->phase == LS_SU_SETTLE) { /* frozen in between */
             ls_observer_step_finite(&d->obs, d->inj.amp >= cfg->inject.amplitude ? err : LS_R(0.0), LS_R(0.0));
         }
+        /* the raw currents in the estimated frame (the pulses' start and end) */
+        i_dr = c_est * i_a + s_est * i_b;
+        ph = ls_startup_step(su, i_dr, err, d->demod.valid);
     }
-    /* the raw currents in the estimated frame (the pulses' peaks; the current loop between them) */
-    i_dr = c_est * i_a + s_est * i_b;
-    i_qr = -s_est * i_a + c_est * i_b;
-    ph = ls_startup_step(su, i_dr, d->demod.valid);
     if (ph == LS_SU_FAILED) {
         return ph; /* the caller trips LS_FAULT_OBSERVER and turns the outputs off */
     }
@@ -54,30 +52,30 @@ ls_startup_phase ls_drive_startup_step_(ls_drive *d, const ls_meas *meas, ls_cmd
         d->obs.pos = ls_pos_add(d->obs.pos, d->obs.pos.theta < LS_PI ? LS_PI : -LS_PI);
         d->obs.omega = LS_R(0.0);
     }
-    pulses = ph == LS_SU_PULSE || su->turned;
-    if (pulses) {
+    /* the injection: on while locking and settling (ramping), ramping down while quiet, off during
+     * the pulses (and ramped up again from zero after them) */
+    ls_inject_enable(&d->inj, ph != LS_SU_QUIET && ph != LS_SU_PULSE);
+    if (ph == LS_SU_PULSE || su->turned) {
+        /* open loop: the pulse's d-voltage, or zero (the current decays freely, no controller
+         * overshoot to bias the next pulse); the controller starts again afterwards */
+        const LS_REAL v_max = meas->v_dc * (LS_R(0.95) / LS_SQRT3); /* 95 % of the linear range */
+        ls_current_reset(&d->cur);
+        d->inj.amp = LS_R(0.0);
         i_d = i_dr;
-        i_q = i_qr;
+        i_q = -s_est * i_a + c_est * i_b;
+        v_d = ls_clamp(su->v_d, -v_max, v_max);
+        v_q = LS_R(0.0);
+        v_a = c_est * v_d;
+        v_b = s_est * v_d;
     } else {
+        /* zero currents, on the fundamental currents, plus the injection */
         i_d = c_est * if_a + s_est * if_b;
         i_q = -s_est * if_a + c_est * if_b;
-    }
-    v_lim = meas->v_dc * (LS_R(1.0) / LS_SQRT3) - d->v_hf_max;
-    /* zero currents; during a pulse the d-loop follows the current (no wind-up) and v_d is the pulse's */
-    ls_current_step_finite(&d->cur, i_d, i_q, su->pulsing ? i_d : LS_R(0.0), LS_R(0.0), LS_R(0.0), v_lim, &v_d,
-                           &v_q);
-    if (su->pulsing) { /* within 95 % of the modulator's linear range */
-        const LS_REAL v_max = meas->v_dc * (LS_R(0.95) / LS_SQRT3);
-        v_d = ls_clamp(su->v_d, -v_max, v_max);
-    }
-    v_a = c_est * v_d - s_est * v_q;
-    v_b = s_est * v_d + c_est * v_q;
-    if (pulses) {
-        d->inj.amp = LS_R(0.0); /* off, and ramped up again after the pulses */
-    } else {
+        v_lim = meas->v_dc * (LS_R(1.0) / LS_SQRT3) - d->v_hf_max;
+        ls_current_step_finite(&d->cur, i_d, i_q, LS_R(0.0), LS_R(0.0), LS_R(0.0), v_lim, &v_d, &v_q);
         v_hf = ls_inject_step(&d->inj);
-        v_a += v_hf * c_est - d->inj.v_q * s_est;
-        v_b += v_hf * s_est + d->inj.v_q * c_est;
+        v_a = c_est * v_d - s_est * v_q + v_hf * c_est - d->inj.v_q * s_est;
+        v_b = s_est * v_d + c_est * v_q + v_hf * s_est + d->inj.v_q * c_est;
     }
     (void)ls_mod_step_finite(&d->mod, v_a, v_b, meas->v_dc, meas->i_abc, duty);
     if (!LS_ISFINITE(duty[0] + duty[1] + duty[2])) {

@@ -28,8 +28,9 @@ ls_status ls_startup_init(ls_startup *s, const ls_startup_cfg *cfg)
     memset(s, 0, sizeof *s);
     if (!LS_ISFINITE(cfg->fs) || !(cfg->fs > LS_R(0.0)) || !LS_ISFINITE(cfg->v_pulse) ||
         !(cfg->v_pulse > LS_R(0.0)) || !LS_ISFINITE(cfg->i_min) || cfg->i_min < LS_R(0.0) ||
-        !(cfg->t_lock > LS_R(0.0)) || cfg->pairs < 1u || cfg->pairs > LS_STARTUP_PAIRS_MAX ||
-        !steps_of(cfg->t_lock, cfg->fs, 1u, &s->n_lock) || !steps_of(cfg->t_pulse, cfg->fs, 1u, &s->n_pulse) ||
+        !LS_ISFINITE(cfg->err_lock) || !(cfg->err_lock > LS_R(0.0)) || cfg->pairs < 1u ||
+        cfg->pairs > LS_STARTUP_PAIRS_MAX || !steps_of(cfg->t_lock, cfg->fs, 1u, &s->n_lock) ||
+        !steps_of(cfg->t_quiet, cfg->fs, 0u, &s->n_quiet) || !steps_of(cfg->t_pulse, cfg->fs, 2u, &s->n_pulse) ||
         !steps_of(cfg->t_rest, cfg->fs, 3u, &n_rest) || !steps_of(cfg->t_settle, cfg->fs, 0u, &s->n_settle) ||
         s->n_pulse > LS_STARTUP_STEPS_MAX - n_rest) {
         memset(s, 0, sizeof *s);
@@ -46,6 +47,7 @@ void ls_startup_reset(ls_startup *s)
     s->phase = LS_SU_LOCK;
     s->timer = 0u;
     s->pulse = 0u;
+    s->i_start = LS_R(0.0);
     s->sum = LS_R(0.0);
     s->v_d = LS_R(0.0);
     s->pulsing = false;
@@ -61,7 +63,7 @@ static LS_REAL pulse_sign(uint32_t k)
     return ((k ^ (k >> 1)) & 1u) != 0u ? LS_R(-1.0) : LS_R(1.0);
 }
 
-ls_startup_phase ls_startup_step(ls_startup *s, LS_REAL i_d, bool hf_valid)
+ls_startup_phase ls_startup_step(ls_startup *s, LS_REAL i_d, LS_REAL err, bool hf_valid)
 {
     s->pulsing = false;
     s->turned = false;
@@ -73,16 +75,26 @@ ls_startup_phase ls_startup_step(ls_startup *s, LS_REAL i_d, bool hf_valid)
     case LS_SU_LOCK:
         if (++s->timer >= s->n_lock) {
             s->timer = 0u;
-            s->phase = hf_valid ? LS_SU_PULSE : LS_SU_FAILED;
+            s->phase = hf_valid && LS_FABS(err) <= s->cfg.err_lock ? LS_SU_QUIET : LS_SU_FAILED;
+        }
+        break;
+    case LS_SU_QUIET:
+        if (++s->timer >= s->n_quiet) {
+            s->timer = 0u;
+            s->phase = LS_SU_PULSE;
         }
         break;
     case LS_SU_PULSE: {
-        /* slot k (k < 2 pairs): n_slot - n_pulse steps of rest, then pulse k for n_pulse steps;
-         * the voltage of a step acts during the next PWM period, so pulse k's current at its end
-         * is the sample of step 1 of slot k + 1; a last slot of rest only, then the decision */
+        /* slot k (k < 2 pairs): n_r = n_slot - n_pulse steps of rest, then pulse k for n_pulse
+         * steps; the voltage of a step acts during the next PWM period, so pulse k starts from the
+         * sample of step n_r + 1 and ends at the sample of step 1 of slot k + 1; a last slot of
+         * rest only, then the decision */
         const uint32_t n_pulses = 2u * s->cfg.pairs;
         if (s->timer == 1u && s->pulse > 0u) {
-            s->sum += i_d;
+            s->sum += i_d - s->i_start;
+        }
+        if (s->timer == s->n_slot - s->n_pulse + 1u) {
+            s->i_start = i_d;
         }
         if (s->timer >= s->n_slot - s->n_pulse && s->pulse < n_pulses) {
             s->pulsing = true;

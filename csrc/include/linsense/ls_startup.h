@@ -6,18 +6,21 @@
  * inductance is lower and the same volt-seconds drive a larger current than against it (-d).
  *
  * The sequence (ls_drive's LS_MODE_STARTUP runs it; docs/firmware.md, docs/theory.md):
- *   LS_SU_LOCK    t_lock with zero current references, the pulsating HF injection and the HF
- *                 observer running: the estimate converges on the axis (modulo pi). The mover is
- *                 not held (a position loop on an estimate of unknown polarity could push the
- *                 wrong way) and feels no force but the HF current's.
+ *   LS_SU_LOCK    t_lock with zero current references, the HF injection and the HF observer
+ *                 running: the estimate converges on the axis (modulo pi). The mover is not held
+ *                 (a position loop on an estimate of unknown polarity could push the wrong way)
+ *                 and feels no force but the HF current's. At its end the demodulated error must
+ *                 be valid and within err_lock (else LS_SU_FAILED).
+ *   LS_SU_QUIET   t_quiet: the injection ramps down (stopping it at once would leave its HF
+ *                 currents to decay with an offset, a force impulse), observer frozen.
  *   LS_SU_PULSE   2 x pairs voltage pulses of +-v_pulse for t_pulse on the estimated d-axis, each
- *                 after t_rest with the currents controlled to zero (and a last t_rest after the
- *                 last pulse: the injection's current and the pulses' decay); the pairs alternate
- *                 (+-, -+, +-, ...) so that a slow drift cancels. The injection is off. At the end
- *                 of each pulse the d-current in the estimated frame, i_+ or i_- (signed), is
- *                 summed: i_diff = sum(i_+ + i_-) / pairs = mean(|i_+| - |i_-|). i_diff > 0: the
- *                 estimate's +d is the magnets' north; i_diff < 0: it is their south, flip by pi.
- *                 |i_diff| < i_min: undecided (LS_SU_FAILED).
+ *                 after t_rest at zero voltage (the current decays freely: no controller
+ *                 overshoot), and a last t_rest; the pairs alternate (+-, -+, +-, ...) so that a
+ *                 slow drift and the remainder of the previous pulse cancel. Per pulse the change
+ *                 of the d-current in the estimated frame from its start to its end, di_+ or di_-
+ *                 (signed), is summed: i_diff = sum(di_+ + di_-) / pairs = mean(|di_+| - |di_-|).
+ *                 i_diff > 0: the estimate's +d is the magnets' north; i_diff < 0: it is their
+ *                 south, flip by pi. |i_diff| < i_min: undecided (LS_SU_FAILED).
  *   LS_SU_SETTLE  t_settle: the injection ramps up again and the observer relocks (on the flipped
  *                 estimate), still with zero currents.
  *   LS_SU_DONE    the caller enters position control with the reference at the estimate.
@@ -40,20 +43,24 @@
 
 typedef enum {
     LS_SU_LOCK = 0,   /* HF lock on the axis (modulo pi), zero currents */
-    LS_SU_PULSE = 1,  /* d-axis pulse pairs */
-    LS_SU_SETTLE = 2, /* injection back on, observer relocking */
-    LS_SU_DONE = 3,   /* polarity resolved: enter position control */
-    LS_SU_FAILED = 4  /* no HF signal at the end of the lock, or |i_diff| < i_min */
+    LS_SU_QUIET = 1,  /* injection ramping down, zero currents */
+    LS_SU_PULSE = 2,  /* d-axis pulse pairs */
+    LS_SU_SETTLE = 3, /* injection back on, observer relocking */
+    LS_SU_DONE = 4,   /* polarity resolved: enter position control */
+    LS_SU_FAILED = 5  /* no HF lock at the end of t_lock, or |i_diff| < i_min */
 } ls_startup_phase;
 
 typedef struct {
     LS_REAL fs;       /* Hz, sampling rate (= PWM frequency), > 0 */
     LS_REAL t_lock;   /* s, HF lock time before the pulses, > 0 */
+    LS_REAL err_lock; /* rad, largest |demodulated error| accepted at the end of t_lock, > 0 */
+    LS_REAL t_quiet;  /* s, injection ramp-down before the pulses (>= its amplitude / ramp rate plus
+                         a few L/R), >= 0 */
     LS_REAL v_pulse;  /* V, pulse amplitude on the estimated d-axis, > 0 (the drive also bounds it by
                          the bus: v_pulse <= v_dc_min / sqrt(3)) */
-    LS_REAL t_pulse;  /* s, length of one pulse, rounded to whole sampling periods (>= 1) */
-    LS_REAL t_rest;   /* s, currents controlled to zero before each pulse and after the last, >= 3
-                         sampling periods after rounding (a pulse's end is sampled on the second) */
+    LS_REAL t_pulse;  /* s, length of one pulse, rounded to whole sampling periods (>= 2) */
+    LS_REAL t_rest;   /* s, zero voltage before each pulse and after the last, >= 3 sampling periods
+                         after rounding (a pulse's end is sampled on the second) */
     uint32_t pairs;   /* -, (+, -) pulse pairs, 1 .. LS_STARTUP_PAIRS_MAX */
     LS_REAL i_min;    /* A, smallest |i_diff| accepted as a decision, >= 0 */
     LS_REAL t_settle; /* s, HF relock after the pulses, >= 0 */
@@ -62,19 +69,21 @@ typedef struct {
 typedef struct {
     ls_startup_cfg cfg;     /* copy of the configuration */
     uint32_t n_lock;        /* -, t_lock in sampling periods */
+    uint32_t n_quiet;       /* -, t_quiet in sampling periods */
     uint32_t n_pulse;       /* -, t_pulse in sampling periods */
     uint32_t n_slot;        /* -, one pulse and its rest, sampling periods */
     uint32_t n_settle;      /* -, t_settle in sampling periods */
     ls_startup_phase phase; /* phase after the last step */
     uint32_t timer;         /* -, steps in the present phase (LS_SU_PULSE: in the present slot) */
     uint32_t pulse;         /* -, pulse in progress, 0 .. 2 pairs - 1 */
-    LS_REAL sum;            /* A, sum of the signed d-currents at the pulses' ends */
+    LS_REAL i_start;        /* A, d-current at the start of the pulse in progress */
+    LS_REAL sum;            /* A, sum of the pulses' signed d-current changes */
     LS_REAL v_d;            /* V, d-axis voltage of this step (LS_SU_PULSE; pulsing true) */
     bool pulsing;           /* this step applies v_d open loop (else: current control to zero) */
     bool turned;            /* set by the step that ends the pulses (the caller flips then), then
                                false again */
     /* results (valid from LS_SU_SETTLE on) */
-    LS_REAL i_diff;         /* A, mean(|i_+| - |i_-|) over the pairs */
+    LS_REAL i_diff;         /* A, mean(|di_+| - |di_-|) over the pairs */
     bool flip;              /* the estimate was turned by pi */
     uint32_t steps;         /* -, sampling periods since the start (saturates) */
 } ls_startup;
@@ -84,8 +93,8 @@ ls_status ls_startup_init(ls_startup *s, const ls_startup_cfg *cfg);
 /* Back to the start of LS_SU_LOCK, results cleared. */
 void ls_startup_reset(ls_startup *s);
 /* One sampling period. i_d: A, this step's sampled d-current in the estimated frame (raw, not
- * filtered); hf_valid: the demodulator sees enough HF signal. Sets v_d, pulsing and turned for
- * this step and returns the phase after it. Finite inputs (the drive's, by construction). */
-ls_startup_phase ls_startup_step(ls_startup *s, LS_REAL i_d, bool hf_valid);
+ * filtered); err: rad, the demodulated error; hf_valid: the demodulator sees enough HF signal.
+ * Sets v_d, pulsing and turned for this step and returns the phase after it. */
+ls_startup_phase ls_startup_step(ls_startup *s, LS_REAL i_d, LS_REAL err, bool hf_valid);
 
 #endif /* LINSENSE_LS_STARTUP_H */
