@@ -416,8 +416,8 @@ ls_status ls_sim_open_loop(const ls_sim_cfg *cfg, const double *seg_t, const dou
 void ls_sim_plant_eval(const ls_sim_cfg *cfg, double theta, double lab[3], double dlab[3], double lpm[2],
                        double dlpm[2]);
 double ls_sim_force(const ls_sim_cfg *cfg, double theta, const double i_ab[2]);
-void ls_sim_sat_eval(const ls_sim_cfg *cfg, double theta, const double i_ab[2], double lam[2], double l_inc[3],
-                     double dlam[2], double *force);
+void ls_sim_sat_eval(const ls_sim_cfg *cfg, double theta, const double i_ab[2], double lam[2],
+                     double l_inc[3], double dlam[2], double *force);
 
 /* binding helpers (defined in the set_source code below) */
 int ls_py_real_size(void);

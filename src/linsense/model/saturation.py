@@ -66,7 +66,8 @@ class Saturation:
         if self.tables:
             cur = ", ".join(f"{c:g}" for c in self.currents)
             return f"tables at i_q = {cur} A, polarity {self.polarity:g} /A"
-        return f"parametric: polarity {self.polarity:g} /A, L_q -{100 * self.q_drop:g} % at {self.q_current:g} A"
+        return (f"parametric: polarity {self.polarity:g} /A, "
+                f"L_q -{100 * self.q_drop:g} % at {self.q_current:g} A")
 
     def key(self) -> tuple:
         """Everything that defines it, hashable (for caches)."""
@@ -81,7 +82,8 @@ def i_sat_d_of(polarity: float, i_m: float) -> float:
     if polarity == 0.0:
         return 0.0
     if not (polarity > 0.0 and i_m > 0.0):
-        raise ValueError(f"polarity {polarity:g} /A needs a positive value and magnet current (i_m = {i_m:g} A)")
+        raise ValueError(f"polarity {polarity:g} /A needs a positive value and magnet current "
+                         f"(i_m = {i_m:g} A)")
     a2 = 4.0 * i_m / polarity - i_m * i_m
     if not a2 > 0.0:
         raise ValueError(f"polarity {polarity:g} /A is beyond what a magnet current of {i_m:g} A can give "
@@ -151,8 +153,9 @@ def incremental_dq(series: dict, theta: np.ndarray | float, i_q: float) -> np.nd
     k = np.arange(series["n_order"])
     c, s = np.cos(theta[..., None] * k), np.sin(theta[..., None] * k)
     pw = i_q ** np.arange(series["n_pow"])
-    v = np.einsum("p,pek,...k->...e", pw, series["dq_cos"], c) + np.einsum("p,pek,...k->...e", pw,
-                                                                         series["dq_sin"], s)
+    v = (np.einsum("p,pek,...k->...e", pw, series["dq_cos"], c)
+         + np.einsum("p,pek,...k->...e", pw, series["dq_sin"], s))
     out = np.empty(theta.shape + (2, 2))
-    out[..., 0, 0], out[..., 0, 1], out[..., 1, 0], out[..., 1, 1] = v[..., 0], v[..., 1], v[..., 1], v[..., 2]
+    out[..., 0, 0], out[..., 1, 1] = v[..., 0], v[..., 2]
+    out[..., 0, 1] = out[..., 1, 0] = v[..., 1]
     return out
