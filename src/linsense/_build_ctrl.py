@@ -339,6 +339,16 @@ void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd);
 /* simulator (csrc/sim, linsense/ls_sim.h) */
 #define LS_SIM_MAX_ORDER 64
 #define LS_SIM_MAX_PM 8
+#define LS_SIM_SAT_POW 4
+typedef struct {
+    int32_t on;
+    int32_t n_order;
+    int32_t n_pow;
+    double dq_cos[4][3][64];
+    double dq_sin[4][3][64];
+    double i_m;
+    double i_sat_d;
+} ls_sim_sat;
 typedef enum { LS_SIM_AVERAGE = 0, LS_SIM_SWITCHING = 1 } ls_sim_fidelity;
 typedef enum { LS_SIM_FREE = 0, LS_SIM_HELD = 1, LS_SIM_PRESCRIBED = 2 } ls_sim_motion;
 typedef enum { LS_SIM_LOAD_CONSTANT = 0, LS_SIM_LOAD_STEP = 1, LS_SIM_LOAD_INCLINE = 2 } ls_sim_load;
@@ -381,6 +391,7 @@ typedef struct {
     double v0;
     int32_t decimate;
     double i_abort;
+    ls_sim_sat sat;
 } ls_sim_cfg;
 typedef struct { double t; double x; int32_t move; } ls_sim_cmd;
 typedef struct {
@@ -405,6 +416,8 @@ ls_status ls_sim_open_loop(const ls_sim_cfg *cfg, const double *seg_t, const dou
 void ls_sim_plant_eval(const ls_sim_cfg *cfg, double theta, double lab[3], double dlab[3], double lpm[2],
                        double dlpm[2]);
 double ls_sim_force(const ls_sim_cfg *cfg, double theta, const double i_ab[2]);
+void ls_sim_sat_eval(const ls_sim_cfg *cfg, double theta, const double i_ab[2], double lam[2],
+                     double l_inc[3], double dlam[2], double *force);
 
 /* binding helpers (defined in the set_source code below) */
 int ls_py_real_size(void);

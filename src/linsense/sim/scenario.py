@@ -227,6 +227,27 @@ class RecordSection(BaseModel):
     decimate: int = Field(default=1, ge=1, le=1_000_000)
 
 
+class SaturationSection(BaseModel):
+    """The saturated plant (docs/simulator.md, "Saturation"): off by default (the linear plant).
+    ``enabled`` uses the motor file's ``[saturation]``; the other keys give or override its
+    parametric keys (so that a preset such as ecce2010 can saturate)."""
+
+    model_config = _STRICT
+    enabled: bool = False
+    polarity: NonNegative | None = None  # 1/A, (L_d(-I) - L_d(+I)) / L_d per A of d pulse
+    magnet_current: Positive | None = None  # A, i_m (default psi_pm / mean L_d)
+    q_drop: Annotated[float, Field(ge=0.0, lt=1.0)] | None = None  # -, fall of L_q at q_current
+    q_current: Positive | None = None  # A
+
+    @model_validator(mode="after")
+    def _check(self) -> SaturationSection:
+        keys = ("polarity", "magnet_current", "q_drop", "q_current")
+        given = [k for k in keys if getattr(self, k) is not None]
+        if given and not self.enabled:
+            raise KeyProblem(given[0], "only used by the saturated plant: set saturation.enabled = true")
+        return self
+
+
 class MetricsSection(BaseModel):
     model_config = _STRICT
     convergence_s: NonNegative = 0.1  # s, start of the transient/steady error windows
@@ -256,6 +277,7 @@ class ScenarioFile(BaseModel):
     record: RecordSection = Field(default_factory=RecordSection)
     metrics: MetricsSection = Field(default_factory=MetricsSection)
     calibration: CalibrationSection = Field(default_factory=CalibrationSection)
+    saturation: SaturationSection = Field(default_factory=SaturationSection)
 
     @model_validator(mode="after")
     def _check(self) -> ScenarioFile:
