@@ -104,18 +104,18 @@ void ls_drive_default_cfg(ls_drive_cfg *c)
     c->cal.period = 0;
     c->cal.dither_amp = LS_R(0.4);
     c->cal.dither_freq = LS_R(150.0); /* not a submultiple of the injection (200 Hz is: 5 x 200 = 1 kHz) */
-    /* start-up (ls_startup.h): about 1.9 A at the end of a 24 V, 0.5 ms pulse with L_d = 3.5 mH;
+    /* start-up (ls_startup.h): about 2.8 A at the end of a 36 V, 0.5 ms pulse with L_d = 3.5 mH;
      * linsense tune designs them from the motor's saturation data */
     c->startup.fs = fs;
-    c->startup.t_lock = LS_R(0.15);
+    c->startup.t_lock = LS_R(0.1);
     c->startup.err_lock = LS_R(0.2);
-    c->startup.t_quiet = LS_R(0.012); /* 12 V at 1200 V/s, and 2 ms */
-    c->startup.v_pulse = LS_R(24.0);
+    c->startup.t_quiet = LS_R(0.012); /* the injection's 10 ms ramp (12 V at 1200 V/s), and 2 ms */
+    c->startup.v_pulse = LS_R(36.0);
     c->startup.t_pulse = LS_R(0.5e-3);
-    c->startup.t_rest = LS_R(2.0e-3);
+    c->startup.t_rest = LS_R(1.5e-3);
     c->startup.pairs = 16u;
     c->startup.i_min = LS_R(0.005);
-    c->startup.t_settle = LS_R(0.05);
+    c->startup.t_settle = LS_R(0.03);
 }
 
 /* --------------------------------------------------------------------------- init */
@@ -176,8 +176,11 @@ ls_status ls_drive_init(ls_drive *d, const ls_drive_cfg *cfg)
     if (cfg->hf_dtres) {
         st |= cfg->dtres.fs == cfg->fs ? ls_dtres_init(&d->dtres, &cfg->dtres) : LS_ERR_PARAM;
     }
-    if (cfg->startup.pairs != 0u) { /* LS_MODE_STARTUP configured */
-        st |= cfg->startup.fs == cfg->fs && cfg->startup.v_pulse <= LS_DRIVE_V_DC_MAX
+    if (cfg->startup.pairs != 0u) { /* LS_MODE_STARTUP configured: the injection's envelope
+                                       rises and falls within t_settle and t_quiet */
+        const LS_REAL t_ramp = cfg->inject.amplitude / cfg->inject.ramp_rate;
+        st |= cfg->startup.fs == cfg->fs && cfg->startup.v_pulse <= LS_DRIVE_V_DC_MAX &&
+                      cfg->startup.t_quiet >= t_ramp && cfg->startup.t_settle >= t_ramp
                   ? ls_startup_init(&d->su, &cfg->startup)
                   : LS_ERR_PARAM;
     }

@@ -39,7 +39,7 @@ ls_startup_phase ls_drive_startup_step_(ls_drive *d, const ls_meas *meas, ls_cmd
         const LS_REAL err = ls_demod_step_cs(&d->demod, ihf_a, ihf_b, d->obs.pos.theta, c_est, s_est, d->inj.c,
                                              d->inj.s, LS_R(0.0));
         if (su->phase == LS_SU_LOCK || su->phase == LS_SU_SETTLE) { /* frozen in between */
-            ls_observer_step_finite(&d->obs, d->inj.amp >= cfg->inject.amplitude ? err : LS_R(0.0), LS_R(0.0));
+            ls_observer_step_finite(&d->obs, su->env >= LS_R(1.0) ? err : LS_R(0.0), LS_R(0.0));
         }
         /* the raw currents in the estimated frame (the pulses' start and end) */
         i_dr = c_est * i_a + s_est * i_b;
@@ -52,15 +52,25 @@ ls_startup_phase ls_drive_startup_step_(ls_drive *d, const ls_meas *meas, ls_cmd
         d->obs.pos = ls_pos_add(d->obs.pos, d->obs.pos.theta < LS_PI ? LS_PI : -LS_PI);
         d->obs.omega = LS_R(0.0);
     }
-    /* the injection: on while locking and settling (ramping), ramping down while quiet, off during
-     * the pulses (and ramped up again from zero after them) */
-    ls_inject_enable(&d->inj, ph != LS_SU_QUIET && ph != LS_SU_PULSE);
+    /* the injection: the carrier at full amplitude times a smoothstep envelope (a linear ramp's
+     * corners leave a DC current, a force impulse that a free mover keeps as a drift): up while
+     * locking and settling, down while quiet, zero during the pulses */
+    {
+        const LS_REAL du = d->inj.amp_step / cfg->inject.amplitude;
+        const bool up = ph == LS_SU_LOCK || ph == LS_SU_SETTLE || ph == LS_SU_DONE;
+        su->env = ls_clamp(up ? su->env + du : su->env - du, LS_R(0.0), LS_R(1.0));
+        if (ph == LS_SU_PULSE) {
+            su->env = LS_R(0.0);
+        }
+        ls_inject_enable(&d->inj, true);
+        d->inj.amp = cfg->inject.amplitude;
+    }
     if (ph == LS_SU_PULSE || su->turned) {
         /* open loop: the pulse's d-voltage, or zero (the current decays freely, no controller
          * overshoot to bias the next pulse); the controller starts again afterwards */
         const LS_REAL v_max = meas->v_dc * (LS_R(0.95) / LS_SQRT3); /* 95 % of the linear range */
         ls_current_reset(&d->cur);
-        d->inj.amp = LS_R(0.0);
+        (void)ls_inject_step(&d->inj); /* the carrier goes on */
         i_d = i_dr;
         i_q = -s_est * i_a + c_est * i_b;
         v_d = ls_clamp(su->v_d, -v_max, v_max);
@@ -68,14 +78,21 @@ ls_startup_phase ls_drive_startup_step_(ls_drive *d, const ls_meas *meas, ls_cmd
         v_a = c_est * v_d;
         v_b = s_est * v_d;
     } else {
-        /* zero currents, on the fundamental currents, plus the injection */
+        /* zero currents, on the fundamental currents, plus the injection (no speed loop even once
+         * the polarity is known: the observer's speed while it relocks after the pulses is no
+         * motion, and a loop on it pushes the mover) */
         i_d = c_est * if_a + s_est * if_b;
         i_q = -s_est * if_a + c_est * if_b;
         v_lim = meas->v_dc * (LS_R(1.0) / LS_SQRT3) - d->v_hf_max;
+        /* at zero speed: the observer's speed while it slews onto the axis is no motion, and its
+         * back-EMF feed-forward would push the mover */
         ls_current_step_finite(&d->cur, i_d, i_q, LS_R(0.0), LS_R(0.0), LS_R(0.0), v_lim, &v_d, &v_q);
-        v_hf = ls_inject_step(&d->inj);
-        v_a = c_est * v_d - s_est * v_q + v_hf * c_est - d->inj.v_q * s_est;
-        v_b = s_est * v_d + c_est * v_q + v_hf * s_est + d->inj.v_q * c_est;
+        const LS_REAL g = su->env * su->env * (LS_R(3.0) - LS_R(2.0) * su->env);
+        LS_REAL v_hq;
+        v_hf = g * ls_inject_step(&d->inj);
+        v_hq = g * d->inj.v_q;
+        v_a = c_est * v_d - s_est * v_q + v_hf * c_est - v_hq * s_est;
+        v_b = s_est * v_d + c_est * v_q + v_hf * s_est + v_hq * c_est;
     }
     (void)ls_mod_step_finite(&d->mod, v_a, v_b, meas->v_dc, meas->i_abc, duty);
     if (!LS_ISFINITE(duty[0] + duty[1] + duty[2])) {

@@ -52,6 +52,7 @@ void ls_startup_reset(ls_startup *s)
     s->v_d = LS_R(0.0);
     s->pulsing = false;
     s->turned = false;
+    s->env = LS_R(0.0);
     s->i_diff = LS_R(0.0);
     s->flip = false;
     s->steps = 0u;

@@ -242,11 +242,38 @@ void ls_protect_trip(ls_protect *p, uint32_t bits);
 uint32_t ls_protect_check_power(ls_protect *p, const LS_REAL i_abc[3], LS_REAL v_dc);
 uint32_t ls_protect_check_observer(ls_protect *p, LS_REAL err, bool valid, LS_REAL omega);
 
+/* ls_startup.h */
+typedef enum {
+    LS_SU_LOCK = 0, LS_SU_QUIET = 1, LS_SU_PULSE = 2, LS_SU_SETTLE = 3, LS_SU_DONE = 4, LS_SU_FAILED = 5
+} ls_startup_phase;
+typedef struct {
+    LS_REAL fs;
+    LS_REAL t_lock;
+    LS_REAL err_lock;
+    LS_REAL t_quiet;
+    LS_REAL v_pulse;
+    LS_REAL t_pulse;
+    LS_REAL t_rest;
+    uint32_t pairs;
+    LS_REAL i_min;
+    LS_REAL t_settle;
+} ls_startup_cfg;
+typedef struct {
+    ls_startup_cfg cfg;
+    ls_startup_phase phase;
+    uint32_t pulse;
+    LS_REAL i_diff;
+    bool flip;
+    uint32_t steps;
+    ...;
+} ls_startup;
+ls_status ls_startup_init(ls_startup *s, const ls_startup_cfg *cfg);
+
 /* ls_drive.h */
 #define LS_FAULT_ENCODER ...
 typedef enum {
     LS_MODE_OFF = 0, LS_MODE_SENSORED = 1, LS_MODE_SENSORLESS_LUT = 2, LS_MODE_SENSORLESS_NOLUT = 3,
-    LS_MODE_CALIBRATION = 4
+    LS_MODE_CALIBRATION = 4, LS_MODE_STARTUP = 5
 } ls_mode;
 typedef struct {
     uint32_t points;
@@ -283,6 +310,7 @@ typedef struct {
     ls_dtres_cfg dtres;
     ls_protect_cfg prot;
     ls_cal_cfg cal;
+    ls_startup_cfg startup;
 } ls_drive_cfg;
 typedef struct {
     LS_REAL i_abc[3];
@@ -324,6 +352,8 @@ typedef struct {
     ls_protect prot;
     uint32_t cal_index;
     LS_REAL psi_cal;
+    bool starting;
+    ls_startup su;
     ...;
 } ls_drive;
 void ls_drive_default_cfg(ls_drive_cfg *cfg);

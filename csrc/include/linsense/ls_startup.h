@@ -82,6 +82,9 @@ typedef struct {
     bool pulsing;           /* this step applies v_d open loop (else: current control to zero) */
     bool turned;            /* set by the step that ends the pulses (the caller flips then), then
                                false again */
+    LS_REAL env;            /* -, the caller's injection envelope, 0 .. 1 (ls_drive: a smoothstep
+                               3 u^2 - 2 u^3 of this linear ramp, so that switching the injection
+                               on and off leaves no DC current, i.e. no force impulse) */
     /* results (valid from LS_SU_SETTLE on) */
     LS_REAL i_diff;         /* A, mean(|di_+| - |di_-|) over the pairs */
     bool flip;              /* the estimate was turned by pi */
@@ -90,7 +93,7 @@ typedef struct {
 
 /* Validate cfg (LS_ERR_NULL, LS_ERR_PARAM) and reset. */
 ls_status ls_startup_init(ls_startup *s, const ls_startup_cfg *cfg);
-/* Back to the start of LS_SU_LOCK, results cleared. */
+/* Back to the start of LS_SU_LOCK, results cleared, env 0. */
 void ls_startup_reset(ls_startup *s);
 /* One sampling period. i_d: A, this step's sampled d-current in the estimated frame (raw, not
  * filtered); err: rad, the demodulated error; hf_valid: the demodulator sees enough HF signal.

@@ -34,7 +34,8 @@ from linsense.tune.design import DriveData, current_gains, design, error_gain, m
 #: drive sub-configuration -> scenario section (for messages)
 _SECTION = {"inject": "injection", "bpf": "injection", "sep": "injection", "demod": "observer",
             "obs": "observer", "enc_obs": "sensors", "current": "controller", "pos": "controller",
-            "pos.speed": "controller", "traj": "reference", "mod": "inverter", "prot": "protection"}
+            "pos.speed": "controller", "traj": "reference", "mod": "inverter", "prot": "protection",
+            "startup": "startup"}
 
 
 @dataclass
@@ -424,12 +425,16 @@ def build(sc: Scenario, motor: Motor | None = None, trace_in_memory: bool = True
         d.cal.k_int, d.cal.t_settle, d.cal.t_hold = cs.k_int, cs.t_settle, cs.t_hold
         d.cal.tol, d.cal.t_max = math.radians(cs.tol_deg), cs.t_max
         d.cal.dither_amp, d.cal.dither_freq = cs.dither_a, cs.dither_hz
-    for sub in ("inject", "bpf", "sep", "demod", "obs", "enc_obs", "current", "traj", "prot", "dtres"):
+    su = s.startup
+    d.startup.t_lock, d.startup.err_lock, d.startup.t_quiet = su.t_lock, math.radians(su.err_lock_deg), su.t_quiet
+    d.startup.v_pulse, d.startup.t_pulse, d.startup.t_rest = su.v_pulse, su.t_pulse, su.t_rest
+    d.startup.pairs, d.startup.i_min, d.startup.t_settle = su.pairs, su.i_min, su.t_settle
+    for sub in ("inject", "bpf", "sep", "demod", "obs", "enc_obs", "current", "traj", "prot", "dtres", "startup"):
         getattr(d, sub).fs = fs
     d.pos.speed.fs = fs
 
     # the table for sensorless_lut, and for the HF observer beside the encoder in sensored mode
-    compensation = obs.compensation or ("lut" if ctl.mode in ("sensorless_lut", "sensored") else "none")
+    compensation = obs.compensation or ("lut" if ctl.mode in ("sensorless_lut", "sensored", "startup") else "none")
     # the tables the controller can know, from the motor model with the resistance it believes (as
     # cached ls_lut objects: the drive only reads them, through const pointers)
     def lut_motor() -> Motor:
@@ -455,7 +460,9 @@ def build(sc: Scenario, motor: Motor | None = None, trace_in_memory: bool = True
         sections = sorted({_SECTION.get(k.split(".")[0] if k != "pos.speed" else k, k) for k in exc.fields})
         key = ",".join(sections)
         raise InputError(sc.source, key, f"refused by the controller library: {exc}") from None
-    drive.set_position(2.0 * math.pi * setup.x0 / tau)
+    # (the start-up does not know where the mover is: its estimate starts at startup.guess_mm)
+    x_known = s.startup.guess_mm * 1e-3 if ctl.mode == "startup" else setup.x0
+    drive.set_position(2.0 * math.pi * x_known / tau)
     if s.initial.load_balanced:
         drive.set_load(initial_load(sc, motor))
     try:
