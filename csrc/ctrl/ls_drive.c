@@ -107,7 +107,7 @@ void ls_drive_default_cfg(ls_drive_cfg *c)
     /* start-up (ls_startup.h): about 2.8 A at the end of a 36 V, 0.5 ms pulse with L_d = 3.5 mH;
      * linsense tune designs them from the motor's saturation data */
     c->startup.fs = fs;
-    c->startup.t_lock = LS_R(0.1);
+    c->startup.t_lock = LS_R(0.07);
     c->startup.err_lock = LS_R(0.2);
     c->startup.t_quiet = LS_R(0.012); /* the injection's 10 ms ramp (12 V at 1200 V/s), and 2 ms */
     c->startup.v_pulse = LS_R(36.0);

@@ -1,7 +1,6 @@
 /* ls_drive_step's LS_MODE_STARTUP path (ls_drive.h, ls_startup.h), in a translation unit of its
  * own: ls_drive.c calls it from the outputs-off branch (d->starting) and handles its end. */
 #include <math.h>
-#include <string.h>
 
 #include "linsense/ls_drive.h"
 #include "linsense/ls_math.h"
@@ -99,7 +98,7 @@ ls_startup_phase ls_drive_startup_step_(ls_drive *d, const ls_meas *meas, ls_cmd
         ls_protect_trip(&d->prot, LS_FAULT_NONFINITE);
         return LS_SU_FAILED;
     }
-    memset(cmd, 0, sizeof *cmd);
+    /* every field exactly once (as ls_drive_step) */
     cmd->duty[0] = duty[0];
     cmd->duty[1] = duty[1];
     cmd->duty[2] = duty[2];
@@ -118,9 +117,14 @@ ls_startup_phase ls_drive_startup_step_(ls_drive *d, const ls_meas *meas, ls_cmd
     cmd->psi_comp = d->demod.psi;
     cmd->i_dq[0] = i_d;
     cmd->i_dq[1] = i_q;
+    cmd->i_dq_ref[0] = LS_R(0.0);
+    cmd->i_dq_ref[1] = LS_R(0.0);
     cmd->v_dq[0] = v_d;
     cmd->v_dq[1] = v_q;
     cmd->v_hf = v_hf;
+    cmd->cal_index = 0u;
+    cmd->cal_done = false;
+    cmd->psi_cal = LS_R(0.0);
     return ph;
 }
 

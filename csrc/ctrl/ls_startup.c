@@ -29,6 +29,7 @@ ls_status ls_startup_init(ls_startup *s, const ls_startup_cfg *cfg)
     if (!LS_ISFINITE(cfg->fs) || !(cfg->fs > LS_R(0.0)) || !LS_ISFINITE(cfg->v_pulse) ||
         !(cfg->v_pulse > LS_R(0.0)) || !LS_ISFINITE(cfg->i_min) || cfg->i_min < LS_R(0.0) ||
         !LS_ISFINITE(cfg->err_lock) || !(cfg->err_lock > LS_R(0.0)) || cfg->pairs < 1u ||
+        !(cfg->t_lock * cfg->fs <= LS_R(0.25) * (LS_REAL)LS_STARTUP_STEPS_MAX) ||
         cfg->pairs > LS_STARTUP_PAIRS_MAX || !steps_of(cfg->t_lock, cfg->fs, 1u, &s->n_lock) ||
         !steps_of(cfg->t_quiet, cfg->fs, 0u, &s->n_quiet) || !steps_of(cfg->t_pulse, cfg->fs, 2u, &s->n_pulse) ||
         !steps_of(cfg->t_rest, cfg->fs, 3u, &n_rest) || !steps_of(cfg->t_settle, cfg->fs, 0u, &s->n_settle) ||
@@ -74,9 +75,15 @@ ls_startup_phase ls_startup_step(ls_startup *s, LS_REAL i_d, LS_REAL err, bool h
     }
     switch (s->phase) {
     case LS_SU_LOCK:
+        /* at least n_lock steps; then as soon as the error is within err_lock (a start near the
+         * unstable equilibrium, 90 deg off, takes longer); failed after 4 n_lock */
         if (++s->timer >= s->n_lock) {
-            s->timer = 0u;
-            s->phase = hf_valid && LS_FABS(err) <= s->cfg.err_lock ? LS_SU_QUIET : LS_SU_FAILED;
+            if (hf_valid && LS_FABS(err) <= s->cfg.err_lock) {
+                s->timer = 0u;
+                s->phase = LS_SU_QUIET;
+            } else if (s->timer >= 4u * s->n_lock) {
+                s->phase = LS_SU_FAILED;
+            }
         }
         break;
     case LS_SU_QUIET:

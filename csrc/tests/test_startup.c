@@ -85,15 +85,22 @@ static void test_module(void)
     LS_CHECK_NEAR(s.i_diff, -0.4, 1e-4);
     /* timing: lock 160, quiet 80, 4 slots (16 rest + 4 pulse), a last rest, settle 80 */
     LS_CHECK(steps == 160u + 80u + 4u * 20u + 16u + 80u);
-    /* the lock not reached: error beyond err_lock */
+    /* the lock not reached: error beyond err_lock, failed at 4 t_lock (a late lock goes on) */
     ls_startup_reset(&s);
-    for (k = 0; k < 200u; ++k) {
+    for (k = 0; k < 639u; ++k) {
+        (void)ls_startup_step(&s, LS_R(0.0), LS_R(0.5), true);
+    }
+    LS_CHECK(s.phase == LS_SU_LOCK);
+    (void)ls_startup_step(&s, LS_R(0.0), LS_R(0.1), true);
+    LS_CHECK(s.phase == LS_SU_QUIET);
+    ls_startup_reset(&s);
+    for (k = 0; k < 640u; ++k) {
         (void)ls_startup_step(&s, LS_R(0.0), LS_R(0.5), true);
     }
     LS_CHECK(s.phase == LS_SU_FAILED);
     /* no HF signal at the end of the lock */
     ls_startup_reset(&s);
-    for (k = 0; k < 200u; ++k) {
+    for (k = 0; k < 700u; ++k) {
         (void)ls_startup_step(&s, LS_R(0.0), LS_R(0.0), false);
     }
     LS_CHECK(s.phase == LS_SU_FAILED);

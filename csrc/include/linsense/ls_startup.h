@@ -9,8 +9,8 @@
  *   LS_SU_LOCK    t_lock with zero current references, the HF injection and the HF observer
  *                 running: the estimate converges on the axis (modulo pi). The mover is not held
  *                 (a position loop on an estimate of unknown polarity could push the wrong way)
- *                 and feels no force but the HF current's. At its end the demodulated error must
- *                 be valid and within err_lock (else LS_SU_FAILED).
+ *                 and feels no force but the HF current's. It ends after at least t_lock, once the
+ *                 demodulated error is valid and within err_lock (LS_SU_FAILED if not by 4 t_lock).
  *   LS_SU_QUIET   t_quiet: the injection ramps down (stopping it at once would leave its HF
  *                 currents to decay with an offset, a force impulse), observer frozen.
  *   LS_SU_PULSE   2 x pairs voltage pulses of +-v_pulse for t_pulse on the estimated d-axis, each
@@ -39,7 +39,8 @@
 #include "linsense/ls_types.h"
 
 #define LS_STARTUP_PAIRS_MAX 1024u      /* -, largest number of pulse pairs */
-#define LS_STARTUP_STEPS_MAX 100000000u /* -, largest length of a phase in sampling periods */
+#define LS_STARTUP_STEPS_MAX 100000000u /* -, largest length of a phase in sampling periods (t_lock:
+                                           a quarter of it) */
 
 typedef enum {
     LS_SU_LOCK = 0,   /* HF lock on the axis (modulo pi), zero currents */
@@ -52,8 +53,8 @@ typedef enum {
 
 typedef struct {
     LS_REAL fs;       /* Hz, sampling rate (= PWM frequency), > 0 */
-    LS_REAL t_lock;   /* s, HF lock time before the pulses, > 0 */
-    LS_REAL err_lock; /* rad, largest |demodulated error| accepted at the end of t_lock, > 0 */
+    LS_REAL t_lock;   /* s, shortest HF lock before the pulses (at most 4 t_lock), > 0 */
+    LS_REAL err_lock; /* rad, the lock ends once |demodulated error| <= err_lock, > 0 */
     LS_REAL t_quiet;  /* s, injection ramp-down before the pulses (>= its amplitude / ramp rate plus
                          a few L/R), >= 0 */
     LS_REAL v_pulse;  /* V, pulse amplitude on the estimated d-axis, > 0 (the drive also bounds it by

@@ -55,8 +55,9 @@ def base_scenario(motor: str = "ecce2010", polarity: float | None = 0.0131, fide
 
 
 def startup_run(base: dict, x0_mm: float, load_n: float = 0.0, coulomb: float = 30.0, seed: int = 1,
-                base_dir=None) -> StartupRun:
-    """One start-up from the true position ``x0_mm`` (the drive's estimate at startup.guess_mm)."""
+                base_dir=None, coulomb_free: float = 0.0) -> StartupRun:
+    """One start-up from the true position ``x0_mm`` (the drive's estimate at startup.guess_mm);
+    Coulomb friction ``coulomb`` N with a load, ``coulomb_free`` N without."""
     d = {k: (dict(v) if isinstance(v, dict) else v) for k, v in base.items()}
     d["initial"] = {"position_mm": float(x0_mm)}
     d["load"] = {"force": float(load_n)}
@@ -68,8 +69,7 @@ def startup_run(base: dict, x0_mm: float, load_n: float = 0.0, coulomb: float = 
     d["scenario"]["duration"] = t_max + AFTER_S
     sc = scenario_from_dict(d, base_dir=base_dir)
     b = build(sc)
-    if load_n != 0.0:
-        b.cfg.coulomb = max(float(b.cfg.coulomb), float(coulomb))
+    b.cfg.coulomb = max(float(b.cfg.coulomb), float(coulomb if load_n != 0.0 else coulomb_free))
     raw = run_closed_loop(b.cfg, b.drive.state, b.n_steps, b.commands, signals=("x", "theta_err"))
     s = b.drive.state.su
     n_su = int(s.steps)
@@ -93,10 +93,10 @@ def start_positions(n: int, pole_pitch_mm: float = 56.0, seed: int = 14) -> np.n
 
 
 def startup_runs(base: dict, n: int = 200, loads=(0.0, 20.0), coulomb: float = 30.0, seed: int = 14,
-                 base_dir=None) -> list[StartupRun]:
+                 base_dir=None, coulomb_free: float = 0.0) -> list[StartupRun]:
     """:func:`startup_run` at ``n`` random positions over two periods, for each load."""
     xs = start_positions(n, seed=seed)
-    return [startup_run(base, x, load, coulomb, seed=k + 1, base_dir=base_dir)
+    return [startup_run(base, x, load, coulomb, seed=k + 1, base_dir=base_dir, coulomb_free=coulomb_free)
             for load in loads for k, x in enumerate(xs)]
 
 
