@@ -26,3 +26,10 @@ if command -v "${ARM_CC:-arm-none-eabi-gcc}" >/dev/null; then
 else
   echo "Cortex-M4F code size: arm-none-eabi-gcc not installed (make tools installs it)"
 fi
+# the start-up with the magnet polarity: 200 random starts over two periods, 0 and 20 N (about 20 s)
+PY=${PY:-.venv/bin/python}
+if [ -x "$PY" ]; then
+  "$PY" tools/bench_startup.py 200
+else
+  echo "start-up benchmark: $PY not found (make install), run: python tools/bench_startup.py"
+fi

@@ -114,7 +114,7 @@ void ls_drive_default_cfg(ls_drive_cfg *c)
     c->startup.t_pulse = LS_R(0.5e-3);
     c->startup.t_rest = LS_R(1.5e-3);
     c->startup.pairs = 16u;
-    c->startup.i_min = LS_R(0.005);
+    c->startup.i_min = LS_R(0.01); /* about 2 sigma of 16 pairs with 10 mA of current noise */
     c->startup.t_settle = LS_R(0.03);
 }
 

@@ -331,6 +331,11 @@ class ScenarioFile(BaseModel):
                     raise KeyProblem(f"startup.{k}", f"at most 60 s, got {getattr(su, k):g}")
             if su.err_lock_deg > 90.0:
                 raise KeyProblem("startup.err_lock_deg", f"at most 90 deg, got {su.err_lock_deg:g}")
+            t_ramp = self.injection.amplitude / self.injection.ramp_rate
+            for k in ("t_quiet", "t_settle"):
+                if getattr(su, k) < t_ramp:
+                    raise KeyProblem(f"startup.{k}", f"must cover the injection's ramp, amplitude / ramp_rate = "
+                                     f"{t_ramp:g} s, got {getattr(su, k):g}")
         if ctl.mode not in ("sensorless_lut", "sensored", "startup") and comp == "lut":
             raise KeyProblem("observer.compensation", f"\"lut\" is only used by control.mode = "
                             f"\"sensorless_lut\" (or \"sensored\", for the HF observer beside the encoder), "
