@@ -104,17 +104,18 @@ void ls_drive_default_cfg(ls_drive_cfg *c)
     c->cal.period = 0;
     c->cal.dither_amp = LS_R(0.4);
     c->cal.dither_freq = LS_R(150.0); /* not a submultiple of the injection (200 Hz is: 5 x 200 = 1 kHz) */
-    /* start-up (ls_startup.h): about 2.8 A at the end of a 36 V, 0.5 ms pulse with L_d = 3.5 mH;
-     * linsense tune designs them from the motor's saturation data */
+    /* start-up (ls_startup.h): `linsense tune --polarity 0.0131` for ecce2010 (the FEA's 1.31 %/A of
+     * a thin back iron) and this drive, 10 mA rms of current noise and a 12-bit ADC: 2.8 A at the
+     * end of a 37.4 V, 7-period pulse, 16 pairs for a decision 6 sigma clear (docs/tuning.md) */
     c->startup.fs = fs;
     c->startup.t_lock = LS_R(0.07);
     c->startup.err_lock = LS_R(0.2);
     c->startup.t_quiet = LS_R(0.012); /* the injection's 10 ms ramp (12 V at 1200 V/s), and 2 ms */
-    c->startup.v_pulse = LS_R(36.0);
-    c->startup.t_pulse = LS_R(0.5e-3);
-    c->startup.t_rest = LS_R(1.5e-3);
+    c->startup.v_pulse = LS_R(37.4);
+    c->startup.t_pulse = LS_R(0.4375e-3);
+    c->startup.t_rest = LS_R(1.5625e-3);
     c->startup.pairs = 16u;
-    c->startup.i_min = LS_R(0.01); /* about 2 sigma of 16 pairs with 10 mA of current noise */
+    c->startup.i_min = LS_R(0.0126);
     c->startup.t_settle = LS_R(0.03);
 }
 
