@@ -31,11 +31,12 @@ def main() -> None:
     for load, s in summary(runs).items():
         print(f"start-up, {a.fidelity}, load {load:g} N: polarity right {s['right']}/{s['n']}, worst motion "
               f"while detecting {s['motion_mm']:.4f} mm (at {s['worst_x0_mm']:.2f} mm), detection "
-              f"{s['detect_s'] * 1e3:.1f} ms, smallest |i_diff| {s['i_diff_min_a'] * 1e3:.1f} mA, worst motion "
-              f"in the first {100:d} ms of position control {s['motion_after_mm']:.3f} mm")
+              f"{s['detect_s'] * 1e3:.1f} ms, smallest |i_diff| {s['i_diff_min_a'] * 1e3:.1f} mA, "
+              f"worst motion in the first 100 ms of position control {s['motion_after_mm']:.3f} mm")
     wrong = [r for r in runs if not r.right]
     for r in wrong:
-        print(f"  wrong: x0 {r.x0_mm:.2f} mm, load {r.load_n:g} N, fault {r.fault:#x}, i_diff {r.i_diff_a * 1e3:.1f} mA")
+        print(f"  wrong: x0 {r.x0_mm:.2f} mm, load {r.load_n:g} N, fault {r.fault:#x}, "
+              f"i_diff {r.i_diff_a * 1e3:.1f} mA")
     print(f"start-up benchmark: {len(runs)} runs in {wall:.1f} s")
 
 

@@ -385,7 +385,8 @@ def calibrate(motor_spec: str, positions: int, load: float, fidelity: str, quad:
                    "pulse (polarity.csv of linsense fea --polarity: rel / I); default: the motor file's "
                    "[saturation] polarity, else no start-up design")
 @click.option("--current-noise", type=float, default=0.01, show_default=True, callback=_finite(0.0, False),
-              help="current-sensor noise, A rms per phase (12-bit ADC over +-10 A on top), for the pulse pairs")
+              help="current-sensor noise, A rms per phase (a 12-bit ADC over +-10 A on top), for the "
+                   "pulse pairs")
 @click.option("--name", default=None, help="C name suffix (default: the motor name)")
 @click.option("--out", required=True, type=click.Path(dir_okay=False), help="output file")
 def tune(motor_spec: str, scenario_path: str | None, v_dc, f_pwm, dead_time, i_max, v_inj, f_inj, quad,

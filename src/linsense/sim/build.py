@@ -426,15 +426,18 @@ def build(sc: Scenario, motor: Motor | None = None, trace_in_memory: bool = True
         d.cal.tol, d.cal.t_max = math.radians(cs.tol_deg), cs.t_max
         d.cal.dither_amp, d.cal.dither_freq = cs.dither_a, cs.dither_hz
     su = s.startup
-    d.startup.t_lock, d.startup.err_lock, d.startup.t_quiet = su.t_lock, math.radians(su.err_lock_deg), su.t_quiet
+    d.startup.t_lock, d.startup.err_lock = su.t_lock, math.radians(su.err_lock_deg)
+    d.startup.t_quiet = su.t_quiet
     d.startup.v_pulse, d.startup.t_pulse, d.startup.t_rest = su.v_pulse, su.t_pulse, su.t_rest
     d.startup.pairs, d.startup.i_min, d.startup.t_settle = su.pairs, su.i_min, su.t_settle
-    for sub in ("inject", "bpf", "sep", "demod", "obs", "enc_obs", "current", "traj", "prot", "dtres", "startup"):
+    for sub in ("inject", "bpf", "sep", "demod", "obs", "enc_obs", "current", "traj", "prot", "dtres",
+                "startup"):
         getattr(d, sub).fs = fs
     d.pos.speed.fs = fs
 
     # the table for sensorless_lut, and for the HF observer beside the encoder in sensored mode
-    compensation = obs.compensation or ("lut" if ctl.mode in ("sensorless_lut", "sensored", "startup") else "none")
+    compensation = obs.compensation or ("lut" if ctl.mode in ("sensorless_lut", "sensored", "startup")
+                                        else "none")
     # the tables the controller can know, from the motor model with the resistance it believes (as
     # cached ls_lut objects: the drive only reads them, through const pointers)
     def lut_motor() -> Motor:

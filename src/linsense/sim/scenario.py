@@ -94,7 +94,8 @@ class InverterSection(BaseModel):
 
 class ControlSection(BaseModel):
     model_config = _STRICT
-    mode: Literal["sensorless_lut", "sensorless_nolut", "sensored", "calibration", "startup"] = "sensorless_lut"
+    mode: Literal["sensorless_lut", "sensorless_nolut", "sensored", "calibration",
+                  "startup"] = "sensorless_lut"
     fs: Positive | None = None  # Hz, must equal inverter.f_pwm (default: equal)
     delay_comp: NonNegative = _c(_C.delay_comp)  # sampling periods of angle advance
     inject_sensored: bool = bool(_C.inject_sensored)  # keep injecting (and observing) in sensored mode
@@ -334,8 +335,8 @@ class ScenarioFile(BaseModel):
             t_ramp = self.injection.amplitude / self.injection.ramp_rate
             for k in ("t_quiet", "t_settle"):
                 if getattr(su, k) < t_ramp:
-                    raise KeyProblem(f"startup.{k}", f"must cover the injection's ramp, amplitude / ramp_rate = "
-                                     f"{t_ramp:g} s, got {getattr(su, k):g}")
+                    raise KeyProblem(f"startup.{k}", f"must cover the injection's ramp, amplitude / "
+                                     f"ramp_rate = {t_ramp:g} s, got {getattr(su, k):g}")
         if ctl.mode not in ("sensorless_lut", "sensored", "startup") and comp == "lut":
             raise KeyProblem("observer.compensation", f"\"lut\" is only used by control.mode = "
                             f"\"sensorless_lut\" (or \"sensored\", for the HF observer beside the encoder), "

@@ -90,10 +90,11 @@ class StartupDesign:
 
     def lines(self) -> list[str]:
         return [
-            f"  start-up       pulses {self.v_pulse:.3g} V x {self.t_pulse * 1e3:.3g} ms ({self.i_peak:.2f} A), "
-            f"{self.pairs} pairs, rests {self.t_rest * 1e3:.3g} ms; signal {self.signal * 1e3:.3g} mA against "
-            f"{self.sigma * 1e3:.3g} mA rms (polarity {self.polarity * 100:.3g} %/A), i_min {self.i_min * 1e3:.3g} mA; "
-            f"lock {self.t_lock * 1e3:.3g} ms, detection {self.detect_s * 1e3:.0f} ms, drift from the pulses "
+            f"  start-up       pulses {self.v_pulse:.3g} V x {self.t_pulse * 1e3:.3g} ms "
+            f"({self.i_peak:.2f} A), {self.pairs} pairs, rests {self.t_rest * 1e3:.3g} ms; signal "
+            f"{self.signal * 1e3:.3g} mA against {self.sigma * 1e3:.3g} mA rms (polarity "
+            f"{self.polarity * 100:.3g} %/A), i_min {self.i_min * 1e3:.3g} mA; lock "
+            f"{self.t_lock * 1e3:.3g} ms, detection {self.detect_s * 1e3:.0f} ms, drift from the pulses "
             f"~{self.motion_mm:.3g} mm",
         ]
 
@@ -102,21 +103,22 @@ def pulse_currents(L_d0: float, R_s: float, i_m: float, a: float, v: float, t: f
                    n_sub: int = 400) -> tuple[float, float]:
     """Current change (A) of a ``+v`` and a ``-v`` pulse of ``t`` s from zero current (RK2 on the
     saturated d-axis)."""
+    def di(x: float, vs: float) -> float:
+        return (vs - R_s * x) / (L_d0 * float(d_factor(x, i_m, a)))
+
     out = []
-    for sgn in (1.0, -1.0):
+    for vs in (v, -v):
         i, h = 0.0, t / n_sub
         for _ in range(n_sub):
-            def di(x: float) -> float:
-                return (sgn * v - R_s * x) / (L_d0 * float(d_factor(x, i_m, a)))
-            k1 = di(i)
-            i += h * di(i + 0.5 * h * k1)
+            i += h * di(i + 0.5 * h * di(i, vs), vs)
         out.append(i)
     return out[0], out[1]
 
 
 def design_startup(motor: Motor, *, v_dc: float, f_pwm: float, i_max: float, observer_bw: float,
                    v_inj: float, polarity: float | None = None, current_noise: float = 0.01,
-                   adc_bits: int = 12, adc_range: float = 10.0, source: str = "<tune>") -> StartupDesign | None:
+                   adc_bits: int = 12, adc_range: float = 10.0,
+                   source: str = "<tune>") -> StartupDesign | None:
     """The start-up for ``motor``, or None without saturation data (``polarity`` None and no
     ``[saturation] polarity`` in the motor file)."""
     if polarity is None and motor.saturation is not None and motor.saturation.polarity > 0:
