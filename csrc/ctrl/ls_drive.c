@@ -177,11 +177,8 @@ ls_status ls_drive_init(ls_drive *d, const ls_drive_cfg *cfg)
     if (cfg->hf_dtres) {
         st |= cfg->dtres.fs == cfg->fs ? ls_dtres_init(&d->dtres, &cfg->dtres) : LS_ERR_PARAM;
     }
-    if (cfg->startup.pairs != 0u) { /* LS_MODE_STARTUP configured: the injection's envelope
-                                       rises and falls within t_settle and t_quiet */
-        const LS_REAL t_ramp = cfg->inject.amplitude / cfg->inject.ramp_rate;
-        st |= cfg->startup.fs == cfg->fs && cfg->startup.v_pulse <= LS_DRIVE_V_DC_MAX &&
-                      cfg->startup.t_quiet >= t_ramp && cfg->startup.t_settle >= t_ramp
+    if (cfg->startup.pairs != 0u) { /* LS_MODE_STARTUP configured */
+        st |= cfg->startup.fs == cfg->fs && cfg->startup.v_pulse <= LS_DRIVE_V_DC_MAX
                   ? ls_startup_init(&d->su, &cfg->startup)
                   : LS_ERR_PARAM;
     }
@@ -284,8 +281,10 @@ ls_status ls_drive_set_mode(ls_drive *d, ls_mode mode)
             return LS_ERR_PARAM;
         }
         break;
-    case LS_MODE_STARTUP:
-        if (d->cfg.demod.comp == NULL || d->cfg.startup.pairs == 0u) {
+    case LS_MODE_STARTUP: /* the injection's envelope must rise and fall within t_settle and t_quiet */
+        if (d->cfg.demod.comp == NULL || d->cfg.startup.pairs == 0u ||
+            !(d->cfg.startup.t_quiet * d->cfg.inject.ramp_rate >= d->cfg.inject.amplitude) ||
+            !(d->cfg.startup.t_settle * d->cfg.inject.ramp_rate >= d->cfg.inject.amplitude)) {
             return LS_ERR_PARAM;
         }
         break;

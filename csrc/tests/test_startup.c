@@ -247,6 +247,11 @@ static void test_refused(void)
     LS_CHECK(ls_drive_init(&d, &cfg) == LS_OK);
     LS_CHECK(ls_drive_set_mode(&d, LS_MODE_STARTUP) == LS_ERR_PARAM); /* not configured */
     cfg.startup.pairs = 4u;
+    cfg.startup.t_quiet = LS_R(0.005); /* below the injection's 10 ms ramp: the mode is refused */
+    LS_CHECK(ls_drive_init(&d, &cfg) == LS_OK);
+    LS_CHECK(ls_drive_set_mode(&d, LS_MODE_STARTUP) == LS_ERR_PARAM);
+    LS_CHECK(ls_drive_set_mode(&d, LS_MODE_SENSORLESS_LUT) == LS_OK);
+    cfg.startup.t_quiet = LS_R(0.012);
     cfg.startup.fs = LS_R(8000.0);
     LS_CHECK(ls_drive_init(&d, &cfg) == LS_ERR_PARAM);
 }

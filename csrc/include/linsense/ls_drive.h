@@ -26,7 +26,8 @@
  *                            the sensorless observer's equilibrium agrees with the encoder; the
  *                            result is written to cal.table (paper Fig. 9, "measured" LUT)
  *   LS_MODE_STARTUP          start-up from an unknown position (ls_startup.h, cfg.startup and
- *                            cfg.demod.comp required): HF lock on the axis modulo pi with zero
+ *                            cfg.demod.comp required, startup.t_quiet and t_settle at least the
+ *                            injection's ramp time): HF lock on the axis modulo pi with zero
  *                            currents, d-axis pulse pairs for the magnet polarity (the estimate
  *                            turned by pi when they say so), HF relock, then LS_MODE_SENSORLESS_LUT
  *                            by itself with the reference at the estimate (no jump); su holds the
