@@ -8,18 +8,34 @@ mkdir -p "$B"
 cc -std=c99 -Wall -Wextra -Wpedantic -Werror -O2 -g -Icsrc/include -Icsrc/tests -Ibuild/gen \
   csrc/tests/bench_drive.c csrc/ctrl/*.c -lm -o "$B/bench_drive"
 "$B/bench_drive" "$N"
-count() { # $1: dead-time compensation on (1) or off (0)
-  valgrind --tool=callgrind --toggle-collect=ls_drive_step --callgrind-out-file="$B/callgrind.$1.out" \
-    "$B/bench_drive" "$N" "$1" > /dev/null 2> "$B/callgrind.$1.log"
-  awk '/^(summary|totals):/ {print $2; exit}' "$B/callgrind.$1.out"
+count() { # $1: dead-time compensation on (1) or off (0); $2: injection 0 pulsating, 1 rotating,
+          # 2 square, 3 LS_MODE_STARTUP (bench_drive.c); $3: steps
+  valgrind --tool=callgrind --toggle-collect=ls_drive_step --callgrind-out-file="$B/callgrind.$1${2:-0}.out" \
+    "$B/bench_drive" "${3:-$N}" "$1" "${2:-0}" > /dev/null 2> "$B/callgrind.$1${2:-0}.log"
+  awk '/^(summary|totals):/ {print $2; exit}' "$B/callgrind.$1${2:-0}.out"
 }
+per() { echo $(( ($1 + $2 / 2) / $2 )); }
 total_dtc=$(count 1)
 total=$(count 0)
+total_rot=$(count 1 1)
+total_sq=$(count 1 2)
+N_SU=2800 # the whole start-up (LS_MODE_STARTUP) and no more
+total_su=$(count 1 3 $N_SU)
 echo "ls_drive_step, sensorless with LUT, float, -O2, x86-64, $N steps during a move: $total instructions"
-echo "  with dead-time compensation off: $(( (total + N / 2) / N )) per step"
-echo "instructions per step (everything on: compensation, residual, elliptical injection, notch): $(( (total_dtc + N / 2) / N ))"
+echo "  with dead-time compensation off: $(per "$total" "$N") per step"
+echo "instructions per step (everything on: compensation, residual, elliptical injection, notch): $(per "$total_dtc" "$N")"
+echo "instructions per step, rotating injection (compensation, residual, its table): $(per "$total_rot" "$N")"
+echo "instructions per step, square wave at fs/2 (compensation, its table, d-current): $(per "$total_sq" "$N")"
+echo "instructions per step in LS_MODE_STARTUP (lock, pulses, settle; $N_SU steps): $(per "$total_su" "$N_SU")"
 if command -v "${ARM_CC:-arm-none-eabi-gcc}" >/dev/null; then
   tools/check_mcu.sh build/arm | tail -1
 else
   echo "Cortex-M4F code size: arm-none-eabi-gcc not installed (make tools installs it)"
+fi
+# the start-up with the magnet polarity: 200 random starts over two periods, 0 and 20 N (about 20 s)
+PY=${PY:-.venv/bin/python}
+if [ -x "$PY" ]; then
+  "$PY" tools/bench_startup.py 200
+else
+  echo "start-up benchmark: $PY not found (make install), run: python tools/bench_startup.py"
 fi

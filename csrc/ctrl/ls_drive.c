@@ -104,6 +104,19 @@ void ls_drive_default_cfg(ls_drive_cfg *c)
     c->cal.period = 0;
     c->cal.dither_amp = LS_R(0.4);
     c->cal.dither_freq = LS_R(150.0); /* not a submultiple of the injection (200 Hz is: 5 x 200 = 1 kHz) */
+    /* start-up (ls_startup.h): `linsense tune --polarity 0.0131` for ecce2010 (the FEA's 1.31 %/A of
+     * a thin back iron) and this drive, 10 mA rms of current noise and a 12-bit ADC: 2.8 A at the
+     * end of a 37.4 V, 7-period pulse, 16 pairs for a decision 6 sigma clear (docs/tuning.md) */
+    c->startup.fs = fs;
+    c->startup.t_lock = LS_R(0.07);
+    c->startup.err_lock = LS_R(0.2);
+    c->startup.t_quiet = LS_R(0.012); /* the injection's 10 ms ramp (12 V at 1200 V/s), and 2 ms */
+    c->startup.v_pulse = LS_R(37.4);
+    c->startup.t_pulse = LS_R(0.4375e-3);
+    c->startup.t_rest = LS_R(1.5625e-3);
+    c->startup.pairs = 16u;
+    c->startup.i_min = LS_R(0.0126);
+    c->startup.t_settle = LS_R(0.03);
 }
 
 /* --------------------------------------------------------------------------- init */
@@ -171,6 +184,11 @@ ls_status ls_drive_init(ls_drive *d, const ls_drive_cfg *cfg)
     st |= ls_mod_init(&d->mod, &cfg->mod);
     if (cfg->hf_dtres) {
         st |= cfg->dtres.fs == cfg->fs ? ls_dtres_init(&d->dtres, &cfg->dtres) : LS_ERR_PARAM;
+    }
+    if (cfg->startup.pairs != 0u) { /* LS_MODE_STARTUP configured */
+        st |= cfg->startup.fs == cfg->fs && cfg->startup.v_pulse <= LS_DRIVE_V_DC_MAX
+                  ? ls_startup_init(&d->su, &cfg->startup)
+                  : LS_ERR_PARAM;
     }
     st |= ls_protect_init(&d->prot, &cfg->prot);
     if (st != LS_OK) {
@@ -243,6 +261,8 @@ void ls_drive_reset(ls_drive *d, ls_pos p)
     ls_dtres_reset(&d->dtres);
     ls_protect_reset(&d->prot);
     mode_set(d, LS_MODE_OFF);
+    d->starting = false;
+    ls_startup_reset(&d->su);
     d->align = false;
     d->pending = false;
     d->f_ref = LS_R(0.0);
@@ -270,6 +290,13 @@ ls_status ls_drive_set_mode(ls_drive *d, ls_mode mode)
             return LS_ERR_PARAM;
         }
         break;
+    case LS_MODE_STARTUP: /* the injection's envelope must rise and fall within t_settle and t_quiet */
+        if (d->cfg.demod.comp == NULL || d->cfg.startup.pairs == 0u ||
+            !(d->cfg.startup.t_quiet * d->cfg.inject.ramp_rate >= d->cfg.inject.amplitude) ||
+            !(d->cfg.startup.t_settle * d->cfg.inject.ramp_rate >= d->cfg.inject.amplitude)) {
+            return LS_ERR_PARAM;
+        }
+        break;
     case LS_MODE_CALIBRATION:
         if (d->cfg.cal.table == NULL) {
             return LS_ERR_PARAM;
@@ -285,11 +312,21 @@ ls_status ls_drive_set_mode(ls_drive *d, ls_mode mode)
     }
     /* the table in sensorless_lut, and for the HF observer that runs beside the encoder in sensored
      * mode (inject_sensored) when there is one; not without LUT, nor while calibrating it */
-    ls_demod_set_comp(&d->demod, mode == LS_MODE_SENSORLESS_LUT || mode == LS_MODE_SENSORED);
+    ls_demod_set_comp(&d->demod, mode == LS_MODE_SENSORLESS_LUT || mode == LS_MODE_SENSORED ||
+                                     mode == LS_MODE_STARTUP);
     /* the modulator's history and the residual model start again (the outputs may have been off) */
     ls_mod_reset(&d->mod);
     ls_dtres_reset(&d->dtres);
-    mode_set(d, mode);
+    /* LS_MODE_STARTUP runs in the outputs-off branch of ls_drive_step (see ls_drive.h): mode OFF,
+     * starting set; it enters LS_MODE_SENSORLESS_LUT, aligned, when it is done */
+    d->starting = mode == LS_MODE_STARTUP;
+    mode_set(d, d->starting ? LS_MODE_OFF : mode);
+    if (d->starting) {
+        d->hf_on = true;
+        d->v_hf_max = d->cfg.inject.amplitude;
+        ls_startup_reset(&d->su);
+        ls_current_reset(&d->cur);
+    }
     d->align = true;
     ls_inject_enable(&d->inj, d->hf_on);
     return LS_OK;
@@ -365,7 +402,7 @@ ls_status ls_drive_step_to(ls_drive *d, ls_pos target)
 static void disable(ls_drive *d, ls_cmd *cmd, uint32_t fault)
 {
     memset(cmd, 0, sizeof *cmd);
-    cmd->mode = d->mode;
+    cmd->mode = d->starting ? LS_MODE_STARTUP : d->mode;
     cmd->fault = fault;
     ls_current_reset(&d->cur);
     ls_posctrl_reset(&d->pos);
@@ -473,6 +510,31 @@ static void calibration_step(ls_drive *d)
     }
 }
 
+/* --------------------------------------------------------------------------- start-up */
+/* LS_MODE_STARTUP: one step of ls_drive_startup_step_ (ls_drive_startup.c, its own translation
+ * unit so that the inline blocks it shares with ls_drive_step stay inlined there), then its end:
+ * a failure turns the outputs off, the end enters LS_MODE_SENSORLESS_LUT with the reference
+ * aligned at the estimate from the next step on (no jump). */
+#if defined(__GNUC__)
+#define LS_DRIVE_COLD __attribute__((noinline, cold)) /* out of ls_drive_step's other modes */
+#else
+#define LS_DRIVE_COLD
+#endif
+static LS_DRIVE_COLD void startup_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
+{
+    const ls_startup_phase ph = ls_drive_startup_step_(d, meas, cmd);
+    if (ph == LS_SU_FAILED) {
+        if (d->prot.fault == LS_FAULT_NONE) {
+            ls_protect_trip(&d->prot, LS_FAULT_OBSERVER);
+        }
+        disable_report(d, cmd, d->prot.fault);
+    } else if (ph == LS_SU_DONE) {
+        d->starting = false;
+        mode_set(d, LS_MODE_SENSORLESS_LUT);
+        d->align = true;
+    }
+}
+
 void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
 {
     const ls_drive_cfg *cfg;
@@ -505,6 +567,10 @@ void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
         fault = d->prot.fault;
     }
     if (fault != LS_FAULT_NONE || mode == LS_MODE_OFF) {
+        if (d->starting && fault == LS_FAULT_NONE) { /* LS_MODE_STARTUP (see ls_drive.h) */
+            startup_step(d, meas, cmd);
+            return;
+        }
         disable_report(d, cmd, fault);
         return;
     }

@@ -59,11 +59,36 @@ static void coef_init(const ls_sim_cfg *c, plant_coef *q)
     }
 }
 
+/* PM flux linkage (alpha-beta, Wb) and its theta derivative (Wb/rad) at theta (c1, s1: cos, sin) */
+SIM_HOT void pm_flux(const ls_sim_cfg *c, double theta, double c1, double s1, double lpm[2], double dlpm[2])
+{
+    int32_t j;
+    lpm[0] = c->psi_pm * c1;
+    lpm[1] = c->psi_pm * s1;
+    dlpm[0] = -c->psi_pm * s1;
+    dlpm[1] = c->psi_pm * c1;
+    for (j = 0; j < c->n_pm; ++j) {
+        /* phase a: psi_pm a_n cos(n th + phi); b, c shifted by -+2 pi/3 in th. Clarke of that
+         * three-phase set: zero for triplen n, (cos, +sin) for n = 1 mod 3, (cos, -sin) for
+         * n = 2 mod 3 */
+        int32_t n = c->pm_order[j];
+        double a = c->psi_pm * c->pm_amp[j], arg = (double)n * theta + c->pm_phase[j];
+        double sg = (n % 3 == 1) ? 1.0 : ((n % 3 == 2) ? -1.0 : 0.0);
+        if (sg == 0.0) {
+            continue;
+        }
+        lpm[0] += a * cos(arg);
+        lpm[1] += sg * a * sin(arg);
+        dlpm[0] -= (double)n * a * sin(arg);
+        dlpm[1] += sg * (double)n * a * cos(arg);
+    }
+}
+
 SIM_HOT void maps_cs(const ls_sim_cfg *c, const plant_coef *q, double theta, double c1, double s1, plant_maps *m)
 {
     double ck = c1, sk = s1;
     double l0 = q->a[0][0], l1 = q->a[0][1], l2 = q->a[0][2], d0 = 0.0, d1 = 0.0, d2 = 0.0;
-    int32_t k, j;
+    int32_t k;
     for (k = 1; k < c->n_order; ++k) {
         const double *a = q->a[k], *b = q->b[k], *da = q->da[k], *db = q->db[k];
         double cn = ck * c1 - sk * s1;
@@ -82,25 +107,7 @@ SIM_HOT void maps_cs(const ls_sim_cfg *c, const plant_coef *q, double theta, dou
     m->dl[0] = d0;
     m->dl[1] = d1;
     m->dl[2] = d2;
-    m->lpm[0] = c->psi_pm * c1;
-    m->lpm[1] = c->psi_pm * s1;
-    m->dlpm[0] = -c->psi_pm * s1;
-    m->dlpm[1] = c->psi_pm * c1;
-    for (j = 0; j < c->n_pm; ++j) {
-        /* phase a: psi_pm a_n cos(n th + phi); b, c shifted by -+2 pi/3 in th. Clarke of that
-         * three-phase set: zero for triplen n, (cos, +sin) for n = 1 mod 3, (cos, -sin) for
-         * n = 2 mod 3 */
-        int32_t n = c->pm_order[j];
-        double a = c->psi_pm * c->pm_amp[j], arg = (double)n * theta + c->pm_phase[j];
-        double sg = (n % 3 == 1) ? 1.0 : ((n % 3 == 2) ? -1.0 : 0.0);
-        if (sg == 0.0) {
-            continue;
-        }
-        m->lpm[0] += a * cos(arg);
-        m->lpm[1] += sg * a * sin(arg);
-        m->dlpm[0] -= (double)n * a * sin(arg);
-        m->dlpm[1] += sg * (double)n * a * cos(arg);
-    }
+    pm_flux(c, theta, c1, s1, m->lpm, m->dlpm);
 }
 
 static void maps(const ls_sim_cfg *c, const plant_coef *q, double theta, plant_maps *m)
@@ -129,13 +136,267 @@ SIM_HOT double force_of(const plant_coef *q, const plant_maps *m, const double i
     return q->kf * (i[0] * u0 + i[1] * u1);
 }
 
+/* ------------------------------------------------------------------------------ saturation */
+/* The saturated plant (ls_sim_sat, ls_sim.h): its position-dependent values frozen at one angle th
+ * (once per PWM period or open-loop sub-step); within the period the angle th + dth enters to first
+ * order, lambda(i, th + dth) = lambda(i, th) + dth d lambda/d theta (the error, dth^2 d2 lambda/d
+ * theta2 with |dth| <= omega h/2, is ~1e-9 Wb at 0.2 m/s), like the linear plant's mid-period
+ * freeze. */
+typedef struct {
+    double th, c, s;              /* rad, -, -: the angle, its cos and sin */
+    double v[LS_SIM_SAT_POW][3];  /* H/A^p, A_p, B_p, C_p at th */
+    double dv[LS_SIM_SAT_POW][3]; /* H/A^p/rad, their theta derivatives */
+    double lpm[2], dlpm[2];       /* Wb, Wb/rad: PM flux (alpha-beta) and its theta derivative */
+    double kf;                    /* 1/m, (3/2) 2 pi/tau */
+} sat_frame;
+
+typedef struct {
+    double lam[2];  /* Wb, flux linkage (alpha-beta, with the PM flux) */
+    double l[3];    /* H, incremental inductance d lambda/d i: aa, bb, ab */
+    double dlam[2]; /* Wb/rad, d lambda/d theta at constant alpha-beta currents */
+    double force;   /* N */
+} sat_point;
+
+static void sat_frame_at(const ls_sim_cfg *c, double theta, sat_frame *f)
+{
+    const ls_sim_sat *s = &c->sat;
+    const double c1 = cos(theta), s1 = sin(theta);
+    double ck = 1.0, sk = 0.0;
+    int32_t k, p, e;
+    f->th = theta;
+    f->c = c1;
+    f->s = s1;
+    f->kf = 1.5 * 2.0 * SIM_PI / c->pole_pitch;
+    for (p = 0; p < LS_SIM_SAT_POW; ++p) {
+        for (e = 0; e < 3; ++e) {
+            f->v[p][e] = 0.0;
+            f->dv[p][e] = 0.0;
+        }
+    }
+    for (k = 0; k < s->n_order; ++k) {
+        double cn = ck * c1 - sk * s1;
+        for (p = 0; p < s->n_pow; ++p) {
+            for (e = 0; e < 3; ++e) {
+                const double a = s->dq_cos[p][e][k], b = s->dq_sin[p][e][k];
+                f->v[p][e] += a * ck + b * sk;
+                f->dv[p][e] += (double)k * (b * ck - a * sk);
+            }
+        }
+        sk = sk * c1 + ck * s1;
+        ck = cn;
+    }
+    pm_flux(c, theta, c1, s1, f->lpm, f->dlpm);
+}
+
+/* The d-axis saturation S(i_d) (A^2), S' = K (A) and S'' = k (-) (ls_sim.h). In u = (i_m + i_d)/a,
+ * a = i_sat_d: k = g/(1 + u^2), K = g a (atan u - atan u0), S = g a^2 [u (atan u - atan u0) -
+ * ln((1 + u^2)/(1 + u0^2))/2], g = 1 + u0^2 (so k(0) = 1), written with atan and log1p of the
+ * differences so that a small i_d keeps its digits. */
+static void sat_d(const ls_sim_sat *s, double id, double *S, double *K, double *k)
+{
+    double a, u0, u, g, dat;
+    if (!(s->i_sat_d > 0.0)) {
+        *S = 0.5 * id * id;
+        *K = id;
+        *k = 1.0;
+        return;
+    }
+    a = s->i_sat_d;
+    u0 = s->i_m / a;
+    u = (s->i_m + id) / a;
+    g = 1.0 + u0 * u0;
+    dat = 1.0 + u * u0 > 0.0 ? atan((u - u0) / (1.0 + u * u0)) : atan(u) - atan(u0);
+    *k = g / (1.0 + u * u);
+    *K = g * a * dat;
+    *S = g * a * a * (u * dat - 0.5 * log1p((u - u0) * (u + u0) / g));
+}
+
+/* the saturated plant at alpha-beta currents i and the frame's angle */
+static void sat_eval(const ls_sim_cfg *c, const sat_frame *f, const double i[2], sat_point *pt)
+{
+    const ls_sim_sat *s = &c->sat;
+    const double cs = f->c, sn = f->s;
+    const double id = cs * i[0] + sn * i[1], iq = -sn * i[0] + cs * i[1];
+    double pw[LS_SIM_SAT_POW + 2];
+    double a = 0.0, a1 = 0.0, a2 = 0.0, at = 0.0, a1t = 0.0;
+    double b = 0.0, b1 = 0.0, bi = 0.0, bt = 0.0, bit = 0.0;
+    double cc = 0.0, c1 = 0.0, c2 = 0.0, c1t = 0.0, c2t = 0.0;
+    double S, K, kd, ld, lq, hdd, hdq, hqq, gd, gq, wt, ea, eb;
+    int32_t p;
+    pw[0] = 1.0;
+    for (p = 1; p < LS_SIM_SAT_POW + 2; ++p) {
+        pw[p] = pw[p - 1] * iq;
+    }
+    for (p = 0; p < s->n_pow; ++p) {
+        const double A = f->v[p][0], dA = f->dv[p][0], B = f->v[p][1], dB = f->dv[p][1];
+        const double C = f->v[p][2], dC = f->dv[p][2], q1 = 1.0 / (double)(p + 1), q2 = q1 / (double)(p + 2);
+        a += A * pw[p];
+        at += dA * pw[p];
+        if (p >= 1) {
+            a1 += (double)p * A * pw[p - 1];
+            a1t += (double)p * dA * pw[p - 1];
+            b1 += (double)p * B * pw[p - 1];
+        }
+        if (p >= 2) {
+            a2 += (double)(p * (p - 1)) * A * pw[p - 2];
+        }
+        b += B * pw[p];
+        bt += dB * pw[p];
+        bi += B * pw[p + 1] * q1;
+        bit += dB * pw[p + 1] * q1;
+        cc += C * pw[p];
+        c1 += C * pw[p + 1] * q1;
+        c1t += dC * pw[p + 1] * q1;
+        c2 += C * pw[p + 2] * q2;
+        c2t += dC * pw[p + 2] * q2;
+    }
+    sat_d(s, id, &S, &K, &kd);
+    /* dq flux (without the PM), incremental inductances, d lambda_dq/d theta at constant i_dq */
+    ld = a * K + bi;
+    lq = a1 * S + id * b + c1;
+    hdd = a * kd;
+    hdq = a1 * K + b;
+    hqq = a2 * S + id * b1 + cc;
+    /* at constant alpha-beta currents i_dq turns: d i_dq/d theta = (i_q, -i_d) */
+    gd = at * K + bit + hdd * iq - hdq * id;
+    gq = a1t * S + id * bt + c1t + hdq * iq - hqq * id;
+    wt = at * S + id * bit + c2t + ld * iq - lq * id;
+    /* to alpha-beta: lambda_ab = R lambda_dq, d/d theta = R (J lambda_dq + g), L = R H R' */
+    ea = gd - lq;
+    eb = gq + ld;
+    pt->lam[0] = cs * ld - sn * lq + f->lpm[0];
+    pt->lam[1] = sn * ld + cs * lq + f->lpm[1];
+    pt->dlam[0] = cs * ea - sn * eb + f->dlpm[0];
+    pt->dlam[1] = sn * ea + cs * eb + f->dlpm[1];
+    pt->l[0] = cs * cs * hdd - 2.0 * cs * sn * hdq + sn * sn * hqq;
+    pt->l[1] = sn * sn * hdd + 2.0 * cs * sn * hdq + cs * cs * hqq;
+    pt->l[2] = cs * sn * (hdd - hqq) + (cs * cs - sn * sn) * hdq;
+    pt->force = f->kf * (wt + i[0] * f->dlpm[0] + i[1] * f->dlpm[1]);
+}
+
+/* The currents i whose flux at th + dth is lam_t, by Newton's method from i (d lambda/d i as the
+ * Jacobian; dth's share of it, ~1e-3 of it, only slows the convergence); pt: the last evaluation.
+ * False when the inductance is not positive definite or Newton does not converge. */
+static bool sat_solve(const ls_sim_cfg *c, const sat_frame *f, double dth, const double lam_t[2], double i[2],
+                      sat_point *pt)
+{
+    int it;
+    for (it = 0; it < 20; ++it) {
+        double r0, r1, det, d0, d1;
+        sat_eval(c, f, i, pt);
+        r0 = lam_t[0] - pt->lam[0] - dth * pt->dlam[0];
+        r1 = lam_t[1] - pt->lam[1] - dth * pt->dlam[1];
+        det = pt->l[0] * pt->l[1] - pt->l[2] * pt->l[2];
+        if (!(det > 0.0 && pt->l[0] > 0.0)) {
+            return false;
+        }
+        d0 = (pt->l[1] * r0 - pt->l[2] * r1) / det;
+        d1 = (pt->l[0] * r1 - pt->l[2] * r0) / det;
+        i[0] += d0;
+        i[1] += d1;
+        /* after a step this small the error left is below 1e-15 A (quadratic convergence) */
+        if (fabs(d0) + fabs(d1) <= 1e-10) {
+            return true;
+        }
+    }
+    return false;
+}
+
+/* One interval h with constant alpha-beta voltage v: d lambda/dt = v - R i(lambda, theta), theta =
+ * th + dth0 + omega t, by the classical RK4 on the flux (sub-steps keep h R / L below 0.2, so the
+ * local error matches the linear plant's 4th-order propagator), the currents from the flux by
+ * sat_solve. pt: the plant at the end. False: the plant left its valid range (diverged). */
+static bool sat_step(const ls_sim_cfg *c, const sat_frame *f, const double v[2], double h, double dth0, double omega,
+                     double i[2], sat_point *pt)
+{
+    double l0[2], lt[2], k1[2], k2[2], k3[2], k4[2], ii[2], hs, tr, det;
+    int32_t n, j;
+    bool ok = true;
+    sat_eval(c, f, i, pt);
+    tr = pt->l[0] + pt->l[1];
+    det = pt->l[0] * pt->l[1] - pt->l[2] * pt->l[2];
+    if (!(det > 0.0 && pt->l[0] > 0.0)) {
+        return false;
+    }
+    /* smallest eigenvalue >= det / tr */
+    hs = h * c->r_s * tr / det;
+    n = hs > 0.2 ? (hs > 200.0 ? 1000 : (int32_t)ceil(hs / 0.2)) : 1;
+    hs = h / (double)n;
+    for (j = 0; j < n && ok; ++j) {
+        const double d0 = dth0 + omega * hs * (double)j, dm = d0 + 0.5 * omega * hs, d1 = d0 + omega * hs;
+        if (j > 0) {
+            sat_eval(c, f, i, pt);
+        }
+        l0[0] = pt->lam[0] + d0 * pt->dlam[0];
+        l0[1] = pt->lam[1] + d0 * pt->dlam[1];
+        k1[0] = v[0] - c->r_s * i[0];
+        k1[1] = v[1] - c->r_s * i[1];
+        ii[0] = i[0];
+        ii[1] = i[1];
+        lt[0] = l0[0] + 0.5 * hs * k1[0];
+        lt[1] = l0[1] + 0.5 * hs * k1[1];
+        ok = ok && sat_solve(c, f, dm, lt, ii, pt);
+        k2[0] = v[0] - c->r_s * ii[0];
+        k2[1] = v[1] - c->r_s * ii[1];
+        lt[0] = l0[0] + 0.5 * hs * k2[0];
+        lt[1] = l0[1] + 0.5 * hs * k2[1];
+        ok = ok && sat_solve(c, f, dm, lt, ii, pt);
+        k3[0] = v[0] - c->r_s * ii[0];
+        k3[1] = v[1] - c->r_s * ii[1];
+        lt[0] = l0[0] + hs * k3[0];
+        lt[1] = l0[1] + hs * k3[1];
+        ok = ok && sat_solve(c, f, d1, lt, ii, pt);
+        k4[0] = v[0] - c->r_s * ii[0];
+        k4[1] = v[1] - c->r_s * ii[1];
+        lt[0] = l0[0] + hs * (1.0 / 6.0) * (k1[0] + 2.0 * k2[0] + 2.0 * k3[0] + k4[0]);
+        lt[1] = l0[1] + hs * (1.0 / 6.0) * (k1[1] + 2.0 * k2[1] + 2.0 * k3[1] + k4[1]);
+        ok = ok && sat_solve(c, f, d1, lt, ii, pt);
+        i[0] = ii[0];
+        i[1] = ii[1];
+    }
+    return ok;
+}
+
+void ls_sim_sat_eval(const ls_sim_cfg *cfg, double theta, const double i_ab[2], double lam[2], double l_inc[3],
+                     double dlam[2], double *force)
+{
+    sat_frame f;
+    sat_point pt;
+    sat_frame_at(cfg, theta, &f);
+    sat_eval(cfg, &f, i_ab, &pt);
+    memcpy(lam, pt.lam, sizeof pt.lam);
+    memcpy(l_inc, pt.l, sizeof pt.l);
+    memcpy(dlam, pt.dlam, sizeof pt.dlam);
+    *force = pt.force;
+}
+
 double ls_sim_force(const ls_sim_cfg *cfg, double theta, const double i_ab[2])
 {
     plant_coef q;
     plant_maps m;
+    if (cfg->sat.on) {
+        double lam[2], l[3], dl[2], f;
+        ls_sim_sat_eval(cfg, theta, i_ab, lam, l, dl, &f);
+        return f;
+    }
     coef_init(cfg, &q);
     maps(cfg, &q, theta, &m);
     return force_of(&q, &m, i_ab);
+}
+
+/* the force (N) at theta, either plant (the records outside the time loop) */
+static double force_at(const ls_sim_cfg *c, const plant_coef *q, double theta, const double i[2])
+{
+    plant_maps m;
+    if (c->sat.on) {
+        sat_frame f;
+        sat_point pt;
+        sat_frame_at(c, theta, &f);
+        sat_eval(c, &f, i, &pt);
+        return pt.force;
+    }
+    maps(c, q, theta, &m);
+    return force_of(q, &m, i);
 }
 
 /* ------------------------------------------------------------------------------ checks */
@@ -175,6 +436,24 @@ ls_status ls_sim_check(const ls_sim_cfg *c)
     for (k = 0; k < c->n_pm; ++k) {
         if (!LS_ISFINITE(c->pm_amp[k]) || !LS_ISFINITE(c->pm_phase[k]) || c->pm_order[k] < 1) {
             return LS_ERR_PARAM;
+        }
+    }
+    if (c->sat.on != 0) {
+        const ls_sim_sat *s = &c->sat;
+        int32_t p;
+        if (s->on != 1 || s->n_order < 1 || s->n_order > LS_SIM_MAX_ORDER || s->n_pow < 1 ||
+            s->n_pow > LS_SIM_SAT_POW || !(LS_ISFINITE(s->i_m) && s->i_m >= 0.0) ||
+            !(LS_ISFINITE(s->i_sat_d) && s->i_sat_d >= 0.0)) {
+            return LS_ERR_PARAM;
+        }
+        for (p = 0; p < s->n_pow; ++p) {
+            for (e = 0; e < 3; ++e) {
+                for (k = 0; k < s->n_order; ++k) {
+                    if (!LS_ISFINITE(s->dq_cos[p][e][k]) || !LS_ISFINITE(s->dq_sin[p][e][k])) {
+                        return LS_ERR_PARAM;
+                    }
+                }
+            }
         }
     }
     return LS_OK;
@@ -394,11 +673,58 @@ SIM_HOT void period_average(const ls_sim_cfg *c, const plant_coef *q, const froz
     }
 }
 
+/* Average model on the saturated plant: the duty errors of period_average, predicted from the same
+ * frozen linearisation (here d lambda/d i at the period start), applied as pole-voltage errors over
+ * the period, which the linear plant's correction i += G e is exactly; then one sat_step. f_end:
+ * the force at the period end. False: the plant diverged. */
+static bool period_average_sat(const ls_sim_cfg *c, const plant_coef *q, const frozen *f, const sat_frame *sf,
+                               double omega, const double duty[3], double h, double i[2], dead_carry *carry,
+                               double *f_end)
+{
+    const double dd = q->d_dead, vdc = c->v_dc, i0 = i[0], i1 = i[1];
+    double p[3] = {vdc * duty[0], vdc * duty[1], vdc * duty[2]}, v_ab[2];
+    sat_point sp;
+    bool ok;
+    poles_to_ab(p, v_ab);
+    if (dd > 0.0) {
+        const double b0 = f->linv[0] * v_ab[0] + f->linv[1] * v_ab[1] + f->be[0];
+        const double b1 = f->linv[2] * v_ab[0] + f->linv[3] * v_ab[1] + f->be[1];
+        const double sq = 0.5 * SQRT3, m0 = f->m[0], m1 = f->m[1], m2 = f->m[2], m3 = f->m[3];
+        const double rb0 = -0.5 * m0 + sq * m2, rb1 = -0.5 * m1 + sq * m3, rbc = -0.5 * b0 + sq * b1;
+        const double rc0 = -0.5 * m0 - sq * m2, rc1 = -0.5 * m1 - sq * m3, rcc = -0.5 * b0 - sq * b1;
+        const double hh = 0.5 * h, vh = 0.5 * vdc * h;
+        const double sa = m0 * i0 + m1 * i1 + b0, sb = rb0 * i0 + rb1 * i1 + rbc, sc = rc0 * i0 + rc1 * i1 + rcc;
+        const double ma = i0 + hh * sa, mb = -0.5 * i0 + sq * i1 + hh * sb, mc = -0.5 * i0 - sq * i1 + hh * sc;
+        double in[3] = {0.0, 0.0, 0.0}, pe[3], dv[2];
+        int j;
+        if (carry->any_excess) {
+            for (j = 0; j < 3; ++j) {
+                in[j] = carry->excess[j];
+                carry->excess[j] = 0.0;
+            }
+            carry->any_excess = false;
+        }
+        pe[0] = vdc * leg_error(duty[0], dd, ma, hh * duty[0] * sa - ripple_on(f, duty, vh, 0), in[0],
+                                &carry->excess[0], &carry->any_excess);
+        pe[1] = vdc * leg_error(duty[1], dd, mb, hh * duty[1] * sb - ripple_on(f, duty, vh, 1), in[1],
+                                &carry->excess[1], &carry->any_excess);
+        pe[2] = vdc * leg_error(duty[2], dd, mc, hh * duty[2] * sc - ripple_on(f, duty, vh, 2), in[2],
+                                &carry->excess[2], &carry->any_excess);
+        poles_to_ab(pe, dv);
+        v_ab[0] += dv[0];
+        v_ab[1] += dv[1];
+    }
+    ok = sat_step(c, sf, v_ab, h, -0.5 * omega * h, omega, i, &sp);
+    *f_end = sp.force;
+    return ok;
+}
+
 /* Switching model: gate commands at (1 -+ d) T/2, turn-on edges delayed by the dead time, the
  * diode picked by the current sign at the command instant. Returns the time-weighted force
  * integral over the period through *f_int (trapezoid per segment). */
 static void period_switching(const ls_sim_cfg *c, const plant_coef *q, const frozen *f, const plant_maps *pm,
-                             const double duty[3], double h, double i[2], double *f_int, dead_carry *carry)
+                             const double duty[3], double h, double i[2], double *f_int, dead_carry *carry,
+                             const sat_frame *sf, double omega, bool *bad)
 {
     double t = 0.0, p[3], cmd_t[6], edge_t[6], v_ab[2], iabc[3], f0, f1;
     int cmd_leg[6], cmd_on[6], edge_leg[6], edge_on[6];
@@ -428,7 +754,13 @@ static void period_switching(const ls_sim_cfg *c, const plant_coef *q, const fro
             cmd_t[k - 1] = tt; cmd_leg[k - 1] = tl; cmd_on[k - 1] = to;
         }
     }
-    f0 = force_of(q, pm, i);
+    if (sf != NULL) { /* the saturated plant: f0 from its own force, each segment by sat_step */
+        sat_point sp;
+        sat_eval(c, sf, i, &sp);
+        f0 = sp.force;
+    } else {
+        f0 = force_of(q, pm, i);
+    }
     *f_int = 0.0;
     for (;;) {
         /* the next event: a gate command or a delayed edge, whichever comes first */
@@ -445,8 +777,16 @@ static void period_switching(const ls_sim_cfg *c, const plant_coef *q, const fro
         if (t_next > t) {
             double pv[3] = {p[0] * c->v_dc, p[1] * c->v_dc, p[2] * c->v_dc};
             poles_to_ab(pv, v_ab);
-            propagate(f, v_ab, t_next - t, i);
-            f1 = force_of(q, pm, i);
+            if (sf != NULL) {
+                sat_point sp;
+                if (!sat_step(c, sf, v_ab, t_next - t, omega * (t - 0.5 * h), omega, i, &sp)) {
+                    *bad = true;
+                }
+                f1 = sp.force;
+            } else {
+                propagate(f, v_ab, t_next - t, i);
+                f1 = force_of(q, pm, i);
+            }
             *f_int += 0.5 * (f0 + f1) * (t_next - t);
             f0 = f1;
             t = t_next;
@@ -806,6 +1146,8 @@ ls_status ls_sim_continue(const ls_sim_cfg *c, ls_drive *drive, const ls_sim_cmd
     dead_carry carry;
     block_acc acc;
     frozen fz;
+    sat_frame sf;
+    bool sat;
     if (c == NULL || drive == NULL || s == NULL || out == NULL || res == NULL || (n_cmds > 0 && cmds == NULL) ||
         n_more < 0) {
         return LS_ERR_NULL;
@@ -853,10 +1195,12 @@ ls_status ls_sim_continue(const ls_sim_cfg *c, ls_drive *drive, const ls_sim_cmd
     acc.r = -1;
     acc.n = 0;
     coef_init(c, &q);
+    sat = c->sat.on != 0;
     memset(&cmd, 0, sizeof cmd);
     k_end = s->k + n_more;
     for (k = s->k; k < k_end; ++k) {
-        double t = (double)k * h, x_mid, f_start, f_avg, u[3], th_mid, cm, sm, dl, cd, sd;
+        double t = (double)k * h, x_mid, f_start, f_avg, u[3], th_mid, cm, sm, dl, cd, sd, om;
+        bool bad = false;
         if (k % LS_SIM_STOP_POLL == 0 && out->stop != NULL && *out->stop != 0) {
             fault |= LS_SIM_FAULT_STOPPED;
             break;
@@ -884,12 +1228,30 @@ ls_status ls_sim_continue(const ls_sim_cfg *c, ls_drive *drive, const ls_sim_cmd
         angle_to(&ang, th_mid);
         cm = ang.c;
         sm = ang.s;
-        maps_cs(c, &q, th_mid, cm, sm, &pm);
         /* the speed at mid-period likewise (exact for a constant acceleration) */
-        if (!freeze(c, &pm, kx * (1.5 * v - 0.5 * v_lag), &fz)) {
-            fault |= LS_SIM_FAULT_DIVERGED;
+        om = kx * (1.5 * v - 0.5 * v_lag);
+        if (!sat) {
+            maps_cs(c, &q, th_mid, cm, sm, &pm);
+            if (!freeze(c, &pm, om, &fz)) {
+                fault |= LS_SIM_FAULT_DIVERGED;
+            }
+            f_start = force_of(&q, &pm, i);
+        } else {
+            /* the saturated plant: its values at the mid-period angle, and for the inverter's
+             * predictions the system linearised at the period-start currents (L = d lambda/d i,
+             * the EMF omega d lambda/d theta frozen) */
+            sat_point sp;
+            sat_frame_at(c, th_mid, &sf);
+            sat_eval(c, &sf, i, &sp);
+            memcpy(pm.l, sp.l, sizeof pm.l);
+            pm.dl[0] = pm.dl[1] = pm.dl[2] = 0.0;
+            memcpy(pm.lpm, sp.lam, sizeof pm.lpm);
+            memcpy(pm.dlpm, sp.dlam, sizeof pm.dlpm);
+            if (!freeze(c, &pm, om, &fz)) {
+                fault |= LS_SIM_FAULT_DIVERGED;
+            }
+            f_start = sp.force;
         }
-        f_start = force_of(&q, &pm, i);
         if (--rec_count == 0) {
             rec_count = c->decimate;
             dl = kx * (x - x_mid);
@@ -909,11 +1271,18 @@ ls_status ls_sim_continue(const ls_sim_cfg *c, ls_drive *drive, const ls_sim_cmd
         }
         if (c->fidelity == LS_SIM_SWITCHING) {
             double f_int;
-            period_switching(c, &q, &fz, &pm, u, h, i, &f_int, &carry);
+            period_switching(c, &q, &fz, &pm, u, h, i, &f_int, &carry, sat ? &sf : NULL, om, &bad);
             f_avg = f_int / h;
+        } else if (sat) {
+            double f_end;
+            bad = !period_average_sat(c, &q, &fz, &sf, om, u, h, i, &carry, &f_end);
+            f_avg = 0.5 * (f_start + f_end);
         } else {
             period_average(c, &q, &fz, u, h, i, &carry);
             f_avg = 0.5 * (f_start + force_of(&q, &pm, i));
+        }
+        if (bad) {
+            fault |= LS_SIM_FAULT_DIVERGED;
         }
         x_lag = x;
         v_lag2 = v_lag;
@@ -935,8 +1304,7 @@ ls_status ls_sim_continue(const ls_sim_cfg *c, ls_drive *drive, const ls_sim_cmd
             /* record the state that tripped (a block of its own), then stop */
             double nan3[3] = {NAN, NAN, NAN}, f_end = NAN;
             if (LS_ISFINITE(i[0]) && LS_ISFINITE(i[1]) && LS_ISFINITE(x)) {
-                maps(c, &q, kx * x, &pm);
-                f_end = force_of(&q, &pm, i);
+                f_end = force_at(c, &q, kx * x, i);
             }
             if (blk) {
                 block_write(out, &acc);
@@ -1024,8 +1392,7 @@ ls_status ls_sim_open_loop(const ls_sim_cfg *c, const double *seg_t, const doubl
         if (!(LS_ISFINITE(h) && h >= 0.0) || !LS_ISFINITE(seg_v[3 * s]) || !LS_ISFINITE(seg_v[3 * s + 1]) || !LS_ISFINITE(seg_v[3 * s + 2])) {
             return LS_ERR_PARAM;
         }
-        maps(c, &pc, kx * x, &pm);
-        f_start = force_of(&pc, &pm, i);
+        f_start = force_at(c, &pc, kx * x, i);
         record(out, s, t, x, v, i, cos(kx * x), sin(kx * x), &seg_v[3 * s], f_start, NULL, tau, kx, fault);
         poles_to_ab(&seg_v[3 * s], v_ab);
         {
@@ -1035,6 +1402,20 @@ ls_status ls_sim_open_loop(const ls_sim_cfg *c, const double *seg_t, const doubl
             double hs = h / (double)n;
             for (q = 0; q < n && fault == 0u; ++q) {
                 double fa, fb;
+                if (c->sat.on) { /* the saturated plant: frozen at the sub-step's mid angle */
+                    sat_frame sf;
+                    sat_point sp;
+                    sat_frame_at(c, kx * (x + 0.5 * hs * v), &sf);
+                    sat_eval(c, &sf, i, &sp);
+                    fa = sp.force;
+                    if (!sat_step(c, &sf, v_ab, hs, -0.5 * kx * v * hs, kx * v, i, &sp)) {
+                        fault |= LS_SIM_FAULT_DIVERGED;
+                        break;
+                    }
+                    fb = sp.force;
+                    mechanics(c, &pc, t + (double)q * hs, hs, 0.5 * (fa + fb), &x, &v);
+                    continue;
+                }
                 maps(c, &pc, kx * (x + 0.5 * hs * v), &pm);
                 if (!freeze(c, &pm, kx * v, &fz)) {
                     fault |= LS_SIM_FAULT_DIVERGED;
@@ -1055,8 +1436,8 @@ ls_status ls_sim_open_loop(const ls_sim_cfg *c, const double *seg_t, const doubl
     {
         double last[3] = {NAN, NAN, NAN};
         if (LS_ISFINITE(x) && LS_ISFINITE(i[0]) && LS_ISFINITE(i[1])) {
-            maps(c, &pc, kx * x, &pm);
-            record(out, s, t, x, v, i, cos(kx * x), sin(kx * x), last, force_of(&pc, &pm, i), NULL, tau, kx, fault);
+            record(out, s, t, x, v, i, cos(kx * x), sin(kx * x), last, force_at(c, &pc, kx * x, i), NULL, tau, kx,
+                   fault);
         } else {
             record(out, s, t, x, v, i, 1.0, 0.0, last, NAN, NULL, tau, kx, fault);
         }

@@ -1,8 +1,10 @@
 /* Benchmark driver: ls_drive_step in sensorless mode with the LUT, float build, closed around
  * the compact test plant, during a minimum-time move (every block active). Run it under
- *   valgrind --tool=callgrind --toggle-collect=ls_drive_step ./bench_drive N [DTC [SHAPE]]
- * SHAPE: 0 pulsating (elliptical, the default), 1 rotating, 2 square wave at fs/2 (each with a
- * table and the gain schedule: the instructions do not depend on the tables' values)
+ *   valgrind --tool=callgrind --toggle-collect=ls_drive_step ./bench_drive N [DTC [SHAPE [G [R]]]]
+ * SHAPE: 0 pulsating (elliptical, the default), 1 rotating, 2 square wave at fs/2, each with its
+ * table; 3 LS_MODE_STARTUP from an unknown position on a saturating plant (the default injection;
+ * 2800 steps are the whole start-up, beyond it the drive holds in sensorless LUT mode).
+ * G = 1: with a gain table (rotating, square); R = 1: without the dead-time residual model.
  * so that only the instructions executed inside ls_drive_step are counted (tools/bench.sh). */
 #include <stdio.h>
 #include <stdlib.h>
@@ -75,6 +77,15 @@ int main(int argc, char **argv)
         return 2;
     }
     ls_drive_move_to(&d, tp_pos_of_m(0.020, p.tau));
+    if (shape == 3) { /* LS_MODE_STARTUP from an unknown position, saturating plant */
+        ls_pos zero = {0, LS_R(0.0)};
+        tp_init(&p, 0.0123);
+        p.sat_k = 0.01;
+        ls_drive_reset(&d, zero);
+        if (ls_drive_set_mode(&d, LS_MODE_STARTUP) != LS_OK) {
+            return 2;
+        }
+    }
     for (k = 0; k < n; ++k) {
         tp_measure(&p, &m);
         ls_drive_step(&d, &m, &c);

@@ -2,7 +2,10 @@
  * in alpha-beta with L_ab(theta) from paper eq. 3 (ecce2010 preset by default), PM flux from the
  * force constant, period-averaged 2-level inverter with the one-period computation delay, and a
  * mass with viscous friction and a load force. Double precision, RK2 with 8 sub-steps per PWM
- * period. This is test scaffolding, not the simulator (csrc/sim/ is the faithful plant). */
+ * period. This is test scaffolding, not the simulator (csrc/sim/ is the faithful plant).
+ * Optional (all off after tp_init): d-axis saturation for the start-up tests, an extra d-axis
+ * flux -sat_k sat_ld i_d^2 / 2 (incremental L_d lower by 2 sat_k I relatively at +I than at -I),
+ * Coulomb friction with stiction, Gaussian current-sensor noise. */
 #ifndef LS_TEST_PLANT_H
 #define LS_TEST_PLANT_H
 
@@ -22,6 +25,10 @@ typedef struct {
     double duty[3];             /* duties applied during the present period */
     double i[2];                /* A, alpha-beta current */
     int32_t enc_counts;         /* counts per period */
+    double sat_k, sat_ld;       /* 1/A, H: d-axis saturation (0: linear) */
+    double coulomb;             /* N, Coulomb friction (held while |F - f_load| <= coulomb) */
+    double i_noise;             /* A rms, current-sensor noise */
+    uint64_t rng;               /* noise generator state */
 } tp_plant;
 
 static inline void tp_L_ab(const tp_plant *p, double th, double L[2][2])
@@ -53,16 +60,24 @@ static inline double tp_psi_pm(const tp_plant *p)
     return p->kf * p->tau / (3 * TP_PI);
 }
 
-/* currents from fluxes at position x */
+/* currents from fluxes at position x (with saturation: fixed-point iterations on the d-axis term,
+ * each contracting by about sat_k |i_d|) */
 static inline void tp_currents(const tp_plant *p, double x, const double lam[2], double i[2])
 {
-    double th = 2 * TP_PI * x / p->tau, L[2][2], det, r0, r1;
+    double th = 2 * TP_PI * x / p->tau, L[2][2], det, r0, r1, c = cos(th), s = sin(th), id, dl;
+    int it;
     tp_L_ab(p, th, L);
-    r0 = lam[0] - tp_psi_pm(p) * cos(th);
-    r1 = lam[1] - tp_psi_pm(p) * sin(th);
+    r0 = lam[0] - tp_psi_pm(p) * c;
+    r1 = lam[1] - tp_psi_pm(p) * s;
     det = L[0][0] * L[1][1] - L[0][1] * L[1][0];
     i[0] = (L[1][1] * r0 - L[0][1] * r1) / det;
     i[1] = (-L[1][0] * r0 + L[0][0] * r1) / det;
+    for (it = 0; p->sat_k != 0.0 && it < 12; ++it) {
+        id = c * i[0] + s * i[1];
+        dl = -0.5 * p->sat_k * p->sat_ld * id * id; /* extra d-axis flux */
+        i[0] = (L[1][1] * (r0 - dl * c) - L[0][1] * (r1 - dl * s)) / det;
+        i[1] = (-L[1][0] * (r0 - dl * c) + L[0][0] * (r1 - dl * s)) / det;
+    }
 }
 
 static inline void tp_deriv(const tp_plant *p, const double s[4], const double v_ab[2], double ds[4])
@@ -74,7 +89,12 @@ static inline void tp_deriv(const tp_plant *p, const double s[4], const double v
     ds[0] = v_ab[0] - p->R * i[0];
     ds[1] = v_ab[1] - p->R * i[1];
     ds[2] = s[3];
-    ds[3] = (f - p->f_load - p->visc * s[3]) / p->mass;
+    if (p->coulomb > 0.0 && s[3] == 0.0 && fabs(f - p->f_load) <= p->coulomb) {
+        ds[3] = 0.0; /* stiction */
+    } else {
+        double fc = p->coulomb * (s[3] > 0.0 ? 1.0 : s[3] < 0.0 ? -1.0 : (f - p->f_load > 0.0 ? 1.0 : -1.0));
+        ds[3] = (f - p->f_load - p->visc * s[3] - fc) / p->mass;
+    }
 }
 
 static inline void tp_init(tp_plant *p, double x0)
@@ -86,16 +106,37 @@ static inline void tp_init(tp_plant *p, double x0)
     p->lam[1] = tp_psi_pm(p) * sin(2 * TP_PI * x0 / p->tau);
     p->duty[0] = p->duty[1] = p->duty[2] = 0.5;
     p->i[0] = p->i[1] = 0.0;
+    p->sat_k = 0.0;
+    p->sat_ld = 3.5e-3;
+    p->coulomb = 0.0;
+    p->i_noise = 0.0;
+    p->rng = 0x9E3779B97F4A7C15ull;
+}
+
+/* standard normal deviate (xorshift64*, Box-Muller) */
+static inline double tp_gauss(tp_plant *p)
+{
+    double u1, u2;
+    p->rng ^= p->rng >> 12; p->rng ^= p->rng << 25; p->rng ^= p->rng >> 27;
+    u1 = ((double)((p->rng * 2685821657736338717ull) >> 11) + 0.5) / 9007199254740992.0;
+    p->rng ^= p->rng >> 12; p->rng ^= p->rng << 25; p->rng ^= p->rng >> 27;
+    u2 = ((double)((p->rng * 2685821657736338717ull) >> 11) + 0.5) / 9007199254740992.0;
+    return sqrt(-2.0 * log(u1)) * cos(2 * TP_PI * u2);
 }
 
 /* measurements at the start of the period (carrier peak) */
-static inline void tp_measure(const tp_plant *p, ls_meas *m)
+static inline void tp_measure(tp_plant *p, ls_meas *m)
 {
     double i[2], cnt;
     tp_currents(p, p->x, p->lam, i);
     m->i_abc[0] = (LS_REAL)i[0];
     m->i_abc[1] = (LS_REAL)(-0.5 * i[0] + sqrt(3.0) / 2 * i[1]);
     m->i_abc[2] = (LS_REAL)(-0.5 * i[0] - sqrt(3.0) / 2 * i[1]);
+    if (p->i_noise > 0.0) {
+        m->i_abc[0] += (LS_REAL)(p->i_noise * tp_gauss(p));
+        m->i_abc[1] += (LS_REAL)(p->i_noise * tp_gauss(p));
+        m->i_abc[2] += (LS_REAL)(p->i_noise * tp_gauss(p));
+    }
     m->v_dc = (LS_REAL)p->v_dc;
     cnt = floor(p->x / p->tau * p->enc_counts);
     m->enc_valid = true;
@@ -119,6 +160,9 @@ static inline void tp_advance(tp_plant *p, const ls_cmd *cmd)
         for (j = 0; j < 4; ++j) mid[j] = s[j] + 0.5 * h * k1[j];
         tp_deriv(p, mid, v_ab, k2);
         for (j = 0; j < 4; ++j) s[j] += h * k2[j];
+        if (p->coulomb > 0.0 && s[3] * mid[3] < 0.0) {
+            s[3] = 0.0; /* friction stops the mover rather than reversing it */
+        }
     }
     p->lam[0] = s[0]; p->lam[1] = s[1]; p->x = s[2]; p->v = s[3];
     for (j = 0; j < 3; ++j) {

@@ -247,11 +247,38 @@ void ls_protect_trip(ls_protect *p, uint32_t bits);
 uint32_t ls_protect_check_power(ls_protect *p, const LS_REAL i_abc[3], LS_REAL v_dc);
 uint32_t ls_protect_check_observer(ls_protect *p, LS_REAL err, bool valid, LS_REAL omega);
 
+/* ls_startup.h */
+typedef enum {
+    LS_SU_LOCK = 0, LS_SU_QUIET = 1, LS_SU_PULSE = 2, LS_SU_SETTLE = 3, LS_SU_DONE = 4, LS_SU_FAILED = 5
+} ls_startup_phase;
+typedef struct {
+    LS_REAL fs;
+    LS_REAL t_lock;
+    LS_REAL err_lock;
+    LS_REAL t_quiet;
+    LS_REAL v_pulse;
+    LS_REAL t_pulse;
+    LS_REAL t_rest;
+    uint32_t pairs;
+    LS_REAL i_min;
+    LS_REAL t_settle;
+} ls_startup_cfg;
+typedef struct {
+    ls_startup_cfg cfg;
+    ls_startup_phase phase;
+    uint32_t pulse;
+    LS_REAL i_diff;
+    bool flip;
+    uint32_t steps;
+    ...;
+} ls_startup;
+ls_status ls_startup_init(ls_startup *s, const ls_startup_cfg *cfg);
+
 /* ls_drive.h */
 #define LS_FAULT_ENCODER ...
 typedef enum {
     LS_MODE_OFF = 0, LS_MODE_SENSORED = 1, LS_MODE_SENSORLESS_LUT = 2, LS_MODE_SENSORLESS_NOLUT = 3,
-    LS_MODE_CALIBRATION = 4
+    LS_MODE_CALIBRATION = 4, LS_MODE_STARTUP = 5
 } ls_mode;
 typedef struct {
     uint32_t points;
@@ -289,6 +316,7 @@ typedef struct {
     ls_protect_cfg prot;
     ls_cal_cfg cal;
     LS_REAL i_d_inj;
+    ls_startup_cfg startup;
 } ls_drive_cfg;
 typedef struct {
     LS_REAL i_abc[3];
@@ -330,6 +358,8 @@ typedef struct {
     ls_protect prot;
     uint32_t cal_index;
     LS_REAL psi_cal;
+    bool starting;
+    ls_startup su;
     ...;
 } ls_drive;
 void ls_drive_default_cfg(ls_drive_cfg *cfg);
@@ -345,6 +375,16 @@ void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd);
 /* simulator (csrc/sim, linsense/ls_sim.h) */
 #define LS_SIM_MAX_ORDER 64
 #define LS_SIM_MAX_PM 8
+#define LS_SIM_SAT_POW 4
+typedef struct {
+    int32_t on;
+    int32_t n_order;
+    int32_t n_pow;
+    double dq_cos[4][3][64];
+    double dq_sin[4][3][64];
+    double i_m;
+    double i_sat_d;
+} ls_sim_sat;
 typedef enum { LS_SIM_AVERAGE = 0, LS_SIM_SWITCHING = 1 } ls_sim_fidelity;
 typedef enum { LS_SIM_FREE = 0, LS_SIM_HELD = 1, LS_SIM_PRESCRIBED = 2 } ls_sim_motion;
 typedef enum { LS_SIM_LOAD_CONSTANT = 0, LS_SIM_LOAD_STEP = 1, LS_SIM_LOAD_INCLINE = 2 } ls_sim_load;
@@ -387,6 +427,7 @@ typedef struct {
     double v0;
     int32_t decimate;
     double i_abort;
+    ls_sim_sat sat;
 } ls_sim_cfg;
 typedef struct { double t; double x; int32_t move; } ls_sim_cmd;
 typedef struct {
@@ -411,6 +452,8 @@ ls_status ls_sim_open_loop(const ls_sim_cfg *cfg, const double *seg_t, const dou
 void ls_sim_plant_eval(const ls_sim_cfg *cfg, double theta, double lab[3], double dlab[3], double lpm[2],
                        double dlpm[2]);
 double ls_sim_force(const ls_sim_cfg *cfg, double theta, const double i_ab[2]);
+void ls_sim_sat_eval(const ls_sim_cfg *cfg, double theta, const double i_ab[2], double lam[2],
+                     double l_inc[3], double dlam[2], double *force);
 
 /* binding helpers (defined in the set_source code below) */
 int ls_py_real_size(void);

@@ -380,10 +380,17 @@ def calibrate(motor_spec: str, positions: int, load: float, fidelity: str, quad:
               help="elliptical share kappa on q (0: pulsating; default 0.9)")
 @click.option("--format", "fmt", type=click.Choice(["toml", "c"]), default="toml", show_default=True,
               help="toml: a complete scenario; c: an ls_drive_cfg set-up header for the firmware")
+@click.option("--polarity", type=float, default=None, callback=_finite(0.0, True),
+              help="saturation data for the start-up pulses, 1/A: (L_d(-I) - L_d(+I)) / L_d per A of d "
+                   "pulse (polarity.csv of linsense fea --polarity: rel / I); default: the motor file's "
+                   "[saturation] polarity, else no start-up design")
+@click.option("--current-noise", type=float, default=0.01, show_default=True, callback=_finite(0.0, False),
+              help="current-sensor noise, A rms per phase (a 12-bit ADC over +-10 A on top), for the "
+                   "pulse pairs")
 @click.option("--name", default=None, help="C name suffix (default: the motor name)")
 @click.option("--out", required=True, type=click.Path(dir_okay=False), help="output file")
 def tune(motor_spec: str, scenario_path: str | None, v_dc, f_pwm, dead_time, i_max, v_inj, f_inj, quad,
-         fmt: str, name: str | None, out: str) -> None:
+         fmt: str, polarity: float | None, current_noise: float, name: str | None, out: str) -> None:
     """Design the drive for a motor: injection, current loop, demodulator, observer, speed and
     position loops (docs/tuning.md); print the design and its margins; write a scenario or a C header."""
     from linsense.io import write_atomic
@@ -405,14 +412,23 @@ def tune(motor_spec: str, scenario_path: str | None, v_dc, f_pwm, dead_time, i_m
             setattr(dd, key, val)
     motor = _load(motor_spec)
     dz = design(motor, dd, src)
+    from linsense.tune.startup import design_startup
+    su = design_startup(motor, v_dc=dd.v_dc, f_pwm=dd.f_pwm, i_max=dd.i_max, observer_bw=dz.observer_bw,
+                        v_inj=dz.v_inj, polarity=polarity, current_noise=current_noise, source=src)
     if fmt == "c":
-        text = c_header(dz, dd, motor, name)
+        text = c_header(dz, dd, motor, name, startup=su)
     else:
-        text = scenario_toml(dz, dd, motor_spec, Path(out), base, base_dir)
+        text = scenario_toml(dz, dd, motor_spec, Path(out), base, base_dir, startup=su)
     click.echo(str(write_atomic(out, text)))
     for line in design_lines(dz, motor.name, dd):
         click.echo(line)
-    for w in dz.warnings:
+    if su is not None:
+        for line in su.lines():
+            click.echo(line)
+    else:
+        click.echo("  start-up       not designed: no saturation data (--polarity, or [saturation] polarity "
+                   "in the motor file)")
+    for w in dz.warnings + (su.warnings if su is not None else []):
         click.echo(f"linsense: warning: {w}", err=True)
 
 

@@ -159,7 +159,7 @@ _ENUMS = {
     ("ls_drive", "mode"): {"off": lib.LS_MODE_OFF, "sensored": lib.LS_MODE_SENSORED,
                            "sensorless_lut": lib.LS_MODE_SENSORLESS_LUT,
                            "sensorless_nolut": lib.LS_MODE_SENSORLESS_NOLUT,
-                           "calibration": lib.LS_MODE_CALIBRATION},
+                           "calibration": lib.LS_MODE_CALIBRATION, "startup": lib.LS_MODE_STARTUP},
 }
 
 
@@ -775,7 +775,10 @@ class Drive:
                 obj = getattr(obj, part)
             if float(obj.fs) != fs:
                 bad[f"{path}.fs"] = f"{float(obj.fs):g} Hz differs from the drive's fs = {fs:g} Hz"
-        sections = self._SECTIONS + ((("dtres", "ls_dtres"),) if self.cfg.hf_dtres else ())
+        if self.cfg.startup.pairs != 0 and float(self.cfg.startup.fs) != fs:
+            bad["startup.fs"] = f"{float(self.cfg.startup.fs):g} Hz differs from the drive's fs = {fs:g} Hz"
+        sections = (self._SECTIONS + ((("dtres", "ls_dtres"),) if self.cfg.hf_dtres else ())
+                    + ((("startup", "ls_startup"),) if self.cfg.startup.pairs != 0 else ()))
         for section, module in sections:
             init = getattr(lib, module + "_init")
             if init(ffi.new(module + " *"), ffi.addressof(self.cfg, section)) != lib.LS_OK:

@@ -32,6 +32,13 @@
  *                            compensation angle until the demodulated error is zero, i.e. until
  *                            the sensorless observer's equilibrium agrees with the encoder; the
  *                            result is written to cal.table (paper Fig. 9, "measured" LUT)
+ *   LS_MODE_STARTUP          start-up from an unknown position (ls_startup.h, cfg.startup and
+ *                            cfg.demod.comp required, startup.t_quiet and t_settle at least the
+ *                            injection's ramp time): HF lock on the axis modulo pi with zero
+ *                            currents, d-axis pulse pairs for the magnet polarity (the estimate
+ *                            turned by pi when they say so), HF relock, then LS_MODE_SENSORLESS_LUT
+ *                            by itself with the reference at the estimate (no jump); su holds the
+ *                            decision; a failed start-up trips LS_FAULT_OBSERVER
  */
 #ifndef LINSENSE_LS_DRIVE_H
 #define LINSENSE_LS_DRIVE_H
@@ -46,6 +53,7 @@
 #include "linsense/ls_observer.h"
 #include "linsense/ls_pos.h"
 #include "linsense/ls_protect.h"
+#include "linsense/ls_startup.h"
 #include "linsense/ls_traj.h"
 #include "linsense/ls_types.h"
 
@@ -63,7 +71,8 @@ typedef enum {
     LS_MODE_SENSORED = 1,
     LS_MODE_SENSORLESS_LUT = 2,
     LS_MODE_SENSORLESS_NOLUT = 3,
-    LS_MODE_CALIBRATION = 4
+    LS_MODE_CALIBRATION = 4,
+    LS_MODE_STARTUP = 5
 } ls_mode;
 
 typedef struct {
@@ -116,6 +125,8 @@ typedef struct {
     LS_REAL i_d_inj;        /* A, d-axis current reference while the HF injection is on (0: none): keeps
                                the phase currents off zero, where the dead time would act on the
                                square wave's current change (docs/firmware.md), |i_d_inj| < i_max */
+    ls_startup_cfg startup; /* start-up with the magnet polarity (startup.pairs = 0: none, and
+                               LS_MODE_STARTUP refused); startup.fs = fs */
 } ls_drive_cfg;
 
 typedef struct {
@@ -197,6 +208,10 @@ typedef struct {
     int32_t enc_prev;    /* -, encoder count of the last sample (encoder modes) */
     int64_t enc_jump_max; /* -, largest plausible count change per step (>= 1) */
     LS_REAL i_d_ref;     /* A, d-current reference (cfg.i_d_inj with hf_on, else 0) */
+    /* LS_MODE_STARTUP: while it runs, mode holds LS_MODE_OFF and starting is set, so that
+     * ls_drive_step's other modes pay nothing for it (it is dispatched from the outputs-off branch) */
+    bool starting;       /* the start-up sequence runs (cmd.mode reports LS_MODE_STARTUP) */
+    ls_startup su;       /* its sequence and decision (su.flip, su.i_diff, su.phase, su.steps) */
 } ls_drive;
 
 /* Fill cfg with the defaults documented in docs/firmware.md: 16 kHz, 12 V / 1 kHz injection and
@@ -233,5 +248,7 @@ ls_status ls_drive_move_to(ls_drive *d, ls_pos target);
 ls_status ls_drive_step_to(ls_drive *d, ls_pos target);
 /* One PWM period. */
 void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd);
+/* Internal: ls_drive_step's LS_MODE_STARTUP path (csrc/ctrl/ls_drive_startup.c); not an API. */
+ls_startup_phase ls_drive_startup_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd);
 
 #endif /* LINSENSE_LS_DRIVE_H */

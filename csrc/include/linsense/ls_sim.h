@@ -44,6 +44,33 @@
 
 #define LS_SIM_MAX_ORDER 64 /* highest harmonic order of L_ab(theta) */
 #define LS_SIM_MAX_PM 8     /* PM-flux harmonics */
+#define LS_SIM_SAT_POW 4    /* powers 0..3 of i_q in the saturated plant's inductances */
+
+/* The saturated plant (docs/simulator.md, "Saturation"; docs/theory.md). With on = 1 it replaces
+ * the linear L_ab(theta) i of the flux linkage (lab_* then only serve ls_sim_plant_eval); the PM
+ * flux is the same. In the true dq frame (i_d, i_q = Park(theta) of the alpha-beta currents) the
+ * magnetic co-energy (per 3/2, like the force formula) is
+ *   W(i_d, i_q, theta) = a(theta, i_q) S(i_d) + i_d B(theta, i_q) + C(theta, i_q),
+ *   a = sum_p A_p(theta) i_q^p,  B = sum_p B_p(theta) i_q^(p+1)/(p+1),
+ *   C = sum_p C_p(theta) i_q^(p+2)/((p+1)(p+2)),
+ * A_p, B_p, C_p Fourier series in theta (dq_cos, dq_sin, entries 0, 1, 2), so that at i_d = 0 the
+ * incremental inductances d2W/di2 are exactly L_d = a, L_dq = sum_p B_p i_q^p, L_q = sum_p C_p i_q^p
+ * (e.g. FEA tables at several q currents, fitted by a polynomial in i_q). S is the d-axis
+ * saturation: S'' = k(i_d) = f(i_d + i_m) / f(i_m), f(u) = 1/(1 + (u/i_sat_d)^2), S(0) = S'(0) = 0
+ * (i_sat_d = 0: S = i_d^2/2, no d-axis saturation): a current along the magnets' flux (+d) lowers
+ * the incremental L_d, one against it raises it (the magnet-polarity signal). The flux linkage is
+ * lambda = dW/di + lambda_pm, the voltage v = R i + d lambda/dt is integrated with lambda as the
+ * state (RK4; i from lambda by Newton's method), and the force is (3/2)(2 pi/tau) dW/dtheta at
+ * constant alpha-beta currents (plus the PM term). */
+typedef struct {
+    int32_t on;                                          /* -, 1: saturated plant, 0: linear (lab_*) */
+    int32_t n_order;                                     /* -, harmonic orders 0..n_order-1 of dq_* (<= LS_SIM_MAX_ORDER) */
+    int32_t n_pow;                                       /* -, powers 0..n_pow-1 of i_q (1..LS_SIM_SAT_POW) */
+    double dq_cos[LS_SIM_SAT_POW][3][LS_SIM_MAX_ORDER];  /* H/A^p, cos(k theta) coefficients of A_p, B_p, C_p */
+    double dq_sin[LS_SIM_SAT_POW][3][LS_SIM_MAX_ORDER];  /* H/A^p, sin(k theta) coefficients */
+    double i_m;                                          /* A, magnet-equivalent d current (>= 0) */
+    double i_sat_d;                                      /* A, d-axis saturation current (0: none) */
+} ls_sim_sat;
 
 typedef enum {
     LS_SIM_AVERAGE = 0,
@@ -110,6 +137,8 @@ typedef struct {
     double v0;                           /* m/s, initial (or prescribed) speed */
     int32_t decimate;                    /* -, record every decimate-th period (>= 1) */
     double i_abort;                      /* A, |phase current| beyond which the run is stopped as diverged */
+    /* saturation (sat.on = 0: the linear plant, the fast path) */
+    ls_sim_sat sat;
 } ls_sim_cfg;
 
 /* A reference command issued at time t (s): move (minimum-time) or step to x (m). */
@@ -220,7 +249,14 @@ ls_status ls_sim_open_loop(const ls_sim_cfg *cfg, const double *seg_t, const dou
 void ls_sim_plant_eval(const ls_sim_cfg *cfg, double theta, double lab[3], double dlab[3], double lpm[2],
                        double dlpm[2]);
 
-/* Force (N) at theta for alpha-beta currents i (co-energy formula above). */
+/* Force (N) at theta for alpha-beta currents i (co-energy formula above; the saturated one when
+ * sat.on). */
 double ls_sim_force(const ls_sim_cfg *cfg, double theta, const double i_ab[2]);
+
+/* The saturated plant at theta and alpha-beta currents i (for the tests; cfg->sat.on need not be
+ * set): flux linkage lambda_ab (2, Wb, with the PM flux), incremental inductance d lambda/d i (3:
+ * aa, bb, ab, H), d lambda/d theta at constant i (2, Wb/rad) and the force (N). */
+void ls_sim_sat_eval(const ls_sim_cfg *cfg, double theta, const double i_ab[2], double lam[2], double l_inc[3],
+                     double dlam[2], double *force);
 
 #endif /* LINSENSE_LS_SIM_H */

@@ -18,6 +18,7 @@ import numpy as np
 from linsense.errors import InputError, ModelError
 from linsense.io import finite_cell, parse_toml, read_text_file
 from linsense.model.inductance import ENTRIES, InductanceModel
+from linsense.model.saturation import Saturation
 from linsense.model.schema import validate_motor_file
 
 #: Saliency |L_q - L_d| below this fraction of (L_d + L_q)/2 counts as vanished.
@@ -72,6 +73,7 @@ class Motor:
     friction: Friction = field(default_factory=Friction)
     pm_harmonics: tuple[PmHarmonic, ...] = ()
     source: str = ""
+    saturation: Saturation | None = None  # for the simulator's saturated plant (None: none given)
 
     @property
     def psi_pm(self) -> float:
@@ -179,6 +181,7 @@ def motor_from_toml(text: str, source: str, base_dir: Path | None = None) -> Mot
             ind.L0, ind.L2, ind.M0, ind.M2, ind.dM0, ind.harmonics()
         )
     m = doc.motor
+    saturation = None if doc.saturation is None else _saturation(doc.saturation, source, base_dir)
     return Motor(
         name=m.name,
         R_s=m.R_s,
@@ -191,7 +194,25 @@ def motor_from_toml(text: str, source: str, base_dir: Path | None = None) -> Mot
             PmHarmonic(h.order, h.amplitude, math.radians(h.phase_deg)) for h in doc.pm_flux.harmonics
         ),
         source=source,
+        saturation=saturation,
     )
+
+
+def _saturation(sec, source: str, base_dir: Path | None) -> Saturation:
+    """The ``[saturation]`` section, its tables read (paths relative to the motor file)."""
+    tables = []
+    for j, name in enumerate(sec.tables or ()):
+        path = Path(name)
+        if not path.is_absolute() and base_dir is not None:
+            path = base_dir / path
+        if not path.is_file():
+            raise InputError(source, f"saturation.tables[{j}]", f"no such table file {str(path)!r}")
+        theta, entries = read_inductance_table(path)
+        tables.append(InductanceModel.from_table(theta, entries, sec.table_max_order,
+                                                 description=f"table {name}"))
+    return Saturation(polarity=sec.polarity, magnet_current=sec.magnet_current, q_drop=sec.q_drop,
+                      q_current=sec.q_current, currents=tuple(float(c) for c in sec.currents or ()),
+                      tables=tuple(tables), source=source)
 
 
 def read_inductance_table(path: Path) -> tuple[np.ndarray, np.ndarray]:

@@ -106,12 +106,48 @@ class PmFluxSection(BaseModel):
     harmonics: list[PmHarmonicEntry] = Field(default_factory=list)
 
 
+class SaturationSection(BaseModel):
+    """Saturation for the simulator's saturated plant (:mod:`linsense.model.saturation`): the
+    parametric keys, or incremental inductance tables at several q currents (plus ``polarity``)."""
+
+    model_config = _STRICT
+    polarity: NonNegative = 0.0  # 1/A, (L_d(-I) - L_d(+I)) / L_d per A of d pulse
+    magnet_current: Positive | None = None  # A, i_m (default psi_pm / mean L_d)
+    q_drop: float = Field(default=0.0, ge=0.0, lt=1.0)  # -, fall of L_q at q_current
+    q_current: Positive = 1.0  # A
+    currents: list[float] | None = None  # A, q currents of the tables
+    tables: list[Annotated[str, Field(min_length=1)]] | None = None  # L_abc(theta) CSVs
+    table_max_order: int | None = Field(default=None, ge=1, le=MAX_HARMONIC_ORDER)
+
+    @model_validator(mode="after")
+    def _check(self) -> SaturationSection:
+        if (self.currents is None) != (self.tables is None):
+            raise KeyProblem("tables" if self.tables is None else "currents",
+                             "give currents and tables together (or neither: the parametric model)")
+        if self.currents is not None:
+            if len(self.currents) != len(self.tables):
+                raise KeyProblem("tables", f"{len(self.tables)} tables for {len(self.currents)} currents")
+            if not 2 <= len(self.currents) <= 16:
+                raise KeyProblem("currents", f"give 2 to 16 currents, got {len(self.currents)}")
+            if len(set(self.currents)) != len(self.currents):
+                raise KeyProblem("currents", f"currents must be distinct, got {self.currents!r}")
+            if any(abs(c) > 1e3 for c in self.currents):
+                raise KeyProblem("currents", f"beyond 1000 A, got {self.currents!r}")
+            if self.q_drop:
+                raise KeyProblem("q_drop", "the tables give the q-axis saturation: q_drop is for the "
+                                 "parametric model only")
+        elif self.table_max_order is not None:
+            raise KeyProblem("table_max_order", "only valid together with 'tables'")
+        return self
+
+
 class MotorFile(BaseModel):
     model_config = _STRICT
     motor: MotorSection
     inductance: InductanceSection
     friction: FrictionSection = Field(default_factory=FrictionSection)
     pm_flux: PmFluxSection = Field(default_factory=PmFluxSection)
+    saturation: SaturationSection | None = None
 
 
 def validate_motor_file(data: dict, source: str) -> MotorFile:

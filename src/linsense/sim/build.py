@@ -22,11 +22,12 @@ import numpy as np
 
 from linsense.compensation.lut import build_lut
 from linsense.ctrl import ConfigError, Drive, drive_default_cfg, ffi, lib, make_lut
-from linsense.errors import InputError, LinsenseError
+from linsense.errors import InputError, LinsenseError, ModelError
 from linsense.limits import MAX_STEPS, MAX_TRACE_BYTES, MAX_TRACE_FILE_BYTES
 from linsense.model.motor import Motor, load_motor, preset_names
+from linsense.model.saturation import Saturation
 from linsense.sim.core import BLOCKS, SIGNALS, PlantSetup, SimulationError, plant_template, sim_cfg
-from linsense.sim.plant import lab_fourier
+from linsense.sim.plant import fill_saturation, lab_fourier
 from linsense.sim.scenario import Scenario
 from linsense.tune.design import DriveData, current_gains, design, error_gain, mean_dq, speed_gains
 from linsense.tune.injection import (
@@ -40,7 +41,8 @@ from linsense.tune.injection import (
 #: drive sub-configuration -> scenario section (for messages)
 _SECTION = {"inject": "injection", "bpf": "injection", "sep": "injection", "demod": "observer",
             "obs": "observer", "enc_obs": "sensors", "current": "controller", "pos": "controller",
-            "pos.speed": "controller", "traj": "reference", "mod": "inverter", "prot": "protection"}
+            "pos.speed": "controller", "traj": "reference", "mod": "inverter", "prot": "protection",
+            "startup": "startup"}
 
 
 @dataclass
@@ -94,7 +96,29 @@ def _fingerprint(motor: Motor) -> str:
                              motor.friction, motor.pm_harmonics)).encode())
     h.update(np.ascontiguousarray(motor.inductance.a).tobytes())
     h.update(np.ascontiguousarray(motor.inductance.b).tobytes())
+    if motor.saturation is not None:
+        h.update(repr(motor.saturation.key()).encode())
     return h.hexdigest()
+
+
+def plant_saturation(sc: Scenario, motor: Motor) -> Saturation | None:
+    """The saturation of the plant ``sc`` runs (None: the linear plant): the motor file's
+    ``[saturation]`` with the scenario's ``[saturation]`` keys over it, when ``saturation.enabled``."""
+    ss = sc.spec.saturation
+    if not ss.enabled:
+        return None
+    over = {k: getattr(ss, k) for k in ("polarity", "magnet_current", "q_drop", "q_current")
+            if getattr(ss, k) is not None}
+    if motor.saturation is None and not over:
+        raise InputError(sc.source, "saturation.enabled",
+                         f"motor {motor.name!r} has no [saturation] section: give saturation.polarity "
+                         "and/or q_drop here, or a [saturation] section in the motor file")
+    base = motor.saturation if motor.saturation is not None else Saturation(source=sc.source)
+    if base.tables and over.get("q_drop"):
+        raise InputError(sc.source, "saturation.q_drop",
+                         f"motor {motor.name!r} has saturation tables (they give the q-axis), "
+                         f"got {over['q_drop']!r}")
+    return dataclasses.replace(base, **over)
 
 
 def _load_motor_file_cached(path: Path, check: bool) -> Motor:
@@ -121,6 +145,14 @@ def resolve_motor(sc: Scenario, spec: str | None = None, key: str = "motor", che
     if not p.is_file():
         raise InputError(sc.source, key, f"no such motor file {str(p)!r} (value {spec!r})")
     return _load_motor_file_cached(p, check)
+
+
+def _sat_template(plant, motor: Motor, sat: Saturation):
+    """A copy of the plant template switched to the saturated plant."""
+    c = ffi.new("ls_sim_cfg *")
+    ffi.memmove(c, plant, ffi.sizeof("ls_sim_cfg"))
+    fill_saturation(c, motor, sat)
+    return c
 
 
 def trapezoid_time(distance: float, v_max: float, a_max: float) -> float:
@@ -323,10 +355,17 @@ def build(sc: Scenario, motor: Motor | None = None, trace_in_memory: bool = True
         load=s.load.type, load_f0=load_f0, load_f1=s.load.force_after, load_t=s.load.time,
         load_incline=math.radians(s.load.incline_deg), decimate=s.record.decimate, i_abort=prot.i_abort,
     )
+    sat = plant_saturation(sc, motor)
     try:
         plant = _memo(("plant", motor_key(motor)),
                       lambda: plant_template(motor, lab_fourier(motor.inductance, 1e-12)))
+        if sat is not None:
+            lin = plant
+            plant = _memo(("plant_sat", motor_key(motor), sat.key()),
+                          lambda: _sat_template(lin, motor, sat))
         cfg = sim_cfg(motor, setup, template=plant)
+    except ModelError as exc:
+        raise InputError(sc.source, "saturation.polarity", f"refused: {exc}") from None
     except (SimulationError, LinsenseError) as exc:
         raise InputError(sc.source, "", f"simulator configuration refused: {exc}") from None
 
@@ -423,12 +462,19 @@ def build(sc: Scenario, motor: Motor | None = None, trace_in_memory: bool = True
         d.cal.k_int, d.cal.t_settle, d.cal.t_hold = cs.k_int, cs.t_settle, cs.t_hold
         d.cal.tol, d.cal.t_max = math.radians(cs.tol_deg), cs.t_max
         d.cal.dither_amp, d.cal.dither_freq = cs.dither_a, cs.dither_hz
-    for sub in ("inject", "bpf", "sep", "demod", "obs", "enc_obs", "current", "traj", "prot", "dtres"):
+    su = s.startup
+    d.startup.t_lock, d.startup.err_lock = su.t_lock, math.radians(su.err_lock_deg)
+    d.startup.t_quiet = su.t_quiet
+    d.startup.v_pulse, d.startup.t_pulse, d.startup.t_rest = su.v_pulse, su.t_pulse, su.t_rest
+    d.startup.pairs, d.startup.i_min, d.startup.t_settle = su.pairs, su.i_min, su.t_settle
+    for sub in ("inject", "bpf", "sep", "demod", "obs", "enc_obs", "current", "traj", "prot", "dtres",
+                "startup"):
         getattr(d, sub).fs = fs
     d.pos.speed.fs = fs
 
     # the table for sensorless_lut, and for the HF observer beside the encoder in sensored mode
-    compensation = obs.compensation or ("lut" if ctl.mode in ("sensorless_lut", "sensored") else "none")
+    compensation = obs.compensation or ("lut" if ctl.mode in ("sensorless_lut", "sensored", "startup")
+                                        else "none")
     # the tables the controller can know, from the motor model with the resistance it believes (as
     # cached ls_lut objects: the drive only reads them, through const pointers)
     def lut_motor() -> Motor:
@@ -462,7 +508,9 @@ def build(sc: Scenario, motor: Motor | None = None, trace_in_memory: bool = True
         sections = sorted({_SECTION.get(k.split(".")[0] if k != "pos.speed" else k, k) for k in exc.fields})
         key = ",".join(sections)
         raise InputError(sc.source, key, f"refused by the controller library: {exc}") from None
-    drive.set_position(2.0 * math.pi * setup.x0 / tau)
+    # (the start-up does not know where the mover is: its estimate starts at startup.guess_mm)
+    x_known = s.startup.guess_mm * 1e-3 if ctl.mode == "startup" else setup.x0
+    drive.set_position(2.0 * math.pi * x_known / tau)
     if s.initial.load_balanced:
         drive.set_load(initial_load(sc, motor))
     try:

@@ -34,6 +34,7 @@ MODES = {
     "sensorless_lut": lib.LS_MODE_SENSORLESS_LUT,
     "sensorless_nolut": lib.LS_MODE_SENSORLESS_NOLUT,
     "calibration": lib.LS_MODE_CALIBRATION,
+    "startup": lib.LS_MODE_STARTUP,
 }
 #: Recorded signals: name -> values per sample.
 SIGNALS = {

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from linsense._ctrl import lib
+from linsense._ctrl import ffi, lib
 from linsense.errors import ModelError
 from linsense.model.frames import abc_to_ab_matrix
 from linsense.model.inductance import InductanceModel
@@ -78,3 +78,33 @@ def fill_plant(cfg, motor, tol: float = 1e-12, lab: tuple | None = None) -> None
     cfg.mass = motor.mass
     cfg.visc = motor.friction.viscous
     cfg.coulomb = motor.friction.coulomb
+
+
+def fill_saturation(cfg, motor, sat) -> dict:
+    """Switch an ``ls_sim_cfg`` (cffi) to the saturated plant of ``motor`` with the
+    :class:`~linsense.model.saturation.Saturation` ``sat`` (``None``: back to the linear plant).
+    Returns the series written (:func:`linsense.model.saturation.plant_series`)."""
+    from linsense.model.saturation import plant_series
+
+    if sat is None:
+        cfg.sat.on = 0
+        return {}
+    try:
+        ser = plant_series(sat, motor.inductance, motor.psi_pm, MAX_ORDER)
+    except ValueError as exc:
+        raise ModelError(sat.source or motor.source, "saturation.polarity", str(exc)) from None
+    cfg.sat.on = 1
+    cfg.sat.n_order = ser["n_order"]
+    cfg.sat.n_pow = ser["n_pow"]
+    cos, sin = ser["dq_cos"], ser["dq_sin"]
+    buf_c = ffi.cast("double *", ffi.addressof(cfg.sat, "dq_cos"))
+    buf_s = ffi.cast("double *", ffi.addressof(cfg.sat, "dq_sin"))
+    full_c = np.zeros((int(lib.LS_SIM_SAT_POW), 3, MAX_ORDER))
+    full_s = np.zeros_like(full_c)
+    full_c[: cos.shape[0], :, : cos.shape[2]] = cos
+    full_s[: sin.shape[0], :, : sin.shape[2]] = sin
+    ffi.memmove(buf_c, full_c.tobytes(), full_c.nbytes)
+    ffi.memmove(buf_s, full_s.tobytes(), full_s.nbytes)
+    cfg.sat.i_m = ser["i_m"]
+    cfg.sat.i_sat_d = ser["i_sat_d"]
+    return ser

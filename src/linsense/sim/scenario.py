@@ -58,6 +58,23 @@ class CalibrationSection(BaseModel):
     dither_hz: Positive = _c(_C.cal.dither_freq)  # Hz
 
 
+class StartupSection(BaseModel):
+    """Start-up from an unknown position with the magnet polarity, control.mode = "startup"
+    (ls_startup_cfg, docs/firmware.md): HF lock, d-axis pulse pairs, then sensorless_lut."""
+
+    model_config = _STRICT
+    guess_mm: float = 0.0  # mm, the drive's initial estimate (the true position is initial.position_mm)
+    t_lock: Positive = _c(_C.startup.t_lock)  # s, HF lock before the pulses
+    err_lock_deg: Positive = round(math.degrees(float(_C.startup.err_lock)), 4)  # deg, lock accepted within
+    t_quiet: NonNegative = _c(_C.startup.t_quiet)  # s, injection ramp-down before the pulses
+    v_pulse: Positive = _c(_C.startup.v_pulse)  # V, pulse amplitude on the estimated d-axis
+    t_pulse: Positive = _c(_C.startup.t_pulse)  # s, pulse length (>= 2 PWM periods)
+    t_rest: Positive = _c(_C.startup.t_rest)  # s, zero voltage before each pulse (>= 3 PWM periods)
+    pairs: int = Field(default=int(_C.startup.pairs), ge=1, le=1024)  # (+, -) pulse pairs
+    i_min: NonNegative = _c(_C.startup.i_min)  # A, smallest |i_diff| accepted as a decision
+    t_settle: NonNegative = _c(_C.startup.t_settle)  # s, HF relock after the pulses
+
+
 class ScenarioSection(BaseModel):
     model_config = _STRICT
     name: str = Field(default="scenario", min_length=1)
@@ -77,7 +94,8 @@ class InverterSection(BaseModel):
 
 class ControlSection(BaseModel):
     model_config = _STRICT
-    mode: Literal["sensorless_lut", "sensorless_nolut", "sensored", "calibration"] = "sensorless_lut"
+    mode: Literal["sensorless_lut", "sensorless_nolut", "sensored", "calibration",
+                  "startup"] = "sensorless_lut"
     fs: Positive | None = None  # Hz, must equal inverter.f_pwm (default: equal)
     delay_comp: NonNegative = _c(_C.delay_comp)  # sampling periods of angle advance
     inject_sensored: bool = bool(_C.inject_sensored)  # keep injecting (and observing) in sensored mode
@@ -233,6 +251,27 @@ class RecordSection(BaseModel):
     decimate: int = Field(default=1, ge=1, le=1_000_000)
 
 
+class SaturationSection(BaseModel):
+    """The saturated plant (docs/simulator.md, "Saturation"): off by default (the linear plant).
+    ``enabled`` uses the motor file's ``[saturation]``; the other keys give or override its
+    parametric keys (so that a preset such as ecce2010 can saturate)."""
+
+    model_config = _STRICT
+    enabled: bool = False
+    polarity: NonNegative | None = None  # 1/A, (L_d(-I) - L_d(+I)) / L_d per A of d pulse
+    magnet_current: Positive | None = None  # A, i_m (default psi_pm / mean L_d)
+    q_drop: Annotated[float, Field(ge=0.0, lt=1.0)] | None = None  # -, fall of L_q at q_current
+    q_current: Positive | None = None  # A
+
+    @model_validator(mode="after")
+    def _check(self) -> SaturationSection:
+        keys = ("polarity", "magnet_current", "q_drop", "q_current")
+        given = [k for k in keys if getattr(self, k) is not None]
+        if given and not self.enabled:
+            raise KeyProblem(given[0], "only used by the saturated plant: set saturation.enabled = true")
+        return self
+
+
 class MetricsSection(BaseModel):
     model_config = _STRICT
     convergence_s: NonNegative = 0.1  # s, start of the transient/steady error windows
@@ -262,6 +301,8 @@ class ScenarioFile(BaseModel):
     record: RecordSection = Field(default_factory=RecordSection)
     metrics: MetricsSection = Field(default_factory=MetricsSection)
     calibration: CalibrationSection = Field(default_factory=CalibrationSection)
+    saturation: SaturationSection = Field(default_factory=SaturationSection)
+    startup: StartupSection = Field(default_factory=StartupSection)
 
     @model_validator(mode="after")
     def _check(self) -> ScenarioFile:
@@ -305,11 +346,32 @@ class ScenarioFile(BaseModel):
             raise KeyProblem("injection.frequency", f"must be <= f_pwm / 4 = {inv.f_pwm / 4:g} Hz, "
                             f"got {self.injection.frequency:g}")
         comp = self.observer.compensation
-        if ctl.mode == "sensorless_lut" and comp == "none":
+        if ctl.mode in ("sensorless_lut", "startup") and comp == "none":
             raise KeyProblem("observer.compensation",
-                             "\"none\" contradicts control.mode = \"sensorless_lut\" "
+                             f"\"none\" contradicts control.mode = \"{ctl.mode}\" "
                              "(use mode = \"sensorless_nolut\")")
-        if ctl.mode not in ("sensorless_lut", "sensored") and comp == "lut":
+        su = self.startup
+        if ctl.mode != "startup" and su.model_fields_set:
+            raise KeyProblem(f"startup.{sorted(su.model_fields_set)[0]}",
+                             "only used by control.mode = \"startup\"")
+        if ctl.mode == "startup":
+            if round(su.t_pulse * inv.f_pwm) < 2:
+                raise KeyProblem("startup.t_pulse", f"must be at least 2 PWM periods ({2 / inv.f_pwm:g} s), "
+                                 f"got {su.t_pulse:g}")
+            if round(su.t_rest * inv.f_pwm) < 3:
+                raise KeyProblem("startup.t_rest", f"must be at least 3 PWM periods ({3 / inv.f_pwm:g} s), "
+                                 f"got {su.t_rest:g}")
+            for k in ("t_lock", "t_quiet", "t_pulse", "t_rest", "t_settle"):
+                if getattr(su, k) > 60.0:
+                    raise KeyProblem(f"startup.{k}", f"at most 60 s, got {getattr(su, k):g}")
+            if su.err_lock_deg > 90.0:
+                raise KeyProblem("startup.err_lock_deg", f"at most 90 deg, got {su.err_lock_deg:g}")
+            t_ramp = self.injection.amplitude / self.injection.ramp_rate
+            for k in ("t_quiet", "t_settle"):
+                if getattr(su, k) < t_ramp:
+                    raise KeyProblem(f"startup.{k}", f"must cover the injection's ramp, amplitude / "
+                                     f"ramp_rate = {t_ramp:g} s, got {getattr(su, k):g}")
+        if ctl.mode not in ("sensorless_lut", "sensored", "startup") and comp == "lut":
             raise KeyProblem("observer.compensation", f"\"lut\" is only used by control.mode = "
                             f"\"sensorless_lut\" (or \"sensored\", for the HF observer beside the encoder), "
                             f"got mode = {ctl.mode!r}")

@@ -20,9 +20,11 @@ from linsense.tune.design import (
 )
 
 
-def scenario_dict(dz: Design, drive: DriveData, motor_ref: str, base: dict | None = None) -> dict:
+def scenario_dict(dz: Design, drive: DriveData, motor_ref: str, base: dict | None = None,
+                  startup=None) -> dict:
     """A complete scenario: ``base`` (a scenario's given keys, or a 2 s hold) with the design's
-    drive data and gains written out."""
+    drive data and gains written out; ``startup`` (a :class:`linsense.tune.startup.StartupDesign`)
+    fills ``[startup]`` when the scenario's mode is "startup"."""
     sc = {k: (dict(v) if isinstance(v, dict) else v) for k, v in (base or {}).items()}
     sc["motor"] = motor_ref
     sc.setdefault("scenario", {"name": "tuned", "duration": 2.0})
@@ -59,6 +61,8 @@ def scenario_dict(dz: Design, drive: DriveData, motor_ref: str, base: dict | Non
     prot = sc.setdefault("protection", {})
     prot.setdefault("v_dc_min", _r(drive.v_dc * V_DC_MIN_FRACTION))
     prot.setdefault("v_dc_max", _r(drive.v_dc * V_DC_MAX_FRACTION))
+    if startup is not None and sc.get("control", {}).get("mode") == "startup":
+        sc.setdefault("startup", {}).update(startup.scenario_keys())
     return sc
 
 
@@ -69,6 +73,7 @@ def scenario_toml(
     out: Path,
     base: dict | None = None,
     base_dir: Path | None = None,
+    startup=None,
 ) -> str:
     """The scenario as TOML; a motor-file path is made relative to the output file's folder."""
     ref = motor_spec
@@ -83,14 +88,15 @@ def scenario_toml(
         f"{dz.f_inj:g} Hz injection, current loop {dz.current_bw:.3g} Hz, observer {dz.observer_bw:.3g} Hz, "
         f"speed loop {dz.speed_bw:.3g} Hz, position {dz.kp_x:.3g} 1/s.\n"
     )
-    return head + tomli_w.dumps(scenario_dict(dz, drive, ref, base))
+    return head + tomli_w.dumps(scenario_dict(dz, drive, ref, base, startup))
 
 
 def _r(v: float) -> float:
     return float(f"{v:.6g}")
 
 
-def c_header(dz: Design, drive: DriveData, motor: Motor, name: str | None = None, points: int = 256) -> str:
+def c_header(dz: Design, drive: DriveData, motor: Motor, name: str | None = None, points: int = 256,
+             startup=None) -> str:
     """``ls_cfg_<name>.h``: the compensation and gain tables and ``ls_cfg_<name>(cfg, comp, gain)``,
     which fills an ``ls_drive_cfg`` from ``ls_drive_default_cfg`` with the design (the library holds
     no motor's numbers)."""
@@ -159,8 +165,13 @@ def c_header(dz: Design, drive: DriveData, motor: Motor, name: str | None = None
         ("dtres.l_q", L_q),
         ("cal.dither_amp", dz.dither_a),
         ("cal.dither_freq", dz.dither_hz),
+        ("startup.fs", drive.f_pwm),
     ]
+    if startup is not None:  # the start-up pulses, designed from the saturation data
+        sets += startup.c_fields()
     body = "\n".join(f"    cfg->{k} = {f(v)};" for k, v in sets)
+    if startup is not None:
+        body += f"\n    cfg->startup.pairs = {int(startup.pairs)}u;"
     guard = f"LS_CFG_{sym.upper()}_H"
     return f"""/* Drive configuration for motor {motor.name}, designed by `linsense tune` (docs/tuning.md).
  * Drive: {drive.v_dc:g} V bus, {drive.f_pwm:g} Hz PWM, {drive.dead_time * 1e6:g} us dead time,

@@ -1,0 +1,130 @@
+/* ls_drive_step's LS_MODE_STARTUP path (ls_drive.h, ls_startup.h), in a translation unit of its
+ * own: ls_drive.c calls it from the outputs-off branch (d->starting) and handles its end. */
+#include <math.h>
+
+#include "linsense/ls_drive.h"
+#include "linsense/ls_math.h"
+
+/* The HF chain of the sensorless modes (separation, residual, band-pass, demodulator with the
+ * table, observer) with zero current references instead of the position loop; during the pulses
+ * the observer is frozen, the injection off and the d-voltage the pulse's; at the end of the
+ * pulses the estimate is turned by pi if they say so. Returns the sequence's phase after the step
+ * (LS_SU_FAILED also for a non-finite output, with LS_FAULT_NONFINITE latched); writes cmd
+ * unless it fails. */
+ls_startup_phase ls_drive_startup_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
+{
+    const ls_drive_cfg *cfg = &d->cfg;
+    ls_startup *su = &d->su;
+    LS_REAL i_a, i_b, ihf_a, ihf_b, if_a, if_b, c_est, s_est, i_d, i_q, i_dr, v_d, v_q, v_a, v_b;
+    LS_REAL v_hf = LS_R(0.0), v_lim, duty[3];
+    ls_startup_phase ph;
+
+    i_a = meas->i_abc[0];
+    i_b = (meas->i_abc[1] - meas->i_abc[2]) * (LS_R(1.0) / LS_SQRT3);
+    ls_sincos(d->obs.pos.theta, &c_est, &s_est);
+    if_a = ls_biquad_step(&d->sep[0], i_a);
+    if_b = ls_biquad_step(&d->sep[1], i_b);
+    if (cfg->hf_dtres) {
+        LS_REAL v_err[2], i_res[2];
+        (void)ls_mod_residual(&d->mod, meas->i_abc, meas->v_dc, d->dtres.k_rip, v_err);
+        ls_dtres_step(&d->dtres, v_err, c_est, s_est, i_res);
+        ihf_a = ls_biquad_step(&d->bpf[0], i_a - i_res[0]);
+        ihf_b = ls_biquad_step(&d->bpf[1], i_b - i_res[1]);
+    } else {
+        ihf_a = ls_biquad_step(&d->bpf[0], i_a);
+        ihf_b = ls_biquad_step(&d->bpf[1], i_b);
+    }
+    {
+        const LS_REAL err = ls_demod_step_cs(&d->demod, ihf_a, ihf_b, d->obs.pos.theta, c_est, s_est, d->inj.c,
+                                             d->inj.s, LS_R(0.0));
+        if (su->phase == LS_SU_LOCK || su->phase == LS_SU_SETTLE) { /* frozen in between */
+            ls_observer_step_finite(&d->obs, su->env >= LS_R(1.0) ? err : LS_R(0.0), LS_R(0.0));
+        }
+        /* the raw currents in the estimated frame (the pulses' start and end) */
+        i_dr = c_est * i_a + s_est * i_b;
+        ph = ls_startup_step(su, i_dr, err, d->demod.valid);
+    }
+    if (ph == LS_SU_FAILED) {
+        return ph; /* the caller trips LS_FAULT_OBSERVER and turns the outputs off */
+    }
+    if (su->turned && su->flip) { /* the other pole: by pi, in the same period as the guess */
+        d->obs.pos = ls_pos_add(d->obs.pos, d->obs.pos.theta < LS_PI ? LS_PI : -LS_PI);
+        d->obs.omega = LS_R(0.0);
+    }
+    /* the injection: the carrier at full amplitude times a smoothstep envelope (a linear ramp's
+     * corners leave a DC current, a force impulse that a free mover keeps as a drift): up while
+     * locking and settling, down while quiet, zero during the pulses */
+    {
+        const LS_REAL du = d->inj.amp_step / cfg->inject.amplitude;
+        const bool up = ph == LS_SU_LOCK || ph == LS_SU_SETTLE || ph == LS_SU_DONE;
+        su->env = ls_clamp(up ? su->env + du : su->env - du, LS_R(0.0), LS_R(1.0));
+        if (ph == LS_SU_PULSE) {
+            su->env = LS_R(0.0);
+        }
+        ls_inject_enable(&d->inj, true);
+        d->inj.amp = cfg->inject.amplitude;
+    }
+    if (ph == LS_SU_PULSE || su->turned) {
+        /* open loop: the pulse's d-voltage, or zero (the current decays freely, no controller
+         * overshoot to bias the next pulse); the controller starts again afterwards */
+        const LS_REAL v_max = meas->v_dc * (LS_R(0.95) / LS_SQRT3); /* 95 % of the linear range */
+        ls_current_reset(&d->cur);
+        (void)ls_inject_step(&d->inj); /* the carrier goes on */
+        i_d = i_dr;
+        i_q = -s_est * i_a + c_est * i_b;
+        v_d = ls_clamp(su->v_d, -v_max, v_max);
+        v_q = LS_R(0.0);
+        v_a = c_est * v_d;
+        v_b = s_est * v_d;
+    } else {
+        /* zero currents, on the fundamental currents, plus the injection (no speed loop even once
+         * the polarity is known: the observer's speed while it relocks after the pulses is no
+         * motion, and a loop on it pushes the mover) */
+        i_d = c_est * if_a + s_est * if_b;
+        i_q = -s_est * if_a + c_est * if_b;
+        v_lim = meas->v_dc * (LS_R(1.0) / LS_SQRT3) - d->v_hf_max;
+        /* at zero speed: the observer's speed while it slews onto the axis is no motion, and its
+         * back-EMF feed-forward would push the mover */
+        ls_current_step_finite(&d->cur, i_d, i_q, LS_R(0.0), LS_R(0.0), LS_R(0.0), v_lim, &v_d, &v_q);
+        const LS_REAL g = su->env * su->env * (LS_R(3.0) - LS_R(2.0) * su->env);
+        LS_REAL v_hq;
+        v_hf = g * ls_inject_step(&d->inj);
+        v_hq = g * d->inj.v_q;
+        v_a = c_est * v_d - s_est * v_q + v_hf * c_est - v_hq * s_est;
+        v_b = s_est * v_d + c_est * v_q + v_hf * s_est + v_hq * c_est;
+    }
+    (void)ls_mod_step_finite(&d->mod, v_a, v_b, meas->v_dc, meas->i_abc, duty);
+    if (!LS_ISFINITE(duty[0] + duty[1] + duty[2])) {
+        ls_protect_trip(&d->prot, LS_FAULT_NONFINITE);
+        return LS_SU_FAILED;
+    }
+    /* every field exactly once (as ls_drive_step) */
+    cmd->duty[0] = duty[0];
+    cmd->duty[1] = duty[1];
+    cmd->duty[2] = duty[2];
+    cmd->enable = true;
+    cmd->fault = d->prot.fault;
+    cmd->mode = LS_MODE_STARTUP;
+    cmd->pos_fb = d->obs.pos;
+    cmd->pos_est = d->obs.pos;
+    cmd->pos_ref = d->obs.pos;
+    cmd->v_est = ls_observer_speed(&d->obs);
+    cmd->v_fb = cmd->v_est;
+    cmd->f_load_est = d->obs.f_load;
+    cmd->err_sig = d->demod.err;
+    cmd->err_valid = d->demod.valid;
+    cmd->hf_level = d->demod.level;
+    cmd->psi_comp = d->demod.psi;
+    cmd->i_dq[0] = i_d;
+    cmd->i_dq[1] = i_q;
+    cmd->i_dq_ref[0] = LS_R(0.0);
+    cmd->i_dq_ref[1] = LS_R(0.0);
+    cmd->v_dq[0] = v_d;
+    cmd->v_dq[1] = v_q;
+    cmd->v_hf = v_hf;
+    cmd->cal_index = 0u;
+    cmd->cal_done = false;
+    cmd->psi_cal = LS_R(0.0);
+    return ph;
+}
+

@@ -1,0 +1,185 @@
+"""Design of the start-up pulses (issue 14, item 4; ``LS_MODE_STARTUP``, ``ls_startup_cfg``) from
+the motor's saturation data.
+
+The polarity signal of a d-axis pulse pair is the difference of the current changes that the same
+volt-seconds drive along and against the magnets' flux. With the saturation model of the
+simulator (:mod:`linsense.model.saturation`: incremental ``L_d(i_d) = L_d0 k(i_d)``,
+``k = f(i_d + i_m) / f(i_m)``, ``f(u) = 1 / (1 + (u / a)^2)``, ``a`` from the small-pulse polarity
+``(L_d(-I) - L_d(+I)) / L_d / I``, e.g. ``linsense fea --polarity``), the pulse is integrated,
+``L_d0 k(i) di/dt = V - R_s i``, for ``+V`` and ``-V``:
+
+* amplitude: 90 % of the bus's linear range ``V_dc / sqrt(3)`` (the fastest rise: the shortest
+  pulse, the least force time);
+* length: the shortest whole number of PWM periods whose current reaches ``1.1 i_max`` (the
+  signal grows with the square of the current, the force impulse with the current);
+* pairs: the current-sensor noise (rms per phase, plus the ADC's quantisation) gives the standard
+  deviation of the decision, ``2 sigma / sqrt(pairs)`` (each pulse is measured as the change of
+  one sample to another); the pairs make the expected signal where it is smallest (at the largest
+  ``L_d`` over the period) ``Z_SIGMA`` of them, and ``i_min`` is ``I_MIN_SIGMA`` of them: a start
+  fails (undecided, outputs off) with a probability of 3e-5 (3.5 sigma), decides wrong below 1e-9,
+  and a motor without the signal is refused in 99 % of starts instead of decided at random;
+* rests: ``4 L/R`` of zero voltage (the current decays; each pulse is measured from its own start);
+* the force: an axis error ``e`` and the end-effect's cross-coupling ``L_dq / L_q`` turn part of the
+  pulse into q-current, whose force alternates with the pulses' signs and nearly cancels; the
+  reluctance force ``(3/4) (2 pi / tau) dL_d/dtheta i_d^2`` has one sign: the predicted motion is
+  their drift over the pulses.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+
+from linsense.analysis.hf import dq_components
+from linsense.errors import InputError
+from linsense.model.motor import Motor
+from linsense.model.saturation import d_factor, i_sat_d_of
+
+Z_SIGMA = 6.0  # expected signal (at the largest L_d) over its standard deviation
+I_MIN_SIGMA = 2.5  # i_min in standard deviations
+PULSE_CURRENT = 1.1  # of i_max
+PULSE_BUS = 0.9  # of V_dc / sqrt(3)
+REST_TAU = 4.0  # rests in L_d / R_s
+PAIRS_MAX = 64
+LOCK_OBS = 2.8  # t_lock = LOCK_OBS / f_obs
+ERR_LOCK = 0.2  # rad
+LOCK_ACCURACY = math.radians(2.0)  # rad, axis error assumed during the pulses
+RAMP_RATE = 1200.0  # V/s, the injection's ramp (ls_drive_default_cfg)
+
+
+@dataclass
+class StartupDesign:
+    """The designed ``ls_startup_cfg`` (SI) and what the model predicts."""
+
+    polarity: float  # 1/A, the saturation data used
+    v_pulse: float  # V
+    t_pulse: float  # s
+    t_rest: float  # s
+    pairs: int
+    i_min: float  # A
+    t_lock: float  # s
+    err_lock: float  # rad
+    t_quiet: float  # s
+    t_settle: float  # s
+    i_peak: float  # A, current at the end of a +V pulse
+    signal: float  # A, expected |di_+| - |di_-|
+    sigma: float  # A, standard deviation of the decision (i_diff)
+    detect_s: float  # s, the whole sequence (shortest lock)
+    motion_mm: float  # mm, predicted drift over the pulses
+    warnings: list = field(default_factory=list)
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+    def scenario_keys(self) -> dict:
+        """The scenario's ``[startup]`` section."""
+        r = lambda v: float(f"{v:.6g}")  # noqa: E731
+        return {"t_lock": r(self.t_lock), "err_lock_deg": r(math.degrees(self.err_lock)),
+                "t_quiet": r(self.t_quiet), "v_pulse": r(self.v_pulse), "t_pulse": r(self.t_pulse),
+                "t_rest": r(self.t_rest), "pairs": int(self.pairs), "i_min": r(self.i_min),
+                "t_settle": r(self.t_settle)}
+
+    def c_fields(self) -> list[tuple[str, float]]:
+        """``cfg->startup.<field>`` values of the C header (pairs as a float: written as LS_R)."""
+        return [("startup.t_lock", self.t_lock), ("startup.err_lock", self.err_lock),
+                ("startup.t_quiet", self.t_quiet), ("startup.v_pulse", self.v_pulse),
+                ("startup.t_pulse", self.t_pulse), ("startup.t_rest", self.t_rest),
+                ("startup.i_min", self.i_min), ("startup.t_settle", self.t_settle)]
+
+    def lines(self) -> list[str]:
+        return [
+            f"  start-up       pulses {self.v_pulse:.3g} V x {self.t_pulse * 1e3:.3g} ms "
+            f"({self.i_peak:.2f} A), {self.pairs} pairs, rests {self.t_rest * 1e3:.3g} ms; signal "
+            f"{self.signal * 1e3:.3g} mA against {self.sigma * 1e3:.3g} mA rms (polarity "
+            f"{self.polarity * 100:.3g} %/A), i_min {self.i_min * 1e3:.3g} mA; lock "
+            f"{self.t_lock * 1e3:.3g} ms, detection {self.detect_s * 1e3:.0f} ms, drift from the pulses "
+            f"~{self.motion_mm:.3g} mm",
+        ]
+
+
+def pulse_currents(L_d0: float, R_s: float, i_m: float, a: float, v: float, t: float,
+                   n_sub: int = 400) -> tuple[float, float]:
+    """Current change (A) of a ``+v`` and a ``-v`` pulse of ``t`` s from zero current (RK2 on the
+    saturated d-axis)."""
+    def di(x: float, vs: float) -> float:
+        return (vs - R_s * x) / (L_d0 * float(d_factor(x, i_m, a)))
+
+    out = []
+    for vs in (v, -v):
+        i, h = 0.0, t / n_sub
+        for _ in range(n_sub):
+            i += h * di(i + 0.5 * h * di(i, vs), vs)
+        out.append(i)
+    return out[0], out[1]
+
+
+def design_startup(motor: Motor, *, v_dc: float, f_pwm: float, i_max: float, observer_bw: float,
+                   v_inj: float, polarity: float | None = None, current_noise: float = 0.01,
+                   adc_bits: int = 12, adc_range: float = 10.0,
+                   source: str = "<tune>") -> StartupDesign | None:
+    """The start-up for ``motor``, or None without saturation data (``polarity`` None and no
+    ``[saturation] polarity`` in the motor file)."""
+    if polarity is None and motor.saturation is not None and motor.saturation.polarity > 0:
+        polarity = motor.saturation.polarity
+    if polarity is None:
+        return None
+    if not (math.isfinite(polarity) and polarity > 0):
+        raise InputError(source, "polarity", f"must be a positive number (1/A), got {polarity!r}")
+    if not (math.isfinite(current_noise) and current_noise >= 0):
+        raise InputError(source, "current_noise", f"must be >= 0 A, got {current_noise!r}")
+    warnings: list[str] = []
+    th = np.linspace(0.0, 2.0 * np.pi, 360, endpoint=False)
+    L_d, L_q, L_dq = dq_components(motor, th)
+    L_d0 = float(np.mean(L_d))
+    sat = motor.saturation
+    i_m = sat.magnet_current if sat is not None and sat.magnet_current is not None else motor.psi_pm / L_d0
+    try:
+        a = i_sat_d_of(polarity, i_m)
+    except ValueError as exc:
+        raise InputError(source, "polarity", str(exc)) from None
+    ts = 1.0 / f_pwm
+    v = PULSE_BUS * v_dc / math.sqrt(3.0)
+    i_target = PULSE_CURRENT * i_max
+    n = 2
+    while True:
+        dp, dm = pulse_currents(L_d0, motor.R_s, i_m, a, v, n * ts)
+        if dp >= i_target or n >= 400:
+            break
+        n += 1
+    if dp < i_target:
+        warnings.append(f"the pulses reach {dp:.2f} A only (target {i_target:.2f} A): the bus is too low")
+    # the signal where it is smallest: at the largest L_d over the period (the least current)
+    sp, sm = pulse_currents(float(np.max(L_d)), motor.R_s, i_m, a, v, n * ts)
+    signal = sp + sm  # (sm < 0)
+    lsb = 2.0 * adc_range / 2**adc_bits if adc_bits > 0 else 0.0
+    sigma_1 = math.sqrt(current_noise**2 + lsb**2 / 12.0)
+    pairs = max(1, math.ceil((Z_SIGMA * 2.0 * sigma_1 / signal) ** 2)) if signal > 0 else PAIRS_MAX
+    if pairs > PAIRS_MAX:
+        warnings.append(f"the saturation signal ({signal * 1e3:.3g} mA) needs {pairs} pulse pairs against "
+                        f"{sigma_1 * 1e3:.3g} mA of noise: limited to {PAIRS_MAX}, the decision is less sure")
+        pairs = PAIRS_MAX
+    sigma = 2.0 * sigma_1 / math.sqrt(pairs)
+    i_min = I_MIN_SIGMA * sigma
+    n_rest = max(3, math.ceil(REST_TAU * L_d0 / motor.R_s / ts))
+    t_pulse, t_rest = n * ts, n_rest * ts
+    t_ramp = v_inj / RAMP_RATE
+    t_lock = LOCK_OBS / observer_bw
+    t_quiet = t_ramp + 2e-3
+    t_settle = t_ramp + 20e-3
+    t_pulses = (2 * pairs + 1) * (t_pulse + t_rest)
+    # motion: the one-signed reluctance force's drift over the pulses, and one pulse's q-force impulse
+    kx = 2.0 * math.pi / motor.pole_pitch
+    dld = float(np.max(np.abs(np.gradient(L_d, th))))
+    t_eff = t_pulse / 3.0 + 0.5 * L_d0 / motor.R_s  # s, i^2 over a pulse and its decay, in peak units
+    f_rel = 0.75 * kx * dld * dp**2
+    v_rel = 2 * pairs * f_rel * t_eff / motor.mass
+    cross = float(np.max(np.abs(L_dq / L_q))) + math.sin(LOCK_ACCURACY)
+    j_q = motor.force_constant * dp * cross * (t_pulse / 2.0 + L_d0 / motor.R_s)
+    motion = 0.5 * v_rel * t_pulses + j_q / motor.mass * (t_pulse + t_rest)
+    return StartupDesign(polarity=polarity, v_pulse=v, t_pulse=t_pulse, t_rest=t_rest, pairs=int(pairs),
+                         i_min=i_min, t_lock=t_lock, err_lock=ERR_LOCK, t_quiet=t_quiet, t_settle=t_settle,
+                         i_peak=dp, signal=signal, sigma=sigma,
+                         detect_s=t_lock + t_quiet + t_pulses + t_settle, motion_mm=motion * 1e3,
+                         warnings=warnings)
