@@ -9,8 +9,8 @@ a polynomial in ``i_q`` (:func:`numpy.polyfit`), the flux linkage
 Gauss-Legendre quadrature (``K``, ``S`` the single and double integrals of the d-axis factor
 ``k(i_d)``, the double ones by Cauchy's formula), the co-energy ``W`` likewise; the currents are
 integrated in alpha-beta with ``d i/dt = (d lambda/d i)^-1 (v - R i - omega d lambda/d theta)``,
-both derivatives by central differences of that flux, the force ``(3/2)(2 pi/tau) dW/dtheta`` by central differences of ``W``
-(scipy ``solve_ivp``, DOP853, rtol 1e-10).
+both derivatives by central differences of that flux, the force ``(3/2)(2 pi/tau) dW/dtheta`` by
+central differences of ``W`` (scipy ``solve_ivp``, DOP853, rtol 1e-10).
 """
 
 from __future__ import annotations
