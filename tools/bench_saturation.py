@@ -44,8 +44,8 @@ def lut_bench(positions: int) -> None:
               f"mean {ed.mean():+.3f} max {np.abs(ed).max():.3f}   max {np.abs(cd - ed).max():.3f} "
               f"mean {np.abs(cd - ed).mean():.3f}")
     for run in r.metrics["runs"]:
-        print(f"  {run['load_n']:4.0f} N: table vs the model LUT (0 A, with R_s) max {run['max_diff_deg']:.3f} "
-              f"deg, {run['sim_s']:.1f} s simulated in {run['wall_s']:.2f} s")
+        print(f"  {run['load_n']:4.0f} N: table vs the model LUT (0 A, with R_s) max "
+              f"{run['max_diff_deg']:.3f} deg, {run['sim_s']:.1f} s simulated in {run['wall_s']:.2f} s")
     verdict = "PASS" if r.max_diff_deg <= TARGET_DEG else "FAIL"
     print(f"LUT change with load, calibrated vs FEA: max {r.max_diff_deg:.3f} deg "
           f"(target <= {TARGET_DEG:g} deg) {verdict}")
