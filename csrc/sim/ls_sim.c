@@ -275,15 +275,19 @@ static void sat_eval(const ls_sim_cfg *c, const sat_frame *f, const double i[2],
 }
 
 /* The currents i whose flux at th + dth is lam_t, by Newton's method from i (d lambda/d i as the
- * Jacobian; dth's share of it, ~1e-3 of it, only slows the convergence); pt: the last evaluation.
- * False when the inductance is not positive definite or Newton does not converge. */
+ * Jacobian; dth's share of it, ~1e-3 of it, only slows the convergence). pt: on entry the
+ * evaluation at i (or within 1e-10 A of it), which makes the first step without evaluating; on
+ * return the last evaluation. False when the inductance is not positive definite or Newton does
+ * not converge. */
 static bool sat_solve(const ls_sim_cfg *c, const sat_frame *f, double dth, const double lam_t[2], double i[2],
                       sat_point *pt)
 {
     int it;
     for (it = 0; it < 20; ++it) {
         double r0, r1, det, d0, d1;
-        sat_eval(c, f, i, pt);
+        if (it > 0) {
+            sat_eval(c, f, i, pt);
+        }
         r0 = lam_t[0] - pt->lam[0] - dth * pt->dlam[0];
         r1 = lam_t[1] - pt->lam[1] - dth * pt->dlam[1];
         det = pt->l[0] * pt->l[1] - pt->l[2] * pt->l[2];
