@@ -25,7 +25,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from linsense.errors import InputError
-from linsense.model.motor import Motor, load_motor, motor_from_toml
+from linsense.model.motor import Motor, load_motor, motor_from_toml, motor_to_toml
 from linsense.model.saturation import Saturation
 from linsense.sim import core
 from linsense.sim.plant import fill_saturation
@@ -227,6 +227,34 @@ def test_polarity_signal_of_the_parametric_model():
         assert rel == pytest.approx(0.02 * amp, rel=0.01)
 
 
+def test_fitted_series_reproduces_the_fea_tables():
+    """The cubic in i_q through the five FEA tables gives each table back within 2e-5 of its largest
+    entry (measured 1.5e-5) and its eq. 12 LUT within 0.001 deg (0.0007)."""
+    from linsense.model.saturation import incremental_dq, plant_series
+
+    m = load_motor(THIN)
+    ser = plant_series(m.saturation, m.inductance, m.psi_pm, 64)
+    th = np.linspace(0.0, 2.0 * np.pi, 360, endpoint=False)
+    for cur, tab in zip(m.saturation.currents, m.saturation.tables, strict=True):
+        L, Lf = tab.L_dq(th), incremental_dq(ser, th, cur)
+        assert np.abs(L - Lf).max() <= 2e-5 * np.abs(L).max()
+        lut = np.degrees(np.arctan(-L[:, 0, 1] / L[:, 1, 1]) - np.arctan(-Lf[:, 0, 1] / Lf[:, 1, 1]))
+        assert np.abs(lut).max() <= 1e-3
+
+
+def test_ecce2010_preset_saturates_when_enabled():
+    """The preset carries an assumed parametric saturation (1.5 %/A of polarity signal), used only
+    when a scenario enables it; motor_to_toml writes it back."""
+    from linsense.sim.build import build
+
+    m = load_motor("ecce2010")
+    assert m.saturation.polarity == 0.015
+    assert "[saturation]" in motor_to_toml(m)
+    b = build(scenario_from_dict(_scenario(enabled=True), "s.toml"))
+    assert b.cfg.sat.on == 1 and b.cfg.sat.n_pow == 3
+    assert build(scenario_from_dict(_scenario(), "s.toml")).cfg.sat.on == 0
+
+
 # ---------------------------------------------------------------------- keys
 def _scenario(**sat):
     return {"motor": "ecce2010", "scenario": {"name": "s", "duration": 0.01}, "reference": {"type": "hold"},
@@ -245,7 +273,6 @@ def test_scenario_keys_select_the_saturated_plant():
 
 
 @pytest.mark.parametrize("sat, key, words", [
-    ({"enabled": True}, "saturation.enabled", "no [saturation] section"),
     ({"polarity": 0.02}, "saturation.polarity", "saturation.enabled = true"),
     ({"enabled": True, "polarity": -1.0}, "saturation.polarity", "greater than or equal"),
     ({"enabled": True, "q_drop": 1.5}, "saturation.q_drop", "less than 1"),
@@ -294,13 +321,16 @@ def test_bad_motor_saturation_is_one_line(tmp_path, body, key, words):
 
 
 def test_cli_refuses_bad_saturation_with_exit_2(tmp_path, run_cli):
+    """A motor without [saturation] (examples/motors/harmonic.toml) and no parametric keys."""
     sc = tmp_path / "s.toml"
-    sc.write_text('motor = "ecce2010"\n[scenario]\nname = "s"\nduration = 0.01\n'
+    harmonic = ROOT / "examples" / "motors" / "harmonic.toml"
+    sc.write_text(f'motor = "{harmonic}"\n[scenario]\nname = "s"\nduration = 0.01\n'
                   '[reference]\ntype = "hold"\n[saturation]\nenabled = true\n')
     r = run_cli("simulate", sc, "--out", tmp_path / "o")
     assert r.code == 2, r
     line = r.err.strip()
     assert "\n" not in line and "saturation.enabled" in line and str(sc) in line, line
+    assert "no [saturation] section" in line
 
 
 # ---------------------------------------------------------------------- the bar
