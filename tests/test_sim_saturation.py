@@ -242,6 +242,24 @@ def test_fitted_series_reproduces_the_fea_tables():
         assert np.abs(lut).max() <= 1e-3
 
 
+def test_too_many_harmonic_orders_are_refused():
+    """Tables whose dq series would exceed the C plant's orders: a ModelError naming the key."""
+    import dataclasses
+
+    from linsense.errors import ModelError
+    from linsense.model.inductance import InductanceModel
+    from linsense.sim.plant import MAX_ORDER
+
+    m = load_motor("ecce2010")
+    a = np.zeros((6, MAX_ORDER))
+    a[:, : m.inductance.a.shape[1]] = m.inductance.a
+    wide = InductanceModel(a, np.zeros_like(a), description="wide")
+    sat = Saturation(currents=(0.0, 1.0), tables=(wide, wide), source="w.toml")
+    cfg = core.sim_cfg(m, core.PlantSetup())
+    with pytest.raises(ModelError, match="saturation.tables: the dq inductances have 66 harmonic orders"):
+        fill_saturation(cfg, dataclasses.replace(m, saturation=sat), sat)
+
+
 def test_ecce2010_preset_saturates_when_enabled():
     """The preset carries an assumed parametric saturation (1.5 %/A of polarity signal), used only
     when a scenario enables it; motor_to_toml writes it back."""
