@@ -351,6 +351,18 @@ def test_cli_refuses_bad_saturation_with_exit_2(tmp_path, run_cli):
     assert "no [saturation] section" in line
 
 
+def test_calibrate_cli_saturated(tmp_path, run_cli):
+    r = run_cli("calibrate", "--motor", THIN, "--positions", "4", "--load", "20", "--fidelity", "average",
+                "--saturated", "--out", tmp_path / "c")
+    assert r.code == 0, r.err
+    import json
+    m = json.loads((tmp_path / "c" / "metrics.json").read_text())
+    assert m["completed"] and m["saturated"] is True
+    r = run_cli("calibrate", "--motor", ROOT / "examples" / "motors" / "harmonic.toml", "--positions", "4",
+                "--saturated", "--out", tmp_path / "d")
+    assert r.code == 2 and "no [saturation] section" in r.err and r.err.count("\n") == 1, r.err
+
+
 # ---------------------------------------------------------------------- the bar
 def test_calibrated_lut_against_load_agrees_with_fea():
     """Issue 14: on the saturated plant of the tubular motor with a thin back iron (FEA tables at
