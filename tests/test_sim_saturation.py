@@ -150,15 +150,14 @@ def reference_run(ref: Reference, seg_t, seg_v, x0: float, speed: float):
     ("tubular56_thin_sat", 0.2, "average"), ("tubular56_thin_sat", 0.0, "switching"),
 ])
 def test_saturated_plant_matches_reference(name, speed, fidelity):
-    """Open loop, 10 ms (moving: 5 ms; switching: 2 ms) of the accuracy test's voltages (12 V /
-    1 kHz injection 0.2 rad off d, 11 V on q: about 1 A of i_q and +-0.5 A of HF d current; the
-    reference is slow, hence the short runs and five of the eight combinations). Acceptance 3e-6 of the peak, the
-    linear plant's bar: the plant integrates the flux by RK4 (local error (h R/L)^5/120, about
-    1e-6 of the current per period at 16 kHz, the same as the linear plant's 4th-order
-    propagator), holds the angle's share to first order within a quarter period (~1e-9 Wb at
-    0.2 m/s) and solves the currents to 1e-10 A; the reference's own error (central differences
-    for d lambda/di and the EMF) is about 1e-9 of the peak. Measured: 8e-9 at standstill, up to
-    7.9e-7 at 0.2 m/s (docs/simulator.md)."""
+    """Open loop, 10 ms (moving: 5 ms; switching: 2 ms) of the accuracy test's voltages (12 V / 1 kHz
+    injection 0.2 rad off d, 11 V on q: about 1 A of i_q and +-0.5 A of HF d current; the reference is
+    slow, hence the short runs and five of the eight combinations). Acceptance 3e-6 of the peak, the
+    linear plant's bar: the plant integrates the flux by RK4 (local error (h R/L)^5/120, about 1e-6 of the
+    current per period at 16 kHz, the same as the linear plant's 4th-order propagator), holds the angle's
+    share to first order within a quarter period (~1e-9 Wb at 0.2 m/s) and solves the currents to 1e-10 A;
+    the reference's own error (central differences for d lambda/di and the EMF) is about 1e-9 of the peak.
+    Measured: 8e-9 at standstill, up to 7.9e-7 at 0.2 m/s (docs/simulator.md)."""
     m = sat_motor(name)
     x0 = 0.0123
     d = duties(m, x0, speed)
