@@ -162,6 +162,7 @@ bench: $(GEN_HDR) tools
 	$(PY) tools/bench_sweep.py
 	$(PY) tools/bench_fea.py
 	$(PY) tools/bench_reproduce.py
+	$(PY) tools/bench_saturation.py
 
 clean:
 	rm -rf $(BUILD) out

@@ -275,15 +275,19 @@ static void sat_eval(const ls_sim_cfg *c, const sat_frame *f, const double i[2],
 }
 
 /* The currents i whose flux at th + dth is lam_t, by Newton's method from i (d lambda/d i as the
- * Jacobian; dth's share of it, ~1e-3 of it, only slows the convergence); pt: the last evaluation.
- * False when the inductance is not positive definite or Newton does not converge. */
+ * Jacobian; dth's share of it, ~1e-3 of it, only slows the convergence). pt: on entry the
+ * evaluation at i (or within 1e-10 A of it), which makes the first step without evaluating; on
+ * return the last evaluation. False when the inductance is not positive definite or Newton does
+ * not converge. */
 static bool sat_solve(const ls_sim_cfg *c, const sat_frame *f, double dth, const double lam_t[2], double i[2],
                       sat_point *pt)
 {
     int it;
     for (it = 0; it < 20; ++it) {
         double r0, r1, det, d0, d1;
-        sat_eval(c, f, i, pt);
+        if (it > 0) {
+            sat_eval(c, f, i, pt);
+        }
         r0 = lam_t[0] - pt->lam[0] - dth * pt->dlam[0];
         r1 = lam_t[1] - pt->lam[1] - dth * pt->dlam[1];
         det = pt->l[0] * pt->l[1] - pt->l[2] * pt->l[2];
@@ -722,9 +726,9 @@ static bool period_average_sat(const ls_sim_cfg *c, const plant_coef *q, const f
 /* Switching model: gate commands at (1 -+ d) T/2, turn-on edges delayed by the dead time, the
  * diode picked by the current sign at the command instant. Returns the time-weighted force
  * integral over the period through *f_int (trapezoid per segment). */
-static void period_switching(const ls_sim_cfg *c, const plant_coef *q, const frozen *f, const plant_maps *pm,
-                             const double duty[3], double h, double i[2], double *f_int, dead_carry *carry,
-                             const sat_frame *sf, double omega, bool *bad)
+SIM_HOT void switching_impl(const ls_sim_cfg *c, const plant_coef *q, const frozen *f, const plant_maps *pm,
+                            const double duty[3], double h, double i[2], double *f_int, dead_carry *carry,
+                            const sat_frame *sf, double omega, bool *bad)
 {
     double t = 0.0, p[3], cmd_t[6], edge_t[6], v_ab[2], iabc[3], f0, f1;
     int cmd_leg[6], cmd_on[6], edge_leg[6], edge_on[6];
@@ -831,6 +835,21 @@ static void period_switching(const ls_sim_cfg *c, const plant_coef *q, const fro
         carry->t[edge_leg[k]] = edge_t[k] - h;
         carry->on[edge_leg[k]] = edge_on[k];
     }
+}
+
+/* the two instances: the linear plant's (sf = NULL folded away, the code of before) and the
+ * saturated plant's (segments by sat_step; bad: it diverged) */
+static void period_switching(const ls_sim_cfg *c, const plant_coef *q, const frozen *f, const plant_maps *pm,
+                             const double duty[3], double h, double i[2], double *f_int, dead_carry *carry)
+{
+    switching_impl(c, q, f, pm, duty, h, i, f_int, carry, NULL, 0.0, NULL);
+}
+
+static void period_switching_sat(const ls_sim_cfg *c, const plant_coef *q, const frozen *f, const double duty[3],
+                                 double h, double i[2], double *f_int, dead_carry *carry, const sat_frame *sf,
+                                 double omega, bool *bad)
+{
+    switching_impl(c, q, f, NULL, duty, h, i, f_int, carry, sf, omega, bad);
 }
 
 /* ------------------------------------------------------------------------------ sensors */
@@ -1128,8 +1147,11 @@ static void block_write(const ls_sim_out *o, const block_acc *b)
     }
 }
 
-ls_status ls_sim_continue(const ls_sim_cfg *c, ls_drive *drive, const ls_sim_cmd *cmds, int32_t n_cmds,
-                          ls_sim_state *s, int64_t n_more, const ls_sim_out *out, ls_sim_result *res)
+/* The time loop of ls_sim_continue, instantiated twice (sat a constant): the linear plant's copy
+ * has no trace of the saturated plant (the fast path), the other runs it. */
+SIM_HOT ls_status continue_impl(const ls_sim_cfg *c, ls_drive *drive, const ls_sim_cmd *cmds, int32_t n_cmds,
+                                ls_sim_state *s, int64_t n_more, const ls_sim_out *out, ls_sim_result *res,
+                                const bool sat)
 {
     const double h = 1.0 / c->f_pwm, tau = c->pole_pitch, kx = 2.0 * SIM_PI / tau;
     double x, v, i[2], duty[3], x_lag, v_lag, v_lag2; /* m, m/s: x and v one period back, v two back */
@@ -1147,7 +1169,6 @@ ls_status ls_sim_continue(const ls_sim_cfg *c, ls_drive *drive, const ls_sim_cmd
     block_acc acc;
     frozen fz;
     sat_frame sf;
-    bool sat;
     if (c == NULL || drive == NULL || s == NULL || out == NULL || res == NULL || (n_cmds > 0 && cmds == NULL) ||
         n_more < 0) {
         return LS_ERR_NULL;
@@ -1195,7 +1216,6 @@ ls_status ls_sim_continue(const ls_sim_cfg *c, ls_drive *drive, const ls_sim_cmd
     acc.r = -1;
     acc.n = 0;
     coef_init(c, &q);
-    sat = c->sat.on != 0;
     memset(&cmd, 0, sizeof cmd);
     k_end = s->k + n_more;
     for (k = s->k; k < k_end; ++k) {
@@ -1271,7 +1291,11 @@ ls_status ls_sim_continue(const ls_sim_cfg *c, ls_drive *drive, const ls_sim_cmd
         }
         if (c->fidelity == LS_SIM_SWITCHING) {
             double f_int;
-            period_switching(c, &q, &fz, &pm, u, h, i, &f_int, &carry, sat ? &sf : NULL, om, &bad);
+            if (sat) {
+                period_switching_sat(c, &q, &fz, u, h, i, &f_int, &carry, &sf, om, &bad);
+            } else {
+                period_switching(c, &q, &fz, &pm, u, h, i, &f_int, &carry);
+            }
             f_avg = f_int / h;
         } else if (sat) {
             double f_end;
@@ -1352,6 +1376,15 @@ ls_status ls_sim_continue(const ls_sim_cfg *c, ls_drive *drive, const ls_sim_cmd
     res->x_end = x;
     res->v_end = v;
     return LS_OK;
+}
+
+ls_status ls_sim_continue(const ls_sim_cfg *c, ls_drive *drive, const ls_sim_cmd *cmds, int32_t n_cmds,
+                          ls_sim_state *s, int64_t n_more, const ls_sim_out *out, ls_sim_result *res)
+{
+    if (c != NULL && c->sat.on != 0) {
+        return continue_impl(c, drive, cmds, n_cmds, s, n_more, out, res, true);
+    }
+    return continue_impl(c, drive, cmds, n_cmds, s, n_more, out, res, false);
 }
 
 ls_status ls_sim_run(const ls_sim_cfg *c, ls_drive *drive, const ls_sim_cmd *cmds, int32_t n_cmds, int64_t n_steps,

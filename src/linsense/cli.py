@@ -330,8 +330,11 @@ def simulate(scenario: str, out: str, fidelity: str | None, trace_fmt: str, deci
               show_default=True, help="inverter model (both with the 0.8 us dead time)")
 @click.option("--quad", default=0.0, show_default=True, type=float, callback=_quad,
               help="the injection's q-axis share kappa (0: the paper's pulsating injection)")
+@click.option("--saturated", is_flag=True, default=False,
+              help="on the saturated plant (the motor file's [saturation], docs/simulator.md)")
 @click.option("--out", required=True, type=click.Path(file_okay=False), help="output folder")
-def calibrate(motor_spec: str, positions: int, load: float, fidelity: str, quad: float, out: str) -> None:
+def calibrate(motor_spec: str, positions: int, load: float, fidelity: str, quad: float, saturated: bool,
+              out: str) -> None:
     """Run the firmware's LUT calibration in the simulator (paper Fig. 9): lut_measured.csv,
     metrics.json, calibration.png. Exit code 1 if it does not complete."""
     from linsense.io import output_set, split_timing
@@ -340,7 +343,8 @@ def calibrate(motor_spec: str, positions: int, load: float, fidelity: str, quad:
     from linsense.sim.calibrate import lut_csv
 
     motor = _load(motor_spec)
-    cal = run_calibration(motor, positions, load, fidelity, quad=quad, source=motor_spec)
+    extra = {"saturation": {"enabled": True}} if saturated else {}
+    cal = run_calibration(motor, positions, load, fidelity, quad=quad, source=motor_spec, **extra)
     metrics, timing = split_timing(cal.metrics)
     with output_set(out, "calibrate") as s:
         s.write("lut_measured.csv", lut_csv(cal))

@@ -4,7 +4,9 @@
  * numpy-ready arrays; Python (linsense.sim) only configures it and reads the results.
  *
  * Plant (moving-armature linear motor, floating star point), state: alpha-beta currents i,
- * position x, speed v. Flux linkage lambda = L_ab(theta) i + lambda_pm(theta), theta = 2 pi x/tau:
+ * position x, speed v. Flux linkage lambda = L_ab(theta) i + lambda_pm(theta), theta = 2 pi x/tau
+ * (the linear plant, the default; with sat.on the saturated plant replaces L_ab(theta) i, see
+ * ls_sim_sat below):
  *   L_ab(theta): Fourier series of the three alpha-beta entries (L_aa, L_bb, L_ab), computed by
  *                linsense from the motor's inductance model (eq. 3, harmonics or a table);
  *   lambda_pm:   psi_pm (cos theta, sin theta) plus relative harmonics of order n with phase

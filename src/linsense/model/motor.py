@@ -393,6 +393,12 @@ def motor_to_toml(motor: Motor, table: str | None = None) -> str:
         raise ValueError("a tabulated inductance model needs the name of its table file")
     if f.viscous or f.coulomb:
         lines += ["", "[friction]", f"viscous = {f.viscous!r}  # N s/m", f"coulomb = {f.coulomb!r}  # N"]
+    sat = motor.saturation
+    if sat is not None and not sat.tables:  # (tables need their file names: not written)
+        lines += ["", "[saturation]", f"polarity = {sat.polarity!r}  # 1/A", f"q_drop = {sat.q_drop!r}",
+                  f"q_current = {sat.q_current!r}  # A"]
+        if sat.magnet_current is not None:
+            lines.append(f"magnet_current = {sat.magnet_current!r}  # A")
     if motor.pm_harmonics:
         lines += ["", "[pm_flux]", "harmonics = ["]
         lines += [

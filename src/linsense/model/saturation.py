@@ -75,6 +75,14 @@ class Saturation:
         return (self.polarity, self.magnet_current, self.q_drop, self.q_current, self.currents, tab)
 
 
+class SaturationRangeError(ValueError):
+    """Saturation data the C plant cannot take; ``key`` names the motor-file key."""
+
+    def __init__(self, key: str, message: str) -> None:
+        super().__init__(message)
+        self.key = key
+
+
 def i_sat_d_of(polarity: float, i_m: float) -> float:
     """A, the d saturation current ``a`` giving the small-pulse polarity signal ``polarity`` (1/A)
     at the magnet current ``i_m`` (A): ``polarity = -2 k'(0) = 4 i_m / (a^2 + i_m^2)``. 0 for no
@@ -82,12 +90,12 @@ def i_sat_d_of(polarity: float, i_m: float) -> float:
     if polarity == 0.0:
         return 0.0
     if not (polarity > 0.0 and i_m > 0.0):
-        raise ValueError(f"polarity {polarity:g} /A needs a positive value and magnet current "
-                         f"(i_m = {i_m:g} A)")
+        raise SaturationRangeError("saturation.polarity", f"polarity {polarity:g} /A needs a positive value "
+                                   f"and magnet current (i_m = {i_m:g} A)")
     a2 = 4.0 * i_m / polarity - i_m * i_m
     if not a2 > 0.0:
-        raise ValueError(f"polarity {polarity:g} /A is beyond what a magnet current of {i_m:g} A can give "
-                         f"(at most {4.0 / i_m:.3g} /A)")
+        raise SaturationRangeError("saturation.polarity", f"polarity {polarity:g} /A is beyond what a magnet "
+                                   f"current of {i_m:g} A can give (at most {4.0 / i_m:.3g} /A)")
     return math.sqrt(a2)
 
 
@@ -118,7 +126,12 @@ def plant_series(sat: Saturation, inductance: InductanceModel, psi_pm: float,
     ``max_order``: the C plant's limit of harmonic orders."""
     models = sat.tables if sat.tables else (inductance,)
     # the dq series has the L_abc orders +-2 (the rotation); all shared by one length
-    n_order = min(max(m.max_order for m in models) + 3, max_order)
+    n_order = max(m.max_order for m in models) + 3
+    if n_order > max_order:
+        key = "saturation.tables" if sat.tables else "inductance"
+        raise SaturationRangeError(key, f"the dq inductances have {n_order} harmonic orders; the simulator's "
+                                   f"saturated plant takes at most {max_order} (smooth the tables with "
+                                   "table_max_order)")
     series = [_dq_series(m, n_order) for m in models]
     if sat.tables:
         cur = np.asarray(sat.currents, dtype=float)

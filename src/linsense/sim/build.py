@@ -364,8 +364,9 @@ def build(sc: Scenario, motor: Motor | None = None, trace_in_memory: bool = True
             plant = _memo(("plant_sat", motor_key(motor), sat.key()),
                           lambda: _sat_template(lin, motor, sat))
         cfg = sim_cfg(motor, setup, template=plant)
-    except ModelError as exc:
-        raise InputError(sc.source, "saturation.polarity", f"refused: {exc}") from None
+    except ModelError as exc:  # (the saturated plant's data: the scenario's key, or the motor file's)
+        key = exc.key if exc.key == "saturation.polarity" else ""
+        raise InputError(sc.source, key, f"saturated plant refused: {exc}") from None
     except (SimulationError, LinsenseError) as exc:
         raise InputError(sc.source, "", f"simulator configuration refused: {exc}") from None
 

@@ -104,6 +104,7 @@ def calibrate(
         "f_inj_hz": float(f_inj),
         "injection_quad": float(quad),
         "dead_time_s": float(sc.spec.inverter.dead_time),
+        "saturated": bool(sc.spec.saturation.enabled),
         "fault": fault_reason(raw.fault),
         "sim_s": round(raw.steps_done / sc.spec.inverter.f_pwm, 6),
         "wall_s": round(raw.wall_s, 6),

@@ -84,15 +84,15 @@ def fill_saturation(cfg, motor, sat) -> dict:
     """Switch an ``ls_sim_cfg`` (cffi) to the saturated plant of ``motor`` with the
     :class:`~linsense.model.saturation.Saturation` ``sat`` (``None``: back to the linear plant).
     Returns the series written (:func:`linsense.model.saturation.plant_series`)."""
-    from linsense.model.saturation import plant_series
+    from linsense.model.saturation import SaturationRangeError, plant_series
 
     if sat is None:
         cfg.sat.on = 0
         return {}
     try:
         ser = plant_series(sat, motor.inductance, motor.psi_pm, MAX_ORDER)
-    except ValueError as exc:
-        raise ModelError(sat.source or motor.source, "saturation.polarity", str(exc)) from None
+    except SaturationRangeError as exc:
+        raise ModelError(sat.source or motor.source, exc.key, str(exc)) from None
     cfg.sat.on = 1
     cfg.sat.n_order = ser["n_order"]
     cfg.sat.n_pow = ser["n_pow"]
