@@ -145,3 +145,20 @@ def test_bad_injection_keys_are_refused(spec, key, tmp_path, run_cli):
     r = run_cli("simulate", str(path), "--out", str(tmp_path / "o"))
     assert r.code == 2, r.err
     assert key in r.err and "\n" not in r.err.strip()
+
+
+@pytest.mark.parametrize("shape", ["rotating", "square"])
+def test_startup_with_each_shape(shape):
+    """The start-up from an unknown position (HF lock, polarity pulses, handover) with the rotating
+    and square-wave injections too, on the saturated plant, switching inverter with dead time: the
+    polarity right at 12 random positions over two periods, the mover within 0.1 mm while detecting
+    (measured: 12/12 each, worst 0.088 mm rotating, 0.073 mm square)."""
+    from linsense.sim.startup import base_scenario, startup_run
+
+    base = base_scenario()
+    base["injection"] = {"shape": shape}
+    rng = np.random.default_rng(3)
+    for x0 in rng.uniform(0.0, 2.0 * TAU_MM, 12):
+        r = startup_run(base, float(x0))
+        assert r.right and r.fault == 0, (shape, x0, r.fault)
+        assert r.motion_mm <= 0.1, (shape, x0, r.motion_mm)

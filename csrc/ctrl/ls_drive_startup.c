@@ -90,8 +90,15 @@ ls_startup_phase ls_drive_startup_step_(ls_drive *d, const ls_meas *meas, ls_cmd
         LS_REAL v_hq;
         v_hf = g * ls_inject_step(&d->inj);
         v_hq = g * d->inj.v_q;
-        v_a = c_est * v_d - s_est * v_q + v_hf * c_est - v_hq * s_est;
-        v_b = s_est * v_d + c_est * v_q + v_hf * s_est + v_hq * c_est;
+        v_a = c_est * v_d - s_est * v_q;
+        v_b = s_est * v_d + c_est * v_q;
+        if (cfg->inject.shape != LS_INJ_ROTATING) { /* on the estimated axes */
+            v_a += v_hf * c_est - v_hq * s_est;
+            v_b += v_hf * s_est + v_hq * c_est;
+        } else { /* the rotating vector, in the stationary frame */
+            v_a += v_hf;
+            v_b += v_hq;
+        }
     }
     (void)ls_mod_step_finite(&d->mod, v_a, v_b, meas->v_dc, meas->i_abc, duty);
     if (!LS_ISFINITE(duty[0] + duty[1] + duty[2])) {
