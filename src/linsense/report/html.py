@@ -40,5 +40,6 @@ def render_report(metrics: dict, figures: dict[str, bytes], scenarios: dict) -> 
                       undefined=StrictUndefined, trim_blocks=False)
     tpl = env.get_template("report.html.j2")
     held = sum(bool(c["holds"]) for c in metrics["claims"])
+    held_beyond = sum(bool(c["holds"]) for c in metrics["claims_beyond"])
     return tpl.render(m=metrics, scenarios=scenarios, img=img, fmt=_fmt, absmax=_absmax, held=held,
-                      version=__version__)
+                      held_beyond=held_beyond, version=__version__)

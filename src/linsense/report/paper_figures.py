@@ -10,6 +10,8 @@ aliases. Every function returns a :class:`matplotlib.figure.Figure`; the caller 
 
 from __future__ import annotations
 
+import textwrap
+
 import numpy as np
 from matplotlib.figure import Figure
 
@@ -47,9 +49,15 @@ def fig9_luts(motor, cals: dict[float, object], f_inj: float, quad: float = 0.0)
     return fig
 
 
-def _run_columns(fig: Figure, runs: dict[str, object], pole_pitch: float, ylim_err: float | None = None):
-    """Columns of (position, error) panels, one per run in ``runs`` (title -> Result)."""
-    axes = fig.subplots(2, len(runs), sharex="col", squeeze=False)
+def _run_columns(fig: Figure, runs: dict[str, object], pole_pitch: float, ylim_err: float | None = None,
+                 axes=None):
+    """Columns of (position, error) panels, one per run in ``runs`` (title -> Result). ``axes``
+    given (2 x n, :func:`fig_runs_beside`): the runs in pairs on shared scales, so the legends in
+    the first column only, the y labels on the first column of a pair and the error's mm axis on
+    the second."""
+    light = axes is not None
+    if axes is None:
+        axes = fig.subplots(2, len(runs), sharex="col", squeeze=False)
     mm_per_deg = pole_pitch * 1e3 / 360.0
     for col, (title, res) in enumerate(runs.items()):
         b = result_plot_data(res).bins
@@ -59,27 +67,38 @@ def _run_columns(fig: Figure, runs: dict[str, object], pole_pitch: float, ylim_e
         ax.plot(t, b["x_ref"] * 1e3, "k--", lw=0.9, label="reference")
         ax.plot(t, b["x_mean"] * 1e3, color="tab:blue", lw=1.3, label="measured")
         ax.plot(t, b["x_est"] * 1e3, color="tab:red", lw=1.0, alpha=0.85, label="estimated")
-        ax.set_ylabel("position (mm)")
+        if not light or col % 2 == 0:
+            ax.set_ylabel("position (mm)")
+        else:
+            ax.tick_params(labelleft=False)
         reason = (m.get("unstable_reason") or "?").split(":")[0]
         verdict = "stable" if m.get("stable") else f"NOT stable: {reason}"
+        if light:  # (narrow columns)
+            verdict = "\n".join(textwrap.wrap(verdict, 56))
         ax.set_title(f"{title}\n{verdict}", fontsize=9)
-        ax.legend(fontsize=7, loc="best")
+        if not light or col == 0:
+            ax.legend(fontsize=7, loc="best")
         ax = axes[1, col]
         ax.fill_between(t, np.degrees(b["err_lo"]), np.degrees(b["err_hi"]), color="tab:red", alpha=0.25,
                         lw=0, label="min-max")
         ax.plot(t, np.degrees(b["err_mean"]), color="tab:red", lw=1.0, label="mean")
         ax.axhline(0.0, color="k", lw=0.5)
-        ax.set_ylabel("estimation error (electrical deg)")
+        if not light or col % 2 == 0:
+            ax.set_ylabel("estimation error (electrical deg)")
+        else:
+            ax.tick_params(labelleft=False)
         ax.set_xlabel("time (s)")
         if ylim_err:
             ax.set_ylim(-ylim_err, ylim_err)
-        sec = ax.secondary_yaxis("right", functions=(lambda d: d * mm_per_deg, lambda x: x / mm_per_deg))
-        sec.set_ylabel("(mm)", fontsize=8)
+        if not light or col % 2 == 1:
+            sec = ax.secondary_yaxis("right", functions=(lambda d: d * mm_per_deg, lambda x: x / mm_per_deg))
+            sec.set_ylabel("(mm)", fontsize=8)
         pk = m.get("max_abs_err_deg")
         st = m.get("steady_max_err_deg")
         ax.set_title(f"peak |error| {pk if pk is None else f'{pk:.2f}'} deg, steady "
                      f"{st if st is None else f'{st:.2f}'} deg", fontsize=8)
-        ax.legend(fontsize=7, loc="best")
+        if not light or col == 0:
+            ax.legend(fontsize=7, loc="best")
         for a in axes[:, col]:
             a.grid(True, alpha=0.3)
     return axes
@@ -90,6 +109,79 @@ def fig_runs(runs: dict[str, object], pole_pitch: float, title: str) -> Figure:
     fig = Figure(figsize=(4.6 * len(runs), 6.4), layout="constrained")
     _run_columns(fig, runs, pole_pitch)
     fig.suptitle(title, fontsize=10)
+    return fig
+
+
+def fig_runs_beside(runs: dict[str, object], pole_pitch: float, title: str) -> Figure:
+    """Closed-loop runs side by side in pairs (``runs``: column title -> Result, in the order
+    a1, b1, a2, b2, ...: e.g. the pulsating and the rotating injection with the table, then without
+    it), each pair's error panels on one scale so that the two injections compare at a glance."""
+    n = len(runs)
+    fig = Figure(figsize=(4.0 * n, 6.6))  # (fixed margins: a constrained layout of 8 panels costs 0.4 s)
+    ratios = [x for k in range(0, n, 2) for x in ([0.22, 1.0, 1.0] if k else [1.0, 1.0])][: n + (n - 1) // 2]
+    gs = fig.add_gridspec(2, len(ratios), width_ratios=ratios, left=0.045, right=0.955, top=0.87, bottom=0.08,
+                          wspace=0.12, hspace=0.25)
+    cols = [c for c in range(len(ratios)) if ratios[c] == 1.0]
+    axes = np.empty((2, n), dtype=object)
+    for k, c in enumerate(cols):
+        axes[0, k] = fig.add_subplot(gs[0, c])
+        axes[1, k] = fig.add_subplot(gs[1, c], sharex=axes[0, k])
+    axes = _run_columns(fig, runs, pole_pitch, axes=axes)
+    for c in range(0, axes.shape[1] - 1, 2):
+        lo = min(axes[1, c].get_ylim()[0], axes[1, c + 1].get_ylim()[0])
+        hi = max(axes[1, c].get_ylim()[1], axes[1, c + 1].get_ylim()[1])
+        for a in (axes[1, c], axes[1, c + 1]):
+            a.set_ylim(lo, hi)
+        lo = min(axes[0, c].get_ylim()[0], axes[0, c + 1].get_ylim()[0])
+        hi = max(axes[0, c].get_ylim()[1], axes[0, c + 1].get_ylim()[1])
+        for a in (axes[0, c], axes[0, c + 1]):
+            a.set_ylim(lo, hi)
+    fig.suptitle(title, fontsize=10)
+    return fig
+
+
+def fig_startup(runs: list, pole_pitch_mm: float, i_min: float, bound_mm: float, title: str) -> Figure:
+    """The magnet-polarity start-up from random positions (``runs``: :class:`~linsense.sim.startup.
+    StartupRun`): above, the pulses' signed current difference ``i_diff`` against the start
+    position, by decision (estimate kept, or turned by pi) and outcome (polarity right or wrong),
+    with the decision threshold +-``i_min``; below, the mover's largest motion while the drive
+    detects and in the position control that follows, with the bound ``bound_mm``."""
+    fig = Figure(figsize=(9.0, 6.0), layout="constrained")
+    ax_i, ax_m = fig.subplots(2, 1, sharex=True)
+    x0 = np.array([r.x0_mm for r in runs])
+    idiff = np.array([r.i_diff_a for r in runs]) * 1e3
+    flip = np.array([r.flip for r in runs], dtype=bool)
+    right = np.array([r.right for r in runs], dtype=bool)
+    for sel, color, label in ((~flip, "C0", "estimate kept"), (flip, "C1", "estimate turned by π")):
+        ok, bad = sel & right, sel & ~right
+        ax_i.plot(x0[ok], idiff[ok], "o", color=color, ms=5,
+                  label=f"{label}: polarity right ({int(ok.sum())})")
+        if bad.any():
+            ax_i.plot(x0[bad], idiff[bad], "X", color="r", ms=8,
+                      label=f"{label}: polarity WRONG ({int(bad.sum())})")
+    for s in (1.0, -1.0):
+        ax_i.axhline(s * i_min * 1e3, color="0.4", lw=0.8, ls="--",
+                     label=f"decision threshold ±{i_min * 1e3:.1f} mA" if s > 0 else None)
+    ax_i.axhline(0.0, color="k", lw=0.5)
+    ax_i.set_ylabel("pulse-current difference i_diff (mA)")
+    ax_i.set_title(f"polarity right in {int(right.sum())} of {len(runs)} starts", fontsize=9)
+    ax_i.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5))
+    motion = np.array([r.motion_mm for r in runs])
+    after = np.array([r.motion_after_mm for r in runs])
+    ax_m.plot(x0, motion, "o", color="C2", ms=5, label="while detecting")
+    ax_m.plot(x0, after, "s", color="C4", ms=4, mfc="none", label="first 100 ms of position control after it")
+    ax_m.axhline(bound_mm, color="r", lw=0.8, ls=":", label=f"bound while detecting, {bound_mm:g} mm")
+    ax_m.set_ylim(0.0, None)
+    ax_m.set_ylabel("largest |x - x0| (mm)")
+    ax_m.set_xlabel("true start position x0 (mm; the drive's estimate starts at 0)")
+    ax_m.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5))
+    deg = 360.0 / pole_pitch_mm
+    sec = ax_i.secondary_xaxis("top", functions=(lambda x: x * deg, lambda d: d / deg))
+    sec.set_xlabel("electrical deg", fontsize=8)
+    for ax in (ax_i, ax_m):
+        ax.set_xlim(-pole_pitch_mm, pole_pitch_mm)
+        ax.grid(True, alpha=0.3)
+    fig.suptitle(title, fontsize=9)
     return fig
 
 

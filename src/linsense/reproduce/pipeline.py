@@ -5,7 +5,9 @@ Stages: the model (tables, LUT files, Figs. 5, 6, 8a, 8b), Fig. 9 (the calibrati
 40 N), Figs. 11 and 12 (3 mm and 6 mm steps with and without the LUT, and the 6 mm step without
 the LUT and without dead time), Fig. 13 (the trajectory), and beyond the paper the hold study
 (bias of eq. 12 against the table with R_s, and the dead time's effect) and the stability map on
-the sweep engine. Closed-loop runs are on the switching inverter with 0.8 us dead time.
+the sweep engine, the rotating-vector variant of Figs. 11-13 (its own table psi_rot) and the
+magnet-polarity start-up from random positions on the saturated plant. Closed-loop runs are on the
+switching inverter with 0.8 us dead time.
 """
 
 from __future__ import annotations
@@ -18,11 +20,13 @@ from pathlib import Path
 import numpy as np
 
 from linsense.reproduce import runs
-from linsense.reproduce.claims import claims, finite_or_none
+from linsense.reproduce.claims import STARTUP_MOTION_MM, claims, claims_beyond, finite_or_none
 
 #: positions of the calibration and of the hold study, full and --quick
 CAL_POSITIONS = {False: 56, True: 14}
 HOLD_POSITIONS = {False: 16, True: 8}
+#: random start positions of the start-up study, full and --quick
+STARTUP_STARTS = {False: 24, True: 12}
 
 
 @contextmanager
@@ -121,6 +125,12 @@ def reproduce(out: str, motor_spec: str = "ecce2010", quick: bool = False, progr
     for c in metrics["claims"]:
         verdict = "holds" if c["holds"] else "FAILS"
         lines.append(f"  [{verdict}] {c['claim']}: paper {c['paper']}, ours {c['ours']}")
+    held = sum(c["holds"] for c in metrics["claims_beyond"])
+    lines.append(f"beyond the paper (the rotating vector, the start-up): {held} of "
+                 f"{len(metrics['claims_beyond'])} hold")
+    for c in metrics["claims_beyond"]:
+        verdict = "holds" if c["holds"] else "FAILS"
+        lines.append(f"  [{verdict}] {c['claim']}: {c['paper']}; ours {c['ours']}")
     return st.files, [model_line, *lines]
 
 
@@ -224,6 +234,41 @@ def _closed_loop(st, bars, motor, scen_motor, summ: dict, quick: bool, figs: dic
         {"a) with the LUT": results["fig13"]["lut"], "b) without the LUT": results["fig13"]["nolut"]},
         tau, _trajectory_title(scenarios["fig13"]["lut"])))
 
+    # --- the rotating vector: Figs. 11-13 again, beside the pulsating runs
+    stage = _Stage(bars, "rotating vector: Figs. 11-13", n_runs)
+    rot, rot_sc = runs.rotating_runs(scen_motor, stage.tick)
+    for fig, variants in rot_sc.items():
+        scenarios[f"rotating_{fig}"] = variants
+        for var, sc in variants.items():
+            st.write(f"scenarios/rotating_{fig}_{var}.toml", _scenario_toml(sc))
+    for fig, name in (("fig11", "fig11_step3"), ("fig12", "fig12_step6"), ("fig13", "fig13_trajectory")):
+        title = (_trajectory_title(scenarios["fig13"]["lut"]) if fig == "fig13"
+                 else _step_title(fig, scenarios[fig]["lut"], motor))
+        figs[f"figures/rotating_{name}.png"] = png_bytes(pf.fig_runs_beside(
+            {"a) pulsating, with the LUT": results[fig]["lut"],
+             "b) rotating vector, with its table": rot[fig]["lut"],
+             "c) pulsating, without the LUT": results[fig]["nolut"],
+             "d) rotating vector, without its table": rot[fig]["nolut"]},
+            tau, title.replace(f"Fig. {fig[3:]}:",
+                               f"Fig. {fig[3:]}, pulsating (the paper's) and rotating-vector injection:", 1)))
+    rot_analysis = _rotating_analysis(motor, rot, scenarios["fig11"]["lut"].spec.injection.frequency)
+
+    # --- the magnet polarity at start-up (saturated plant)
+    n_su = STARTUP_STARTS[quick]
+    stage = _Stage(bars, f"start-up: polarity, {n_su} starts", n_su)
+    su = runs.startup_study(scen_motor, n_su, stage.tick)
+    scenarios["startup"] = {"worst": su.scenario}
+    st.write("scenarios/startup_worst.toml", _scenario_toml(su.scenario))
+    su_spec = su.scenario.spec
+    su_metrics = _startup_metrics(su)
+    figs["figures/startup_polarity.png"] = png_bytes(pf.fig_startup(
+        su.runs, su.pole_pitch_mm, su_spec.startup.i_min, STARTUP_MOTION_MM,
+        f"Magnet polarity at start-up (LS_MODE_STARTUP) from {len(su.runs)} random positions over two "
+        "periods:\n"
+        f"saturated plant ({su.polarity * 100:g} %/A), {su_spec.inverter.fidelity} inverter with "
+        f"{su_spec.inverter.dead_time * 1e6:g} µs dead time, {su_spec.sensors.current_noise * 1e3:g} mA rms "
+        f"current noise,\n{su_spec.sensors.adc_bits}-bit ADC, a free frictionless mover without load"))
+
     # --- beyond the paper
     n_hold = HOLD_POSITIONS[quick]
     stage = _Stage(bars, f"beyond: hold study, {n_hold} positions", 2 * len(runs.HOLD_VARIANTS))
@@ -251,6 +296,9 @@ def _closed_loop(st, bars, motor, scen_motor, summ: dict, quick: bool, figs: dic
         "fig12": {k: results["fig12"][k].metrics for k in ("lut", "nolut", "nolut_no_dead_time")},
         "fig12_analysis": {"onset": onset, "linearised": linearised},
         "fig13": {k: results["fig13"][k].metrics for k in ("lut", "nolut")},
+        "rotating": {**{fig: {k: r.metrics for k, r in v.items()} for fig, v in rot.items()},
+                     "analysis": rot_analysis},
+        "startup": su_metrics,
         "beyond": {
             "hold": {"positions_deg": hold.positions_deg.tolist(),
                      "true_deg": {k: [finite_or_none(v) for v in a] for k, a in hold.true_deg.items()},
@@ -261,6 +309,7 @@ def _closed_loop(st, bars, motor, scen_motor, summ: dict, quick: bool, figs: dic
         },
     }
     metrics["claims"] = claims(metrics)
+    metrics["claims_beyond"] = claims_beyond(metrics)
     metrics["wall_s"] = round(time.perf_counter() - t_start, 2)
     st.write("metrics.json", json.dumps(metrics, indent=1, default=_json_default, allow_nan=False) + "\n")
     for name, data in figs.items():
@@ -268,6 +317,49 @@ def _closed_loop(st, bars, motor, scen_motor, summ: dict, quick: bool, figs: dic
             st.write(name, data)
     st.write("report.html", render_report(metrics, figs, scenarios))
     return metrics
+
+
+def _rotating_analysis(motor, rot: dict, f_inj: float) -> dict:
+    """The rotating runs against the model: the largest |psi_rot|, how far the 6 mm run without the
+    table reaches, and per run without the table the mean estimation error over its last 0.3 s
+    beside psi_rot at the true position the mover holds there."""
+    from linsense.analysis.rotating import psi_rotating
+
+    th = np.linspace(0.0, 2.0 * np.pi, 3601)
+    out = {"psi_rot_peak_deg": float(np.degrees(np.max(np.abs(psi_rotating(motor, th, f_inj))))),
+           "reach6_deg": _reach_deg(motor, rot["fig12"]["nolut"]), "nolut_vs_model": {}}
+    for fig in ("fig11", "fig12", "fig13"):
+        r = rot[fig]["nolut"]
+        w = (r.t >= r.t[-1] - 0.3) & np.isfinite(r.x) & np.isfinite(r.theta_err)
+        if not w.any():
+            continue
+        true = float(np.mean(r.x[w])) * 2.0 * np.pi / motor.pole_pitch
+        out["nolut_vs_model"][fig] = {
+            "true_deg": float(np.degrees(true)),
+            "error_deg": float(np.degrees(np.mean(r.theta_err[w]))),
+            "model_deg": float(np.degrees(psi_rotating(motor, true, f_inj)))}
+    return out
+
+
+def _startup_metrics(su) -> dict:
+    """metrics.json's ``startup``: the study's outcome and its runs."""
+    rs = su.runs
+    sp = su.scenario.spec
+    worst = max(rs, key=lambda r: r.motion_mm)
+    return {
+        "n": len(rs), "right": sum(r.right for r in rs), "faults": sum(r.fault != 0 for r in rs),
+        "flips": sum(r.flip for r in rs),
+        "motion_max_mm": max(r.motion_mm for r in rs), "worst_x0_mm": worst.x0_mm,
+        "motion_after_max_mm": max(r.motion_after_mm for r in rs),
+        "detect_s": max(r.detect_s for r in rs), "i_diff_min_a": min(abs(r.i_diff_a) for r in rs),
+        "i_min_a": sp.startup.i_min,
+        "setup": {"polarity_per_a": su.polarity, "fidelity": sp.inverter.fidelity,
+                  "dead_time_s": sp.inverter.dead_time, "current_noise_a": sp.sensors.current_noise,
+                  "adc_bits": sp.sensors.adc_bits, "load_n": 0.0, "friction_n": 0.0},
+        "runs": [{"x0_mm": r.x0_mm, "right": r.right, "flip": r.flip, "fault": r.fault,
+                  "motion_mm": r.motion_mm, "motion_after_mm": finite_or_none(r.motion_after_mm),
+                  "i_diff_a": r.i_diff_a, "err_end_deg": r.err_end_deg, "detect_s": r.detect_s} for r in rs],
+    }
 
 
 def _scenario_toml(sc) -> str:

@@ -1,5 +1,6 @@
 """The closed-loop runs of ``linsense reproduce``: the paper's scenarios (package data, one TOML file
-each), the calibration at three loads, the hold study and the stability map (docs/reproduce.md).
+each), the calibration at three loads, the hold study, the stability map, the rotating-vector
+variant of Figs. 11-13 and the magnet-polarity start-up (docs/reproduce.md).
 
 Every run is on the switching inverter with the paper's 0.8 us dead time unless its name says
 otherwise (``nolut_no_dead_time``): the scenario files set it, and :func:`paper_scenario` refuses a
@@ -35,6 +36,10 @@ HOLD_VARIANTS = {
     "linsense default drive (elliptical, dead-time residual)": {
         "injection": {"quadrature": None}, "observer": {"bandwidth_hz": None}},
 }
+#: the rotating-vector variant of a paper scenario: the same drive, gains and estimator settings
+#: with the stationary-frame rotating vector (negative-sequence demodulation; its own table
+#: psi_rot in sensorless_lut, none in sensorless_nolut) instead of the pulsating injection
+ROTATING = {"injection": {"shape": "rotating", "quadrature": None}, "observer": {"demod_method": None}}
 
 
 def data_path(*parts: str) -> Path:
@@ -76,9 +81,12 @@ def with_changes(sc, changes: dict):
     return scenario_from_dict(data, sc.source, sc.base_dir)
 
 
-def figure_runs(motor: str | None, tick=lambda: None) -> tuple[dict, dict]:
+def figure_runs(motor: str | None, tick=lambda: None, changes: dict | None = None,
+                prefix: str = "") -> tuple[dict, dict]:
     """The runs of Figs. 11, 12, 13 (traces kept, for the figures) and Fig. 12's uncompensated run
-    without dead time. Returns ``(results, scenarios)``: figure -> variant -> Result / Scenario."""
+    without dead time. Returns ``(results, scenarios)``: figure -> variant -> Result / Scenario.
+    ``changes``: sections changed in every scenario (:func:`with_changes`), ``prefix`` before
+    their names."""
     from linsense.sim.run import simulate
 
     results: dict = {}
@@ -87,15 +95,23 @@ def figure_runs(motor: str | None, tick=lambda: None) -> tuple[dict, dict]:
         results[fig], scenarios[fig] = {}, {}
         for var, name in variants.items():
             sc = paper_scenario(name, motor)
+            if changes:
+                sc = with_changes(sc, {**changes, "scenario": {"name": prefix + sc.spec.scenario.name}})
             scenarios[fig][var] = sc
             results[fig][var] = simulate(with_changes(sc, {"record": {"decimate": 4}}))
             tick()
-    sc = with_changes(scenarios["fig12"]["nolut"], {"inverter": {"dead_time": 0.0},
-                                                    "scenario": {"name": "paper_step6_nolut_no_dead_time"}})
+    name = f"{prefix}paper_step6_nolut_no_dead_time"
+    sc = with_changes(scenarios["fig12"]["nolut"],
+                      {"inverter": {"dead_time": 0.0}, "scenario": {"name": name}})
     scenarios["fig12"]["nolut_no_dead_time"] = sc
     results["fig12"]["nolut_no_dead_time"] = simulate(with_changes(sc, {"record": {"decimate": 4}}))
     tick()
     return results, scenarios
+
+
+def rotating_runs(motor: str | None, tick=lambda: None) -> tuple[dict, dict]:
+    """:func:`figure_runs` with the rotating vector (:data:`ROTATING`; names prefixed "rotating_")."""
+    return figure_runs(motor, tick, ROTATING, "rotating_")
 
 
 def calibrations(motor, positions: int, tick=lambda: None) -> dict:
@@ -182,3 +198,44 @@ def stability_map(motor: str | None, quick: bool, out: Path):
     df = sweep(spec, out)
     axes = [a.key for a in spec.spec.axis]
     return df, axes, summary_line("stability-map", df, axes)
+
+
+@dataclass
+class StartupStudy:
+    """Start-ups (control.mode = "startup") from random positions over two electrical periods."""
+
+    runs: list  # linsense.sim.startup.StartupRun, one per start
+    pole_pitch_mm: float
+    scenario: object  # the Scenario of the start with the largest motion while detecting
+    polarity: float  # 1/A, the saturated plant's
+
+
+#: the start-up study's saturated plant: ecce2010 at 1.31 %/A (the FEA's thin back iron; the
+#: firmware's default pulses are designed for it), 10 mA rms current noise and a 12-bit ADC
+STARTUP_POLARITY = 0.0131
+
+
+def startup_study(motor: str | None, n: int, tick=lambda: None) -> StartupStudy:
+    """The magnet-polarity start-up (docs/firmware.md, ``LS_MODE_STARTUP``) from ``n`` random
+    positions over two electrical periods, the drive's estimate at 0, on the saturated plant, the
+    switching inverter with the paper's dead time, a free frictionless mover without load
+    (:mod:`linsense.sim.startup`)."""
+    from linsense.sim.build import resolve_motor
+    from linsense.sim.scenario import scenario_from_dict
+    from linsense.sim.startup import AFTER_S, base_scenario, start_positions, startup_run
+
+    base = base_scenario(motor=motor or "ecce2010", polarity=STARTUP_POLARITY, fidelity=FIDELITY)
+    base["inverter"]["dead_time"] = DEAD_TIME
+    base["scenario"]["name"] = "startup"
+    probe = scenario_from_dict({**base, "initial": {"position_mm": 0.0}})
+    tau_mm = resolve_motor(probe).pole_pitch * 1e3
+    rs = []
+    for k, x in enumerate(start_positions(n, pole_pitch_mm=tau_mm)):
+        rs.append(startup_run(base, float(x), 0.0, seed=k + 1))
+        tick()
+    worst = max(range(len(rs)), key=lambda k: rs[k].motion_mm)
+    su = probe.spec.startup  # (the run's duration as startup_run sets it)
+    t_max = su.t_lock + su.t_quiet + (2 * su.pairs + 1) * (su.t_pulse + su.t_rest) + su.t_settle + 0.01
+    d = {**base, "initial": {"position_mm": rs[worst].x0_mm}, "load": {"force": 0.0},
+         "scenario": {**base["scenario"], "seed": worst + 1, "duration": round(t_max + AFTER_S, 6)}}
+    return StartupStudy(rs, tau_mm, scenario_from_dict(d, "startup.toml"), STARTUP_POLARITY)
