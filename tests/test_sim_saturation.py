@@ -227,6 +227,45 @@ def test_polarity_signal_of_the_parametric_model():
         assert rel == pytest.approx(0.02 * amp, rel=0.01)
 
 
+@pytest.mark.parametrize("name", ["ecce2010", "thin"])
+def test_saturated_model_is_one_co_energy(name):
+    """ls_sim_sat_eval's incremental inductance is the flux's derivative in the current, its
+    d lambda/d theta the flux's derivative in the position, and its force the co-energy's
+    derivative in the position (Maxwell reciprocity: dF/di = (3/2) kx d lambda/d theta), each
+    against central differences of the flux and force it returns (docs/theory.md section 8)."""
+    from linsense._ctrl import ffi, lib
+
+    m = sat_motor("ecce2010") if name == "ecce2010" else load_motor(THIN)
+    cfg = core.sim_cfg(m, core.PlantSetup())
+    fill_saturation(cfg, m, m.saturation)
+    kx = 2.0 * math.pi / m.pole_pitch
+
+    def ev(th: float, i: np.ndarray):
+        lam, li, dl, f = ffi.new("double[2]"), ffi.new("double[3]"), ffi.new("double[2]"), ffi.new("double *")
+        lib.ls_sim_sat_eval(cfg, th, ffi.new("double[2]", list(i)), lam, li, dl, f)
+        return np.array(list(lam)), np.array([[li[0], li[2]], [li[2], li[1]]]), np.array(list(dl)), f[0]
+
+    rng = np.random.default_rng(5)
+    h_i, h_t = 1e-5, 1e-6
+    worst = np.zeros(3)
+    for _ in range(20):
+        th, i = rng.uniform(0, 2 * math.pi), rng.uniform(-2.0, 2.0, 2)
+        lam, L, dl, f = ev(th, i)
+        scale_l = np.abs(L).max()
+        for k in range(2):
+            e = np.zeros(2)
+            e[k] = h_i
+            d_lam = (ev(th, i + e)[0] - ev(th, i - e)[0]) / (2 * h_i)
+            worst[0] = max(worst[0], np.abs(d_lam - L[:, k]).max() / scale_l)
+            d_f = (ev(th, i + e)[3] - ev(th, i - e)[3]) / (2 * h_i)
+            worst[2] = max(worst[2], abs(d_f - 1.5 * kx * dl[k]) / (1.5 * kx * np.abs(dl).max() + 1e-12))
+        d_th = (ev(th + h_t, i)[0] - ev(th - h_t, i)[0]) / (2 * h_t)
+        worst[1] = max(worst[1], np.abs(d_th - dl).max() / (np.abs(dl).max() + 1e-12))
+    print(f"\n  {name}: inductance {worst[0]:.1e}, d lambda/d theta {worst[1]:.1e}, "
+          f"reciprocity {worst[2]:.1e}")
+    assert worst.max() < 1e-5, worst
+
+
 def test_fitted_series_reproduces_the_fea_tables():
     """The cubic in i_q through the five FEA tables gives each table back within 2e-5 of its largest
     entry (measured 1.5e-5) and its eq. 12 LUT within 0.001 deg (0.0007)."""
@@ -389,7 +428,13 @@ def test_calibrated_lut_against_load_agrees_with_fea():
     0..2 A of i_q), the firmware's calibration at 0, 20 and 40 N (0, 0.73, 1.47 A) on the
     switching inverter with 0.8 us dead time; the table's change with load agrees with the change
     of the FEA's LUT at the same q current within 0.3 electrical deg (14 of the 56 positions, to
-    keep the test to a few seconds; tools/bench_saturation.py runs all 56)."""
+    keep the test to a few seconds; tools/bench_saturation.py runs all 56). The FEA's LUT is eq. 12
+    of the same tables the plant is built from: the test shows that the closed-loop calibration
+    measures the plant's load-dependent inductances (changes are compared, so an offset common to
+    every load cancels). The FEA's change at 40 N is itself about 0.3 deg, so beyond the issue's
+    0.3 deg the test holds a regression bound of 0.15 deg (measured 0.086) and the mean change
+    within 20 % of the FEA's (measured about 8 % below: the calibration measures the
+    resistance-aware LUT, which moves less with load than eq. 12)."""
     from linsense.sim.lut_load import lut_vs_load
 
     t0 = time.perf_counter()
@@ -401,3 +446,7 @@ def test_calibrated_lut_against_load_agrees_with_fea():
     assert all(run["dead_time_s"] == pytest.approx(0.8e-6) for run in r.metrics["runs"])
     assert fea40 > 0.25  # the load moves the LUT: the comparison is not trivial
     assert r.max_diff_deg <= 0.3
+    assert r.max_diff_deg <= 0.15  # regression bound (measured 0.086)
+    for k in (1, 2):  # 20 and 40 N: the mean change, not only its bound
+        cal, fea = np.mean(r.cal_change[k]), np.mean(r.fea_change[k])
+        assert abs(cal - fea) <= 0.2 * abs(fea), (k, np.degrees(cal), np.degrees(fea))

@@ -291,7 +291,7 @@ ls_status ls_drive_set_mode(ls_drive *d, ls_mode mode)
         }
         break;
     case LS_MODE_STARTUP: /* the injection's envelope must rise and fall within t_settle and t_quiet */
-        if (d->cfg.demod.comp == NULL || d->cfg.startup.pairs == 0u ||
+        if (d->cfg.demod.comp == NULL || d->cfg.startup.pairs == 0u || !(d->cfg.inject.amplitude > LS_R(0.0)) ||
             !(d->cfg.startup.t_quiet * d->cfg.inject.ramp_rate >= d->cfg.inject.amplitude) ||
             !(d->cfg.startup.t_settle * d->cfg.inject.ramp_rate >= d->cfg.inject.amplitude)) {
             return LS_ERR_PARAM;

@@ -27,7 +27,7 @@ ls_status ls_startup_init(ls_startup *s, const ls_startup_cfg *cfg)
     }
     memset(s, 0, sizeof *s);
     if (!LS_ISFINITE(cfg->fs) || !(cfg->fs > LS_R(0.0)) || !LS_ISFINITE(cfg->v_pulse) ||
-        !(cfg->v_pulse > LS_R(0.0)) || !LS_ISFINITE(cfg->i_min) || cfg->i_min < LS_R(0.0) ||
+        !(cfg->v_pulse > LS_R(0.0)) || !LS_ISFINITE(cfg->i_min) || !(cfg->i_min > LS_R(0.0)) ||
         !LS_ISFINITE(cfg->err_lock) || !(cfg->err_lock > LS_R(0.0)) || cfg->pairs < 1u ||
         !(cfg->t_lock * cfg->fs <= LS_R(0.25) * (LS_REAL)LS_STARTUP_STEPS_MAX) ||
         cfg->pairs > LS_STARTUP_PAIRS_MAX || !steps_of(cfg->t_lock, cfg->fs, 1u, &s->n_lock) ||
@@ -70,6 +70,10 @@ ls_startup_phase ls_startup_step(ls_startup *s, LS_REAL i_d, LS_REAL err, bool h
     s->pulsing = false;
     s->turned = false;
     s->v_d = LS_R(0.0);
+    if (s->cfg.pairs == 0u) { /* a state that ls_startup_init did not fill (zeroed): no sequence */
+        s->phase = LS_SU_FAILED;
+        return s->phase;
+    }
     if (s->steps < LS_STARTUP_STEPS_MAX) {
         s->steps++;
     }

@@ -53,6 +53,13 @@ static void test_module(void)
     LS_CHECK(ls_startup_init(&s, &bad) == LS_ERR_PARAM);
     bad = c; bad.i_min = LS_R(-1.0);
     LS_CHECK(ls_startup_init(&s, &bad) == LS_ERR_PARAM);
+    bad = c; bad.i_min = LS_R(0.0); /* would never leave a start undecided */
+    LS_CHECK(ls_startup_init(&s, &bad) == LS_ERR_PARAM);
+    { /* a zeroed state (its init failed or never ran) fails at once instead of dividing by 0 pairs */
+        ls_startup z;
+        memset(&z, 0, sizeof z);
+        LS_CHECK(ls_startup_step(&z, LS_R(0.1), LS_R(0.0), true) == LS_SU_FAILED);
+    }
     bad = c; bad.t_settle = LS_R(1.0e9);
     LS_CHECK(ls_startup_init(&s, &bad) == LS_ERR_PARAM);
     bad = c; bad.err_lock = LS_R(0.0);
@@ -252,6 +259,10 @@ static void test_refused(void)
     LS_CHECK(ls_drive_set_mode(&d, LS_MODE_STARTUP) == LS_ERR_PARAM);
     LS_CHECK(ls_drive_set_mode(&d, LS_MODE_SENSORLESS_LUT) == LS_OK);
     cfg.startup.t_quiet = LS_R(0.012);
+    cfg.inject.amplitude = LS_R(0.0); /* no injection: no lock (and its envelope's step divides by it) */
+    LS_CHECK(ls_drive_init(&d, &cfg) == LS_OK);
+    LS_CHECK(ls_drive_set_mode(&d, LS_MODE_STARTUP) == LS_ERR_PARAM);
+    cfg.inject.amplitude = LS_R(12.0);
     cfg.startup.fs = LS_R(8000.0);
     LS_CHECK(ls_drive_init(&d, &cfg) == LS_ERR_PARAM);
 }

@@ -63,7 +63,8 @@ typedef struct {
     LS_REAL t_rest;   /* s, zero voltage before each pulse and after the last, >= 3 sampling periods
                          after rounding (a pulse's end is sampled on the second) */
     uint32_t pairs;   /* -, (+, -) pulse pairs, 1 .. LS_STARTUP_PAIRS_MAX */
-    LS_REAL i_min;    /* A, smallest |i_diff| accepted as a decision, >= 0 */
+    LS_REAL i_min;    /* A, smallest |i_diff| accepted as a decision, > 0 (0 would never leave a
+                         start undecided) */
     LS_REAL t_settle; /* s, HF relock after the pulses, >= 0 */
 } ls_startup_cfg;
 

@@ -71,7 +71,7 @@ class StartupSection(BaseModel):
     t_pulse: Positive = _c(_C.startup.t_pulse)  # s, pulse length (>= 2 PWM periods)
     t_rest: Positive = _c(_C.startup.t_rest)  # s, zero voltage before each pulse (>= 3 PWM periods)
     pairs: int = Field(default=int(_C.startup.pairs), ge=1, le=1024)  # (+, -) pulse pairs
-    i_min: NonNegative = _c(_C.startup.i_min)  # A, smallest |i_diff| accepted as a decision
+    i_min: Positive = _c(_C.startup.i_min)  # A, smallest |i_diff| accepted as a decision (> 0)
     t_settle: NonNegative = _c(_C.startup.t_settle)  # s, HF relock after the pulses
 
 

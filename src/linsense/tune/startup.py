@@ -43,10 +43,10 @@ PULSE_CURRENT = 1.1  # of i_max
 PULSE_BUS = 0.9  # of V_dc / sqrt(3)
 REST_TAU = 4.0  # rests in L_d / R_s
 PAIRS_MAX = 64
-LOCK_OBS = 2.8  # t_lock = LOCK_OBS / f_obs
+LOCK_OBS = 2.8  # t_lock = LOCK_OBS / f_obs (2.8 / 40 Hz = 70 ms: the lock settled in the simulator)
 ERR_LOCK = 0.2  # rad
 LOCK_ACCURACY = math.radians(2.0)  # rad, axis error assumed during the pulses
-RAMP_RATE = 1200.0  # V/s, the injection's ramp (ls_drive_default_cfg)
+MOTION_BAR_MM = 0.1  # mm, the motion while detecting that the design warns beyond (issue 14)
 
 
 @dataclass
@@ -117,10 +117,16 @@ def pulse_currents(L_d0: float, R_s: float, i_m: float, a: float, v: float, t: f
 
 def design_startup(motor: Motor, *, v_dc: float, f_pwm: float, i_max: float, observer_bw: float,
                    v_inj: float, polarity: float | None = None, current_noise: float = 0.01,
-                   adc_bits: int = 12, adc_range: float = 10.0,
-                   source: str = "<tune>") -> StartupDesign | None:
+                   adc_bits: int = 12, adc_range: float = 10.0, ramp_rate: float | None = None,
+                   i_trip: float | None = None, source: str = "<tune>") -> StartupDesign | None:
     """The start-up for ``motor``, or None without saturation data (``polarity`` None and no
-    ``[saturation] polarity`` in the motor file)."""
+    ``[saturation] polarity`` in the motor file). ``ramp_rate`` (V/s): the injection's ramp, and
+    ``i_trip`` (A): the over-current protection's limit (None: the C library's defaults)."""
+    from linsense.ctrl import drive_default_cfg
+
+    c_def = drive_default_cfg()
+    ramp_rate = float(c_def.inject.ramp_rate) if ramp_rate is None else ramp_rate
+    i_trip = float(c_def.prot.i_max) if i_trip is None else i_trip
     if polarity is None and motor.saturation is not None and motor.saturation.polarity > 0:
         polarity = motor.saturation.polarity
     if polarity is None:
@@ -164,7 +170,10 @@ def design_startup(motor: Motor, *, v_dc: float, f_pwm: float, i_max: float, obs
     i_min = I_MIN_SIGMA * sigma
     n_rest = max(3, math.ceil(REST_TAU * L_d0 / motor.R_s / ts))
     t_pulse, t_rest = n * ts, n_rest * ts
-    t_ramp = v_inj / RAMP_RATE
+    if dp >= 0.9 * i_trip:
+        warnings.append(f"the pulses reach {dp:.2f} A, within 10 % of the over-current trip at "
+                        f"{i_trip:.2f} A")
+    t_ramp = v_inj / ramp_rate
     t_lock = LOCK_OBS / observer_bw
     t_quiet = t_ramp + 2e-3
     t_settle = t_ramp + 20e-3
@@ -178,6 +187,10 @@ def design_startup(motor: Motor, *, v_dc: float, f_pwm: float, i_max: float, obs
     cross = float(np.max(np.abs(L_dq / L_q))) + math.sin(LOCK_ACCURACY)
     j_q = motor.force_constant * dp * cross * (t_pulse / 2.0 + L_d0 / motor.R_s)
     motion = 0.5 * v_rel * t_pulses + j_q / motor.mass * (t_pulse + t_rest)
+    if motion * 1e3 > MOTION_BAR_MM:
+        warnings.append(f"a free, frictionless mover may move {motion * 1e3:.3f} mm while detecting (more "
+                        f"than {MOTION_BAR_MM:g} mm): the pulses' reluctance force drifts it; guide friction "
+                        f"or a brake holds it (docs/firmware.md)")
     return StartupDesign(polarity=polarity, v_pulse=v, t_pulse=t_pulse, t_rest=t_rest, pairs=int(pairs),
                          i_min=i_min, t_lock=t_lock, err_lock=ERR_LOCK, t_quiet=t_quiet, t_settle=t_settle,
                          i_peak=dp, signal=signal, sigma=sigma,
