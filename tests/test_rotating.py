@@ -81,3 +81,20 @@ def test_build_lut_and_cli_export_the_rotating_table(run_cli, tmp_path):
     r = run_cli("lut", "--motor", "ecce2010", "--injection", "rotating", "--f-inj", "1000", "--quad", "0.5",
                 "--out", tmp_path / "x.csv")
     assert r.code == 2 and "--quad" in r.err and "\n" not in r.err.strip()
+
+
+def test_sampled_negative_sequence_limits():
+    """The sampled drive's model (voltage held over a period, one period after its computation):
+    as f_pwm grows it is the continuous one; at 16 kHz its reference phase is the continuous
+    c_ref + 1.5 w T within a degree (0.54 deg for ecce2010: the drive's ref_phase uses the sampled
+    one, docs/theory.md), and its table moves by less than 0.01 deg."""
+    from linsense.analysis.rotating import psi_rotating_sampled, reference_phase, reference_phase_sampled
+
+    m = load_motor("ecce2010")
+    th = np.linspace(0.0, 2.0 * np.pi, 24, endpoint=False)
+    assert np.abs(psi_rotating_sampled(m, th, 1000.0, 1e7) - psi_rotating(m, th, 1000.0)).max() < 1e-7
+    cont = reference_phase(m, 1000.0) + 1.5 * 2.0 * np.pi * 1000.0 / 16000.0
+    d = np.degrees(np.angle(np.exp(1j * (reference_phase_sampled(m, 1000.0, 16000.0) - cont))))
+    assert 0.1 < abs(d) < 1.0, d
+    moved = psi_rotating_sampled(m, th, 1000.0, 16000.0) - psi_rotating(m, th, 1000.0)
+    assert np.degrees(np.abs(moved)).max() < 0.01
