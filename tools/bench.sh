@@ -15,6 +15,7 @@ count() { # $1: dead-time compensation on (1) or off (0); $2: injection 0 pulsat
   awk '/^(summary|totals):/ {print $2; exit}' "$B/callgrind.$1${2:-0}.out"
 }
 per() { echo $(( ($1 + $2 / 2) / $2 )); }
+verdict() { if [ "$1" -le 1000 ]; then echo "$1 (target <= 1,000) PASS"; else echo "$1 (target <= 1,000) FAIL"; fi; }
 total_dtc=$(count 1)
 total=$(count 0)
 total_rot=$(count 1 1)
@@ -23,10 +24,10 @@ N_SU=2800 # the whole start-up (LS_MODE_STARTUP) and no more
 total_su=$(count 1 3 $N_SU)
 echo "ls_drive_step, sensorless with LUT, float, -O2, x86-64, $N steps during a move: $total instructions"
 echo "  with dead-time compensation off: $(per "$total" "$N") per step"
-echo "instructions per step (everything on: compensation, residual, elliptical injection, notch): $(per "$total_dtc" "$N")"
-echo "instructions per step, rotating injection (compensation, residual, its table): $(per "$total_rot" "$N")"
-echo "instructions per step, square wave at fs/2 (compensation, its table, d-current): $(per "$total_sq" "$N")"
-echo "instructions per step in LS_MODE_STARTUP (lock, pulses, settle; $N_SU steps): $(per "$total_su" "$N_SU")"
+echo "instructions per step (everything on: compensation, residual, elliptical injection, notch): $(verdict "$(per "$total_dtc" "$N")")"
+echo "instructions per step, rotating injection (compensation, residual, its table): $(verdict "$(per "$total_rot" "$N")")"
+echo "instructions per step, square wave at fs/2 (compensation, its table, d-current): $(verdict "$(per "$total_sq" "$N")")"
+echo "instructions per step in LS_MODE_STARTUP (lock, pulses, settle; $N_SU steps): $(verdict "$(per "$total_su" "$N_SU")")"
 if command -v "${ARM_CC:-arm-none-eabi-gcc}" >/dev/null; then
   tools/check_mcu.sh build/arm | tail -1
 else
