@@ -322,9 +322,15 @@ static bool sat_step(const ls_sim_cfg *c, const sat_frame *f, const double v[2],
     if (!(det > 0.0 && pt->l[0] > 0.0)) {
         return false;
     }
-    /* smallest eigenvalue >= det / tr */
+    /* smallest eigenvalue >= det / tr: RK4 sub-steps of at most 0.2 of the fastest L/R time
+     * constant; beyond 1000 of them (a time constant below h / 5000: not a motor this plant can
+     * integrate) the step is refused, which the caller reports as diverged, instead of being
+     * integrated with too few sub-steps */
     hs = h * c->r_s * tr / det;
-    n = hs > 0.2 ? (hs > 200.0 ? 1000 : (int32_t)ceil(hs / 0.2)) : 1;
+    if (!(hs <= 200.0)) {
+        return false;
+    }
+    n = hs > 0.2 ? (int32_t)ceil(hs / 0.2) : 1;
     hs = h / (double)n;
     for (j = 0; j < n && ok; ++j) {
         const double d0 = dth0 + omega * hs * (double)j, dm = d0 + 0.5 * omega * hs, d1 = d0 + omega * hs;
