@@ -50,7 +50,7 @@ def test_rotating_with_its_table_holds_everywhere():
     the gain schedule: |steady error| <= 1.0 deg and no fault at 16 positions (measured: |bias| <=
     0.23 deg; 0.62 deg over 96 positions). Near 90 and 270 deg, where the end-effect makes the
     negative sequence smallest (8 % of its mean), the dead time leaves a small cycle: <= 0.1 mm
-    (measured 0.058 mm here, 0.097 mm over 96 positions); elsewhere none beyond 0.001 mm."""
+    (measured 0.058 mm here and over 96 positions); elsewhere none beyond 0.001 mm."""
     worst = 0.0
     for x_mm in POSITIONS_MM:
         m, bias, peak, pp, _ = _hold("rotating", "sensorless_lut", x_mm)

@@ -238,6 +238,9 @@ static void mode_set(ls_drive *d, ls_mode mode)
                mode == LS_MODE_CALIBRATION || (mode == LS_MODE_SENSORED && d->cfg.inject_sensored);
     d->v_hf_max = d->hf_on ? d->cfg.inject.amplitude : LS_R(0.0);
     d->i_d_ref = d->hf_on ? d->cfg.i_d_inj : LS_R(0.0);
+    d->rot_fast = (mode == LS_MODE_SENSORLESS_LUT || mode == LS_MODE_SENSORLESS_NOLUT) &&
+                  d->cfg.inject.shape == LS_INJ_ROTATING && d->cfg.sep.type == LS_BIQUAD_NOTCH &&
+                  d->cfg.sep.f0 == d->cfg.bpf.f0 && d->cfg.sep.q == d->cfg.bpf.q;
     d->enc_have_prev = false; /* the encoder's jump check starts again */
 }
 
@@ -399,7 +402,7 @@ ls_status ls_drive_step_to(ls_drive *d, ls_pos target)
 
 /* --------------------------------------------------------------------------- step */
 /* Outputs off: every command field cleared, then mode and fault; controllers reset. */
-static void disable(ls_drive *d, ls_cmd *cmd, uint32_t fault)
+void ls_drive_disable_(ls_drive *d, ls_cmd *cmd, uint32_t fault)
 {
     memset(cmd, 0, sizeof *cmd);
     cmd->mode = d->starting ? LS_MODE_STARTUP : d->mode;
@@ -410,9 +413,9 @@ static void disable(ls_drive *d, ls_cmd *cmd, uint32_t fault)
 }
 
 /* Outputs off after a fault or in LS_MODE_OFF, reporting the estimate and the reference. */
-static void disable_report(ls_drive *d, ls_cmd *cmd, uint32_t fault)
+void ls_drive_disable_report_(ls_drive *d, ls_cmd *cmd, uint32_t fault)
 {
-    disable(d, cmd, fault);
+    ls_drive_disable_(d, cmd, fault);
     cmd->pos_est = d->obs.pos;
     cmd->pos_fb = d->obs.pos;
     cmd->pos_ref = d->traj.target;
@@ -527,7 +530,7 @@ static LS_DRIVE_COLD void startup_step(ls_drive *d, const ls_meas *meas, ls_cmd 
         if (d->prot.fault == LS_FAULT_NONE) {
             ls_protect_trip(&d->prot, LS_FAULT_OBSERVER);
         }
-        disable_report(d, cmd, d->prot.fault);
+        ls_drive_disable_report_(d, cmd, d->prot.fault);
     } else if (ph == LS_SU_DONE) {
         d->starting = false;
         mode_set(d, LS_MODE_SENSORLESS_LUT);
@@ -554,6 +557,10 @@ void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
         cmd->fault = LS_FAULT_CONFIG;
         return;
     }
+    if (d->rot_fast) { /* the rotating injection's sensorless path (ls_drive_rotating.c) */
+        ls_drive_rot_step_(d, meas, cmd);
+        return;
+    }
     cfg = &d->cfg;
     mode = d->mode;
     sensorless = mode == LS_MODE_SENSORLESS_LUT || mode == LS_MODE_SENSORLESS_NOLUT;
@@ -571,7 +578,7 @@ void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
             startup_step(d, meas, cmd);
             return;
         }
-        disable_report(d, cmd, fault);
+        ls_drive_disable_report_(d, cmd, fault);
         return;
     }
 
@@ -583,7 +590,7 @@ void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
         ls_pos pe = enc_pos(meas->enc_count, cfg->enc_counts);
         if (!enc_plausible(d, meas->enc_count, pe)) {
             ls_protect_trip(&d->prot, LS_FAULT_ENCODER);
-            disable_report(d, cmd, d->prot.fault);
+            ls_drive_disable_report_(d, cmd, d->prot.fault);
             return;
         }
         if (d->align) {
@@ -653,7 +660,7 @@ void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
         calibration_step(d);
     }
     if (d->prot.fault != LS_FAULT_NONE) {
-        disable_report(d, cmd, d->prot.fault);
+        ls_drive_disable_report_(d, cmd, d->prot.fault);
         return;
     }
 
@@ -717,7 +724,7 @@ void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
      * zero-sequence offset is then Inf - Inf), and the positions are finite by ls_pos_norm */
     if (!LS_ISFINITE(duty[0] + duty[1] + duty[2])) {
         ls_protect_trip(&d->prot, LS_FAULT_NONFINITE);
-        disable(d, cmd, d->prot.fault);
+        ls_drive_disable_(d, cmd, d->prot.fault);
         return;
     }
     /* every field exactly once */

@@ -127,7 +127,8 @@ static const size_t FIELDS[] = {
     FIELD(traj.pole_pitch), FIELD(mod.dead_time), FIELD(mod.i_band), FIELD(mod.dtc_lead), FIELD(dtres.r_s),
     FIELD(dtres.l_d), FIELD(dtres.l_q), FIELD(prot.i_max), FIELD(prot.v_dc_min), FIELD(prot.v_dc_max),
     FIELD(prot.err_max), FIELD(prot.err_time), FIELD(prot.omega_max), FIELD(cal.k_int), FIELD(cal.t_settle),
-    FIELD(cal.t_hold), FIELD(cal.tol), FIELD(cal.t_max), FIELD(cal.dither_amp), FIELD(cal.dither_freq)};
+    FIELD(cal.t_hold), FIELD(cal.tol), FIELD(cal.t_max), FIELD(cal.dither_amp), FIELD(cal.dither_freq),
+    FIELD(i_d_inj), FIELD(demod.ref_phase)};
 #define N_FIELDS (sizeof FIELDS / sizeof FIELDS[0])
 #define N_CAL 64u
 
@@ -183,8 +184,11 @@ static void overrides(reader *r, ls_drive_cfg *c)
             c->dtres.ripple = (kind & 16u) != 0u;
             break;
         case 6:
-            c->demod.method = (ls_demod_method)(kind % 3u);
-            c->sep.type = (ls_biquad_type)(kind / 3u % 4u);
+            c->demod.method = (ls_demod_method)(kind % 4u);
+            c->sep.type = (ls_biquad_type)(kind / 4u % 5u);
+            /* the injection's shape and the band-pass's type (rotating, square: their own paths) */
+            c->inject.shape = (ls_inject_shape)(kind / 20u % 4u);
+            c->bpf.type = (ls_biquad_type)(kind / 80u % 5u);
             break;
         case 7:
             c->demod.comp = (kind & 1u) ? NULL : c->demod.comp;

@@ -208,6 +208,8 @@ typedef struct {
     int32_t enc_prev;    /* -, encoder count of the last sample (encoder modes) */
     int64_t enc_jump_max; /* -, largest plausible count change per step (>= 1) */
     LS_REAL i_d_ref;     /* A, d-current reference (cfg.i_d_inj with hf_on, else 0) */
+    bool rot_fast;       /* a sensorless mode with the rotating injection and sep the notch at bpf's
+                            f0 and q: ls_drive_step runs ls_drive_rot_step_ */
     /* LS_MODE_STARTUP: while it runs, mode holds LS_MODE_OFF and starting is set, so that
      * ls_drive_step's other modes pay nothing for it (it is dispatched from the outputs-off branch) */
     bool starting;       /* the start-up sequence runs (cmd.mode reports LS_MODE_STARTUP) */
@@ -250,5 +252,10 @@ ls_status ls_drive_step_to(ls_drive *d, ls_pos target);
 void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd);
 /* Internal: ls_drive_step's LS_MODE_STARTUP path (csrc/ctrl/ls_drive_startup.c); not an API. */
 ls_startup_phase ls_drive_startup_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd);
+/* Internal: ls_drive_step in the sensorless modes with the rotating injection
+ * (csrc/ctrl/ls_drive_rotating.c), and the outputs-off helpers it shares; not an API. */
+void ls_drive_rot_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd);
+void ls_drive_disable_(ls_drive *d, ls_cmd *cmd, uint32_t fault);
+void ls_drive_disable_report_(ls_drive *d, ls_cmd *cmd, uint32_t fault);
 
 #endif /* LINSENSE_LS_DRIVE_H */

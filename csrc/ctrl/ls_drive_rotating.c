@@ -1,0 +1,123 @@
+/* ls_drive_step in the sensorless modes with the rotating injection (ls_drive.h), in a translation
+ * unit of its own: the rotating vector's negative-sequence demodulator costs about 40 instructions
+ * more than the pulsating product, and this path takes them back where the shape allows,
+ * without touching the other shapes' code (docs/firmware.md, "Injection shapes"):
+ *   - no band-pass: the notch at the band-pass's f0 and q is 1 - band-pass (cookbook designs), so
+ *     the band-passed current is the current less its fundamental, and the dead-time residual's
+ *     current is taken out of it unfiltered (required: sep the notch at bpf's f0 and q);
+ *   - no encoder, calibration or elliptical branches (sensorless only).
+ * ls_drive.c dispatches here (d->rot_fast) and keeps every other mode and shape. */
+#include <math.h>
+#include <string.h>
+
+#include "linsense/ls_drive.h"
+#include "linsense/ls_math.h"
+
+void ls_drive_rot_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
+{
+    const ls_drive_cfg *cfg = &d->cfg;
+    LS_REAL i_a, i_b, ihf_a, ihf_b, if_a, if_b, c_est, s_est, v_hf, v_d, v_q, v_a, v_b, dlt, c_adv, s_adv;
+    LS_REAL i_d, i_q, i_q_ref, v_lim, omega, x_err, v_ff, a_ff, f, err, e_obs, duty[3];
+    ls_pos x_ref, pos;
+    uint32_t fault = ls_protect_check_power(&d->prot, meas->i_abc, meas->v_dc);
+
+    if (fault != LS_FAULT_NONE) {
+        ls_drive_disable_report_(d, cmd, fault);
+        return;
+    }
+    i_a = meas->i_abc[0];
+    i_b = (meas->i_abc[1] - meas->i_abc[2]) * (LS_R(1.0) / LS_SQRT3);
+    if (d->align) {
+        ls_traj_reset(&d->traj, d->obs.pos);
+        if (d->pending) {
+            d->pending = false;
+            if (d->pending_move) {
+                ls_traj_move(&d->traj, d->pending_target);
+            } else {
+                ls_traj_jump(&d->traj, d->pending_target);
+            }
+        }
+        d->align = false;
+    }
+    ls_sincos(d->obs.pos.theta, &c_est, &s_est);
+
+    /* the fundamental (notch), and the HF current as its complement less the residual's */
+    if_a = ls_biquad_step(&d->sep[0], i_a);
+    if_b = ls_biquad_step(&d->sep[1], i_b);
+    ihf_a = i_a - if_a;
+    ihf_b = i_b - if_b;
+    if (cfg->hf_dtres) {
+        LS_REAL v_err[2], i_res[2];
+        (void)ls_mod_residual(&d->mod, meas->i_abc, meas->v_dc, d->dtres.k_rip, v_err);
+        ls_dtres_step(&d->dtres, v_err, c_est, s_est, i_res);
+        ihf_a -= i_res[0];
+        ihf_b -= i_res[1];
+    }
+
+    /* negative-sequence demodulation and observer (the error counts once the injection is up) */
+    err = ls_demod_step_cs(&d->demod, ihf_a, ihf_b, d->obs.pos.theta, c_est, s_est, d->inj.c, d->inj.s,
+                           LS_R(0.0));
+    e_obs = d->inj.amp >= cfg->inject.amplitude ? err : LS_R(0.0);
+    ls_observer_step_finite(&d->obs, e_obs, d->f_ref);
+    ls_protect_check_observer(&d->prot, e_obs, d->demod.valid, d->obs.omega);
+    if (d->prot.fault != LS_FAULT_NONE) {
+        ls_drive_disable_report_(d, cmd, d->prot.fault);
+        return;
+    }
+    pos = d->obs.pos;
+    omega = d->obs.omega;
+
+    /* position reference and control -> force -> current reference */
+    ls_traj_step(&d->traj, &x_ref, &v_ff, &a_ff);
+    x_err = ls_pos_diff(x_ref, pos) * d->inv_kx;
+    f = ls_posctrl_step_finite(&d->pos, x_err, omega * d->inv_kx, v_ff, a_ff);
+    i_q_ref = ls_clamp(f * d->inv_kf, -cfg->i_max, cfg->i_max);
+    d->f_ref = i_q_ref * cfg->force_constant;
+
+    /* current control in the estimated frame */
+    i_d = c_est * if_a + s_est * if_b;
+    i_q = -s_est * if_a + c_est * if_b;
+    v_lim = meas->v_dc * (LS_R(1.0) / LS_SQRT3) - d->v_hf_max;
+    ls_current_step_finite(&d->cur, i_d, i_q, d->i_d_ref, i_q_ref, omega, v_lim, &v_d, &v_q);
+
+    /* fundamental voltage at the advanced angle, plus the rotating vector in the stationary frame */
+    dlt = d->delay_ts * omega;
+    c_adv = c_est - s_est * dlt;
+    s_adv = s_est + c_est * dlt;
+    v_hf = ls_inject_step(&d->inj);
+    v_a = c_adv * v_d - s_adv * v_q + v_hf;
+    v_b = s_adv * v_d + c_adv * v_q + d->inj.v_q;
+    (void)ls_mod_step_finite(&d->mod, v_a, v_b, meas->v_dc, meas->i_abc, duty);
+    if (!LS_ISFINITE(duty[0] + duty[1] + duty[2])) {
+        ls_protect_trip(&d->prot, LS_FAULT_NONFINITE);
+        ls_drive_disable_(d, cmd, d->prot.fault);
+        return;
+    }
+    /* every field exactly once (as ls_drive_step) */
+    cmd->duty[0] = duty[0];
+    cmd->duty[1] = duty[1];
+    cmd->duty[2] = duty[2];
+    cmd->enable = true;
+    cmd->fault = d->prot.fault;
+    cmd->mode = d->mode;
+    cmd->pos_fb = pos;
+    cmd->pos_est = pos;
+    cmd->pos_ref = x_ref;
+    cmd->v_est = ls_observer_speed(&d->obs);
+    cmd->v_fb = omega * d->inv_kx;
+    cmd->f_load_est = d->obs.f_load;
+    cmd->err_sig = d->demod.err;
+    cmd->err_valid = d->demod.valid;
+    cmd->hf_level = d->demod.level;
+    cmd->psi_comp = d->demod.psi;
+    cmd->i_dq[0] = i_d;
+    cmd->i_dq[1] = i_q;
+    cmd->i_dq_ref[0] = d->i_d_ref;
+    cmd->i_dq_ref[1] = i_q_ref;
+    cmd->v_dq[0] = v_d;
+    cmd->v_dq[1] = v_q;
+    cmd->v_hf = v_hf;
+    cmd->cal_index = d->cal_index;
+    cmd->cal_done = false;
+    cmd->psi_cal = d->psi_cal;
+}
