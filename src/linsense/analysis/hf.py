@@ -19,10 +19,31 @@ def _model(m) -> InductanceModel:
     return m if isinstance(m, InductanceModel) else m.inductance
 
 
+#: the frequency at which a table without R_s is evaluated (any: without R_s it does not depend on it)
+F_NO_R = 1000.0
+
+
+def table_model(motor, f_inj: float | None):
+    """``(motor, f)`` a table is computed for: ``f_inj`` None is the R_s = 0 limit, ``motor``
+    without its resistance at :data:`F_NO_R`; else ``(motor, f_inj)`` unchanged."""
+    import dataclasses
+
+    if f_inj is None:
+        return dataclasses.replace(motor, R_s=0.0), F_NO_R
+    return motor, f_inj
+
+
 def dq_components(model, theta: np.ndarray | float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(L_d, L_q, L_dq)`` at ``theta`` (H), from the transformed 3x3 matrix."""
     L = _model(model).L_dq(theta)
     return L[..., 0, 0], L[..., 1, 1], L[..., 0, 1]
+
+
+def mean_dq(motor, n: int = 720) -> tuple[float, float]:
+    """Mean L_d, L_q over one period (H): the motor without its end-effect."""
+    th = np.linspace(0.0, 2.0 * np.pi, n, endpoint=False)
+    L_d, L_q, _ = dq_components(motor, th)
+    return float(np.mean(L_d)), float(np.mean(L_q))
 
 
 def saliency(model, theta: np.ndarray | float) -> np.ndarray:

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from linsense.analysis.hf import dq_components
+from linsense.analysis.hf import dq_components, mean_dq
 
 
 def negative_sequence_numeric(motor, theta, v_inj: float, f_inj: float) -> np.ndarray:
@@ -57,9 +57,8 @@ def reference_phase(motor, f_inj: float) -> float:
     """The demodulator's constant phase ``c_ref`` (rad): ``arg(i_n exp(-j 2 theta))`` of a motor
     with the mean ``L_d``, ``L_q`` over the period, no ``L_dq`` and the same R_s (what a drive designed
     without the end-effect would use), so that ``theta_est = (arg(i_n) - c_ref) / 2``."""
-    th = np.linspace(0.0, 2.0 * np.pi, 720, endpoint=False)
-    L_d, L_q, _ = dq_components(motor, th)
-    S, D = 0.5 * (L_d.mean() + L_q.mean()), 0.5 * (L_d.mean() - L_q.mean())
+    L_d, L_q = mean_dq(motor)
+    S, D = 0.5 * (L_d + L_q), 0.5 * (L_d - L_q)
     return float(np.angle(_i_n(motor.R_s, 2.0 * np.pi * f_inj, S, D, 1.0)))
 
 
@@ -123,9 +122,7 @@ def reference_phase_sampled(motor, f_inj: float, f_pwm: float, delay: float = 1.
     the hold, exactly; ``c_ref + 1.5 w T`` is its continuous approximation, 0.54 deg off for
     ecce2010 at 1 kHz and 16 kHz). ``delay``: periods between a voltage's computation and the
     period it acts in (the drive's ``delay_comp`` less the half period of the hold)."""
-    th = np.linspace(0.0, 2.0 * np.pi, 720, endpoint=False)
-    L_d, L_q, _ = dq_components(motor, th)
-    L = np.diag([L_d.mean(), L_q.mean()])  # at theta = 0 the alpha-beta matrix is the dq one
+    L = np.diag(mean_dq(motor))  # at theta = 0 the alpha-beta matrix is the dq one
     return float(np.angle(_sampled_i_n(L, motor.R_s, 1.0, f_inj, f_pwm, delay)))
 
 

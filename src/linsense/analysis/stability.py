@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from linsense.analysis.hf import demod_ratio, equilibrium_error, loop_gain_factor
+from linsense.analysis.hf import demod_ratio, equilibrium_error, loop_gain_factor, mean_dq
 
 
 @dataclass
@@ -49,8 +49,6 @@ def nolut_error_gain(motor, theta, f_inj: float, quad: float = 0.0, h: float = 1
     """Local error gain of the uncompensated observer at its equilibrium ``e*(theta)``, relative to
     the nominal demodulator gain ``L_q / (L_q - L_d)`` of the mean inductances (no gain schedule):
     ``-G0 d ratio / d theta_err`` (:func:`linsense.analysis.hf.demod_ratio`, no compensation)."""
-    from linsense.tune.design import mean_dq
-
     theta = np.asarray(theta, dtype=float)
     L_d, L_q = mean_dq(motor)
     g0 = L_q / (L_q - L_d)

@@ -100,14 +100,13 @@ def build_lut(motor, points: int, f_inj: float | None = None, quad: float = 0.0,
     theta = 2.0 * np.pi * np.arange(points) / points
     prov = motor.provenance()
     if injection == "rotating":
-        import dataclasses
-
+        from linsense.analysis.hf import table_model
         from linsense.analysis.rotating import psi_rotating
 
         # the drive's table: read at the observer's estimate, which at the equilibrium is the true
-        # position, so sampled against the position (R_s = 0 without f_inj: any frequency then)
-        values = (psi_rotating(motor, theta, f_inj) if f_inj is not None
-                  else psi_rotating(dataclasses.replace(motor, R_s=0.0), theta, 1000.0))
+        # position, so sampled against the position (R_s = 0 without f_inj)
+        m, f = table_model(motor, f_inj)
+        values = psi_rotating(m, theta, f)
         prov = {**prov, "injection": "rotating",
                 "lut_model": "R_s = 0 (e*)" if f_inj is None else "with R_s at f_inj"}
         if f_inj is not None:

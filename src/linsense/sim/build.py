@@ -481,12 +481,17 @@ def build(sc: Scenario, motor: Motor | None = None, trace_in_memory: bool = True
     def lut_motor() -> Motor:
         return dataclasses.replace(model_motor, R_s=known["R_s"])
 
+    def shape_tables(f: float | None):
+        """The rotating or square wave's (table, gain) at ``f``, computed once for both."""
+        return _memo(("shape_tables", shape, model_key, known["R_s"], obs.lut_points, f),
+                     lambda: injection_tables(lut_motor(), shape, obs.lut_points, f))
+
     try:
         comp = None
         if compensation == "lut" and shape != "pulsating":
             f_lut = f_inj if obs.lut_model == "resistive" else None
             comp = _memo(("lut", shape, model_key, known["R_s"], obs.lut_points, f_lut),
-                         lambda: make_lut(injection_tables(lut_motor(), shape, obs.lut_points, f_lut)[0]))
+                         lambda: make_lut(shape_tables(f_lut)[0]))
         elif compensation == "lut":
             f_lut = inj.frequency if obs.lut_model == "resistive" else None
             quad = inj.quadrature if f_lut else 0.0
@@ -495,8 +500,7 @@ def build(sc: Scenario, motor: Motor | None = None, trace_in_memory: bool = True
         gain_table = None
         if obs.gain_schedule and shape != "pulsating":
             gain_table = _memo(("gain_table", shape, model_key, known["R_s"], f_inj, obs.lut_points),
-                               lambda: make_lut(injection_tables(lut_motor(), shape, obs.lut_points,
-                                                                 f_inj)[1]))
+                               lambda: make_lut(shape_tables(f_inj)[1]))
         elif obs.gain_schedule:
             # the demodulator gain that makes the error's local slope 1 everywhere (the saliency and,
             # with the elliptical injection and R_s, its phase set it; docs/tuning.md)

@@ -39,7 +39,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from linsense.analysis.hf import demod_ratio, dq_components, hf_current_amplitude, psi_lut_resistive
+from linsense.analysis.hf import demod_ratio, hf_current_amplitude, mean_dq, psi_lut_resistive
 from linsense.errors import InputError
 from linsense.model.motor import Motor
 
@@ -114,13 +114,6 @@ def speed_gains(bw_hz: float, mass: float) -> tuple[float, float]:
     """Speed PI gains for a bandwidth (Hz): kp = m w, ki = m w^2 / 4 (a double real closed-loop pole)."""
     w = 2.0 * math.pi * bw_hz
     return mass * w, mass * w * w / 4.0
-
-
-def mean_dq(motor: Motor, n: int = 720) -> tuple[float, float]:
-    """Mean L_d, L_q over one period (H)."""
-    th = np.linspace(0.0, 2.0 * np.pi, n, endpoint=False)
-    L_d, L_q, _ = dq_components(motor, th)
-    return float(np.mean(L_d)), float(np.mean(L_q))
 
 
 def error_gain(motor: Motor, f_inj: float, quad: float, gain: float, n: int = 180) -> np.ndarray:

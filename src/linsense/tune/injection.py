@@ -20,6 +20,7 @@ import math
 
 import numpy as np
 
+from linsense.analysis.hf import table_model
 from linsense.analysis.rotating import negative_sequence, psi_rotating, reference_phase_sampled
 from linsense.analysis.square import delta_current, psi_square
 from linsense.model.motor import Motor
@@ -37,23 +38,14 @@ SQUARE_D_FRACTION = 0.4
 #: the rotating demodulator's validity threshold, as a fraction of the model's smallest |i_n|^2 over
 #: the period (the end-effect makes it vary: 8 % to 193 % of its mean for ecce2010)
 ROTATING_LEVEL_FRACTION = 0.25
-#: the frequency at which the R_s = 0 tables are evaluated (any: without R_s they do not depend on it)
-_F_NO_R = 1000.0
 _H = 1e-4  # rad, step of the numerical derivatives
-
-
-def _model(motor: Motor, f_inj: float | None) -> tuple[Motor, float]:
-    """The motor and frequency a table is computed for: ``f_inj`` None is the R_s = 0 limit."""
-    if f_inj is None:
-        return dataclasses.replace(motor, R_s=0.0), _F_NO_R
-    return motor, f_inj
 
 
 def rotating_tables(motor: Motor, n: int, f_inj: float | None) -> tuple[np.ndarray, np.ndarray]:
     """``(psi_rot, gain)`` on ``n`` positions over the period: the rotating injection's
     compensation table (rad, :func:`linsense.analysis.rotating.psi_rotating`) and the gain
     schedule ``1 / (1 + dpsi_rot/dtheta)``."""
-    m, f = _model(motor, f_inj)
+    m, f = table_model(motor, f_inj)
     th = 2.0 * np.pi * np.arange(n) / n
     psi = psi_rotating(m, th, f)
     slope = 1.0 + (psi_rotating(m, th + _H, f) - psi_rotating(m, th - _H, f)) / (2.0 * _H)
@@ -74,7 +66,7 @@ def square_tables(motor: Motor, n: int, f_inj: float | None) -> tuple[np.ndarray
     """``(psi_square, gain)`` on ``n`` positions over the period: the square wave's compensation
     table (rad, :func:`linsense.analysis.square.psi_square`) and the gain ``-1 / (d ratio / d
     theta_est)`` that makes the error's slope against ``theta - theta_est`` one."""
-    m, f = _model(motor, f_inj)
+    m, f = table_model(motor, f_inj)
     th = 2.0 * np.pi * np.arange(n) / n
     psi = psi_square(m, th, f)
     r_p = _square_ratio(m, th, th + _H, f, psi_square(m, th + _H, f))
