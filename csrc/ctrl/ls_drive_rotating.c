@@ -12,6 +12,7 @@
 
 #include "linsense/ls_drive.h"
 #include "linsense/ls_math.h"
+#include "ls_drive_cmd.h"
 
 void ls_drive_rot_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
 {
@@ -93,31 +94,6 @@ void ls_drive_rot_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
         ls_drive_disable_(d, cmd, d->prot.fault);
         return;
     }
-    /* every field exactly once (as ls_drive_step) */
-    cmd->duty[0] = duty[0];
-    cmd->duty[1] = duty[1];
-    cmd->duty[2] = duty[2];
-    cmd->enable = true;
-    cmd->fault = d->prot.fault;
-    cmd->mode = d->mode;
-    cmd->pos_fb = pos;
-    cmd->pos_est = pos;
-    cmd->pos_ref = x_ref;
-    cmd->v_est = ls_observer_speed(&d->obs);
-    cmd->v_fb = omega * d->inv_kx;
-    cmd->f_load_est = d->obs.f_load;
-    cmd->err_sig = d->demod.err;
-    cmd->err_valid = d->demod.valid;
-    cmd->hf_level = d->demod.level;
-    cmd->psi_comp = d->demod.psi;
-    cmd->i_dq[0] = i_d;
-    cmd->i_dq[1] = i_q;
-    cmd->i_dq_ref[0] = d->i_d_ref;
-    cmd->i_dq_ref[1] = i_q_ref;
-    cmd->v_dq[0] = v_d;
-    cmd->v_dq[1] = v_q;
-    cmd->v_hf = v_hf;
-    cmd->cal_index = d->cal_index;
-    cmd->cal_done = false;
-    cmd->psi_cal = d->psi_cal;
+    ls_drive_cmd_(cmd, d, duty, d->mode, pos, x_ref, omega * d->inv_kx, i_d, i_q, d->i_d_ref, i_q_ref, v_d, v_q,
+                  v_hf, d->cal_index, false, d->psi_cal);
 }

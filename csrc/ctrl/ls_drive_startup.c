@@ -4,6 +4,7 @@
 
 #include "linsense/ls_drive.h"
 #include "linsense/ls_math.h"
+#include "ls_drive_cmd.h"
 
 /* The HF chain of the sensorless modes (separation, residual, band-pass, demodulator with the
  * table, observer) with zero current references instead of the position loop; during the pulses
@@ -105,33 +106,8 @@ ls_startup_phase ls_drive_startup_step_(ls_drive *d, const ls_meas *meas, ls_cmd
         ls_protect_trip(&d->prot, LS_FAULT_NONFINITE);
         return LS_SU_FAILED;
     }
-    /* every field exactly once (as ls_drive_step) */
-    cmd->duty[0] = duty[0];
-    cmd->duty[1] = duty[1];
-    cmd->duty[2] = duty[2];
-    cmd->enable = true;
-    cmd->fault = d->prot.fault;
-    cmd->mode = LS_MODE_STARTUP;
-    cmd->pos_fb = d->obs.pos;
-    cmd->pos_est = d->obs.pos;
-    cmd->pos_ref = d->obs.pos;
-    cmd->v_est = ls_observer_speed(&d->obs);
-    cmd->v_fb = cmd->v_est;
-    cmd->f_load_est = d->obs.f_load;
-    cmd->err_sig = d->demod.err;
-    cmd->err_valid = d->demod.valid;
-    cmd->hf_level = d->demod.level;
-    cmd->psi_comp = d->demod.psi;
-    cmd->i_dq[0] = i_d;
-    cmd->i_dq[1] = i_q;
-    cmd->i_dq_ref[0] = LS_R(0.0);
-    cmd->i_dq_ref[1] = LS_R(0.0);
-    cmd->v_dq[0] = v_d;
-    cmd->v_dq[1] = v_q;
-    cmd->v_hf = v_hf;
-    cmd->cal_index = 0u;
-    cmd->cal_done = false;
-    cmd->psi_cal = LS_R(0.0);
+    ls_drive_cmd_(cmd, d, duty, LS_MODE_STARTUP, d->obs.pos, d->obs.pos, ls_observer_speed(&d->obs), i_d, i_q,
+                  LS_R(0.0), LS_R(0.0), v_d, v_q, v_hf, 0u, false, LS_R(0.0));
     return ph;
 }
 
