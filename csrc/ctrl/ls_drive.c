@@ -137,6 +137,8 @@ ls_status ls_drive_init(ls_drive *d, const ls_drive_cfg *cfg)
     memset(d, 0, sizeof *d);
     if (!pos_finite(cfg->fs) || !pos_finite(cfg->pole_pitch) || !pos_finite(cfg->force_constant) ||
         !pos_finite(cfg->i_max) || !LS_ISFINITE(cfg->i_d_inj) || !(LS_FABS(cfg->i_d_inj) < cfg->i_max) ||
+        !LS_ISFINITE(cfg->i_d_near) || !(LS_FABS(cfg->i_d_near) < cfg->i_max) || !(cfg->near_in >= LS_R(0.0)) ||
+        !(cfg->near_out >= cfg->near_in) || !(cfg->near_out < LS_PI / LS_R(6.0)) ||
         !LS_ISFINITE(cfg->delay_comp) || cfg->delay_comp < LS_R(0.0) ||
         cfg->enc_counts <= 0 || !pos_finite(cfg->enc_v_max) || cfg->fs > LS_DRIVE_FS_MAX ||
         cfg->i_max > LS_DRIVE_I_MAX || cfg->prot.i_max > LS_DRIVE_I_MAX || cfg->prot.v_dc_max > LS_DRIVE_V_DC_MAX ||
@@ -218,6 +220,11 @@ ls_status ls_drive_init(ls_drive *d, const ls_drive_cfg *cfg)
     if (cfg->cal.dither_amp > LS_R(0.0)) {
         ls_sincos_full(LS_TWO_PI * cfg->cal.dither_freq * d->ts, &d->cal_dc, &d->cal_ds);
     }
+    if (cfg->near_out > LS_R(0.0)) { /* |cos(3 theta)| = |sin(3 e)|, e the distance to pi/6 + k pi/3 */
+        LS_REAL c_unused;
+        ls_sincos_full(LS_R(3.0) * cfg->near_in, &c_unused, &d->near_c3_in);
+        ls_sincos_full(LS_R(3.0) * cfg->near_out, &c_unused, &d->near_c3_out);
+    }
     d->initialised = true;
     ls_drive_reset(d, zero);
     return LS_OK;
@@ -239,9 +246,10 @@ static void mode_set(ls_drive *d, ls_mode mode)
                mode == LS_MODE_CALIBRATION || (mode == LS_MODE_SENSORED && d->cfg.inject_sensored);
     d->v_hf_max = d->hf_on ? d->cfg.inject.amplitude : LS_R(0.0);
     d->i_d_ref = d->hf_on ? d->cfg.i_d_inj : LS_R(0.0);
-    d->rot_fast = (mode == LS_MODE_SENSORLESS_LUT || mode == LS_MODE_SENSORLESS_NOLUT) &&
-                  d->cfg.inject.shape == LS_INJ_ROTATING && d->cfg.sep.type == LS_BIQUAD_NOTCH &&
-                  d->cfg.sep.f0 == d->cfg.bpf.f0 && d->cfg.sep.q == d->cfg.bpf.q;
+    d->fast = (mode == LS_MODE_SENSORLESS_LUT || mode == LS_MODE_SENSORLESS_NOLUT) &&
+              ((d->cfg.inject.shape == LS_INJ_ROTATING && d->cfg.sep.type == LS_BIQUAD_NOTCH &&
+                d->cfg.sep.f0 == d->cfg.bpf.f0 && d->cfg.sep.q == d->cfg.bpf.q) ||
+               d->cfg.inject.shape == LS_INJ_SQUARE);
     d->enc_have_prev = false; /* the encoder's jump check starts again */
 }
 
@@ -558,8 +566,8 @@ void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
         cmd->fault = LS_FAULT_CONFIG;
         return;
     }
-    if (d->rot_fast) { /* the rotating injection's sensorless path (ls_drive_rotating.c) */
-        ls_drive_rot_step_(d, meas, cmd);
+    if (d->fast) { /* the rotating vector's and the square wave's sensorless paths */
+        ls_drive_fast_step_(d, meas, cmd);
         return;
     }
     cfg = &d->cfg;

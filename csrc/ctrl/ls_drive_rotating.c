@@ -6,19 +6,31 @@
  *     the band-passed current is the current less its fundamental, and the dead-time residual's
  *     current is taken out of it unfiltered (required: sep the notch at bpf's f0 and q);
  *   - no encoder, calibration or elliptical branches (sensorless only).
- * ls_drive.c dispatches here (d->rot_fast) and keeps every other mode and shape. */
+ * ls_drive.c dispatches here (d->fast, ls_drive_fast_step_, which also runs the square wave's step) and keeps every other mode and shape. */
 #include <math.h>
 #include <string.h>
 
 #include "linsense/ls_drive.h"
 #include "linsense/ls_math.h"
 #include "ls_drive_cmd.h"
+#include "ls_drive_path.h"
 
-void ls_drive_rot_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
+static void rot_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd);
+
+void ls_drive_fast_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
+{
+    if (d->cfg.inject.shape == LS_INJ_SQUARE) {
+        ls_drive_sq_step_(d, meas, cmd); /* (ls_drive_square.c) */
+    } else {
+        rot_step(d, meas, cmd);
+    }
+}
+
+static void rot_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
 {
     const ls_drive_cfg *cfg = &d->cfg;
     LS_REAL i_a, i_b, ihf_a, ihf_b, if_a, if_b, c_est, s_est, v_hf, v_d, v_q, v_a, v_b, dlt, c_adv, s_adv;
-    LS_REAL i_d, i_q, i_q_ref, v_lim, omega, x_err, v_ff, a_ff, f, err, e_obs, duty[3];
+    LS_REAL i_d, i_q, i_q_ref, v_lim, omega, err, duty[3];
     ls_pos x_ref, pos;
     uint32_t fault = ls_protect_check_power(&d->prot, meas->i_abc, meas->v_dc);
 
@@ -28,18 +40,7 @@ void ls_drive_rot_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
     }
     i_a = meas->i_abc[0];
     i_b = (meas->i_abc[1] - meas->i_abc[2]) * (LS_R(1.0) / LS_SQRT3);
-    if (d->align) {
-        ls_traj_reset(&d->traj, d->obs.pos);
-        if (d->pending) {
-            d->pending = false;
-            if (d->pending_move) {
-                ls_traj_move(&d->traj, d->pending_target);
-            } else {
-                ls_traj_jump(&d->traj, d->pending_target);
-            }
-        }
-        d->align = false;
-    }
+    ls_drive_path_align_(d);
     ls_sincos(d->obs.pos.theta, &c_est, &s_est);
 
     /* the fundamental (notch), and the HF current as its complement less the residual's */
@@ -58,10 +59,7 @@ void ls_drive_rot_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
     /* negative-sequence demodulation and observer (the error counts once the injection is up) */
     err = ls_demod_step_cs(&d->demod, ihf_a, ihf_b, d->obs.pos.theta, c_est, s_est, d->inj.c, d->inj.s,
                            LS_R(0.0));
-    e_obs = d->inj.amp >= cfg->inject.amplitude ? err : LS_R(0.0);
-    ls_observer_step_finite(&d->obs, e_obs, d->f_ref);
-    ls_protect_check_observer(&d->prot, e_obs, d->demod.valid, d->obs.omega);
-    if (d->prot.fault != LS_FAULT_NONE) {
+    if (ls_drive_path_observe_(d, err)) {
         ls_drive_disable_report_(d, cmd, d->prot.fault);
         return;
     }
@@ -69,11 +67,7 @@ void ls_drive_rot_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
     omega = d->obs.omega;
 
     /* position reference and control -> force -> current reference */
-    ls_traj_step(&d->traj, &x_ref, &v_ff, &a_ff);
-    x_err = ls_pos_diff(x_ref, pos) * d->inv_kx;
-    f = ls_posctrl_step_finite(&d->pos, x_err, omega * d->inv_kx, v_ff, a_ff);
-    i_q_ref = ls_clamp(f * d->inv_kf, -cfg->i_max, cfg->i_max);
-    d->f_ref = i_q_ref * cfg->force_constant;
+    i_q_ref = ls_drive_path_force_(d, pos, omega, &x_ref);
 
     /* current control in the estimated frame */
     i_d = c_est * if_a + s_est * if_b;

@@ -11,7 +11,8 @@ ls_status ls_mod_init(ls_mod *m, const ls_mod_cfg *cfg)
     if (!LS_ISFINITE(cfg->f_pwm) || !LS_ISFINITE(cfg->dead_time) || !LS_ISFINITE(cfg->i_band) ||
         !(cfg->f_pwm > LS_R(0.0)) || cfg->dead_time < LS_R(0.0) ||
         cfg->dead_time * cfg->f_pwm >= LS_R(0.1) || !(cfg->i_band > LS_R(0.0)) || !LS_ISFINITE(cfg->dtc_lead) ||
-        cfg->dtc_lead < LS_R(-1.0) || cfg->dtc_lead > LS_R(4.0)) {
+        cfg->dtc_lead < LS_R(-1.0) || cfg->dtc_lead > LS_R(4.0) || !LS_ISFINITE(cfg->l_ripple) ||
+        cfg->l_ripple < LS_R(0.0)) {
         return LS_ERR_PARAM;
     }
     m->cfg = *cfg;
@@ -19,6 +20,7 @@ ls_status ls_mod_init(ls_mod *m, const ls_mod_cfg *cfg)
     m->inv_band = LS_R(1.0) / cfg->i_band;
     m->k_now = (LS_R(1.0) + cfg->dtc_lead) * m->inv_band;
     m->k_prev = cfg->dtc_lead * m->inv_band;
+    m->k_rip = cfg->l_ripple > LS_R(0.0) ? m->inv_band / (cfg->f_pwm * cfg->l_ripple) : LS_R(0.0);
     ls_mod_reset(m);
     return LS_OK;
 }

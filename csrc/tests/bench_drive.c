@@ -63,6 +63,11 @@ int main(int argc, char **argv)
         cfg.mod.dtc_lead = -0.5f;
         cfg.hf_dtres = false; /* (not with the square wave: i_d_inj instead) */
         cfg.i_d_inj = 1.0f;
+        cfg.mod.l_ripple = 4.0e-3f; /* the edges' ripple in the compensation */
+        cfg.mod.i_band = 0.01f;
+        cfg.i_d_near = 0.124f; /* the d-current schedule near the normal positions */
+        cfg.near_in = 0.0617f;
+        cfg.near_out = 0.1187f;
         cfg.demod.gain_table = argc > 4 && atoi(argv[4]) != 0 ? &lut_g : NULL;
         for (j = 0; j < 64; ++j) {
             gain_tab[j] = (float)cfg.demod.gain; /* the nominal L_q / (L_q - L_d) */

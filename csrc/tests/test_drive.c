@@ -90,6 +90,19 @@ static void test_refusals(void)
     LS_CHECK(ls_drive_init(&d, &bad) == LS_ERR_PARAM);
     bad = cfg; bad.i_max = (LS_REAL)NAN;
     LS_CHECK(ls_drive_init(&d, &bad) == LS_ERR_PARAM);
+    /* the d-current schedule: 0 <= near_in <= near_out < pi/6, |i_d_near| < i_max */
+    bad = cfg; bad.near_in = LS_R(0.1); bad.near_out = LS_R(0.05);
+    LS_CHECK(ls_drive_init(&d, &bad) == LS_ERR_PARAM);
+    bad = cfg; bad.near_out = LS_R(0.53);
+    LS_CHECK(ls_drive_init(&d, &bad) == LS_ERR_PARAM);
+    bad = cfg; bad.near_in = LS_R(-0.01); bad.near_out = LS_R(0.1);
+    LS_CHECK(ls_drive_init(&d, &bad) == LS_ERR_PARAM);
+    bad = cfg; bad.near_out = (LS_REAL)NAN;
+    LS_CHECK(ls_drive_init(&d, &bad) == LS_ERR_PARAM);
+    bad = cfg; bad.i_d_near = cfg.i_max;
+    LS_CHECK(ls_drive_init(&d, &bad) == LS_ERR_PARAM);
+    bad = cfg; bad.i_d_near = (LS_REAL)NAN;
+    LS_CHECK(ls_drive_init(&d, &bad) == LS_ERR_PARAM);
     LS_CHECK(ls_drive_init(NULL, &cfg) == LS_ERR_NULL);
     /* modes that need what the configuration lacks */
     LS_CHECK(ls_drive_init(&d, &cfg) == LS_OK);
@@ -409,6 +422,55 @@ static void test_calibration(void)
     LS_CHECK(worst < 0.3 * DEG);
 }
 
+/* The square wave's d-current schedule (ls_drive_cfg.i_d_near, near_in, near_out): i_d_near within
+ * near_in of the positions pi/6 + k pi/3, i_d_inj beyond near_out, the last one in between
+ * (hysteresis); judged on the estimate the step used. */
+static void test_square_schedule(void)
+{
+    static const double deg[] = {30.0, 35.0, 38.0, 35.0, 32.0, 35.0, 90.0 + 6.5, 90.0 + 7.5, 270.0 - 2.0, 0.0};
+    static const int near[] = {1, 1, 0, 0, 1, 1, 1, 0, 1, 0};
+    ls_drive d;
+    ls_drive_cfg cfg;
+    ls_cmd c;
+    ls_meas m;
+    unsigned k;
+    ls_drive_default_cfg(&cfg);
+    cfg.inject.shape = LS_INJ_SQUARE;
+    cfg.inject.quad = LS_R(0.0);
+    cfg.inject.freq = LS_R(0.5) * cfg.fs;
+    cfg.bpf.type = LS_BIQUAD_DIFF;
+    cfg.sep.type = LS_BIQUAD_LOWPASS;
+    cfg.sep.f0 = LS_R(2000.0);
+    cfg.demod.f_notch = LS_R(0.0);
+    cfg.hf_dtres = false;
+    cfg.mod.l_ripple = LS_R(4.0e-3);
+    cfg.i_d_inj = LS_R(0.9);
+    cfg.i_d_near = LS_R(0.12);
+    cfg.near_in = (LS_REAL)(3.5 * DEG);
+    cfg.near_out = (LS_REAL)(7.0 * DEG);
+    LS_CHECK(ls_drive_init(&d, &cfg) == LS_OK);
+    LS_CHECK(ls_drive_set_mode(&d, LS_MODE_SENSORLESS_NOLUT) == LS_OK);
+    memset(&m, 0, sizeof m);
+    m.v_dc = LS_R(72.0);
+    for (k = 0; k < sizeof deg / sizeof deg[0]; ++k) {
+        ls_pos p = {0, (LS_REAL)(deg[k] * DEG)};
+        LS_CHECK(ls_drive_set_position(&d, p) == LS_OK);
+        ls_drive_step(&d, &m, &c);
+        LS_CHECK(c.enable && c.fault == LS_FAULT_NONE);
+        LS_CHECK_NEAR(c.i_dq_ref[0], near[k] ? 0.12 : 0.9, 1e-6);
+    }
+    /* without a schedule (near_out = 0), i_d_inj everywhere */
+    cfg.near_in = cfg.near_out = LS_R(0.0);
+    LS_CHECK(ls_drive_init(&d, &cfg) == LS_OK);
+    LS_CHECK(ls_drive_set_mode(&d, LS_MODE_SENSORLESS_NOLUT) == LS_OK);
+    {
+        ls_pos p = {0, (LS_REAL)(30.0 * DEG)};
+        LS_CHECK(ls_drive_set_position(&d, p) == LS_OK);
+        ls_drive_step(&d, &m, &c);
+        LS_CHECK_NEAR(c.i_dq_ref[0], 0.9, 1e-6);
+    }
+}
+
 int main(void)
 {
     test_refusals();
@@ -420,5 +482,6 @@ int main(void)
     test_sensorless_move();
     test_observer_loss();
     test_calibration();
+    test_square_schedule();
     return ls_test_report("test_drive");
 }

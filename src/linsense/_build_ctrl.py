@@ -216,11 +216,13 @@ ls_status ls_dtres_init(ls_dtres *r, const ls_dtres_cfg *cfg);
 void ls_dtres_reset(ls_dtres *r);
 
 /* ls_modulator.h */
-typedef struct { LS_REAL f_pwm; LS_REAL dead_time; bool dtc; LS_REAL i_band; LS_REAL dtc_lead; } ls_mod_cfg;
+typedef struct {
+    LS_REAL f_pwm; LS_REAL dead_time; bool dtc; LS_REAL i_band; LS_REAL dtc_lead; LS_REAL l_ripple;
+} ls_mod_cfg;
 typedef struct { LS_REAL d[3]; LS_REAL c[3]; } ls_mod_hist;
 typedef struct {
     ls_mod_cfg cfg; LS_REAL d_dead; LS_REAL i_prev[3]; bool have_prev; LS_REAL inv_band;
-    LS_REAL k_now; LS_REAL k_prev; ls_mod_hist hist[2]; uint32_t newest;
+    LS_REAL k_now; LS_REAL k_prev; LS_REAL k_rip; ls_mod_hist hist[2]; uint32_t newest;
 } ls_mod;
 ls_status ls_mod_init(ls_mod *m, const ls_mod_cfg *cfg);
 void ls_mod_reset(ls_mod *m);
@@ -316,6 +318,7 @@ typedef struct {
     ls_protect_cfg prot;
     ls_cal_cfg cal;
     LS_REAL i_d_inj;
+    LS_REAL i_d_near; LS_REAL near_in; LS_REAL near_out;
     ls_startup_cfg startup;
 } ls_drive_cfg;
 typedef struct {

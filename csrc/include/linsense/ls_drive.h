@@ -125,6 +125,14 @@ typedef struct {
     LS_REAL i_d_inj;        /* A, d-axis current reference while the HF injection is on (0: none): keeps
                                the phase currents off zero, where the dead time would act on the
                                square wave's current change (docs/firmware.md), |i_d_inj| < i_max */
+    LS_REAL i_d_near;       /* A, d-current reference while injecting near the six positions per period
+                               where the estimated d-axis is normal to a phase axis (theta = pi/6 + k
+                               pi/3), whose phase current then lies in the dead time's relay band
+                               (docs/theory.md); |i_d_near| < i_max */
+    LS_REAL near_in;        /* rad, electrical angle from the nearest of those positions below which
+                               i_d_near replaces i_d_inj, [0, near_out] */
+    LS_REAL near_out;       /* rad, ... above which i_d_inj returns (the hysteresis), < pi/6; 0: no
+                               such schedule (i_d_inj everywhere) */
     ls_startup_cfg startup; /* start-up with the magnet polarity (startup.pairs = 0: none, and
                                LS_MODE_STARTUP refused); startup.fs = fs */
 } ls_drive_cfg;
@@ -207,9 +215,13 @@ typedef struct {
     bool enc_have_prev;  /* enc_prev holds the last sample's count */
     int32_t enc_prev;    /* -, encoder count of the last sample (encoder modes) */
     int64_t enc_jump_max; /* -, largest plausible count change per step (>= 1) */
-    LS_REAL i_d_ref;     /* A, d-current reference (cfg.i_d_inj with hf_on, else 0) */
-    bool rot_fast;       /* a sensorless mode with the rotating injection and sep the notch at bpf's
-                            f0 and q: ls_drive_step runs ls_drive_rot_step_ */
+    LS_REAL i_d_ref;     /* A, d-current reference (cfg.i_d_inj with hf_on, else 0; i_d_near near the
+                            positions of cfg.near_in) */
+    LS_REAL near_c3_in;  /* -, sin(3 near_in): |cos(3 theta_est)| below it is near */
+    LS_REAL near_c3_out; /* -, sin(3 near_out) (0: no schedule) */
+    bool fast;           /* a sensorless mode with a step of its own, ls_drive_fast_step_: the
+                            rotating injection with sep the notch at bpf's f0 and q, or the square
+                            wave */
     /* LS_MODE_STARTUP: while it runs, mode holds LS_MODE_OFF and starting is set, so that
      * ls_drive_step's other modes pay nothing for it (it is dispatched from the outputs-off branch) */
     bool starting;       /* the start-up sequence runs (cmd.mode reports LS_MODE_STARTUP) */
@@ -253,8 +265,10 @@ void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd);
 /* Internal: ls_drive_step's LS_MODE_STARTUP path (csrc/ctrl/ls_drive_startup.c); not an API. */
 ls_startup_phase ls_drive_startup_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd);
 /* Internal: ls_drive_step in the sensorless modes with the rotating injection
- * (csrc/ctrl/ls_drive_rotating.c), and the outputs-off helpers it shares; not an API. */
-void ls_drive_rot_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd);
+ * (csrc/ctrl/ls_drive_rotating.c) or the square wave (csrc/ctrl/ls_drive_square.c), and the
+ * outputs-off helpers they share; not an API. ls_drive_fast_step_ runs the one of the shape. */
+void ls_drive_fast_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd);
+void ls_drive_sq_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd);
 void ls_drive_disable_(ls_drive *d, ls_cmd *cmd, uint32_t fault);
 void ls_drive_disable_report_(ls_drive *d, ls_cmd *cmd, uint32_t fault);
 

@@ -9,7 +9,9 @@
  * current extrapolated dtc_lead periods ahead, i_pred = i + dtc_lead (i - i_prev) (1.5: the
  * middle of the next period). With HF injection the current crosses zero twice per injection
  * period; without the lead the compensation is wrong around every crossing and biases the
- * position estimate by several degrees (measured with the simulator).
+ * position estimate by several degrees (measured with the simulator). ls_mod_step_ripple_finite
+ * also puts each leg's two edges apart by the PWM ripple (cfg.l_ripple): a small current that
+ * straddles zero between them loses no dead time (the square wave's relay band, docs/theory.md).
  */
 #ifndef LINSENSE_LS_MODULATOR_H
 #define LINSENSE_LS_MODULATOR_H
@@ -24,6 +26,9 @@ typedef struct {
     LS_REAL dtc_lead;  /* -, periods of current extrapolation for the compensation sign, [-1, 4]
                           (-0.5 with the square wave at fs/2, whose current change reverses every
                           period: the middle of the next period is then i - (i - i_prev)/2) */
+    LS_REAL l_ripple;  /* H, >= 0: the phase inductance of the PWM current ripple that
+                          ls_mod_step_ripple_finite puts on each leg's two edges (0: both edges at
+                          the predicted current; ls_mod_step and ls_mod_step_finite ignore it) */
 } ls_mod_cfg;
 
 /* One step's duties as the inverter applies them, and the compensation they contain. */
@@ -40,6 +45,7 @@ typedef struct {
     LS_REAL inv_band;  /* 1/A, 1 / i_band */
     LS_REAL k_now;     /* 1/A, (1 + dtc_lead) / i_band: i_pred / i_band = k_now i - k_prev i_prev */
     LS_REAL k_prev;    /* 1/A, dtc_lead / i_band */
+    LS_REAL k_rip;     /* 1/(A V), T / (l_ripple i_band): the ripple in bands per volt of bus (0: none) */
     ls_mod_hist hist[2]; /* the last two steps ([newest] and [newest ^ 1]); after a reset, legs
                           * that did not switch (d = 0) */
     uint32_t newest;     /* -, index of the last step's entry (0 or 1) */
@@ -224,6 +230,58 @@ static inline bool ls_mod_step_finite(ls_mod *m, LS_REAL v_a, LS_REAL v_b, LS_RE
                                       const LS_REAL i_abc[3], LS_REAL duty[3])
 {
     return ls_mod_step_impl(m, v_a, v_b, v_dc, i_abc, duty, false);
+}
+
+/* ls_mod_step_finite with each leg's two edges apart by the PWM ripple in the dead-time
+ * compensation (cfg.l_ripple; with 0 it is ls_mod_step_finite): the current at leg k's turn-on
+ * edge (1 - d_k) T/2 lies s_k = (V_dc T / L)((d_k - d_mean)/4 + A_k/12) below the predicted
+ * mid-period current i_pred and the turn-off edge as far above (the average ramp and the PWM
+ * ripple; d the duties before the compensation, d_mean their mean, A_k = sum_j |d_j - d_k|, as in
+ * ls_mod_residual), and each edge loses or gains the dead time by its own sign. A phase current
+ * within s_k of zero loses nothing at either edge; where s_k differs between the square wave's two
+ * half periods, a current between the two loses the dead time in one of them only, in step with
+ * the carrier (docs/theory.md, "The dead time and the square wave"). The compensation is then
+ * t_dead f_pwm (sat((i_pred - s_k)/i_band) + sat((i_pred + s_k)/i_band))/2 instead of
+ * t_dead f_pwm sat(i_pred/i_band); it replaces the one ls_mod_step_finite added (a clamped leg
+ * keeps it). Separate from ls_mod_step_finite so that its callers compile without it. */
+static inline bool ls_mod_step_ripple_finite(ls_mod *m, LS_REAL v_a, LS_REAL v_b, LS_REAL v_dc,
+                                             const LS_REAL i_abc[3], LS_REAL duty[3])
+{
+    const bool rip = m->cfg.dtc && m->have_prev && m->k_rip > LS_R(0.0);
+    /* the predicted currents in bands, before the step replaces i_prev */
+    const LS_REAL x0 = m->k_now * i_abc[0] - m->k_prev * m->i_prev[0];
+    const LS_REAL x1 = m->k_now * i_abc[1] - m->k_prev * m->i_prev[1];
+    const LS_REAL x2 = m->k_now * i_abc[2] - m->k_prev * m->i_prev[2];
+    bool clipped = ls_mod_step_impl(m, v_a, v_b, v_dc, i_abc, duty, false);
+    ls_mod_hist *h = &m->hist[m->newest]; /* the entry the step has just written */
+    const LS_REAL c0 = h->c[0], c1 = h->c[1], c2 = h->c[2];
+    const LS_REAL d0 = duty[0], d1 = duty[1], d2 = duty[2];
+    if (rip && d0 > LS_R(0.0) && d0 < LS_R(1.0) && d1 > LS_R(0.0) && d1 < LS_R(1.0) && d2 > LS_R(0.0) &&
+        d2 < LS_R(1.0)) { /* (a leg clamped at 0 or 1 keeps what the step gave it: rare) */
+        const LS_REAL b0 = d0 - c0, b1 = d1 - c1, b2 = d2 - c2; /* the duties without compensation */
+        const LS_REAL kv = m->k_rip * v_dc;
+        const LS_REAL dm = (b0 + b1 + b2) * (LS_R(1.0) / LS_R(3.0));
+        const LS_REAL a01 = LS_FABS(b0 - b1) * (LS_R(1.0) / LS_R(12.0));
+        const LS_REAL a02 = LS_FABS(b0 - b2) * (LS_R(1.0) / LS_R(12.0));
+        const LS_REAL a12 = LS_FABS(b1 - b2) * (LS_R(1.0) / LS_R(12.0));
+        const LS_REAL s0 = kv * ((b0 - dm) * LS_R(0.25) + a01 + a02);
+        const LS_REAL s1 = kv * ((b1 - dm) * LS_R(0.25) + a01 + a12);
+        const LS_REAL s2 = kv * ((b2 - dm) * LS_R(0.25) + a02 + a12);
+        const LS_REAL hd = LS_R(0.5) * m->d_dead;
+        const LS_REAL n0 = hd * (ls_clamp(x0 - s0, LS_R(-1.0), LS_R(1.0)) + ls_clamp(x0 + s0, LS_R(-1.0), LS_R(1.0)));
+        const LS_REAL n1 = hd * (ls_clamp(x1 - s1, LS_R(-1.0), LS_R(1.0)) + ls_clamp(x1 + s1, LS_R(-1.0), LS_R(1.0)));
+        const LS_REAL n2 = hd * (ls_clamp(x2 - s2, LS_R(-1.0), LS_R(1.0)) + ls_clamp(x2 + s2, LS_R(-1.0), LS_R(1.0)));
+        const LS_REAL e0 = b0 + n0, e1 = b1 + n1, e2 = b2 + n2;
+        clipped = clipped || e0 > LS_R(1.0) || e0 < LS_R(0.0) || e1 > LS_R(1.0) || e1 < LS_R(0.0) ||
+                  e2 > LS_R(1.0) || e2 < LS_R(0.0);
+        h->d[0] = duty[0] = ls_clamp(e0, LS_R(0.0), LS_R(1.0));
+        h->d[1] = duty[1] = ls_clamp(e1, LS_R(0.0), LS_R(1.0));
+        h->d[2] = duty[2] = ls_clamp(e2, LS_R(0.0), LS_R(1.0));
+        h->c[0] = n0;
+        h->c[1] = n1;
+        h->c[2] = n2;
+    }
+    return clipped;
 }
 
 #endif /* LINSENSE_LS_MODULATOR_H */

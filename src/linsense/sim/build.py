@@ -31,10 +31,12 @@ from linsense.sim.plant import fill_saturation, lab_fourier
 from linsense.sim.scenario import Scenario
 from linsense.tune.design import DriveData, current_gains, design, error_gain, mean_dq, speed_gains
 from linsense.tune.injection import (
+    SQUARE_DTC_BAND,
     SQUARE_DTC_LEAD,
     SQUARE_SEP_FRACTION,
     injection_tables,
     rotating_design,
+    square_current_schedule,
     square_d_current,
 )
 
@@ -415,6 +417,14 @@ def build(sc: Scenario, motor: Motor | None = None, trace_in_memory: bool = True
         # the current change reverses every period: the dead-time compensation's sign is taken
         # from the middle of the next period, i - (i - i_prev) / 2 (ls_modulator.h)
         d.mod.dtc_lead = SQUARE_DTC_LEAD
+        # against the dead time where a phase current is small (docs/theory.md, "The dead time and
+        # the square wave"): the compensation with the edges' ripple, and the d-current schedule
+        if inj.dead_time_measures:
+            l_avg = 0.5 * (known["L_d"] + known["L_q"])
+            d.mod.l_ripple = l_avg
+            sched = square_current_schedule(l_avg, known["R_s"], inj.amplitude, fs, d.i_d_inj)
+            if sched is not None:
+                d.i_d_near, d.near_in, d.near_out = sched["i_d_near"], sched["near_in"], sched["near_out"]
     d.obs.type = lib.LS_OBS_PLL if obs.type == "pll" else lib.LS_OBS_MECH
     d.obs.pole_pitch = tau
     d.obs.mass = known["mass"]
@@ -448,7 +458,8 @@ def build(sc: Scenario, motor: Motor | None = None, trace_in_memory: bool = True
     d.mod.f_pwm = fs
     d.mod.dead_time = inv.dead_time
     d.mod.dtc = inv.dead_time_compensation
-    d.mod.i_band = inv.dtc_current_band
+    d.mod.i_band = (SQUARE_DTC_BAND if shape == "square" and inj.dead_time_measures
+                    and "dtc_current_band" not in inv.model_fields_set else inv.dtc_current_band)
     d.hf_dtres = obs.dead_time_residual
     d.dtres.r_s, d.dtres.l_d, d.dtres.l_q = known["R_s"], known["L_d"], known["L_q"]
     d.dtres.ripple = obs.dead_time_ripple

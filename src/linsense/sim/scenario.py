@@ -114,6 +114,10 @@ class InjectionSection(BaseModel):
     # A, d-current reference while injecting (default: the design's, 0 except for the square wave,
     # whose current change the dead time would bias at zero current; docs/firmware.md)
     d_current: float | None = None
+    # the square wave's measures against the dead time where a phase current is small: the
+    # compensation with the edges' PWM ripple and the d-current schedule near the positions where
+    # the d-axis is normal to a phase axis (docs/theory.md, "The dead time and the square wave")
+    dead_time_measures: bool = True
 
 
 class ObserverSection(BaseModel):
@@ -342,6 +346,9 @@ class ScenarioFile(BaseModel):
                 raise KeyProblem("injection.frequency",
                                  f"the square wave is at f_pwm / 2 = {inv.f_pwm / 2:g} Hz "
                                 f"(leave the key out), got {inj.frequency:g}")
+        elif "dead_time_measures" in inj.model_fields_set:
+            raise KeyProblem("injection.dead_time_measures", f"only with shape = \"square\", got shape = "
+                            f"{inj.shape!r}")
         elif "frequency" in self.injection.model_fields_set and self.injection.frequency * 4 > inv.f_pwm:
             raise KeyProblem("injection.frequency", f"must be <= f_pwm / 4 = {inv.f_pwm / 4:g} Hz, "
                             f"got {self.injection.frequency:g}")

@@ -35,6 +35,15 @@ SQUARE_DTC_LEAD = -0.5
 #: phase currents off zero, where the dead time would act on the current change in step with the
 #: square wave (measured on the switching model: up to 8 deg of bias without it; docs/firmware.md)
 SQUARE_D_FRACTION = 0.4
+#: the dead-time compensation's current band with the square wave (A): its edge-ripple model
+#: (ls_mod_step_ripple_finite) knows the sign at each edge, so the smooth sign can be narrow
+SQUARE_DTC_BAND = 0.01
+#: the margin (A) the square wave's d-current schedule keeps every phase current from the edges of
+#: the dead time's relay band (:func:`square_current_schedule`): the force current at a no-load
+#: hold and the compensation's prediction error
+SQUARE_DT_MARGIN = 0.01
+#: the smallest hysteresis (rad) of the schedule; a design with less is refused
+SQUARE_MIN_HYSTERESIS = math.radians(1.0)
 #: the rotating demodulator's validity threshold, as a fraction of the model's smallest |i_n|^2 over
 #: the period (the end-effect makes it vary: 8 % to 193 % of its mean for ecce2010)
 ROTATING_LEVEL_FRACTION = 0.25
@@ -89,6 +98,50 @@ def injection_tables(motor: Motor, shape: str, n: int, f_inj: float | None) -> t
 def square_d_current(i_max: float) -> float:
     """The square wave's d-current reference while injecting (A): ``SQUARE_D_FRACTION i_max``."""
     return SQUARE_D_FRACTION * i_max
+
+
+def square_current_schedule(l_avg: float, R_s: float, v_inj: float, f_pwm: float, i_d_far: float,
+                            margin: float = SQUARE_DT_MARGIN) -> dict | None:
+    """The square wave's d-current schedule against the dead time (docs/theory.md, "The dead time
+    and the square wave"): ``{"i_d_near", "near_in", "near_out"}`` (A, rad, rad), or ``None`` where
+    no schedule with ``SQUARE_MIN_HYSTERESIS`` exists.
+
+    At standstill a leg's two edges lie ``-+s`` about its mid-period current (ramp and PWM ripple,
+    ``ls_mod_step_ripple_finite``); a phase current within ``s`` loses no dead time, beyond it the
+    whole. Where the estimated d-axis is normal to a phase axis (``theta = pi/6 + k pi/3``) that
+    phase carries no d-current and, with the square wave's d-voltage ``v = +-V + R_s i_d`` in the
+    two half periods, ``s = k |v|``, ``k = sqrt(3) T / (12 L)``: a current between ``k (V - R_s
+    i_d)`` and ``k (V + R_s i_d)`` loses the dead time in one half period only, in step with the
+    carrier, and the demodulated error follows its sign (a relay in the loop). The schedule keeps
+    the phase current out of that band, with ``margin``, at a distance ``e`` from those positions:
+
+    - far (``e >= near_in``) with ``i_d_far``: ``i_d_far sin(e) >= k (V + R_s i_d_far) + margin``;
+    - near (``e <= near_out``) with ``i_d_near``: ``i_d_near sin(e) + margin <= k (V - R_s
+      i_d_near)``, while the two other phases, at ``cos(pi/6 + e)`` of the d-current, stay beyond
+      their own edges' reach in either half, ``(T/L)(sqrt(3)/4)(V + R_s i_d_near) + margin``.
+
+    ``l_avg`` (H) is the inductance of the compensation's ripple model, ``(L_d + L_q) / 2``.
+    """
+    T = 1.0 / f_pwm
+    k = math.sqrt(3.0) * T / (12.0 * l_avg)
+    k_other = (T / l_avg) * math.sqrt(3.0) / 4.0
+    far = (k * (v_inj + R_s * abs(i_d_far)) + margin) / abs(i_d_far) if i_d_far else math.inf
+    if not far < 1.0:
+        return None
+    near_in = math.asin(far)
+    near_out, i_near = math.radians(10.0), 0.0
+    for _ in range(50):  # the two near conditions depend on each other: a fixed point
+        den = math.cos(math.pi / 6.0 + near_out) - k_other * R_s
+        if not den > 0.0:
+            return None
+        i_near = (k_other * v_inj + margin) / den
+        x = (k * (v_inj - R_s * i_near) - margin) / i_near
+        if not 0.0 < x < 0.5:
+            return None
+        near_out = min(math.asin(x), math.pi / 6.0 - 1e-3)
+    if near_out - near_in < SQUARE_MIN_HYSTERESIS or not i_near < abs(i_d_far):
+        return None
+    return {"i_d_near": math.copysign(i_near, i_d_far), "near_in": near_in, "near_out": near_out}
 
 
 def rotating_design(motor: Motor, R_s: float, v_inj: float, f_inj: float, fs: float,
