@@ -9,7 +9,8 @@ cc -std=c99 -Wall -Wextra -Wpedantic -Werror -O2 -g -Icsrc/include -Icsrc/tests 
   csrc/tests/bench_drive.c csrc/ctrl/*.c -lm -o "$B/bench_drive"
 "$B/bench_drive" "$N"
 count() { # $1: dead-time compensation on (1) or off (0); $2: injection 0 pulsating, 1 rotating,
-          # 2 square, 3 LS_MODE_STARTUP (bench_drive.c); $3: steps
+          # 2 square, 3 LS_MODE_STARTUP, 4 LS_MODE_SENSORED, 5 LS_MODE_CALIBRATION, 6 sensored square
+          # (bench_drive.c); $3: steps
   valgrind --tool=callgrind --toggle-collect=ls_drive_step --callgrind-out-file="$B/callgrind.$1${2:-0}.out" \
     "$B/bench_drive" "${3:-$N}" "$1" "${2:-0}" > /dev/null 2> "$B/callgrind.$1${2:-0}.log"
   awk '/^(summary|totals):/ {print $2; exit}' "$B/callgrind.$1${2:-0}.out"
@@ -22,12 +23,18 @@ total_rot=$(count 1 1)
 total_sq=$(count 1 2)
 N_SU=2800 # the whole start-up (LS_MODE_STARTUP) and no more
 total_su=$(count 1 3 $N_SU)
+total_sens=$(count 1 4)
+total_cal=$(count 1 5)
+total_sens_sq=$(count 1 6)
 echo "ls_drive_step, sensorless with LUT, float, -O2, x86-64, $N steps during a move: $total instructions"
 echo "  with dead-time compensation off: $(per "$total" "$N") per step"
 echo "instructions per step (everything on: compensation, residual, elliptical injection, notch): $(verdict "$(per "$total_dtc" "$N")")"
 echo "instructions per step, rotating injection (compensation, residual, its table): $(verdict "$(per "$total_rot" "$N")")"
 echo "instructions per step, square wave at fs/2 (compensation, its table, d-current): $(verdict "$(per "$total_sq" "$N")")"
 echo "instructions per step in LS_MODE_STARTUP (lock, pulses, settle; $N_SU steps): $(verdict "$(per "$total_su" "$N_SU")")"
+echo "instructions per step in LS_MODE_SENSORED, the HF observer beside the encoder: $(verdict "$(per "$total_sens" "$N")")"
+echo "instructions per step in LS_MODE_SENSORED with the square wave: $(verdict "$(per "$total_sens_sq" "$N")")"
+echo "instructions per step in LS_MODE_CALIBRATION (12 points, dither, residual): $(verdict "$(per "$total_cal" "$N")")"
 if command -v "${ARM_CC:-arm-none-eabi-gcc}" >/dev/null; then
   tools/check_mcu.sh build/arm | tail -1
 else

@@ -609,8 +609,11 @@ void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
         }
         ls_observer_step_finite(&d->enc, ls_pos_diff(pe, d->enc.pos), d->f_ref);
         if (calibrating) {
-            /* the HF axis follows the encoder: theta_err = 0 by construction */
-            ls_observer_reset(&d->obs, d->enc.pos);
+            /* the HF axis follows the encoder: theta_err = 0 by construction (the encoder's
+             * position is normalised already: ls_observer_reset without its normalisation) */
+            d->obs.pos = d->enc.pos;
+            d->obs.omega = LS_R(0.0);
+            d->obs.f_load = LS_R(0.0);
         }
     } else if (d->align) {
         ls_traj_reset(&d->traj, d->obs.pos);
@@ -678,7 +681,12 @@ void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
     if (use_enc) {
         pos_fb = d->enc.pos;
         omega_fb = d->enc.omega;
-        ls_sincos(pos_fb.theta, &c_fb, &s_fb);
+        if (calibrating) { /* the estimated axis is the encoder's here (above) */
+            c_fb = c_est;
+            s_fb = s_est;
+        } else {
+            ls_sincos(pos_fb.theta, &c_fb, &s_fb);
+        }
     } else {
         pos_fb = d->obs.pos;
         omega_fb = d->obs.omega;

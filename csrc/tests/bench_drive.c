@@ -4,6 +4,9 @@
  * SHAPE: 0 pulsating (elliptical, the default), 1 rotating, 2 square wave at fs/2, each with its
  * table; 3 LS_MODE_STARTUP from an unknown position on a saturating plant (the default injection;
  * 2800 steps are the whole start-up, beyond it the drive holds in sensorless LUT mode).
+ * 4 LS_MODE_SENSORED with the HF observer beside the encoder (inject_sensored), 5
+ * LS_MODE_CALIBRATION (12 points of period 1, the default injection), 6 LS_MODE_SENSORED with the
+ * square wave (its general path) beside the encoder.
  * G = 1: with a gain table (rotating, square); R = 1: without the dead-time residual model.
  * so that only the instructions executed inside ls_drive_step are counted (tools/bench.sh). */
 #include <stdio.h>
@@ -35,7 +38,7 @@ int main(int argc, char **argv)
     for (j = 0; j < 64; ++j) {
         gain_tab[j] = 1.0f;
     }
-    if (ls_lut_init(&lut, shape == 1 ? &lc_rot : shape == 2 ? &lc_sq : &lc) != LS_OK ||
+    if (ls_lut_init(&lut, shape == 1 ? &lc_rot : (shape == 2 || shape == 6) ? &lc_sq : &lc) != LS_OK ||
         ls_lut_init(&lut_g, &gc) != LS_OK) {
         return 2;
     }
@@ -51,7 +54,7 @@ int main(int argc, char **argv)
         cfg.demod.min_level = 3.8e-4f; /* linsense.tune.injection.rotating_design for ecce2010, */
         cfg.demod.ref_phase = 1.4613f; /* 12 V at 1 kHz, 16 kHz, delay_comp 1.5 */
         cfg.demod.gain_table = argc > 4 && atoi(argv[4]) != 0 ? &lut_g : NULL;
-    } else if (shape == 2) { /* square wave at fs/2: first difference, low-pass separation */
+    } else if (shape == 2 || shape == 6) { /* square wave at fs/2: first difference, low-pass separation */
         cfg.inject.shape = LS_INJ_SQUARE;
         cfg.inject.quad = 0.0f;
         cfg.inject.freq = 0.5f * cfg.fs;
@@ -73,6 +76,13 @@ int main(int argc, char **argv)
             gain_tab[j] = (float)cfg.demod.gain; /* the nominal L_q / (L_q - L_d) */
         }
     }
+    if (shape >= 4) { /* the encoder modes, the HF observer running beside */
+        static float cal_table[12];
+        cfg.inject_sensored = true;
+        cfg.cal.points = 12u;
+        cfg.cal.table = cal_table;
+        cfg.cal.period = 1;
+    }
     if (ls_drive_init(&d, &cfg) != LS_OK) {
         return 2;
     }
@@ -82,6 +92,17 @@ int main(int argc, char **argv)
         return 2;
     }
     ls_drive_move_to(&d, tp_pos_of_m(0.020, p.tau));
+    if (shape == 4 || shape == 6) {
+        if (ls_drive_set_mode(&d, LS_MODE_SENSORED) != LS_OK) {
+            return 2;
+        }
+        ls_drive_move_to(&d, tp_pos_of_m(0.020, p.tau));
+    } else if (shape == 5) {
+        tp_init(&p, 0.056 + 0.001);
+        if (ls_drive_set_mode(&d, LS_MODE_CALIBRATION) != LS_OK) {
+            return 2;
+        }
+    }
     if (shape == 3) { /* LS_MODE_STARTUP from an unknown position, saturating plant */
         ls_pos zero = {0, LS_R(0.0)};
         tp_init(&p, 0.0123);
