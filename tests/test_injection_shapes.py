@@ -108,7 +108,7 @@ def test_square_without_the_dead_time_measures_cycles():
     test above is a test of the measures."""
     worst = 0.0
     for d in NEAR_NORMAL_DEG[:10]:
-        _, _, peak, pp, _ = _hold("square", "sensorless_lut", TAU_MM * d / 360.0,
+        _, _, _, pp, _ = _hold("square", "sensorless_lut", TAU_MM * d / 360.0,
                                   injection={"dead_time_measures": False})
         worst = max(worst, pp)
     assert worst > 0.05, worst

@@ -22,29 +22,19 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def hold(args):
+    """A sensorless hold at x_mm: the default drive for 3 s (fid the inverter model), or the rotating
+    vector or the square wave with its table for 1.2 s on the switching model (shape)."""
     import linsense
 
-    x_mm, fid = args
-    r = linsense.simulate({"motor": "ecce2010", "scenario": {"name": "hold", "duration": 3.0},
-                           "inverter": {"fidelity": fid}, "initial": {"position_mm": x_mm},
-                           "reference": {"type": "hold"}})
+    x_mm, fid, shape = (*args, None)[:3]
+    spec = {"motor": "ecce2010", "scenario": {"name": "hold", "duration": 3.0 if shape is None else 1.2},
+            "inverter": {"fidelity": fid}, "initial": {"position_mm": x_mm}, "reference": {"type": "hold"}}
+    if shape is not None:
+        spec.update(control={"mode": "sensorless_lut"}, injection={"shape": shape})
+    r = linsense.simulate(spec)
     w = r.t >= r.t[-1] - 0.3
     e = np.degrees(r.theta_err[w])
-    return fid, float(abs(np.mean(e))), float(np.max(np.abs(e))), float(np.ptp(r.x[w])) * 1e3
-
-
-def hold_shape(args):
-    """A 1.2 s hold with the rotating vector or the square wave (with its table and measures)."""
-    import linsense
-
-    x_mm, shape = args
-    r = linsense.simulate({"motor": "ecce2010", "scenario": {"name": "hold", "duration": 1.2},
-                           "inverter": {"fidelity": "switching"}, "control": {"mode": "sensorless_lut"},
-                           "injection": {"shape": shape}, "initial": {"position_mm": x_mm},
-                           "reference": {"type": "hold"}})
-    w = r.t >= r.t[-1] - 0.3
-    e = np.degrees(r.theta_err[w])
-    return shape, float(abs(np.mean(e))), float(np.max(np.abs(e))), float(np.ptp(r.x[w])) * 1e3, \
+    return shape or fid, float(abs(np.mean(e))), float(np.max(np.abs(e))), float(np.ptp(r.x[w])) * 1e3, \
         r.metrics["fault"]
 
 
@@ -71,8 +61,8 @@ def main() -> int:
         holds = list(ex.map(hold, jobs))
         cals = list(ex.map(cal, (0.0, 20.0, 40.0)))
         figs = list(ex.map(fig13, ("switching", "average")))
-        shapes = list(ex.map(hold_shape, [(56.0 * k / 96, sh) for sh in ("rotating", "square")
-                                          for k in range(96)]))
+        shapes = list(ex.map(hold, [(56.0 * k / 96, "switching", sh) for sh in ("rotating", "square")
+                                    for k in range(96)]))
     ok = True
     print("closed-loop benchmark: ecce2010, 72 V, 16 kHz, 0.8 us dead time, 12 V / 1 kHz (+ 0.9 on q)")
     for fid in ("switching", "average"):

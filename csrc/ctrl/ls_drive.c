@@ -5,6 +5,7 @@
 #include "linsense/ls_drive.h"
 #include "linsense/ls_math.h"
 #include "ls_drive_cmd.h"
+#include "ls_drive_path.h"
 
 /* --------------------------------------------------------------------------- defaults */
 void ls_drive_default_cfg(ls_drive_cfg *c)
@@ -618,17 +619,7 @@ void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
     } else if (d->align) {
         ls_traj_reset(&d->traj, d->obs.pos);
     }
-    if (d->align) {
-        if (d->pending) {
-            d->pending = false;
-            if (d->pending_move) {
-                ls_traj_move(&d->traj, d->pending_target);
-            } else {
-                ls_traj_jump(&d->traj, d->pending_target);
-            }
-        }
-        d->align = false;
-    }
+    ls_drive_path_pending_(d);
 
     /* the estimated axis (the HF estimate of the previous step, or the encoder's while calibrating) */
     ls_sincos(d->obs.pos.theta, &c_est, &s_est);

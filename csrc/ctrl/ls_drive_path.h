@@ -1,16 +1,16 @@
-/* Pieces the sensorless steps of their own (ls_drive_rotating.c, ls_drive_square.c) share: private
- * to the library, static inline so that each step keeps its own compiled copy (the general step in
- * ls_drive.c has its own forms, with the encoder and calibration branches). */
+/* Pieces the steps of ls_drive_step share (ls_drive.c, ls_drive_rotating.c, ls_drive_square.c):
+ * private to the library, static inline so that each step keeps its own compiled copy. (The HF
+ * band-pass with the residual, and the current control with the advanced angle, are written out in
+ * each step: shared, they cost the general or the rotating step 1-5 instructions of the 1,000.) */
 #ifndef LINSENSE_LS_DRIVE_PATH_H
 #define LINSENSE_LS_DRIVE_PATH_H
 
 #include "linsense/ls_drive.h"
 
-/* The reference at the estimate after a mode change, then the move or step commanded with it. */
-static inline void ls_drive_path_align_(ls_drive *d)
+/* After a mode change, once the reference is aligned: the move or step commanded with it. */
+static inline void ls_drive_path_pending_(ls_drive *d)
 {
     if (d->align) {
-        ls_traj_reset(&d->traj, d->obs.pos);
         if (d->pending) {
             d->pending = false;
             if (d->pending_move) {
@@ -21,6 +21,15 @@ static inline void ls_drive_path_align_(ls_drive *d)
         }
         d->align = false;
     }
+}
+
+/* The reference at the estimate after a mode change, then the move or step commanded with it. */
+static inline void ls_drive_path_align_(ls_drive *d)
+{
+    if (d->align) {
+        ls_traj_reset(&d->traj, d->obs.pos);
+    }
+    ls_drive_path_pending_(d);
 }
 
 /* The HF observer on the demodulated error (counted once the injection has reached its
