@@ -125,7 +125,8 @@ typedef struct {
     LS_REAL i_d_inj;        /* A, d-axis current reference while the HF injection is on (0: none): keeps
                                the phase currents off zero, where the dead time would act on the
                                square wave's current change (docs/firmware.md), |i_d_inj| < i_max */
-    LS_REAL i_d_near;       /* A, d-current reference while injecting near the six positions per period
+    LS_REAL i_d_near;       /* A, the square wave's sensorless step only (ls_drive_square.c): the
+                               d-current reference while injecting near the six positions per period
                                where the estimated d-axis is normal to a phase axis (theta = pi/6 + k
                                pi/3), whose phase current then lies in the dead time's relay band
                                (docs/theory.md); |i_d_near| < i_max */
