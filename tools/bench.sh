@@ -32,7 +32,7 @@ echo "instructions per step (everything on: compensation, residual, elliptical i
 echo "instructions per step, rotating injection (compensation, residual, its table): $(verdict "$(per "$total_rot" "$N")")"
 echo "instructions per step, square wave at fs/2 (compensation, its table, d-current): $(verdict "$(per "$total_sq" "$N")")"
 echo "instructions per step in LS_MODE_STARTUP (lock, pulses, settle; $N_SU steps): $(verdict "$(per "$total_su" "$N_SU")")"
-echo "instructions per step in LS_MODE_SENSORED, the HF observer beside the encoder: $(verdict "$(per "$total_sens" "$N")")"
+echo "instructions per step in LS_MODE_SENSORED, the HF estimate beside the encoder: $(verdict "$(per "$total_sens" "$N")")"
 echo "instructions per step in LS_MODE_SENSORED with the square wave: $(verdict "$(per "$total_sens_sq" "$N")")"
 echo "instructions per step in LS_MODE_CALIBRATION (12 points, dither, residual): $(verdict "$(per "$total_cal" "$N")")"
 if command -v "${ARM_CC:-arm-none-eabi-gcc}" >/dev/null; then

@@ -21,6 +21,7 @@ ls_status ls_demod_init(ls_demod *d, const ls_demod_cfg *cfg)
     if ((cfg->comp != NULL && cfg->comp->len < 4u) || (cfg->gain_table != NULL && cfg->gain_table->len < 4u)) {
         return LS_ERR_PARAM;
     }
+    d->den_min = cfg->min_level > LS_R(1e-30) ? cfg->min_level : LS_R(1e-30);
     lp.type = LS_BIQUAD_LOWPASS;
     lp.f0 = cfg->f_lpf;
     lp.q = LS_R(0.70710678);

@@ -127,6 +127,22 @@ static bool pos_finite(LS_REAL x)
     return LS_ISFINITE(x) && x > LS_R(0.0);
 }
 
+/* The first step count n with n ts >= t (strict: n ts > t), as the float product decides it, for
+ * a finite t >= 0; UINT32_MAX where t / ts is beyond it (a time no calibration reaches). */
+static uint32_t steps_of(LS_REAL t, LS_REAL ts, bool strict)
+{
+    LS_REAL x = t / ts;
+    uint32_t n;
+    if (!(x < LS_R(4.0e9))) {
+        return UINT32_MAX;
+    }
+    n = x > LS_R(1.0) ? (uint32_t)x - 1u : 0u; /* in range: 0 <= x < 4e9 */
+    while (strict ? !((LS_REAL)n * ts > t) : !((LS_REAL)n * ts >= t)) {
+        n++; /* at most a few steps: n starts one below t / ts */
+    }
+    return n;
+}
+
 ls_status ls_drive_init(ls_drive *d, const ls_drive_cfg *cfg)
 {
     ls_pos zero = {0, LS_R(0.0)};
@@ -212,14 +228,23 @@ ls_status ls_drive_init(ls_drive *d, const ls_drive_cfg *cfg)
     d->inv_kf = LS_R(1.0) / cfg->force_constant;
     d->delay_ts = cfg->delay_comp * d->ts;
     d->enc_jump_max = enc_jump >= LS_R(1.0) ? (int64_t)(int32_t)enc_jump : 1; /* a one-count change is always plausible */
+    d->enc_k = LS_TWO_PI / (LS_REAL)cfg->enc_counts;
+    d->sep_notch = cfg->sep.type == LS_BIQUAD_NOTCH;
+    d->sep_cpl = cfg->sep.type == LS_BIQUAD_NOTCH && cfg->bpf.type == LS_BIQUAD_BANDPASS &&
+                 cfg->sep.f0 == cfg->bpf.f0 && cfg->sep.q == cfg->bpf.q;
     /* derived gains that a tiny or huge value could overflow (every input was finite) */
     if (!LS_ISFINITE4(d->kx, d->inv_kx, d->inv_kf, d->delay_ts) || !(d->inv_kx > LS_R(0.0)) ||
         !(d->inv_kf > LS_R(0.0)) || !LS_ISFINITE(cfg->i_max * cfg->force_constant)) {
         memset(d, 0, sizeof *d);
         return LS_ERR_PARAM;
     }
-    if (cfg->cal.dither_amp > LS_R(0.0)) {
-        ls_sincos_full(LS_TWO_PI * cfg->cal.dither_freq * d->ts, &d->cal_dc, &d->cal_ds);
+    if (cfg->cal.table != NULL) {
+        d->cal_n_settle = steps_of(cfg->cal.t_settle, d->ts, false);
+        d->cal_n_hold = steps_of(cfg->cal.t_hold, d->ts, false);
+        d->cal_n_max = steps_of(cfg->cal.t_max, d->ts, true);
+    }
+    if (cfg->cal.dither_amp > LS_R(0.0)) { /* < 2^30 (dither_freq < fs / 4, checked above) */
+        d->cal_inc = (uint32_t)(cfg->cal.dither_freq * d->ts * LS_R(4294967296.0));
     }
     if (cfg->near_out > LS_R(0.0)) { /* |cos(3 theta)| = |sin(3 e)|, e the distance to pi/6 + k pi/3 */
         LS_REAL c_unused;
@@ -231,14 +256,6 @@ ls_status ls_drive_init(ls_drive *d, const ls_drive_cfg *cfg)
     return LS_OK;
 }
 
-/* A new averaging window of the calibration (see calibration_step). */
-static void cal_window_reset(ls_drive *d)
-{
-    d->cal_hold = 0u;
-    d->cal_sum_err = LS_R(0.0);
-    d->cal_sum_psi = LS_R(0.0);
-}
-
 /* The mode and what it runs. */
 static void mode_set(ls_drive *d, ls_mode mode)
 {
@@ -247,11 +264,17 @@ static void mode_set(ls_drive *d, ls_mode mode)
                mode == LS_MODE_CALIBRATION || (mode == LS_MODE_SENSORED && d->cfg.inject_sensored);
     d->v_hf_max = d->hf_on ? d->cfg.inject.amplitude : LS_R(0.0);
     d->i_d_ref = d->hf_on ? d->cfg.i_d_inj : LS_R(0.0);
-    d->fast = (mode == LS_MODE_SENSORLESS_LUT || mode == LS_MODE_SENSORLESS_NOLUT) &&
-              ((d->cfg.inject.shape == LS_INJ_ROTATING && d->cfg.sep.type == LS_BIQUAD_NOTCH &&
-                d->cfg.sep.f0 == d->cfg.bpf.f0 && d->cfg.sep.q == d->cfg.bpf.q) ||
-               d->cfg.inject.shape == LS_INJ_SQUARE);
-    d->enc_have_prev = false; /* the encoder's jump check starts again */
+    if (mode == LS_MODE_SENSORED || mode == LS_MODE_CALIBRATION) {
+        d->path = LS_DRIVE_PATH_ENCODER;
+    } else if (mode != LS_MODE_SENSORLESS_LUT && mode != LS_MODE_SENSORLESS_NOLUT) {
+        d->path = LS_DRIVE_PATH_GENERAL; /* LS_MODE_OFF (and LS_MODE_STARTUP, which runs from there) */
+    } else if (d->cfg.inject.shape == LS_INJ_SQUARE) {
+        d->path = LS_DRIVE_PATH_SQUARE;
+    } else if (d->cfg.inject.shape == LS_INJ_ROTATING && d->sep_cpl) {
+        d->path = LS_DRIVE_PATH_ROTATING;
+    } else {
+        d->path = LS_DRIVE_PATH_GENERAL;
+    }
 }
 
 void ls_drive_reset(ls_drive *d, ls_pos p)
@@ -282,10 +305,11 @@ void ls_drive_reset(ls_drive *d, ls_pos p)
     d->cal_phase = LS_CAL_DONE;
     d->cal_index = 0u;
     d->cal_timer = 0u;
-    cal_window_reset(d);
+    ls_drive_cal_window_reset_(d);
     d->psi_cal = LS_R(0.0);
-    d->cal_osc.c = LS_R(1.0);
-    d->cal_osc.s = LS_R(0.0);
+    ls_drive_cal_cs_(d);
+    d->cal_acc = 0u;
+    d->cal_amp = LS_R(0.0);
 }
 
 ls_status ls_drive_set_mode(ls_drive *d, ls_mode mode)
@@ -315,10 +339,12 @@ ls_status ls_drive_set_mode(ls_drive *d, ls_mode mode)
             return LS_ERR_PARAM;
         }
         d->cal_phase = LS_CAL_MOVE;
+        d->cal_amp = LS_R(0.0);
         d->cal_index = 0u;
         d->cal_timer = 0u;
-        cal_window_reset(d);
+        ls_drive_cal_window_reset_(d);
         d->psi_cal = LS_R(0.0);
+        ls_drive_cal_cs_(d);
         break;
     default:
         return LS_ERR_PARAM;
@@ -431,98 +457,6 @@ void ls_drive_disable_report_(ls_drive *d, ls_cmd *cmd, uint32_t fault)
     cmd->pos_ref = d->traj.target;
 }
 
-/* The encoder's sample plausible: a count change from the last sample of at most enc_jump_max
- * (int64_t: no overflow whatever the counts), and its position pe within +-LS_POS_PERIOD_MAX
- * periods (beyond only with enc_counts < 128). */
-static bool enc_plausible(ls_drive *d, int32_t count, ls_pos pe)
-{
-    const int64_t jump = (int64_t)count - (int64_t)d->enc_prev;
-    const bool ok = !d->enc_have_prev || (jump <= d->enc_jump_max && jump >= -d->enc_jump_max);
-    d->enc_prev = count;
-    d->enc_have_prev = true;
-    return ok && pe.period <= LS_POS_PERIOD_MAX && pe.period >= -LS_POS_PERIOD_MAX;
-}
-
-static ls_pos enc_pos(int32_t count, int32_t per_period)
-{
-    ls_pos p;
-    int32_t q = count / per_period;
-    int32_t r = count % per_period;
-    if (r < 0) {
-        r += per_period;
-        q -= 1;
-    }
-    p.period = q;
-    p.theta = (LS_REAL)r * (LS_TWO_PI / (LS_REAL)per_period);
-    return p;
-}
-
-/* Calibration sequence (paper Fig. 9). The HF injection and the demodulator work on the encoder
- * angle, so theta_err = 0 exactly, and the integrator drives the demodulated error to zero:
- * d psi_cal/dt = k_int * ratio, ratio ~ Psi_true - psi_cal. That is the condition under which the
- * sensorless observer's equilibrium error against the encoder vanishes, reached at the rate k_int
- * whatever the local saliency (adapting on the observer's own error instead would scale the loop
- * gain by L_q/(L_q - L_d), up to 13 for ecce2010, and let the observer slip). */
-static void calibration_step(ls_drive *d)
-{
-    const ls_cal_cfg *c = &d->cfg.cal;
-    ls_pos target;
-    switch (d->cal_phase) {
-    case LS_CAL_MOVE:
-        if (d->cal_timer == 0u) {
-            target.period = c->period;
-            target.theta = LS_TWO_PI * (LS_REAL)d->cal_index / (LS_REAL)c->points;
-            ls_traj_move(&d->traj, target);
-        }
-        d->cal_timer++;
-        if (!d->traj.active) {
-            d->cal_phase = LS_CAL_SETTLE;
-            d->cal_timer = 0u;
-        }
-        break;
-    case LS_CAL_SETTLE:
-        if ((LS_REAL)(++d->cal_timer) * d->ts >= c->t_settle) {
-            d->cal_phase = LS_CAL_ADAPT;
-            d->cal_timer = 0u;
-            cal_window_reset(d);
-        }
-        break;
-    case LS_CAL_ADAPT:
-        if (d->demod.valid) {
-            d->psi_cal = ls_clamp(d->psi_cal + c->k_int * d->demod.ratio * d->ts, -LS_PI / LS_R(4.0),
-                                  LS_PI / LS_R(4.0));
-        }
-        /* windows of t_hold: a point is accepted when the mean of the demodulated error (the
-         * observer's error against the encoder) over a whole window is below tol; the table gets the
-         * window's mean angle (the HF currents and the dead time make both ripple) */
-        if (!d->demod.valid) { /* a window counts whole and valid only */
-            cal_window_reset(d);
-        } else {
-            d->cal_sum_err += d->demod.err;
-            d->cal_sum_psi += d->psi_cal;
-            d->cal_hold++;
-        }
-        d->cal_timer++;
-        if ((LS_REAL)d->cal_hold * d->ts >= c->t_hold) {
-            const LS_REAL inv_n = LS_R(1.0) / (LS_REAL)d->cal_hold;
-            if (LS_FABS(d->cal_sum_err * inv_n) < c->tol) {
-                c->table[d->cal_index] = (float)(d->cal_sum_psi * inv_n);
-                d->cal_index++;
-                d->cal_timer = 0u;
-                d->cal_phase = d->cal_index >= c->points ? LS_CAL_DONE : LS_CAL_MOVE;
-            }
-            cal_window_reset(d);
-        }
-        if (d->cal_phase == LS_CAL_ADAPT && (LS_REAL)d->cal_timer * d->ts > c->t_max) {
-            ls_protect_trip(&d->prot, LS_FAULT_OBSERVER);
-        }
-        break;
-    case LS_CAL_DONE:
-    default:
-        break;
-    }
-}
-
 /* --------------------------------------------------------------------------- start-up */
 /* LS_MODE_STARTUP: one step of ls_drive_startup_step_ (ls_drive_startup.c, its own translation
  * unit so that the inline blocks it shares with ls_drive_step stay inlined there), then its end:
@@ -548,42 +482,22 @@ static LS_DRIVE_COLD void startup_step(ls_drive *d, const ls_meas *meas, ls_cmd 
     }
 }
 
-void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
+/* LS_MODE_OFF (and LS_MODE_STARTUP from it), or a sensorless mode with the pulsating or elliptical
+ * injection (or a rotating one whose sep is not bpf's complement). Out of line: ls_drive_step
+ * only dispatches, and the other paths do not pay for this one's register saves. */
+#if defined(__GNUC__)
+__attribute__((noinline))
+#endif
+static void general_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
 {
-    const ls_drive_cfg *cfg;
     LS_REAL i_a, i_b, ihf_a, ihf_b, if_a, if_b;
-    LS_REAL c_fb, s_fb, c_est, s_est, v_hf, v_d, v_q, v_a, v_b, dlt, c_adv, s_adv;
-    LS_REAL i_d, i_q, i_q_ref, v_lim, omega_fb, x_err, v_ff, a_ff, f, duty[3];
-    ls_pos x_ref, pos_fb;
-    ls_mode mode;
-    bool sensorless, calibrating, use_enc, hf_on;
+    LS_REAL c_est, s_est, v_hf, v_d, v_q, v_a, v_b;
+    LS_REAL i_d, i_q, i_q_ref, omega, duty[3];
+    ls_pos x_ref, pos;
     uint32_t fault;
 
-    if (cmd == NULL) {
-        return;
-    }
-    if (d == NULL || meas == NULL || !d->initialised) {
-        memset(cmd, 0, sizeof *cmd);
-        cmd->fault = LS_FAULT_CONFIG;
-        return;
-    }
-    if (d->fast) { /* the rotating vector's and the square wave's sensorless paths */
-        ls_drive_fast_step_(d, meas, cmd);
-        return;
-    }
-    cfg = &d->cfg;
-    mode = d->mode;
-    sensorless = mode == LS_MODE_SENSORLESS_LUT || mode == LS_MODE_SENSORLESS_NOLUT;
-    calibrating = mode == LS_MODE_CALIBRATION;
-    use_enc = mode == LS_MODE_SENSORED || calibrating;
-    hf_on = d->hf_on;
-
     fault = ls_protect_check_power(&d->prot, meas->i_abc, meas->v_dc);
-    if (use_enc && !meas->enc_valid) {
-        ls_protect_trip(&d->prot, LS_FAULT_ENCODER);
-        fault = d->prot.fault;
-    }
-    if (fault != LS_FAULT_NONE || mode == LS_MODE_OFF) {
+    if (fault != LS_FAULT_NONE || d->mode == LS_MODE_OFF) {
         if (d->starting && fault == LS_FAULT_NONE) { /* LS_MODE_STARTUP (see ls_drive.h) */
             startup_step(d, meas, cmd);
             return;
@@ -595,137 +509,35 @@ void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
     /* measurements: Clarke */
     i_a = meas->i_abc[0];
     i_b = (meas->i_abc[1] - meas->i_abc[2]) * (LS_R(1.0) / LS_SQRT3);
-    /* encoder tracking loop */
-    if (use_enc) {
-        ls_pos pe = enc_pos(meas->enc_count, cfg->enc_counts);
-        if (!enc_plausible(d, meas->enc_count, pe)) {
-            ls_protect_trip(&d->prot, LS_FAULT_ENCODER);
-            ls_drive_disable_report_(d, cmd, d->prot.fault);
-            return;
-        }
-        if (d->align) {
-            ls_observer_reset(&d->enc, pe);
-            ls_observer_reset(&d->obs, pe);
-            ls_traj_reset(&d->traj, pe);
-        }
-        ls_observer_step_finite(&d->enc, ls_pos_diff(pe, d->enc.pos), d->f_ref);
-        if (calibrating) {
-            /* the HF axis follows the encoder: theta_err = 0 by construction (the encoder's
-             * position is normalised already: ls_observer_reset without its normalisation) */
-            d->obs.pos = d->enc.pos;
-            d->obs.omega = LS_R(0.0);
-            d->obs.f_load = LS_R(0.0);
-        }
-    } else if (d->align) {
-        ls_traj_reset(&d->traj, d->obs.pos);
-    }
-    ls_drive_path_pending_(d);
+    ls_drive_path_align_(d);
 
-    /* the estimated axis (the HF estimate of the previous step, or the encoder's while calibrating) */
+    /* the estimated axis (the HF estimate of the previous step) */
     ls_sincos(d->obs.pos.theta, &c_est, &s_est);
 
     /* fundamental separation of the measured currents, and HF band-pass of the currents less what
-     * the dead-time residual drove (ls_dtres.h). With the square wave the "band-pass" is the first
-     * difference (LS_BIQUAD_DIFF): the current's change over one period, whose sign alternates with
-     * the carrier; unsigned, since the product demodulator's ratio does not depend on it and the
-     * fundamental's change then enters the products at fs/2, where the demodulator's low-pass has
-     * its zeros */
-    if_a = ls_biquad_step(&d->sep[0], i_a);
-    if_b = ls_biquad_step(&d->sep[1], i_b);
-    /* (two branches: one path through a zeroed i_res costs 7 instructions per step) */
-    if (hf_on && cfg->hf_dtres) {
-        LS_REAL v_err[2], i_res[2];
-        (void)ls_mod_residual(&d->mod, meas->i_abc, meas->v_dc, d->dtres.k_rip, v_err);
-        ls_dtres_step(&d->dtres, v_err, c_est, s_est, i_res);
-        ihf_a = ls_biquad_step(&d->bpf[0], i_a - i_res[0]);
-        ihf_b = ls_biquad_step(&d->bpf[1], i_b - i_res[1]);
-    } else {
-        ihf_a = ls_biquad_step(&d->bpf[0], i_a);
-        ihf_b = ls_biquad_step(&d->bpf[1], i_b);
-    }
+     * the dead-time residual drove (ls_dtres.h) */
+    ls_drive_path_hf_(d, meas, i_a, i_b, c_est, s_est, &if_a, &if_b, &ihf_a, &ihf_b);
 
     /* HF demodulation and observer, on the axis the injection used */
-    if (hf_on) {
-        LS_REAL err = ls_demod_step_cs(&d->demod, ihf_a, ihf_b, d->obs.pos.theta, c_est, s_est, d->inj.c,
-                                       d->inj.s, calibrating ? d->psi_cal : LS_R(0.0));
-        if (!calibrating) {
-            /* the error counts once the injection has reached its amplitude: while it ramps up,
-             * the band-pass still rings on the fundamental current's first steps. In sensored mode
-             * (inject_sensored) the HF observer runs beside the encoder, unchecked (commissioning) */
-            const LS_REAL e_obs = d->inj.amp >= cfg->inject.amplitude ? err : LS_R(0.0);
-            ls_observer_step_finite(&d->obs, e_obs, d->f_ref);
-            if (sensorless) {
-                ls_protect_check_observer(&d->prot, e_obs, d->demod.valid, d->obs.omega);
-            }
+    {
+        const LS_REAL err = ls_demod_step_cs_norm(&d->demod, ihf_a, ihf_b, d->obs.pos.theta, c_est, s_est,
+                                             d->inj.c, d->inj.s, LS_R(0.0));
+        if (ls_drive_path_observe_(d, err)) {
+            ls_drive_disable_report_(d, cmd, d->prot.fault);
+            return;
         }
     }
-    if (calibrating) {
-        calibration_step(d);
-    }
-    if (d->prot.fault != LS_FAULT_NONE) {
-        ls_drive_disable_report_(d, cmd, d->prot.fault);
-        return;
-    }
-
-    /* feedback: encoder or HF estimate (copied, so that the values just computed stay in
-     * registers) */
-    if (use_enc) {
-        pos_fb = d->enc.pos;
-        omega_fb = d->enc.omega;
-        if (calibrating) { /* the estimated axis is the encoder's here (above) */
-            c_fb = c_est;
-            s_fb = s_est;
-        } else {
-            ls_sincos(pos_fb.theta, &c_fb, &s_fb);
-        }
-    } else {
-        pos_fb = d->obs.pos;
-        omega_fb = d->obs.omega;
-        c_fb = c_est;
-        s_fb = s_est;
-    }
+    pos = d->obs.pos;
+    omega = d->obs.omega;
 
     /* position reference and control -> force -> current reference */
-    ls_traj_step(&d->traj, &x_ref, &v_ff, &a_ff);
-    x_err = ls_pos_diff(x_ref, pos_fb) * d->inv_kx;
-    /* finite by construction from here on: the measurements passed the checks above, positions
-     * are normalised, speeds limited; the final check below catches anything else */
-    f = ls_posctrl_step_finite(&d->pos, x_err, omega_fb * d->inv_kx, v_ff, a_ff);
-    i_q_ref = f * d->inv_kf;
-    if (calibrating && d->cal_phase != LS_CAL_MOVE && d->cal_phase != LS_CAL_DONE && cfg->cal.dither_amp > LS_R(0.0)) {
-        d->cal_osc = ls_phasor_advance(d->cal_osc, d->cal_dc, d->cal_ds); /* the dither, one step on */
-        i_q_ref += cfg->cal.dither_amp * d->cal_osc.s;
-    }
-    i_q_ref = ls_clamp(i_q_ref, -cfg->i_max, cfg->i_max);
-    d->f_ref = i_q_ref * cfg->force_constant;
+    i_q_ref = ls_drive_path_force_(d, pos, omega, &x_ref);
 
-    /* current control in the feedback frame */
-    i_d = c_fb * if_a + s_fb * if_b;
-    i_q = -s_fb * if_a + c_fb * if_b;
-    v_lim = meas->v_dc * (LS_R(1.0) / LS_SQRT3) - d->v_hf_max;
-    ls_current_step_finite(&d->cur, i_d, i_q, d->i_d_ref, i_q_ref, omega_fb, v_lim, &v_d, &v_q);
-
-    /* fundamental voltage at the angle advanced over the computation delay (small-angle
-     * rotation), plus the HF injection on the estimated d-axis */
-    dlt = d->delay_ts * omega_fb;
-    c_adv = c_fb - s_fb * dlt;
-    s_adv = s_fb + c_fb * dlt;
-    v_a = c_adv * v_d - s_adv * v_q;
-    v_b = s_adv * v_d + c_adv * v_q;
-    if (hf_on) {
-        /* on the estimated d-axis, plus the optional quadrature component on q (rotating: the
-         * stationary-frame vector) */
-        v_hf = ls_inject_step(&d->inj);
-        if (cfg->inject.shape != LS_INJ_ROTATING) {
-            v_a += v_hf * c_est - d->inj.v_q * s_est;
-            v_b += v_hf * s_est + d->inj.v_q * c_est;
-        } else { /* in the stationary frame */
-            v_a += v_hf;
-            v_b += d->inj.v_q;
-        }
-    } else {
-        v_hf = LS_R(0.0);
-    }
+    /* current control in the estimated frame */
+    ls_drive_path_current_(d, meas->v_dc, c_est, s_est, if_a, if_b, i_q_ref, omega, &i_d, &i_q, &v_d, &v_q, &v_a,
+                           &v_b);
+    /* plus the HF injection on the estimated d-axis (rotating: in the stationary frame) */
+    v_hf = ls_drive_path_inject_(d, c_est, s_est, &v_a, &v_b);
     (void)ls_mod_step_finite(&d->mod, v_a, v_b, meas->v_dc, meas->i_abc, duty);
 
     /* nothing non-finite ever leaves a step: a non-finite v_a or v_b makes every duty NaN (the
@@ -735,6 +547,32 @@ void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
         ls_drive_disable_(d, cmd, d->prot.fault);
         return;
     }
-    ls_drive_cmd_(cmd, d, duty, mode, pos_fb, x_ref, omega_fb * d->inv_kx, i_d, i_q, d->i_d_ref, i_q_ref, v_d, v_q,
-                  v_hf, d->cal_index, calibrating && d->cal_phase == LS_CAL_DONE, d->psi_cal);
+    ls_drive_cmd_(cmd, d, duty, d->mode, pos, x_ref, omega * d->inv_kx, i_d, i_q, d->i_d_ref, i_q_ref, v_d, v_q,
+                  v_hf, d->cal_index, false, d->psi_cal);
+}
+
+void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
+{
+    if (cmd == NULL) {
+        return;
+    }
+    if (d == NULL || meas == NULL || !d->initialised) {
+        memset(cmd, 0, sizeof *cmd);
+        cmd->fault = LS_FAULT_CONFIG;
+        return;
+    }
+    switch (d->path) { /* each path's step (ls_drive.h) */
+    case LS_DRIVE_PATH_ROTATING:
+        ls_drive_rot_step_(d, meas, cmd);
+        break;
+    case LS_DRIVE_PATH_SQUARE:
+        ls_drive_sq_step_(d, meas, cmd);
+        break;
+    case LS_DRIVE_PATH_ENCODER:
+        ls_drive_enc_step_(d, meas, cmd);
+        break;
+    default:
+        general_step(d, meas, cmd);
+        break;
+    }
 }

@@ -4,9 +4,9 @@
  * without touching the other shapes' code (docs/firmware.md, "Injection shapes"):
  *   - no band-pass: the notch at the band-pass's f0 and q is 1 - band-pass (cookbook designs), so
  *     the band-passed current is the current less its fundamental, and the dead-time residual's
- *     current is taken out of it unfiltered (required: sep the notch at bpf's f0 and q);
+ *     current is taken out of it unfiltered (required: sep the notch at bpf's f0 and q, sep_cpl);
  *   - no encoder, calibration or elliptical branches (sensorless only).
- * ls_drive.c dispatches here (d->fast, ls_drive_fast_step_, which also runs the square wave's step) and keeps every other mode and shape. */
+ * ls_drive.c dispatches here (d->path) and keeps the sensorless modes' other shapes. */
 #include <math.h>
 #include <string.h>
 
@@ -15,22 +15,11 @@
 #include "ls_drive_cmd.h"
 #include "ls_drive_path.h"
 
-static void rot_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd);
-
-void ls_drive_fast_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
-{
-    if (d->cfg.inject.shape == LS_INJ_SQUARE) {
-        ls_drive_sq_step_(d, meas, cmd); /* (ls_drive_square.c) */
-    } else {
-        rot_step(d, meas, cmd);
-    }
-}
-
-static void rot_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
+void ls_drive_rot_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
 {
     const ls_drive_cfg *cfg = &d->cfg;
-    LS_REAL i_a, i_b, ihf_a, ihf_b, if_a, if_b, c_est, s_est, v_hf, v_d, v_q, v_a, v_b, dlt, c_adv, s_adv;
-    LS_REAL i_d, i_q, i_q_ref, v_lim, omega, err, duty[3];
+    LS_REAL i_a, i_b, ihf_a, ihf_b, if_a, if_b, c_est, s_est, v_hf, v_d, v_q, v_a, v_b;
+    LS_REAL i_d, i_q, i_q_ref, omega, err, duty[3];
     ls_pos x_ref, pos;
     uint32_t fault = ls_protect_check_power(&d->prot, meas->i_abc, meas->v_dc);
 
@@ -57,7 +46,7 @@ static void rot_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
     }
 
     /* negative-sequence demodulation and observer (the error counts once the injection is up) */
-    err = ls_demod_step_cs(&d->demod, ihf_a, ihf_b, d->obs.pos.theta, c_est, s_est, d->inj.c, d->inj.s,
+    err = ls_demod_step_cs_norm(&d->demod, ihf_a, ihf_b, d->obs.pos.theta, c_est, s_est, d->inj.c, d->inj.s,
                            LS_R(0.0));
     if (ls_drive_path_observe_(d, err)) {
         ls_drive_disable_report_(d, cmd, d->prot.fault);
@@ -70,18 +59,12 @@ static void rot_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
     i_q_ref = ls_drive_path_force_(d, pos, omega, &x_ref);
 
     /* current control in the estimated frame */
-    i_d = c_est * if_a + s_est * if_b;
-    i_q = -s_est * if_a + c_est * if_b;
-    v_lim = meas->v_dc * (LS_R(1.0) / LS_SQRT3) - d->v_hf_max;
-    ls_current_step_finite(&d->cur, i_d, i_q, d->i_d_ref, i_q_ref, omega, v_lim, &v_d, &v_q);
-
-    /* fundamental voltage at the advanced angle, plus the rotating vector in the stationary frame */
-    dlt = d->delay_ts * omega;
-    c_adv = c_est - s_est * dlt;
-    s_adv = s_est + c_est * dlt;
+    ls_drive_path_current_(d, meas->v_dc, c_est, s_est, if_a, if_b, i_q_ref, omega, &i_d, &i_q, &v_d, &v_q, &v_a,
+                           &v_b);
+    /* plus the rotating vector in the stationary frame */
     v_hf = ls_inject_step(&d->inj);
-    v_a = c_adv * v_d - s_adv * v_q + v_hf;
-    v_b = s_adv * v_d + c_adv * v_q + d->inj.v_q;
+    v_a += v_hf;
+    v_b += d->inj.v_q;
     (void)ls_mod_step_finite(&d->mod, v_a, v_b, meas->v_dc, meas->i_abc, duty);
     if (!LS_ISFINITE(duty[0] + duty[1] + duty[2])) {
         ls_protect_trip(&d->prot, LS_FAULT_NONFINITE);

@@ -8,8 +8,8 @@
  *   - the d-current schedule: i_d_near instead of i_d_inj near the six positions where the
  *     estimated d-axis is normal to a phase axis (cfg.near_in, cfg.near_out, with hysteresis);
  *   - no residual model, encoder, calibration or elliptical branches (sensorless only).
- * ls_drive.c dispatches here (d->fast) and keeps every other mode and shape, including the
- * square wave in the sensored and calibration modes (without the two measures above). */
+ * ls_drive.c dispatches here (d->path); the square wave in the sensored and calibration modes
+ * runs the encoder modes' step (ls_drive_encoder.c, without the two measures above). */
 #include <math.h>
 #include <string.h>
 
@@ -21,8 +21,8 @@
 void ls_drive_sq_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
 {
     const ls_drive_cfg *cfg = &d->cfg;
-    LS_REAL i_a, i_b, ihf_a, ihf_b, if_a, if_b, c_est, s_est, v_hf, v_d, v_q, v_a, v_b, dlt, c_adv, s_adv;
-    LS_REAL i_d, i_q, i_q_ref, v_lim, omega, err, duty[3];
+    LS_REAL i_a, i_b, ihf_a, ihf_b, if_a, if_b, c_est, s_est, v_hf, v_d, v_q, v_a, v_b;
+    LS_REAL i_d, i_q, i_q_ref, omega, err, duty[3];
     ls_pos x_ref, pos;
     uint32_t fault = ls_protect_check_power(&d->prot, meas->i_abc, meas->v_dc);
 
@@ -42,7 +42,7 @@ void ls_drive_sq_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
     ihf_b = ls_biquad_step(&d->bpf[1], i_b);
 
     /* product demodulation with the table, and observer (the error counts once the injection is up) */
-    err = ls_demod_step_cs(&d->demod, ihf_a, ihf_b, d->obs.pos.theta, c_est, s_est, d->inj.c, d->inj.s,
+    err = ls_demod_step_cs_norm(&d->demod, ihf_a, ihf_b, d->obs.pos.theta, c_est, s_est, d->inj.c, d->inj.s,
                            LS_R(0.0));
     if (ls_drive_path_observe_(d, err)) {
         ls_drive_disable_report_(d, cmd, d->prot.fault);
@@ -66,18 +66,12 @@ void ls_drive_sq_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
     }
 
     /* current control in the estimated frame */
-    i_d = c_est * if_a + s_est * if_b;
-    i_q = -s_est * if_a + c_est * if_b;
-    v_lim = meas->v_dc * (LS_R(1.0) / LS_SQRT3) - d->v_hf_max;
-    ls_current_step_finite(&d->cur, i_d, i_q, d->i_d_ref, i_q_ref, omega, v_lim, &v_d, &v_q);
-
-    /* fundamental voltage at the advanced angle, plus the square wave on the estimated d-axis */
-    dlt = d->delay_ts * omega;
-    c_adv = c_est - s_est * dlt;
-    s_adv = s_est + c_est * dlt;
+    ls_drive_path_current_(d, meas->v_dc, c_est, s_est, if_a, if_b, i_q_ref, omega, &i_d, &i_q, &v_d, &v_q, &v_a,
+                           &v_b);
+    /* plus the square wave on the estimated d-axis */
     v_hf = ls_inject_step(&d->inj);
-    v_a = c_adv * v_d - s_adv * v_q + v_hf * c_est;
-    v_b = s_adv * v_d + c_adv * v_q + v_hf * s_est;
+    v_a += v_hf * c_est;
+    v_b += v_hf * s_est;
     (void)ls_mod_step_ripple_finite(&d->mod, v_a, v_b, meas->v_dc, meas->i_abc, duty);
     if (!LS_ISFINITE(duty[0] + duty[1] + duty[2])) {
         ls_protect_trip(&d->prot, LS_FAULT_NONFINITE);

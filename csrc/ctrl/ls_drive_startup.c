@@ -5,6 +5,7 @@
 #include "linsense/ls_drive.h"
 #include "linsense/ls_math.h"
 #include "ls_drive_cmd.h"
+#include "ls_drive_path.h"
 
 /* The HF chain of the sensorless modes (separation, residual, band-pass, demodulator with the
  * table, observer) with zero current references instead of the position loop; during the pulses
@@ -23,20 +24,9 @@ ls_startup_phase ls_drive_startup_step_(ls_drive *d, const ls_meas *meas, ls_cmd
     i_a = meas->i_abc[0];
     i_b = (meas->i_abc[1] - meas->i_abc[2]) * (LS_R(1.0) / LS_SQRT3);
     ls_sincos(d->obs.pos.theta, &c_est, &s_est);
-    if_a = ls_biquad_step(&d->sep[0], i_a);
-    if_b = ls_biquad_step(&d->sep[1], i_b);
-    if (cfg->hf_dtres) {
-        LS_REAL v_err[2], i_res[2];
-        (void)ls_mod_residual(&d->mod, meas->i_abc, meas->v_dc, d->dtres.k_rip, v_err);
-        ls_dtres_step(&d->dtres, v_err, c_est, s_est, i_res);
-        ihf_a = ls_biquad_step(&d->bpf[0], i_a - i_res[0]);
-        ihf_b = ls_biquad_step(&d->bpf[1], i_b - i_res[1]);
-    } else {
-        ihf_a = ls_biquad_step(&d->bpf[0], i_a);
-        ihf_b = ls_biquad_step(&d->bpf[1], i_b);
-    }
+    ls_drive_path_hf_(d, meas, i_a, i_b, c_est, s_est, &if_a, &if_b, &ihf_a, &ihf_b);
     {
-        const LS_REAL err = ls_demod_step_cs(&d->demod, ihf_a, ihf_b, d->obs.pos.theta, c_est, s_est, d->inj.c,
+        const LS_REAL err = ls_demod_step_cs_norm(&d->demod, ihf_a, ihf_b, d->obs.pos.theta, c_est, s_est, d->inj.c,
                                              d->inj.s, LS_R(0.0));
         if (su->phase == LS_SU_LOCK || su->phase == LS_SU_SETTLE) { /* frozen in between */
             ls_observer_step_finite(&d->obs, su->env >= LS_R(1.0) ? err : LS_R(0.0), LS_R(0.0));

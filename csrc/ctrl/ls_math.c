@@ -4,16 +4,6 @@
 
 #include "linsense/ls_math.h"
 
-#ifdef LS_REAL_DOUBLE
-
-void ls_sincos_full(LS_REAL x, LS_REAL *c, LS_REAL *s)
-{
-    *c = cos(x);
-    *s = sin(x);
-}
-
-#else
-
 const float ls_sin_tab[LS_SIN_TAB_N] = {
     0.000000000e+00f, 2.454122901e-02f, 4.906767607e-02f, 7.356456667e-02f, 9.801714122e-02f, 1.224106774e-01f,
     1.467304677e-01f, 1.709618866e-01f, 1.950903237e-01f, 2.191012353e-01f, 2.429801822e-01f, 2.667127550e-01f,
@@ -58,6 +48,16 @@ const float ls_sin_tab[LS_SIN_TAB_N] = {
     -3.826834261e-01f, -3.598950505e-01f, -3.368898630e-01f, -3.136817515e-01f, -2.902846634e-01f, -2.667127550e-01f,
     -2.429801822e-01f, -2.191012353e-01f, -1.950903237e-01f, -1.709618866e-01f, -1.467304677e-01f, -1.224106774e-01f,
     -9.801714122e-02f, -7.356456667e-02f, -4.906767607e-02f, -2.454122901e-02f};
+
+#ifdef LS_REAL_DOUBLE
+
+void ls_sincos_full(LS_REAL x, LS_REAL *c, LS_REAL *s)
+{
+    *c = cos(x);
+    *s = sin(x);
+}
+
+#else
 
 /* Bits of 2/pi after the binary point, preceded by one word of zeros (the integer part): bit t of
  * this string (t = 0 the most significant bit of word 0) is the bit of weight 2^(31 - t). 224

@@ -395,7 +395,7 @@ static void test_calibration(void)
     static float table[12];
     long k;
     unsigned i;
-    double worst = 0;
+    double worst = 0, phasor = 0;
     setup(&d, &cfg);
     cfg.cal.points = 12u;
     cfg.cal.table = table;
@@ -403,13 +403,22 @@ static void test_calibration(void)
     LS_CHECK(ls_drive_init(&d, &cfg) == LS_OK);
     memset(&c, 0, sizeof c);
     tp_init(&p, 0.056 + 0.001);
+    /* the sequence's times in steps: the first n with n ts >= t (> t_max) */
+    LS_CHECK((LS_REAL)d.cal_n_settle * d.ts >= cfg.cal.t_settle && (LS_REAL)(d.cal_n_settle - 1u) * d.ts < cfg.cal.t_settle);
+    LS_CHECK((LS_REAL)d.cal_n_hold * d.ts >= cfg.cal.t_hold && (LS_REAL)(d.cal_n_hold - 1u) * d.ts < cfg.cal.t_hold);
+    LS_CHECK((LS_REAL)d.cal_n_max * d.ts > cfg.cal.t_max && !((LS_REAL)(d.cal_n_max - 1u) * d.ts > cfg.cal.t_max));
     LS_CHECK(ls_drive_set_mode(&d, LS_MODE_CALIBRATION) == LS_OK);
     for (k = 0; k < (long)(30.0 * p.fs) && !c.cal_done && c.fault == 0; ++k) {
         tp_measure(&p, &m);
         ls_drive_step(&d, &m, &c);
         tp_advance(&p, &c);
+        /* psi_cal's cosine and sine, turned by its steps: within rounding of the exact ones */
+        phasor = fmax(phasor, fmax(fabs((double)d.cal_c - cos((double)d.psi_cal)),
+                                   fabs((double)d.cal_s - sin((double)d.psi_cal))));
     }
-    printf("  calibration of 12 points: %s after %.2f s\n", c.cal_done ? "done" : "NOT done", (double)k / p.fs);
+    printf("  calibration of 12 points: %s after %.2f s; cos and sin of psi_cal within %.1e of exact\n",
+           c.cal_done ? "done" : "NOT done", (double)k / p.fs, phasor);
+    LS_CHECK(phasor < 2e-5); /* (measured 4.6e-6 in float: the rounding of the turns over one window) */
     LS_CHECK(c.cal_done);
     LS_CHECK(c.fault == 0);
     for (i = 0; i < 12u; ++i) {

@@ -121,6 +121,7 @@ typedef struct {
     LS_REAL err;
     bool valid;
     LS_REAL ref_c, ref_s;
+    LS_REAL den_min;
 } ls_demod;
 ls_status ls_demod_init(ls_demod *d, const ls_demod_cfg *cfg);
 void ls_demod_reset(ls_demod *d);

@@ -69,6 +69,8 @@ typedef struct {
     LS_REAL err;       /* rad, estimate of theta - theta_est at the last step */
     bool valid;        /* level above min_level at the last step */
     LS_REAL ref_c, ref_s; /* -, cos and sin of ref_phase (rotating) */
+    LS_REAL den_min;   /* A^2, max(min_level, 1e-30): the product's level, its denominator, is valid
+                          above it */
 } ls_demod;
 
 ls_status ls_demod_init(ls_demod *d, const ls_demod_cfg *cfg);
@@ -85,39 +87,30 @@ void ls_demod_set_gain_table(ls_demod *d, bool on);
 LS_REAL ls_demod_rot_(ls_demod *d, LS_REAL i_a, LS_REAL i_b, LS_REAL c, LS_REAL s, LS_REAL car_c, LS_REAL car_s,
                       LS_REAL *den);
 
-static inline LS_REAL ls_demod_step_cs(ls_demod *d, LS_REAL i_a, LS_REAL i_b, LS_REAL theta_est,
-                                       LS_REAL c_est, LS_REAL s_est, LS_REAL car_c, LS_REAL car_s,
-                                       LS_REAL psi_cal)
+/* ls_demod_step_cs given the compensation angle psi (rad) and its cosine and sine (c_psi, s_psi):
+ * the step without the table and the trigonometry (the calibration turns psi_cal's by small
+ * steps). Inline (called every PWM period). */
+static inline LS_REAL ls_demod_step_psi(ls_demod *d, LS_REAL i_a, LS_REAL i_b, LS_REAL theta_est,
+                                        LS_REAL c_est, LS_REAL s_est, LS_REAL car_c, LS_REAL car_s,
+                                        LS_REAL psi, LS_REAL c_psi, LS_REAL s_psi)
 {
-    LS_REAL psi = psi_cal;
-    LS_REAL c, s, c_psi, s_psi, i_d, i_q, num, den, g, inv;
+    LS_REAL c, s, i_d, i_q, num, den, g, inv;
     const bool product = d->cfg.method == LS_DEMOD_PRODUCT;
     if (product) {
         /* i_d^2 + i_q^2 = i_a^2 + i_b^2 (a rotation keeps the length): the level, and the
          * division below, do not wait for the angle */
-        den = ls_biquad_step(&d->lp[1], i_a * i_a + i_b * i_b);
+        den = ls_biquad_step_sym(&d->lp[1], i_a * i_a + i_b * i_b);
         d->level = den;
     }
-    if (d->use_comp) {
-        psi = psi_cal + ls_lut_step(d->cfg.comp, theta_est);
-    }
-#ifdef LS_REAL_DOUBLE
-    c_psi = cos(psi);
-    s_psi = sin(psi);
-#else
-    if (LS_FABS(psi) <= LS_PI / LS_R(4.0)) { /* a compensation angle: no range reduction */
-        ls_sincos_kernel(psi, 0u, &c_psi, &s_psi);
-    } else {
-        ls_sincos(psi, &c_psi, &s_psi); /* also NaN */
-    }
-#endif
     /* cos and sin of theta_est + psi */
     c = c_est * c_psi - s_est * s_psi;
     s = s_est * c_psi + c_est * s_psi;
     i_d = c * i_a + s * i_b;
     i_q = -s * i_a + c * i_b;
     if (product) {
-        num = ls_biquad_step(&d->lp[0], i_d * i_q);
+        num = ls_biquad_step_sym(&d->lp[0], i_d * i_q);
+        /* level = den: finite, above min_level and 1e-30 (false for NaN) */
+        d->valid = den > d->den_min && den <= LS_REAL_MAX;
     } else if (d->cfg.method == LS_DEMOD_ROTATING) {
         num = ls_demod_rot_(d, i_a, i_b, c, s, car_c, car_s, &den);
     } else {
@@ -130,7 +123,9 @@ static inline LS_REAL ls_demod_step_cs(ls_demod *d, LS_REAL i_a, LS_REAL i_b, LS
         d->level = LS_R(2.0) * den;
     }
     d->psi = psi;
-    d->valid = LS_ISFINITE(d->level) && d->level > d->cfg.min_level && den > LS_R(1e-30);
+    if (!product) {
+        d->valid = LS_ISFINITE(d->level) && d->level > d->cfg.min_level && den > LS_R(1e-30);
+    }
     if (!d->valid) {
         d->ratio = LS_R(0.0);
         d->err = LS_R(0.0);
@@ -141,6 +136,65 @@ static inline LS_REAL ls_demod_step_cs(ls_demod *d, LS_REAL i_a, LS_REAL i_b, LS
     d->ratio = num * inv;
     d->err = num * (g * inv); /* = g ratio */
     return d->err;
+}
+
+/* The compensation angle psi = psi_cal + Psi_LUT(theta_est) (the table when it is on), returned,
+ * and its cosine and sine; theta_norm: theta_est is in [0, 2 pi) (an ls_pos's theta: the table is
+ * read without the range check). Inline. */
+static inline LS_REAL ls_demod_comp_(const ls_demod *d, LS_REAL theta_est, LS_REAL psi_cal, LS_REAL *c_psi,
+                                     LS_REAL *s_psi, const bool theta_norm)
+{
+    LS_REAL psi = psi_cal;
+    LS_REAL c, s; /* (locals: the callers' stay in registers) */
+    if (d->use_comp) {
+        psi = psi_cal + (theta_norm ? ls_lut_step_norm(d->cfg.comp, theta_est) : ls_lut_step(d->cfg.comp, theta_est));
+    }
+#ifdef LS_REAL_DOUBLE
+    c = cos(psi);
+    s = sin(psi);
+#else
+    if (LS_FABS(psi) <= LS_PI / LS_R(4.0)) { /* a compensation angle: no range reduction */
+        ls_sincos_kernel(psi, 0u, &c, &s);
+    } else {
+        ls_sincos(psi, &c, &s); /* also NaN */
+    }
+#endif
+    *c_psi = c;
+    *s_psi = s;
+    return psi;
+}
+
+/* ls_demod_comp_ for any theta_est. */
+static inline LS_REAL ls_demod_comp(const ls_demod *d, LS_REAL theta_est, LS_REAL psi_cal, LS_REAL *c_psi,
+                                    LS_REAL *s_psi)
+{
+    return ls_demod_comp_(d, theta_est, psi_cal, c_psi, s_psi, false);
+}
+
+/* ls_demod_comp_ for theta_est in [0, 2 pi) (an ls_pos's theta: ls_drive's steps). */
+static inline LS_REAL ls_demod_comp_norm(const ls_demod *d, LS_REAL theta_est, LS_REAL psi_cal, LS_REAL *c_psi,
+                                         LS_REAL *s_psi)
+{
+    return ls_demod_comp_(d, theta_est, psi_cal, c_psi, s_psi, true);
+}
+
+static inline LS_REAL ls_demod_step_cs(ls_demod *d, LS_REAL i_a, LS_REAL i_b, LS_REAL theta_est,
+                                       LS_REAL c_est, LS_REAL s_est, LS_REAL car_c, LS_REAL car_s,
+                                       LS_REAL psi_cal)
+{
+    LS_REAL c_psi, s_psi;
+    const LS_REAL psi = ls_demod_comp(d, theta_est, psi_cal, &c_psi, &s_psi);
+    return ls_demod_step_psi(d, i_a, i_b, theta_est, c_est, s_est, car_c, car_s, psi, c_psi, s_psi);
+}
+
+/* ls_demod_step_cs for theta_est in [0, 2 pi) (an ls_pos's theta: ls_drive's steps). */
+static inline LS_REAL ls_demod_step_cs_norm(ls_demod *d, LS_REAL i_a, LS_REAL i_b, LS_REAL theta_est,
+                                            LS_REAL c_est, LS_REAL s_est, LS_REAL car_c, LS_REAL car_s,
+                                            LS_REAL psi_cal)
+{
+    LS_REAL c_psi, s_psi;
+    const LS_REAL psi = ls_demod_comp_norm(d, theta_est, psi_cal, &c_psi, &s_psi);
+    return ls_demod_step_psi(d, i_a, i_b, theta_est, c_est, s_est, car_c, car_s, psi, c_psi, s_psi);
 }
 
 /* One step. i_a, i_b: band-passed HF currents (A); theta_est (rad); (car_c, car_s): the

@@ -22,8 +22,10 @@
  *
  * Modes:
  *   LS_MODE_OFF              outputs disabled, estimators idle
- *   LS_MODE_SENSORED         encoder closes every loop (HF injection optional: with inject_sensored the
- *                            HF observer runs beside the encoder, with the table when there is one)
+ *   LS_MODE_SENSORED         encoder closes every loop (HF injection optional, on the encoder's
+ *                            d-axis: with inject_sensored, cmd.pos_est is the HF estimate beside the
+ *                            encoder, its position plus the error demodulated there with the table
+ *                            when there is one: where a sensorless observer would settle)
  *   LS_MODE_SENSORLESS_LUT   HF observer with the compensation table (cfg.demod.comp required)
  *   LS_MODE_SENSORLESS_NOLUT HF observer without compensation (the paper's unstable case)
  *   LS_MODE_CALIBRATION      encoder closes the position loop; at each of cal.points positions of
@@ -104,7 +106,7 @@ typedef struct {
     LS_REAL enc_v_max;      /* m/s, encoder plausibility: a count change between two samples of
                                more than enc_v_max / fs of travel (and more than one count) trips
                                LS_FAULT_ENCODER; > 0, at most LS_DRIVE_ENC_JUMP_MAX counts per step */
-    bool inject_sensored;   /* keep injecting in LS_MODE_SENSORED */
+    bool inject_sensored;   /* keep injecting in LS_MODE_SENSORED (and estimate beside the encoder) */
     bool hf_dtres;          /* take the current the dead-time residual drove out of the HF path (not
                                with the square wave) */
     ls_inject_cfg inject;   /* HF injection */
@@ -209,20 +211,30 @@ typedef struct {
     uint32_t cal_timer;  /* steps in the present phase */
     uint32_t cal_hold;   /* steps in the present averaging window */
     LS_REAL psi_cal;     /* rad */
+    LS_REAL cal_c, cal_s; /* -, cos and sin of psi_cal: turned with it by its small steps, exact at
+                             the start and at the end of every averaging window */
     LS_REAL cal_sum_err; /* rad, sum of the demodulated error over the window */
     LS_REAL cal_sum_psi; /* rad, sum of psi_cal over the window */
-    LS_REAL cal_dc, cal_ds; /* -, cos and sin of the dither's phase step */
-    ls_phasor cal_osc;      /* -, cos and sin of the dither's phase */
-    bool enc_have_prev;  /* enc_prev holds the last sample's count */
+    uint32_t cal_n_settle; /* -, steps of cal.t_settle: the first n with n ts >= t_settle */
+    uint32_t cal_n_hold;   /* -, steps of cal.t_hold: the first n with n ts >= t_hold */
+    uint32_t cal_n_max;    /* -, steps beyond cal.t_max: the first n with n ts > t_max */
+    uint32_t cal_acc;    /* -, the dither's phase, 2^32 per period */
+    uint32_t cal_inc;    /* -, its step per period: dither_freq / fs 2^32 */
+    LS_REAL cal_amp;     /* A, the dither's amplitude now: cal.dither_amp while settling and
+                            adapting, else 0 */
     int32_t enc_prev;    /* -, encoder count of the last sample (encoder modes) */
     int64_t enc_jump_max; /* -, largest plausible count change per step (>= 1) */
     LS_REAL i_d_ref;     /* A, d-current reference (cfg.i_d_inj with hf_on, else 0; i_d_near near the
                             positions of cfg.near_in) */
     LS_REAL near_c3_in;  /* -, sin(3 near_in): |cos(3 theta_est)| below it is near */
     LS_REAL near_c3_out; /* -, sin(3 near_out) (0: no schedule) */
-    bool fast;           /* a sensorless mode with a step of its own, ls_drive_fast_step_: the
-                            rotating injection with sep the notch at bpf's f0 and q, or the square
-                            wave */
+    uint8_t path;        /* the step that runs (LS_DRIVE_PATH_*): a sensorless mode's own step,
+                            the rotating injection with sep the notch at bpf's f0 and q or the
+                            square wave, or the encoder modes' */
+    LS_REAL enc_k;       /* rad, 2 pi / enc_counts: the angle of one encoder count */
+    bool sep_notch;      /* sep is a notch (else a low-pass): ls_biquad_step_notch */
+    bool sep_cpl;        /* sep is the notch at bpf's f0 and q, 1 - bpf (cookbook designs): the
+                            rotating step's band-passed current is the current less sep's output */
     /* LS_MODE_STARTUP: while it runs, mode holds LS_MODE_OFF and starting is set, so that
      * ls_drive_step's other modes pay nothing for it (it is dispatched from the outputs-off branch) */
     bool starting;       /* the start-up sequence runs (cmd.mode reports LS_MODE_STARTUP) */
@@ -266,10 +278,16 @@ void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd);
 /* Internal: ls_drive_step's LS_MODE_STARTUP path (csrc/ctrl/ls_drive_startup.c); not an API. */
 ls_startup_phase ls_drive_startup_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd);
 /* Internal: ls_drive_step in the sensorless modes with the rotating injection
- * (csrc/ctrl/ls_drive_rotating.c) or the square wave (csrc/ctrl/ls_drive_square.c), and the
- * outputs-off helpers they share; not an API. ls_drive_fast_step_ runs the one of the shape. */
-void ls_drive_fast_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd);
+ * (csrc/ctrl/ls_drive_rotating.c) or the square wave (csrc/ctrl/ls_drive_square.c), in the
+ * encoder modes (csrc/ctrl/ls_drive_encoder.c), and the outputs-off helpers they share; not an
+ * API. */
+#define LS_DRIVE_PATH_GENERAL 0u  /* ls_drive.c: the sensorless modes' pulsating and elliptical step */
+#define LS_DRIVE_PATH_ROTATING 1u
+#define LS_DRIVE_PATH_SQUARE 2u
+#define LS_DRIVE_PATH_ENCODER 3u
+void ls_drive_rot_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd);
 void ls_drive_sq_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd);
+void ls_drive_enc_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd);
 void ls_drive_disable_(ls_drive *d, ls_cmd *cmd, uint32_t fault);
 void ls_drive_disable_report_(ls_drive *d, ls_cmd *cmd, uint32_t fault);
 

@@ -51,4 +51,36 @@ static inline LS_REAL ls_biquad_step(ls_biquad *f, LS_REAL x)
     return y;
 }
 
+/* ls_biquad_step for a band-pass (LS_BIQUAD_BANDPASS: b1 = 0, b2 = -b0 by design), the same
+ * operations less those on the zero and the negated coefficient. */
+static inline LS_REAL ls_biquad_step_bp(ls_biquad *f, LS_REAL x)
+{
+    const LS_REAL bx = f->b0 * x;
+    LS_REAL y = bx + f->z1;
+    f->z1 = f->z2 - f->a1 * y;
+    f->z2 = -bx - f->a2 * y;
+    return y;
+}
+
+/* ls_biquad_step for a symmetric numerator (b2 = b0: LS_BIQUAD_LOWPASS, and ls_demod's low-pass
+ * with its zeros at f_notch), likewise. */
+static inline LS_REAL ls_biquad_step_sym(ls_biquad *f, LS_REAL x)
+{
+    const LS_REAL bx = f->b0 * x;
+    LS_REAL y = bx + f->z1;
+    f->z1 = f->b1 * x - f->a1 * y + f->z2;
+    f->z2 = bx - f->a2 * y;
+    return y;
+}
+
+/* ls_biquad_step for a notch (LS_BIQUAD_NOTCH: b2 = b0, b1 = a1 by design), likewise. */
+static inline LS_REAL ls_biquad_step_notch(ls_biquad *f, LS_REAL x)
+{
+    const LS_REAL bx = f->b0 * x;
+    LS_REAL y = bx + f->z1;
+    f->z1 = f->a1 * x - f->a1 * y + f->z2;
+    f->z2 = bx - f->a2 * y;
+    return y;
+}
+
 #endif /* LINSENSE_LS_FILTER_H */

@@ -32,19 +32,15 @@ void ls_lut_reset(ls_lut *lut);
 /* ls_lut_step for an angle outside [0, 2 pi): out of line (the per-step path never takes it). */
 LS_REAL ls_lut_step_wide(const ls_lut *lut, LS_REAL theta);
 
-/* Interpolated value at electrical angle theta (rad, any value). A non-finite theta gives 0; one
- * so large that it has no fraction of a period left (|theta| >= 2^24 2 pi in float) gives table[0].
- * Inline (called every PWM period); an angle in [0, 2 pi), as ls_pos keeps it, needs no wrap. */
-static inline LS_REAL ls_lut_step(const ls_lut *lut, LS_REAL theta)
+/* ls_lut_step for theta in [0, 2 pi), as every ls_pos keeps its theta (ls_pos.h), without the
+ * check: the drive's per-step path. */
+static inline LS_REAL ls_lut_step_norm(const ls_lut *lut, LS_REAL theta)
 {
     LS_REAL u;
     LS_REAL f;
     LS_REAL t0;
     LS_REAL t1;
     uint32_t k;
-    if (!(theta >= LS_R(0.0) && theta < LS_TWO_PI)) { /* (true for NaN, Inf) */
-        return ls_lut_step_wide(lut, theta);
-    }
     u = theta * lut->points_per_rad; /* in [0, n]: the conversion is in range */
     k = (uint32_t)u;
     f = u - (LS_REAL)k;
@@ -58,6 +54,17 @@ static inline LS_REAL ls_lut_step(const ls_lut *lut, LS_REAL theta)
         return (LS_REAL)lut->table[0];
     }
     return t0 + f * (t1 - t0); /* = (1 - f) t0 + f t1 */
+}
+
+/* Interpolated value at electrical angle theta (rad, any value). A non-finite theta gives 0; one
+ * so large that it has no fraction of a period left (|theta| >= 2^24 2 pi in float) gives table[0].
+ * Inline (called every PWM period); an angle in [0, 2 pi), as ls_pos keeps it, needs no wrap. */
+static inline LS_REAL ls_lut_step(const ls_lut *lut, LS_REAL theta)
+{
+    if (!(theta >= LS_R(0.0) && theta < LS_TWO_PI)) { /* (true for NaN, Inf) */
+        return ls_lut_step_wide(lut, theta);
+    }
+    return ls_lut_step_norm(lut, theta);
 }
 
 #endif /* LINSENSE_LS_LUT_H */

@@ -28,14 +28,15 @@
 /* rad, largest |x| reduced inline (2^13: j < 2^13 keeps every product j * PIO2_* exact). */
 #define LS_SINCOS_FAST_MAX LS_R(8192.0)
 
-#ifndef LS_REAL_DOUBLE
-/* rad, largest |x| taken by the table (8 pi a little less: |k| < 2^10 keeps k 2 pi / N exact). */
-#define LS_SINCOS_TAB_MAX 25.0f
 /* points of the sine table over one turn (a power of 2) */
 #define LS_SIN_TAB_N 256u
 /* sin(2 pi k / N), k = 0 ... N - 1, rounded to float (1 kB of read-only data, as in CMSIS-DSP's
- * arm_sin_cos_f32; csrc/tests/test_math.c checks it against double sin). */
+ * arm_sin_cos_f32; csrc/tests/test_math.c checks it against double sin); in the double build too
+ * (the calibration's dither reads it). */
 extern const float ls_sin_tab[LS_SIN_TAB_N];
+#ifndef LS_REAL_DOUBLE
+/* rad, largest |x| taken by the table (8 pi a little less: |k| < 2^10 keeps k 2 pi / N exact). */
+#define LS_SINCOS_TAB_MAX 25.0f
 #endif
 
 /* cos and sin of any x (rad), out of line; NaN for a non-finite x. */

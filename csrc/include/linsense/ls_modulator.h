@@ -179,6 +179,7 @@ static inline bool ls_mod_residual(const ls_mod *m, const LS_REAL i_abc[3], LS_R
     const ls_mod_hist *h = &m->hist[m->newest ^ 1u];
     const LS_REAL d0 = h->d[0], d1 = h->d[1], d2 = h->d[2];
     LS_REAL e0, e1, e2;
+    int all_switch;
     if (!m->have_prev) {
         v_ab[0] = v_ab[1] = LS_R(0.0);
         return false;
@@ -204,8 +205,12 @@ static inline bool ls_mod_residual(const ls_mod *m, const LS_REAL i_abc[3], LS_R
     }
     /* a leg at 0 or 1 does not switch: no error, and no compensation reached it (one test for the
      * usual case, every leg switching) */
-    if (!((d0 < d1 ? d0 : d1) > LS_R(0.0) && (d0 > d1 ? d0 : d1) < LS_R(1.0) && d2 > LS_R(0.0) &&
-          d2 < LS_R(1.0))) {
+    {
+        const LS_REAL lo01 = d0 < d1 ? d0 : d1, hi01 = d0 > d1 ? d0 : d1;
+        const LS_REAL lo = lo01 < d2 ? lo01 : d2, hi = hi01 > d2 ? hi01 : d2;
+        all_switch = (lo > LS_R(0.0)) & (hi < LS_R(1.0)); /* (&: one branch, on both) */
+    }
+    if (!all_switch) {
         e0 = d0 * (LS_R(1.0) - d0) > LS_R(0.0) ? e0 : LS_R(0.0);
         e1 = d1 * (LS_R(1.0) - d1) > LS_R(0.0) ? e1 : LS_R(0.0);
         e2 = d2 * (LS_R(1.0) - d2) > LS_R(0.0) ? e2 : LS_R(0.0);

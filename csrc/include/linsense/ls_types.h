@@ -10,12 +10,14 @@
 
 #include <stdint.h>
 #include <stdbool.h>
+#include <float.h>  /* FLT_MAX, DBL_MAX: a freestanding compiler header */
 #include <stddef.h> /* NULL, size_t: a freestanding compiler header, not libc */
 #include <math.h>   /* the LS_SIN ... macros and the inline helpers use it */
 
 #ifdef LS_REAL_DOUBLE
 typedef double LS_REAL;
 #define LS_R(x) (x)
+#define LS_REAL_MAX DBL_MAX /* the largest finite LS_REAL */
 #define LS_FLOOR floor
 #define LS_SIN sin
 #define LS_COS cos
@@ -27,6 +29,7 @@ typedef double LS_REAL;
 #else
 typedef float LS_REAL;
 #define LS_R(x) (x##f)
+#define LS_REAL_MAX FLT_MAX /* the largest finite LS_REAL */
 #define LS_FLOOR floorf
 #define LS_SIN sinf
 #define LS_COS cosf
