@@ -12,7 +12,7 @@ BUILD  := build
 
 CSTD     := -std=c99 -Wall -Wextra -Wpedantic -Werror
 CLIBWARN := -Wdouble-promotion -Wconversion -Wshadow
-SAN      := -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
+SAN      := -fsanitize=address,undefined,float-cast-overflow -fno-sanitize-recover=all -fno-omit-frame-pointer
 CINC     := -Icsrc/include -Icsrc/tests -I$(BUILD)/gen
 CTRL_SRC := $(wildcard csrc/ctrl/*.c)
 SIM_SRC  := $(wildcard csrc/sim/*.c)

@@ -220,8 +220,9 @@ def test_review_regressions(tmp_path, capsys):
 
 
 def test_sensored_observer_beside_the_encoder():
-    """In sensored mode the injection (on by default) feeds the HF observer beside the encoder, with
-    the table: its estimation metrics are the sensorless estimate's, not the frozen start position."""
+    """In sensored mode the injection (on by default) feeds the HF estimate beside the encoder (the
+    encoder's position plus the error demodulated there, with the table): its estimation metrics
+    are the sensorless estimate's, not the frozen start position."""
     r = linsense.simulate(
         {
             "motor": "ecce2010",

@@ -128,17 +128,21 @@ static bool pos_finite(LS_REAL x)
 }
 
 /* The first step count n with n ts >= t (strict: n ts > t), as the float product decides it, for
- * a finite t >= 0; UINT32_MAX where t / ts is beyond it (a time no calibration reaches). */
+ * a finite t >= 0, below 2^24 steps (17 min at 16 kHz; beyond, t / ts to the float's resolution);
+ * UINT32_MAX where t / ts is beyond 4e9 (a time no calibration reaches). */
 static uint32_t steps_of(LS_REAL t, LS_REAL ts, bool strict)
 {
-    LS_REAL x = t / ts;
+    const LS_REAL x = t / ts;
     uint32_t n;
     if (!(x < LS_R(4.0e9))) {
         return UINT32_MAX;
     }
-    n = x > LS_R(1.0) ? (uint32_t)x - 1u : 0u; /* in range: 0 <= x < 4e9 */
+    if (x >= LS_R(16777216.0)) {
+        return (uint32_t)x; /* in range: 2^24 <= x < 4e9 */
+    }
+    n = x > LS_R(1.0) ? (uint32_t)x - 1u : 0u; /* in range: 0 <= x < 2^24, every n exact in float */
     while (strict ? !((LS_REAL)n * ts > t) : !((LS_REAL)n * ts >= t)) {
-        n++; /* at most a few steps: n starts one below t / ts */
+        n++; /* at most three times: n starts one below t / ts */
     }
     return n;
 }
@@ -243,7 +247,8 @@ ls_status ls_drive_init(ls_drive *d, const ls_drive_cfg *cfg)
         d->cal_n_hold = steps_of(cfg->cal.t_hold, d->ts, false);
         d->cal_n_max = steps_of(cfg->cal.t_max, d->ts, true);
     }
-    if (cfg->cal.dither_amp > LS_R(0.0)) { /* < 2^30 (dither_freq < fs / 4, checked above) */
+    if (cfg->cal.table != NULL && cfg->cal.dither_amp > LS_R(0.0)) { /* < 2^30 (dither_freq < fs / 4,
+                                                                       checked above with the table) */
         d->cal_inc = (uint32_t)(cfg->cal.dither_freq * d->ts * LS_R(4294967296.0));
     }
     if (cfg->near_out > LS_R(0.0)) { /* |cos(3 theta)| = |sin(3 e)|, e the distance to pi/6 + k pi/3 */
@@ -349,8 +354,8 @@ ls_status ls_drive_set_mode(ls_drive *d, ls_mode mode)
     default:
         return LS_ERR_PARAM;
     }
-    /* the table in sensorless_lut, and for the HF observer that runs beside the encoder in sensored
-     * mode (inject_sensored) when there is one; not without LUT, nor while calibrating it */
+    /* the table in sensorless_lut, and for the HF estimate beside the encoder in sensored mode
+     * (inject_sensored) when there is one; not without LUT, nor while calibrating it */
     ls_demod_set_comp(&d->demod, mode == LS_MODE_SENSORLESS_LUT || mode == LS_MODE_SENSORED ||
                                      mode == LS_MODE_STARTUP);
     /* the modulator's history and the residual model start again (the outputs may have been off) */
@@ -367,6 +372,10 @@ ls_status ls_drive_set_mode(ls_drive *d, ls_mode mode)
         ls_current_reset(&d->cur);
     }
     d->align = true;
+    if (mode == LS_MODE_SENSORED && !d->hf_on) { /* (its step runs the injection: off at once, not
+                                                    ramped down, the voltage limit leaves it no room) */
+        ls_inject_reset(&d->inj);
+    }
     ls_inject_enable(&d->inj, d->hf_on);
     return LS_OK;
 }
@@ -536,8 +545,16 @@ static void general_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
     /* current control in the estimated frame */
     ls_drive_path_current_(d, meas->v_dc, c_est, s_est, if_a, if_b, i_q_ref, omega, &i_d, &i_q, &v_d, &v_q, &v_a,
                            &v_b);
-    /* plus the HF injection on the estimated d-axis (rotating: in the stationary frame) */
-    v_hf = ls_drive_path_inject_(d, c_est, s_est, &v_a, &v_b);
+    /* plus the HF injection on the estimated d-axis, with the optional quadrature component on q
+     * (rotating: the stationary-frame vector) */
+    v_hf = ls_inject_step(&d->inj);
+    if (d->cfg.inject.shape != LS_INJ_ROTATING) {
+        v_a += v_hf * c_est - d->inj.v_q * s_est;
+        v_b += v_hf * s_est + d->inj.v_q * c_est;
+    } else { /* in the stationary frame */
+        v_a += v_hf;
+        v_b += d->inj.v_q;
+    }
     (void)ls_mod_step_finite(&d->mod, v_a, v_b, meas->v_dc, meas->i_abc, duty);
 
     /* nothing non-finite ever leaves a step: a non-finite v_a or v_b makes every duty NaN (the

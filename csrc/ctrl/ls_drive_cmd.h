@@ -1,7 +1,7 @@
 /* The command every one of ls_drive_step's paths writes (ls_drive.c, ls_drive_startup.c,
- * ls_drive_rotating.c, ls_drive_square.c, ls_drive_encoder.c): private to the library, static inline so that each path keeps its own
- * compiled copy. Every field exactly once; the drive's own fields are read from d, the step's
- * values are the arguments. */
+ * ls_drive_rotating.c, ls_drive_square.c, ls_drive_encoder.c): private to the library, static
+ * inline so that each path keeps its own compiled copy. Every field exactly once; the drive's own
+ * fields are read from d, the step's values are the arguments. */
 #ifndef LINSENSE_LS_DRIVE_CMD_H
 #define LINSENSE_LS_DRIVE_CMD_H
 

@@ -111,6 +111,7 @@ LS_DRIVE_NOINLINE static void calibration_step(ls_drive *d)
          * window's mean angle (the HF currents and the dead time make both ripple) */
         if (!d->demod.valid) { /* a window counts whole and valid only */
             ls_drive_cal_window_reset_(d);
+            ls_drive_cal_cs_(d); /* (rare: its cosine and sine exact again, as at a window's end) */
         } else {
             d->cal_sum_err += d->demod.err;
             d->cal_sum_psi += d->psi_cal;
@@ -178,6 +179,9 @@ void ls_drive_enc_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
 
     /* the fundamental, and the HF current less what the dead-time residual drove (ls_dtres.h); the
      * band-pass, or the square wave's first difference */
+    /* (LS_MODE_SENSORED without inject_sensored runs the same step: its injection was reset to zero
+     * amplitude at the mode change, so v_hf = 0, the demodulator finds no level and the estimate
+     * beside the encoder is the encoder's position) */
     ls_drive_path_hf_(d, meas, i_a, i_b, c_fb, s_fb, &if_a, &if_b, &ihf_a, &ihf_b);
     {
         /* with the table in sensored mode; while calibrating, at psi_cal (by its cosine and sine) */
@@ -219,7 +223,7 @@ void ls_drive_enc_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
         i_q_ref = f * d->inv_kf;
         if (calibrating) { /* the dither, one step on (the sine at the phase's nearest of 256 points) */
             d->cal_acc += d->cal_inc;
-            i_q_ref += d->cal_amp * (LS_REAL)ls_sin_tab[d->cal_acc >> 24];
+            i_q_ref += d->cal_amp * (LS_REAL)ls_sin_tab[(d->cal_acc + 0x800000u) >> 24]; /* (mod 2^32) */
         }
         i_q_ref = ls_clamp(i_q_ref, -cfg->i_max, cfg->i_max);
         d->f_ref = i_q_ref * cfg->force_constant;

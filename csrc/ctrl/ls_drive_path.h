@@ -5,6 +5,7 @@
 #define LINSENSE_LS_DRIVE_PATH_H
 
 #include "linsense/ls_drive.h"
+#include "linsense/ls_math.h"
 
 /* psi_cal's cosine and sine, exactly (|psi_cal| <= pi/4). */
 static inline void ls_drive_cal_cs_(ls_drive *d)

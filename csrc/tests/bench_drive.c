@@ -4,9 +4,9 @@
  * SHAPE: 0 pulsating (elliptical, the default), 1 rotating, 2 square wave at fs/2, each with its
  * table; 3 LS_MODE_STARTUP from an unknown position on a saturating plant (the default injection;
  * 2800 steps are the whole start-up, beyond it the drive holds in sensorless LUT mode).
- * 4 LS_MODE_SENSORED with the HF observer beside the encoder (inject_sensored), 5
+ * 4 LS_MODE_SENSORED with the HF estimate beside the encoder (inject_sensored), 5
  * LS_MODE_CALIBRATION (12 points of period 1, the default injection), 6 LS_MODE_SENSORED with the
- * square wave (its general path) beside the encoder.
+ * square wave beside the encoder (4 to 6: the encoder modes' step, ls_drive_encoder.c).
  * G = 1: with a gain table (rotating, square); R = 1: without the dead-time residual model.
  * so that only the instructions executed inside ls_drive_step are counted (tools/bench.sh). */
 #include <stdio.h>

@@ -284,6 +284,16 @@ static void test_init_refuses(void)
     cfg.current.kp = LS_CURRENT_KP_MAX;
     cfg.enc_v_max = LS_R(1e-6); /* less than a count per step: one count stays plausible */
     LS_CHECK(ls_drive_init(&d, &cfg) == LS_OK && d.enc_jump_max == 1);
+    /* calibration values are checked with a table only, and read only then: without one, a dither
+     * frequency that a table would refuse leaves the drive valid and converts nothing (the
+     * sanitizer's float-cast-overflow check traps the conversion it used to make) */
+    default_cfg(&cfg);
+    cfg.cal.table = NULL;
+    cfg.cal.dither_amp = LS_R(0.4);
+    cfg.cal.dither_freq = LS_R(1e12);
+    LS_CHECK(ls_drive_init(&d, &cfg) == LS_OK && d.cal_inc == 0u);
+    cfg.cal.dither_freq = (LS_REAL)NAN;
+    LS_CHECK(ls_drive_init(&d, &cfg) == LS_OK && d.cal_inc == 0u);
 }
 
 /* ------------------------------------------------------------------------------ voltage limit */

@@ -72,8 +72,6 @@ static void test_generated_header(void)
     LS_CHECK_NEAR(peak / DEG, 4.03, 0.01);
 }
 
-/* With arguments: print the interpolated value at each angle (rad), for the Python
- * cross-check of the interpolation rule. Without: run the unit tests. */
 /* ls_lut_step_norm (the drive's step, for an ls_pos's theta in [0, 2 pi)) is ls_lut_step there,
  * also at the last float below 2 pi, where theta N / (2 pi) rounds up to N. */
 static void test_norm(void)
@@ -96,6 +94,8 @@ static void test_norm(void)
     LS_CHECK(differ == 0);
 }
 
+/* With arguments: print the interpolated value at each angle (rad), for the Python
+ * cross-check of the interpolation rule. Without: run the unit tests. */
 int main(int argc, char **argv)
 {
     if (argc > 1) {

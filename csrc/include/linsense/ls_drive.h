@@ -153,9 +153,10 @@ typedef struct {
     uint32_t fault;      /* latched LS_FAULT_* bits */
     ls_mode mode;        /* active mode */
     ls_pos pos_fb;       /* position used by the controllers (encoder or HF estimate) */
-    ls_pos pos_est;      /* HF observer position estimate */
+    ls_pos pos_est;      /* HF position estimate: the observer's (sensorless modes), the encoder's
+                            position plus the error demodulated there (LS_MODE_SENSORED) */
     ls_pos pos_ref;      /* position reference */
-    LS_REAL v_est;       /* m/s, HF observer speed estimate */
+    LS_REAL v_est;       /* m/s, speed of pos_est (LS_MODE_SENSORED: the encoder's) */
     LS_REAL v_fb;        /* m/s, speed used by the controllers */
     LS_REAL f_load_est;  /* N, load-force estimate (mechanical observer) */
     LS_REAL err_sig;     /* rad, demodulated error (estimate of theta - theta_est) */
@@ -211,8 +212,8 @@ typedef struct {
     uint32_t cal_timer;  /* steps in the present phase */
     uint32_t cal_hold;   /* steps in the present averaging window */
     LS_REAL psi_cal;     /* rad */
-    LS_REAL cal_c, cal_s; /* -, cos and sin of psi_cal: turned with it by its small steps, exact at
-                             the start and at the end of every averaging window */
+    LS_REAL cal_c, cal_s; /* -, cos and sin of psi_cal: turned with it by its small steps, exact
+                             again at the start, the end and every reset of an averaging window */
     LS_REAL cal_sum_err; /* rad, sum of the demodulated error over the window */
     LS_REAL cal_sum_psi; /* rad, sum of psi_cal over the window */
     uint32_t cal_n_settle; /* -, steps of cal.t_settle: the first n with n ts >= t_settle */

@@ -204,7 +204,8 @@ static inline bool ls_mod_residual(const ls_mod *m, const LS_REAL i_abc[3], LS_R
         e2 = h->c[2] - ls_mod_lost_(d2, m->i_prev[2], i_abc[2], r2, dd);
     }
     /* a leg at 0 or 1 does not switch: no error, and no compensation reached it (one test for the
-     * usual case, every leg switching) */
+     * usual case, every leg switching; the duties are finite: ls_drive trips and resets the
+     * modulator on a non-finite one) */
     {
         const LS_REAL lo01 = d0 < d1 ? d0 : d1, hi01 = d0 > d1 ? d0 : d1;
         const LS_REAL lo = lo01 < d2 ? lo01 : d2, hi = hi01 > d2 ? hi01 : d2;
