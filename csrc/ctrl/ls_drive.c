@@ -233,9 +233,6 @@ ls_status ls_drive_init(ls_drive *d, const ls_drive_cfg *cfg)
     d->delay_ts = cfg->delay_comp * d->ts;
     d->enc_jump_max = enc_jump >= LS_R(1.0) ? (int64_t)(int32_t)enc_jump : 1; /* a one-count change is always plausible */
     d->enc_k = LS_TWO_PI / (LS_REAL)cfg->enc_counts;
-    d->sep_notch = cfg->sep.type == LS_BIQUAD_NOTCH;
-    d->sep_cpl = cfg->sep.type == LS_BIQUAD_NOTCH && cfg->bpf.type == LS_BIQUAD_BANDPASS &&
-                 cfg->sep.f0 == cfg->bpf.f0 && cfg->sep.q == cfg->bpf.q;
     /* derived gains that a tiny or huge value could overflow (every input was finite) */
     if (!LS_ISFINITE4(d->kx, d->inv_kx, d->inv_kf, d->delay_ts) || !(d->inv_kx > LS_R(0.0)) ||
         !(d->inv_kf > LS_R(0.0)) || !LS_ISFINITE(cfg->i_max * cfg->force_constant)) {
@@ -275,7 +272,9 @@ static void mode_set(ls_drive *d, ls_mode mode)
         d->path = LS_DRIVE_PATH_GENERAL; /* LS_MODE_OFF (and LS_MODE_STARTUP, which runs from there) */
     } else if (d->cfg.inject.shape == LS_INJ_SQUARE) {
         d->path = LS_DRIVE_PATH_SQUARE;
-    } else if (d->cfg.inject.shape == LS_INJ_ROTATING && d->sep_cpl) {
+    } else if (d->cfg.inject.shape == LS_INJ_ROTATING && d->cfg.sep.type == LS_BIQUAD_NOTCH &&
+               d->cfg.sep.f0 == d->cfg.bpf.f0 && d->cfg.sep.q == d->cfg.bpf.q) {
+        /* (the notch at the band-pass's f0 and q is 1 - band-pass: ls_drive_rotating.c) */
         d->path = LS_DRIVE_PATH_ROTATING;
     } else {
         d->path = LS_DRIVE_PATH_GENERAL;
@@ -556,16 +555,7 @@ static void general_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
         v_b += d->inj.v_q;
     }
     (void)ls_mod_step_finite(&d->mod, v_a, v_b, meas->v_dc, meas->i_abc, duty);
-
-    /* nothing non-finite ever leaves a step: a non-finite v_a or v_b makes every duty NaN (the
-     * zero-sequence offset is then Inf - Inf), and the positions are finite by ls_pos_norm */
-    if (!LS_ISFINITE(duty[0] + duty[1] + duty[2])) {
-        ls_protect_trip(&d->prot, LS_FAULT_NONFINITE);
-        ls_drive_disable_(d, cmd, d->prot.fault);
-        return;
-    }
-    ls_drive_cmd_(cmd, d, duty, d->mode, pos, x_ref, omega * d->inv_kx, i_d, i_q, d->i_d_ref, i_q_ref, v_d, v_q,
-                  v_hf, d->cal_index, false, d->psi_cal);
+    ls_drive_cmd_out_(cmd, d, duty, pos, x_ref, omega, i_d, i_q, i_q_ref, v_d, v_q, v_hf, false);
 }
 
 void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)

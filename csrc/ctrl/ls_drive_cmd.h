@@ -40,4 +40,21 @@ static inline void ls_drive_cmd_(ls_cmd *cmd, const ls_drive *d, const LS_REAL d
     cmd->psi_cal = psi_cal;
 }
 
+/* The step's end once its duties are written: nothing non-finite ever leaves a step (a non-finite
+ * v_a or v_b makes every duty NaN, the zero-sequence offset being Inf - Inf; the positions are
+ * finite by ls_pos_norm), so a non-finite duty trips LS_FAULT_NONFINITE and turns the outputs off;
+ * else the command. */
+static inline void ls_drive_cmd_out_(ls_cmd *cmd, ls_drive *d, const LS_REAL duty[3], ls_pos pos_fb,
+                                     ls_pos pos_ref, LS_REAL omega, LS_REAL i_d, LS_REAL i_q, LS_REAL i_q_ref,
+                                     LS_REAL v_d, LS_REAL v_q, LS_REAL v_hf, bool cal_done)
+{
+    if (!LS_ISFINITE(duty[0] + duty[1] + duty[2])) {
+        ls_protect_trip(&d->prot, LS_FAULT_NONFINITE);
+        ls_drive_disable_(d, cmd, d->prot.fault);
+        return;
+    }
+    ls_drive_cmd_(cmd, d, duty, d->mode, pos_fb, pos_ref, omega * d->inv_kx, i_d, i_q, d->i_d_ref, i_q_ref, v_d,
+                  v_q, v_hf, d->cal_index, cal_done, d->psi_cal);
+}
+
 #endif /* LINSENSE_LS_DRIVE_CMD_H */

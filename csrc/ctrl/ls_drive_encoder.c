@@ -235,12 +235,7 @@ void ls_drive_enc_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
     /* plus the HF injection on the encoder's d-axis (rotating: in the stationary frame) */
     v_hf = ls_drive_path_inject_(d, c_fb, s_fb, &v_a, &v_b);
     (void)ls_mod_step_finite(&d->mod, v_a, v_b, meas->v_dc, meas->i_abc, duty);
-    if (!LS_ISFINITE(duty[0] + duty[1] + duty[2])) {
-        ls_protect_trip(&d->prot, LS_FAULT_NONFINITE);
-        ls_drive_disable_(d, cmd, d->prot.fault);
-        return;
-    }
-    ls_drive_cmd_(cmd, d, duty, d->mode, pos, x_ref, omega * d->inv_kx, i_d, i_q, d->i_d_ref, i_q_ref, v_d, v_q,
-                  v_hf, d->cal_index, calibrating && d->cal_phase == LS_CAL_DONE, d->psi_cal);
+    ls_drive_cmd_out_(cmd, d, duty, pos, x_ref, omega, i_d, i_q, i_q_ref, v_d, v_q, v_hf,
+                      calibrating && d->cal_phase == LS_CAL_DONE);
 }
 

@@ -1,6 +1,9 @@
 /* Pieces the steps of ls_drive_step share (ls_drive.c, ls_drive_startup.c, ls_drive_rotating.c,
  * ls_drive_square.c, ls_drive_encoder.c): private to the library, static inline so that each step
- * keeps its own compiled copy. */
+ * keeps its own compiled copy. (The checks, Clarke and alignment at the start of the rotating and
+ * square steps are written out in each: shared, they cost those steps 5 and 13 instructions; so is
+ * the encoder step's force with the calibration's dither: through ls_drive_path_force_ with the
+ * dither as an argument it cost the encoder modes 5 and 7, and they have 12 to spare.) */
 #ifndef LINSENSE_LS_DRIVE_PATH_H
 #define LINSENSE_LS_DRIVE_PATH_H
 
@@ -80,7 +83,7 @@ static inline LS_REAL ls_drive_path_force_(ls_drive *d, ls_pos pos, LS_REAL omeg
 static inline void ls_drive_path_hf_(ls_drive *d, const ls_meas *meas, LS_REAL i_a, LS_REAL i_b, LS_REAL c,
                                      LS_REAL s, LS_REAL *if_a, LS_REAL *if_b, LS_REAL *ihf_a, LS_REAL *ihf_b)
 {
-    if (d->sep_notch) {
+    if (d->cfg.sep.type == LS_BIQUAD_NOTCH) {
         *if_a = ls_biquad_step_notch(&d->sep[0], i_a);
         *if_b = ls_biquad_step_notch(&d->sep[1], i_b);
     } else {

@@ -4,7 +4,7 @@
  * without touching the other shapes' code (docs/firmware.md, "Injection shapes"):
  *   - no band-pass: the notch at the band-pass's f0 and q is 1 - band-pass (cookbook designs), so
  *     the band-passed current is the current less its fundamental, and the dead-time residual's
- *     current is taken out of it unfiltered (required: sep the notch at bpf's f0 and q, sep_cpl);
+ *     current is taken out of it unfiltered (required: sep the notch at bpf's f0 and q);
  *   - no encoder, calibration or elliptical branches (sensorless only).
  * ls_drive.c dispatches here (d->path) and keeps the sensorless modes' other shapes. */
 #include <math.h>
@@ -66,11 +66,5 @@ void ls_drive_rot_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
     v_a += v_hf;
     v_b += d->inj.v_q;
     (void)ls_mod_step_finite(&d->mod, v_a, v_b, meas->v_dc, meas->i_abc, duty);
-    if (!LS_ISFINITE(duty[0] + duty[1] + duty[2])) {
-        ls_protect_trip(&d->prot, LS_FAULT_NONFINITE);
-        ls_drive_disable_(d, cmd, d->prot.fault);
-        return;
-    }
-    ls_drive_cmd_(cmd, d, duty, d->mode, pos, x_ref, omega * d->inv_kx, i_d, i_q, d->i_d_ref, i_q_ref, v_d, v_q,
-                  v_hf, d->cal_index, false, d->psi_cal);
+    ls_drive_cmd_out_(cmd, d, duty, pos, x_ref, omega, i_d, i_q, i_q_ref, v_d, v_q, v_hf, false);
 }

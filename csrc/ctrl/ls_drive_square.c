@@ -73,11 +73,5 @@ void ls_drive_sq_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
     v_a += v_hf * c_est;
     v_b += v_hf * s_est;
     (void)ls_mod_step_ripple_finite(&d->mod, v_a, v_b, meas->v_dc, meas->i_abc, duty);
-    if (!LS_ISFINITE(duty[0] + duty[1] + duty[2])) {
-        ls_protect_trip(&d->prot, LS_FAULT_NONFINITE);
-        ls_drive_disable_(d, cmd, d->prot.fault);
-        return;
-    }
-    ls_drive_cmd_(cmd, d, duty, d->mode, pos, x_ref, omega * d->inv_kx, i_d, i_q, d->i_d_ref, i_q_ref, v_d, v_q,
-                  v_hf, d->cal_index, false, d->psi_cal);
+    ls_drive_cmd_out_(cmd, d, duty, pos, x_ref, omega, i_d, i_q, i_q_ref, v_d, v_q, v_hf, false);
 }

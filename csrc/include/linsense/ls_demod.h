@@ -147,7 +147,8 @@ static inline LS_REAL ls_demod_comp_(const ls_demod *d, LS_REAL theta_est, LS_RE
     LS_REAL psi = psi_cal;
     LS_REAL c, s; /* (locals: the callers' stay in registers) */
     if (d->use_comp) {
-        psi = psi_cal + (theta_norm ? ls_lut_step_norm(d->cfg.comp, theta_est) : ls_lut_step(d->cfg.comp, theta_est));
+        psi = psi_cal +
+              (theta_norm ? ls_lut_step_norm(d->cfg.comp, theta_est) : ls_lut_step(d->cfg.comp, theta_est));
     }
 #ifdef LS_REAL_DOUBLE
     c = cos(psi);
@@ -164,13 +165,6 @@ static inline LS_REAL ls_demod_comp_(const ls_demod *d, LS_REAL theta_est, LS_RE
     return psi;
 }
 
-/* ls_demod_comp_ for any theta_est. */
-static inline LS_REAL ls_demod_comp(const ls_demod *d, LS_REAL theta_est, LS_REAL psi_cal, LS_REAL *c_psi,
-                                    LS_REAL *s_psi)
-{
-    return ls_demod_comp_(d, theta_est, psi_cal, c_psi, s_psi, false);
-}
-
 /* ls_demod_comp_ for theta_est in [0, 2 pi) (an ls_pos's theta: ls_drive's steps). */
 static inline LS_REAL ls_demod_comp_norm(const ls_demod *d, LS_REAL theta_est, LS_REAL psi_cal, LS_REAL *c_psi,
                                          LS_REAL *s_psi)
@@ -183,7 +177,7 @@ static inline LS_REAL ls_demod_step_cs(ls_demod *d, LS_REAL i_a, LS_REAL i_b, LS
                                        LS_REAL psi_cal)
 {
     LS_REAL c_psi, s_psi;
-    const LS_REAL psi = ls_demod_comp(d, theta_est, psi_cal, &c_psi, &s_psi);
+    const LS_REAL psi = ls_demod_comp_(d, theta_est, psi_cal, &c_psi, &s_psi, false);
     return ls_demod_step_psi(d, i_a, i_b, theta_est, c_est, s_est, car_c, car_s, psi, c_psi, s_psi);
 }
 

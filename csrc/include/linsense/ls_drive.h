@@ -233,9 +233,6 @@ typedef struct {
                             the rotating injection with sep the notch at bpf's f0 and q or the
                             square wave, or the encoder modes' */
     LS_REAL enc_k;       /* rad, 2 pi / enc_counts: the angle of one encoder count */
-    bool sep_notch;      /* sep is a notch (else a low-pass): ls_biquad_step_notch */
-    bool sep_cpl;        /* sep is the notch at bpf's f0 and q, 1 - bpf (cookbook designs): the
-                            rotating step's band-passed current is the current less sep's output */
     /* LS_MODE_STARTUP: while it runs, mode holds LS_MODE_OFF and starting is set, so that
      * ls_drive_step's other modes pay nothing for it (it is dispatched from the outputs-off branch) */
     bool starting;       /* the start-up sequence runs (cmd.mode reports LS_MODE_STARTUP) */
