@@ -163,6 +163,7 @@ bench: $(GEN_HDR) tools
 	$(PY) tools/bench_fea.py
 	$(PY) tools/bench_reproduce.py
 	$(PY) tools/bench_saturation.py
+	$(PY) tools/bench_tune.py
 
 clean:
 	rm -rf $(BUILD) out

@@ -392,16 +392,29 @@ def calibrate(motor_spec: str, positions: int, load: float, fidelity: str, quad:
               help="current-sensor noise, A rms per phase (a 12-bit ADC over +-10 A on top), for the "
                    "pulse pairs")
 @click.option("--name", default=None, help="C name suffix (default: the motor name)")
+@click.option("--v-max", type=float, default=None, callback=_finite(0.0, True),
+              help="the application's top speed, m/s (default 0.2): speed cap, trips, verification")
+@click.option("--a-max", type=float, default=None, callback=_finite(0.0, True),
+              help="the application's acceleration, m/s^2 (default 1)")
+@click.option("--load", type=float, default=None, callback=_finite(0.0, False),
+              help="the rated load force, N (default half of K_f i_max): verification's loads")
+@click.option("--travel", type=float, default=None, callback=_finite(0.0, True),
+              help="the stroke, mm (default: unbounded)")
+@click.option("--quick", is_flag=True, help="verify at 8 positions on the nominal plant only")
+@click.option("--no-verify", is_flag=True, help="do not run the verification")
 @click.option("--out", required=True, type=click.Path(dir_okay=False), help="output file")
 def tune(motor_spec: str, scenario_path: str | None, v_dc, f_pwm, dead_time, i_max, v_inj, f_inj, quad,
-         fmt: str, polarity: float | None, current_noise: float, name: str | None, out: str) -> None:
+         fmt: str, polarity: float | None, current_noise: float, name: str | None, v_max, a_max, load,
+         travel, quick: bool, no_verify: bool, out: str) -> None:
     """Design the drive for a motor: injection, current loop, demodulator, observer, speed and
-    position loops (docs/tuning.md); print the design and its margins; write a scenario or a C header."""
+    position loops, limits and trips (docs/tuning.md); print the design and its margins; write a
+    scenario or a C header; then verify it in the simulator (switching inverter with dead time) and
+    write verification.json and verification.png beside the output (exit 1 if a check fails)."""
     from linsense.io import write_atomic
     from linsense.sim.build import drive_data
     from linsense.sim.scenario import load_scenario
     from linsense.tune.design import DriveData, design
-    from linsense.tune.export import c_header, scenario_toml
+    from linsense.tune.export import c_header, scenario_dict, scenario_toml
 
     base, base_dir, src = None, None, motor_spec
     dd = DriveData()
@@ -411,7 +424,8 @@ def tune(motor_spec: str, scenario_path: str | None, v_dc, f_pwm, dead_time, i_m
         base.pop("motor", None)
         dd = drive_data(sc)
     for key, val in (("v_dc", v_dc), ("f_pwm", f_pwm), ("dead_time", dead_time), ("i_max", i_max),
-                     ("v_inj", v_inj), ("f_inj", f_inj), ("quad", quad)):
+                     ("v_inj", v_inj), ("f_inj", f_inj), ("quad", quad), ("v_max", v_max), ("a_max", a_max),
+                     ("load", load), ("travel", None if travel is None else travel * 1e-3)):
         if val is not None:
             setattr(dd, key, val)
     motor = _load(motor_spec)
@@ -434,6 +448,42 @@ def tune(motor_spec: str, scenario_path: str | None, v_dc, f_pwm, dead_time, i_m
                    "in the motor file)")
     for w in dz.warnings + (su.warnings if su is not None else []):
         click.echo(f"linsense: warning: {w}", err=True)
+    if no_verify:
+        return
+    _verify_tuned(motor, motor_spec, scenario_dict(dz, dd, motor_spec, base, startup=su), base_dir, dd, dz,
+                  quick, Path(out))
+
+
+def _verify_tuned(motor, motor_spec: str, base: dict, base_dir, dd, dz, quick: bool, out: Path) -> None:
+    """Run the certificate of the tuned drive, print it, write verification.json and .png beside
+    ``out``; exit 1 when a check fails."""
+    import json
+
+    from linsense.io import write_atomic
+    from linsense.model.motor import names_a_file
+    from linsense.report.verify_figures import certificate_figure
+    from linsense.verify.certificate import verify
+
+    spec = str(Path(motor_spec).resolve()) if names_a_file(motor_spec) else motor_spec
+    base = dict(base)
+    base.pop("control", None)  # (the certificate judges the sensorless drive)
+    cert = verify(motor, spec, base, str(base_dir or Path.cwd()), v_max=dd.v_max, a_max=dd.a_max,
+                  load=dz.load, quick=quick)
+    for line in cert.lines():
+        click.echo(line)
+    folder = out.resolve().parent
+    doc = cert.as_dict()
+    doc.update(motor=motor.name, drive={k: v for k, v in vars(dd).items()},
+               design={k: v for k, v in dz.as_dict().items() if k not in ("margins", "warnings")})
+    click.echo(str(write_atomic(folder / "verification.json", json.dumps(doc, indent=1, sort_keys=True) + "\n")))
+    fig = certificate_figure(cert.rows, f"{motor.name}: {'verified' if cert.passed else 'NOT verified'}")
+    import io
+
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=100, metadata={"Software": None})
+    click.echo(str(write_atomic(folder / "verification.png", buf.getvalue())))
+    if not cert.passed:
+        raise click.exceptions.Exit(1)
 
 
 @cli.command("fea")
@@ -506,22 +556,40 @@ def sweep_cmd(sweep_file: str, out: str, workers: int | None, scheduler: str | N
     click.echo(f"{sw.name}: {line}")
 
 
+def motor_pitch(dd, dz) -> float:
+    """m/s per electrical rad/s of the design (from its speed cap and trip)."""
+    from linsense.tune.design import OVERSPEED_MARGIN
+
+    return dz.v_cap * OVERSPEED_MARGIN / dz.omega_trip if dz.omega_trip else float("nan")
+
+
 def design_lines(dz, motor_name: str, dd) -> list[str]:
     """The design as a person reads it."""
+    from linsense.tune.design import (  # noqa: F401 (the printed ratios)
+        CURRENT_TRIP_MARGIN,
+        RATIO_INJ_CURRENT,
+        RATIO_LPF,
+        SPEED_CAP_MARGIN,
+    )
     lines = [
         f"design for {motor_name}: {dd.v_dc:g} V bus, {dd.f_pwm:g} Hz PWM, "
         f"{dd.dead_time * 1e6:g} us dead time, "
         f"i_max {dd.i_max:g} A",
         f"  injection      {dz.v_inj:.4g} V at {dz.f_inj:g} Hz on d, kappa {dz.quad:g} on q: HF current "
         f"{dz.i_hf:.3g} A; fundamental fits up to {dz.headroom_speed:.3g} m/s at i_max",
-        f"  current loop   {dz.current_bw:.4g} Hz (f_inj / 4): kp {dz.current_kp:.4g} V/A, "
+        f"  current loop   {dz.current_bw:.4g} Hz (f_inj / {RATIO_INJ_CURRENT:g}): kp {dz.current_kp:.4g} V/A, "
         f"ki {dz.current_ki:.4g} V/(A s)",
-        f"  demodulator    low-pass {dz.demod_lpf:.4g} Hz (0.3 f_inj), zeros at {dz.demod_notch:g} Hz; gain "
+        f"  demodulator    low-pass {dz.demod_lpf:.4g} Hz ({RATIO_LPF:g} f_inj), zeros at {dz.demod_notch:g} Hz; gain "
         f"{dz.demod_gain:.4g}, scheduled (local error gain {dz.k_e_min:.2f}..{dz.k_e_max:.2f} unscheduled)",
-        f"  observer       {dz.observer_bw:.4g} Hz PLL (low-pass / 7.5)",
-        f"  speed loop     {dz.speed_bw:.4g} Hz (observer / 10): kp {dz.speed_kp:.4g} N s/m, "
+        f"  observer       {dz.observer_bw:.4g} Hz PLL (limited by {dz.limits.get('observer', '')})",
+        f"  speed loop     {dz.speed_bw:.4g} Hz ({dz.limits.get('speed loop', '')}): kp {dz.speed_kp:.4g} N s/m, "
         f"ki {dz.speed_ki:.4g} N/m",
-        f"  position loop  kp_x {dz.kp_x:.4g} 1/s (speed w / 2.5)",
+        f"  position loop  kp_x {dz.kp_x:.4g} 1/s ({dz.limits.get('position loop', '')})",
+        f"  limits         speed cap {dz.v_cap:.3g} m/s ({SPEED_CAP_MARGIN:g} v_max), over-speed trip "
+        f"{dz.omega_trip:.4g} rad/s ({dz.omega_trip * motor_pitch(dd, dz) :.3g} m/s), observer clamp "
+        f"{dz.omega_obs:.4g} rad/s, over-current trip {dz.i_trip:.3g} A ({CURRENT_TRIP_MARGIN:g} x (i_max + HF "
+        f"peak)); rated load {dz.load:.3g} N",
+        f"  injection rule {dz.limits.get('injection', '')}",
         f"  calibration    dither {dz.dither_a:.3g} A at {dz.dither_hz:.4g} Hz",
         "  margins (linearised model: phase margin, gain margin up / down, crossover):",
     ]

@@ -50,8 +50,23 @@ RATIO_LPF = 0.3
 RATIO_LPF_OBS = 7.5
 RATIO_OBS_SPEED = 10.0
 RATIO_SPEED_POS = 2.5
-INJ_BUS_FRACTION = 1.0 / 6.0
-INJ_CURRENT_MAX = 0.3  # of i_max
+#: the injection (docs/tuning.md, "The injection amplitude"): the dead-time voltage error
+#: T_d f_pwm V_dc at most DEAD_TIME_RATIO times the weakest HF error signal's voltage
+#: V_inj s_min (s = (L_q - L_d)/(L_q + L_d), its lowest over the period), within the bus shares
+#: below and the HF current limit; beyond DEAD_TIME_RATIO_MAX at the largest allowed amplitude no
+#: design can hold everywhere (refused before simulating)
+DEAD_TIME_RATIO = 1.25
+DEAD_TIME_RATIO_MAX = 4.0
+INJ_BUS_MIN = 1.0 / 8.0  # of V_dc
+INJ_BUS_MAX = 1.0 / 6.0  # of V_dc
+INJ_CURRENT_MAX = 0.4  # HF current, of i_max
+#: the limits, with their margins over what the application needs (docs/tuning.md, "The limits")
+SPEED_CAP_MARGIN = 1.25  # speed-reference cap over the application's v_max
+OVERSPEED_MARGIN = 1.6  # over-speed trip over the speed cap
+OBSERVER_SPEED_MARGIN = 1.25  # observer speed clamp over the over-speed trip
+CURRENT_TRIP_MARGIN = 1.3  # over-current trip over i_max plus the HF current's peak
+FORCE_MARGIN = 0.8  # the application's force (load + m a_max) at most this share of K_f i_max
+RATED_LOAD_FRACTION = 0.5  # rated load, of K_f i_max, when the application does not give it
 QUAD = 0.9
 DITHER_CURRENT = 0.16  # of i_max
 DITHER_FREQ = 0.15  # of f_inj
@@ -67,7 +82,10 @@ class DriveData:
     f_pwm: float = 16000.0  # Hz, PWM = control rate
     dead_time: float = 0.8e-6  # s
     i_max: float = 2.5  # A, current-reference limit
-    v_max: float = 0.2  # m/s, the fastest move the drive must make (bus headroom check)
+    v_max: float = 0.2  # m/s, the fastest move the drive must make (speed cap, trips, bus headroom)
+    a_max: float = 1.0  # m/s^2, the application's acceleration (force check, verification)
+    load: float | None = None  # N, rated load (None: RATED_LOAD_FRACTION K_f i_max)
+    travel: float | None = None  # m, the stroke (None: unbounded)
     v_inj: float | None = None  # V, injection amplitude (None: designed)
     f_inj: float | None = None  # Hz, injection frequency (None: designed)
     quad: float = QUAD  # -, elliptical share on q (0: the paper's pulsating injection)
@@ -98,6 +116,14 @@ class Design:
     k_e_max: float
     margins: dict = field(default_factory=dict)
     headroom_speed: float = math.nan  # m/s, speed up to which the fundamental fits beside the injection
+    dead_time_ratio: float = math.nan  # -, T_d f_pwm V_dc / (V_inj s_min)
+    s_min: float = math.nan  # -, lowest (L_q - L_d)/(L_q + L_d) over the period
+    v_cap: float = math.nan  # m/s, speed-reference cap (controller.v_max)
+    omega_trip: float = math.nan  # rad/s electrical, over-speed trip (protection.omega_max)
+    omega_obs: float = math.nan  # rad/s electrical, observer speed clamp (observer.omega_max)
+    i_trip: float = math.nan  # A, over-current trip (protection.i_max)
+    load: float = math.nan  # N, rated load the verification uses
+    limits: dict = field(default_factory=dict)  # what limits each bandwidth (docs/tuning.md)
     warnings: list = field(default_factory=list)
 
     def as_dict(self) -> dict:
@@ -133,7 +159,7 @@ def design(
     """Design the drive for ``motor``; bad drive data end in :class:`InputError` naming ``source``.
     ``analyse``: also compute the margins of the linearised model (python-control)."""
     d = drive or DriveData()
-    for key in ("v_dc", "f_pwm", "i_max", "v_max"):
+    for key in ("v_dc", "f_pwm", "i_max", "v_max", "a_max"):
         v = getattr(d, key)
         if not (math.isfinite(v) and v > 0):
             raise InputError(source, key, f"must be a positive number, got {v!r}")
@@ -151,10 +177,21 @@ def design(
             source, "f_inj", f"must be positive and at most f_pwm / 4 = {d.f_pwm / 4:g} Hz, got {f_inj:g}"
         )
     z = abs(complex(motor.R_s, 2.0 * math.pi * f_inj * 0.5 * (L_d + L_q)))
+    s_min = saliency_min(motor)
+    dv_dt = d.dead_time * d.f_pwm * d.v_dc
+    v_top = min(d.v_dc * INJ_BUS_MAX, INJ_CURRENT_MAX * d.i_max * z)
     if d.v_inj is not None:
         v_inj = d.v_inj
     else:
-        v_inj = min(d.v_dc * INJ_BUS_FRACTION, INJ_CURRENT_MAX * d.i_max * z)
+        if dv_dt / (v_top * s_min) > DEAD_TIME_RATIO_MAX:
+            raise InputError(
+                source, "dead_time",
+                f"the dead time's voltage error T_d f_pwm V_dc = {dv_dt:.3g} V is "
+                f"{dv_dt / (v_top * s_min):.2g} times the weakest HF error signal (V_inj s_min = "
+                f"{v_top:.3g} V x {s_min:.3g}) at the largest injection allowed (limit "
+                f"{DEAD_TIME_RATIO_MAX:g}): the saliency is too small for this dead time at this bus; "
+                "lower the dead time or the PWM rate, or raise i_max")
+        v_inj = min(max(dv_dt / (DEAD_TIME_RATIO * s_min), d.v_dc * INJ_BUS_MIN), v_top)
     if not (v_inj > 0):
         raise InputError(source, "v_inj", f"must be positive, got {v_inj!r}")
     v_lin = d.v_dc / math.sqrt(3.0)
@@ -234,7 +271,10 @@ def design(
         k_e_max=float(k_e.max()),
         headroom_speed=headroom,
         warnings=warnings,
+        dead_time_ratio=dv_dt / (v_inj * s_min),
+        s_min=s_min,
     )
+    _limits(dz, motor, d, warnings)
     if not analyse:
         return dz
     dz.margins = margins(dz, motor, d)
@@ -245,6 +285,47 @@ def design(
         if pm is None or pm < 30.0 or (gm is not None and gm < 6.0):
             warnings.append(f"{name}: phase margin {pm} deg, gain margin {gm} dB (below 30 deg / 6 dB)")
     return dz
+
+
+def saliency_min(motor: Motor, n: int = 360) -> float:
+    """The lowest local saliency ratio ``(L_q - L_d)/(L_q + L_d)`` over the period (-): the
+    weakest HF error signal, relative (docs/tuning.md, "The injection amplitude")."""
+    from linsense.analysis.hf import dq_components
+
+    L_d, L_q, _ = dq_components(motor, np.linspace(0.0, 2.0 * np.pi, n, endpoint=False))
+    return float(np.min((L_q - L_d) / (L_q + L_d)))
+
+
+def _limits(dz: Design, motor: Motor, d: DriveData, warnings: list) -> None:
+    """The speed cap, the trips and the observer's clamp with their margins over the application
+    (docs/tuning.md, "The limits"); the rated load. Fills ``dz`` in place."""
+    w_per_v = 2.0 * math.pi / motor.pole_pitch  # electrical rad/s per m/s
+    f_max = motor.force_constant * d.i_max
+    dz.load = d.load if d.load is not None else RATED_LOAD_FRACTION * f_max
+    if not (math.isfinite(dz.load) and dz.load >= 0.0):
+        raise InputError("<tune>", "load", f"must be a force >= 0 N, got {dz.load!r}")
+    need = dz.load + motor.mass * d.a_max
+    if need > FORCE_MARGIN * f_max:
+        warnings.append(
+            f"the application needs {need:.3g} N (load {dz.load:.3g} N + m a_max "
+            f"{motor.mass * d.a_max:.3g} N), over {FORCE_MARGIN:g} of K_f i_max = {f_max:.3g} N: "
+            "raise i_max or lower a_max / the load")
+    dz.v_cap = SPEED_CAP_MARGIN * d.v_max
+    dz.omega_trip = OVERSPEED_MARGIN * dz.v_cap * w_per_v
+    dz.omega_obs = OBSERVER_SPEED_MARGIN * dz.omega_trip
+    th = np.linspace(0.0, 2.0 * np.pi, 90, endpoint=False)
+    i_hf_peak = float(np.max(hf_current_amplitude(motor, th, dz.v_inj, dz.f_inj))) * math.hypot(1.0, dz.quad)
+    dz.i_trip = CURRENT_TRIP_MARGIN * (d.i_max + i_hf_peak)
+    if dz.v_cap > dz.headroom_speed:
+        warnings.append(f"the speed cap {dz.v_cap:.3g} m/s ({SPEED_CAP_MARGIN:g} v_max) is beyond the "
+                        f"{dz.headroom_speed:.3g} m/s up to which the bus drives i_max beside the injection")
+    dz.limits = {
+        "injection": (f"dead-time error {dz.dead_time_ratio:.2g} x the weakest error signal "
+                      f"(target {DEAD_TIME_RATIO:g}; bus share {dz.v_inj / d.v_dc:.3g} V_dc)"),
+        "observer": f"the demodulator's low-pass ({dz.demod_lpf:.4g} Hz) / {RATIO_LPF_OBS:g}",
+        "speed loop": f"the observer / {RATIO_OBS_SPEED:g}",
+        "position loop": f"the speed loop's w / {RATIO_SPEED_POS:g}",
+    }
 
 
 def _observer_gains(f_bw: float) -> tuple[float, float]:

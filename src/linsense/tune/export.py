@@ -40,6 +40,7 @@ def scenario_dict(dz: Design, drive: DriveData, motor_ref: str, base: dict | Non
             "bandwidth_hz": _r(dz.observer_bw),
             "demod_lpf_hz": _r(dz.demod_lpf),
             "gain_schedule": True,
+            "omega_max": _r(dz.omega_obs),
         }
     )
     for k in ("k1", "k2", "k3"):
@@ -52,6 +53,7 @@ def scenario_dict(dz: Design, drive: DriveData, motor_ref: str, base: dict | Non
             "current_bandwidth_hz": _r(dz.current_bw),
             "speed_bandwidth_hz": _r(dz.speed_bw),
             "i_max": drive.i_max,
+            "v_max": _r(dz.v_cap),
         }
     )
     if con.get("position_type", "p") == "p":
@@ -61,6 +63,11 @@ def scenario_dict(dz: Design, drive: DriveData, motor_ref: str, base: dict | Non
     prot = sc.setdefault("protection", {})
     prot.setdefault("v_dc_min", _r(drive.v_dc * V_DC_MIN_FRACTION))
     prot.setdefault("v_dc_max", _r(drive.v_dc * V_DC_MAX_FRACTION))
+    prot.update({"omega_max": _r(dz.omega_trip), "i_max": _r(dz.i_trip)})
+    ref = sc["reference"]
+    if ref.get("type") == "trajectory":
+        ref.setdefault("v_max", drive.v_max)
+        ref.setdefault("a_max", drive.a_max)
     if startup is not None and sc.get("control", {}).get("mode") == "startup":
         sc.setdefault("startup", {}).update(startup.scenario_keys())
     return sc
@@ -145,6 +152,13 @@ def c_header(dz: Design, drive: DriveData, motor: Motor, name: str | None = None
         ("current.psi_pm", motor.psi_pm),
         ("current.fs", drive.f_pwm),
         ("pos.kp_x", dz.kp_x),
+        ("pos.v_max", dz.v_cap),
+        ("obs.omega_max", dz.omega_obs),
+        ("enc_obs.omega_max", dz.omega_obs),
+        ("prot.omega_max", dz.omega_trip),
+        ("prot.i_max", dz.i_trip),
+        ("traj.v_max", drive.v_max),
+        ("traj.a_max", drive.a_max),
         ("pos.mass", motor.mass),
         ("pos.force_max", force_max),
         ("pos.speed.kp", dz.speed_kp),

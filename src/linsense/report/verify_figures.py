@@ -1,0 +1,60 @@
+"""The certificate's figure (``linsense tune``): the holds' error against position and load, the
+off-nominal plants' errors, the steps and the trajectory (docs/tuning.md, "The certificate")."""
+
+from __future__ import annotations
+
+from matplotlib.figure import Figure
+
+from linsense.verify import criteria as C
+
+
+def certificate_figure(rows: list[dict], title: str) -> Figure:
+    """Four panels from the certificate's judged runs (rows of :func:`linsense.verify.run.judge`)."""
+    fig = Figure(figsize=(11, 8), layout="constrained")
+    ax = fig.subplots(2, 2)
+    fig.suptitle(title)
+    a = ax[0, 0]
+    for lf in C.HOLD_LOADS:
+        rs = [r for r in rows if r["kind"] == "hold" and r["plant"] == "nominal" and "err_deg" in r
+              and (r["load_n"] > 0) == (lf > 0) and (r["load_n"] < 0) == (lf < 0)]
+        if not rs:
+            continue
+        pos = [r["position_deg"] for r in rs]
+        line, = a.plot(pos, [r["err_deg"] for r in rs], "o-", label=f"|x - target|, {rs[0]['load_n']:+.3g} N")
+        a.plot(pos, [r["pp_deg"] for r in rs], "x--", color=line.get_color(), label=f"p-p, {rs[0]['load_n']:+.3g} N")
+    a.axhline(C.HOLD_ERR_DEG, color="k", lw=0.8)
+    a.axhline(C.HOLD_PP_DEG, color="k", lw=0.8, ls=":")
+    a.set(title="holds, nominal plant", xlabel="position (electrical deg)", ylabel="electrical deg",
+          yscale="log")
+    if a.get_legend_handles_labels()[0]:
+        a.legend(fontsize=7)
+    a = ax[0, 1]
+    for plant in C.OFF_NOMINAL:
+        rs = [r for r in rows if r["kind"] == "hold" and r["plant"] == plant and "err_deg" in r
+              and r["load_n"] == 0.0]
+        if rs:
+            a.plot([r["position_deg"] for r in rs], [r["err_deg"] for r in rs], ".-", label=plant)
+    a.axhline(C.OFF_ERR_DEG, color="k", lw=0.8)
+    a.set(title="holds at no load, off-nominal plants (nominal LUT)", xlabel="position (electrical deg)",
+          ylabel="|x - target| (electrical deg)")
+    if a.get_legend_handles_labels()[0]:
+        a.legend(fontsize=7)
+    a = ax[1, 0]
+    for r in rows:
+        if r["kind"] in ("step", "load_step") and "trace" in r:
+            tr = r["trace"]
+            a.plot(tr["t"], tr["x_deg"], label=r["case"])
+    a.axhspan(-C.SETTLE_BAND_DEG, C.SETTLE_BAND_DEG, color="0.85")
+    a.set(title="steps and load step: x - target", xlabel="t (s)", ylabel="electrical deg", ylim=(-20, 20))
+    if a.get_legend_handles_labels()[0]:
+        a.legend(fontsize=7)
+    a = ax[1, 1]
+    for r in rows:
+        if r["kind"] == "trajectory" and "trace" in r:
+            tr = r["trace"]
+            a.plot(tr["t"], tr["err_deg"], label="estimation error")
+            a.legend(fontsize=7)
+    a.axhspan(-C.TRAJ_PEAK_ERR_DEG, C.TRAJ_PEAK_ERR_DEG, color="0.9")
+    a.axhspan(-C.TRAJ_REST_ERR_DEG, C.TRAJ_REST_ERR_DEG, color="0.8")
+    a.set(title="trajectory with the rated load", xlabel="t (s)", ylabel="electrical deg")
+    return fig

@@ -1,0 +1,142 @@
+"""The runs of the certificate (docs/tuning.md, "The certificate"): holds over the period at
+three loads, two steps, a trajectory and a load step on the nominal plant; the holds again on the
+off-nominal plants. Every run is the tuned scenario on the switching inverter with the drive's
+dead time; only the reference, the load and (off-nominal) the plant change.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from linsense.model.inductance import InductanceModel
+from linsense.model.motor import Motor
+from linsense.sim.build import trapezoid_time
+from linsense.verify import criteria as C
+
+
+@dataclass(frozen=True)
+class Case:
+    """One verification run.
+
+    ``kind``: ``hold``, ``step``, ``trajectory`` or ``load_step``; ``plant``: the off-nominal
+    name (a key of :data:`~linsense.verify.criteria.OFF_NOMINAL`) or ``"nominal"``; ``sections``:
+    the scenario sections this run sets over the tuned scenario; ``target`` (m): where the mover
+    must end; ``t_event`` (s): the step, the move's start or the load step."""
+
+    name: str
+    kind: str
+    plant: str
+    sections: dict = field(hash=False)
+    target: float = 0.0
+    t_event: float = 0.0
+    t_end_move: float = 0.0
+    load: float = 0.0
+    position_deg: float = 0.0
+
+
+def hold_cases(tau: float, load_rated: float, n_pos: int, plant: str = "nominal",
+               loads=C.HOLD_LOADS) -> list[Case]:
+    """Holds at ``n_pos`` positions over the period (offset by half a step from 0, so the grid does
+    not sit on the symmetric positions only) at ``loads`` (fractions of ``load_rated``)."""
+    out = []
+    for k in range(n_pos):
+        deg = 360.0 * (k + 0.37) / n_pos
+        x0 = tau * deg / 360.0
+        for lf in loads:
+            f = lf * load_rated
+            out.append(Case(
+                name=f"hold {deg:.1f} deg, {f:+.3g} N", kind="hold", plant=plant,
+                sections={"scenario": {"duration": C.HOLD_SETTLE_S + C.END_WINDOW_S},
+                          "reference": {"type": "hold"}, "initial": {"position_mm": x0 * 1e3,
+                                                                      "load_balanced": True},
+                          "load": {"type": "constant", "force": f}},
+                target=x0, position_deg=deg, load=f))
+    return out
+
+
+def step_cases(tau: float) -> list[Case]:
+    """Steps of :data:`~linsense.verify.criteria.STEP_FRACTIONS` of the pole pitch from rest."""
+    out = []
+    t0 = 0.05
+    x0 = tau * 0.37 / C.POSITIONS
+    for frac in C.STEP_FRACTIONS:
+        x1 = x0 + frac * tau
+        out.append(Case(
+            name=f"step {frac:g} pole pitch ({frac * tau * 1e3:.3g} mm)", kind="step", plant="nominal",
+            sections={"scenario": {"duration": t0 + C.STEP_SETTLE_S + C.END_WINDOW_S + 0.1},
+                      "reference": {"type": "step", "position_mm": x1 * 1e3, "at": t0},
+                      "initial": {"position_mm": x0 * 1e3}},
+            target=x1, t_event=t0, t_end_move=t0))
+    return out
+
+
+def trajectory_case(tau: float, v_max: float, a_max: float, load_rated: float) -> Case:
+    """Out over :data:`~linsense.verify.criteria.TRAJ_PITCHES` pole pitches and back, at the
+    application's speed and acceleration, against the rated load."""
+    x0 = tau * 0.37 / C.POSITIONS
+    x1 = x0 + C.TRAJ_PITCHES * tau
+    t0, dwell = 0.1, 0.3
+    dur = trapezoid_time(x1 - x0, v_max, a_max)
+    t_end = t0 + 2.0 * dur + dwell + 0.01
+    return Case(
+        name=f"trajectory {C.TRAJ_PITCHES:g} pole pitches and back, {v_max:g} m/s, {a_max:g} m/s^2, "
+             f"{load_rated:.3g} N", kind="trajectory", plant="nominal",
+        sections={"scenario": {"duration": t_end + C.END_WINDOW_S + 0.2},
+                  "reference": {"type": "trajectory", "waypoints_mm": [x1 * 1e3, x0 * 1e3], "at": t0,
+                                "v_max": v_max, "a_max": a_max, "dwell": dwell},
+                  "initial": {"position_mm": x0 * 1e3, "load_balanced": True},
+                  "load": {"type": "constant", "force": load_rated}},
+        target=x0, t_event=t0, t_end_move=t_end, load=load_rated)
+
+
+def load_step_case(tau: float, load_rated: float) -> Case:
+    """A step of :data:`~linsense.verify.criteria.LOAD_STEP_FRACTION` of the rated load while
+    holding."""
+    x0 = tau * 0.37 / C.POSITIONS
+    t0 = 0.3
+    f = C.LOAD_STEP_FRACTION * load_rated
+    return Case(
+        name=f"load step 0 -> {f:.3g} N while holding", kind="load_step", plant="nominal",
+        sections={"scenario": {"duration": t0 + C.LOAD_RECOVER_S + C.END_WINDOW_S},
+                  "reference": {"type": "hold"}, "initial": {"position_mm": x0 * 1e3},
+                  "load": {"type": "step", "force": 0.0, "force_after": f, "time": t0}},
+        target=x0, t_event=t0, load=f)
+
+
+def all_cases(tau: float, v_max: float, a_max: float, load_rated: float, quick: bool) -> list[Case]:
+    """The certificate's runs: ``quick`` is the nominal holds at
+    :data:`~linsense.verify.criteria.POSITIONS_QUICK` positions and the steps."""
+    if quick:
+        return hold_cases(tau, load_rated, C.POSITIONS_QUICK) + step_cases(tau)
+    cases = hold_cases(tau, load_rated, C.POSITIONS) + step_cases(tau)
+    cases += [trajectory_case(tau, v_max, a_max, load_rated), load_step_case(tau, load_rated)]
+    for name in C.OFF_NOMINAL:
+        cases += hold_cases(tau, load_rated, C.POSITIONS, plant=name)
+    return cases
+
+
+def off_nominal_motor(motor: Motor, name: str) -> Motor:
+    """``motor`` with the tolerance ``name`` applied: every inductance scaled, R_s scaled, and the
+    end-effect (the part of the mean mutuals M_BC, M_CA beyond M_AB, eq. 3's dM0) scaled."""
+    if name == "nominal":
+        return motor
+    k_l, k_r, k_e = C.OFF_NOMINAL[name]
+    ind = motor.inductance
+    a, b = np.array(ind.a) * k_l, np.array(ind.b) * k_l
+    d_m0 = 0.5 * (a[4, 0] + a[5, 0]) - a[3, 0]
+    a[4, 0] += (k_e - 1.0) * d_m0
+    a[5, 0] += (k_e - 1.0) * d_m0
+    new = InductanceModel(a, b, description=f"{ind.description} ({name})")
+    return dataclasses.replace(motor, name=f"{motor.name} ({name})", R_s=motor.R_s * k_r, inductance=new)
+
+
+def deg_of(x: np.ndarray | float, tau: float) -> np.ndarray | float:
+    """Metres -> electrical degrees."""
+    return np.asarray(x) * (360.0 / tau) if not isinstance(x, float) else x * 360.0 / tau
+
+
+__all__ = ["Case", "all_cases", "off_nominal_motor", "hold_cases", "step_cases", "trajectory_case",
+           "load_step_case", "deg_of"]

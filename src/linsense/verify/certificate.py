@@ -1,0 +1,150 @@
+"""The certificate of a designed drive: its runs grouped into checks, each with its number, its
+bound, and where it fails the likely cause and what to change (docs/tuning.md, "The certificate").
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+from linsense.model.motor import Motor
+from linsense.verify import criteria as C
+from linsense.verify.cases import all_cases
+from linsense.verify.run import run_cases
+
+#: the likely cause of a failed check and what to change
+REMEDY = {
+    "limit cycle": ("the dead time acts as a relay where the saliency is weak: more injection voltage "
+                    "(--v-inj), less dead time, or lower bandwidths"),
+    "error": ("a steady estimation bias (dead time or model error): calibrate the LUT on the bench "
+              "(linsense calibrate) or raise the injection voltage"),
+    "settle": "a faster position loop or a higher speed cap (--v-max), within the observer's bandwidth",
+    "trajectory": "a smaller speed or acceleration (--v-max, --a-max) or a faster observer",
+    "load": "a stiffer position/speed loop, or a smaller load step",
+    "fault": "see the fault: overspeed -> raise --v-max; overcurrent -> raise --i-max or lower --a-max",
+    "off-nominal": ("the LUT and gains depend on this parameter: identify the motor (linsense identify) "
+                    "or calibrate the LUT (linsense calibrate)"),
+}
+
+
+@dataclass
+class Check:
+    """One line of the certificate."""
+
+    name: str
+    passed: bool
+    value: str
+    bound: str
+    cause: str = ""
+    runs: int = 0
+    failed: int = 0
+
+    def line(self) -> str:
+        mark = "PASS" if self.passed else "FAIL"
+        out = f"  {mark}  {self.name:34s} {self.value}  (bound {self.bound}; {self.runs - self.failed}/{self.runs} runs)"
+        if not self.passed and self.cause:
+            out += f"\n        likely: {self.cause}"
+        return out
+
+
+@dataclass
+class Certificate:
+    """The checks, the runs behind them and the wall time of the verification."""
+
+    checks: list[Check]
+    rows: list[dict]
+    wall_s: float
+    quick: bool
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def passed(self) -> bool:
+        return all(c.passed for c in self.checks)
+
+    def lines(self) -> list[str]:
+        n = len(self.rows)
+        head = (f"verification ({'quick: ' if self.quick else ''}{n} runs, switching inverter with the drive's "
+                f"dead time, {self.wall_s:.1f} s):")
+        tail = ("verified: every check passed" if self.passed else
+                f"NOT verified: {sum(not c.passed for c in self.checks)} of {len(self.checks)} checks failed")
+        return [head] + [c.line() for c in self.checks] + [tail]
+
+    def as_dict(self) -> dict:
+        runs = [{k: v for k, v in r.items() if k not in ("trace", "wall_s")} for r in self.rows]
+        return {"passed": self.passed, "quick": self.quick,
+                "checks": [c.__dict__ for c in self.checks], "runs": runs, **self.extra}
+
+
+def _cause(rows: list[dict]) -> str:
+    whys = " ".join(r["why"] for r in rows if not r["passed"])
+    if "fault" in whys or "did not finish" in whys:
+        return REMEDY["fault"]
+    if "limit cycle" in whys:
+        return REMEDY["limit cycle"]
+    return REMEDY["error"]
+
+
+def _hold_check(name: str, rows: list[dict], lim_err: float, extra_cause: str = "") -> Check:
+    ok = [r for r in rows if "err_deg" in r]
+    failed = [r for r in rows if not r["passed"]]
+    e = max((r["err_deg"] for r in ok), default=float("nan"))
+    pp = max((r["pp_deg"] for r in ok), default=float("nan"))
+    value = f"|x - target| <= {e:.3g} deg, p-p <= {pp:.3g} deg"
+    if failed:
+        worst = failed[0]
+        value += f"; e.g. {worst['case']}: {worst['why']}"
+    return Check(name, not failed, value, f"{lim_err:g} deg, {C.HOLD_PP_DEG:g} deg p-p, no fault",
+                 extra_cause or (_cause(rows) if failed else ""), len(rows), len(failed))
+
+
+def checks(rows: list[dict]) -> list[Check]:
+    """The certificate's checks from the judged runs."""
+    out = []
+    nominal = [r for r in rows if r["kind"] == "hold" and r["plant"] == "nominal"]
+    out.append(_hold_check("holds, nominal plant", nominal, C.HOLD_ERR_DEG))
+    e_nom = max((r.get("err_deg", 0.0) for r in nominal), default=0.0)
+    for r in rows:
+        if r["kind"] == "step":
+            ts = r.get("settle_s")
+            out.append(Check(r["case"], r["passed"],
+                             f"settled in {'never' if ts is None else f'{ts:.3g} s'}, p-p {r.get('pp_deg', float('nan')):.3g} deg",
+                             f"{C.STEP_SETTLE_S:g} s within {C.SETTLE_BAND_DEG:g} deg", "" if r["passed"] else (
+                                 REMEDY["fault"] if r["fault"] != "none" else REMEDY["settle"]), 1, int(not r["passed"])))
+        elif r["kind"] == "trajectory":
+            out.append(Check("trajectory", r["passed"],
+                             f"peak estimation error {r.get('peak_err_deg', float('nan')):.3g} deg, at rest "
+                             f"{r.get('est_err_deg', float('nan')):.3g} deg",
+                             f"{C.TRAJ_PEAK_ERR_DEG:g} deg, {C.TRAJ_REST_ERR_DEG:g} deg at rest",
+                             "" if r["passed"] else (REMEDY["fault"] if r["fault"] != "none" else REMEDY["trajectory"]),
+                             1, int(not r["passed"])))
+        elif r["kind"] == "load_step":
+            rec = r.get("recover_s")
+            out.append(Check(r["case"], r["passed"],
+                             f"back within {C.SETTLE_BAND_DEG:g} deg after {'never' if rec is None else f'{rec:.3g} s'}; "
+                             f"peak {r.get('peak_dev_deg', float('nan')):.3g} deg ({r.get('peak_dev_mm', float('nan')):.3g} mm), "
+                             f"stiffness {r.get('stiffness_n_per_mm', float('nan')):.3g} N/mm",
+                             f"{C.LOAD_RECOVER_S:g} s", "" if r["passed"] else REMEDY["load"], 1, int(not r["passed"])))
+    for plant in C.OFF_NOMINAL:
+        rs = [r for r in rows if r["plant"] == plant]
+        if not rs:
+            continue
+        c = _hold_check(f"holds, {plant}", rs, C.OFF_ERR_DEG, REMEDY["off-nominal"] if any(
+            not r["passed"] and "limit cycle" not in r["why"] for r in rs) else "")
+        e = max((r.get("err_deg", float("nan")) for r in rs), default=float("nan"))
+        c.value += f"; cost {e - e_nom:+.3g} deg over nominal"
+        if not c.passed and not c.cause:
+            c.cause = _cause(rs)
+        out.append(c)
+    return out
+
+
+def verify(motor: Motor, motor_spec: str, base: dict, base_dir: str, *, v_max: float, a_max: float,
+           load: float, quick: bool = False, workers: int | None = None) -> Certificate:
+    """Run the certificate of the tuned scenario ``base`` (a dict, as ``linsense tune`` writes it)
+    for ``motor`` (``motor_spec``: its preset name or absolute file path, the controller's model).
+
+    ``v_max``, ``a_max`` (m/s, m/s^2) and ``load`` (N, rated) are the application's."""
+    cases = all_cases(motor.pole_pitch, v_max, a_max, load, quick)
+    t0 = time.perf_counter()
+    rows = run_cases(cases, base, motor_spec, motor, base_dir, workers)
+    return Certificate(checks(rows), rows, time.perf_counter() - t0, quick)

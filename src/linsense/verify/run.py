@@ -1,0 +1,166 @@
+"""Run the certificate's cases and judge each (docs/tuning.md, "The certificate").
+
+Each case is the tuned scenario with its own reference, load and plant, on the switching
+inverter with the drive's dead time. Off-nominal plants keep the controller's nominal model
+(``controller.model.motor``): its LUT, gain table and feed-forwards are the nominal motor's.
+The runs go through a local dask cluster of worker threads (the C loop releases the GIL).
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+import numpy as np
+
+from linsense.model.motor import Motor
+from linsense.sim.build import build
+from linsense.sim.core import run_closed_loop
+from linsense.sim.metrics import fault_reason
+from linsense.sim.scenario import scenario_from_dict
+from linsense.verify import criteria as C
+from linsense.verify.cases import Case, off_nominal_motor
+
+_SIGNALS = ("t", "x", "theta_err")
+_BLOCKS = ("x_min", "x_max", "x_mean", "err_min", "err_max", "err_mean")
+
+
+#: sections a case gives whole (the tuned scenario's own reference, load and start do not mix in)
+_WHOLE = ("reference", "load", "initial")
+
+
+def _merge(base: dict, over: dict) -> dict:
+    out = copy.deepcopy(base)
+    for sec, vals in over.items():
+        if sec in _WHOLE:
+            out[sec] = copy.deepcopy(vals)
+        elif isinstance(vals, dict):
+            out.setdefault(sec, {}).update(copy.deepcopy(vals))
+        else:
+            out[sec] = vals
+    return out
+
+
+def case_scenario(case: Case, base: dict, motor_spec: str) -> dict:
+    """The scenario dict of ``case``: ``base`` (the tuned scenario) with the case's sections, the
+    switching inverter, and the controller's model pinned to the nominal motor ``motor_spec``."""
+    sc = _merge(base, case.sections)
+    sc["motor"] = motor_spec
+    sc["scenario"]["name"] = case.name
+    sc.setdefault("inverter", {})["fidelity"] = "switching"
+    sc.setdefault("controller", {}).setdefault("model", {})["motor"] = motor_spec
+    f_pwm = float(sc["inverter"].get("f_pwm", 16000.0))
+    sc.setdefault("record", {})["decimate"] = max(1, int(round(f_pwm / 2000.0)))  # 0.5 ms blocks
+    sc.setdefault("travel", {}).update({"min_mm": -1e4, "max_mm": 1e4})
+    return sc
+
+
+def run_case(case: Case, base: dict, motor_spec: str, nominal: Motor, base_dir: str) -> dict:
+    """Run ``case`` and judge it: a row of plain values (JSON-ready)."""
+    sc = scenario_from_dict(case_scenario(case, base, motor_spec), source=f"<verify: {case.name}>",
+                            base_dir=base_dir)
+    plant = off_nominal_motor(nominal, case.plant)
+    b = build(sc, motor=plant)
+    raw = run_closed_loop(b.cfg, b.drive.state, b.n_steps, b.commands, signals=_SIGNALS, blocks=_BLOCKS)
+    row = judge(case, raw.arrays, raw.fault, raw.steps_done / float(sc.spec.inverter.f_pwm),
+                sc.spec.scenario.duration, nominal.pole_pitch)
+    row["wall_s"] = raw.wall_s
+    return row
+
+
+def judge(case: Case, a: dict, fault: int, t_done: float, duration: float, tau: float) -> dict:
+    """The figures of one run (electrical degrees, mm beside) and its verdict against
+    :mod:`linsense.verify.criteria`."""
+    deg = 360.0 / tau
+    t = a["t"]
+    n = t.size - 1 if fault else t.size  # (the sample that tripped is not judged)
+    t, lo, hi = t[:n], a["x_min"][:n], a["x_max"][:n]
+    e_lo, e_hi, e_mean = a["err_min"][:n], a["err_max"][:n], a["err_mean"][:n]
+    row = {"case": case.name, "kind": case.kind, "plant": case.plant, "position_deg": case.position_deg,
+           "load_n": case.load, "fault": fault_reason(fault), "passed": False, "why": ""}
+    dev = np.maximum(np.abs(lo - case.target), np.abs(hi - case.target)) * deg  # |x - target|, deg
+    err = np.degrees(np.maximum(np.abs(e_lo), np.abs(e_hi)))  # |estimation error|, deg
+    win = t >= duration - C.END_WINDOW_S
+    if fault or t_done < duration - 1e-9 or not win.any() or not np.all(np.isfinite(dev)):
+        row["why"] = f"fault: {fault_reason(fault)} at {t_done:.3g} s" if fault else "did not finish"
+        return row
+    if case.kind != "hold":  # for the certificate's figure: one point per block
+        x_mid = 0.5 * (lo + hi)
+        row["trace"] = {"t": t.tolist(), "x_deg": ((x_mid - case.target) * deg).tolist(),
+                        "err_deg": np.degrees(e_mean).tolist()}
+    pp = float(hi[win].max() - lo[win].min()) * deg
+    row.update(pp_deg=pp, pp_mm=pp / deg * 1e3, err_deg=float(dev[win].max()),
+               est_err_deg=float(err[win].max()), bias_deg=float(np.degrees(e_mean[win].mean())))
+    why = []
+    if case.kind == "hold":
+        lim = C.HOLD_ERR_DEG if case.plant == "nominal" else C.OFF_ERR_DEG
+        if row["err_deg"] > lim:
+            why.append(f"|x - target| {row['err_deg']:.3g} deg > {lim:g}")
+    elif case.kind == "step":
+        row["settle_s"] = _settle(t, dev, case.t_event)
+        row["overshoot_deg"] = float(max(0.0, np.max(np.sign(case.target - lo[0]) * (
+            (hi if case.target > lo[0] else lo) - case.target)))) * deg
+        if row["settle_s"] is None or row["settle_s"] > C.STEP_SETTLE_S:
+            why.append(f"settles in {_s(row['settle_s'])} > {C.STEP_SETTLE_S:g} s (within "
+                       f"{C.SETTLE_BAND_DEG:g} deg)")
+    elif case.kind == "trajectory":
+        moving = (t >= case.t_event) & (t <= case.t_end_move)
+        row["peak_err_deg"] = float(err[moving].max()) if moving.any() else 0.0
+        if row["peak_err_deg"] > C.TRAJ_PEAK_ERR_DEG:
+            why.append(f"peak estimation error {row['peak_err_deg']:.3g} deg > {C.TRAJ_PEAK_ERR_DEG:g}")
+        if row["est_err_deg"] > C.TRAJ_REST_ERR_DEG:
+            why.append(f"estimation error at rest {row['est_err_deg']:.3g} deg > {C.TRAJ_REST_ERR_DEG:g}")
+        if row["err_deg"] > C.HOLD_ERR_DEG:
+            why.append(f"|x - target| at rest {row['err_deg']:.3g} deg > {C.HOLD_ERR_DEG:g}")
+    elif case.kind == "load_step":
+        after = t >= case.t_event
+        peak = float(dev[after].max())
+        rec = _settle(t, dev, case.t_event)
+        row.update(peak_dev_deg=peak, peak_dev_mm=peak / deg * 1e3, recover_s=rec,
+                   stiffness_n_per_mm=abs(case.load) / max(peak / deg * 1e3, 1e-9))
+        if rec is None or rec > C.LOAD_RECOVER_S:
+            why.append(f"back within {C.SETTLE_BAND_DEG:g} deg after {_s(rec)} > {C.LOAD_RECOVER_S:g} s")
+    if pp > C.HOLD_PP_DEG:
+        why.append(f"limit cycle {pp:.3g} deg p-p ({pp / deg * 1e3:.3g} mm) > {C.HOLD_PP_DEG:g} deg")
+    row["why"] = "; ".join(why)
+    row["passed"] = not why
+    return row
+
+
+def _settle(t: np.ndarray, dev: np.ndarray, t0: float) -> float | None:
+    """Time (s) from ``t0`` after which ``dev <= SETTLE_BAND_DEG`` to the end; None if never."""
+    out = np.flatnonzero((dev > C.SETTLE_BAND_DEG) & (t >= t0))
+    if not out.size:
+        return 0.0
+    if out[-1] + 1 >= t.size:
+        return None
+    return float(t[out[-1] + 1] - t0)
+
+
+def _s(v: float | None) -> str:
+    return "never" if v is None else f"{v:.3g} s"
+
+
+def run_cases(cases: list[Case], base: dict, motor_spec: str, nominal: Motor, base_dir: str,
+              workers: int | None = None) -> list[dict]:
+    """Every case's row, in order, on a local dask cluster of ``workers`` threads (default: one per
+    core; 1 runs them in this thread)."""
+    import os
+
+    n = workers or os.cpu_count() or 1
+    if n == 1 or len(cases) < 2:
+        return [run_case(c, base, motor_spec, nominal, base_dir) for c in cases]
+    from linsense.sweep.engine import cluster_client
+
+    # batches of runs per task: a task costs about a millisecond of scheduling
+    size = max(1, math.ceil(len(cases) / (4 * n)))
+    batches = [cases[i:i + size] for i in range(0, len(cases), size)]
+
+    def batch(cs):
+        return [run_case(c, base, motor_spec, nominal, base_dir) for c in cs]
+
+    with cluster_client(n, None, processes=False) as client:
+        out = client.gather(client.map(batch, batches, pure=False))
+    return [r for rows in out for r in rows]
+
+
+__all__ = ["run_case", "run_cases", "judge", "case_scenario"]

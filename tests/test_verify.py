@@ -1,0 +1,192 @@
+"""The certificate of `linsense tune` (docs/tuning.md, "The certificate"): its judge on synthetic
+runs, the designed limits, the test motors of examples/motors/class tuned and verified (--quick),
+and the command's outputs and exit codes."""
+
+from __future__ import annotations
+
+import json
+import math
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from linsense.cli import main
+from linsense.model.motor import load_motor
+from linsense.sim.build import build
+from linsense.sim.scenario import scenario_from_dict
+from linsense.tune.design import (
+    CURRENT_TRIP_MARGIN,
+    OVERSPEED_MARGIN,
+    SPEED_CAP_MARGIN,
+    DriveData,
+    design,
+)
+from linsense.tune.export import scenario_dict
+from linsense.verify import criteria as C
+from linsense.verify.cases import Case, all_cases, off_nominal_motor
+from linsense.verify.certificate import checks, verify
+from linsense.verify.run import judge
+
+ROOT = Path(__file__).parents[1]
+CLASS = ROOT / "examples" / "motors" / "class"
+DRIVES = tomllib.loads((CLASS / "drives.toml").read_text())
+NAMES = sorted(DRIVES)
+
+
+def _drive(name: str) -> DriveData:
+    d = DRIVES[name]
+    return DriveData(v_dc=d["v_dc"], f_pwm=d["f_pwm"], dead_time=d["dead_time"], i_max=d["i_max"],
+                     v_max=d["v_max"], a_max=d["a_max"], load=d["load"])
+
+
+def _arrays(t, x, err=None):
+    x = np.asarray(x, float)
+    e = np.zeros_like(x) if err is None else np.asarray(err, float)
+    return {"t": np.asarray(t, float), "x_min": x, "x_max": x, "x_mean": x,
+            "err_min": e, "err_max": e, "err_mean": e}
+
+
+TAU = 0.056
+
+
+def test_judge_hold_limit_cycle_in_electrical_degrees():
+    """A 0.2 deg p-p oscillation fails, 0.1 deg passes, whatever the pole pitch (same angles)."""
+    for tau in (0.02, 0.1):
+        t = np.arange(0, 0.8, 5e-4)
+        for amp_deg, ok in ((0.1, True), (0.2, False)):
+            x = 0.01 + 0.5 * amp_deg / 360 * tau * np.sin(2 * np.pi * 7 * t)
+            case = Case("h", "hold", "nominal", {}, target=0.01)
+            row = judge(case, _arrays(t, x), 0, 0.8, 0.8, tau)
+            assert row["passed"] is ok, row
+            assert row["pp_deg"] == pytest.approx(amp_deg, rel=0.02)
+
+
+def test_judge_step_settling_and_never():
+    t = np.arange(0, 0.8, 5e-4)
+    tgt = 0.1 * TAU
+    x = np.where(t < 0.05, 0.0, tgt * (1 - np.exp(-(t - 0.05) / 0.03)))
+    case = Case("s", "step", "nominal", {}, target=tgt, t_event=0.05)
+    row = judge(case, _arrays(t, x), 0, 0.8, 0.8, TAU)
+    # |x - target| = 36 deg exp(-t/0.03) <= 1 deg after 0.03 ln 36 = 0.1075 s
+    assert row["settle_s"] == pytest.approx(0.03 * math.log(36), abs=1e-3) and row["passed"]
+    row = judge(case, _arrays(t, x * 0.9), 0, 0.8, 0.8, TAU)  # ends 3.6 deg short
+    assert row["settle_s"] is None and not row["passed"] and "never" in row["why"]
+
+
+def test_judge_fault_and_short_run_fail():
+    t = np.arange(0, 0.3, 5e-4)
+    case = Case("h", "hold", "nominal", {}, target=0.0)
+    row = judge(case, _arrays(t, np.zeros_like(t)), 0x10, 0.3, 0.8, TAU)
+    assert not row["passed"] and "overspeed" in row["why"]
+    row = judge(case, _arrays(t, np.zeros_like(t)), 0, 0.3, 0.8, TAU)
+    assert not row["passed"] and row["why"] == "did not finish"
+
+
+def test_off_nominal_plants():
+    m = load_motor("ecce2010")
+    hot = off_nominal_motor(m, "R_s +30 % (hot)")
+    assert hot.R_s == pytest.approx(1.3 * m.R_s)
+    big = off_nominal_motor(m, "dM0 +25 %")
+    a0, a1 = m.inductance.a, big.inductance.a
+    assert 0.5 * (a1[4, 0] + a1[5, 0]) - a1[3, 0] == pytest.approx(1.25 * -0.47e-3, rel=1e-9)
+    assert off_nominal_motor(m, "L -10 %").inductance.a[0, 0] == pytest.approx(0.9 * a0[0, 0])
+
+
+def test_cases_full_and_quick():
+    full = all_cases(TAU, 0.2, 1.0, 40.0, quick=False)
+    quick = all_cases(TAU, 0.2, 1.0, 40.0, quick=True)
+    holds = [c for c in full if c.kind == "hold"]
+    assert len(holds) == C.POSITIONS * len(C.HOLD_LOADS) * (1 + len(C.OFF_NOMINAL))
+    assert {c.kind for c in full} == {"hold", "step", "trajectory", "load_step"}
+    assert all(c.plant == "nominal" for c in quick)
+    assert len([c for c in quick if c.kind == "hold"]) == C.POSITIONS_QUICK * len(C.HOLD_LOADS)
+
+
+def test_designed_limits_follow_the_application():
+    m = load_motor("ecce2010")
+    dz = design(m, DriveData(v_max=0.4, load=20.0), analyse=False)
+    assert dz.v_cap == pytest.approx(SPEED_CAP_MARGIN * 0.4)
+    assert dz.omega_trip == pytest.approx(OVERSPEED_MARGIN * dz.v_cap * 2 * math.pi / m.pole_pitch)
+    assert dz.omega_obs > dz.omega_trip  # the trip must see the speed the observer reports
+    assert dz.i_trip > CURRENT_TRIP_MARGIN * 2.5
+    # what tune writes carries them (a scenario without them keeps the library's generous fallbacks:
+    # docs/tuning.md, "The limits")
+    sc = scenario_dict(dz, DriveData(v_max=0.4, load=20.0), "ecce2010")
+    assert sc["controller"]["v_max"] == pytest.approx(dz.v_cap, rel=1e-5)
+    assert sc["protection"]["omega_max"] == pytest.approx(dz.omega_trip, rel=1e-5)
+    assert sc["protection"]["i_max"] == pytest.approx(dz.i_trip, rel=1e-5)
+    assert sc["observer"]["omega_max"] == pytest.approx(dz.omega_obs, rel=1e-5)
+    b = build(scenario_from_dict({**sc, "scenario": {"duration": 0.01}}))
+    assert float(b.drive.cfg.prot.omega_max) == pytest.approx(dz.omega_trip, rel=1e-5)
+
+
+def test_injection_follows_dead_time_and_saliency():
+    """More dead time -> more injection (up to the bus share); an impossible one is refused."""
+    m = load_motor("ecce2010")
+    lo = design(m, DriveData(dead_time=0.4e-6), analyse=False)
+    hi = design(m, DriveData(dead_time=0.8e-6), analyse=False)
+    assert lo.v_inj < hi.v_inj <= 72.0 / 4.5 + 1e-9
+    from linsense.errors import InputError
+
+    with pytest.raises(InputError, match="saliency is too small for this dead time"):
+        design(m, DriveData(dead_time=3e-6), analyse=False)
+
+
+def _quick_certificate(name: str):
+    m = load_motor(CLASS / f"{name}.toml")
+    dd = _drive(name)
+    dz = design(m, dd, analyse=False)
+    spec = str(CLASS / f"{name}.toml")
+    return verify(m, spec, scenario_dict(dz, dd, spec), str(ROOT), v_max=dd.v_max, a_max=dd.a_max,
+                  load=dz.load, quick=True, workers=1)
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_class_motor_tuned_and_quick_verified(name):
+    """Each test motor designed from its file and drive data, then the quick certificate on the
+    switching inverter with dead time: every run judged, the verdict is the checks', and every
+    failed check names its number and a likely cause."""
+    cert = _quick_certificate(name)
+    assert len(cert.rows) == C.POSITIONS_QUICK * len(C.HOLD_LOADS) + len(C.STEP_FRACTIONS)
+    assert all(r["passed"] == (r["why"] == "") for r in cert.rows)
+    assert cert.passed == all(c.passed for c in cert.checks)
+    for c in cert.checks:
+        assert c.passed or (c.cause and c.failed > 0), c
+    lines = cert.lines()
+    assert lines[-1].startswith("verified" if cert.passed else "NOT verified")
+
+
+@pytest.mark.xfail(strict=True, reason="issue 22: the design does not yet pass the certificate on the "
+                   "test motors (docs/tuning.md, 'Where the design stands')")
+def test_every_class_motor_passes_the_quick_certificate():
+    failed = [n for n in NAMES if not _quick_certificate(n).passed]
+    assert not failed, failed
+
+
+def test_tune_cli_writes_certificate_and_exit_code(tmp_path, capsys):
+    out = tmp_path / "t.toml"
+    with pytest.raises(SystemExit) as e:
+        main(["tune", "--motor", "ecce2010", "--quick", "--out", str(out)])
+    text = capsys.readouterr().out
+    doc = json.loads((tmp_path / "verification.json").read_text())
+    assert (tmp_path / "verification.png").stat().st_size > 10_000
+    assert e.value.code == (0 if doc["passed"] else 1)
+    assert "verification (quick" in text and ("NOT verified" in text) != doc["passed"]
+    for c in doc["checks"]:
+        assert ("PASS  " + c["name"] if c["passed"] else "FAIL  " + c["name"]) in text
+        if not c["passed"]:
+            assert c["cause"]
+    assert tomllib.loads(out.read_text())["protection"]["omega_max"] > 0
+
+
+def test_tune_no_verify_and_refusal(tmp_path, capsys):
+    with pytest.raises(SystemExit) as e:
+        main(["tune", "--motor", "ecce2010", "--no-verify", "--out", str(tmp_path / "a.toml")])
+    assert e.value.code in (0, None) and not (tmp_path / "verification.json").exists()
+    capsys.readouterr()
+    with pytest.raises(SystemExit) as e:
+        main(["tune", "--motor", "ecce2010", "--dead-time", "3e-6", "--out", str(tmp_path / "b.toml")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert e.value.code == 2 and len(err) == 1 and "dead_time" in err[0] and "saliency" in err[0]
