@@ -1,6 +1,8 @@
 """The first, mask-based implementation of ``compute_metrics`` (linsense 0.x, before the sweep made
 its cost matter): kept as the reference the faster one in linsense.sim.metrics is tested against
-(tests/test_sim_metrics.py, random runs with faults, non-finite samples and moves)."""
+(tests/test_sim_metrics.py, random runs with faults, non-finite samples and moves). Its bounds
+became electrical degrees with the fast one's (issue 22): the pole pitch converts them, and the
+position metrics are given in degrees beside mm."""
 
 from __future__ import annotations
 
@@ -49,11 +51,13 @@ def settling_time(t: np.ndarray, x: np.ndarray, x_to: float, t0: float, band: fl
 
 
 def compute_metrics_ref(arrays: dict, *, fault: int, steps_done: int, f_pwm: float, moves, wall_s: float,
-                    observer_active: bool, convergence_s: float, settle_s: float, tolerance_mm: float,
-                    bound_mm: float, settle_band_mm: float, settling_band_mm: float,
-                    final_window_s: float, x_target: float, x_start: float) -> dict:
+                        observer_active: bool, convergence_s: float, settle_s: float, pole_pitch: float,
+                        tolerance_deg: float, bound_deg: float, settle_band_deg: float,
+                        settling_band_deg: float, final_window_s: float, x_target: float,
+                        x_start: float) -> dict:
     """Metrics of a run. ``x_target`` (m) is the last commanded position, ``x_start`` (m) the initial
     one; ``moves`` the planned moves ``(t0, t1, x_from, x_to)``. Definitions: docs/simulator.md."""
+    deg_per_m = 360.0 / pole_pitch
     t = arrays["t"]
     # each sample's block: lowest, highest and mean value (the point value itself without blocks)
     x = arrays.get("x_mean", arrays.get("x"))
@@ -87,10 +91,10 @@ def compute_metrics_ref(arrays: dict, *, fault: int, steps_done: int, f_pwm: flo
     final_x = float(x_last[x_fin][-1]) if np.any(x_fin) else float("nan")
     wsel = win & x_fin
     xw = x[wsel]
-    limit_cycle = float(np.max(x_hi[wsel]) - np.min(x_lo[wsel])) * 1e3 if xw.size else None
-    end_err_mm = float(max(np.max(np.abs(x_lo[wsel] - x_target)),
-                           np.max(np.abs(x_hi[wsel] - x_target)))) * 1e3 if xw.size else None
-    offset_mm = float(np.mean(xw - x_target)) * 1e3 if xw.size else None
+    limit_cycle = float(np.max(x_hi[wsel]) - np.min(x_lo[wsel])) if xw.size else None  # m
+    end_err = float(max(np.max(np.abs(x_lo[wsel] - x_target)),
+                        np.max(np.abs(x_hi[wsel] - x_target)))) if xw.size else None
+    offset = float(np.mean(xw - x_target)) if xw.size else None
 
     # the last move: overshoot beyond the reference (not counting the steady offset), settling time,
     # and whether the drive reached the reference region at all
@@ -102,8 +106,8 @@ def compute_metrics_ref(arrays: dict, *, fault: int, steps_done: int, f_pwm: flo
         sel = ok & (t >= t0) & x_fin
         if direction != 0 and np.any(sel):
             x_far = x_hi if direction > 0 else x_lo  # the block's extreme in the move's direction
-            peak = float(np.max(direction * (x_far[sel] - x_to))) * 1e3
-            steady = max(0.0, float(direction) * offset_mm) if offset_mm is not None else 0.0
+            peak = float(np.max(direction * (x_far[sel] - x_to)))
+            steady = max(0.0, float(direction) * offset) if offset is not None else 0.0
             overshoot = max(0.0, peak - steady)
         dist = abs(x_to - x_from)
         if dist > 0 and np.any(sel):
@@ -112,31 +116,39 @@ def compute_metrics_ref(arrays: dict, *, fault: int, steps_done: int, f_pwm: flo
             gap = np.maximum(np.maximum(x_lo[sel] - x_to, x_to - x_hi[sel]), 0.0) if x_lo is not x_hi \
                 else np.abs(x[sel] - x_to)
             closest = float(np.min(gap))
-            reached = closest <= min(0.5 * dist, bound_mm * 1e-3)
+            reached = closest * deg_per_m <= min(0.5 * dist * deg_per_m, bound_deg)
     x_to = moves[-1][3] if moves else x_target
     t_from = moves[-1][0] if moves else 0.0
     s_sel = ok & x_fin
-    settle_t = settling_time(t[s_sel], x_lo[s_sel], x_to, t_from, settling_band_mm * 1e-3,
+    settle_t = settling_time(t[s_sel], x_lo[s_sel], x_to, t_from, settling_band_deg / deg_per_m,
                              None if x_lo is x_hi else x_hi[s_sel])
 
+    def deg(v):
+        return None if v is None else v * deg_per_m
+
+    def mm(v):
+        return None if v is None else v * 1e3
+
     # stability: no fault; finite; reached the reference region; bounded (end window within
-    # bound_mm of the target) and settled (true position varies by at most settle_band_mm there)
+    # bound_deg of the target) and settled (true position varies by at most settle_band_deg there)
     reason = ""
     if fault:
         reason = f"fault: {fault_reason(fault)}"
     elif not np.all(x_fin):
         reason = "non-finite position"
     elif not reached:
+        move = abs(moves[-1][3] - moves[-1][2])
         reason = (f"never reached the target: the true position came no closer than half the move "
-                  f"({abs(moves[-1][3] - moves[-1][2]) * 1e3:.3g} mm)")
-    elif end_err_mm is None:
+                  f"({deg(move):.3g} deg, {mm(move):.3g} mm)")
+    elif end_err is None:
         reason = "no samples in the end window"
-    elif end_err_mm > bound_mm:
-        reason = (f"|x - target| reaches {end_err_mm:.3g} mm in the last {final_window_s:g} s "
-                  f"(bound {bound_mm:g} mm)")
-    elif limit_cycle > settle_band_mm:
-        reason = (f"not settled (limit cycle): x varies by {limit_cycle:.3g} mm in the last "
-                  f"{final_window_s:g} s (tolerance {settle_band_mm:g} mm)")
+    elif deg(end_err) > bound_deg:
+        reason = (f"|x - target| reaches {deg(end_err):.3g} deg ({mm(end_err):.3g} mm) in the last "
+                  f"{final_window_s:g} s (bound {bound_deg:g} deg)")
+    elif deg(limit_cycle) > settle_band_deg:
+        reason = (f"not settled (limit cycle): x varies by {deg(limit_cycle):.3g} deg "
+                  f"({mm(limit_cycle):.3g} mm) in the last {final_window_s:g} s "
+                  f"(tolerance {settle_band_deg:g} deg)")
     stable = reason == ""
     rt = sim_s / wall_s if wall_s > 0 else None
     return {
@@ -145,10 +157,12 @@ def compute_metrics_ref(arrays: dict, *, fault: int, steps_done: int, f_pwm: flo
         "transient_max_err_deg": _round(tr_err),
         "steady_max_err_deg": _round(st_err),
         "bias_deg": _round(bias),
-        "limit_cycle_mm": _round(limit_cycle),
+        "limit_cycle_mm": _round(mm(limit_cycle)),
+        "limit_cycle_deg": _round(deg(limit_cycle)),
         "settling_time_s": _round(settle_t),
         "final_position_mm": _round(final_x * 1e3),
-        "overshoot_mm": _round(overshoot),
+        "overshoot_mm": _round(mm(overshoot)),
+        "overshoot_deg": _round(deg(overshoot)),
         "fault": fault_reason(fault),
         "sim_s": _round(sim_s, 9),
         "wall_s": _round(wall_s, 6),
@@ -165,10 +179,13 @@ def compute_metrics_ref(arrays: dict, *, fault: int, steps_done: int, f_pwm: flo
         "unstable_reason": reason or None,
         "target_mm": _round(x_target * 1e3),
         "start_mm": _round(x_start * 1e3),
-        "final_error_mm": _round(end_err_mm),
-        "final_offset_mm": _round(offset_mm),
+        "final_error_mm": _round(mm(end_err)),
+        "final_error_deg": _round(deg(end_err)),
+        "final_offset_mm": _round(mm(offset)),
+        "final_offset_deg": _round(deg(offset)),
         "reached": bool(reached),
-        "accurate": bool(stable and end_err_mm is not None and end_err_mm <= tolerance_mm),
+        "accurate": bool(stable and end_err is not None and deg(end_err) <= tolerance_deg),
         "steps": int(steps_done),
         "samples": int(t.size),
+        "pole_pitch_mm": _round(pole_pitch * 1e3),
     }

@@ -10,17 +10,20 @@ import pytest
 
 import linsense
 from linsense.cli import main
-from linsense.sim.metrics import compute_metrics, settling_time
-from linsense.sim.scenario import scenario_from_dict
+from linsense.errors import InputError
+from linsense.sim.metrics import REQUIRED_KEYS, compute_metrics, settling_time
+from linsense.sim.scenario import MetricsSection, scenario_from_dict
 
 F_PWM = 1000.0
+PITCH = 0.056  # m, ecce2010
 DEFAULTS = dict(
     convergence_s=0.1,
     settle_s=0.3,
-    tolerance_mm=0.5,
-    bound_mm=3.5,
-    settle_band_mm=0.02,
-    settling_band_mm=0.1,
+    pole_pitch=PITCH,
+    tolerance_deg=3.0,
+    bound_deg=22.5,
+    settle_band_deg=0.15,
+    settling_band_deg=1.0,
     final_window_s=0.3,
 )
 
@@ -75,9 +78,10 @@ def test_settled_run_and_its_keys():
     assert m["stable"] and m["reached"] and m["unstable_reason"] is None
     assert 0.5 < m["overshoot_mm"] < 3.0
     st = m["settling_time_s"]
-    # after st the position stays within 0.1 mm of the target, just before it did not
+    # after st the position stays within 1 electrical deg (0.156 mm) of the target, just before not
+    band = 1.0 / 360.0 * PITCH
     after = t >= 0.1 + st - 0.5 / F_PWM
-    assert np.all(np.abs(x[after] - 3e-3) <= 1e-4) and np.abs(x[~after][-1] - 3e-3) > 1e-4
+    assert np.all(np.abs(x[after] - 3e-3) <= band) and np.abs(x[~after][-1] - 3e-3) > band
 
 
 def test_overshoot_is_measured_beyond_the_steady_offset():
@@ -104,6 +108,97 @@ def test_settling_time_none_when_outside_at_the_end():
     t = np.linspace(0, 1, 101)
     assert settling_time(t, np.ones(101), 0.0, 0.0, 0.1) is None
     assert settling_time(t, np.zeros(101), 0.0, 0.0, 0.1) == 0.0
+
+
+# ------------------------------------------------------- bounds in electrical degrees (issue 22)
+DEG_KEYS = ("limit_cycle_deg", "final_error_deg", "final_offset_deg", "overshoot_deg")
+
+
+def _angle_run(theta_deg: np.ndarray, pitch: float, moves_deg, target_deg: float, **kw) -> dict:
+    """Metrics of a run given as the true electrical angle (deg) on a motor of pole pitch ``pitch``."""
+    to_m = pitch / 360.0
+    moves = [(t0, t1, a * to_m, b * to_m) for t0, t1, a, b in moves_deg]
+    return _metrics(theta_deg * to_m, moves, target_deg * to_m, x_start=theta_deg[0] * to_m,
+                    **{"pole_pitch": pitch, **kw})
+
+
+@pytest.mark.parametrize("pp_deg, stable", [(0.1, True), (0.2, False)])
+def test_the_same_hold_in_angle_gets_the_same_verdict_on_any_pole_pitch(pp_deg, stable):
+    """A 2 deg step to 30 deg that ends in a 10 Hz cycle of ``pp_deg`` electrical degrees peak to
+    peak, 0.4 deg beside the target: on a 20 mm and a 100 mm motor the same angles give the same
+    verdict, reason and metrics in degrees, and the metrics in mm scale with the pole pitch. With
+    the old fixed 0.02 mm limit-cycle threshold the 0.1 deg cycle (0.0056 and 0.028 mm) would be
+    settled on one motor and not on the other."""
+    t = np.arange(3000) / F_PWM
+    tt = (t - 0.1).clip(0)
+    theta = 28.0 + 2.4 * (1 - np.exp(-tt / 0.05)) + 0.5 * pp_deg * np.sin(2 * np.pi * 10.0 * t)
+    theta[t < 0.1] = 28.0
+    runs = {pitch: _angle_run(theta, pitch, [(0.1, 0.1, 28.0, 30.0)], 30.0) for pitch in (0.02, 0.1)}
+    a, b = runs[0.02], runs[0.1]
+    for m in (a, b):
+        assert m["stable"] is stable and m["reached"] and m["accurate"] is stable, m["unstable_reason"]
+        assert m["limit_cycle_deg"] == pytest.approx(pp_deg, rel=1e-3)
+        assert m["final_offset_deg"] == pytest.approx(0.4, abs=0.01)
+        assert m["settling_time_s"] is not None  # within 1 deg of the target
+    for k in (*DEG_KEYS, "settling_time_s", "bias_deg", "stable", "accurate", "reached"):
+        assert a[k] == pytest.approx(b[k], abs=2e-6), k
+    for k in ("limit_cycle_mm", "final_error_mm", "final_offset_mm"):
+        assert b[k] == pytest.approx(5.0 * a[k], rel=1e-4, abs=1e-6), k
+    if not stable:
+        assert a["unstable_reason"] == b["unstable_reason"].replace(f"({b['limit_cycle_mm']:.3g} mm)",
+                                                                    f"({a['limit_cycle_mm']:.3g} mm)")
+        assert a["unstable_reason"].startswith("not settled (limit cycle): x varies by 0.2 deg (0.0111 mm)")
+        assert a["unstable_reason"].endswith("in the last 0.3 s (tolerance 0.15 deg)")
+    else:  # the old 0.02 mm threshold judged the two motors differently
+        old = {p: _angle_run(theta, p, [(0.1, 0.1, 28.0, 30.0)], 30.0, settle_band_deg=360.0 * 0.02e-3 / p)
+               for p in (0.02, 0.1)}
+        assert old[0.02]["stable"] and not old[0.1]["stable"]
+
+
+def test_bound_reason_in_degrees_with_mm_beside():
+    """A drive that settles 25 deg beside its target is beyond the 22.5 deg bound; the reason gives
+    degrees with mm beside (1.39 mm on a 20 mm motor)."""
+    theta = np.full(2000, 25.0)
+    m = _angle_run(theta, 0.02, [], 0.0)
+    assert not m["stable"] and m["final_error_deg"] == pytest.approx(25.0)
+    assert m["unstable_reason"] == "|x - target| reaches 25 deg (1.39 mm) in the last 0.3 s (bound 22.5 deg)"
+    assert set(REQUIRED_KEYS) <= set(m) and m["pole_pitch_mm"] == 20.0
+
+
+def test_metrics_bounds_in_both_units_are_refused():
+    """A file that gives one bound in both forms is refused in one line naming both keys."""
+    for name, mm, deg in (("bound", 3.5, 22.5), ("settle_band", 0.02, 0.15), ("tolerance", 0.5, 3.0),
+                          ("settling_band", 0.1, 1.0)):
+        data = {"motor": "ecce2010", "scenario": {"duration": 0.2}, "reference": {"type": "hold"},
+                "metrics": {f"{name}_mm": mm, f"{name}_deg": deg}}
+        with pytest.raises(InputError) as e:
+            scenario_from_dict(data, "s.toml")
+        msg = str(e.value)
+        assert "\n" not in msg and f"metrics.{name}_mm" in msg and f"metrics.{name}_deg" in msg, msg
+        assert msg.startswith(f"s.toml: metrics.{name}_deg: "), msg
+    with pytest.raises(InputError, match="metrics.bound_inch: unknown key"):
+        scenario_from_dict({"motor": "ecce2010", "scenario": {"duration": 0.2}, "reference": {"type": "hold"},
+                            "metrics": {"bound_inch": 1.0}}, "s.toml")
+
+
+def test_metrics_bounds_in_mm_still_work():
+    """The mm keys of older files keep their meaning: converted with the motor's pole pitch, mixed
+    with the other bounds in degrees, and a run's verdict follows them."""
+    sec = MetricsSection(settle_band_mm=0.02, bound_deg=10.0)
+    got = sec.bounds_deg(0.056)
+    assert got == {"tolerance_deg": 3.0, "bound_deg": 10.0, "settling_band_deg": 1.0,
+                   "settle_band_deg": pytest.approx(360.0 * 0.02 / 56.0, rel=1e-12)}
+    # a 0.03 mm cycle is beyond 0.02 mm, within 0.05 mm (0.193 and 0.321 deg at 56 mm)
+    t = np.arange(2000) / F_PWM
+    x = 3e-3 + 0.015e-3 * np.sin(2 * np.pi * 10.0 * t)
+    for band_mm, stable in ((0.02, False), (0.05, True)):
+        bounds = MetricsSection(settle_band_mm=band_mm).bounds_deg(PITCH)
+        m = _metrics(x, [], 3e-3, x_start=3e-3, **bounds)
+        assert m["stable"] is stable and m["limit_cycle_mm"] == pytest.approx(0.03, rel=1e-3)
+    sc = {"motor": "ecce2010", "scenario": {"duration": 0.2}, "control": {"mode": "sensored"},
+          "reference": {"type": "hold"}, "metrics": {"bound_mm": 3.5, "settling_band_mm": 0.1}}
+    m = linsense.simulate(sc, record="metrics").metrics
+    assert m["stable"] and m["pole_pitch_mm"] == 56.0 and m["settling_time_s"] == 0.0, m["unstable_reason"]
 
 
 def _fig13_like(balanced: bool):
@@ -198,9 +293,9 @@ def _random_run(rng: np.random.Generator, blocks: bool, n: int):
         moves.insert(0, (0.0, 0.015625, x0, x0))
     kw = dict(fault=int(rng.choice([0, 0, 1, 0x200])), steps_done=n * 16, f_pwm=16e3, moves=moves,
               wall_s=0.01, observer_active=bool(rng.random() < 0.85), convergence_s=when(0.2),
-              settle_s=when(0.3), tolerance_mm=0.05, bound_mm=1.0, settle_band_mm=0.05,
-              settling_band_mm=rng.choice([0.01, 0.1]), final_window_s=when(0.4),
-              x_target=x_to, x_start=x0)
+              settle_s=when(0.3), pole_pitch=float(rng.choice([0.02, 0.056, 0.1])), tolerance_deg=0.3,
+              bound_deg=6.0, settle_band_deg=0.3, settling_band_deg=float(rng.choice([0.06, 0.6])),
+              final_window_s=when(0.4), x_target=x_to, x_start=x0)
     return arrays, kw
 
 

@@ -26,7 +26,7 @@ from linsense.tune.design import (
 from linsense.tune.export import scenario_dict
 from linsense.verify import criteria as C
 from linsense.verify.cases import Case, all_cases, off_nominal_motor
-from linsense.verify.certificate import checks, verify
+from linsense.verify.certificate import verify
 from linsense.verify.run import judge
 
 ROOT = Path(__file__).parents[1]
@@ -37,15 +37,29 @@ NAMES = sorted(DRIVES)
 
 def _drive(name: str) -> DriveData:
     d = DRIVES[name]
-    return DriveData(v_dc=d["v_dc"], f_pwm=d["f_pwm"], dead_time=d["dead_time"], i_max=d["i_max"],
-                     v_max=d["v_max"], a_max=d["a_max"], load=d["load"])
+    return DriveData(
+        v_dc=d["v_dc"],
+        f_pwm=d["f_pwm"],
+        dead_time=d["dead_time"],
+        i_max=d["i_max"],
+        v_max=d["v_max"],
+        a_max=d["a_max"],
+        load=d["load"],
+    )
 
 
 def _arrays(t, x, err=None):
     x = np.asarray(x, float)
     e = np.zeros_like(x) if err is None else np.asarray(err, float)
-    return {"t": np.asarray(t, float), "x_min": x, "x_max": x, "x_mean": x,
-            "err_min": e, "err_max": e, "err_mean": e}
+    return {
+        "t": np.asarray(t, float),
+        "x_min": x,
+        "x_max": x,
+        "x_mean": x,
+        "err_min": e,
+        "err_max": e,
+        "err_mean": e,
+    }
 
 
 TAU = 0.056
@@ -139,8 +153,17 @@ def _quick_certificate(name: str):
     dd = _drive(name)
     dz = design(m, dd, analyse=False)
     spec = str(CLASS / f"{name}.toml")
-    return verify(m, spec, scenario_dict(dz, dd, spec), str(ROOT), v_max=dd.v_max, a_max=dd.a_max,
-                  load=dz.load, quick=True, workers=1)
+    return verify(
+        m,
+        spec,
+        scenario_dict(dz, dd, spec),
+        str(ROOT),
+        v_max=dd.v_max,
+        a_max=dd.a_max,
+        load=dz.load,
+        quick=True,
+        workers=1,
+    )
 
 
 @pytest.mark.parametrize("name", NAMES)
@@ -158,8 +181,11 @@ def test_class_motor_tuned_and_quick_verified(name):
     assert lines[-1].startswith("verified" if cert.passed else "NOT verified")
 
 
-@pytest.mark.xfail(strict=True, reason="issue 22: the design does not yet pass the certificate on the "
-                   "test motors (docs/tuning.md, 'Where the design stands')")
+@pytest.mark.xfail(
+    strict=True,
+    reason="issue 22: the design does not yet pass the certificate on the "
+    "test motors (docs/tuning.md, 'Where the design stands')",
+)
 def test_every_class_motor_passes_the_quick_certificate():
     failed = [n for n in NAMES if not _quick_certificate(n).passed]
     assert not failed, failed

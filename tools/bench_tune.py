@@ -18,17 +18,28 @@ CLASS = ROOT / "examples" / "motors" / "class"
 
 def main() -> None:
     drives = tomllib.loads((CLASS / "drives.toml").read_text())
-    drives["ecce2010"] = dict(v_dc=72.0, f_pwm=16000.0, dead_time=0.8e-6, i_max=2.5, v_max=0.2, a_max=1.0,
-                              load=40.0)
-    print(f"{'motor':11s} {'obs':>5s} {'spd':>5s} {'kp_x':>5s} {'step .1':>8s} {'step .75':>8s} "
-          f"{'N/mm':>6s} {'hold e':>6s} {'hold pp':>7s} {'wall':>5s}  failed checks")
+    drives["ecce2010"] = dict(
+        v_dc=72.0, f_pwm=16000.0, dead_time=0.8e-6, i_max=2.5, v_max=0.2, a_max=1.0, load=40.0
+    )
+    print(
+        f"{'motor':11s} {'obs':>5s} {'spd':>5s} {'kp_x':>5s} {'step .1':>8s} {'step .75':>8s} "
+        f"{'N/mm':>6s} {'hold e':>6s} {'hold pp':>7s} {'wall':>5s}  failed checks"
+    )
     for name, d in drives.items():
         spec = "ecce2010" if name == "ecce2010" else str(CLASS / f"{name}.toml")
         m = load_motor(spec)
         dd = DriveData(**d)
         dz = design(m, dd, analyse=False)
-        cert = verify(m, spec, scenario_dict(dz, dd, spec), str(ROOT), v_max=dd.v_max, a_max=dd.a_max,
-                      load=dz.load, quick=False)
+        cert = verify(
+            m,
+            spec,
+            scenario_dict(dz, dd, spec),
+            str(ROOT),
+            v_max=dd.v_max,
+            a_max=dd.a_max,
+            load=dz.load,
+            quick=False,
+        )
         rows = cert.rows
         steps = [r.get("settle_s") for r in rows if r["kind"] == "step"]
         ls = next(r for r in rows if r["kind"] == "load_step")
@@ -38,10 +49,13 @@ def main() -> None:
             return "never" if v is None else f"{v:.3f}"
 
         failed = [c.name for c in cert.checks if not c.passed]
-        print(f"{name:11s} {dz.observer_bw:5.3g} {dz.speed_bw:5.3g} {dz.kp_x:5.3g} {s(steps[0]):>8s} "
-              f"{s(steps[1]):>8s} {ls.get('stiffness_n_per_mm', float('nan')):6.3g} "
-              f"{max(r['err_deg'] for r in holds):6.3g} {max(r['pp_deg'] for r in holds):7.3g} "
-              f"{cert.wall_s:5.1f}  {len(failed)}/{len(cert.checks)}: {', '.join(failed)}", flush=True)
+        print(
+            f"{name:11s} {dz.observer_bw:5.3g} {dz.speed_bw:5.3g} {dz.kp_x:5.3g} {s(steps[0]):>8s} "
+            f"{s(steps[1]):>8s} {ls.get('stiffness_n_per_mm', float('nan')):6.3g} "
+            f"{max(r['err_deg'] for r in holds):6.3g} {max(r['pp_deg'] for r in holds):7.3g} "
+            f"{cert.wall_s:5.1f}  {len(failed)}/{len(cert.checks)}: {', '.join(failed)}",
+            flush=True,
+        )
 
 
 if __name__ == "__main__":

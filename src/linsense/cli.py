@@ -311,8 +311,10 @@ def simulate(scenario: str, out: str, fidelity: str | None, trace_fmt: str, deci
         f"max |err| {_show(m['max_abs_err_deg'], 'deg')} "
         f"(transient {_show(m['transient_max_err_deg'], 'deg')}, "
         f"steady {_show(m['steady_max_err_deg'], 'deg')}, bias {_show(m['bias_deg'], 'deg')}); "
-        f"final x {m['final_position_mm']} mm, limit cycle {m['limit_cycle_mm']} mm, overshoot "
-        f"{m['overshoot_mm']} mm; {m['sim_s']} s simulated in {m['wall_s']} s "
+        f"final x {m['final_position_mm']} mm, limit cycle {_show(m['limit_cycle_deg'], 'deg', '.3g')} "
+        f"({m['limit_cycle_mm']} mm), overshoot {_show(m['overshoot_deg'], 'deg', '.3g')} "
+        f"({m['overshoot_mm']} mm); "
+        f"{m['sim_s']} s simulated in {m['wall_s']} s "
         f"({m['realtime_factor']}x real time)"
     )
     if check and not m["stable"]:
@@ -475,7 +477,8 @@ def _verify_tuned(motor, motor_spec: str, base: dict, base_dir, dd, dz, quick: b
     doc = cert.as_dict()
     doc.update(motor=motor.name, drive={k: v for k, v in vars(dd).items()},
                design={k: v for k, v in dz.as_dict().items() if k not in ("margins", "warnings")})
-    click.echo(str(write_atomic(folder / "verification.json", json.dumps(doc, indent=1, sort_keys=True) + "\n")))
+    text = json.dumps(doc, indent=1, sort_keys=True) + "\n"
+    click.echo(str(write_atomic(folder / "verification.json", text)))
     fig = certificate_figure(cert.rows, f"{motor.name}: {'verified' if cert.passed else 'NOT verified'}")
     import io
 
@@ -577,17 +580,21 @@ def design_lines(dz, motor_name: str, dd) -> list[str]:
         f"i_max {dd.i_max:g} A",
         f"  injection      {dz.v_inj:.4g} V at {dz.f_inj:g} Hz on d, kappa {dz.quad:g} on q: HF current "
         f"{dz.i_hf:.3g} A; fundamental fits up to {dz.headroom_speed:.3g} m/s at i_max",
-        f"  current loop   {dz.current_bw:.4g} Hz (f_inj / {RATIO_INJ_CURRENT:g}): kp {dz.current_kp:.4g} V/A, "
+        f"  current loop   {dz.current_bw:.4g} Hz (f_inj / {RATIO_INJ_CURRENT:g}): "
+        f"kp {dz.current_kp:.4g} V/A, "
         f"ki {dz.current_ki:.4g} V/(A s)",
-        f"  demodulator    low-pass {dz.demod_lpf:.4g} Hz ({RATIO_LPF:g} f_inj), zeros at {dz.demod_notch:g} Hz; gain "
+        f"  demodulator    low-pass {dz.demod_lpf:.4g} Hz ({RATIO_LPF:g} f_inj), "
+        f"zeros at {dz.demod_notch:g} Hz; gain "
         f"{dz.demod_gain:.4g}, scheduled (local error gain {dz.k_e_min:.2f}..{dz.k_e_max:.2f} unscheduled)",
         f"  observer       {dz.observer_bw:.4g} Hz PLL (limited by {dz.limits.get('observer', '')})",
-        f"  speed loop     {dz.speed_bw:.4g} Hz ({dz.limits.get('speed loop', '')}): kp {dz.speed_kp:.4g} N s/m, "
+        f"  speed loop     {dz.speed_bw:.4g} Hz ({dz.limits.get('speed loop', '')}): "
+        f"kp {dz.speed_kp:.4g} N s/m, "
         f"ki {dz.speed_ki:.4g} N/m",
         f"  position loop  kp_x {dz.kp_x:.4g} 1/s ({dz.limits.get('position loop', '')})",
         f"  limits         speed cap {dz.v_cap:.3g} m/s ({SPEED_CAP_MARGIN:g} v_max), over-speed trip "
         f"{dz.omega_trip:.4g} rad/s ({dz.omega_trip * motor_pitch(dd, dz) :.3g} m/s), observer clamp "
-        f"{dz.omega_obs:.4g} rad/s, over-current trip {dz.i_trip:.3g} A ({CURRENT_TRIP_MARGIN:g} x (i_max + HF "
+        f"{dz.omega_obs:.4g} rad/s, over-current trip {dz.i_trip:.3g} A ({CURRENT_TRIP_MARGIN:g} x (i_max "
+        f"+ HF "
         f"peak)); rated load {dz.load:.3g} N",
         f"  injection rule {dz.limits.get('injection', '')}",
         f"  calibration    dither {dz.dither_a:.3g} A at {dz.dither_hz:.4g} Hz",

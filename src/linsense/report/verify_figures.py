@@ -15,28 +15,53 @@ def certificate_figure(rows: list[dict], title: str) -> Figure:
     fig.suptitle(title)
     a = ax[0, 0]
     for lf in C.HOLD_LOADS:
-        rs = [r for r in rows if r["kind"] == "hold" and r["plant"] == "nominal" and "err_deg" in r
-              and (r["load_n"] > 0) == (lf > 0) and (r["load_n"] < 0) == (lf < 0)]
+        rs = [
+            r
+            for r in rows
+            if r["kind"] == "hold"
+            and r["plant"] == "nominal"
+            and "err_deg" in r
+            and (r["load_n"] > 0) == (lf > 0)
+            and (r["load_n"] < 0) == (lf < 0)
+        ]
         if not rs:
             continue
         pos = [r["position_deg"] for r in rs]
-        line, = a.plot(pos, [r["err_deg"] for r in rs], "o-", label=f"|x - target|, {rs[0]['load_n']:+.3g} N")
-        a.plot(pos, [r["pp_deg"] for r in rs], "x--", color=line.get_color(), label=f"p-p, {rs[0]['load_n']:+.3g} N")
+        (line,) = a.plot(
+            pos, [r["err_deg"] for r in rs], "o-", label=f"|x - target|, {rs[0]['load_n']:+.3g} N"
+        )
+        a.plot(
+            pos,
+            [r["pp_deg"] for r in rs],
+            "x--",
+            color=line.get_color(),
+            label=f"p-p, {rs[0]['load_n']:+.3g} N",
+        )
     a.axhline(C.HOLD_ERR_DEG, color="k", lw=0.8)
     a.axhline(C.HOLD_PP_DEG, color="k", lw=0.8, ls=":")
-    a.set(title="holds, nominal plant", xlabel="position (electrical deg)", ylabel="electrical deg",
-          yscale="log")
+    a.set(
+        title="holds, nominal plant",
+        xlabel="position (electrical deg)",
+        ylabel="electrical deg",
+        yscale="log",
+    )
     if a.get_legend_handles_labels()[0]:
         a.legend(fontsize=7)
     a = ax[0, 1]
     for plant in C.OFF_NOMINAL:
-        rs = [r for r in rows if r["kind"] == "hold" and r["plant"] == plant and "err_deg" in r
-              and r["load_n"] == 0.0]
+        rs = [
+            r
+            for r in rows
+            if r["kind"] == "hold" and r["plant"] == plant and "err_deg" in r and r["load_n"] == 0.0
+        ]
         if rs:
             a.plot([r["position_deg"] for r in rs], [r["err_deg"] for r in rs], ".-", label=plant)
     a.axhline(C.OFF_ERR_DEG, color="k", lw=0.8)
-    a.set(title="holds at no load, off-nominal plants (nominal LUT)", xlabel="position (electrical deg)",
-          ylabel="|x - target| (electrical deg)")
+    a.set(
+        title="holds at no load, off-nominal plants (nominal LUT)",
+        xlabel="position (electrical deg)",
+        ylabel="|x - target| (electrical deg)",
+    )
     if a.get_legend_handles_labels()[0]:
         a.legend(fontsize=7)
     a = ax[1, 0]

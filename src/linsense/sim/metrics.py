@@ -9,6 +9,10 @@ With block statistics (``x_min``, ``x_max``, ``x_mean``, ``err_min``, ``err_max`
 the arrays, :data:`linsense.sim.core.BLOCKS`) every metric reads the envelope of each block instead
 of its point value, so nothing between two samples is missed; times (settling, the windows) then
 have the resolution of one block. With ``decimate = 1`` the result is exactly the point one.
+
+The bounds that judge a run (``stable``, ``accurate``, the settling band) are electrical degrees,
+fractions of the pole pitch (``theta = 360 deg * x / pole_pitch``), so that they mean the same on a
+20 mm and a 100 mm motor; the positions they bound are reported in electrical degrees and in mm.
 """
 
 from __future__ import annotations
@@ -35,7 +39,8 @@ FAULT_NAMES = {
 
 #: Keys every metrics dict (and metrics.json) has.
 REQUIRED_KEYS = ("stable", "max_abs_err_deg", "transient_max_err_deg", "steady_max_err_deg",
-                 "bias_deg", "limit_cycle_mm", "settling_time_s", "final_position_mm", "overshoot_mm",
+                 "bias_deg", "limit_cycle_mm", "limit_cycle_deg", "settling_time_s", "final_position_mm",
+                 "final_error_deg", "final_offset_deg", "overshoot_mm", "overshoot_deg",
                  "fault", "sim_s", "wall_s", "realtime_factor")
 
 
@@ -100,14 +105,65 @@ def settling_time(t: np.ndarray, x: np.ndarray, x_to: float, t0: float, band: fl
 
 
 def compute_metrics(arrays: dict, *, fault: int, steps_done: int, f_pwm: float, moves, wall_s: float,
-                    observer_active: bool, convergence_s: float, settle_s: float, tolerance_mm: float,
-                    bound_mm: float, settle_band_mm: float, settling_band_mm: float,
-                    final_window_s: float, x_target: float, x_start: float) -> dict:
-    """Metrics of a run. ``x_target`` (m) is the last commanded position, ``x_start`` (m) the initial
-    one; ``moves`` the planned moves ``(t0, t1, x_from, x_to)``. Definitions: docs/simulator.md.
+                    observer_active: bool, convergence_s: float, settle_s: float, pole_pitch: float,
+                    tolerance_deg: float, bound_deg: float, settle_band_deg: float,
+                    settling_band_deg: float, final_window_s: float, x_target: float,
+                    x_start: float) -> dict:
+    """Metrics of one closed-loop run (definitions: docs/simulator.md, "Metrics").
 
     The samples' times ``t`` ascend, so every time window is a range of indices (found by
-    bisection): a sweep computes these metrics thousands of times, at about 0.1 ms each."""
+    bisection): a sweep computes these metrics thousands of times, at about 0.1 ms each.
+
+    Parameters
+    ----------
+    arrays : dict
+        The run's recorded signals: ``t`` (s), the true position ``x`` (m) and the estimation error
+        ``theta_err`` (rad), or their block statistics (``x_min``, ``x_max``, ``x_mean``,
+        ``err_min``, ``err_max``, ``err_mean``).
+    fault : int
+        Fault bits the run ended with (0: none).
+    steps_done : int
+        PWM periods run.
+    f_pwm : float
+        Hz, PWM frequency (= control rate).
+    moves : list of tuple
+        The planned moves ``(t0, t1, x_from, x_to)`` (s, s, m, m).
+    wall_s : float
+        s, wall-clock time of the run.
+    observer_active : bool
+        Whether the HF observer ran (else the estimation errors are None).
+    convergence_s, settle_s : float
+        s, start of the error windows; transient time after a step or the end of a move.
+    pole_pitch : float
+        m, one electrical period of the motor: ``theta = 360 deg * x / pole_pitch`` converts the
+        bounds below, and the position metrics in degrees.
+    tolerance_deg, bound_deg : float
+        Electrical deg, ``|x - target|`` over the end window for ``accurate`` and for ``stable``
+        (bounded).
+    settle_band_deg : float
+        Electrical deg, the largest peak to peak of the true position over the end window of a
+        settled run (the limit-cycle threshold of ``stable``).
+    settling_band_deg : float
+        Electrical deg, the ``|x - target|`` band that defines ``settling_time_s``.
+    final_window_s : float
+        s, the end window.
+    x_target, x_start : float
+        m, the last commanded position and the initial one.
+
+    Returns
+    -------
+    dict
+        Finite numbers, bools, strings and None (never NaN): :data:`REQUIRED_KEYS` and the extras
+        of docs/simulator.md.
+
+    Raises
+    ------
+    ValueError
+        ``pole_pitch`` is not a positive finite length.
+    """
+    if not (math.isfinite(pole_pitch) and pole_pitch > 0.0):
+        raise ValueError(f"pole_pitch must be a positive length (m), got {pole_pitch!r}")
+    deg_per_m = 360.0 / pole_pitch  # electrical degrees per metre of travel
     t = arrays["t"]
     # each sample's block: lowest, highest and mean value (the point value itself without blocks)
     x = arrays.get("x_mean", arrays.get("x"))
@@ -159,16 +215,16 @@ def compute_metrics(arrays: dict, *, fault: int, steps_done: int, f_pwm: float, 
         return a[i0:n_ok] if x_all else a[i0:n_ok][x_fin[i0:n_ok]]
 
     xw, lo_w, hi_w = finite(x, i_win), finite(x_lo, i_win), finite(x_hi, i_win)
-    if xw.size:
-        limit_cycle = float(hi_w.max() - lo_w.min()) * 1e3
-        end_err_mm = float(max(np.abs(lo_w - x_target).max(), np.abs(hi_w - x_target).max())) * 1e3
-        offset_mm = float((xw - x_target).mean()) * 1e3
+    if xw.size:  # (m)
+        limit_cycle = float(hi_w.max() - lo_w.min())
+        end_err = float(max(np.abs(lo_w - x_target).max(), np.abs(hi_w - x_target).max()))
+        offset = float((xw - x_target).mean())
     else:
-        limit_cycle = end_err_mm = offset_mm = None
+        limit_cycle = end_err = offset = None
 
     # the last move: overshoot beyond the reference (not counting the steady offset), settling time,
     # and whether the drive reached the reference region at all
-    overshoot, reached = 0.0, True
+    overshoot, reached = 0.0, True  # (m)
     t_last = moves[-1][0] if moves else 0.0
     i_last = int(ts.searchsorted(t_last))
     ts_f, lo_f, hi_f = finite(t, i_last), finite(x_lo, i_last), finite(x_hi, i_last)
@@ -177,8 +233,8 @@ def compute_metrics(arrays: dict, *, fault: int, steps_done: int, f_pwm: float, 
         direction = np.sign(x_to - x_from)
         if direction != 0 and lo_f.size:
             x_far = hi_f if direction > 0 else lo_f  # the block's extreme in the move's direction
-            peak = float((direction * (x_far - x_to)).max()) * 1e3
-            steady = max(0.0, float(direction) * offset_mm) if offset_mm is not None else 0.0
+            peak = float((direction * (x_far - x_to)).max())
+            steady = max(0.0, float(direction) * offset) if offset is not None else 0.0
             overshoot = max(0.0, peak - steady)
         dist = abs(x_to - x_from)
         if dist > 0 and lo_f.size:
@@ -189,31 +245,39 @@ def compute_metrics(arrays: dict, *, fault: int, steps_done: int, f_pwm: float, 
                 closest = float(gap.min())
             else:
                 closest = float(np.abs(finite(x, i_last) - x_to).min())
-            reached = closest <= min(0.5 * dist, bound_mm * 1e-3)
+            reached = closest * deg_per_m <= min(0.5 * dist * deg_per_m, bound_deg)
     x_to = moves[-1][3] if moves else x_target
     settle_t = None
     if ts_f.size:  # (the samples from t_last on: settling_time's own search starts at 0)
-        settle_t = settling_time(ts_f, lo_f, x_to, t_last, settling_band_mm * 1e-3,
+        settle_t = settling_time(ts_f, lo_f, x_to, t_last, settling_band_deg / deg_per_m,
                                  None if x_lo is x_hi else hi_f)
 
+    def deg(v: float | None) -> float | None:
+        return None if v is None else v * deg_per_m
+
+    def mm(v: float | None) -> float | None:
+        return None if v is None else v * 1e3
+
     # stability: no fault; finite; reached the reference region; bounded (end window within
-    # bound_mm of the target) and settled (true position varies by at most settle_band_mm there)
+    # bound_deg of the target) and settled (true position varies by at most settle_band_deg there)
     reason = ""
     if fault:
         reason = f"fault: {fault_reason(fault)}"
     elif not x_all:
         reason = "non-finite position"
     elif not reached:
+        move = abs(moves[-1][3] - moves[-1][2])
         reason = (f"never reached the target: the true position came no closer than half the move "
-                  f"({abs(moves[-1][3] - moves[-1][2]) * 1e3:.3g} mm)")
-    elif end_err_mm is None:
+                  f"({deg(move):.3g} deg, {mm(move):.3g} mm)")
+    elif end_err is None:
         reason = "no samples in the end window"
-    elif end_err_mm > bound_mm:
-        reason = (f"|x - target| reaches {end_err_mm:.3g} mm in the last {final_window_s:g} s "
-                  f"(bound {bound_mm:g} mm)")
-    elif limit_cycle > settle_band_mm:
-        reason = (f"not settled (limit cycle): x varies by {limit_cycle:.3g} mm in the last "
-                  f"{final_window_s:g} s (tolerance {settle_band_mm:g} mm)")
+    elif deg(end_err) > bound_deg:
+        reason = (f"|x - target| reaches {deg(end_err):.3g} deg ({mm(end_err):.3g} mm) in the last "
+                  f"{final_window_s:g} s (bound {bound_deg:g} deg)")
+    elif deg(limit_cycle) > settle_band_deg:
+        reason = (f"not settled (limit cycle): x varies by {deg(limit_cycle):.3g} deg "
+                  f"({mm(limit_cycle):.3g} mm) in the last {final_window_s:g} s "
+                  f"(tolerance {settle_band_deg:g} deg)")
     stable = reason == ""
     rt = sim_s / wall_s if wall_s > 0 else None
     return {
@@ -222,10 +286,12 @@ def compute_metrics(arrays: dict, *, fault: int, steps_done: int, f_pwm: float, 
         "transient_max_err_deg": _round(tr_err),
         "steady_max_err_deg": _round(st_err),
         "bias_deg": _round(bias),
-        "limit_cycle_mm": _round(limit_cycle),
+        "limit_cycle_mm": _round(mm(limit_cycle)),
+        "limit_cycle_deg": _round(deg(limit_cycle)),
         "settling_time_s": _round(settle_t),
         "final_position_mm": _round(final_x * 1e3),
-        "overshoot_mm": _round(overshoot),
+        "overshoot_mm": _round(mm(overshoot)),
+        "overshoot_deg": _round(deg(overshoot)),
         "fault": fault_reason(fault),
         "sim_s": _round(sim_s, 9),
         "wall_s": _round(wall_s, 6),
@@ -242,10 +308,13 @@ def compute_metrics(arrays: dict, *, fault: int, steps_done: int, f_pwm: float, 
         "unstable_reason": reason or None,
         "target_mm": _round(x_target * 1e3),
         "start_mm": _round(x_start * 1e3),
-        "final_error_mm": _round(end_err_mm),
-        "final_offset_mm": _round(offset_mm),
+        "final_error_mm": _round(mm(end_err)),
+        "final_error_deg": _round(deg(end_err)),
+        "final_offset_mm": _round(mm(offset)),
+        "final_offset_deg": _round(deg(offset)),
         "reached": bool(reached),
-        "accurate": bool(stable and end_err_mm is not None and end_err_mm <= tolerance_mm),
+        "accurate": bool(stable and end_err is not None and deg(end_err) <= tolerance_deg),
         "steps": int(steps_done),
         "samples": int(t.size),
+        "pole_pitch_mm": _round(pole_pitch * 1e3),
     }

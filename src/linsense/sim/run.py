@@ -124,16 +124,17 @@ def finish_metrics(b, raw, m: dict, block: int) -> None:
 
 def run_metrics(b, raw, arrays: dict | None = None) -> dict:
     """The metrics of the run ``raw`` of the built scenario ``b`` (from ``arrays``, by default the
-    run's own: with block statistics among them, from those)."""
+    run's own: with block statistics among them, from those); the bounds in electrical degrees of
+    the plant motor's pole pitch."""
     s = b.scenario.spec
     x_target = b.commands[-1][1] if b.commands else b.setup.x0
     observer_active = s.control.mode != "sensored" or s.control.inject_sensored
+    pitch = b.motor.pole_pitch  # (the plant's: the controller's model has the same)
     return compute_metrics(
         raw.arrays if arrays is None else arrays, fault=raw.fault, steps_done=raw.steps_done,
         f_pwm=s.inverter.f_pwm, moves=b.moves, wall_s=raw.wall_s,  # the C run alone
         observer_active=observer_active, convergence_s=s.metrics.convergence_s,
-        settle_s=s.metrics.settle_s, tolerance_mm=s.metrics.tolerance_mm, bound_mm=s.metrics.bound_mm,
-        settle_band_mm=s.metrics.settle_band_mm, settling_band_mm=s.metrics.settling_band_mm,
+        settle_s=s.metrics.settle_s, pole_pitch=pitch, **s.metrics.bounds_deg(pitch),
         final_window_s=s.metrics.final_window_s, x_target=x_target, x_start=b.setup.x0,
     )
 

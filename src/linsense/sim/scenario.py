@@ -276,15 +276,62 @@ class SaturationSection(BaseModel):
         return self
 
 
+#: the bounds of the metrics, each given in electrical degrees (``<name>_deg``) or, as older files
+#: do, in mm (``<name>_mm``): one form per bound
+METRIC_BOUNDS = ("tolerance", "bound", "settle_band", "settling_band")
+
+
 class MetricsSection(BaseModel):
+    """How a run is judged (docs/simulator.md, "Metrics"). The bounds are electrical degrees, fractions
+    of the pole pitch (``theta = 360 deg * x / pole_pitch``), so that ``stable`` means the same on
+    every motor; the defaults are 3.5, 0.023, 0.16 and 0.47 mm at the 56 mm pitch of ecce2010. A
+    bound may be given in mm instead (``bound_mm``...: older files), converted with the motor's pole
+    pitch (:meth:`bounds_deg`); never in both forms."""
+
     model_config = _STRICT
     convergence_s: NonNegative = 0.1  # s, start of the transient/steady error windows
     settle_s: NonNegative = 0.3  # s, after a step or the end of a move: still transient
-    tolerance_mm: Positive = 0.5  # mm, |x - target| over the end window for `accurate`
-    bound_mm: Positive = 3.5  # mm, |x - target| over the end window for `stable` (bounded)
-    settle_band_mm: Positive = 0.02  # mm, peak-to-peak true x over the end window for `stable` (settled)
-    settling_band_mm: Positive = 0.1  # mm, |x - target| band that defines settling_time_s
+    tolerance_deg: Positive = 3.0  # electrical deg, |x - target| over the end window for `accurate`
+    bound_deg: Positive = 22.5  # electrical deg, |x - target| over the end window for `stable` (bounded)
+    # electrical deg, peak-to-peak true position over the end window for `stable` (settled: no limit cycle)
+    settle_band_deg: Positive = 0.15
+    settling_band_deg: Positive = 1.0  # electrical deg, |x - target| band that defines settling_time_s
+    tolerance_mm: Positive | None = None  # mm, instead of tolerance_deg
+    bound_mm: Positive | None = None  # mm, instead of bound_deg
+    settle_band_mm: Positive | None = None  # mm, instead of settle_band_deg
+    settling_band_mm: Positive | None = None  # mm, instead of settling_band_deg
     final_window_s: Positive = 0.3  # s, end window
+
+    @model_validator(mode="after")
+    def _check(self) -> MetricsSection:
+        for name in METRIC_BOUNDS:
+            mm = getattr(self, f"{name}_mm")
+            if mm is not None and f"{name}_deg" in self.model_fields_set:
+                raise KeyProblem(f"{name}_deg", f"give metrics.{name}_deg or metrics.{name}_mm, not both "
+                                 f"(got {getattr(self, f'{name}_deg')!r} deg and {mm!r} mm)")
+        return self
+
+    def bounds_deg(self, pole_pitch: float) -> dict[str, float]:
+        """The bounds in electrical degrees on a motor of pole pitch ``pole_pitch``.
+
+        Parameters
+        ----------
+        pole_pitch : float
+            m, one electrical period of the motor.
+
+        Returns
+        -------
+        dict
+            ``tolerance_deg``, ``bound_deg``, ``settle_band_deg``, ``settling_band_deg``: the keys
+            given in degrees (or their defaults) as they are, those given in mm converted
+            (``360 deg * x / pole_pitch``).
+        """
+        out = {}
+        for name in METRIC_BOUNDS:
+            mm = getattr(self, f"{name}_mm")
+            deg = getattr(self, f"{name}_deg") if mm is None else 360.0 * (mm * 1e-3) / pole_pitch
+            out[f"{name}_deg"] = deg
+        return out
 
 
 class ScenarioFile(BaseModel):

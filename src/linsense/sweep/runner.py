@@ -22,8 +22,9 @@ from linsense.sweep.spec import SweepSpec
 
 #: scalar metrics copied into a sweep's rows (lists and the long texts stay out)
 ROW_METRICS = ("stable", "accurate", "reached", "max_abs_err_deg", "transient_max_err_deg",
-               "steady_max_err_deg", "bias_deg", "limit_cycle_mm", "settling_time_s", "final_position_mm",
-               "final_error_mm", "final_offset_mm", "overshoot_mm", "fault", "unstable_reason",
+               "steady_max_err_deg", "bias_deg", "limit_cycle_mm", "limit_cycle_deg", "settling_time_s",
+               "final_position_mm", "final_error_mm", "final_error_deg", "final_offset_mm",
+               "final_offset_deg", "overshoot_mm", "overshoot_deg", "fault", "unstable_reason",
                "hf_current_a", "sim_s", "wall_s")
 
 

@@ -37,8 +37,9 @@ class Case:
     position_deg: float = 0.0
 
 
-def hold_cases(tau: float, load_rated: float, n_pos: int, plant: str = "nominal",
-               loads=C.HOLD_LOADS) -> list[Case]:
+def hold_cases(
+    tau: float, load_rated: float, n_pos: int, plant: str = "nominal", loads=C.HOLD_LOADS
+) -> list[Case]:
     """Holds at ``n_pos`` positions over the period (offset by half a step from 0, so the grid does
     not sit on the symmetric positions only) at ``loads`` (fractions of ``load_rated``)."""
     out = []
@@ -47,13 +48,22 @@ def hold_cases(tau: float, load_rated: float, n_pos: int, plant: str = "nominal"
         x0 = tau * deg / 360.0
         for lf in loads:
             f = lf * load_rated
-            out.append(Case(
-                name=f"hold {deg:.1f} deg, {f:+.3g} N", kind="hold", plant=plant,
-                sections={"scenario": {"duration": C.HOLD_SETTLE_S + C.END_WINDOW_S},
-                          "reference": {"type": "hold"}, "initial": {"position_mm": x0 * 1e3,
-                                                                      "load_balanced": True},
-                          "load": {"type": "constant", "force": f}},
-                target=x0, position_deg=deg, load=f))
+            out.append(
+                Case(
+                    name=f"hold {deg:.1f} deg, {f:+.3g} N",
+                    kind="hold",
+                    plant=plant,
+                    sections={
+                        "scenario": {"duration": C.HOLD_SETTLE_S + C.END_WINDOW_S},
+                        "reference": {"type": "hold"},
+                        "initial": {"position_mm": x0 * 1e3, "load_balanced": True},
+                        "load": {"type": "constant", "force": f},
+                    },
+                    target=x0,
+                    position_deg=deg,
+                    load=f,
+                )
+            )
     return out
 
 
@@ -64,12 +74,21 @@ def step_cases(tau: float) -> list[Case]:
     x0 = tau * 0.37 / C.POSITIONS
     for frac in C.STEP_FRACTIONS:
         x1 = x0 + frac * tau
-        out.append(Case(
-            name=f"step {frac:g} pole pitch ({frac * tau * 1e3:.3g} mm)", kind="step", plant="nominal",
-            sections={"scenario": {"duration": t0 + C.STEP_SETTLE_S + C.END_WINDOW_S + 0.1},
-                      "reference": {"type": "step", "position_mm": x1 * 1e3, "at": t0},
-                      "initial": {"position_mm": x0 * 1e3}},
-            target=x1, t_event=t0, t_end_move=t0))
+        out.append(
+            Case(
+                name=f"step {frac:g} pole pitch ({frac * tau * 1e3:.3g} mm)",
+                kind="step",
+                plant="nominal",
+                sections={
+                    "scenario": {"duration": t0 + C.STEP_SETTLE_S + C.END_WINDOW_S + 0.1},
+                    "reference": {"type": "step", "position_mm": x1 * 1e3, "at": t0},
+                    "initial": {"position_mm": x0 * 1e3},
+                },
+                target=x1,
+                t_event=t0,
+                t_end_move=t0,
+            )
+        )
     return out
 
 
@@ -83,13 +102,27 @@ def trajectory_case(tau: float, v_max: float, a_max: float, load_rated: float) -
     t_end = t0 + 2.0 * dur + dwell + 0.01
     return Case(
         name=f"trajectory {C.TRAJ_PITCHES:g} pole pitches and back, {v_max:g} m/s, {a_max:g} m/s^2, "
-             f"{load_rated:.3g} N", kind="trajectory", plant="nominal",
-        sections={"scenario": {"duration": t_end + C.END_WINDOW_S + 0.2},
-                  "reference": {"type": "trajectory", "waypoints_mm": [x1 * 1e3, x0 * 1e3], "at": t0,
-                                "v_max": v_max, "a_max": a_max, "dwell": dwell},
-                  "initial": {"position_mm": x0 * 1e3, "load_balanced": True},
-                  "load": {"type": "constant", "force": load_rated}},
-        target=x0, t_event=t0, t_end_move=t_end, load=load_rated)
+        f"{load_rated:.3g} N",
+        kind="trajectory",
+        plant="nominal",
+        sections={
+            "scenario": {"duration": t_end + C.END_WINDOW_S + 0.2},
+            "reference": {
+                "type": "trajectory",
+                "waypoints_mm": [x1 * 1e3, x0 * 1e3],
+                "at": t0,
+                "v_max": v_max,
+                "a_max": a_max,
+                "dwell": dwell,
+            },
+            "initial": {"position_mm": x0 * 1e3, "load_balanced": True},
+            "load": {"type": "constant", "force": load_rated},
+        },
+        target=x0,
+        t_event=t0,
+        t_end_move=t_end,
+        load=load_rated,
+    )
 
 
 def load_step_case(tau: float, load_rated: float) -> Case:
@@ -99,11 +132,19 @@ def load_step_case(tau: float, load_rated: float) -> Case:
     t0 = 0.3
     f = C.LOAD_STEP_FRACTION * load_rated
     return Case(
-        name=f"load step 0 -> {f:.3g} N while holding", kind="load_step", plant="nominal",
-        sections={"scenario": {"duration": t0 + C.LOAD_RECOVER_S + C.END_WINDOW_S},
-                  "reference": {"type": "hold"}, "initial": {"position_mm": x0 * 1e3},
-                  "load": {"type": "step", "force": 0.0, "force_after": f, "time": t0}},
-        target=x0, t_event=t0, load=f)
+        name=f"load step 0 -> {f:.3g} N while holding",
+        kind="load_step",
+        plant="nominal",
+        sections={
+            "scenario": {"duration": t0 + C.LOAD_RECOVER_S + C.END_WINDOW_S},
+            "reference": {"type": "hold"},
+            "initial": {"position_mm": x0 * 1e3},
+            "load": {"type": "step", "force": 0.0, "force_after": f, "time": t0},
+        },
+        target=x0,
+        t_event=t0,
+        load=f,
+    )
 
 
 def all_cases(tau: float, v_max: float, a_max: float, load_rated: float, quick: bool) -> list[Case]:
@@ -138,5 +179,13 @@ def deg_of(x: np.ndarray | float, tau: float) -> np.ndarray | float:
     return np.asarray(x) * (360.0 / tau) if not isinstance(x, float) else x * 360.0 / tau
 
 
-__all__ = ["Case", "all_cases", "off_nominal_motor", "hold_cases", "step_cases", "trajectory_case",
-           "load_step_case", "deg_of"]
+__all__ = [
+    "Case",
+    "all_cases",
+    "off_nominal_motor",
+    "hold_cases",
+    "step_cases",
+    "trajectory_case",
+    "load_step_case",
+    "deg_of",
+]

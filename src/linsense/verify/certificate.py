@@ -14,16 +14,22 @@ from linsense.verify.run import run_cases
 
 #: the likely cause of a failed check and what to change
 REMEDY = {
-    "limit cycle": ("the dead time acts as a relay where the saliency is weak: more injection voltage "
-                    "(--v-inj), less dead time, or lower bandwidths"),
-    "error": ("a steady estimation bias (dead time or model error): calibrate the LUT on the bench "
-              "(linsense calibrate) or raise the injection voltage"),
+    "limit cycle": (
+        "the dead time acts as a relay where the saliency is weak: more injection voltage "
+        "(--v-inj), less dead time, or lower bandwidths"
+    ),
+    "error": (
+        "a steady estimation bias (dead time or model error): calibrate the LUT on the bench "
+        "(linsense calibrate) or raise the injection voltage"
+    ),
     "settle": "a faster position loop or a higher speed cap (--v-max), within the observer's bandwidth",
     "trajectory": "a smaller speed or acceleration (--v-max, --a-max) or a faster observer",
     "load": "a stiffer position/speed loop, or a smaller load step",
     "fault": "see the fault: overspeed -> raise --v-max; overcurrent -> raise --i-max or lower --a-max",
-    "off-nominal": ("the LUT and gains depend on this parameter: identify the motor (linsense identify) "
-                    "or calibrate the LUT (linsense calibrate)"),
+    "off-nominal": (
+        "the LUT and gains depend on this parameter: identify the motor (linsense identify) "
+        "or calibrate the LUT (linsense calibrate)"
+    ),
 }
 
 
@@ -41,7 +47,8 @@ class Check:
 
     def line(self) -> str:
         mark = "PASS" if self.passed else "FAIL"
-        out = f"  {mark}  {self.name:34s} {self.value}  (bound {self.bound}; {self.runs - self.failed}/{self.runs} runs)"
+        n_ok = self.runs - self.failed
+        out = f"  {mark}  {self.name:34s} {self.value}  (bound {self.bound}; {n_ok}/{self.runs} runs)"
         if not self.passed and self.cause:
             out += f"\n        likely: {self.cause}"
         return out
@@ -63,16 +70,33 @@ class Certificate:
 
     def lines(self) -> list[str]:
         n = len(self.rows)
-        head = (f"verification ({'quick: ' if self.quick else ''}{n} runs, switching inverter with the drive's "
-                f"dead time, {self.wall_s:.1f} s):")
-        tail = ("verified: every check passed" if self.passed else
-                f"NOT verified: {sum(not c.passed for c in self.checks)} of {len(self.checks)} checks failed")
+        head = (
+            f"verification ({'quick: ' if self.quick else ''}{n} runs, switching inverter with the drive's "
+            f"dead time, {self.wall_s:.1f} s):"
+        )
+        tail = (
+            "verified: every check passed"
+            if self.passed
+            else f"NOT verified: {sum(not c.passed for c in self.checks)} of {len(self.checks)} checks failed"
+        )
         return [head] + [c.line() for c in self.checks] + [tail]
 
     def as_dict(self) -> dict:
         runs = [{k: v for k, v in r.items() if k not in ("trace", "wall_s")} for r in self.rows]
-        return {"passed": self.passed, "quick": self.quick,
-                "checks": [c.__dict__ for c in self.checks], "runs": runs, **self.extra}
+        return {
+            "passed": self.passed,
+            "quick": self.quick,
+            "checks": [c.__dict__ for c in self.checks],
+            "runs": runs,
+            **self.extra,
+        }
+
+
+NAN = float("nan")
+
+
+def _s(v: float | None) -> str:
+    return "never" if v is None else f"{v:.3g} s"
 
 
 def _cause(rows: list[dict]) -> str:
@@ -93,8 +117,15 @@ def _hold_check(name: str, rows: list[dict], lim_err: float, extra_cause: str = 
     if failed:
         worst = failed[0]
         value += f"; e.g. {worst['case']}: {worst['why']}"
-    return Check(name, not failed, value, f"{lim_err:g} deg, {C.HOLD_PP_DEG:g} deg p-p, no fault",
-                 extra_cause or (_cause(rows) if failed else ""), len(rows), len(failed))
+    return Check(
+        name,
+        not failed,
+        value,
+        f"{lim_err:g} deg, {C.HOLD_PP_DEG:g} deg p-p, no fault",
+        extra_cause or (_cause(rows) if failed else ""),
+        len(rows),
+        len(failed),
+    )
 
 
 def checks(rows: list[dict]) -> list[Check]:
@@ -106,30 +137,59 @@ def checks(rows: list[dict]) -> list[Check]:
     for r in rows:
         if r["kind"] == "step":
             ts = r.get("settle_s")
-            out.append(Check(r["case"], r["passed"],
-                             f"settled in {'never' if ts is None else f'{ts:.3g} s'}, p-p {r.get('pp_deg', float('nan')):.3g} deg",
-                             f"{C.STEP_SETTLE_S:g} s within {C.SETTLE_BAND_DEG:g} deg", "" if r["passed"] else (
-                                 REMEDY["fault"] if r["fault"] != "none" else REMEDY["settle"]), 1, int(not r["passed"])))
+            out.append(
+                Check(
+                    r["case"],
+                    r["passed"],
+                    f"settled in {_s(ts)}, p-p {r.get('pp_deg', NAN):.3g} deg",
+                    f"{C.STEP_SETTLE_S:g} s within {C.SETTLE_BAND_DEG:g} deg",
+                    "" if r["passed"] else (REMEDY["fault"] if r["fault"] != "none" else REMEDY["settle"]),
+                    1,
+                    int(not r["passed"]),
+                )
+            )
         elif r["kind"] == "trajectory":
-            out.append(Check("trajectory", r["passed"],
-                             f"peak estimation error {r.get('peak_err_deg', float('nan')):.3g} deg, at rest "
-                             f"{r.get('est_err_deg', float('nan')):.3g} deg",
-                             f"{C.TRAJ_PEAK_ERR_DEG:g} deg, {C.TRAJ_REST_ERR_DEG:g} deg at rest",
-                             "" if r["passed"] else (REMEDY["fault"] if r["fault"] != "none" else REMEDY["trajectory"]),
-                             1, int(not r["passed"])))
+            out.append(
+                Check(
+                    "trajectory",
+                    r["passed"],
+                    f"peak estimation error {r.get('peak_err_deg', float('nan')):.3g} deg, at rest "
+                    f"{r.get('est_err_deg', float('nan')):.3g} deg",
+                    f"{C.TRAJ_PEAK_ERR_DEG:g} deg, {C.TRAJ_REST_ERR_DEG:g} deg at rest",
+                    ""
+                    if r["passed"]
+                    else (REMEDY["fault"] if r["fault"] != "none" else REMEDY["trajectory"]),
+                    1,
+                    int(not r["passed"]),
+                )
+            )
         elif r["kind"] == "load_step":
             rec = r.get("recover_s")
-            out.append(Check(r["case"], r["passed"],
-                             f"back within {C.SETTLE_BAND_DEG:g} deg after {'never' if rec is None else f'{rec:.3g} s'}; "
-                             f"peak {r.get('peak_dev_deg', float('nan')):.3g} deg ({r.get('peak_dev_mm', float('nan')):.3g} mm), "
-                             f"stiffness {r.get('stiffness_n_per_mm', float('nan')):.3g} N/mm",
-                             f"{C.LOAD_RECOVER_S:g} s", "" if r["passed"] else REMEDY["load"], 1, int(not r["passed"])))
+            out.append(
+                Check(
+                    r["case"],
+                    r["passed"],
+                    f"back within {C.SETTLE_BAND_DEG:g} deg after {_s(rec)}; "
+                    f"peak {r.get('peak_dev_deg', NAN):.3g} deg ({r.get('peak_dev_mm', NAN):.3g} mm), "
+                    f"stiffness {r.get('stiffness_n_per_mm', float('nan')):.3g} N/mm",
+                    f"{C.LOAD_RECOVER_S:g} s",
+                    "" if r["passed"] else REMEDY["load"],
+                    1,
+                    int(not r["passed"]),
+                )
+            )
     for plant in C.OFF_NOMINAL:
         rs = [r for r in rows if r["plant"] == plant]
         if not rs:
             continue
-        c = _hold_check(f"holds, {plant}", rs, C.OFF_ERR_DEG, REMEDY["off-nominal"] if any(
-            not r["passed"] and "limit cycle" not in r["why"] for r in rs) else "")
+        c = _hold_check(
+            f"holds, {plant}",
+            rs,
+            C.OFF_ERR_DEG,
+            REMEDY["off-nominal"]
+            if any(not r["passed"] and "limit cycle" not in r["why"] for r in rs)
+            else "",
+        )
         e = max((r.get("err_deg", float("nan")) for r in rs), default=float("nan"))
         c.value += f"; cost {e - e_nom:+.3g} deg over nominal"
         if not c.passed and not c.cause:
@@ -138,8 +198,18 @@ def checks(rows: list[dict]) -> list[Check]:
     return out
 
 
-def verify(motor: Motor, motor_spec: str, base: dict, base_dir: str, *, v_max: float, a_max: float,
-           load: float, quick: bool = False, workers: int | None = None) -> Certificate:
+def verify(
+    motor: Motor,
+    motor_spec: str,
+    base: dict,
+    base_dir: str,
+    *,
+    v_max: float,
+    a_max: float,
+    load: float,
+    quick: bool = False,
+    workers: int | None = None,
+) -> Certificate:
     """Run the certificate of the tuned scenario ``base`` (a dict, as ``linsense tune`` writes it)
     for ``motor`` (``motor_spec``: its preset name or absolute file path, the controller's model).
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import copy
 import math
+
 import numpy as np
 
 from linsense.model.motor import Motor
@@ -56,13 +57,20 @@ def case_scenario(case: Case, base: dict, motor_spec: str) -> dict:
 
 def run_case(case: Case, base: dict, motor_spec: str, nominal: Motor, base_dir: str) -> dict:
     """Run ``case`` and judge it: a row of plain values (JSON-ready)."""
-    sc = scenario_from_dict(case_scenario(case, base, motor_spec), source=f"<verify: {case.name}>",
-                            base_dir=base_dir)
+    sc = scenario_from_dict(
+        case_scenario(case, base, motor_spec), source=f"<verify: {case.name}>", base_dir=base_dir
+    )
     plant = off_nominal_motor(nominal, case.plant)
     b = build(sc, motor=plant)
     raw = run_closed_loop(b.cfg, b.drive.state, b.n_steps, b.commands, signals=_SIGNALS, blocks=_BLOCKS)
-    row = judge(case, raw.arrays, raw.fault, raw.steps_done / float(sc.spec.inverter.f_pwm),
-                sc.spec.scenario.duration, nominal.pole_pitch)
+    row = judge(
+        case,
+        raw.arrays,
+        raw.fault,
+        raw.steps_done / float(sc.spec.inverter.f_pwm),
+        sc.spec.scenario.duration,
+        nominal.pole_pitch,
+    )
     row["wall_s"] = raw.wall_s
     return row
 
@@ -75,8 +83,16 @@ def judge(case: Case, a: dict, fault: int, t_done: float, duration: float, tau: 
     n = t.size - 1 if fault else t.size  # (the sample that tripped is not judged)
     t, lo, hi = t[:n], a["x_min"][:n], a["x_max"][:n]
     e_lo, e_hi, e_mean = a["err_min"][:n], a["err_max"][:n], a["err_mean"][:n]
-    row = {"case": case.name, "kind": case.kind, "plant": case.plant, "position_deg": case.position_deg,
-           "load_n": case.load, "fault": fault_reason(fault), "passed": False, "why": ""}
+    row = {
+        "case": case.name,
+        "kind": case.kind,
+        "plant": case.plant,
+        "position_deg": case.position_deg,
+        "load_n": case.load,
+        "fault": fault_reason(fault),
+        "passed": False,
+        "why": "",
+    }
     dev = np.maximum(np.abs(lo - case.target), np.abs(hi - case.target)) * deg  # |x - target|, deg
     err = np.degrees(np.maximum(np.abs(e_lo), np.abs(e_hi)))  # |estimation error|, deg
     win = t >= duration - C.END_WINDOW_S
@@ -85,11 +101,19 @@ def judge(case: Case, a: dict, fault: int, t_done: float, duration: float, tau: 
         return row
     if case.kind != "hold":  # for the certificate's figure: one point per block
         x_mid = 0.5 * (lo + hi)
-        row["trace"] = {"t": t.tolist(), "x_deg": ((x_mid - case.target) * deg).tolist(),
-                        "err_deg": np.degrees(e_mean).tolist()}
+        row["trace"] = {
+            "t": t.tolist(),
+            "x_deg": ((x_mid - case.target) * deg).tolist(),
+            "err_deg": np.degrees(e_mean).tolist(),
+        }
     pp = float(hi[win].max() - lo[win].min()) * deg
-    row.update(pp_deg=pp, pp_mm=pp / deg * 1e3, err_deg=float(dev[win].max()),
-               est_err_deg=float(err[win].max()), bias_deg=float(np.degrees(e_mean[win].mean())))
+    row.update(
+        pp_deg=pp,
+        pp_mm=pp / deg * 1e3,
+        err_deg=float(dev[win].max()),
+        est_err_deg=float(err[win].max()),
+        bias_deg=float(np.degrees(e_mean[win].mean())),
+    )
     why = []
     if case.kind == "hold":
         lim = C.HOLD_ERR_DEG if case.plant == "nominal" else C.OFF_ERR_DEG
@@ -97,11 +121,21 @@ def judge(case: Case, a: dict, fault: int, t_done: float, duration: float, tau: 
             why.append(f"|x - target| {row['err_deg']:.3g} deg > {lim:g}")
     elif case.kind == "step":
         row["settle_s"] = _settle(t, dev, case.t_event)
-        row["overshoot_deg"] = float(max(0.0, np.max(np.sign(case.target - lo[0]) * (
-            (hi if case.target > lo[0] else lo) - case.target)))) * deg
+        row["overshoot_deg"] = (
+            float(
+                max(
+                    0.0,
+                    np.max(
+                        np.sign(case.target - lo[0]) * ((hi if case.target > lo[0] else lo) - case.target)
+                    ),
+                )
+            )
+            * deg
+        )
         if row["settle_s"] is None or row["settle_s"] > C.STEP_SETTLE_S:
-            why.append(f"settles in {_s(row['settle_s'])} > {C.STEP_SETTLE_S:g} s (within "
-                       f"{C.SETTLE_BAND_DEG:g} deg)")
+            why.append(
+                f"settles in {_s(row['settle_s'])} > {C.STEP_SETTLE_S:g} s (within {C.SETTLE_BAND_DEG:g} deg)"
+            )
     elif case.kind == "trajectory":
         moving = (t >= case.t_event) & (t <= case.t_end_move)
         row["peak_err_deg"] = float(err[moving].max()) if moving.any() else 0.0
@@ -115,8 +149,12 @@ def judge(case: Case, a: dict, fault: int, t_done: float, duration: float, tau: 
         after = t >= case.t_event
         peak = float(dev[after].max())
         rec = _settle(t, dev, case.t_event)
-        row.update(peak_dev_deg=peak, peak_dev_mm=peak / deg * 1e3, recover_s=rec,
-                   stiffness_n_per_mm=abs(case.load) / max(peak / deg * 1e3, 1e-9))
+        row.update(
+            peak_dev_deg=peak,
+            peak_dev_mm=peak / deg * 1e3,
+            recover_s=rec,
+            stiffness_n_per_mm=abs(case.load) / max(peak / deg * 1e3, 1e-9),
+        )
         if rec is None or rec > C.LOAD_RECOVER_S:
             why.append(f"back within {C.SETTLE_BAND_DEG:g} deg after {_s(rec)} > {C.LOAD_RECOVER_S:g} s")
     if pp > C.HOLD_PP_DEG:
@@ -140,8 +178,9 @@ def _s(v: float | None) -> str:
     return "never" if v is None else f"{v:.3g} s"
 
 
-def run_cases(cases: list[Case], base: dict, motor_spec: str, nominal: Motor, base_dir: str,
-              workers: int | None = None) -> list[dict]:
+def run_cases(
+    cases: list[Case], base: dict, motor_spec: str, nominal: Motor, base_dir: str, workers: int | None = None
+) -> list[dict]:
     """Every case's row, in order, on a local dask cluster of ``workers`` threads (default: one per
     core; 1 runs them in this thread)."""
     import os
@@ -153,7 +192,7 @@ def run_cases(cases: list[Case], base: dict, motor_spec: str, nominal: Motor, ba
 
     # batches of runs per task: a task costs about a millisecond of scheduling
     size = max(1, math.ceil(len(cases) / (4 * n)))
-    batches = [cases[i:i + size] for i in range(0, len(cases), size)]
+    batches = [cases[i : i + size] for i in range(0, len(cases), size)]
 
     def batch(cs):
         return [run_case(c, base, motor_spec, nominal, base_dir) for c in cs]
