@@ -98,7 +98,7 @@ lint: $(STAMP)
 EXAMPLE := $(BUILD)/example
 example: $(STAMP)
 	@mkdir -p $(EXAMPLE)
-	$(VENV)/bin/linsense tune --motor ecce2010 --format c --out $(EXAMPLE)/ls_cfg_ecce2010.h
+	$(VENV)/bin/linsense tune --motor ecce2010 --format c --no-verify --out $(EXAMPLE)/ls_cfg_ecce2010.h
 	$(CC) $(CSTD) -O2 -Icsrc/include -I$(EXAMPLE) examples/firmware/main.c $(CTRL_SRC) -lm -o $(EXAMPLE)/firmware_example
 	$(EXAMPLE)/firmware_example
 
