@@ -322,42 +322,82 @@ def simulate(scenario: str, out: str, fidelity: str | None, trace_fmt: str, deci
         raise click.exceptions.Exit(1)
 
 
+def _drive_options(f):
+    """The drive data as options (``--v-dc --f-pwm --dead-time --i-max --v-inj --f-inj``, SI units;
+    :class:`~linsense.tune.design.DriveData`'s names): a command gets them as keyword arguments,
+    None where not given."""
+    dflt = " (default: the scenario's, else the design's drive data)"
+    opts = [
+        click.option("--v-dc", type=float, default=None, callback=_finite(0.0, True),
+                     help="bus voltage, V" + dflt),
+        click.option("--f-pwm", type=float, default=None, callback=_finite(0.0, True),
+                     help="PWM rate, Hz" + dflt),
+        click.option("--dead-time", type=float, default=None, callback=_finite(0.0, False),
+                     help="the inverter's dead time, s" + dflt),
+        click.option("--i-max", type=float, default=None, callback=_finite(0.0, True),
+                     help="current limit, A" + dflt),
+        click.option("--v-inj", type=float, default=None, callback=_finite(0.0, True),
+                     help="injection amplitude, V (default: the scenario's, else designed)"),
+        click.option("--f-inj", type=float, default=None, callback=_finite(0.0, True),
+                     help="injection frequency, Hz (default: the scenario's, else designed)"),
+    ]
+    for opt in reversed(opts):
+        f = opt(f)
+    return f
+
+
 @cli.command()
-@click.option("--motor", "motor_spec", required=True, help=MOTOR_HELP)
+@click.option("--motor", "motor_spec", default=None,
+              help=MOTOR_HELP + "; with --scenario it must be the scenario's motor")
+@click.option("--scenario", "scenario_path", type=click.Path(dir_okay=False), default=None,
+              help="the drive to calibrate: the scenario's motor, bus, PWM, dead time, injection (shape, "
+                   "amplitude, frequency, kappa), gains and [calibration] keys; the options below over it")
 @click.option("--positions", default=56, show_default=True, type=click.IntRange(4, 4096),
               help="points over one electrical period")
 @click.option("--load", default=0.0, show_default=True, type=float, callback=_finite(-math.inf, False),
               help="constant load force, N (opposing positive motion when > 0)")
 @click.option("--fidelity", type=click.Choice(["switching", "average"]), default="switching",
-              show_default=True, help="inverter model (both with the 0.8 us dead time)")
-@click.option("--quad", default=0.0, show_default=True, type=float, callback=_quad,
-              help="the injection's q-axis share kappa (0: the paper's pulsating injection)")
+              show_default=True, help="inverter model, with the drive's dead time (a scenario's fidelity is "
+                                      "not used)")
+@click.option("--quad", default=None, type=float, callback=_quad,
+              help="the injection's q-axis share kappa (default: the scenario's, else the design's; 0: the "
+                   "paper's pulsating injection)")
+@_drive_options
 @click.option("--saturated", is_flag=True, default=False,
               help="on the saturated plant (the motor file's [saturation], docs/simulator.md)")
 @click.option("--out", required=True, type=click.Path(file_okay=False), help="output folder")
-def calibrate(motor_spec: str, positions: int, load: float, fidelity: str, quad: float, saturated: bool,
-              out: str) -> None:
-    """Run the firmware's LUT calibration in the simulator (paper Fig. 9): lut_measured.csv,
-    metrics.json, calibration.png. Exit code 1 if it does not complete."""
+def calibrate(motor_spec: str | None, scenario_path: str | None, positions: int, load: float, fidelity: str,
+              quad: float | None, saturated: bool, out: str, **drive) -> None:
+    """Run the firmware's LUT calibration in the simulator (paper Fig. 9) on the drive that will use
+    the table: a scenario's (--scenario), or the design for the motor (linsense tune's, with the
+    drive data given): lut_measured.csv, metrics.json, calibration.png. Exit code 1 if it does not
+    complete."""
     from linsense.io import output_set, split_timing
     from linsense.report.figures import fig_calibration, save_png
     from linsense.sim.calibrate import calibrate as run_calibration
     from linsense.sim.calibrate import lut_csv
+    from linsense.sim.scenario import load_scenario
 
-    motor = _load(motor_spec)
+    if motor_spec is None and scenario_path is None:
+        raise click.UsageError("give --motor or --scenario (the drive to calibrate)")
+    sc = load_scenario(scenario_path) if scenario_path is not None else None
+    motor = _load(motor_spec) if motor_spec is not None else None
     extra = {"saturation": {"enabled": True}} if saturated else {}
-    cal = run_calibration(motor, positions, load, fidelity, quad=quad, source=motor_spec, **extra)
+    cal = run_calibration(motor_spec if sc is not None else motor, positions, load, fidelity, quad=quad,
+                          source=motor_spec or "<calibrate>", scenario=sc, drive=drive, **extra)
     metrics, timing = split_timing(cal.metrics)
     with output_set(out, "calibrate") as s:
         s.write("lut_measured.csv", lut_csv(cal))
         s.write("metrics.json", json.dumps(metrics, indent=1) + "\n")
         s.write("timing.json", json.dumps(timing, indent=1) + "\n")
-        save_png(fig_calibration(cal, motor), s.path("calibration.png"))
+        save_png(fig_calibration(cal, cal.motor), s.path("calibration.png"))
     for f in s.files:
         click.echo(str(f))
     m = cal.metrics
     click.echo(f"{m['motor']}: {m['points_done']}/{m['points']} points, load {m['load_n']:g} N, "
-               f"{m['fidelity']}: "
+               f"{m['fidelity']}, {m['v_dc']:g} V, {m['f_pwm_hz']:g} Hz PWM, {m['dead_time_s'] * 1e6:g} us; "
+               f"{m['injection_shape']} injection {m['v_inj']:.3g} V at {m['f_inj_hz']:g} Hz, kappa "
+               f"{m['injection_quad']:g}: "
                f"max |measured - model with R_s| {_show(m['max_diff_deg'], 'deg', '.3g')}, against eq. 12 "
                f"{_show(m['max_diff_eq12_deg'], 'deg', '.3g')}; {m['sim_s']} s simulated in {m['wall_s']} s")
     if not cal.completed:

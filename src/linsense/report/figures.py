@@ -182,8 +182,15 @@ def fig_calibration(cal, motor) -> Figure:
     fig = Figure(figsize=(7.5, 4.2), layout="constrained")
     ax = fig.subplots()
     ax.plot(np.degrees(th), np.degrees(psi_lut(motor, th)), "-", color="0.6", lw=1.0, label="model, eq. (12)")
-    ax.plot(np.degrees(th), np.degrees(psi_lut_resistive(motor, th, m["f_inj_hz"], quad=m["injection_quad"])),
-            "b-", lw=1.2, label="model with R_s (the injection used)")
+    shape = m.get("injection_shape", "pulsating")
+    if shape == "pulsating":
+        model = psi_lut_resistive(motor, th, m["f_inj_hz"], quad=m["injection_quad"])
+    else:  # (the shape's own table, on the same grid: 720 points and the first again at 360 deg)
+        from linsense.compensation.lut import build_lut
+
+        model = build_lut(motor, th.size - 1, f_inj=m["f_inj_hz"], injection=shape).values
+        model = np.append(model, model[0])
+    ax.plot(np.degrees(th), np.degrees(model), "b-", lw=1.2, label="model with R_s (the injection used)")
     ok = np.isfinite(cal.psi_measured)
     ax.plot(np.degrees(cal.theta[ok]), np.degrees(cal.psi_measured[ok]), "o", ms=4, mfc="none", color="C3",
             label=f"measured ({int(ok.sum())} of {m['points']} points)")

@@ -16,6 +16,7 @@ import os
 import threading
 from collections import OrderedDict
 from dataclasses import dataclass, field
+from fractions import Fraction
 from pathlib import Path
 
 import numpy as np
@@ -222,6 +223,46 @@ def drive_data(sc: Scenario) -> DriveData:
                      quad=inj.quadrature)
 
 
+#: the calibration's own timings follow the drive (docs/simulator.md, "Calibration"): its
+#: adaptation rate k_int 15 times below the dither (the ripple the dither leaves on the angle) and 30
+#: times below the demodulator's low-pass (the loop it closes through it); its window t_hold about
+#: CAL_HOLD_TAUS adaptation time constants, in whole periods of the dither's beat with the injection;
+#: its settling CAL_SETTLE_TAUS time constants 1/kp_x of the position loop after a move; a point not
+#: accepted within CAL_MAX_WINDOWS windows trips (ls_cal_cfg; for ecce2010 on the paper's drive
+#: about the C defaults, which are constants)
+CAL_K_INT_DITHER = 15.0
+CAL_K_INT_LPF = 30.0
+CAL_HOLD_TAUS = 6.0
+CAL_SETTLE_TAUS = 1.5
+CAL_MAX_WINDOWS = 30.0
+
+
+def calibration_timing(f_inj: float, dither_a: float, dither_hz: float, demod_lpf: float,
+                       kp_x: float, k_int: float | None = None, t_hold: float | None = None) -> dict:
+    """The calibration's ``k_int`` (1/s), ``t_hold``, ``t_settle`` and ``t_max`` (s) for a drive
+    injecting at ``f_inj`` (Hz) with a q-current dither of ``dither_a`` (A) at ``dither_hz`` (Hz),
+    the demodulator's low-pass at ``demod_lpf`` (Hz) and the position loop's ``kp_x`` (1/s).
+    A ``k_int`` or ``t_hold`` given is kept, and the others follow it.
+
+    The window is a whole number of periods of the dither and of its beats with the injection
+    (``1 / gcd(dither_hz, f_inj)`` where the two are commensurate, else of the dither): their
+    ripple in the demodulated error then averages out of the window's mean, which the acceptance
+    compares with ``tol`` (a window of 7.5 dither periods never accepts: the ripple's remainder
+    stays above it).
+    """
+    if k_int is None:
+        k_int = 2.0 * math.pi * min(dither_hz / CAL_K_INT_DITHER, demod_lpf / CAL_K_INT_LPF)
+    if t_hold is None:
+        period = 1.0 / f_inj
+        if dither_a > 0.0:
+            ratio = Fraction(dither_hz / f_inj).limit_denominator(64)
+            exact = abs(float(ratio) * f_inj - dither_hz) <= 1e-9 * dither_hz
+            period = ratio.denominator / f_inj if exact else 1.0 / dither_hz
+        t_hold = math.ceil(CAL_HOLD_TAUS / k_int / period - 1e-9) * period
+    return {"k_int": k_int, "t_hold": t_hold, "t_settle": CAL_SETTLE_TAUS / kp_x,
+            "t_max": CAL_MAX_WINDOWS * t_hold}
+
+
 def designed(sc: Scenario, motor: Motor) -> Scenario:
     """``sc`` with every gain it leaves unset taken from the design for its motor and drive
     (:func:`linsense.tune.design`, docs/tuning.md); what the file gives is kept."""
@@ -251,6 +292,18 @@ def designed(sc: Scenario, motor: Motor) -> Scenario:
         if k in given["controller"]:
             want["controller"].pop(k.replace("_kp", "_bandwidth_hz"))
     changes = {sec: {k: v for k, v in vals.items() if k not in given[sec]} for sec, vals in want.items()}
+    if s.control.mode == "calibration":  # its own timings follow the drive as it runs
+        def run(sec: str, key: str):
+            return changes.get(sec, {}).get(key, getattr(getattr(s, sec), key))
+
+        f_run = s.inverter.f_pwm / 2.0 if s.injection.shape == "square" else run("injection", "frequency")
+        kp_x = run("controller", "kp_x") if con.position_type == "p" else dz.kp_x
+        cal = s.calibration
+        timing = calibration_timing(f_run, run("calibration", "dither_a"), run("calibration", "dither_hz"),
+                                    run("observer", "demod_lpf_hz"), kp_x,
+                                    cal.k_int if "k_int" in given["calibration"] else None,
+                                    cal.t_hold if "t_hold" in given["calibration"] else None)
+        changes["calibration"].update({k: v for k, v in timing.items() if k not in given["calibration"]})
     # the designed values are valid by construction (the design keeps the injection within the bus
     # and f_pwm / 4): set them without validating the whole scenario again (a sweep builds thousands)
     update = {sec: getattr(s, sec).model_copy(update=vals) for sec, vals in changes.items() if vals}

@@ -5,27 +5,53 @@ control, settles, then injects and demodulates on the encoder angle and integrat
 compensation angle until the mean demodulated error (the sensorless observer's error against the
 encoder) over a window vanishes (``LS_MODE_CALIBRATION``, docs/firmware.md). A small q-current
 dither sweeps the phase currents through zero meanwhile, so that the inverter's dead time averages
-out instead of biasing the table at no load (docs/simulator.md). The measured table is compared
-with the model's: the resistance-aware LUT for the same injection, and the paper's eq. (12).
+out instead of biasing the table at no load (docs/simulator.md).
+
+The calibration runs the drive that will use the table: a scenario's (its bus, PWM, dead time,
+injection shape, amplitude, frequency and kappa, gains), or the design for the motor
+(:func:`linsense.sim.build.designed`, :class:`linsense.tune.design.DriveData`), with the drive-data
+keys given over either. The measured table is compared with the model's for the injection the
+drive actually runs, once the design has filled it in: the resistance-aware LUT at that frequency
+and kappa (or the rotating or square wave's own table), and the paper's eq. (12).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 
-from linsense.analysis.hf import psi_lut, psi_lut_resistive
+from linsense.analysis.hf import psi_lut
+from linsense.compensation.lut import build_lut
+from linsense.errors import InputError
 from linsense.model.motor import Motor
-from linsense.sim.build import build
+from linsense.sim.build import build, designed, motor_key, resolve_motor
 from linsense.sim.core import run_closed_loop
 from linsense.sim.metrics import fault_reason
-from linsense.sim.scenario import scenario_from_dict
+from linsense.sim.scenario import Scenario, scenario_from_dict
+from linsense.tune.design import DriveData
 
-#: simulated-time budget per point (s) beyond the move and the settling: the drive's own t_max trips
-#: an unconverged point long before
-_BUDGET_PER_POINT = 1.5
+#: simulated-time budget per point beyond the settling, of the time t_max after which the drive
+#: trips an unconverged point (the points that converge early leave their time to the others)
+_BUDGET_OF_T_MAX = 0.5
+
+#: drive data (:class:`~linsense.tune.design.DriveData` field) -> scenario (section, key)
+DRIVE_KEYS = {
+    "v_dc": ("inverter", "v_dc"),
+    "f_pwm": ("inverter", "f_pwm"),
+    "dead_time": ("inverter", "dead_time"),
+    "i_max": ("controller", "i_max"),
+    "v_max": ("reference", "v_max"),
+    "a_max": ("reference", "a_max"),
+    "v_inj": ("injection", "amplitude"),
+    "f_inj": ("injection", "frequency"),
+    "quad": ("injection", "quadrature"),
+}
+
+#: scenario sections that describe the application or the run, not the drive: the calibration
+#: sets its own (its reference is its sequence, its load the ``load`` argument)
+_RUN_SECTIONS = ("scenario", "reference", "load", "record", "metrics", "startup")
 
 
 @dataclass
@@ -34,63 +60,176 @@ class Calibration:
 
     theta: np.ndarray  # rad, table positions, 2 pi k / points
     psi_measured: np.ndarray  # rad, the calibration's table (NaN where not reached)
-    psi_model: np.ndarray  # rad, the model LUT with R_s for the same injection
+    psi_model: np.ndarray  # rad, the model LUT with R_s for the injection the drive runs
     psi_eq12: np.ndarray  # rad, paper eq. (12)
     metrics: dict = field(default_factory=dict)
+    motor: Motor | None = None  # the plant's motor
 
     @property
     def completed(self) -> bool:
         return bool(self.metrics.get("completed"))
 
 
-def calibrate(
-    motor: Motor | str,
+def calibration_scenario(
+    motor: Motor | str | None = None,
     positions: int = 56,
     load: float = 0.0,
     fidelity: str = "switching",
-    quad: float = 0.0,
+    quad: float | None = None,
     source: str = "<calibrate>",
+    scenario: Scenario | None = None,
+    drive: dict | None = None,
     **sections,
-) -> Calibration:
-    """Run the calibration on ``motor`` (a Motor, a preset name or a motor-file path).
+) -> tuple[Scenario, Motor | None]:
+    """The scenario a calibration runs (before the design fills in its unset gains) and the motor
+    object to build it with (None: the scenario's own motor).
 
     Parameters
     ----------
+    motor : Motor, preset name or motor-file path, or None with ``scenario``.
+    positions : points over one electrical period.
+    load : N, constant load opposing positive motion (the drive starts balanced against it).
+    fidelity : inverter model, ``"switching"`` or ``"average"`` (the scenario's is not used).
+    quad : kappa, the injection's q-axis share; None: the scenario's, else the design's.
+    source : name for messages when there is no scenario.
+    scenario : the drive to calibrate: everything it says about the drive (inverter, injection,
+        observer, controller, sensors, protection, calibration, saturation keys) is kept; its
+        reference, load, record and start-up are the calibration's. Without it the drive is the
+        design's: :class:`~linsense.tune.design.DriveData`'s defaults.
+    drive : drive data over the scenario's or the defaults, by
+        :class:`~linsense.tune.design.DriveData` name (``v_dc``, ``f_pwm``, ``dead_time``,
+        ``i_max``, ``v_max``, ``a_max``, ``v_inj``, ``f_inj``, ``quad``; SI units); None values are ignored.
+    sections : further scenario keys over all that (e.g. ``inverter={"dead_time": 0.0}``).
+
+    Raises
+    ------
+    InputError
+        ``motor`` and the scenario's motor differ, an unknown drive key, or a scenario the
+        changes make invalid (naming its file and key).
+    """
+    drive = {k: v for k, v in (drive or {}).items() if v is not None}
+    unknown = sorted(set(drive) - set(DRIVE_KEYS))
+    if unknown:
+        raise InputError(source, unknown[0], f"not a drive-data key (known: {', '.join(DRIVE_KEYS)})")
+    if quad is not None:
+        drive["quad"] = float(quad)
+    explicit = set(drive)
+    spec = motor if isinstance(motor, str) else None
+    obj = motor if isinstance(motor, Motor) else None
+    if scenario is not None:
+        source, base_dir = scenario.source, scenario.base_dir
+        data = {k: v for k, v in scenario.given().items() if k not in _RUN_SECTIONS}
+        keep_ref = {k: v for k, v in scenario.given().get("reference", {}).items() if k in ("v_max", "a_max")}
+        data["reference"] = {"type": "hold", **keep_ref}
+        # the scenario's table, if any, is not used: the calibration measures one
+        data.get("observer", {}).pop("compensation", None)
+        if motor is not None:
+            _same_motor(scenario, spec, obj)
+            obj = obj if obj is not None else resolve_motor(scenario)
+    else:
+        base_dir = None
+        # the design's drive (DriveData's defaults, read here, never restated)
+        dd = DriveData()
+        given = {f.name: getattr(dd, f.name) for f in fields(DriveData)
+                 if f.name in DRIVE_KEYS and getattr(dd, f.name) is not None}
+        drive = {**given, **drive}
+        # (a Motor object replaces the scenario's motor at the build: any preset names it here)
+        data = {"motor": spec or "ecce2010", "reference": {"type": "hold"}}
+    for key, val in drive.items():
+        sec, k = DRIVE_KEYS[key]
+        data.setdefault(sec, {})[k] = float(val)
+    if "f_pwm" in drive:  # (control.fs follows the PWM rate given)
+        data.get("control", {}).pop("fs", None)
+    data["scenario"] = {"name": "calibrate", "duration": 1.0,
+                        **({"seed": scenario.spec.scenario.seed} if scenario is not None else {})}
+    data.setdefault("inverter", {})["fidelity"] = fidelity
+    data.setdefault("control", {})["mode"] = "calibration"
+    data["load"] = {"type": "constant", "force": float(load)}
+    data.setdefault("initial", {})["load_balanced"] = True
+    data.setdefault("calibration", {})["points"] = int(positions)
+    data["record"] = {"decimate": 16}
+    for sec, vals in sections.items():
+        data.setdefault(sec, {}).update(vals)
+    try:
+        sc = scenario_from_dict(data, source, base_dir)
+    except InputError as exc:  # a value given as drive data: say so
+        given = {".".join(DRIVE_KEYS[k]): k for k in explicit}
+        if exc.key not in given:
+            raise
+        raise InputError(exc.source, f"{exc.key} (drive data {given[exc.key]})", exc.message) from None
+    # the run's budget: per point the settling and half the time after which a point trips, with
+    # the calibration's timings as the drive runs them (designed for the model the drive believes)
+    ov = sc.spec.controller.model.motor
+    model = (obj if obj is not None else resolve_motor(sc)) if ov is None else \
+        resolve_motor(sc, ov, "controller.model.motor", check=False)
+    cal = designed(sc, model).spec.calibration
+    sc = sc.replace(scenario={"duration": positions * (cal.t_settle + _BUDGET_OF_T_MAX * cal.t_max)})
+    return sc, obj
+
+
+def _same_motor(sc: Scenario, spec: str | None, obj: Motor | None) -> None:
+    """Refuse a motor given beside a scenario when it is not the scenario's motor."""
+    from linsense.model.motor import load_motor
+
+    given = obj if obj is not None else load_motor(spec)
+    own = resolve_motor(sc)
+    if motor_key(given) != motor_key(own):
+        name = spec if spec is not None else given.name
+        raise InputError(sc.source, "motor",
+                         f"the scenario's motor {sc.spec.motor!r} ({own.name}) is not the motor given, "
+                         f"{name!r} ({given.name}): give one of them (the scenario's gains are its motor's)")
+
+
+def calibrate(
+    motor: Motor | str | None = None,
+    positions: int = 56,
+    load: float = 0.0,
+    fidelity: str = "switching",
+    quad: float | None = None,
+    source: str = "<calibrate>",
+    scenario: Scenario | None = None,
+    drive: dict | None = None,
+    **sections,
+) -> Calibration:
+    """Run the calibration on the drive that will use the table.
+
+    Parameters
+    ----------
+    motor : a Motor, a preset name or a motor-file path; None with ``scenario`` (its motor).
+        Both given: they must be the same motor (:class:`~linsense.errors.InputError` otherwise).
     positions : points over one electrical period (the paper: 56).
     load : N, constant load opposing positive motion (the drive starts balanced against it).
     fidelity : inverter model, ``"switching"`` (default) or ``"average"``.
-    quad : the injection's q-axis share kappa; 0 (default) is the paper's pulsating injection,
-        with which the table is three times stiffer (docs/theory.md).
+    quad : the injection's q-axis share kappa; None (default): the scenario's, else the design's
+        (:class:`~linsense.tune.design.DriveData`); 0 is the paper's pulsating injection, with
+        which the table is three times stiffer (docs/theory.md).
+    scenario : the drive (a :class:`~linsense.sim.scenario.Scenario`); None: the design for
+        ``motor`` on :class:`~linsense.tune.design.DriveData`'s drive.
+    drive : drive data over it, by :class:`~linsense.tune.design.DriveData` name
+        (:func:`calibration_scenario`).
     sections : further scenario sections (e.g. ``inverter={"dead_time": 0.0}``).
+
+    Returns
+    -------
+    Calibration
+        The measured table and the model's for the injection the drive runs (its frequency and
+        kappa after the design), with ``metrics``.
     """
-    spec = motor if isinstance(motor, str) else None
-    data = {
-        "motor": spec or "ecce2010",
-        "scenario": {"name": "calibrate", "duration": 1.0},
-        "inverter": {"fidelity": fidelity},
-        "control": {"mode": "calibration"},
-        "injection": {"quadrature": float(quad)},
-        "reference": {"type": "hold"},
-        "load": {"force": float(load)},
-        "initial": {"load_balanced": True},
-        "calibration": {"points": int(positions)},
-        "record": {"decimate": 16},
-    }
-    for sec, vals in sections.items():
-        data.setdefault(sec, {}).update(vals)
-    sc = scenario_from_dict(data, source)
-    cal = sc.spec.calibration
-    per_point = _BUDGET_PER_POINT + cal.t_settle
-    sc = sc.replace(scenario={"duration": positions * per_point})
-    b = build(sc, None if spec is not None else motor)
+    if motor is None and scenario is None:
+        motor = "ecce2010"
+    sc, obj = calibration_scenario(motor, positions, load, fidelity, quad, source, scenario, drive,
+                                   **sections)
+    b = build(sc, obj)
     raw = run_closed_loop(b.cfg, b.drive.state, b.n_steps, b.commands)
     done = int(b.drive.state.cal_index)
     table = np.array([b.extra["cal_table"][k] for k in range(positions)], dtype=float)
     table[done:] = np.nan
     m = b.motor
+    s = b.scenario.spec  # the scenario as it ran: the design's values filled in
+    inj = s.injection
+    f_inj = s.inverter.f_pwm / 2.0 if inj.shape == "square" else inj.frequency
     theta = 2.0 * np.pi * np.arange(positions) / positions
-    f_inj = sc.spec.injection.frequency
-    model = psi_lut_resistive(m, theta, f_inj, quad=float(quad))
+    model = build_lut(m, positions, f_inj=f_inj, quad=inj.quadrature, injection=inj.shape).values
     eq12 = psi_lut(m, theta)
     ok = np.isfinite(table)
     metrics = {
@@ -100,17 +239,28 @@ def calibrate(
         "max_diff_deg": _max_deg(table[ok] - model[ok]),
         "max_diff_eq12_deg": _max_deg(table[ok] - eq12[ok]),
         "load_n": float(load),
-        "fidelity": fidelity,
+        "fidelity": s.inverter.fidelity,
+        "v_dc": float(s.inverter.v_dc),
+        "f_pwm_hz": float(s.inverter.f_pwm),
+        "dead_time_s": float(s.inverter.dead_time),
+        "i_max_a": float(s.controller.i_max),
+        "injection_shape": inj.shape,
+        "v_inj": float(inj.amplitude),
         "f_inj_hz": float(f_inj),
-        "injection_quad": float(quad),
-        "dead_time_s": float(sc.spec.inverter.dead_time),
-        "saturated": bool(sc.spec.saturation.enabled),
+        "injection_quad": float(inj.quadrature),
+        "dither_a": float(s.calibration.dither_a),
+        "dither_hz": float(s.calibration.dither_hz),
+        "k_int": round(float(s.calibration.k_int), 6),
+        "t_settle_s": round(float(s.calibration.t_settle), 6),
+        "t_hold_s": round(float(s.calibration.t_hold), 6),
+        "t_max_s": round(float(s.calibration.t_max), 6),
+        "saturated": bool(s.saturation.enabled),
         "fault": fault_reason(raw.fault),
-        "sim_s": round(raw.steps_done / sc.spec.inverter.f_pwm, 6),
+        "sim_s": round(raw.steps_done / s.inverter.f_pwm, 6),
         "wall_s": round(raw.wall_s, 6),
         "motor": m.name,
     }
-    return Calibration(theta, table, model, eq12, metrics)
+    return Calibration(theta, table, model, eq12, metrics, m)
 
 
 def _max_deg(d: np.ndarray) -> float | None:

@@ -3,8 +3,9 @@
 LUT-against-load within 0.3 deg").
 
 The drive's calibration mode (:func:`linsense.sim.calibrate.calibrate`, switching inverter with
-the dead time) runs on the saturated plant of a motor file whose ``[saturation]`` holds the FEA's
-incremental inductance tables at several q currents, under each load force; its table's change
+the dead time, the paper's pulsating injection) runs on the saturated plant of a motor file whose
+``[saturation]`` holds the FEA's incremental inductance tables at several q currents, under each
+load force; its table's change
 from the first load is compared with the change of the FEA's ``lut_<I>A.csv`` (eq. 12 of each
 load's table) at the same q current ``i_q = F / force_constant``, interpolated linearly between
 the FEA's load currents.
@@ -81,7 +82,7 @@ def lut_vs_load(motor_file: str | Path, loads=(0.0, 20.0, 40.0), positions: int 
         raise ValueError(f"{path}: needs a [saturation] section with FEA tables")
     tables, metrics, iq = [], [], []
     for f in loads:
-        c = calibrate(str(path), positions=positions, load=float(f), fidelity=fidelity,
+        c = calibrate(str(path), positions=positions, load=float(f), fidelity=fidelity, quad=0.0,
                       saturation={"enabled": True})
         if not c.completed:
             raise RuntimeError(f"calibration at {f:g} N did not complete: {c.metrics}")
