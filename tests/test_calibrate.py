@@ -36,15 +36,14 @@ ABOVE_BAR_ELLIPTICAL = {
                 "that the continuous model leaves out",
     "m100_edge": "the design's dither (0.16 i_max) is 1.6 times the HF current: its leak through the HF "
                  "band-pass biases the table by up to 0.7 deg (0.29 deg with half the dither)",
-    "m20_hv": "the design's position loop is softer than the gradient of the HF current's reluctance "
-              "force on this light 20 mm motor: points are not held (completes with twice the loop "
-              "bandwidths); and 1.5 us of dead time at 8 kHz",
-    "m60_pos20k": "0.8 us of dead time at 20 kHz (1.15 V against 10.5 V of injection): 0.3-0.36 deg",
-    "m90_heavy": "dead time with the elliptical injection: 0.29-0.32 deg",
+    "m20_hv": "1.5 us of dead time at 8 kHz with the elliptical injection: 0.34 deg (it completes since "
+              "the loops are twice faster; before, its points were not held)",
+    "m60_pos20k": "at the bar: 0.8 us of dead time at 20 kHz (1.15 V against 10.5 V of injection), 0.29-0.36 "
+                  "deg",
+    "m90_heavy": "at the bar: dead time with the elliptical injection, 0.29-0.32 deg",
 }
-ABOVE_BAR_PULSATING = {
-    "m20_hv": ABOVE_BAR_ELLIPTICAL["m20_hv"],
-}
+#: (m20_hv's points were not held with the former 4 Hz speed loop; now 0.12 deg)
+ABOVE_BAR_PULSATING: dict = {}
 
 
 def _drive(name: str) -> dict:

@@ -140,8 +140,11 @@ def test_no_aliasing_of_the_hf_current():
 
 
 def test_metrics_only_memory_does_not_grow(monkeypatch):
-    short = run.simulate(_hold(10.0), record="metrics")
-    long = run.simulate(_hold(100.0), record="metrics")
+    # (on the switching inverter: the average model's dead-time approximation cycles by 0.6 deg at
+    # this position with the default 8 Hz speed loop; the switching model holds within 0.002 deg)
+    sw = {"inverter": {"fidelity": "switching"}}
+    short = run.simulate(_hold(10.0, **sw), record="metrics")
+    long = run.simulate(_hold(100.0, **sw), record="metrics")
     assert short.t.size == long.t.size <= run.METRICS_SAMPLES
     assert long.metrics["steps"] == 1_600_000
     assert long.metrics["block_s"] == -(-1_600_000 // run.METRICS_SAMPLES) / 16000

@@ -216,3 +216,46 @@ def test_tune_no_verify_and_refusal(tmp_path, capsys):
         main(["tune", "--motor", "ecce2010", "--dead-time", "3e-6", "--out", str(tmp_path / "b.toml")])
     err = capsys.readouterr().err.strip().splitlines()
     assert e.value.code == 2 and len(err) == 1 and "dead_time" in err[0] and "saliency" in err[0]
+
+
+def _full_off_nominal(name: str):
+    m = load_motor(CLASS / f"{name}.toml")
+    dd = _drive(name)
+    dz = design(m, dd)
+    spec = str(CLASS / f"{name}.toml")
+    from linsense.verify.cases import hold_cases
+    from linsense.verify.run import run_cases
+
+    cases = []
+    for plant in C.OFF_NOMINAL:
+        cases += hold_cases(m.pole_pitch, dz.load, C.POSITIONS, plant=plant, loads=(0.0,))
+    rows = run_cases(cases, scenario_dict(dz, dd, spec), spec, m, str(ROOT), workers=1)
+    return dz, rows
+
+
+#: the class motors whose drive holds the position (m20_hv's 500 Hz injection does not: docs/tuning.md)
+HOLDING = [n for n in NAMES if n != "m20_hv"]
+
+
+@pytest.mark.parametrize("name", HOLDING)
+def test_predicted_tolerance_costs_agree_with_the_simulation(name):
+    """The model's prediction of each tolerance's hold error (linsense.tune.margins, before any
+    simulation) agrees with the switching simulation with dead time within 1 deg or 25 %, so that
+    its verdict against the 3 deg bound is the certificate's (measured: within 0.1-0.9 deg)."""
+    dz, rows = _full_off_nominal(name)
+    for plant, pred in dz.tolerances.items():
+        meas = max(r.get("err_deg", math.inf) for r in rows if r["plant"] == plant)
+        tol = max(1.0, 0.25 * pred["error_deg"])
+        assert abs(meas - pred["error_deg"]) <= tol, (plant, meas, pred)
+        if abs(pred["error_deg"] - C.OFF_ERR_DEG) > tol:  # (clear of the bound: the same verdict)
+            assert (meas <= C.OFF_ERR_DEG) == (pred["error_deg"] <= C.OFF_ERR_DEG), (plant, meas, pred)
+
+
+def test_margins_differ_by_motor():
+    """The tolerance costs and the error-gain range under them, which the loops' margins are
+    evaluated over, are the motor's own."""
+    costs = {n: design(load_motor(CLASS / f"{n}.toml"), _drive(n)).tolerances for n in NAMES}
+    worst = {n: max(t["error_deg"] for t in c.values()) for n, c in costs.items()}
+    assert max(worst.values()) > 2 * min(worst.values()), worst
+    k_lo = {n: min(t["k_lo"] for t in c.values()) for n, c in costs.items()}
+    assert len({round(v, 2) for v in k_lo.values()}) >= 4, k_lo

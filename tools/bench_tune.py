@@ -53,6 +53,7 @@ def main() -> None:
             f"{name:11s} {dz.observer_bw:5.3g} {dz.speed_bw:5.3g} {dz.kp_x:5.3g} {s(steps[0]):>8s} "
             f"{s(steps[1]):>8s} {ls.get('stiffness_n_per_mm', float('nan')):6.3g} "
             f"{max(r['err_deg'] for r in holds):6.3g} {max(r['pp_deg'] for r in holds):7.3g} "
+              f"{sum(r['passed'] for r in holds):3d}/{len(holds):2d} "
             f"{cert.wall_s:5.1f}  {len(failed)}/{len(cert.checks)}: {', '.join(failed)}",
             flush=True,
         )

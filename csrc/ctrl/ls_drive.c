@@ -5,44 +5,46 @@
 #include "linsense/ls_drive.h"
 #include "linsense/ls_math.h"
 #include "ls_drive_cmd.h"
+#include "ls_drive_defaults.h"
 #include "ls_drive_path.h"
 
 /* --------------------------------------------------------------------------- defaults */
 void ls_drive_default_cfg(ls_drive_cfg *c)
 {
-    const LS_REAL fs = LS_R(16000.0);
-    /* ecce2010 reference motor (docs/theory.md): mean L_d, L_q; psi_pm = K_f tau / (3 pi) */
-    const LS_REAL l_d = LS_R(3.508e-3), l_q = LS_R(4.459e-3);
-    const LS_REAL tau = LS_R(0.056), kf = LS_R(20.0), mass = LS_R(1.5), r_s = LS_R(9.0);
-    const LS_REAL w_i = LS_TWO_PI * LS_R(250.0); /* current-loop bandwidth, rad/s */
-    const LS_REAL w_v = LS_TWO_PI * LS_R(4.0);   /* speed-loop bandwidth, rad/s */
+    /* the design for the ecce2010 reference motor on the default drive: ls_drive_defaults.h, generated
+     * by linsense.tune.defaults (docs/tuning.md); psi_pm = K_f tau / (3 pi) */
+    const LS_REAL fs = LS_DEF_FS;
+    const LS_REAL l_d = LS_DEF_L_D, l_q = LS_DEF_L_Q;
+    const LS_REAL tau = LS_DEF_TAU, kf = LS_DEF_KF, mass = LS_DEF_MASS, r_s = LS_DEF_R_S;
+    const LS_REAL w_i = LS_TWO_PI * LS_DEF_CURRENT_BW; /* current-loop bandwidth, rad/s */
+    const LS_REAL w_v = LS_TWO_PI * LS_DEF_SPEED_BW;   /* speed-loop bandwidth, rad/s */
     memset(c, 0, sizeof *c);
     c->fs = fs;
     c->pole_pitch = tau;
     c->force_constant = kf;
-    c->i_max = LS_R(2.5);
+    c->i_max = LS_DEF_I_MAX;
     c->delay_comp = LS_R(1.5);
     c->enc_counts = 56000; /* 1 um per count */
     c->enc_v_max = LS_R(5.0); /* twice the over-speed limit below (250 rad/s: 2.2 m/s) */
     c->inject_sensored = true; /* the HF current dithers the dead time: no hunting (docs/simulator.md) */
-    c->inject.amplitude = LS_R(12.0);
-    c->inject.freq = LS_R(1000.0);
+    c->inject.amplitude = LS_DEF_INJ_AMPLITUDE;
+    c->inject.freq = LS_DEF_INJ_FREQ;
     c->inject.fs = fs;
-    c->inject.ramp_rate = LS_R(1200.0);
-    c->inject.quad = LS_R(0.9); /* elliptical: robust to the dead time (docs/theory.md) */
+    c->inject.ramp_rate = LS_DEF_INJ_RAMP_RATE;
+    c->inject.quad = LS_DEF_INJ_QUAD; /* elliptical: robust to the dead time (docs/theory.md) */
     c->bpf.type = LS_BIQUAD_BANDPASS;
-    c->bpf.f0 = LS_R(1000.0);
+    c->bpf.f0 = LS_DEF_INJ_FREQ;
     c->bpf.q = LS_R(2.0);
     c->bpf.fs = fs;
     c->sep.type = LS_BIQUAD_NOTCH;
-    c->sep.f0 = LS_R(1000.0);
+    c->sep.f0 = LS_DEF_INJ_FREQ;
     c->sep.q = LS_R(2.0);
     c->sep.fs = fs;
     c->demod.method = LS_DEMOD_PRODUCT;
-    c->demod.f_lpf = LS_R(300.0);
-    c->demod.f_notch = LS_R(2000.0); /* 2 f_inj: the products' ripple */
+    c->demod.f_lpf = LS_DEF_DEMOD_LPF;
+    c->demod.f_notch = LS_DEF_DEMOD_NOTCH; /* 2 f_inj: the products' ripple */
     c->demod.fs = fs;
-    c->demod.gain = l_q / (l_q - l_d);
+    c->demod.gain = LS_DEF_DEMOD_GAIN;
     c->demod.comp = NULL;
     c->demod.gain_table = NULL;
     c->demod.min_level = LS_R(0.005);
@@ -52,7 +54,7 @@ void ls_drive_default_cfg(ls_drive_cfg *c)
     c->obs.mass = mass;
     c->obs.omega_max = LS_R(300.0);
     c->obs.force_max = LS_R(200.0);
-    ls_observer_gains(&c->obs, LS_R(40.0)); /* well above the speed loop it feeds */
+    ls_observer_gains(&c->obs, LS_DEF_OBSERVER_BW); /* well above the speed loop it feeds */
     c->enc_obs = c->obs;
     c->enc_obs.type = LS_OBS_PLL;
     ls_observer_gains(&c->enc_obs, LS_R(200.0));
@@ -64,7 +66,7 @@ void ls_drive_default_cfg(ls_drive_cfg *c)
     c->current.decouple = true;
     c->current.fs = fs;
     c->pos.type = LS_POSCTRL_P;
-    c->pos.kp_x = LS_R(10.0);
+    c->pos.kp_x = LS_DEF_KP_X;
     c->pos.kd_x = LS_R(0.0);
     c->pos.v_max = LS_R(0.5);
     c->pos.mass = mass;
@@ -74,12 +76,12 @@ void ls_drive_default_cfg(ls_drive_cfg *c)
     c->pos.speed.out_min = -c->pos.force_max;
     c->pos.speed.out_max = c->pos.force_max;
     c->pos.speed.fs = fs;
-    c->traj.v_max = LS_R(0.2);
-    c->traj.a_max = LS_R(1.0);
+    c->traj.v_max = LS_DEF_TRAJ_V_MAX;
+    c->traj.a_max = LS_DEF_TRAJ_A_MAX;
     c->traj.pole_pitch = tau;
     c->traj.fs = fs;
     c->mod.f_pwm = fs;
-    c->mod.dead_time = LS_R(0.8e-6);
+    c->mod.dead_time = LS_DEF_DEAD_TIME;
     c->mod.dtc = true;
     c->mod.i_band = LS_R(0.05); /* A: a trade-off under dead time, see docs/simulator.md */
     c->mod.dtc_lead = LS_R(1.5);
@@ -90,8 +92,8 @@ void ls_drive_default_cfg(ls_drive_cfg *c)
     c->dtres.l_q = l_q;
     c->dtres.ripple = true;
     c->prot.i_max = LS_R(6.0);
-    c->prot.v_dc_min = LS_R(40.0);
-    c->prot.v_dc_max = LS_R(90.0);
+    c->prot.v_dc_min = LS_DEF_V_DC_MIN;
+    c->prot.v_dc_max = LS_DEF_V_DC_MAX;
     c->prot.err_max = LS_R(0.6);
     c->prot.err_time = LS_R(0.05);
     c->prot.omega_max = LS_R(250.0);
@@ -104,8 +106,8 @@ void ls_drive_default_cfg(ls_drive_cfg *c)
     c->cal.tol = LS_R(0.0005);
     c->cal.t_max = LS_R(3.0);
     c->cal.period = 0;
-    c->cal.dither_amp = LS_R(0.4);
-    c->cal.dither_freq = LS_R(150.0); /* not a submultiple of the injection (200 Hz is: 5 x 200 = 1 kHz) */
+    c->cal.dither_amp = LS_DEF_DITHER_AMP;
+    c->cal.dither_freq = LS_DEF_DITHER_FREQ; /* not a submultiple of the injection (200 Hz is: 5 x 200 = 1 kHz) */
     /* start-up (ls_startup.h): `linsense tune --polarity 0.0131` for ecce2010 (the FEA's 1.31 %/A of
      * a thin back iron) and this drive, 10 mA rms of current noise and a 12-bit ADC: 2.8 A at the
      * end of a 37.4 V, 7-period pulse, 16 pairs for a decision 6 sigma clear (docs/tuning.md) */

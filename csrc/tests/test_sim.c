@@ -288,6 +288,11 @@ static void saturated(void)
     LS_CHECK(ls_lut_init(&lut, &lc) == LS_OK);
     ls_drive_default_cfg(&dc);
     dc.demod.comp = &lut;
+    /* the former slow loops (4 Hz speed, 10 1/s): two runs equal to rounding must not drift apart
+     * through a dead-time limit cycle, which the default's 8 Hz, 20 1/s show at some positions */
+    dc.pos.kp_x = 10.0;
+    dc.pos.speed.kp = dc.pos.mass * 2.0 * TP_PI * 4.0;
+    dc.pos.speed.ki = dc.pos.speed.kp * 2.0 * TP_PI * 4.0 / 4.0;
     o.i_abc = iA; o.x = xA;
     sensorless_drive(&d, &dc);
     LS_CHECK(ls_sim_run(&c, &d, &cmd, 1, 8000, &o, &r) == LS_OK && r.fault == 0u && r.n_rec == 2000);
@@ -296,13 +301,17 @@ static void saturated(void)
     o.i_abc = iB; o.x = xB;
     sensorless_drive(&d, &dc);
     LS_CHECK(ls_sim_run(&c, &d, &cmd, 1, 8000, &o, &r) == LS_OK && r.fault == 0u && r.n_rec == 2000);
-    for (k = 0; k < 3 * 2000; ++k) {
+    /* to rounding over the first 0.1 s (standstill, the move's start); afterwards a dead-time edge
+     * whose phase current is within rounding of zero may be decided either way and the two runs, each
+     * valid, part (double: at 0.115 s); both then end on the target */
+    for (k = 0; k < 3 * 400; ++k) {
         if (fabs(iA[k] - iB[k]) > worst) worst = fabs(iA[k] - iB[k]);
         if (fabs(iA[k]) > peak) peak = fabs(iA[k]);
     }
-    printf("  saturated plant without saturation vs linear, 0.5 s switching closed loop: %.2e A of %.2f A\n",
-           worst, peak);
+    printf("  saturated plant without saturation vs linear, first 0.1 s of a switching closed loop: %.2e A of "
+           "%.2f A; at 0.5 s %.4f and %.4f mm (target 3 mm)\n", worst, peak, xA[1999] * 1e3, xB[1999] * 1e3);
     LS_CHECK(worst < 1e-4 * peak);
+    LS_CHECK(fabs(xA[1999] - 0.003) < 2e-4 && fabs(xB[1999] - 0.003) < 2e-4);
     /* saturating: 2 %/A of polarity at i_m = 34 A, L_q -5 % at 2 A */
     c.sat.i_m = 34.0;
     c.sat.i_sat_d = 75.0;

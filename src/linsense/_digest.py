@@ -12,10 +12,11 @@ from pathlib import Path
 
 
 def source_digest(csrc: Path, build_script: Path) -> str:
-    """SHA-256 over the C sources, the public headers and the build script."""
+    """SHA-256 over the C sources, the library's internal and public headers and the build script."""
     h = hashlib.sha256()
     files = (
         sorted((csrc / "ctrl").glob("*.c"))
+        + sorted((csrc / "ctrl").glob("*.h"))  # (internal headers: ls_drive_defaults.h, ...)
         + sorted((csrc / "sim").glob("*.c"))
         + sorted((csrc / "include" / "linsense").glob("*.h"))
     )

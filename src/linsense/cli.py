@@ -474,7 +474,8 @@ def tune(motor_spec: str, scenario_path: str | None, v_dc, f_pwm, dead_time, i_m
     dz = design(motor, dd, src)
     from linsense.tune.startup import design_startup
     su = design_startup(motor, v_dc=dd.v_dc, f_pwm=dd.f_pwm, i_max=dd.i_max, observer_bw=dz.observer_bw,
-                        v_inj=dz.v_inj, polarity=polarity, current_noise=current_noise, source=src)
+                        v_inj=dz.v_inj, polarity=polarity, current_noise=current_noise,
+                        ramp_rate=dz.inj_ramp_rate, source=src)
     if fmt == "c":
         text = c_header(dz, dd, motor, name, startup=su)
     else:
@@ -641,8 +642,12 @@ def design_lines(dz, motor_name: str, dd) -> list[str]:
         "  margins (linearised model: phase margin, gain margin up / down, crossover):",
     ]
     for k, m in dz.margins.items():
-        lines.append(f"    {k:44s} {m['pm_deg']} deg, {m['gm_up_db']} dB / {m['gm_down_db']} dB, "
+        lines.append(f"    {k:48s} {m['pm_deg']} deg, {m['gm_up_db']} dB / {m['gm_down_db']} dB, "
                      f"{m['crossover_hz']} Hz")
+    if dz.tolerances:
+        lines.append("  tolerances (model: worst hold error with the nominal LUT; scheduled error gain):")
+        for k, t in dz.tolerances.items():
+            lines.append(f"    {k:48s} {t['error_deg']:.3g} deg, k_e {t['k_lo']:.2f}..{t['k_hi']:.2f}")
     return lines
 
 

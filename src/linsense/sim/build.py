@@ -279,7 +279,7 @@ def designed(sc: Scenario, motor: Motor) -> Scenario:
     except InputError as exc:  # the design's drive-data names -> the scenario's keys
         raise InputError(sc.source, _DESIGN_KEYS.get(exc.key, exc.key), exc.message) from None
     want = {
-        "injection": {"amplitude": dz.v_inj, "frequency": dz.f_inj},
+        "injection": {"amplitude": dz.v_inj, "frequency": dz.f_inj, "ramp_rate": dz.inj_ramp_rate},
         "observer": {"bandwidth_hz": dz.observer_bw, "demod_lpf_hz": dz.demod_lpf, "gain_schedule": True},
         "controller": {"speed_bandwidth_hz": dz.speed_bw, "current_bandwidth_hz": dz.current_bw},
         "calibration": {"dither_a": dz.dither_a, "dither_hz": dz.dither_hz},

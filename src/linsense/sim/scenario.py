@@ -24,7 +24,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 from linsense.ctrl import drive_default_cfg
 from linsense.errors import InputError
 from linsense.io import read_toml
-from linsense.tune.design import V_DC_MAX_FRACTION, V_DC_MIN_FRACTION
+from linsense.tune.design import V_DC_MAX_FRACTION, V_DC_MIN_FRACTION, DriveData
 from linsense.validation import KeyProblem, to_input_error
 
 _BRANCH = re.compile(r"^(float|int|bool|str|list\[.*\]|constrained-.*|function-.*)$")
@@ -85,7 +85,7 @@ class ScenarioSection(BaseModel):
 class InverterSection(BaseModel):
     model_config = _STRICT
     fidelity: Literal["average", "switching"] = "average"
-    v_dc: Positive = 72.0  # V
+    v_dc: Positive = _c(DriveData().v_dc)  # V (the design's default drive; the C library has no bus)
     f_pwm: Positive = _c(_C.fs)  # Hz, PWM frequency = control rate
     dead_time: NonNegative = _c(_C.mod.dead_time)  # s
     dead_time_compensation: bool = bool(_C.mod.dtc)
@@ -126,7 +126,7 @@ class ObserverSection(BaseModel):
     lut_model: Literal["resistive", "eq12"] = "resistive"
     lut_points: int = Field(default=256, ge=4, le=65536)
     type: Literal["pll", "mech"] = "pll"
-    bandwidth_hz: Positive = 40.0  # Hz, all poles at -2 pi f (ls_observer_gains)
+    bandwidth_hz: Positive = _c(_C.obs.k1 / (4.0 * math.pi))  # Hz, all poles at -2 pi f (ls_observer_gains)
     k1: Positive | None = None  # 1/s, overrides the bandwidth
     k2: Positive | None = None  # 1/s^2
     k3: Positive | None = None  # 1/s^3 (mech)
@@ -160,18 +160,18 @@ class ModelOverride(BaseModel):
 class ControllerSection(BaseModel):
     model_config = _STRICT
     position_type: Literal["p", "pd"] = "p"
-    kp_x: Positive | None = None  # p: 1/s (default 10); pd: N/m (required)
+    kp_x: Positive | None = None  # p: 1/s (default: designed); pd: N/m (required)
     kd_x: NonNegative = 0.0  # pd: N s/m
-    v_max: Positive = 0.5  # m/s, speed-reference limit (p)
+    v_max: Positive = _c(_C.pos.v_max)  # m/s, speed-reference limit (p)
     # Hz: kp = m w, ki = m w^2 / 4 (the C default's w)
     speed_bandwidth_hz: Positive = _c(_C.pos.speed.kp / _C.pos.mass / (2.0 * math.pi))
     speed_kp: Positive | None = None  # N s/m, overrides the bandwidth
     speed_ki: NonNegative | None = None  # N/m
-    current_bandwidth_hz: Positive = 250.0  # Hz: kp = w (L_d + L_q)/2, ki = w R_s
+    current_bandwidth_hz: Positive = _c(_C.current.ki / _C.dtres.r_s / (2.0 * math.pi))  # Hz: ki = w R_s
     current_kp: Positive | None = None  # V/A
     current_ki: NonNegative | None = None  # V/(A s)
     decouple: bool = True
-    i_max: Positive = 2.5  # A, current-reference limit (force limit = K_f i_max)
+    i_max: Positive = _c(_C.i_max)  # A, current-reference limit (force limit = K_f i_max)
     model: ModelOverride = Field(default_factory=ModelOverride)
 
 
@@ -181,8 +181,8 @@ class ReferenceSection(BaseModel):
     position_mm: float | None = None  # step: target, mm
     at: NonNegative = 0.1  # s, step time or first move start
     waypoints_mm: list[float] | None = Field(default=None, max_length=10_000)  # trajectory targets, mm
-    v_max: Positive = 0.2  # m/s, trajectory speed limit
-    a_max: Positive = 1.0  # m/s^2, trajectory acceleration limit
+    v_max: Positive = _c(_C.traj.v_max)  # m/s, trajectory speed limit
+    a_max: Positive = _c(_C.traj.a_max)  # m/s^2, trajectory acceleration limit
     dwell: float = 0.2  # s, pause after each move
 
     @model_validator(mode="after")

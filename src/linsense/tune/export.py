@@ -33,7 +33,8 @@ def scenario_dict(dz: Design, drive: DriveData, motor_ref: str, base: dict | Non
         {"v_dc": drive.v_dc, "f_pwm": drive.f_pwm, "dead_time": drive.dead_time}
     )
     sc.setdefault("injection", {}).update(
-        {"amplitude": _r(dz.v_inj), "frequency": _r(dz.f_inj), "quadrature": _r(dz.quad)}
+        {"amplitude": _r(dz.v_inj), "frequency": _r(dz.f_inj), "quadrature": _r(dz.quad),
+         "ramp_rate": _r(dz.inj_ramp_rate)}
     )
     sc.setdefault("observer", {}).update(
         {
@@ -131,6 +132,7 @@ def c_header(dz: Design, drive: DriveData, motor: Motor, name: str | None = None
         ("inject.freq", dz.f_inj),
         ("inject.fs", drive.f_pwm),
         ("inject.quad", dz.quad),
+        ("inject.ramp_rate", dz.inj_ramp_rate),
         ("bpf.f0", dz.f_inj),
         ("bpf.fs", drive.f_pwm),
         ("sep.f0", dz.f_inj),

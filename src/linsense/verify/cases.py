@@ -6,13 +6,12 @@ dead time; only the reference, the load and (off-nominal) the plant change.
 
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from linsense.model.inductance import InductanceModel
 from linsense.model.motor import Motor
+from linsense.model.tolerance import perturbed
 from linsense.sim.build import trapezoid_time
 from linsense.verify import criteria as C
 
@@ -160,18 +159,12 @@ def all_cases(tau: float, v_max: float, a_max: float, load_rated: float, quick: 
 
 
 def off_nominal_motor(motor: Motor, name: str) -> Motor:
-    """``motor`` with the tolerance ``name`` applied: every inductance scaled, R_s scaled, and the
-    end-effect (the part of the mean mutuals M_BC, M_CA beyond M_AB, eq. 3's dM0) scaled."""
+    """``motor`` with the tolerance ``name`` (a key of :data:`~linsense.verify.criteria.OFF_NOMINAL`)
+    applied (:func:`linsense.model.tolerance.perturbed`); ``"nominal"`` returns it unchanged."""
     if name == "nominal":
         return motor
     k_l, k_r, k_e = C.OFF_NOMINAL[name]
-    ind = motor.inductance
-    a, b = np.array(ind.a) * k_l, np.array(ind.b) * k_l
-    d_m0 = 0.5 * (a[4, 0] + a[5, 0]) - a[3, 0]
-    a[4, 0] += (k_e - 1.0) * d_m0
-    a[5, 0] += (k_e - 1.0) * d_m0
-    new = InductanceModel(a, b, description=f"{ind.description} ({name})")
-    return dataclasses.replace(motor, name=f"{motor.name} ({name})", R_s=motor.R_s * k_r, inductance=new)
+    return perturbed(motor, k_l, k_r, k_e, label=name)
 
 
 def deg_of(x: np.ndarray | float, tau: float) -> np.ndarray | float:

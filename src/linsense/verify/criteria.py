@@ -6,6 +6,8 @@ means the same thing for a 20 mm and a 100 mm motor; times in seconds.
 
 from __future__ import annotations
 
+from linsense.tune.margins import TOLERANCE_ERR_DEG, TOLERANCES
+
 #: nominal plant, holds: steady |x - target| (deg) and peak-to-peak of the true position (deg)
 HOLD_ERR_DEG = 1.0
 HOLD_PP_DEG = 0.15
@@ -27,15 +29,9 @@ TRAJ_REST_ERR_DEG = 1.0
 HOLD_LOADS = (0.0, 0.5, -0.5)
 #: off-nominal plants (the controller keeps the nominal model and LUT): |x - target| (deg) and no
 #: limit cycle above HOLD_PP_DEG
-OFF_ERR_DEG = 3.0
-#: name -> (inductance scale, R_s scale, end-effect scale)
-OFF_NOMINAL = {
-    "L +10 %": (1.10, 1.0, 1.0),
-    "L -10 %": (0.90, 1.0, 1.0),
-    "R_s +30 % (hot)": (1.0, 1.30, 1.0),
-    "dM0 +25 %": (1.0, 1.0, 1.25),
-    "dM0 -25 %": (1.0, 1.0, 0.75),
-}
+OFF_ERR_DEG = TOLERANCE_ERR_DEG
+#: name -> (inductance scale, R_s scale, end-effect scale): the design's own tolerances
+OFF_NOMINAL = TOLERANCES
 #: positions over the electrical period: full and --quick
 POSITIONS = 16
 POSITIONS_QUICK = 8

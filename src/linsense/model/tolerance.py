@@ -1,0 +1,30 @@
+"""A motor with its parameters off by a tolerance (docs/tuning.md, "Margins" and "The certificate").
+
+The controller of a drive keeps the nominal model (its LUT, gain table, feed-forwards) while the
+motor differs from it: every inductance by a factor, the resistance (a hot winding) and the
+end-effect (eq. 3's dM0, the part of the mean mutuals M_BC and M_CA beyond M_AB).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from linsense.model.inductance import InductanceModel
+from linsense.model.motor import Motor
+
+
+def perturbed(motor: Motor, k_inductance: float = 1.0, k_resistance: float = 1.0, k_end_effect: float = 1.0,
+              label: str = "") -> Motor:
+    """``motor`` with every inductance scaled by ``k_inductance``, R_s by ``k_resistance`` and the
+    end-effect (the constant part of M_BC and M_CA beyond M_AB) by ``k_end_effect``; works on any
+    inductance model (parametric, harmonic or tabulated: its Fourier form)."""
+    ind = motor.inductance
+    a, b = np.array(ind.a) * k_inductance, np.array(ind.b) * k_inductance
+    d_m0 = 0.5 * (a[4, 0] + a[5, 0]) - a[3, 0]
+    a[4, 0] += (k_end_effect - 1.0) * d_m0
+    a[5, 0] += (k_end_effect - 1.0) * d_m0
+    new = InductanceModel(a, b, description=f"{ind.description} ({label})" if label else ind.description)
+    name = f"{motor.name} ({label})" if label else motor.name
+    return dataclasses.replace(motor, name=name, R_s=motor.R_s * k_resistance, inductance=new)

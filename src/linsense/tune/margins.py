@@ -1,0 +1,83 @@
+"""What the model predicts of a design before any simulation (docs/tuning.md, "Margins"):
+
+* each tolerance's cost: the hold error of a motor off by the tolerance while the drive keeps the
+  nominal LUT and gain schedule, from the HF model (paper eq. 10-11 with R_s and the injection):
+  at a hold the estimate sits on the target ``T`` and the true position at ``T - e`` where the
+  demodulated error read with the nominal table at ``T`` vanishes;
+* the range of the local error gain the observer then sees (the schedule normalises the nominal
+  motor's to 1; an off-nominal motor's departs from it, position by position): the loops'
+  margins are evaluated over that range, so that they differ by motor.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from linsense.analysis.hf import demod_ratio, psi_lut_resistive
+from linsense.model.motor import Motor
+from linsense.model.tolerance import perturbed
+
+#: the tolerances the design is judged against: name -> (inductance, R_s, end-effect) scale
+TOLERANCES = {
+    "L +10 %": (1.10, 1.0, 1.0),
+    "L -10 %": (0.90, 1.0, 1.0),
+    "R_s +30 % (hot)": (1.0, 1.30, 1.0),
+    "dM0 +25 %": (1.0, 1.0, 1.25),
+    "dM0 -25 %": (1.0, 1.0, 0.75),
+}
+#: the hold error (electrical deg) a tolerance may cost: the certificate's off-nominal bound
+TOLERANCE_ERR_DEG = 3.0
+_H = 1e-4  # rad, numerical derivatives
+
+
+def _ratio(plant: Motor, target: np.ndarray, e: np.ndarray, f_inj: float, quad: float, psi_t: np.ndarray):
+    """The demodulated ratio of ``plant`` with the estimate at ``target`` and the true position at
+    ``target - e`` (error ``e``), the table read at the estimate."""
+    return demod_ratio(plant, target - e, e, 1.0, f_inj, psi_t, quad=quad)
+
+
+def hold_error(nominal: Motor, plant: Motor, f_inj: float, quad: float, n: int = 180) -> np.ndarray:
+    """The hold error ``e`` (rad, true position = target - e) at ``n`` targets over the period, for
+    ``plant`` driven with ``nominal``'s resistance-aware table (Newton from ``e = 0``, the branch a
+    drive starting on target follows); NaN where it does not converge within 0.6 rad."""
+    target = np.linspace(0.0, 2.0 * np.pi, n, endpoint=False)
+    psi_t = psi_lut_resistive(nominal, target, f_inj, quad=quad)
+    e = np.zeros(n)
+    for _ in range(30):
+        r = _ratio(plant, target, e, f_inj, quad, psi_t)
+        hi = _ratio(plant, target, e + _H, f_inj, quad, psi_t)
+        d = (hi - _ratio(plant, target, e - _H, f_inj, quad, psi_t)) / (2.0 * _H)
+        step = np.where(d != 0.0, r / np.where(d != 0.0, d, 1.0), 0.0)
+        e = e - np.clip(step, -0.05, 0.05)
+        if np.max(np.abs(step)) < 1e-9:
+            break
+    e[~(np.abs(e) < 0.6)] = np.nan
+    return e
+
+
+def local_gain(nominal: Motor, plant: Motor, f_inj: float, quad: float, n: int = 180) -> np.ndarray:
+    """The local error gain of ``plant`` at ``e = 0`` relative to ``nominal``'s (which the gain
+    schedule divides out): 1 everywhere for the nominal motor."""
+    target = np.linspace(0.0, 2.0 * np.pi, n, endpoint=False)
+    psi_t = psi_lut_resistive(nominal, target, f_inj, quad=quad)
+
+    def slope(m: Motor) -> np.ndarray:
+        return (_ratio(m, target, -_H * np.ones(n), f_inj, quad, psi_t)
+                - _ratio(m, target, _H * np.ones(n), f_inj, quad, psi_t)) / (2.0 * _H)
+
+    return slope(plant) / slope(nominal)
+
+
+def tolerance_costs(motor: Motor, f_inj: float, quad: float, n: int = 180) -> dict:
+    """Per tolerance: the predicted worst hold error (deg; inf where the model finds no hold) and
+    the range of the scheduled local error gain."""
+    out = {}
+    for name, (k_l, k_r, k_e) in TOLERANCES.items():
+        plant = perturbed(motor, k_l, k_r, k_e, label=name)
+        e = hold_error(motor, plant, f_inj, quad, n)
+        g = local_gain(motor, plant, f_inj, quad, n)
+        worst = math.inf if np.any(~np.isfinite(e)) else float(np.degrees(np.max(np.abs(e))))
+        out[name] = {"error_deg": worst, "k_lo": float(np.min(g)), "k_hi": float(np.max(g))}
+    return out

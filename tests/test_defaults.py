@@ -1,0 +1,61 @@
+"""One home for each default (issue 22): the C library's design defaults are generated from the
+design (linsense.tune.defaults), ls_drive.c sets those fields from the generated macros only, and
+the compiled defaults are that design."""
+
+from __future__ import annotations
+
+import math
+import re
+from pathlib import Path
+
+import pytest
+
+from linsense.ctrl import drive_default_cfg
+from linsense.model.motor import load_motor
+from linsense.tune.defaults import default_values, header
+from linsense.tune.design import DriveData, design
+
+ROOT = Path(__file__).parents[1]
+HEADER = ROOT / "csrc" / "ctrl" / "ls_drive_defaults.h"
+DRIVE_C = ROOT / "csrc" / "ctrl" / "ls_drive.c"
+
+#: cfg fields the design sets: ls_drive_default_cfg must take them from ls_drive_defaults.h
+DESIGNED_FIELDS = ("i_max", "inject.amplitude", "inject.freq", "inject.quad", "bpf.f0", "sep.f0",
+                   "demod.f_lpf", "demod.f_notch", "demod.gain", "pos.kp_x", "traj.v_max", "traj.a_max",
+                   "mod.dead_time", "prot.v_dc_min", "prot.v_dc_max", "cal.dither_amp", "cal.dither_freq")
+
+
+def test_header_is_generated_from_the_design():
+    """Regenerate: a rule or default changed in Python without regenerating fails here."""
+    regen = "python -m linsense.tune.defaults csrc/ctrl/ls_drive_defaults.h"
+    assert HEADER.read_text(encoding="utf-8") == header(), f"ls_drive_defaults.h is stale: {regen}"
+
+
+def test_designed_fields_are_not_literals_in_c():
+    body = DRIVE_C.read_text(encoding="utf-8")
+    start = body.index("void ls_drive_default_cfg")
+    body = body[start:body.index("/* ------", start)]
+    for f in DESIGNED_FIELDS:
+        m = re.search(rf"c->{re.escape(f)} = ([^;]*);", body)
+        assert m, f
+        assert "LS_R(" not in m.group(1) and not re.search(r"\d\.\d|\d+e-?\d", m.group(1)), (f, m.group(1))
+    # and the design's bandwidths are not restated as literals
+    for macro in ("LS_DEF_CURRENT_BW", "LS_DEF_SPEED_BW", "LS_DEF_OBSERVER_BW"):
+        assert macro in body
+
+
+def test_compiled_defaults_are_the_design():
+    c = drive_default_cfg()
+    dz = design(load_motor("ecce2010"), DriveData(), analyse=False)
+    w_o, w_v = 2 * math.pi * dz.observer_bw, 2 * math.pi * dz.speed_bw
+    vals = dict((n, v) for n, v, _ in default_values())
+    pairs = {
+        "inject.amplitude": (c.inject.amplitude, dz.v_inj), "inject.freq": (c.inject.freq, dz.f_inj),
+        "demod.f_lpf": (c.demod.f_lpf, dz.demod_lpf), "demod.gain": (c.demod.gain, dz.demod_gain),
+        "obs.k1": (c.obs.k1, 2 * w_o), "obs.k2": (c.obs.k2, w_o * w_o),
+        "pos.speed.kp": (c.pos.speed.kp, 1.5 * w_v), "pos.kp_x": (c.pos.kp_x, dz.kp_x),
+        "current.kp": (c.current.kp, dz.current_kp), "current.ki": (c.current.ki, dz.current_ki),
+        "fs": (c.fs, vals["LS_DEF_FS"]), "mod.dead_time": (c.mod.dead_time, DriveData().dead_time),
+    }
+    for key, (c_val, py_val) in pairs.items():
+        assert float(c_val) == pytest.approx(py_val, rel=1e-6), key
