@@ -164,6 +164,7 @@ bench: $(GEN_HDR) tools
 	$(PY) tools/bench_reproduce.py
 	$(PY) tools/bench_saturation.py
 	$(PY) tools/bench_tune.py
+	$(PY) tools/bench_reference.py
 
 clean:
 	rm -rf $(BUILD) out

@@ -259,3 +259,23 @@ def test_margins_differ_by_motor():
     assert max(worst.values()) > 2 * min(worst.values()), worst
     k_lo = {n: min(t["k_lo"] for t in c.values()) for n, c in costs.items()}
     assert len({round(v, 2) for v in k_lo.values()}) >= 4, k_lo
+
+
+def test_tune_square_wave(tmp_path, capsys):
+    """--injection square: a scenario with the square wave (no kappa, no frequency: f_pwm / 2) that
+    the simulator runs; the C header refuses it in one line (it configures the elliptical one)."""
+    out = tmp_path / "sq.toml"
+    with pytest.raises(SystemExit) as e:
+        main(["tune", "--motor", "ecce2010", "--injection", "square", "--no-verify", "--out", str(out)])
+    assert e.value.code in (0, None)
+    inj = tomllib.loads(out.read_text())["injection"]
+    assert inj["shape"] == "square" and "quadrature" not in inj and "frequency" not in inj
+    from linsense.sim.scenario import load_scenario
+
+    assert build(load_scenario(out)).drive.cfg.inject.shape == 2  # LS_INJ_SQUARE
+    capsys.readouterr()
+    with pytest.raises(SystemExit) as e:
+        main(["tune", "--motor", "ecce2010", "--injection", "square", "--format", "c", "--no-verify",
+              "--out", str(tmp_path / "sq.h")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert e.value.code == 2 and len(err) == 1 and "--format" in err[0]

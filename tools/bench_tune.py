@@ -25,10 +25,11 @@ def main() -> None:
         f"{'motor':11s} {'obs':>5s} {'spd':>5s} {'kp_x':>5s} {'step .1':>8s} {'step .75':>8s} "
         f"{'N/mm':>6s} {'hold e':>6s} {'hold pp':>7s} {'wall':>5s}  failed checks"
     )
-    for name, d in drives.items():
+    runs = [(name, d, shape) for shape in ("pulsating", "square") for name, d in drives.items()]
+    for name, d, shape in runs:
         spec = "ecce2010" if name == "ecce2010" else str(CLASS / f"{name}.toml")
         m = load_motor(spec)
-        dd = DriveData(**d)
+        dd = DriveData(**d, shape=shape)
         dz = design(m, dd, analyse=False)
         cert = verify(
             m,
@@ -49,8 +50,9 @@ def main() -> None:
             return "never" if v is None else f"{v:.3f}"
 
         failed = [c.name for c in cert.checks if not c.passed]
+        label = f"{name[:6]} {shape[:3]}"
         print(
-            f"{name:11s} {dz.observer_bw:5.3g} {dz.speed_bw:5.3g} {dz.kp_x:5.3g} {s(steps[0]):>8s} "
+            f"{label:11s} {dz.observer_bw:5.3g} {dz.speed_bw:5.3g} {dz.kp_x:5.3g} {s(steps[0]):>8s} "
             f"{s(steps[1]):>8s} {ls.get('stiffness_n_per_mm', float('nan')):6.3g} "
             f"{max(r['err_deg'] for r in holds):6.3g} {max(r['pp_deg'] for r in holds):7.3g} "
               f"{sum(r['passed'] for r in holds):3d}/{len(holds):2d} "

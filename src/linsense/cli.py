@@ -442,12 +442,15 @@ def calibrate(motor_spec: str | None, scenario_path: str | None, positions: int,
               help="the rated load force, N (default half of K_f i_max): verification's loads")
 @click.option("--travel", type=float, default=None, callback=_finite(0.0, True),
               help="the stroke, mm (default: unbounded)")
+@click.option("--injection", "shape", type=click.Choice(["pulsating", "rotating", "square"]), default=None,
+              help="the injection: pulsating/elliptical (default; kappa --quad), rotating vector, or "
+                   "square wave at f_pwm / 2 with its dead-time measures (docs/firmware.md)")
 @click.option("--quick", is_flag=True, help="verify at 8 positions on the nominal plant only")
 @click.option("--no-verify", is_flag=True, help="do not run the verification")
 @click.option("--out", required=True, type=click.Path(dir_okay=False), help="output file")
 def tune(motor_spec: str, scenario_path: str | None, v_dc, f_pwm, dead_time, i_max, v_inj, f_inj, quad,
          fmt: str, polarity: float | None, current_noise: float, name: str | None, v_max, a_max, load,
-         travel, quick: bool, no_verify: bool, out: str) -> None:
+         travel, shape, quick: bool, no_verify: bool, out: str) -> None:
     """Design the drive for a motor: injection, current loop, demodulator, observer, speed and
     position loops, limits and trips (docs/tuning.md); print the design and its margins; write a
     scenario or a C header; then verify it in the simulator (switching inverter with dead time) and
@@ -467,7 +470,7 @@ def tune(motor_spec: str, scenario_path: str | None, v_dc, f_pwm, dead_time, i_m
         dd = drive_data(sc)
     for key, val in (("v_dc", v_dc), ("f_pwm", f_pwm), ("dead_time", dead_time), ("i_max", i_max),
                      ("v_inj", v_inj), ("f_inj", f_inj), ("quad", quad), ("v_max", v_max), ("a_max", a_max),
-                     ("load", load), ("travel", None if travel is None else travel * 1e-3)):
+                     ("load", load), ("travel", None if travel is None else travel * 1e-3), ("shape", shape)):
         if val is not None:
             setattr(dd, key, val)
     motor = _load(motor_spec)
@@ -619,8 +622,12 @@ def design_lines(dz, motor_name: str, dd) -> list[str]:
         f"design for {motor_name}: {dd.v_dc:g} V bus, {dd.f_pwm:g} Hz PWM, "
         f"{dd.dead_time * 1e6:g} us dead time, "
         f"i_max {dd.i_max:g} A",
-        f"  injection      {dz.v_inj:.4g} V at {dz.f_inj:g} Hz on d, kappa {dz.quad:g} on q: HF current "
-        f"{dz.i_hf:.3g} A; fundamental fits up to {dz.headroom_speed:.3g} m/s at i_max",
+        (f"  injection      {dz.v_inj:.4g} V at {dz.f_inj:g} Hz on d, kappa {dz.quad:g} on q: HF current "
+         f"{dz.i_hf:.3g} A; fundamental fits up to {dz.headroom_speed:.3g} m/s at i_max"
+         if dd.shape == "pulsating" else
+         f"  injection      {dd.shape}, {dz.v_inj:.4g} V"
+         f"{' at f_pwm / 2' if dd.shape == 'square' else f' at {dz.f_inj:g} Hz'} (the loops below are "
+         f"designed as for {dz.f_inj:g} Hz); fundamental fits up to {dz.headroom_speed:.3g} m/s"),
         f"  current loop   {dz.current_bw:.4g} Hz (f_inj / {RATIO_INJ_CURRENT:g}): "
         f"kp {dz.current_kp:.4g} V/A, "
         f"ki {dz.current_ki:.4g} V/(A s)",

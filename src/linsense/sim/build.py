@@ -220,7 +220,7 @@ def drive_data(sc: Scenario) -> DriveData:
                      # (the square wave's f_pwm / 2 is not a design choice: the other gains are
                      # designed as for the default frequency)
                      f_inj=inj.frequency if "frequency" in given and inj.shape != "square" else None,
-                     quad=inj.quadrature)
+                     quad=inj.quadrature, shape=inj.shape)
 
 
 #: the calibration's own timings follow the drive (docs/simulator.md, "Calibration"): its

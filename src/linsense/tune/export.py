@@ -32,10 +32,19 @@ def scenario_dict(dz: Design, drive: DriveData, motor_ref: str, base: dict | Non
     sc.setdefault("inverter", {}).update(
         {"v_dc": drive.v_dc, "f_pwm": drive.f_pwm, "dead_time": drive.dead_time}
     )
-    sc.setdefault("injection", {}).update(
-        {"amplitude": _r(dz.v_inj), "frequency": _r(dz.f_inj), "quadrature": _r(dz.quad),
-         "ramp_rate": _r(dz.inj_ramp_rate)}
-    )
+    inj = sc.setdefault("injection", {})
+    inj.update({"amplitude": _r(dz.v_inj), "ramp_rate": _r(dz.inj_ramp_rate)})
+    if drive.shape != "pulsating":
+        inj["shape"] = drive.shape
+    shape = inj.get("shape", "pulsating")
+    if shape == "pulsating":  # (kappa is the pulsating/elliptical injection's own)
+        inj["quadrature"] = _r(dz.quad)
+    else:
+        inj.pop("quadrature", None)
+    if shape == "square":  # (at f_pwm / 2, not a design choice)
+        inj.pop("frequency", None)
+    else:
+        inj["frequency"] = _r(dz.f_inj)
     sc.setdefault("observer", {}).update(
         {
             "bandwidth_hz": _r(dz.observer_bw),
@@ -108,6 +117,11 @@ def c_header(dz: Design, drive: DriveData, motor: Motor, name: str | None = None
     """``ls_cfg_<name>.h``: the compensation and gain tables and ``ls_cfg_<name>(cfg, comp, gain)``,
     which fills an ``ls_drive_cfg`` from ``ls_drive_default_cfg`` with the design (the library holds
     no motor's numbers)."""
+    if drive.shape != "pulsating":
+        from linsense.errors import InputError
+
+        raise InputError("--format", "c", f"the C header configures the pulsating/elliptical injection; "
+                         f"for the {drive.shape} injection write a scenario (--format toml)")
     sym = c_identifier(name or motor.name)
     fn = f"ls_cfg_{sym}"
     lut = build_lut(motor, points, f_inj=dz.f_inj, quad=dz.quad).values
