@@ -125,15 +125,22 @@ def test_designed_limits_follow_the_application():
     assert dz.omega_trip == pytest.approx(OVERSPEED_MARGIN * dz.v_cap * 2 * math.pi / m.pole_pitch)
     assert dz.omega_obs > dz.omega_trip  # the trip must see the speed the observer reports
     assert dz.i_trip > CURRENT_TRIP_MARGIN * 2.5
-    # what tune writes carries them (a scenario without them keeps the library's generous fallbacks:
-    # docs/tuning.md, "The limits")
+    # what tune writes carries them, and a scenario that gives only motor and drive data gets them
     sc = scenario_dict(dz, DriveData(v_max=0.4, load=20.0), "ecce2010")
     assert sc["controller"]["v_max"] == pytest.approx(dz.v_cap, rel=1e-5)
     assert sc["protection"]["omega_max"] == pytest.approx(dz.omega_trip, rel=1e-5)
     assert sc["protection"]["i_max"] == pytest.approx(dz.i_trip, rel=1e-5)
     assert sc["observer"]["omega_max"] == pytest.approx(dz.omega_obs, rel=1e-5)
-    b = build(scenario_from_dict({**sc, "scenario": {"duration": 0.01}}))
-    assert float(b.drive.cfg.prot.omega_max) == pytest.approx(dz.omega_trip, rel=1e-5)
+    bare = {"motor": "ecce2010", "scenario": {"duration": 0.01},
+            "reference": {"type": "trajectory", "waypoints_mm": [5.0], "v_max": 0.4}}
+    b = build(scenario_from_dict(bare))
+    for got, want in ((b.drive.cfg.pos.v_max, dz.v_cap), (b.drive.cfg.prot.omega_max, dz.omega_trip),
+                      (b.drive.cfg.prot.i_max, dz.i_trip), (b.drive.cfg.obs.omega_max, dz.omega_obs)):
+        assert float(got) == pytest.approx(want, rel=1e-5)
+    # without a table the estimate moves up to max(1 + de*/dtheta) = 2.93 times the mover: the trips
+    # on the estimate are that much wider
+    b = build(scenario_from_dict({**bare, "control": {"mode": "sensorless_nolut"}}))
+    assert float(b.drive.cfg.prot.omega_max) == pytest.approx(2.93 * dz.omega_trip, rel=0.01)
 
 
 def test_injection_follows_dead_time_and_saliency():

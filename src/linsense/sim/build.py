@@ -30,7 +30,15 @@ from linsense.model.saturation import Saturation
 from linsense.sim.core import BLOCKS, SIGNALS, PlantSetup, SimulationError, plant_template, sim_cfg
 from linsense.sim.plant import fill_saturation, lab_fourier
 from linsense.sim.scenario import Scenario
-from linsense.tune.design import DriveData, current_gains, design, error_gain, mean_dq, speed_gains
+from linsense.tune.design import (
+    DriveData,
+    current_gains,
+    design,
+    error_gain,
+    mean_dq,
+    speed_gains,
+    uncompensated_speed_factor,
+)
 from linsense.tune.injection import (
     SQUARE_DTC_BAND,
     SQUARE_DTC_LEAD,
@@ -268,7 +276,7 @@ def designed(sc: Scenario, motor: Motor) -> Scenario:
     (:func:`linsense.tune.design`, docs/tuning.md); what the file gives is kept."""
     s = sc.spec
     con = s.controller
-    sections = ("injection", "observer", "controller", "calibration")
+    sections = ("injection", "observer", "controller", "calibration", "protection")
     given = {sec: getattr(s, sec).model_fields_set for sec in sections}
     try:
         dd = drive_data(sc)
@@ -278,12 +286,20 @@ def designed(sc: Scenario, motor: Motor) -> Scenario:
                    lambda: design(motor, dd, sc.source, analyse=False))
     except InputError as exc:  # the design's drive-data names -> the scenario's keys
         raise InputError(sc.source, _DESIGN_KEYS.get(exc.key, exc.key), exc.message) from None
+    no_table = s.observer.compensation == "none" or (
+        s.observer.compensation is None and s.control.mode not in ("sensorless_lut", "sensored", "startup"))
+    k_est = _memo(("k_est", motor_key(motor)), lambda: uncompensated_speed_factor(motor)) if no_table else 1.0
     want = {
         "injection": {"amplitude": dz.v_inj, "frequency": dz.f_inj, "ramp_rate": dz.inj_ramp_rate},
         "observer": {"bandwidth_hz": dz.observer_bw, "demod_lpf_hz": dz.demod_lpf, "gain_schedule": True},
         "controller": {"speed_bandwidth_hz": dz.speed_bw, "current_bandwidth_hz": dz.current_bw},
         "calibration": {"dither_a": dz.dither_a, "dither_hz": dz.dither_hz},
+        # the limits with their margins over the application (reference.v_max, a_max); the trips act
+        # on the estimate, which without a table moves up to max(1 + de*/dtheta) times the mover
+        "protection": {"omega_max": dz.omega_trip * k_est, "i_max": dz.i_trip},
     }
+    want["observer"]["omega_max"] = dz.omega_obs * k_est
+    want["controller"]["v_max"] = dz.v_cap
     if con.position_type == "p":
         want["controller"]["kp_x"] = dz.kp_x
     if "k1" in given["observer"]:

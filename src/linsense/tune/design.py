@@ -324,6 +324,16 @@ def saliency_min(motor: Motor, n: int = 360) -> float:
     return float(np.min((L_q - L_d) / (L_q + L_d)))
 
 
+def uncompensated_speed_factor(motor: Motor) -> float:
+    """The largest ratio of the estimate's speed to the mover's without a compensation table:
+    ``max(1 + de*/dtheta)`` (../shared/brief.md section 4; 2.93 for ecce2010). The drive's trips
+    and clamps act on the estimate, so a drive run without its table needs them this much wider."""
+    from linsense.analysis.hf import loop_gain_factor
+
+    th = np.linspace(0.0, 2.0 * np.pi, 360, endpoint=False)
+    return float(max(1.0, np.max(loop_gain_factor(motor, th))))
+
+
 def _limits(dz: Design, motor: Motor, d: DriveData, warnings: list) -> None:
     """The speed cap, the trips and the observer's clamp with their margins over the application
     (docs/tuning.md, "The limits"); the rated load. Fills ``dz`` in place."""
