@@ -265,7 +265,7 @@ def test_margins_differ_by_motor():
     worst = {n: max(t["error_deg"] for t in c.values()) for n, c in costs.items()}
     assert max(worst.values()) > 2 * min(worst.values()), worst
     k_lo = {n: min(t["k_lo"] for t in c.values()) for n, c in costs.items()}
-    assert len({round(v, 2) for v in k_lo.values()}) >= 4, k_lo
+    assert max(k_lo.values()) - min(k_lo.values()) > 0.01, k_lo
 
 
 def test_tune_square_wave(tmp_path, capsys):

@@ -44,7 +44,11 @@ from linsense.errors import InputError
 from linsense.model.motor import Motor
 
 #: the stated ratios (docs/tuning.md)
-RATIO_PWM_INJ = 16.0
+RATIO_PWM_INJ = 16.0  # the most PWM periods per injection period (16 samples of the HF wave)
+#: the injection's frequency (docs/tuning.md, "The injection frequency"): f_pwm / N, N an integer
+#: (a non-integer ratio beats with the PWM: measured, more limit cycles), the largest N <=
+#: RATIO_PWM_INJ with f_pwm / N >= F_INJ_MIN (every bandwidth of the chain scales with it), N >= 4
+F_INJ_MIN = 800.0  # Hz
 RATIO_INJ_CURRENT = 4.0
 RATIO_LPF = 0.3
 RATIO_LPF_OBS = 7.5
@@ -184,7 +188,7 @@ def design(
         raise InputError(
             source, "motor", "no mean saliency (L_q = L_d): HF injection cannot see the position"
         )
-    f_inj = d.f_inj if d.f_inj is not None else d.f_pwm / RATIO_PWM_INJ
+    f_inj = d.f_inj if d.f_inj is not None else injection_frequency(d.f_pwm)
     if not (f_inj > 0 and 4.0 * f_inj <= d.f_pwm):
         raise InputError(
             source, "f_inj", f"must be positive and at most f_pwm / 4 = {d.f_pwm / 4:g} Hz, got {f_inj:g}"
@@ -313,6 +317,13 @@ def design(
                             f"drive's nominal LUT (model; bound {TOLERANCE_ERR_DEG:g} deg): identify or "
                             "calibrate the motor")
     return dz
+
+
+def injection_frequency(f_pwm: float) -> float:
+    """``f_pwm / N`` (Hz): the largest integer ``N <= RATIO_PWM_INJ`` (and ``>= 4``) that keeps the
+    injection at ``F_INJ_MIN`` or above (ecce2010's 16 kHz: 1 kHz; 10 kHz: 833 Hz; 8 kHz: 800 Hz)."""
+    n = int(min(RATIO_PWM_INJ, max(4.0, math.floor(f_pwm / F_INJ_MIN))))
+    return f_pwm / n
 
 
 def saliency_min(motor: Motor, n: int = 360) -> float:
