@@ -1,35 +1,16 @@
-"""Design of the sensorless drive for a motor: injection, current loop, demodulator, observer,
-speed and position loops, calibration dither; with the margins of a linearised model.
+"""Design of the sensorless drive for a motor, a drive and an application: injection, current
+loop, demodulator, observer, speed and position loops, calibration dither, speed cap and trips;
+with the margins of a linearised model and the predicted cost of each parameter tolerance
+(:mod:`linsense.tune.margins`).
 
-The method (docs/tuning.md) is bandwidth separation with stated ratios, from the PWM rate down:
-
-====================  ===================================  ==========================
-quantity              rule                                  ecce2010, 16 kHz, 72 V
-====================  ===================================  ==========================
-injection frequency   f_inj = f_pwm / 16                    1 kHz
-injection amplitude   V_inj = V_dc / 6 (HF current <= 0.3   12 V (0.45 A)
-                      i_max), kappa = 0.9 on q
-current loop          f_i = f_inj / 4; kp = w (L_d+L_q)/2,  250 Hz
-                      ki = w R_s (pole-zero cancellation)
-demodulator low-pass  f_lpf = 0.3 f_inj, zeros at 2 f_inj   300 Hz
-observer (PLL)        f_obs = f_lpf / 7.5                   40 Hz
-speed loop            f_v = f_obs / 10; kp = m w,           4 Hz
-                      ki = m w^2 / 4
-position loop         kp_x = w_v / 2.5                      10 1/s
-calibration dither    0.16 i_max at 0.15 f_inj              0.4 A, 150 Hz
-====================  ===================================  ==========================
-
-The C library's defaults (``ls_drive_default_cfg``) are this design for the ecce2010 motor and the
-paper's drive; ``tests/test_tune.py`` checks that they agree.
-
-The margins come from a linearised small-signal model (python-control): the observer loop
-``k_e H_lpf(s) e^{-s T_bp} (k1 s + k2) / s^2`` with the demodulator's low-pass and the band-pass
-envelope delay, and the motion loop broken at the force reference, ``C_v(s) (kp_x T(s) + S_v(s))
-P(s) C_i(s)`` with the mass ``P = 1/(m s^2)``, the current loop ``C_i``, the speed PI ``C_v`` and the
-observer's position and speed transfers ``T``, ``S_v`` (the drive feeds back the estimates). Both
-are evaluated over the range of the local error gain ``k_e(theta)``: the demodulated error's slope
-against the position error, normalised by the demodulator gain, which the saliency sets (paper
-eq. 11; ``linsense.analysis.hf.demod_ratio``).
+The rules are the constants and functions of this module; docs/tuning.md states each with its
+criterion and its measured effect, and the C library's defaults are generated from them for the
+reference motor (:mod:`linsense.tune.defaults`). The chain, from the PWM rate down: the injection
+at ``f_pwm / N`` (:func:`injection_frequency`), the current loop at ``f_inj / RATIO_INJ_CURRENT``,
+the demodulator's low-pass at ``RATIO_LPF f_inj``, the observer at ``f_lpf / RATIO_LPF_OBS``, the
+speed loop at ``f_obs / RATIO_OBS_SPEED``, the position gain ``w_v / RATIO_SPEED_POS``; the
+injection's amplitude from the dead-time voltage error and the lowest local saliency
+(``DEAD_TIME_RATIO``), the limits from the application with the stated margins.
 """
 
 from __future__ import annotations
@@ -54,6 +35,7 @@ RATIO_LPF = 0.3
 RATIO_LPF_OBS = 7.5
 RATIO_OBS_SPEED = 5.0
 RATIO_SPEED_POS = 2.5
+SPEED_KI_DIV = 4.0  # speed PI: ki = m w^2 / SPEED_KI_DIV (a double real closed-loop pole)
 #: the injection (docs/tuning.md, "The injection amplitude"): the dead-time voltage error
 #: T_d f_pwm V_dc at most DEAD_TIME_RATIO times the weakest HF error signal's voltage
 #: V_inj s_min (s = (L_q - L_d)/(L_q + L_d), its lowest over the period), within the bus shares
@@ -151,7 +133,7 @@ def current_gains(bw_hz: float, L_d: float, L_q: float, R_s: float) -> tuple[flo
 def speed_gains(bw_hz: float, mass: float) -> tuple[float, float]:
     """Speed PI gains for a bandwidth (Hz): kp = m w, ki = m w^2 / 4 (a double real closed-loop pole)."""
     w = 2.0 * math.pi * bw_hz
-    return mass * w, mass * w * w / 4.0
+    return mass * w, mass * w * w / SPEED_KI_DIV
 
 
 def error_gain(motor: Motor, f_inj: float, quad: float, gain: float, n: int = 180) -> np.ndarray:
