@@ -15,8 +15,9 @@ from linsense.verify.run import run_cases
 #: the likely cause of a failed check and what to change
 REMEDY = {
     "limit cycle": (
-        "the dead time acts as a relay where the saliency is weak: more injection voltage "
-        "(--v-inj), less dead time, or lower bandwidths"
+        "the dead time, where a phase current sits near zero at a PWM edge (docs/tuning.md): more "
+        "injection voltage (--v-inj), less dead time, the square wave (--injection square), or "
+        "lower bandwidths"
     ),
     "error": (
         "a steady estimation bias (dead time or model error): calibrate the LUT on the bench "
@@ -128,6 +129,22 @@ def _hold_check(name: str, rows: list[dict], lim_err: float, extra_cause: str = 
     )
 
 
+def _single(r: dict, name: str, value: str, bound: str, remedy: str) -> Check:
+    """The check of one run: its value, and where it failed why (every bound it broke) and the
+    likely cause of the first."""
+    cause = ""
+    if not r["passed"]:
+        value = r["why"] if r["kind"] == "step" else f"{value}; {r['why']}"  # (a step's why says its time)
+        if r["fault"] != "none" or "did not finish" in r["why"]:
+            cause = REMEDY["fault"]
+        elif r["why"].startswith("limit cycle"):
+            cause = REMEDY["limit cycle"]
+        else:
+            cause = REMEDY[remedy]
+    pp = f", p-p <= {C.HOLD_PP_DEG:g} deg at the end"
+    return Check(name, r["passed"], value, bound + pp, cause, 1, int(not r["passed"]))
+
+
 def checks(rows: list[dict]) -> list[Check]:
     """The certificate's checks from the judged runs."""
     out = []
@@ -136,46 +153,37 @@ def checks(rows: list[dict]) -> list[Check]:
     e_nom = max((r.get("err_deg", 0.0) for r in nominal), default=0.0)
     for r in rows:
         if r["kind"] == "step":
-            ts = r.get("settle_s")
             out.append(
-                Check(
+                _single(
+                    r,
                     r["case"],
-                    r["passed"],
-                    f"settled in {_s(ts)}, p-p {r.get('pp_deg', NAN):.3g} deg",
+                    f"settled in {_s(r.get('settle_s'))}",
                     f"{C.STEP_SETTLE_S:g} s within {C.SETTLE_BAND_DEG:g} deg",
-                    "" if r["passed"] else (REMEDY["fault"] if r["fault"] != "none" else REMEDY["settle"]),
-                    1,
-                    int(not r["passed"]),
+                    "settle",
                 )
             )
         elif r["kind"] == "trajectory":
             out.append(
-                Check(
+                _single(
+                    r,
                     "trajectory",
-                    r["passed"],
-                    f"peak estimation error {r.get('peak_err_deg', float('nan')):.3g} deg, at rest "
-                    f"{r.get('est_err_deg', float('nan')):.3g} deg",
+                    f"peak estimation error {r.get('peak_err_deg', NAN):.3g} deg, "
+                    f"at rest {r.get('est_err_deg', NAN):.3g} deg",
                     f"{C.TRAJ_PEAK_ERR_DEG:g} deg, {C.TRAJ_REST_ERR_DEG:g} deg at rest",
-                    ""
-                    if r["passed"]
-                    else (REMEDY["fault"] if r["fault"] != "none" else REMEDY["trajectory"]),
-                    1,
-                    int(not r["passed"]),
+                    "trajectory",
                 )
             )
         elif r["kind"] == "load_step":
-            rec = r.get("recover_s")
             out.append(
-                Check(
+                _single(
+                    r,
                     r["case"],
-                    r["passed"],
-                    f"back within {C.SETTLE_BAND_DEG:g} deg after {_s(rec)}; "
-                    f"peak {r.get('peak_dev_deg', NAN):.3g} deg ({r.get('peak_dev_mm', NAN):.3g} mm), "
-                    f"stiffness {r.get('stiffness_n_per_mm', float('nan')):.3g} N/mm",
+                    f"back within {C.SETTLE_BAND_DEG:g} deg after "
+                    f"{_s(r.get('recover_s'))}; peak {r.get('peak_dev_deg', NAN):.3g} deg "
+                    f"({r.get('peak_dev_mm', NAN):.3g} mm), stiffness "
+                    f"{r.get('stiffness_n_per_mm', NAN):.3g} N/mm",
                     f"{C.LOAD_RECOVER_S:g} s",
-                    "" if r["passed"] else REMEDY["load"],
-                    1,
-                    int(not r["passed"]),
+                    "load",
                 )
             )
     for plant in C.OFF_NOMINAL:
