@@ -155,16 +155,13 @@ tools:
 	  fi; \
 	fi
 
+# every benchmark runs; make bench fails at the end if any did (naming them)
+BENCHES := tools/bench_sim.py tools/bench_closed_loop.py tools/bench_sweep.py tools/bench_fea.py \
+           tools/bench_reproduce.py tools/bench_saturation.py tools/bench_tune.py tools/bench_reference.py
 bench: $(GEN_HDR) tools
-	tools/bench.sh
-	$(PY) tools/bench_sim.py
-	$(PY) tools/bench_closed_loop.py
-	$(PY) tools/bench_sweep.py
-	$(PY) tools/bench_fea.py
-	$(PY) tools/bench_reproduce.py
-	$(PY) tools/bench_saturation.py
-	$(PY) tools/bench_tune.py
-	$(PY) tools/bench_reference.py
+	@failed=""; tools/bench.sh || failed="$$failed tools/bench.sh"; \
+	for b in $(BENCHES); do echo "$(PY) $$b"; $(PY) $$b || failed="$$failed $$b"; done; \
+	if [ -n "$$failed" ]; then echo "bench: FAIL in$$failed"; exit 1; fi; echo "bench: every target met"
 
 clean:
 	rm -rf $(BUILD) out

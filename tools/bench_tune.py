@@ -16,7 +16,7 @@ ROOT = Path(__file__).parents[1]
 CLASS = ROOT / "examples" / "motors" / "class"
 
 
-def main() -> None:
+def main() -> int:
     drives = tomllib.loads((CLASS / "drives.toml").read_text())
     drives["ecce2010"] = dict(
         v_dc=72.0, f_pwm=16000.0, dead_time=0.8e-6, i_max=2.5, v_max=0.2, a_max=1.0, load=40.0
@@ -25,6 +25,7 @@ def main() -> None:
         f"{'motor':11s} {'obs':>5s} {'spd':>5s} {'kp_x':>5s} {'step .1':>8s} {'step .75':>8s} "
         f"{'N/mm':>6s} {'hold e':>6s} {'hold pp':>7s} {'wall':>5s}  failed checks"
     )
+    n_failed = 0
     runs = [(name, d, shape) for shape in ("pulsating", "square") for name, d in drives.items()]
     for name, d, shape in runs:
         spec = "ecce2010" if name == "ecce2010" else str(CLASS / f"{name}.toml")
@@ -50,6 +51,7 @@ def main() -> None:
             return "never" if v is None else f"{v:.3f}"
 
         failed = [c.name for c in cert.checks if not c.passed]
+        n_failed += bool(failed)
         label = f"{name[:6]} {shape[:3]}"
         print(
             f"{label:11s} {dz.observer_bw:5.3g} {dz.speed_bw:5.3g} {dz.kp_x:5.3g} {s(steps[0]):>8s} "
@@ -61,5 +63,10 @@ def main() -> None:
         )
 
 
+    print(f"certificate: {len(runs) - n_failed} of {len(runs)} designs verified (target: all) "
+          f"{'PASS' if n_failed == 0 else 'FAIL'}")
+    return 1 if n_failed else 0
+
+
 if __name__ == "__main__":
-    main()
+    raise SystemExit(main())
