@@ -32,8 +32,8 @@ BAR_DEG = 0.3
 #: xfail, not strict, so that a design that brings them within the bar shows as XPASS
 ABOVE_BAR_ELLIPTICAL = {
     "ecce2010": "elliptical injection at 12 V: the dead time (0.8 us, 72 V) and the design's dither "
-                "leaking through the HF band-pass move the table 0.3-0.4 deg, plus 0.1 deg of sampling "
-                "that the continuous model leaves out",
+                "leaking through the HF band-pass move the table 0.3-0.4 deg (a sampled-data model of the "
+                "table was tried and moves it the other way: not the cause)",
     "m100_edge": "the design's dither (0.16 i_max) is 1.6 times the HF current: its leak through the HF "
                  "band-pass biases the table by up to 0.7 deg (0.29 deg with half the dither)",
     "m20_hv": "1.5 us of dead time at 8 kHz with the elliptical injection: 0.34 deg (it completes since "

@@ -203,15 +203,68 @@ def test_tune_cli_writes_certificate_and_exit_code(tmp_path, capsys):
     with pytest.raises(SystemExit) as e:
         main(["tune", "--motor", "ecce2010", "--quick", "--out", str(out)])
     text = capsys.readouterr().out
-    doc = json.loads((tmp_path / "verification.json").read_text())
-    assert (tmp_path / "verification.png").stat().st_size > 10_000
+    doc = json.loads((tmp_path / "t.verification.json").read_text())
+    assert (tmp_path / "t.verification.png").stat().st_size > 10_000
     assert e.value.code == (0 if doc["passed"] else 1)
+    assert doc["quick"] and not doc["verified"]  # (a quick run never claims the certificate)
     assert "verification (quick" in text and ("NOT verified" in text) != doc["passed"]
     for c in doc["checks"]:
         assert ("PASS  " + c["name"] if c["passed"] else "FAIL  " + c["name"]) in text
         if not c["passed"]:
             assert c["cause"]
     assert tomllib.loads(out.read_text())["protection"]["omega_max"] > 0
+
+
+def test_quick_pass_is_not_verified():
+    from linsense.verify.certificate import Certificate, Check
+
+    ok = Certificate([Check("x", True, "v", "b")], [], 0.1, quick=True)
+    assert ok.passed and not ok.verified and "not verified" in ok.verdict()
+    assert Certificate([Check("x", True, "v", "b")], [], 0.1, quick=False).verdict().startswith("verified")
+
+
+def test_tune_scenario_options_reach_the_file(tmp_path, capsys, monkeypatch):
+    """A relative --motor with --scenario is the working folder's; --v-max and --a-max reach the
+    scenario's trajectory (the limits are designed from them); a scenario without its table gets
+    the widened trips; a start-up scenario verifies; --travel shortens the certificate's moves."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "m.toml").write_text((ROOT / "examples" / "motors" / "small30.toml").read_text())
+    sub = tmp_path / "s"
+    sub.mkdir()
+    (sub / "sc.toml").write_text('motor = "ecce2010"\n[scenario]\nduration = 1.0\n[control]\n'
+                                 'mode = "sensorless_nolut"\n[reference]\ntype = "trajectory"\n'
+                                 'waypoints_mm = [20.0]\n')
+    with pytest.raises(SystemExit) as e:
+        main(["tune", "--motor", "m.toml", "--scenario", "s/sc.toml", "--v-max", "0.1", "--no-verify",
+              "--out", "o/x.toml"])
+    assert e.value.code in (0, None)
+    doc = tomllib.loads((tmp_path / "o" / "x.toml").read_text())
+    assert (tmp_path / "o" / doc["motor"]).resolve() == (tmp_path / "m.toml").resolve()
+    assert doc["reference"]["v_max"] == 0.1
+    dz = design(load_motor(tmp_path / "m.toml"), DriveData(v_max=0.1))
+    from linsense.tune.design import uncompensated_speed_factor
+
+    k = uncompensated_speed_factor(load_motor(tmp_path / "m.toml"))
+    assert doc["protection"]["omega_max"] == pytest.approx(k * dz.omega_trip, rel=1e-4) and k > 1.5
+    from linsense.sim.scenario import load_scenario
+
+    build(load_scenario(tmp_path / "o" / "x.toml"))  # (it runs as written)
+    capsys.readouterr()
+    cases = all_cases(TAU, 0.2, 1.0, 20.0, quick=False, travel=0.07)
+    traj = next(c for c in cases if c.kind == "trajectory")
+    assert max(traj.sections["reference"]["waypoints_mm"]) <= 70.0
+    assert all(c.sections["travel"]["max_mm"] <= 73.0 for c in cases)
+
+
+def test_tune_bad_application_is_one_line_before_writing(tmp_path, capsys):
+    for args, key in ((["--load", "0"], "load"), (["--a-max", "1e-9"], "a_max"),
+                      (["--f-inj", "0.2"], "f_inj"), (["--travel", "10"], "travel")):
+        out = tmp_path / f"{key}.toml"
+        with pytest.raises(SystemExit) as e:
+            main(["tune", "--motor", "ecce2010", *args, "--quick", "--out", str(out)])
+        err = capsys.readouterr().err.strip().splitlines()
+        assert e.value.code == 2 and len(err) == 1 and key in err[0], (args, err)
+        assert not out.exists()
 
 
 def test_tune_no_verify_and_refusal(tmp_path, capsys):

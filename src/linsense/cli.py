@@ -455,12 +455,15 @@ def tune(motor_spec: str, scenario_path: str | None, v_dc, f_pwm, dead_time, i_m
     position loops, limits and trips (docs/tuning.md); print the design and its margins; write a
     scenario or a C header; then verify it in the simulator (switching inverter with dead time) and
     write verification.json and verification.png beside the output (exit 1 if a check fails)."""
+    import functools
+
     from linsense.io import write_atomic
     from linsense.sim.build import drive_data
     from linsense.sim.scenario import load_scenario
-    from linsense.tune.design import DriveData, design
+    from linsense.tune.design import DriveData, design, uncompensated_speed_factor
     from linsense.tune.export import c_header, scenario_dict, scenario_toml
 
+    say = functools.partial(click.echo, err=out == "-")  # (stdout carries the file itself then)
     base, base_dir, src = None, None, motor_spec
     dd = DriveData()
     if scenario_path is not None:
@@ -479,56 +482,92 @@ def tune(motor_spec: str, scenario_path: str | None, v_dc, f_pwm, dead_time, i_m
     su = design_startup(motor, v_dc=dd.v_dc, f_pwm=dd.f_pwm, i_max=dd.i_max, observer_bw=dz.observer_bw,
                         v_inj=dz.v_inj, polarity=polarity, current_noise=current_noise,
                         ramp_rate=dz.inj_ramp_rate, source=src)
+    # a drive run without its table (sensorless_nolut) gets its trips on the estimate wider
+    mode = (base or {}).get("control", {}).get("mode", "sensorless_lut")
+    comp = (base or {}).get("observer", {}).get("compensation")
+    no_table = comp == "none" or (comp is None and mode not in ("sensorless_lut", "sensored", "startup"))
+    k_est = uncompensated_speed_factor(motor) if no_table else 1.0
+    sc_dict = scenario_dict(dz, dd, motor_spec, base, startup=su, k_est=k_est)
+    cert_run = None
+    if not no_verify:  # (its runs are built before anything is written: a refusal leaves no file)
+        from linsense.verify.certificate import prepare
+
+        cert_run = prepare(motor, _motor_ref(motor_spec), _certificate_base(sc_dict),
+                           str(base_dir or Path.cwd()), v_max=dd.v_max, a_max=dd.a_max, load=dz.load,
+                           travel=dd.travel, quick=quick)
     if fmt == "c":
         text = c_header(dz, dd, motor, name, startup=su)
     else:
-        text = scenario_toml(dz, dd, motor_spec, Path(out), base, base_dir, startup=su)
-    click.echo(str(write_atomic(out, text)))
+        text = scenario_toml(dz, dd, motor_spec, Path(out), base, Path.cwd(), startup=su, k_est=k_est)
+    say(str(write_atomic(out, text)))
     for line in design_lines(dz, motor.name, dd):
-        click.echo(line)
+        say(line)
     if su is not None:
         for line in su.lines():
-            click.echo(line)
+            say(line)
     else:
-        click.echo("  start-up       not designed: no saturation data (--polarity, or [saturation] polarity "
-                   "in the motor file)")
+        say("  start-up       not designed: no saturation data (--polarity, or [saturation] polarity "
+            "in the motor file)")
     for w in dz.warnings + (su.warnings if su is not None else []):
         click.echo(f"linsense: warning: {w}", err=True)
-    if no_verify:
+    if mode != "sensorless_lut" and not no_verify:
+        say(f"  (the certificate judges the designed sensorless drive with its table, not control.mode = "
+            f"{mode!r} of the scenario)")
+    json_path, png_path = _certificate_paths(out)
+    if cert_run is None:
+        for p in (json_path, png_path):  # (a certificate of an earlier design would be stale)
+            p.unlink(missing_ok=True)
         return
-    _verify_tuned(motor, motor_spec, scenario_dict(dz, dd, motor_spec, base, startup=su), base_dir, dd, dz,
-                  quick, Path(out))
+    _verify_tuned(cert_run, motor, dd, dz, quick, json_path, png_path, say)
 
 
-def _verify_tuned(motor, motor_spec: str, base: dict, base_dir, dd, dz, quick: bool, out: Path) -> None:
-    """Run the certificate of the tuned drive, print it, write verification.json and .png beside
-    ``out``; exit 1 when a check fails."""
+def _motor_ref(motor_spec: str) -> str:
+    """The motor as the certificate's scenarios name it: a preset, or the file's absolute path."""
+    from linsense.model.motor import names_a_file
+
+    return str(Path(motor_spec).resolve()) if names_a_file(motor_spec) else motor_spec
+
+
+def _certificate_base(sc: dict) -> dict:
+    """The tuned scenario the certificate varies: the designed sensorless drive (its mode, start-up
+    and the scenario's own reference and travel are the certificate's, per run)."""
+    base = {k: (dict(v) if isinstance(v, dict) else v) for k, v in sc.items()}
+    for k in ("control", "startup", "reference", "travel", "initial", "load"):
+        base.pop(k, None)
+    return base
+
+
+def _certificate_paths(out: str) -> tuple[Path, Path]:
+    """``<out stem>.verification.json`` and ``.png`` beside the output file (in the working folder
+    for ``-`` or a device such as /dev/null)."""
+    p = Path(out)
+    if out == "-" or (p.exists() and not p.is_file()):
+        folder, stem = Path.cwd(), "tune"
+    else:
+        folder, stem = p.resolve().parent, p.stem
+    return folder / f"{stem}.verification.json", folder / f"{stem}.verification.png"
+
+
+def _verify_tuned(cert_run, motor, dd, dz, quick: bool, json_path: Path, png_path: Path, say) -> None:
+    """Run the prepared certificate, print it, write its JSON and figure; exit 1 when a check
+    fails (a quick run never claims the full certificate)."""
+    import io
     import json
 
     from linsense.io import write_atomic
-    from linsense.model.motor import names_a_file
     from linsense.report.verify_figures import certificate_figure
-    from linsense.verify.certificate import verify
 
-    spec = str(Path(motor_spec).resolve()) if names_a_file(motor_spec) else motor_spec
-    base = dict(base)
-    base.pop("control", None)  # (the certificate judges the sensorless drive)
-    cert = verify(motor, spec, base, str(base_dir or Path.cwd()), v_max=dd.v_max, a_max=dd.a_max,
-                  load=dz.load, quick=quick)
+    cert = cert_run()
     for line in cert.lines():
-        click.echo(line)
-    folder = out.resolve().parent
+        say(line)
     doc = cert.as_dict()
     doc.update(motor=motor.name, drive={k: v for k, v in vars(dd).items()},
                design={k: v for k, v in dz.as_dict().items() if k not in ("margins", "warnings")})
-    text = json.dumps(doc, indent=1, sort_keys=True) + "\n"
-    click.echo(str(write_atomic(folder / "verification.json", text)))
-    fig = certificate_figure(cert.rows, f"{motor.name}: {'verified' if cert.passed else 'NOT verified'}")
-    import io
-
+    say(str(write_atomic(json_path, json.dumps(doc, indent=1, sort_keys=True) + "\n")))
+    fig = certificate_figure(cert.rows, f"{motor.name}: {cert.verdict()}", quick=quick)
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=100, metadata={"Software": None})
-    click.echo(str(write_atomic(folder / "verification.png", buf.getvalue())))
+    say(str(write_atomic(png_path, buf.getvalue())))
     if not cert.passed:
         raise click.exceptions.Exit(1)
 

@@ -8,8 +8,9 @@ from matplotlib.figure import Figure
 from linsense.verify import criteria as C
 
 
-def certificate_figure(rows: list[dict], title: str) -> Figure:
-    """Four panels from the certificate's judged runs (rows of :func:`linsense.verify.run.judge`)."""
+def certificate_figure(rows: list[dict], title: str, quick: bool = False) -> Figure:
+    """Four panels from the certificate's judged runs (rows of :func:`linsense.verify.run.judge`);
+    ``quick``: the off-nominal and trajectory panels were not run."""
     fig = Figure(figsize=(11, 8), layout="constrained")
     ax = fig.subplots(2, 2)
     fig.suptitle(title)
@@ -70,7 +71,10 @@ def certificate_figure(rows: list[dict], title: str) -> Figure:
             tr = r["trace"]
             a.plot(tr["t"], tr["x_deg"], label=r["case"])
     a.axhspan(-C.SETTLE_BAND_DEG, C.SETTLE_BAND_DEG, color="0.85")
-    a.set(title="steps and load step: x - target", xlabel="t (s)", ylabel="electrical deg", ylim=(-20, 20))
+    traces = [r["trace"]["x_deg"] for r in rows if r["kind"] in ("step", "load_step") and r.get("trace")]
+    peak = max((max(abs(v) for v in x) for x in traces if x), default=20.0)
+    lim = min(max(20.0, 1.05 * peak), 400.0)
+    a.set(title="steps and load step: x - target", xlabel="t (s)", ylabel="electrical deg", ylim=(-lim, lim))
     if a.get_legend_handles_labels()[0]:
         a.legend(fontsize=7)
     a = ax[1, 1]
@@ -82,9 +86,11 @@ def certificate_figure(rows: list[dict], title: str) -> Figure:
     a.axhspan(-C.TRAJ_PEAK_ERR_DEG, C.TRAJ_PEAK_ERR_DEG, color="0.9")
     a.axhspan(-C.TRAJ_REST_ERR_DEG, C.TRAJ_REST_ERR_DEG, color="0.8")
     a.set(title="trajectory with the rated load", xlabel="t (s)", ylabel="electrical deg")
+    faulted = "\n".join(f"{r['case']}: {r['why']}" for r in rows if r["fault"] != "none")
     for a in ax.flat:  # (a quick certificate runs neither the off-nominal plants nor the trajectory)
         if not any(not ln.get_label().startswith("_") for ln in a.lines):
             a.cla()
             a.set_axis_off()
-            a.text(0.5, 0.5, "not run (--quick)", ha="center", va="center", transform=a.transAxes)
+            note = "not run (--quick)" if quick else f"no trace to show\n{faulted}"
+            a.text(0.5, 0.5, note, ha="center", va="center", transform=a.transAxes, fontsize=8, wrap=True)
     return fig

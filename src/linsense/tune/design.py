@@ -56,6 +56,7 @@ CURRENT_TRIP_MARGIN = 1.3  # over-current trip over i_max plus the HF current's 
 #: the switching simulation of ecce2010 at 1 kHz (docs/tuning.md, "Margins"): observers of 40 and
 #: 50 Hz (32 and 21 deg, 5.6 and 3.4 dB) hold and step; 60 Hz (9.6 deg, 1.5 dB) trips
 MARGIN_FLOORS = {"observer": (20.0, 3.0), "motion": (25.0, 6.0)}
+MOVE_TIME_MAX = 60.0  # s, the application's move over two pole pitches (v_max, a_max)
 FORCE_MARGIN = 0.8  # the application's force (load + m a_max) at most this share of K_f i_max
 RATED_LOAD_FRACTION = 0.5  # rated load, of K_f i_max, when the application does not give it
 QUAD = 0.9
@@ -171,16 +172,30 @@ def design(
             source, "motor", "no mean saliency (L_q = L_d): HF injection cannot see the position"
         )
     f_inj = d.f_inj if d.f_inj is not None else injection_frequency(d.f_pwm)
-    if not (f_inj > 0 and 4.0 * f_inj <= d.f_pwm):
+    if not (F_INJ_MIN / 8.0 <= f_inj and 4.0 * f_inj <= d.f_pwm):
         raise InputError(
-            source, "f_inj", f"must be positive and at most f_pwm / 4 = {d.f_pwm / 4:g} Hz, got {f_inj:g}"
+            source, "f_inj", f"must be between {F_INJ_MIN / 8.0:g} Hz (the loops' bandwidths follow it) and "
+            f"f_pwm / 4 = {d.f_pwm / 4:g} Hz, got {f_inj:g}"
         )
+    # the application's move over two pole pitches (the certificate's trajectory) within a minute
+    t_move = 2.0 * motor.pole_pitch / d.v_max + d.v_max / d.a_max
+    if t_move > MOVE_TIME_MAX:
+        key = "v_max" if 2.0 * motor.pole_pitch / d.v_max >= d.v_max / d.a_max else "a_max"
+        raise InputError(source, key, f"a move over two pole pitches at v_max = {d.v_max:g} m/s, a_max = "
+                         f"{d.a_max:g} m/s^2 lasts {t_move:.3g} s, beyond {MOVE_TIME_MAX:g} s")
+    if d.travel is not None and not (math.isfinite(d.travel) and d.travel >= motor.pole_pitch):
+        raise InputError(source, "travel", f"{d.travel * 1e3:g} mm: the stroke must cover at least one pole "
+                         f"pitch ({motor.pole_pitch * 1e3:g} mm: the drive holds anywhere in the period)")
     z = abs(complex(motor.R_s, 2.0 * math.pi * f_inj * 0.5 * (L_d + L_q)))
     s_min = saliency_min(motor)
     dv_dt = d.dead_time * d.f_pwm * d.v_dc
     v_top = min(d.v_dc * INJ_BUS_MAX, INJ_CURRENT_MAX * d.i_max * z)
     if d.v_inj is not None:
         v_inj = d.v_inj
+        if v_inj > 0 and dv_dt / (v_inj * s_min) > DEAD_TIME_RATIO_MAX:
+            warnings.append(f"the given injection leaves the dead time's voltage error "
+                            f"{dv_dt / (v_inj * s_min):.3g} times the weakest HF error signal (the design "
+                            f"refuses above {DEAD_TIME_RATIO_MAX:g}): expect the holds to fail")
     else:
         if dv_dt / (v_top * s_min) > DEAD_TIME_RATIO_MAX:
             raise InputError(
@@ -295,9 +310,10 @@ def design(
                             f"{pm_min:g} deg / {gm_min:g} dB)")
     for name, t in dz.tolerances.items():
         if not t["error_deg"] <= TOLERANCE_ERR_DEG:
-            warnings.append(f"a motor off by {name} holds {t['error_deg']:.3g} deg off target with this "
-                            f"drive's nominal LUT (model; bound {TOLERANCE_ERR_DEG:g} deg): identify or "
-                            "calibrate the motor")
+            held = (f"holds {t['error_deg']:.3g} deg off target" if math.isfinite(t["error_deg"])
+                    else "has no hold near the target at some positions")
+            warnings.append(f"a motor off by {name} {held} with this drive's nominal LUT (model; bound "
+                            f"{TOLERANCE_ERR_DEG:g} deg): identify or calibrate the motor")
     return dz
 
 
@@ -333,9 +349,14 @@ def _limits(dz: Design, motor: Motor, d: DriveData, warnings: list) -> None:
     w_per_v = 2.0 * math.pi / motor.pole_pitch  # electrical rad/s per m/s
     f_max = motor.force_constant * d.i_max
     dz.load = d.load if d.load is not None else RATED_LOAD_FRACTION * f_max
-    if not (math.isfinite(dz.load) and dz.load >= 0.0):
-        raise InputError("<tune>", "load", f"must be a force >= 0 N, got {dz.load!r}")
+    if not (math.isfinite(dz.load) and dz.load > 0.0):
+        raise InputError("<tune>", "load", f"the rated load must be a force > 0 N (the certificate's loads "
+                         f"are fractions of it), got {dz.load!r}")
     need = dz.load + motor.mass * d.a_max
+    if need > f_max:
+        raise InputError("<tune>", "load", f"the application needs {need:.3g} N (load {dz.load:.3g} N + "
+                         f"m a_max {motor.mass * d.a_max:.3g} N), beyond K_f i_max = {f_max:.3g} N: raise "
+                         "i_max or lower a_max / the load")
     if need > FORCE_MARGIN * f_max:
         warnings.append(
             f"the application needs {need:.3g} N (load {dz.load:.3g} N + m a_max "

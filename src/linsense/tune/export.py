@@ -21,10 +21,11 @@ from linsense.tune.design import (
 
 
 def scenario_dict(dz: Design, drive: DriveData, motor_ref: str, base: dict | None = None,
-                  startup=None) -> dict:
+                  startup=None, k_est: float = 1.0) -> dict:
     """A complete scenario: ``base`` (a scenario's given keys, or a 2 s hold) with the design's
     drive data and gains written out; ``startup`` (a :class:`linsense.tune.startup.StartupDesign`)
-    fills ``[startup]`` when the scenario's mode is "startup"."""
+    fills ``[startup]`` when the scenario's mode is "startup". ``k_est``: the trips and clamp on the
+    estimate widened by it (a drive without its table: ``uncompensated_speed_factor``)."""
     sc = {k: (dict(v) if isinstance(v, dict) else v) for k, v in (base or {}).items()}
     sc["motor"] = motor_ref
     sc.setdefault("scenario", {"name": "tuned", "duration": 2.0})
@@ -50,7 +51,7 @@ def scenario_dict(dz: Design, drive: DriveData, motor_ref: str, base: dict | Non
             "bandwidth_hz": _r(dz.observer_bw),
             "demod_lpf_hz": _r(dz.demod_lpf),
             "gain_schedule": True,
-            "omega_max": _r(dz.omega_obs),
+            "omega_max": _r(dz.omega_obs * k_est),
         }
     )
     for k in ("k1", "k2", "k3"):
@@ -73,11 +74,12 @@ def scenario_dict(dz: Design, drive: DriveData, motor_ref: str, base: dict | Non
     prot = sc.setdefault("protection", {})
     prot.setdefault("v_dc_min", _r(drive.v_dc * V_DC_MIN_FRACTION))
     prot.setdefault("v_dc_max", _r(drive.v_dc * V_DC_MAX_FRACTION))
-    prot.update({"omega_max": _r(dz.omega_trip), "i_max": _r(dz.i_trip)})
+    prot.update({"omega_max": _r(dz.omega_trip * k_est), "i_max": _r(dz.i_trip)})
     ref = sc["reference"]
-    if ref.get("type") == "trajectory":
-        ref.setdefault("v_max", drive.v_max)
-        ref.setdefault("a_max", drive.a_max)
+    if ref.get("type") == "trajectory":  # (the application's: the limits above are designed from them)
+        ref.update({"v_max": drive.v_max, "a_max": drive.a_max})
+    if drive.travel is not None and "travel" not in sc:
+        sc["travel"] = {"min_mm": 0.0, "max_mm": _r(drive.travel * 1e3)}
     if startup is not None and sc.get("control", {}).get("mode") == "startup":
         sc.setdefault("startup", {}).update(startup.scenario_keys())
     return sc
@@ -91,8 +93,10 @@ def scenario_toml(
     base: dict | None = None,
     base_dir: Path | None = None,
     startup=None,
+    k_est: float = 1.0,
 ) -> str:
-    """The scenario as TOML; a motor-file path is made relative to the output file's folder."""
+    """The scenario as TOML; a motor-file path (relative to ``base_dir``, default the working
+    folder, as the command line gives it) is made relative to the output file's folder."""
     ref = motor_spec
     looks_like_path = motor_spec.lower().endswith(".toml") or any(c in motor_spec for c in "/\\")
     if looks_like_path:
@@ -105,7 +109,7 @@ def scenario_toml(
         f"{dz.f_inj:g} Hz injection, current loop {dz.current_bw:.3g} Hz, observer {dz.observer_bw:.3g} Hz, "
         f"speed loop {dz.speed_bw:.3g} Hz, position {dz.kp_x:.3g} 1/s.\n"
     )
-    return head + tomli_w.dumps(scenario_dict(dz, drive, ref, base, startup))
+    return head + tomli_w.dumps(scenario_dict(dz, drive, ref, base, startup, k_est))
 
 
 def _r(v: float) -> float:

@@ -45,15 +45,19 @@ def hold_error(nominal: Motor, plant: Motor, f_inj: float, quad: float, n: int =
     target = np.linspace(0.0, 2.0 * np.pi, n, endpoint=False)
     psi_t = psi_lut_resistive(nominal, target, f_inj, quad=quad)
     e = np.zeros(n)
-    for _ in range(30):
+    bad = np.zeros(n, dtype=bool)
+    for _ in range(60):
         r = _ratio(plant, target, e, f_inj, quad, psi_t)
         hi = _ratio(plant, target, e + _H, f_inj, quad, psi_t)
         d = (hi - _ratio(plant, target, e - _H, f_inj, quad, psi_t)) / (2.0 * _H)
-        step = np.where(d != 0.0, r / np.where(d != 0.0, d, 1.0), 0.0)
+        bad |= ~(np.abs(d) > 1e-12)  # (no slope: no restoring error there)
+        step = np.where(bad, 0.0, r / np.where(bad, 1.0, d))
         e = e - np.clip(step, -0.05, 0.05)
-        if np.max(np.abs(step)) < 1e-9:
+        if np.max(np.abs(step)) < 1e-10:
             break
-    e[~(np.abs(e) < 0.6)] = np.nan
+    # converged: the residual vanishes (against the ratio's scale) and the slope restores
+    resid = np.abs(_ratio(plant, target, e, f_inj, quad, psi_t))
+    e[bad | ~(resid < 1e-6) | ~(np.abs(e) < 0.6)] = np.nan
     return e
 
 

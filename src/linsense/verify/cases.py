@@ -6,6 +6,7 @@ dead time; only the reference, the load and (off-nominal) the plant change.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -91,16 +92,18 @@ def step_cases(tau: float) -> list[Case]:
     return out
 
 
-def trajectory_case(tau: float, v_max: float, a_max: float, load_rated: float) -> Case:
-    """Out over :data:`~linsense.verify.criteria.TRAJ_PITCHES` pole pitches and back, at the
-    application's speed and acceleration, against the rated load."""
+def trajectory_case(tau: float, v_max: float, a_max: float, load_rated: float,
+                    pitches: float = C.TRAJ_PITCHES) -> Case:
+    """Out over ``pitches`` pole pitches (:data:`~linsense.verify.criteria.TRAJ_PITCHES`, or what
+    the stroke allows) and back, at the application's speed and acceleration, against the rated
+    load."""
     x0 = tau * 0.37 / C.POSITIONS
-    x1 = x0 + C.TRAJ_PITCHES * tau
+    x1 = x0 + pitches * tau
     t0, dwell = 0.1, 0.3
     dur = trapezoid_time(x1 - x0, v_max, a_max)
     t_end = t0 + 2.0 * dur + dwell + 0.01
     return Case(
-        name=f"trajectory {C.TRAJ_PITCHES:g} pole pitches and back, {v_max:g} m/s, {a_max:g} m/s^2, "
+        name=f"trajectory {pitches:.3g} pole pitches and back, {v_max:g} m/s, {a_max:g} m/s^2, "
         f"{load_rated:.3g} N",
         kind="trajectory",
         plant="nominal",
@@ -146,15 +149,32 @@ def load_step_case(tau: float, load_rated: float) -> Case:
     )
 
 
-def all_cases(tau: float, v_max: float, a_max: float, load_rated: float, quick: bool) -> list[Case]:
+def travel_section(tau: float, travel: float) -> dict:
+    """The plant's end stops for a stroke of ``travel`` (m) from 0: a twentieth of the pole pitch
+    beyond each end (a run that reaches them ends with the travel fault)."""
+    return {"min_mm": -0.05 * tau * 1e3, "max_mm": (travel + 0.05 * tau) * 1e3}
+
+
+def all_cases(tau: float, v_max: float, a_max: float, load_rated: float, quick: bool,
+              travel: float | None = None) -> list[Case]:
     """The certificate's runs: ``quick`` is the nominal holds at
-    :data:`~linsense.verify.criteria.POSITIONS_QUICK` positions and the steps."""
+    :data:`~linsense.verify.criteria.POSITIONS_QUICK` positions and the steps. ``travel`` (m, at
+    least a pole pitch): the stroke from 0; the trajectory is shortened to it and every run gets
+    its end stops (:func:`travel_section`)."""
     if quick:
-        return hold_cases(tau, load_rated, C.POSITIONS_QUICK) + step_cases(tau)
-    cases = hold_cases(tau, load_rated, C.POSITIONS) + step_cases(tau)
-    cases += [trajectory_case(tau, v_max, a_max, load_rated), load_step_case(tau, load_rated)]
-    for name in C.OFF_NOMINAL:
-        cases += hold_cases(tau, load_rated, C.POSITIONS, plant=name)
+        cases = hold_cases(tau, load_rated, C.POSITIONS_QUICK) + step_cases(tau)
+    else:
+        cases = hold_cases(tau, load_rated, C.POSITIONS) + step_cases(tau)
+        traj = trajectory_case(tau, v_max, a_max, load_rated)
+        if travel is not None and travel < C.TRAJ_PITCHES * tau + 2 * tau * 0.37 / C.POSITIONS:
+            traj = trajectory_case(tau, v_max, a_max, load_rated,
+                                   pitches=(travel - 2 * tau * 0.37 / C.POSITIONS) / tau)
+        cases += [traj, load_step_case(tau, load_rated)]
+        for name in C.OFF_NOMINAL:
+            cases += hold_cases(tau, load_rated, C.POSITIONS, plant=name)
+    if travel is not None:
+        stops = travel_section(tau, travel)
+        cases = [dataclasses.replace(c, sections={**c.sections, "travel": stops}) for c in cases]
     return cases
 
 
