@@ -487,7 +487,7 @@ def tune(motor_spec: str, scenario_path: str | None, v_dc, f_pwm, dead_time, i_m
     comp = (base or {}).get("observer", {}).get("compensation")
     no_table = comp == "none" or (comp is None and mode not in ("sensorless_lut", "sensored", "startup"))
     k_est = uncompensated_speed_factor(motor) if no_table else 1.0
-    sc_dict = scenario_dict(dz, dd, motor_spec, base, startup=su, k_est=k_est)
+    sc_dict = scenario_dict(dz, dd, motor_spec, base, startup=su, k_est=k_est, pole_pitch=motor.pole_pitch)
     cert_run = None
     if not no_verify:  # (its runs are built before anything is written: a refusal leaves no file)
         from linsense.verify.certificate import prepare
@@ -498,7 +498,8 @@ def tune(motor_spec: str, scenario_path: str | None, v_dc, f_pwm, dead_time, i_m
     if fmt == "c":
         text = c_header(dz, dd, motor, name, startup=su)
     else:
-        text = scenario_toml(dz, dd, motor_spec, Path(out), base, Path.cwd(), startup=su, k_est=k_est)
+        text = scenario_toml(dz, dd, motor_spec, Path(out), base, Path.cwd(), startup=su, k_est=k_est,
+                             pole_pitch=motor.pole_pitch)
     say(str(write_atomic(out, text)))
     for line in design_lines(dz, motor.name, dd):
         say(line)

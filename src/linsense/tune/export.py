@@ -20,8 +20,14 @@ from linsense.tune.design import (
 )
 
 
+def end_stops(pole_pitch: float, travel: float) -> dict:
+    """The ``[travel]`` section for a stroke of ``travel`` (m) from 0: the end stops a twentieth of
+    the pole pitch beyond each end (a run that reaches them ends with the travel fault)."""
+    return {"min_mm": _r(-0.05 * pole_pitch * 1e3), "max_mm": _r((travel + 0.05 * pole_pitch) * 1e3)}
+
+
 def scenario_dict(dz: Design, drive: DriveData, motor_ref: str, base: dict | None = None,
-                  startup=None, k_est: float = 1.0) -> dict:
+                  startup=None, k_est: float = 1.0, pole_pitch: float | None = None) -> dict:
     """A complete scenario: ``base`` (a scenario's given keys, or a 2 s hold) with the design's
     drive data and gains written out; ``startup`` (a :class:`linsense.tune.startup.StartupDesign`)
     fills ``[startup]`` when the scenario's mode is "startup". ``k_est``: the trips and clamp on the
@@ -78,8 +84,8 @@ def scenario_dict(dz: Design, drive: DriveData, motor_ref: str, base: dict | Non
     ref = sc["reference"]
     if ref.get("type") == "trajectory":  # (the application's: the limits above are designed from them)
         ref.update({"v_max": drive.v_max, "a_max": drive.a_max})
-    if drive.travel is not None and "travel" not in sc:
-        sc["travel"] = {"min_mm": 0.0, "max_mm": _r(drive.travel * 1e3)}
+    if drive.travel is not None and "travel" not in sc and pole_pitch is not None:
+        sc["travel"] = end_stops(pole_pitch, drive.travel)
     if startup is not None and sc.get("control", {}).get("mode") == "startup":
         sc.setdefault("startup", {}).update(startup.scenario_keys())
     return sc
@@ -94,6 +100,7 @@ def scenario_toml(
     base_dir: Path | None = None,
     startup=None,
     k_est: float = 1.0,
+    pole_pitch: float | None = None,
 ) -> str:
     """The scenario as TOML; a motor-file path (relative to ``base_dir``, default the working
     folder, as the command line gives it) is made relative to the output file's folder."""
@@ -109,7 +116,7 @@ def scenario_toml(
         f"{dz.f_inj:g} Hz injection, current loop {dz.current_bw:.3g} Hz, observer {dz.observer_bw:.3g} Hz, "
         f"speed loop {dz.speed_bw:.3g} Hz, position {dz.kp_x:.3g} 1/s.\n"
     )
-    return head + tomli_w.dumps(scenario_dict(dz, drive, ref, base, startup, k_est))
+    return head + tomli_w.dumps(scenario_dict(dz, drive, ref, base, startup, k_est, pole_pitch))
 
 
 def _r(v: float) -> float:

@@ -14,6 +14,7 @@ import numpy as np
 from linsense.model.motor import Motor
 from linsense.model.tolerance import perturbed
 from linsense.sim.build import trapezoid_time
+from linsense.tune.export import end_stops
 from linsense.verify import criteria as C
 
 
@@ -149,18 +150,12 @@ def load_step_case(tau: float, load_rated: float) -> Case:
     )
 
 
-def travel_section(tau: float, travel: float) -> dict:
-    """The plant's end stops for a stroke of ``travel`` (m) from 0: a twentieth of the pole pitch
-    beyond each end (a run that reaches them ends with the travel fault)."""
-    return {"min_mm": -0.05 * tau * 1e3, "max_mm": (travel + 0.05 * tau) * 1e3}
-
-
 def all_cases(tau: float, v_max: float, a_max: float, load_rated: float, quick: bool,
               travel: float | None = None) -> list[Case]:
     """The certificate's runs: ``quick`` is the nominal holds at
     :data:`~linsense.verify.criteria.POSITIONS_QUICK` positions and the steps. ``travel`` (m, at
     least a pole pitch): the stroke from 0; the trajectory is shortened to it and every run gets
-    its end stops (:func:`travel_section`)."""
+    its end stops (:func:`linsense.tune.export.end_stops`)."""
     if quick:
         cases = hold_cases(tau, load_rated, C.POSITIONS_QUICK) + step_cases(tau)
     else:
@@ -173,7 +168,7 @@ def all_cases(tau: float, v_max: float, a_max: float, load_rated: float, quick: 
         for name in C.OFF_NOMINAL:
             cases += hold_cases(tau, load_rated, C.POSITIONS, plant=name)
     if travel is not None:
-        stops = travel_section(tau, travel)
+        stops = end_stops(tau, travel)
         cases = [dataclasses.replace(c, sections={**c.sections, "travel": stops}) for c in cases]
     return cases
 
