@@ -26,7 +26,6 @@ from linsense.tune.design import (
 from linsense.tune.export import scenario_dict
 from linsense.verify import criteria as C
 from linsense.verify.cases import Case, all_cases, off_nominal_motor
-from linsense.verify.certificate import verify
 from linsense.verify.run import judge
 
 ROOT = Path(__file__).parents[1]
@@ -156,21 +155,9 @@ def test_injection_follows_dead_time_and_saliency():
 
 
 def _quick_certificate(name: str):
-    m = load_motor(CLASS / f"{name}.toml")
-    dd = _drive(name)
-    dz = design(m, dd, analyse=False)
-    spec = str(CLASS / f"{name}.toml")
-    return verify(
-        m,
-        spec,
-        scenario_dict(dz, dd, spec),
-        str(ROOT),
-        v_max=dd.v_max,
-        a_max=dd.a_max,
-        load=dz.load,
-        quick=True,
-        workers=1,
-    )
+    from linsense.verify.certificate import design_and_verify
+
+    return design_and_verify(str(CLASS / f"{name}.toml"), _drive(name), quick=True, workers=1)[1]
 
 
 @pytest.mark.parametrize("name", NAMES)

@@ -7,10 +7,8 @@ from __future__ import annotations
 import tomllib
 from pathlib import Path
 
-from linsense.model.motor import load_motor
-from linsense.tune.design import DriveData, design
-from linsense.tune.export import scenario_dict
-from linsense.verify.certificate import verify
+from linsense.tune.design import DriveData
+from linsense.verify.certificate import design_and_verify
 
 ROOT = Path(__file__).parents[1]
 CLASS = ROOT / "examples" / "motors" / "class"
@@ -29,19 +27,8 @@ def main() -> int:
     runs = [(name, d, shape) for shape in ("pulsating", "square") for name, d in drives.items()]
     for name, d, shape in runs:
         spec = "ecce2010" if name == "ecce2010" else str(CLASS / f"{name}.toml")
-        m = load_motor(spec)
         dd = DriveData(**d, shape=shape)
-        dz = design(m, dd, analyse=False)
-        cert = verify(
-            m,
-            spec,
-            scenario_dict(dz, dd, spec),
-            str(ROOT),
-            v_max=dd.v_max,
-            a_max=dd.a_max,
-            load=dz.load,
-            quick=False,
-        )
+        dz, cert = design_and_verify(spec, dd, base_dir=str(ROOT))
         rows = cert.rows
         steps = [r.get("settle_s") for r in rows if r["kind"] == "step"]
         ls = next(r for r in rows if r["kind"] == "load_step")

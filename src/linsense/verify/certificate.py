@@ -270,3 +270,23 @@ def verify(
     ``v_max``, ``a_max`` (m/s, m/s^2) and ``load`` (N, rated) are the application's."""
     return prepare(motor, motor_spec, base, base_dir, v_max=v_max, a_max=a_max, load=load, quick=quick,
                    workers=workers)()
+
+
+def design_and_verify(motor_spec: str, drive, *, quick: bool = False, workers: int | None = None,
+                      base_dir: str | None = None):
+    """``(design, certificate)`` of ``linsense tune`` from Python: the design for the motor
+    ``motor_spec`` (a preset or a motor-file path) on ``drive`` (a
+    :class:`~linsense.tune.design.DriveData`), and its certificate."""
+    from pathlib import Path
+
+    from linsense.model.motor import load_motor, names_a_file
+    from linsense.tune.design import design
+    from linsense.tune.export import scenario_dict
+
+    spec = str(Path(motor_spec).resolve()) if names_a_file(motor_spec) else motor_spec
+    motor = load_motor(spec)
+    dz = design(motor, drive, spec, analyse=False)
+    base = scenario_dict(dz, drive, spec, pole_pitch=motor.pole_pitch)
+    cert = prepare(motor, spec, base, base_dir or str(Path.cwd()), v_max=drive.v_max, a_max=drive.a_max,
+                   load=dz.load, travel=drive.travel, quick=quick, workers=workers)()
+    return dz, cert
