@@ -107,7 +107,7 @@ void ls_drive_default_cfg(ls_drive_cfg *c)
     c->cal.t_max = LS_R(3.0);
     c->cal.period = 0;
     c->cal.dither_amp = LS_DEF_DITHER_AMP;
-    c->cal.dither_freq = LS_DEF_DITHER_FREQ; /* not a submultiple of the injection (200 Hz is: 5 x 200 = 1 kHz) */
+    c->cal.dither_freq = LS_DEF_DITHER_FREQ; /* not a submultiple of the injection (50 Hz would be) */
     /* start-up (ls_startup.h): `linsense tune --polarity 0.0131` for ecce2010 (the FEA's 1.31 %/A of
      * a thin back iron) and this drive, 10 mA rms of current noise and a 12-bit ADC: 2.8 A at the
      * end of a 37.4 V, 7-period pulse, 16 pairs for a decision 6 sigma clear (docs/tuning.md) */

@@ -29,6 +29,6 @@
 #define LS_DEF_TRAJ_V_MAX LS_R(0.2) /* m/s, trajectory speed */
 #define LS_DEF_TRAJ_A_MAX LS_R(1.0) /* m/s^2, trajectory acceleration */
 #define LS_DEF_DITHER_AMP LS_R(0.4) /* A, calibration dither */
-#define LS_DEF_DITHER_FREQ LS_R(150.0) /* Hz, calibration dither frequency */
+#define LS_DEF_DITHER_FREQ LS_R(55.0) /* Hz, calibration dither frequency */
 
 #endif /* LS_DRIVE_DEFAULTS_H */

@@ -61,7 +61,8 @@ FORCE_MARGIN = 0.8  # the application's force (load + m a_max) at most this shar
 RATED_LOAD_FRACTION = 0.5  # rated load, of K_f i_max, when the application does not give it
 QUAD = 0.9
 DITHER_CURRENT = 0.16  # of i_max
-DITHER_FREQ = 0.15  # of f_inj
+# of f_inj: low against the HF band-pass (it leaks less), above the speed loop, not a submultiple
+DITHER_FREQ = 0.055
 V_DC_MIN_FRACTION = 5.0 / 9.0  # under-voltage limit, of the bus (40 V at 72 V)
 V_DC_MAX_FRACTION = 5.0 / 4.0  # over-voltage limit (90 V at 72 V)
 
