@@ -36,6 +36,11 @@ bool ls_pos_norm_full(ls_pos *p)
     } else if (th < LS_R(0.0)) {
         th += LS_TWO_PI;
         n -= 1;
+        if (!(th < LS_TWO_PI)) { /* a negative theta too small for th / 2 pi (it underflows to -0, so
+                                    the rounds leave it) rounds to 2 pi: it is the period's start */
+            th = LS_R(0.0);
+            n += 1;
+        }
     }
     if (!(th >= LS_R(0.0) && th < LS_TWO_PI)) { /* (not reached; an angle in range whatever) */
         th = LS_R(0.0);

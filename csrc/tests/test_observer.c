@@ -66,6 +66,18 @@ static void test_long_travel(void)
     q.theta = (LS_REAL)NAN;
     q = ls_pos_norm(q);
     LS_CHECK(q.theta == 0);
+    /* a negative theta so small that th / 2 pi underflows to -0 (a denormal; found in the
+     * simulator: the encoder's tracking loop at 0.6 um read one pole pitch back, -56 mm) is the
+     * period's start, not the previous period's */
+    {
+#ifdef LS_REAL_DOUBLE
+        ls_pos t = {3, -4.9e-324}; /* (the smallest subnormal: / 2 pi underflows to -0) */
+#else
+        ls_pos t = {3, -1.0e-45f}; /* (the smallest subnormal: / 2 pi underflows to -0) */
+#endif
+        t = ls_pos_norm(t);
+        LS_CHECK(t.period == 3 && t.theta == LS_R(0.0));
+    }
 }
 
 static void test_pll_ramp(void)
