@@ -62,16 +62,13 @@ def hold_error(nominal: Motor, plant: Motor, f_inj: float, quad: float, n: int =
 
 
 def local_gain(nominal: Motor, plant: Motor, f_inj: float, quad: float, n: int = 180) -> np.ndarray:
-    """The local error gain of ``plant`` at ``e = 0`` relative to ``nominal``'s (which the gain
-    schedule divides out): 1 everywhere for the nominal motor."""
-    target = np.linspace(0.0, 2.0 * np.pi, n, endpoint=False)
-    psi_t = psi_lut_resistive(nominal, target, f_inj, quad=quad)
+    """The local error gain of ``plant`` driven with ``nominal``'s table, relative to ``nominal``'s
+    (which the gain schedule divides out): 1 everywhere for the nominal motor. The slope against
+    the estimate, as the observer sees it (:func:`linsense.tune.design.error_gain`)."""
+    from linsense.tune.design import error_gain
 
-    def slope(m: Motor) -> np.ndarray:
-        return (_ratio(m, target, -_H * np.ones(n), f_inj, quad, psi_t)
-                - _ratio(m, target, _H * np.ones(n), f_inj, quad, psi_t)) / (2.0 * _H)
-
-    return slope(plant) / slope(nominal)
+    return (error_gain(plant, f_inj, quad, 1.0, n, table=nominal)
+            / error_gain(nominal, f_inj, quad, 1.0, n))
 
 
 def tolerance_costs(motor: Motor, f_inj: float, quad: float, n: int = 180) -> dict:
