@@ -411,17 +411,7 @@ def calibrate(motor_spec: str | None, scenario_path: str | None, positions: int,
 @click.option("--scenario", "scenario_path", type=click.Path(dir_okay=False), default=None,
               help="scenario whose drive data (bus, PWM, dead time, i_max, injection) and other keys "
                    "are kept")
-@click.option("--v-dc", type=float, default=None, callback=_finite(0.0, True),
-              help="bus voltage, V (default 72)")
-@click.option("--f-pwm", type=float, default=None, callback=_finite(0.0, True),
-              help="PWM rate, Hz (default 16000)")
-@click.option("--dead-time", type=float, default=None, callback=_finite(0.0, False),
-              help="s (default 0.8e-6)")
-@click.option("--i-max", type=float, default=None, callback=_finite(0.0, True),
-              help="current limit, A (default 2.5)")
-@click.option("--v-inj", type=float, default=None, callback=_finite(0.0, True), help="injection amplitude, V")
-@click.option("--f-inj", type=float, default=None, callback=_finite(0.0, True),
-              help="injection frequency, Hz")
+@_drive_options
 @click.option("--quad", type=float, default=None, callback=_quad,
               help="elliptical share kappa on q (0: pulsating; default 0.9)")
 @click.option("--format", "fmt", type=click.Choice(["toml", "c"]), default="toml", show_default=True,
@@ -448,9 +438,9 @@ def calibrate(motor_spec: str | None, scenario_path: str | None, positions: int,
 @click.option("--quick", is_flag=True, help="verify at 8 positions on the nominal plant only")
 @click.option("--no-verify", is_flag=True, help="do not run the verification")
 @click.option("--out", required=True, type=click.Path(dir_okay=False), help="output file")
-def tune(motor_spec: str, scenario_path: str | None, v_dc, f_pwm, dead_time, i_max, v_inj, f_inj, quad,
-         fmt: str, polarity: float | None, current_noise: float, name: str | None, v_max, a_max, load,
-         travel, shape, quick: bool, no_verify: bool, out: str) -> None:
+def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: float | None,
+         current_noise: float, name: str | None, v_max, a_max, load, travel, shape, quick: bool,
+         no_verify: bool, out: str, **drive) -> None:
     """Design the drive for a motor: injection, current loop, demodulator, observer, speed and
     position loops, limits and trips (docs/tuning.md); print the design and its margins; write a
     scenario or a C header; then verify it in the simulator (switching inverter with dead time) and
@@ -458,7 +448,7 @@ def tune(motor_spec: str, scenario_path: str | None, v_dc, f_pwm, dead_time, i_m
     import functools
 
     from linsense.io import write_atomic
-    from linsense.sim.build import drive_data
+    from linsense.sim.build import compensation_of, drive_data
     from linsense.sim.scenario import load_scenario
     from linsense.tune.design import DriveData, design, uncompensated_speed_factor
     from linsense.tune.export import c_header, scenario_dict, scenario_toml
@@ -471,9 +461,9 @@ def tune(motor_spec: str, scenario_path: str | None, v_dc, f_pwm, dead_time, i_m
         base, base_dir, src = sc.given(), sc.base_dir, scenario_path
         base.pop("motor", None)
         dd = drive_data(sc)
-    for key, val in (("v_dc", v_dc), ("f_pwm", f_pwm), ("dead_time", dead_time), ("i_max", i_max),
-                     ("v_inj", v_inj), ("f_inj", f_inj), ("quad", quad), ("v_max", v_max), ("a_max", a_max),
-                     ("load", load), ("travel", None if travel is None else travel * 1e-3), ("shape", shape)):
+    given = {**drive, "quad": quad, "v_max": v_max, "a_max": a_max, "load": load,
+             "travel": None if travel is None else travel * 1e-3, "shape": shape}
+    for key, val in given.items():  # (the drive data options: _drive_options, DriveData's names)
         if val is not None:
             setattr(dd, key, val)
     motor = _load(motor_spec)
@@ -484,15 +474,14 @@ def tune(motor_spec: str, scenario_path: str | None, v_dc, f_pwm, dead_time, i_m
                         ramp_rate=dz.inj_ramp_rate, source=src)
     # a drive run without its table (sensorless_nolut) gets its trips on the estimate wider
     mode = (base or {}).get("control", {}).get("mode", "sensorless_lut")
-    comp = (base or {}).get("observer", {}).get("compensation")
-    no_table = comp == "none" or (comp is None and mode not in ("sensorless_lut", "sensored", "startup"))
+    no_table = compensation_of(mode, (base or {}).get("observer", {}).get("compensation")) == "none"
     k_est = uncompensated_speed_factor(motor) if no_table else 1.0
     sc_dict = scenario_dict(dz, dd, motor_spec, base, startup=su, k_est=k_est, pole_pitch=motor.pole_pitch)
     cert_run = None
     if not no_verify:  # (its runs are built before anything is written: a refusal leaves no file)
-        from linsense.verify.certificate import prepare
+        from linsense.verify.certificate import motor_ref, prepare
 
-        cert_run = prepare(motor, _motor_ref(motor_spec), _certificate_base(sc_dict),
+        cert_run = prepare(motor, motor_ref(motor_spec), _certificate_base(sc_dict),
                            str(base_dir or Path.cwd()), v_max=dd.v_max, a_max=dd.a_max, load=dz.load,
                            travel=dd.travel, quick=quick)
     if fmt == "c":
@@ -520,13 +509,6 @@ def tune(motor_spec: str, scenario_path: str | None, v_dc, f_pwm, dead_time, i_m
             p.unlink(missing_ok=True)
         return
     _verify_tuned(cert_run, motor, dd, dz, quick, json_path, png_path, say)
-
-
-def _motor_ref(motor_spec: str) -> str:
-    """The motor as the certificate's scenarios name it: a preset, or the file's absolute path."""
-    from linsense.model.motor import names_a_file
-
-    return str(Path(motor_spec).resolve()) if names_a_file(motor_spec) else motor_spec
 
 
 def _certificate_base(sc: dict) -> dict:

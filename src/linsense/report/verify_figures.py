@@ -8,6 +8,12 @@ from matplotlib.figure import Figure
 from linsense.verify import criteria as C
 
 
+def _legend(a) -> None:
+    """A small legend, where the panel has labelled lines."""
+    if a.get_legend_handles_labels()[0]:
+        a.legend(fontsize=7)
+
+
 def certificate_figure(rows: list[dict], title: str, quick: bool = False) -> Figure:
     """Four panels from the certificate's judged runs (rows of :func:`linsense.verify.run.judge`);
     ``quick``: the off-nominal and trajectory panels were not run."""
@@ -46,8 +52,7 @@ def certificate_figure(rows: list[dict], title: str, quick: bool = False) -> Fig
         ylabel="electrical deg",
         yscale="log",
     )
-    if a.get_legend_handles_labels()[0]:
-        a.legend(fontsize=7)
+    _legend(a)
     a = ax[0, 1]
     for plant in C.OFF_NOMINAL:
         rs = [
@@ -63,8 +68,7 @@ def certificate_figure(rows: list[dict], title: str, quick: bool = False) -> Fig
         xlabel="position (electrical deg)",
         ylabel="|x - target| (electrical deg)",
     )
-    if a.get_legend_handles_labels()[0]:
-        a.legend(fontsize=7)
+    _legend(a)
     a = ax[1, 0]
     for r in rows:
         if r["kind"] in ("step", "load_step") and "trace" in r:
@@ -75,17 +79,16 @@ def certificate_figure(rows: list[dict], title: str, quick: bool = False) -> Fig
     peak = max((max(abs(v) for v in x) for x in traces if x), default=20.0)
     lim = min(max(20.0, 1.05 * peak), 400.0)
     a.set(title="steps and load step: x - target", xlabel="t (s)", ylabel="electrical deg", ylim=(-lim, lim))
-    if a.get_legend_handles_labels()[0]:
-        a.legend(fontsize=7)
+    _legend(a)
     a = ax[1, 1]
     for r in rows:
         if r["kind"] == "trajectory" and "trace" in r:
             tr = r["trace"]
             a.plot(tr["t"], tr["err_deg"], label="estimation error")
-            a.legend(fontsize=7)
     a.axhspan(-C.TRAJ_PEAK_ERR_DEG, C.TRAJ_PEAK_ERR_DEG, color="0.9")
     a.axhspan(-C.TRAJ_REST_ERR_DEG, C.TRAJ_REST_ERR_DEG, color="0.8")
     a.set(title="trajectory with the rated load", xlabel="t (s)", ylabel="electrical deg")
+    _legend(a)
     faulted = "\n".join(f"{r['case']}: {r['why']}" for r in rows if r["fault"] != "none")
     for a in ax.flat:  # (a quick certificate runs neither the off-nominal plants nor the trajectory)
         if not any(not ln.get_label().startswith("_") for ln in a.lines):

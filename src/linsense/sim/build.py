@@ -271,6 +271,15 @@ def calibration_timing(f_inj: float, dither_a: float, dither_hz: float, demod_lp
             "t_max": CAL_MAX_WINDOWS * t_hold}
 
 
+def compensation_of(mode: str, compensation: str | None) -> str:
+    """The compensation a drive runs: ``observer.compensation`` where the scenario gives it, else
+    the table (``"lut"``) in the modes that use one (sensorless_lut; sensored and startup for the HF
+    estimate) and ``"none"`` in the others."""
+    if compensation is not None:
+        return compensation
+    return "lut" if mode in ("sensorless_lut", "sensored", "startup") else "none"
+
+
 def designed(sc: Scenario, motor: Motor) -> Scenario:
     """``sc`` with every gain it leaves unset taken from the design for its motor and drive
     (:func:`linsense.tune.design`, docs/tuning.md); what the file gives is kept."""
@@ -286,8 +295,7 @@ def designed(sc: Scenario, motor: Motor) -> Scenario:
                    lambda: design(motor, dd, sc.source, analyse=False))
     except InputError as exc:  # the design's drive-data names -> the scenario's keys
         raise InputError(sc.source, _DESIGN_KEYS.get(exc.key, exc.key), exc.message) from None
-    no_table = s.observer.compensation == "none" or (
-        s.observer.compensation is None and s.control.mode not in ("sensorless_lut", "sensored", "startup"))
+    no_table = compensation_of(s.control.mode, s.observer.compensation) == "none"
     k_est = _memo(("k_est", motor_key(motor)), lambda: uncompensated_speed_factor(motor)) if no_table else 1.0
     want = {
         "injection": {"amplitude": dz.v_inj, "frequency": dz.f_inj, "ramp_rate": dz.inj_ramp_rate},
@@ -554,8 +562,7 @@ def build(sc: Scenario, motor: Motor | None = None, trace_in_memory: bool = True
     d.pos.speed.fs = fs
 
     # the table for sensorless_lut, and for the HF observer beside the encoder in sensored mode
-    compensation = obs.compensation or ("lut" if ctl.mode in ("sensorless_lut", "sensored", "startup")
-                                        else "none")
+    compensation = compensation_of(ctl.mode, obs.compensation)
     # the tables the controller can know, from the motor model with the resistance it believes (as
     # cached ls_lut objects: the drive only reads them, through const pointers)
     def lut_motor() -> Motor:

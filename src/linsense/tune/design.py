@@ -294,7 +294,7 @@ def design(
         inj_ramp_rate=v_inj / INJ_RAMP_TIME,
         s_min=s_min,
     )
-    _limits(dz, motor, d, warnings)
+    _limits(dz, motor, d, warnings, source)
     if not analyse:
         return dz
     from linsense.tune.margins import TOLERANCE_ERR_DEG, tolerance_costs
@@ -348,18 +348,18 @@ def uncompensated_speed_factor(motor: Motor) -> float:
     return float(max(1.0, np.max(loop_gain_factor(motor, th))))
 
 
-def _limits(dz: Design, motor: Motor, d: DriveData, warnings: list) -> None:
+def _limits(dz: Design, motor: Motor, d: DriveData, warnings: list, source: str) -> None:
     """The speed cap, the trips and the observer's clamp with their margins over the application
     (docs/tuning.md, "The limits"); the rated load. Fills ``dz`` in place."""
     w_per_v = 2.0 * math.pi / motor.pole_pitch  # electrical rad/s per m/s
     f_max = motor.force_constant * d.i_max
     dz.load = d.load if d.load is not None else RATED_LOAD_FRACTION * f_max
     if not (math.isfinite(dz.load) and dz.load > 0.0):
-        raise InputError("<tune>", "load", f"the rated load must be a force > 0 N (the certificate's loads "
+        raise InputError(source, "load", f"the rated load must be a force > 0 N (the certificate's loads "
                          f"are fractions of it), got {dz.load!r}")
     need = dz.load + motor.mass * d.a_max
     if need > f_max:
-        raise InputError("<tune>", "load", f"the application needs {need:.3g} N (load {dz.load:.3g} N + "
+        raise InputError(source, "load", f"the application needs {need:.3g} N (load {dz.load:.3g} N + "
                          f"m a_max {motor.mass * d.a_max:.3g} N), beyond K_f i_max = {f_max:.3g} N: raise "
                          "i_max or lower a_max / the load")
     if need > FORCE_MARGIN * f_max:

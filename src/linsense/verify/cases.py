@@ -38,6 +38,16 @@ class Case:
     position_deg: float = 0.0
 
 
+#: the position grid's offset, in grid steps from 0 (so that it does not sit on the symmetric
+#: positions only); the moves start at the first point of the full grid
+OFFSET = 0.37
+
+
+def start(tau: float) -> float:
+    """Where the steps, the trajectory and the load step start (m)."""
+    return tau * OFFSET / C.POSITIONS
+
+
 def hold_cases(
     tau: float, load_rated: float, n_pos: int, plant: str = "nominal", loads=C.HOLD_LOADS
 ) -> list[Case]:
@@ -45,7 +55,7 @@ def hold_cases(
     not sit on the symmetric positions only) at ``loads`` (fractions of ``load_rated``)."""
     out = []
     for k in range(n_pos):
-        deg = 360.0 * (k + 0.37) / n_pos
+        deg = 360.0 * (k + OFFSET) / n_pos
         x0 = tau * deg / 360.0
         for lf in loads:
             f = lf * load_rated
@@ -72,7 +82,7 @@ def step_cases(tau: float) -> list[Case]:
     """Steps of :data:`~linsense.verify.criteria.STEP_FRACTIONS` of the pole pitch from rest."""
     out = []
     t0 = 0.05
-    x0 = tau * 0.37 / C.POSITIONS
+    x0 = start(tau)
     for frac in C.STEP_FRACTIONS:
         x1 = x0 + frac * tau
         out.append(
@@ -98,7 +108,7 @@ def trajectory_case(tau: float, v_max: float, a_max: float, load_rated: float,
     """Out over ``pitches`` pole pitches (:data:`~linsense.verify.criteria.TRAJ_PITCHES`, or what
     the stroke allows) and back, at the application's speed and acceleration, against the rated
     load."""
-    x0 = tau * 0.37 / C.POSITIONS
+    x0 = start(tau)
     x1 = x0 + pitches * tau
     t0, dwell = 0.1, 0.3
     dur = trapezoid_time(x1 - x0, v_max, a_max)
@@ -131,7 +141,7 @@ def trajectory_case(tau: float, v_max: float, a_max: float, load_rated: float,
 def load_step_case(tau: float, load_rated: float) -> Case:
     """A step of :data:`~linsense.verify.criteria.LOAD_STEP_FRACTION` of the rated load while
     holding."""
-    x0 = tau * 0.37 / C.POSITIONS
+    x0 = start(tau)
     t0 = 0.3
     f = C.LOAD_STEP_FRACTION * load_rated
     return Case(
@@ -161,9 +171,8 @@ def all_cases(tau: float, v_max: float, a_max: float, load_rated: float, quick: 
     else:
         cases = hold_cases(tau, load_rated, C.POSITIONS) + step_cases(tau)
         traj = trajectory_case(tau, v_max, a_max, load_rated)
-        if travel is not None and travel < C.TRAJ_PITCHES * tau + 2 * tau * 0.37 / C.POSITIONS:
-            traj = trajectory_case(tau, v_max, a_max, load_rated,
-                                   pitches=(travel - 2 * tau * 0.37 / C.POSITIONS) / tau)
+        if travel is not None and travel < C.TRAJ_PITCHES * tau + 2 * start(tau):
+            traj = trajectory_case(tau, v_max, a_max, load_rated, pitches=(travel - 2 * start(tau)) / tau)
         cases += [traj, load_step_case(tau, load_rated)]
         for name in C.OFF_NOMINAL:
             cases += hold_cases(tau, load_rated, C.POSITIONS, plant=name)

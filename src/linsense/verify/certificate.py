@@ -272,6 +272,16 @@ def verify(
                    workers=workers)()
 
 
+def motor_ref(motor_spec: str) -> str:
+    """The motor as the certificate's scenarios name it (they run from other folders): a preset's
+    name, or the motor file's absolute path."""
+    from pathlib import Path
+
+    from linsense.model.motor import names_a_file
+
+    return str(Path(motor_spec).resolve()) if names_a_file(motor_spec) else motor_spec
+
+
 def design_and_verify(motor_spec: str, drive, *, quick: bool = False, workers: int | None = None,
                       base_dir: str | None = None):
     """``(design, certificate)`` of ``linsense tune`` from Python: the design for the motor
@@ -279,11 +289,11 @@ def design_and_verify(motor_spec: str, drive, *, quick: bool = False, workers: i
     :class:`~linsense.tune.design.DriveData`), and its certificate."""
     from pathlib import Path
 
-    from linsense.model.motor import load_motor, names_a_file
+    from linsense.model.motor import load_motor
     from linsense.tune.design import design
     from linsense.tune.export import scenario_dict
 
-    spec = str(Path(motor_spec).resolve()) if names_a_file(motor_spec) else motor_spec
+    spec = motor_ref(motor_spec)
     motor = load_motor(spec)
     dz = design(motor, drive, spec, analyse=False)
     base = scenario_dict(dz, drive, spec, pole_pitch=motor.pole_pitch)
