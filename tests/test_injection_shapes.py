@@ -75,7 +75,10 @@ def test_rotating_without_table_follows_the_model(motor):
     (measured: 12 of 16 positions hold, within 0.54 deg of the model)."""
     held = 0
     for x_mm in POSITIONS_MM:
-        m, bias, _, pp, theta = _hold("rotating", "sensorless_nolut", x_mm)
+        # (the interpolating dead-time residual: the forward one orients the saliency at the
+        # estimate, here up to 20 deg off by design, and its error then adds up to 0.65 deg)
+        m, bias, _, pp, theta = _hold("rotating", "sensorless_nolut", x_mm,
+                                      observer={"dead_time_model": "interpolated"})
         if m["fault"] != "none" or pp > 0.1:
             continue
         held += 1

@@ -10,14 +10,15 @@ cc -std=c99 -Wall -Wextra -Wpedantic -Werror -O2 -g -Icsrc/include -Icsrc/tests 
 "$B/bench_drive" "$N"
 count() { # $1: dead-time compensation on (1) or off (0); $2: injection 0 pulsating, 1 rotating,
           # 2 square, 3 LS_MODE_STARTUP, 4 LS_MODE_SENSORED, 5 LS_MODE_CALIBRATION, 6 sensored square
-          # (bench_drive.c); $3: steps
-  valgrind --tool=callgrind --toggle-collect=ls_drive_step --callgrind-out-file="$B/callgrind.$1${2:-0}.out" \
-    "$B/bench_drive" "${3:-$N}" "$1" "${2:-0}" > /dev/null 2> "$B/callgrind.$1${2:-0}.log"
-  awk '/^(summary|totals):/ {print $2; exit}' "$B/callgrind.$1${2:-0}.out"
+          # (bench_drive.c); $3: steps; $4: the residual (0 forward, 2 interpolating)
+  valgrind --tool=callgrind --toggle-collect=ls_drive_step --callgrind-out-file="$B/callgrind.$1${2:-0}${4:-0}.out" \
+    "$B/bench_drive" "${3:-$N}" "$1" "${2:-0}" 0 "${4:-0}" > /dev/null 2> "$B/callgrind.$1${2:-0}${4:-0}.log"
+  awk '/^(summary|totals):/ {print $2; exit}' "$B/callgrind.$1${2:-0}${4:-0}.out"
 }
 per() { echo $(( ($1 + $2 / 2) / $2 )); }
 verdict() { if [ "$1" -le 1000 ]; then echo "$1 (target <= 1,000) PASS"; else echo "$1 (target <= 1,000) FAIL"; fi; }
 total_dtc=$(count 1)
+total_interp=$(count 1 0 "$N" 2)
 total=$(count 0)
 total_rot=$(count 1 1)
 total_sq=$(count 1 2)
@@ -29,6 +30,7 @@ total_sens_sq=$(count 1 6)
 echo "ls_drive_step, sensorless with LUT, float, -O2, x86-64, $N steps during a move: $total instructions"
 echo "  with dead-time compensation off: $(per "$total" "$N") per step"
 echo "instructions per step (everything on: compensation, residual, elliptical injection, notch): $(verdict "$(per "$total_dtc" "$N")")"
+echo "  the same with the interpolating dead-time residual (observer.dead_time_model = \"interpolated\"): $(verdict "$(per "$total_interp" "$N")")"
 echo "instructions per step, rotating injection (compensation, residual, its table): $(verdict "$(per "$total_rot" "$N")")"
 echo "instructions per step, square wave at fs/2 (compensation, its table, d-current): $(verdict "$(per "$total_sq" "$N")")"
 echo "instructions per step in LS_MODE_STARTUP (lock, pulses, settle; $N_SU steps): $(verdict "$(per "$total_su" "$N_SU")")"

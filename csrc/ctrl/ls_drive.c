@@ -90,7 +90,10 @@ void ls_drive_default_cfg(ls_drive_cfg *c)
     c->dtres.r_s = r_s;
     c->dtres.l_d = l_d;
     c->dtres.l_q = l_q;
-    c->dtres.ripple = true;
+    c->dtres.forward = true;
+    c->dtres.adapt = true;
+    c->dtres.l_ea = LS_DEF_L_EA;
+    c->dtres.l_eb = LS_DEF_L_EB;
     c->prot.i_max = LS_R(6.0);
     c->prot.v_dc_min = LS_DEF_V_DC_MIN;
     c->prot.v_dc_max = LS_DEF_V_DC_MAX;

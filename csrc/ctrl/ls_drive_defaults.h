@@ -8,6 +8,8 @@
 #define LS_DEF_I_MAX LS_R(2.5) /* A, current-reference limit */
 #define LS_DEF_L_D LS_R(0.00350783333) /* H, mean L_d of the reference motor */
 #define LS_DEF_L_Q LS_R(0.00445883333) /* H, mean L_q */
+#define LS_DEF_L_EA LS_R(-0.000156666667) /* H, the end effect's stationary anisotropy, diagonal */
+#define LS_DEF_L_EB LS_R(0.000271354627) /* H, the end effect's stationary anisotropy, off-diagonal */
 #define LS_DEF_TAU LS_R(0.056) /* m, pole pitch */
 #define LS_DEF_KF LS_R(20.0) /* N/A, force constant */
 #define LS_DEF_MASS LS_R(1.5) /* kg, moving mass */

@@ -1,3 +1,4 @@
+
 /* Pieces the steps of ls_drive_step share (ls_drive.c, ls_drive_startup.c, ls_drive_rotating.c,
  * ls_drive_square.c, ls_drive_encoder.c): private to the library, static inline so that each step
  * keeps its own compiled copy. (The checks, Clarke and alignment at the start of the rotating and
@@ -77,6 +78,27 @@ static inline LS_REAL ls_drive_path_force_(ls_drive *d, ls_pos pos, LS_REAL omeg
     return i_q_ref;
 }
 
+/* The current the dead-time residual drove over the period that has just ended (A, alpha-beta;
+ * ls_dtres.h): the modulator's forward model of the period with the inductance model at the angle
+ * (c, s), its voltage error through the R-L model, and the model's inductance scale measured from
+ * the period's current change (dtres.cfg.adapt); or the interpolation (dtres.cfg.forward false).
+ * Call before ls_mod_step. */
+static inline void ls_drive_path_residual_(ls_drive *d, const ls_meas *meas, LS_REAL c, LS_REAL s, LS_REAL i_res[2])
+{
+    LS_REAL v_err[2];
+    if (d->dtres.cfg.forward) {
+        LS_REAL g[6], i_end[3];
+        ls_dtres_phase_g(&d->dtres, c, s, g);
+        if (ls_mod_residual(&d->mod, meas->i_abc, meas->v_dc, g, d->dtres.cfg.r_s, v_err, i_end) &&
+            d->dtres.cfg.adapt) {
+            ls_dtres_adapt(&d->dtres, d->mod.i_prev, meas->i_abc, i_end);
+        }
+    } else {
+        (void)ls_mod_residual_interp(&d->mod, meas->i_abc, meas->v_dc, d->dtres.k_rip, v_err);
+    }
+    ls_dtres_step(&d->dtres, v_err, c, s, i_res);
+}
+
 /* The fundamental of the measured currents (sep: *if_a, *if_b), and their HF part (bpf: *ihf_a,
  * *ihf_b) less what the dead-time residual drove (ls_dtres.h; the residual in the frame (c, s) of
  * the injection), in A, alpha-beta. */
@@ -91,9 +113,8 @@ static inline void ls_drive_path_hf_(ls_drive *d, const ls_meas *meas, LS_REAL i
         *if_b = ls_biquad_step(&d->sep[1], i_b);
     }
     if (d->cfg.hf_dtres) { /* (bpf is then the band-pass: not with the square wave, ls_drive_init) */
-        LS_REAL v_err[2], i_res[2];
-        (void)ls_mod_residual(&d->mod, meas->i_abc, meas->v_dc, d->dtres.k_rip, v_err);
-        ls_dtres_step(&d->dtres, v_err, c, s, i_res);
+        LS_REAL i_res[2];
+        ls_drive_path_residual_(d, meas, c, s, i_res);
         *ihf_a = ls_biquad_step_bp(&d->bpf[0], i_a - i_res[0]);
         *ihf_b = ls_biquad_step_bp(&d->bpf[1], i_b - i_res[1]);
     } else {

@@ -38,9 +38,8 @@ void ls_drive_rot_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
     ihf_a = i_a - if_a;
     ihf_b = i_b - if_b;
     if (cfg->hf_dtres) {
-        LS_REAL v_err[2], i_res[2];
-        (void)ls_mod_residual(&d->mod, meas->i_abc, meas->v_dc, d->dtres.k_rip, v_err);
-        ls_dtres_step(&d->dtres, v_err, c_est, s_est, i_res);
+        LS_REAL i_res[2];
+        ls_drive_path_residual_(d, meas, c_est, s_est, i_res);
         ihf_a -= i_res[0];
         ihf_b -= i_res[1];
     }

@@ -16,15 +16,22 @@ ls_status ls_dtres_init(ls_dtres *r, const ls_dtres_cfg *cfg)
         return LS_ERR_NULL;
     }
     if (!LS_ISFINITE4(cfg->fs, cfg->r_s, cfg->l_d, cfg->l_q) || !(cfg->fs > LS_R(0.0)) ||
-        cfg->r_s < LS_R(0.0) || !(cfg->l_d > LS_R(0.0)) || !(cfg->l_q > LS_R(0.0))) {
+        cfg->r_s < LS_R(0.0) || !(cfg->l_d > LS_R(0.0)) || !(cfg->l_q > LS_R(0.0)) ||
+        !LS_ISFINITE(cfg->l_ea) || !LS_ISFINITE(cfg->l_eb)) {
+        return LS_ERR_PARAM;
+    }
+    /* L_ab positive definite at every angle: its smallest eigenvalue is at least
+     * (L_d + L_q)/2 - |L_d - L_q|/2 - |(l_ea, l_eb)| */
+    if (!(LS_R(0.5) * (cfg->l_d + cfg->l_q) - LS_R(0.5) * LS_FABS(cfg->l_d - cfg->l_q) >
+          LS_SQRT(cfg->l_ea * cfg->l_ea + cfg->l_eb * cfg->l_eb))) {
         return LS_ERR_PARAM;
     }
     r->cfg = *cfg;
     ts = LS_R(1.0) / cfg->fs;
     axis(cfg->r_s, cfg->l_d, ts, &r->a_d, &r->b_d);
     axis(cfg->r_s, cfg->l_q, ts, &r->a_q, &r->b_q);
-    r->k_rip = cfg->ripple ? LS_R(2.0) * ts / (cfg->l_d + cfg->l_q) : LS_R(0.0);
     /* an inductance so small against R Ts that the response overflows: refused */
+    r->k_rip = LS_R(2.0) * ts / (cfg->l_d + cfg->l_q);
     if (!LS_ISFINITE4(r->a_d, r->b_d, r->a_q, r->b_q) || !LS_ISFINITE(r->k_rip)) {
         return LS_ERR_PARAM;
     }
@@ -36,4 +43,6 @@ void ls_dtres_reset(ls_dtres *r)
 {
     r->i_d = LS_R(0.0);
     r->i_q = LS_R(0.0);
+    r->k_l = LS_R(1.0);
+    r->s_num = r->s_den = LS_R(0.0);
 }

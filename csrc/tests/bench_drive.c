@@ -7,7 +7,8 @@
  * 4 LS_MODE_SENSORED with the HF estimate beside the encoder (inject_sensored), 5
  * LS_MODE_CALIBRATION (12 points of period 1, the default injection), 6 LS_MODE_SENSORED with the
  * square wave beside the encoder (4 to 6: the encoder modes' step, ls_drive_encoder.c).
- * G = 1: with a gain table (rotating, square); R = 1: without the dead-time residual model.
+ * G = 1: with a gain table (rotating, square); R = 1: without the dead-time residual model, 2: with
+ * its interpolating model (dtres.forward false) instead of the forward one.
  * so that only the instructions executed inside ls_drive_step are counted (tools/bench.sh). */
 #include <stdio.h>
 #include <stdlib.h>
@@ -45,7 +46,8 @@ int main(int argc, char **argv)
     ls_drive_default_cfg(&cfg);
     cfg.demod.comp = &lut;
     cfg.mod.dtc = argc > 2 && atoi(argv[2]) != 0; /* the plant has no dead time: off unless asked */
-    cfg.hf_dtres = !(argc > 5 && atoi(argv[5]) != 0); /* the dead-time residual model (on unless asked) */
+    cfg.hf_dtres = !(argc > 5 && atoi(argv[5]) == 1); /* the dead-time residual model (on unless asked) */
+    cfg.dtres.forward = !(argc > 5 && atoi(argv[5]) == 2);
     if (shape == 1) { /* rotating: stationary-frame vector, negative-sequence demodulation */
         cfg.inject.shape = LS_INJ_ROTATING;
         cfg.inject.quad = 0.0f;

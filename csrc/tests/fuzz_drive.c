@@ -182,7 +182,8 @@ static void overrides(reader *r, ls_drive_cfg *c)
             c->hf_dtres = (kind & 2u) != 0u;
             c->inject_sensored = (kind & 4u) != 0u;
             c->current.decouple = (kind & 8u) != 0u;
-            c->dtres.ripple = (kind & 16u) != 0u;
+            c->dtres.forward = (kind & 16u) != 0u;
+            c->dtres.adapt = (kind & 32u) != 0u;
             break;
         case 6:
             c->demod.method = (ls_demod_method)(kind % 4u);

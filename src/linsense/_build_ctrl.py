@@ -209,9 +209,12 @@ void ls_traj_jump(ls_traj *t, ls_pos target);
 void ls_traj_step(ls_traj *t, ls_pos *x_ref, LS_REAL *v_ref, LS_REAL *a_ref);
 
 /* ls_dtres.h */
-typedef struct { LS_REAL fs; LS_REAL r_s; LS_REAL l_d; LS_REAL l_q; bool ripple; } ls_dtres_cfg;
 typedef struct {
-    ls_dtres_cfg cfg; LS_REAL a_d, a_q; LS_REAL b_d, b_q; LS_REAL i_d, i_q; LS_REAL k_rip;
+    LS_REAL fs; LS_REAL r_s; LS_REAL l_d; LS_REAL l_q; bool forward; bool adapt; LS_REAL l_ea; LS_REAL l_eb;
+} ls_dtres_cfg;
+typedef struct {
+    ls_dtres_cfg cfg; LS_REAL a_d, a_q; LS_REAL b_d, b_q; LS_REAL i_d, i_q; LS_REAL k_rip; LS_REAL k_l;
+    LS_REAL s_num, s_den;
 } ls_dtres;
 ls_status ls_dtres_init(ls_dtres *r, const ls_dtres_cfg *cfg);
 void ls_dtres_reset(ls_dtres *r);

@@ -1,17 +1,21 @@
 /* linsense firmware library: the HF current the inverter's dead-time error drove, to be taken out
  * of the current the HF estimator sees.
  *
- * The modulator's dead-time compensation predicts each leg's current sign 1.5 periods ahead; where
- * a phase current is small (a phase perpendicular to the injection axis carries little HF current,
- * only the force current), the prediction misses and the residual error voltage acts like a relay
- * on the sign of the force current, biasing the demodulated position error by degrees
- * (docs/simulator.md, "Dead time and the closed loop"). After the period both end-point currents
- * are known: ls_mod_residual interpolates each leg's current at its edges and returns the voltage
- * error the inverter actually left. This module passes that voltage through a nominal R-L_d-L_q
- * model in the estimated frame (exact first-order step per axis) and returns the alpha-beta current
- * it drove, which the drive subtracts before the HF band-pass:
- *   i_d[k+1] = a_d i_d[k] + b_d v_d[k],  a_d = exp(-R T / L_d),  b_d = (1 - a_d) / R  (T / L_d for R = 0)
- * and likewise on q.
+ * The modulator's dead-time compensation predicts each leg's current 1.5 periods ahead; where a
+ * phase current is small or crosses zero near an edge, the prediction misses, and the residual
+ * error voltage, in step with the injection, biases the demodulated position error by degrees
+ * (docs/simulator.md, "Dead time and the closed loop"). After the period its start and end currents
+ * are known: ls_mod_residual runs a forward model of the period through this module's inductance
+ * model at the estimated angle (ls_dtres_phase_g: the saliency and the end effect's stationary
+ * anisotropy) and returns the voltage error the inverter left. This module passes that voltage
+ * through the R-L model in the estimated frame and returns the alpha-beta current it drove, which
+ * the drive subtracts before the HF band-pass:
+ *   i_dq[k+1] = a (.) i_dq[k] + k_l diag(b_d L_d, b_q L_q) L_dq^-1 v_dq[k],
+ *   a_d = exp(-R T / L_d),  b_d = (1 - a_d) / R  (T / L_d for R = 0), likewise on q,
+ * L_dq the model's inductance in the estimated frame. k_l, the scale of the model's inverse
+ * inductance, is measured from every period (ls_dtres_adapt: the current change the model predicted
+ * against the measured one), so that an inductance off by 10 % (a tolerance, a warm motor) does not
+ * bring the dead time's bias back.
  */
 #ifndef LINSENSE_LS_DTRES_H
 #define LINSENSE_LS_DTRES_H
@@ -19,19 +23,31 @@
 #include "linsense/ls_types.h"
 
 typedef struct {
-    LS_REAL fs;  /* Hz, sampling rate, > 0 */
-    LS_REAL r_s; /* ohm, phase resistance of the model, >= 0 */
-    LS_REAL l_d; /* H, d-axis HF inductance of the model, > 0 */
-    LS_REAL l_q; /* H, q-axis HF inductance of the model, > 0 */
-    bool ripple; /* the PWM current ripple at the edges decides the sign of a small current */
+    LS_REAL fs;   /**< unit: Hz, sampling rate, > 0 */
+    LS_REAL r_s;  /**< unit: ohm, phase resistance of the model, >= 0 */
+    LS_REAL l_d;  /**< unit: H, d-axis HF inductance of the model, > 0 */
+    LS_REAL l_q;  /**< unit: H, q-axis HF inductance of the model, > 0 */
+    bool forward; /**< unit: -, the forward model of the period (ls_mod_residual, with l_ea, l_eb and
+                       adapt); false: the cheaper interpolation between the period's end samples
+                       (ls_mod_residual_interp), which needs no angle (docs/firmware.md) */
+    bool adapt;   /**< unit: -, measure the model's inductance scale k_l online (false: k_l = 1) */
+    LS_REAL l_ea; /**< unit: H, the stationary anisotropy of the alpha-beta inductance (the end
+                       effect): L_ab = (L_d + L_q)/2 I + (L_d - L_q)/2 [c2 s2; s2 -c2]
+                       + [l_ea l_eb; l_eb -l_ea] (c2, s2: cos and sin of twice the angle) */
+    LS_REAL l_eb; /**< unit: H, its off-diagonal part; L_ab positive definite at every angle:
+                       |(l_ea, l_eb)| < min(L_d, L_q) */
 } ls_dtres_cfg;
 
 typedef struct {
-    ls_dtres_cfg cfg;   /* copy of the configuration */
-    LS_REAL a_d, a_q;   /* -, per-step decay exp(-R T / L) */
-    LS_REAL b_d, b_q;   /* A/V, per-step input gain (1 - a) / R (T / L for R = 0) */
-    LS_REAL i_d, i_q;   /* A, modelled current in the estimated frame */
-    LS_REAL k_rip;      /* 1/H s, T / L of the PWM ripple at the edges (0: ripple ignored) */
+    ls_dtres_cfg cfg;     /**< unit: -, copy of the configuration */
+    LS_REAL a_d, a_q;     /**< unit: -, per-step decay exp(-R T / L) */
+    LS_REAL b_d, b_q;     /**< unit: A/V, per-step input gain (1 - a) / R (T / L for R = 0) */
+    LS_REAL i_d, i_q;     /**< unit: A, modelled current in the estimated frame */
+    LS_REAL k_rip;        /**< unit: s/H, T / L of the PWM ripple at the edges (the interpolation) */
+    LS_REAL k_l;          /**< unit: -, the measured scale of the model's inverse inductance (1: as
+                               configured), in [LS_DTRES_KL_MIN, LS_DTRES_KL_MAX] */
+    LS_REAL s_num, s_den; /**< unit: A^2, low-passed products of the measured and the predicted
+                               current change (ls_dtres_adapt) */
 } ls_dtres;
 
 ls_status ls_dtres_init(ls_dtres *r, const ls_dtres_cfg *cfg);
@@ -44,10 +60,63 @@ static inline void ls_dtres_step(ls_dtres *r, const LS_REAL v_ab[2], LS_REAL c, 
 {
     const LS_REAL v_d = c * v_ab[0] + s * v_ab[1];
     const LS_REAL v_q = -s * v_ab[0] + c * v_ab[1];
-    r->i_d = r->a_d * r->i_d + r->b_d * v_d;
-    r->i_q = r->a_q * r->i_q + r->b_q * v_q;
+    /* the input through the inverse of L_dq = [L_d + e1, e2; e2, L_q - e1] (the end effect's
+     * anisotropy turned into the frame: e1 = l_ea c2 + l_eb s2, e2 = l_eb c2 - l_ea s2), scaled per
+     * axis as b_d L_d and b_q L_q (the exact first-order step without the end effect) */
+    const LS_REAL c2 = c * c - s * s, s2 = LS_R(2.0) * c * s;
+    const LS_REAL e1 = r->cfg.l_ea * c2 + r->cfg.l_eb * s2, e2 = r->cfg.l_eb * c2 - r->cfg.l_ea * s2;
+    const LS_REAL ld = r->cfg.l_d + e1, lq = r->cfg.l_q - e1;
+    const LS_REAL idet = LS_R(1.0) / (ld * lq - e2 * e2);
+    const LS_REAL u_d = (lq * v_d - e2 * v_q) * idet, u_q = (ld * v_q - e2 * v_d) * idet; /* L_dq^-1 v */
+    r->i_d = r->a_d * r->i_d + r->k_l * r->b_d * r->cfg.l_d * u_d;
+    r->i_q = r->a_q * r->i_q + r->k_l * r->b_q * r->cfg.l_q * u_q;
     i_ab[0] = c * r->i_d - s * r->i_q;
     i_ab[1] = s * r->i_d + c * r->i_q;
+}
+
+/* The phase inverse-inductance matrix of the model at the angle (c, s) = (cos, sin) of its d-axis,
+ * times k_l: G_kj = k_l r_k' L_ab^-1 r_j (1/H; r_k the unit vector of phase k in alpha-beta, L_ab
+ * as in ls_dtres_cfg, the saliency and the end effect), written [aa, bb, cc, ab, ac, bc] for
+ * ls_mod_residual. Its rows sum to 0 (r_a + r_b + r_c = 0). */
+static inline void ls_dtres_phase_g(const ls_dtres *r, LS_REAL c, LS_REAL s, LS_REAL g[6])
+{
+    const LS_REAL hs = LS_R(0.5) * (r->cfg.l_d + r->cfg.l_q), hd = LS_R(0.5) * (r->cfg.l_d - r->cfg.l_q);
+    const LS_REAL c2 = c * c - s * s, s2 = LS_R(2.0) * c * s;
+    /* L_ab = [p + m, o; o, p - m] and its inverse [p - m, -o; -o, p + m] / det */
+    const LS_REAL m = hd * c2 + r->cfg.l_ea, o = hd * s2 + r->cfg.l_eb;
+    const LS_REAL idet = LS_R(1.0) / (hs * hs - m * m - o * o);
+    const LS_REAL x00 = (hs - m) * idet, x11 = (hs + m) * idet, x01 = -o * idet;
+    const LS_REAL h3 = LS_R(0.5) * LS_SQRT3;
+    /* r_a = (1, 0), r_b = (-1/2, sqrt3/2), r_c = (-1/2, -sqrt3/2) */
+    const LS_REAL q0 = LS_R(0.25) * x00 + LS_R(0.75) * x11;
+    const LS_REAL q1 = h3 * x01;
+    const LS_REAL k = r->k_l;
+    g[0] = k * x00;
+    g[1] = k * (q0 - q1);
+    g[2] = k * (q0 + q1);
+    g[3] = k * (LS_R(-0.5) * x00 + h3 * x01);
+    g[4] = k * (LS_R(-0.5) * x00 - h3 * x01);
+    g[5] = k * (LS_R(0.25) * x00 - LS_R(0.75) * x11);
+}
+
+/* The inverse-inductance scale from one period (cfg.adapt): i0, the period's start currents, i1
+ * its end, i_pred the end the model predicted (ls_mod_residual), A, phases. The model's current
+ * changes scale with k_l / L, so k_l <- k_l <i1 - i0, p - i0> / |p - i0|^2 (p = i_pred), each
+ * product low-passed over 1 / LS_DTRES_KL_RATE periods (the injection's current change is the
+ * signal), within [LS_DTRES_KL_MIN, LS_DTRES_KL_MAX]. Inline (called every PWM period). */
+#define LS_DTRES_KL_RATE LS_R(0.002)
+#define LS_DTRES_KL_MIN LS_R(0.5)
+#define LS_DTRES_KL_MAX LS_R(2.0)
+static inline void ls_dtres_adapt(ls_dtres *r, const LS_REAL i0[3], const LS_REAL i1[3], const LS_REAL i_pred[3])
+{
+    const LS_REAL m0 = i1[0] - i0[0], m1 = i1[1] - i0[1], m2 = i1[2] - i0[2];
+    const LS_REAL p0 = i_pred[0] - i0[0], p1 = i_pred[1] - i0[1], p2 = i_pred[2] - i0[2];
+    r->s_num += LS_DTRES_KL_RATE * ((m0 * p0 + m1 * p1 + m2 * p2) * r->k_l - r->s_num);
+    r->s_den += LS_DTRES_KL_RATE * ((p0 * p0 + p1 * p1 + p2 * p2) - r->s_den);
+    if (r->s_den > LS_R(1e-12)) { /* (A^2: below, no current has changed yet) */
+        const LS_REAL k = r->s_num / r->s_den;
+        r->k_l = k < LS_DTRES_KL_MIN ? LS_DTRES_KL_MIN : (k > LS_DTRES_KL_MAX ? LS_DTRES_KL_MAX : k);
+    }
 }
 
 #endif /* LINSENSE_LS_DTRES_H */

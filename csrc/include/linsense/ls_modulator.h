@@ -150,7 +150,128 @@ static inline bool ls_mod_step_impl(ls_mod *m, LS_REAL v_a, LS_REAL v_b, LS_REAL
 }
 
 /* The dead-time voltage error, net of the compensation, that the inverter left in the PWM period
- * that has just ended: call with the currents sampled at its end, before ls_mod_step. Its duties
+ * that has just ended, by a forward model of that period: call with the currents sampled at its
+ * end (i_abc), before ls_mod_step (i_prev is then the period's start current; its duties are the
+ * entry of two steps ago). From the start currents the six edges run in their order (the legs
+ * sorted by duty; centre-aligned: turn-on from the largest duty down, turn-off back up), the phase
+ * currents advanced between them by the poles' voltage through g, the phase inverse-inductance
+ * matrix G_kj = r_k' L^-1 r_j (1/H, [aa, bb, cc, ab, ac, bc]: ls_dtres_phase_g; its rows sum to 0),
+ * less the resistive drop (2/3) R_s G i with the current taken as linear between the two samples.
+ * At each edge both switches of the leg are off for the dead time and the diode the current picks
+ * holds the pole: a turn-on loses the dead time when the leg's current flows out (i > 0), a
+ * turn-off gains it when the current flows in; the volt-seconds act on all three currents from
+ * there, so that each edge's current carries the losses of the edges before it and the PWM ripple
+ * with the motor's saliency and end effect (docs/simulator.md, "Dead time and the closed loop").
+ * The leg's duty error is c - t_dead f_pwm (L_on + L_off - 1), L = 1 where the current at the edge
+ * flows out (c: the compensation it carried); a leg that does not switch (d = 0 or 1) has none.
+ * Writes the alpha-beta voltage error (V) and the end currents the model predicts (A, phases; for
+ * ls_dtres_adapt) and returns true, or writes 0 and returns false without the previous step's
+ * currents. i_abc, v_dc and g must be finite. (Used by ls_drive with hf_dtres; see
+ * linsense/ls_dtres.h.) */
+static inline bool ls_mod_residual(const ls_mod *m, const LS_REAL i_abc[3], LS_REAL v_dc, const LS_REAL g[6],
+                                   LS_REAL r_s, LS_REAL v_ab[2], LS_REAL i_end[3])
+{
+    const ls_mod_hist *h = &m->hist[m->newest ^ 1u];
+    LS_REAL e[3];
+    int o0 = 0, o1 = 1, o2 = 2, all_switch;
+    if (!m->have_prev) {
+        v_ab[0] = v_ab[1] = LS_R(0.0);
+        i_end[0] = i_end[1] = i_end[2] = LS_R(0.0);
+        return false;
+    }
+    /* the legs by duty: o0 the largest, o2 the smallest */
+    if (h->d[1] > h->d[0]) {
+        o0 = 1;
+        o1 = 0;
+    }
+    if (h->d[2] > h->d[o1]) {
+        o2 = o1;
+        o1 = 2;
+        if (h->d[2] > h->d[o0]) {
+            o1 = o0;
+            o0 = 2;
+        }
+    }
+    {
+        /* in the sorted order (a = o0, b = o1, c = o2): G's entries (diagonal g[k], off-diagonal
+         * g[k + j + 2]), the start currents and their change over the period */
+        const LS_REAL T = LS_R(1.0) / m->cfg.f_pwm;
+        const LS_REAL kv = LS_R(2.0) / LS_R(3.0) * v_dc, kr = LS_R(2.0) / LS_R(3.0) * r_s;
+        const LS_REAL kd = kv * m->cfg.dead_time; /* a whole dead time's volt-seconds, per unit of G */
+        const LS_REAL gaa = g[o0], gbb = g[o1], gcc = g[o2];
+        const LS_REAL gab = g[o0 + o1 + 2], gac = g[o0 + o2 + 2], gbc = g[o1 + o2 + 2];
+        const LS_REAL ia = m->i_prev[o0], ib = m->i_prev[o1], ic = m->i_prev[o2];
+        const LS_REAL ja = i_abc[o0] - ia, jb = i_abc[o1] - ib, jc = i_abc[o2] - ic;
+        /* the resistive drop (A) to time t: (r_k + s_k t) t, the current linear between the samples */
+        const LS_REAL kh = LS_R(0.5) * kr * m->cfg.f_pwm;
+        const LS_REAL ra = kr * (gaa * ia + gab * ib + gac * ic), rb = kr * (gab * ia + gbb * ib + gbc * ic);
+        const LS_REAL rc = kr * (gac * ia + gbc * ib + gcc * ic);
+        const LS_REAL sa = kh * (gaa * ja + gab * jb + gac * jc), sb = kh * (gab * ja + gbb * jb + gbc * jc);
+        const LS_REAL sc = kh * (gac * ja + gbc * jb + gcc * jc);
+        const LS_REAL da = h->d[o0], db = h->d[o1], dc = h->d[o2];
+        /* the segments: all low before the first edge and after the last ((1 - da) T / 2 each), a
+         * alone high (u1, twice), a and b high (u2, twice), all high (u3); the edges at t1 .. t6 */
+        const LS_REAL u1 = LS_R(0.5) * (da - db) * T, u2 = LS_R(0.5) * (db - dc) * T, u3 = dc * T;
+        const LS_REAL t1 = LS_R(0.5) * (LS_R(1.0) - da) * T, t2 = t1 + u1, t3 = t2 + u2, t5 = t3 + u3 + u2;
+        const LS_REAL t6 = t5 + u1;
+        /* the current gained over u1 (a high: G_ka) and over u2 (a and b high: -G_kc) */
+        const LS_REAL ka = kv * u1, kb = -kv * u2;
+        LS_REAL l1, l2, l3, l4, l5, l6, i3, la, lb, lc;
+        /* a on (the others low): the dead time lost with its current flowing out */
+        l1 = ia - (ra + sa * t1) * t1 > LS_R(0.0) ? LS_R(1.0) : LS_R(0.0);
+        /* b on (a high), after a's loss */
+        l2 = ib - (rb + sb * t2) * t2 + gab * (ka - kd * l1) > LS_R(0.0) ? LS_R(1.0) : LS_R(0.0);
+        /* c on and off (a and b high); the turn-off after the turn-on's own loss (the turn-off keeps
+         * the pole low with the current flowing out: l = 1, high for the dead time otherwise) */
+        i3 = ic - (rc + sc * t3) * t3 + gac * (ka - kd * l1) + gcc * kb - gbc * kd * l2;
+        l3 = i3 > LS_R(0.0) ? LS_R(1.0) : LS_R(0.0);
+        l4 = i3 - (rc + sc * (LS_R(2.0) * t3 + u3)) * u3 - gcc * kd * l3 > LS_R(0.0) ? LS_R(1.0) : LS_R(0.0);
+        lc = l3 + l4 - LS_R(1.0); /* c's lost high time, in dead times (-1: gained) */
+        /* b off (a high): two u2 segments, c's edges between */
+        l5 = ib - (rb + sb * t5) * t5 + gab * (ka - kd * l1) + LS_R(2.0) * kb * gbc - kd * (gbb * l2 + gbc * lc) >
+                     LS_R(0.0)
+                 ? LS_R(1.0)
+                 : LS_R(0.0);
+        lb = l2 + l5 - LS_R(1.0);
+        /* a off (the others low) */
+        l6 = ia - (ra + sa * t6) * t6 + LS_R(2.0) * (ka * gaa + kb * gac) - kd * (gaa * l1 + gab * lb + gac * lc) >
+                     LS_R(0.0)
+                 ? LS_R(1.0)
+                 : LS_R(0.0);
+        la = l1 + l6 - LS_R(1.0);
+        /* the end currents the model predicts (ls_dtres_adapt) */
+        i_end[o0] = ia - (ra + sa * T) * T + LS_R(2.0) * (ka * gaa + kb * gac) - kd * (gaa * la + gab * lb + gac * lc);
+        i_end[o1] = ib - (rb + sb * T) * T + LS_R(2.0) * (ka * gab + kb * gbc) - kd * (gab * la + gbb * lb + gbc * lc);
+        i_end[o2] = ic - (rc + sc * T) * T + LS_R(2.0) * (ka * gac + kb * gcc) - kd * (gac * la + gbc * lb + gcc * lc);
+        e[o0] = la;
+        e[o1] = lb;
+        e[o2] = lc;
+    }
+    /* each leg's duty error: its compensation less the high time lost; none for a leg that does
+     * not switch (one test for the usual case, every leg switching) */
+    {
+        const LS_REAL dd = m->d_dead, d0 = h->d[0], d1 = h->d[1], d2 = h->d[2];
+        const LS_REAL lo01 = d0 < d1 ? d0 : d1, hi01 = d0 > d1 ? d0 : d1;
+        const LS_REAL lo = lo01 < d2 ? lo01 : d2, hi = hi01 > d2 ? hi01 : d2;
+        e[0] = h->c[0] - dd * e[0];
+        e[1] = h->c[1] - dd * e[1];
+        e[2] = h->c[2] - dd * e[2];
+        all_switch = (lo > LS_R(0.0)) & (hi < LS_R(1.0)); /* (&: one branch, on both) */
+        if (!all_switch) {
+            e[0] = d0 * (LS_R(1.0) - d0) > LS_R(0.0) ? e[0] : LS_R(0.0);
+            e[1] = d1 * (LS_R(1.0) - d1) > LS_R(0.0) ? e[1] : LS_R(0.0);
+            e[2] = d2 * (LS_R(1.0) - d2) > LS_R(0.0) ? e[2] : LS_R(0.0);
+        }
+    }
+    /* pole-voltage errors to alpha-beta (the common mode does not reach a floating star) */
+    v_ab[0] = v_dc * (LS_R(2.0) * e[0] - e[1] - e[2]) * (LS_R(1.0) / LS_R(3.0));
+    v_ab[1] = v_dc * (e[1] - e[2]) * (LS_R(1.0) / LS_SQRT3);
+    return true;
+}
+
+/* ls_mod_residual by interpolation (the cheaper model, LS_DTRES_INTERPOLATED): the dead-time
+ * voltage error, net of the compensation, that the inverter left in the PWM period that has just
+ * ended: call with the currents sampled at its end, before ls_mod_step. Its duties
  * were computed two steps ago; each leg switches at (1 -+ d)/2 of the period, loses the dead time
  * at turn-on when its current flows out and gains it at turn-off when it flows in (duty error
  * -(t_dead f_pwm)(sign i_on + sign i_off)/2), with i_on and i_off interpolated between the
@@ -171,8 +292,8 @@ static inline LS_REAL ls_mod_lost_(LS_REAL d, LS_REAL i0, LS_REAL i1, LS_REAL ri
     return LS_FABS(i_sum) > LS_FABS(s2) ? (i_sum > LS_R(0.0) ? d_dead : -d_dead) : LS_R(0.0);
 }
 
-static inline bool ls_mod_residual(const ls_mod *m, const LS_REAL i_abc[3], LS_REAL v_dc, LS_REAL k_rip,
-                                   LS_REAL v_ab[2])
+static inline bool ls_mod_residual_interp(const ls_mod *m, const LS_REAL i_abc[3], LS_REAL v_dc, LS_REAL k_rip,
+                                          LS_REAL v_ab[2])
 {
     /* the entry of two steps ago (this step has not pushed yet); local copies: the loads are not
      * repeated for fear of aliasing */
@@ -243,7 +364,7 @@ static inline bool ls_mod_step_finite(ls_mod *m, LS_REAL v_a, LS_REAL v_b, LS_RE
  * edge (1 - d_k) T/2 lies s_k = (V_dc T / L)((d_k - d_mean)/4 + A_k/12) below the predicted
  * mid-period current i_pred and the turn-off edge as far above (the average ramp and the PWM
  * ripple; d the duties before the compensation, d_mean their mean, A_k = sum_j |d_j - d_k|, as in
- * ls_mod_residual), and each edge loses or gains the dead time by its own sign. A phase current
+ * the residual's first-order ripple), and each edge loses or gains the dead time by its own sign. A phase current
  * within s_k of zero loses nothing at either edge; where s_k differs between the square wave's two
  * half periods, a current between the two loses the dead time in one of them only, in step with
  * the carrier (docs/theory.md, "The dead time and the square wave"). The compensation is then

@@ -46,6 +46,16 @@ def mean_dq(motor, n: int = 720) -> tuple[float, float]:
     return float(np.mean(L_d)), float(np.mean(L_q))
 
 
+def end_anisotropy(motor, n: int = 720) -> tuple[float, float]:
+    """The stationary anisotropy ``(l_ea, l_eb)`` (H) of the alpha-beta inductance: the traceless
+    part of its mean over one period, ``[[l_ea, l_eb], [l_eb, -l_ea]]``. The saliency's part turns
+    with ``2 theta`` and averages out; what stays is the end effect's (a 3x3 matrix that is not
+    cyclic: docs/theory.md), which the dead-time residual's model needs (ls_dtres.h)."""
+    th = np.linspace(0.0, 2.0 * np.pi, n, endpoint=False)
+    L = np.asarray(motor.inductance.L_ab(th)).mean(axis=0)
+    return float(0.5 * (L[0, 0] - L[1, 1])), float(0.5 * (L[0, 1] + L[1, 0]))
+
+
 def saliency(model, theta: np.ndarray | float) -> np.ndarray:
     """Saliency ``L_q - L_d`` (H)."""
     L_d, L_q, _ = dq_components(model, theta)

@@ -21,6 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
+from linsense.analysis.hf import end_anisotropy
 from linsense.compensation.lut import build_lut
 from linsense.ctrl import ConfigError, Drive, drive_default_cfg, ffi, lib, make_lut
 from linsense.errors import InputError, LinsenseError, ModelError
@@ -539,7 +540,11 @@ def build(sc: Scenario, motor: Motor | None = None, trace_in_memory: bool = True
                     and "dtc_current_band" not in inv.model_fields_set else inv.dtc_current_band)
     d.hf_dtres = obs.dead_time_residual
     d.dtres.r_s, d.dtres.l_d, d.dtres.l_q = known["R_s"], known["L_d"], known["L_q"]
-    d.dtres.ripple = obs.dead_time_ripple
+    d.dtres.forward = obs.dead_time_model == "forward"
+    d.dtres.adapt = obs.dead_time_adapt
+    # (the interpolated model is the former one: its response without the end effect)
+    d.dtres.l_ea, d.dtres.l_eb = (_memo(("end_anisotropy", model_key), lambda: end_anisotropy(model_motor))
+                                  if d.dtres.forward else (0.0, 0.0))
     d.prot.i_max, d.prot.v_dc_min, d.prot.v_dc_max = prot.i_max, prot.v_dc_min, prot.v_dc_max
     d.prot.err_max, d.prot.err_time, d.prot.omega_max = prot.err_max, prot.err_time, prot.omega_max
     d.cal.period = int(math.floor(s.initial.position_mm * 1e-3 / tau))

@@ -136,7 +136,11 @@ class ObserverSection(BaseModel):
     demod_notch: bool = bool(_C.demod.f_notch > 0)  # notch at 2 f_inj before the low-pass
     min_level: NonNegative = _c(_C.demod.min_level)  # A^2
     dead_time_residual: bool = bool(_C.hf_dtres)  # take the dead-time residual's current out (ls_dtres.h)
-    dead_time_ripple: bool = bool(_C.dtres.ripple)  # the residual's edge currents include the PWM ripple
+    # the residual's model: "forward" (the period run edge by edge from its start current, with the
+    # saliency at the estimated angle and the end effect) or "interpolated" (the edge currents
+    # between the period's end samples: cheaper, needs no angle; the former model)
+    dead_time_model: Literal["forward", "interpolated"] = "forward" if _C.dtres.forward else "interpolated"
+    dead_time_adapt: bool = bool(_C.dtres.adapt)  # the forward model measures its inductance scale online
     omega_max: Positive = _c(_C.obs.omega_max)  # rad/s electrical, clamp of the speed estimate
     force_max: Positive = _c(_C.obs.force_max)  # N, clamp of the load estimate (mech)
 

@@ -15,7 +15,7 @@ from __future__ import annotations
 import math
 import sys
 
-from linsense.analysis.hf import mean_dq
+from linsense.analysis.hf import end_anisotropy, mean_dq
 from linsense.model.motor import load_motor
 from linsense.tune.design import V_DC_MAX_FRACTION, V_DC_MIN_FRACTION, DriveData, design
 
@@ -29,11 +29,14 @@ def default_values() -> list[tuple[str, float, str]]:
     d = DriveData()
     dz = design(m, d, analyse=False)
     l_d, l_q = mean_dq(m)
+    l_ea, l_eb = end_anisotropy(m)
     return [
         ("LS_DEF_FS", d.f_pwm, "Hz, PWM and control rate"),
         ("LS_DEF_I_MAX", d.i_max, "A, current-reference limit"),
         ("LS_DEF_L_D", l_d, "H, mean L_d of the reference motor"),
         ("LS_DEF_L_Q", l_q, "H, mean L_q"),
+        ("LS_DEF_L_EA", l_ea, "H, the end effect's stationary anisotropy, diagonal"),
+        ("LS_DEF_L_EB", l_eb, "H, the end effect's stationary anisotropy, off-diagonal"),
         ("LS_DEF_TAU", m.pole_pitch, "m, pole pitch"),
         ("LS_DEF_KF", m.force_constant, "N/A, force constant"),
         ("LS_DEF_MASS", m.mass, "kg, moving mass"),

@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 import tomli_w
 
+from linsense.analysis.hf import end_anisotropy
 from linsense.compensation.lut import build_lut, c_identifier
 from linsense.model.motor import Motor
 from linsense.tune.design import (
@@ -139,6 +140,7 @@ def c_header(dz: Design, drive: DriveData, motor: Motor, name: str | None = None
     k_e = error_gain(motor, dz.f_inj, dz.quad, 1.0, n=points)
     gain = 1.0 / k_e
     L_d, L_q = mean_dq(motor)
+    l_ea, l_eb = end_anisotropy(motor)
 
     def f(v: float) -> str:
         return f"LS_R({v:.9e})"
@@ -204,6 +206,8 @@ def c_header(dz: Design, drive: DriveData, motor: Motor, name: str | None = None
         ("dtres.r_s", motor.R_s),
         ("dtres.l_d", L_d),
         ("dtres.l_q", L_q),
+        ("dtres.l_ea", l_ea),
+        ("dtres.l_eb", l_eb),
         ("cal.dither_amp", dz.dither_a),
         ("cal.dither_freq", dz.dither_hz),
         ("startup.fs", drive.f_pwm),
