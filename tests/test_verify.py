@@ -328,3 +328,24 @@ def test_tune_square_wave(tmp_path, capsys):
               "--out", str(tmp_path / "sq.h")])
     err = capsys.readouterr().err.strip().splitlines()
     assert e.value.code == 2 and len(err) == 1 and "--format" in err[0]
+
+
+def test_a_trajectory_of_fractional_periods_is_judged_to_its_end():
+    """A trajectory's run lasts its motion time and margins, not a whole number of PWM periods: the
+    simulator runs round(duration f_pwm) periods, and the judge compares with what was run (it
+    said "did not finish" for m100_edge's, one third of a period short, before)."""
+    from linsense.verify.cases import trajectory_case
+    from linsense.verify.certificate import motor_ref
+    from linsense.verify.run import run_case
+
+    spec = motor_ref(str(CLASS / "m100_edge.toml"))
+    motor = load_motor(spec)
+    d = _drive("m100_edge")
+    dz = design(motor, d, spec, analyse=False)
+    base = scenario_dict(dz, d, spec, pole_pitch=motor.pole_pitch)
+    case = trajectory_case(motor.pole_pitch, d.v_max, d.a_max, dz.load)
+    periods = case.sections["scenario"]["duration"] * d.f_pwm
+    assert abs(periods - round(periods)) > 1e-3  # (the case this test is about)
+    row = run_case(case, base, spec, motor, str(ROOT))
+    assert row["fault"] == "none" and "did not finish" not in row["why"], row["why"]
+    assert "peak_err_deg" in row

@@ -10,7 +10,8 @@
  * anisotropy) and returns the voltage error the inverter left. This module passes that voltage
  * through the R-L model in the estimated frame and returns the alpha-beta current it drove, which
  * the drive subtracts before the HF band-pass:
- *   i_dq[k+1] = a (.) i_dq[k] + k_l diag(b_d L_d, b_q L_q) L_dq^-1 v_dq[k],
+ *   i_dq[k+1] = a (.) i_dq[k] + k_l diag(b_d L_d, b_q L_q) L_dq^-1 v_dq[k]   (forward model),
+ *   i_dq[k+1] = a (.) i_dq[k] + diag(b_d, b_q) v_dq[k]   (the interpolation: the former model),
  *   a_d = exp(-R T / L_d),  b_d = (1 - a_d) / R  (T / L_d for R = 0), likewise on q,
  * L_dq the model's inductance in the estimated frame. k_l, the scale of the model's inverse
  * inductance, is measured from every period (ls_dtres_adapt: the current change the model predicted
@@ -58,18 +59,23 @@ void ls_dtres_reset(ls_dtres *r);
  * Inline (called every PWM period). */
 static inline void ls_dtres_step(ls_dtres *r, const LS_REAL v_ab[2], LS_REAL c, LS_REAL s, LS_REAL i_ab[2])
 {
-    const LS_REAL v_d = c * v_ab[0] + s * v_ab[1];
-    const LS_REAL v_q = -s * v_ab[0] + c * v_ab[1];
-    /* the input through the inverse of L_dq = [L_d + e1, e2; e2, L_q - e1] (the end effect's
-     * anisotropy turned into the frame: e1 = l_ea c2 + l_eb s2, e2 = l_eb c2 - l_ea s2), scaled per
-     * axis as b_d L_d and b_q L_q (the exact first-order step without the end effect) */
-    const LS_REAL c2 = c * c - s * s, s2 = LS_R(2.0) * c * s;
-    const LS_REAL e1 = r->cfg.l_ea * c2 + r->cfg.l_eb * s2, e2 = r->cfg.l_eb * c2 - r->cfg.l_ea * s2;
-    const LS_REAL ld = r->cfg.l_d + e1, lq = r->cfg.l_q - e1;
-    const LS_REAL idet = LS_R(1.0) / (ld * lq - e2 * e2);
-    const LS_REAL u_d = (lq * v_d - e2 * v_q) * idet, u_q = (ld * v_q - e2 * v_d) * idet; /* L_dq^-1 v */
-    r->i_d = r->a_d * r->i_d + r->k_l * r->b_d * r->cfg.l_d * u_d;
-    r->i_q = r->a_q * r->i_q + r->k_l * r->b_q * r->cfg.l_q * u_q;
+    LS_REAL v_d = c * v_ab[0] + s * v_ab[1];
+    LS_REAL v_q = -s * v_ab[0] + c * v_ab[1];
+    if (r->cfg.forward) {
+        /* the input through the inverse of L_dq = [L_d + e1, e2; e2, L_q - e1] (the end effect's
+         * anisotropy turned into the frame: e1 = l_ea c2 + l_eb s2, e2 = l_eb c2 - l_ea s2), scaled
+         * per axis as b_d L_d and b_q L_q (the exact first-order step without the end effect), and
+         * by k_l: v_dq <- k_l diag(L_d, L_q) L_dq^-1 v_dq */
+        const LS_REAL c2 = c * c - s * s, s2 = LS_R(2.0) * c * s;
+        const LS_REAL e1 = r->cfg.l_ea * c2 + r->cfg.l_eb * s2, e2 = r->cfg.l_eb * c2 - r->cfg.l_ea * s2;
+        const LS_REAL ld = r->cfg.l_d + e1, lq = r->cfg.l_q - e1;
+        const LS_REAL k = r->k_l / (ld * lq - e2 * e2);
+        const LS_REAL u_d = (lq * v_d - e2 * v_q) * (k * r->cfg.l_d), u_q = (ld * v_q - e2 * v_d) * (k * r->cfg.l_q);
+        v_d = u_d;
+        v_q = u_q;
+    }
+    r->i_d = r->a_d * r->i_d + r->b_d * v_d;
+    r->i_q = r->a_q * r->i_q + r->b_q * v_q;
     i_ab[0] = c * r->i_d - s * r->i_q;
     i_ab[1] = s * r->i_d + c * r->i_q;
 }

@@ -64,12 +64,13 @@ def run_case(case: Case, base: dict, motor_spec: str, nominal: Motor, base_dir: 
     plant = off_nominal_motor(nominal, case.plant)
     b = build(sc, motor=plant)
     raw = run_closed_loop(b.cfg, b.drive.state, b.n_steps, b.commands, signals=_SIGNALS, blocks=_BLOCKS)
+    f_pwm = float(sc.spec.inverter.f_pwm)
     row = judge(
         case,
         raw.arrays,
         raw.fault,
-        raw.steps_done / float(sc.spec.inverter.f_pwm),
-        sc.spec.scenario.duration,
+        raw.steps_done / f_pwm,
+        b.n_steps / f_pwm,  # (the duration in whole PWM periods, as run: a trajectory's is not one)
         nominal.pole_pitch,
     )
     row["wall_s"] = raw.wall_s
