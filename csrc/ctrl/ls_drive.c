@@ -24,6 +24,7 @@ void ls_drive_default_cfg(ls_drive_cfg *c)
     c->force_constant = kf;
     c->i_max = LS_DEF_I_MAX;
     c->delay_comp = LS_R(1.5);
+    c->hf_delay = LS_DEF_HF_DELAY;
     c->enc_counts = 56000; /* 1 um per count */
     c->enc_v_max = LS_R(5.0); /* twice the over-speed limit below (250 rad/s: 2.2 m/s) */
     c->inject_sensored = true; /* the HF current dithers the dead time: no hunting (docs/simulator.md) */
@@ -165,7 +166,8 @@ ls_status ls_drive_init(ls_drive *d, const ls_drive_cfg *cfg)
         !pos_finite(cfg->i_max) || !LS_ISFINITE(cfg->i_d_inj) || !(LS_FABS(cfg->i_d_inj) < cfg->i_max) ||
         !LS_ISFINITE(cfg->i_d_near) || !(LS_FABS(cfg->i_d_near) < cfg->i_max) || !(cfg->near_in >= LS_R(0.0)) ||
         !(cfg->near_out >= cfg->near_in) || !(cfg->near_out < LS_PI / LS_R(6.0)) ||
-        !LS_ISFINITE(cfg->delay_comp) || cfg->delay_comp < LS_R(0.0) ||
+        !LS_ISFINITE(cfg->delay_comp) || cfg->delay_comp < LS_R(0.0) || !LS_ISFINITE(cfg->hf_delay) ||
+        cfg->hf_delay < LS_R(0.0) || cfg->hf_delay > LS_R(0.1) ||
         cfg->enc_counts <= 0 || !pos_finite(cfg->enc_v_max) || cfg->fs > LS_DRIVE_FS_MAX ||
         cfg->i_max > LS_DRIVE_I_MAX || cfg->prot.i_max > LS_DRIVE_I_MAX || cfg->prot.v_dc_max > LS_DRIVE_V_DC_MAX ||
         cfg->bpf.type != (cfg->inject.shape == LS_INJ_SQUARE ? LS_BIQUAD_DIFF : LS_BIQUAD_BANDPASS) ||
@@ -533,8 +535,10 @@ static void general_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
 
     /* HF demodulation and observer, on the axis the injection used */
     {
+        /* (advanced by the axis's turn over the HF path's delay) */
         const LS_REAL err = ls_demod_step_cs_norm(&d->demod, ihf_a, ihf_b, d->obs.pos.theta, c_est, s_est,
-                                             d->inj.c, d->inj.s, LS_R(0.0));
+                                             d->inj.c, d->inj.s, LS_R(0.0)) +
+                            d->cfg.hf_delay * d->obs.omega;
         if (ls_drive_path_observe_(d, err)) {
             ls_drive_disable_report_(d, cmd, d->prot.fault);
             return;

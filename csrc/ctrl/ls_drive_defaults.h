@@ -24,6 +24,7 @@
 #define LS_DEF_DEMOD_LPF LS_R(300.0) /* Hz, demodulator low-pass */
 #define LS_DEF_DEMOD_NOTCH LS_R(2000.0) /* Hz, the low-pass's zeros (2 f_inj) */
 #define LS_DEF_DEMOD_GAIN LS_R(4.68857343) /* -, L_q / (L_q - L_d) of the means */
+#define LS_DEF_HF_DELAY LS_R(0.001) /* s, the HF path's delay the estimate is advanced by */
 #define LS_DEF_OBSERVER_BW LS_R(40.0) /* Hz, HF observer (PLL) bandwidth */
 #define LS_DEF_DEAD_TIME LS_R(8e-07) /* s, inverter dead time */
 #define LS_DEF_V_DC_MIN LS_R(40.0) /* V, under-voltage trip */

@@ -304,6 +304,7 @@ typedef struct {
     LS_REAL force_constant;
     LS_REAL i_max;
     LS_REAL delay_comp;
+    LS_REAL hf_delay;
     int32_t enc_counts;
     LS_REAL enc_v_max;
     bool inject_sensored;

@@ -656,7 +656,9 @@ def design_lines(dz, motor_name: str, dd) -> list[str]:
         f"  demodulator    low-pass {dz.demod_lpf:.4g} Hz ({RATIO_LPF:g} f_inj), "
         f"zeros at {dz.demod_notch:g} Hz; gain "
         f"{dz.demod_gain:.4g}, scheduled (local error gain {dz.k_e_min:.2f}..{dz.k_e_max:.2f} unscheduled)",
-        f"  observer       {dz.observer_bw:.4g} Hz PLL (limited by {dz.limits.get('observer', '')})",
+        f"  observer       {dz.observer_bw:.4g} Hz PLL (limited by {dz.limits.get('observer', '')})"
+        + (f"; the HF path's delay {dz.hf_delay * 1e3:.3g} ms compensated (1 / f_inj)"
+           if dz.hf_delay > 0 else ""),
         f"  speed loop     {dz.speed_bw:.4g} Hz ({dz.limits.get('speed loop', '')}): "
         f"kp {dz.speed_kp:.4g} N s/m, "
         f"ki {dz.speed_ki:.4g} N/m",

@@ -102,6 +102,10 @@ typedef struct {
     LS_REAL i_max;          /* A, limit of the current reference, > 0 */
     LS_REAL delay_comp;     /* -, angle advance of the voltage in sampling periods (1.5 for a
                                one-period computation delay plus the half-period average), >= 0 */
+    LS_REAL hf_delay;       /* s, the HF path's delay, in [0, 0.1]: the pulsating and elliptical
+                               injections' demodulated error is advanced by omega hf_delay (the
+                               estimated axis turns while the HF current passes the band-pass; about
+                               one injection period, docs/tuning.md); 0: none */
     int32_t enc_counts;     /* -, encoder counts per electrical period, > 0 */
     LS_REAL enc_v_max;      /* m/s, encoder plausibility: a count change between two samples of
                                more than enc_v_max / fs of travel (and more than one count) trips

@@ -300,7 +300,8 @@ def designed(sc: Scenario, motor: Motor) -> Scenario:
     k_est = _memo(("k_est", motor_key(motor)), lambda: uncompensated_speed_factor(motor)) if no_table else 1.0
     want = {
         "injection": {"amplitude": dz.v_inj, "frequency": dz.f_inj, "ramp_rate": dz.inj_ramp_rate},
-        "observer": {"bandwidth_hz": dz.observer_bw, "demod_lpf_hz": dz.demod_lpf, "gain_schedule": True},
+        "observer": {"bandwidth_hz": dz.observer_bw, "demod_lpf_hz": dz.demod_lpf, "gain_schedule": True,
+                     "hf_delay_s": dz.hf_delay},
         "controller": {"speed_bandwidth_hz": dz.speed_bw, "current_bandwidth_hz": dz.current_bw},
         "calibration": {"dither_a": dz.dither_a, "dither_hz": dz.dither_hz},
         # the limits with their margins over the application (reference.v_max, a_max); the trips act
@@ -473,6 +474,7 @@ def build(sc: Scenario, motor: Motor | None = None, trace_in_memory: bool = True
     d.bpf.q = d.sep.q = inj.filter_q
     d.demod.method = lib.LS_DEMOD_PRODUCT if obs.demod_method == "product" else lib.LS_DEMOD_HETERODYNE
     d.demod.f_lpf = obs.demod_lpf_hz
+    d.hf_delay = obs.hf_delay_s
     # the low-pass's zeros at 2 f_inj, where that is below fs / 2 (f_inj < f_pwm / 4)
     d.demod.f_notch = 2.0 * inj.frequency if obs.demod_notch and 4.0 * inj.frequency < fs else 0.0
     d.demod.gain = known["demod_gain"]

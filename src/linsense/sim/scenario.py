@@ -133,6 +133,8 @@ class ObserverSection(BaseModel):
     gain_schedule: bool = True  # demodulator gain table normalising the local error gain (designed)
     demod_method: Literal["product", "heterodyne"] = "product"
     demod_lpf_hz: Positive = _c(_C.demod.f_lpf)  # Hz
+    # s, the HF path's delay: the pulsating/elliptical estimate is advanced by omega times it (designed)
+    hf_delay_s: float = Field(default=_c(_C.hf_delay), ge=0.0, le=0.1)
     demod_notch: bool = bool(_C.demod.f_notch > 0)  # notch at 2 f_inj before the low-pass
     min_level: NonNegative = _c(_C.demod.min_level)  # A^2
     dead_time_residual: bool = bool(_C.hf_dtres)  # take the dead-time residual's current out (ls_dtres.h)

@@ -51,6 +51,7 @@ def default_values() -> list[tuple[str, float, str]]:
         ("LS_DEF_DEMOD_LPF", dz.demod_lpf, "Hz, demodulator low-pass"),
         ("LS_DEF_DEMOD_NOTCH", dz.demod_notch, "Hz, the low-pass's zeros (2 f_inj)"),
         ("LS_DEF_DEMOD_GAIN", dz.demod_gain, "-, L_q / (L_q - L_d) of the means"),
+        ("LS_DEF_HF_DELAY", dz.hf_delay, "s, the HF path's delay the estimate is advanced by"),
         ("LS_DEF_OBSERVER_BW", dz.observer_bw, "Hz, HF observer (PLL) bandwidth"),
         ("LS_DEF_DEAD_TIME", d.dead_time, "s, inverter dead time"),
         ("LS_DEF_V_DC_MIN", d.v_dc * V_DC_MIN_FRACTION, "V, under-voltage trip"),

@@ -36,6 +36,11 @@ RATIO_LPF_OBS = 7.5
 RATIO_OBS_SPEED = 5.0
 RATIO_SPEED_POS = 2.5
 SPEED_KI_DIV = 4.0  # speed PI: ki = m w^2 / SPEED_KI_DIV (a double real closed-loop pole)
+#: the HF path's delay in injection periods (docs/tuning.md, "The HF path's delay"): while the HF
+#: current passes the band-pass (group delay 2 Q / w = 0.64 periods at Q = 2) and the sampling,
+#: the estimated axis turns by omega times it, and the demodulated error carries that turn as a lag
+#: proportional to the speed; measured 0.73-1.18 periods over the test motors
+HF_DELAY_PERIODS = 1.0
 #: the injection (docs/tuning.md, "The injection amplitude"): the dead-time voltage error
 #: T_d f_pwm V_dc at most DEAD_TIME_RATIO times the weakest HF error signal's voltage
 #: V_inj s_min (s = (L_q - L_d)/(L_q + L_d), its lowest over the period), within the bus shares
@@ -106,6 +111,7 @@ class Design:
     kp_x: float
     dither_a: float
     dither_hz: float
+    hf_delay: float  # s, the HF path's delay the estimate is advanced by (pulsating, elliptical)
     k_e_min: float  # local error gain over the period, relative
     k_e_max: float
     margins: dict = field(default_factory=dict)
@@ -286,6 +292,7 @@ def design(
         kp_x=kp_x,
         dither_a=DITHER_CURRENT * d.i_max,
         dither_hz=DITHER_FREQ * f_inj,
+        hf_delay=HF_DELAY_PERIODS / f_inj if d.shape == "pulsating" else 0.0,
         k_e_min=float(k_e.min()),
         k_e_max=float(k_e.max()),
         headroom_speed=headroom,

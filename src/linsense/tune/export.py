@@ -59,6 +59,7 @@ def scenario_dict(dz: Design, drive: DriveData, motor_ref: str, base: dict | Non
             "demod_lpf_hz": _r(dz.demod_lpf),
             "gain_schedule": True,
             "omega_max": _r(dz.omega_obs * k_est),
+            "hf_delay_s": _r(dz.hf_delay),
         }
     )
     for k in ("k1", "k2", "k3"):
@@ -206,6 +207,7 @@ def c_header(dz: Design, drive: DriveData, motor: Motor, name: str | None = None
         ("dtres.r_s", motor.R_s),
         ("dtres.l_d", L_d),
         ("dtres.l_q", L_q),
+        ("hf_delay", dz.hf_delay),
         ("dtres.l_ea", l_ea),
         ("dtres.l_eb", l_eb),
         ("cal.dither_amp", dz.dither_a),
