@@ -129,7 +129,7 @@ static const size_t FIELDS[] = {
     FIELD(prot.err_max), FIELD(prot.err_time), FIELD(prot.omega_max), FIELD(cal.k_int), FIELD(cal.t_settle),
     FIELD(cal.t_hold), FIELD(cal.tol), FIELD(cal.t_max), FIELD(cal.dither_amp), FIELD(cal.dither_freq),
     FIELD(i_d_inj), FIELD(demod.ref_phase), FIELD(mod.l_ripple), FIELD(i_d_near), FIELD(near_in),
-    FIELD(near_out)};
+    FIELD(near_out), FIELD(hf_delay), FIELD(dtres.l_ea), FIELD(dtres.l_eb)};
 #define N_FIELDS (sizeof FIELDS / sizeof FIELDS[0])
 #define N_CAL 64u
 

@@ -88,6 +88,15 @@ static void test_refusals(void)
     LS_CHECK(ls_drive_init(&d, &bad) == LS_ERR_PARAM);
     bad = cfg; bad.enc_counts = 0;
     LS_CHECK(ls_drive_init(&d, &bad) == LS_ERR_PARAM);
+    /* the HF path's delay within [0, 0.1] s; the end effect's anisotropy below min(L_d, L_q) */
+    bad = cfg; bad.hf_delay = LS_R(-1e-4);
+    LS_CHECK(ls_drive_init(&d, &bad) == LS_ERR_PARAM);
+    bad = cfg; bad.hf_delay = LS_R(0.2);
+    LS_CHECK(ls_drive_init(&d, &bad) == LS_ERR_PARAM);
+    bad = cfg; bad.hf_delay = LS_R(0.1);
+    LS_CHECK(ls_drive_init(&d, &bad) == LS_OK);
+    bad = cfg; bad.dtres.l_ea = bad.dtres.l_d;
+    LS_CHECK(ls_drive_init(&d, &bad) == LS_ERR_PARAM);
     bad = cfg; bad.i_max = (LS_REAL)NAN;
     LS_CHECK(ls_drive_init(&d, &bad) == LS_ERR_PARAM);
     /* the d-current schedule: 0 <= near_in <= near_out < pi/6, |i_d_near| < i_max */
