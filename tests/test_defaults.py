@@ -59,3 +59,18 @@ def test_compiled_defaults_are_the_design():
     }
     for key, (c_val, py_val) in pairs.items():
         assert float(c_val) == pytest.approx(py_val, rel=1e-6), key
+
+
+def test_the_generator_takes_no_option_for_a_file(tmp_path, monkeypatch, capsys):
+    """``--help`` prints the usage and writes nothing (it wrote the header into a file named
+    ``--help``); another option is refused with exit code 2."""
+    from linsense.tune.defaults import main
+
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(SystemExit) as e:
+        main(["--help"])
+    assert e.value.code == 0 and "usage" in capsys.readouterr().out
+    with pytest.raises(SystemExit) as e:
+        main(["-o"])
+    assert e.value.code == 2
+    assert list(tmp_path.iterdir()) == []

@@ -85,7 +85,12 @@ def header() -> str:
 
 
 def main(argv: list[str] | None = None) -> None:
+    """``python -m linsense.tune.defaults [OUT]``: the header to OUT, or to standard output."""
     args = sys.argv[1:] if argv is None else argv
+    if len(args) > 1 or (args and args[0].startswith("-")):
+        sys.stdout.write("usage: python -m linsense.tune.defaults [OUT.h]\n"
+                         "  writes csrc/ctrl/ls_drive_defaults.h's text to OUT.h, or to standard output\n")
+        raise SystemExit(0 if args and args[0] in ("-h", "--help") else 2)
     text = header()
     if not args:
         sys.stdout.write(text)
