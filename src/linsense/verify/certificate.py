@@ -141,6 +141,8 @@ def _single(r: dict, name: str, value: str, bound: str, remedy: str) -> Check:
     """The check of one run: its value, and where it failed why (every bound it broke) and the
     likely cause of the first."""
     cause = ""
+    if r.get("note"):  # (still approaching within the band at the end: said, not failed)
+        value = f"{value}; {r['note']}"
     if not r["passed"]:
         value = r["why"] if r["kind"] == "step" else f"{value}; {r['why']}"  # (a step's why says its time)
         if r["fault"] != "none" or "did not finish" in r["why"]:
@@ -149,7 +151,8 @@ def _single(r: dict, name: str, value: str, bound: str, remedy: str) -> Check:
             cause = REMEDY["limit cycle"]
         else:
             cause = REMEDY[remedy]
-    pp = f", p-p <= {C.HOLD_PP_DEG:g} deg at the end"
+    pp = (f", p-p <= {C.HOLD_PP_DEG:g} deg at the end" if r["kind"] == "step" else
+          f", no limit cycle above {C.HOLD_PP_DEG:g} deg p-p at the end")
     return Check(name, r["passed"], value, bound + pp, cause, 1, int(not r["passed"]))
 
 
