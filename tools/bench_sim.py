@@ -5,8 +5,8 @@ sensorless mode with the resistance-aware LUT, a 2 s trajectory scenario (minimu
 0 -> 20 mm -> 0 at v_max 0.2 m/s, a_max 1 m/s^2), every period recorded, built with
 ``linsense.sim.core`` directly (independent of the scenario layer). Each fidelity is repeated
 and the best and median realtime factor (simulated seconds / wall seconds of the C call alone)
-are reported with the time per PWM period. It is a report: the exit status is 0 whatever the
-result, and each target line says PASS or FAIL.
+are reported with the time per PWM period. Each target line says PASS or FAIL; the exit status is
+1 when any says FAIL, so that ``make bench`` names this benchmark among its misses.
 
 Then the memory of a long run (issue 10): a 600 s hold (ecce2010, sensorless with the LUT, average
 inverter) in metrics-only mode (``simulate(..., record="metrics")``) in a subprocess, its peak RSS
@@ -169,7 +169,31 @@ def one_run(motor, lut, fidelity: str, seconds: float) -> tuple[float, int, int,
     return wall, int(res.steps_done), int(res.fault), {k: a[:n] for k, a in arrays.items()}
 
 
+class _Verdicts:
+    """Standard output that remembers whether a line said FAIL."""
+
+    def __init__(self, out):
+        self.out, self.failed = out, False
+
+    def write(self, text: str) -> int:
+        self.failed = self.failed or " FAIL" in text
+        return self.out.write(text)
+
+    def flush(self) -> None:
+        self.out.flush()
+
+
 def main() -> int:
+    verdicts = _Verdicts(sys.stdout)
+    sys.stdout = verdicts
+    try:
+        _main()
+    finally:
+        sys.stdout = verdicts.out
+    return 1 if verdicts.failed else 0
+
+
+def _main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--seconds", type=float, default=2.0)
@@ -211,7 +235,6 @@ def main() -> int:
         cpu_bench(args.cli_repeat)
     if args.rss_seconds > 0:
         memory_bench(args.rss_seconds, args.cli_timeout)
-    return 0
 
 
 if __name__ == "__main__":
