@@ -330,20 +330,27 @@ def test_tune_square_wave(tmp_path, capsys):
     assert e.value.code == 2 and len(err) == 1 and "--format" in err[0]
 
 
+def _tuned_trajectory(name: str):
+    """``(spec, motor, drive, design, tuned scenario dict, trajectory case)`` of a test motor on its
+    drive, as linsense tune designs it."""
+    from linsense.verify.cases import trajectory_case
+    from linsense.verify.certificate import motor_ref
+
+    spec = motor_ref(str(CLASS / f"{name}.toml"))
+    motor = load_motor(spec)
+    d = _drive(name)
+    dz = design(motor, d, spec, analyse=False)
+    base = scenario_dict(dz, d, spec, pole_pitch=motor.pole_pitch)
+    return spec, motor, d, dz, base, trajectory_case(motor.pole_pitch, d.v_max, d.a_max, dz.load)
+
+
 def test_a_trajectory_of_fractional_periods_is_judged_to_its_end():
     """A trajectory's run lasts its motion time and margins, not a whole number of PWM periods: the
     simulator runs round(duration f_pwm) periods, and the judge compares with what was run (it
     said "did not finish" for m100_edge's, one third of a period short, before)."""
-    from linsense.verify.cases import trajectory_case
-    from linsense.verify.certificate import motor_ref
     from linsense.verify.run import run_case
 
-    spec = motor_ref(str(CLASS / "m100_edge.toml"))
-    motor = load_motor(spec)
-    d = _drive("m100_edge")
-    dz = design(motor, d, spec, analyse=False)
-    base = scenario_dict(dz, d, spec, pole_pitch=motor.pole_pitch)
-    case = trajectory_case(motor.pole_pitch, d.v_max, d.a_max, dz.load)
+    spec, motor, d, _, base, case = _tuned_trajectory("m100_edge")
     periods = case.sections["scenario"]["duration"] * d.f_pwm
     assert abs(periods - round(periods)) > 1e-3  # (the case this test is about)
     row = run_case(case, base, spec, motor, str(ROOT))
@@ -358,18 +365,11 @@ def test_the_hf_delay_compensation_removes_the_speed_lag():
     m30_low's trajectory (0.3 m/s on a 30 mm pitch, 63 rad/s): the speed-proportional part of the
     estimation error, fitted, drops from 0.055 deg per rad/s to below a fifth of it (measured
     0.008), and the peak error from 6.0 to 3.7 deg."""
-    from linsense.verify.cases import trajectory_case
-    from linsense.verify.certificate import motor_ref
     from linsense.verify.run import run_case
 
-    spec = motor_ref(str(CLASS / "m30_low.toml"))
-    motor = load_motor(spec)
-    d = _drive("m30_low")
-    dz = design(motor, d, spec, analyse=False)
+    spec, motor, _, dz, base, case = _tuned_trajectory("m30_low")
     assert dz.hf_delay == pytest.approx(1.0 / dz.f_inj)
-    base = scenario_dict(dz, d, spec, pole_pitch=motor.pole_pitch)
     assert base["observer"]["hf_delay_s"] == pytest.approx(dz.hf_delay)
-    case = trajectory_case(motor.pole_pitch, d.v_max, d.a_max, dz.load)
 
     def lag(delay: float) -> tuple[float, float]:
         b = json.loads(json.dumps(base))

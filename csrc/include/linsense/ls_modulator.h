@@ -149,6 +149,26 @@ static inline bool ls_mod_step_impl(ls_mod *m, LS_REAL v_a, LS_REAL v_b, LS_REAL
     return clipped;
 }
 
+/* Both residual models' last step: the legs' net duty errors e0..e2 of the period whose duties h
+ * holds to the alpha-beta voltage error (V) in v_ab. A leg at 0 or 1 does not switch: no error, and
+ * no compensation reached it (one test for the usual case, every leg switching; the duties are
+ * finite: ls_drive trips and resets the modulator on a non-finite one). The common mode does not
+ * reach a floating star. */
+static inline void ls_mod_error_ab_(const ls_mod_hist *h, LS_REAL e0, LS_REAL e1, LS_REAL e2, LS_REAL v_dc,
+                                    LS_REAL v_ab[2])
+{
+    const LS_REAL d0 = h->d[0], d1 = h->d[1], d2 = h->d[2];
+    const LS_REAL lo01 = d0 < d1 ? d0 : d1, hi01 = d0 > d1 ? d0 : d1;
+    const LS_REAL lo = lo01 < d2 ? lo01 : d2, hi = hi01 > d2 ? hi01 : d2;
+    if (!((lo > LS_R(0.0)) & (hi < LS_R(1.0)))) { /* (&: one branch, on both) */
+        e0 = d0 * (LS_R(1.0) - d0) > LS_R(0.0) ? e0 : LS_R(0.0);
+        e1 = d1 * (LS_R(1.0) - d1) > LS_R(0.0) ? e1 : LS_R(0.0);
+        e2 = d2 * (LS_R(1.0) - d2) > LS_R(0.0) ? e2 : LS_R(0.0);
+    }
+    v_ab[0] = v_dc * (LS_R(2.0) * e0 - e1 - e2) * (LS_R(1.0) / LS_R(3.0));
+    v_ab[1] = v_dc * (e1 - e2) * (LS_R(1.0) / LS_SQRT3);
+}
+
 /* The dead-time voltage error, net of the compensation, that the inverter left in the PWM period
  * that has just ended, by a forward model of that period: call with the currents sampled at its
  * end (i_abc), before ls_mod_step (i_prev is then the period's start current; its duties are the
@@ -173,7 +193,7 @@ static inline bool ls_mod_residual(const ls_mod *m, const LS_REAL i_abc[3], LS_R
 {
     const ls_mod_hist *h = &m->hist[m->newest ^ 1u];
     LS_REAL e[3];
-    int o0 = 0, o1 = 1, o2 = 2, all_switch;
+    int o0 = 0, o1 = 1, o2 = 2;
     if (!m->have_prev) {
         v_ab[0] = v_ab[1] = LS_R(0.0);
         i_end[0] = i_end[1] = i_end[2] = LS_R(0.0);
@@ -247,29 +267,13 @@ static inline bool ls_mod_residual(const ls_mod *m, const LS_REAL i_abc[3], LS_R
         e[o1] = lb;
         e[o2] = lc;
     }
-    /* each leg's duty error: its compensation less the high time lost; none for a leg that does
-     * not switch (one test for the usual case, every leg switching) */
-    {
-        const LS_REAL dd = m->d_dead, d0 = h->d[0], d1 = h->d[1], d2 = h->d[2];
-        const LS_REAL lo01 = d0 < d1 ? d0 : d1, hi01 = d0 > d1 ? d0 : d1;
-        const LS_REAL lo = lo01 < d2 ? lo01 : d2, hi = hi01 > d2 ? hi01 : d2;
-        e[0] = h->c[0] - dd * e[0];
-        e[1] = h->c[1] - dd * e[1];
-        e[2] = h->c[2] - dd * e[2];
-        all_switch = (lo > LS_R(0.0)) & (hi < LS_R(1.0)); /* (&: one branch, on both) */
-        if (!all_switch) {
-            e[0] = d0 * (LS_R(1.0) - d0) > LS_R(0.0) ? e[0] : LS_R(0.0);
-            e[1] = d1 * (LS_R(1.0) - d1) > LS_R(0.0) ? e[1] : LS_R(0.0);
-            e[2] = d2 * (LS_R(1.0) - d2) > LS_R(0.0) ? e[2] : LS_R(0.0);
-        }
-    }
-    /* pole-voltage errors to alpha-beta (the common mode does not reach a floating star) */
-    v_ab[0] = v_dc * (LS_R(2.0) * e[0] - e[1] - e[2]) * (LS_R(1.0) / LS_R(3.0));
-    v_ab[1] = v_dc * (e[1] - e[2]) * (LS_R(1.0) / LS_SQRT3);
+    /* each leg's duty error: its compensation less the high time lost */
+    ls_mod_error_ab_(h, h->c[0] - m->d_dead * e[0], h->c[1] - m->d_dead * e[1], h->c[2] - m->d_dead * e[2], v_dc,
+                     v_ab);
     return true;
 }
 
-/* ls_mod_residual by interpolation (the cheaper model, LS_DTRES_INTERPOLATED): the dead-time
+/* ls_mod_residual by interpolation (the cheaper model, dtres.forward = false): the dead-time
  * voltage error, net of the compensation, that the inverter left in the PWM period that has just
  * ended: call with the currents sampled at its end, before ls_mod_step. Its duties
  * were computed two steps ago; each leg switches at (1 -+ d)/2 of the period, loses the dead time
@@ -300,7 +304,6 @@ static inline bool ls_mod_residual_interp(const ls_mod *m, const LS_REAL i_abc[3
     const ls_mod_hist *h = &m->hist[m->newest ^ 1u];
     const LS_REAL d0 = h->d[0], d1 = h->d[1], d2 = h->d[2];
     LS_REAL e0, e1, e2;
-    int all_switch;
     if (!m->have_prev) {
         v_ab[0] = v_ab[1] = LS_R(0.0);
         return false;
@@ -324,22 +327,7 @@ static inline bool ls_mod_residual_interp(const ls_mod *m, const LS_REAL i_abc[3
         e1 = h->c[1] - ls_mod_lost_(d1, m->i_prev[1], i_abc[1], r1, dd);
         e2 = h->c[2] - ls_mod_lost_(d2, m->i_prev[2], i_abc[2], r2, dd);
     }
-    /* a leg at 0 or 1 does not switch: no error, and no compensation reached it (one test for the
-     * usual case, every leg switching; the duties are finite: ls_drive trips and resets the
-     * modulator on a non-finite one) */
-    {
-        const LS_REAL lo01 = d0 < d1 ? d0 : d1, hi01 = d0 > d1 ? d0 : d1;
-        const LS_REAL lo = lo01 < d2 ? lo01 : d2, hi = hi01 > d2 ? hi01 : d2;
-        all_switch = (lo > LS_R(0.0)) & (hi < LS_R(1.0)); /* (&: one branch, on both) */
-    }
-    if (!all_switch) {
-        e0 = d0 * (LS_R(1.0) - d0) > LS_R(0.0) ? e0 : LS_R(0.0);
-        e1 = d1 * (LS_R(1.0) - d1) > LS_R(0.0) ? e1 : LS_R(0.0);
-        e2 = d2 * (LS_R(1.0) - d2) > LS_R(0.0) ? e2 : LS_R(0.0);
-    }
-    /* pole-voltage errors to alpha-beta (the common mode does not reach a floating star) */
-    v_ab[0] = v_dc * (LS_R(2.0) * e0 - e1 - e2) * (LS_R(1.0) / LS_R(3.0));
-    v_ab[1] = v_dc * (e1 - e2) * (LS_R(1.0) / LS_SQRT3);
+    ls_mod_error_ab_(h, e0, e1, e2, v_dc, v_ab);
     return true;
 }
 
