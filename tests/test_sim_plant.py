@@ -162,7 +162,8 @@ def test_sensored_step_reaches_target():
     print(f"\n  sensored 3 mm step: final error {(run.x_end - x1) * 1e6:+.2f} um, "
           f"overshoot {(a['x'].max() - x1) * 1e3:.3f} mm")
     assert np.abs(late - x1).max() < 5e-6
-    assert a["x"][0] == x0 and np.abs(a["x"][: int(0.05 * FS)] - x1).min() > 1e-3  # it did move there
+    # it did move there (the step runs as a move at the designed step acceleration: 54 ms for 3 mm)
+    assert a["x"][0] == x0 and np.abs(a["x"][: int(0.01 * FS)] - x1).min() > 1e-3
     assert np.isfinite(a["i_abc"]).all() and np.abs(a["i_abc"]).max() > 0.02
 
 

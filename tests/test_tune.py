@@ -203,5 +203,6 @@ def test_sensored_observer_beside_the_encoder():
         }
     )
     m = r.metrics
-    # (the transient error of the 3 mm step: 3.01 deg with the default 8 Hz speed loop)
-    assert m["stable"] and abs(m["bias_deg"]) < 1.0 and m["max_abs_err_deg"] < 3.5
+    # (the transient error of the 3 mm step, a move at the designed step acceleration: 3.52 deg with
+    # the default 8 Hz speed loop, 3.23 deg as a jump; the frozen start position would be 19 deg off)
+    assert m["stable"] and abs(m["bias_deg"]) < 1.0 and m["max_abs_err_deg"] < 4.5

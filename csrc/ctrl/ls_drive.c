@@ -69,7 +69,7 @@ void ls_drive_default_cfg(ls_drive_cfg *c)
     c->pos.type = LS_POSCTRL_P;
     c->pos.kp_x = LS_DEF_KP_X;
     c->pos.kd_x = LS_R(0.0);
-    c->pos.v_max = LS_R(0.5);
+    c->pos.v_max = LS_DEF_V_CAP;
     c->pos.mass = mass;
     c->pos.force_max = kf * c->i_max;
     c->pos.speed.kp = mass * w_v;
@@ -79,6 +79,9 @@ void ls_drive_default_cfg(ls_drive_cfg *c)
     c->pos.speed.fs = fs;
     c->traj.v_max = LS_DEF_TRAJ_V_MAX;
     c->traj.a_max = LS_DEF_TRAJ_A_MAX;
+    c->traj.v_step = LS_DEF_V_CAP;
+    c->traj.a_step = LS_DEF_TRAJ_A_STEP;
+    c->traj.a_lpf = LS_DEF_DEMOD_LPF;
     c->traj.pole_pitch = tau;
     c->traj.fs = fs;
     c->mod.f_pwm = fs;

@@ -17,6 +17,7 @@
 #define LS_DEF_CURRENT_BW LS_R(250.0) /* Hz, current-loop bandwidth */
 #define LS_DEF_SPEED_BW LS_R(8.0) /* Hz, speed-loop bandwidth */
 #define LS_DEF_KP_X LS_R(20.106193) /* 1/s, position-loop gain */
+#define LS_DEF_V_CAP LS_R(0.25) /* m/s, speed-reference cap (and a step's speed) */
 #define LS_DEF_INJ_AMPLITUDE LS_R(12.0) /* V, injection amplitude */
 #define LS_DEF_INJ_FREQ LS_R(1000.0) /* Hz, injection frequency */
 #define LS_DEF_INJ_QUAD LS_R(0.9) /* -, elliptical share kappa */
@@ -31,6 +32,7 @@
 #define LS_DEF_V_DC_MAX LS_R(90.0) /* V, over-voltage trip */
 #define LS_DEF_TRAJ_V_MAX LS_R(0.2) /* m/s, trajectory speed */
 #define LS_DEF_TRAJ_A_MAX LS_R(1.0) /* m/s^2, trajectory acceleration */
+#define LS_DEF_TRAJ_A_STEP LS_R(4.1887902) /* m/s^2, a step command's acceleration */
 #define LS_DEF_DITHER_AMP LS_R(0.4) /* A, calibration dither */
 #define LS_DEF_DITHER_FREQ LS_R(55.0) /* Hz, calibration dither frequency */
 

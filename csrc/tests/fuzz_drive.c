@@ -123,7 +123,7 @@ static const size_t FIELDS[] = {
     FIELD(obs.omega_max), FIELD(obs.force_max), FIELD(enc_obs.k1), FIELD(enc_obs.k2), FIELD(enc_obs.omega_max),
     FIELD(enc_obs.pole_pitch), FIELD(current.kp), FIELD(current.ki), FIELD(current.l_d), FIELD(current.l_q),
     FIELD(current.psi_pm), FIELD(pos.kp_x), FIELD(pos.kd_x), FIELD(pos.v_max), FIELD(pos.speed.kp),
-    FIELD(pos.speed.ki), FIELD(pos.mass), FIELD(pos.force_max), FIELD(traj.v_max), FIELD(traj.a_max),
+    FIELD(pos.speed.ki), FIELD(pos.mass), FIELD(pos.force_max), FIELD(traj.v_max), FIELD(traj.a_max), FIELD(traj.v_step), FIELD(traj.a_step), FIELD(traj.a_lpf),
     FIELD(traj.pole_pitch), FIELD(mod.dead_time), FIELD(mod.i_band), FIELD(mod.dtc_lead), FIELD(dtres.r_s),
     FIELD(dtres.l_d), FIELD(dtres.l_q), FIELD(prot.i_max), FIELD(prot.v_dc_min), FIELD(prot.v_dc_max),
     FIELD(prot.err_max), FIELD(prot.err_time), FIELD(prot.omega_max), FIELD(cal.k_int), FIELD(cal.t_settle),

@@ -127,6 +127,9 @@ static void test_traj_long_move(void)
     int sgn, k;
     tc.v_max = LS_R(0.2);
     tc.a_max = LS_R(1.0);
+    tc.v_step = LS_R(0.0);
+    tc.a_step = LS_R(0.0);
+    tc.a_lpf = LS_R(0.0);
     tc.pole_pitch = LS_R(0.056);
     tc.fs = LS_R(16000.0);
     for (sgn = -1; sgn <= 1; sgn += 2) {
@@ -184,20 +187,31 @@ static void test_setters_ends(void)
     ls_drive d;
     ls_cmd c;
     ls_meas m;
-    int sgn, k;
-    for (sgn = -1; sgn <= 1; sgn += 2) {
-        default_cfg(&cfg);
-        cfg.inject_sensored = false;
-        LS_CHECK(ls_drive_init(&d, &cfg) == LS_OK);
-        LS_CHECK(ls_drive_set_mode(&d, LS_MODE_SENSORED) == LS_OK);
-        meas_zero(&m, 0);
-        ls_drive_step(&d, &m, &c);
-        LS_CHECK(ls_drive_step_to(&d, mkpos(sgn * LS_POS_PERIOD_MAX, LS_R(0.0))) == LS_OK);
-        for (k = 0; k < 20; ++k) {
+    int sgn, k, profiled;
+    for (profiled = 0; profiled <= 1; ++profiled) { /* a step that jumps (a_step 0), one that moves */
+        for (sgn = -1; sgn <= 1; sgn += 2) {
+            default_cfg(&cfg);
+            cfg.inject_sensored = false;
+            if (!profiled) {
+                cfg.traj.a_step = LS_R(0.0);
+            }
+            LS_CHECK(ls_drive_init(&d, &cfg) == LS_OK);
+            LS_CHECK(ls_drive_set_mode(&d, LS_MODE_SENSORED) == LS_OK);
+            meas_zero(&m, 0);
             ls_drive_step(&d, &m, &c);
+            LS_CHECK(ls_drive_step_to(&d, mkpos(sgn * LS_POS_PERIOD_MAX, LS_R(0.0))) == LS_OK);
+            for (k = 0; k < 20; ++k) {
+                ls_drive_step(&d, &m, &c);
+            }
+            LS_CHECK(c.enable && cmd_ok(&c));
+            if (profiled) { /* on its way in the target's direction (as far as LS_TRAJ_STEPS_MAX go) */
+                LS_CHECK(d.traj.active && (LS_REAL)sgn * ls_pos_diff(c.pos_ref, mkpos(0, LS_R(0.0))) > LS_R(0.0));
+                LS_CHECK((LS_REAL)sgn * ls_pos_diff(d.traj.target, mkpos(0, LS_R(0.0))) > LS_R(1.0e6));
+            } else {
+                LS_CHECK(c.pos_ref.period == sgn * LS_POS_PERIOD_MAX);
+            }
+            LS_CHECK((LS_REAL)sgn * c.i_dq_ref[1] > LS_R(0.0)); /* force towards the target */
         }
-        LS_CHECK(c.enable && cmd_ok(&c) && c.pos_ref.period == sgn * LS_POS_PERIOD_MAX);
-        LS_CHECK((LS_REAL)sgn * c.i_dq_ref[1] > LS_R(0.0)); /* force towards the target */
     }
 }
 

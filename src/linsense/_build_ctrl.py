@@ -194,7 +194,10 @@ void ls_posctrl_reset(ls_posctrl *p);
 LS_REAL ls_posctrl_step(ls_posctrl *p, LS_REAL x_err, LS_REAL v, LS_REAL v_ff, LS_REAL a_ff);
 
 /* ls_traj.h */
-typedef struct { LS_REAL v_max; LS_REAL a_max; LS_REAL pole_pitch; LS_REAL fs; } ls_traj_cfg;
+typedef struct {
+    LS_REAL v_max; LS_REAL a_max; LS_REAL v_step; LS_REAL a_step; LS_REAL a_lpf;
+    LS_REAL pole_pitch; LS_REAL fs;
+} ls_traj_cfg;
 typedef struct {
     ls_traj_cfg cfg;
     ls_pos start;

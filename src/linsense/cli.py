@@ -663,6 +663,7 @@ def design_lines(dz, motor_name: str, dd) -> list[str]:
         f"kp {dz.speed_kp:.4g} N s/m, "
         f"ki {dz.speed_ki:.4g} N/m",
         f"  position loop  kp_x {dz.kp_x:.4g} 1/s ({dz.limits.get('position loop', '')})",
+        f"  steps          {dz.limits.get('steps', '')}",
         f"  limits         speed cap {dz.v_cap:.3g} m/s ({SPEED_CAP_MARGIN:g} v_max), over-speed trip "
         f"{dz.omega_trip:.4g} rad/s ({dz.omega_trip * motor_pitch(dd, dz) :.3g} m/s), observer clamp "
         f"{dz.omega_obs:.4g} rad/s, over-current trip {dz.i_trip:.3g} A ({CURRENT_TRIP_MARGIN:g} x (i_max "

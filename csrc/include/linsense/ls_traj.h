@@ -2,7 +2,8 @@
  *
  * Minimum-time trapezoidal profile under |v| <= v_max, |a| <= a_max (triangular when the move is
  * shorter than v_max^2 / a_max), evaluated in closed form at t = k Ts (no accumulated error), or
- * a step (the reference jumps). Positions are ls_pos, so moves start anywhere on a long axis.
+ * a step: the same profile under the drive's own limits v_step, a_step (a_step 0: the reference
+ * jumps, the paper's step). Positions are ls_pos, so moves start anywhere on a long axis.
  *   D >= v^2/a: T = D/v_max + v_max/a_max;  otherwise T = 2 sqrt(D/a_max).
  */
 #ifndef LINSENSE_LS_TRAJ_H
@@ -14,6 +15,11 @@
 typedef struct {
     LS_REAL v_max;      /* m/s, > 0 */
     LS_REAL a_max;      /* m/s^2, > 0 */
+    LS_REAL v_step;     /* m/s, a step's speed limit (ls_traj_jump), > 0 when a_step > 0, else >= 0 */
+    LS_REAL a_step;     /* m/s^2, a step's acceleration, >= 0; 0: a step jumps the reference */
+    LS_REAL a_lpf;      /* Hz, first-order low-pass of the acceleration output (the force feed-forward:
+                           its steps, through the HF band-pass, disturb the demodulated error),
+                           >= 0, a_lpf / fs <= 1; 0: unfiltered */
     LS_REAL pole_pitch; /* m, tau, > 0 */
     LS_REAL fs;         /* Hz, sampling rate, > 0 */
 } ls_traj_cfg;
@@ -27,6 +33,9 @@ typedef struct {
     LS_REAL t_acc;    /* s, acceleration time */
     LS_REAL t_total;  /* s, duration of the move */
     LS_REAL v_peak;   /* m/s, peak speed of the move */
+    LS_REAL acc;      /* m/s^2, acceleration of the move (a_max, or a_step for a step) */
+    LS_REAL a_out;    /* m/s^2, the acceleration output (low-passed) */
+    LS_REAL a_k;      /* -, the low-pass's gain per step, 2 pi a_lpf Ts (1: unfiltered) */
     uint32_t k;       /* -, steps since the start of the move (< LS_TRAJ_STEPS_MAX + 1) */
     bool active;      /* a move is in progress */
     LS_REAL ts;       /* s, sampling period */
@@ -44,18 +53,20 @@ void ls_traj_reset(ls_traj *t, ls_pos p);
  * LS_TRAJ_STEPS_MAX steps ends, in its direction, where that many steps take it: the reference
  * never wraps back (command the rest again). */
 void ls_traj_move(ls_traj *t, ls_pos target);
-/* Step the reference to target (no profile). */
+/* Step to target: a minimum-time move under v_step and a_step (as ls_traj_move), or, with
+ * a_step 0, the reference jumps to target (no profile). */
 void ls_traj_jump(ls_traj *t, ls_pos target);
-/* Reference for this step: position, speed (m/s), acceleration (m/s^2); then advance.
- * Inline (every PWM period). */
+/* Reference for this step: position, speed (m/s), acceleration (m/s^2, through the low-pass
+ * a_lpf); then advance. Inline (every PWM period). */
 static inline void ls_traj_step(ls_traj *t, ls_pos *x_ref, LS_REAL *v_ref, LS_REAL *a_ref)
 {
     LS_REAL tt, s, v, a;
-    const LS_REAL am = t->cfg.a_max;
+    const LS_REAL am = t->acc;
     if (!t->active) {
         *x_ref = t->target;
         *v_ref = LS_R(0.0);
-        *a_ref = LS_R(0.0);
+        t->a_out -= t->a_k * t->a_out;
+        *a_ref = t->a_out;
         return;
     }
     tt = (LS_REAL)t->k * t->ts;
@@ -76,12 +87,14 @@ static inline void ls_traj_step(ls_traj *t, ls_pos *x_ref, LS_REAL *v_ref, LS_RE
         t->active = false;
         *x_ref = t->target;
         *v_ref = LS_R(0.0);
-        *a_ref = LS_R(0.0);
+        t->a_out -= t->a_k * t->a_out;
+        *a_ref = t->a_out;
         return;
     }
     *x_ref = ls_pos_add(t->start, t->sign * s * t->kx);
     *v_ref = t->sign * v;
-    *a_ref = t->sign * a;
+    t->a_out += t->a_k * (t->sign * a - t->a_out);
+    *a_ref = t->a_out;
     t->k++;
 }
 

@@ -310,6 +310,7 @@ def designed(sc: Scenario, motor: Motor) -> Scenario:
     }
     want["observer"]["omega_max"] = dz.omega_obs * k_est
     want["controller"]["v_max"] = dz.v_cap
+    want["controller"]["step_a_max"] = dz.a_step
     if con.position_type == "p":
         want["controller"]["kp_x"] = dz.kp_x
     if "k1" in given["observer"]:
@@ -534,6 +535,8 @@ def build(sc: Scenario, motor: Motor | None = None, trace_in_memory: bool = True
     d.pos.speed.ki = con.speed_ki if con.speed_ki is not None else ki_v
     d.pos.speed.out_min, d.pos.speed.out_max = -d.pos.force_max, d.pos.force_max
     d.traj.v_max, d.traj.a_max = s.reference.v_max, s.reference.a_max
+    d.traj.v_step, d.traj.a_step = con.v_max, con.step_a_max
+    d.traj.a_lpf = min(obs.demod_lpf_hz, fs)  # (the force feed-forward as fast as the demodulator sees)
     d.traj.pole_pitch = tau
     d.mod.f_pwm = fs
     d.mod.dead_time = inv.dead_time

@@ -168,7 +168,9 @@ class ControllerSection(BaseModel):
     position_type: Literal["p", "pd"] = "p"
     kp_x: Positive | None = None  # p: 1/s (default: designed); pd: N/m (required)
     kd_x: NonNegative = 0.0  # pd: N s/m
-    v_max: Positive = _c(_C.pos.v_max)  # m/s, speed-reference limit (p)
+    v_max: Positive = _c(_C.pos.v_max)  # m/s, speed-reference limit (p) and a step command's speed
+    # m/s^2, a step command's acceleration (a minimum-time move at v_max); 0: the reference jumps
+    step_a_max: float = Field(default=_c(_C.traj.a_step), ge=0.0, le=1.0e4)
     # Hz: kp = m w, ki = m w^2 / 4 (the C default's w)
     speed_bandwidth_hz: Positive = _c(_C.pos.speed.kp / _C.pos.mass / (2.0 * math.pi))
     speed_kp: Positive | None = None  # N s/m, overrides the bandwidth

@@ -44,6 +44,7 @@ def default_values() -> list[tuple[str, float, str]]:
         ("LS_DEF_CURRENT_BW", dz.current_bw, "Hz, current-loop bandwidth"),
         ("LS_DEF_SPEED_BW", dz.speed_bw, "Hz, speed-loop bandwidth"),
         ("LS_DEF_KP_X", dz.kp_x, "1/s, position-loop gain"),
+        ("LS_DEF_V_CAP", dz.v_cap, "m/s, speed-reference cap (and a step's speed)"),
         ("LS_DEF_INJ_AMPLITUDE", dz.v_inj, "V, injection amplitude"),
         ("LS_DEF_INJ_FREQ", dz.f_inj, "Hz, injection frequency"),
         ("LS_DEF_INJ_QUAD", dz.quad, "-, elliptical share kappa"),
@@ -58,6 +59,7 @@ def default_values() -> list[tuple[str, float, str]]:
         ("LS_DEF_V_DC_MAX", d.v_dc * V_DC_MAX_FRACTION, "V, over-voltage trip"),
         ("LS_DEF_TRAJ_V_MAX", d.v_max, "m/s, trajectory speed"),
         ("LS_DEF_TRAJ_A_MAX", d.a_max, "m/s^2, trajectory acceleration"),
+        ("LS_DEF_TRAJ_A_STEP", dz.a_step, "m/s^2, a step command's acceleration"),
         ("LS_DEF_DITHER_AMP", dz.dither_a, "A, calibration dither"),
         ("LS_DEF_DITHER_FREQ", dz.dither_hz, "Hz, calibration dither frequency"),
     ]

@@ -54,6 +54,12 @@ INJ_RAMP_TIME = 0.01  # s, the injection's ramp up and down (the start-up's quie
 INJ_CURRENT_MAX = 0.4  # HF current, of i_max
 #: the limits, with their margins over what the application needs (docs/tuning.md, "The limits")
 SPEED_CAP_MARGIN = 1.25  # speed-reference cap over the application's v_max
+#: a step command runs as a minimum-time move at the speed cap and a_step = v_cap w_v / STEP_ACCEL_DIV
+#: (the cap reached in STEP_ACCEL_DIV speed-loop time constants; the PLL's speed lag under it,
+#: 2 a / w_obs, is then 2 / (STEP_ACCEL_DIV RATIO_OBS_SPEED) = 13 % of the cap), at most
+#: STEP_FORCE_SHARE of K_f i_max / m (the rest for the loops and the load); docs/tuning.md, "Steps"
+STEP_ACCEL_DIV = 3.0
+STEP_FORCE_SHARE = 0.5
 OVERSPEED_MARGIN = 1.6  # over-speed trip over the speed cap
 OBSERVER_SPEED_MARGIN = 1.25  # observer speed clamp over the over-speed trip
 CURRENT_TRIP_MARGIN = 1.3  # over-current trip over i_max plus the HF current's peak
@@ -120,6 +126,7 @@ class Design:
     inj_ramp_rate: float = math.nan  # V/s, the injection's ramp (V_inj / INJ_RAMP_TIME)
     s_min: float = math.nan  # -, lowest (L_q - L_d)/(L_q + L_d) over the period
     v_cap: float = math.nan  # m/s, speed-reference cap (controller.v_max)
+    a_step: float = math.nan  # m/s^2, a step command's acceleration (reference.step_a_max; at v_cap)
     omega_trip: float = math.nan  # rad/s electrical, over-speed trip (protection.omega_max)
     omega_obs: float = math.nan  # rad/s electrical, observer speed clamp (observer.omega_max)
     i_trip: float = math.nan  # A, over-current trip (protection.i_max)
@@ -375,6 +382,8 @@ def _limits(dz: Design, motor: Motor, d: DriveData, warnings: list, source: str)
             f"{motor.mass * d.a_max:.3g} N), over {FORCE_MARGIN:g} of K_f i_max = {f_max:.3g} N: "
             "raise i_max or lower a_max / the load")
     dz.v_cap = SPEED_CAP_MARGIN * d.v_max
+    dz.a_step = min(dz.v_cap * 2.0 * math.pi * dz.speed_bw / STEP_ACCEL_DIV,
+                    STEP_FORCE_SHARE * f_max / motor.mass)
     dz.omega_trip = OVERSPEED_MARGIN * dz.v_cap * w_per_v
     dz.omega_obs = OBSERVER_SPEED_MARGIN * dz.omega_trip
     th = np.linspace(0.0, 2.0 * np.pi, 90, endpoint=False)
@@ -389,6 +398,10 @@ def _limits(dz: Design, motor: Motor, d: DriveData, warnings: list, source: str)
         "observer": f"the demodulator's low-pass ({dz.demod_lpf:.4g} Hz) / {RATIO_LPF_OBS:g}",
         "speed loop": f"the observer / {RATIO_OBS_SPEED:g}",
         "position loop": f"the speed loop's w / {RATIO_SPEED_POS:g}",
+        "steps": (f"a move at the speed cap and {dz.a_step:.3g} m/s^2: "
+                  + (f"the speed loop's w v_cap / {STEP_ACCEL_DIV:g}"
+                     if dz.a_step < STEP_FORCE_SHARE * f_max / motor.mass else
+                     f"{STEP_FORCE_SHARE:g} K_f i_max / m")),
     }
 
 

@@ -73,6 +73,7 @@ def scenario_dict(dz: Design, drive: DriveData, motor_ref: str, base: dict | Non
             "speed_bandwidth_hz": _r(dz.speed_bw),
             "i_max": drive.i_max,
             "v_max": _r(dz.v_cap),
+            "step_a_max": _r(dz.a_step),
         }
     )
     if con.get("position_type", "p") == "p":
@@ -188,6 +189,9 @@ def c_header(dz: Design, drive: DriveData, motor: Motor, name: str | None = None
         ("prot.omega_max", dz.omega_trip),
         ("prot.i_max", dz.i_trip),
         ("traj.v_max", drive.v_max),
+        ("traj.v_step", dz.v_cap),
+        ("traj.a_step", dz.a_step),
+        ("traj.a_lpf", dz.demod_lpf),
         ("traj.a_max", drive.a_max),
         ("pos.mass", motor.mass),
         ("pos.force_max", force_max),
