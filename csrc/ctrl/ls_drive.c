@@ -17,7 +17,6 @@ void ls_drive_default_cfg(ls_drive_cfg *c)
     const LS_REAL l_d = LS_DEF_L_D, l_q = LS_DEF_L_Q;
     const LS_REAL tau = LS_DEF_TAU, kf = LS_DEF_KF, mass = LS_DEF_MASS, r_s = LS_DEF_R_S;
     const LS_REAL w_i = LS_TWO_PI * LS_DEF_CURRENT_BW; /* current-loop bandwidth, rad/s */
-    const LS_REAL w_v = LS_TWO_PI * LS_DEF_SPEED_BW;   /* speed-loop bandwidth, rad/s */
     memset(c, 0, sizeof *c);
     c->fs = fs;
     c->pole_pitch = tau;
@@ -49,12 +48,13 @@ void ls_drive_default_cfg(ls_drive_cfg *c)
     c->demod.comp = NULL;
     c->demod.gain_table = NULL;
     c->demod.min_level = LS_R(0.005);
-    c->obs.type = LS_OBS_PLL;
+    c->obs.type = LS_DEF_OBSERVER_MECH > 0 ? LS_OBS_MECH : LS_OBS_PLL;
+    c->load_ff = LS_DEF_OBSERVER_MECH > 0; /* the mechanical observer's load estimate fed forward */
     c->obs.fs = fs;
     c->obs.pole_pitch = tau;
     c->obs.mass = mass;
     c->obs.omega_max = LS_R(300.0);
-    c->obs.force_max = LS_R(200.0);
+    c->obs.force_max = kf * c->i_max; /* the load the drive can hold */
     ls_observer_gains(&c->obs, LS_DEF_OBSERVER_BW); /* well above the speed loop it feeds */
     c->enc_obs = c->obs;
     c->enc_obs.type = LS_OBS_PLL;
@@ -72,8 +72,8 @@ void ls_drive_default_cfg(ls_drive_cfg *c)
     c->pos.v_max = LS_DEF_V_CAP;
     c->pos.mass = mass;
     c->pos.force_max = kf * c->i_max;
-    c->pos.speed.kp = mass * w_v;
-    c->pos.speed.ki = mass * w_v * w_v / LS_R(4.0);
+    c->pos.speed.kp = LS_DEF_SPEED_KP;
+    c->pos.speed.ki = LS_DEF_SPEED_KI;
     c->pos.speed.out_min = -c->pos.force_max;
     c->pos.speed.out_max = c->pos.force_max;
     c->pos.speed.fs = fs;
@@ -128,6 +128,7 @@ void ls_drive_default_cfg(ls_drive_cfg *c)
     c->startup.pairs = 16u;
     c->startup.i_min = LS_R(0.0126);
     c->startup.t_settle = LS_R(0.03);
+    c->startup.lock_gain = LS_DEF_STARTUP_LOCK_GAIN;
 }
 
 /* --------------------------------------------------------------------------- init */
@@ -174,7 +175,8 @@ ls_status ls_drive_init(ls_drive *d, const ls_drive_cfg *cfg)
         cfg->enc_counts <= 0 || !pos_finite(cfg->enc_v_max) || cfg->fs > LS_DRIVE_FS_MAX ||
         cfg->i_max > LS_DRIVE_I_MAX || cfg->prot.i_max > LS_DRIVE_I_MAX || cfg->prot.v_dc_max > LS_DRIVE_V_DC_MAX ||
         cfg->bpf.type != (cfg->inject.shape == LS_INJ_SQUARE ? LS_BIQUAD_DIFF : LS_BIQUAD_BANDPASS) ||
-        (cfg->sep.type != LS_BIQUAD_NOTCH && cfg->sep.type != LS_BIQUAD_LOWPASS)) {
+        (cfg->sep.type != LS_BIQUAD_NOTCH && cfg->sep.type != LS_BIQUAD_LOWPASS) ||
+        (cfg->load_ff && (cfg->obs.type != LS_OBS_MECH || !(cfg->pos.mass > LS_R(0.0))))) {
         return LS_ERR_PARAM;
     }
     /* the demodulation that goes with the injection's shape; the square wave is separated from
@@ -240,11 +242,14 @@ ls_status ls_drive_init(ls_drive *d, const ls_drive_cfg *cfg)
     d->kx = LS_TWO_PI / cfg->pole_pitch;
     d->inv_kx = cfg->pole_pitch / LS_TWO_PI;
     d->inv_kf = LS_R(1.0) / cfg->force_constant;
+    d->ff_load_k = cfg->load_ff ? LS_R(1.0) / cfg->pos.mass : LS_R(0.0);
+    d->integ_keep = cfg->load_ff ? LS_R(0.0) : LS_R(1.0);
     d->delay_ts = cfg->delay_comp * d->ts;
     d->enc_jump_max = enc_jump >= LS_R(1.0) ? (int64_t)(int32_t)enc_jump : 1; /* a one-count change is always plausible */
     d->enc_k = LS_TWO_PI / (LS_REAL)cfg->enc_counts;
     /* derived gains that a tiny or huge value could overflow (every input was finite) */
-    if (!LS_ISFINITE4(d->kx, d->inv_kx, d->inv_kf, d->delay_ts) || !(d->inv_kx > LS_R(0.0)) ||
+    if (!LS_ISFINITE4(d->kx, d->inv_kx, d->inv_kf, d->delay_ts) || !LS_ISFINITE(d->ff_load_k) ||
+        !(d->inv_kx > LS_R(0.0)) ||
         !(d->inv_kf > LS_R(0.0)) || !LS_ISFINITE(cfg->i_max * cfg->force_constant)) {
         memset(d, 0, sizeof *d);
         return LS_ERR_PARAM;
@@ -411,11 +416,14 @@ ls_status ls_drive_set_load(ls_drive *d, LS_REAL f_load)
     if (!LS_ISFINITE(f_load)) {
         return LS_ERR_PARAM;
     }
-    if (d->cfg.pos.type == LS_POSCTRL_P) {
+    if (d->cfg.pos.type == LS_POSCTRL_P) { /* (the encoder modes'; load_ff: the sensorless modes hold it at 0) */
         d->pos.speed.integ = ls_clamp(f_load, d->cfg.pos.speed.out_min, d->cfg.pos.speed.out_max);
     }
     if (d->cfg.obs.type == LS_OBS_MECH) {
         d->obs.f_load = ls_clamp(f_load, -d->cfg.obs.force_max, d->cfg.obs.force_max);
+    }
+    if (d->cfg.enc_obs.type == LS_OBS_MECH) {
+        d->enc.f_load = ls_clamp(f_load, -d->cfg.enc_obs.force_max, d->cfg.enc_obs.force_max);
     }
     d->f_ref = ls_clamp(f_load, -d->cfg.pos.force_max, d->cfg.pos.force_max);
     return LS_OK;

@@ -16,6 +16,8 @@
 #define LS_DEF_R_S LS_R(9.0) /* ohm, phase resistance */
 #define LS_DEF_CURRENT_BW LS_R(250.0) /* Hz, current-loop bandwidth */
 #define LS_DEF_SPEED_BW LS_R(8.0) /* Hz, speed-loop bandwidth */
+#define LS_DEF_SPEED_KP LS_R(75.3982237) /* N s/m, speed-loop gain (m w_v) */
+#define LS_DEF_SPEED_KI LS_R(947.482023) /* N/m, speed-loop ki (m w_v^2 / 4; 0 sensorless with load_ff) */
 #define LS_DEF_KP_X LS_R(20.106193) /* 1/s, position-loop gain */
 #define LS_DEF_V_CAP LS_R(0.25) /* m/s, speed-reference cap (and a step's speed) */
 #define LS_DEF_INJ_AMPLITUDE LS_R(12.0) /* V, injection amplitude */
@@ -26,7 +28,9 @@
 #define LS_DEF_DEMOD_NOTCH LS_R(2000.0) /* Hz, the low-pass's zeros (2 f_inj) */
 #define LS_DEF_DEMOD_GAIN LS_R(4.68857343) /* -, L_q / (L_q - L_d) of the means */
 #define LS_DEF_HF_DELAY LS_R(0.001) /* s, the HF path's delay the estimate is advanced by */
-#define LS_DEF_OBSERVER_BW LS_R(40.0) /* Hz, HF observer (PLL) bandwidth */
+#define LS_DEF_OBSERVER_BW LS_R(15.0) /* Hz, HF observer bandwidth (all its poles) */
+#define LS_DEF_STARTUP_LOCK_GAIN LS_R(1.77777778) /* -, the start-up's gain on the demodulated error while the observer locks */
+#define LS_DEF_OBSERVER_MECH LS_R(1.0) /* -, 1: the mechanical observer with its load estimate fed forward; 0: the PLL */
 #define LS_DEF_DEAD_TIME LS_R(8e-07) /* s, inverter dead time */
 #define LS_DEF_V_DC_MIN LS_R(40.0) /* V, under-voltage trip */
 #define LS_DEF_V_DC_MAX LS_R(90.0) /* V, over-voltage trip */

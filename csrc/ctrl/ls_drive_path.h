@@ -72,6 +72,8 @@ static inline LS_REAL ls_drive_path_force_(ls_drive *d, ls_pos pos, LS_REAL omeg
     LS_REAL v_ff, a_ff, x_err, f, i_q_ref;
     ls_traj_step(&d->traj, x_ref, &v_ff, &a_ff);
     x_err = ls_pos_diff(*x_ref, pos) * d->inv_kx;
+    a_ff += d->ff_load_k * d->obs.f_load; /* load_ff: the observer's load-force estimate, */
+    d->pos.speed.integ *= d->integ_keep;   /* which is then the integral action */
     f = ls_posctrl_step_finite(&d->pos, x_err, omega * d->inv_kx, v_ff, a_ff);
     i_q_ref = ls_clamp(f * d->inv_kf, -d->cfg.i_max, d->cfg.i_max);
     d->f_ref = i_q_ref * d->cfg.force_constant;

@@ -29,7 +29,11 @@ ls_startup_phase ls_drive_startup_step_(ls_drive *d, const ls_meas *meas, ls_cmd
         const LS_REAL err = ls_demod_step_cs_norm(&d->demod, ihf_a, ihf_b, d->obs.pos.theta, c_est, s_est, d->inj.c,
                                              d->inj.s, LS_R(0.0));
         if (su->phase == LS_SU_LOCK || su->phase == LS_SU_SETTLE) { /* frozen in between */
-            ls_observer_step_finite(&d->obs, su->env >= LS_R(1.0) ? err : LS_R(0.0), LS_R(0.0));
+            ls_observer_step_finite(&d->obs, su->env >= LS_R(1.0) ? err * cfg->startup.lock_gain : LS_R(0.0),
+                                    LS_R(0.0));
+            /* (no load estimate while it slews onto the axis at zero current: a mechanical
+             * observer's would hold what the slewing looked like, and load_ff push it) */
+            d->obs.f_load = LS_R(0.0);
         }
         /* the raw currents in the estimated frame (the pulses' start and end) */
         i_dr = c_est * i_a + s_est * i_b;

@@ -29,6 +29,7 @@ ls_status ls_startup_init(ls_startup *s, const ls_startup_cfg *cfg)
     if (!LS_ISFINITE(cfg->fs) || !(cfg->fs > LS_R(0.0)) || !LS_ISFINITE(cfg->v_pulse) ||
         !(cfg->v_pulse > LS_R(0.0)) || !LS_ISFINITE(cfg->i_min) || !(cfg->i_min > LS_R(0.0)) ||
         !LS_ISFINITE(cfg->err_lock) || !(cfg->err_lock > LS_R(0.0)) || cfg->pairs < 1u ||
+        !(cfg->lock_gain > LS_R(0.0)) || !(cfg->lock_gain <= LS_R(100.0)) ||
         !(cfg->t_lock * cfg->fs <= LS_R(0.25) * (LS_REAL)LS_STARTUP_STEPS_MAX) ||
         cfg->pairs > LS_STARTUP_PAIRS_MAX || !steps_of(cfg->t_lock, cfg->fs, 1u, &s->n_lock) ||
         !steps_of(cfg->t_quiet, cfg->fs, 0u, &s->n_quiet) || !steps_of(cfg->t_pulse, cfg->fs, 2u, &s->n_pulse) ||

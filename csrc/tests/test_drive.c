@@ -316,13 +316,25 @@ static void test_sensorless_hold_elliptical(void)
     }
 }
 
-/* ls_drive_set_load: the speed integrator (P type) and the mechanical observer start with the load */
+/* ls_drive_set_load: the speed integrator (P type, without load_ff) and the mechanical observer
+ * start with the load; with load_ff (the default) the observer's estimate alone carries it */
 static void test_set_load(void)
 {
     ls_drive d;
     ls_drive_cfg cfg;
     ls_pos p0 = {0, LS_R(0.0)};
     setup(&d, &cfg);
+    LS_CHECK(cfg.load_ff && cfg.obs.type == LS_OBS_MECH);
+    ls_drive_set_position(&d, p0);
+    ls_drive_set_load(&d, LS_R(20.0));
+    LS_CHECK_NEAR(d.pos.speed.integ, 20.0, 1e-6); /* (the encoder modes') */
+    LS_CHECK_NEAR(d.obs.f_load, 20.0, 1e-6);
+    LS_CHECK_NEAR(d.f_ref, 20.0, 1e-6);
+    LS_CHECK(d.integ_keep == LS_R(0.0) && d.ff_load_k > LS_R(0.0));
+    cfg.load_ff = false;
+    cfg.obs.type = LS_OBS_PLL;
+    ls_observer_gains(&cfg.obs, LS_R(40.0));
+    LS_CHECK(ls_drive_init(&d, &cfg) == LS_OK);
     ls_drive_set_position(&d, p0);
     ls_drive_set_load(&d, LS_R(20.0));
     LS_CHECK_NEAR(d.pos.speed.integ, 20.0, 1e-6);
@@ -341,6 +353,17 @@ static void test_set_load(void)
     ls_drive_set_load(&d, LS_R(-15.0));
     LS_CHECK_NEAR(d.obs.f_load, -15.0, 1e-6);
     LS_CHECK_NEAR(d.pos.speed.integ, 0.0, 1e-9); /* PD: no integrator to preset */
+    /* load_ff needs the mechanical observer (its estimate) and a mass to turn it into acceleration */
+    cfg.load_ff = true;
+    LS_CHECK(ls_drive_init(&d, &cfg) == LS_OK);
+    cfg.obs.type = LS_OBS_PLL;
+    ls_observer_gains(&cfg.obs, LS_R(40.0));
+    LS_CHECK(ls_drive_init(&d, &cfg) == LS_ERR_PARAM);
+    cfg.obs.type = LS_OBS_MECH;
+    ls_observer_gains(&cfg.obs, LS_R(15.0));
+    LS_CHECK(ls_drive_init(&d, &cfg) == LS_OK);
+    cfg.pos.mass = LS_R(0.0);
+    LS_CHECK(ls_drive_init(&d, &cfg) == LS_ERR_PARAM);
 }
 
 static void test_sensorless_move(void)

@@ -39,9 +39,15 @@ static void test_module(void)
     c.pairs = 2u;
     c.i_min = LS_R(0.01);
     c.t_settle = LS_R(0.005);
+    LS_CHECK(ls_startup_init(&s, &c) == LS_ERR_PARAM); /* lock_gain 0 */
+    c.lock_gain = LS_R(1.0);
     LS_CHECK(ls_startup_init(NULL, &c) == LS_ERR_NULL);
     LS_CHECK(ls_startup_init(&s, &c) == LS_OK);
     bad = c; bad.pairs = 0u;
+    LS_CHECK(ls_startup_init(&s, &bad) == LS_ERR_PARAM);
+    bad = c; bad.lock_gain = LS_R(101.0);
+    LS_CHECK(ls_startup_init(&s, &bad) == LS_ERR_PARAM);
+    bad = c; bad.lock_gain = (LS_REAL)NAN;
     LS_CHECK(ls_startup_init(&s, &bad) == LS_ERR_PARAM);
     bad = c; bad.t_rest = LS_R(1.0e-4); /* 1.6 periods */
     LS_CHECK(ls_startup_init(&s, &bad) == LS_ERR_PARAM);
@@ -233,8 +239,12 @@ static void test_closed_loop(void)
     LS_CHECK(jump < 2.0e-3);  /* the reference starts at the estimate (of the step before: 0.02 mm) */
     LS_CHECK(iq < 0.4);       /* no force step at the entry (0.4 A: 8 N of 50; measured 0.26 A with the
                                  8 Hz speed loop and kp_x 20 1/s of the default design) */
-    LS_CHECK(worst_all < 5.0e-4); /* afterwards, the sensorless hold's own wander with 10 mA of noise and no
-                                     friction (0.1 mm in 0.25 s from a known position) */
+    LS_CHECK(worst_all < 1.0e-3); /* afterwards, the sensorless hold's own wander with 10 mA of noise and no
+                                     friction (0.1 mm in 0.25 s from a known position), and the estimate's
+                                     convergence from where the start-up left it: 0.41 mm with the PLL and
+                                     the speed PI, 0.88 mm with the mechanical observer (15 Hz) and its load
+                                     estimate fed forward, the default since issue 22's fourth stage: its
+                                     slower convergence moves the free mover more (docs/tuning.md) */
 }
 
 static void test_linear_iron(void)

@@ -100,7 +100,8 @@ int main(void)
     ls_cfg_ecce2010(&cfg, &comp_lut, &gain_lut); /* the designed configuration and its tables */
     cfg.mod.dtc = false;          /* the synthetic motor has an ideal inverter: nothing to */
     cfg.mod.dead_time = 0.0f;     /* compensate, and no dead-time residual to take out */
-    cfg.obs.type = LS_OBS_PLL;
+    cfg.obs.type = LS_OBS_PLL;    /* the armature is held: the tracking loop alone (the designed */
+    cfg.load_ff = false;          /* mechanical observer's model expects the force to move it) */
     if (ls_drive_init(&drive, &cfg) != LS_OK) {
         fprintf(stderr, "configuration refused\n");
         return 2;

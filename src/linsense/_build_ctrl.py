@@ -271,6 +271,7 @@ typedef struct {
     uint32_t pairs;
     LS_REAL i_min;
     LS_REAL t_settle;
+    LS_REAL lock_gain;
 } ls_startup_cfg;
 typedef struct {
     ls_startup_cfg cfg;
@@ -312,6 +313,7 @@ typedef struct {
     LS_REAL enc_v_max;
     bool inject_sensored;
     bool hf_dtres;
+    bool load_ff;
     ls_inject_cfg inject;
     ls_biquad_cfg bpf;
     ls_biquad_cfg sep;

@@ -469,7 +469,8 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
     motor = _load(motor_spec)
     dz = design(motor, dd, src)
     from linsense.tune.startup import design_startup
-    su = design_startup(motor, v_dc=dd.v_dc, f_pwm=dd.f_pwm, i_max=dd.i_max, observer_bw=dz.observer_bw,
+    # (the start-up locks as the PLL would: startup.lock_gain, linsense.tune.design.startup_lock_gain)
+    su = design_startup(motor, v_dc=dd.v_dc, f_pwm=dd.f_pwm, i_max=dd.i_max, observer_bw=dz.observer_bw_pll,
                         v_inj=dz.v_inj, polarity=polarity, current_noise=current_noise,
                         ramp_rate=dz.inj_ramp_rate, source=src)
     # a drive run without its table (sensorless_nolut) gets its trips on the estimate wider
@@ -656,12 +657,15 @@ def design_lines(dz, motor_name: str, dd) -> list[str]:
         f"  demodulator    low-pass {dz.demod_lpf:.4g} Hz ({RATIO_LPF:g} f_inj), "
         f"zeros at {dz.demod_notch:g} Hz; gain "
         f"{dz.demod_gain:.4g}, scheduled (local error gain {dz.k_e_min:.2f}..{dz.k_e_max:.2f} unscheduled)",
-        f"  observer       {dz.observer_bw:.4g} Hz PLL (limited by {dz.limits.get('observer', '')})"
+        f"  observer       {dz.observer_bw:.4g} Hz "
+        + ("mechanical, its load estimate fed forward" if dz.load_ff else dz.observer_type.upper())
+        + f" (limited by {dz.limits.get('observer', '')})"
         + (f"; the HF path's delay {dz.hf_delay * 1e3:.3g} ms compensated (1 / f_inj)"
            if dz.hf_delay > 0 else ""),
         f"  speed loop     {dz.speed_bw:.4g} Hz ({dz.limits.get('speed loop', '')}): "
         f"kp {dz.speed_kp:.4g} N s/m, "
-        f"ki {dz.speed_ki:.4g} N/m",
+        f"ki {dz.speed_ki:.4g} N/m"
+        + (" (the encoder modes'; 0 sensorless: the load estimate)" if dz.load_ff else ""),
         f"  position loop  kp_x {dz.kp_x:.4g} 1/s ({dz.limits.get('position loop', '')})",
         f"  steps          {dz.limits.get('steps', '')}",
         f"  limits         speed cap {dz.v_cap:.3g} m/s ({SPEED_CAP_MARGIN:g} v_max), over-speed trip "

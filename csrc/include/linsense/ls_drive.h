@@ -113,6 +113,11 @@ typedef struct {
     bool inject_sensored;   /* keep injecting in LS_MODE_SENSORED (and estimate beside the encoder) */
     bool hf_dtres;          /* take the current the dead-time residual drove out of the HF path (not
                                with the square wave) */
+    bool load_ff;           /* the sensorless modes: feed the HF observer's load-force estimate forward
+                               into the force reference (obs.type LS_OBS_MECH, pos.mass > 0) and hold
+                               the speed PI's integrator at 0 (the estimate is the integral action: the
+                               load is taken up at the observer's bandwidth); the encoder modes keep the
+                               PI (docs/tuning.md, "The observer") */
     ls_inject_cfg inject;   /* HF injection */
     ls_biquad_cfg bpf;      /* HF band-pass on the alpha-beta currents (LS_BIQUAD_BANDPASS; with the
                                square wave LS_BIQUAD_DIFF) */
@@ -210,6 +215,10 @@ typedef struct {
     LS_REAL kx;          /* rad/m, 2 pi / tau */
     LS_REAL inv_kx;      /* m/rad, tau / (2 pi) */
     LS_REAL inv_kf;      /* A/N, 1 / force_constant */
+    LS_REAL ff_load_k;   /* 1/kg, the load-force estimate's share of the acceleration feed-forward:
+                            1 / pos.mass with load_ff, else 0 */
+    LS_REAL integ_keep;  /* -, the sensorless step's factor on the speed PI's integrator: 0 with
+                            load_ff, else 1 */
     LS_REAL delay_ts;    /* s, delay_comp ts: angle advance per rad/s of speed */
     ls_cal_phase cal_phase;
     uint32_t cal_index;

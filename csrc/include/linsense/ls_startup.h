@@ -66,6 +66,9 @@ typedef struct {
     LS_REAL i_min;    /* A, smallest |i_diff| accepted as a decision, > 0 (0 would never leave a
                          start undecided) */
     LS_REAL t_settle; /* s, HF relock after the pulses, >= 0 */
+    LS_REAL lock_gain; /* -, ls_drive: the demodulated error's gain into the HF observer while it locks
+                          at zero current (no load estimate then: a mechanical observer's gains act as a
+                          PLL's, scaled by it to the PLL's lock, docs/tuning.md), in (0, 100]; 1: none */
 } ls_startup_cfg;
 
 typedef struct {

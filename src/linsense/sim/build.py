@@ -38,6 +38,7 @@ from linsense.tune.design import (
     error_gain,
     mean_dq,
     speed_gains,
+    startup_lock_gain,
     uncompensated_speed_factor,
 )
 from linsense.tune.injection import (
@@ -309,6 +310,12 @@ def designed(sc: Scenario, motor: Motor) -> Scenario:
         "protection": {"omega_max": dz.omega_trip * k_est, "i_max": dz.i_trip},
     }
     want["observer"]["omega_max"] = dz.omega_obs * k_est
+    # the observer's type (mech for the pulsating and elliptical injections) and its bandwidth; the
+    # load estimate's clamp at the force the drive can make
+    want["observer"]["type"] = dz.observer_type
+    obs_type = s.observer.type if "type" in given["observer"] else dz.observer_type
+    want["observer"]["bandwidth_hz"] = dz.observer_bw_mech if obs_type == "mech" else dz.observer_bw_pll
+    want["observer"]["force_max"] = dz.force_max
     want["controller"]["v_max"] = dz.v_cap
     want["controller"]["step_a_max"] = dz.a_step
     if con.position_type == "p":
@@ -507,6 +514,11 @@ def build(sc: Scenario, motor: Motor | None = None, trace_in_memory: bool = True
             if sched is not None:
                 d.i_d_near, d.near_in, d.near_out = sched["i_d_near"], sched["near_in"], sched["near_out"]
     d.obs.type = lib.LS_OBS_PLL if obs.type == "pll" else lib.LS_OBS_MECH
+    load_ff = obs.type == "mech" if obs.load_feedforward is None else obs.load_feedforward
+    if load_ff and obs.type != "mech":
+        raise InputError(sc.source, "observer.load_feedforward",
+                         "needs observer.type = \"mech\" (the load estimate is the mechanical observer's)")
+    d.load_ff = load_ff
     d.obs.pole_pitch = tau
     d.obs.mass = known["mass"]
     d.obs.omega_max = obs.omega_max
@@ -566,6 +578,7 @@ def build(sc: Scenario, motor: Motor | None = None, trace_in_memory: bool = True
     d.startup.t_quiet = su.t_quiet
     d.startup.v_pulse, d.startup.t_pulse, d.startup.t_rest = su.v_pulse, su.t_pulse, su.t_rest
     d.startup.pairs, d.startup.i_min, d.startup.t_settle = su.pairs, su.i_min, su.t_settle
+    d.startup.lock_gain = startup_lock_gain(obs.type, obs.bandwidth_hz, obs.demod_lpf_hz)
     for sub in ("inject", "bpf", "sep", "demod", "obs", "enc_obs", "current", "traj", "prot", "dtres",
                 "startup"):
         getattr(d, sub).fs = fs

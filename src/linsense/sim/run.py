@@ -19,7 +19,7 @@ from linsense.sim.scenario import Scenario, as_scenario
 AVERAGE_NOTE = ("average inverter: the dead time's effect on the HF estimate is approximated (edge "
                 "currents predicted linearly, with the PWM ripple's dead zone); its steady bias can "
                 "differ from the switching model's by up to about 1 deg and it can show or miss limit "
-                "cycles below about 0.05 mm: check bias and limit-cycle claims with fidelity = switching")
+                "cycles below about 0.2 mm: check bias and limit-cycle claims with fidelity = switching")
 
 #: fault at t = 0 -> the scenario key most likely responsible
 _FAULT_KEYS = {"undervoltage": "inverter.v_dc", "overvoltage": "inverter.v_dc",

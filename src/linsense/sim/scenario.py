@@ -125,8 +125,13 @@ class ObserverSection(BaseModel):
     compensation: Literal["lut", "none"] | None = None  # default: lut in sensorless_lut, else none
     lut_model: Literal["resistive", "eq12"] = "resistive"
     lut_points: int = Field(default=256, ge=4, le=65536)
-    type: Literal["pll", "mech"] = "pll"
-    bandwidth_hz: Positive = _c(_C.obs.k1 / (4.0 * math.pi))  # Hz, all poles at -2 pi f (ls_observer_gains)
+    # "mech": the mechanical observer (mass, force, load estimate); "pll": the type-2 tracking loop
+    type: Literal["pll", "mech"] = "mech" if _C.obs.type == 1 else "pll"
+    # Hz, all poles at -2 pi f (ls_observer_gains: k1 = 3 w for mech, 2 w for pll)
+    bandwidth_hz: Positive = _c(_C.obs.k1 / (2.0 * math.pi * (3.0 if _C.obs.type == 1 else 2.0)))
+    # the mechanical observer's load estimate fed forward into the force reference (ls_drive_cfg.load_ff;
+    # the speed loop's designed integral gain is then 0); default: on with type = "mech"
+    load_feedforward: bool | None = None
     k1: Positive | None = None  # 1/s, overrides the bandwidth
     k2: Positive | None = None  # 1/s^2
     k3: Positive | None = None  # 1/s^3 (mech)

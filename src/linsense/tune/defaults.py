@@ -17,7 +17,7 @@ import sys
 
 from linsense.analysis.hf import end_anisotropy, mean_dq
 from linsense.model.motor import load_motor
-from linsense.tune.design import V_DC_MAX_FRACTION, V_DC_MIN_FRACTION, DriveData, design
+from linsense.tune.design import V_DC_MAX_FRACTION, V_DC_MIN_FRACTION, DriveData, design, startup_lock_gain
 
 #: the reference motor whose design the C defaults are
 REFERENCE_MOTOR = "ecce2010"
@@ -43,6 +43,8 @@ def default_values() -> list[tuple[str, float, str]]:
         ("LS_DEF_R_S", m.R_s, "ohm, phase resistance"),
         ("LS_DEF_CURRENT_BW", dz.current_bw, "Hz, current-loop bandwidth"),
         ("LS_DEF_SPEED_BW", dz.speed_bw, "Hz, speed-loop bandwidth"),
+        ("LS_DEF_SPEED_KP", dz.speed_kp, "N s/m, speed-loop gain (m w_v)"),
+        ("LS_DEF_SPEED_KI", dz.speed_ki, "N/m, speed-loop ki (m w_v^2 / 4; 0 sensorless with load_ff)"),
         ("LS_DEF_KP_X", dz.kp_x, "1/s, position-loop gain"),
         ("LS_DEF_V_CAP", dz.v_cap, "m/s, speed-reference cap (and a step's speed)"),
         ("LS_DEF_INJ_AMPLITUDE", dz.v_inj, "V, injection amplitude"),
@@ -53,7 +55,11 @@ def default_values() -> list[tuple[str, float, str]]:
         ("LS_DEF_DEMOD_NOTCH", dz.demod_notch, "Hz, the low-pass's zeros (2 f_inj)"),
         ("LS_DEF_DEMOD_GAIN", dz.demod_gain, "-, L_q / (L_q - L_d) of the means"),
         ("LS_DEF_HF_DELAY", dz.hf_delay, "s, the HF path's delay the estimate is advanced by"),
-        ("LS_DEF_OBSERVER_BW", dz.observer_bw, "Hz, HF observer (PLL) bandwidth"),
+        ("LS_DEF_OBSERVER_BW", dz.observer_bw, "Hz, HF observer bandwidth (all its poles)"),
+        ("LS_DEF_STARTUP_LOCK_GAIN", startup_lock_gain(dz.observer_type, dz.observer_bw, dz.demod_lpf),
+         "-, the start-up's gain on the demodulated error while the observer locks"),
+        ("LS_DEF_OBSERVER_MECH", 1.0 if dz.observer_type == "mech" else 0.0,
+         "-, 1: the mechanical observer with its load estimate fed forward; 0: the PLL"),
         ("LS_DEF_DEAD_TIME", d.dead_time, "s, inverter dead time"),
         ("LS_DEF_V_DC_MIN", d.v_dc * V_DC_MIN_FRACTION, "V, under-voltage trip"),
         ("LS_DEF_V_DC_MAX", d.v_dc * V_DC_MAX_FRACTION, "V, over-voltage trip"),

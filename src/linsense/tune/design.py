@@ -7,8 +7,10 @@ The rules are the constants and functions of this module; docs/tuning.md states 
 criterion and its measured effect, and the C library's defaults are generated from them for the
 reference motor (:mod:`linsense.tune.defaults`). The chain, from the PWM rate down: the injection
 at ``f_pwm / N`` (:func:`injection_frequency`), the current loop at ``f_inj / RATIO_INJ_CURRENT``,
-the demodulator's low-pass at ``RATIO_LPF f_inj``, the observer at ``f_lpf / RATIO_LPF_OBS``, the
-speed loop at ``f_obs / RATIO_OBS_SPEED``, the position gain ``w_v / RATIO_SPEED_POS``; the
+the demodulator's low-pass at ``RATIO_LPF f_inj``, the PLL's bandwidth ``f_lpf / RATIO_LPF_OBS``
+(with the pulsating and elliptical injections the mechanical observer at ``f_lpf / RATIO_LPF_MECH``
+instead, its load estimate fed forward), the speed loop at ``f_pll / RATIO_OBS_SPEED``, the position
+gain ``w_v / RATIO_SPEED_POS``; the
 injection's amplitude from the dead-time voltage error and the lowest local saliency
 (``DEAD_TIME_RATIO``), the limits from the application with the stated margins.
 """
@@ -34,6 +36,12 @@ RATIO_INJ_CURRENT = 4.0
 RATIO_LPF = 0.3
 RATIO_LPF_OBS = 7.5
 RATIO_OBS_SPEED = 5.0
+#: the mechanical observer (the pulsating and elliptical injections; docs/tuning.md, "The observer"):
+#: its triple pole at f_lpf / RATIO_LPF_MECH (measured on the seven test motors, switching
+#: inverter: f_lpf / 25 leaves 1.2-1.8 deg cycles after the load step, f_lpf / 16-20 none), its load
+#: estimate fed forward, the speed PI's integrator held at 0 in the sensorless modes (the estimate is
+#: the integral action; the encoder modes keep the PI)
+RATIO_LPF_MECH = 20.0
 RATIO_SPEED_POS = 2.5
 SPEED_KI_DIV = 4.0  # speed PI: ki = m w^2 / SPEED_KI_DIV (a double real closed-loop pole)
 #: the HF path's delay in injection periods (docs/tuning.md, "The HF path's delay"): while the HF
@@ -131,6 +139,11 @@ class Design:
     omega_obs: float = math.nan  # rad/s electrical, observer speed clamp (observer.omega_max)
     i_trip: float = math.nan  # A, over-current trip (protection.i_max)
     load: float = math.nan  # N, rated load the verification uses
+    observer_type: str = "pll"  # "mech" (with load_ff) or "pll" (observer.type)
+    load_ff: bool = False  # the mechanical observer's load estimate fed forward (observer.load_feedforward)
+    observer_bw_pll: float = math.nan  # Hz, the PLL bandwidth by the rules (observer.type "pll")
+    observer_bw_mech: float = math.nan  # Hz, the mechanical observer's (observer.type = "mech")
+    force_max: float = math.nan  # N, K_f i_max: the clamp of the load estimate (observer.force_max)
     limits: dict = field(default_factory=dict)  # what limits each bandwidth (docs/tuning.md)
     tolerances: dict = field(default_factory=dict)  # per tolerance: predicted hold error, gain range
     warnings: list = field(default_factory=list)
@@ -146,7 +159,9 @@ def current_gains(bw_hz: float, L_d: float, L_q: float, R_s: float) -> tuple[flo
 
 
 def speed_gains(bw_hz: float, mass: float) -> tuple[float, float]:
-    """Speed PI gains for a bandwidth (Hz): kp = m w, ki = m w^2 / 4 (a double real closed-loop pole)."""
+    """Speed PI gains for a bandwidth (Hz): kp = m w, ki = m w^2 / 4 (a double real closed-loop pole;
+    with the load estimate fed forward the sensorless modes hold the integrator at 0, the encoder
+    modes keep it)."""
     w = 2.0 * math.pi * bw_hz
     return mass * w, mass * w * w / SPEED_KI_DIV
 
@@ -263,9 +278,11 @@ def design(
     f_i = f_inj / RATIO_INJ_CURRENT
     kp_i, ki_i = current_gains(f_i, L_d, L_q, motor.R_s)
     f_lpf = RATIO_LPF * f_inj
-    f_obs = f_lpf / RATIO_LPF_OBS
-    f_v = f_obs / RATIO_OBS_SPEED
-    kp_v, ki_v = speed_gains(f_v, motor.mass)
+    f_pll = f_lpf / RATIO_LPF_OBS
+    f_v = f_pll / RATIO_OBS_SPEED
+    mech = d.shape == "pulsating"  # (the rotating and square injections: the PLL, not yet verified)
+    f_obs = f_lpf / RATIO_LPF_MECH if mech else f_pll
+    kp_v, ki_v = speed_gains(f_v, motor.mass)  # (the PI's integral: the encoder modes' with load_ff)
     kp_x = 2.0 * math.pi * f_v / RATIO_SPEED_POS
     gain = L_q / (L_q - L_d)
     k_e = error_gain(motor, f_inj, d.quad, gain)
@@ -293,6 +310,10 @@ def design(
         demod_notch=2.0 * f_inj if 4.0 * f_inj < d.f_pwm else 0.0,  # (below fs / 2 only)
         demod_gain=gain,
         observer_bw=f_obs,
+        observer_type="mech" if mech else "pll",
+        load_ff=mech,
+        observer_bw_pll=f_pll,
+        observer_bw_mech=f_lpf / RATIO_LPF_MECH,
         speed_bw=f_v,
         speed_kp=kp_v,
         speed_ki=ki_v,
@@ -368,6 +389,7 @@ def _limits(dz: Design, motor: Motor, d: DriveData, warnings: list, source: str)
     w_per_v = 2.0 * math.pi / motor.pole_pitch  # electrical rad/s per m/s
     f_max = motor.force_constant * d.i_max
     dz.load = d.load if d.load is not None else RATED_LOAD_FRACTION * f_max
+    dz.force_max = f_max
     if not (math.isfinite(dz.load) and dz.load > 0.0):
         raise InputError(source, "load", f"the rated load must be a force > 0 N (the certificate's loads "
                          f"are fractions of it), got {dz.load!r}")
@@ -395,8 +417,9 @@ def _limits(dz: Design, motor: Motor, d: DriveData, warnings: list, source: str)
     dz.limits = {
         "injection": (f"dead-time error {dz.dead_time_ratio:.2g} x the weakest error signal "
                       f"(target {DEAD_TIME_RATIO:g}; bus share {dz.v_inj / d.v_dc:.3g} V_dc)"),
-        "observer": f"the demodulator's low-pass ({dz.demod_lpf:.4g} Hz) / {RATIO_LPF_OBS:g}",
-        "speed loop": f"the observer / {RATIO_OBS_SPEED:g}",
+        "observer": (f"the demodulator's low-pass ({dz.demod_lpf:.4g} Hz) / "
+                     f"{RATIO_LPF_MECH if dz.observer_type == 'mech' else RATIO_LPF_OBS:g}"),
+        "speed loop": f"the low-pass / {RATIO_LPF_OBS * RATIO_OBS_SPEED:g}",
         "position loop": f"the speed loop's w / {RATIO_SPEED_POS:g}",
         "steps": (f"a move at the speed cap and {dz.a_step:.3g} m/s^2: "
                   + (f"the speed loop's w v_cap / {STEP_ACCEL_DIV:g}"
@@ -405,14 +428,28 @@ def _limits(dz: Design, motor: Motor, d: DriveData, warnings: list, source: str)
     }
 
 
-def _observer_gains(f_bw: float) -> tuple[float, float]:
-    """k1, k2 of the PLL with both poles at -2 pi f (ls_observer_gains)."""
+def startup_lock_gain(observer_type: str, f_obs: float, f_lpf: float) -> float:
+    """The start-up's gain on the demodulated error while the HF observer locks at zero current
+    (``startup.lock_gain``): without a load estimate the mechanical observer's gains (3 w, 3 w^2) act
+    as a PLL's; times ``2 w_pll / (3 w)`` its k1 is the PLL's at ``f_lpf / RATIO_LPF_OBS`` (k2 then
+    0.75 of it: damping 1.15), so it slews onto the axis as the PLL does (measured, 200 starts on
+    ecce2010 without load or friction: 0.096 mm of motion while detecting, 0.099 with the PLL;
+    0.121 without the gain, 0.111 with k2 matched instead); 1 with the PLL."""
+    if observer_type != "mech":
+        return 1.0
+    return 2.0 * (f_lpf / RATIO_LPF_OBS) / (3.0 * f_obs)
+
+
+def _observer_gains(f_bw: float, mech: bool = False) -> tuple[float, ...]:
+    """k1, k2 of the PLL with both poles at -2 pi f, or k1, k2, k3 of the mechanical observer with its
+    three (ls_observer_gains)."""
     w = 2.0 * math.pi * f_bw
-    return 2.0 * w, w * w
+    return (3.0 * w, 3.0 * w * w, w**3) if mech else (2.0 * w, w * w)
 
 
-def loops(*, mass: float, kp_x: float, speed_kp: float, speed_ki: float, observer_k: tuple[float, float],
-          current_bw: float, demod_lpf: float, f_inj: float, f_pwm: float, k_e: float, g: float = 1.0):
+def loops(*, mass: float, kp_x: float, speed_kp: float, speed_ki: float, observer_k: tuple[float, ...],
+          current_bw: float, demod_lpf: float, f_inj: float, f_pwm: float, k_e: float, g: float = 1.0,
+          load_ff: bool = False):
     """The observer loop and the motion loop (python-control transfer functions; docs/tuning.md).
 
     The observer loop ``k_e H_lpf(s) e^{-s T_d} (k1 s + k2)/s^2``: the demodulator's low-pass, the HF
@@ -422,7 +459,14 @@ def loops(*, mass: float, kp_x: float, speed_kp: float, speed_ki: float, observe
     the force reference, ``g C_v(s) (kp_x T(s) + S_v(s)) P(s) C_i(s)``: mass, current loop, speed
     PI and the observer's transfers from the true position to its position and speed estimates;
     ``g`` scales what the observer reports (``1 + de*/dtheta`` of an uncompensated observer,
-    ../shared/brief.md section 4 in the notes; 1 with the LUT)."""
+    ../shared/brief.md section 4 in the notes; 1 with the LUT).
+
+    The mechanical observer (``observer_k = (k1, k2, k3)``; docs/tuning.md, "The observer"): the
+    observer loop ``k_e H_lpf e^{-s T_d} G_o``, ``G_o = k1/s + k2/s^2 + k3/s^3``; its model takes the
+    force reference u (the estimate of the load aside), so its error sees only what the model
+    misses, the current loop: ``E = eps/u = k_e H (C_i - 1) / (m s^2 (1 + k_e H G_o))``, and the
+    motion loop broken at u is ``C_v (kp_x x_est + v_est)/u + load_ff k3 m E / s`` with
+    ``x_est/u = 1/(m s^2) + G_o E`` and ``v_est/u = 1/(m s) + (k2/s + k3/s^2) E``."""
     import control as ct
 
     s = ct.tf("s")
@@ -431,9 +475,21 @@ def loops(*, mass: float, kp_x: float, speed_kp: float, speed_ki: float, observe
     t_d = 2.0 / (math.pi * f_inj) + 1.5 / f_pwm
     num, den = ct.pade(t_d, 2)
     kh = k_e * h_lpf * ct.tf(num, den)
+    w_i = 2.0 * math.pi * current_bw
+    if len(observer_k) == 3:
+        k1, k2, k3 = observer_k
+        g_o = k1 / s + k2 / s**2 + k3 / s**3
+        c_i = w_i / (s + w_i)
+        e_u = ct.minreal(kh * (c_i - 1) / (mass * s**2 * (1 + kh * g_o)), verbose=False)
+        x_u = 1 / (mass * s**2) + g_o * e_u
+        v_u = 1 / (mass * s) + (k2 / s + k3 / s**2) * e_u
+        c_v = speed_kp + speed_ki / s if speed_ki else speed_kp
+        l_mot = g * c_v * (kp_x * x_u + v_u)
+        if load_ff:
+            l_mot = l_mot + k3 * mass / s * e_u
+        return kh * g_o, ct.minreal(l_mot, verbose=False)
     k1, k2 = observer_k
     g_o = (k1 * s + k2) / s**2
-    w_i = 2.0 * math.pi * current_bw
     t_pos = ct.minreal(kh * g_o / (1 + kh * g_o), verbose=False)
     s_v = ct.minreal((k2 / s) * kh / (1 + kh * g_o), verbose=False)
     c_v = speed_kp + speed_ki / s
@@ -456,10 +512,12 @@ def margins(dz: Design, motor: Motor, drive: DriveData, k_lo: float = 1.0, k_hi:
         ("unscheduled max", dz.k_e_max),
     )
     for label, k in cases:
-        l_obs, l_mot = loops(mass=motor.mass, kp_x=dz.kp_x, speed_kp=dz.speed_kp, speed_ki=dz.speed_ki,
-                             observer_k=_observer_gains(dz.observer_bw), current_bw=dz.current_bw,
-                             demod_lpf=dz.demod_lpf,
-                             f_inj=dz.f_inj, f_pwm=drive.f_pwm, k_e=k)
+        # (with the load estimate fed forward the sensorless step holds the PI's integrator at 0)
+        ki = 0.0 if dz.load_ff else dz.speed_ki
+        l_obs, l_mot = loops(mass=motor.mass, kp_x=dz.kp_x, speed_kp=dz.speed_kp, speed_ki=ki,
+                             observer_k=_observer_gains(dz.observer_bw, dz.observer_type == "mech"),
+                             current_bw=dz.current_bw, demod_lpf=dz.demod_lpf,
+                             f_inj=dz.f_inj, f_pwm=drive.f_pwm, k_e=k, load_ff=dz.load_ff)
         out[f"observer loop ({label}, k_e = {k:.2f})"] = loop_margins(l_obs)
         out[f"motion loop ({label}, k_e = {k:.2f})"] = loop_margins(l_mot)
     return out

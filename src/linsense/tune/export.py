@@ -18,6 +18,7 @@ from linsense.tune.design import (
     DriveData,
     error_gain,
     mean_dq,
+    startup_lock_gain,
 )
 
 
@@ -55,7 +56,9 @@ def scenario_dict(dz: Design, drive: DriveData, motor_ref: str, base: dict | Non
         inj["frequency"] = _r(dz.f_inj)
     sc.setdefault("observer", {}).update(
         {
+            "type": dz.observer_type,
             "bandwidth_hz": _r(dz.observer_bw),
+            "force_max": _r(dz.force_max),
             "demod_lpf_hz": _r(dz.demod_lpf),
             "gain_schedule": True,
             "omega_max": _r(dz.omega_obs * k_est),
@@ -173,6 +176,7 @@ def c_header(dz: Design, drive: DriveData, motor: Motor, name: str | None = None
         ("obs.fs", drive.f_pwm),
         ("obs.pole_pitch", motor.pole_pitch),
         ("obs.mass", motor.mass),
+        ("obs.force_max", dz.force_max),
         ("enc_obs.fs", drive.f_pwm),
         ("enc_obs.pole_pitch", motor.pole_pitch),
         ("enc_obs.mass", motor.mass),
@@ -192,6 +196,7 @@ def c_header(dz: Design, drive: DriveData, motor: Motor, name: str | None = None
         ("traj.v_step", dz.v_cap),
         ("traj.a_step", dz.a_step),
         ("traj.a_lpf", dz.demod_lpf),
+        ("startup.lock_gain", startup_lock_gain(dz.observer_type, dz.observer_bw, dz.demod_lpf)),
         ("traj.a_max", drive.a_max),
         ("pos.mass", motor.mass),
         ("pos.force_max", force_max),
@@ -258,6 +263,8 @@ static inline void {fn}(ls_drive_cfg *cfg, const ls_lut *comp, const ls_lut *gai
 {{
     ls_drive_default_cfg(cfg);
 {body}
+    cfg->obs.type = {"LS_OBS_MECH" if dz.observer_type == "mech" else "LS_OBS_PLL"};
+    cfg->load_ff = {"true" if dz.load_ff else "false"}; /* the observer's load estimate fed forward */
     ls_observer_gains(&cfg->obs, {f(dz.observer_bw)}); /* the library's rule for the bandwidth (Hz) */
     cfg->demod.comp = comp;
     cfg->demod.gain_table = gain;

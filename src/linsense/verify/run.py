@@ -158,10 +158,15 @@ def judge(case: Case, a: dict, fault: int, t_done: float, duration: float, tau: 
         if rec is None or rec > C.LOAD_RECOVER_S:
             why.append(f"back within {C.SETTLE_BAND_DEG:g} deg after {_s(rec)} > {C.LOAD_RECOVER_S:g} s")
     if pp > C.HOLD_PP_DEG:
-        # a monotonic approach in the end window is still settling, not a limit cycle
+        # a monotonic approach in the end window is still settling, not a limit cycle; nor is an
+        # oscillation that decays: below the threshold over the window's second half, and at most
+        # half its first half's (a cycle keeps its amplitude)
         xm, tw = 0.5 * (lo[win] + hi[win]), t[win]
         resid = xm - np.polyval(np.polyfit(tw - tw[0], xm, 1), tw - tw[0]) if xm.size > 2 else xm
-        what = "limit cycle" if float(np.ptp(resid)) * deg > 0.5 * pp else "still moving"
+        h = xm.size // 2
+        p1, p2 = (float(np.ptp(xm[:h])), float(np.ptp(xm[h:]))) if h > 1 else (0.0, 0.0)
+        decays = h > 1 and p2 * deg <= C.HOLD_PP_DEG and p2 <= 0.5 * p1
+        what = "limit cycle" if float(np.ptp(resid)) * deg > 0.5 * pp and not decays else "still moving"
         text = f"{what} {pp:.3g} deg p-p ({pp / deg * 1e3:.3g} mm) > {C.HOLD_PP_DEG:g} deg"
         # holds and steps must be still at their end; the load step and the trajectory are bounded
         # by their recovery and their errors (docs/tuning.md, "The certificate"): a mover still
@@ -169,8 +174,8 @@ def judge(case: Case, a: dict, fault: int, t_done: float, duration: float, tau: 
         if what == "limit cycle" or case.kind in ("hold", "step"):
             why.append(text)
         else:
-            row["note"] = (f"still approaching: {pp:.3g} deg p-p ({pp / deg * 1e3:.3g} mm) at the end, "
-                           f"within {C.SETTLE_BAND_DEG:g} deg")
+            row["note"] = (f"still settling: {pp:.3g} deg p-p ({pp / deg * 1e3:.3g} mm) at the end, "
+                           f"within {C.SETTLE_BAND_DEG:g} deg, decaying")
     row["why"] = "; ".join(why)
     row["passed"] = not why
     return row
