@@ -236,3 +236,37 @@ def test_a_step_runs_as_the_designed_move():
     t_move = 2.0 * (3.0e-3 / dz.a_step) ** 0.5  # (triangular: 3 mm is short of v_cap^2 / a_step)
     done = t > 0.05 + t_move + 2e-3
     assert x_move[done] == pytest.approx(3.0e-3, abs=1e-9) and (x_move[~done] < 3.0e-3).all()
+
+
+def test_the_designed_observer_is_the_mechanical_one_with_its_load_fed_forward():
+    """The design's observer for the pulsating and elliptical injections (docs/tuning.md, "The
+    observer"): mechanical, at f_lpf / 20, its load estimate fed forward; the PLL keeps the paper's
+    rule; a load feed-forward without the mechanical observer is refused, naming the key."""
+    from linsense.errors import InputError
+    from linsense.model.motor import load_motor
+    from linsense.tune.design import RATIO_LPF_MECH, RATIO_LPF_OBS, startup_lock_gain
+
+    motor = load_motor("ecce2010")
+    dz = design(motor, DriveData(), analyse=False)
+    assert dz.observer_type == "mech" and dz.load_ff
+    assert dz.observer_bw == pytest.approx(dz.demod_lpf / RATIO_LPF_MECH)
+    sq = design(motor, DriveData(shape="square"), analyse=False)
+    assert sq.observer_type == "pll" and not sq.load_ff
+    assert sq.observer_bw == pytest.approx(sq.demod_lpf / RATIO_LPF_OBS)
+    # the start-up's lock as the PLL's: k1 of the mechanical observer times the gain = the PLL's k1
+    g = startup_lock_gain("mech", dz.observer_bw, dz.demod_lpf)
+    assert 3 * dz.observer_bw * g == pytest.approx(2 * dz.observer_bw_pll)
+    assert startup_lock_gain("pll", 40, 300) == 1
+    hold = {"motor": "ecce2010", "scenario": {"duration": 0.1}, "reference": {"type": "hold"}}
+    b = build(scenario_from_dict(hold))
+    d = b.drive.state.cfg
+    assert d.obs.type == 1 and d.load_ff and d.startup.lock_gain == pytest.approx(g)
+    assert d.obs.force_max == pytest.approx(dz.force_max)
+    b = build(scenario_from_dict({**hold, "observer": {"type": "pll"}}))
+    d = b.drive.state.cfg
+    assert d.obs.type == 0 and not d.load_ff and d.startup.lock_gain == 1.0
+    # the PLL's 40 Hz
+    assert d.obs.k1 == pytest.approx(2 * 2 * 3.141592653589793 * dz.observer_bw_pll, rel=1e-5)
+    with pytest.raises(InputError) as e:
+        build(scenario_from_dict({**hold, "observer": {"type": "pll", "load_feedforward": True}}))
+    assert "observer.load_feedforward" in str(e.value) and "mech" in str(e.value)
