@@ -169,6 +169,11 @@ void ls_drive_enc_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
         return;
     }
     if (d->align) {
+        /* load_ff: the sensorless modes held the load in the HF observer's estimate (the speed PI's
+         * integrator at 0); the encoder modes hold it in the integrator */
+        if (cfg->load_ff && cfg->pos.type == LS_POSCTRL_P) {
+            d->pos.speed.integ = ls_clamp(d->obs.f_load, cfg->pos.speed.out_min, cfg->pos.speed.out_max);
+        }
         ls_observer_reset(&d->enc, pe);
         ls_observer_reset(&d->obs, pe);
         ls_traj_reset(&d->traj, pe);
@@ -221,6 +226,9 @@ void ls_drive_enc_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
         x_err = ls_pos_diff(x_ref, pos) * d->inv_kx;
         f = ls_posctrl_step_finite(&d->pos, x_err, omega * d->inv_kx, v_ff, a_ff);
         i_q_ref = f * d->inv_kf;
+        /* the HF observer slaved to the encoder carries the integrator's load too: a change to a
+         * sensorless mode with load_ff starts from it (ls_drive_path_force_) */
+        d->obs.f_load = ls_clamp(d->pos.speed.integ, -cfg->obs.force_max, cfg->obs.force_max);
         if (calibrating) { /* the dither, one step on (the sine at the phase's nearest of 256 points) */
             d->cal_acc += d->cal_inc;
             i_q_ref += d->cal_amp * (LS_REAL)ls_sin_tab[(d->cal_acc + 0x800000u) >> 24]; /* (mod 2^32) */
