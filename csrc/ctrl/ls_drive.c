@@ -55,7 +55,7 @@ void ls_drive_default_cfg(ls_drive_cfg *c)
     c->obs.mass = mass;
     c->obs.omega_max = LS_R(300.0);
     c->obs.force_max = kf * c->i_max; /* the load the drive can hold */
-    ls_observer_gains(&c->obs, LS_DEF_OBSERVER_BW); /* well above the speed loop it feeds */
+    ls_observer_gains(&c->obs, LS_DEF_OBSERVER_BW); /* the design's rule (linsense.tune.design) */
     c->enc_obs = c->obs;
     c->enc_obs.type = LS_OBS_PLL;
     ls_observer_gains(&c->enc_obs, LS_R(200.0));

@@ -15,7 +15,6 @@
 #define LS_DEF_MASS LS_R(1.5) /* kg, moving mass */
 #define LS_DEF_R_S LS_R(9.0) /* ohm, phase resistance */
 #define LS_DEF_CURRENT_BW LS_R(250.0) /* Hz, current-loop bandwidth */
-#define LS_DEF_SPEED_BW LS_R(8.0) /* Hz, speed-loop bandwidth */
 #define LS_DEF_SPEED_KP LS_R(75.3982237) /* N s/m, speed-loop gain (m w_v) */
 #define LS_DEF_SPEED_KI LS_R(947.482023) /* N/m, speed-loop ki (m w_v^2 / 4; 0 sensorless with load_ff) */
 #define LS_DEF_KP_X LS_R(20.106193) /* 1/s, position-loop gain */

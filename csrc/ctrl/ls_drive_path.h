@@ -1,4 +1,3 @@
-
 /* Pieces the steps of ls_drive_step share (ls_drive.c, ls_drive_startup.c, ls_drive_rotating.c,
  * ls_drive_square.c, ls_drive_encoder.c): private to the library, static inline so that each step
  * keeps its own compiled copy. (The checks, Clarke and alignment at the start of the rotating and

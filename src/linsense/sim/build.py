@@ -301,8 +301,7 @@ def designed(sc: Scenario, motor: Motor) -> Scenario:
     k_est = _memo(("k_est", motor_key(motor)), lambda: uncompensated_speed_factor(motor)) if no_table else 1.0
     want = {
         "injection": {"amplitude": dz.v_inj, "frequency": dz.f_inj, "ramp_rate": dz.inj_ramp_rate},
-        "observer": {"bandwidth_hz": dz.observer_bw, "demod_lpf_hz": dz.demod_lpf, "gain_schedule": True,
-                     "hf_delay_s": dz.hf_delay},
+        "observer": {"demod_lpf_hz": dz.demod_lpf, "gain_schedule": True, "hf_delay_s": dz.hf_delay},
         "controller": {"speed_bandwidth_hz": dz.speed_bw, "current_bandwidth_hz": dz.current_bw},
         "calibration": {"dither_a": dz.dither_a, "dither_hz": dz.dither_hz},
         # the limits with their margins over the application (reference.v_max, a_max); the trips act

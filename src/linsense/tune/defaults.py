@@ -42,7 +42,6 @@ def default_values() -> list[tuple[str, float, str]]:
         ("LS_DEF_MASS", m.mass, "kg, moving mass"),
         ("LS_DEF_R_S", m.R_s, "ohm, phase resistance"),
         ("LS_DEF_CURRENT_BW", dz.current_bw, "Hz, current-loop bandwidth"),
-        ("LS_DEF_SPEED_BW", dz.speed_bw, "Hz, speed-loop bandwidth"),
         ("LS_DEF_SPEED_KP", dz.speed_kp, "N s/m, speed-loop gain (m w_v)"),
         ("LS_DEF_SPEED_KI", dz.speed_ki, "N/m, speed-loop ki (m w_v^2 / 4; 0 sensorless with load_ff)"),
         ("LS_DEF_KP_X", dz.kp_x, "1/s, position-loop gain"),

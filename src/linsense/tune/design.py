@@ -280,8 +280,9 @@ def design(
     f_lpf = RATIO_LPF * f_inj
     f_pll = f_lpf / RATIO_LPF_OBS
     f_v = f_pll / RATIO_OBS_SPEED
+    f_mech = f_lpf / RATIO_LPF_MECH
     mech = d.shape == "pulsating"  # (the rotating and square injections: the PLL, not yet verified)
-    f_obs = f_lpf / RATIO_LPF_MECH if mech else f_pll
+    f_obs = f_mech if mech else f_pll
     kp_v, ki_v = speed_gains(f_v, motor.mass)  # (the PI's integral: the encoder modes' with load_ff)
     kp_x = 2.0 * math.pi * f_v / RATIO_SPEED_POS
     gain = L_q / (L_q - L_d)
@@ -313,7 +314,7 @@ def design(
         observer_type="mech" if mech else "pll",
         load_ff=mech,
         observer_bw_pll=f_pll,
-        observer_bw_mech=f_lpf / RATIO_LPF_MECH,
+        observer_bw_mech=f_mech,
         speed_bw=f_v,
         speed_kp=kp_v,
         speed_ki=ki_v,
