@@ -88,10 +88,13 @@ def test_tune_outputs(tmp_path, capsys):
     src = tmp_path / "use.c"
     src.write_text(
         '#include "ls_cfg_small30.h"\nint main(void)\n{\n    static ls_drive d;\n    ls_drive_cfg cfg;\n'
-        "    ls_lut c, g;\n    ls_lut_cfg cc = {ls_cfg_small30_comp, SMALL30_LEN};\n"
+        "    ls_lut c, g, r, h;\n    ls_lut_cfg cc = {ls_cfg_small30_comp, SMALL30_LEN};\n"
         "    ls_lut_cfg gc = {ls_cfg_small30_gain, SMALL30_LEN};\n"
-        "    if (ls_lut_init(&c, &cc) != LS_OK || ls_lut_init(&g, &gc) != LS_OK) return 2;\n"
-        "    ls_cfg_small30(&cfg, &c, &g);\n    return ls_drive_init(&d, &cfg) == LS_OK ? 0 : 1;\n}\n"
+        "    ls_lut_cfg rc = {ls_cfg_small30_comp_r, SMALL30_LEN};\n"
+        "    ls_lut_cfg hc = {ls_cfg_small30_gain_r, SMALL30_LEN};\n"
+        "    if (ls_lut_init(&c, &cc) != LS_OK || ls_lut_init(&g, &gc) != LS_OK\n"
+        "        || ls_lut_init(&r, &rc) != LS_OK || ls_lut_init(&h, &hc) != LS_OK) return 2;\n"
+        "    ls_cfg_small30(&cfg, &c, &g, &r, &h);\n    return ls_drive_init(&d, &cfg) == LS_OK ? 0 : 1;\n}\n"
     )
     exe = tmp_path / "use"
     ctrl_src = sorted(str(p) for p in (ROOT / "csrc" / "ctrl").glob("*.c"))

@@ -411,3 +411,51 @@ def test_judge_load_step_still_approaching_passes_a_limit_cycle_fails():
     # the same creep at the end of a hold fails
     row = judge(Case("h", "hold", "nominal", {}, target=0.0), _arrays(t, creep), 0, 0.9, 0.9, TAU)
     assert not row["passed"] and "still moving" in row["why"]
+
+
+@pytest.mark.parametrize("adapt", [True, False])
+def test_the_drive_measures_a_hot_winding(adapt):
+    """A winding 30 % hotter than the motor file: the drive measures the resistance's scale from the
+    HF current changes (ls_dtres_adapt) and its table follows it (ls_demod_cfg.comp_r); ecce2010 at
+    the position where the model puts the nominal table's worst error (4.2 deg): within 1 deg with
+    the measurement, beyond the certificate's 3 deg bound without it (observer.resistance_adapt)."""
+    from linsense.model.tolerance import perturbed
+    from linsense.sim.core import run_closed_loop
+    from linsense.tune.margins import hold_error
+    from linsense.verify.run import _BLOCKS, _SIGNALS, case_scenario
+
+    m = load_motor("ecce2010")
+    dd = DriveData(v_dc=72.0, f_pwm=16000.0, dead_time=0.8e-6, i_max=2.5, v_max=0.2, a_max=1.0, load=40.0)
+    dz = design(m, dd, analyse=False)
+    hot = perturbed(m, 1.0, 1.3, 1.0, label="hot")
+    e = hold_error(m, hot, dz.f_inj, dz.quad, 72)  # the nominal table's error, target = k 5 deg
+    deg = 5.0 * float(np.argmax(np.abs(e)))
+    assert math.degrees(np.max(np.abs(e))) > 4.0
+    case = Case(name="hot", kind="hold", plant="nominal", target=m.pole_pitch * deg / 360.0,
+                sections={"scenario": {"duration": 0.6}, "reference": {"type": "hold"},
+                          "initial": {"position_mm": m.pole_pitch * deg / 360.0 * 1e3, "load_balanced": True},
+                          "observer": {"resistance_adapt": adapt}})
+    base = scenario_dict(dz, dd, "ecce2010")
+    sc = scenario_from_dict(case_scenario(case, base, "ecce2010"), source="<test>", base_dir=str(ROOT))
+    b = build(sc, motor=hot)
+    raw = run_closed_loop(b.cfg, b.drive.state, b.n_steps, b.commands, signals=_SIGNALS, blocks=_BLOCKS)
+    err_deg = abs(float(raw.arrays["x_mean"][-1]) - case.target) * 360.0 / m.pole_pitch
+    k_r = float(b.drive.state.dtres.k_r)
+    if adapt:
+        assert abs(k_r - 1.3) < 0.03 and err_deg < 1.0, (k_r, err_deg)
+    else:
+        assert k_r == 1.0 and err_deg > C.OFF_ERR_DEG, (k_r, err_deg)
+
+
+def test_the_end_effect_tolerance_costs_what_the_end_effect_ratio_says():
+    """The model's cost of dM0 +25 % (pulsating injection, nominal table) is a quarter of the end
+    effect's share of the saliency over 2, in rad, on every test motor (docs/tuning.md, "The
+    end-effect tolerance"): a property of the motor, which the design's warning names."""
+    from linsense.tune.design import end_effect_ratio
+    from linsense.tune.margins import tolerance_costs
+
+    for name in NAMES + ["ecce2010"]:
+        m = load_motor("ecce2010" if name == "ecce2010" else CLASS / f"{name}.toml")
+        dz = design(m, _drive(name) if name != "ecce2010" else DriveData(), analyse=False)
+        cost = tolerance_costs(m, dz.f_inj, 0.0, n=90)["dM0 +25 %"]["error_deg"]
+        assert cost == pytest.approx(math.degrees(0.25 * end_effect_ratio(m) / 2.0), rel=0.12), name

@@ -18,7 +18,8 @@ ls_status ls_demod_init(ls_demod *d, const ls_demod_cfg *cfg)
         cfg->f_notch >= LS_R(0.5) * cfg->fs) {
         return LS_ERR_PARAM;
     }
-    if ((cfg->comp != NULL && cfg->comp->len < 4u) || (cfg->gain_table != NULL && cfg->gain_table->len < 4u)) {
+    if ((cfg->comp != NULL && cfg->comp->len < 4u) || (cfg->gain_table != NULL && cfg->gain_table->len < 4u) ||
+        (cfg->comp_r != NULL && cfg->comp_r->len < 4u) || (cfg->gain_r != NULL && cfg->gain_r->len < 4u)) {
         return LS_ERR_PARAM;
     }
     d->den_min = cfg->min_level > LS_R(1e-30) ? cfg->min_level : LS_R(1e-30);
@@ -62,6 +63,7 @@ void ls_demod_reset(ls_demod *d)
     d->ratio = LS_R(0.0);
     d->err = LS_R(0.0);
     d->valid = false;
+    d->k_r = LS_R(1.0);
 }
 
 void ls_demod_set_comp(ls_demod *d, bool on)

@@ -47,6 +47,8 @@ void ls_drive_default_cfg(ls_drive_cfg *c)
     c->demod.gain = LS_DEF_DEMOD_GAIN;
     c->demod.comp = NULL;
     c->demod.gain_table = NULL;
+    c->demod.comp_r = NULL;
+    c->demod.gain_r = NULL;
     c->demod.min_level = LS_R(0.005);
     c->obs.type = LS_DEF_OBSERVER_MECH > 0 ? LS_OBS_MECH : LS_OBS_PLL;
     c->load_ff = LS_DEF_OBSERVER_MECH > 0; /* the mechanical observer's load estimate fed forward */
@@ -96,6 +98,7 @@ void ls_drive_default_cfg(ls_drive_cfg *c)
     c->dtres.l_q = l_q;
     c->dtres.forward = true;
     c->dtres.adapt = true;
+    c->dtres.adapt_r = true;
     c->dtres.l_ea = LS_DEF_L_EA;
     c->dtres.l_eb = LS_DEF_L_EB;
     c->prot.i_max = LS_R(6.0);

@@ -81,18 +81,24 @@ static inline LS_REAL ls_drive_path_force_(ls_drive *d, ls_pos pos, LS_REAL omeg
 
 /* The current the dead-time residual drove over the period that has just ended (A, alpha-beta;
  * ls_dtres.h): the modulator's forward model of the period with the inductance model at the angle
- * (c, s), its voltage error through the R-L model, and the model's inductance scale measured from
- * the period's current change (dtres.cfg.adapt); or the interpolation (dtres.cfg.forward false).
+ * (c, s), its voltage error through the R-L model, and the model's inductance and resistance scales
+ * measured from the period's current change (dtres.cfg.adapt; the resistance's passed to the
+ * demodulator's tables); or the interpolation (dtres.cfg.forward false).
  * Call before ls_mod_step. */
 static inline void ls_drive_path_residual_(ls_drive *d, const ls_meas *meas, LS_REAL c, LS_REAL s, LS_REAL i_res[2])
 {
     LS_REAL v_err[2];
     if (d->dtres.cfg.forward) {
-        LS_REAL g[6], i_end[3];
+        LS_REAL g[6], i_end[3], i_drop[3];
         ls_dtres_phase_g(&d->dtres, c, s, g);
-        if (ls_mod_residual(&d->mod, meas->i_abc, meas->v_dc, g, d->dtres.cfg.r_s, v_err, i_end) &&
+        if (ls_mod_residual(&d->mod, meas->i_abc, meas->v_dc, g, d->dtres.cfg.r_s * d->dtres.k_r, v_err, i_end,
+                            i_drop) &&
             d->dtres.cfg.adapt) {
-            ls_dtres_adapt(&d->dtres, d->mod.i_prev, meas->i_abc, i_end);
+            ls_dtres_adapt(&d->dtres, d->mod.i_prev, meas->i_abc, i_end, i_drop, !d->starting);
+            /* the tables' resistance correction (ls_demod.h), and the current PI's zero on the
+             * winding's R/L pole (ki = R_s w_c: linsense.tune.design.current_gains) */
+            d->demod.k_r = d->dtres.k_r;
+            d->cur.ki_ts = d->cur.cfg.ki * d->cur.ts * d->dtres.k_r;
         }
     } else {
         (void)ls_mod_residual_interp(&d->mod, meas->i_abc, meas->v_dc, d->dtres.k_rip, v_err);

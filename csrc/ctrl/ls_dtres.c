@@ -39,10 +39,26 @@ ls_status ls_dtres_init(ls_dtres *r, const ls_dtres_cfg *cfg)
     return LS_OK;
 }
 
+void ls_dtres_resistance_(ls_dtres *r)
+{
+    const LS_REAL ts = LS_R(1.0) / r->cfg.fs, rs = r->cfg.r_s * r->k_r;
+    axis(rs, r->cfg.l_d, ts, &r->a_d, &r->b_d);
+    axis(rs, r->cfg.l_q, ts, &r->a_q, &r->b_q);
+}
+
 void ls_dtres_reset(ls_dtres *r)
 {
+    int k;
     r->i_d = LS_R(0.0);
     r->i_q = LS_R(0.0);
     r->k_l = LS_R(1.0);
-    r->s_num = r->s_den = LS_R(0.0);
+    r->k_r = LS_R(1.0);
+    for (k = 0; k < 7; ++k) {
+        r->s[k] = LS_R(0.0);
+    }
+    for (k = 0; k < 6; ++k) {
+        r->hp[k] = LS_R(0.0);
+    }
+    r->n_solve = 0u;
+    ls_dtres_resistance_(r);
 }

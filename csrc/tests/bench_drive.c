@@ -45,6 +45,9 @@ int main(int argc, char **argv)
     }
     ls_drive_default_cfg(&cfg);
     cfg.demod.comp = &lut;
+    /* the tables' slopes in the resistance's scale, which the design writes (read every step) */
+    cfg.demod.comp_r = &lut_g;
+    cfg.demod.gain_r = &lut_g;
     cfg.mod.dtc = argc > 2 && atoi(argv[2]) != 0; /* the plant has no dead time: off unless asked */
     cfg.hf_dtres = !(argc > 5 && atoi(argv[5]) == 1); /* the dead-time residual model (on unless asked) */
     cfg.dtres.forward = !(argc > 5 && atoi(argv[5]) == 2);

@@ -18,10 +18,10 @@
 #include <string.h>
 
 #include "linsense/ls_drive.h"
-#include "ls_cfg_ecce2010.h" /* generated: tables and ls_cfg_ecce2010(&cfg, &comp, &gain) */
+#include "ls_cfg_ecce2010.h" /* generated: the tables and ls_cfg_ecce2010(&cfg, &comp, &gain, ...) */
 
 /* ---- application state: statically allocated, as on an MCU (the library has no globals) ---- */
-static ls_lut comp_lut, gain_lut;
+static ls_lut comp_lut, gain_lut, comp_r_lut, gain_r_lut;
 static ls_drive drive;
 static ls_cmd cmd;
 
@@ -55,7 +55,10 @@ static void adc_read(ls_meas *m)
     m->enc_count = 0;
 }
 
-/* apply the duty cycles for one PWM period to the synthetic motor: v = R i + L di/dt */
+/* the synthetic motor over one PWM period, v = R i + L di/dt, with the duty cycles written in the
+ * previous period (a PWM unit's shadow registers load them at the period's start: the one period of
+ * computation delay the drive expects, ls_drive_cfg.delay_comp); then the new ones are latched */
+static double duty_next[3] = {0.5, 0.5, 0.5};
 static void pwm_write(const ls_cmd *c)
 {
     const double vdc = 72.0, R = 9.0, h = 1.0 / 16000.0 / 8;
@@ -64,7 +67,8 @@ static void pwm_write(const ls_cmd *c)
     motor_inductance(L);
     det = L[0][0] * L[1][1] - L[0][1] * L[1][0];
     for (k = 0; k < 3; ++k) {
-        v[k] = c->enable ? (double)c->duty[k] * vdc : 0.5 * vdc;
+        v[k] = duty_next[k] * vdc;
+        duty_next[k] = c->enable ? (double)c->duty[k] : 0.5;
     }
     va = (2 * v[0] - v[1] - v[2]) / 3;
     vb = (v[1] - v[2]) / sqrt(3.0);
@@ -89,15 +93,18 @@ int main(void)
     const double deg = 3.14159265358979323846 / 180.0;
     ls_lut_cfg lut_cfg = {ls_cfg_ecce2010_comp, ECCE2010_LEN};
     ls_lut_cfg gain_cfg = {ls_cfg_ecce2010_gain, ECCE2010_LEN};
+    ls_lut_cfg comp_r_cfg = {ls_cfg_ecce2010_comp_r, ECCE2010_LEN};
+    ls_lut_cfg gain_r_cfg = {ls_cfg_ecce2010_gain_r, ECCE2010_LEN};
     ls_drive_cfg cfg;
     ls_pos start;
     long k;
     double est_deg = 0.0;
 
-    if (ls_lut_init(&comp_lut, &lut_cfg) != LS_OK || ls_lut_init(&gain_lut, &gain_cfg) != LS_OK) {
+    if (ls_lut_init(&comp_lut, &lut_cfg) != LS_OK || ls_lut_init(&gain_lut, &gain_cfg) != LS_OK ||
+        ls_lut_init(&comp_r_lut, &comp_r_cfg) != LS_OK || ls_lut_init(&gain_r_lut, &gain_r_cfg) != LS_OK) {
         return 2;
     }
-    ls_cfg_ecce2010(&cfg, &comp_lut, &gain_lut); /* the designed configuration and its tables */
+    ls_cfg_ecce2010(&cfg, &comp_lut, &gain_lut, &comp_r_lut, &gain_r_lut); /* the design and its tables */
     cfg.mod.dtc = false;          /* the synthetic motor has an ideal inverter: nothing to */
     cfg.mod.dead_time = 0.0f;     /* compensate, and no dead-time residual to take out */
     cfg.obs.type = LS_OBS_PLL;    /* the armature is held: the tracking loop alone (the designed */
@@ -121,8 +128,8 @@ int main(void)
         }
         if (k % 500 == 0 || k == 3999) {
             est_deg = (double)cmd.pos_est.theta / deg;
-            printf("step %4ld  t = %6.4f s  estimate %7.3f deg  (true %.1f)  error signal %+.4f rad  HF %.3f A rms\n",
-                   k, (double)k / 16000.0, est_deg, TRUE_THETA_DEG, (double)cmd.err_sig, sqrt((double)cmd.hf_level));
+            printf("step %4ld  t = %6.4f s  estimate %7.3f deg  (true %.1f)  error signal %+.4f rad  HF %.3f A rms  k_r %.3f\n",
+                   k, (double)k / 16000.0, est_deg, TRUE_THETA_DEG, (double)cmd.err_sig, sqrt((double)cmd.hf_level), (double)drive.dtres.k_r);
         }
     }
     printf("converged to %.3f deg, %.3f deg from the true position\n", est_deg, est_deg - TRUE_THETA_DEG);

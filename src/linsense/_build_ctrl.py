@@ -106,6 +106,8 @@ typedef struct {
     LS_REAL gain;
     const ls_lut *comp;
     const ls_lut *gain_table;
+    const ls_lut *comp_r;
+    const ls_lut *gain_r;
     LS_REAL min_level;
     LS_REAL f_notch;
     LS_REAL ref_phase;
@@ -115,6 +117,7 @@ typedef struct {
     ls_biquad lp[4];
     bool use_comp;
     bool use_gain_table;
+    LS_REAL k_r;
     LS_REAL psi;
     LS_REAL level;
     LS_REAL ratio;
@@ -213,11 +216,12 @@ void ls_traj_step(ls_traj *t, ls_pos *x_ref, LS_REAL *v_ref, LS_REAL *a_ref);
 
 /* ls_dtres.h */
 typedef struct {
-    LS_REAL fs; LS_REAL r_s; LS_REAL l_d; LS_REAL l_q; bool forward; bool adapt; LS_REAL l_ea; LS_REAL l_eb;
+    LS_REAL fs; LS_REAL r_s; LS_REAL l_d; LS_REAL l_q; bool forward; bool adapt; bool adapt_r;
+    LS_REAL l_ea; LS_REAL l_eb;
 } ls_dtres_cfg;
 typedef struct {
     ls_dtres_cfg cfg; LS_REAL a_d, a_q; LS_REAL b_d, b_q; LS_REAL i_d, i_q; LS_REAL k_rip; LS_REAL k_l;
-    LS_REAL s_num, s_den;
+    LS_REAL k_r; LS_REAL s[7]; LS_REAL hp[6]; uint32_t n_solve;
 } ls_dtres;
 ls_status ls_dtres_init(ls_dtres *r, const ls_dtres_cfg *cfg);
 void ls_dtres_reset(ls_dtres *r);
@@ -373,6 +377,7 @@ typedef struct {
     LS_REAL psi_cal;
     bool starting;
     ls_startup su;
+    ls_dtres dtres;
     ...;
 } ls_drive;
 void ls_drive_default_cfg(ls_drive_cfg *cfg);

@@ -738,6 +738,10 @@ class Drive:
         Compensation table for ``cfg.demod.comp`` (kept alive by this object).
     gain_table : array_like or Lut, optional
         Position-scheduled demodulator gain for ``cfg.demod.gain_table``.
+    comp_r, gain_r : array_like or Lut, optional
+        The compensation and gain tables' slopes in the resistance's scale, for
+        ``cfg.demod.comp_r`` and ``cfg.demod.gain_r`` (:func:`linsense.compensation.lut.lut_r_slope`,
+        :func:`linsense.tune.design.gain_r_slope`).
 
     Raises
     ------
@@ -746,10 +750,17 @@ class Drive:
         refuses them, or the drive-level rule.
     """
 
-    def __init__(self, cfg: Any = None, *, comp: Any = None, gain_table: Any = None) -> None:
+    def __init__(self, cfg: Any = None, *, comp: Any = None, gain_table: Any = None,
+                 comp_r: Any = None, gain_r: Any = None) -> None:
         self.cfg = drive_default_cfg() if cfg is None else cfg
         self.comp = None if comp is None else make_lut(comp)
         self.gain_table = None if gain_table is None else make_lut(gain_table)
+        self.comp_r = None if comp_r is None else make_lut(comp_r)
+        self.gain_r = None if gain_r is None else make_lut(gain_r)
+        if self.comp_r is not None:
+            self.cfg.demod.comp_r = self.comp_r.ptr
+        if self.gain_r is not None:
+            self.cfg.demod.gain_r = self.gain_r.ptr
         if self.comp is not None:
             self.cfg.demod.comp = self.comp.ptr
         if self.gain_table is not None:

@@ -50,6 +50,11 @@ typedef struct {
                                  |g| <= LS_DEMOD_GAIN_MAX */
     const ls_lut *comp;       /* compensation table Psi_LUT(theta_est), rad; NULL: none */
     const ls_lut *gain_table; /* g(theta_est), -; replaces `gain` when not NULL and enabled */
+    const ls_lut *comp_r;     /* dPsi_LUT/dk_r(theta_est), rad: the table's change per unit of the
+                                 resistance's scale k_r (the drive's measured k_r, ls_dtres.h):
+                                 Psi_LUT + (k_r - 1) comp_r is used with the table; NULL: none */
+    const ls_lut *gain_r;     /* dg/dk_r(theta_est), -: the gain table's change per unit of k_r, used
+                                 with it as g + (k_r - 1) gain_r; NULL: none */
     LS_REAL min_level;        /* A^2, HF mean-square current below which err is held at 0, >= 0 */
     LS_REAL f_notch;          /* Hz, the low-pass filters' zeros (instead of at fs/2), 2 f_inj: nulls the
                                  products' ripple at twice the injection frequency (0: plain), < fs/2 */
@@ -63,6 +68,8 @@ typedef struct {
     ls_biquad lp[4];   /* low-pass filters (product: 2 used; heterodyne: 4), zeros at f_notch */
     bool use_comp;     /* compensation table in use */
     bool use_gain_table; /* gain table in use */
+    LS_REAL k_r;       /* -, the resistance's scale the tables are corrected for (cfg.comp_r,
+                          cfg.gain_r; 1 after init and reset; the drive writes it) */
     LS_REAL psi;       /* rad, total compensation angle used at the last step */
     LS_REAL level;     /* A^2, mean-square HF current at the last step */
     LS_REAL ratio;     /* -, normalised error before the gain (~ delta) */
@@ -132,7 +139,13 @@ static inline LS_REAL ls_demod_step_psi(ls_demod *d, LS_REAL i_a, LS_REAL i_b, L
         return d->err;
     }
     inv = LS_R(1.0) / den; /* the demodulator's one division */
-    g = d->use_gain_table ? ls_lut_step(d->cfg.gain_table, theta_est) : d->cfg.gain;
+    g = d->cfg.gain;
+    if (d->use_gain_table) {
+        g = ls_lut_step(d->cfg.gain_table, theta_est);
+        if (d->cfg.gain_r != NULL) {
+            g += (d->k_r - LS_R(1.0)) * ls_lut_step(d->cfg.gain_r, theta_est);
+        }
+    }
     d->ratio = num * inv;
     d->err = num * (g * inv); /* = g ratio */
     return d->err;
@@ -149,6 +162,10 @@ static inline LS_REAL ls_demod_comp_(const ls_demod *d, LS_REAL theta_est, LS_RE
     if (d->use_comp) {
         psi = psi_cal +
               (theta_norm ? ls_lut_step_norm(d->cfg.comp, theta_est) : ls_lut_step(d->cfg.comp, theta_est));
+        if (d->cfg.comp_r != NULL) {
+            psi += (d->k_r - LS_R(1.0)) * (theta_norm ? ls_lut_step_norm(d->cfg.comp_r, theta_est)
+                                                      : ls_lut_step(d->cfg.comp_r, theta_est));
+        }
     }
 #ifdef LS_REAL_DOUBLE
     c = cos(psi);

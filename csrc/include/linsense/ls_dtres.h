@@ -16,7 +16,9 @@
  * L_dq the model's inductance in the estimated frame. k_l, the scale of the model's inverse
  * inductance, is measured from every period (ls_dtres_adapt: the current change the model predicted
  * against the measured one), so that an inductance off by 10 % (a tolerance, a warm motor) does not
- * bring the dead time's bias back.
+ * bring the dead time's bias back; with cfg.adapt_r the resistance scale k_r too (the period's
+ * resistive drop against the measured change: a hot winding), which the drive passes to the
+ * forward model's drop and to the demodulator's table (ls_demod.h, comp_r).
  */
 #ifndef LINSENSE_LS_DTRES_H
 #define LINSENSE_LS_DTRES_H
@@ -32,6 +34,7 @@ typedef struct {
                        adapt); false: the cheaper interpolation between the period's end samples
                        (ls_mod_residual_interp), which needs no angle (docs/firmware.md) */
     bool adapt;   /**< unit: -, measure the model's inductance scale k_l online (false: k_l = 1) */
+    bool adapt_r; /**< unit: -, with adapt: measure the resistance scale k_r online too (false: k_r = 1) */
     LS_REAL l_ea; /**< unit: H, the stationary anisotropy of the alpha-beta inductance (the end
                        effect): L_ab = (L_d + L_q)/2 I + (L_d - L_q)/2 [c2 s2; s2 -c2]
                        + [l_ea l_eb; l_eb -l_ea] (c2, s2: cos and sin of twice the angle) */
@@ -47,12 +50,19 @@ typedef struct {
     LS_REAL k_rip;        /**< unit: s/H, T / L of the PWM ripple at the edges (the interpolation) */
     LS_REAL k_l;          /**< unit: -, the measured scale of the model's inverse inductance (1: as
                                configured), in [LS_DTRES_KL_MIN, LS_DTRES_KL_MAX] */
-    LS_REAL s_num, s_den; /**< unit: A^2, low-passed products of the measured and the predicted
-                               current change (ls_dtres_adapt) */
+    LS_REAL k_r;          /**< unit: -, the measured scale of the model's phase resistance (1: as
+                               configured; cfg.adapt_r), in [LS_DTRES_KR_MIN, LS_DTRES_KR_MAX] */
+    LS_REAL s[7];         /**< unit: A^2, low-passed products of the period's changes (ls_dtres_adapt):
+                               <a,a>, <a,b>, <b,b>, <m,a>, <m,b> (high-passed), <m,c>, <c,c> */
+    LS_REAL hp[6];        /**< unit: A, the slow parts of m, a and b (alpha-beta), taken out of them */
+    uint32_t n_solve;     /**< unit: -, periods since the scales were last solved for */
 } ls_dtres;
 
 ls_status ls_dtres_init(ls_dtres *r, const ls_dtres_cfg *cfg);
 void ls_dtres_reset(ls_dtres *r);
+/* The response's per-step decay and gain (a_d, b_d, a_q, b_q) for the resistance k_r r_s (called
+ * by ls_dtres_adapt when it has solved for k_r; out of line: two exponentials). */
+void ls_dtres_resistance_(ls_dtres *r);
 
 /* v_ab: the voltage error of the period that has just ended (V, alpha-beta); (c, s): cos and sin
  * of the estimated angle. Writes the modelled current at this sample into i_ab (A, alpha-beta).
@@ -105,23 +115,84 @@ static inline void ls_dtres_phase_g(const ls_dtres *r, LS_REAL c, LS_REAL s, LS_
     g[5] = k * (LS_R(0.25) * x00 - LS_R(0.75) * x11);
 }
 
-/* The inverse-inductance scale from one period (cfg.adapt): i0, the period's start currents, i1
- * its end, i_pred the end the model predicted (ls_mod_residual), A, phases. The model's current
- * changes scale with k_l / L, so k_l <- k_l <i1 - i0, p - i0> / |p - i0|^2 (p = i_pred), each
- * product low-passed over 1 / LS_DTRES_KL_RATE periods (the injection's current change is the
- * signal), within [LS_DTRES_KL_MIN, LS_DTRES_KL_MAX]. Inline (called every PWM period). */
+/* The inverse-inductance scale k_l and (cfg.adapt_r) the resistance scale k_r from one period
+ * (cfg.adapt): i0, the period's start currents, i1 its end, i_pred the end the model predicted and
+ * i_drop the resistive drop in that prediction (ls_mod_residual), A, phases. The model's change is
+ * p - i0 = k_l (a - k_r b) with a = (p - i0 + drop) / k_l (the volt-seconds through the
+ * inductance, per unit of k_l) and b = drop / (k_l k_r) (the drop per unit of k_l k_r); m = i1 - i0
+ * the measured change. k_l <- <m, c> / <c, c> with c = a - k_r b (the products over the phases,
+ * weighted by k_l^2, low-passed over 1 / LS_DTRES_KL_RATE periods), every period. k_r: m fitted
+ * as x a - y b by least squares (k_r = y / x) on the products in alpha-beta, low-passed over
+ * 1 / LS_DTRES_KR_RATE periods, after each of m, a and b has lost its slow part (a first-order
+ * high-pass at LS_DTRES_HP_RATE per period): the fit reads the injection's changes, not the
+ * fundamental's, whose back-EMF the model does not know and which would read as a resistance
+ * while the mover moves under load; solved every LS_DTRES_SOLVE_EVERY periods. Each within its
+ * bounds. fit_r false holds k_r (the drive's start-up, whose angle is not
+ * known yet: the model's drop is then read on the wrong axes). Inline (called every PWM period). */
 #define LS_DTRES_KL_RATE LS_R(0.002)
+#define LS_DTRES_KR_RATE LS_R(0.002)
+#define LS_DTRES_HP_RATE LS_R(0.05)
+#define LS_DTRES_SOLVE_EVERY 16u
 #define LS_DTRES_KL_MIN LS_R(0.5)
 #define LS_DTRES_KL_MAX LS_R(2.0)
-static inline void ls_dtres_adapt(ls_dtres *r, const LS_REAL i0[3], const LS_REAL i1[3], const LS_REAL i_pred[3])
+/* a copper winding's resistance from -40 to +180 degC is 0.76-1.78 of its 20 degC value: the scale
+ * stays within that (an estimate pinned at a bound says the forward model does not fit the plant:
+ * a PWM update other than one period after the sample, a current-sensing gain error) */
+#define LS_DTRES_KR_MIN LS_R(0.7)
+#define LS_DTRES_KR_MAX LS_R(1.8)
+static inline void ls_dtres_adapt(ls_dtres *r, const LS_REAL i0[3], const LS_REAL i1[3], const LS_REAL i_pred[3],
+                                  const LS_REAL i_drop[3], bool fit_r)
 {
-    const LS_REAL m0 = i1[0] - i0[0], m1 = i1[1] - i0[1], m2 = i1[2] - i0[2];
-    const LS_REAL p0 = i_pred[0] - i0[0], p1 = i_pred[1] - i0[1], p2 = i_pred[2] - i0[2];
-    r->s_num += LS_DTRES_KL_RATE * ((m0 * p0 + m1 * p1 + m2 * p2) * r->k_l - r->s_num);
-    r->s_den += LS_DTRES_KL_RATE * ((p0 * p0 + p1 * p1 + p2 * p2) - r->s_den);
-    if (r->s_den > LS_R(1e-12)) { /* (A^2: below, no current has changed yet) */
-        const LS_REAL k = r->s_num / r->s_den;
-        r->k_l = k < LS_DTRES_KL_MIN ? LS_DTRES_KL_MIN : (k > LS_DTRES_KL_MAX ? LS_DTRES_KL_MAX : k);
+    const LS_REAL k3 = LS_R(0.57735026919), ul = LS_R(1.0) / r->k_l, ub = ul / r->k_r;
+    LS_REAL x[6];
+    int k;
+    {
+        /* k_l: <m, p - i0> k_l and <p - i0, p - i0> = <m, c> k_l^2 and <c, c> k_l^2 (each period
+         * weighted by the change the model predicted), over the phases */
+        const LS_REAL m0 = i1[0] - i0[0], m1 = i1[1] - i0[1], m2 = i1[2] - i0[2];
+        const LS_REAL p0 = i_pred[0] - i0[0], p1 = i_pred[1] - i0[1], p2 = i_pred[2] - i0[2];
+        r->s[5] += LS_DTRES_KL_RATE * ((m0 * p0 + m1 * p1 + m2 * p2) * r->k_l - r->s[5]);
+        r->s[6] += LS_DTRES_KL_RATE * ((p0 * p0 + p1 * p1 + p2 * p2) - r->s[6]);
+    }
+    fit_r = fit_r && r->cfg.adapt_r;
+    if (fit_r) {
+        /* m, a and b in alpha-beta: alpha = x_a, beta = (x_b - x_c) / sqrt 3 */
+        x[0] = i1[0] - i0[0];
+        x[1] = (i1[1] - i0[1] - i1[2] + i0[2]) * k3;
+        x[2] = (i_pred[0] - i0[0] + i_drop[0]) * ul;
+        x[3] = (i_pred[1] - i0[1] + i_drop[1] - i_pred[2] + i0[2] - i_drop[2]) * (k3 * ul);
+        x[4] = i_drop[0] * ub;
+        x[5] = (i_drop[1] - i_drop[2]) * (k3 * ub);
+        for (k = 0; k < 6; ++k) { /* each less its slow part */
+            r->hp[k] += LS_DTRES_HP_RATE * (x[k] - r->hp[k]);
+            x[k] -= r->hp[k];
+        }
+        /* m = x[0..1], a = x[2..3], b = x[4..5]: <a,a>, <a,b>, <b,b>, <m,a>, <m,b> */
+        r->s[0] += LS_DTRES_KR_RATE * (x[2] * x[2] + x[3] * x[3] - r->s[0]);
+        r->s[1] += LS_DTRES_KR_RATE * (x[2] * x[4] + x[3] * x[5] - r->s[1]);
+        r->s[2] += LS_DTRES_KR_RATE * (x[4] * x[4] + x[5] * x[5] - r->s[2]);
+        r->s[3] += LS_DTRES_KR_RATE * (x[0] * x[2] + x[1] * x[3] - r->s[3]);
+        r->s[4] += LS_DTRES_KR_RATE * (x[0] * x[4] + x[1] * x[5] - r->s[4]);
+    }
+    if (r->s[6] > LS_R(1e-12)) { /* (A^2: below, no current has changed yet) */
+        const LS_REAL kl = r->s[5] / r->s[6];
+        /* (NaN goes to the lower bound) */
+        r->k_l = kl > LS_DTRES_KL_MIN ? (kl < LS_DTRES_KL_MAX ? kl : LS_DTRES_KL_MAX) : LS_DTRES_KL_MIN;
+    }
+    if (fit_r && ++r->n_solve >= LS_DTRES_SOLVE_EVERY) { /* (the sums move over 1 / LS_DTRES_KR_RATE) */
+        const LS_REAL saa = r->s[0], sab = r->s[1], sbb = r->s[2], sma = r->s[3], smb = r->s[4];
+        const LS_REAL det = saa * sbb - sab * sab;
+        LS_REAL kr = r->k_r;
+        r->n_solve = 0u;
+        if (det > LS_R(1e-3) * saa * sbb && saa > LS_R(1e-12)) {
+            /* min |m - x a + y b|^2: [saa -sab; -sab sbb] [x; y] = [sma; -smb], k_r = y / x */
+            const LS_REAL xs = sbb * sma - sab * smb, ys = sab * sma - saa * smb;
+            if (xs > LS_R(0.0)) {
+                kr = ys / xs; /* (NaN goes to the lower bound) */
+            }
+        }
+        r->k_r = kr > LS_DTRES_KR_MIN ? (kr < LS_DTRES_KR_MAX ? kr : LS_DTRES_KR_MAX) : LS_DTRES_KR_MIN;
+        ls_dtres_resistance_(r);
     }
 }
 

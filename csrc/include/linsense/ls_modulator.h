@@ -184,12 +184,12 @@ static inline void ls_mod_error_ab_(const ls_mod_hist *h, LS_REAL e0, LS_REAL e1
  * with the motor's saliency and end effect (docs/simulator.md, "Dead time and the closed loop").
  * The leg's duty error is c - t_dead f_pwm (L_on + L_off - 1), L = 1 where the current at the edge
  * flows out (c: the compensation it carried); a leg that does not switch (d = 0 or 1) has none.
- * Writes the alpha-beta voltage error (V) and the end currents the model predicts (A, phases; for
- * ls_dtres_adapt) and returns true, or writes 0 and returns false without the previous step's
- * currents. i_abc, v_dc and g must be finite. (Used by ls_drive with hf_dtres; see
+ * Writes the alpha-beta voltage error (V), the end currents the model predicts and the resistive
+ * drop within that prediction (A, phases; for ls_dtres_adapt) and returns true, or writes 0 and
+ * returns false without the previous step's currents. i_abc, v_dc and g must be finite. (Used by ls_drive with hf_dtres; see
  * linsense/ls_dtres.h.) */
 static inline bool ls_mod_residual(const ls_mod *m, const LS_REAL i_abc[3], LS_REAL v_dc, const LS_REAL g[6],
-                                   LS_REAL r_s, LS_REAL v_ab[2], LS_REAL i_end[3])
+                                   LS_REAL r_s, LS_REAL v_ab[2], LS_REAL i_end[3], LS_REAL i_drop[3])
 {
     const ls_mod_hist *h = &m->hist[m->newest ^ 1u];
     LS_REAL e[3];
@@ -197,6 +197,7 @@ static inline bool ls_mod_residual(const ls_mod *m, const LS_REAL i_abc[3], LS_R
     if (!m->have_prev) {
         v_ab[0] = v_ab[1] = LS_R(0.0);
         i_end[0] = i_end[1] = i_end[2] = LS_R(0.0);
+        i_drop[0] = i_drop[1] = i_drop[2] = LS_R(0.0);
         return false;
     }
     /* the legs by duty: o0 the largest, o2 the smallest */
@@ -263,6 +264,9 @@ static inline bool ls_mod_residual(const ls_mod *m, const LS_REAL i_abc[3], LS_R
         i_end[o0] = ia - (ra + sa * T) * T + LS_R(2.0) * (ka * gaa + kb * gac) - kd * (gaa * la + gab * lb + gac * lc);
         i_end[o1] = ib - (rb + sb * T) * T + LS_R(2.0) * (ka * gab + kb * gbc) - kd * (gab * la + gbb * lb + gbc * lc);
         i_end[o2] = ic - (rc + sc * T) * T + LS_R(2.0) * (ka * gac + kb * gcc) - kd * (gac * la + gbc * lb + gcc * lc);
+        i_drop[o0] = (ra + sa * T) * T;
+        i_drop[o1] = (rb + sb * T) * T;
+        i_drop[o2] = (rc + sc * T) * T;
         e[o0] = la;
         e[o1] = lb;
         e[o2] = lc;

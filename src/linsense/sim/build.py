@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from linsense.analysis.hf import end_anisotropy
-from linsense.compensation.lut import build_lut
+from linsense.compensation.lut import build_lut, lut_r_slope
 from linsense.ctrl import ConfigError, Drive, drive_default_cfg, ffi, lib, make_lut
 from linsense.errors import InputError, LinsenseError, ModelError
 from linsense.limits import MAX_STEPS, MAX_TRACE_BYTES, MAX_TRACE_FILE_BYTES
@@ -35,7 +35,8 @@ from linsense.tune.design import (
     DriveData,
     current_gains,
     design,
-    error_gain,
+    gain_r_slope,
+    gain_schedule,
     mean_dq,
     speed_gains,
     startup_lock_gain,
@@ -558,6 +559,7 @@ def build(sc: Scenario, motor: Motor | None = None, trace_in_memory: bool = True
     d.dtres.r_s, d.dtres.l_d, d.dtres.l_q = known["R_s"], known["L_d"], known["L_q"]
     d.dtres.forward = obs.dead_time_model == "forward"
     d.dtres.adapt = obs.dead_time_adapt
+    d.dtres.adapt_r = obs.dead_time_adapt and obs.resistance_adapt
     # (the interpolated model is the former one: its response without the end effect)
     d.dtres.l_ea, d.dtres.l_eb = (_memo(("end_anisotropy", model_key), lambda: end_anisotropy(model_motor))
                                   if d.dtres.forward else (0.0, 0.0))
@@ -596,7 +598,7 @@ def build(sc: Scenario, motor: Motor | None = None, trace_in_memory: bool = True
                      lambda: injection_tables(lut_motor(), shape, obs.lut_points, f))
 
     try:
-        comp = None
+        comp = comp_r = None
         if compensation == "lut" and shape != "pulsating":
             f_lut = f_inj if obs.lut_model == "resistive" else None
             comp = _memo(("lut", shape, model_key, known["R_s"], obs.lut_points, f_lut),
@@ -606,7 +608,11 @@ def build(sc: Scenario, motor: Motor | None = None, trace_in_memory: bool = True
             quad = inj.quadrature if f_lut else 0.0
             comp = _memo(("lut", model_key, known["R_s"], obs.lut_points, f_lut, quad),
                          lambda: make_lut(build_lut(lut_motor(), obs.lut_points, f_inj=f_lut, quad=quad)))
-        gain_table = None
+            if f_lut and obs.resistance_adapt and d.hf_dtres and d.dtres.forward and d.dtres.adapt:
+                # the table's slope in R_s, for the resistance the drive measures (ls_dtres_adapt)
+                comp_r = _memo(("lut_r", model_key, known["R_s"], obs.lut_points, f_lut, quad),
+                               lambda: make_lut(lut_r_slope(lut_motor(), obs.lut_points, f_lut, quad)))
+        gain_table = gain_r = None
         if obs.gain_schedule and shape != "pulsating":
             gain_table = _memo(("gain_table", shape, model_key, known["R_s"], f_inj, obs.lut_points),
                                lambda: make_lut(shape_tables(f_inj)[1]))
@@ -615,9 +621,13 @@ def build(sc: Scenario, motor: Motor | None = None, trace_in_memory: bool = True
             # with the elliptical injection and R_s, its phase set it; docs/tuning.md)
             gain_table = _memo(
                 ("gain_table", model_key, known["R_s"], inj.frequency, inj.quadrature, obs.lut_points),
-                lambda: make_lut(1.0 / error_gain(lut_motor(), inj.frequency, inj.quadrature, 1.0,
-                                                  n=obs.lut_points)))
-        drive = Drive(d, comp=comp, gain_table=gain_table)  # a given gain table is used by default
+                lambda: make_lut(gain_schedule(lut_motor(), inj.frequency, inj.quadrature, obs.lut_points)))
+            if comp_r is not None:  # (it follows the measured resistance as the table does)
+                gain_r = _memo(
+                    ("gain_r", model_key, known["R_s"], inj.frequency, inj.quadrature, obs.lut_points),
+                    lambda: make_lut(gain_r_slope(lut_motor(), inj.frequency, inj.quadrature,
+                                                  obs.lut_points)))
+        drive = Drive(d, comp=comp, gain_table=gain_table, comp_r=comp_r, gain_r=gain_r)
     except ConfigError as exc:
         sections = sorted({_SECTION.get(k.split(".")[0] if k != "pos.speed" else k, k) for k in exc.fields})
         key = ",".join(sections)

@@ -148,6 +148,8 @@ class ObserverSection(BaseModel):
     # between the period's end samples: cheaper, needs no angle; the former model)
     dead_time_model: Literal["forward", "interpolated"] = "forward" if _C.dtres.forward else "interpolated"
     dead_time_adapt: bool = bool(_C.dtres.adapt)  # the forward model measures its inductance scale online
+    # with dead_time_adapt, the resistance's scale too, which corrects the resistance-aware table
+    resistance_adapt: bool = bool(_C.dtres.adapt_r)
     omega_max: Positive = _c(_C.obs.omega_max)  # rad/s electrical, clamp of the speed estimate
     force_max: Positive = _c(_C.obs.force_max)  # N, clamp of the load estimate (mech)
 

@@ -17,12 +17,19 @@ injection's amplitude from the dead-time voltage error and the lowest local sali
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from linsense.analysis.hf import demod_ratio, hf_current_amplitude, mean_dq, psi_lut_resistive
+from linsense.analysis.hf import (
+    demod_ratio,
+    end_anisotropy,
+    hf_current_amplitude,
+    mean_dq,
+    psi_lut_resistive,
+)
 from linsense.errors import InputError
 from linsense.model.motor import Motor
 
@@ -182,6 +189,34 @@ def error_gain(motor: Motor, f_inj: float, quad: float, gain: float, n: int = 18
     r_p = demod_ratio(motor, th, h, 1.0, f_inj, psi_p, quad=quad)
     r_m = demod_ratio(motor, th, -h, 1.0, f_inj, psi_m, quad=quad)
     return -gain * (r_p - r_m) / (2.0 * h)
+
+
+def end_effect_ratio(motor: Motor) -> float:
+    """``|(l_ea, l_eb)| / (|L_d - L_q| / 2)``: the end effect's stationary anisotropy over the
+    saliency's rotating one (alpha-beta inductance, :func:`linsense.analysis.hf.end_anisotropy`).
+    A fraction ``d`` of error in the end effect tilts the HF ellipse's axis by up to about
+    ``d ratio / 2`` rad, which no saliency estimator tells from a position shift where the tilt is
+    across the axis (docs/tuning.md, "The end-effect tolerance")."""
+    l_ea, l_eb = end_anisotropy(motor)
+    l_d, l_q = mean_dq(motor)
+    return float(math.hypot(l_ea, l_eb) / (0.5 * abs(l_d - l_q)))
+
+
+def gain_schedule(motor: Motor, f_inj: float, quad: float, n: int) -> np.ndarray:
+    """The demodulator's gain table, ``1 / k_e(theta)`` at ``n`` positions (:func:`error_gain`):
+    the local error gain 1 everywhere (docs/tuning.md, "The gain schedule")."""
+    return 1.0 / error_gain(motor, f_inj, quad, 1.0, n=n)
+
+
+def gain_r_slope(motor: Motor, f_inj: float, quad: float, n: int) -> np.ndarray:
+    """``d g / d k_r`` of :func:`gain_schedule` (per unit of the resistance's scale, ``R_s = k_r
+    R_s0``; central difference over +-2 %): the drive measures ``k_r`` and reads ``g + (k_r - 1)
+    dg/dk_r`` (``ls_demod_cfg.gain_r``), as its table follows it (``lut_r_slope``)."""
+    if not motor.R_s > 0:
+        return np.zeros(n)
+    hi, lo = (gain_schedule(dataclasses.replace(motor, R_s=motor.R_s * (1.0 + s * 0.02)), f_inj, quad, n)
+              for s in (1.0, -1.0))
+    return (hi - lo) / 0.04
 
 
 def design(
@@ -353,8 +388,12 @@ def design(
         if not t["error_deg"] <= TOLERANCE_ERR_DEG:
             held = (f"holds {t['error_deg']:.3g} deg off target" if math.isfinite(t["error_deg"])
                     else "has no hold near the target at some positions")
+            why = ""
+            if name.startswith("dM0"):  # (docs/tuning.md, "The end-effect tolerance")
+                why = (f"; the end effect is {end_effect_ratio(motor):.2f} of the saliency, and an error in "
+                       f"it reads as a position shift at the weak positions whatever the drive does")
             warnings.append(f"a motor off by {name} {held} with this drive's nominal LUT (model; bound "
-                            f"{TOLERANCE_ERR_DEG:g} deg): identify or calibrate the motor")
+                            f"{TOLERANCE_ERR_DEG:g} deg{why}): identify or calibrate the motor")
     return dz
 
 

@@ -9,14 +9,15 @@ import numpy as np
 import tomli_w
 
 from linsense.analysis.hf import end_anisotropy
-from linsense.compensation.lut import build_lut, c_identifier
+from linsense.compensation.lut import build_lut, c_identifier, lut_r_slope
 from linsense.model.motor import Motor
 from linsense.tune.design import (
     V_DC_MAX_FRACTION,
     V_DC_MIN_FRACTION,
     Design,
     DriveData,
-    error_gain,
+    gain_r_slope,
+    gain_schedule,
     mean_dq,
     startup_lock_gain,
 )
@@ -131,9 +132,9 @@ def _r(v: float) -> float:
 
 def c_header(dz: Design, drive: DriveData, motor: Motor, name: str | None = None, points: int = 256,
              startup=None) -> str:
-    """``ls_cfg_<name>.h``: the compensation and gain tables and ``ls_cfg_<name>(cfg, comp, gain)``,
-    which fills an ``ls_drive_cfg`` from ``ls_drive_default_cfg`` with the design (the library holds
-    no motor's numbers)."""
+    """``ls_cfg_<name>.h``: the compensation and gain tables, their slopes in the resistance's scale,
+    and ``ls_cfg_<name>(cfg, comp, gain, comp_r, gain_r)``, which fills an ``ls_drive_cfg`` from
+    ``ls_drive_default_cfg`` with the design (the library holds no motor's numbers)."""
     if drive.shape != "pulsating":
         from linsense.errors import InputError
 
@@ -142,8 +143,9 @@ def c_header(dz: Design, drive: DriveData, motor: Motor, name: str | None = None
     sym = c_identifier(name or motor.name)
     fn = f"ls_cfg_{sym}"
     lut = build_lut(motor, points, f_inj=dz.f_inj, quad=dz.quad).values
-    k_e = error_gain(motor, dz.f_inj, dz.quad, 1.0, n=points)
-    gain = 1.0 / k_e
+    lut_r = lut_r_slope(motor, points, dz.f_inj, dz.quad)
+    gain = gain_schedule(motor, dz.f_inj, dz.quad, points)
+    gain_r = gain_r_slope(motor, dz.f_inj, dz.quad, points)
     L_d, L_q = mean_dq(motor)
     l_ea, l_eb = end_anisotropy(motor)
 
@@ -236,10 +238,11 @@ def c_header(dz: Design, drive: DriveData, motor: Motor, name: str | None = None
  * demodulator {dz.demod_lpf:.4g} Hz (zeros at {dz.demod_notch:g} Hz), observer {dz.observer_bw:.4g} Hz,
  * speed loop {dz.speed_bw:.4g} Hz, position {dz.kp_x:.4g} 1/s.
  *
- *   ls_lut comp, gain;
+ *   ls_lut comp, gain, comp_r, gain_r;
  *   ls_lut_cfg cc = {{{fn}_comp, {sym.upper()}_LEN}}, gc = {{{fn}_gain, {sym.upper()}_LEN}};
- *   ls_lut_init(&comp, &cc); ls_lut_init(&gain, &gc);
- *   {fn}(&cfg, &comp, &gain);      then ls_drive_init(&drive, &cfg)
+ *   ls_lut_cfg rc = {{{fn}_comp_r, {sym.upper()}_LEN}}, hc = {{{fn}_gain_r, {sym.upper()}_LEN}};
+ *   ls_lut_init(&comp, &cc); ls_lut_init(&gain, &gc); ls_lut_init(&comp_r, &rc); ls_lut_init(&gain_r, &hc);
+ *   {fn}(&cfg, &comp, &gain, &comp_r, &gain_r);      then ls_drive_init(&drive, &cfg)
  */
 #ifndef {guard}
 #define {guard}
@@ -253,13 +256,26 @@ static const float {fn}_comp[{points}] = {{
     {table(lut)}
 }};
 
+/* dPsi_LUT/dk_r (rad per unit of the resistance's scale): the table follows the resistance the
+ * drive measures (ls_dtres_adapt, ls_demod_cfg.comp_r) */
+static const float {fn}_comp_r[{points}] = {{
+    {table(lut_r)}
+}};
+
 /* demodulator gain (-) that makes the local error gain 1 everywhere */
 static const float {fn}_gain[{points}] = {{
     {table(gain)}
 }};
 
-/* ls_drive_default_cfg, then the design; comp and gain: ls_lut objects over the tables above */
-static inline void {fn}(ls_drive_cfg *cfg, const ls_lut *comp, const ls_lut *gain)
+/* dg/dk_r (-): the gain follows the measured resistance too */
+static const float {fn}_gain_r[{points}] = {{
+    {table(gain_r)}
+}};
+
+/* ls_drive_default_cfg, then the design; comp, gain, comp_r and gain_r: ls_lut objects over the
+ * tables above (comp_r, gain_r NULL: the tables do not follow the measured resistance) */
+static inline void {fn}(ls_drive_cfg *cfg, const ls_lut *comp, const ls_lut *gain, const ls_lut *comp_r,
+                        const ls_lut *gain_r)
 {{
     ls_drive_default_cfg(cfg);
 {body}
@@ -268,6 +284,8 @@ static inline void {fn}(ls_drive_cfg *cfg, const ls_lut *comp, const ls_lut *gai
     ls_observer_gains(&cfg->obs, {f(dz.observer_bw)}); /* the library's rule for the bandwidth (Hz) */
     cfg->demod.comp = comp;
     cfg->demod.gain_table = gain;
+    cfg->demod.comp_r = comp_r;
+    cfg->demod.gain_r = gain_r;
 }}
 
 #endif /* {guard} */

@@ -1,7 +1,9 @@
 """What the model predicts of a design before any simulation (docs/tuning.md, "Margins"):
 
 * each tolerance's cost: the hold error of a motor off by the tolerance while the drive keeps the
-  nominal LUT and gain schedule, from the HF model (paper eq. 10-11 with R_s and the injection):
+  nominal LUT and gain schedule (the table following the resistance the drive measures online,
+  ``Psi_LUT + (k_r - 1) dPsi_LUT/dk_r``: ls_dtres_adapt, ls_demod_cfg.comp_r), from the HF model
+  (paper eq. 10-11 with R_s and the injection):
   at a hold the estimate sits on the target ``T`` and the true position at ``T - e`` where the
   demodulated error read with the nominal table at ``T`` vanishes;
 * the range of the local error gain the observer then sees (the schedule normalises the nominal
@@ -11,11 +13,13 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
 
 from linsense.analysis.hf import demod_ratio, psi_lut_resistive
+from linsense.compensation.lut import lut_r_slope
 from linsense.model.motor import Motor
 from linsense.model.tolerance import perturbed
 
@@ -38,12 +42,16 @@ def _ratio(plant: Motor, target: np.ndarray, e: np.ndarray, f_inj: float, quad: 
     return demod_ratio(plant, target - e, e, 1.0, f_inj, psi_t, quad=quad)
 
 
-def hold_error(nominal: Motor, plant: Motor, f_inj: float, quad: float, n: int = 180) -> np.ndarray:
+def hold_error(nominal: Motor, plant: Motor, f_inj: float, quad: float, n: int = 180,
+               k_r: float = 1.0) -> np.ndarray:
     """The hold error ``e`` (rad, true position = target - e) at ``n`` targets over the period, for
-    ``plant`` driven with ``nominal``'s resistance-aware table (Newton from ``e = 0``, the branch a
-    drive starting on target follows); NaN where it does not converge within 0.6 rad."""
+    ``plant`` driven with ``nominal``'s resistance-aware table, corrected for the resistance's scale
+    ``k_r`` the drive measured (Newton from ``e = 0``, the branch a drive starting on target
+    follows); NaN where it does not converge within 0.6 rad."""
     target = np.linspace(0.0, 2.0 * np.pi, n, endpoint=False)
     psi_t = psi_lut_resistive(nominal, target, f_inj, quad=quad)
+    if k_r != 1.0:
+        psi_t = psi_t + (k_r - 1.0) * lut_r_slope(nominal, n, f_inj, quad)
     e = np.zeros(n)
     bad = np.zeros(n, dtype=bool)
     for _ in range(60):
@@ -71,14 +79,17 @@ def local_gain(nominal: Motor, plant: Motor, f_inj: float, quad: float, n: int =
             / error_gain(nominal, f_inj, quad, 1.0, n))
 
 
-def tolerance_costs(motor: Motor, f_inj: float, quad: float, n: int = 180) -> dict:
+def tolerance_costs(motor: Motor, f_inj: float, quad: float, n: int = 180, r_adapt: bool = True) -> dict:
     """Per tolerance: the predicted worst hold error (deg; inf where the model finds no hold) and
-    the range of the scheduled local error gain."""
+    the range of the scheduled local error gain. ``r_adapt``: the drive measures the resistance
+    and its table follows it (the default drive: ``observer.resistance_adapt``)."""
     out = {}
     for name, (k_l, k_r, k_e) in TOLERANCES.items():
         plant = perturbed(motor, k_l, k_r, k_e, label=name)
-        e = hold_error(motor, plant, f_inj, quad, n)
-        g = local_gain(motor, plant, f_inj, quad, n)
+        e = hold_error(motor, plant, f_inj, quad, n, k_r=k_r if r_adapt else 1.0)
+        # (the gain schedule follows the measured resistance too: the nominal motor's at k_r R_s)
+        ref = dataclasses.replace(motor, R_s=motor.R_s * k_r) if r_adapt and k_r != 1.0 else motor
+        g = local_gain(ref, plant, f_inj, quad, n)
         worst = math.inf if np.any(~np.isfinite(e)) else float(np.degrees(np.max(np.abs(e))))
         out[name] = {"error_deg": worst, "k_lo": float(np.min(g)), "k_hi": float(np.max(g))}
     return out
