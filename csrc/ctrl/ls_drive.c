@@ -298,6 +298,20 @@ static void mode_set(ls_drive *d, ls_mode mode)
         d->path = LS_DRIVE_PATH_GENERAL;
     }
 }
+/* The residual model starts again (keep_r: its measured resistance scale kept, ls_dtres_restart;
+ * else ls_dtres_reset, k_r = 1), and what follows that scale with it: the demodulator's table
+ * correction and the current PI's integral gain. */
+static void dtres_reset(ls_drive *d, bool keep_r)
+{
+    if (keep_r) {
+        ls_dtres_restart(&d->dtres);
+    } else {
+        ls_dtres_reset(&d->dtres);
+    }
+    d->demod.k_r = d->dtres.k_r;
+    d->cur.ki_ts = d->cur.cfg.ki * d->cur.ts * d->dtres.k_r;
+}
+
 
 void ls_drive_reset(ls_drive *d, ls_pos p)
 {
@@ -316,7 +330,7 @@ void ls_drive_reset(ls_drive *d, ls_pos p)
     ls_posctrl_reset(&d->pos);
     ls_traj_reset(&d->traj, p);
     ls_mod_reset(&d->mod);
-    ls_dtres_reset(&d->dtres);
+    dtres_reset(d, false);
     ls_protect_reset(&d->prot);
     mode_set(d, LS_MODE_OFF);
     d->starting = false;
@@ -377,7 +391,7 @@ ls_status ls_drive_set_mode(ls_drive *d, ls_mode mode)
                                      mode == LS_MODE_STARTUP);
     /* the modulator's history and the residual model start again (the outputs may have been off) */
     ls_mod_reset(&d->mod);
-    ls_dtres_reset(&d->dtres);
+    dtres_reset(d, true);
     /* LS_MODE_STARTUP runs in the outputs-off branch of ls_drive_step (see ls_drive.h): mode OFF,
      * starting set; it enters LS_MODE_SENSORLESS_LUT, aligned, when it is done */
     d->starting = mode == LS_MODE_STARTUP;

@@ -94,11 +94,15 @@ static inline void ls_drive_path_residual_(ls_drive *d, const ls_meas *meas, LS_
         if (ls_mod_residual(&d->mod, meas->i_abc, meas->v_dc, g, d->dtres.cfg.r_s * d->dtres.k_r, v_err, i_end,
                             i_drop) &&
             d->dtres.cfg.adapt) {
-            ls_dtres_adapt(&d->dtres, d->mod.i_prev, meas->i_abc, i_end, i_drop, !d->starting);
-            /* the tables' resistance correction (ls_demod.h), and the current PI's zero on the
-             * winding's R/L pole (ki = R_s w_c: linsense.tune.design.current_gains) */
-            d->demod.k_r = d->dtres.k_r;
-            d->cur.ki_ts = d->cur.cfg.ki * d->cur.ts * d->dtres.k_r;
+            /* (k_r held while the angle is not the motor's: the start-up, the table off) */
+            ls_dtres_adapt(&d->dtres, d->mod.i_prev, meas->i_abc, i_end, i_drop,
+                           !d->starting && d->mode != LS_MODE_SENSORLESS_NOLUT);
+            if (d->dtres.n_solve == 0u) { /* k_r solved for: the tables' resistance correction
+                                           * (ls_demod.h), and the current PI's zero on the winding's
+                                           * R/L pole (ki = R_s w_c: tune.design.current_gains) */
+                d->demod.k_r = d->dtres.k_r;
+                d->cur.ki_ts = d->cur.cfg.ki * d->cur.ts * d->dtres.k_r;
+            }
         }
     } else {
         (void)ls_mod_residual_interp(&d->mod, meas->i_abc, meas->v_dc, d->dtres.k_rip, v_err);

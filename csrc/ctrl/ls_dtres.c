@@ -41,18 +41,22 @@ ls_status ls_dtres_init(ls_dtres *r, const ls_dtres_cfg *cfg)
 
 void ls_dtres_resistance_(ls_dtres *r)
 {
-    const LS_REAL ts = LS_R(1.0) / r->cfg.fs, rs = r->cfg.r_s * r->k_r;
-    axis(rs, r->cfg.l_d, ts, &r->a_d, &r->b_d);
-    axis(rs, r->cfg.l_q, ts, &r->a_q, &r->b_q);
+    LS_REAL ts;
+    r->k_r_resp = r->k_r;
+    if (!(r->cfg.fs > LS_R(0.0)) || !(r->cfg.l_d > LS_R(0.0)) || !(r->cfg.l_q > LS_R(0.0))) {
+        return; /* (not initialised: a drive without hf_dtres resets it too) */
+    }
+    ts = LS_R(1.0) / r->cfg.fs;
+    axis(r->cfg.r_s * r->k_r, r->cfg.l_d, ts, &r->a_d, &r->b_d);
+    axis(r->cfg.r_s * r->k_r, r->cfg.l_q, ts, &r->a_q, &r->b_q);
 }
 
-void ls_dtres_reset(ls_dtres *r)
+void ls_dtres_restart(ls_dtres *r)
 {
     int k;
     r->i_d = LS_R(0.0);
     r->i_q = LS_R(0.0);
     r->k_l = LS_R(1.0);
-    r->k_r = LS_R(1.0);
     for (k = 0; k < 7; ++k) {
         r->s[k] = LS_R(0.0);
     }
@@ -60,5 +64,11 @@ void ls_dtres_reset(ls_dtres *r)
         r->hp[k] = LS_R(0.0);
     }
     r->n_solve = 0u;
+}
+
+void ls_dtres_reset(ls_dtres *r)
+{
+    ls_dtres_restart(r);
+    r->k_r = LS_R(1.0);
     ls_dtres_resistance_(r);
 }

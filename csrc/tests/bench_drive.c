@@ -26,9 +26,9 @@ int main(int argc, char **argv)
     ls_lut_cfg lc = {ls_lut_ecce2010_q, LS_LUT_ECCE2010_Q_LEN};
     ls_lut_cfg lc_rot = {ls_lut_ecce2010_rot, LS_LUT_ECCE2010_ROT_LEN};
     ls_lut_cfg lc_sq = {ls_lut_ecce2010_sq, LS_LUT_ECCE2010_SQ_LEN};
-    ls_lut lut, lut_g;
-    static float gain_tab[64];
-    ls_lut_cfg gc = {gain_tab, 64u};
+    ls_lut lut, lut_g, lut_r;
+    static float gain_tab[64], slope_tab[64]; /* (the slopes 0: read every step, no effect) */
+    ls_lut_cfg gc = {gain_tab, 64u}, rc = {slope_tab, 64u};
     int shape, j;
     ls_drive_cfg cfg;
     ls_drive d;
@@ -40,14 +40,14 @@ int main(int argc, char **argv)
         gain_tab[j] = 1.0f;
     }
     if (ls_lut_init(&lut, shape == 1 ? &lc_rot : (shape == 2 || shape == 6) ? &lc_sq : &lc) != LS_OK ||
-        ls_lut_init(&lut_g, &gc) != LS_OK) {
+        ls_lut_init(&lut_g, &gc) != LS_OK || ls_lut_init(&lut_r, &rc) != LS_OK) {
         return 2;
     }
     ls_drive_default_cfg(&cfg);
     cfg.demod.comp = &lut;
     /* the tables' slopes in the resistance's scale, which the design writes (read every step) */
-    cfg.demod.comp_r = &lut_g;
-    cfg.demod.gain_r = &lut_g;
+    cfg.demod.comp_r = &lut_r;
+    cfg.demod.gain_r = &lut_r;
     cfg.mod.dtc = argc > 2 && atoi(argv[2]) != 0; /* the plant has no dead time: off unless asked */
     cfg.hf_dtres = !(argc > 5 && atoi(argv[5]) == 1); /* the dead-time residual model (on unless asked) */
     cfg.dtres.forward = !(argc > 5 && atoi(argv[5]) == 2);

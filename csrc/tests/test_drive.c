@@ -552,9 +552,40 @@ static void test_square_schedule(void)
     }
 }
 
+/* The resistance scale the residual model measured (ls_dtres_adapt): kept across a mode change
+ * with the table correction and the current PI's integral gain that follow it, back to 1 after a
+ * reset; and a drive without the residual model resets it without arithmetic on its zeros. */
+static void test_resistance_scale(void)
+{
+    static ls_drive d;
+    ls_drive_cfg cfg;
+    ls_pos p0 = {0, LS_R(0.0)};
+    double ki_ts;
+    setup(&d, &cfg);
+    ki_ts = (double)cfg.current.ki / (double)cfg.fs;
+    LS_CHECK(ki_ts > 0.0);
+    LS_CHECK(d.dtres.k_r == LS_R(1.0) && d.demod.k_r == LS_R(1.0));
+    d.dtres.k_r = LS_R(1.2);
+    LS_CHECK(ls_drive_set_mode(&d, LS_MODE_SENSORLESS_LUT) == LS_OK);
+    LS_CHECK(d.dtres.k_r == LS_R(1.2) && d.demod.k_r == LS_R(1.2) && d.dtres.k_l == LS_R(1.0));
+    LS_CHECK_NEAR(d.cur.ki_ts, 1.2 * ki_ts, 1e-5 * ki_ts);
+    ls_drive_reset(&d, p0);
+    LS_CHECK(d.dtres.k_r == LS_R(1.0) && d.demod.k_r == LS_R(1.0));
+    LS_CHECK_NEAR(d.cur.ki_ts, ki_ts, 1e-5 * ki_ts);
+    /* without the residual model (its configuration all zeros) */
+    memset(&d, 0, sizeof d);
+    ls_drive_default_cfg(&cfg);
+    cfg.demod.comp = &g_comp_r;
+    cfg.hf_dtres = false;
+    memset(&cfg.dtres, 0, sizeof cfg.dtres);
+    LS_CHECK(ls_drive_init(&d, &cfg) == LS_OK);
+    LS_CHECK(d.dtres.a_d == LS_R(0.0) && d.dtres.b_d == LS_R(0.0) && d.demod.k_r == LS_R(1.0));
+}
+
 int main(void)
 {
     test_refusals();
+    test_resistance_scale();
     test_nonfinite();
     test_sensored_step();
     test_sensorless_hold();

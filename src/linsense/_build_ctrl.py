@@ -222,6 +222,7 @@ typedef struct {
 typedef struct {
     ls_dtres_cfg cfg; LS_REAL a_d, a_q; LS_REAL b_d, b_q; LS_REAL i_d, i_q; LS_REAL k_rip; LS_REAL k_l;
     LS_REAL k_r; LS_REAL s[7]; LS_REAL hp[6]; uint32_t n_solve;
+    LS_REAL k_r_resp;
 } ls_dtres;
 ls_status ls_dtres_init(ls_dtres *r, const ls_dtres_cfg *cfg);
 void ls_dtres_reset(ls_dtres *r);

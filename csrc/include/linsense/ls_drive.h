@@ -130,7 +130,14 @@ typedef struct {
     ls_posctrl_cfg pos;     /* position (and speed) controller */
     ls_traj_cfg traj;       /* trajectory generator */
     ls_mod_cfg mod;         /* modulator */
-    ls_dtres_cfg dtres;     /* response model of the dead-time residual (used if hf_dtres) */
+    ls_dtres_cfg dtres;     /* response model of the dead-time residual (used if hf_dtres); with
+                               dtres.adapt_r its measured resistance scale k_r (ls_dtres_adapt; held
+                               in the start-up and LS_MODE_SENSORLESS_NOLUT, kept across
+                               ls_drive_set_mode, 1 after ls_drive_reset) also scales current.ki
+                               (which it takes for R_s w_c, the design's rule: set adapt_r false
+                               to keep a hand-set ki) and corrects the demodulator's tables
+                               (demod.comp_r, demod.gain_r). k_r is only as good as mod.dead_time:
+                               a dead time off by 0.1 us moves it by about 3 % */
     ls_protect_cfg prot;    /* protection */
     ls_cal_cfg cal;         /* LUT calibration */
     LS_REAL i_d_inj;        /* A, d-axis current reference while the HF injection is on (0: none): keeps

@@ -55,13 +55,18 @@ typedef struct {
     LS_REAL s[7];         /**< unit: A^2, low-passed products of the period's changes (ls_dtres_adapt):
                                <a,a>, <a,b>, <b,b>, <m,a>, <m,b> (high-passed), <m,c>, <c,c> */
     LS_REAL hp[6];        /**< unit: A, the slow parts of m, a and b (alpha-beta), taken out of them */
-    uint32_t n_solve;     /**< unit: -, periods since the scales were last solved for */
+    uint32_t n_solve;     /**< unit: -, periods since k_r was last solved for (0: just now) */
+    LS_REAL k_r_resp;     /**< unit: -, the k_r that a_d, b_d, a_q, b_q were computed for */
 } ls_dtres;
 
 ls_status ls_dtres_init(ls_dtres *r, const ls_dtres_cfg *cfg);
+/* The state and both scales back to the start (k_l = k_r = 1). */
 void ls_dtres_reset(ls_dtres *r);
+/* The state, k_l and the fits' sums back to the start, k_r kept (the winding's resistance does not
+ * change with the drive's mode: ls_drive_set_mode). */
+void ls_dtres_restart(ls_dtres *r);
 /* The response's per-step decay and gain (a_d, b_d, a_q, b_q) for the resistance k_r r_s (called
- * by ls_dtres_adapt when it has solved for k_r; out of line: two exponentials). */
+ * by ls_dtres_adapt when k_r has moved by LS_DTRES_KR_RESP since; out of line: two exponentials). */
 void ls_dtres_resistance_(ls_dtres *r);
 
 /* v_ab: the voltage error of the period that has just ended (V, alpha-beta); (c, s): cos and sin
@@ -126,13 +131,20 @@ static inline void ls_dtres_phase_g(const ls_dtres *r, LS_REAL c, LS_REAL s, LS_
  * 1 / LS_DTRES_KR_RATE periods, after each of m, a and b has lost its slow part (a first-order
  * high-pass at LS_DTRES_HP_RATE per period): the fit reads the injection's changes, not the
  * fundamental's, whose back-EMF the model does not know and which would read as a resistance
- * while the mover moves under load; solved every LS_DTRES_SOLVE_EVERY periods. Each within its
- * bounds. fit_r false holds k_r (the drive's start-up, whose angle is not
+ * while the mover moves under load; solved every LS_DTRES_SOLVE_EVERY periods, moving by at most
+ * LS_DTRES_KR_STEP each time. Each within its bounds. fit_r false holds k_r (the drive's start-up, whose angle is not
  * known yet: the model's drop is then read on the wrong axes). Inline (called every PWM period). */
 #define LS_DTRES_KL_RATE LS_R(0.002)
 #define LS_DTRES_KR_RATE LS_R(0.002)
 #define LS_DTRES_HP_RATE LS_R(0.05)
 #define LS_DTRES_SOLVE_EVERY 16u
+/* the largest change of k_r per solve (a hot winding's +30 % in 15 solves, 240 periods: about
+ * the sums' time constant), and the normal equations' conditioning below which k_r is not solved
+ * for (det < LS_DTRES_KR_COND <a,a><b,b>: the drop and the volt-seconds too alike, e.g. no
+ * current to drop) */
+#define LS_DTRES_KR_STEP LS_R(0.02)
+#define LS_DTRES_KR_COND LS_R(1e-3)
+#define LS_DTRES_KR_RESP LS_R(0.002) /* -, the k_r change that recomputes the response (a, b) */
 #define LS_DTRES_KL_MIN LS_R(0.5)
 #define LS_DTRES_KL_MAX LS_R(2.0)
 /* a copper winding's resistance from -40 to +180 degC is 0.76-1.78 of its 20 degC value: the scale
@@ -179,20 +191,26 @@ static inline void ls_dtres_adapt(ls_dtres *r, const LS_REAL i0[3], const LS_REA
         /* (NaN goes to the lower bound) */
         r->k_l = kl > LS_DTRES_KL_MIN ? (kl < LS_DTRES_KL_MAX ? kl : LS_DTRES_KL_MAX) : LS_DTRES_KL_MIN;
     }
-    if (fit_r && ++r->n_solve >= LS_DTRES_SOLVE_EVERY) { /* (the sums move over 1 / LS_DTRES_KR_RATE) */
+    if (fit_r && ++r->n_solve >= LS_DTRES_SOLVE_EVERY) { /* (the sums move over 1 / KR_RATE) */
         const LS_REAL saa = r->s[0], sab = r->s[1], sbb = r->s[2], sma = r->s[3], smb = r->s[4];
         const LS_REAL det = saa * sbb - sab * sab;
         LS_REAL kr = r->k_r;
         r->n_solve = 0u;
-        if (det > LS_R(1e-3) * saa * sbb && saa > LS_R(1e-12)) {
+        if (det > LS_DTRES_KR_COND * saa * sbb && saa > LS_R(1e-12)) {
             /* min |m - x a + y b|^2: [saa -sab; -sab sbb] [x; y] = [sma; -smb], k_r = y / x */
             const LS_REAL xs = sbb * sma - sab * smb, ys = sab * sma - saa * smb;
             if (xs > LS_R(0.0)) {
                 kr = ys / xs; /* (NaN goes to the lower bound) */
             }
         }
+        /* at most LS_DTRES_KR_STEP per solve: the tables and the PI follow a ramp, not the first
+         * solves' scatter (NaN stays NaN: the bounds below) */
+        kr = kr > r->k_r + LS_DTRES_KR_STEP ? r->k_r + LS_DTRES_KR_STEP
+                                              : (kr < r->k_r - LS_DTRES_KR_STEP ? r->k_r - LS_DTRES_KR_STEP : kr);
         r->k_r = kr > LS_DTRES_KR_MIN ? (kr < LS_DTRES_KR_MAX ? kr : LS_DTRES_KR_MAX) : LS_DTRES_KR_MIN;
-        ls_dtres_resistance_(r);
+        if (LS_FABS(r->k_r - r->k_r_resp) > LS_DTRES_KR_RESP) {
+            ls_dtres_resistance_(r);
+        }
     }
 }
 

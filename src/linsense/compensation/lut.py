@@ -127,20 +127,23 @@ def build_lut(motor, points: int, f_inj: float | None = None, quad: float = 0.0,
     return Lut(values, name=motor.name, provenance=prov)
 
 
-#: relative step of R_s for the table's slope (the table is smooth in R_s: docs/tuning.md)
-_R_STEP = 0.02
+#: relative step of R_s for the tables' slopes in it (central differences; the tables are smooth in
+#: R_s: the linearisation leaves 0.2 deg at +30 % on ecce2010, docs/tuning.md "The hot winding")
+R_SLOPE_STEP = 0.02
 
 
 def lut_r_slope(motor, points: int, f_inj: float, quad: float = 0.0) -> np.ndarray:
     """``dPsi_LUT/dk_r`` (rad per unit of the resistance's scale ``k_r``, ``R_s = k_r R_s0``) of the
     resistance-aware table (:func:`build_lut` with ``f_inj``) at its ``points`` positions: the drive
     measures ``k_r`` online (``ls_dtres_adapt``) and reads ``Psi_LUT + (k_r - 1) dPsi_LUT/dk_r``
-    (``ls_demod_cfg.comp_r``; docs/tuning.md, "Tolerances"). Central difference over +-2 %."""
+    (``ls_demod_cfg.comp_r``; docs/tuning.md, "The hot winding"). Central difference over
+    :data:`R_SLOPE_STEP`."""
     if not motor.R_s > 0:
         return np.zeros(points)
-    hi, lo = (build_lut(dataclasses.replace(motor, R_s=motor.R_s * (1.0 + s * _R_STEP)), points, f_inj=f_inj,
+    h = R_SLOPE_STEP
+    hi, lo = (build_lut(dataclasses.replace(motor, R_s=motor.R_s * (1.0 + s * h)), points, f_inj=f_inj,
                         quad=quad).values for s in (1.0, -1.0))
-    return (hi - lo) / (2.0 * _R_STEP)
+    return (hi - lo) / (2.0 * h)
 
 
 # ---------------------------------------------------------------------- exports
