@@ -184,6 +184,17 @@ def test_every_class_motor_passes_the_quick_certificate():
     assert not failed, failed
 
 
+def test_m30_low_is_verified():
+    """m30_low's design passes the full certificate, every check (the off-nominal plants with the
+    resistance measured online; its end effect is 0.18 of its saliency: docs/tuning.md, "The
+    end-effect tolerance"), and it says so."""
+    from linsense.verify.certificate import design_and_verify
+
+    cert = design_and_verify(str(CLASS / "m30_low.toml"), _drive("m30_low"), quick=False, workers=1)[1]
+    assert cert.verified, [c.line() for c in cert.checks if not c.passed]
+    assert cert.lines()[-1] == "verified: every check passed"
+
+
 def test_tune_cli_writes_certificate_and_exit_code(tmp_path, capsys):
     out = tmp_path / "t.toml"
     with pytest.raises(SystemExit) as e:
