@@ -39,7 +39,7 @@ RATIO_PWM_INJ = 16.0  # the most PWM periods per injection period (16 samples of
 #: the injection's frequency (docs/tuning.md, "The injection frequency"): f_pwm / N, N an integer
 #: (a non-integer ratio beats with the PWM: measured, more limit cycles), the largest N <=
 #: RATIO_PWM_INJ with f_pwm / N >= F_INJ_MIN (every bandwidth of the chain scales with it), N >= 4
-F_INJ_MIN = 800.0  # Hz
+F_INJ_MIN = 1000.0  # Hz
 RATIO_INJ_CURRENT = 4.0
 RATIO_LPF = 0.3
 RATIO_LPF_OBS = 7.5
@@ -401,7 +401,8 @@ def design(
 
 def injection_frequency(f_pwm: float) -> float:
     """``f_pwm / N`` (Hz): the largest integer ``N <= RATIO_PWM_INJ`` (and ``>= 4``) that keeps the
-    injection at ``F_INJ_MIN`` or above (ecce2010's 16 kHz: 1 kHz; 10 kHz: 833 Hz; 8 kHz: 800 Hz)."""
+    injection at ``F_INJ_MIN`` or above (ecce2010's 16 kHz: 1 kHz; 10 kHz: 1 kHz; 8 kHz: 1 kHz;
+    12 kHz: 1 kHz; 20 kHz: 1.25 kHz)."""
     n = int(min(RATIO_PWM_INJ, max(4.0, math.floor(f_pwm / F_INJ_MIN))))
     return f_pwm / n
 
