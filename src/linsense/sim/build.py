@@ -48,6 +48,7 @@ from linsense.tune.injection import (
     SQUARE_SEP_FRACTION,
     injection_tables,
     rotating_design,
+    rotating_r_slopes,
     square_current_schedule,
     square_d_current,
 )
@@ -599,16 +600,26 @@ def build(sc: Scenario, motor: Motor | None = None, trace_in_memory: bool = True
 
     try:
         comp = comp_r = None
+        # the tables follow the resistance the drive measures (ls_dtres_adapt, with the forward
+        # residual model): their slopes in it, for the resistance-aware tables
+        r_slopes = obs.resistance_adapt and d.hf_dtres and d.dtres.forward and d.dtres.adapt
+        rot_r = None
         if compensation == "lut" and shape != "pulsating":
             f_lut = f_inj if obs.lut_model == "resistive" else None
             comp = _memo(("lut", shape, model_key, known["R_s"], obs.lut_points, f_lut),
                          lambda: make_lut(shape_tables(f_lut)[0]))
+            if shape == "rotating" and f_lut and r_slopes:
+                rot_r = _memo(("rot_r", model_key, known["R_s"], obs.lut_points, f_inj, fs, ctl.delay_comp,
+                               inj.amplitude),
+                              lambda: tuple(make_lut(t) for t in rotating_r_slopes(
+                                  lut_motor(), obs.lut_points, f_inj, fs, ctl.delay_comp, inj.amplitude)))
+                comp_r = rot_r[0]
         elif compensation == "lut":
             f_lut = inj.frequency if obs.lut_model == "resistive" else None
             quad = inj.quadrature if f_lut else 0.0
             comp = _memo(("lut", model_key, known["R_s"], obs.lut_points, f_lut, quad),
                          lambda: make_lut(build_lut(lut_motor(), obs.lut_points, f_inj=f_lut, quad=quad)))
-            if f_lut and obs.resistance_adapt and d.hf_dtres and d.dtres.forward and d.dtres.adapt:
+            if f_lut and r_slopes:
                 # the table's slope in R_s, for the resistance the drive measures (ls_dtres_adapt)
                 comp_r = _memo(("lut_r", model_key, known["R_s"], obs.lut_points, f_lut, quad),
                                lambda: make_lut(lut_r_slope(lut_motor(), obs.lut_points, f_lut, quad)))
@@ -616,6 +627,8 @@ def build(sc: Scenario, motor: Motor | None = None, trace_in_memory: bool = True
         if obs.gain_schedule and shape != "pulsating":
             gain_table = _memo(("gain_table", shape, model_key, known["R_s"], f_inj, obs.lut_points),
                                lambda: make_lut(shape_tables(f_inj)[1]))
+            if rot_r is not None:
+                gain_r = rot_r[1]
         elif obs.gain_schedule:
             # the demodulator gain that makes the error's local slope 1 everywhere (the saliency and,
             # with the elliptical injection and R_s, its phase set it; docs/tuning.md)

@@ -23,6 +23,7 @@ import numpy as np
 from linsense.analysis.hf import table_model
 from linsense.analysis.rotating import negative_sequence, psi_rotating, reference_phase_sampled
 from linsense.analysis.square import delta_current, psi_square
+from linsense.compensation.lut import R_SLOPE_STEP
 from linsense.model.motor import Motor
 
 #: the square wave's fundamental separation: a low-pass at this fraction of f_pwm (its zeros at
@@ -61,6 +62,28 @@ def rotating_tables(motor: Motor, n: int, f_inj: float | None) -> tuple[np.ndarr
     if np.any(slope <= 0.0):
         raise ValueError("the rotating-vector estimate is not monotone in the position: no gain schedule")
     return psi, 1.0 / slope
+
+
+def rotating_r_slopes(motor: Motor, n: int, f_inj: float, fs: float, delay_comp: float,
+                      v_inj: float) -> tuple[np.ndarray, np.ndarray]:
+    """The rotating injection's tables' slopes in the resistance's scale ``k_r`` (``R_s = k_r
+    R_s0``; central differences over :data:`~linsense.compensation.lut.R_SLOPE_STEP`), for
+    ``ls_demod_cfg.comp_r`` and ``gain_r`` (docs/tuning.md, "The hot winding"): the compensation's
+    is ``dpsi_rot/dk_r + (d ref_phase/dk_r) / 2``, since the demodulator compares the negative
+    sequence's phase with ``2 (theta_est + Psi) + ref_phase`` and ``ref_phase`` (the motor without
+    its end effect, :func:`rotating_design`) moves with the resistance too."""
+    h = R_SLOPE_STEP
+    if not motor.R_s > 0:
+        return np.zeros(n), np.zeros(n)
+    out = []
+    for s in (1.0, -1.0):
+        m = dataclasses.replace(motor, R_s=motor.R_s * (1.0 + s * h))
+        psi, gain = rotating_tables(m, n, f_inj)
+        ref = rotating_design(m, m.R_s, v_inj, f_inj, fs, delay_comp)["ref_phase"]
+        out.append((psi, gain, ref))
+    (p1, g1, r1), (p0, g0, r0) = out
+    d_ref = math.remainder(r1 - r0, 2.0 * math.pi)
+    return (p1 - p0 + 0.5 * d_ref) / (2.0 * h), (g1 - g0) / (2.0 * h)
 
 
 def _square_ratio(motor: Motor, theta, theta_est, f_inj: float, psi_est) -> np.ndarray:
