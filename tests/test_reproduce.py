@@ -21,6 +21,7 @@ from pathlib import Path
 import pytest
 
 from linsense.errors import InputError
+from linsense.io import TIMING_KEYS
 from linsense.sim.metrics import REQUIRED_KEYS
 
 
@@ -38,18 +39,21 @@ N_RUNS = sum(len(v) for v in RUNS.values())
 
 
 def test_metrics_json_has_the_issues_structure(rep):
-    _, _, m = rep
+    out, _, m = rep
+    timing = json.loads((out / "timing.json").read_text())
     assert isinstance(m["lut"]["peak_deg"], float)
     for k in ("model_peak_deg", "cal_0N_max_diff_deg", "cal_20N_max_diff_deg", "cal_40N_max_diff_deg"):
         assert isinstance(m["fig9"][k], float), k
     for fig, variants in RUNS.items():
         for var in variants:
-            run = m[fig][var]
-            missing = [k for k in REQUIRED_KEYS if k not in run]
+            # (the wall-clock ones in timing.json, at the same place)
+            run, t = m[fig][var], timing[fig][var]
+            missing = [k for k in REQUIRED_KEYS if k not in run and k not in t]
             assert not missing, (fig, var, missing)
+            assert not set(TIMING_KEYS) & set(run)
             assert run["fidelity"] == "switching"
-            run = m["rotating"][fig][var]
-            missing = [k for k in REQUIRED_KEYS if k not in run]
+            run, t = m["rotating"][fig][var], timing["rotating"][fig][var]
+            missing = [k for k in REQUIRED_KEYS if k not in run and k not in t]
             assert not missing, ("rotating", fig, var, missing)
             assert run["fidelity"] == "switching"
     assert set(m["rotating"]["analysis"]["nolut_vs_model"]) == {"fig11", "fig12", "fig13"}
@@ -284,6 +288,20 @@ def test_paper_scenario_refuses_another_inverter(tmp_path, monkeypatch):
     monkeypatch.setattr(runs, "data_path", lambda *parts: Path(tmp_path).joinpath(*parts))
     with pytest.raises(InputError, match="switching inverter with 0.8 us dead time"):
         runs.paper_scenario("x.toml")
+
+
+def test_byte_identical_apart_from_timing(rep, tmp_path):
+    """A second run of the same command writes the same bytes in every file but timing.json (the
+    wall-clock times: docs/cli.md), the stability map's table and the report included."""
+    out2 = tmp_path / "out"
+    p = subprocess.run([sys.executable, "-m", "linsense", "reproduce", "--quick", "--out", str(out2)],
+                       capture_output=True, text=True, timeout=600)
+    assert p.returncode == 0, p.stderr
+    files = sorted(f.relative_to(rep[0]) for f in rep[0].rglob("*") if f.is_file())
+    assert files == sorted(f.relative_to(out2) for f in out2.rglob("*") if f.is_file())
+    differ = [str(f) for f in files if (rep[0] / f).read_bytes() != (out2 / f).read_bytes()]
+    assert differ == ["timing.json"], differ
+    assert "wall_s" not in (rep[0] / "metrics.json").read_text()
 
 
 def test_a_motor_file_runs_every_stage(rep, tmp_path):

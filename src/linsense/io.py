@@ -120,6 +120,27 @@ def write_atomic_with(path: str | os.PathLike, writer: Callable) -> Path:
 TIMING_KEYS = ("wall_s", "realtime_factor")
 
 
+def strip_timing(obj):
+    """``(obj without the TIMING_KEYS at any depth, the removed values in the same nesting)``: for a
+    file of many runs' metrics (``linsense reproduce``'s ``metrics.json``), whose wall-clock times
+    go to ``timing.json``. The second item is ``None`` where nothing was removed."""
+    if isinstance(obj, dict):
+        keep, timing = {}, {}
+        for k, v in obj.items():
+            if k in TIMING_KEYS:
+                timing[k] = v
+                continue
+            keep[k], t = strip_timing(v)
+            if t is not None:
+                timing[k] = t
+        return keep, (timing or None)
+    if isinstance(obj, (list, tuple)):
+        pairs = [strip_timing(v) for v in obj]
+        timing = [t for _, t in pairs]
+        return [k for k, _ in pairs], (timing if any(t is not None for t in timing) else None)
+    return obj, None
+
+
 def split_timing(metrics: dict) -> tuple[dict, dict]:
     """``(reproducible metrics, timing)``: the :data:`TIMING_KEYS` moved to the second dict."""
     keep = {k: v for k, v in metrics.items() if k not in TIMING_KEYS}

@@ -20,12 +20,13 @@ from linsense.io import parse_toml, read_toml, write_atomic
 from linsense.model.motor import preset_names
 from linsense.sweep.spec import SweepSpec
 
-#: scalar metrics copied into a sweep's rows (lists and the long texts stay out)
+#: scalar metrics copied into a sweep's rows (lists and the long texts stay out; no wall-clock time:
+#: a sweep's tables are byte-reproducible, docs/cli.md)
 ROW_METRICS = ("stable", "accurate", "reached", "max_abs_err_deg", "transient_max_err_deg",
                "steady_max_err_deg", "bias_deg", "limit_cycle_mm", "limit_cycle_deg", "settling_time_s",
                "final_position_mm", "final_error_mm", "final_error_deg", "final_offset_mm",
                "final_offset_deg", "overshoot_mm", "overshoot_deg", "fault", "unstable_reason",
-               "hf_current_a", "sim_s", "wall_s")
+               "hf_current_a", "sim_s")
 
 
 @dataclass
@@ -186,8 +187,6 @@ def run_point(ctx: SweepContext, index: int, point: dict, relative: dict) -> dic
             m["hf_current_a"] = hf_current(res)
         else:
             m = metrics_only(sc)
-        if "wall_s" not in m:
-            m["wall_s"] = getattr(res, "wall_s", None)
         for k in ROW_METRICS:
             v = m.get(k)
             row[k] = None if isinstance(v, float) and not math.isfinite(v) else v
