@@ -131,9 +131,28 @@ def compute_metrics_ref(arrays: dict, *, fault: int, steps_done: int, f_pwm: flo
 
     # stability: no fault; finite; reached the reference region; bounded (end window within
     # bound_deg of the target) and settled (true position varies by at most settle_band_deg there)
+    # (issue 23: the run holds its moves and an end window after them, or the verdict says why not)
+    verdict, why = "", ""
+    t_run = sim_s
+    if fault and t.size:
+        t_run = min(sim_s, float(t[-1]))
+    if moves and moves[-1][0] >= t_run:
+        reached, verdict = False, "not reached"
+        why = (f"the run ends at {t_run:.6g} s, before the commanded move at {moves[-1][0]:.6g} s "
+               f"(scenario.duration, reference.at)")
+    else:
+        t_move = max([m[1] for m in moves] + [0.0])
+        if t_run < final_window_s or (moves and t_run - final_window_s < t_move):
+            verdict = "too short"
+            why = (f"the end window ({final_window_s:g} s, metrics.final_window_s) needs the run "
+                   f"({t_run:.6g} s) to last at least {t_move + final_window_s:.6g} s")
+            if moves:
+                why += f" (the last move ends at {t_move:.6g} s)"
     reason = ""
     if fault:
         reason = f"fault: {fault_reason(fault)}"
+    elif verdict:
+        reason = f"{verdict}: {why}"
     elif not np.all(x_fin):
         reason = "non-finite position"
     elif not reached:
@@ -150,9 +169,11 @@ def compute_metrics_ref(arrays: dict, *, fault: int, steps_done: int, f_pwm: flo
                   f"({mm(limit_cycle):.3g} mm) in the last {final_window_s:g} s "
                   f"(tolerance {settle_band_deg:g} deg)")
     stable = reason == ""
+    verdict = verdict or ("stable" if stable else "unstable")
     rt = sim_s / wall_s if wall_s > 0 else None
     return {
         "stable": bool(stable),
+        "verdict": verdict,
         "max_abs_err_deg": _round(max_err),
         "transient_max_err_deg": _round(tr_err),
         "steady_max_err_deg": _round(st_err),

@@ -31,7 +31,26 @@ CASES = {
     "noise nan": (["bench-emulate", "--motor", "ecce2010", "--noise", "nan", "--out", "b.csv"],
                   ["--noise", "nan"]),
     "unknown command": (["simulat", "x.toml"], ["simulat"]),
+    # (issue 23: these were accepted and wrote something wrong)
+    "f-inj 1e300": (["lut", "--motor", "ecce2010", "--f-inj", "1e300", "--out", "l.csv"],
+                    ["--f-inj", "1e+300", "limit"]),
+    "out names a folder": (["model", "--motor", "ecce2010", "--out", "newdir/"],
+                           ["--out", "newdir/", "folder"]),
 }
+
+
+def test_a_c_keyword_symbol_still_compiles(run_cli, tmp_path):
+    """`lut --symbol int` (a C keyword) writes a header whose array is not named int (issue 23: it
+    did not compile)."""
+    import subprocess
+
+    out = tmp_path / "l.h"
+    run_cli("lut", "--motor", "ecce2010", "--format", "c", "--symbol", "int", "--out", str(out))
+    src = tmp_path / "u.c"
+    src.write_text('#include "l.h"\nint main(void) { return (int)(int_t[0] * 0.0f); }\n')
+    cc = subprocess.run(["cc", "-std=c99", "-Wall", "-Werror", "-I", str(tmp_path), str(src), "-o",
+                         str(tmp_path / "u")], capture_output=True, text=True)
+    assert cc.returncode == 0, cc.stderr
 
 
 @pytest.mark.parametrize("case", list(CASES))
@@ -40,3 +59,35 @@ def test_hostile_command_line(run_cli, tmp_path, monkeypatch, case):
     monkeypatch.chdir(tmp_path)
     run_cli(*args).refused(*words)
     assert list(tmp_path.iterdir()) == []  # nothing written
+
+
+def test_an_override_that_would_change_nothing_is_refused(run_cli, tmp_path):
+    """`controller.model.demod_gain` with the gain schedule on changed nothing, byte for byte (issue
+    23): it is refused in one line naming both keys; with the schedule off it takes effect."""
+    sc = tmp_path / "s.toml"
+    body = ('motor = "ecce2010"\n[scenario]\nduration = 0.4\n[reference]\ntype = "hold"\n'
+            "[controller.model]\ndemod_gain = -3.0\n")
+    sc.write_text(body)
+    run_cli("simulate", str(sc), "--out", str(tmp_path / "o")).refused(
+        "controller.model.demod_gain", "-3.0", "observer.gain_schedule")
+    assert not (tmp_path / "o").exists()
+    sc.write_text(body + "[observer]\ngain_schedule = false\n")
+    r = run_cli("simulate", str(sc), "--out", str(tmp_path / "o2"), "--check")
+    assert r.code == 1 and "fault" in r.out + r.err  # (a gain of the wrong sign: it took effect)
+
+
+def test_lut_refuses_a_motor_the_drive_cannot_hold(run_cli, tmp_path):
+    """A table for a motor whose demodulated error changes sign with the injection it is for (the
+    firmware's elliptical one) is refused as tune, simulate and calibrate refuse the motor (issue 23:
+    lut wrote it); for the pulsating injection, which holds this motor, it is written."""
+    from importlib import resources
+
+    text = (resources.files("linsense.model") / "presets" / "ecce2010.toml").read_text()
+    text = text.replace("L2 = -0.317e-3", "L2 = 0.9e-3").replace("M2 = -0.317e-3", "M2 = 0.9e-3")
+    mot = tmp_path / "rev.toml"
+    mot.write_text(text)
+    run_cli("lut", "--motor", str(mot), "--f-inj", "1000", "--out", str(tmp_path / "a.csv")).refused(
+        "rev.toml", "motor", "changes sign")
+    assert not (tmp_path / "a.csv").exists()
+    assert run_cli("lut", "--motor", str(mot), "--f-inj", "1000", "--quad", "0",
+                   "--out", str(tmp_path / "b.csv")).code == 0

@@ -195,7 +195,7 @@ def test_metrics_bounds_in_mm_still_work():
         bounds = MetricsSection(settle_band_mm=band_mm).bounds_deg(PITCH)
         m = _metrics(x, [], 3e-3, x_start=3e-3, **bounds)
         assert m["stable"] is stable and m["limit_cycle_mm"] == pytest.approx(0.03, rel=1e-3)
-    sc = {"motor": "ecce2010", "scenario": {"duration": 0.2}, "control": {"mode": "sensored"},
+    sc = {"motor": "ecce2010", "scenario": {"duration": 0.4}, "control": {"mode": "sensored"},
           "reference": {"type": "hold"}, "metrics": {"bound_mm": 3.5, "settling_band_mm": 0.1}}
     m = linsense.simulate(sc, record="metrics").metrics
     assert m["stable"] and m["pole_pitch_mm"] == 56.0 and m["settling_time_s"] == 0.0, m["unstable_reason"]
@@ -313,3 +313,53 @@ def test_metrics_equal_the_mask_based_reference(blocks):
         got = compute_metrics(arrays, **kw)
         want = compute_metrics_ref(arrays, **kw)
         assert got == want, (k, {key: (got[key], want[key]) for key in got if got[key] != want[key]})
+
+
+STEP = {"motor": "ecce2010", "control": {"mode": "sensored"},
+        "reference": {"type": "step", "position_mm": 3.0, "at": 0.1}}
+
+
+@pytest.mark.parametrize("duration, at, verdict, fragment", [
+    (0.6, 10.0, "not reached", "before the commanded move at 10 s"),  # the move after the run's end
+    (2.0 / 16000.0, 0.1, "not reached", "before the commanded move"),  # two PWM periods
+    (0.3, 0.1, "too short", "to last at least 0.4 s"),  # the end window would hold the step itself
+    (0.25, None, "too short", "needs the run (0.25 s)"),  # a hold shorter than its end window
+])
+def test_verdicts_judged_on_nothing_are_their_own(duration, at, verdict, fragment, tmp_path, capsys):
+    """A run that does not hold its commanded move, or an end window after it, is not judged stable
+    (issue 23: a move at 10 s in a 0.6 s run, two PWM periods, and an end window longer than the
+    run were all "stable"; the last reported the step as a 2.9 mm limit cycle): its verdict says
+    which, and `linsense simulate --check` exits 1 naming the keys."""
+    sc = json.loads(json.dumps(STEP))
+    sc["scenario"] = {"duration": duration}
+    if at is None:
+        sc["reference"] = {"type": "hold"}
+    else:
+        sc["reference"]["at"] = at
+    m = linsense.simulate(sc, record="metrics").metrics
+    assert m["verdict"] == verdict and not m["stable"], m["unstable_reason"]
+    assert fragment in m["unstable_reason"], m["unstable_reason"]
+    assert (m["reached"] is False) == (verdict == "not reached")
+    path = tmp_path / "s.toml"
+    import tomli_w
+
+    path.write_text(tomli_w.dumps(sc))
+    with pytest.raises(SystemExit) as e:
+        main(["simulate", str(path), "--out", str(tmp_path / "o"), "--check"])
+    assert e.value.code == 1
+    err = capsys.readouterr().err
+    assert verdict in err and ("reference.at" in err or "final_window_s" in err), err
+
+
+def test_a_fault_before_the_step_is_not_reached():
+    """A drive that trips before its step never reached it (issue 23: it was `reached`)."""
+    t = np.arange(50) / F_PWM  # (tripped at 49 ms, the step at 0.1 s)
+    a = _arrays(np.zeros(t.size), None)
+    m = compute_metrics(a, fault=0x01, steps_done=t.size, f_pwm=F_PWM, moves=[(0.1, 0.1, 0.0, 3e-3)],
+                        wall_s=0.01, observer_active=True, x_target=3e-3, x_start=0.0, **DEFAULTS)
+    assert not m["reached"] and m["verdict"] == "not reached" and m["unstable_reason"].startswith("fault")
+
+
+def test_a_settled_step_is_stable():
+    m = linsense.simulate({**STEP, "scenario": {"duration": 0.8}}, record="metrics").metrics
+    assert m["verdict"] == "stable" and m["stable"], m["unstable_reason"]

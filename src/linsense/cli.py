@@ -88,9 +88,14 @@ def lut(motor_spec: str, points: int, fmt: str, symbol: str | None, f_inj: float
     from linsense.compensation.lut import build_lut, export
     from linsense.ctrl import drive_default_cfg
     from linsense.io import write_atomic
+    from linsense.limits import MAX_F_INJ
+    from linsense.tune.design import observable_error_gain
 
     if f_inj is not None and not (f_inj > 0 and np.isfinite(f_inj)):
         raise InputError("--f-inj", "", f"must be a positive frequency in Hz, got {f_inj!r}")
+    if f_inj is not None and f_inj > MAX_F_INJ:
+        raise InputError("--f-inj", "", f"{f_inj:g} Hz is beyond the limit of {MAX_F_INJ:g} Hz (half of a "
+                         "1 MHz PWM; docs/limits.md)")
     if quad is not None and f_inj is None:
         raise InputError("--quad", "", "only with --f-inj (eq. 12 neglects R_s, where kappa changes nothing)")
     if quad is not None and injection != "pulsating":
@@ -99,6 +104,9 @@ def lut(motor_spec: str, points: int, fmt: str, symbol: str | None, f_inj: float
     if quad is None:
         quad = round(float(drive_default_cfg().inject.quad), 6) if f_inj is not None else 0.0
     motor = _load(motor_spec)
+    # (a motor the HF observer cannot hold is refused as tune and simulate refuse it: issue 23)
+    observable_error_gain(motor, f_inj or float(drive_default_cfg().inject.freq), quad if f_inj else 0.0,
+                          motor_spec)
     write_atomic(out, export(build_lut(motor, points, f_inj, quad=quad, injection=injection), fmt, symbol))
 
 

@@ -85,6 +85,11 @@ def write_atomic_with(path: str | os.PathLike, writer: Callable) -> Path:
         writer(sys.stdout.buffer)
         sys.stdout.flush()
         return Path("-")
+    if str(path).endswith(("/", os.sep)) or os.path.isdir(path):
+        # (`model --out newdir/` wrote a file named newdir)
+        from linsense.errors import InputError
+
+        raise InputError("--out", "", f"{str(path)!r} names a folder: give the file's name in it")
     path = Path(path)
     try:
         special = not stat.S_ISREG(os.stat(path).st_mode)

@@ -16,6 +16,9 @@ MAX_HARMONIC_ORDER = int(lib.LS_SIM_MAX_ORDER) - 1
 MAX_POINTS = 100_000
 #: positions of an emulated bench measurement or of a calibration (--positions)
 MAX_POSITIONS = 10_000
+#: Hz, highest injection frequency of a table (``lut --f-inj``): half of a 1 MHz PWM; above it the
+#: resistance's share is nil and the HF currents underflow (1e300 Hz gave an all-zero table)
+MAX_F_INJ = 500_000.0
 #: PWM periods of one simulated run (duration x f_pwm): about an hour of computing
 MAX_STEPS = 10_000_000_000
 #: bytes of the trace one run keeps in memory (recorded samples x about 140 B)

@@ -175,10 +175,20 @@ def to_json(lut: Lut) -> str:
     return json.dumps(doc, indent=1) + "\n"
 
 
+#: C99's keywords, which are not identifiers (``lut --symbol int`` wrote a header that did not
+#: compile)
+C_KEYWORDS = frozenset(
+    "auto break case char const continue default do double else enum extern float for goto if "
+    "inline int long register restrict return short signed sizeof static struct switch typedef "
+    "union unsigned void volatile while".split())
+
+
 def c_identifier(name: str) -> str:
-    """A valid lower-case C identifier derived from ``name``."""
+    """A valid lower-case C identifier derived from ``name`` (``m_`` before a leading digit, ``_t``
+    after a C keyword)."""
     ident = re.sub(r"[^0-9a-zA-Z_]", "_", name).lower().strip("_") or "motor"
-    return ident if not ident[0].isdigit() else f"m_{ident}"
+    ident = ident if not ident[0].isdigit() else f"m_{ident}"
+    return f"{ident}_t" if ident in C_KEYWORDS else ident
 
 
 def _c_float(v: float) -> str:

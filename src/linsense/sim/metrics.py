@@ -258,11 +258,29 @@ def compute_metrics(arrays: dict, *, fault: int, steps_done: int, f_pwm: float, 
     def mm(v: float | None) -> float | None:
         return None if v is None else v * 1e3
 
+    # the run must hold its commanded moves and an end window after them: a move that starts after
+    # the run ended (by its duration or a fault) was never reached; an end window longer than the
+    # run, or one that overlaps the last move, judges the move itself: too short
+    verdict = ""
+    t_run = min(sim_s, float(t[-1])) if fault and t.size else sim_s
+    if moves and moves[-1][0] >= t_run:
+        reached = False
+        verdict = "not reached"
+        why_short = (f"the run ends at {t_run:.6g} s, before the commanded move at {moves[-1][0]:.6g} s "
+                     f"(scenario.duration, reference.at)")
+    elif t_run < final_window_s or (moves and t_run - final_window_s < max(m[1] for m in moves)):
+        verdict = "too short"
+        t_move = max(m[1] for m in moves) if moves else 0.0
+        why_short = (f"the end window ({final_window_s:g} s, metrics.final_window_s) needs the run "
+                     f"({t_run:.6g} s) to last at least {t_move + final_window_s:.6g} s"
+                     + (f" (the last move ends at {t_move:.6g} s)" if moves else ""))
     # stability: no fault; finite; reached the reference region; bounded (end window within
     # bound_deg of the target) and settled (true position varies by at most settle_band_deg there)
     reason = ""
     if fault:
         reason = f"fault: {fault_reason(fault)}"
+    elif verdict:
+        reason = f"{verdict}: {why_short}"
     elif not x_all:
         reason = "non-finite position"
     elif not reached:
@@ -279,9 +297,15 @@ def compute_metrics(arrays: dict, *, fault: int, steps_done: int, f_pwm: float, 
                   f"({mm(limit_cycle):.3g} mm) in the last {final_window_s:g} s "
                   f"(tolerance {settle_band_deg:g} deg)")
     stable = reason == ""
+    if not verdict:
+        verdict = "stable" if stable else "unstable"
     rt = sim_s / wall_s if wall_s > 0 else None
     return {
         "stable": bool(stable),
+        # "stable", "unstable" (unstable_reason says why: a fault, the bound, a limit cycle, the
+        # target never approached), or, judged on nothing: "not reached" (the commanded move lies
+        # after the run's end) or "too short" (no end window after the last move)
+        "verdict": verdict,
         "max_abs_err_deg": _round(max_err),
         "transient_max_err_deg": _round(tr_err),
         "steady_max_err_deg": _round(st_err),

@@ -464,6 +464,11 @@ class ScenarioFile(BaseModel):
         g = c.model.demod_gain
         if g is not None and g == 0.0:
             raise KeyProblem("controller.model.demod_gain", "must be non-zero, got 0.0")
+        if g is not None and self.observer.gain_schedule:
+            # (issue 23: it was accepted and changed nothing, the gain table replacing it)
+            raise KeyProblem("controller.model.demod_gain", f"{g!r} has no effect with "
+                             "observer.gain_schedule = true (the gain table replaces it): set "
+                             "observer.gain_schedule = false to use it")
         tr = self.travel
         if not tr.min_mm < tr.max_mm:
             raise KeyProblem("travel.max_mm",

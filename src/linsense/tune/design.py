@@ -192,6 +192,26 @@ def error_gain(motor: Motor, f_inj: float, quad: float, gain: float, n: int = 18
     return -gain * (r_p - r_m) / (2.0 * h)
 
 
+def observable_error_gain(motor: Motor, f_inj: float, quad: float, source: str) -> np.ndarray:
+    """:func:`error_gain` with the nominal demodulator gain ``L_q / (L_q - L_d)``, or
+    :class:`InputError` naming ``source`` where it is not positive at every position: the HF
+    observer cannot hold there, and no table compensates it (``tune``, ``simulate``, ``calibrate``
+    and ``lut`` refuse such a motor alike)."""
+    L_d, L_q = mean_dq(motor)
+    if L_q == L_d:
+        raise InputError(source, "motor",
+                         "no mean saliency (L_q = L_d): HF injection cannot see the position")
+    k_e = error_gain(motor, f_inj, quad, L_q / (L_q - L_d))
+    if np.any(k_e <= 0):
+        raise InputError(
+            source,
+            "motor",
+            "the demodulated error changes sign at some positions (saliency "
+            "vanishes or reverses): the HF observer cannot hold there",
+        )
+    return k_e
+
+
 def end_effect_ratio(motor: Motor) -> float:
     """``|(l_ea, l_eb)| / (|L_d - L_q| / 2)``: the end effect's stationary anisotropy over the
     saliency's rotating one (alpha-beta inductance, :func:`linsense.analysis.hf.end_anisotropy`).
@@ -323,14 +343,7 @@ def design(
     kp_v, ki_v = speed_gains(f_v, motor.mass)  # (the PI's integral: the encoder modes' with load_ff)
     kp_x = 2.0 * math.pi * f_v / RATIO_SPEED_POS
     gain = L_q / (L_q - L_d)
-    k_e = error_gain(motor, f_inj, d.quad, gain)
-    if np.any(k_e <= 0):
-        raise InputError(
-            source,
-            "motor",
-            "the demodulated error changes sign at some positions (saliency "
-            "vanishes or reverses): the HF observer cannot hold there",
-        )
+    k_e = observable_error_gain(motor, f_inj, d.quad, source)
     if k_e.min() < 0.3:
         warnings.append(
             f"the error gain drops to {k_e.min():.2f} of nominal at some positions "
