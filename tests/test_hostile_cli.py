@@ -91,3 +91,15 @@ def test_lut_refuses_a_motor_the_drive_cannot_hold(run_cli, tmp_path):
     assert not (tmp_path / "a.csv").exists()
     assert run_cli("lut", "--motor", str(mot), "--f-inj", "1000", "--quad", "0",
                    "--out", str(tmp_path / "b.csv")).code == 0
+
+
+def test_a_pm_harmonic_listed_twice_is_refused(run_cli, tmp_path):
+    """Two [pm_flux] entries of one order were accepted (issue 23): refused naming the entry."""
+    from importlib import resources
+
+    text = (resources.files("linsense.model") / "presets" / "ecce2010.toml").read_text()
+    mot = tmp_path / "pm.toml"
+    mot.write_text(text + "\n[pm_flux]\nharmonics = [ { order = 5, amplitude = 0.02 },"
+                          " { order = 5, amplitude = 0.03 } ]\n")
+    run_cli("model", "--motor", str(mot), "--out", str(tmp_path / "m.csv")).refused(
+        "pm.toml", "pm_flux.harmonics[1].order", "order 5", "twice")

@@ -105,6 +105,17 @@ class PmFluxSection(BaseModel):
     model_config = _STRICT
     harmonics: list[PmHarmonicEntry] = Field(default_factory=list)
 
+    @model_validator(mode="after")
+    def _one_entry_per_order(self) -> PmFluxSection:
+        # (issue 23: an order listed twice was accepted, one entry silently over the other)
+        seen = set()
+        for k, h in enumerate(self.harmonics):
+            if h.order in seen:
+                raise KeyProblem(f"harmonics[{k}].order", f"order {h.order} is listed twice: give each "
+                                 "order once (amplitude and phase_deg together)")
+            seen.add(h.order)
+        return self
+
 
 class SaturationSection(BaseModel):
     """Saturation for the simulator's saturated plant (:mod:`linsense.model.saturation`): the
