@@ -103,3 +103,18 @@ def test_a_pm_harmonic_listed_twice_is_refused(run_cli, tmp_path):
                           " { order = 5, amplitude = 0.03 } ]\n")
     run_cli("model", "--motor", str(mot), "--out", str(tmp_path / "m.csv")).refused(
         "pm.toml", "pm_flux.harmonics[1].order", "order 5", "twice")
+
+
+@pytest.mark.parametrize("command", ["simulate", "model"])
+def test_a_deeply_nested_toml_is_one_line(run_cli, tmp_path, command):
+    """A 1.8 kB file with a 900-deep array was a RecursionError traceback in every reader (issue 23):
+    one line naming the file and the limit (docs/limits.md), for a scenario and a motor file."""
+    from linsense.limits import MAX_TOML_DEPTH
+
+    f = tmp_path / "deep.toml"
+    f.write_text('motor = "ecce2010"\nx = ' + "[" * 900 + "]" * 900 + "\n")
+    args = ["simulate", str(f), "--out", str(tmp_path / "o")] if command == "simulate" else \
+        ["model", "--motor", str(f), "--out", str(tmp_path / "m.csv")]
+    run_cli(*args).refused("deep.toml", "nested", str(MAX_TOML_DEPTH))
+    f.write_text('motor = "ecce2010"\nx = ' + "[" * (MAX_TOML_DEPTH + 1) + "]" * (MAX_TOML_DEPTH + 1) + "\n")
+    run_cli(*args).refused("deep.toml", "nested")

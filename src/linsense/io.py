@@ -52,15 +52,29 @@ def read_text_file(path: str | os.PathLike, what: str) -> str:
 
 
 def parse_toml(text: str, source: str) -> dict:
-    """The data of a TOML text, or InputError naming ``source``."""
+    """The data of a TOML text, or InputError naming ``source`` (also for arrays and tables nested
+    deeper than :data:`linsense.limits.MAX_TOML_DEPTH`: a 900-deep array was a RecursionError
+    traceback in every reader)."""
     import tomllib
 
     from linsense.errors import InputError
+    from linsense.limits import MAX_TOML_DEPTH
 
+    deep = f"arrays or tables nested deeper than the limit of {MAX_TOML_DEPTH} (docs/limits.md)"
     try:
-        return tomllib.loads(text)
+        data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise InputError(source, "", f"not valid TOML: {exc}") from None
+    except RecursionError:
+        raise InputError(source, "", deep) from None
+    stack = [(data, 1)]
+    while stack:  # (iterative: the check itself must not recurse)
+        obj, depth = stack.pop()
+        if depth > MAX_TOML_DEPTH:
+            raise InputError(source, "", deep)
+        children = obj.values() if isinstance(obj, dict) else obj
+        stack.extend((c, depth + 1) for c in children if isinstance(c, (dict, list)))
+    return data
 
 
 def read_toml(path: str | os.PathLike, what: str) -> dict:

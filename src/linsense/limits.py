@@ -16,6 +16,9 @@ MAX_HARMONIC_ORDER = int(lib.LS_SIM_MAX_ORDER) - 1
 MAX_POINTS = 100_000
 #: positions of an emulated bench measurement or of a calibration (--positions)
 MAX_POSITIONS = 10_000
+#: nesting of arrays and tables in a TOML file (motor, scenario, sweep): the deepest a file of
+#: linsense has is 4
+MAX_TOML_DEPTH = 32
 #: Hz, highest injection frequency of a table (``lut --f-inj``): half of a 1 MHz PWM; above it the
 #: resistance's share is nil and the HF currents underflow (1e300 Hz gave an all-zero table)
 MAX_F_INJ = 500_000.0
