@@ -8,6 +8,8 @@ All angles in rad. Every function is vectorised and broadcasts ``theta`` against
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from linsense.model.frames import rot
@@ -90,6 +92,20 @@ def psi_lut(model, theta) -> np.ndarray:
     """Compensation angle ``Psi_LUT = psi(theta, 0) = atan(-L_dq / L_q)`` (rad), eq. (12)."""
     _, L_q, L_dq = dq_components(model, theta)
     return np.arctan2(-L_dq, L_q)
+
+
+def _frequency(f, name: str) -> float:
+    """``f`` as a float if it is a real, finite, positive frequency (Hz), else InputError naming
+    ``name`` (the API refuses what the CLI refuses: a negative, complex or None frequency was
+    accepted and gave a table of nonsense)."""
+    import numbers
+
+    from linsense.errors import InputError
+
+    if isinstance(f, bool) or not isinstance(f, numbers.Real) or not (math.isfinite(f) and f > 0):
+        raise InputError("linsense.analysis.hf", name,
+                         f"must be a positive finite frequency in Hz, got {f!r}")
+    return float(f)
 
 
 def psi_lut_resistive(motor, theta, f_inj: float, quad: float = 0.0) -> np.ndarray:
@@ -184,6 +200,7 @@ def hf_current(
     amplitude ``v_inj`` (V) at ``f_inj`` (Hz) on the estimated d-axis, plus ``quad v_inj sin`` on
     the estimated q-axis (phasor ``-j quad v_inj``; 0: pulsating). Returns shape ``(..., 2)``.
     """
+    f_inj = _frequency(f_inj, "f_inj")
     theta, theta_err = np.broadcast_arrays(np.asarray(theta, float), np.asarray(theta_err, float))
     w = 2.0 * np.pi * f_inj
     Z = motor.R_s * np.eye(2) + 1j * w * motor.inductance.L_dq(theta)

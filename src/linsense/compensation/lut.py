@@ -92,12 +92,24 @@ def build_lut(motor, points: int, f_inj: float | None = None, quad: float = 0.0,
     ``injection="square"``: the square wave's table at ``f_inj`` (e.g. f_pwm / 2),
     :func:`~linsense.analysis.square.psi_square` (without ``f_inj``: eq. 12, its R_s = 0 limit).
     """
-    if points < 4:
-        raise ValueError("points must be >= 4")
+    import numbers
+
+    from linsense.limits import MAX_F_INJ, MAX_POINTS
+
+    src = "linsense.compensation.build_lut"
+    # (the API refuses what the CLI refuses: 4.5 points, 10**9 points, a complex or negative
+    # frequency were accepted, the second until memory ran out)
+    if isinstance(points, bool) or not isinstance(points, numbers.Integral) or not 4 <= points <= MAX_POINTS:
+        raise InputError(src, "points", f"must be an integer in 4 .. {MAX_POINTS:,} (docs/limits.md), "
+                         f"got {points!r}")
     if injection not in ("pulsating", "rotating", "square"):
-        raise ValueError(f"injection must be 'pulsating', 'rotating' or 'square', got {injection!r}")
-    if f_inj is not None and not f_inj > 0:
-        raise ValueError("f_inj must be positive")
+        raise InputError(src, "injection", f"must be 'pulsating', 'rotating' or 'square', got {injection!r}")
+    if f_inj is not None and (isinstance(f_inj, bool) or not isinstance(f_inj, numbers.Real)
+                              or not (math.isfinite(f_inj) and 0 < f_inj <= MAX_F_INJ)):
+        raise InputError(src, "f_inj", f"must be None or a frequency in (0, {MAX_F_INJ:g}] Hz, got {f_inj!r}")
+    if isinstance(quad, bool) or not isinstance(quad, numbers.Real) or not 0.0 <= quad < 1.0:
+        raise InputError(src, "quad", f"must be in [0, 1), got {quad!r}")
+    points = int(points)
     theta = 2.0 * np.pi * np.arange(points) / points
     prov = motor.provenance()
     if injection == "rotating":
