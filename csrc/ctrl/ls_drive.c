@@ -298,9 +298,9 @@ static void mode_set(ls_drive *d, ls_mode mode)
         d->path = LS_DRIVE_PATH_GENERAL;
     }
 }
+
 /* The residual model starts again (keep_r: its measured resistance scale kept, ls_dtres_restart;
- * else ls_dtres_reset, k_r = 1), and what follows that scale with it: the demodulator's table
- * correction and the current PI's integral gain. */
+ * else ls_dtres_reset, k_r = 1), and what follows that scale with it (ls_drive_path_follow_r_). */
 static void dtres_reset(ls_drive *d, bool keep_r)
 {
     if (keep_r) {
@@ -308,10 +308,8 @@ static void dtres_reset(ls_drive *d, bool keep_r)
     } else {
         ls_dtres_reset(&d->dtres);
     }
-    d->demod.k_r = d->dtres.k_r;
-    d->cur.ki_ts = d->cur.cfg.ki * d->cur.ts * d->dtres.k_r;
+    ls_drive_path_follow_r_(d);
 }
-
 
 void ls_drive_reset(ls_drive *d, ls_pos p)
 {

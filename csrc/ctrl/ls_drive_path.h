@@ -79,6 +79,15 @@ static inline LS_REAL ls_drive_path_force_(ls_drive *d, ls_pos pos, LS_REAL omeg
     return i_q_ref;
 }
 
+/* What follows the residual model's measured resistance scale k_r (ls_dtres_adapt): the
+ * demodulator's tables' resistance correction (ls_demod.h) and the current PI's zero on the
+ * winding's R/L pole (ki = R_s w_c: linsense.tune.design.current_gains). */
+static inline void ls_drive_path_follow_r_(ls_drive *d)
+{
+    d->demod.k_r = d->dtres.k_r;
+    d->cur.ki_ts = d->cur.cfg.ki * d->cur.ts * d->dtres.k_r;
+}
+
 /* The current the dead-time residual drove over the period that has just ended (A, alpha-beta;
  * ls_dtres.h): the modulator's forward model of the period with the inductance model at the angle
  * (c, s), its voltage error through the R-L model, and the model's inductance and resistance scales
@@ -97,11 +106,8 @@ static inline void ls_drive_path_residual_(ls_drive *d, const ls_meas *meas, LS_
             /* (k_r held while the angle is not the motor's: the start-up, the table off) */
             ls_dtres_adapt(&d->dtres, d->mod.i_prev, meas->i_abc, i_end, i_drop,
                            !d->starting && d->mode != LS_MODE_SENSORLESS_NOLUT);
-            if (d->dtres.n_solve == 0u) { /* k_r solved for: the tables' resistance correction
-                                           * (ls_demod.h), and the current PI's zero on the winding's
-                                           * R/L pole (ki = R_s w_c: tune.design.current_gains) */
-                d->demod.k_r = d->dtres.k_r;
-                d->cur.ki_ts = d->cur.cfg.ki * d->cur.ts * d->dtres.k_r;
+            if (d->dtres.n_solve == 0u) { /* (k_r solved for) */
+                ls_drive_path_follow_r_(d);
             }
         }
     } else {

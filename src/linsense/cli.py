@@ -101,12 +101,13 @@ def lut(motor_spec: str, points: int, fmt: str, symbol: str | None, f_inj: float
     if quad is not None and injection != "pulsating":
         raise InputError("--quad", "", f"only with --injection pulsating (the {injection} injection has no "
                          "q-axis share)")
+    firmware = drive_default_cfg()  # (the firmware's injection: its kappa and frequency; the cfg is
+    # kept whole: a member of a freed cffi struct reads garbage)
     if quad is None:
-        quad = round(float(drive_default_cfg().inject.quad), 6) if f_inj is not None else 0.0
+        quad = round(float(firmware.inject.quad), 6) if f_inj is not None else 0.0
     motor = _load(motor_spec)
     # (a motor the HF observer cannot hold is refused as tune and simulate refuse it: issue 23)
-    observable_error_gain(motor, f_inj or float(drive_default_cfg().inject.freq), quad if f_inj else 0.0,
-                          motor_spec)
+    observable_error_gain(motor, f_inj or float(firmware.inject.freq), quad if f_inj else 0.0, motor_spec)
     write_atomic(out, export(build_lut(motor, points, f_inj, quad=quad, injection=injection), fmt, symbol))
 
 

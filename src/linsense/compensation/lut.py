@@ -144,18 +144,25 @@ def build_lut(motor, points: int, f_inj: float | None = None, quad: float = 0.0,
 R_SLOPE_STEP = 0.02
 
 
-def lut_r_slope(motor, points: int, f_inj: float, quad: float = 0.0) -> np.ndarray:
-    """``dPsi_LUT/dk_r`` (rad per unit of the resistance's scale ``k_r``, ``R_s = k_r R_s0``) of the
-    resistance-aware table (:func:`build_lut` with ``f_inj``) at its ``points`` positions: the drive
-    measures ``k_r`` online (``ls_dtres_adapt``) and reads ``Psi_LUT + (k_r - 1) dPsi_LUT/dk_r``
-    (``ls_demod_cfg.comp_r``; docs/tuning.md, "The hot winding"). Central difference over
-    :data:`R_SLOPE_STEP`."""
+def resistance_slope(motor, table, n: int) -> np.ndarray:
+    """``d table / dk_r`` (per unit of the resistance's scale ``k_r``, ``R_s = k_r R_s0``) of the
+    ``n``-point table that ``table(motor)`` computes: central difference over :data:`R_SLOPE_STEP`,
+    zeros for a motor without resistance. The tables' slopes the drive reads as it measures ``k_r``
+    (docs/tuning.md, "The hot winding")."""
     if not motor.R_s > 0:
-        return np.zeros(points)
+        return np.zeros(n)
     h = R_SLOPE_STEP
-    hi, lo = (build_lut(dataclasses.replace(motor, R_s=motor.R_s * (1.0 + s * h)), points, f_inj=f_inj,
-                        quad=quad).values for s in (1.0, -1.0))
+    hi, lo = (np.asarray(table(dataclasses.replace(motor, R_s=motor.R_s * (1.0 + s * h))))
+              for s in (1.0, -1.0))
     return (hi - lo) / (2.0 * h)
+
+
+def lut_r_slope(motor, points: int, f_inj: float, quad: float = 0.0) -> np.ndarray:
+    """``dPsi_LUT/dk_r`` (rad per unit of ``k_r``) of the resistance-aware table (:func:`build_lut`
+    with ``f_inj``) at its ``points`` positions (:func:`resistance_slope`): the drive measures
+    ``k_r`` online (``ls_dtres_adapt``) and reads ``Psi_LUT + (k_r - 1) dPsi_LUT/dk_r``
+    (``ls_demod_cfg.comp_r``)."""
+    return resistance_slope(motor, lambda m: build_lut(m, points, f_inj=f_inj, quad=quad).values, points)
 
 
 # ---------------------------------------------------------------------- exports

@@ -263,14 +263,14 @@ def compute_metrics(arrays: dict, *, fault: int, steps_done: int, f_pwm: float, 
     # run, or one that overlaps the last move, judges the move itself: too short
     verdict = ""
     t_run = min(sim_s, float(t[-1])) if fault and t.size else sim_s
+    t_move = max(m[1] for m in moves) if moves else 0.0  # (s, the end of the last move)
     if moves and moves[-1][0] >= t_run:
         reached = False
         verdict = "not reached"
         why_short = (f"the run ends at {t_run:.6g} s, before the commanded move at {moves[-1][0]:.6g} s "
                      f"(scenario.duration, reference.at)")
-    elif t_run < final_window_s or (moves and t_run - final_window_s < max(m[1] for m in moves)):
+    elif t_run < final_window_s or (moves and t_run - final_window_s < t_move):
         verdict = "too short"
-        t_move = max(m[1] for m in moves) if moves else 0.0
         why_short = (f"the end window ({final_window_s:g} s, metrics.final_window_s) needs the run "
                      f"({t_run:.6g} s) to last at least {t_move + final_window_s:.6g} s"
                      + (f" (the last move ends at {t_move:.6g} s)" if moves else ""))

@@ -17,7 +17,6 @@ injection's amplitude from the dead-time voltage error and the lowest local sali
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from dataclasses import asdict, dataclass, field
 
@@ -30,7 +29,7 @@ from linsense.analysis.hf import (
     mean_dq,
     psi_lut_resistive,
 )
-from linsense.compensation.lut import R_SLOPE_STEP
+from linsense.compensation.lut import resistance_slope
 from linsense.errors import InputError
 from linsense.model.motor import Motor
 
@@ -231,14 +230,10 @@ def gain_schedule(motor: Motor, f_inj: float, quad: float, n: int) -> np.ndarray
 
 def gain_r_slope(motor: Motor, f_inj: float, quad: float, n: int) -> np.ndarray:
     """``d g / d k_r`` of :func:`gain_schedule` (per unit of the resistance's scale, ``R_s = k_r
-    R_s0``; central difference over R_SLOPE_STEP): the drive measures ``k_r`` and reads ``g + (k_r - 1)
-    dg/dk_r`` (``ls_demod_cfg.gain_r``), as its table follows it (``lut_r_slope``)."""
-    if not motor.R_s > 0:
-        return np.zeros(n)
-    h = R_SLOPE_STEP
-    hi, lo = (gain_schedule(dataclasses.replace(motor, R_s=motor.R_s * (1.0 + s * h)), f_inj, quad, n)
-              for s in (1.0, -1.0))
-    return (hi - lo) / (2.0 * h)
+    R_s0``; :func:`~linsense.compensation.lut.resistance_slope`): the drive measures ``k_r`` and
+    reads ``g + (k_r - 1) dg/dk_r`` (``ls_demod_cfg.gain_r``), as its table follows it
+    (``lut_r_slope``)."""
+    return resistance_slope(motor, lambda m: gain_schedule(m, f_inj, quad, n), n)
 
 
 def design(
