@@ -184,15 +184,27 @@ def test_every_class_motor_passes_the_quick_certificate():
     assert not failed, failed
 
 
-def test_m30_low_is_verified():
-    """m30_low's design passes the full certificate, every check (the off-nominal plants with the
-    resistance measured online; its end effect is 0.18 of its saliency: docs/tuning.md, "The
-    end-effect tolerance"), and it says so."""
+@pytest.mark.parametrize("name", NAMES)
+def test_every_test_motor_passes_all_but_the_end_effect_tolerance(name):
+    """Each test motor's design passes every check of the full certificate (nominal holds, steps,
+    trajectory, load step, L +-10 %, R_s +30 % with the resistance measured online) except, at
+    most, the end-effect tolerance dM0 +-25 %, and that only where the end effect is a large share
+    of the saliency (end-effect ratio above 0.3: docs/tuning.md, "The end-effect tolerance");
+    m30_low (0.18) is verified and says so (m45_24v, 0.36, is too, at
+    2.99 deg). m20_hv's hot winding held in a 0.35 deg cycle with the
+    dead-time ratio at 1.25 (docs/tuning.md, "The injection amplitude")."""
+    from linsense.model.motor import load_motor
+    from linsense.tune.design import end_effect_ratio
     from linsense.verify.certificate import design_and_verify
 
-    cert = design_and_verify(str(CLASS / "m30_low.toml"), _drive("m30_low"), quick=False, workers=1)[1]
-    assert cert.verified, [c.line() for c in cert.checks if not c.passed]
-    assert cert.lines()[-1] == "verified: every check passed"
+    spec = str(CLASS / f"{name}.toml")
+    cert = design_and_verify(spec, _drive(name), quick=False, workers=1)[1]
+    failed = [c.line() for c in cert.checks if not c.passed]
+    r = end_effect_ratio(load_motor(spec))
+    assert all("dM0" in line for line in failed), failed
+    if r < 0.3:
+        assert cert.verified, failed
+        assert cert.lines()[-1] == "verified: every check passed"
 
 
 def test_tune_cli_writes_certificate_and_exit_code(tmp_path, capsys):

@@ -61,7 +61,7 @@ HF_DELAY_PERIODS = 1.0
 #: V_inj s_min (s = (L_q - L_d)/(L_q + L_d), its lowest over the period), within the bus shares
 #: below and the HF current limit; beyond DEAD_TIME_RATIO_MAX at the largest allowed amplitude no
 #: design can hold everywhere (refused before simulating)
-DEAD_TIME_RATIO = 1.25
+DEAD_TIME_RATIO = 1.0
 DEAD_TIME_RATIO_MAX = 4.0
 INJ_BUS_MIN = 1.0 / 8.0  # of V_dc
 INJ_BUS_MAX = 1.0 / 6.0  # of V_dc
