@@ -30,7 +30,7 @@ import numpy as np
 
 from linsense._ctrl import ffi, lib
 from linsense._digest import source_digest
-from linsense.errors import LinsenseError
+from linsense.errors import InputError, LinsenseError
 
 __all__ = [
     "ffi",
@@ -840,24 +840,35 @@ class Drive:
 
         Parameters
         ----------
-        i_abc : array_like, shape (3,)
-            Phase currents, A.
-        v_dc : float
-            DC-bus voltage, V.
+        i_abc : array_like of real numbers, shape (3,)
+            Phase currents, A. A NaN or infinite current is a measurement the drive handles: it
+            trips ``LS_FAULT_NONFINITE``.
+        v_dc : real number
+            DC-bus voltage, V (non-finite: as ``i_abc``).
         enc_count : int, optional
-            Encoder count; None: encoder not valid.
+            Encoder count, an integer within int32 (an integral float is taken); None: encoder
+            not valid.
 
         Returns
         -------
         cdata ``ls_cmd *``
             The command of this step (overwritten by the next call; copy fields you keep).
+
+        Raises
+        ------
+        InputError
+            ``i_abc`` not three real numbers, ``v_dc`` not one, ``enc_count`` not an integer within
+            int32: one line naming the argument, what was given and what is expected.
         """
+        i = _real_array("Drive.step", "i_abc", i_abc, "three phase currents, shape (3,)", ((3,),))
+        vdc = _real_array("Drive.step", "v_dc", v_dc, "one bus voltage, a real number", ((),))
+        enc = None if enc_count is None else _counts("Drive.step", "enc_count", enc_count, ((),))
         meas = ffi.new("ls_meas *")
-        for k, v in enumerate(np.asarray(i_abc, dtype=np.float64).ravel()[:3]):
-            meas.i_abc[k] = float(v)
-        meas.v_dc = float(v_dc)
-        meas.enc_valid = enc_count is not None
-        meas.enc_count = 0 if enc_count is None else int(enc_count)
+        for k in range(3):
+            meas.i_abc[k] = float(i[k])
+        meas.v_dc = float(vdc)
+        meas.enc_valid = enc is not None
+        meas.enc_count = 0 if enc is None else int(enc)
         lib.ls_drive_step(self.state, meas, self.cmd)
         return self.cmd
 
@@ -866,18 +877,28 @@ class Drive:
 
         Parameters
         ----------
-        i_abc : array_like, shape (n, 3)
-            Phase currents, A.
-        v_dc : array_like, shape (n,) or scalar
+        i_abc : array_like of real numbers, shape (n, 3)
+            Phase currents, A, one row per PWM period (non-finite values: see :meth:`step`).
+        v_dc : real number or array_like, shape (n,)
             DC-bus voltage, V.
-        enc_count : array_like of int, optional
-            Encoder counts; None: encoder not valid.
+        enc_count : int or array_like of int, shape (n,), optional
+            Encoder counts within int32; None: encoder not valid.
+
+        Raises
+        ------
+        InputError
+            A wrong shape, a non-real dtype, a non-integer or out-of-range count: one line naming
+            the argument, what was given and what is expected.
         """
-        i = np.ascontiguousarray(np.asarray(i_abc, dtype=np.float64).reshape(-1, 3))
+        i = _real_array("Drive.run", "i_abc", i_abc, "one row of three phase currents per period, "
+                        "shape (n, 3)", ((None, 3),))
+        i = np.ascontiguousarray(i, dtype=np.float64)
         n = i.shape[0]
-        vdc = _in(v_dc, n)
-        enc = None if enc_count is None else np.ascontiguousarray(np.broadcast_to(enc_count, (n,)),
-                                                                   dtype=np.int32)
+        vdc = _real_array("Drive.run", "v_dc", v_dc, f"a real number or one per period, shape ({n},)",
+                          ((), (n,)))
+        vdc = _in(vdc, n)
+        enc = None if enc_count is None else np.ascontiguousarray(
+            np.broadcast_to(_counts("Drive.run", "enc_count", enc_count, ((), (n,))), (n,)), dtype=np.int32)
         duty = np.empty((n, 3))
         fault = np.empty(n, dtype=np.uint32)
         enable = np.empty(n, dtype=np.uint8)
@@ -885,3 +906,61 @@ class Drive:
         lib.ls_py_drive_run(self.state, _p(i), _p(vdc), _p(enc, "int32_t[]"), n, _p(duty),
                             _p(fault, "uint32_t[]"), _p(enable, "uint8_t[]"), _p(th), _p(err))
         return DriveOutput(duty, fault, enable.astype(bool), th, err)
+
+
+def _shape_ok(shape: tuple, shapes: tuple) -> bool:
+    """``shape`` is one of ``shapes`` (None in one of them: any length)."""
+    return any(len(w) == len(shape) and all(a is None or a == b for a, b in zip(w, shape, strict=True))
+               for w in shapes)
+
+
+def _as_array(source: str, key: str, value: Any, what: str) -> np.ndarray:
+    """``value`` as a numpy array without conversion (strings, None and objects refused)."""
+    try:
+        a = np.asarray(value)
+    except (TypeError, ValueError) as exc:  # (ragged lists)
+        raise InputError(source, key, f"expected {what}, got {_brief(value)} ({exc})") from None
+    return a
+
+
+def _brief(value: Any) -> str:
+    r = " ".join(repr(value).split())  # (one line: a numpy array's repr has several)
+    return r if len(r) <= 60 else r[:57] + "..."
+
+
+def _real_array(source: str, key: str, value: Any, what: str, shapes: tuple) -> np.ndarray:
+    """``value`` as a float64 array of the given shape; :class:`InputError` naming ``key`` if it is
+    not real numbers (bool, complex, strings, None, objects) or not of one of ``shapes``."""
+    a = _as_array(source, key, value, what)
+    if a.dtype.kind not in "iuf":
+        raise InputError(source, key, f"expected {what}, real numbers, got {_brief(value)} "
+                         f"(dtype {a.dtype})")
+    if not _shape_ok(a.shape, shapes):
+        raise InputError(source, key, f"expected {what}, got shape {a.shape}")
+    return a.astype(np.float64)
+
+
+#: the range of an encoder count (ls_meas.enc_count is an int32_t)
+_INT32 = (-(2**31), 2**31 - 1)
+
+
+def _counts(source: str, key: str, value: Any, shape: tuple) -> np.ndarray:
+    """Encoder counts as an int64 array: integers (or integral floats) within int32, else
+    :class:`InputError` naming ``key`` (a NaN, 2.5 or 2**31 was silently cast to another count)."""
+    what = ("an integer encoder count" if shape == ((),)
+            else f"integer encoder counts, one or shape {shape[-1]}")
+    a = _as_array(source, key, value, what)
+    if a.dtype.kind not in "iuf":
+        raise InputError(source, key, f"expected {what}, got {_brief(value)} (dtype {a.dtype})")
+    if not _shape_ok(a.shape, shape):
+        raise InputError(source, key, f"expected {what}, got shape {a.shape}")
+    if a.dtype.kind == "f":
+        bad = ~np.isfinite(a) | (a != np.round(a))
+        if np.any(bad):
+            raise InputError(source, key, f"expected {what}, got {float(a[bad].flat[0])!r} (not an integer)")
+    lo, hi = (a.min(), a.max()) if a.size else (0, 0)
+    if lo < _INT32[0] or hi > _INT32[1]:
+        v = lo if lo < _INT32[0] else hi
+        raise InputError(source, key, f"{int(v)} is beyond the int32 range of a count "
+                         f"[{_INT32[0]}, {_INT32[1]}] (ls_meas.enc_count)")
+    return a.astype(np.int64)
