@@ -6,7 +6,6 @@ motor files), ``analysis`` (psi maps, saliency, uncompensated observer), ``compe
 """
 
 from linsense.errors import InputError, LinsenseError, ModelError
-from linsense.model.motor import Motor, load_motor
 
 __version__ = "0.1.0"
 
@@ -15,7 +14,13 @@ __all__ = ["InputError", "LinsenseError", "ModelError", "Motor", "load_motor", "
 
 
 def __getattr__(name: str):
-    # the simulator needs the compiled extension: import it only when asked for
+    # imported when asked for, so that ``import linsense`` stays light (the console entry,
+    # linsense.__main__, imports numpy inside its Ctrl-C handling); the simulator needs the
+    # compiled extension
+    if name in ("Motor", "load_motor"):
+        from linsense.model import motor
+
+        return getattr(motor, name)
     if name in ("simulate", "simulate_many"):
         from linsense.sim import run
 

@@ -1,5 +1,33 @@
-"""``python -m linsense`` runs the CLI."""
+"""The ``linsense`` console entry (``python -m linsense`` and the ``linsense`` script).
 
-from linsense.cli import main
+A tiny module: everything heavy (click, numpy, the compiled controller library) is imported inside
+:func:`entry`'s ``try``, so that Ctrl-C during the start-up imports ends like Ctrl-C during a run,
+with exit code 130 and the one line ``linsense: interrupted``, never a traceback.
+"""
 
-main()
+import sys
+
+#: exit code of a run stopped by Ctrl-C (128 + SIGINT), as a shell reports it
+INTERRUPTED = 130
+
+
+def entry(argv=None) -> None:
+    """Run the CLI (:func:`linsense.cli.main`); Ctrl-C at any time, also while importing, exits 130.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        The arguments (default: ``sys.argv[1:]``).
+    """
+    try:
+        from linsense.cli import main
+
+        main(argv)
+    except KeyboardInterrupt:
+        sys.stderr.write("linsense: interrupted\n")
+        sys.stderr.flush()
+        sys.exit(INTERRUPTED)
+
+
+if __name__ == "__main__":
+    entry()
