@@ -30,7 +30,8 @@ from linsense.model.motor import Motor, load_motor, preset_names
 from linsense.model.saturation import Saturation
 from linsense.sim.core import BLOCKS, SIGNALS, PlantSetup, SimulationError, plant_template, sim_cfg
 from linsense.sim.plant import fill_saturation, lab_fourier
-from linsense.sim.scenario import Scenario
+from linsense.sim.refusal import explain, given_keys
+from linsense.sim.scenario import Scenario, compensation_of
 from linsense.tune.design import (
     DriveData,
     current_gains,
@@ -212,13 +213,41 @@ def initial_load(sc: Scenario, motor: Motor) -> float:
     return ld.force
 
 
+def _value_of(spec, key: str):
+    """The value of the dotted scenario ``key`` in ``spec`` (given, designed or default)."""
+    obj = spec
+    for part in key.split("."):
+        obj = getattr(obj, part, None)
+    return obj
+
+
 #: injection.shape -> the C library's ls_inject_shape
 _SHAPE = {"pulsating": lib.LS_INJ_PULSATING, "rotating": lib.LS_INJ_ROTATING, "square": lib.LS_INJ_SQUARE}
 
-#: DriveData field -> scenario key (for messages)
-_DESIGN_KEYS = {"v_dc": "inverter.v_dc", "f_pwm": "inverter.f_pwm", "i_max": "controller.i_max",
-                "v_max": "reference.v_max", "v_inj": "injection.amplitude", "f_inj": "injection.frequency",
-                "quad": "injection.quadrature"}
+#: a key of the design's refusals -> the scenario keys its rule reads, the one to name first: the
+#: first the file gives is named (none given: the first, a default)
+_DESIGN_KEYS = {"v_dc": ("inverter.v_dc", "controller.i_max", "injection.amplitude"),
+                "f_pwm": ("inverter.f_pwm",), "i_max": ("controller.i_max",),
+                "v_max": ("reference.v_max", "reference.a_max"),
+                "a_max": ("reference.a_max", "reference.v_max"),
+                "v_inj": ("injection.amplitude", "inverter.v_dc"),
+                "f_inj": ("injection.frequency", "inverter.f_pwm"),
+                "quad": ("injection.quadrature",), "shape": ("injection.shape",),
+                "dead_time": ("inverter.dead_time", "inverter.f_pwm", "inverter.v_dc", "controller.i_max"),
+                "load": ("reference.a_max", "controller.i_max"), "motor": ("motor",)}
+
+
+def _design_refusal(sc: Scenario, exc: InputError) -> InputError:
+    """The design's refusal ``exc`` (keys of DriveData) as the scenario's: naming the key the file
+    gives that the rule reads, with its value."""
+    keys = _DESIGN_KEYS.get(exc.key, (exc.key,))
+    given = given_keys(sc.given())
+    key = next((k for k in keys if k in given), keys[0])
+    value = _value_of(sc.spec, key)
+    shown = f"{value:g}" if isinstance(value, float) else repr(value)
+    if key == "motor" or (key == keys[0] and shown in exc.message):
+        return InputError(sc.source, key, exc.message)
+    return InputError(sc.source, key, f"{shown} refused by the design ({exc.key}: {exc.message})")
 
 
 def drive_data(sc: Scenario) -> DriveData:
@@ -275,15 +304,6 @@ def calibration_timing(f_inj: float, dither_a: float, dither_hz: float, demod_lp
             "t_max": CAL_MAX_WINDOWS * t_hold}
 
 
-def compensation_of(mode: str, compensation: str | None) -> str:
-    """The compensation a drive runs: ``observer.compensation`` where the scenario gives it, else
-    the table (``"lut"``) in the modes that use one (sensorless_lut; sensored and startup for the HF
-    estimate) and ``"none"`` in the others."""
-    if compensation is not None:
-        return compensation
-    return "lut" if mode in ("sensorless_lut", "sensored", "startup") else "none"
-
-
 def designed(sc: Scenario, motor: Motor) -> Scenario:
     """``sc`` with every gain it leaves unset taken from the design for its motor and drive
     (:func:`linsense.tune.design`, docs/tuning.md); what the file gives is kept."""
@@ -298,7 +318,7 @@ def designed(sc: Scenario, motor: Motor) -> Scenario:
         dz = _memo(("design", motor_key(motor), tuple(vars(dd).values())),
                    lambda: design(motor, dd, sc.source, analyse=False))
     except InputError as exc:  # the design's drive-data names -> the scenario's keys
-        raise InputError(sc.source, _DESIGN_KEYS.get(exc.key, exc.key), exc.message) from None
+        raise _design_refusal(sc, exc) from None
     no_table = compensation_of(s.control.mode, s.observer.compensation) == "none"
     k_est = _memo(("k_est", motor_key(motor)), lambda: uncompensated_speed_factor(motor)) if no_table else 1.0
     want = {
@@ -343,6 +363,30 @@ def designed(sc: Scenario, motor: Motor) -> Scenario:
     # and f_pwm / 4): set them without validating the whole scenario again (a sweep builds thousands)
     update = {sec: getattr(s, sec).model_copy(update=vals) for sec, vals in changes.items() if vals}
     return Scenario(s.model_copy(update=update), sc.source, sc.base_dir)
+
+
+def check_sensors(source: str, gain: list, offset: list, noise: float, i_trip: float,
+                  trip_given: bool = False) -> None:
+    """Refuse current sensors the drive cannot run with: a gain of 0 or below (the current not
+    measured, or a phase reversed), an offset or an rms noise at the over-current trip
+    ``protection.i_max`` or beyond (the drive trips on the sensor alone, at t = 0; issue 23: the
+    message named protection.i_max where the file gave only the sensor). ``trip_given``: the file
+    gives protection.i_max, which is then named, with the sensor's value as its limit."""
+    for g in gain:
+        if not g > 0.0:
+            raise InputError(source, "sensors.current_gain", f"must be above 0 (0 measures no current, "
+                             f"a negative gain reverses the phase), got {g!r}")
+    for key, v, what in [("sensors.current_offset", max(abs(o) for o in offset), "offset"),
+                         ("sensors.current_noise", noise, "rms noise")]:
+        if v < i_trip:
+            continue
+        if trip_given:
+            raise InputError(source, "protection.i_max", f"{i_trip:g} A is at or below {key} = {v:g} A: "
+                             f"the drive would trip at t = 0 on the sensor's {what} alone; it must be above "
+                             f"{v:g} A")
+        raise InputError(source, key, f"{v!r} A reaches the over-current trip protection.i_max = "
+                         f"{i_trip:g} A: the drive would trip at t = 0 on the {what} alone; it must be below "
+                         f"{i_trip:g} A")
 
 
 def check_run_size(source: str, n_steps: int, decimate: int, fs: float, trace_in_memory: bool = True) -> None:
@@ -405,6 +449,7 @@ def build(sc: Scenario, motor: Motor | None = None, trace_in_memory: bool = True
         raise InputError(sc.source, "controller.model.motor",
                          f"pole pitch {model_motor.pole_pitch:g} m differs from the motor's "
                          f"{motor.pole_pitch:g} m: a controller cannot believe in another pole pitch")
+    user_keys = given_keys(sc.given())  # (the keys the file gives: designed() sets the others)
     sc = designed(sc, model_motor)
     s = sc.spec
     inv, ctl, inj, obs, con, prot = s.inverter, s.control, s.injection, s.observer, s.controller, s.protection
@@ -436,6 +481,7 @@ def build(sc: Scenario, motor: Motor | None = None, trace_in_memory: bool = True
     sens = s.sensors
     gain = sens.current_gain if isinstance(sens.current_gain, list) else [sens.current_gain] * 3
     offs = sens.current_offset if isinstance(sens.current_offset, list) else [sens.current_offset] * 3
+    check_sensors(sc.source, gain, offs, sens.current_noise, prot.i_max, "protection.i_max" in user_keys)
     setup = PlantSetup(
         fidelity=inv.fidelity, v_dc=inv.v_dc, f_pwm=fs, dead_time=inv.dead_time,
         i_gain=tuple(gain), i_offset=tuple(offs), i_noise=sens.current_noise, adc_bits=sens.adc_bits,
@@ -642,6 +688,10 @@ def build(sc: Scenario, motor: Motor | None = None, trace_in_memory: bool = True
                                                   obs.lut_points)))
         drive = Drive(d, comp=comp, gain_table=gain_table, comp_r=comp_r, gain_r=gain_r)
     except ConfigError as exc:
+        # the one field at fault, its scenario key, the value and the C library's limit
+        told = explain(d, user_keys, lambda k: _value_of(s, k))
+        if told is not None:
+            raise InputError(sc.source, *told) from None
         sections = sorted({_SECTION.get(k.split(".")[0] if k != "pos.speed" else k, k) for k in exc.fields})
         key = ",".join(sections)
         raise InputError(sc.source, key, f"refused by the controller library: {exc}") from None

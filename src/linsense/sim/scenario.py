@@ -52,7 +52,8 @@ class CalibrationSection(BaseModel):
     k_int: Positive = _c(_C.cal.k_int)  # 1/s, adaptation rate of the compensation angle
     t_settle: NonNegative = _c(_C.cal.t_settle)  # s, wait after each move
     t_hold: Positive = _c(_C.cal.t_hold)  # s, window over which a point must have converged
-    tol_deg: Positive = round(math.degrees(float(_C.cal.tol)), 6)  # deg, acceptance (see ls_drive.h)
+    # deg, acceptance (see ls_drive.h); an electrical angle error is at most 180 deg
+    tol_deg: float = Field(default=round(math.degrees(float(_C.cal.tol)), 6), gt=0.0, le=180.0)
     t_max: Positive = _c(_C.cal.t_max)  # s, a point not accepted by then trips the observer fault
     dither_a: NonNegative = _c(_C.cal.dither_amp)  # A, q-current dither while adapting (0: none)
     dither_hz: Positive = _c(_C.cal.dither_freq)  # Hz
@@ -378,8 +379,13 @@ class ScenarioFile(BaseModel):
                             f"(the controller runs "
                             f"once per PWM period), got {ctl.fs:g}")
         if inv.dead_time * inv.f_pwm >= 0.1:
+            if "dead_time" not in inv.model_fields_set:  # (the rate given, the dead time the default)
+                raise KeyProblem("inverter.f_pwm", f"{inv.f_pwm:g} Hz makes the dead time "
+                                 f"({inv.dead_time:g} s) 10 % of the PWM period or more: at most "
+                                 f"{0.1 / inv.dead_time:g} Hz with this dead time")
             raise KeyProblem("inverter.dead_time", f"must be below 10 % of the PWM period "
                             f"({0.1 / inv.f_pwm:g} s), got {inv.dead_time!r}")
+        _check_overrides(self)
         inj = self.injection
         if inj.shape != "pulsating":
             if "quadrature" in inj.model_fields_set and inj.quadrature != 0.0:
@@ -487,6 +493,10 @@ class ScenarioFile(BaseModel):
             p.v_dc_max = round(inv.v_dc * V_DC_MAX_FRACTION, 6)
             p.__pydantic_fields_set__.discard("v_dc_max")
         if not p.v_dc_min < p.v_dc_max:
+            if not {"v_dc_min", "v_dc_max"} & p.model_fields_set:  # (both follow the bus)
+                raise KeyProblem("inverter.v_dc", f"{inv.v_dc:g} V is too small: the bus limits that follow "
+                                 f"it ({V_DC_MIN_FRACTION:.3g} and {V_DC_MAX_FRACTION:.3g} of it, to 1 uV) "
+                                 "are equal")
             raise KeyProblem("protection.v_dc_max",
                             f"must be above v_dc_min = {p.v_dc_min:g}, got {p.v_dc_max:g}")
         if not p.v_dc_min <= inv.v_dc <= p.v_dc_max:
@@ -503,6 +513,74 @@ class ScenarioFile(BaseModel):
         if self.injection.amplitude == 0.0 and ctl.mode != "sensored":
             raise KeyProblem("injection.amplitude", "the sensorless modes need an HF injection, got 0")
         return self
+
+
+def _given(section: BaseModel, key: str) -> bool:
+    return key in section.model_fields_set
+
+
+def _check_overrides(f: ScenarioFile) -> None:
+    """Refuse a key the file gives that another key (or the mode, the injection's shape, the
+    observer's type) makes meaningless: it would be silently ignored or overridden (issue 23).
+    The message names both keys."""
+    inj, obs, con, ref, ld, sens = f.injection, f.observer, f.controller, f.reference, f.load, f.sensors
+    mode, shape = f.control.mode, inj.shape
+    # (the observer's type where the file does not give it: the design's, linsense.tune.design)
+    obs_type = obs.type if _given(obs, "type") else ("mech" if shape == "pulsating" else "pll")
+    pairs = [  # (key given, the key/setting that overrides it, why)
+        (obs, "bandwidth_hz", obs.k1 is not None, "observer.k1", "the explicit gains replace it"),
+        (con, "speed_bandwidth_hz", con.speed_kp is not None, "controller.speed_kp",
+         "the explicit gains replace it"),
+        (con, "current_bandwidth_hz", con.current_kp is not None, "controller.current_kp",
+         "the explicit gains replace it"),
+        (obs, "k3", obs_type == "pll", f"observer.type = {obs_type!r}", "only the mech observer has k3"),
+        (obs, "hf_delay_s", shape != "pulsating" and obs.hf_delay_s != 0.0, f"injection.shape = {shape!r}",
+         "the delay advances the pulsating and elliptical estimate only"),
+        (obs, "demod_notch", shape == "square", "injection.shape = 'square'",
+         "the square wave's demodulator has no notch"),
+        (inj, "filter_q", shape == "square", "injection.shape = 'square'",
+         "the square wave's filters are a difference and a fixed low-pass"),
+        (obs, "lut_model", compensation_of(mode, obs.compensation) == "none",
+         f"observer.compensation = 'none' (control.mode = {mode!r})", "there is no table"),
+        (obs, "lut_points", compensation_of(mode, obs.compensation) == "none" and not obs.gain_schedule,
+         "observer.compensation = 'none' and observer.gain_schedule = false", "there is no table"),
+        (obs, "dead_time_model", not obs.dead_time_residual, "observer.dead_time_residual = false",
+         "the model is the residual's"),
+        (obs, "dead_time_adapt", not obs.dead_time_residual, "observer.dead_time_residual = false",
+         "it adapts the residual's model"),
+        (obs, "resistance_adapt", not (obs.dead_time_residual and obs.dead_time_adapt),
+         "observer.dead_time_residual or dead_time_adapt = false", "it adapts with the residual's model"),
+        (ref, "dwell", ref.type != "trajectory", f"reference.type = {ref.type!r}",
+         "the dwell is the pause between a trajectory's moves"),
+        (ref, "at", ref.type == "hold", "reference.type = 'hold'", "a hold commands nothing"),
+        (ld, "force_after", ld.type != "step", f"load.type = {ld.type!r}", "only a step load changes"),
+        (ld, "time", ld.type != "step", f"load.type = {ld.type!r}", "only a step load changes"),
+        (ld, "incline_deg", ld.type != "incline", f"load.type = {ld.type!r}",
+         "only the incline adds m g sin"),
+        (sens, "adc_range", sens.adc_bits == 0, "sensors.adc_bits = 0 (ideal)", "nothing is quantised"),
+        (f.control, "inject_sensored", mode != "sensored", f"control.mode = {mode!r}",
+         "it is the sensored mode's setting"),
+        (f.inverter, "dtc_current_band", not f.inverter.dead_time_compensation,
+         "inverter.dead_time_compensation = false", "it is the compensation's band"),
+    ]
+    sections = {id(getattr(f, name)): name for name in type(f).model_fields}
+    sections[id(con.model)] = "controller.model"
+    for sec, key, overridden, by, why in pairs:
+        if overridden and _given(sec, key):
+            name = f"{sections[id(sec)]}.{key}"
+            raise KeyProblem(name, f"{getattr(sec, key)!r} has no effect with {by} ({why}): leave it out")
+    if con.model.demod_gain is not None and shape != "pulsating":
+        raise KeyProblem("controller.model.demod_gain", f"{con.model.demod_gain!r} has no effect with "
+                         f"injection.shape = {shape!r} (its error is the angle itself, gain 1): leave it out")
+
+
+def compensation_of(mode: str, compensation: str | None) -> str:
+    """The compensation a drive runs: ``observer.compensation`` where the scenario gives it, else
+    the table (``"lut"``) in the modes that use one (sensorless_lut; sensored and startup for the HF
+    estimate) and ``"none"`` in the others."""
+    if compensation is not None:
+        return compensation
+    return "lut" if mode in ("sensorless_lut", "sensored", "startup") else "none"
 
 
 class Scenario:
