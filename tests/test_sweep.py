@@ -161,7 +161,9 @@ def test_another_sweep_in_the_same_folder_is_refused(run_cli, tmp_path):
     out = tmp_path / "out"
     assert run_cli("sweep", f, "--out", out, "--workers", 1, "--no-progress").code == 0
     (tmp_path / "sweep.toml").write_text(f.read_text().replace("50.0", "60.0"))
-    run_cli("sweep", f, "--out", out, "--no-progress").refused("--out", "another sweep")
+    # (issue 23: the line names what changed, and --restart)
+    run_cli("sweep", f, "--out", out, "--no-progress").refused("--out", "sweep file", "sweep.toml", "changed",
+                                                               "--restart")
     (tmp_path / "mine").mkdir()
     (tmp_path / "mine" / "notes.txt").write_text("x")
     run_cli("sweep", f, "--out", tmp_path / "mine", "--no-progress").refused("--out", "not a sweep folder")

@@ -1,8 +1,9 @@
-"""Fingerprint of the C sources compiled into the cffi extension.
+"""Fingerprints: of the C sources compiled into the cffi extension, and of files (a sweep's inputs).
 
-Used by the build script (``_build_ctrl.py``, loaded by path at build time, when the package is
-not importable yet) and by ``linsense.ctrl`` at import, to detect an extension built from other
-sources. Standard library only.
+``source_digest`` is used by the build script (``_build_ctrl.py``, loaded by path at build time,
+when the package is not importable yet) and by ``linsense.ctrl`` at import, to detect an extension
+built from other sources; ``file_sha256`` by :mod:`linsense.sweep.inputs`, the record of what a
+sweep's rows depend on. Standard library only.
 """
 
 from __future__ import annotations
@@ -23,4 +24,22 @@ def source_digest(csrc: Path, build_script: Path) -> str:
     for f in [*files, build_script]:
         h.update(f.name.encode())
         h.update(f.read_bytes())
+    return h.hexdigest()
+
+
+def bytes_sha256(data: bytes) -> str:
+    """SHA-256 of ``data``, hex."""
+    return hashlib.sha256(data).hexdigest()
+
+
+def file_sha256(path: Path) -> str | None:
+    """SHA-256 of the file's bytes (hex), or None when there is no such file (a missing input is
+    recorded as absent, so that creating it later counts as a change)."""
+    h = hashlib.sha256()
+    try:
+        with open(path, "rb") as f:
+            for block in iter(lambda: f.read(1 << 20), b""):
+                h.update(block)
+    except (FileNotFoundError, NotADirectoryError, IsADirectoryError):
+        return None
     return h.hexdigest()

@@ -609,8 +609,10 @@ def fea(geometry: str, out: str, positions: int, level: str, lut_points: int, lo
 @click.option("--scheduler", default=None, help="address of a running dask scheduler (tcp://host:8786)")
 @click.option("--processes", is_flag=True, help="local workers as processes instead of threads")
 @click.option("--no-progress", is_flag=True, help="no progress bar")
+@click.option("--restart", is_flag=True,
+              help="discard the rows already in --out (a sweep whose inputs changed) and start over")
 def sweep_cmd(sweep_file: str, out: str, workers: int | None, scheduler: str | None, processes: bool,
-              no_progress: bool) -> None:
+              no_progress: bool, restart: bool) -> None:
     """Run a sweep: a base scenario with keys varied, on dask.distributed (docs/sweeps.md)."""
     from linsense.io import write_atomic, write_atomic_with
     from linsense.report.sweep_figures import FIGURES
@@ -619,7 +621,7 @@ def sweep_cmd(sweep_file: str, out: str, workers: int | None, scheduler: str | N
 
     sw = load_sweep(sweep_file)
     df = sweep(sw, out, workers=workers, scheduler=scheduler, processes=processes,
-               progress=not no_progress and sys.stderr.isatty())
+               progress=not no_progress and sys.stderr.isatty(), restart=restart)
     out_dir = Path(out)
     axes = [a.key for a in sw.spec.axis]
     relative = {a.key: a.relative for a in sw.spec.axis}

@@ -6,8 +6,11 @@ loop releases the GIL, so threads run in parallel without starting processes), o
 address (``scheduler="tcp://host:8786"``). Each finished batch is written as one Parquet
 partition ``parts/part-NNNNNN.parquet`` through a temporary file and a rename, so a partition is
 either complete or absent; a sweep killed at any point and started again with the same command
-runs only the batches without a partition: no row is lost, none is duplicated. The table of all
-rows is returned as a pandas DataFrame, sorted by run. docs/sweeps.md.
+runs only the batches without a partition: no row is lost, none is duplicated. ``sweep.json``
+records the digest of everything the rows depend on (:mod:`linsense.sweep.inputs`): a resume or a
+reuse of the folder after any of it changed is refused naming what changed, ``restart`` discards
+the old rows first. The table of all rows is returned as a pandas DataFrame, sorted by run.
+docs/sweeps.md.
 """
 
 from __future__ import annotations
@@ -15,21 +18,26 @@ from __future__ import annotations
 import json
 import logging
 import os
+import shutil
 import signal
 import tempfile
+import uuid
 import warnings
 from contextlib import contextmanager, nullcontext
 from pathlib import Path
 
 import pandas as pd
 
-from linsense import __version__
 from linsense.errors import InputError
+from linsense.sweep.inputs import changed_on_disk, changes, code_identity, show, sweep_inputs, valid_record
+from linsense.sweep.inputs import digest as inputs_digest
 from linsense.sweep.points import points
 from linsense.sweep.runner import context, run_batch
-from linsense.sweep.spec import SweepSpec, as_sweep
+from linsense.sweep.spec import STUDIES, SweepSpec, as_sweep
 
 MANIFEST = "sweep.json"
+#: what the CLI writes into a sweep's folder from its rows (``--restart`` deletes them first)
+OUTPUTS = ("results.parquet", "summary.txt", *(f"{s}.png" for s in STUDIES))
 
 
 def batch_size(sweep: SweepSpec, n_runs: int) -> int:
@@ -38,28 +46,93 @@ def batch_size(sweep: SweepSpec, n_runs: int) -> int:
     return sweep.spec.sweep.batch or max(1, min(128, -(-n_runs // 32)))
 
 
-def _manifest(sweep: SweepSpec, n_runs: int) -> dict:
-    return {"format": "linsense-sweep", "version": __version__, "spec": sweep.spec.model_dump(mode="json"),
-            "scenario": str(sweep.scenario_path.resolve()), "runs": n_runs,
-            "batch": batch_size(sweep, n_runs)}
+def _manifest(sweep: SweepSpec, n_runs: int, inputs: list[dict], code: dict) -> dict:
+    """``DIR/sweep.json``: the sweep, and the digest of everything its rows depend on."""
+    return {"format": "linsense-sweep", "version": code["linsense"],
+            "spec": sweep.spec.model_dump(mode="json"), "scenario": str(sweep.scenario_path.resolve()),
+            "runs": n_runs, "batch": batch_size(sweep, n_runs), "inputs": inputs, "code": code,
+            "digest": inputs_digest(inputs, code)}
 
 
-def _check_out(out: Path, manifest: dict) -> None:
-    """``out`` is new, empty, or holds this same sweep (to resume); anything else is refused."""
+def _refuse(out: Path, message: str) -> InputError:
+    return InputError("--out", "", f"{show(str(out))!r} {message}")
+
+
+def _check_out(out: Path, manifest: dict, restart: bool) -> bool:
+    """``out`` is new, empty, or holds this same sweep (to resume); anything else is refused.
+
+    A folder with a sweep's manifest whose record differs (another sweep file, an edited base
+    scenario, motor or table, another linsense or C library) or cannot be read is refused naming
+    what changed, unless ``restart``: then the result is True (discard its rows first). A folder
+    that is not a sweep's is refused even with ``restart`` (never deleted).
+    """
+    if out.exists() and not out.is_dir():
+        raise _refuse(out, "is a file, not a folder: give a new or empty folder")
     m = out / MANIFEST
-    if m.is_file():
-        try:
-            old = json.loads(m.read_text(encoding="utf-8"))
-        except (OSError, ValueError) as exc:
-            raise InputError(str(m), "", f"cannot read the sweep manifest: {exc}") from None
-        if {k: old.get(k) for k in ("spec", "scenario", "runs", "batch")} != {
-                k: manifest[k] for k in ("spec", "scenario", "runs", "batch")}:
-            raise InputError("--out", "", f"{str(out)!r} holds another sweep (its {MANIFEST} differs): "
-                             "give a new folder, or delete it to start again")
-        return
-    if out.exists() and (not out.is_dir() or any(out.iterdir())):
-        raise InputError("--out", "", f"{str(out)!r} exists and is not a sweep folder (no {MANIFEST}): "
-                         "give a new or empty folder")
+    if not (m.exists() or m.is_symlink()):
+        if out.exists() and any(out.iterdir()):
+            raise _refuse(out, f"exists and is not a sweep folder (no {MANIFEST}): give a new or empty "
+                          "folder")
+        return False
+    for name in (MANIFEST, "parts", "motors"):  # (what the sweep writes: never a stranger's kind of entry)
+        p = out / name
+        if p.exists() and p.is_dir() != (name != MANIFEST):
+            kind = "file" if name == MANIFEST else "folder"
+            raise _refuse(out, f"holds {name!r} that is not the sweep's (a {kind} is expected): remove it "
+                          "or give another folder")
+    if restart:
+        return True
+    again = "use --restart to start over (discarding its rows)"
+    try:
+        old = json.loads(m.read_text(encoding="utf-8"))
+    except (OSError, ValueError) as exc:
+        raise _refuse(out, f"holds a sweep whose {MANIFEST} cannot be read ({exc}): {again}") from None
+    why = valid_record(old)
+    if why is not None:
+        raise _refuse(out, f"holds a sweep whose {MANIFEST} {why}: {again}")
+    diff = changes(old["inputs"], old["code"], manifest["inputs"], manifest["code"])
+    if diff:
+        raise _refuse(out, f"holds a sweep whose inputs changed since it started: {', '.join(diff)}; {again}")
+    same = ("spec", "runs", "batch")
+    if {k: old.get(k) for k in same} != {k: manifest[k] for k in same}:
+        raise _refuse(out, f"holds another sweep (its {MANIFEST} differs): {again}")
+    return False
+
+
+def _discard(out: Path) -> None:
+    """Remove the rows of the sweep in ``out`` (``--restart``), keeping the folder consistent at
+    every instant: first the tables made from the rows (``results.parquet``, ``summary.txt``, the
+    figures), then ``parts/`` and ``motors/``, each renamed aside in one step and then deleted; the
+    caller replaces the manifest last. Killed at any point, the folder holds the old manifest and a
+    subset of the old rows (resumable as the old sweep, refused for the new one), and the next run
+    deletes what was set aside."""
+    for name in OUTPUTS:
+        p = out / name
+        if p.is_file() or p.is_symlink():
+            p.unlink()
+    for name in ("parts", "motors"):
+        d = out / name
+        if d.is_dir():
+            aside = out / f".{name}.discarded-{os.getpid()}-{uuid.uuid4().hex[:8]}"
+            os.replace(d, aside)
+            if aside.is_symlink():  # (a link to a folder elsewhere: the link goes, not the files there)
+                aside.unlink()
+            else:
+                shutil.rmtree(aside)
+
+
+def _write_manifest(out: Path, manifest: dict) -> None:
+    tmp = out / f".{MANIFEST}.tmp"
+    tmp.write_text(json.dumps(manifest, indent=1) + "\n", encoding="utf-8")
+    os.replace(tmp, out / MANIFEST)
+
+
+def _unchanged_while_running(out: Path, inputs: list[dict]) -> None:
+    """Refuse to keep rows when a file the runs read changed after the sweep recorded it."""
+    diff = changed_on_disk(inputs)
+    if diff:
+        raise _refuse(out, f"holds a sweep whose inputs changed while it ran: {', '.join(diff)} (the rows "
+                      "computed since are not kept); use --restart to start over (discarding its rows)")
 
 
 def _write_partition(parts: Path, b: int, rows: list[dict]) -> Path:
@@ -81,6 +154,8 @@ def _write_partition(parts: Path, b: int, rows: list[dict]) -> Path:
 def _done_batches(parts: Path) -> set[int]:
     for stale in parts.glob(".part-*.tmp"):  # a temporary file of a killed run: never a result
         stale.unlink(missing_ok=True)
+    for aside in parts.parent.glob(".*.discarded-*"):  # what a killed --restart set aside
+        shutil.rmtree(aside, ignore_errors=True)
     return {int(p.stem.split("-")[1]) for p in parts.glob("part-*.parquet")}
 
 
@@ -136,14 +211,17 @@ def _progress(total: int, done: int, enabled: bool):
 
 
 def sweep(spec, out: str | Path | None = None, *, workers: int | None = None, scheduler: str | None = None,
-          processes: bool = False, progress: bool = False) -> pd.DataFrame:
+          processes: bool = False, progress: bool = False, restart: bool = False) -> pd.DataFrame:
     """Run a sweep (a :class:`SweepSpec`, a sweep TOML path or a dict) and return its rows.
 
     Parameters
     ----------
     out : path, optional
         Folder of the partitions (``parts/``), the manifest and the edited motor files; a sweep
-        given the same ``out`` again resumes. Without it, a temporary folder is used.
+        given the same ``out`` again resumes, or returns its rows when it is complete, if
+        everything its rows depend on is unchanged (``sweep.json`` records their digests; docs/
+        sweeps.md): otherwise :class:`InputError` naming what changed. Without it, a temporary
+        folder is used.
     workers : int, optional
         Workers of the local cluster (default: one per core).
     scheduler : str, optional
@@ -153,6 +231,9 @@ def sweep(spec, out: str | Path | None = None, *, workers: int | None = None, sc
         and the C loop runs without the GIL).
     progress : bool
         Show a progress bar (runs done, rate, time left).
+    restart : bool
+        Discard the rows of the sweep already in ``out`` (of other inputs, or with an unreadable
+        manifest) and start over; a folder that is not a sweep's is still refused.
     """
     sw = as_sweep(spec)
     pts = points(sw)
@@ -162,16 +243,21 @@ def sweep(spec, out: str | Path | None = None, *, workers: int | None = None, sc
     holder = tempfile.TemporaryDirectory(prefix="linsense-sweep-") if out is None else nullcontext(out)
     with holder as out_dir:
         out_dir = Path(out_dir)
-        manifest = _manifest(sw, len(pts))
-        _check_out(out_dir, manifest)
+        inputs = sweep_inputs(sw)
+        manifest = _manifest(sw, len(pts), inputs, code_identity())
+        discard = _check_out(out_dir, manifest, restart)
+        ctx = context(sw, out_dir / "motors")  # (reads the base: bad input refused before a discard)
+        _unchanged_while_running(out_dir, inputs)  # (the base read above is the one recorded)
         parts = out_dir / "parts"
-        parts.mkdir(parents=True, exist_ok=True)
-        (out_dir / "motors").mkdir(exist_ok=True)
-        if not (out_dir / MANIFEST).is_file():
-            tmp = out_dir / f".{MANIFEST}.tmp"
-            tmp.write_text(json.dumps(manifest, indent=1) + "\n", encoding="utf-8")
-            os.replace(tmp, out_dir / MANIFEST)
-        ctx = context(sw, out_dir / "motors")
+        try:
+            if discard:
+                _discard(out_dir)
+            parts.mkdir(parents=True, exist_ok=True)
+            (out_dir / "motors").mkdir(exist_ok=True)
+            if discard or not (out_dir / MANIFEST).is_file():
+                _write_manifest(out_dir, manifest)
+        except OSError as exc:
+            raise _refuse(out_dir, f"cannot be written: {exc.strerror or exc}") from None
         done = _done_batches(parts)
         todo = [b for b in range(len(batches)) if b not in done]
         n_done = sum(len(batches[b]) for b in done)
@@ -187,7 +273,9 @@ def sweep(spec, out: str | Path | None = None, *, workers: int | None = None, sc
                 kill_after = int(os.environ.get("LINSENSE_TEST_KILL_AFTER_PARTS", "0"))  # (tests only)
                 for written, fut in enumerate(as_completed(futures), start=1):
                     b = futures[fut]
-                    _write_partition(parts, b, fut.result())
+                    rows = fut.result()
+                    _unchanged_while_running(out_dir, inputs)  # (rows of the recorded inputs only)
+                    _write_partition(parts, b, rows)
                     if bar:
                         bar.advance(task, len(batches[b]))
                     if kill_after and written >= kill_after:

@@ -53,9 +53,15 @@ def _motor_data(spec: str, scenario_dir: Path, source: str) -> tuple[dict, Path]
         return parse_toml(text, f"preset {spec}"), scenario_dir
     p = Path(spec) if Path(spec).is_absolute() else scenario_dir / spec
     data = read_toml(p, "motor file (the base scenario's motor)")
-    table = data.get("inductance", {}).get("table")
-    if isinstance(table, str) and not Path(table).is_absolute():
-        data["inductance"]["table"] = str((p.parent / table).resolve())
+    # the tables' paths made absolute: an edited copy is written under DIR/motors/ (a saturated
+    # motor's tables were relative to it there: every run of a motor.* axis was refused)
+    ind = data.get("inductance")
+    if isinstance(ind, dict) and isinstance(ind.get("table"), str) and not Path(ind["table"]).is_absolute():
+        ind["table"] = str((p.parent / ind["table"]).resolve())
+    sat = data.get("saturation")
+    if isinstance(sat, dict) and isinstance(sat.get("tables"), list):
+        sat["tables"] = [str((p.parent / t).resolve()) if isinstance(t, str) and not Path(t).is_absolute()
+                         else t for t in sat["tables"]]
     return data, p.parent
 
 

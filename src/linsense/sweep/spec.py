@@ -37,18 +37,22 @@ true motor; :mod:`linsense.sim.build`, ``controller.model.motor``).
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated, Literal
+from typing import Annotated, Literal, get_args
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
+from linsense._digest import bytes_sha256
 from linsense.errors import InputError
-from linsense.io import read_toml
+from linsense.io import parse_toml, read_text_file
 from linsense.validation import KeyProblem, to_input_error
 
 _STRICT = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
 #: most runs one sweep file may ask for (docs/limits.md)
 MAX_RUNS = 1_000_000
 Value = float | int | bool | str
+Study = Literal["stability-map", "lut-robustness", "injection"]
+#: the built-in studies (each writes ``DIR/<study>.png``)
+STUDIES: tuple[str, ...] = get_args(Study)
 
 
 class Axis(BaseModel):
@@ -91,7 +95,7 @@ class SweepSection(BaseModel):
     sampling: Literal["grid", "random", "lhs"] = "grid"
     samples: int | None = Field(default=None, ge=1, le=MAX_RUNS)  # random, lhs
     seed: int = Field(default=0, ge=0, lt=2**63)
-    study: Literal["stability-map", "lut-robustness", "injection"] | None = None
+    study: Study | None = None
     # runs per task and per Parquet partition; default: about 32 tasks, at most 128 runs each (a task
     # costs a few ms of scheduling and writing: large sweeps want large batches, small ones several)
     batch: int | None = Field(default=None, ge=1, le=10_000)
@@ -126,12 +130,15 @@ class SweepFile(BaseModel):
 
 
 class SweepSpec:
-    """A validated sweep file: ``spec`` (the pydantic model), ``source`` and ``base_dir``."""
+    """A validated sweep file: ``spec`` (the pydantic model), ``source``, ``base_dir`` and
+    ``text_sha256``, the SHA-256 of the file's text the spec was parsed from (None for a sweep given
+    as a dict: :mod:`linsense.sweep.inputs` then digests the validated spec)."""
 
-    def __init__(self, spec: SweepFile, source: str, base_dir: Path) -> None:
+    def __init__(self, spec: SweepFile, source: str, base_dir: Path, text_sha256: str | None = None) -> None:
         self.spec = spec
         self.source = source
         self.base_dir = base_dir
+        self.text_sha256 = text_sha256
 
     @property
     def name(self) -> str:
@@ -155,8 +162,12 @@ def sweep_from_dict(data: dict, source: str = "<dict>", base_dir: str | Path | N
 
 
 def load_sweep(path: str | Path) -> SweepSpec:
-    """Read and validate a sweep TOML file."""
-    return sweep_from_dict(read_toml(path, "sweep file"), str(path), Path(path).parent)
+    """Read and validate a sweep TOML file (its text read once: the spec and its digest are of the
+    same bytes)."""
+    text = read_text_file(path, "sweep file")
+    sw = sweep_from_dict(parse_toml(text, str(path)), str(path), Path(path).parent)
+    sw.text_sha256 = bytes_sha256(text.encode("utf-8"))
+    return sw
 
 
 def as_sweep(obj) -> SweepSpec:
