@@ -145,6 +145,10 @@ OVERRIDE = {
     "current bandwidth with gains": ("[controller]\ncurrent_bandwidth_hz = 100.0\ncurrent_kp = 5.0\n"
                                      "current_ki = 100.0",
                                      ["controller.current_bandwidth_hz", "controller.current_kp"]),
+    "force_max with the PLL": ('[observer]\ntype = "pll"\nforce_max = 20.0',
+                               ["observer.force_max", "observer.type = 'pll'"]),
+    "force_max with the square wave's PLL": ('[injection]\nshape = "square"\n[observer]\nforce_max = 20.0',
+                                             ["observer.force_max", "observer.type = 'pll'"]),
     "k3 with the PLL": ('[observer]\ntype = "pll"\nk1 = 100.0\nk2 = 100.0\nk3 = 10.0',
                         ["observer.k3", "observer.type = 'pll'"]),
     "HF delay with the rotating vector": ('[injection]\nshape = "rotating"\n[observer]\nhf_delay_s = 0.05',

@@ -534,6 +534,8 @@ def _check_overrides(f: ScenarioFile) -> None:
         (con, "current_bandwidth_hz", con.current_kp is not None, "controller.current_kp",
          "the explicit gains replace it"),
         (obs, "k3", obs_type == "pll", f"observer.type = {obs_type!r}", "only the mech observer has k3"),
+        (obs, "force_max", obs_type == "pll", f"observer.type = {obs_type!r}",
+         "it clamps the mech observer's load estimate; the PLL has none"),
         (obs, "hf_delay_s", shape != "pulsating" and obs.hf_delay_s != 0.0, f"injection.shape = {shape!r}",
          "the delay advances the pulsating and elliptical estimate only"),
         (obs, "demod_notch", shape == "square", "injection.shape = 'square'",

@@ -59,7 +59,6 @@ def scenario_dict(dz: Design, drive: DriveData, motor_ref: str, base: dict | Non
         {
             "type": dz.observer_type,
             "bandwidth_hz": _r(dz.observer_bw),
-            "force_max": _r(dz.force_max),
             "demod_lpf_hz": _r(dz.demod_lpf),
             "gain_schedule": True,
             "omega_max": _r(dz.omega_obs * k_est),
@@ -68,6 +67,10 @@ def scenario_dict(dz: Design, drive: DriveData, motor_ref: str, base: dict | Non
     )
     for k in ("k1", "k2", "k3"):
         sc["observer"].pop(k, None)
+    if dz.observer_type == "mech":  # (the clamp of its load estimate; the PLL has none)
+        sc["observer"]["force_max"] = _r(dz.force_max)
+    else:
+        sc["observer"].pop("force_max", None)
     con = sc.setdefault("controller", {})
     for k in ("speed_kp", "speed_ki", "current_kp", "current_ki"):
         con.pop(k, None)
