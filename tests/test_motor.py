@@ -99,3 +99,51 @@ def test_errors_are_linsense_errors(tmp_path):
 def test_shipped_examples_load(path):
     m = load_motor(path)
     check_motor(m)
+
+
+# ---------------------------------------------------------------------- issue 23: long tables, slips of unit
+def test_a_long_table_is_fitted_up_to_the_order_limit(ecce):
+    """8,000 positions (interpolated exactly, minutes and GBs) are fitted to order 63 in blocks: the
+    same series as lstsq, the motor's within 1e-15 H; scattered positions too."""
+    from linsense.limits import MAX_TABLE_ORDER
+    from linsense.model.inductance import InductanceModel, _design
+
+    theta = np.linspace(0.0, 2.0 * np.pi, 8000, endpoint=False)
+    tab = InductanceModel.from_table(theta, ecce.inductance.entries(theta))
+    assert tab.max_order == MAX_TABLE_ORDER
+    th = theta_grid(997)
+    np.testing.assert_allclose(tab.entries(th), ecce.inductance.entries(th), atol=1e-15)
+    rng = np.random.default_rng(3)
+    scattered = np.sort(rng.uniform(0.0, 2.0 * np.pi, 6000))
+    y = ecce.inductance.entries(scattered) + rng.normal(0.0, 1e-6, (6000, 6))
+    tab = InductanceModel.from_table(scattered, y)
+    ref, *_ = np.linalg.lstsq(_design(scattered, MAX_TABLE_ORDER), y, rcond=None)
+    np.testing.assert_allclose(tab.a, ref[:MAX_TABLE_ORDER + 1].T, atol=1e-12)
+
+
+@pytest.mark.parametrize("edits, key, words", [
+    ([("L0 = 2.75e-3", "L0 = 1")], "inductance.L0", ["L0 = 1 H", "Did you type mH?"]),
+    ([("L0 = 2.75e-3", "L0 = 0.6")], "inductance.L0", ["L0 = 0.6 H", "Did you type mH?"]),
+    ([("L0 = 2.75e-3", "L0 = 0.2"), ("R_s = 9", "R_s = 1")], "inductance.L0",
+     ["time constant of 0.2 s", "Did you type mH?"]),
+    ([("L0 = 2.75e-3", "L0 = 0.2")], None, []),  # 0.2 H / 9 ohm = 22 ms: a large motor's
+    ([("R_s = 9", "R_s = 0")], None, []),  # (no time constant)
+    ([("R_s = 9", "R_s = 150")], "motor.R_s", ["150 ohm", "Did you type milliohm?"]),
+])
+def test_slips_of_unit(edits, key, words):
+    from linsense.model.motor import check_plausible, motor_from_toml
+
+    text = BASE + ("\n[inductance]\nL0 = 2.75e-3\nL2 = -0.317e-3\nM0 = -0.92e-3\nM2 = -0.317e-3\n"
+                   "dM0 = -0.47e-3\n")
+    for old, new in edits:
+        assert old in text
+        text = text.replace(old, new)
+    m = motor_from_toml(text, "m.toml")
+    if key is None:
+        check_plausible(m)
+        return
+    with pytest.raises(InputError) as exc:
+        check_plausible(m)
+    assert exc.value.key == key
+    for w in words:
+        assert w in str(exc.value), (w, str(exc.value))

@@ -5,6 +5,44 @@ The CLI turns any :class:`LinsenseError` into exit code 2 and the one-line ``str
 
 from __future__ import annotations
 
+import re
+
+#: a run of characters without a space longer than this in a message (a user's value, key or
+#: section name: a 50 MB key gave a 50 MB line) is cut to its first MAX_SHOWN_CHARS
+MAX_WORD_CHARS = 200
+#: characters kept of a cut run, before an ellipsis and the run's length
+MAX_SHOWN_CHARS = 80
+#: characters of a key, and of a message, after which the rest is cut (values with spaces)
+MAX_KEY_CHARS = 200
+MAX_MESSAGE_CHARS = 1000
+_LONG_WORD = re.compile(rf"\S{{{MAX_WORD_CHARS + 1},}}")
+_LONG_QUOTED = re.compile(rf"'([^'\n]{{{MAX_WORD_CHARS - 1},}})'|\"([^\"\n]{{{MAX_WORD_CHARS - 1},}})\"")
+
+
+def _cut(text: str, keep: int) -> str:
+    return f"{text[:keep]}\u2026 ({len(text):,} characters)"
+
+
+def _cut_quoted(m: re.Match) -> str:
+    q, inner = ("'", m.group(1)) if m.group(1) is not None else ('"', m.group(2))
+    return f"{q}{inner[:MAX_SHOWN_CHARS]}\u2026{q} ({len(inner):,} characters)"
+
+
+def bounded(text: str, limit: int = MAX_MESSAGE_CHARS) -> str:
+    """``text`` with every user value in it bounded, for a one-line message (docs/limits.md).
+
+    A quoted value (``'...'`` or ``"..."``, as ``repr`` writes it) or a run without spaces longer
+    than :data:`MAX_WORD_CHARS` becomes its first :data:`MAX_SHOWN_CHARS` characters, an ellipsis
+    and its length; what is still longer than ``limit`` is cut there the same way. Every message
+    of :class:`InputError` and :class:`ModelError` goes through it, so no message quotes a whole
+    50 MB value.
+    """
+    text = str(text)
+    if len(text) > MAX_WORD_CHARS:
+        text = _LONG_QUOTED.sub(_cut_quoted, text)
+        text = _LONG_WORD.sub(lambda m: _cut(m.group(), MAX_SHOWN_CHARS), text)
+    return _cut(text, limit) if len(text) > limit else text
+
 
 class LinsenseError(Exception):
     """Base class of every error linsense raises on purpose."""
@@ -25,8 +63,8 @@ class InputError(LinsenseError):
 
     def __init__(self, source: str, key: str, message: str) -> None:
         self.source = str(source)
-        self.key = key
-        self.message = message
+        self.key = key = bounded(key, MAX_KEY_CHARS) if key else key
+        self.message = message = bounded(message)
         where = f"{self.source}: {key}" if key else self.source
         super().__init__(f"{where}: {message}")
 
@@ -36,7 +74,8 @@ class ModelError(LinsenseError):
 
     def __init__(self, source: str, key: str, message: str) -> None:
         self.source = str(source)
-        self.key = key
+        self.key = key = bounded(key, MAX_KEY_CHARS) if key else key
+        message = bounded(message)
         where = f"{self.source}: {key}" if key else self.source
         super().__init__(f"{where}: {message}")
 

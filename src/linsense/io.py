@@ -23,6 +23,9 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
+#: a number written with a decimal comma ("1,5", "-0,25e-3"): refused by name, not as "not a number"
+_DECIMAL_COMMA = re.compile(r"\s*[+-]?\d*,\d+([eE][+-]?\d+)?\s*")
+
 
 def finite_cell(source: str, row: int, column: str, cell: str) -> float:
     """Parse one CSV cell as a finite number, or raise InputError naming row and column."""
@@ -31,10 +34,123 @@ def finite_cell(source: str, row: int, column: str, cell: str) -> float:
     try:
         v = float(cell)
     except ValueError:
+        if _DECIMAL_COMMA.fullmatch(cell):
+            raise InputError(source, f"row {row}, column {column}",
+                             f"decimal commas are not read: use a point (got {cell!r})") from None
         raise InputError(source, f"row {row}, column {column}", f"not a number: {cell!r}") from None
     if not math.isfinite(v):
         raise InputError(source, f"row {row}, column {column}", f"not finite: {cell!r}")
     return v
+
+
+def read_csv_table(path: str | os.PathLike, columns: tuple[str, ...], what: str):
+    """The named ``columns`` of a user's CSV table as finite floats, shape ``(rows, len(columns))``,
+    and each row's line number in the file (for messages).
+
+    Read line by line with every size bounded before it is kept (docs/limits.md): at most
+    :data:`~linsense.limits.MAX_TABLE_ROWS` data rows, :data:`~linsense.limits.MAX_TABLE_COLUMNS`
+    columns and :data:`~linsense.limits.MAX_TABLE_FIELD_CHARS` characters a field; only the named
+    columns are kept. A UTF-8 byte-order mark is skipped; semicolon separators and decimal commas
+    are refused by name (they read as one column, or as more fields than the header has); every row
+    must have the header's number of fields (empty lines are skipped). Other columns are allowed
+    (``linsense model`` writes more).
+
+    Parameters
+    ----------
+    path : str or path
+        The CSV file; its first line is the header.
+    columns : tuple of str
+        The columns wanted, each required.
+    what : str
+        What the file is, for the messages ("inductance table").
+
+    Returns
+    -------
+    data : ndarray, shape (rows, len(columns))
+    line : ndarray of int, shape (rows,)
+        The line of each row in the file (the header is line 1).
+
+    Raises
+    ------
+    InputError
+        Naming the file, the row and column, the value or the count and the limit.
+    """
+    import array
+    import csv
+
+    import numpy as np
+
+    from linsense.errors import InputError
+    from linsense.limits import MAX_TABLE_COLUMNS, MAX_TABLE_FIELD_CHARS, MAX_TABLE_ROWS
+
+    src = str(path)
+    max_line = MAX_TABLE_COLUMNS * (MAX_TABLE_FIELD_CHARS + 3) + 2  # (quotes, separators, CRLF)
+    field_limit = f"field larger than field limit of {MAX_TABLE_FIELD_CHARS} characters (docs/limits.md)"
+    col_limit = f"beyond the limit of {MAX_TABLE_COLUMNS} columns (docs/limits.md)"
+    semicolons = "semicolon separators are not read: separate the columns with commas"
+    number = 0  # the line being read, 1-based (the header is row 1)
+
+    def lines(f):
+        nonlocal number
+        while True:
+            line = f.readline(max_line + 1)
+            if not line:
+                return
+            number += 1
+            if number > MAX_TABLE_ROWS + 1:
+                raise InputError(src, "", f"more than {MAX_TABLE_ROWS:,} rows: beyond the limit of "
+                                          f"{MAX_TABLE_ROWS:,} rows of a table (docs/limits.md)")
+            if len(line) > max_line:
+                parts = line.split(",")
+                if len(parts) > MAX_TABLE_COLUMNS:
+                    raise InputError(src, f"row {number}", f"{len(parts) - 1:,}+ columns: {col_limit}")
+                raise InputError(src, f"row {number}", field_limit)
+            yield line
+
+    def checked(row: list[str]) -> list[str]:
+        if len(row) > MAX_TABLE_COLUMNS:
+            raise InputError(src, f"row {number}", f"{len(row):,} columns: {col_limit}")
+        for j, cell in enumerate(row):
+            if len(cell) > MAX_TABLE_FIELD_CHARS:
+                raise InputError(src, f"row {number}, column {j + 1}",
+                                 f"{field_limit}: a field of {len(cell):,} characters")
+        return row
+
+    values, numbers = array.array("d"), array.array("q")
+    try:
+        with open(path, newline="", encoding="utf-8-sig") as f:
+            reader = csv.reader(lines(f))
+            header = [h.strip() for h in checked(next(reader, []))]
+            if not header:
+                raise InputError(src, "", f"empty {what}")
+            missing = [c for c in columns if c not in header]
+            if missing:
+                if any(";" in h for h in header):
+                    raise InputError(src, "row 1", f"{semicolons} (and decimal commas are not read: use "
+                                                   f"a point); need the columns {','.join(columns)}")
+                raise InputError(src, f"column {missing[0]}", f"missing column (need {','.join(columns)})")
+            idx = [header.index(c) for c in columns]
+            for row in reader:
+                row = checked(row)
+                if not row or (len(row) == 1 and not row[0].strip()):
+                    continue
+                if len(row) >= len(header):  # (a bad cell is named first, then a count)
+                    cells = [finite_cell(src, number, name, row[c].strip())
+                             for c, name in zip(idx, columns, strict=True)]
+                if len(row) != len(header):
+                    hint = ""
+                    if any(";" in c for c in row):
+                        hint = f" ({semicolons})"
+                    elif len(row) > len(header) and any(c.strip().isdigit() for c in row):
+                        hint = " (decimal commas are not read: use a point)"
+                    raise InputError(src, f"row {number}", f"{len(row)} fields for the header's "
+                                                           f"{len(header)} columns{hint}")
+                values.extend(cells)
+                numbers.append(number)
+    except (OSError, UnicodeDecodeError, csv.Error) as exc:
+        raise InputError(src, "", f"cannot read {what}: {exc}") from None
+    return (np.frombuffer(values, dtype=float).reshape(-1, len(columns)).copy(),
+            np.frombuffer(numbers, dtype=np.int64).copy())
 
 
 def read_text_file(path: str | os.PathLike, what: str) -> str:
@@ -82,6 +198,52 @@ def read_toml(path: str | os.PathLike, what: str) -> dict:
     return parse_toml(read_text_file(path, what), str(path))
 
 
+#: the reasons an output cannot be written, in words (an OSError showed ``[Errno 28]`` and the
+#: temporary file's name)
+_REASONS = {
+    errno.EROFS: "read-only file system",
+    errno.EACCES: "permission denied",
+    errno.EPERM: "permission denied (operation not permitted)",
+    errno.ENOSPC: "no space left on the device",
+    errno.EDQUOT: "disk quota exceeded",
+    errno.EFBIG: "file too large for the file system",
+    errno.ENAMETOOLONG: "file name too long",
+    errno.ENOTDIR: "a folder on its path is a file",
+    errno.EIO: "input/output error of the device",
+}
+
+
+def _shown(path: str | os.PathLike) -> Path:
+    """The path the user named for ``path``: a file of an output set being written is shown in the
+    set's ``--out`` folder, not in its temporary sibling."""
+    p = Path(path)
+    for s in _ACTIVE:
+        if s.tmp is not None and (p == s.tmp or s.tmp in p.parents):
+            return s.shown / p.relative_to(s.tmp)
+        if p.parent == s.target.parent and p.name.startswith(f".{_stem(s.target)}."):
+            return s.shown  # (its temporary or old sibling)
+    return p
+
+
+def output_error(path: str | os.PathLike, exc: OSError):
+    """The :class:`~linsense.errors.OutputError` of an OSError met writing ``path``: the path the
+    user named and the reason in words ("read-only file system", "no space left on the device",
+    "permission denied: its folder is read-only"), no errno, no temporary file."""
+    from linsense.errors import OutputError
+
+    shown = _shown(path)
+    reason = _REASONS.get(exc.errno) or (exc.strerror or str(exc) or type(exc).__name__)
+    if exc.errno in (errno.EACCES, errno.EPERM):
+        folder = Path(os.path.abspath(shown)).parent
+        while not folder.exists() and folder.parent != folder:
+            folder = folder.parent
+        if not os.access(folder, os.W_OK):
+            reason += ": its folder is read-only"
+    if exc.errno is not None and exc.strerror and exc.strerror != os.strerror(exc.errno):
+        reason += f" ({exc.strerror})"  # (a message of its own, e.g. the test hooks')
+    return OutputError(shown, f"cannot write: {reason}")
+
+
 def write_atomic(path: str | os.PathLike, data: str | bytes) -> Path:
     """Write ``data`` to ``path`` through a temporary file in the same folder and a rename."""
     return write_atomic_with(path, lambda f: f.write(data.encode() if isinstance(data, str) else data))
@@ -91,10 +253,18 @@ def write_atomic_with(path: str | os.PathLike, writer: Callable) -> Path:
     """Call ``writer(binary_file)`` on a temporary file, then rename it onto ``path``.
 
     The parent folder is created if needed. On any exception the temporary file is removed
-    and ``path`` is left as it was. ``"-"`` writes to standard output; an existing target that
-    is not a regular file (``/dev/null``, a FIFO, ``/dev/stdout``) is written in place, never
-    replaced.
+    and ``path`` is left as it was; an OSError (a read-only folder, a full disk) becomes an
+    :class:`~linsense.errors.OutputError` naming ``path`` (:func:`output_error`). ``"-"`` writes
+    to standard output; an existing target that is not a regular file (``/dev/null``, a FIFO,
+    ``/dev/stdout``) is written in place, never replaced.
     """
+    try:
+        return _write_atomic_with(path, writer)
+    except OSError as exc:
+        raise output_error(path, exc) from None
+
+
+def _write_atomic_with(path: str | os.PathLike, writer: Callable) -> Path:
     if str(path) == "-":
         writer(sys.stdout.buffer)
         sys.stdout.flush()
@@ -521,16 +691,29 @@ def output_set(out: str | os.PathLike, command: str) -> Iterator[OutputSet]:
     :class:`~linsense.errors.OutputError` (exit code 2) before anything is computed.
     """
     s = OutputSet(out, command)
-    s.open()
+    try:
+        s.open()
+    except OSError as exc:
+        raise output_error(s.shown, exc) from None
     _ACTIVE.append(s)
     try:
-        yield s
-        s.commit()
-    except BaseException:
-        s.abort()
-        raise
+        try:
+            yield s
+            s.commit()
+        except BaseException:
+            s.abort()
+            raise
+    except OSError as exc:  # a read-only folder, a full disk: the user's path and the reason in words
+        where = Path(exc.filename) if exc.filename is not None else None
+        if where is not None and not (_under(where, s.target.parent) or _under(where, s.shown.parent)):
+            raise  # (not the output's: an input's error)
+        raise output_error(where if where is not None else s.shown, exc) from None
     finally:
         _ACTIVE.remove(s)
+
+
+def _under(p: Path, folder: Path) -> bool:
+    return p == folder or folder in p.parents
 
 
 #: the output sets being written (for the ``first-file`` test hook of :func:`write_atomic_with`)

@@ -14,6 +14,16 @@ from linsense.errors import InputError
 MAX_HARMONIC_ORDER = int(lib.LS_SIM_MAX_ORDER) - 1
 #: positions per electrical period of a table, a LUT or a figure (--points)
 MAX_POINTS = 100_000
+#: rows of a table a user gives (an inductance table of a motor file): as many as ``linsense model
+#: --points`` writes, so that every table linsense writes it also reads
+MAX_TABLE_ROWS = MAX_POINTS
+#: columns of such a table (``linsense model`` writes 17) and characters of one of its fields (a
+#: number needs at most 24)
+MAX_TABLE_COLUMNS = 64
+MAX_TABLE_FIELD_CHARS = 100
+#: Fourier order of a tabulated L_abc(theta): a longer table is fitted by least squares up to it
+#: (8,000 rows interpolated exactly took minutes, 100,000 asked for 37 GiB); the simulator's limit
+MAX_TABLE_ORDER = MAX_HARMONIC_ORDER
 #: positions of an emulated bench measurement or of a calibration (--positions)
 MAX_POSITIONS = 10_000
 #: nesting of arrays and tables in a TOML file (motor, scenario, sweep): the deepest a file of

@@ -16,12 +16,42 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from linsense.limits import MAX_TABLE_ORDER
 from linsense.model.frames import ab_to_dq_matrix, abc_to_ab_matrix
 
 #: Names of the six independent entries, in storage order.
 ENTRIES = ("L_A", "L_B", "L_C", "M_AB", "M_BC", "M_CA")
 #: (row, column) of each entry in the 3x3 matrix.
 _INDEX = ((0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (2, 0))
+#: positions above which a table is fitted through its normal equations in blocks of as many rows
+#: (a (N, 2K+1) design matrix of 100,000 positions took 5 s in ``lstsq``)
+_BLOCK = 4096
+
+
+def _design(theta: np.ndarray, K: int) -> np.ndarray:
+    k = np.arange(K + 1)
+    return np.concatenate([np.cos(np.outer(theta, k)), np.sin(np.outer(theta, k[1:]))], axis=1)
+
+
+def _fit(theta: np.ndarray, y: np.ndarray, K: int) -> np.ndarray:
+    """Least-squares coefficients ``(2K+1, 6)`` of the series of order ``K`` through ``(theta, y)``.
+
+    Up to :data:`_BLOCK` positions: ``lstsq`` on the design matrix. Above: its normal equations,
+    summed over blocks of rows (bounded memory, a few hundred ms for 100,000 positions), solved
+    when well conditioned (equally spaced positions: condition 2); else ``lstsq``.
+    """
+    if theta.size <= _BLOCK:
+        return np.linalg.lstsq(_design(theta, K), y, rcond=None)[0]
+    n = 2 * K + 1
+    G, b = np.zeros((n, n)), np.zeros((n, y.shape[1]))
+    for i in range(0, theta.size, _BLOCK):
+        A = _design(theta[i:i + _BLOCK], K)
+        G += A.T @ A
+        b += A.T @ y[i:i + _BLOCK]
+    w = np.linalg.eigvalsh(G)
+    if w[0] > 1e-6 * w[-1]:  # (error of the solution about 1e6 eps: 1e-10 relative)
+        return np.linalg.solve(G, b)
+    return np.linalg.lstsq(_design(theta, K), y, rcond=None)[0]
 
 
 @dataclass(frozen=True)
@@ -119,7 +149,11 @@ class InductanceModel:
         """Periodic (trigonometric) least-squares fit of tabulated ``L_abc(theta)``.
 
         With ``N`` equally spaced samples and the default ``max_order = (N - 1) // 2`` the
-        series interpolates the table exactly; a smaller ``max_order`` smooths it.
+        series interpolates the table exactly; a smaller ``max_order`` smooths it. The order is
+        at most :data:`~linsense.limits.MAX_TABLE_ORDER` (63, the simulator's limit): a table
+        of more than 127 positions is fitted by least squares up to it (interpolated exactly,
+        8,000 positions took minutes and 100,000 asked for 37 GiB; every use of the model costs
+        in proportion to its order).
 
         Parameters
         ----------
@@ -131,10 +165,8 @@ class InductanceModel:
         theta = np.asarray(theta, dtype=float)
         entries = np.asarray(entries, dtype=float)
         N = theta.size
-        K = (N - 1) // 2 if max_order is None else min(int(max_order), (N - 1) // 2)
-        k = np.arange(K + 1)
-        A = np.concatenate([np.cos(np.outer(theta, k)), np.sin(np.outer(theta, k[1:]))], axis=1)
-        coef, *_ = np.linalg.lstsq(A, entries, rcond=None)
+        K = min((N - 1) // 2, MAX_TABLE_ORDER if max_order is None else int(max_order), MAX_TABLE_ORDER)
+        coef = _fit(theta, entries, K)
         a = coef[: K + 1].T
         b = np.concatenate([np.zeros((6, 1)), coef[K + 1 :].T], axis=1)
         return cls(a, b, description=description)

@@ -6,7 +6,6 @@ A motor file (TOML, SI units) has the sections ``[motor]`` and ``[inductance]`` 
 
 from __future__ import annotations
 
-import csv
 import functools
 import math
 from dataclasses import dataclass, field
@@ -16,14 +15,14 @@ from pathlib import Path
 import numpy as np
 
 from linsense.errors import InputError, ModelError
-from linsense.io import finite_cell, parse_toml, read_text_file
+from linsense.io import parse_toml, read_csv_table, read_text_file
 from linsense.model.inductance import ENTRIES, InductanceModel
 from linsense.model.saturation import Saturation
 from linsense.model.schema import validate_motor_file
 
 #: Saliency |L_q - L_d| below this fraction of (L_d + L_q)/2 counts as vanished.
 MIN_SALIENCY_RATIO = 0.01
-#: Columns a tabulated inductance file must have (more are ignored).
+#: Columns a tabulated inductance file must have (others, e.g. those of ``linsense model``, are allowed).
 TABLE_COLUMNS = ("theta_deg",) + ENTRIES
 
 
@@ -218,25 +217,11 @@ def _saturation(sec, source: str, base_dir: Path | None) -> Saturation:
 def read_inductance_table(path: Path) -> tuple[np.ndarray, np.ndarray]:
     """Read a tabulated ``L_abc(theta)`` CSV (columns ``theta_deg, L_A .. M_CA``; H).
 
-    Returns positions in rad and a ``(N, 6)`` array. Every problem names the row and column.
+    Returns positions in rad and a ``(N, 6)`` array. Every problem names the row and column; the
+    sizes are bounded while reading (:func:`linsense.io.read_csv_table`, docs/limits.md).
     """
     src = str(path)
-    try:
-        with open(path, newline="", encoding="utf-8") as f:
-            rows = list(csv.reader(f))
-    except (OSError, UnicodeDecodeError, csv.Error) as exc:
-        raise InputError(src, "", f"cannot read inductance table: {exc}") from None
-    if not rows:
-        raise InputError(src, "", "empty inductance table")
-    header = [h.strip() for h in rows[0]]
-    for col in TABLE_COLUMNS:
-        if col not in header:
-            raise InputError(src, f"column {col}", "missing column (need " + ",".join(TABLE_COLUMNS) + ")")
-    idx = [header.index(c) for c in TABLE_COLUMNS]
-    data = np.empty((len(rows) - 1, len(idx)))
-    for r, row in enumerate(rows[1:], start=2):
-        for j, (c, name) in enumerate(zip(idx, TABLE_COLUMNS, strict=True)):
-            data[r - 2, j] = finite_cell(src, r, name, row[c].strip() if c < len(row) else "")
+    data, line = read_csv_table(path, TABLE_COLUMNS, "inductance table")
     if data.shape[0] < 8:
         raise InputError(src, "", f"need at least 8 positions, got {data.shape[0]}")
     wrapped = np.mod(data[:, 0], 360.0)
@@ -244,8 +229,8 @@ def read_inductance_table(path: Path) -> tuple[np.ndarray, np.ndarray]:
     ws = wrapped[order]
     dup = np.nonzero(np.diff(ws) < 1e-9)[0]
     if dup.size:
-        r = int(order[dup[0] + 1]) + 2
-        raise InputError(src, f"row {r}, column theta_deg", f"duplicate position {data[r - 2, 0]!r}")
+        r = int(order[dup[0] + 1])
+        raise InputError(src, f"row {line[r]}, column theta_deg", f"duplicate position {data[r, 0]!r}")
     gaps = np.diff(np.concatenate([ws, [ws[0] + 360.0]]))
     if gaps.max() > 45.0:
         g = int(np.argmax(gaps))
@@ -288,14 +273,21 @@ def _intervals_deg(theta: np.ndarray, bad: np.ndarray) -> str:
 
 
 #: Ranges that hold every real linear PM motor with margin, SI units: (low, high, unit, the
-#: likely mistake above, below). A value outside names the probable slip of unit.
+#: likely mistake above, below). A value outside names the probable slip of unit. The class
+#: (pole pitch 20-100 mm, 24-300 V, L 0.1-100 mH, R_s 0.1-20 ohm; docs/limits.md): above 0.5 H the
+#: HF current of any injection the drive can make (V_dc/6 at 500 Hz or more) is below 30 mA, under
+#: the resolution of its current sensors; below 1 uH the PWM ripple is hundreds of amperes; a phase
+#: of 100 ohm passes at most 3 A at 300 V.
 PLAUSIBLE = {
     "motor.pole_pitch": (1e-3, 1.0, "m", "mm", None),
-    "motor.R_s": (0.0, 1e3, "ohm", "milliohm", None),
+    "motor.R_s": (0.0, 100.0, "ohm", "milliohm", None),
     "motor.force_constant": (1e-2, 1e4, "N/A", None, None),
     "motor.mass": (1e-3, 1e4, "kg", "g", None),
-    "inductance": (1e-6, 1.0, "H", "mH", "uH or nH"),
+    "inductance": (1e-6, 0.5, "H", "mH", "uH or nH"),
 }
+#: s, the longest electrical time constant L0 / R_s of a real linear motor (large iron-core motors
+#: reach 20-30 ms): an inductance typed in mH that the range above lets through (0.1 to 0.5) ends here
+MAX_TIME_CONSTANT = 0.1
 
 
 def _implausible(key: str, value: float, what: str = "") -> str | None:
@@ -331,6 +323,11 @@ def check_plausible(motor: Motor) -> None:
     msg = _implausible("inductance", L_self, what)
     if msg:
         raise InputError(motor.source, key, msg)
+    if L_self > MAX_TIME_CONSTANT * motor.R_s > 0.0:
+        raise InputError(motor.source, key, (
+            f"{what} = {L_self:g} H with R_s = {motor.R_s:g} ohm is an electrical time constant of "
+            f"{L_self / motor.R_s:.3g} s, beyond the {MAX_TIME_CONSTANT:g} s of real linear motors. "
+            "Did you type mH? Motor files are in SI units (H)."))
 
 
 def check_motor(motor: Motor) -> None:
