@@ -112,7 +112,17 @@ FUZZ_TIME   ?= 60
 FUZZ_CORPUS := csrc/tests/fuzz_corpus
 FUZZ_FLAGS  := -std=c99 -Wall -Wextra -Wpedantic -Werror -O1 -g -fsanitize=fuzzer,address,undefined \
                -fno-sanitize-recover=all -fno-omit-frame-pointer
-fuzz:
+# The property suite's long run (tests/properties/, hypothesis profile "long": thousands of generated
+# motor, scenario and sweep files, tables and API calls per property; PROP_EXAMPLES sets the number)
+# before the C fuzzing when make fuzz is run itself; make test runs the bounded "ci" profile in pytest
+# (the sub-make of fuzztest skips this).
+PROP_EXAMPLES ?= 2000
+.PHONY: fuzzpy
+fuzzpy: $(STAMP)
+	@if [ "$(MAKELEVEL)" = 0 ]; then HYPOTHESIS_PROFILE=long PROP_EXAMPLES=$(PROP_EXAMPLES) $(PY) -m pytest -q -p no:cacheprovider tests/properties; \
+	else echo "fuzzpy: skipped under make test (its pytest runs tests/properties with the ci profile)"; fi
+
+fuzz: fuzzpy
 	@set -e; for v in float double; do \
 	  dir=$(BUILD)/fuzz/$$v; mkdir -p $$dir/corpus; \
 	  case $$v in double) def=-DLS_REAL_DOUBLE ;; *) def= ;; esac; \

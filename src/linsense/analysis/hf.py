@@ -94,18 +94,47 @@ def psi_lut(model, theta) -> np.ndarray:
     return np.arctan2(-L_dq, L_q)
 
 
-def _frequency(f, name: str) -> float:
-    """``f`` as a float if it is a real, finite, positive frequency (Hz), else InputError naming
-    ``name`` (the API refuses what the CLI refuses: a negative, complex or None frequency was
-    accepted and gave a table of nonsense)."""
+def real_arg(v, source: str, name: str, low: float = -math.inf, high: float = math.inf, *,
+             low_open: bool = False, high_open: bool = False, what: str = "a finite real number") -> float:
+    """``v`` as a float if it is a real (not a boolean, complex, string, None or array), finite
+    number within ``low`` .. ``high`` (open ends where asked), else InputError naming ``source``
+    and the argument ``name``: the API refuses what the CLI refuses (issue 23: a NaN amplitude, a
+    string or a complex number gave tables of NaN or a numpy traceback)."""
     import numbers
 
     from linsense.errors import InputError
 
-    if isinstance(f, bool) or not isinstance(f, numbers.Real) or not (math.isfinite(f) and f > 0):
-        raise InputError("linsense.analysis.hf", name,
-                         f"must be a positive finite frequency in Hz, got {f!r}")
-    return float(f)
+    ok = isinstance(v, numbers.Real) and not isinstance(v, bool | np.bool_) and math.isfinite(v)
+    if ok:
+        ok = (v > low if low_open else v >= low) and (v < high if high_open else v <= high)
+    if not ok:
+        lo = "" if low == -math.inf else f"{'(' if low_open else '['}{low:g}"
+        hi = "" if high == math.inf else f"{high:g}{')' if high_open else ']'}"
+        rng = f" in {lo or '(-inf'}, {hi or 'inf)'}" if lo or hi else ""
+        raise InputError(source, name, f"must be {what}{rng}, got {v!r}")
+    return float(v)
+
+
+def _frequency(f, name: str) -> float:
+    """``f`` as a float if it is a real, finite, positive frequency (Hz) up to the injection's limit
+    (:data:`linsense.limits.MAX_F_INJ`, docs/limits.md), else InputError naming ``name`` (the API
+    refuses what the CLI refuses: a negative, complex or None frequency was accepted and gave a table
+    of nonsense; 1e308 Hz gave NaN angles, 1e300 Hz all-zero currents)."""
+    from linsense.limits import MAX_F_INJ
+
+    f = real_arg(f, "linsense.analysis.hf", name, 0.0, MAX_F_INJ, low_open=True,
+                 what="a positive finite frequency in Hz (docs/limits.md)")
+    if not math.isfinite(1.0 / f):  # (5e-324 Hz: its period is infinite, the square wave's table NaN)
+        from linsense.errors import InputError
+
+        raise InputError("linsense.analysis.hf", name, f"{f!r} Hz is too small: its period overflows")
+    return f
+
+
+def _amplitude(v, name: str = "v_inj") -> float:
+    """``v`` as a float if it is a real, finite, positive voltage (V), else InputError naming ``name``."""
+    return real_arg(v, "linsense.analysis.hf", name, 0.0, low_open=True,
+                    what="a positive finite amplitude in V")
 
 
 def psi_lut_resistive(motor, theta, f_inj: float, quad: float = 0.0) -> np.ndarray:
@@ -201,16 +230,28 @@ def hf_current(
     the estimated q-axis (phasor ``-j quad v_inj``; 0: pulsating). Returns shape ``(..., 2)``.
     """
     f_inj = _frequency(f_inj, "f_inj")
+    v_inj = _amplitude(v_inj)
+    quad = real_arg(quad, "linsense.analysis.hf", "quad", 0.0, 1.0, high_open=True)
     theta, theta_err = np.broadcast_arrays(np.asarray(theta, float), np.asarray(theta_err, float))
     w = 2.0 * np.pi * f_inj
     Z = motor.R_s * np.eye(2) + 1j * w * motor.inductance.L_dq(theta)
     R = rot(theta_err)
     v_dq = v_inj * (R[..., :, 0] - 1j * quad * R[..., :, 1])
     i_dq = np.linalg.solve(Z, v_dq[..., None].astype(complex))[..., 0]
-    return np.einsum("...ji,...j->...i", rot(theta_err), i_dq)
+    return _finite_currents(np.einsum("...ji,...j->...i", rot(theta_err), i_dq), v_inj, f_inj)
+
+
+def _finite_currents(i: np.ndarray, v_inj: float, f_inj: float) -> np.ndarray:
+    """``i``, or InputError naming ``v_inj`` when the currents overflow (1e308 V gave inf amperes)."""
+    if not np.all(np.isfinite(i)):
+        from linsense.errors import InputError
+
+        raise InputError("linsense.analysis.hf", "v_inj", f"{v_inj!r} V at {f_inj:g} Hz gives HF currents "
+                         "beyond floating point")
+    return i
 
 
 def hf_current_amplitude(motor, theta, v_inj: float = 12.0, f_inj: float = 1000.0) -> np.ndarray:
     """Peak amplitude (A) of the HF current vector for a pulsating injection at zero error."""
-    i = hf_current(motor, theta, v_inj, f_inj)
-    return np.sqrt(np.sum(np.abs(i) ** 2, axis=-1))
+    i = np.abs(hf_current(motor, theta, v_inj, f_inj))
+    return _finite_currents(np.hypot(i[..., 0], i[..., 1]), v_inj, f_inj)

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from linsense.analysis.hf import dq_components, mean_dq
+from linsense.analysis.hf import _amplitude, _frequency, dq_components, mean_dq
 
 
 def negative_sequence_numeric(motor, theta, v_inj: float, f_inj: float) -> np.ndarray:
@@ -46,6 +46,7 @@ def negative_sequence(motor, theta, v_inj: float, f_inj: float) -> np.ndarray:
     ``i_n = j w V D exp(j 2 theta) / (conj(a)^2 + w^2 |D|^2)`` with ``a = R_s + j w S``: with the
     alpha-beta matrix ``L_ab x = S x + D exp(j 2 theta) conj(x)``, ``Z = a + j w K`` where ``K^2 = |D|^2``,
     so ``Z^-1 = (a - j w K) / (a^2 + w^2 |D|^2)``, and only the ``K`` part has a negative sequence."""
+    f_inj, v_inj = _frequency(f_inj, "f_inj"), _amplitude(v_inj)
     theta = np.asarray(theta, dtype=float)
     L_d, L_q, L_dq = dq_components(motor, theta)
     S = 0.5 * (L_d + L_q)
@@ -66,6 +67,7 @@ def psi_rotating(motor, theta, f_inj: float) -> np.ndarray:
     """Estimation error (rad) of the rotating-vector estimate at the true position ``theta``:
     ``theta_est - theta = angle(i_n exp(-j (2 theta + c_ref))) / 2`` (the compensation table of the
     rotating injection, like Psi_LUT for the pulsating one; it does not depend on V)."""
+    f_inj = _frequency(f_inj, "f_inj")
     theta = np.asarray(theta, dtype=float)
     i_n = negative_sequence(motor, theta, 1.0, f_inj)
     return 0.5 * np.angle(i_n * np.exp(-1j * (2.0 * theta + reference_phase(motor, f_inj))))

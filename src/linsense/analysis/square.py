@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from linsense.analysis.hf import _amplitude, _frequency
 from linsense.model.frames import rot
 
 
@@ -34,6 +35,7 @@ def delta_current(motor, theta, f_inj: float, v_inj: float = 1.0, theta_err=0.0)
     square wave of amplitude ``v_inj`` (V) at ``f_inj`` (Hz) in the periodic steady state, closed
     form ``(2/R_s) tanh(R_s T L^-1 / 2) v`` (``T = 1/(2 f_inj)``; the series of tanh when R_s T is
     small against L, exactly ``T L^-1 v`` for R_s = 0)."""
+    f_inj, v_inj = _frequency(f_inj, "f_inj"), _amplitude(v_inj)
     theta, theta_err = np.broadcast_arrays(np.asarray(theta, float), np.asarray(theta_err, float))
     T = 0.5 / f_inj
     L_inv = np.linalg.inv(_l_dq(motor, theta))

@@ -20,8 +20,17 @@ def model_table(motor, points: int) -> dict[str, np.ndarray]:
 
     Inductances in H; angles in electrical degrees; ``gain_nolut`` = ``1 + de*/dtheta``.
     """
-    if points < 4:
-        raise ValueError("points must be >= 4")
+    import numbers
+
+    from linsense.errors import InputError
+    from linsense.limits import MAX_POINTS
+
+    # (the API refuses what `linsense model --points` refuses: 3 was a ValueError, 4.5 a TypeError and
+    # 10**9 ran the machine out of memory)
+    if isinstance(points, bool) or not isinstance(points, numbers.Integral) or not 4 <= points <= MAX_POINTS:
+        raise InputError("linsense.analysis.tables.model_table", "points",
+                         f"must be an integer in 4 .. {MAX_POINTS:,} (docs/limits.md), got {points!r}")
+    points = int(points)
     theta = np.linspace(0.0, 2.0 * np.pi, points, endpoint=False)
     ind = motor.inductance
     e = ind.entries(theta)

@@ -210,6 +210,12 @@ def c_identifier(name: str) -> str:
     return f"{ident}_t" if ident in C_KEYWORDS else ident
 
 
+def c_comment_text(text: str) -> str:
+    """``text`` safe inside a C comment: a user's ``*/`` (a motor name) ended the comment and the rest
+    was compiled as C; a ``/*`` is a -Wcomment warning."""
+    return str(text).replace("*/", "* /").replace("/*", "/ *")
+
+
 def _c_float(v: float) -> str:
     """A float literal that round-trips float32 exactly (9 significant digits)."""
     s = f"{float(np.float32(v)):.9g}"
@@ -222,7 +228,10 @@ def to_c_header(lut: Lut, symbol: str | None = None) -> str:
     """C99 header: ``static const float <symbol>[<SYMBOL>_LEN]`` in rad, with provenance."""
     sym = c_identifier(symbol or f"ls_lut_{lut.name}")
     up = sym.upper()
-    prov = "\n".join(f" *   {k} = {v!r}" for k, v in (lut.provenance or {"name": lut.name}).items())
+    # (a motor name is the user's text: "*/" in it ended the comment and the header did not compile,
+    # "/*" in it is a -Wcomment warning)
+    prov = "\n".join(c_comment_text(f" *   {k} = {v!r}")
+                     for k, v in (lut.provenance or {"name": lut.name}).items())
     rows = []
     vals = [_c_float(v) for v in lut.values]
     for i in range(0, len(vals), 6):
@@ -327,9 +336,21 @@ def read_lut_json(path: str | Path) -> Lut:
 
 
 def read_c_header(text: str) -> np.ndarray:
-    """Values of the (single) float table in a header written by :func:`to_c_header`."""
-    body = text[text.index("{") + 1 : text.index("};")]
-    return np.array([float(tok.strip().rstrip("f")) for tok in body.split(",") if tok.strip()])
+    """Values of the (single) float table in a header written by :func:`to_c_header`.
+
+    Raises
+    ------
+    InputError
+        When ``text`` holds no ``static const float NAME[LEN] = { ... };`` table of numbers.
+    """
+    # (the table's own braces: a motor name with "{" in the provenance comment was read as the table)
+    m = re.search(r"static const float \w+\[\w+\] = \{([^}]*)\};", text)
+    try:
+        if m is None:
+            raise ValueError("no 'static const float NAME[LEN] = {...};' table")
+        return np.array([float(tok.strip().rstrip("f")) for tok in m.group(1).split(",") if tok.strip()])
+    except ValueError as exc:
+        raise InputError("<C header>", "", f"not a LUT header of linsense: {exc}") from None
 
 
 def read_lut(path: str | Path) -> Lut:

@@ -16,7 +16,6 @@ and the column.
 from __future__ import annotations
 
 import csv
-import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -256,10 +255,24 @@ def emulate_bench(
     current : float
         Nominal current amplitude, A peak.
     """
-    if positions < 1:
-        raise ValueError("positions must be >= 1")
-    if not (noise >= 0.0 and math.isfinite(noise)):
-        raise ValueError(f"noise must be a finite fraction >= 0, got {noise!r}")
+    import numbers
+
+    from linsense.analysis.hf import real_arg
+    from linsense.limits import MAX_POSITIONS
+
+    # (the API refuses what `linsense bench-emulate` refuses, in one InputError naming the argument:
+    # None, NaN, a string or a complex number were numpy tracebacks, a NaN seed a TypeError)
+    src = "linsense.identify.emulate_bench"
+    if isinstance(positions, bool) or not isinstance(positions, numbers.Integral) \
+            or not 8 <= positions <= MAX_POSITIONS:
+        raise InputError(src, "positions", f"must be an integer in 8 .. {MAX_POSITIONS:,} (docs/limits.md), "
+                         f"got {positions!r}")
+    if isinstance(seed, bool) or not isinstance(seed, numbers.Integral) or seed < 0:
+        raise InputError(src, "seed", f"must be an integer >= 0, got {seed!r}")
+    positions, seed = int(positions), int(seed)
+    noise = real_arg(noise, src, "noise", 0.0, what="a finite fraction")
+    freq = real_arg(freq, src, "freq", 0.0, low_open=True, what="a positive finite frequency in Hz")
+    current = real_arg(current, src, "current", 0.0, low_open=True, what="a positive finite current in A")
     rng = np.random.default_rng(seed)
     x = np.arange(positions) * motor.pole_pitch / positions
     pos = np.repeat(x, 3)

@@ -282,6 +282,9 @@ def design(
                             f"{dv_dt / (v_inj * s_min):.3g} times the weakest HF error signal (the design "
                             f"refuses above {DEAD_TIME_RATIO_MAX:g}): expect the holds to fail")
     else:
+        if not v_top * s_min > 0.0:  # (i_max = 5e-324 A: a ZeroDivisionError traceback)
+            raise InputError(source, "i_max", f"{d.i_max!r} A leaves no injection: the largest allowed, "
+                             f"{INJ_CURRENT_MAX:g} i_max |Z(f_inj)|, is {v_top:.3g} V")
         if dv_dt / (v_top * s_min) > DEAD_TIME_RATIO_MAX:
             raise InputError(
                 source, "dead_time",

@@ -9,7 +9,7 @@ import numpy as np
 import tomli_w
 
 from linsense.analysis.hf import end_anisotropy
-from linsense.compensation.lut import build_lut, c_identifier, lut_r_slope
+from linsense.compensation.lut import build_lut, c_comment_text, c_identifier, lut_r_slope
 from linsense.model.motor import Motor
 from linsense.tune.design import (
     V_DC_MAX_FRACTION,
@@ -234,7 +234,8 @@ def c_header(dz: Design, drive: DriveData, motor: Motor, name: str | None = None
     if startup is not None:
         body += f"\n    cfg->startup.pairs = {int(startup.pairs)}u;"
     guard = f"LS_CFG_{sym.upper()}_H"
-    return f"""/* Drive configuration for motor {motor.name}, designed by `linsense tune` (docs/tuning.md).
+    shown = c_comment_text(motor.name)
+    return f"""/* Drive configuration for motor {shown}, designed by `linsense tune` (docs/tuning.md).
  * Drive: {drive.v_dc:g} V bus, {drive.f_pwm:g} Hz PWM, {drive.dead_time * 1e6:g} us dead time,
  * i_max {drive.i_max:g} A.
  * Injection {dz.v_inj:.4g} V / {dz.f_inj:g} Hz (kappa {dz.quad:g}), current loop {dz.current_bw:.4g} Hz,
