@@ -150,3 +150,38 @@ def test_what_the_properties_found_is_refused_naming_the_argument(ecce, what, ca
 def test_the_amplitude_of_huge_currents_is_finite(ecce):
     # (found: 1e308 V at 1 Hz, currents of 1.1e307 A, had an amplitude of inf: the squares overflowed)
     assert np.all(np.isfinite(hf_current_amplitude(ecce, THETA, 1e308, 1.0)))
+
+
+#: Python values a dict can carry and a TOML file cannot (tuples, numpy scalars, bytes, sets). Narrowed,
+#: pending bugs (reported, linsense/sim/scenario.py and build.py): None for an optional key
+#: (controller.kp_x = None) is a TypeError traceback in build, np.True_ is accepted as the number 1.0
+PY_ODD = st.one_of(ODD, st.tuples(st.floats(), st.floats()), st.binary(max_size=4), st.just({1.0}),
+                   st.just(np.int64(7)), st.just(np.float64(0.02))).filter(
+    lambda v: v is not None and not isinstance(v, np.bool_))
+
+
+@prop_settings()
+@given(section=st.sampled_from(["scenario", "inverter", "observer", "reference", "record", "controller"]),
+       key=st.sampled_from(["duration", "seed", "v_dc", "bandwidth_hz", "position_mm", "decimate", "kp_x",
+                            "lut_points", "at"]),
+       value=PY_ODD, record=st.sampled_from(["trace", "metrics"]))
+def test_simulate_of_a_dict_runs_as_given_or_names_the_key(section, key, value, record):
+    import linsense
+
+    # (narrowed to dicts and the two record modes, pending bug (reported, linsense/sim/run.py and
+    # scenario.py): simulate(42) is a TypeError and simulate(d, record="x") a ValueError, not InputError)
+    doc = {"motor": "ecce2010", "scenario": {"duration": 0.005}, "reference": {"position_mm": 1.0}}
+    doc[section] = {**doc.get(section, {}), key: value}
+    status, res = attempt(linsense.simulate, doc, record=record)
+    event(f"{status}")
+    if status == "refused":
+        assert isinstance(res, InputError) and res.source == "<dict>", repr(res)
+        return
+    # accepted: a value of the documented type (a finite real, an int for counts), and a run of it
+    assert not isinstance(value, bool | np.bool_ | str | bytes | tuple | set | complex | np.ndarray) \
+        and value is not None, f"{section}.{key} = {value!r} accepted"
+    assert real(value), f"{section}.{key} = {value!r} accepted"
+    m = res.metrics
+    sc = res.scenario.spec
+    assert abs(m["steps"] - sc.scenario.duration * sc.inverter.f_pwm) <= 1 or m["fault"] != "none"
+    assert getattr(getattr(sc, section), key) == value
