@@ -24,7 +24,7 @@ GEN_HDR  := $(BUILD)/gen/ls_lut_ecce2010.h $(BUILD)/gen/ls_lut_ecce2010_r.h $(BU
 # variant name : extra flags
 VARIANTS := float-san double-san float-plain
 
-.PHONY: all install demo test ctest mcu example pytest lint bench tools fuzz fuzztest clean
+.PHONY: all install demo test ctest mcu example pytest lint bench tools fuzz fuzz-merge fuzztest clean
 
 all: test
 
@@ -102,16 +102,31 @@ example: $(STAMP)
 	$(CC) $(CSTD) -O2 -Icsrc/include -I$(EXAMPLE) examples/firmware/main.c $(CTRL_SRC) -lm -o $(EXAMPLE)/firmware_example
 	$(EXAMPLE)/firmware_example
 
-# Fuzzing ls_drive_step and the ls_drive_* setters (csrc/tests/fuzz_drive.c) with clang's libFuzzer
-# under ASan+UBSan, float and double, FUZZ_TIME seconds each. The committed corpus
-# (csrc/tests/fuzz_corpus/) is read, never written: new inputs go to build/fuzz/<variant>/corpus,
-# a crash to build/fuzz/<variant>/crash-* (make fuzz fails). `make test` runs 30 s of each when
-# clang with libFuzzer is available (make tools installs it), and says so when it is not.
+# Fuzzing ls_drive_step and the ls_drive_* setters (csrc/tests/fuzz_drive.c: a structure-aware
+# input of a header and fixed-size step records, its own record mutator, the dictionary
+# csrc/tests/fuzz_drive.dict) with clang's libFuzzer under ASan+UBSan, float and double, FUZZ_TIME
+# seconds each. Coverage is the library's: csrc/ctrl/ is instrumented for it, the harness only for
+# the sanitizers. The committed corpus (csrc/tests/fuzz_corpus/) is read, never written: new inputs
+# go to build/fuzz/<variant>/corpus, a crash to build/fuzz/<variant>/crash-* (make fuzz fails), the
+# time-stamped log to build/fuzz/<variant>/fuzz.log, from which tools/fuzz_report.py prints
+# "coverage saturated: ..." (no new edge in the last half of the run) or "NOT saturated: ...".
+# `make fuzz-merge` minimises build/fuzz/*/corpus and the committed corpus into a fresh
+# csrc/tests/fuzz_corpus/ (libFuzzer -merge=1 with both variants). `make test` runs 30 s of each
+# when clang with libFuzzer is available (make tools installs it), and says so when it is not.
 FUZZ_CC     ?= clang
 FUZZ_TIME   ?= 60
 FUZZ_CORPUS := csrc/tests/fuzz_corpus
-FUZZ_FLAGS  := -std=c99 -Wall -Wextra -Wpedantic -Werror -O1 -g -fsanitize=fuzzer,address,undefined \
-               -fno-sanitize-recover=all -fno-omit-frame-pointer
+FUZZ_DICT   := csrc/tests/fuzz_drive.dict
+FUZZ_FLAGS  := -std=c99 -Wall -Wextra -Wpedantic -Werror -O1 -g -fno-sanitize-recover=all -fno-omit-frame-pointer
+FUZZ_OPTS   := -timeout=10 -rss_limit_mb=2048 -max_len=2048 -len_control=0 -print_final_stats=1 -dict=$(FUZZ_DICT)
+FUZZ_BUILD   = dir=$(BUILD)/fuzz/$$v; mkdir -p $$dir/corpus $$dir/obj; \
+	  case $$v in double) def=-DLS_REAL_DOUBLE ;; *) def= ;; esac; objs=""; \
+	  for src in $(CTRL_SRC); do \
+	    obj=$$dir/obj/$$(basename $$src .c).o; objs="$$objs $$obj"; \
+	    $(FUZZ_CC) $(FUZZ_FLAGS) -fsanitize=fuzzer-no-link,address,undefined $$def -Icsrc/include -c $$src -o $$obj; \
+	  done; \
+	  $(FUZZ_CC) $(FUZZ_FLAGS) -fsanitize=address,undefined $$def -Icsrc/include -c csrc/tests/fuzz_drive.c -o $$dir/obj/fuzz_drive.o; \
+	  $(FUZZ_CC) -fsanitize=fuzzer,address,undefined $$objs $$dir/obj/fuzz_drive.o -lm -o $$dir/fuzz_drive
 # The property suite's long run (tests/properties/, hypothesis profile "long": thousands of generated
 # motor, scenario and sweep files, tables and API calls per property; PROP_EXAMPLES sets the number)
 # before the C fuzzing when make fuzz is run itself; make test runs the bounded "ci" profile in pytest
@@ -124,14 +139,24 @@ fuzzpy: $(STAMP)
 
 fuzz: fuzzpy
 	@set -e; for v in float double; do \
-	  dir=$(BUILD)/fuzz/$$v; mkdir -p $$dir/corpus; \
-	  case $$v in double) def=-DLS_REAL_DOUBLE ;; *) def= ;; esac; \
-	  $(FUZZ_CC) $(FUZZ_FLAGS) $$def -Icsrc/include csrc/tests/fuzz_drive.c $(CTRL_SRC) -lm -o $$dir/fuzz_drive; \
+	  $(FUZZ_BUILD); \
 	  echo "fuzz_drive ($$v): $(FUZZ_TIME) s"; \
-	  $$dir/fuzz_drive -max_total_time=$(FUZZ_TIME) -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 \
-	    -artifact_prefix=$$dir/ $$dir/corpus $(FUZZ_CORPUS) 2> $$dir/fuzz.log || { tail -40 $$dir/fuzz.log; exit 1; }; \
-	  grep -E "^stat::number_of_executed_units|^Done" $$dir/fuzz.log | sed "s/^/[$$v] /"; \
+	  python3 tools/fuzz_report.py run --log $$dir/fuzz.log -- $$dir/fuzz_drive -max_total_time=$(FUZZ_TIME) \
+	    $(FUZZ_OPTS) -artifact_prefix=$$dir/ $$dir/corpus $(FUZZ_CORPUS) || { tail -40 $$dir/fuzz.log; exit 1; }; \
+	  grep -E "stat::number_of_executed_units|Done " $$dir/fuzz.log | cut -f2 | sed "s/^/[$$v] /"; \
+	  python3 tools/fuzz_report.py summary $$dir/fuzz.log --label $$v; \
 	done
+
+fuzz-merge:
+	@set -e; new=$(BUILD)/fuzz/merged; rm -rf $$new; mkdir -p $$new; \
+	for v in float double; do \
+	  $(FUZZ_BUILD); \
+	  $$dir/fuzz_drive -merge=1 $(FUZZ_OPTS) $$new $(FUZZ_CORPUS) $(wildcard $(BUILD)/fuzz/float/corpus $(BUILD)/fuzz/double/corpus) \
+	    2> $$dir/merge.log || { tail -20 $$dir/merge.log; exit 1; }; \
+	  grep -E "MERGE-OUTER: [0-9]+ new files" $$dir/merge.log | sed "s/^/[$$v] /"; \
+	done; \
+	rm -f $(FUZZ_CORPUS)/*; cp $$new/* $(FUZZ_CORPUS)/; \
+	echo "$(FUZZ_CORPUS): $$(ls $(FUZZ_CORPUS) | wc -l) inputs, $$(du -sk $(FUZZ_CORPUS) | cut -f1) kB"
 
 fuzztest: tools
 	@if printf 'int LLVMFuzzerTestOneInput(const char *d, unsigned long n) { (void)d; (void)n; return 0; }\n' | \

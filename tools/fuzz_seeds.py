@@ -1,134 +1,119 @@
 #!/usr/bin/env python3
-"""Write the seed corpus of csrc/tests/fuzz_drive.c (csrc/tests/fuzz_corpus/): small inputs that
-reach each operation, mode and class of hostile value; libFuzzer mutates from there.
+"""Write the seed inputs of csrc/tests/fuzz_drive.c and its libFuzzer dictionary.
 
-The byte format is documented at the top of fuzz_drive.c; FIELDS below follows its FIELDS list.
-Run from the repository root: python3 tools/fuzz_seeds.py
+  python3 tools/fuzz_seeds.py SEED_DIR        seeds: each preset in each mode, moves, steps,
+                                              hostile values (make fuzz merges the fuzzed corpus
+                                              into csrc/tests/fuzz_corpus/, which starts from these)
+  python3 tools/fuzz_seeds.py --dict FILE     the dictionary: whole step records
+
+The format (a header, override records, step records) is documented at the top of fuzz_drive.c.
 """
 
 import pathlib
 import struct
+import sys
 
-FIELDS = (
-    "fs pole_pitch force_constant i_max delay_comp enc_v_max inject.amplitude inject.freq "
-    "inject.ramp_rate inject.quad bpf.f0 bpf.q sep.f0 sep.q demod.f_lpf demod.gain demod.min_level "
-    "demod.f_notch obs.k1 obs.k2 obs.k3 obs.pole_pitch obs.mass obs.omega_max obs.force_max "
-    "enc_obs.k1 enc_obs.k2 enc_obs.omega_max enc_obs.pole_pitch current.kp current.ki current.l_d "
-    "current.l_q current.psi_pm pos.kp_x pos.kd_x pos.v_max pos.speed.kp pos.speed.ki pos.mass "
-    "pos.force_max traj.v_max traj.a_max traj.pole_pitch mod.dead_time mod.i_band mod.dtc_lead "
-    "dtres.r_s dtres.l_d dtres.l_q prot.i_max prot.v_dc_min prot.v_dc_max prot.err_max prot.err_time "
-    "prot.omega_max cal.k_int cal.t_settle cal.t_hold cal.tol cal.t_max cal.dither_amp "
-    "cal.dither_freq"
-).split()
-assert len(FIELDS) == 63
-SPECIAL = [0.0, -0.0, 1.0, -1.0, 0.5, 1e-3, 1e-30, -1e-30, 1e6, -1e6, 1e10, -1e10, 1e20, -1e20, 1e30, -1e30,
-           3e38, -3e38, 1e-38, 1.4e-45, 1e300, -1e300, 16000.0, 72.0, 2147483647.0, -2147483648.0, 4.3e9,
-           1.6777216e7, 8.0e6, 0.056, 100.0, 1e4]
-NAN, INF, NINF = bytes([2 | 8]), bytes([2 | 16]), bytes([2])
-OFF, SENSORED, LUT, NOLUT, CAL = range(5)
+OFF, SENSORED, LUT, NOLUT, CAL, STARTUP = range(6)
+PRESETS = range(8)
+N_FIELDS = 86  # fuzz_drive.c FIELDS; then enc_counts, cal.period, startup.pairs, the types
+SCALE = {1: 0x00, 8: 0x10, 64: 0x20, 256: 0x30}
 
 
-def special(x):
-    return bytes([1 | (SPECIAL.index(x) << 3)])
+def header(preset=0, flags=0, tables=0, cal=0, n_ovr=0, load=0, plant=0):
+    return bytes([preset, flags, tables, cal, n_ovr, load & 0xFF, plant, 0])
 
 
-def factor(byte):  # a factor 0.5 + byte / 170 (with a relative override)
-    return bytes([4, byte])
+def ovr(field, kind, value):
+    return bytes([field, kind]) + struct.pack(">I", value & 0xFFFFFFFF)
 
 
-def small(v, scale_idx=3):  # v / 128 * 10^(scale_idx - 3), v in [-128, 127]
-    return bytes([5 | (scale_idx << 3), v & 0xFF])
+def rec(op=0, arg=0, value=0, n=0, scale=1, meas=0):
+    return bytes([op, arg]) + struct.pack(">I", value & 0xFFFFFFFF) + bytes([n, SCALE[scale] | meas])
 
 
-def cfg(*overrides):  # (field name or int index, kind, value bytes)
-    out = bytes([len(overrides)])
-    for name, kind, val in overrides:
-        idx = FIELDS.index(name) if isinstance(name, str) else name
-        out += bytes([idx, kind]) + val
-    return out
+def mode(m, n=255, scale=8):
+    return rec(1, m, 0, n, scale)
 
 
-def mode(m):
-    return bytes([0, m])
+def run(n=255, scale=64, meas=0):
+    return rec(0, 0, 0, n, scale, meas)
 
 
-def pos(op, period=None, theta=b"\x03\x00", near_end=0):
-    if near_end:
-        return bytes([op, 2 | (4 if near_end < 0 else 0), 0]) + theta
-    if period is None:
-        return bytes([op, 3]) + theta
-    return bytes([op, 0]) + struct.pack(">i", period) + theta
+def pos_plain(period, frac):  # arg class 0: period in the high byte (int16 / 256), angle frac of a period
+    return ((period & 0xFF) << 24) | int(frac * 65536) & 0xFFFF
 
 
-def steps(n, what=4, meas=b"", x16=True):
-    return bytes([7 | (16 if x16 else 0), n, what]) + meas
+def f32(x):
+    return struct.unpack(">I", struct.pack(">f", x))[0]
 
 
-def enc(count=None, delta=0, valid=True):
-    if count is None:
-        return bytes([6, 0 if valid else 2, delta & 0xFF])
-    return bytes([6, 1 if valid else 3]) + struct.pack(">i", count)
+def seeds():
+    s = {}
+    for p in PRESETS:
+        for m in (SENSORED, LUT, NOLUT, CAL, STARTUP):
+            s[f"preset{p}_mode{m}"] = header(p) + mode(m) + run() + run()
+    s["sensored_move"] = header() + mode(SENSORED) + rec(3, 0, pos_plain(1, 0.3), 255, 64) + run()
+    s["sensored_step"] = header() + mode(SENSORED) + rec(4, 0, pos_plain(-1, 0.7), 255, 64) + run()
+    s["lut_move"] = header() + rec(2, 0, pos_plain(0, 0.0)) + mode(LUT) + rec(3, 0, pos_plain(2, 0.5), 255, 64)
+    s["lut_load"] = header(load=40) + mode(LUT) + rec(5, 4, 0x00034000, 255, 64) + rec(9, 4, 0x00046000, 255, 64)
+    s["move_far_end"] = header() + mode(SENSORED) + rec(3, 0x10, 0x00010000, 255, 64)
+    s["move_any_period"] = header() + mode(SENSORED) + rec(3, 0x30, 0x7FFFFFFF, 16) + rec(4, 0x30, 0x80000000, 16)
+    s["move_nan"] = header() + mode(LUT) + rec(3, 0x22, 1, 16) + rec(2, 0x22, 2, 16) + rec(6, 0x20, f32(1e30), 16)
+    s["reset_end"] = header() + rec(6, 0x10, 0x00030000) + mode(LUT, 64)
+    s["enc_jumps"] = (header() + mode(SENSORED, 16) + rec(7, 1, 0x7FFFFFFF, 1, meas=2) + rec(7, 1, 0x80000000, 1, meas=2)
+                      + rec(0, 0, 0, 64, 1, meas=4) + rec(0, 0, 0, 64, 1, meas=8))
+    s["meas_hostile"] = (header() + mode(LUT, 16) + rec(8, 0 | (2 << 2), 1, 8) + rec(8, 3 | (1 << 2), 16, 8)
+                         + rec(8, 1 | (1 << 2), 14, 8) + rec(8, 3 | (4 << 2), 0x0005C000, 64))
+    s["held_currents"] = header() + mode(LUT, 16, 1) + run(255, 8, meas=1) + mode(SENSORED, 1) + run(255, 8, meas=1 | 4)
+    s["plant_noise_sat"] = header(tables=64, plant=10) + mode(STARTUP) + run() + run()
+    s["no_tables"] = header(tables=7) + mode(LUT, 4, 1) + mode(CAL, 4, 1) + mode(NOLUT) + run()
+    s["flags_all"] = header(flags=255, tables=8 | 16 | 32) + mode(SENSORED) + run() + mode(LUT) + run()
+    s["fs_32k"] = header(plant=0x30) + mode(LUT) + run()
+    s["ovr_fs_nan"] = header(n_ovr=1) + ovr(0, 2, 1) + mode(LUT, 4)
+    s["ovr_kp_huge"] = header(n_ovr=2) + ovr(29, 1, 14) + ovr(30, 1, 10) + mode(SENSORED) + run(64, 8)
+    s["ovr_denormal_l"] = header(n_ovr=2) + ovr(51, 0, 1) + ovr(52, 0, 1) + mode(LUT) + run(64, 8)
+    s["ovr_enc_coarse"] = header(n_ovr=1) + ovr(N_FIELDS, 0, 6) + mode(SENSORED) + run(64, 8)
+    return s
 
 
-SEEDS = {
-    "off": cfg() + steps(10),
-    "sensorless_lut": cfg() + mode(LUT) + steps(64),
-    "sensorless_nolut_move": cfg() + mode(NOLUT) + steps(4) + pos(2, 0, small(100)) + steps(64),
-    "sensored_move": cfg() + mode(SENSORED) + pos(2, 1, small(50)) + steps(64, what=8 | 16),
-    "sensored_step": cfg() + mode(SENSORED) + steps(2) + pos(3, -1, small(-50)) + steps(64, what=8),
-    "calibration": cfg() + mode(CAL) + steps(255, what=8 | 16),
-    "move_huge_theta": cfg() + mode(LUT) + steps(1) + pos(2, None, special(1e30)) + steps(16),
-    "move_huge_theta_double": cfg() + mode(LUT) + steps(1) + pos(2, None, special(1e300)) + steps(16),
-    "step_huge_period": cfg() + mode(SENSORED) + steps(1) + pos(3, 2**31 - 1) + steps(16),
-    "step_min_period": cfg() + mode(SENSORED) + steps(1) + pos(3, -2**31, special(-1e20)) + steps(16),
-    "set_position_end": cfg() + pos(1, near_end=1) + mode(LUT) + steps(32),
-    "set_position_neg_end": cfg() + pos(1, near_end=-1, theta=special(-1.0)) + mode(NOLUT) + steps(32),
-    "set_position_nan": cfg() + pos(1, 0, NAN) + mode(LUT) + steps(8),
-    "move_inf": cfg() + mode(LUT) + pos(2, 0, INF) + pos(3, 0, NINF) + steps(8),
-    "reset_huge": cfg() + bytes([5, 0]) + struct.pack(">i", 2**31 - 1) + special(3e38) + mode(LUT) + steps(8),
-    "set_load": cfg() + mode(LUT) + bytes([4]) + special(1e30) + bytes([4]) + NAN + steps(16),
-    "enc_jump_extremes": cfg() + mode(SENSORED) + enc(2**31 - 1) + steps(1, x16=False) + enc(-2**31)
-    + steps(1, x16=False) + enc(2**31 - 1) + steps(1, x16=False),
-    "enc_invalid": cfg() + mode(SENSORED) + enc(valid=False) + steps(4),
-    "enc_coarse": cfg(("enc_v_max", 1, factor(0)), (len(FIELDS), 0, struct.pack(">i", 6))) + mode(SENSORED)
-    + enc(2**31 - 1) + steps(4),
-    "meas_nan_current": cfg() + mode(LUT) + steps(4, what=0, meas=bytes([255]) + NAN),
-    "meas_inf_vdc": cfg() + mode(LUT) + steps(4, what=3, meas=bytes([255]) + INF),
-    "meas_big_current": cfg() + mode(SENSORED) + steps(4, what=1, meas=bytes([255]) + special(1e30)),
-    "meas_low_vdc": cfg() + mode(NOLUT) + steps(4, what=3, meas=bytes([255]) + special(0.5)),
-    "current_kp_huge": cfg(("current.kp", 0, special(1e30))) + mode(LUT) + steps(16),
-    "current_gains_max": cfg(("current.kp", 0, special(1e6)), ("current.ki", 0, special(1e10)),
-                             ("prot.v_dc_max", 0, special(1e4))) + mode(SENSORED) + steps(16, what=8),
-    "obs_gains_huge": cfg(("obs.k1", 0, special(1e30)), ("obs.k2", 0, special(1e30))) + mode(LUT) + steps(8),
-    "obs_k1_edge": cfg(("obs.k1", 0, special(16000.0))) + mode(NOLUT) + steps(32),
-    "obs_mech": cfg((len(FIELDS) + 3, 1, b"")) + mode(LUT) + steps(32),
-    "posctrl_pd": cfg((len(FIELDS) + 4, 1, b""), ("pos.kp_x", 0, special(1e6))) + mode(SENSORED)
-    + steps(32, what=8),
-    "flags_off": cfg((len(FIELDS) + 5, 0, b"")) + mode(SENSORED) + steps(32, what=8),
-    "flags_on": cfg((len(FIELDS) + 5, 31, b"")) + mode(LUT) + steps(32),
-    "demod_heterodyne_lowpass": cfg((len(FIELDS) + 6, 4, b"")) + mode(LUT) + steps(32),
-    "no_tables": cfg((len(FIELDS) + 7, 7, b"")) + mode(LUT) + mode(CAL) + mode(NOLUT) + steps(8),
-    "fs_tiny": cfg(("fs", 0, special(1e-30))) + mode(LUT) + steps(4),
-    "fs_big": cfg(("fs", 0, special(8.0e6))) + mode(LUT) + steps(4),
-    "fs_double": cfg(("fs", 1, factor(255))) + mode(LUT) + steps(64),
-    "pole_pitch_tiny": cfg(("pole_pitch", 0, special(1e-38)), ("traj.pole_pitch", 0, special(1e-38)))
-    + mode(SENSORED) + steps(4),
-    "vdc_max_huge": cfg(("prot.v_dc_max", 0, special(3e38))) + mode(SENSORED) + steps(4),
-    "quad_nan": cfg(("inject.quad", 0, NAN)) + mode(LUT) + steps(4),
-    "cal_period_far": cfg((len(FIELDS) + 1, 0, struct.pack(">i", 2**30))) + mode(CAL) + steps(8),
-    "demod_gain_huge": cfg(("demod.gain", 0, special(1e20))) + mode(LUT) + steps(64),
-    "biquad_q_tiny": cfg(("sep.q", 0, special(1e-30)), ("bpf.q", 0, special(1.4e-45))) + mode(LUT) + steps(8),
-    "obs_omega_max_huge": cfg(("obs.omega_max", 0, special(3e38))) + mode(LUT) + steps(8),
-}
+def dictionary():
+    """Whole records: each mode with a long run, the setters, hostile measurements."""
+    toks = {}
+    for m in range(6):
+        toks[f"mode{m}_run"] = mode(m, 255, 64)
+    toks["run_plant"] = run(255, 256)
+    toks["run_held"] = run(255, 8, meas=1)
+    toks["run_enc_up"] = run(255, 8, meas=4)
+    toks["run_enc_invalid"] = run(16, 1, meas=8)
+    toks["move_to"] = rec(3, 0, pos_plain(1, 0.25), 255, 64)
+    toks["step_to"] = rec(4, 0, pos_plain(-2, 0.5), 255, 64)
+    toks["set_position"] = rec(2, 0, pos_plain(0, 0.1), 16)
+    toks["move_end"] = rec(3, 0x10, 0x00030000, 255, 8)
+    toks["set_load"] = rec(5, 4, 0x00034000, 255, 8)
+    toks["plant_load"] = rec(9, 4, 0x00046000, 255, 64)
+    toks["nan_current"] = rec(8, 2 << 2, 1, 4)
+    toks["inf_vdc"] = rec(8, 3 | (2 << 2), 2, 4)
+    toks["enc_max"] = rec(7, 1, 0x7FFFFFFF, 1, meas=2)
+    return toks
 
 
 def main():
-    out = pathlib.Path("csrc/tests/fuzz_corpus")
+    if len(sys.argv) == 3 and sys.argv[1] == "--dict":
+        lines = ["# csrc/tests/fuzz_drive.c: whole step records (tools/fuzz_seeds.py --dict)"]
+        for name, b in dictionary().items():
+            lines.append(f'{name}="' + "".join(f"\\x{c:02x}" for c in b) + '"')
+        pathlib.Path(sys.argv[2]).write_text("\n".join(lines) + "\n")
+        return 0
+    if len(sys.argv) != 2:
+        print(__doc__, file=sys.stderr)
+        return 2
+    out = pathlib.Path(sys.argv[1])
     out.mkdir(parents=True, exist_ok=True)
-    for name, data in SEEDS.items():
+    for name, data in seeds().items():
         (out / f"seed_{name}").write_bytes(data)
-    print(f"{len(SEEDS)} seeds in {out}")
+    print(f"{len(seeds())} seeds in {out}")
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())
