@@ -24,7 +24,9 @@ import sys
 import time
 from pathlib import Path
 
-STATUS = re.compile(r"^#(\d+)\s+(INITED|NEW|REDUCE|pulse|DONE|RELOAD)\s+cov: (\d+) ft: (\d+)(?: corp: (\d+))?")
+STATUS = re.compile(
+    r"^#(\d+)\s+(INITED|NEW|REDUCE|pulse|DONE|RELOAD)\s+cov: (\d+) ft: (\d+)(?: corp: (\d+))?"
+)
 
 
 def run(args):
@@ -68,8 +70,10 @@ def verdict(path, quiet):
     execs_end = points[-1][1]
     ok = t_end > 0 and (t_end - t_new) >= quiet * t_end
     word = "coverage saturated" if ok else "NOT saturated"
-    return ok, (f"{word}: cov {cov_max}, ft {points[-1][3]}, last new edge at {t_new:.0f} s of {t_end:.0f} s "
-                f"(exec {n_new} of {execs_end}; saturated = no new edge in the last {quiet:.0%} of the run)")
+    return ok, (
+        f"{word}: cov {cov_max}, ft {points[-1][3]}, last new edge at {t_new:.0f} s of {t_end:.0f} s "
+        f"(exec {n_new} of {execs_end}; saturated = no new edge in the last {quiet:.0%} of the run)"
+    )
 
 
 def summary(args):
@@ -103,9 +107,9 @@ def curve(args):
         fig, axes = plt.subplots(1, 2, figsize=(10, 3.6))
         for label in dict.fromkeys(r[0] for r in rows):
             pts = [r for r in rows if r[0] == label]
-            for ax, k in zip(axes, (3, 4)):
+            for ax, k in zip(axes, (3, 4), strict=True):
                 ax.step([p[1] for p in pts], [p[k] for p in pts], where="post", label=label)
-        for ax, name in zip(axes, ("cov (edges of the library)", "ft (features)")):
+        for ax, name in zip(axes, ("cov (edges of the library)", "ft (features)"), strict=True):
             ax.set_xlabel("wall time, s")
             ax.set_ylabel(name)
             ax.grid(True, alpha=0.3)
