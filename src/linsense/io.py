@@ -76,9 +76,67 @@ def read_csv_table(path: str | os.PathLike, columns: tuple[str, ...], what: str)
         Naming the file, the row and column, the value or the count and the limit.
     """
     import array
-    import csv
 
     import numpy as np
+
+    from linsense.errors import InputError
+
+    src = str(path)
+    rows = csv_rows(path, what)
+    header = next(rows)[1]
+    missing = [c for c in columns if c not in header]
+    if missing:
+        if any(";" in h for h in header):
+            raise InputError(src, "row 1", f"{_SEMICOLONS} (and decimal commas are not read: use "
+                                           f"a point); need the columns {','.join(columns)}")
+        raise InputError(src, f"column {missing[0]}", f"missing column (need {','.join(columns)})")
+    idx = [header.index(c) for c in columns]
+    values, numbers = array.array("d"), array.array("q")
+    for number, row in rows:
+        if len(row) >= len(header):  # (a bad cell is named first, then a count)
+            cells = [finite_cell(src, number, name, row[c].strip())
+                     for c, name in zip(idx, columns, strict=True)]
+        check_width(src, number, row, header)
+        values.extend(cells)
+        numbers.append(number)
+    return (np.frombuffer(values, dtype=float).reshape(-1, len(columns)).copy(),
+            np.frombuffer(numbers, dtype=np.int64).copy())
+
+
+_SEMICOLONS = "semicolon separators are not read: separate the columns with commas"
+
+
+def check_width(src: str, number: int, row: list[str], header: list[str]) -> None:
+    """InputError naming row ``number`` of ``src`` when it has another number of fields than the
+    header, with the likely cause (semicolons, decimal commas)."""
+    from linsense.errors import InputError
+
+    if len(row) != len(header):
+        hint = ""
+        if any(";" in c for c in row):
+            hint = f" ({_SEMICOLONS})"
+        elif len(row) > len(header) and any(c.strip().isdigit() for c in row):
+            hint = " (decimal commas are not read: use a point)"
+        raise InputError(src, f"row {number}", f"{len(row)} fields for the header's "
+                                               f"{len(header)} columns{hint}")
+
+
+def csv_rows(path: str | os.PathLike, what: str):
+    """The rows of a user's CSV file, each size bounded before it is kept (docs/limits.md), as
+    ``(line, cells)``: first the header (line 1, its cells stripped), then every non-empty data row.
+
+    At most :data:`~linsense.limits.MAX_TABLE_ROWS` data rows, :data:`~linsense.limits.MAX_TABLE_COLUMNS`
+    columns and :data:`~linsense.limits.MAX_TABLE_FIELD_CHARS` characters a field; a UTF-8 byte-order
+    mark is skipped; a file that cannot be read, is not UTF-8 or has no header is refused. The one
+    CSV reader of every table a user gives (inductance and saturation tables, LUTs, bench files);
+    :func:`check_width` checks a row's number of fields.
+
+    Raises
+    ------
+    InputError
+        Naming the file, the row (and column), the count or size and the limit.
+    """
+    import csv
 
     from linsense.errors import InputError
     from linsense.limits import MAX_TABLE_COLUMNS, MAX_TABLE_FIELD_CHARS, MAX_TABLE_ROWS
@@ -87,7 +145,6 @@ def read_csv_table(path: str | os.PathLike, columns: tuple[str, ...], what: str)
     max_line = MAX_TABLE_COLUMNS * (MAX_TABLE_FIELD_CHARS + 3) + 2  # (quotes, separators, CRLF)
     field_limit = f"field larger than field limit of {MAX_TABLE_FIELD_CHARS} characters (docs/limits.md)"
     col_limit = f"beyond the limit of {MAX_TABLE_COLUMNS} columns (docs/limits.md)"
-    semicolons = "semicolon separators are not read: separate the columns with commas"
     number = 0  # the line being read, 1-based (the header is row 1)
 
     def lines(f):
@@ -116,53 +173,40 @@ def read_csv_table(path: str | os.PathLike, columns: tuple[str, ...], what: str)
                                  f"{field_limit}: a field of {len(cell):,} characters")
         return row
 
-    values, numbers = array.array("d"), array.array("q")
     try:
         with open(path, newline="", encoding="utf-8-sig") as f:
             reader = csv.reader(lines(f))
             header = [h.strip() for h in checked(next(reader, []))]
-            if not header:
-                raise InputError(src, "", f"empty {what}")
-            missing = [c for c in columns if c not in header]
-            if missing:
-                if any(";" in h for h in header):
-                    raise InputError(src, "row 1", f"{semicolons} (and decimal commas are not read: use "
-                                                   f"a point); need the columns {','.join(columns)}")
-                raise InputError(src, f"column {missing[0]}", f"missing column (need {','.join(columns)})")
-            idx = [header.index(c) for c in columns]
+            if not header or header == [""]:
+                raise InputError(src, "", f"empty {what} (no header)")
+            yield 1, header
             for row in reader:
                 row = checked(row)
-                if not row or (len(row) == 1 and not row[0].strip()):
+                if not row or all(not c.strip() for c in row):
                     continue
-                if len(row) >= len(header):  # (a bad cell is named first, then a count)
-                    cells = [finite_cell(src, number, name, row[c].strip())
-                             for c, name in zip(idx, columns, strict=True)]
-                if len(row) != len(header):
-                    hint = ""
-                    if any(";" in c for c in row):
-                        hint = f" ({semicolons})"
-                    elif len(row) > len(header) and any(c.strip().isdigit() for c in row):
-                        hint = " (decimal commas are not read: use a point)"
-                    raise InputError(src, f"row {number}", f"{len(row)} fields for the header's "
-                                                           f"{len(header)} columns{hint}")
-                values.extend(cells)
-                numbers.append(number)
+                yield number, row
+    except FileNotFoundError:
+        raise InputError(src, "", f"no such {what}") from None
     except (OSError, UnicodeDecodeError, csv.Error) as exc:
         raise InputError(src, "", f"cannot read {what}: {exc}") from None
-    return (np.frombuffer(values, dtype=float).reshape(-1, len(columns)).copy(),
-            np.frombuffer(numbers, dtype=np.int64).copy())
 
 
 def read_text_file(path: str | os.PathLike, what: str) -> str:
     """Text of a user file, or InputError naming it: ``what`` says what was expected."""
     from linsense.errors import InputError
+    from linsense.limits import MAX_TEXT_FILE_BYTES
 
     src = str(path)
     p = Path(path)
     if not p.is_file():
         raise InputError(src, "", f"no such {what}")
     try:
-        return p.read_text(encoding="utf-8")
+        with open(p, "rb") as f:
+            data = f.read(MAX_TEXT_FILE_BYTES + 1)  # (bounded: no more is read)
+        if len(data) > MAX_TEXT_FILE_BYTES:
+            raise InputError(src, "", f"larger than the limit of {MAX_TEXT_FILE_BYTES:,} bytes of a {what} "
+                                      "(docs/limits.md)")
+        return data.decode("utf-8")
     except (OSError, UnicodeDecodeError) as exc:
         raise InputError(src, "", f"cannot read: {exc}") from None
 

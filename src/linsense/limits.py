@@ -29,6 +29,10 @@ MAX_POSITIONS = 10_000
 #: nesting of arrays and tables in a TOML file (motor, scenario, sweep): the deepest a file of
 #: linsense has is 4
 MAX_TOML_DEPTH = 32
+#: bytes of a text file a user gives (a motor, scenario, sweep or geometry TOML file, a JSON LUT):
+#: the largest linsense writes is a few kB; read no further than this (a multi-GB file was read
+#: whole before it was refused)
+MAX_TEXT_FILE_BYTES = 16 * 1024**2
 #: Hz, highest injection frequency of a table (``lut --f-inj``): half of a 1 MHz PWM; above it the
 #: resistance's share is nil and the HF currents underflow (1e300 Hz gave an all-zero table)
 MAX_F_INJ = 500_000.0

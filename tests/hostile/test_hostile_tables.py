@@ -4,7 +4,8 @@ mislead"): each case an input, its exit code and the words its one line must con
 * tables: rows, columns and field size bounded while reading (docs/limits.md), a UTF-8 BOM read,
   decimal commas and semicolon separators refused by name (they said "missing column theta_deg");
 * motor values off by a unit prefix ("did you type mH?");
-* a 50 MB key, section or value quoted in a bounded message (it was a 50 MB line);
+* a 10 MB key, section or value quoted in a bounded message (a 50 MB one was a 50 MB line; a
+  file beyond 16 MiB is now refused before it is parsed);
 * an output that cannot be written (read-only folder, full disk): the user's path and the reason
   in words, not ``[Errno 28]`` and the temporary file's name.
 """
@@ -25,7 +26,7 @@ from linsense.model.motor import load_motor
 
 PRESET = (resources.files("linsense.model") / "presets" / "ecce2010.toml").read_text()
 HEADER = "theta_deg,L_A,L_B,L_C,M_AB,M_BC,M_CA"
-BIG = 50_000_000
+BIG = 10_000_000  # (under the 16 MiB a text file may have: MAX_TEXT_FILE_BYTES)
 
 
 def edit(old: str, new: str) -> str:
@@ -101,17 +102,20 @@ CASES = {
                                      ["motor.R_s", "500", "Did you type milliohm"]),
     "R_s negative": (edit("R_s = 9.0", "R_s = -9.0"), None, 2,
                      ["motor.R_s", "greater than or equal to 0", "-9"]),
-    # a user's value of 50 MB in a message
-    "50 MB unknown key": (edit("[motor]\n", "[motor]\n" + "k" * BIG + " = 1\n"), None, 2,
-                          ["unknown key", "kkkk\u2026 (50,000,006 characters)"]),
-    "50 MB value of an unknown key": (edit("[motor]\n", '[motor]\nfoo = "' + "v" * BIG + '"\n'), None, 2,
-                                      ["motor.foo", "unknown key", "vvvv\u2026' (50,000,000 characters)"]),
-    "50 MB section": (PRESET + "\n[" + "s" * BIG + "]\nx = 1\n", None, 2,
-                      ["ssss\u2026 (50,000,000 characters)"]),
-    "50 MB string for a number": (edit("mass = 1.5", 'mass = "' + "1" * BIG + '"'), None, 2,
-                                  ["motor.mass", "1111\u2026' (50,000,000 characters)"]),
-    "50 MB value with spaces": (edit("[motor]\n", '[motor]\nfoo = "' + "a " * (BIG // 2) + '"\n'), None, 2,
-                                ["motor.foo", "unknown key", "a a \u2026' (50,000,000 characters)"]),
+    # a user's value of 10 MB in a message
+    "10 MB unknown key": (edit("[motor]\n", "[motor]\n" + "k" * BIG + " = 1\n"), None, 2,
+                          ["unknown key", "kkkk\u2026 (10,000,006 characters)"]),
+    "10 MB value of an unknown key": (edit("[motor]\n", '[motor]\nfoo = "' + "v" * BIG + '"\n'), None, 2,
+                                      ["motor.foo", "unknown key", "vvvv\u2026' (10,000,000 characters)"]),
+    "10 MB section": (PRESET + "\n[" + "s" * BIG + "]\nx = 1\n", None, 2,
+                      ["ssss\u2026 (10,000,000 characters)"]),
+    "10 MB string for a number": (edit("mass = 1.5", 'mass = "' + "1" * BIG + '"'), None, 2,
+                                  ["motor.mass", "1111\u2026' (10,000,000 characters)"]),
+    "10 MB value with spaces": (edit("[motor]\n", '[motor]\nfoo = "' + "a " * (BIG // 2) + '"\n'), None, 2,
+                                ["motor.foo", "unknown key", "a a \u2026' (10,000,000 characters)"]),
+    "50 MB value: the file beyond the size limit": (
+        edit("[motor]\n", '[motor]\nfoo = "' + "v" * (5 * BIG) + '"\n'), None, 2,
+        ["m.toml", "larger than the limit of 16,777,216 bytes of a motor file"]),
 }
 
 

@@ -13,7 +13,6 @@ with provenance) and a C99 header with a ``static const float`` table in radians
 
 from __future__ import annotations
 
-import csv
 import dataclasses
 import json
 import math
@@ -26,6 +25,7 @@ import numpy as np
 from linsense import __version__
 from linsense.analysis.hf import psi_lut, psi_lut_resistive
 from linsense.errors import InputError
+from linsense.io import check_width, csv_rows, read_text_file
 
 FORMATS = ("csv", "json", "c")
 
@@ -286,15 +286,13 @@ def _check_grid(theta: np.ndarray, src: str) -> None:
 def read_lut_csv(path: str | Path) -> Lut:
     """Read a LUT written by :func:`to_csv`."""
     src = str(path)
-    try:
-        with open(path, newline="", encoding="utf-8") as f:
-            rows = list(csv.reader(f))
-    except (OSError, UnicodeDecodeError, csv.Error) as exc:
-        raise InputError(src, "", f"cannot read the LUT: {exc}") from None
-    if not rows or [h.strip() for h in rows[0][:2]] != ["theta_deg", "psi_lut_deg"]:
+    rows = csv_rows(path, "LUT")  # (bounded, BOM skipped: docs/limits.md)
+    header = next(rows)[1]
+    if header[:2] != ["theta_deg", "psi_lut_deg"]:
         raise InputError(src, "header", "expected columns theta_deg,psi_lut_deg")
     data = []
-    for r, row in enumerate(rows[1:], start=2):
+    for r, row in rows:
+        check_width(src, r, row, header)
         try:
             vals = [float(row[0]), float(row[1])]
         except (ValueError, IndexError):
@@ -311,8 +309,8 @@ def read_lut_json(path: str | Path) -> Lut:
     """Read a LUT written by :func:`to_json`."""
     src = str(path)
     try:
-        doc = json.loads(Path(path).read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, ValueError) as exc:  # (JSONDecodeError is a ValueError)
+        doc = json.loads(read_text_file(path, "LUT"))
+    except ValueError as exc:  # (JSONDecodeError is a ValueError)
         raise InputError(src, "", f"cannot read the LUT: {exc}") from None
     if not isinstance(doc, dict) or doc.get("format") != "linsense-lut":
         got = doc.get("format") if isinstance(doc, dict) else type(doc).__name__

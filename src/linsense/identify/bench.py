@@ -15,14 +15,13 @@ and the column.
 
 from __future__ import annotations
 
-import csv
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from linsense.errors import InputError
-from linsense.io import finite_cell
+from linsense.io import check_width, csv_rows, finite_cell
 
 #: Phases in storage order (index 0, 1, 2).
 PHASES = ("A", "B", "C")
@@ -114,19 +113,17 @@ def read_bench_csv(path: str | Path) -> BenchData:
     InputError
     """
     src = str(path)
-    try:
-        with open(path, newline="", encoding="utf-8") as f:
-            lines = list(csv.reader(f))
-    except FileNotFoundError:
-        raise InputError(src, "", "no such bench file") from None
-    except (OSError, UnicodeDecodeError, csv.Error) as exc:
-        raise InputError(src, "", f"cannot read bench file: {exc}") from None
-    if not lines:
-        raise InputError(src, "", "empty bench file (no header)")
-    header = [h.strip() for h in lines[0]]
+    rows_in = csv_rows(path, "bench file")  # (bounded, BOM skipped: docs/limits.md)
+    header = next(rows_in)[1]
+    if any(";" in h for h in header) and not any(c in header for c in ("phase", "I_re", "I")):
+        raise InputError(src, "row 1", "semicolon separators are not read: separate the columns with "
+                                       "commas (and decimal commas are not read: use a point)")
     form, cols = _header_form(header, src)
     idx = {c: header.index(c) for c in cols}
-    body = [(r, row) for r, row in enumerate(lines[1:], start=2) if any(cell.strip() for cell in row)]
+    body = []
+    for r, row in rows_in:
+        check_width(src, r, row, header)
+        body.append((r, row))
     if not body:
         raise InputError(src, "", "no data rows after the header")
     numeric = [c for c in cols if c != "phase"]

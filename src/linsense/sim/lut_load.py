@@ -13,23 +13,21 @@ the FEA's load currents.
 
 from __future__ import annotations
 
-import csv
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from linsense.io import read_csv_table
 from linsense.model.motor import load_motor
 from linsense.sim.calibrate import calibrate
 
 
 def read_lut_csv(path: Path) -> tuple[np.ndarray, np.ndarray]:
-    """``theta_deg, psi_lut_deg`` columns -> (theta, psi), rad."""
-    with open(path, newline="", encoding="utf-8") as f:
-        rows = list(csv.DictReader(f))
-    th = np.radians([float(r["theta_deg"]) for r in rows])
-    ps = np.radians([float(r["psi_lut_deg"]) for r in rows])
-    return th, ps
+    """``theta_deg, psi_lut_deg`` columns -> (theta, psi), rad (through the one bounded CSV reader,
+    :func:`linsense.io.read_csv_table`)."""
+    data = read_csv_table(path, ("theta_deg", "psi_lut_deg"), "LUT")[0]
+    return np.radians(data[:, 0]), np.radians(data[:, 1])
 
 
 def _periodic_interp(theta: np.ndarray, th: np.ndarray, ps: np.ndarray) -> np.ndarray:
