@@ -29,7 +29,7 @@
  *       6 ls_drive_reset (a position, rd_pos); 5 ls_drive_set_load (rd_real); 7 the held encoder
  *       count (arg & 1: set to the value, else moved by its low 16 bits); 8 for this record's steps,
  *       measurement arg % 4 (i_a, i_b, i_c, v_dc) is the value (rd_real: NaN, Inf, huge ...);
- *       9 the plant's load force (rd_real, limited to +-500 N)
+ *       9 the plant's load force (rd_real, limited to +-100 N)
  *     then n * {1, 8, 64, 256}[meas >> 4 & 3] steps of ls_drive_step (an input runs at most
  *     MAX_STEPS), with measurements from
  *       meas bit 0 clear: the plant (below: the ecce2010 motor driven by the drive's own duties, a
@@ -351,21 +351,34 @@ static void check_cmd(const ls_cmd *c)
     check_pos(c->pos_ref);
 }
 
-/* The plant: the ecce2010 motor (csrc/tests/ls_test_plant.h's, its d/q inductances) as fluxes in
- * the rotor frame, one explicit step per PWM period with the previous step's duties (the
- * computation delay), a mass with viscous friction and a load force, optional d-axis saturation
- * (L_d lower at +i_d than at -i_d: the start-up's polarity signal) and current-sensor noise. Cheap
- * (one sine and cosine a step) and crude on purpose: it closes the loop, so that moves finish, the
- * calibration converges and the start-up decides, which held measurements never do. */
+/* The plant: the ecce2010 motor (csrc/tests/ls_test_plant.h's, its d/q inductances) with its
+ * flux linkage in alpha-beta, explicit steps of at most 62.5 us (at least one a PWM period) with the
+ * previous step's duties (the computation delay), a mass with viscous friction and a load force,
+ * optional d-axis saturation (L_d lower at +i_d than at -i_d: the start-up's polarity signal) and
+ * current-sensor noise. Cheap and crude on purpose: it closes the loop, so that moves finish, the
+ * calibration converges and the start-up decides, which held measurements never do. It stays
+ * finite: the load force within +-100 N (below the motor's 160 N), the speed within +-20 m/s (end
+ * stops), and a state that is not finite anyway starts again at rest at 0 (a runaway at a 500 N
+ * load once overflowed it). */
 typedef struct {
     double ld, lq, r, psi, kf, tau, mass, visc; /* H, H, ohm, Wb, N/A, m, kg, N s/m */
     double f_load, v_dc, ts, sat_k, noise;       /* N, V, s, 1/A, A rms */
-    double x, v, lam_d, lam_q, duty[3];          /* m, m/s, Wb, Wb, - */
+    double x, v, lam[2], duty[3];                /* m, m/s, Wb (alpha, beta), - */
     int32_t counts;                              /* encoder counts per pole pitch */
     uint32_t rng;
 } plant;
 
 #define PLANT_2PI 6.283185307179586
+#define PLANT_F_MAX 100.0
+#define PLANT_V_MAX 20.0
+
+static void plant_rest(plant *p, double x0)
+{
+    p->x = x0;
+    p->v = 0.0;
+    p->lam[0] = p->psi * cos(PLANT_2PI * x0 / p->tau);
+    p->lam[1] = p->psi * sin(PLANT_2PI * x0 / p->tau);
+}
 
 static void plant_init(plant *p, double x0)
 {
@@ -382,24 +395,24 @@ static void plant_init(plant *p, double x0)
     p->ts = 1.0 / 16000.0;
     p->sat_k = 0.0;
     p->noise = 0.0;
-    p->x = x0;
-    p->v = 0.0;
-    p->lam_d = p->psi;
-    p->lam_q = 0.0;
     p->duty[0] = p->duty[1] = p->duty[2] = 0.5;
     p->counts = 56000;
     p->rng = 0x9E3779B9u;
+    plant_rest(p, x0);
 }
 
-static void plant_currents(const plant *p, double *i_d, double *i_q)
+/* alpha-beta currents at x from the flux linkage */
+static void plant_currents(const plant *p, double x, const double lam[2], double i[2])
 {
-    double id = (p->lam_d - p->psi) / p->ld;
+    const double th = PLANT_2PI * x / p->tau, c = cos(th), s = sin(th);
+    const double lam_d = c * lam[0] + s * lam[1], lam_q = -s * lam[0] + c * lam[1];
+    double i_d = (lam_d - p->psi) / p->ld, i_q = lam_q / p->lq;
     if (p->sat_k != 0.0) { /* one fixed-point pass of L_d (1 - sat_k i_d), kept within [0.5, 1.5] L_d */
-        const double k = 1.0 - p->sat_k * id;
-        id = (p->lam_d - p->psi) / (p->ld * (k < 0.5 ? 0.5 : (k > 1.5 ? 1.5 : k)));
+        const double k = 1.0 - p->sat_k * i_d;
+        i_d = (lam_d - p->psi) / (p->ld * (k < 0.5 ? 0.5 : (k > 1.5 ? 1.5 : k)));
     }
-    *i_d = id;
-    *i_q = p->lam_q / p->lq;
+    i[0] = c * i_d - s * i_q;
+    i[1] = s * i_d + c * i_q;
 }
 
 static double plant_noise(plant *p)
@@ -415,7 +428,7 @@ static double plant_noise(plant *p)
     return acc * 1.7320508;
 }
 
-/* the encoder count, held within int32 (the mover stays within metres anyway) */
+/* the encoder count, held within int32 (the mover stays within a few hundred metres anyway) */
 static int32_t plant_count(const plant *p)
 {
     const double c = floor(p->x / p->tau * (double)p->counts);
@@ -424,15 +437,12 @@ static int32_t plant_count(const plant *p)
 
 static void plant_measure(plant *p, ls_meas *m)
 {
-    const double th = PLANT_2PI * p->x / p->tau, c = cos(th), s = sin(th);
-    double i_d, i_q, ia, ib;
+    double i[2];
     int k;
-    plant_currents(p, &i_d, &i_q);
-    ia = c * i_d - s * i_q;
-    ib = s * i_d + c * i_q;
-    m->i_abc[0] = (LS_REAL)ia;
-    m->i_abc[1] = (LS_REAL)(-0.5 * ia + 0.8660254037844386 * ib);
-    m->i_abc[2] = (LS_REAL)(-0.5 * ia - 0.8660254037844386 * ib);
+    plant_currents(p, p->x, p->lam, i);
+    m->i_abc[0] = (LS_REAL)i[0];
+    m->i_abc[1] = (LS_REAL)(-0.5 * i[0] + 0.8660254037844386 * i[1]);
+    m->i_abc[2] = (LS_REAL)(-0.5 * i[0] - 0.8660254037844386 * i[1]);
     for (k = 0; k < 3 && p->noise > 0.0; ++k) {
         m->i_abc[k] += (LS_REAL)(p->noise * plant_noise(p));
     }
@@ -442,17 +452,24 @@ static void plant_measure(plant *p, ls_meas *m)
 /* one PWM period with the duties of the previous step, then latch the new ones */
 static void plant_advance(plant *p, const ls_cmd *cmd)
 {
-    const double th = PLANT_2PI * p->x / p->tau, c = cos(th), s = sin(th), w = PLANT_2PI * p->v / p->tau;
     const double va = (2.0 * p->duty[0] - p->duty[1] - p->duty[2]) * p->v_dc / 3.0;
     const double vb = (p->duty[1] - p->duty[2]) * p->v_dc / 1.7320508075688772;
-    const double lam_d = p->lam_d;
-    double i_d, i_q;
+    const int n = (int)ceil(p->ts / 62.5e-6 - 1e-9);
+    const double h = p->ts / (double)n;
     int k;
-    plant_currents(p, &i_d, &i_q);
-    p->lam_d += p->ts * (c * va + s * vb - p->r * i_d + w * p->lam_q);
-    p->lam_q += p->ts * (-s * va + c * vb - p->r * i_q - w * lam_d);
-    p->v += p->ts * (p->kf * i_q - p->f_load - p->visc * p->v) / p->mass;
-    p->x += p->ts * p->v;
+    for (k = 0; k < n; ++k) {
+        double i[2], f;
+        plant_currents(p, p->x, p->lam, i);
+        f = p->kf * (-sin(PLANT_2PI * p->x / p->tau) * i[0] + cos(PLANT_2PI * p->x / p->tau) * i[1]);
+        p->lam[0] += h * (va - p->r * i[0]);
+        p->lam[1] += h * (vb - p->r * i[1]);
+        p->v += h * (f - p->f_load - p->visc * p->v) / p->mass;
+        p->v = p->v > PLANT_V_MAX ? PLANT_V_MAX : (p->v < -PLANT_V_MAX ? -PLANT_V_MAX : p->v);
+        p->x += h * p->v;
+    }
+    if (!(isfinite(p->x) && isfinite(p->v) && isfinite(p->lam[0]) && isfinite(p->lam[1]))) {
+        plant_rest(p, 0.0);
+    }
     for (k = 0; k < 3; ++k) {
         p->duty[k] = cmd->enable ? (double)cmd->duty[k] : 0.5; /* disabled: no net voltage */
     }
@@ -575,7 +592,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             break;
         case 9: {
             const LS_REAL f = rd_real(arg, u);
-            pl.f_load = LS_ISFINITE(f) ? fmax(-500.0, fmin(500.0, (double)f)) : 0.0;
+            pl.f_load = LS_ISFINITE(f) ? fmax(-PLANT_F_MAX, fmin(PLANT_F_MAX, (double)f)) : 0.0;
             break;
         }
         default:
