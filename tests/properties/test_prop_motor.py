@@ -14,6 +14,8 @@ import numpy as np
 from hypothesis import assume, event, example, given
 from hypothesis import strategies as st
 from prop_strategies import (
+    L0_RANGE,
+    MOTOR_RANGES,
     MOTOR_SECTIONS,
     attempt,
     check_grid,
@@ -82,6 +84,14 @@ def test_a_motor_file_loads_within_the_ranges_or_is_refused_in_one_line(tmp_path
                               "dM0": -0.47e-3}}
     else:
         doc, _ = data.draw(mutated(data.draw(motor_doc()), MOTOR_SECTIONS))
+        if data.draw(st.integers(0, 2)) == 0 and isinstance(doc.get("motor"), dict) \
+                and isinstance(doc.get("inductance"), dict):
+            # at and around a documented range's ends (docs/limits.md, "Plausibility of a motor")
+            key = data.draw(st.sampled_from(sorted(MOTOR_RANGES) + ["L0"]))
+            lo, hi = L0_RANGE if key == "L0" else MOTOR_RANGES[key]
+            value = data.draw(st.sampled_from([lo, hi, hi * 1.01, hi * 2.0, hi * 1e3,
+                                               lo * 0.5 if lo else -1e-9]))
+            (doc["inductance"] if key == "L0" else doc["motor"])[key] = value
     path = tmp_path / "motor.toml"
     path.write_text(toml_text(doc), encoding="utf-8")
     parsed = tomllib.loads(path.read_text(encoding="utf-8"))  # (what the file says, as TOML reads it)
