@@ -59,6 +59,16 @@ def parse(path):
     return points, t_end
 
 
+def inited(path):
+    """The time of the INITED line (the corpus loaded), 0 without one."""
+    for line in Path(path).read_text(encoding="utf-8", errors="replace").splitlines():
+        t, _, text = line.partition("\t")
+        m = STATUS.match(text)
+        if m and m.group(2) == "INITED":
+            return float(t)
+    return 0.0
+
+
 def verdict(path, quiet):
     points, t_end = parse(path)
     if not points:
@@ -89,6 +99,9 @@ def curve(args):
         label, _, t0 = rest.partition("@")
         label = label or Path(path).parent.name
         points, _ = parse(path)
+        if t0:  # a continuation: from its corpus loaded (INITED) on, the loading's partial counts left out
+            t_init = inited(path)
+            points = [p for p in points if p[0] >= t_init]
         last_t, last_cov = -1e9, -1
         for i, p in enumerate(points):  # thinned: each new edge, else one row per 5 s, and the end
             if p[2] > last_cov or p[0] - last_t >= 5.0 or i == len(points) - 1:
