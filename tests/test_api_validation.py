@@ -122,3 +122,128 @@ def test_drive_takes_what_it_should(drive):
     assert drive.run(np.zeros((4, 3)), 60.0, 3).enable.all()
     cmd = drive.step([float("nan"), 0.0, 0.0], 60.0)
     assert cmd.fault & ctrl.lib.LS_FAULT_NONFINITE
+
+
+# ------------------------------------------------------------------ simulate, the firmware blocks (issue 23,
+# found by tests/properties/test_prop_api.py)
+SHORT = {"motor": "ecce2010", "scenario": {"duration": 0.005}, "reference": {"position_mm": 1.0}}
+
+
+def _with(section: str, key: str, value) -> dict:
+    return {**SHORT, section: {**SHORT.get(section, {}), key: value}}
+
+
+@pytest.mark.parametrize("doc, key, words", [
+    (_with("controller", "kp_x", None), "controller.kp_x", ["None", "TOML has no null"]),  # (TypeError)
+    (_with("scenario", "seed", None), "scenario.seed", ["None"]),
+    (_with("reference", "position_mm", np.True_), "reference.position_mm", ["True"]),  # (run as 1.0)
+    (_with("scenario", "duration", np.True_), "scenario.duration", ["True"]),
+    (_with("reference", "position_mm", (1.0,)), "reference.position_mm", ["tuple"]),
+    (_with("inverter", "v_dc", 60 + 0j), "inverter.v_dc", ["complex"]),
+    (_with("reference", "position_mm", np.array([1.0, 2.0])), "reference.position_mm", ["ndarray"]),
+    ({**SHORT, "reference": {"type": "trajectory", "waypoints_mm": [1.0, None]}}, "reference.waypoints_mm[1]",
+     ["None"]),
+    ({k: v for k, v in SHORT.items() if k != "reference"}, "reference.position_mm",
+     ["missing required key", "no [reference] section"]),  # (named "position_mm")
+    ({k: v for k, v in SHORT.items() if k != "scenario"}, "scenario.duration",
+     ["missing required key", "no [scenario] section"]),
+    (_with("scenario", "duration", 1e308), "scenario.duration", ["1e+308", "1e+10"]),  # (OverflowError)
+])
+def test_simulate_of_a_dict_refuses_as_the_file_would(doc, key, words):
+    import linsense
+
+    for record in ("trace", "metrics"):
+        with pytest.raises(InputError) as e:
+            linsense.simulate(doc, record=record)
+        msg = str(e.value)
+        assert e.value.source == "<dict>" and e.value.key == key and "\n" not in msg, msg
+        for w in words:
+            assert w in msg, (w, msg)
+
+
+def test_simulate_of_a_dict_takes_numpy_reals_as_numbers():
+    """A numpy scalar of a real dtype is the number it holds (as TOML's would be), and runs."""
+    import linsense
+
+    doc = {**SHORT, "scenario": {"duration": np.float32(0.005), "seed": np.int64(3)},
+           "reference": {"position_mm": np.float64(1.0)}, "record": {"decimate": np.uint8(2)}}
+    r = linsense.simulate(doc)
+    sp = r.scenario.spec
+    assert sp.scenario.seed == 3 and type(sp.scenario.seed) is int and sp.record.decimate == 2
+    assert type(sp.reference.position_mm) is float and r.metrics["steps"] == 80
+
+
+@pytest.mark.parametrize("call, source, key, words", [
+    (lambda ls: ls.simulate(42), "simulate", "scenario", ["int", "42"]),  # (TypeError)
+    (lambda ls: ls.simulate(None), "simulate", "scenario", ["None"]),
+    (lambda ls: ls.simulate(SHORT, record="x"), "simulate", "record", ["'trace'", "'x'"]),  # (ValueError)
+    (lambda ls: ls.simulate(SHORT, record=None), "simulate", "record", ["None"]),
+    (lambda ls: ls.simulate_many([SHORT], workers=0), "simulate_many", "workers", ["0"]),
+    (lambda ls: ls.simulate_many([SHORT], workers="2"), "simulate_many", "workers", ["'2'"]),  # (TypeError)
+    (lambda ls: ls.simulate_many([SHORT, 42]), "simulate_many", "scenario", ["int"]),
+    (lambda ls: ls.simulate_many(SHORT), "simulate_many", "scenarios", ["dict", "use simulate"]),
+    (lambda ls: ls.simulate_many([SHORT], record="x"), "simulate_many", "record", ["'x'"]),
+])
+def test_simulate_names_its_argument(call, source, key, words):
+    import linsense
+
+    with pytest.raises(InputError) as e:
+        call(linsense)
+    msg = str(e.value)
+    assert (e.value.source, e.value.key) == (source, key) and "\n" not in msg, msg
+    for w in words:
+        assert w in msg, (w, msg)
+
+
+FS = dict(fs=16000.0)
+OBS = dict(fs=16000.0, pole_pitch=0.056, omega_max=1000.0)
+
+
+@pytest.mark.parametrize("make, source, key, words", [
+    (lambda c: c.Biquad(None, f0=100.0, **FS), "Biquad", "type", ["'lowpass'", "None"]),  # (TypeError)
+    (lambda c: c.Biquad(True, f0=100.0, **FS), "Biquad", "type", ["True"]),  # (the enum 1)
+    (lambda c: c.Biquad(f0=None, **FS), "Biquad", "f0", ["real number", "None"]),  # (TypeError)
+    (lambda c: c.Biquad(f0="x", **FS), "Biquad", "f0", ["real number", "'x'"]),
+    (lambda c: c.Biquad(f0=1j, **FS), "Biquad", "f0", ["real number", "complex"]),
+    (lambda c: c.Biquad(f0=True, **FS), "Biquad", "f0", ["real number", "bool"]),  # (taken as 1 Hz)
+    (lambda c: c.Biquad(f0=np.array([1.0, 2.0]), **FS), "Biquad", "f0", ["ndarray"]),
+    (lambda c: c.Biquad(f0=10**400, **FS), "Biquad", "f0", ["double"]),  # (OverflowError)
+    (lambda c: c.Biquad(f0=100.0, q=None, **FS), "Biquad", "q", ["None"]),
+    (lambda c: c.Injection(amplitude=None, freq=1000.0, **FS), "Injection", "amplitude", ["None"]),
+    (lambda c: c.Injection(amplitude=1.0, freq="1000", **FS), "Injection", "freq", ["'1000'"]),
+    (lambda c: c.Injection(amplitude=1.0, freq=1000.0, on="yes", **FS), "Injection", "on", ["'yes'"]),
+    (lambda c: c.Observer(None, f_bw=20.0, **OBS), "Observer", "type", ["'pll'", "None"]),  # (TypeError)
+    (lambda c: c.Observer("pll", f_bw="x", **OBS), "Observer", "f_bw", ["'x'"]),
+    (lambda c: c.Observer("pll", **OBS), "Observer", "f_bw", ["k1"]),  # (ValueError)
+    (lambda c: c.Observer("pll", f_bw=20.0, fs=16000.0, pole_pitch=None, omega_max=1000.0), "Observer",
+     "pole_pitch", ["None"]),
+    (lambda c: c.Lut("abcd"), "Lut", "values", ["'abcd'"]),  # (ValueError)
+    (lambda c: c.Lut(np.zeros((4, 4))), "Lut", "values", ["shape (4, 4)"]),  # (flattened to 16 points)
+    (lambda c: c.Lut([True] * 8), "Lut", "values", ["bool"]),  # (taken as 1.0)
+    (lambda c: c.Lut(None), "Lut", "values", ["None"]),
+    (lambda c: c.Lut([0.0, 1e300, 0.0, 0.0]), "Lut", "values[1]", ["1e+300", "float32"]),  # (inf)
+    (lambda c: c.Demodulator(fs=16000.0, gain=None), "Demodulator", "gain", ["None"]),
+    (lambda c: c.Demodulator(fs=16000.0, gain=1.0, comp="abcd"), "Demodulator", "comp", ["'abcd'"]),
+])
+def test_the_firmware_blocks_name_their_argument(make, source, key, words):
+    from linsense import ctrl
+
+    with pytest.raises(InputError) as e:
+        make(ctrl)
+    msg = str(e.value)
+    assert (e.value.source, e.value.key) == (source, key) and "\n" not in msg, msg
+    for w in words:
+        assert w in msg, (w, msg)
+
+
+def test_the_firmware_blocks_take_real_numbers():
+    """Ints and numpy scalars of a real dtype are numbers; a compensation table is a table."""
+    from linsense import ctrl
+    from linsense.compensation.lut import build_lut
+
+    assert np.all(np.isfinite(ctrl.Biquad("notch", f0=np.float32(1000.0), q=2, fs=16000).run(np.ones(8))))
+    assert ctrl.Injection(amplitude=np.int64(12), freq=1000, fs=16000.0).run(4)[0].shape == (4,)
+    obs = ctrl.Observer("mech", f_bw=np.int64(20), mass=1.5, force_max=100, **OBS)
+    assert np.all(np.isfinite(obs.run(np.zeros(4)).theta))
+    assert ctrl.Lut(build_lut(load_motor("ecce2010"), 16)).len == 16
+    assert ctrl.Lut(np.arange(8)).len == 8

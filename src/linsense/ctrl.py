@@ -21,6 +21,7 @@ angles, ``theta = 2 pi period + angle``, computed in double from the C ``ls_pos`
 
 from __future__ import annotations
 
+import numbers
 import warnings
 from collections.abc import Callable
 from pathlib import Path
@@ -341,13 +342,23 @@ class Lut:
 
     Raises
     ------
+    InputError
+        ``values`` is not one dimension of real numbers, or a value is beyond a float32.
     ConfigError
         If ``ls_lut_init`` refuses the table (fewer than 4 points, non-finite values).
     """
 
     def __init__(self, values: Any) -> None:
         values = getattr(values, "values", values)
-        table = np.array(values, dtype=np.float32).ravel()
+        # one dimension of real numbers (issue 23: a string was a ValueError, a 2-D array was flattened
+        # into one table, booleans were taken as 0 and 1)
+        a = _real_array("Lut", "values", values, "a table of shape (N,)", ((None,),))
+        big = np.abs(a) > np.finfo(np.float32).max
+        if np.any(big & np.isfinite(a)):
+            k = int(np.flatnonzero(big & np.isfinite(a))[0])
+            raise InputError("Lut", f"values[{k}]", f"{float(a[k])!r} is beyond the range of the table's "
+                             f"float32 ({float(np.finfo(np.float32).max):.4g})")
+        table = a.astype(np.float32)
         table.setflags(write=False)
         self.table = table
         self.len = table.size
@@ -395,13 +406,16 @@ class Biquad:
 
     Raises
     ------
+    InputError
+        An argument that is not a real number (``type``: not a name), naming it.
     ConfigError
         If ``ls_biquad_init`` refuses the configuration.
     """
 
     def __init__(self, type: str = "lowpass", *, f0: float, q: float = 0.70710678, fs: float) -> None:
         self._keep: list = []
-        values = {"type": _enum("ls_biquad", "type", type), "f0": f0, "q": q, "fs": fs}
+        values = {"type": _type("Biquad", "ls_biquad", type), "f0": _real("Biquad", "f0", f0),
+                  "q": _real("Biquad", "q", q), "fs": _real("Biquad", "fs", fs)}
         self.state, self.cfg = _init_module("ls_biquad", lib.ls_biquad_init, "ls_biquad", "ls_biquad_cfg",
                                             values, _good("bpf"), self._keep)
 
@@ -451,6 +465,8 @@ class Injection:
 
     Raises
     ------
+    InputError
+        An argument that is not a real number (``on``: not a bool), naming it.
     ConfigError
         If ``ls_inject_init`` refuses the configuration.
     """
@@ -458,7 +474,11 @@ class Injection:
     def __init__(self, *, amplitude: float, freq: float, fs: float, ramp_rate: float = 1200.0,
                  on: bool = True) -> None:
         self._keep: list = []
-        values = {"amplitude": amplitude, "freq": freq, "fs": fs, "ramp_rate": ramp_rate}
+        values = {k: _real("Injection", k, v) for k, v in
+                  (("amplitude", amplitude), ("freq", freq), ("fs", fs), ("ramp_rate", ramp_rate))}
+        if not isinstance(on, bool | np.bool_):
+            raise InputError("Injection", "on", f"expected True or False, got {_brief(on)} "
+                             f"({type(on).__name__})")
         self.state, self.cfg = _init_module("ls_inject", lib.ls_inject_init, "ls_inject", "ls_inject_cfg",
                                             values, _good("inject"), self._keep)
         self.enable(on)
@@ -518,14 +538,26 @@ class Demodulator:
 
     Raises
     ------
+    InputError
+        An argument that is not a real number (a table: not one dimension of them), naming it.
     ConfigError
         If ``ls_demod_init`` (or ``ls_lut_init`` for a table) refuses the configuration.
     """
 
     def __init__(self, *, fs: float, f_lpf: float = 150.0, gain: float, method: str = "product",
                  comp: Any = None, gain_table: Any = None, min_level: float = 0.0) -> None:
-        self.comp = None if comp is None else make_lut(comp)
-        self.gain_table = None if gain_table is None else make_lut(gain_table)
+        fs, f_lpf, gain, min_level = (_real("Demodulator", k, v) for k, v in
+                                      (("fs", fs), ("f_lpf", f_lpf), ("gain", gain),
+                                       ("min_level", min_level)))
+        if not isinstance(method, str):
+            raise InputError("Demodulator", "method",
+                             f"expected 'product' or 'heterodyne', got {_brief(method)}")
+        try:
+            self.comp = None if comp is None else make_lut(comp)
+            self.gain_table = None if gain_table is None else make_lut(gain_table)
+        except InputError as exc:  # (named as this constructor's argument)
+            arg = "comp" if self.__dict__.get("comp", 0) == 0 else "gain_table"
+            raise InputError("Demodulator", exc.key.replace("values", arg, 1), exc.message) from None
         self._keep: list = []
         values = {"method": _enum("ls_demod", "method", method), "f_lpf": f_lpf, "fs": fs, "gain": gain,
                   "comp": self.comp, "gain_table": self.gain_table, "min_level": min_level}
@@ -637,6 +669,9 @@ class Observer:
 
     Raises
     ------
+    InputError
+        An argument that is not a real number (``type``: not a name), or neither ``f_bw`` nor
+        ``k1`` and ``k2`` given, naming it.
     ConfigError
         If ``ls_observer_init`` refuses the configuration.
     """
@@ -644,7 +679,13 @@ class Observer:
     def __init__(self, type: str = "pll", *, fs: float, pole_pitch: float, omega_max: float,
                  f_bw: float | None = None, k1: float | None = None, k2: float | None = None,
                  k3: float | None = None, mass: float = 0.0, force_max: float = 0.0) -> None:
-        t = _enum("ls_observer", "type", type)
+        t = _type("Observer", "ls_observer", type)
+        fs, pole_pitch, omega_max, mass, force_max = (
+            _real("Observer", k, v) for k, v in (("fs", fs), ("pole_pitch", pole_pitch),
+                                                 ("omega_max", omega_max), ("mass", mass),
+                                                 ("force_max", force_max)))
+        f_bw, k1, k2, k3 = (_real("Observer", k, v, optional=True)
+                            for k, v in (("f_bw", f_bw), ("k1", k1), ("k2", k2), ("k3", k3)))
         gains = {"k1": 0.0, "k2": 0.0, "k3": 0.0}
         if f_bw is not None:
             tmp = ffi.new("ls_observer_cfg *", {"type": t})
@@ -654,7 +695,7 @@ class Observer:
             if v is not None:
                 gains[k] = v
         if f_bw is None and (k1 is None or k2 is None):
-            raise ValueError("give f_bw or the gains k1, k2 (and k3 for mech)")
+            raise InputError("Observer", "f_bw", "missing: give f_bw or the gains k1, k2 (and k3 for mech)")
         values = {"type": t, "fs": fs, "pole_pitch": pole_pitch, "omega_max": omega_max, **gains,
                   "mass": mass, "force_max": force_max}
         good = _good("obs")
@@ -938,6 +979,34 @@ def _real_array(source: str, key: str, value: Any, what: str, shapes: tuple) -> 
     if not _shape_ok(a.shape, shapes):
         raise InputError(source, key, f"expected {what}, got shape {a.shape}")
     return a.astype(np.float64)
+
+
+def _real(source: str, key: str, value: Any, optional: bool = False) -> float | None:
+    """``value`` as a Python float: a real number (int, float or a numpy scalar of a real dtype; NaN
+    and inf are left to the C init, which refuses them by field), else :class:`InputError` naming
+    ``key``, what was given and what is expected (None, a bool, a string, a complex number or an
+    array was a TypeError or was taken as 1.0, issue 23). ``optional``: None is returned as None."""
+    if value is None and optional:
+        return None
+    ok = isinstance(value, numbers.Real) and not isinstance(value, bool | np.bool_)
+    if isinstance(value, np.ndarray) and value.ndim == 0 and value.dtype.kind in "iuf":
+        value, ok = value.item(), True
+    if not ok:
+        raise InputError(source, key, f"expected a real number, got {_brief(value)} ({type(value).__name__})")
+    try:
+        return float(value)
+    except OverflowError:  # (an int beyond a double)
+        raise InputError(source, key, f"{_brief(value)} is beyond the range of a double (1.8e308)") from None
+
+
+def _type(source: str, module: str, value: Any) -> int:
+    """The C enum value of the argument ``type`` given by name (or as the C value, an int)."""
+    table = _ENUMS[(module, "type")]
+    integral = isinstance(value, numbers.Integral) and not isinstance(value, bool | np.bool_)
+    if isinstance(value, str) or integral:
+        return _enum(module, "type", value)
+    raise InputError(source, "type", f"expected one of {', '.join(map(repr, table))}, got {_brief(value)} "
+                     f"({type(value).__name__})")
 
 
 #: the range of an encoder count (ls_meas.enc_count is an int32_t)

@@ -152,30 +152,41 @@ def test_the_amplitude_of_huge_currents_is_finite(ecce):
     assert np.all(np.isfinite(hf_current_amplitude(ecce, THETA, 1e308, 1.0)))
 
 
-#: Python values a dict can carry and a TOML file cannot (tuples, numpy scalars, bytes, sets). Narrowed,
-#: pending bugs (reported, linsense/sim/scenario.py and build.py): None for an optional key
-#: (controller.kp_x = None) is a TypeError traceback in build, np.True_ is accepted as the number 1.0
+#: Python values a dict can carry and a TOML file cannot (tuples, numpy scalars, bytes, sets, None).
+#: Found (issue 23): None for an optional key (controller.kp_x = None) was a TypeError traceback in
+#: build, np.True_ was accepted as the number 1.0
 PY_ODD = st.one_of(ODD, st.tuples(st.floats(), st.floats()), st.binary(max_size=4), st.just({1.0}),
-                   st.just(np.int64(7)), st.just(np.float64(0.02))).filter(
-    lambda v: v is not None and not isinstance(v, np.bool_))
+                   st.just(np.int64(7)), st.just(np.float64(0.02)), st.just(np.True_), st.just(np.False_))
+#: what ``simulate`` is given instead of a scenario, and instead of a record mode
+NOT_A_SCENARIO = st.one_of(st.none(), st.integers(), st.floats(), st.binary(max_size=4), st.lists(st.none()),
+                           st.just(np.zeros(3)))
+RECORD = mostly(st.sampled_from(["trace", "metrics"]),
+                st.one_of(st.none(), st.text(max_size=8), st.integers(), st.just(b"trace"), st.just(True)),
+                one_in=4)
 
 
 @prop_settings()
 @given(section=st.sampled_from(["scenario", "inverter", "observer", "reference", "record", "controller"]),
        key=st.sampled_from(["duration", "seed", "v_dc", "bandwidth_hz", "position_mm", "decimate", "kp_x",
                             "lut_points", "at"]),
-       value=PY_ODD, record=st.sampled_from(["trace", "metrics"]))
-def test_simulate_of_a_dict_runs_as_given_or_names_the_key(section, key, value, record):
+       value=PY_ODD, record=RECORD, scenario=mostly(st.none(), NOT_A_SCENARIO, one_in=8))
+def test_simulate_of_a_dict_runs_as_given_or_names_the_key(section, key, value, record, scenario):
     import linsense
 
-    # (narrowed to dicts and the two record modes, pending bug (reported, linsense/sim/run.py and
-    # scenario.py): simulate(42) is a TypeError and simulate(d, record="x") a ValueError, not InputError)
+    # (found: simulate(42) was a TypeError and simulate(d, record="x") a ValueError, not InputError)
     doc = {"motor": "ecce2010", "scenario": {"duration": 0.005}, "reference": {"position_mm": 1.0}}
     doc[section] = {**doc.get(section, {}), key: value}
-    status, res = attempt(linsense.simulate, doc, record=record)
+    status, res = attempt(linsense.simulate, doc if scenario is None else scenario, record=record)
     event(f"{status}")
+    if record not in ("trace", "metrics") or isinstance(record, bytes):
+        assert status == "refused" and (res.source, res.key) == ("simulate", "record"), (record, res)
+        return
+    if scenario is not None:
+        assert status == "refused" and (res.source, res.key) == ("simulate", "scenario"), (scenario, res)
+        return
     if status == "refused":
         assert isinstance(res, InputError) and res.source == "<dict>", repr(res)
+        assert res.key.startswith(f"{section}.{key}"), (section, key, value, str(res))
         return
     # accepted: a value of the documented type (a finite real, an int for counts), and a run of it
     assert not isinstance(value, bool | np.bool_ | str | bytes | tuple | set | complex | np.ndarray) \
@@ -199,20 +210,28 @@ CTRL = {
                                          omega_max=a["omega_max"], f_bw=a["f0"]),
                  lambda o: o.run(np.full(16, 0.01)).theta),
 }
-#: narrowed to real numbers (NaN, inf, huge, negative, zero included) and the enums' names, pending
-#: bugs (reported, linsense/ctrl.py): None, a string, a complex number or an array where a number
-#: belongs (Biquad(f0=None), Injection(amplitude="x"), Observer(None, ...)) are TypeErrors, Lut("abcd")
-#: a ValueError, not ConfigError or InputError
+#: real numbers (NaN, inf, huge, negative, zero included), and what is not one: None, a string, a
+#: boolean, a complex number, an array, a huge int (found, issue 23: Biquad(f0=None),
+#: Injection(amplitude="x"), Observer(None, ...) were TypeErrors, Lut("abcd") a ValueError, a 2-D
+#: Lut flattened into one table; now one InputError naming the argument)
 REALS = st.one_of(st.floats(), st.sampled_from([0.0, -1.0, 1e308, 5e-324, 1e-300]), st.integers(-10, 10**6))
+NOT_REAL = st.one_of(st.none(), st.text(max_size=4), st.booleans(), st.complex_numbers(max_magnitude=1e6),
+                     st.just(np.array([1.0, 2.0])), st.just(np.True_), st.just(10**400))
+#: the arguments each block reads
+USED = {"Lut": ("values",), "Biquad": ("type", "f0", "q", "fs"), "Injection": ("amplitude", "f0", "fs"),
+        "Observer": ("type", "fs", "pole_pitch", "omega_max", "f0")}
 CTRL_ARGS = {
-    "values": mostly(st.lists(st.floats(-1.0, 1.0), min_size=4, max_size=64), st.lists(REALS, max_size=6)),
-    "type": st.sampled_from(["lowpass", "bandpass", "notch", "pll", "mech"]),
-    "f0": mostly(st.floats(10.0, 2000.0), REALS),
-    "q": mostly(st.floats(0.3, 5.0), REALS),
-    "fs": mostly(st.floats(8000.0, 40000.0), REALS),
-    "amplitude": mostly(st.floats(0.0, 20.0), REALS),
-    "pole_pitch": mostly(st.floats(0.01, 0.1), REALS),
-    "omega_max": mostly(st.floats(10.0, 1000.0), REALS),
+    "values": mostly(st.lists(st.floats(-1.0, 1.0), min_size=4, max_size=64),
+                     st.one_of(st.lists(REALS, max_size=6), NOT_REAL, st.just(np.zeros((4, 4))),
+                               st.lists(st.booleans(), min_size=4, max_size=8))),
+    "type": mostly(st.sampled_from(["lowpass", "bandpass", "notch", "pll", "mech"]),
+                   st.one_of(NOT_REAL, st.just("zz"))),
+    "f0": mostly(st.floats(10.0, 2000.0), st.one_of(REALS, NOT_REAL)),
+    "q": mostly(st.floats(0.3, 5.0), st.one_of(REALS, NOT_REAL)),
+    "fs": mostly(st.floats(8000.0, 40000.0), st.one_of(REALS, NOT_REAL)),
+    "amplitude": mostly(st.floats(0.0, 20.0), st.one_of(REALS, NOT_REAL)),
+    "pole_pitch": mostly(st.floats(0.01, 0.1), st.one_of(REALS, NOT_REAL)),
+    "omega_max": mostly(st.floats(10.0, 1000.0), st.one_of(REALS, NOT_REAL)),
 }
 
 
@@ -225,6 +244,13 @@ def test_a_firmware_block_runs_finite_or_is_refused_in_one_line(block, args):
     status, obj = attempt(make, ctrl, args)
     event(f"{block}: {status}")
     if status == "refused":
+        # an argument that is not a real number (a table: not one dimension of them) is named
+        if isinstance(obj, InputError):
+            assert obj.source == block and obj.key.split("[")[0] in args, (block, str(obj))
         return
+    for name in USED[block]:  # (accepted: every number the block reads is a real number)
+        v = args[name]
+        if name not in ("values", "type"):
+            assert isinstance(v, int | float) and not isinstance(v, bool), (block, name, v)
     out = run(obj)
     assert np.all(np.isfinite(out)), (block, args, out)

@@ -203,6 +203,41 @@ def reference_commands(sc: Scenario) -> tuple[list, list]:
     return cmds, moves
 
 
+def check_positions(sc: Scenario, tau: float) -> None:
+    """Refuse a position the drive cannot hold: beyond ``LS_POS_PERIOD_MAX`` pole pitches either
+    side (``ls_pos``, docs/firmware.md), before it is converted to a count of periods.
+
+    The start (``initial.position_mm``, and ``startup.guess_mm`` of a start-up) was an OverflowError
+    traceback in the conversion, or a one-line ls_pos message naming no key; a reference there was
+    silently refused by the drive's setter (the run held still and reported no fault, issue 23).
+
+    Parameters
+    ----------
+    sc : Scenario
+        The scenario.
+    tau : float
+        m, the motor's pole pitch.
+
+    Raises
+    ------
+    InputError
+        Naming the key, its value and the range in mm on this motor.
+    """
+    s = sc.spec
+    limit = int(lib.LS_POS_PERIOD_MAX)
+    keys = [("initial.position_mm", s.initial.position_mm)]
+    if s.control.mode == "startup":
+        keys.append(("startup.guess_mm", s.startup.guess_mm))
+    if s.reference.position_mm is not None:
+        keys.append(("reference.position_mm", s.reference.position_mm))
+    keys += [(f"reference.waypoints_mm[{i}]", w) for i, w in enumerate(s.reference.waypoints_mm or [])]
+    for key, x_mm in keys:
+        if not abs(x_mm * 1e-3 / tau) < limit:
+            raise InputError(sc.source, key, f"{x_mm:g} mm is beyond the drive's position range of "
+                             f"+-{limit:,} pole pitches (+-{limit * tau * 1e3:.6g} mm on this motor, "
+                             "docs/firmware.md)")
+
+
 def initial_load(sc: Scenario, motor: Motor) -> float:
     """The load force at t = 0 (N, opposing positive motion when > 0), as the plant applies it."""
     ld = sc.spec.load
@@ -279,7 +314,8 @@ CAL_MAX_WINDOWS = 30.0
 
 
 def calibration_timing(f_inj: float, dither_a: float, dither_hz: float, demod_lpf: float,
-                       kp_x: float, k_int: float | None = None, t_hold: float | None = None) -> dict:
+                       kp_x: float, k_int: float | None = None, t_hold: float | None = None,
+                       source: str = "<calibration>") -> dict:
     """The calibration's ``k_int`` (1/s), ``t_hold``, ``t_settle`` and ``t_max`` (s) for a drive
     injecting at ``f_inj`` (Hz) with a q-current dither of ``dither_a`` (A) at ``dither_hz`` (Hz),
     the demodulator's low-pass at ``demod_lpf`` (Hz) and the position loop's ``kp_x`` (1/s).
@@ -290,16 +326,35 @@ def calibration_timing(f_inj: float, dither_a: float, dither_hz: float, demod_lp
     ripple in the demodulated error then averages out of the window's mean, which the acceptance
     compares with ``tol`` (a window of 7.5 dither periods never accepts: the ripple's remainder
     stays above it).
+
+    Raises
+    ------
+    InputError
+        Naming ``calibration.dither_hz`` or ``calibration.k_int`` (in ``source``) when the window
+        they make is not a finite number of periods (a subnormal dither frequency or adaptation
+        rate was a ZeroDivisionError or an OverflowError traceback, issue 23).
     """
+    given_k = k_int is not None
     if k_int is None:
         k_int = 2.0 * math.pi * min(dither_hz / CAL_K_INT_DITHER, demod_lpf / CAL_K_INT_LPF)
+        if not k_int > 0.0:
+            raise InputError(source, "calibration.dither_hz",
+                             f"{dither_hz:g} Hz makes the adaptation rate k_int = 2 pi dither_hz / "
+                             f"{CAL_K_INT_DITHER:g} = 0: a calibration would never converge")
     if t_hold is None:
         period = 1.0 / f_inj
         if dither_a > 0.0:
             ratio = Fraction(dither_hz / f_inj).limit_denominator(64)
             exact = abs(float(ratio) * f_inj - dither_hz) <= 1e-9 * dither_hz
             period = ratio.denominator / f_inj if exact else 1.0 / dither_hz
-        t_hold = math.ceil(CAL_HOLD_TAUS / k_int / period - 1e-9) * period
+        windows = CAL_HOLD_TAUS / k_int / period - 1e-9  # (range-checked before the integer count)
+        if not (math.isfinite(period) and math.isfinite(windows)):
+            key, value = (("calibration.k_int", f"{k_int:g} 1/s") if given_k and math.isfinite(period)
+                          else ("calibration.dither_hz", f"{dither_hz:g} Hz"))
+            raise InputError(source, key, f"{value} makes the hold window {CAL_HOLD_TAUS:g} / k_int "
+                             f"more periods of the dither than a float holds: give calibration.t_hold, "
+                             f"or a k_int and dither_hz a calibration can wait for")
+        t_hold = math.ceil(windows) * period
     return {"k_int": k_int, "t_hold": t_hold, "t_settle": CAL_SETTLE_TAUS / kp_x,
             "t_max": CAL_MAX_WINDOWS * t_hold}
 
@@ -357,7 +412,7 @@ def designed(sc: Scenario, motor: Motor) -> Scenario:
         timing = calibration_timing(f_run, run("calibration", "dither_a"), run("calibration", "dither_hz"),
                                     run("observer", "demod_lpf_hz"), kp_x,
                                     cal.k_int if "k_int" in given["calibration"] else None,
-                                    cal.t_hold if "t_hold" in given["calibration"] else None)
+                                    cal.t_hold if "t_hold" in given["calibration"] else None, sc.source)
         changes["calibration"].update({k: v for k, v in timing.items() if k not in given["calibration"]})
     # the designed values are valid by construction (the design keeps the injection within the bus
     # and f_pwm / 4): set them without validating the whole scenario again (a sweep builds thousands)
@@ -387,6 +442,42 @@ def check_sensors(source: str, gain: list, offset: list, noise: float, i_trip: f
         raise InputError(source, key, f"{v!r} A reaches the over-current trip protection.i_max = "
                          f"{i_trip:g} A: the drive would trip at t = 0 on the {what} alone; it must be below "
                          f"{i_trip:g} A")
+
+
+def run_steps(source: str, duration: float, fs: float) -> int:
+    """The PWM periods of a run of ``duration`` s at ``fs`` Hz, range-checked before the conversion to
+    an integer (issue 23: a product beyond a float, ``scenario.duration = 1e308``, was an
+    OverflowError traceback).
+
+    Parameters
+    ----------
+    source : str
+        The scenario's file, named in a refusal.
+    duration, fs : float
+        ``scenario.duration`` (s) and ``inverter.f_pwm`` (Hz), positive and finite.
+
+    Returns
+    -------
+    int
+        ``round(duration * fs)``, 1 .. :data:`~linsense.limits.MAX_STEPS`.
+
+    Raises
+    ------
+    InputError
+        Naming ``scenario.duration``, its value, the rate and the limit: beyond MAX_STEPS periods
+        (or a product that overflows), or shorter than one period.
+    """
+    periods = duration * fs
+    if not periods <= MAX_STEPS + 0.5:  # (also inf and NaN)
+        count = (f"{periods:.3g} PWM periods" if math.isfinite(periods)
+                 else "more PWM periods than a float holds")
+        raise InputError(source, "scenario.duration",
+                         f"{duration:g} s at {fs:g} Hz is {count}, beyond the limit "
+                         f"of {MAX_STEPS:.3g} (duration x inverter.f_pwm, docs/limits.md)")
+    n_steps = int(round(periods))
+    if n_steps < 1:
+        raise InputError(source, "scenario.duration", f"shorter than one PWM period, got {duration!r}")
+    return n_steps
 
 
 def check_run_size(source: str, n_steps: int, decimate: int, fs: float, trace_in_memory: bool = True) -> None:
@@ -612,6 +703,7 @@ def build(sc: Scenario, motor: Motor | None = None, trace_in_memory: bool = True
                                   if d.dtres.forward else (0.0, 0.0))
     d.prot.i_max, d.prot.v_dc_min, d.prot.v_dc_max = prot.i_max, prot.v_dc_min, prot.v_dc_max
     d.prot.err_max, d.prot.err_time, d.prot.omega_max = prot.err_max, prot.err_time, prot.omega_max
+    check_positions(sc, tau)
     d.cal.period = int(math.floor(s.initial.position_mm * 1e-3 / tau))
     cal_table = None
     if ctl.mode == "calibration":
@@ -705,10 +797,7 @@ def build(sc: Scenario, motor: Motor | None = None, trace_in_memory: bool = True
     except ConfigError as exc:
         raise InputError(sc.source, "control.mode", f"{ctl.mode!r} refused: {exc}") from None
     cmds, moves = reference_commands(sc)
-    n_steps = int(round(s.scenario.duration * fs))
-    if n_steps < 1:
-        raise InputError(sc.source, "scenario.duration",
-                         f"shorter than one PWM period, got {s.scenario.duration!r}")
+    n_steps = run_steps(sc.source, s.scenario.duration, fs)
     check_run_size(sc.source, n_steps, s.record.decimate, fs, trace_in_memory)
     return Built(sc, motor, setup, cfg, drive, cmds, n_steps, moves, known,
                  extra={} if cal_table is None else {"cal_table": cal_table})

@@ -6,9 +6,13 @@ configuration before and computes the metrics after. ``wall_s`` is measured arou
 
 from __future__ import annotations
 
+import numbers
 from pathlib import Path
 
+import numpy as np
+
 from linsense.errors import InputError
+from linsense.limits import MAX_STEPS
 from linsense.sim.build import build
 from linsense.sim.core import BLOCKS, run_closed_loop
 from linsense.sim.metrics import compute_metrics
@@ -57,16 +61,23 @@ def simulate(scenario: Scenario | str | Path | dict, record: str = "trace") -> R
     ------
     InputError
         The scenario (or its motor) is invalid, or the drive trips at its very first step (a
-        configuration that cannot run); the message names the file, key and value.
+        configuration that cannot run); the message names the file, key and value. ``scenario``
+        that is none of the above, or a ``record`` that is not a mode, is named as the argument.
     """
-    if record not in RECORD_MODES:
-        raise ValueError(f"record must be one of {RECORD_MODES}, got {record!r}")
+    _check_record("simulate", record)
     sc = as_scenario(scenario)
     if record == "metrics":
         sc = _metrics_blocks(sc)
     blocks = tuple(BLOCKS) if record == "metrics" or sc.spec.record.decimate > 1 else ()
     raw, m = _run(sc, None, blocks)
     return Result(**raw.arrays, metrics=m, scenario=sc, fault_bits=raw.fault)
+
+
+def _check_record(caller: str, record) -> None:
+    """:class:`InputError` naming the argument ``record`` unless it is one of :data:`RECORD_MODES`."""
+    if not (isinstance(record, str) and record in RECORD_MODES):
+        raise InputError(caller, "record", f"must be one of {', '.join(map(repr, RECORD_MODES))}, "
+                         f"got {' '.join(repr(record).split())}")
 
 
 def _run(sc: Scenario, signals, blocks) -> tuple:
@@ -86,14 +97,16 @@ METRICS_BLOCKS = ("x_min", "x_max", "x_mean", "err_min", "err_max", "err_mean")
 def metrics_only(scenario: Scenario | str | Path | dict) -> dict:
     """The metrics of ``simulate(scenario, record="metrics")``, recording only what they are
     computed from (no Result: a sweep's run; its cost beyond the C loop is about 1 ms)."""
-    return _run(_metrics_blocks(as_scenario(scenario)), METRICS_SIGNALS, METRICS_BLOCKS)[1]
+    return _run(_metrics_blocks(as_scenario(scenario, "metrics_only")), METRICS_SIGNALS, METRICS_BLOCKS)[1]
 
 
 def _metrics_blocks(sc: Scenario) -> Scenario:
     """``sc`` with the block length of a metrics-only run (:func:`metrics_decimate`)."""
     sp = sc.spec
-    n = int(round(sp.scenario.duration * sp.inverter.f_pwm))
-    dec = metrics_decimate(n, sp.record.decimate)
+    periods = sp.scenario.duration * sp.inverter.f_pwm
+    if not periods <= MAX_STEPS:  # (range-checked before the integer count: refused by the build)
+        return sc
+    dec = metrics_decimate(int(round(periods)), sp.record.decimate)
     if dec == sp.record.decimate:
         return sc
     if dec <= 1_000_000:  # (a valid value: set without validating the whole scenario again)
@@ -154,9 +167,19 @@ def simulate_many(scenarios, workers: int = 1, *, scheduler: str | None = None,
     running cluster by address. For thousands of runs, or runs that must survive a kill, use
     :func:`linsense.sweep.sweep`, which keeps only the metrics.
     """
-    items = [as_scenario(s) for s in scenarios]
-    if workers < 1:
-        raise ValueError(f"workers must be >= 1, got {workers}")
+    _check_record("simulate_many", record)
+    integral = isinstance(workers, numbers.Integral) and not isinstance(workers, bool | np.bool_)
+    if not (integral and workers >= 1):
+        raise InputError("simulate_many", "workers", f"must be an integer of at least 1, got "
+                         f"{' '.join(repr(workers).split())}")
+    if isinstance(scenarios, Scenario | str | Path | dict):
+        raise InputError("simulate_many", "scenarios", f"expected a list of scenarios, got one "
+                         f"{type(scenarios).__name__} (use simulate)")
+    try:
+        items = [as_scenario(s, "simulate_many") for s in scenarios]
+    except TypeError:  # (not iterable)
+        raise InputError("simulate_many", "scenarios", f"expected a list of scenarios, got "
+                         f"{type(scenarios).__name__}") from None
     if scheduler is None and (workers == 1 or len(items) <= 1):
         return [simulate(s, record=record) for s in items]
     from linsense.sweep.engine import cluster_client

@@ -14,11 +14,13 @@ the value.
 
 from __future__ import annotations
 
+import datetime
 import math
 import re
 from pathlib import Path
 from typing import Annotated, Literal
 
+import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 from linsense.ctrl import drive_default_cfg
@@ -430,15 +432,15 @@ class ScenarioFile(BaseModel):
             raise KeyProblem(f"startup.{sorted(su.model_fields_set)[0]}",
                              "only used by control.mode = \"startup\"")
         if ctl.mode == "startup":
-            if round(su.t_pulse * inv.f_pwm) < 2:
-                raise KeyProblem("startup.t_pulse", f"must be at least 2 PWM periods ({2 / inv.f_pwm:g} s), "
-                                 f"got {su.t_pulse:g}")
-            if round(su.t_rest * inv.f_pwm) < 3:
-                raise KeyProblem("startup.t_rest", f"must be at least 3 PWM periods ({3 / inv.f_pwm:g} s), "
-                                 f"got {su.t_rest:g}")
-            for k in ("t_lock", "t_quiet", "t_pulse", "t_rest", "t_settle"):
+            for k in ("t_lock", "t_quiet", "t_pulse", "t_rest", "t_settle"):  # (before the periods)
                 if getattr(su, k) > 60.0:
                     raise KeyProblem(f"startup.{k}", f"at most 60 s, got {getattr(su, k):g}")
+            if _periods(su.t_pulse, inv.f_pwm) < 2:
+                raise KeyProblem("startup.t_pulse", f"must be at least 2 PWM periods ({2 / inv.f_pwm:g} s), "
+                                 f"got {su.t_pulse:g}")
+            if _periods(su.t_rest, inv.f_pwm) < 3:
+                raise KeyProblem("startup.t_rest", f"must be at least 3 PWM periods ({3 / inv.f_pwm:g} s), "
+                                 f"got {su.t_rest:g}")
             if su.err_lock_deg > 90.0:
                 raise KeyProblem("startup.err_lock_deg", f"at most 90 deg, got {su.err_lock_deg:g}")
             t_ramp = self.injection.amplitude / self.injection.ramp_rate
@@ -513,6 +515,13 @@ class ScenarioFile(BaseModel):
         if self.injection.amplitude == 0.0 and ctl.mode != "sensored":
             raise KeyProblem("injection.amplitude", "the sensorless modes need an HF injection, got 0")
         return self
+
+
+def _periods(t: float, fs: float) -> float:
+    """``round(t * fs)``, PWM periods of ``t`` s, or inf where the product overflows (``round(inf)``
+    was an OverflowError traceback, issue 23)."""
+    n = t * fs
+    return round(n) if math.isfinite(n) else math.inf
 
 
 def _given(section: BaseModel, key: str) -> bool:
@@ -634,17 +643,108 @@ class Scenario:
         return f"Scenario({self.name!r}, source={self.source!r})"
 
 
+def _sections(model: type[BaseModel], prefix: str = "") -> dict[str, tuple[str, type[BaseModel]]]:
+    """Every section below ``model`` by the name of its model class: its dotted path and its class
+    (``{"ReferenceSection": ("reference", ReferenceSection), "ModelOverride": ("controller.model",
+    ModelOverride), ...}``)."""
+    out = {}
+    for name, field in model.model_fields.items():
+        sub = field.annotation
+        if isinstance(sub, type) and issubclass(sub, BaseModel):
+            out[sub.__name__] = (f"{prefix}{name}", sub)
+            out.update(_sections(sub, f"{prefix}{name}."))
+    return out
+
+
+#: a section's model class name -> its dotted path in a scenario file and its class
+_SECTIONS = _sections(ScenarioFile)
+
+
+def _has_path(data: dict, dotted: str) -> bool:
+    """Whether ``data`` has the (dotted) section ``dotted``."""
+    for part in dotted.split("."):
+        if not isinstance(data, dict) or part not in data:
+            return False
+        data = data[part]
+    return True
+
+
+#: the values a TOML file can hold (a date, a time and a date-time among them)
+_TOML_SCALARS = (str, bool, int, float, datetime.date, datetime.time)
+
+
+def toml_values(data, source: str, key: str = ""):
+    """``data`` (a dict of sections from Python) with only the values a TOML file can hold, so that
+    a dict is validated as the same file would be (issue 23): a numpy scalar of a real or boolean
+    dtype becomes the Python float, int or bool it stands for (``np.True_`` is a boolean, refused
+    where a number belongs as ``true`` is in a file); ``None`` (TOML has no null: it set an optional
+    key to None, a TypeError in the build) and any other object (a tuple, bytes, a set, a complex
+    number, an array) end in :class:`InputError` naming the dotted key.
+
+    Parameters
+    ----------
+    data : object
+        The value at ``key`` (the whole scenario at first).
+    source : str
+        Named in the message (``"<dict>"``).
+    key : str
+        Dotted key of ``data``.
+
+    Returns
+    -------
+    object
+        A copy of ``data`` with every value a TOML value.
+    """
+    if isinstance(data, dict):
+        out = {}
+        for k, v in data.items():
+            if not isinstance(k, str):
+                raise InputError(source, key, f"a key is a string, got {k!r} ({type(k).__name__})")
+            out[k] = toml_values(v, source, f"{key}.{k}" if key else k)
+        return out
+    if isinstance(data, list):
+        return [toml_values(v, source, f"{key}[{i}]") for i, v in enumerate(data)]
+    if isinstance(data, np.generic) and data.dtype.kind in "biuf":
+        return data.item()  # (np.float64 also is a float: a plain float either way)
+    if isinstance(data, _TOML_SCALARS):
+        return data
+    if data is None:
+        hint = "" if key.endswith("]") else ": leave the key out for its default"
+        raise InputError(source, key, f"None is not a value of a scenario (TOML has no null){hint}")
+    shown = " ".join(repr(data).split())
+    raise InputError(source, key, f"expected a TOML value (a string, number, boolean, date, list or table), "
+                     f"got {type(data).__name__} {shown}")
+
+
 def scenario_from_dict(data: dict, source: str = "<dict>", base_dir: str | Path | None = None) -> Scenario:
-    """Validate parsed scenario data; raise :class:`InputError` naming ``source``, key and value."""
+    """Validate parsed scenario data; raise :class:`InputError` naming ``source``, key and value.
+
+    ``data`` from Python is held to what a TOML file can hold (:func:`toml_values`). A missing
+    required key is named with its full dotted path, also when its whole section is missing
+    (``reference.position_mm``: a scenario without ``[reference]`` steps to it by default).
+    """
     if not isinstance(data, dict):
         raise InputError(source, "", f"a scenario is a table of sections, got {type(data).__name__}")
+    data = toml_values(data, source)
     try:
         spec = ScenarioFile.model_validate(data)
     except ValidationError as exc:
-        err = to_input_error(exc, source, ScenarioFile)
+        # a section the data leaves out is built from its defaults, which its own rule can refuse
+        # (pydantic then raises the section's error, located in the section)
+        section, root = _SECTIONS.get(exc.title, ("", ScenarioFile))
+        err = to_input_error(exc, source, root)
         # drop the union-branch names pydantic puts into the location ("current_gain.float")
         key = ".".join(p for p in err.key.split(".") if not _BRANCH.match(p))
-        raise InputError(source, key, err.message) from None
+        key = f"{section}.{key}" if section and key else section or key
+        message = err.message
+        # a whole section missing ("scenario"): named by its first required key
+        missing = next((v for v in _SECTIONS.values() if v[0] == key), None)
+        if missing is not None and message == "missing required key":
+            section = key
+            key += "." + next(k for k, f in missing[1].model_fields.items() if f.is_required())
+        if section and not _has_path(data, section):
+            message = f"{message} (the file has no [{section}] section)"
+        raise InputError(source, key, message) from None
     return Scenario(spec, source, Path(base_dir) if base_dir is not None else Path.cwd())
 
 
@@ -653,12 +753,28 @@ def load_scenario(path: str | Path) -> Scenario:
     return scenario_from_dict(read_toml(path, "scenario file"), str(path), Path(path).parent)
 
 
-def as_scenario(obj) -> Scenario:
-    """A :class:`Scenario` from a Scenario, a path (str or Path) or a dict."""
+def as_scenario(obj, caller: str = "simulate") -> Scenario:
+    """A :class:`Scenario` from a Scenario, a path (str or Path) or a dict.
+
+    Parameters
+    ----------
+    obj : Scenario, str, Path or dict
+        The scenario.
+    caller : str
+        The API function named when ``obj`` is none of these.
+
+    Raises
+    ------
+    InputError
+        ``obj`` is none of these (naming ``caller`` and the argument ``scenario``), or the scenario
+        it gives is invalid.
+    """
     if isinstance(obj, Scenario):
         return obj
     if isinstance(obj, dict):
         return scenario_from_dict(obj)
     if isinstance(obj, str | Path):
         return load_scenario(obj)
-    raise TypeError(f"expected a Scenario, a path or a dict, got {type(obj).__name__}")
+    shown = " ".join(repr(obj).split())
+    raise InputError(caller, "scenario", f"expected a Scenario, a path of a TOML file or a dict of sections, "
+                     f"got {type(obj).__name__} {shown}")
