@@ -42,9 +42,9 @@
  * denormals, huge and tiny numbers, or plausible ones. After every step the target aborts unless
  * every real in ls_cmd is finite, the duties are in [0, 1], every position is normalised and within
  * +-LS_POS_PERIOD_MAX periods, and the outputs are off while a fault is latched; a configuration
- * ls_drive_init refuses must refuse to run. AddressSanitizer and UndefinedBehaviorSanitizer
- * (-fno-sanitize-recover=all) abort on any undefined behaviour, including an out-of-range
- * float-to-int conversion.
+ * ls_drive_init refuses must refuse to run (every setter LS_ERR_NULL). AddressSanitizer and
+ * UndefinedBehaviorSanitizer (-fno-sanitize-recover=all) abort on any undefined behaviour,
+ * including an out-of-range float-to-int conversion.
  *
  * LLVMFuzzerCustomMutator and LLVMFuzzerCustomCrossOver work on records (insert, copy, delete,
  * repeat a run of records, lengthen a record's run of steps, change one field), so that long
@@ -539,8 +539,22 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         override(&cfg, o);
     }
     if (ls_drive_init(&d, &cfg) != LS_OK) {
-        /* a refused configuration: the drive must refuse to run */
+        /* a refused configuration: the drive must refuse to run, and every setter (on it, or on no
+         * drive) must say so and change nothing */
+        const ls_pos p0 = {0, LS_R(0.0)};
         memset(&m, 0, sizeof m);
+        ls_drive_reset(&d, p0);
+        for (k = 0u; k < 3u; ++k) {
+            if (setters[k](&d, p0) != LS_ERR_NULL || setters[k](NULL, p0) != LS_ERR_NULL) {
+                fail();
+            }
+        }
+        if (ls_drive_set_mode(&d, LS_MODE_SENSORED) != LS_ERR_NULL ||
+            ls_drive_set_load(&d, LS_R(1.0)) != LS_ERR_NULL || ls_drive_set_mode(NULL, LS_MODE_OFF) != LS_ERR_NULL ||
+            ls_drive_set_load(NULL, LS_R(0.0)) != LS_ERR_NULL || ls_drive_init(NULL, &cfg) != LS_ERR_NULL ||
+            ls_drive_init(&d, NULL) != LS_ERR_NULL) {
+            fail();
+        }
         ls_drive_step(&d, &m, &cmd);
         if (cmd.enable || cmd.fault != LS_FAULT_CONFIG) {
             fail();
