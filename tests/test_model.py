@@ -159,3 +159,59 @@ def test_4theta_harmonics_appear_as_6theta_ripple(L4, M4):
     np.testing.assert_allclose(d[:, 0, 0], k * np.cos(6 * th), atol=1e-17)
     np.testing.assert_allclose(d[:, 1, 1], -k * np.cos(6 * th), atol=1e-17)
     np.testing.assert_allclose(d[:, 0, 1], -k * np.sin(6 * th), atol=1e-17)
+
+
+# ---------------------------------------------------------------------- issue 23: an even number of positions
+@pytest.mark.parametrize("n", [8, 10, 12, 36, 64, 124, 126])
+def test_an_even_table_is_interpolated_with_its_nyquist_cosine(n):
+    """N equally spaced positions, N even, are passed through as by a real DFT: the orders up to N / 2,
+    the last the cosine alone with its half weight ``sum y_i (-1)^i / N`` (the fit dropped it: 8
+    positions of a motor with L4 were off by L4 at every point)."""
+    rng = np.random.default_rng(n)
+    theta = 2 * np.pi * np.arange(n) / n
+    y = 1e-3 * rng.normal(size=(n, 6))
+    tab = InductanceModel.from_table(theta, y)
+    assert tab.max_order == n // 2
+    np.testing.assert_allclose(tab.entries(theta), y, rtol=0, atol=1e-15)
+    sign = (-1.0) ** np.arange(n)
+    np.testing.assert_allclose(tab.a[:, n // 2], sign @ y / n, rtol=0, atol=1e-17)
+    assert np.all(tab.b[:, n // 2] == 0.0)
+    # the other orders are the DFT's (weight 2 / N)
+    k = 3
+    np.testing.assert_allclose(tab.a[:, k], 2 / n * np.cos(k * theta) @ y, rtol=0, atol=1e-17)
+    np.testing.assert_allclose(tab.b[:, k], 2 / n * np.sin(k * theta) @ y, rtol=0, atol=1e-17)
+
+
+def test_an_even_table_of_a_motor_with_its_nyquist_harmonic():
+    """8 positions of eq. 3 with L4 = 0.1 mH: the model through every position (it was 1e-4 H off)."""
+    ref = InductanceModel.from_params(**ECCE, harmonics={4: (0.1e-3, 0.0)})
+    theta = 2 * np.pi * np.arange(8) / 8
+    tab = InductanceModel.from_table(theta, ref.entries(theta))
+    np.testing.assert_allclose(tab.entries(theta), ref.entries(theta), rtol=0, atol=1e-16)
+
+
+@pytest.mark.parametrize("n, order, want", [
+    (127, None, 63),  # (odd: exact up to 127 positions)
+    (128, None, 63),  # (N / 2 = 64 beyond the limit: least squares to 63, no Nyquist term)
+    (16, 5, 5),       # (table_max_order below N / 2: least squares, sines kept)
+    (16, 8, 8),       # (table_max_order = N / 2: the Nyquist cosine)
+    (16, 20, 8),
+])
+def test_the_order_of_a_table_fit(n, order, want):
+    theta = 2 * np.pi * np.arange(n) / n
+    y = np.random.default_rng(1).normal(size=(n, 6))
+    tab = InductanceModel.from_table(theta, y, order)
+    assert tab.max_order == want
+    if 2 * want >= n - 1:  # (as many coefficients as positions: through them)
+        np.testing.assert_allclose(tab.entries(theta), y, rtol=0, atol=1e-12)
+    if order == 5:
+        assert np.any(tab.b[:, 5] != 0.0)
+
+
+def test_an_even_table_with_jittered_positions_is_still_passed_through():
+    """Positions not equally spaced (a bench), an even number: N coefficients for N positions."""
+    rng = np.random.default_rng(7)
+    theta = np.sort(2 * np.pi * (np.arange(10) + rng.uniform(-0.2, 0.2, 10)) / 10)
+    ref = InductanceModel.from_params(**ECCE, harmonics={4: (0.1e-3, 0.05e-3)})
+    tab = InductanceModel.from_table(theta, ref.entries(theta))
+    np.testing.assert_allclose(tab.entries(theta), ref.entries(theta), rtol=0, atol=1e-15)

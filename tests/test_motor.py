@@ -147,3 +147,76 @@ def test_slips_of_unit(edits, key, words):
     assert exc.value.key == key
     for w in words:
         assert w in str(exc.value), (w, str(exc.value))
+
+
+# ------------------------------------------------------------------- issue 23: one spelling per harmonic key
+PRESET_TEXT = (Path(__file__).resolve().parents[1] / "src/linsense/model/presets/ecce2010.toml").read_text()
+
+
+@pytest.mark.parametrize("line, key, meant", [
+    ("L04 = 0.3e-3", "inductance.L04", "L4"),
+    ("M04 = 0.3e-3", "inductance.M04", "M4"),
+    ("L0006 = 1e-5", "inductance.L0006", "L6"),
+    ("L00 = 1e-3", "inductance.L00", "L0"),
+    ("M02 = 1e-5", "inductance.M02", "M2"),
+])
+def test_a_harmonic_key_with_a_leading_zero_is_refused(line, key, meant):
+    """``L04`` was accepted and its value dropped (the model got L4 = 0): refused naming the key and
+    the key it stands for (docs/motor-files.md: L4, M4, L6 ...)."""
+    from linsense.model.motor import motor_from_toml
+
+    text = PRESET_TEXT.replace("dM0 =", f"{line}\ndM0 =", 1)
+    with pytest.raises(InputError) as e:
+        motor_from_toml(text, "m.toml")
+    assert e.value.key == key and f"did you mean '{meant}'?" in str(e.value), str(e.value)
+
+
+def test_a_harmonic_key_with_other_digits_than_ascii_is_refused():
+    """``"L\u0664"`` (an Arabic-Indic 4: int() reads it as 4) was accepted and dropped like L04."""
+    from linsense.model.motor import motor_from_toml
+
+    text = PRESET_TEXT.replace("dM0 =", '"L\u0664" = 0.3e-3\ndM0 =', 1)
+    with pytest.raises(InputError) as e:
+        motor_from_toml(text, "m.toml")
+    assert e.value.key == "inductance.L\u0664", str(e.value)
+
+
+def test_a_harmonic_key_as_documented_is_read():
+    from linsense.model.motor import motor_from_toml
+
+    m = motor_from_toml(PRESET_TEXT.replace("dM0 =", "L4 = 0.01e-3\nM6 = 0.02e-3\ndM0 =", 1), "m.toml")
+    assert m.inductance.params["L4"] == 0.01e-3 and m.inductance.params["M6"] == 0.02e-3
+
+
+# ---------------------------------------------------------------------- issue 23: plain numbers
+def test_numpy_scalars_are_written_as_plain_numbers(ecce, tmp_path):
+    """A motor whose values are numpy scalars (as a fit gives them) wrote ``R_s = np.float64(9.0)``, not
+    TOML: plain numbers, and the file loads back to the same motor."""
+    import dataclasses
+
+    from linsense.model.motor import Friction, PmHarmonic
+
+    m = dataclasses.replace(ecce, R_s=np.float64(9.0), mass=np.float32(1.5), pole_pitch=np.float64(0.056),
+                            friction=Friction(np.float64(1.0), np.float64(0.5)),
+                            pm_harmonics=(PmHarmonic(np.int64(5), np.float64(0.02), np.float64(0.1)),))
+    text = motor_to_toml(m)
+    assert "np." not in text and "float64" not in text, text
+    path = tmp_path / "m.toml"
+    path.write_text(text)
+    back = load_motor(str(path))
+    assert back.R_s == 9.0 and back.mass == 1.5 and back.friction.viscous == 1.0
+    assert back.pm_harmonics[0].order == 5
+
+
+def test_a_duplicate_position_is_named_as_a_plain_number(ecce, tmp_path):
+    theta = np.array([45.0 * k for k in range(8)] + [360.0])
+    e = ecce.inductance.entries(np.radians(theta))
+    rows = ["theta_deg,L_A,L_B,L_C,M_AB,M_BC,M_CA"] + [
+        ",".join(str(v) for v in [t, *r]) for t, r in zip(theta, e, strict=True)]
+    (tmp_path / "t.csv").write_text("\n".join(rows) + "\n")
+    from linsense.model.motor import read_inductance_table
+
+    with pytest.raises(InputError) as err:
+        read_inductance_table(tmp_path / "t.csv")
+    msg = str(err.value)
+    assert "duplicate position 360.0 deg" in msg and "row 2 has 0.0 deg" in msg and "np." not in msg, msg

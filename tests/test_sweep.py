@@ -220,3 +220,42 @@ def test_metrics_only_equals_simulate_metrics(tmp_path):
     drop = {"wall_s", "realtime_factor"}
     assert {k: v for k, v in lean.items() if k not in drop} == \
         {k: v for k, v in full.items() if k not in drop}
+
+
+# ------------------------------------------------------------------- issue 23: an axis whose span overflows
+HUGE = 1.7976931348623157e308  # (the largest float)
+
+
+@pytest.mark.parametrize("sampling", ["grid", "random", "lhs"])
+@pytest.mark.parametrize("lo, hi, log", [(-1.7e308, 1.7e308, False), (-HUGE, HUGE, False),
+                                         (-1e308, HUGE, False), (5e-324, HUGE, True), (1e-300, HUGE, True)])
+def test_an_axis_whose_span_overflows_gives_finite_points_within_it(tmp_path, sampling, lo, hi, log):
+    """``min = -1.7e308, max = 1.7e308``: ``max - min`` overflows, and the grid and the samples held inf
+    and nan. Every point is finite and within [min, max], the grid's ends are min and max."""
+    n = "n = 3" if sampling == "grid" else ""
+    samples = "" if sampling == "grid" else "samples = 50"
+    axis = (f'[[axis]]\nkey = "controller.kp_x"\nmin = {lo!r}\nmax = {hi!r}\n{n}\n'
+            f'log = {str(log).lower()}\n')
+    pts = [p["controller.kp_x"] for p in points(load_sweep(spec(tmp_path, axis,
+                                                                f'sampling = "{sampling}"\n{samples}')))]
+    assert len(pts) == (3 if sampling == "grid" else 50)
+    assert all(np.isfinite(v) and lo <= v <= hi for v in pts), pts
+    if sampling == "grid":
+        assert pts[0] == lo and pts[-1] == hi
+        if not log:
+            assert pts[1] == pytest.approx(0.5 * lo + 0.5 * hi, abs=1e-12 * hi)
+    else:
+        assert len(set(pts)) == len(pts)  # (samples spread over the axis, not one clipped end)
+
+
+def test_the_points_of_an_ordinary_axis_are_unchanged(tmp_path):
+    """Where max - min is finite the points are what they were to the last bit (np.linspace, min + u
+    (max - min)): a sweep that ran before asks for the same runs when resumed."""
+    axis = '[[axis]]\nkey = "controller.kp_x"\nmin = 0.1\nmax = 0.7\nn = 7\n'
+    pts = [p["controller.kp_x"] for p in points(load_sweep(spec(tmp_path, axis)))]
+    assert pts == [float(v) for v in np.linspace(0.1, 0.7, 7)]
+    axis = '[[axis]]\nkey = "controller.kp_x"\nmin = 0.1\nmax = 0.7\n'
+    keys = 'sampling = "random"\nsamples = 5\nseed = 3'
+    pts = [p["controller.kp_x"] for p in points(load_sweep(spec(tmp_path, axis, keys)))]
+    u = np.random.default_rng(3).random((5, 1))[:, 0]
+    assert pts == [float(v) for v in 0.1 + u * (0.7 - 0.1)]

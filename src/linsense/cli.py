@@ -88,11 +88,14 @@ def lut(motor_spec: str, points: int, fmt: str, symbol: str | None, f_inj: float
     from linsense.compensation.lut import build_lut, export
     from linsense.ctrl import drive_default_cfg
     from linsense.io import write_atomic
-    from linsense.limits import MAX_F_INJ
+    from linsense.limits import MAX_F_INJ, MIN_F_INJ
     from linsense.tune.design import observable_error_gain
 
     if f_inj is not None and not (f_inj > 0 and np.isfinite(f_inj)):
         raise InputError("--f-inj", "", f"must be a positive frequency in Hz, got {f_inj!r}")
+    if f_inj is not None and f_inj < MIN_F_INJ:
+        raise InputError("--f-inj", "", f"{f_inj:g} Hz is below the lower limit of {MIN_F_INJ:g} Hz (an HF "
+                         "injection: below it the resistance is all of the HF impedance; docs/limits.md)")
     if f_inj is not None and f_inj > MAX_F_INJ:
         raise InputError("--f-inj", "", f"{f_inj:g} Hz is beyond the limit of {MAX_F_INJ:g} Hz (half of a "
                          "1 MHz PWM; docs/limits.md)")

@@ -144,6 +144,8 @@ def mutated(draw, doc: dict, sections: dict[str, tuple[str, ...]], max_edits: in
             new = key[:i] + key[i + 1:]
             if new not in keys:
                 table[new] = table.pop(key)
+        elif kind == "typo" and key in table and re.fullmatch(r"[LM][0-9]", key):  # (L4 typed L04)
+            table[f"{key[0]}{'0' * draw(st.integers(1, 2))}{key[1:]}"] = table.pop(key)
         elif kind == "extra":
             table[draw(st.sampled_from(["zz", key + "_x", key.upper() + "X"]))] = draw(_SCALARS)
         elif kind == "section" and sec:
@@ -326,13 +328,6 @@ def motor_violations(doc) -> list[str]:
         if ok is None or not finite_number(v) or not ok(v):
             bad.append(f"saturation.{k}")
     return bad
-
-
-def leading_zero_harmonic(doc) -> bool:
-    """Whether ``doc`` has a harmonic key with a leading zero (``L04``): pending bug (reported,
-    linsense/model/schema.py): it is accepted and its value silently dropped (the model gets L4 = 0)."""
-    ind = doc.get("inductance") if isinstance(doc, dict) else None
-    return isinstance(ind, dict) and any(re.fullmatch(r"[LM]0\d+", k) for k in ind)
 
 
 def eq3_matrix(ind: dict, theta: np.ndarray) -> np.ndarray:

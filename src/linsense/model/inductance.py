@@ -28,30 +28,34 @@ _INDEX = ((0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (2, 0))
 _BLOCK = 4096
 
 
-def _design(theta: np.ndarray, K: int) -> np.ndarray:
+def _design(theta: np.ndarray, K: int, nyquist: bool = False) -> np.ndarray:
+    """Columns ``cos(k theta)``, k = 0 .. K, then ``sin(k theta)``, k = 1 .. K (without
+    ``sin(K theta)`` when ``nyquist``: on ``2K`` equally spaced positions it is zero)."""
     k = np.arange(K + 1)
-    return np.concatenate([np.cos(np.outer(theta, k)), np.sin(np.outer(theta, k[1:]))], axis=1)
+    ks = k[1:K] if nyquist else k[1:]
+    return np.concatenate([np.cos(np.outer(theta, k)), np.sin(np.outer(theta, ks))], axis=1)
 
 
-def _fit(theta: np.ndarray, y: np.ndarray, K: int) -> np.ndarray:
-    """Least-squares coefficients ``(2K+1, 6)`` of the series of order ``K`` through ``(theta, y)``.
+def _fit(theta: np.ndarray, y: np.ndarray, K: int, nyquist: bool = False) -> np.ndarray:
+    """Least-squares coefficients of the series of order ``K`` through ``(theta, y)``, shape
+    ``(2K+1, 6)`` (``(2K, 6)`` when ``nyquist``: no ``sin(K theta)`` column, see :func:`_design`).
 
     Up to :data:`_BLOCK` positions: ``lstsq`` on the design matrix. Above: its normal equations,
     summed over blocks of rows (bounded memory, a few hundred ms for 100,000 positions), solved
     when well conditioned (equally spaced positions: condition 2); else ``lstsq``.
     """
     if theta.size <= _BLOCK:
-        return np.linalg.lstsq(_design(theta, K), y, rcond=None)[0]
-    n = 2 * K + 1
+        return np.linalg.lstsq(_design(theta, K, nyquist), y, rcond=None)[0]
+    n = 2 * K + (0 if nyquist else 1)
     G, b = np.zeros((n, n)), np.zeros((n, y.shape[1]))
     for i in range(0, theta.size, _BLOCK):
-        A = _design(theta[i:i + _BLOCK], K)
+        A = _design(theta[i:i + _BLOCK], K, nyquist)
         G += A.T @ A
         b += A.T @ y[i:i + _BLOCK]
     w = np.linalg.eigvalsh(G)
     if w[0] > 1e-6 * w[-1]:  # (error of the solution about 1e6 eps: 1e-10 relative)
         return np.linalg.solve(G, b)
-    return np.linalg.lstsq(_design(theta, K), y, rcond=None)[0]
+    return np.linalg.lstsq(_design(theta, K, nyquist), y, rcond=None)[0]
 
 
 @dataclass(frozen=True)
@@ -148,12 +152,16 @@ class InductanceModel:
     ) -> InductanceModel:
         """Periodic (trigonometric) least-squares fit of tabulated ``L_abc(theta)``.
 
-        With ``N`` equally spaced samples and the default ``max_order = (N - 1) // 2`` the
-        series interpolates the table exactly; a smaller ``max_order`` smooths it. The order is
-        at most :data:`~linsense.limits.MAX_TABLE_ORDER` (63, the simulator's limit): a table
-        of more than 127 positions is fitted by least squares up to it (interpolated exactly,
-        8,000 positions took minutes and 100,000 asked for 37 GiB; every use of the model costs
-        in proportion to its order).
+        With ``N`` equally spaced samples and the default order ``N // 2`` the series
+        interpolates the table exactly, as a real DFT: for an odd ``N`` the orders up to
+        ``(N - 1) / 2``; for an even ``N`` also the cosine of order ``N / 2`` (the Nyquist term,
+        with its half weight ``sum_i y_i (-1)^i / N``; its sine is zero on the grid and is not
+        fitted). It was left out: 8 positions of a motor with ``L4`` missed ``L4`` at every point
+        (issue 23). A smaller ``max_order`` smooths the table (least squares). The order is at
+        most :data:`~linsense.limits.MAX_TABLE_ORDER` (63, the simulator's limit): a table of
+        more than 127 positions is fitted by least squares up to it (interpolated exactly, 8,000
+        positions took minutes and 100,000 asked for 37 GiB; every use of the model costs in
+        proportion to its order).
 
         Parameters
         ----------
@@ -161,14 +169,26 @@ class InductanceModel:
             Electrical positions, rad.
         entries : ndarray, shape (N, 6)
             ``L_A, L_B, L_C, M_AB, M_BC, M_CA`` at each position, H.
+        max_order : int, optional
+            Highest harmonic order of the fit (default: ``N // 2``, capped at ``MAX_TABLE_ORDER``).
+        description : str
+            Provenance, e.g. ``"table t8.csv"``.
+
+        Returns
+        -------
+        InductanceModel
+            The fitted series; ``b[:, N / 2]`` is zero when the Nyquist cosine is fitted.
         """
         theta = np.asarray(theta, dtype=float)
         entries = np.asarray(entries, dtype=float)
         N = theta.size
-        K = min((N - 1) // 2, MAX_TABLE_ORDER if max_order is None else int(max_order), MAX_TABLE_ORDER)
-        coef = _fit(theta, entries, K)
+        K = min(N // 2, MAX_TABLE_ORDER if max_order is None else int(max_order), MAX_TABLE_ORDER)
+        # (with 2K positions the order K has one degree of freedom: its cosine; N columns for N rows)
+        nyquist = 2 * K == N
+        coef = _fit(theta, entries, K, nyquist)
         a = coef[: K + 1].T
-        b = np.concatenate([np.zeros((6, 1)), coef[K + 1 :].T], axis=1)
+        sines = [np.zeros((6, 1)), coef[K + 1 :].T] + ([np.zeros((6, 1))] if nyquist else [])
+        b = np.concatenate(sines, axis=1)
         return cls(a, b, description=description)
 
     # ------------------------------------------------------------------ evaluation

@@ -229,8 +229,11 @@ def read_inductance_table(path: Path) -> tuple[np.ndarray, np.ndarray]:
     ws = wrapped[order]
     dup = np.nonzero(np.diff(ws) < 1e-9)[0]
     if dup.size:
-        r = int(order[dup[0] + 1])
-        raise InputError(src, f"row {line[r]}, column theta_deg", f"duplicate position {data[r, 0]!r}")
+        r, q = int(order[dup[0] + 1]), int(order[dup[0]])
+        # (plain numbers: the message showed np.float64(360.0); issue 23)
+        raise InputError(src, f"row {line[r]}, column theta_deg",
+                         f"duplicate position {float(data[r, 0])!r} deg (row {line[q]} has "
+                         f"{float(data[q, 0])!r} deg: the same position modulo 360 deg)")
     gaps = np.diff(np.concatenate([ws, [ws[0] + 360.0]]))
     if gaps.max() > 45.0:
         g = int(np.argmax(gaps))
@@ -370,15 +373,16 @@ def motor_to_toml(motor: Motor, table: str | None = None) -> str:
     """Serialise a motor to the motor-file format (round-trips through :func:`load_motor`).
 
     A parametric model writes its eq. (3) parameters; otherwise ``table`` must name the CSV.
+    Every number is written as a plain float (a numpy scalar wrote ``np.float64(9.0)``, not TOML).
     """
     f = motor.friction
     lines = [
         "[motor]",
         f'name = "{motor.name}"',
-        f"R_s = {motor.R_s!r}              # ohm",
-        f"pole_pitch = {motor.pole_pitch!r}     # m, one electrical period",
-        f"force_constant = {motor.force_constant!r}  # N/A, per peak phase current",
-        f"mass = {motor.mass!r}             # kg, moving part",
+        f"R_s = {float(motor.R_s)!r}              # ohm",
+        f"pole_pitch = {float(motor.pole_pitch)!r}     # m, one electrical period",
+        f"force_constant = {float(motor.force_constant)!r}  # N/A, per peak phase current",
+        f"mass = {float(motor.mass)!r}             # kg, moving part",
         "",
         "[inductance]           # H",
     ]
@@ -389,17 +393,19 @@ def motor_to_toml(motor: Motor, table: str | None = None) -> str:
     else:
         raise ValueError("a tabulated inductance model needs the name of its table file")
     if f.viscous or f.coulomb:
-        lines += ["", "[friction]", f"viscous = {f.viscous!r}  # N s/m", f"coulomb = {f.coulomb!r}  # N"]
+        lines += ["", "[friction]", f"viscous = {float(f.viscous)!r}  # N s/m",
+                  f"coulomb = {float(f.coulomb)!r}  # N"]
     sat = motor.saturation
     if sat is not None and not sat.tables:  # (tables need their file names: not written)
-        lines += ["", "[saturation]", f"polarity = {sat.polarity!r}  # 1/A", f"q_drop = {sat.q_drop!r}",
-                  f"q_current = {sat.q_current!r}  # A"]
+        lines += ["", "[saturation]", f"polarity = {float(sat.polarity)!r}  # 1/A",
+                  f"q_drop = {float(sat.q_drop)!r}", f"q_current = {float(sat.q_current)!r}  # A"]
         if sat.magnet_current is not None:
-            lines.append(f"magnet_current = {sat.magnet_current!r}  # A")
+            lines.append(f"magnet_current = {float(sat.magnet_current)!r}  # A")
     if motor.pm_harmonics:
         lines += ["", "[pm_flux]", "harmonics = ["]
         lines += [
-            f"  {{ order = {h.order}, amplitude = {h.amplitude!r}, phase_deg = {math.degrees(h.phase)!r} }},"
+            f"  {{ order = {int(h.order)}, amplitude = {float(h.amplitude)!r}, "
+            f"phase_deg = {float(math.degrees(h.phase))!r} }},"
             for h in motor.pm_harmonics
         ]
         lines.append("]")

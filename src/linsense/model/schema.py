@@ -20,7 +20,11 @@ _STRICT = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
 
 Positive = Annotated[float, Field(gt=0)]
 NonNegative = Annotated[float, Field(ge=0)]
-_HARMONIC_KEY = re.compile(r"^([LM])(\d+)$")
+#: a harmonic key as documented (docs/motor-files.md): L4, M4, L6 ... (ASCII digits, no leading
+#: zero: L04 was accepted and its value dropped, the model got L4 = 0; issue 23)
+_HARMONIC_KEY = re.compile(r"([LM])([1-9][0-9]*)")
+#: a harmonic key with leading zeros (L04, M006): refused, naming the key it stands for
+_ZERO_PADDED_KEY = re.compile(r"([LM])0+([0-9]+)")
 
 
 class MotorSection(BaseModel):
@@ -54,7 +58,12 @@ class InductanceSection(BaseModel):
     def _check(self) -> InductanceSection:
         extra = self.model_extra or {}
         for key, value in extra.items():
-            m = _HARMONIC_KEY.match(key)
+            padded = _ZERO_PADDED_KEY.fullmatch(key)
+            if padded:
+                meant = f"{padded.group(1)}{int(padded.group(2))}"
+                raise KeyProblem(key, f"a harmonic key is written without leading zeros (L4, M4, L6 ...) "
+                                 f"(did you mean '{meant}'?)")
+            m = _HARMONIC_KEY.fullmatch(key)
             if not m or int(m.group(2)) < 4 or int(m.group(2)) % 2:
                 known = [k for k in type(self).model_fields] + ["L4", "M4", "L6", "M6"]
                 hint = closest_key(key, known)
