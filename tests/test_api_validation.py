@@ -29,6 +29,7 @@ def ecce():
     ({"points": 360, "f_inj": 1000 + 1j}, "f_inj"),
     ({"points": 360, "f_inj": float("nan")}, "f_inj"),
     ({"points": 360, "f_inj": 1e300}, "f_inj"),  # (an all-zero table)
+    ({"points": 360, "f_inj": 1e-300}, "f_inj"),  # (an all-zero table: below MIN_F_INJ, 1 Hz)
     ({"points": 360, "f_inj": 1000.0, "quad": 1.0}, "quad"),
     ({"points": 360, "f_inj": 1000.0, "quad": None}, "quad"),
     ({"points": 360, "injection": "sine"}, "injection"),

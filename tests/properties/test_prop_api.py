@@ -73,7 +73,8 @@ def _finite(obj) -> bool:
 CALLS = {
     "build_lut": (lambda m, a: build_lut(m, a["points"], a["f_inj"], quad=a["quad"]),
                   ("points", "f_inj", "quad"), lambda r, a: r.values.shape == (a["points"],),
-                  {"f_inj": lambda v: v is None or ARGS["f_inj"][1](v)}),  # (None: eq. 12)
+                  {"f_inj": lambda v: v is None or (ARGS["f_inj"][1](v) and v >= 1.0)}),  # (None: eq. 12;
+                  # a table's injection at least 1 Hz, MIN_F_INJ: 1e-300 Hz gave an all-zero table)
     "psi_lut_resistive": (lambda m, a: psi_lut_resistive(m, THETA, a["f_inj"], a["quad"]),
                           ("f_inj", "quad"), lambda r, a: r.shape == THETA.shape),
     "hf_current": (lambda m, a: hf_current(m, THETA, a["v_inj"], a["f_inj"], 0.0, a["quad"]),

@@ -100,7 +100,7 @@ def build_lut(motor, points: int, f_inj: float | None = None, quad: float = 0.0,
     """
     import numbers
 
-    from linsense.limits import MAX_F_INJ, MAX_POINTS
+    from linsense.limits import MAX_F_INJ, MAX_POINTS, MIN_F_INJ
 
     src = "linsense.compensation.build_lut"
     # (the API refuses what the CLI refuses: 4.5 points, 10**9 points, a complex or negative
@@ -112,9 +112,9 @@ def build_lut(motor, points: int, f_inj: float | None = None, quad: float = 0.0,
         raise InputError(src, "injection",
                          f"must be 'pulsating', 'rotating' or 'square', got {_shown(injection)}")
     if f_inj is not None and (isinstance(f_inj, bool) or not isinstance(f_inj, numbers.Real)
-                              or not (math.isfinite(f_inj) and 0 < f_inj <= MAX_F_INJ)):
-        raise InputError(src, "f_inj",
-                         f"must be None or a frequency in (0, {MAX_F_INJ:g}] Hz, got {_shown(f_inj)}")
+                              or not (math.isfinite(f_inj) and MIN_F_INJ <= f_inj <= MAX_F_INJ)):
+        raise InputError(src, "f_inj", f"must be None or a frequency in [{MIN_F_INJ:g}, {MAX_F_INJ:g}] Hz "
+                         f"(docs/limits.md), got {_shown(f_inj)}")
     if isinstance(quad, bool) or not isinstance(quad, numbers.Real) or not 0.0 <= quad < 1.0:
         raise InputError(src, "quad", f"must be in [0, 1), got {_shown(quad)}")
     points = int(points)
