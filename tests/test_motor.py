@@ -220,3 +220,14 @@ def test_a_duplicate_position_is_named_as_a_plain_number(ecce, tmp_path):
         read_inductance_table(tmp_path / "t.csv")
     msg = str(err.value)
     assert "duplicate position 360.0 deg" in msg and "row 2 has 0.0 deg" in msg and "np." not in msg, msg
+
+
+@pytest.mark.parametrize("name", ['a "quoted" name', "back\\slash", "both \\\" ends \\"])
+def test_motor_to_toml_writes_any_name_as_a_string(ecce, tmp_path, name):
+    """A name with a quote or a backslash wrote a motor file that did not load
+    back (issue 23): it is a TOML string now, and reads back as it was."""
+    import dataclasses
+
+    path = tmp_path / "m.toml"
+    path.write_text(motor_to_toml(dataclasses.replace(ecce, name=name)))
+    assert load_motor(str(path)).name == name

@@ -369,6 +369,14 @@ def check_motor(motor: Motor) -> None:
         )
 
 
+def _toml_str(text: str) -> str:
+    """``text`` as a TOML basic string (a name with a quote or a backslash wrote a file that did not
+    load back)."""
+    import tomli_w
+
+    return tomli_w.dumps({"s": str(text)})[len("s = "):].strip()
+
+
 def motor_to_toml(motor: Motor, table: str | None = None) -> str:
     """Serialise a motor to the motor-file format (round-trips through :func:`load_motor`).
 
@@ -378,7 +386,7 @@ def motor_to_toml(motor: Motor, table: str | None = None) -> str:
     f = motor.friction
     lines = [
         "[motor]",
-        f'name = "{motor.name}"',
+        f"name = {_toml_str(motor.name)}",
         f"R_s = {float(motor.R_s)!r}              # ohm",
         f"pole_pitch = {float(motor.pole_pitch)!r}     # m, one electrical period",
         f"force_constant = {float(motor.force_constant)!r}  # N/A, per peak phase current",
@@ -387,7 +395,7 @@ def motor_to_toml(motor: Motor, table: str | None = None) -> str:
         "[inductance]           # H",
     ]
     if table is not None:
-        lines.append(f'table = "{table}"')
+        lines.append(f"table = {_toml_str(table)}")
     elif motor.inductance.params:
         lines += [f"{k} = {float(v)!r}" for k, v in motor.inductance.params.items()]
     else:
