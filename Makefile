@@ -130,15 +130,16 @@ FUZZ_BUILD   = dir=$(BUILD)/fuzz/$$v; mkdir -p $$dir/corpus $$dir/obj; \
 	  $(FUZZ_CC) -fsanitize=fuzzer,address,undefined $$objs $$dir/obj/fuzz_drive.o -lm -o $$dir/fuzz_drive
 # The property suite's long run (tests/properties/, hypothesis profile "long": thousands of generated
 # motor, scenario and sweep files, tables and API calls per property; PROP_EXAMPLES sets the number)
-# before the C fuzzing when make fuzz is run itself; make test runs the bounded "ci" profile in pytest
-# (the sub-make of fuzztest skips this).
+# before the C fuzzing (make fuzzc) when make fuzz is run; make test runs the bounded "ci" profile in
+# pytest and 30 s of the C fuzzing (fuzztest).
 PROP_EXAMPLES ?= 2000
-.PHONY: fuzzpy
+.PHONY: fuzzpy fuzzc
 fuzzpy: $(STAMP)
-	@if [ "$(MAKELEVEL)" = 0 ]; then HYPOTHESIS_PROFILE=long PROP_EXAMPLES=$(PROP_EXAMPLES) $(PY) -m pytest -q -p no:cacheprovider tests/properties; \
-	else echo "fuzzpy: skipped under make test (its pytest runs tests/properties with the ci profile)"; fi
+	HYPOTHESIS_PROFILE=long PROP_EXAMPLES=$(PROP_EXAMPLES) $(PY) -m pytest -q -p no:cacheprovider tests/properties
 
-fuzz: fuzzpy
+fuzz: fuzzpy fuzzc
+
+fuzzc:
 	@set -e; for v in float double; do \
 	  $(FUZZ_BUILD); \
 	  echo "fuzz_drive ($$v): $(FUZZ_TIME) s"; \
@@ -162,7 +163,7 @@ fuzz-merge:
 fuzztest: tools
 	@if printf 'int LLVMFuzzerTestOneInput(const char *d, unsigned long n) { (void)d; (void)n; return 0; }\n' | \
 	    $(FUZZ_CC) -x c -fsanitize=fuzzer - -o /dev/null 2>/dev/null; then \
-	  $(MAKE) --no-print-directory fuzz FUZZ_TIME=30; \
+	  $(MAKE) --no-print-directory fuzzc FUZZ_TIME=30; \
 	else \
 	  echo "fuzz: skipped ($(FUZZ_CC) with libFuzzer not available; make tools installs it as root)"; \
 	fi

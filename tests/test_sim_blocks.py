@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from linsense import ctrl
+from linsense.errors import InputError
 from linsense.model.motor import load_motor
 from linsense.sim import core, run
 from linsense.sim.build import build
@@ -179,5 +180,5 @@ def test_metrics_only_matches_the_full_trace(monkeypatch, scenario):
 
 
 def test_record_mode_checked():
-    with pytest.raises(ValueError, match="record"):
+    with pytest.raises(InputError, match="simulate: record: must be one of .trace., .metrics., got"):
         run.simulate(_hold(0.01), record="everything")

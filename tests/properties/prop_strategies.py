@@ -17,13 +17,32 @@ import re
 
 import numpy as np
 import tomli_w
-from hypothesis import settings
+from hypothesis import HealthCheck, settings
 from hypothesis import strategies as st
 
 from linsense.errors import LinsenseError
 
-#: the hypothesis profile of this folder (registered in conftest.py): ``ci`` unless HYPOTHESIS_PROFILE
-PROFILE = settings.get_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
+_COMMON = dict(
+    deadline=None,
+    # (run_cli and tmp_path are function-scoped: every example makes its own folder and resets the
+    # captured output, so sharing them between examples is safe)
+    suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow,
+                           HealthCheck.filter_too_much, HealthCheck.data_too_large],
+)
+#: the hypothesis profiles of this folder's properties (docs/limits.md, "The property suite"):
+#: ``ci`` (the default) a few examples per property, derandomized (the same examples on every run, so
+#: ``make test`` is deterministic), no deadline, no example database; ``long`` (``make fuzz`` or
+#: ``make fuzzpy``: HYPOTHESIS_PROFILE=long) ``PROP_EXAMPLES`` (2000) random examples per property
+#: (times its scale), failures kept in ``.hypothesis/`` and printed with their reproduction blob.
+#: Settings objects of this module, not registered profiles: they apply to these properties only (a
+#: conftest.py here was imported as ``conftest`` in place of tests/conftest.py, whose names other
+#: test modules import)
+PROFILES = {
+    "ci": settings(max_examples=100, derandomize=True, database=None, print_blob=False, **_COMMON),
+    "long": settings(max_examples=int(os.environ.get("PROP_EXAMPLES", "2000")), derandomize=False,
+                     print_blob=True, **_COMMON),
+}
+PROFILE = PROFILES[os.environ.get("HYPOTHESIS_PROFILE", "ci")]
 
 
 def prop_settings(**kw):

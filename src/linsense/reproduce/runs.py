@@ -32,7 +32,7 @@ LOADS_N = (0.0, 20.0, 40.0)
 HOLD_VARIANTS = {
     "LUT with R_s": {},
     "LUT of eq. (12)": {"observer": {"lut_model": "eq12"}},
-    "no LUT": {"control": {"mode": "sensorless_nolut"}},
+    "no LUT": {"control": {"mode": "sensorless_nolut"}, "observer": {"lut_model": None}},
     "linsense default drive (elliptical, dead-time residual)": {
         "injection": {"quadrature": None}, "observer": {"bandwidth_hz": None}},
 }
