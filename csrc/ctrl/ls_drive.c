@@ -189,6 +189,12 @@ ls_status ls_drive_init(ls_drive *d, const ls_drive_cfg *cfg)
         (cfg->inject.shape == LS_INJ_SQUARE && (cfg->sep.type != LS_BIQUAD_LOWPASS || cfg->hf_dtres))) {
         return LS_ERR_PARAM;
     }
+    /* every module counts in the drive's pole pitch (an observer's speed in m/s, the controllers'
+     * speed, the trajectory's), which is bounded: a pitch of 1e38 m made the speed inf (fuzzed) */
+    if (cfg->pole_pitch > LS_DRIVE_POLE_PITCH_MAX || cfg->obs.pole_pitch != cfg->pole_pitch ||
+        cfg->enc_obs.pole_pitch != cfg->pole_pitch || cfg->traj.pole_pitch != cfg->pole_pitch) {
+        return LS_ERR_PARAM;
+    }
     /* every module samples at the drive rate */
     if (cfg->inject.fs != cfg->fs || cfg->bpf.fs != cfg->fs || cfg->sep.fs != cfg->fs ||
         cfg->demod.fs != cfg->fs || cfg->obs.fs != cfg->fs || cfg->enc_obs.fs != cfg->fs ||

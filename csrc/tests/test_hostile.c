@@ -255,6 +255,13 @@ static void e_dtres_l(ls_drive_cfg *c) { c->dtres.l_q = 1.40129846e-45f; }
 static void e_vdc(ls_drive_cfg *c) { c->prot.v_dc_max = LS_R(1e6); }
 static void e_imax(ls_drive_cfg *c) { c->i_max = LS_R(1e6); }
 static void e_pitch(ls_drive_cfg *c) { c->pole_pitch = LS_R(1e-38); }
+/* a huge pitch, the same in every module: a speed in m/s was inf (found by the fuzzer: v_fb) */
+static void e_pitch_huge(ls_drive_cfg *c)
+{
+    c->pole_pitch = c->obs.pole_pitch = c->enc_obs.pole_pitch = c->traj.pole_pitch = LS_R(1e30);
+}
+/* the observer counting in another pitch than the drive: its speed is not the controllers' */
+static void e_pitch_obs(ls_drive_cfg *c) { c->obs.pole_pitch = LS_R(2.0) * c->pole_pitch; }
 static void e_kf(ls_drive_cfg *c) { c->force_constant = (LS_REAL)NAN; }
 static void e_enc_v0(ls_drive_cfg *c) { c->enc_v_max = LS_R(0.0); }
 static void e_enc_vnan(ls_drive_cfg *c) { c->enc_v_max = (LS_REAL)NAN; }
@@ -272,7 +279,8 @@ static void test_init_refuses(void)
     static const cfg_edit edits[] = {e_obs_k1_huge, e_obs_k1_step, e_obs_k2_huge, e_obs_k3_mech, e_obs_omega,
                                      e_obs_mass,    e_cur_kp,      e_cur_kp_edge, e_cur_ki,      e_cur_l,
                                      e_demod_gain,  e_q_tiny,      e_q_huge,      e_fs,          e_vdc,
-                                     e_imax,        e_pitch,       e_kf,          e_enc_v0,      e_enc_vnan,
+                                     e_imax,        e_pitch,       e_pitch_huge,  e_pitch_obs,   e_kf,
+                                     e_enc_v0,      e_enc_vnan,
                                      e_enc_vhuge,   e_cal_period,  e_dtres_l};
     size_t k;
     ls_drive_cfg cfg;

@@ -67,6 +67,7 @@
 #define LS_DRIVE_I_MAX LS_R(1.0e5)     /* A, largest current limit (i_max, prot.i_max) */
 #define LS_DRIVE_V_DC_MAX LS_R(1.0e5)  /* V, largest bus-voltage limit (prot.v_dc_max) */
 #define LS_DRIVE_ENC_JUMP_MAX LS_R(1.0e9) /* -, largest enc_v_max in counts per step */
+#define LS_DRIVE_POLE_PITCH_MAX LS_R(10.0) /* m, largest pole pitch (a speed in m/s stays finite) */
 
 typedef enum {
     LS_MODE_OFF = 0,
@@ -97,7 +98,8 @@ typedef struct {
 
 typedef struct {
     LS_REAL fs;             /* Hz, control sampling rate = PWM frequency, > 0 */
-    LS_REAL pole_pitch;     /* m, one electrical period tau, > 0 */
+    LS_REAL pole_pitch;     /* m, one electrical period tau, in (0, LS_DRIVE_POLE_PITCH_MAX]; obs, enc_obs
+                               and traj use the same */
     LS_REAL force_constant; /* N/A, per peak phase current, > 0 */
     LS_REAL i_max;          /* A, limit of the current reference, > 0 */
     LS_REAL delay_comp;     /* -, angle advance of the voltage in sampling periods (1.5 for a
