@@ -5,11 +5,11 @@ the saturation verdict. Standard library only.
   fuzz_report.py run --log LOG -- FUZZER ARGS...
       runs the fuzzer, writes each line of its output to LOG prefixed with the seconds since its
       start, and exits with the fuzzer's exit code
-  fuzz_report.py summary LOG [--quiet 0.5] [--growth 0.005] [--label NAME]
+  fuzz_report.py summary LOG [--quiet 0.5] [--growth 0.005] [--min-run 300] [--label NAME]
       prints "coverage saturated: cov N; +k edges (x %) in the last 50 % of the run ..." when `cov`
       (the edges of the firmware library covered) grew by at most GROWTH of itself during the last
-      QUIET fraction of the run's wall time (a plateau), else "NOT saturated: ..."; never fails on
-      that
+      QUIET fraction of the run's wall time (a plateau), else "NOT saturated: ..."; a run shorter
+      than MIN_RUN s after its corpus loaded is "not judged"; never fails on that
   fuzz_report.py curve LOG[=LABEL[@T0]]... --csv OUT [--png OUT.png]
       writes the curve (label, t_s, execs, cov, ft, corp) of each log; the label defaults to the
       log's parent directory name; @T0 adds T0 s to its times (a run that continued an earlier
@@ -70,7 +70,7 @@ def inited(path):
     return 0.0
 
 
-def verdict(path, quiet, growth):
+def verdict(path, quiet, growth, min_run=300.0):
     """Saturated when the library's edges (`cov`) grew by at most ``growth`` (a fraction of the
     edges at the window's start) during the last ``quiet`` fraction of the run's wall time: a
     plateau, where the edges still found are a tail of rare combinations (one per minutes); with
@@ -82,23 +82,28 @@ def verdict(path, quiet, growth):
     for t, execs, cov, _, _ in points:
         if cov > cov_max:
             cov_max, t_new, n_new = cov, t, execs
-    t_win = (1.0 - quiet) * t_end
+    t0 = inited(path)  # (the run proper starts once the corpus is loaded)
+    t_win = t0 + (1.0 - quiet) * (t_end - t0)
     before = [cov for t, _, cov, _, _ in points if t <= t_win]
     cov_win = max(before) if before else points[0][2]
     gained = cov_max - cov_win
     execs_end = points[-1][1]
-    ok = t_end > 0 and t_win >= inited(path) and gained <= growth * cov_win
+    if t_end - t0 < min_run:
+        return False, (f"coverage not judged: cov {cov_max}, +{gained} edges in the last {quiet:.0%} of "
+                       f"a {t_end:.0f}-s run (saturation is judged on runs of {min_run:.0f} s or more "
+                       "after the corpus is loaded: make fuzz FUZZ_TIME=600)")
+    ok = t_end > 0 and gained <= growth * cov_win
     word = "coverage saturated" if ok else "NOT saturated"
     return ok, (
         f"{word}: cov {cov_max}, ft {points[-1][3]}; +{gained} edges ({gained / max(cov_win, 1):.2%}) in the "
-        f"last {quiet:.0%} of the run ({t_end - t_win:.0f} s), the last new edge at {t_new:.0f} s of "
-        f"{t_end:.0f} s (exec {n_new} of {execs_end}; saturated = at most {growth:.1%} more edges in the "
-        f"last {quiet:.0%})"
+        f"last {quiet:.0%} of the run after the corpus loaded ({t_end - t_win:.0f} s), the last new edge at "
+        f"{t_new:.0f} s of {t_end:.0f} s (exec {n_new} of {execs_end}; saturated = at most {growth:.1%} "
+        f"more edges in the last {quiet:.0%})"
     )
 
 
 def summary(args):
-    _, line = verdict(args.log, args.quiet, args.growth)
+    _, line = verdict(args.log, args.quiet, args.growth, args.min_run)
     print(f"[{args.label}] {line}" if args.label else line)
     return 0
 
@@ -153,6 +158,7 @@ def main():
     s.add_argument("log")
     s.add_argument("--quiet", type=float, default=0.5)
     s.add_argument("--growth", type=float, default=0.005)
+    s.add_argument("--min-run", type=float, default=300.0)
     s.add_argument("--label", default="")
     c = sub.add_parser("curve")
     c.add_argument("logs", nargs="+")
