@@ -115,6 +115,30 @@ def _preset_names() -> tuple[str, ...]:  # (the package's files do not change wh
     return tuple(sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".toml")))
 
 
+def preset_text(name: str) -> str:
+    """The TOML text of the built-in preset ``name`` (one of :func:`preset_names`)."""
+    return (resources.files("linsense.model") / "presets" / f"{name}.toml").read_text()
+
+
+def names_a_path(spec: str) -> bool:
+    """Whether a scenario's (or a sweep's) motor ``spec`` names a file, relative to the scenario,
+    rather than a preset: a ``.toml`` name or a path with a separator (the file need not exist: the
+    scenario's reader says so)."""
+    return spec.lower().endswith(".toml") or any(c in spec for c in "/\\")
+
+
+def table_files(data: dict) -> list[tuple[str, str]]:
+    """The tables a motor file's TOML ``data`` names, as ``(kind, path as written)``: its
+    ``[inductance] table`` and its ``[saturation] tables`` (kind "inductance table" or "saturation
+    table"); data that is not a motor file's names none."""
+    ind = data.get("inductance")
+    out = [("inductance table", ind.get("table"))] if isinstance(ind, dict) else []
+    sat = data.get("saturation")
+    if isinstance(sat, dict) and isinstance(sat.get("tables"), list):
+        out += [("saturation table", t) for t in sat["tables"]]
+    return [(kind, t) for kind, t in out if isinstance(t, str) and t]
+
+
 def names_a_file(spec: str | Path) -> bool:
     """Whether :func:`load_motor` reads ``spec`` as a motor file (a ``.toml`` name, an existing path
     or a path with a separator) rather than as a preset name."""
@@ -153,7 +177,7 @@ def load_motor(spec: str | Path, check: bool = True) -> Motor:
                 "--motor", "", f"unknown preset '{spec_s}' (presets: {', '.join(preset_names())}; "
                 "or give a path to a .toml motor file)"
             )
-        text = (resources.files("linsense.model") / "presets" / f"{spec_s}.toml").read_text()
+        text = preset_text(spec_s)
         motor = motor_from_toml(text, source=f"preset {spec_s}", base_dir=None)
     check_plausible(motor)
     if check:

@@ -26,7 +26,7 @@ from linsense.compensation.lut import build_lut, lut_r_slope
 from linsense.ctrl import ConfigError, Drive, drive_default_cfg, ffi, lib, make_lut
 from linsense.errors import InputError, LinsenseError, ModelError
 from linsense.limits import MAX_STEPS, MAX_TRACE_BYTES, MAX_TRACE_FILE_BYTES
-from linsense.model.motor import Motor, load_motor, preset_names
+from linsense.model.motor import Motor, load_motor, names_a_path, preset_names
 from linsense.model.saturation import Saturation
 from linsense.sim.core import BLOCKS, SIGNALS, PlantSetup, SimulationError, plant_template, sim_cfg
 from linsense.sim.plant import fill_saturation, lab_fourier
@@ -148,8 +148,7 @@ def resolve_motor(sc: Scenario, spec: str | None = None, key: str = "motor", che
     relative to the scenario file. ``check = False`` skips :func:`check_motor` (for a motor the
     controller only believes in: its tables need not describe a realisable winding)."""
     spec = sc.spec.motor if spec is None else spec
-    looks_like_path = spec.lower().endswith(".toml") or any(c in spec for c in "/\\")
-    if not looks_like_path:
+    if not names_a_path(spec):
         if spec not in preset_names():
             raise InputError(sc.source, key, f"unknown preset {spec!r} "
                              f"(presets: {', '.join(preset_names())}; "

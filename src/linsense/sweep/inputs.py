@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import json
 import os
-from importlib import resources
 from pathlib import Path
 
 from linsense._digest import bytes_sha256, file_sha256
@@ -27,11 +26,6 @@ BASE = "base scenario"
 PRESET = "motor preset"
 #: inputs held in memory for the whole sweep (not re-read by the runs): not checked while it runs
 IN_MEMORY = (SWEEP_FILE, PRESET)
-
-
-def _looks_like_path(spec: str) -> bool:
-    """As the simulator decides (``linsense.sim.build.resolve_motor``): a file, not a preset name."""
-    return spec.lower().endswith(".toml") or any(c in spec for c in "/\\")
 
 
 def _entry(what: str, path: str, sha: str | None) -> dict:
@@ -61,26 +55,18 @@ def _toml(data: bytes | None, source: str) -> dict:
 
 def _motor(what: str, spec: str, scenario_dir: Path) -> list[dict]:
     """The entries of one motor (a preset's text, or a motor file and the tables it names)."""
-    from linsense.model.motor import preset_names
+    from linsense.model.motor import names_a_path, preset_names, preset_text, table_files
 
-    if not _looks_like_path(spec):
+    if not names_a_path(spec):
         if spec not in preset_names():
             return []  # (every run refuses it: the rows do not depend on any file)
-        text = (resources.files("linsense.model") / "presets" / f"{spec}.toml").read_text()
-        return [_entry(PRESET, spec, bytes_sha256(text.encode("utf-8")))]
+        return [_entry(PRESET, spec, bytes_sha256(preset_text(spec).encode("utf-8")))]
     p = Path(spec) if Path(spec).is_absolute() else scenario_dir / spec
     entry, data = _file(what, p)
     out = [entry]
-    doc = _toml(data, str(p))
-    ind = doc.get("inductance")
-    tables = [("inductance table", ind.get("table"))] if isinstance(ind, dict) else []
-    sat = doc.get("saturation")
-    if isinstance(sat, dict) and isinstance(sat.get("tables"), list):
-        tables += [("saturation table", t) for t in sat["tables"]]
-    for kind, t in tables:
-        if isinstance(t, str) and t:
-            tp = Path(t) if Path(t).is_absolute() else p.parent / t
-            out.append(_file(kind, tp)[0])
+    for kind, t in table_files(_toml(data, str(p))):
+        tp = Path(t) if Path(t).is_absolute() else p.parent / t
+        out.append(_file(kind, tp)[0])
     return out
 
 

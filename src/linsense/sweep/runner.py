@@ -10,14 +10,13 @@ import copy
 import hashlib
 import math
 from dataclasses import dataclass, field
-from importlib import resources
 from pathlib import Path
 
 import tomli_w
 
 from linsense.errors import InputError, LinsenseError
 from linsense.io import parse_toml, read_toml, write_atomic
-from linsense.model.motor import preset_names
+from linsense.model.motor import names_a_path, preset_names, preset_text, table_files
 from linsense.sweep.spec import SweepSpec
 
 #: scalar metrics copied into a sweep's rows (lists and the long texts stay out; no wall-clock time:
@@ -47,21 +46,20 @@ class SweepContext:
 
 def _motor_data(spec: str, scenario_dir: Path, source: str) -> tuple[dict, Path]:
     """The base motor's TOML data (a preset's or a file's, table paths made absolute)."""
-    looks_like_path = spec.lower().endswith(".toml") or any(c in spec for c in "/\\")
-    if not looks_like_path and spec in preset_names():
-        text = (resources.files("linsense.model") / "presets" / f"{spec}.toml").read_text()
-        return parse_toml(text, f"preset {spec}"), scenario_dir
+    if not names_a_path(spec) and spec in preset_names():
+        return parse_toml(preset_text(spec), f"preset {spec}"), scenario_dir
     p = Path(spec) if Path(spec).is_absolute() else scenario_dir / spec
     data = read_toml(p, "motor file (the base scenario's motor)")
     # the tables' paths made absolute: an edited copy is written under DIR/motors/ (a saturated
     # motor's tables were relative to it there: every run of a motor.* axis was refused)
-    ind = data.get("inductance")
-    if isinstance(ind, dict) and isinstance(ind.get("table"), str) and not Path(ind["table"]).is_absolute():
-        ind["table"] = str((p.parent / ind["table"]).resolve())
-    sat = data.get("saturation")
-    if isinstance(sat, dict) and isinstance(sat.get("tables"), list):
-        sat["tables"] = [str((p.parent / t).resolve()) if isinstance(t, str) and not Path(t).is_absolute()
-                         else t for t in sat["tables"]]
+    def absolute(t):
+        return str((p.parent / t).resolve()) if isinstance(t, str) and t and not Path(t).is_absolute() else t
+
+    kinds = {kind for kind, _ in table_files(data)}
+    if "inductance table" in kinds:
+        data["inductance"]["table"] = absolute(data["inductance"]["table"])
+    if "saturation table" in kinds:
+        data["saturation"]["tables"] = [absolute(t) for t in data["saturation"]["tables"]]
     return data, p.parent
 
 

@@ -10,7 +10,7 @@ import tomli_w
 
 from linsense.analysis.hf import end_anisotropy
 from linsense.compensation.lut import build_lut, c_comment_text, c_identifier, lut_r_slope
-from linsense.model.motor import Motor
+from linsense.model.motor import Motor, names_a_path
 from linsense.tune.design import (
     V_DC_MAX_FRACTION,
     V_DC_MIN_FRACTION,
@@ -115,8 +115,7 @@ def scenario_toml(
     """The scenario as TOML; a motor-file path (relative to ``base_dir``, default the working
     folder, as the command line gives it) is made relative to the output file's folder."""
     ref = motor_spec
-    looks_like_path = motor_spec.lower().endswith(".toml") or any(c in motor_spec for c in "/\\")
-    if looks_like_path:
+    if names_a_path(motor_spec):
         p = Path(motor_spec)
         if not p.is_absolute():
             p = (base_dir or Path.cwd()) / p
