@@ -28,6 +28,13 @@ def _cut_quoted(m: re.Match) -> str:
     return f"{q}{inner[:MAX_SHOWN_CHARS]}\u2026{q} ({len(inner):,} characters)"
 
 
+def shown(value) -> str:
+    """``repr`` of a user's ``value`` for a message or a comment, a numpy scalar as the plain Python
+    number (``360.0``, not ``np.float64(360.0)``; issue 23)."""
+    item = getattr(value, "item", None)  # (numpy scalars; errors.py does not import numpy)
+    return repr(item() if callable(item) and getattr(value, "ndim", None) == 0 else value)
+
+
 def bounded(text: str, limit: int = MAX_MESSAGE_CHARS) -> str:
     """``text`` with every user value in it bounded, for a one-line message (docs/limits.md).
 

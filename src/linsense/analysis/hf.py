@@ -102,7 +102,7 @@ def real_arg(v, source: str, name: str, low: float = -math.inf, high: float = ma
     string or a complex number gave tables of NaN or a numpy traceback)."""
     import numbers
 
-    from linsense.errors import InputError
+    from linsense.errors import InputError, shown
 
     ok = isinstance(v, numbers.Real) and not isinstance(v, bool | np.bool_) and math.isfinite(v)
     if ok:
@@ -111,7 +111,7 @@ def real_arg(v, source: str, name: str, low: float = -math.inf, high: float = ma
         lo = "" if low == -math.inf else f"{'(' if low_open else '['}{low:g}"
         hi = "" if high == math.inf else f"{high:g}{')' if high_open else ']'}"
         rng = f" in {lo or '(-inf'}, {hi or 'inf)'}" if lo or hi else ""
-        raise InputError(source, name, f"must be {what}{rng}, got {v!r}")
+        raise InputError(source, name, f"must be {what}{rng}, got {shown(v)}")
     return float(v)
 
 

@@ -23,17 +23,11 @@ from pathlib import Path
 import numpy as np
 
 from linsense import __version__
-from linsense.analysis.hf import psi_lut, psi_lut_resistive
-from linsense.errors import InputError
+from linsense.analysis.hf import psi_lut, psi_lut_resistive, real_arg
+from linsense.errors import InputError, shown
 from linsense.io import check_width, csv_rows, read_text_file
 
 FORMATS = ("csv", "json", "c")
-
-
-def _shown(value) -> str:
-    """``repr`` of ``value`` for a message or a comment, a numpy scalar as the plain Python number
-    (``360.0``, not ``np.float64(360.0)``; issue 23)."""
-    return repr(value.item() if isinstance(value, np.generic) else value)
 
 
 @dataclass(frozen=True)
@@ -107,16 +101,13 @@ def build_lut(motor, points: int, f_inj: float | None = None, quad: float = 0.0,
     # frequency were accepted, the second until memory ran out)
     if isinstance(points, bool) or not isinstance(points, numbers.Integral) or not 4 <= points <= MAX_POINTS:
         raise InputError(src, "points", f"must be an integer in 4 .. {MAX_POINTS:,} (docs/limits.md), "
-                         f"got {_shown(points)}")
+                         f"got {shown(points)}")
     if injection not in ("pulsating", "rotating", "square"):
         raise InputError(src, "injection",
-                         f"must be 'pulsating', 'rotating' or 'square', got {_shown(injection)}")
-    if f_inj is not None and (isinstance(f_inj, bool) or not isinstance(f_inj, numbers.Real)
-                              or not (math.isfinite(f_inj) and MIN_F_INJ <= f_inj <= MAX_F_INJ)):
-        raise InputError(src, "f_inj", f"must be None or a frequency in [{MIN_F_INJ:g}, {MAX_F_INJ:g}] Hz "
-                         f"(docs/limits.md), got {_shown(f_inj)}")
-    if isinstance(quad, bool) or not isinstance(quad, numbers.Real) or not 0.0 <= quad < 1.0:
-        raise InputError(src, "quad", f"must be in [0, 1), got {_shown(quad)}")
+                         f"must be 'pulsating', 'rotating' or 'square', got {shown(injection)}")
+    if f_inj is not None:
+        real_arg(f_inj, src, "f_inj", MIN_F_INJ, MAX_F_INJ, what="None or a frequency in Hz (docs/limits.md)")
+    real_arg(quad, src, "quad", 0.0, 1.0, high_open=True, what="a number")
     points = int(points)
     theta = 2.0 * np.pi * np.arange(points) / points
     prov = motor.provenance()
@@ -238,7 +229,7 @@ def to_c_header(lut: Lut, symbol: str | None = None) -> str:
     up = sym.upper()
     # (a motor name is the user's text: "*/" in it ended the comment and the header did not compile,
     # "/*" in it is a -Wcomment warning)
-    prov = "\n".join(c_comment_text(f" *   {k} = {_shown(v)}")
+    prov = "\n".join(c_comment_text(f" *   {k} = {shown(v)}")
                      for k, v in (lut.provenance or {"name": lut.name}).items())
     rows = []
     vals = [_c_float(v) for v in lut.values]
