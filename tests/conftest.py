@@ -64,5 +64,19 @@ def run_cli(capsys):
     return run
 
 
+def scenario_with(base: str, text: str) -> str:
+    """The scenario text ``base`` with ``text`` (sections and keys) added; a section the base has
+    is merged (its keys added under its header)."""
+    out, extra = base, []
+    for block in text.strip().split("\n[") if text.strip() else []:
+        block = block if block.startswith("[") else "[" + block
+        head, _, body = block.partition("\n")
+        if head in out:
+            out = out.replace(head + "\n", head + "\n" + body + "\n")
+        else:
+            extra.append(block)
+    return out + "\n" + "\n".join(extra) + "\n"
+
+
 def theta_grid(n: int = 721) -> np.ndarray:
     return np.linspace(0.0, 2.0 * np.pi, n, endpoint=False)

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import pytest
 
+from conftest import scenario_with
+
 BASE = """motor = "ecce2010"
 
 [scenario]
@@ -22,19 +24,6 @@ at = 0.01
 HOLD = BASE.replace('type = "step"\nposition_mm = 3.0\nat = 0.01', 'type = "hold"')
 TRAJECTORY = BASE.replace('type = "step"\nposition_mm = 3.0',
                           'type = "trajectory"\nwaypoints_mm = [2.0, 1e300]')
-
-
-def with_keys(base: str, text: str) -> str:
-    """``base`` with ``text`` (sections and keys) added; a section the base has is merged."""
-    out, extra = base, []
-    for block in text.strip().split("\n[") if text.strip() else []:
-        block = block if block.startswith("[") else "[" + block
-        head, _, body = block.partition("\n")
-        if head in out:
-            out = out.replace(head + "\n", head + "\n" + body + "\n")
-        else:
-            extra.append(block)
-    return out + "\n" + "\n".join(extra) + "\n"
 
 
 # name: (base, keys added to it, words the one line must contain: the key, the value, the limit)
@@ -78,7 +67,7 @@ CASES = {
 def test_hostile_routed_sim(run_cli, tmp_path, case):
     base, keys, words = CASES[case]
     path = tmp_path / "s.toml"
-    path.write_text(with_keys(base, keys))
+    path.write_text(scenario_with(base, keys))
     out = tmp_path / "out"
     r = run_cli("simulate", path, "--out", out, "--trace", "none")
     line = r.refused("s.toml", *words)
@@ -91,6 +80,6 @@ def test_the_bases_run(run_cli, tmp_path, base):
     """Each base is valid (so each refusal is its case's), and a position within the drive's range
     runs: the limit is the drive's, not tighter."""
     path = tmp_path / "s.toml"
-    path.write_text(with_keys(base, "[travel]\nmax_mm = 1e9\n[initial]\nposition_mm = 9e8"))
+    path.write_text(scenario_with(base, "[travel]\nmax_mm = 1e9\n[initial]\nposition_mm = 9e8"))
     r = run_cli("simulate", path, "--out", tmp_path / "out", "--trace", "none")
     assert r.code == 0, r.err

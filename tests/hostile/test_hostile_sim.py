@@ -10,6 +10,8 @@ import sys
 
 import pytest
 
+from conftest import scenario_with
+
 # the console entry under a stalled import of numpy: Ctrl-C arrives while it imports, always
 _STALLED_IMPORT = r'''
 import sys, time
@@ -68,20 +70,6 @@ type = "step"
 position_mm = 3.0
 at = 0.05
 """
-
-
-def with_keys(text: str) -> str:
-    """The base scenario with ``text`` (sections and keys) added; a section the base has is merged."""
-    out = BASE
-    extra = []
-    for block in text.strip().split("\n["):
-        block = block if block.startswith("[") else "[" + block
-        head, _, body = block.partition("\n")
-        if head in out:
-            out = out.replace(head + "\n", head + "\n" + body + "\n")
-        else:
-            extra.append(block)
-    return out + "\n" + "\n".join(extra) + "\n"
 
 
 # name: (keys added to the base, words the one line must contain: the key, the value, the limit)
@@ -189,7 +177,7 @@ def _scenario(name: str, cases: dict) -> tuple[str, list]:
     if name == "step time of a hold":
         return HOLD, ["reference.at", "reference.type = 'hold'"]
     keys, words = cases[name]
-    return with_keys(keys), words
+    return scenario_with(BASE, keys), words
 
 
 @pytest.mark.parametrize("case", list(RANGE) + list(OVERRIDE))
