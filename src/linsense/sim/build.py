@@ -480,13 +480,10 @@ def run_steps(source: str, duration: float, fs: float) -> int:
 
 
 def check_run_size(source: str, n_steps: int, decimate: int, fs: float, trace_in_memory: bool = True) -> None:
-    """Refuse a run beyond :data:`~linsense.limits.MAX_STEPS` periods or (``trace_in_memory``)
-    whose trace would not fit in :data:`~linsense.limits.MAX_TRACE_BYTES`, before anything is
-    allocated. A run streamed in chunks (``linsense simulate``) keeps no trace in memory."""
-    if n_steps > MAX_STEPS:
-        raise InputError(source, "scenario.duration",
-                         f"{n_steps / fs:g} s at {fs:g} Hz is {n_steps:.3g} PWM periods, beyond the limit "
-                         f"of {MAX_STEPS:.3g} (docs/limits.md)")
+    """Refuse (``trace_in_memory``) a run of ``n_steps`` periods (:func:`run_steps`, which bounds
+    them by :data:`~linsense.limits.MAX_STEPS`) whose trace would not fit in
+    :data:`~linsense.limits.MAX_TRACE_BYTES`, before anything is allocated. A run streamed in
+    chunks (``linsense simulate``) keeps no trace in memory."""
     if not trace_in_memory:
         return
     # with decimate > 1 every sample also keeps its block statistics (linsense.sim.run.simulate)
