@@ -85,10 +85,10 @@ def built_digest() -> str:
 
 
 def source_tree_digest() -> str | None:
-    """Digest of ``csrc/`` and ``_build_ctrl.py`` in the source tree, None outside one (wheel)."""
-    here = Path(__file__).resolve()
-    csrc = here.parents[2] / "csrc"
-    script = here.with_name("_build_ctrl.py")
+    """Digest of ``csrc/`` and ``tools/build_ctrl.py`` in the source tree, None outside one (wheel)."""
+    root = Path(__file__).resolve().parents[2]
+    csrc = root / "csrc"
+    script = root / "tools" / "build_ctrl.py"
     if not (csrc / "ctrl").is_dir() or not script.is_file():
         return None
     return source_digest(csrc, script)
@@ -100,7 +100,7 @@ def _check_stale() -> None:
     if tree is not None and built_digest() != tree:
         warnings.warn(
             "linsense._ctrl was compiled from other C sources than those in csrc/ (or another "
-            "_build_ctrl.py): rebuild it with `pip install -e .`",
+            "tools/build_ctrl.py): rebuild it with `pip install -e .`",
             RuntimeWarning,
             stacklevel=3,
         )
@@ -109,7 +109,7 @@ def _check_stale() -> None:
 _check_stale()
 
 #: numpy dtype of the C library's ``LS_REAL`` (float32 unless built with ``-DLS_REAL_DOUBLE``).
-REAL = np.dtype(np.float32) if lib.ls_py_real_size() == 4 else np.dtype(np.float64)
+REAL = np.dtype(np.float32) if ffi.sizeof("LS_REAL") == 4 else np.dtype(np.float64)
 
 _TWO_PI = 2.0 * np.pi
 _STATUS = {lib.LS_OK: "LS_OK", lib.LS_ERR_NULL: "LS_ERR_NULL", lib.LS_ERR_PARAM: "LS_ERR_PARAM"}
@@ -315,7 +315,7 @@ def to_pos(theta: float):
                           func="ls_pos_norm")
     period = int(np.floor(theta / _TWO_PI))
     p = ffi.new("ls_pos *", {"period": period, "theta": theta - period * _TWO_PI})
-    return lib.ls_py_pos_norm(p[0])
+    return lib.ls_pos_norm(p[0])
 
 
 def from_pos(p) -> float:
@@ -748,7 +748,7 @@ class Observer:
     @property
     def speed(self) -> float:
         """Estimated speed, m/s (``ls_observer_speed``)."""
-        return float(lib.ls_py_observer_speed(self.state))
+        return float(lib.ls_observer_speed(self.state))
 
     @property
     def f_load(self) -> float:
