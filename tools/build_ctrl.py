@@ -6,14 +6,14 @@ binding's C helpers (``csrc/py``) into the extension ``linsense._ctrl``. It is a
 part of the package (wheels do not ship it).
 
 The declarations given to cffi are generated from the headers, never written here: every public
-header (``csrc/include/linsense/*.h``), the simulator's and the helpers' (``csrc/py/*.h``) are run
+header (``csrc/include/linsense/*.h``), the simulator's and the helpers' (``csrc/py/*.h``) go
 through the C preprocessor (``-DLS_CFFI``, which a header may test to hide what the binding must
-not see; ``<...>`` system headers replaced by empty files) and parsed with pycparser; the
-declarations are kept and the bodies of ``static inline`` functions dropped, as are names ending
-in ``_`` (the library's internal functions). Integer macros become ``#define NAME ...`` and
-``LS_REAL`` is declared ``float...``: cffi takes their values and the real type (float, or double
-with ``-DLS_REAL_DOUBLE``) from the headers when it compiles, and checks every struct layout and
-signature there, so a header change needs no edit here and a mismatch fails the build.
+not see; ``<...>`` system headers replaced by empty files) and pycparser; ``static inline``
+functions become prototypes (cffi's wrappers call the inline code), names ending in ``_`` (the
+library's internals) are left out, integer macros become ``#define NAME ...`` and ``LS_REAL``
+``float...``: cffi takes the values and the real type (float, or double with ``-DLS_REAL_DOUBLE``
+in ``CFLAGS``) from the headers when it compiles, and checks every struct layout and signature
+there. A header change needs no edit here; a mismatch fails the build.
 
 Run directly (``python tools/build_ctrl.py``) to compile in place for a quick check, or with
 ``--cdef`` to print the generated declarations.
@@ -21,7 +21,6 @@ Run directly (``python tools/build_ctrl.py``) to compile in place for a quick ch
 
 from __future__ import annotations
 
-import copy
 import importlib.util
 import os
 import re
@@ -43,7 +42,10 @@ PY = CSRC / "py"
 #: the simulator's header (not firmware, so not among the library's public headers)
 SIM_HEADER = INCLUDE / "linsense" / "ls_sim.h"
 HEADERS = sorted(set((INCLUDE / "linsense").glob("*.h")) | {SIM_HEADER}) + sorted(PY.glob("*.h"))
-INCLUDE_DIRS = list(dict.fromkeys([INCLUDE, *([] if INCLUDE in SIM_HEADER.parents else [SIM_HEADER.parent]), PY]))
+INCLUDE_DIRS = [INCLUDE, PY] + ([] if INCLUDE in SIM_HEADER.parents else [SIM_HEADER.parent])
+#: every header, named relative to its include directory
+UMBRELLA = "".join(f'#include "{next(h.relative_to(d) for d in INCLUDE_DIRS if d in h.parents).as_posix()}"\n'
+                   for h in HEADERS)
 SOURCES = sorted((CSRC / "ctrl").glob("*.c")) + sorted((CSRC / "sim").glob("*.c")) + sorted(PY.glob("*.c"))
 if not (CSRC / "ctrl").is_dir() or not SIM_HEADER.is_file():
     raise RuntimeError(f"linsense C sources not found under {CSRC} (expected csrc/ctrl/*.c, {SIM_HEADER})")
@@ -62,18 +64,14 @@ INT_EXPR = re.compile(r"(?:\s|0[xX][0-9a-fA-F]+[uUlL]*|[0-9]+[uUlL]*|<<|>>|[-+*/
 
 def _load_digest_module():
     """Load ``src/linsense/_digest.py`` by path (the package is not importable at build time)."""
-    spec = importlib.util.spec_from_file_location("_linsense_digest", ROOT / "src" / "linsense" / "_digest.py")
+    path = ROOT / "src" / "linsense" / "_digest.py"
+    spec = importlib.util.spec_from_file_location("_linsense_digest", path)
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     return mod
 
 
 DIGEST = _load_digest_module().source_digest(CSRC, Path(__file__).resolve())
-
-
-def include_name(header: Path) -> str:
-    """How the extension's source names ``header`` (relative to its include directory)."""
-    return next(header.relative_to(d).as_posix() for d in INCLUDE_DIRS if d in header.parents)
 
 
 def preprocess(*flags: str) -> str:
@@ -86,7 +84,7 @@ def preprocess(*flags: str) -> str:
         for name in {n for h in HEADERS for n in re.findall(r"#\s*include\s*<([^>]+)>", h.read_text())}:
             (fake / name).parent.mkdir(parents=True, exist_ok=True)
             (fake / name).touch()
-        (fake / "ls_cffi.c").write_text("".join(f'#include "{include_name(h)}"\n' for h in HEADERS))
+        (fake / "ls_cffi.c").write_text(UMBRELLA)
         cmd = [*cc, "-E", "-P", "-std=c99", "-nostdinc", "-DLS_CFFI", f"-I{fake}",
                *(f"-I{d}" for d in INCLUDE_DIRS), *flags, str(fake / "ls_cffi.c")]
         return subprocess.run(cmd, check=True, stdout=subprocess.PIPE, text=True).stdout
@@ -100,7 +98,7 @@ def cdef() -> str:
     decls = []
     for node in ast.ext:
         if isinstance(node, c_ast.FuncDef):  # a static inline function: its prototype (cffi calls it)
-            node = copy.copy(node.decl)
+            node = node.decl
             node.storage, node.funcspec = [], []
         if node.name not in KNOWN_TYPES and not (node.name or "").endswith("_"):
             decls.append(gen.visit(node) + ";")
@@ -128,10 +126,9 @@ def make_ffibuilder(absolute_paths: bool = False) -> FFI:
     path = str if absolute_paths else _rel
     ffi = FFI()
     ffi.cdef(cdef())
-    source = "".join(f'#include "{include_name(h)}"\n' for h in HEADERS)
     ffi.set_source(
         "linsense._ctrl",
-        source + f'const char *ls_py_source_digest(void) {{ return "{DIGEST}"; }}\n',
+        UMBRELLA + f'const char *ls_py_source_digest(void) {{ return "{DIGEST}"; }}\n',
         sources=[path(p) for p in SOURCES],
         include_dirs=[path(d) for d in INCLUDE_DIRS],
         extra_compile_args=COMPILE_ARGS,
