@@ -29,7 +29,7 @@ VARIANTS := float-san double-san float-plain
 all: test
 
 # the install compiles the C library into the cffi extension: rebuild when any of it changes
-$(STAMP): pyproject.toml setup.py src/linsense/_build_ctrl.py $(wildcard csrc/ctrl/*.c csrc/ctrl/*.h csrc/sim/*.c csrc/include/linsense/*.h)
+$(STAMP): pyproject.toml setup.py tools/build_ctrl.py $(wildcard csrc/ctrl/*.c csrc/ctrl/*.h csrc/sim/*.c csrc/include/linsense/*.h csrc/py/*.c csrc/py/*.h)
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install -q --upgrade pip
 	LINSENSE_NATIVE=1 $(PY) -m pip install -q -e '.[dev]'

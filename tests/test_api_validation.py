@@ -60,9 +60,9 @@ def test_the_valid_calls_still_work(ecce):
 # ------------------------------------------------------------------ Drive.step / Drive.run
 @pytest.fixture
 def drive():
-    from linsense import ctrl
+    import blocks  # (the drive stepped from Python: tests/blocks.py)
 
-    d = ctrl.Drive()
+    d = blocks.Drive()
     d.set_mode("sensorless_nolut")
     return d
 
@@ -227,10 +227,10 @@ OBS = dict(fs=16000.0, pole_pitch=0.056, omega_max=1000.0)
     (lambda c: c.Demodulator(fs=16000.0, gain=1.0, comp="abcd"), "Demodulator", "comp", ["'abcd'"]),
 ])
 def test_the_firmware_blocks_name_their_argument(make, source, key, words):
-    from linsense import ctrl
+    import blocks  # (the firmware's blocks one by one: tests/blocks.py; Lut is linsense.ctrl's)
 
     with pytest.raises(InputError) as e:
-        make(ctrl)
+        make(blocks)
     msg = str(e.value)
     assert (e.value.source, e.value.key) == (source, key) and "\n" not in msg, msg
     for w in words:
@@ -239,12 +239,12 @@ def test_the_firmware_blocks_name_their_argument(make, source, key, words):
 
 def test_the_firmware_blocks_take_real_numbers():
     """Ints and numpy scalars of a real dtype are numbers; a compensation table is a table."""
-    from linsense import ctrl
+    import blocks
     from linsense.compensation.lut import build_lut
 
-    assert np.all(np.isfinite(ctrl.Biquad("notch", f0=np.float32(1000.0), q=2, fs=16000).run(np.ones(8))))
-    assert ctrl.Injection(amplitude=np.int64(12), freq=1000, fs=16000.0).run(4)[0].shape == (4,)
-    obs = ctrl.Observer("mech", f_bw=np.int64(20), mass=1.5, force_max=100, **OBS)
+    assert np.all(np.isfinite(blocks.Biquad("notch", f0=np.float32(1000.0), q=2, fs=16000).run(np.ones(8))))
+    assert blocks.Injection(amplitude=np.int64(12), freq=1000, fs=16000.0).run(4)[0].shape == (4,)
+    obs = blocks.Observer("mech", f_bw=np.int64(20), mass=1.5, force_max=100, **OBS)
     assert np.all(np.isfinite(obs.run(np.zeros(4)).theta))
-    assert ctrl.Lut(build_lut(load_motor("ecce2010"), 16)).len == 16
-    assert ctrl.Lut(np.arange(8)).len == 8
+    assert blocks.Lut(build_lut(load_motor("ecce2010"), 16)).len == 16
+    assert blocks.Lut(np.arange(8)).len == 8

@@ -1,4 +1,5 @@
-"""The C firmware library through its Python binding (linsense.ctrl, cffi extension linsense._ctrl).
+"""The C firmware library through its Python binding (linsense.ctrl, cffi extension linsense._ctrl,
+and the blocks one by one: tests/blocks.py).
 
 Independent checks against the Python model: the demodulator's sign, zero and gain on synthetic
 HF currents from linsense.analysis.hf, the biquads against scipy.signal.freqz, the observers on
@@ -13,6 +14,7 @@ import numpy as np
 import pytest
 from scipy import signal
 
+import blocks
 from linsense import ctrl
 from linsense.analysis.hf import demod_ratio, hf_current
 from linsense.compensation.lut import build_lut
@@ -62,7 +64,7 @@ def hf_ab(motor, theta, theta_err, v_inj=V_INJ):
 def settle(motor, theta, theta_err, method="product", comp=None, gain=1.0, gain_table=None,
            v_inj=V_INJ, use_comp=True):
     """Run a fresh C demodulator on the synthetic currents; return (ratio, err, demodulator)."""
-    d = ctrl.Demodulator(fs=FS, f_lpf=150.0, gain=gain, method=method, comp=comp, gain_table=gain_table)
+    d = blocks.Demodulator(fs=FS, f_lpf=150.0, gain=gain, method=method, comp=comp, gain_table=gain_table)
     if not use_comp:
         d.set_comp(False)
     i_a, i_b, theta_est = hf_ab(motor, theta, theta_err, v_inj)
@@ -189,7 +191,7 @@ def cookbook(kind: str, f0: float, q: float, fs: float):
     "kind,f0,q", [("bandpass", 1000.0, 2.0), ("notch", 1000.0, 2.0), ("lowpass", 150.0, 0.70710678)]
 )
 def test_biquad_response_matches_freqz(kind, f0, q):
-    flt = ctrl.Biquad(kind, f0=f0, q=q, fs=FS)
+    flt = blocks.Biquad(kind, f0=f0, q=q, fs=FS)
     b, a = flt.coefficients
     b_ref, a_ref = cookbook(kind, f0, q, FS)
     np.testing.assert_allclose(b, b_ref, atol=2e-7)
@@ -214,7 +216,7 @@ def test_biquad_response_matches_freqz(kind, f0, q):
 
 # ------------------------------------------------------------------ 3. observers
 def test_pll_tracks_a_ramp():
-    obs = ctrl.Observer("pll", fs=FS, pole_pitch=0.056, omega_max=1000.0, f_bw=40.0)
+    obs = blocks.Observer("pll", fs=FS, pole_pitch=0.056, omega_max=1000.0, f_bw=40.0)
     n = 8000
     omega = 2 * np.pi * 15.0  # rad/s electrical
     theta = 0.3 + omega * np.arange(1, n + 1) / FS + 4 * np.pi  # starts two periods up
@@ -232,7 +234,7 @@ def test_pll_tracks_a_ramp():
 
 def test_mech_observer_estimates_load():
     m, tau, f_motor, f_load = 1.5, 0.056, 10.0, 4.0
-    obs = ctrl.Observer("mech", fs=FS, pole_pitch=tau, omega_max=2000.0, f_bw=20.0, mass=m, force_max=50.0)
+    obs = blocks.Observer("mech", fs=FS, pole_pitch=tau, omega_max=2000.0, f_bw=20.0, mass=m, force_max=50.0)
     n = 16000
     t = np.arange(1, n + 1) / FS
     x = 0.5 * (f_motor - f_load) / m * t**2
@@ -243,7 +245,7 @@ def test_mech_observer_estimates_load():
 
 
 def test_observer_open_loop_integrates():
-    obs = ctrl.Observer("pll", fs=FS, pole_pitch=0.056, omega_max=1000.0, k1=100.0, k2=1000.0)
+    obs = blocks.Observer("pll", fs=FS, pole_pitch=0.056, omega_max=1000.0, k1=100.0, k2=1000.0)
     out = obs.run(np.full(16, 0.01))
     # omega_k = k2 eps Ts k, theta_k = sum (omega_{k-1} + k1 eps) Ts
     ts = 1 / FS
@@ -256,26 +258,26 @@ def test_observer_open_loop_integrates():
 # ------------------------------------------------------------------ 4. refusals
 def test_config_refusals_raise_linsense_errors():
     with pytest.raises(LinsenseError, match=r"ls_inject: fs = 3000"):
-        ctrl.Injection(amplitude=12.0, freq=1000.0, fs=3000.0)
-    ctrl.Injection(amplitude=12.0, freq=1000.0, fs=4000.0)  # exactly 4 f_inj is allowed
+        blocks.Injection(amplitude=12.0, freq=1000.0, fs=3000.0)
+    blocks.Injection(amplitude=12.0, freq=1000.0, fs=4000.0)  # exactly 4 f_inj is allowed
     with pytest.raises(ctrl.ConfigError, match=r"ls_lut: len = 3"):
         ctrl.make_lut([0.0, 0.1, 0.2])
     with pytest.raises(ctrl.ConfigError, match=r"table\[2\] = nan"):
         ctrl.make_lut([0.0, 0.1, np.nan, 0.2])
     with pytest.raises(ctrl.ConfigError, match=r"ls_observer: k1 = -1"):
-        ctrl.Observer(fs=FS, pole_pitch=0.056, omega_max=100.0, k1=-1.0, k2=10.0)
+        blocks.Observer(fs=FS, pole_pitch=0.056, omega_max=100.0, k1=-1.0, k2=10.0)
     with pytest.raises(ctrl.ConfigError, match=r"ls_observer: k2 = 0"):
-        ctrl.Observer(fs=FS, pole_pitch=0.056, omega_max=100.0, k1=1.0, k2=0.0)
+        blocks.Observer(fs=FS, pole_pitch=0.056, omega_max=100.0, k1=1.0, k2=0.0)
     with pytest.raises(ctrl.ConfigError, match=r"ls_observer: mass = 0"):
-        ctrl.Observer("mech", fs=FS, pole_pitch=0.056, omega_max=100.0, f_bw=10.0, force_max=10.0)
+        blocks.Observer("mech", fs=FS, pole_pitch=0.056, omega_max=100.0, f_bw=10.0, force_max=10.0)
     with pytest.raises(ctrl.ConfigError, match=r"ls_demod: gain = 0"):
-        ctrl.Demodulator(fs=FS, gain=0.0)
+        blocks.Demodulator(fs=FS, gain=0.0)
     with pytest.raises(ctrl.ConfigError, match=r"ls_biquad: q = -1"):
-        ctrl.Biquad("notch", f0=1000.0, q=-1.0, fs=FS)
+        blocks.Biquad("notch", f0=1000.0, q=-1.0, fs=FS)
     with pytest.raises(ctrl.ConfigError, match=r"ls_biquad: f0 = 9000"):
-        ctrl.Biquad("lowpass", f0=9000.0, fs=FS)
+        blocks.Biquad("lowpass", f0=9000.0, fs=FS)
     with pytest.raises(ctrl.ConfigError) as exc:
-        ctrl.Demodulator(fs=FS, gain=1.0, comp=[0.0, 0.1])
+        blocks.Demodulator(fs=FS, gain=1.0, comp=[0.0, 0.1])
     assert exc.value.module == "ls_lut" and exc.value.status == ctrl.lib.LS_ERR_PARAM
 
 
@@ -289,7 +291,7 @@ def test_lut_interpolation_matches_python(lut_r):
 def test_drive_nonfinite_current_faults():
     cfg = ctrl.drive_default_cfg()
     assert cfg.fs == FS and cfg.inject.freq == F_INJ and cfg.inject.amplitude == V_INJ
-    drive = ctrl.Drive(cfg)
+    drive = blocks.Drive(cfg)
     assert drive.state.initialised
     drive.set_mode("sensorless_nolut")
     cmd = drive.step([0.0, 0.0, 0.0], 60.0)

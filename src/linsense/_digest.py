@@ -1,6 +1,6 @@
 """Fingerprints: of the C sources compiled into the cffi extension, and of files (a sweep's inputs).
 
-``source_digest`` is used by the build script (``_build_ctrl.py``, loaded by path at build time,
+``source_digest`` is used by the build script (``tools/build_ctrl.py``, loaded by path at build time,
 when the package is not importable yet) and by ``linsense.ctrl`` at import, to detect an extension
 built from other sources; ``file_sha256`` by :mod:`linsense.sweep.inputs`, the record of what a
 sweep's rows depend on. Standard library only.
@@ -20,6 +20,7 @@ def source_digest(csrc: Path, build_script: Path) -> str:
         + sorted((csrc / "ctrl").glob("*.h"))  # (internal headers: ls_drive_defaults.h, ...)
         + sorted((csrc / "sim").glob("*.c"))
         + sorted((csrc / "include" / "linsense").glob("*.h"))
+        + sorted((csrc / "py").glob("*.[ch]"))  # (the binding's C helpers)
     )
     for f in [*files, build_script]:
         h.update(f.name.encode())

@@ -200,7 +200,7 @@ def test_simulate_of_a_dict_runs_as_given_or_names_the_key(section, key, value, 
     assert got == (float(value) if isinstance(got, float) else value), (got, value)
 
 
-#: the firmware's blocks from Python (linsense.ctrl): a constructor with these arguments, and a short run
+#: the firmware's blocks from Python (tests/blocks.py): a constructor with these arguments, and a short run
 CTRL = {
     "Lut": (lambda c, a: c.Lut(a["values"]), lambda o: o(np.linspace(-7.0, 7.0, 9))),
     "Biquad": (lambda c, a: c.Biquad(a["type"], f0=a["f0"], q=a["q"], fs=a["fs"]),
@@ -239,10 +239,10 @@ CTRL_ARGS = {
 @prop_settings()
 @given(block=st.sampled_from(sorted(CTRL)), args=st.fixed_dictionaries(CTRL_ARGS))
 def test_a_firmware_block_runs_finite_or_is_refused_in_one_line(block, args):
-    import linsense.ctrl as ctrl
+    import blocks  # (tests/blocks.py; Lut is linsense.ctrl's)
 
     make, run = CTRL[block]
-    status, obj = attempt(make, ctrl, args)
+    status, obj = attempt(make, blocks, args)
     event(f"{block}: {status}")
     if status == "refused":
         # an argument that is not a real number (a table: not one dimension of them) is named

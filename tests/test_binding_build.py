@@ -1,0 +1,58 @@
+"""The binding's build (tools/build_ctrl.py, issue 24): declarations generated from the headers, a
+short script outside the package, and no C helper for Python that nothing calls."""
+
+from __future__ import annotations
+
+import importlib.util
+import re
+import shutil
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+SCRIPT = ROOT / "tools" / "build_ctrl.py"
+
+
+def test_the_build_script_is_short_and_outside_the_package():
+    assert len(SCRIPT.read_text().splitlines()) <= 150
+    assert not list((ROOT / "src").rglob("*build_ctrl*.py"))  # (wheels ship src/linsense only)
+    assert "tools/build_ctrl.py:ffibuilder" in (ROOT / "setup.py").read_text()
+
+
+def test_every_python_helper_is_called():
+    headers = "".join(p.read_text() for p in (ROOT / "csrc" / "py").glob("*.h"))
+    declared = set(re.findall(r"\b(ls_py_\w+)\s*\(", headers))
+    assert "ls_py_drive_run" in declared
+    python = "".join(p.read_text() for d in ("src", "tests") for p in (ROOT / d).rglob("*.py"))
+    unused = sorted(name for name in declared if not re.search(rf"\blib\.{name}\b", python))
+    assert not unused, f"C helpers of the binding nothing calls: {unused}"
+
+
+def _load(script: Path):
+    spec = importlib.util.spec_from_file_location("build_ctrl_copy", script)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_a_header_change_reaches_the_binding_without_a_python_edit(tmp_path):
+    """The declarations follow the headers: a new function, struct and constant in a public header
+    appear in the cdef, static inline functions as prototypes, internal names (trailing _) not."""
+    shutil.copytree(ROOT / "csrc", tmp_path / "csrc", ignore=shutil.ignore_patterns("tests"))
+    (tmp_path / "tools").mkdir()
+    shutil.copy(SCRIPT, tmp_path / "tools")
+    (tmp_path / "src" / "linsense").mkdir(parents=True)
+    shutil.copy(ROOT / "src" / "linsense" / "_digest.py", tmp_path / "src" / "linsense")
+    header = tmp_path / "csrc" / "include" / "linsense" / "ls_added.h"
+    header.write_text('#ifndef LS_ADDED_H\n#define LS_ADDED_H\n#include "linsense/ls_types.h"\n'
+                      "#define LS_ADDED_MAX 0x10u\n"
+                      "typedef struct { LS_REAL gain; int32_t count[3]; } ls_added;\n"
+                      "ls_status ls_added_init(ls_added *a, LS_REAL gain);\n"
+                      "static inline LS_REAL ls_added_step(ls_added *a, LS_REAL x) { return a->gain * x; }\n"
+                      "void ls_added_internal_(ls_added *a);\n#endif\n")
+    cdef = _load(tmp_path / "tools" / "build_ctrl.py").cdef()
+    assert "ls_status ls_added_init(ls_added *a, LS_REAL gain);" in cdef
+    assert "LS_REAL ls_added_step(ls_added *a, LS_REAL x);" in cdef
+    assert re.search(r"LS_REAL gain;\s*int32_t count\[3\];\s*\} ls_added;", cdef)
+    assert "#define LS_ADDED_MAX ..." in cdef and "typedef float... LS_REAL;" in cdef
+    assert "ls_added_internal_" not in cdef and "LS_CFFI" not in cdef
+    assert "{ return" not in cdef  # (no function body)
