@@ -26,7 +26,8 @@ from cffi import FFI
 ROOT = Path(__file__).resolve().parents[2]
 CSRC = ROOT / "csrc"
 INCLUDE = CSRC / "include"
-SOURCES = sorted((CSRC / "ctrl").glob("*.c")) + sorted((CSRC / "sim").glob("*.c"))
+# the simulator as one translation unit: csrc/sim/ls_sim_all.c includes its parts
+SOURCES = sorted((CSRC / "ctrl").glob("*.c")) + [CSRC / "sim" / "ls_sim_all.c"]
 
 if not SOURCES or not (INCLUDE / "linsense" / "ls_drive.h").is_file():
     raise RuntimeError(f"linsense C sources not found under {CSRC} (expected csrc/ctrl/*.c, csrc/include)")
@@ -391,7 +392,7 @@ ls_status ls_drive_move_to(ls_drive *d, ls_pos target);
 ls_status ls_drive_step_to(ls_drive *d, ls_pos target);
 void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd);
 
-/* simulator (csrc/sim, linsense/ls_sim.h) */
+/* simulator (csrc/sim/ls_sim.h) */
 #define LS_SIM_MAX_ORDER 64
 #define LS_SIM_MAX_PM 8
 #define LS_SIM_SAT_POW 4
@@ -500,7 +501,7 @@ void ls_py_drive_run(ls_drive *d, const double *i_abc, const double *v_dc, const
 """
 
 SOURCE = r"""
-#include "linsense/ls_sim.h"
+#include "ls_sim.h"
 #include "linsense/ls_types.h"
 #include "linsense/ls_pos.h"
 #include "linsense/ls_lut.h"
@@ -682,7 +683,7 @@ def make_ffibuilder(absolute_paths: bool = False) -> FFI:
         "linsense._ctrl",
         SOURCE.replace("@DIGEST@", DIGEST),
         sources=[path(p) for p in SOURCES],
-        include_dirs=[path(INCLUDE)],
+        include_dirs=[path(INCLUDE), path(CSRC / "sim")],
         extra_compile_args=COMPILE_ARGS,
         libraries=["m"] if os.name == "posix" else [],
     )
