@@ -15,9 +15,13 @@ CLIBWARN := -Wdouble-promotion -Wconversion -Wshadow
 SAN      := -fsanitize=address,undefined,float-cast-overflow -fno-sanitize-recover=all -fno-omit-frame-pointer
 CINC     := -Icsrc/include -Icsrc/tests -I$(BUILD)/gen
 CTRL_SRC := $(wildcard csrc/ctrl/*.c)
-SIM_SRC  := $(wildcard csrc/sim/*.c)
+# the simulator by part (csrc/sim/ls_sim_*.c behind ls_sim_internal.h); ls_sim_all.c is the same
+# parts as one translation unit, what the extension compiles (its time loop inlines the parts)
+SIM_ALL  := csrc/sim/ls_sim_all.c
+SIM_SRC  := $(filter-out $(SIM_ALL),$(wildcard csrc/sim/*.c))
+TINC     := $(CINC) -Icsrc/sim
 CTESTS   := $(patsubst csrc/tests/%.c,%,$(wildcard csrc/tests/test_*.c))
-# tests of the simulator's internal (static) functions: they include csrc/sim/ls_sim.c themselves
+# tests of the simulator's internal functions (ls_sim_internal.h): linked with the parts' objects
 ITESTS   := $(patsubst csrc/tests/%.c,%,$(wildcard csrc/tests/itest_*.c))
 GEN_HDR  := $(BUILD)/gen/ls_lut_ecce2010.h $(BUILD)/gen/ls_lut_ecce2010_r.h $(BUILD)/gen/ls_lut_ecce2010_q.h \
             $(BUILD)/gen/ls_lut_ecce2010_rot.h $(BUILD)/gen/ls_lut_ecce2010_sq.h
@@ -29,7 +33,7 @@ VARIANTS := float-san double-san float-plain
 all: test
 
 # the install compiles the C library into the cffi extension: rebuild when any of it changes
-$(STAMP): pyproject.toml setup.py tools/build_ctrl.py $(wildcard csrc/ctrl/*.c csrc/ctrl/*.h csrc/sim/*.c csrc/include/linsense/*.h csrc/py/*.c csrc/py/*.h)
+$(STAMP): pyproject.toml setup.py tools/build_ctrl.py $(wildcard csrc/ctrl/*.c csrc/ctrl/*.h csrc/sim/*.c csrc/sim/*.h csrc/include/linsense/*.h csrc/py/*.c csrc/py/*.h)
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install -q --upgrade pip
 	LINSENSE_NATIVE=1 $(PY) -m pip install -q -e '.[dev]'
@@ -58,7 +62,8 @@ $(BUILD)/gen/ls_lut_ecce2010_sq.h: $(GEN_DEPS)
 	$(VENV)/bin/linsense lut --motor ecce2010 --points 360 --format c --f-inj 8000 --injection square --symbol ls_lut_ecce2010_sq --out $@
 
 # Build and run every C test in three variants: float and double under ASan+UBSan, and float
-# without sanitizers. Library sources get the stricter warnings (-Wdouble-promotion ...).
+# without sanitizers. Library sources get the stricter warnings (-Wdouble-promotion ...). The
+# test_* link the simulator as the extension compiles it (ls_sim_all.c), the itest_* its parts.
 ctest: $(GEN_HDR)
 	@set -e; for v in $(VARIANTS); do \
 	  case $$v in \
@@ -71,18 +76,19 @@ ctest: $(GEN_HDR)
 	    obj=$$dir/$$(basename $$src .c).o; \
 	    $(CC) $(CSTD) $(CLIBWARN) $$flags $(CINC) -c $$src -o $$obj; objs="$$objs $$obj"; \
 	  done; \
-	  cobjs="$$objs"; \
+	  sobjs=""; \
 	  for src in $(SIM_SRC); do \
 	    obj=$$dir/$$(basename $$src .c).o; \
-	    $(CC) $(CSTD) -Wshadow $$flags $(CINC) -c $$src -o $$obj; objs="$$objs $$obj"; \
+	    $(CC) $(CSTD) -Wshadow $$flags $(CINC) -c $$src -o $$obj; sobjs="$$sobjs $$obj"; \
 	  done; \
+	  $(CC) $(CSTD) -Wshadow $$flags $(CINC) -c $(SIM_ALL) -o $$dir/ls_sim_all.o; \
 	  for t in $(ITESTS); do \
-	    $(CC) $(CSTD) -Wshadow $$flags $(CINC) csrc/tests/$$t.c $$cobjs -lm -o $$dir/$$t; \
+	    $(CC) $(CSTD) -Wshadow $$flags $(TINC) csrc/tests/$$t.c $$objs $$sobjs -lm -o $$dir/$$t; \
 	    out=$$($$dir/$$t) && rc=0 || rc=$$?; printf '%s\n' "$$out" | sed "s/^/[$$v] /"; \
 	    [ $$rc -eq 0 ] || exit $$rc; \
 	  done; \
 	  for t in $(CTESTS); do \
-	    $(CC) $(CSTD) $$flags $(CINC) csrc/tests/$$t.c $$objs -lm -o $$dir/$$t; \
+	    $(CC) $(CSTD) $$flags $(TINC) csrc/tests/$$t.c $$objs $$dir/ls_sim_all.o -lm -o $$dir/$$t; \
 	    out=$$($$dir/$$t) && rc=0 || rc=$$?; printf '%s\n' "$$out" | sed "s/^/[$$v] /"; \
 	    [ $$rc -eq 0 ] || exit $$rc; \
 	  done; \

@@ -1,4 +1,4 @@
-"""Accuracy of the C plant (``csrc/sim/ls_sim.c``) against an independent reference.
+"""Accuracy of the C plant (``csrc/sim/ls_sim_plant.c``) against an independent reference.
 
 The reference is written here, in the phase (ABC) frame, from the Python motor model only:
 unknowns ``i_a, i_b, i_c`` and the star-point voltage ``v_n`` with the floating star point

@@ -1,4 +1,4 @@
-"""The C plant (``csrc/sim/ls_sim.c``): one model, one source of truth, and closed-loop behaviour.
+"""The C plant (``csrc/sim/ls_sim_plant.c``): one model, one source of truth, and closed-loop behaviour.
 
 * The maps the C plant evaluates (``ls_sim_plant_eval``: L_ab, dL_ab/dtheta, the alpha-beta PM
   flux and its derivative) equal the Python model (``InductanceModel.L_ab``, the Clarke transform

@@ -1,4 +1,4 @@
-"""Benchmark of the C simulator (``csrc/sim/ls_sim.c``): realtime factor of a closed-loop run.
+"""Benchmark of the C simulator (``csrc/sim/``): realtime factor of a closed-loop run.
 
 Run by ``make bench`` (never by the tests). One core, the ecce2010 preset, the firmware drive in
 sensorless mode with the resistance-aware LUT, a 2 s trajectory scenario (minimum-time moves

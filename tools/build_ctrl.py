@@ -40,13 +40,14 @@ CSRC = ROOT / "csrc"
 INCLUDE = CSRC / "include"
 PY = CSRC / "py"
 #: the simulator's header (not firmware, so not among the library's public headers)
-SIM_HEADER = INCLUDE / "linsense" / "ls_sim.h"
+SIM_HEADER = CSRC / "sim" / "ls_sim.h"
 HEADERS = sorted(set((INCLUDE / "linsense").glob("*.h")) | {SIM_HEADER}) + sorted(PY.glob("*.h"))
 INCLUDE_DIRS = [INCLUDE, PY] + ([] if INCLUDE in SIM_HEADER.parents else [SIM_HEADER.parent])
 #: every header, named relative to its include directory
 UMBRELLA = "".join(f'#include "{next(h.relative_to(d) for d in INCLUDE_DIRS if d in h.parents).as_posix()}"\n'
                    for h in HEADERS)
-SOURCES = sorted((CSRC / "ctrl").glob("*.c")) + sorted((CSRC / "sim").glob("*.c")) + sorted(PY.glob("*.c"))
+#: the simulator as one unity build (ls_sim_all.c includes its parts: its time loop inlines them)
+SOURCES = sorted((CSRC / "ctrl").glob("*.c")) + [CSRC / "sim" / "ls_sim_all.c"] + sorted(PY.glob("*.c"))
 if not (CSRC / "ctrl").is_dir() or not SIM_HEADER.is_file():
     raise RuntimeError(f"linsense C sources not found under {CSRC} (expected csrc/ctrl/*.c, {SIM_HEADER})")
 #: -O3 for the simulator's time loop; -ffp-contract=fast lets the compiler fuse a * b + c into one

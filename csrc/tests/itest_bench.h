@@ -1,9 +1,13 @@
-/* Shared by the simulator's internal tests (itest_*.c, which include csrc/sim/ls_sim.c first): one
- * PWM period of the inverter models with prescribed duties, on a held mover with constant L (no
- * saliency) and no PM flux, so that the expected values stay simple. */
+/* Shared by the simulator's internal tests (itest_*.c, linked with the simulator's parts, whose
+ * internal functions ls_sim_internal.h declares): one PWM period of the inverter models with
+ * prescribed duties, on a held mover with constant L (no saliency) and no PM flux, so that the
+ * expected values stay simple. */
 #ifndef LINSENSE_ITEST_BENCH_H
 #define LINSENSE_ITEST_BENCH_H
 
+#include <string.h>
+
+#include "ls_sim_internal.h"
 #include "ls_test.h"
 
 #define L_PH 4e-3 /* H, phase inductance */
@@ -11,9 +15,9 @@
 
 typedef struct {
     ls_sim_cfg c;
-    plant_coef q;
-    plant_maps pm;
-    frozen fz;
+    ls_sim_coef q;
+    ls_sim_maps pm;
+    ls_sim_frozen fz;
     double h;
 } bench;
 
@@ -30,27 +34,27 @@ static void bench_init(bench *b, double dead_time)
     c->dead_time = dead_time; c->i_gain[0] = c->i_gain[1] = c->i_gain[2] = 1.0; c->enc_counts = 56000;
     c->motion = LS_SIM_HELD; c->decimate = 1; c->i_abort = 20.0;
     LS_CHECK(ls_sim_check(c) == LS_OK);
-    coef_init(c, &b->q);
-    maps(c, &b->q, 0.0, &b->pm);
-    LS_CHECK(freeze(c, &b->pm, 0.0, &b->fz));
+    ls_sim_coef_init(c, &b->q);
+    ls_sim_maps_at(c, &b->q, 0.0, &b->pm);
+    LS_CHECK(ls_sim_freeze(c, &b->pm, 0.0, &b->fz));
     b->h = 1.0 / c->f_pwm;
 }
 
 /* one switching period from i0 (alpha-beta) with the given duties and carry */
-static void sw(const bench *b, const double duty[3], const double i0[2], double i1[2], dead_carry *carry)
+static void sw(const bench *b, const double duty[3], const double i0[2], double i1[2], ls_sim_carry *carry)
 {
     double f_int;
     i1[0] = i0[0];
     i1[1] = i0[1];
-    period_switching(&b->c, &b->q, &b->fz, &b->pm, duty, b->h, i1, &f_int, carry);
+    ls_sim_period_switching(&b->c, &b->q, &b->fz, &b->pm, duty, b->h, i1, &f_int, carry);
 }
 
 /* the same with the average model */
-static void av(const bench *b, const double duty[3], const double i0[2], double i1[2], dead_carry *carry)
+static void av(const bench *b, const double duty[3], const double i0[2], double i1[2], ls_sim_carry *carry)
 {
     i1[0] = i0[0];
     i1[1] = i0[1];
-    period_average(&b->c, &b->q, &b->fz, duty, b->h, i1, carry);
+    ls_sim_period_average(&b->c, &b->q, &b->fz, duty, b->h, i1, carry);
 }
 
 #endif /* LINSENSE_ITEST_BENCH_H */

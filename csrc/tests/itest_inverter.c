@@ -1,13 +1,14 @@
 /* The simulator's inverter models one period at a time, with prescribed duties and currents:
- * internal functions, so this test includes csrc/sim/ls_sim.c itself (the Makefile links it with
- * the controller library only). A held mover, constant L (no saliency) and no PM flux keep the
+ * internal functions (csrc/sim/ls_sim_internal.h; the Makefile links this test with the controller
+ * library and the simulator's parts). A held mover, constant L (no saliency) and no PM flux keep the
  * expected values simple:
  *   - a pulse shorter than the dead time never reaches the pole when the current flows out;
  *   - with the current flowing in, it is lengthened by the dead time;
  *   - a turn-off delayed past the period end (duty within the dead time of 1, current flowing in)
  *     keeps the pole high into the next period, in the switching model (carried edge) and the
  *     average model (carried excess duty) alike. */
-#include "../sim/ls_sim.c"
+#include <math.h>
+#include <stdio.h>
 
 #include "itest_bench.h"
 
@@ -24,7 +25,7 @@ static void tiny_pulse(void)
     const double dd = 0.8e-6 * 16000.0, i_out[2] = {1.0, 0.0}, i_in[2] = {-1.0, 0.0};
     const double tiny[3] = {0.3 * dd, 0.5, 0.5}, none[3] = {0.0, 0.5, 0.5};
     double a[2], z[2];
-    dead_carry c1 = no_carry, c2 = no_carry;
+    ls_sim_carry c1 = ls_sim_no_carry, c2 = ls_sim_no_carry;
     bench_init(&b, 0.8e-6);
     /* current out of phase a: the turn-on waits for the dead time, the turn-off command comes
      * first and cancels it: no pulse at all */
@@ -37,14 +38,14 @@ static void tiny_pulse(void)
     LS_CHECK(c1.t[0] < 0.0 && c1.t[1] < 0.0 && c1.t[2] < 0.0);
     /* current into phase a: the upper diode conducts in the dead time, the pulse is lengthened by
      * it, 0.3 dd T + dd T of pole a high */
-    c1 = no_carry;
-    c2 = no_carry;
+    c1 = ls_sim_no_carry;
+    c2 = ls_sim_no_carry;
     sw(&b, tiny, i_in, a, &c1);
     sw(&b, none, i_in, z, &c2);
     LS_CHECK_NEAR(a[0] - z[0], da_of(&b, 1.3 * dd * b.h, 0.5 * b.h), 0.02 * da_of(&b, 1.3 * dd * b.h, 0.5 * b.h));
     /* the average model agrees on both */
-    c1 = no_carry;
-    c2 = no_carry;
+    c1 = ls_sim_no_carry;
+    c2 = ls_sim_no_carry;
     av(&b, tiny, i_out, a, &c1);
     av(&b, none, i_out, z, &c2);
     LS_CHECK_NEAR(a[0], z[0], 1e-12);
@@ -60,7 +61,7 @@ static void spill(void)
     const double high[3] = {d, 0.5, 0.5}, mid[3] = {0.5, 0.5, 0.5};
     const double t_spill = 0.5 * (1.0 + d) / 16000.0 + 0.8e-6 - 1.0 / 16000.0; /* s */
     double i1[2], with[2], without[2], sw_eff, av_eff;
-    dead_carry c = no_carry, none = no_carry;
+    ls_sim_carry c = ls_sim_no_carry, none = ls_sim_no_carry;
     bench_init(&b, 0.8e-6);
     LS_CHECK(t_spill > 0.0);
     /* switching: the delayed turn-off lies past the period end and is carried */
@@ -74,12 +75,12 @@ static void spill(void)
     sw_eff = with[0] - without[0];
     LS_CHECK_NEAR(sw_eff, da_of(&b, t_spill, 0.5 * t_spill), 0.02 * da_of(&b, t_spill, 0.5 * t_spill));
     /* nothing is carried into a period at duty 1: the pole is high anyway */
-    c = no_carry;
+    c = ls_sim_no_carry;
     sw(&b, high, i_in, i1, &c);
     {
         const double full[3] = {1.0, 0.5, 0.5};
         double f1[2], f2[2];
-        dead_carry n2 = no_carry;
+        ls_sim_carry n2 = ls_sim_no_carry;
         sw(&b, full, i1, f1, &c);
         sw(&b, full, i1, f2, &n2);
         LS_CHECK_NEAR(f1[0], f2[0], 1e-12);
@@ -88,15 +89,15 @@ static void spill(void)
      * a up to 1 (the switching model's first period has it low for (1 - d) h/2 at the start),
      * so compare the two models over both periods: with the carry they agree to the current
      * ripple; without it each loses what crossed the period end, the switching model more */
-    c = no_carry;
-    none = no_carry;
+    c = ls_sim_no_carry;
+    none = ls_sim_no_carry;
     av(&b, high, i_in, i1, &c);
     LS_CHECK_NEAR(c.excess[0], d + dd - 1.0, 1e-12);
     av(&b, mid, i1, with, &c);
     LS_CHECK(c.excess[0] == 0.0);
     {
         double s1[2], s2[2], a1[2], a2[2];
-        dead_carry cs = no_carry, ca = no_carry;
+        ls_sim_carry cs = ls_sim_no_carry, ca = ls_sim_no_carry;
         sw(&b, high, i_in, s1, &cs);
         sw(&b, mid, s1, s2, &cs);
         av(&b, high, i_in, a1, &ca);

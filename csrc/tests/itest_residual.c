@@ -1,11 +1,11 @@
 /* The firmware's dead-time residual estimate (ls_mod_residual, ls_dtres) against the simulator's
- * inverter models, one period at a time (this test includes csrc/sim/ls_sim.c): for random duties
- * and start currents, the voltage error the dead time really made in the period is recovered from
- * the end currents with and without dead time, and compared with what ls_mod_residual's forward
- * model estimates from the period's start currents. Held mover, constant L (no saliency, except
- * where said), no PM flux. */
-#include "../sim/ls_sim.c"
-
+ * inverter models (internal functions, csrc/sim/ls_sim_internal.h), one period at a time: for
+ * random duties and start currents, the voltage error the dead time really made in the period is
+ * recovered from the end currents with and without dead time, and compared with what
+ * ls_mod_residual's forward model estimates from the period's start currents. Held mover, constant
+ * L (no saliency, except where said), no PM flux. */
+#include <math.h>
+#include <stdint.h>
 #include <string.h>
 
 #include "itest_bench.h"
@@ -15,7 +15,7 @@
 /* one period of the chosen model, from i0 with no carried edge */
 static void period(const bench *b, bool switching, const double duty[3], const double i0[2], double i1[2])
 {
-    dead_carry carry = no_carry;
+    ls_sim_carry carry = ls_sim_no_carry;
     if (switching) {
         sw(b, duty, i0, i1, &carry);
     } else {

@@ -6,7 +6,7 @@
 #include <math.h>
 #include <string.h>
 
-#include "linsense/ls_sim.h"
+#include "ls_sim.h"
 #include "ls_lut_ecce2010_q.h" /* the table of the default (elliptical) injection */
 #include "ls_test.h"
 #include "ls_test_plant.h"

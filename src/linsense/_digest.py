@@ -19,6 +19,7 @@ def source_digest(csrc: Path, build_script: Path) -> str:
         sorted((csrc / "ctrl").glob("*.c"))
         + sorted((csrc / "ctrl").glob("*.h"))  # (internal headers: ls_drive_defaults.h, ...)
         + sorted((csrc / "sim").glob("*.c"))
+        + sorted((csrc / "sim").glob("*.h"))
         + sorted((csrc / "include" / "linsense").glob("*.h"))
         + sorted((csrc / "py").glob("*.[ch]"))  # (the binding's C helpers)
     )

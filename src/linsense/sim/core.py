@@ -1,4 +1,4 @@
-"""Low-level access to the C simulator (``csrc/sim/ls_sim.c``): configure, run, collect arrays.
+"""Low-level access to the C simulator (``csrc/sim/``, API ``ls_sim.h``): configure, run, collect arrays.
 
 Everything per step happens in C; Python only fills the configuration structs, allocates the
 numpy output arrays and hands pointers over. Higher layers (scenario files, metrics, the CLI)

@@ -1,4 +1,4 @@
-"""The motor model handed to the C plant (``csrc/sim/ls_sim.c``): one source of truth.
+"""The motor model handed to the C plant (``csrc/sim/ls_sim_plant.c``): one source of truth.
 
 The C plant works in alpha-beta. Its inductance is the Fourier series of the three entries
 ``L_aa, L_bb, L_ab`` of ``L_ab(theta) = T L_abc(theta) T_inv``; because that transform is linear

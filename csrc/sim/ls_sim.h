@@ -210,7 +210,7 @@ typedef struct {
     double i[2];            /* A, alpha-beta currents */
     double x_lag, v_lag, v_lag2; /* m, m/s: x and v one period back, v two back */
     double duty[3];         /* -, duties computed for the next period */
-    double carry_t[3];      /* s, dead time carried into the next period (see ls_sim.c) */
+    double carry_t[3];      /* s, dead time carried into the next period (see ls_sim_inverter.c) */
     int32_t carry_on[3];    /* - */
     double carry_excess[3]; /* - */
     int32_t carry_any;      /* - */
