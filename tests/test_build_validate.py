@@ -76,7 +76,8 @@ def test_position_and_feedforward_refused_before_the_plant(no_work):
                              "position_mm": 1e15}, "travel": {"min_mm": -1e16, "max_mm": 1e16}}, "far.toml")
     with pytest.raises(InputError, match="reference.position_mm"):
         build(sc)
-    sc = scenario_from_dict({"motor": "ecce2010", "scenario": {"duration": 0.1}, "reference": {"type": "hold"},
+    sc = scenario_from_dict({"motor": "ecce2010", "scenario": {"duration": 0.1},
+                             "reference": {"type": "hold"},
                              "observer": {"type": "pll", "load_feedforward": True}}, "ff.toml")
     with pytest.raises(InputError, match="observer.load_feedforward"):
         build(sc)
