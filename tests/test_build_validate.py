@@ -81,3 +81,23 @@ def test_position_and_feedforward_refused_before_the_plant(no_work):
                              "observer": {"type": "pll", "load_feedforward": True}}, "ff.toml")
     with pytest.raises(InputError, match="observer.load_feedforward"):
         build(sc)
+
+
+@pytest.mark.parametrize("load, key", [({"force": 1e300}, "load.force"),
+                                       ({"type": "step", "force": 1.0, "force_after": -1e39, "time": 0.0},
+                                        "load.force_after")])
+def test_balanced_load_beyond_the_drive_refused_before_the_drive(no_work, load, key):
+    """A start in equilibrium with a force LS_REAL cannot hold was a ConfigError of ls_drive_set_load
+    naming no scenario key, after the plant, the tables and the drive were made."""
+    sc = scenario_from_dict({"motor": "ecce2010", "scenario": {"duration": 0.01},
+                             "reference": {"type": "hold"}, "load": load, "initial": {"load_balanced": True}},
+                            "load.toml")
+    with pytest.raises(InputError, match=key):
+        build(sc)
+
+
+def test_balanced_load_within_the_drive_builds():
+    sc = scenario_from_dict({"motor": "ecce2010", "scenario": {"duration": 0.01},
+                             "reference": {"type": "hold"}, "load": {"force": 3e38},
+                             "initial": {"load_balanced": True}}, "load.toml")
+    assert build(sc).drive is not None

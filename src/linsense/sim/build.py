@@ -22,6 +22,7 @@ from linsense.model.motor import Motor, load_motor, names_a_path, preset_names
 from linsense.model.saturation import Saturation
 from linsense.sim.cache import memo, motor_key
 from linsense.sim.checks import (
+    check_initial_load,
     check_positions,
     check_run_size,
     check_sensors,
@@ -41,8 +42,8 @@ from linsense.tune.design import DriveData, design, mean_dq, uncompensated_speed
 #: own modules: linsense.sim.checks, .cache, .tables, .drive_cfg)
 __all__ = ["Built", "build", "designed", "drive_data", "calibration_timing", "resolve_motor", "motor_key",
            "plant_saturation", "reference_commands", "trapezoid_time", "initial_load", "compensation_of",
-           "check_positions", "check_sensors", "check_startup", "check_run_size", "check_trace_file",
-           "run_steps", "validate", "Tables"]
+           "check_positions", "check_initial_load", "check_sensors", "check_startup", "check_run_size",
+           "check_trace_file", "run_steps", "validate", "Tables"]
 
 #: drive sub-configuration -> scenario section (for messages)
 _SECTION = {"inject": "injection", "bpf": "injection", "sep": "injection", "demod": "observer",
@@ -413,6 +414,7 @@ def validate(sc: Scenario, motor: Motor, known: dict, user_keys: set[str],
         raise InputError(sc.source, "observer.load_feedforward",
                          "needs observer.type = \"mech\" (the load estimate is the mechanical observer's)")
     check_positions(sc, motor.pole_pitch)
+    check_initial_load(sc, initial_load(sc, motor))
     check_startup(sc)
     n_steps = run_steps(sc.source, s.scenario.duration, s.inverter.f_pwm)
     check_run_size(sc.source, n_steps, s.record.decimate, s.inverter.f_pwm, trace_in_memory)

@@ -5,7 +5,9 @@ from __future__ import annotations
 
 import math
 
-from linsense.ctrl import REAL, lib
+import numpy as np
+
+from linsense.ctrl import REAL, ffi, lib
 from linsense.errors import InputError
 from linsense.limits import MAX_STEPS, MAX_TRACE_BYTES, MAX_TRACE_FILE_BYTES
 from linsense.sim.core import BLOCKS, SIGNALS
@@ -175,3 +177,24 @@ def check_startup(sc: Scenario) -> None:
             raise InputError(sc.source, f"startup.{k}", f"must cover the injection's ramp as the drive runs "
                              f"it, injection.amplitude / ramp_rate = {inj.amplitude:g} V / {inj.ramp_rate:g} "
                              f"V/s = {inj.amplitude / inj.ramp_rate:g} s, got {t:g}")
+
+
+def check_initial_load(sc: Scenario, f_load: float) -> None:
+    """Refuse a start in equilibrium (``initial.load_balanced``) with a load force ``f_load`` (N,
+    :func:`linsense.sim.build.initial_load`) beyond what the drive's ``LS_REAL`` holds:
+    ``ls_drive_set_load`` refuses a non-finite force (it was a ConfigError naming no key, raised
+    after the plant, the tables and the drive were made).
+
+    Raises
+    ------
+    InputError
+        Naming the load key that sets the force at t = 0 (``load.force``, or ``load.force_after`` for
+        a step at t <= 0).
+    """
+    s = sc.spec
+    if not s.initial.load_balanced or math.isfinite(float(ffi.cast("LS_REAL", f_load))):
+        return
+    ld = s.load
+    key = "load.force_after" if ld.type == "step" and ld.time <= 0.0 else "load.force"
+    raise InputError(sc.source, key, f"{f_load:g} N at t = 0 (initial.load_balanced = true) is beyond the "
+                     f"largest force the drive holds, {float(np.finfo(REAL).max):.6g} N (ls_drive_set_load)")
