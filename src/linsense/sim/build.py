@@ -1,10 +1,16 @@
 """From a validated scenario to the C objects of one run: plant, drive, commands.
 
-The drive starts from ``ls_drive_default_cfg`` and gets the scenario's values; the motor
-parameters the controller uses (mean L_d and L_q over a period for the decoupling and the
-demodulator gain, psi_pm, mass, force constant, R_s) come from the motor model unless
-``[controller.model]`` overrides them. The compensation table and the optional gain table are
-:class:`linsense.ctrl.Lut` objects kept alive by the :class:`Built` that owns the drive.
+The path of a scenario (:func:`build`, read top to bottom): its motors (:func:`motors`) and the
+design of every gain it leaves unset (:func:`designed`); what the controller believes about the
+motor (:func:`controller_model`: mean L_d and L_q over a period for the decoupling and the
+demodulator gain, psi_pm, mass, force constant, R_s, unless ``[controller.model]`` overrides
+them); every check of the scenario, before any C object is made (:func:`validate`,
+:mod:`linsense.sim.checks`); the plant (:func:`plant`); the drive's configuration, filled from
+``ls_drive_default_cfg`` by the one scenario -> ``ls_drive_cfg`` mapping
+(:mod:`linsense.tune.cfgmap`, :mod:`linsense.sim.drive_cfg`); its tables
+(:mod:`linsense.sim.tables`: :class:`linsense.ctrl.Lut` objects kept alive by the :class:`Built`
+that owns the drive); the drive (:func:`make_drive`, :func:`start_drive`). The C library keeps its
+own checks as the last line (:mod:`linsense.sim.refusal` names the key a refusal comes from).
 """
 
 from __future__ import annotations
@@ -36,6 +42,7 @@ from linsense.sim.plant import fill_saturation, lab_fourier
 from linsense.sim.refusal import explain, given_keys
 from linsense.sim.scenario import Scenario, compensation_of
 from linsense.sim.tables import Tables, drive_tables
+from linsense.tune.cfgmap import Values
 from linsense.tune.design import DriveData, design, mean_dq, uncompensated_speed_factor
 
 #: the names other modules import from here (the checks, the cache and the tables live in their
@@ -68,6 +75,173 @@ class Built:
     extra: dict = field(default_factory=dict)  # cffi objects kept alive with the drive (calibration table)
 
 
+# ------------------------------------------------------------------ the path of a scenario
+def build(sc: Scenario, motor: Motor | None = None, trace_in_memory: bool = True) -> Built:
+    """Configure the plant and the drive of ``sc``; bad values end in :class:`InputError` naming
+    the scenario file. ``motor`` replaces the scenario's motor (a Motor object from Python). Gains
+    the scenario leaves unset are designed for its motor (:func:`designed`). ``trace_in_memory``
+    False: the run is streamed in chunks (:mod:`linsense.sim.stream`), its trace not kept, so the
+    limit on the trace kept in memory does not apply.
+
+    The path: the motors and the design, every check of the scenario (:func:`validate`, before any
+    C object is made), the plant, the drive's configuration (the mapping of
+    :mod:`linsense.tune.cfgmap`), its tables, the drive. The C library keeps its own checks as the
+    last line: a refusal there names the scenario key it comes from (:mod:`linsense.sim.refusal`).
+    """
+    motor, model_motor = motors(sc, motor)
+    user_keys = given_keys(sc.given())  # (the keys the file gives: designed() sets the others)
+    sc = designed(sc, model_motor)
+    known = controller_model(sc, model_motor)
+    sat, n_steps = validate(sc, motor, known, user_keys, trace_in_memory)
+    setup, cfg = plant(sc, motor, sat)
+    v = drive_values(sc, motor, model_motor, known)
+    d = fill(v)
+    calibrating = sc.spec.control.mode == "calibration"
+    cal_table = calibration_table(d, sc.spec.calibration.points) if calibrating else None
+    drive = make_drive(sc, model_motor, known, v, d, user_keys)
+    start_drive(sc, drive, motor, setup)
+    cmds, moves = reference_commands(sc)
+    return Built(sc, motor, setup, cfg, drive, cmds, n_steps, moves, known,
+                 extra={} if cal_table is None else {"cal_table": cal_table})
+
+
+def motors(sc: Scenario, motor: Motor | None = None) -> tuple[Motor, Motor]:
+    """The plant's motor (``motor``, else the scenario's) and the one the controller believes in (its
+    tables, gains and feed-forwards): the plant's unless ``controller.model.motor`` names another
+    (e.g. one with a parameter off, to test the LUT's robustness), with the same pole pitch."""
+    motor = resolve_motor(sc) if motor is None else motor
+    ov = sc.spec.controller.model
+    model_motor = motor if ov.motor is None else resolve_motor(sc, ov.motor, "controller.model.motor",
+                                                               check=False)
+    if not math.isclose(model_motor.pole_pitch, motor.pole_pitch, rel_tol=1e-9):
+        raise InputError(sc.source, "controller.model.motor",
+                         f"pole pitch {model_motor.pole_pitch:g} m differs from the motor's "
+                         f"{motor.pole_pitch:g} m: a controller cannot believe in another pole pitch")
+    return motor, model_motor
+
+
+def controller_model(sc: Scenario, model_motor: Motor) -> dict:
+    """What the controller believes about the motor: ``[controller.model]``'s values, else the
+    model's (mean L_d and L_q over a period; the demodulator gain ``L_q / (L_q - L_d)``, None
+    without saliency: refused by :func:`validate`)."""
+    ov = sc.spec.controller.model
+    L_d, L_q = memo(("mean_dq", motor_key(model_motor)), lambda: mean_dq(model_motor))
+    known = {
+        "L_d": ov.L_d if ov.L_d is not None else L_d,
+        "L_q": ov.L_q if ov.L_q is not None else L_q,
+        "R_s": ov.R_s if ov.R_s is not None else model_motor.R_s,
+        "psi_pm": ov.psi_pm if ov.psi_pm is not None else model_motor.psi_pm,
+        "mass": ov.mass if ov.mass is not None else model_motor.mass,
+        "force_constant": ov.force_constant if ov.force_constant is not None else model_motor.force_constant,
+    }
+    if ov.demod_gain is not None:
+        known["demod_gain"] = ov.demod_gain
+    elif known["L_q"] != known["L_d"]:
+        known["demod_gain"] = known["L_q"] / (known["L_q"] - known["L_d"])
+    else:
+        known["demod_gain"] = None
+    return known
+
+
+def validate(sc: Scenario, motor: Motor, known: dict, user_keys: set[str],
+             trace_in_memory: bool = True) -> tuple[Saturation | None, int]:
+    """Every check of the designed scenario ``sc`` the build makes, before any C object is made (the
+    motor files and the design refuse while they are read): returns the plant's saturation and the
+    run's PWM periods.
+
+    Raises
+    ------
+    InputError
+        Naming the scenario key, its value and the limit.
+    """
+    s = sc.spec
+    if known["demod_gain"] is None:
+        raise InputError(sc.source, "controller.model.L_q", "equals L_d: no saliency, no demodulator gain")
+    gain, offs = _sensor_triples(s.sensors)
+    check_sensors(sc.source, gain, offs, s.sensors.current_noise, s.protection.i_max,
+                  "protection.i_max" in user_keys)
+    sat = plant_saturation(sc, motor)
+    if s.observer.load_feedforward and s.observer.type != "mech":
+        raise InputError(sc.source, "observer.load_feedforward",
+                         "needs observer.type = \"mech\" (the load estimate is the mechanical observer's)")
+    check_positions(sc, motor.pole_pitch)
+    check_initial_load(sc, initial_load(sc, motor))
+    check_startup(sc)
+    n_steps = run_steps(sc.source, s.scenario.duration, s.inverter.f_pwm)
+    check_run_size(sc.source, n_steps, s.record.decimate, s.inverter.f_pwm, trace_in_memory)
+    return sat, n_steps
+
+
+def _sensor_triples(sens) -> tuple[list, list]:
+    """The current sensors' gains and offsets, one per phase."""
+    gain = sens.current_gain if isinstance(sens.current_gain, list) else [sens.current_gain] * 3
+    offs = sens.current_offset if isinstance(sens.current_offset, list) else [sens.current_offset] * 3
+    return gain, offs
+
+
+def plant(sc: Scenario, motor: Motor, sat: Saturation | None) -> tuple[PlantSetup, object]:
+    """The plant's set-up and its ``ls_sim_cfg *`` (from a cached template of the motor, saturated
+    with ``sat``)."""
+    s = sc.spec
+    inv, sens, tr, ld = s.inverter, s.sensors, s.travel, s.load
+    gain, offs = _sensor_triples(sens)
+    setup = PlantSetup(
+        fidelity=inv.fidelity, v_dc=inv.v_dc, f_pwm=inv.f_pwm, dead_time=inv.dead_time,
+        i_gain=tuple(gain), i_offset=tuple(offs), i_noise=sens.current_noise, adc_bits=sens.adc_bits,
+        adc_range=sens.adc_range, enc_counts=sens.encoder_counts_per_period, seed=s.scenario.seed,
+        motion="free", x0=s.initial.position_mm * 1e-3, v0=0.0,
+        x_min=tr.min_mm * 1e-3, x_max=tr.max_mm * 1e-3,
+        load=ld.type, load_f0=ld.force, load_f1=ld.force_after, load_t=ld.time,
+        load_incline=math.radians(ld.incline_deg), decimate=s.record.decimate, i_abort=s.protection.i_abort,
+    )
+    try:
+        template = memo(("plant", motor_key(motor)),
+                        lambda: plant_template(motor, lab_fourier(motor.inductance, 1e-12)))
+        if sat is not None:
+            lin = template
+            template = memo(("plant_sat", motor_key(motor), sat.key()),
+                            lambda: _sat_template(lin, motor, sat))
+        cfg = sim_cfg(motor, setup, template=template)
+    except ModelError as exc:  # (the saturated plant's data: the scenario's key, or the motor file's)
+        key = exc.key if exc.key == "saturation.polarity" else ""
+        raise InputError(sc.source, key, f"saturated plant refused: {exc}") from None
+    except (SimulationError, LinsenseError) as exc:
+        raise InputError(sc.source, "", f"simulator configuration refused: {exc}") from None
+    return setup, cfg
+
+
+def make_drive(sc: Scenario, model_motor: Motor, known: dict, v: Values, d, user_keys: set[str]) -> Drive:
+    """The drive over the configuration ``d`` (``ls_drive_cfg *``, :func:`linsense.sim.drive_cfg.fill`
+    from the drive values ``v``) with its tables
+    (:func:`linsense.sim.tables.drive_tables`). A refusal of ``ls_drive_init`` (the C library's own
+    checks, the last line) names the one field at fault, its scenario key, the value and the limit."""
+    try:
+        t = drive_tables(sc, model_motor, known["R_s"], v)
+        return Drive(d, comp=t.comp, gain_table=t.gain_table, comp_r=t.comp_r, gain_r=t.gain_r)
+    except ConfigError as exc:
+        told = explain(d, user_keys, lambda k: value_of(sc.spec, k))
+        if told is not None:
+            raise InputError(sc.source, *told) from None
+        sections = sorted({_SECTION.get(k.split(".")[0] if k != "pos.speed" else k, k) for k in exc.fields})
+        raise InputError(sc.source, ",".join(sections), f"refused by the controller library: {exc}") from None
+
+
+def start_drive(sc: Scenario, drive: Drive, motor: Motor, setup: PlantSetup) -> None:
+    """Tell ``drive`` where the mover starts (the start-up does not know: its estimate starts at
+    ``startup.guess_mm``), the load it starts balanced with, and the scenario's mode."""
+    s = sc.spec
+    ctl = s.control
+    x_known = s.startup.guess_mm * 1e-3 if ctl.mode == "startup" else setup.x0
+    drive.set_position(2.0 * math.pi * x_known / motor.pole_pitch)
+    if s.initial.load_balanced:
+        drive.set_load(initial_load(sc, motor))
+    try:
+        drive.set_mode(ctl.mode)
+    except ConfigError as exc:
+        raise InputError(sc.source, "control.mode", f"{ctl.mode!r} refused: {exc}") from None
+
+
+# ------------------------------------------------------------------ the motors, the design, the reference
 def plant_saturation(sc: Scenario, motor: Motor) -> Saturation | None:
     """The saturation of the plant ``sc`` runs (None: the linear plant): the motor file's
     ``[saturation]`` with the scenario's ``[saturation]`` keys over it, when ``saturation.enabled``."""
@@ -113,10 +287,10 @@ def resolve_motor(sc: Scenario, spec: str | None = None, key: str = "motor", che
     return _load_motor_file_cached(p, check)
 
 
-def _sat_template(plant, motor: Motor, sat: Saturation):
-    """A copy of the plant template switched to the saturated plant."""
+def _sat_template(linear, motor: Motor, sat: Saturation):
+    """A copy of the (linear) plant template switched to the saturated plant."""
     c = ffi.new("ls_sim_cfg *")
-    ffi.memmove(c, plant, ffi.sizeof("ls_sim_cfg"))
+    ffi.memmove(c, linear, ffi.sizeof("ls_sim_cfg"))
     fill_saturation(c, motor, sat)
     return c
 
@@ -322,168 +496,3 @@ def designed(sc: Scenario, motor: Motor) -> Scenario:
     # and f_pwm / 4): set them without validating the whole scenario again (a sweep builds thousands)
     update = {sec: getattr(s, sec).model_copy(update=vals) for sec, vals in changes.items() if vals}
     return Scenario(s.model_copy(update=update), sc.source, sc.base_dir)
-
-
-# ------------------------------------------------------------------ the path of a scenario
-def build(sc: Scenario, motor: Motor | None = None, trace_in_memory: bool = True) -> Built:
-    """Configure the plant and the drive of ``sc``; bad values end in :class:`InputError` naming
-    the scenario file. ``motor`` replaces the scenario's motor (a Motor object from Python). Gains
-    the scenario leaves unset are designed for its motor (:func:`designed`). ``trace_in_memory``
-    False: the run is streamed in chunks (:mod:`linsense.sim.stream`), its trace not kept, so the
-    limit on the trace kept in memory does not apply.
-
-    The path: the motors and the design, every check of the scenario (:func:`validate`, before any
-    C object is made), the plant, the drive's configuration (the mapping of
-    :mod:`linsense.tune.cfgmap`), its tables, the drive. The C library keeps its own checks as the
-    last line: a refusal there names the scenario key it comes from (:mod:`linsense.sim.refusal`).
-    """
-    motor, model_motor = motors(sc, motor)
-    user_keys = given_keys(sc.given())  # (the keys the file gives: designed() sets the others)
-    sc = designed(sc, model_motor)
-    known = controller_model(sc, model_motor)
-    sat, n_steps = validate(sc, motor, known, user_keys, trace_in_memory)
-    setup, cfg = plant(sc, motor, sat)
-    v = drive_values(sc, motor, model_motor, known)
-    d = fill(v)
-    calibrating = sc.spec.control.mode == "calibration"
-    cal_table = calibration_table(d, sc.spec.calibration.points) if calibrating else None
-    drive = make_drive(sc, model_motor, known, v, d, user_keys)
-    start_drive(sc, drive, motor, setup)
-    cmds, moves = reference_commands(sc)
-    return Built(sc, motor, setup, cfg, drive, cmds, n_steps, moves, known,
-                 extra={} if cal_table is None else {"cal_table": cal_table})
-
-
-def motors(sc: Scenario, motor: Motor | None = None) -> tuple[Motor, Motor]:
-    """The plant's motor (``motor``, else the scenario's) and the one the controller believes in (its
-    tables, gains and feed-forwards): the plant's unless ``controller.model.motor`` names another
-    (e.g. one with a parameter off, to test the LUT's robustness), with the same pole pitch."""
-    motor = resolve_motor(sc) if motor is None else motor
-    ov = sc.spec.controller.model
-    model_motor = motor if ov.motor is None else resolve_motor(sc, ov.motor, "controller.model.motor",
-                                                               check=False)
-    if not math.isclose(model_motor.pole_pitch, motor.pole_pitch, rel_tol=1e-9):
-        raise InputError(sc.source, "controller.model.motor",
-                         f"pole pitch {model_motor.pole_pitch:g} m differs from the motor's "
-                         f"{motor.pole_pitch:g} m: a controller cannot believe in another pole pitch")
-    return motor, model_motor
-
-
-def controller_model(sc: Scenario, model_motor: Motor) -> dict:
-    """What the controller believes about the motor: ``[controller.model]``'s values, else the
-    model's (mean L_d and L_q over a period; the demodulator gain ``L_q / (L_q - L_d)``, None
-    without saliency: refused by :func:`validate`)."""
-    ov = sc.spec.controller.model
-    L_d, L_q = memo(("mean_dq", motor_key(model_motor)), lambda: mean_dq(model_motor))
-    known = {
-        "L_d": ov.L_d if ov.L_d is not None else L_d,
-        "L_q": ov.L_q if ov.L_q is not None else L_q,
-        "R_s": ov.R_s if ov.R_s is not None else model_motor.R_s,
-        "psi_pm": ov.psi_pm if ov.psi_pm is not None else model_motor.psi_pm,
-        "mass": ov.mass if ov.mass is not None else model_motor.mass,
-        "force_constant": ov.force_constant if ov.force_constant is not None else model_motor.force_constant,
-    }
-    if ov.demod_gain is not None:
-        known["demod_gain"] = ov.demod_gain
-    elif known["L_q"] != known["L_d"]:
-        known["demod_gain"] = known["L_q"] / (known["L_q"] - known["L_d"])
-    else:
-        known["demod_gain"] = None
-    return known
-
-
-def validate(sc: Scenario, motor: Motor, known: dict, user_keys: set[str],
-             trace_in_memory: bool = True) -> tuple[Saturation | None, int]:
-    """Every check of the designed scenario ``sc`` the build makes, before any C object is made (the
-    motor files and the design refuse while they are read): returns the plant's saturation and the
-    run's PWM periods.
-
-    Raises
-    ------
-    InputError
-        Naming the scenario key, its value and the limit.
-    """
-    s = sc.spec
-    if known["demod_gain"] is None:
-        raise InputError(sc.source, "controller.model.L_q", "equals L_d: no saliency, no demodulator gain")
-    gain, offs = _sensor_triples(s.sensors)
-    check_sensors(sc.source, gain, offs, s.sensors.current_noise, s.protection.i_max,
-                  "protection.i_max" in user_keys)
-    sat = plant_saturation(sc, motor)
-    if s.observer.load_feedforward and s.observer.type != "mech":
-        raise InputError(sc.source, "observer.load_feedforward",
-                         "needs observer.type = \"mech\" (the load estimate is the mechanical observer's)")
-    check_positions(sc, motor.pole_pitch)
-    check_initial_load(sc, initial_load(sc, motor))
-    check_startup(sc)
-    n_steps = run_steps(sc.source, s.scenario.duration, s.inverter.f_pwm)
-    check_run_size(sc.source, n_steps, s.record.decimate, s.inverter.f_pwm, trace_in_memory)
-    return sat, n_steps
-
-
-def _sensor_triples(sens) -> tuple[list, list]:
-    """The current sensors' gains and offsets, one per phase."""
-    gain = sens.current_gain if isinstance(sens.current_gain, list) else [sens.current_gain] * 3
-    offs = sens.current_offset if isinstance(sens.current_offset, list) else [sens.current_offset] * 3
-    return gain, offs
-
-
-def plant(sc: Scenario, motor: Motor, sat: Saturation | None) -> tuple[PlantSetup, object]:
-    """The plant's set-up and its ``ls_sim_cfg *`` (from a cached template of the motor, saturated
-    with ``sat``)."""
-    s = sc.spec
-    inv, sens, tr, ld = s.inverter, s.sensors, s.travel, s.load
-    gain, offs = _sensor_triples(sens)
-    setup = PlantSetup(
-        fidelity=inv.fidelity, v_dc=inv.v_dc, f_pwm=inv.f_pwm, dead_time=inv.dead_time,
-        i_gain=tuple(gain), i_offset=tuple(offs), i_noise=sens.current_noise, adc_bits=sens.adc_bits,
-        adc_range=sens.adc_range, enc_counts=sens.encoder_counts_per_period, seed=s.scenario.seed,
-        motion="free", x0=s.initial.position_mm * 1e-3, v0=0.0,
-        x_min=tr.min_mm * 1e-3, x_max=tr.max_mm * 1e-3,
-        load=ld.type, load_f0=ld.force, load_f1=ld.force_after, load_t=ld.time,
-        load_incline=math.radians(ld.incline_deg), decimate=s.record.decimate, i_abort=s.protection.i_abort,
-    )
-    try:
-        template = memo(("plant", motor_key(motor)),
-                        lambda: plant_template(motor, lab_fourier(motor.inductance, 1e-12)))
-        if sat is not None:
-            lin = template
-            template = memo(("plant_sat", motor_key(motor), sat.key()),
-                            lambda: _sat_template(lin, motor, sat))
-        cfg = sim_cfg(motor, setup, template=template)
-    except ModelError as exc:  # (the saturated plant's data: the scenario's key, or the motor file's)
-        key = exc.key if exc.key == "saturation.polarity" else ""
-        raise InputError(sc.source, key, f"saturated plant refused: {exc}") from None
-    except (SimulationError, LinsenseError) as exc:
-        raise InputError(sc.source, "", f"simulator configuration refused: {exc}") from None
-    return setup, cfg
-
-
-def make_drive(sc: Scenario, model_motor: Motor, known: dict, v, d, user_keys: set[str]) -> Drive:
-    """The drive over the configuration ``d`` (:func:`linsense.sim.drive_cfg.fill`) with its tables
-    (:func:`linsense.sim.tables.drive_tables`). A refusal of ``ls_drive_init`` (the C library's own
-    checks, the last line) names the one field at fault, its scenario key, the value and the limit."""
-    try:
-        t = drive_tables(sc, model_motor, known["R_s"], v)
-        return Drive(d, comp=t.comp, gain_table=t.gain_table, comp_r=t.comp_r, gain_r=t.gain_r)
-    except ConfigError as exc:
-        told = explain(d, user_keys, lambda k: value_of(sc.spec, k))
-        if told is not None:
-            raise InputError(sc.source, *told) from None
-        sections = sorted({_SECTION.get(k.split(".")[0] if k != "pos.speed" else k, k) for k in exc.fields})
-        raise InputError(sc.source, ",".join(sections), f"refused by the controller library: {exc}") from None
-
-
-def start_drive(sc: Scenario, drive: Drive, motor: Motor, setup: PlantSetup) -> None:
-    """Tell ``drive`` where the mover starts (the start-up does not know: its estimate starts at
-    ``startup.guess_mm``), the load it starts balanced with, and the scenario's mode."""
-    s = sc.spec
-    ctl = s.control
-    x_known = s.startup.guess_mm * 1e-3 if ctl.mode == "startup" else setup.x0
-    drive.set_position(2.0 * math.pi * x_known / motor.pole_pitch)
-    if s.initial.load_balanced:
-        drive.set_load(initial_load(sc, motor))
-    try:
-        drive.set_mode(ctl.mode)
-    except ConfigError as exc:
-        raise InputError(sc.source, "control.mode", f"{ctl.mode!r} refused: {exc}") from None
