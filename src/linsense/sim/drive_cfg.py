@@ -58,16 +58,28 @@ def drive_values(sc: Scenario, motor: Motor, model_motor: Motor, known: dict) ->
     return Values(lambda k: value_of(s, k), derived, given=given)
 
 
+#: the rows the simulator sets (the observer's gains apart), with each field's struct and member
+_SIM_ROWS = tuple((r, tuple(r.field.split(".")[:-1]), r.field.split(".")[-1]) for r in ROWS
+                  if r.sim and r.kind != "gains")
+
+
 def fill(v: Values):
     """A new ``ls_drive_cfg *``: ``ls_drive_default_cfg`` with every field of the mapping the
     simulator sets (in its order), then the observer's gains (``ls_observer_gains`` from
     ``observer.bandwidth_hz``, or the file's ``k1``..``k3``)."""
     d = drive_default_cfg()
-    for row in ROWS:
-        if not row.sim or row.kind == "gains" or (row.when is not None and not row.when(v)):
+    structs: dict[tuple[str, ...], object] = {(): d}  # (each sub-struct looked up once)
+    for row, head, member in _SIM_ROWS:
+        if row.when is not None and not row.when(v):
             continue
         value = v.field(row.field)
-        set_field(d, row.field, getattr(lib, value) if row.kind == "enum" else value)
+        obj = structs.get(head)
+        if obj is None:
+            obj = d
+            for part in head:
+                obj = getattr(obj, part)
+            structs[head] = obj
+        setattr(obj, member, getattr(lib, value) if row.kind == "enum" else value)
     lib.ls_observer_gains(ffi.addressof(d, "obs"), v["observer.bandwidth_hz"])
     if v["observer.k1"] is not None:
         d.obs.k1, d.obs.k2 = v["observer.k1"], v["observer.k2"]

@@ -93,8 +93,9 @@ class Row:
         """The field's value in the context ``v``."""
         if self.rule is not None:
             return self.rule(v)
-        x = v[self.keys[0]]
-        return x if self.conv is None else CONVERSIONS[self.conv][0](x)
+        if self.conv is None:
+            return v[self.keys[0]]
+        return CONVERSIONS[self.conv][0](v[self.keys[0]])
 
 
 class Values:
@@ -115,19 +116,19 @@ class Values:
     def __init__(self, get: Callable[[str], object], derived: dict | None = None, fields: dict | None = None,
                  given: Callable[[str], bool] | None = None):
         self._get = get
-        self._derived = dict(derived or {})
+        derived = derived or {}
+        self._lazy = {k: d for k, d in derived.items() if callable(d)}
+        self._cache: dict = {k: d for k, d in derived.items() if not callable(d)}
         self._fields = dict(fields or {})
         self._given = given
-        self._cache: dict = {}
 
     def __getitem__(self, key: str):
-        if key not in self._cache:
-            if key in self._derived:
-                d = self._derived[key]
-                self._cache[key] = d(self) if callable(d) else d
-            else:
-                self._cache[key] = self._get(key)
-        return self._cache[key]
+        cache = self._cache
+        if key in cache:
+            return cache[key]
+        fn = self._lazy.get(key)
+        value = cache[key] = fn(self) if fn is not None else self._get(key)
+        return value
 
     def field(self, path: str):
         """The value of the field ``path`` in this context (computed once)."""
