@@ -3,6 +3,8 @@ keys to its fields (:mod:`linsense.tune.cfgmap`), over ``ls_drive_default_cfg``.
 
 from __future__ import annotations
 
+from operator import attrgetter
+
 from linsense.analysis.hf import end_anisotropy
 from linsense.ctrl import drive_default_cfg, ffi, lib
 from linsense.model.motor import Motor
@@ -18,6 +20,10 @@ def value_of(spec, key: str):
     for part in key.split("."):
         obj = getattr(obj, part, None)
     return obj
+
+
+#: dotted scenario key -> its getter (the mapping's keys are all scenario keys: tests/test_build_mapping.py)
+_GETTERS: dict[str, attrgetter] = {}
 
 
 def set_field(cfg, path: str, value) -> None:
@@ -55,7 +61,13 @@ def drive_values(sc: Scenario, motor: Motor, model_motor: Motor, known: dict) ->
         section, name = key.rsplit(".", 1)
         return name in value_of(s, section).model_fields_set
 
-    return Values(lambda k: value_of(s, k), derived, given=given)
+    def get(key: str):
+        getter = _GETTERS.get(key)
+        if getter is None:
+            getter = _GETTERS[key] = attrgetter(key)
+        return getter(s)
+
+    return Values(get, derived, given=given)
 
 
 #: the rows the simulator sets (the observer's gains apart), with each field's struct and member

@@ -132,9 +132,11 @@ class Values:
 
     def field(self, path: str):
         """The value of the field ``path`` in this context (computed once)."""
-        if path not in self._fields:
-            self._fields[path] = ROW[path].value(self)
-        return self._fields[path]
+        fields = self._fields
+        if path in fields:
+            return fields[path]
+        value = fields[path] = ROW[path].value(self)
+        return value
 
     def given(self, key: str) -> bool:
         return self._given is not None and self._given(key)
