@@ -26,15 +26,6 @@ def value_of(spec, key: str):
 _GETTERS: dict[str, attrgetter] = {}
 
 
-def set_field(cfg, path: str, value) -> None:
-    """Set the field ``path`` (``"pos.speed.kp"``) of the cffi struct ``cfg``."""
-    *head, last = path.split(".")
-    obj = cfg
-    for part in head:
-        obj = getattr(obj, part)
-    setattr(obj, last, value)
-
-
 def drive_values(sc: Scenario, motor: Motor, model_motor: Motor, known: dict) -> Values:
     """The inputs of the mapping for the designed scenario ``sc``: its keys, what the controller
     believes (``controller.model.*``: ``known``), the plant motor's pole pitch and the model's
