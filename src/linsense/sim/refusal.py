@@ -1,7 +1,8 @@
 """Which scenario key a refusal of the controller library comes from, with its value and limit.
 
 ``ls_drive_init`` answers a configuration with one status: it does not say which field broke
-which rule. The scenario keys fill the fields of ``ls_drive_cfg`` (:func:`linsense.sim.build.build`),
+which rule. The scenario keys fill the fields of ``ls_drive_cfg`` through one mapping
+(:mod:`linsense.tune.cfgmap`, also read by the build and ``tune --format c``),
 so the culprit is found by asking the C library itself: each field in turn is put back to the
 firmware's default (``ls_drive_default_cfg``) in a copy of the refused configuration, and the field
 whose default makes ``ls_drive_init`` accept it is the one at fault. Its limit is then read from the
@@ -17,94 +18,16 @@ import math
 import numpy as np
 
 from linsense.ctrl import REAL, drive_default_cfg, ffi, lib
+from linsense.tune.cfgmap import FS_FIELDS, ROWS
 
 #: C field of ls_drive_cfg -> (scenario keys that fill it, in order of precedence; the factor
 #: from the first key's unit to the field's, or None where the field is computed from the keys).
 #: The first key the scenario gives is named; none given: the first (a designed or default value).
+#: The rows of the one mapping (linsense.tune.cfgmap) the refusal is searched in.
 FIELDS: dict[str, tuple[tuple[str, ...], float | None]] = {
-    "fs": (("inverter.f_pwm",), 1.0),
-    "force_constant": (("controller.model.force_constant", "motor"), 1.0),
-    "i_max": (("controller.i_max",), 1.0),
-    "delay_comp": (("control.delay_comp",), 1.0),
-    "hf_delay": (("observer.hf_delay_s",), 1.0),
-    "enc_counts": (("sensors.encoder_counts_per_period",), 1.0),
-    "inject.amplitude": (("injection.amplitude",), 1.0),
-    "inject.freq": (("injection.frequency", "inverter.f_pwm"), 1.0),
-    "inject.ramp_rate": (("injection.ramp_rate",), 1.0),
-    "inject.quad": (("injection.quadrature",), 1.0),
-    "bpf.f0": (("injection.frequency", "inverter.f_pwm"), 1.0),
-    "bpf.q": (("injection.filter_q",), 1.0),
-    "sep.f0": (("injection.frequency", "inverter.f_pwm"), 1.0),
-    "sep.q": (("injection.filter_q",), 1.0),
-    "demod.f_lpf": (("observer.demod_lpf_hz",), 1.0),
-    "demod.gain": (("controller.model.demod_gain", "controller.model.L_q", "controller.model.L_d",
-                    "controller.model.motor"), None),
-    "demod.min_level": (("observer.min_level",), 1.0),
-    "demod.f_notch": (("injection.frequency", "observer.demod_notch"), None),
-    "obs.k1": (("observer.k1", "observer.bandwidth_hz"), None),
-    "obs.k2": (("observer.k2", "observer.bandwidth_hz"), None),
-    "obs.k3": (("observer.k3", "observer.bandwidth_hz"), None),
-    "obs.mass": (("controller.model.mass", "motor"), 1.0),
-    "obs.omega_max": (("observer.omega_max",), 1.0),
-    "obs.force_max": (("observer.force_max",), 1.0),
-    "current.kp": (("controller.current_kp", "controller.current_bandwidth_hz", "controller.model.L_d",
-                    "controller.model.L_q"), None),
-    "current.ki": (("controller.current_ki", "controller.model.R_s", "controller.current_bandwidth_hz"),
-                   None),
-    "current.l_d": (("controller.model.L_d", "controller.model.motor"), 1.0),
-    "current.l_q": (("controller.model.L_q", "controller.model.motor"), 1.0),
-    "current.psi_pm": (("controller.model.psi_pm", "controller.model.motor"), 1.0),
-    "pos.kp_x": (("controller.kp_x",), 1.0),
-    "pos.kd_x": (("controller.kd_x",), 1.0),
-    "pos.v_max": (("controller.v_max",), 1.0),
-    "pos.speed.kp": (("controller.speed_kp", "controller.speed_bandwidth_hz", "controller.model.mass"), None),
-    "pos.speed.ki": (("controller.speed_ki", "controller.speed_bandwidth_hz", "controller.model.mass"), None),
-    "pos.mass": (("controller.model.mass", "motor"), 1.0),
-    "pos.force_max": (("controller.i_max", "controller.model.force_constant"), None),
-    "pos.speed.out_min": (("controller.i_max", "controller.model.force_constant"), None),
-    "pos.speed.out_max": (("controller.i_max", "controller.model.force_constant"), None),
-    "traj.v_max": (("reference.v_max",), 1.0),
-    "traj.a_max": (("reference.a_max",), 1.0),
-    "traj.v_step": (("controller.v_max",), 1.0),
-    "traj.a_step": (("controller.step_a_max",), 1.0),
-    "traj.a_lpf": (("observer.demod_lpf_hz",), None),
-    "mod.dead_time": (("inverter.dead_time",), 1.0),
-    "mod.i_band": (("inverter.dtc_current_band",), 1.0),
-    "mod.l_ripple": (("controller.model.L_d", "controller.model.L_q", "controller.model.motor"), None),
-    "dtres.r_s": (("controller.model.R_s", "controller.model.motor"), 1.0),
-    "dtres.l_d": (("controller.model.L_d", "controller.model.motor"), 1.0),
-    "dtres.l_q": (("controller.model.L_q", "controller.model.motor"), 1.0),
-    "prot.i_max": (("protection.i_max",), 1.0),
-    "prot.v_dc_min": (("protection.v_dc_min", "inverter.v_dc"), None),
-    "prot.v_dc_max": (("protection.v_dc_max", "inverter.v_dc"), None),
-    "prot.err_max": (("protection.err_max",), 1.0),
-    "prot.err_time": (("protection.err_time",), 1.0),
-    "prot.omega_max": (("protection.omega_max",), 1.0),
-    "cal.points": (("calibration.points",), 1.0),
-    "cal.k_int": (("calibration.k_int",), 1.0),
-    "cal.t_settle": (("calibration.t_settle", "controller.kp_x"), 1.0),
-    "cal.t_hold": (("calibration.t_hold", "calibration.k_int"), 1.0),
-    "cal.tol": (("calibration.tol_deg",), math.pi / 180.0),
-    "cal.t_max": (("calibration.t_max", "calibration.t_hold", "calibration.k_int"), 1.0),
-    "cal.dither_amp": (("calibration.dither_a",), 1.0),
-    "cal.dither_freq": (("calibration.dither_hz",), 1.0),
-    "i_d_inj": (("injection.d_current", "controller.i_max"), None),
-    "startup.t_lock": (("startup.t_lock",), 1.0),
-    "startup.err_lock": (("startup.err_lock_deg",), math.pi / 180.0),
-    "startup.t_quiet": (("startup.t_quiet",), 1.0),
-    "startup.v_pulse": (("startup.v_pulse",), 1.0),
-    "startup.t_pulse": (("startup.t_pulse",), 1.0),
-    "startup.t_rest": (("startup.t_rest",), 1.0),
-    "startup.pairs": (("startup.pairs",), 1.0),
-    "startup.i_min": (("startup.i_min",), 1.0),
-    "startup.t_settle": (("startup.t_settle",), 1.0),
-    "startup.lock_gain": (("observer.bandwidth_hz", "observer.demod_lpf_hz"), None),
+    r.field: (r.keys, r.scale) for r in ROWS if r.sim and r.blame
 }
-
-#: the sampling rate of every module: one scenario key, inverter.f_pwm
-FS_FIELDS = ("fs", "inject.fs", "bpf.fs", "sep.fs", "demod.fs", "obs.fs", "enc_obs.fs", "current.fs",
-             "pos.speed.fs", "traj.fs", "mod.f_pwm", "dtres.fs", "prot.fs", "startup.fs")
-
+#: (FS_FIELDS, from the mapping: the sampling rate of every module, one scenario key, inverter.f_pwm)
 
 def _get(cfg, path: str):
     obj = cfg

@@ -11,6 +11,7 @@ import tomli_w
 from linsense.analysis.hf import end_anisotropy
 from linsense.compensation.lut import build_lut, c_comment_text, c_identifier, lut_r_slope
 from linsense.model.motor import Motor, names_a_path
+from linsense.tune.cfgmap import Values, header_rows
 from linsense.tune.design import (
     V_DC_MAX_FRACTION,
     V_DC_MIN_FRACTION,
@@ -19,7 +20,6 @@ from linsense.tune.design import (
     gain_r_slope,
     gain_schedule,
     mean_dq,
-    startup_lock_gain,
 )
 
 
@@ -132,6 +132,42 @@ def _r(v: float) -> float:
     return float(f"{v:.6g}")
 
 
+def design_values(dz: Design, drive: DriveData, motor: Motor, startup=None) -> Values:
+    """The design as the scenario keys of the mapping (:mod:`linsense.tune.cfgmap`), unrounded: what
+    ``tune --format c`` writes. The pulsating/elliptical injection, the forward dead-time model, the
+    motor's own parameters (the controller believes the motor); the start-up design's SI values."""
+    L_d, L_q = mean_dq(motor)
+    keys = {
+        "inverter.f_pwm": drive.f_pwm, "inverter.dead_time": drive.dead_time,
+        "motor.pole_pitch": motor.pole_pitch,
+        "controller.i_max": drive.i_max, "controller.model.force_constant": motor.force_constant,
+        "controller.model.mass": motor.mass, "controller.model.L_d": L_d, "controller.model.L_q": L_q,
+        "controller.model.R_s": motor.R_s, "controller.model.psi_pm": motor.psi_pm,
+        "controller.model.demod_gain": dz.demod_gain,
+        "injection.shape": "pulsating", "injection.amplitude": dz.v_inj, "injection.frequency": dz.f_inj,
+        "injection.quadrature": dz.quad, "injection.ramp_rate": dz.inj_ramp_rate,
+        "observer.type": dz.observer_type, "observer.bandwidth_hz": dz.observer_bw,
+        "observer.load_feedforward": dz.load_ff, "observer.demod_lpf_hz": dz.demod_lpf,
+        "observer.demod_notch": True, "observer.force_max": dz.force_max, "observer.omega_max": dz.omega_obs,
+        "observer.hf_delay_s": dz.hf_delay, "observer.dead_time_model": "forward",
+        "controller.current_kp": dz.current_kp, "controller.current_ki": dz.current_ki,
+        "controller.speed_kp": dz.speed_kp, "controller.speed_ki": dz.speed_ki, "controller.kp_x": dz.kp_x,
+        "controller.v_max": dz.v_cap, "controller.step_a_max": dz.a_step,
+        "reference.v_max": drive.v_max, "reference.a_max": drive.a_max,
+        "protection.omega_max": dz.omega_trip, "protection.i_max": dz.i_trip,
+        "protection.v_dc_min": drive.v_dc * V_DC_MIN_FRACTION,
+        "protection.v_dc_max": drive.v_dc * V_DC_MAX_FRACTION,
+        "calibration.dither_a": dz.dither_a, "calibration.dither_hz": dz.dither_hz,
+    }
+    derived = {"model.end_anisotropy": lambda v: end_anisotropy(motor)}
+    fields = {}
+    if startup is not None:
+        keys.update({f"startup.{k}": getattr(startup, k) for k in
+                     ("t_lock", "t_quiet", "v_pulse", "t_pulse", "t_rest", "pairs", "i_min", "t_settle")})
+        fields["startup.err_lock"] = startup.err_lock  # (the design's, in rad)
+    return Values(keys.__getitem__, derived, fields)
+
+
 def c_header(dz: Design, drive: DriveData, motor: Motor, name: str | None = None, points: int = 256,
              startup=None) -> str:
     """``ls_cfg_<name>.h``: the compensation and gain tables, their slopes in the resistance's scale,
@@ -148,8 +184,6 @@ def c_header(dz: Design, drive: DriveData, motor: Motor, name: str | None = None
     lut_r = lut_r_slope(motor, points, dz.f_inj, dz.quad)
     gain = gain_schedule(motor, dz.f_inj, dz.quad, points)
     gain_r = gain_r_slope(motor, dz.f_inj, dz.quad, points)
-    L_d, L_q = mean_dq(motor)
-    l_ea, l_eb = end_anisotropy(motor)
 
     def f(v: float) -> str:
         return f"LS_R({v:.9e})"
@@ -158,80 +192,11 @@ def c_header(dz: Design, drive: DriveData, motor: Motor, name: str | None = None
         rows = [", ".join(f"{v:.9e}f" for v in vals[i : i + 4]) for i in range(0, len(vals), 4)]
         return ",\n    ".join(rows)
 
-    force_max = motor.force_constant * drive.i_max
-    sets = [
-        ("fs", drive.f_pwm),
-        ("pole_pitch", motor.pole_pitch),
-        ("force_constant", motor.force_constant),
-        ("i_max", drive.i_max),
-        ("inject.amplitude", dz.v_inj),
-        ("inject.freq", dz.f_inj),
-        ("inject.fs", drive.f_pwm),
-        ("inject.quad", dz.quad),
-        ("inject.ramp_rate", dz.inj_ramp_rate),
-        ("bpf.f0", dz.f_inj),
-        ("bpf.fs", drive.f_pwm),
-        ("sep.f0", dz.f_inj),
-        ("sep.fs", drive.f_pwm),
-        ("demod.f_lpf", dz.demod_lpf),
-        ("demod.f_notch", dz.demod_notch),
-        ("demod.fs", drive.f_pwm),
-        ("demod.gain", dz.demod_gain),
-        ("obs.fs", drive.f_pwm),
-        ("obs.pole_pitch", motor.pole_pitch),
-        ("obs.mass", motor.mass),
-        ("obs.force_max", dz.force_max),
-        ("enc_obs.fs", drive.f_pwm),
-        ("enc_obs.pole_pitch", motor.pole_pitch),
-        ("enc_obs.mass", motor.mass),
-        ("current.kp", dz.current_kp),
-        ("current.ki", dz.current_ki),
-        ("current.l_d", L_d),
-        ("current.l_q", L_q),
-        ("current.psi_pm", motor.psi_pm),
-        ("current.fs", drive.f_pwm),
-        ("pos.kp_x", dz.kp_x),
-        ("pos.v_max", dz.v_cap),
-        ("obs.omega_max", dz.omega_obs),
-        ("enc_obs.omega_max", dz.omega_obs),
-        ("prot.omega_max", dz.omega_trip),
-        ("prot.i_max", dz.i_trip),
-        ("traj.v_max", drive.v_max),
-        ("traj.v_step", dz.v_cap),
-        ("traj.a_step", dz.a_step),
-        ("traj.a_lpf", dz.demod_lpf),
-        ("startup.lock_gain", startup_lock_gain(dz.observer_type, dz.observer_bw, dz.demod_lpf)),
-        ("traj.a_max", drive.a_max),
-        ("pos.mass", motor.mass),
-        ("pos.force_max", force_max),
-        ("pos.speed.kp", dz.speed_kp),
-        ("pos.speed.ki", dz.speed_ki),
-        ("pos.speed.out_min", -force_max),
-        ("pos.speed.out_max", force_max),
-        ("pos.speed.fs", drive.f_pwm),
-        ("traj.pole_pitch", motor.pole_pitch),
-        ("traj.fs", drive.f_pwm),
-        ("mod.f_pwm", drive.f_pwm),
-        ("mod.dead_time", drive.dead_time),
-        ("prot.v_dc_min", drive.v_dc * V_DC_MIN_FRACTION),
-        ("prot.v_dc_max", drive.v_dc * V_DC_MAX_FRACTION),
-        ("prot.fs", drive.f_pwm),
-        ("dtres.fs", drive.f_pwm),
-        ("dtres.r_s", motor.R_s),
-        ("dtres.l_d", L_d),
-        ("dtres.l_q", L_q),
-        ("hf_delay", dz.hf_delay),
-        ("dtres.l_ea", l_ea),
-        ("dtres.l_eb", l_eb),
-        ("cal.dither_amp", dz.dither_a),
-        ("cal.dither_freq", dz.dither_hz),
-        ("startup.fs", drive.f_pwm),
-    ]
-    if startup is not None:  # the start-up pulses, designed from the saturation data
-        sets += startup.c_fields()
-    body = "\n".join(f"    cfg->{k} = {f(v)};" for k, v in sets)
-    if startup is not None:
-        body += f"\n    cfg->startup.pairs = {int(startup.pairs)}u;"
+    v = design_values(dz, drive, motor, startup)
+    rows = header_rows(startup is not None)
+    body = "\n".join(f"    cfg->{r.field} = {f(v.field(r.field))};" for r in rows if r.kind != "count")
+    bw = v["observer.bandwidth_hz"]
+    body += "".join(f"\n    cfg->{r.field} = {int(v.field(r.field))}u;" for r in rows if r.kind == "count")
     guard = f"LS_CFG_{sym.upper()}_H"
     shown = c_comment_text(motor.name)
     return f"""/* Drive configuration for motor {shown}, designed by `linsense tune` (docs/tuning.md).
@@ -282,9 +247,9 @@ static inline void {fn}(ls_drive_cfg *cfg, const ls_lut *comp, const ls_lut *gai
 {{
     ls_drive_default_cfg(cfg);
 {body}
-    cfg->obs.type = {"LS_OBS_MECH" if dz.observer_type == "mech" else "LS_OBS_PLL"};
-    cfg->load_ff = {"true" if dz.load_ff else "false"}; /* the observer's load estimate fed forward */
-    ls_observer_gains(&cfg->obs, {f(dz.observer_bw)}); /* the library's rule for the bandwidth (Hz) */
+    cfg->obs.type = {v.field("obs.type")};
+    cfg->load_ff = {"true" if v.field("load_ff") else "false"}; /* the observer's load estimate fed forward */
+    ls_observer_gains(&cfg->obs, {f(bw)}); /* the library's rule for the bandwidth (Hz) */
     cfg->demod.comp = comp;
     cfg->demod.gain_table = gain;
     cfg->demod.comp_r = comp_r;

@@ -81,13 +81,6 @@ class StartupDesign:
                 "t_rest": r(self.t_rest), "pairs": int(self.pairs), "i_min": r(self.i_min),
                 "t_settle": r(self.t_settle)}
 
-    def c_fields(self) -> list[tuple[str, float]]:
-        """``cfg->startup.<field>`` values of the C header (pairs as a float: written as LS_R)."""
-        return [("startup.t_lock", self.t_lock), ("startup.err_lock", self.err_lock),
-                ("startup.t_quiet", self.t_quiet), ("startup.v_pulse", self.v_pulse),
-                ("startup.t_pulse", self.t_pulse), ("startup.t_rest", self.t_rest),
-                ("startup.i_min", self.i_min), ("startup.t_settle", self.t_settle)]
-
     def lines(self) -> list[str]:
         return [
             f"  start-up       pulses {self.v_pulse:.3g} V x {self.t_pulse * 1e3:.3g} ms "

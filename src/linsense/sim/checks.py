@@ -1,0 +1,200 @@
+"""The checks of a scenario that the build makes before any work (:func:`linsense.sim.build.validate`):
+each refusal names the scenario key, its value and the limit."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from linsense.ctrl import REAL, ffi, lib
+from linsense.errors import InputError
+from linsense.limits import MAX_STEPS, MAX_TRACE_BYTES, MAX_TRACE_FILE_BYTES
+from linsense.sim.core import BLOCKS, SIGNALS
+from linsense.sim.scenario import Scenario
+
+
+def check_positions(sc: Scenario, tau: float) -> None:
+    """Refuse a position the drive cannot hold: beyond ``LS_POS_PERIOD_MAX`` pole pitches either
+    side (``ls_pos``, docs/firmware.md), before it is converted to a count of periods.
+
+    The start (``initial.position_mm``, and ``startup.guess_mm`` of a start-up) was an OverflowError
+    traceback in the conversion, or a one-line ls_pos message naming no key; a reference there was
+    silently refused by the drive's setter (the run held still and reported no fault, issue 23).
+
+    Parameters
+    ----------
+    sc : Scenario
+        The scenario.
+    tau : float
+        m, the motor's pole pitch.
+
+    Raises
+    ------
+    InputError
+        Naming the key, its value and the range in mm on this motor.
+    """
+    s = sc.spec
+    limit = int(lib.LS_POS_PERIOD_MAX)
+    keys = [("initial.position_mm", s.initial.position_mm)]
+    if s.control.mode == "startup":
+        keys.append(("startup.guess_mm", s.startup.guess_mm))
+    if s.reference.position_mm is not None:
+        keys.append(("reference.position_mm", s.reference.position_mm))
+    keys += [(f"reference.waypoints_mm[{i}]", w) for i, w in enumerate(s.reference.waypoints_mm or [])]
+    for key, x_mm in keys:
+        if not abs(x_mm * 1e-3 / tau) < limit:
+            raise InputError(sc.source, key, f"{x_mm:g} mm is beyond the drive's position range of "
+                             f"+-{limit:,} pole pitches (+-{limit * tau * 1e3:.6g} mm on this motor, "
+                             "docs/firmware.md)")
+
+
+def check_sensors(source: str, gain: list, offset: list, noise: float, i_trip: float,
+                  trip_given: bool = False) -> None:
+    """Refuse current sensors the drive cannot run with: a gain of 0 or below (the current not
+    measured, or a phase reversed), an offset or an rms noise at the over-current trip
+    ``protection.i_max`` or beyond (the drive trips on the sensor alone, at t = 0; issue 23: the
+    message named protection.i_max where the file gave only the sensor). ``trip_given``: the file
+    gives protection.i_max, which is then named, with the sensor's value as its limit."""
+    for g in gain:
+        if not g > 0.0:
+            raise InputError(source, "sensors.current_gain", f"must be above 0 (0 measures no current, "
+                             f"a negative gain reverses the phase), got {g!r}")
+    for key, v, what in [("sensors.current_offset", max(abs(o) for o in offset), "offset"),
+                         ("sensors.current_noise", noise, "rms noise")]:
+        if v < i_trip:
+            continue
+        if trip_given:
+            raise InputError(source, "protection.i_max", f"{i_trip:g} A is at or below {key} = {v:g} A: "
+                             f"the drive would trip at t = 0 on the sensor's {what} alone; it must be above "
+                             f"{v:g} A")
+        raise InputError(source, key, f"{v!r} A reaches the over-current trip protection.i_max = "
+                         f"{i_trip:g} A: the drive would trip at t = 0 on the {what} alone; it must be below "
+                         f"{i_trip:g} A")
+
+
+def run_steps(source: str, duration: float, fs: float) -> int:
+    """The PWM periods of a run of ``duration`` s at ``fs`` Hz, range-checked before the conversion to
+    an integer (issue 23: a product beyond a float, ``scenario.duration = 1e308``, was an
+    OverflowError traceback).
+
+    Parameters
+    ----------
+    source : str
+        The scenario's file, named in a refusal.
+    duration, fs : float
+        ``scenario.duration`` (s) and ``inverter.f_pwm`` (Hz), positive and finite.
+
+    Returns
+    -------
+    int
+        ``round(duration * fs)``, 1 .. :data:`~linsense.limits.MAX_STEPS`.
+
+    Raises
+    ------
+    InputError
+        Naming ``scenario.duration``, its value, the rate and the limit: beyond MAX_STEPS periods
+        (or a product that overflows), or shorter than one period.
+    """
+    periods = duration * fs
+    if not periods <= MAX_STEPS + 0.5:  # (also inf and NaN)
+        count = (f"{periods:.3g} PWM periods" if math.isfinite(periods)
+                 else "more PWM periods than a float holds")
+        raise InputError(source, "scenario.duration",
+                         f"{duration:g} s at {fs:g} Hz is {count}, beyond the limit "
+                         f"of {MAX_STEPS:.3g} (duration x inverter.f_pwm, docs/limits.md)")
+    n_steps = int(round(periods))
+    if n_steps < 1:
+        raise InputError(source, "scenario.duration", f"shorter than one PWM period, got {duration!r}")
+    return n_steps
+
+
+def check_run_size(source: str, n_steps: int, decimate: int, fs: float, trace_in_memory: bool = True) -> None:
+    """Refuse (``trace_in_memory``) a run of ``n_steps`` periods (:func:`run_steps`, which bounds
+    them by :data:`~linsense.limits.MAX_STEPS`) whose trace would not fit in
+    :data:`~linsense.limits.MAX_TRACE_BYTES`, before anything is allocated. A run streamed in
+    chunks (``linsense simulate``) keeps no trace in memory."""
+    if not trace_in_memory:
+        return
+    # with decimate > 1 every sample also keeps its block statistics (linsense.sim.run.simulate)
+    with_blocks = 8 * (sum(SIGNALS.values()) + sum(BLOCKS.values())) + 4
+    per_sample = with_blocks if decimate > 1 else 8 * sum(SIGNALS.values()) + 4
+    n_rec = math.ceil(n_steps / decimate) + 2
+    if n_rec * per_sample > MAX_TRACE_BYTES:
+        need = math.ceil(n_steps * with_blocks / MAX_TRACE_BYTES)
+        gib = n_rec * per_sample / 2**30
+        raise InputError(source, "record.decimate",
+                         f"= {decimate} keeps {n_rec:.3g} samples of the {n_steps / fs:g} s run in memory "
+                         f"({gib:.3g} GiB), beyond the limit of {MAX_TRACE_BYTES / 2**30:g} GiB: set "
+                         f"record.decimate to at least {need} or shorten scenario.duration (docs/limits.md)")
+
+
+def check_trace_file(b) -> None:
+    """Refuse a streamed run whose trace file would exceed :data:`~linsense.limits.MAX_TRACE_FILE_BYTES`
+    (144 B per sample), before it starts."""
+    from linsense.sim.trace import COLUMNS
+
+    s = b.scenario.spec
+    per_sample = 8 * len(COLUMNS)
+    dec = int(b.cfg.decimate)
+    n_rec = math.ceil(b.n_steps / dec)
+    if n_rec * per_sample > MAX_TRACE_FILE_BYTES:
+        need = math.ceil(b.n_steps * per_sample / MAX_TRACE_FILE_BYTES)
+        gib = n_rec * per_sample / 2**30
+        raise InputError(
+            b.scenario.source, "record.decimate",
+            f"= {dec} writes {n_rec:.3g} samples of the {s.scenario.duration:g} s run to the trace file "
+            f"(about "
+            f"{gib:.3g} GiB), beyond the limit of {MAX_TRACE_FILE_BYTES / 2**30:g} GiB: set record.decimate "
+            f"(--decimate) to at least {need}, shorten scenario.duration or write no trace (--trace none) "
+            "(docs/limits.md)")
+
+
+def check_startup(sc: Scenario) -> None:
+    """Refuse a start-up the drive cannot enter (``ls_drive_set_mode``, ``LS_MODE_STARTUP``): the
+    injection must be on, and the quiet time and the settling must cover the injection's ramp as the
+    drive runs it, with the designed amplitude and ramp rate (the scenario's own check sees the
+    file's or the default values; the designed ones were refused by the C library only when the mode
+    was set). Compared as the library does, in ``LS_REAL``.
+
+    Raises
+    ------
+    InputError
+        Naming ``injection.amplitude``, or ``startup.t_quiet`` / ``startup.t_settle`` with the ramp's
+        duration.
+    """
+    s = sc.spec
+    if s.control.mode != "startup":
+        return
+    inj, su = s.injection, s.startup
+    amp, rate = REAL.type(inj.amplitude), REAL.type(inj.ramp_rate)
+    if not amp > 0.0:
+        raise InputError(sc.source, "injection.amplitude", f"the start-up detects with the injection: must "
+                         f"be above 0, got {inj.amplitude!r}")
+    for k in ("t_quiet", "t_settle"):
+        t = getattr(su, k)
+        if not REAL.type(t) * rate >= amp:
+            raise InputError(sc.source, f"startup.{k}", f"must cover the injection's ramp as the drive runs "
+                             f"it, injection.amplitude / ramp_rate = {inj.amplitude:g} V / {inj.ramp_rate:g} "
+                             f"V/s = {inj.amplitude / inj.ramp_rate:g} s, got {t:g}")
+
+
+def check_initial_load(sc: Scenario, f_load: float) -> None:
+    """Refuse a start in equilibrium (``initial.load_balanced``) with a load force ``f_load`` (N,
+    :func:`linsense.sim.build.initial_load`) beyond what the drive's ``LS_REAL`` holds:
+    ``ls_drive_set_load`` refuses a non-finite force (it was a ConfigError naming no key, raised
+    after the plant, the tables and the drive were made).
+
+    Raises
+    ------
+    InputError
+        Naming the load key that sets the force at t = 0 (``load.force``, or ``load.force_after`` for
+        a step at t <= 0).
+    """
+    s = sc.spec
+    if not s.initial.load_balanced or math.isfinite(float(ffi.cast("LS_REAL", f_load))):
+        return
+    ld = s.load
+    key = "load.force_after" if ld.type == "step" and ld.time <= 0.0 else "load.force"
+    raise InputError(sc.source, key, f"{f_load:g} N at t = 0 (initial.load_balanced = true) is beyond the "
+                     f"largest force the drive holds, {float(np.finfo(REAL).max):.6g} N (ls_drive_set_load)")

@@ -1,0 +1,90 @@
+"""The controller's tables of a scenario: the compensation table (and its slope in the resistance)
+and the demodulator's gain table, from the motor model with the resistance the controller believes,
+as cached ``ls_lut`` objects (the drive only reads them, through const pointers)."""
+
+from __future__ import annotations
+
+import dataclasses
+
+from linsense.compensation.lut import build_lut, lut_r_slope
+from linsense.ctrl import make_lut
+from linsense.model.motor import Motor
+from linsense.sim.cache import memo, motor_key
+from linsense.sim.scenario import Scenario, compensation_of
+from linsense.tune.cfgmap import Values
+from linsense.tune.design import gain_r_slope, gain_schedule
+from linsense.tune.injection import injection_tables, rotating_r_slopes
+
+
+@dataclasses.dataclass
+class Tables:
+    """The ``ls_lut`` objects of one drive (None: not used)."""
+
+    comp: object = None
+    gain_table: object = None
+    comp_r: object = None
+    gain_r: object = None
+
+
+def drive_tables(sc: Scenario, model_motor: Motor, R_s: float, v: Values) -> Tables:
+    """The tables of the designed scenario ``sc`` (``v``: its drive values): for ``sensorless_lut``,
+    and for the HF observer beside the encoder in sensored mode; the resistance-aware slopes when the
+    drive measures the resistance (``ls_dtres_adapt`` with the forward residual model)."""
+    obs = sc.spec.observer
+
+    def lut_motor() -> Motor:
+        return dataclasses.replace(model_motor, R_s=R_s)
+
+    key = (motor_key(model_motor), R_s, obs.lut_points)
+    r_slopes = (obs.resistance_adapt and v.field("hf_dtres") and v.field("dtres.forward")
+                and v.field("dtres.adapt"))
+    if v["injection.shape"] != "pulsating":
+        return _shape_tables(sc, lut_motor, key, v, r_slopes)
+    t = Tables()
+    inj = sc.spec.injection
+    if compensation_of(sc.spec.control.mode, obs.compensation) == "lut":
+        f_lut = inj.frequency if obs.lut_model == "resistive" else None
+        quad = inj.quadrature if f_lut else 0.0
+        t.comp = memo(("lut",) + key + (f_lut, quad),
+                      lambda: make_lut(build_lut(lut_motor(), obs.lut_points, f_inj=f_lut, quad=quad)))
+        if f_lut and r_slopes:
+            # the table's slope in R_s, for the resistance the drive measures (ls_dtres_adapt)
+            t.comp_r = memo(("lut_r",) + key + (f_lut, quad),
+                            lambda: make_lut(lut_r_slope(lut_motor(), obs.lut_points, f_lut, quad)))
+    if obs.gain_schedule:
+        # the demodulator gain that makes the error's local slope 1 everywhere (the saliency and,
+        # with the elliptical injection and R_s, its phase set it; docs/tuning.md)
+        g = (inj.frequency, inj.quadrature, obs.lut_points)
+        t.gain_table = memo(("gain_table",) + key[:2] + g,
+                            lambda: make_lut(gain_schedule(lut_motor(), *g)))
+        if t.comp_r is not None:  # (it follows the measured resistance as the table does)
+            t.gain_r = memo(("gain_r",) + key[:2] + g, lambda: make_lut(gain_r_slope(lut_motor(), *g)))
+    return t
+
+
+def _shape_tables(sc: Scenario, lut_motor, key: tuple, v: Values, r_slopes: bool) -> Tables:
+    """The rotating or square wave's tables (each shape's table and gain computed once for both)."""
+    obs, ctl, inj = sc.spec.observer, sc.spec.control, sc.spec.injection
+    shape, f_inj, fs = inj.shape, v.field("inject.freq"), sc.spec.inverter.f_pwm
+    model_key, R_s, points = key
+
+    def shape_tables(f: float | None):
+        return memo(("shape_tables", shape, model_key, R_s, points, f),
+                    lambda: injection_tables(lut_motor(), shape, points, f))
+
+    t = Tables()
+    rot_r = None
+    if compensation_of(ctl.mode, obs.compensation) == "lut":
+        f_lut = f_inj if obs.lut_model == "resistive" else None
+        t.comp = memo(("lut", shape, model_key, R_s, points, f_lut), lambda: make_lut(shape_tables(f_lut)[0]))
+        if shape == "rotating" and f_lut and r_slopes:
+            rot_r = memo(("rot_r", model_key, R_s, points, f_inj, fs, ctl.delay_comp, inj.amplitude),
+                         lambda: tuple(make_lut(x) for x in rotating_r_slopes(
+                             lut_motor(), points, f_inj, fs, ctl.delay_comp, inj.amplitude)))
+            t.comp_r = rot_r[0]
+    if obs.gain_schedule:
+        t.gain_table = memo(("gain_table", shape, model_key, R_s, f_inj, points),
+                            lambda: make_lut(shape_tables(f_inj)[1]))
+        if rot_r is not None:
+            t.gain_r = rot_r[1]
+    return t

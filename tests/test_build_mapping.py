@@ -1,0 +1,119 @@
+"""The one scenario -> ls_drive_cfg mapping (linsense.tune.cfgmap): the simulator's build, the C
+header of ``tune --format c``, the refusal search and the docs' table all read it."""
+
+from __future__ import annotations
+
+import importlib.util
+import math
+import re
+from pathlib import Path
+
+import pytest
+
+from linsense.sim.build import build
+from linsense.sim.drive_cfg import value_of
+from linsense.sim.refusal import FIELDS, FS_FIELDS
+from linsense.sim.scenario import ScenarioFile, _sections, scenario_from_dict
+from linsense.tune.cfgmap import ROW, ROWS, header_rows
+from linsense.tune.design import DriveData, design
+from linsense.tune.export import c_header, scenario_dict
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def _gen_docs():
+    spec = importlib.util.spec_from_file_location("gen_docs", ROOT / "tools" / "gen_docs.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_docs_table_is_the_generated_one():
+    """docs/simulator.md holds the table tools/gen_docs.py writes from the mapping (run the script
+    after a change to linsense.tune.cfgmap)."""
+    gen = _gen_docs()
+    page = gen.PAGE.read_text(encoding="utf-8")
+    assert gen.render(page) == page, "docs/simulator.md's key table differs: run python tools/gen_docs.py"
+    # (the check sees a drift: a row edited by hand is written back)
+    row = "| `inject.amplitude` | `injection.amplitude` | V |"
+    edited = page.replace(row, "| `inject.amplitude` | x | V |")
+    assert edited != page and gen.render(edited) == page
+
+
+def test_every_key_of_the_mapping_is_a_scenario_key():
+    """A renamed or removed scenario key cannot stay in the mapping (nor in the docs and refusals)."""
+    sections = {path for path, _ in _sections(ScenarioFile).values()}
+    known = {"motor"}
+    for path, model in _sections(ScenarioFile).values():
+        known |= {f"{path}.{name}" for name in model.model_fields}
+    for r in ROWS:
+        for k in r.keys:
+            assert k in known, f"{r.field}: {k!r} is not a scenario key"
+            assert k not in sections, f"{r.field}: {k!r} is a section, not a key"
+
+
+def test_refusal_search_reads_the_mapping():
+    assert set(FIELDS) == {r.field for r in ROWS if r.sim and r.blame}
+    assert all(FIELDS[f] == (ROW[f].keys, ROW[f].scale) for f in FIELDS)
+    assert FS_FIELDS[0] == "fs" and all(ROW[f].keys == ("inverter.f_pwm",) for f in FS_FIELDS)
+    assert len(ROW) == len(ROWS)  # (each field once)
+
+
+def _field(cfg, path: str):
+    for part in path.split("."):
+        cfg = getattr(cfg, part)
+    return cfg
+
+
+def _header_values(text: str) -> list[tuple[str, float]]:
+    out = []
+    for m in re.finditer(r"^    cfg->([\w.]+) = (?:LS_R\(([^)]*)\)|(\d+)u);$", text, re.M):
+        out.append((m.group(1), float(m.group(2) or m.group(3))))
+    return out
+
+
+@pytest.fixture(scope="module")
+def tuned():
+    from linsense.model.motor import load_motor
+
+    motor = load_motor("ecce2010")
+    dd = DriveData()
+    dz = design(motor, dd, analyse=False)
+    return motor, dd, dz
+
+
+def test_header_writes_the_mapping_rows_in_order(tuned):
+    motor, dd, dz = tuned
+    got = [f for f, _ in _header_values(c_header(dz, dd, motor))]
+    assert got == [r.field for r in header_rows(False)]
+
+
+def test_header_and_simulator_set_the_same_values(tuned):
+    """The design's scenario (tune --format toml's keys, rounded to 6 digits) built by the simulator
+    gives every field the header writes the header's value (to the rounding)."""
+    motor, dd, dz = tuned
+    text = c_header(dz, dd, motor)
+    sc = scenario_from_dict(scenario_dict(dz, dd, "ecce2010"), "tuned.toml")
+    b = build(sc)
+    compared = 0
+    for path, want in _header_values(text):
+        r = ROW[path]
+        if not r.sim or r.when is not None:  # (the header's own, or the simulator's in calibration only)
+            continue
+        got = float(_field(b.drive.cfg, path))
+        assert math.isclose(got, want, rel_tol=2e-5, abs_tol=1e-12), (path, got, want)
+        compared += 1
+    assert compared > 50
+    assert value_of(b.scenario.spec, "inverter.f_pwm") == dd.f_pwm
+
+
+def test_build_fills_every_row_it_owns():
+    """Each field the simulator sets holds its row's value (the build has no second copy)."""
+    sc = scenario_from_dict({"motor": "ecce2010", "scenario": {"duration": 0.01},
+                             "reference": {"type": "hold"}, "observer": {"min_level": 0.004},
+                             "controller": {"kp_x": 12.0}, "inverter": {"dead_time": 0.5e-6}}, "m.toml")
+    b = build(sc)
+    assert float(_field(b.drive.cfg, "demod.min_level")) == pytest.approx(0.004, rel=1e-6)
+    assert float(_field(b.drive.cfg, "pos.kp_x")) == pytest.approx(12.0, rel=1e-6)
+    assert float(_field(b.drive.cfg, "mod.dead_time")) == pytest.approx(0.5e-6, rel=1e-6)
+    assert float(_field(b.drive.cfg, "traj.pole_pitch")) == pytest.approx(b.motor.pole_pitch, rel=1e-6)
