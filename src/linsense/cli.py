@@ -15,9 +15,9 @@ from pathlib import Path
 import click
 import numpy as np
 
-from linsense import __version__
 from linsense.errors import InputError, LinsenseError
 from linsense.limits import MAX_POINTS, MAX_POSITIONS
+from linsense.version import __version__
 
 MOTOR_HELP = "preset name (e.g. ecce2010) or path to a motor .toml file"
 

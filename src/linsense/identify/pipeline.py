@@ -14,7 +14,6 @@ from pathlib import Path
 
 import numpy as np
 
-from linsense import __version__
 from linsense.analysis.hf import psi_lut
 from linsense.analysis.tables import table_to_csv
 from linsense.compensation.lut import Lut, build_lut, export
@@ -24,6 +23,7 @@ from linsense.identify.fit import T_SIGNIFICANT, FitResult, fit_inductances
 from linsense.identify.process import MeasuredTable, process_bench
 from linsense.identify.tables import measured_columns, measured_lut_csv
 from linsense.model.motor import Friction, Motor, check_motor, motor_to_toml
+from linsense.version import __version__
 
 
 @dataclass(frozen=True)
