@@ -157,8 +157,9 @@ def test_no_private_name_imported_across_packages():
 
 LIGHT = ("linsense", "linsense.errors", "linsense.io", "linsense.limits", "linsense.validation",
          "linsense.model", "linsense.model.motor", "linsense.model.schema", "linsense.analysis.hf",
-         "linsense.analysis.tables", "linsense.compensation.lut", "linsense.tune",
-         "linsense.identify.pipeline", "linsense.sweep.spec")
+         "linsense.analysis.tables", "linsense.analysis.stability", "linsense.compensation.lut",
+         "linsense.tune", "linsense.tune.margins", "linsense.identify.pipeline", "linsense.fea.pipeline",
+         "linsense.fea.outputs")
 
 
 @pytest.mark.parametrize("module", LIGHT)
