@@ -87,7 +87,7 @@ def load_written(path: Path, shown: Path):
         return None, str(exc).replace(str(path), str(shown))
 
 
-def lut_vs_load(results, luts) -> dict:
+def load_sweep(results, luts) -> dict:
     """fea.json's ``lut_vs_load``: the loads, their force, each LUT's largest difference from the first's."""
     kf = outputs.force_constant(results[0])
     ref = luts[0]
@@ -109,7 +109,7 @@ def lut_vs_load(results, luts) -> dict:
     }
 
 
-def lut_vs_load_line(v: dict) -> str:
+def load_sweep_line(v: dict) -> str:
     parts = []
     for i, f, d in zip(v["currents_A"], v["force_N"], v["max_diff_deg"], strict=True):
         force = "" if f is None else f" ({f:.0f} N)"

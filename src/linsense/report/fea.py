@@ -22,10 +22,10 @@ from linsense.fea import outputs
 from linsense.fea.geometry import load_geometry
 from linsense.fea.pipeline import (
     LOAD_OPTION,
+    load_sweep,
+    load_sweep_line,
     load_tag,
     load_written,
-    lut_vs_load,
-    lut_vs_load_line,
     parse_currents,
 )
 from linsense.fea.polarity import polarity_csv, polarity_line, polarity_signal
@@ -111,7 +111,7 @@ def run_fea(spec: str, out: str, positions: int = 56, level: str = "default", lu
                 luts.append(build_lut(m, lut_points) if m is not None else None)
                 if luts[-1] is not None:
                     s.write(f"lut{tag}.csv", to_csv(luts[-1]))
-            vs_load = lut_vs_load(results, luts)
+            vs_load = load_sweep(results, luts)
             extra["lut_vs_load"] = vs_load
         sig = None
         if pulses is not None:
@@ -149,7 +149,7 @@ def run_fea(spec: str, out: str, positions: int = 56, level: str = "default", lu
         lines[-1] += (f", saliency {sal[0] * 1e3:.3f} .. {sal[1] * 1e3:.3f} mH, "
                       f"Psi_LUT peak {summ['psi_lut_peak_deg']:.2f} deg")
     if vs_load is not None:
-        lines.append(lut_vs_load_line(vs_load))
+        lines.append(load_sweep_line(vs_load))
     if sig is not None:
         lines.append(polarity_line(sig))
     return s.files, lines, warnings
