@@ -171,6 +171,15 @@ def test_import_loads_no_c_extension_and_no_matplotlib(module):
     assert r.returncode == 0, r.stderr
 
 
+def test_only_the_binding_and_the_simulator_import_the_c_extension():
+    # the compiled extension (linsense._ctrl, not a module import-linter sees) is reached through the
+    # binding (linsense.ctrl), the simulator's own calls (linsense.sim) and limits' lazy read of C's sizes
+    users = {m for m in MODULES for _, mod, name in _imports(m)
+             if mod == "linsense._ctrl" or (mod == "linsense" and name == "_ctrl")}
+    assert "linsense.ctrl" in users
+    assert {m for m in users if not m.startswith("linsense.sim.")} <= {"linsense.ctrl", "linsense.limits"}
+
+
 def test_the_check_sees_the_c_extension_when_loaded():
     # the same check fails where the extension is needed: the simulator
     code = "import sys, linsense.sim.core\nassert 'linsense._ctrl' in sys.modules\n"
