@@ -77,7 +77,8 @@ def error_gain(motor: Motor, f_inj: float, quad: float, gain: float, n: int = 18
     slope, ``1 + de*/dtheta`` of the end-effect, is part of the observer's loop gain: 0.6-2.9 for
     ecce2010, which a schedule computed with the table read at ``theta`` left in the loop).
     ``table``: the motor whose table the drive reads (default ``motor``; another one: a motor off
-    by a tolerance driven with the nominal table, :mod:`linsense.tune.margins`)."""
+    by a tolerance driven with the nominal table, :func:`local_gain`). The gain schedule's
+    (:mod:`linsense.tune.design`) and the tolerances' one home."""
     th = np.linspace(0.0, 2.0 * np.pi, n, endpoint=False)
     h = 1e-3
     tm = motor if table is None else table
