@@ -99,6 +99,7 @@ pytest: $(STAMP)
 
 lint: $(STAMP)
 	$(VENV)/bin/ruff check src tests tools
+	$(VENV)/bin/lint-imports
 
 # The firmware example: generated LUT header + library + host main, a few thousand steps
 EXAMPLE := $(BUILD)/example

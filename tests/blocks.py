@@ -39,6 +39,7 @@ from linsense.ctrl import (
     _p,
     _real_array,
     _shape_ok,
+    config_error,
     drive_default_cfg,
     ffi,
     from_pos,
@@ -93,7 +94,7 @@ def _init_module(module: str, init: Callable, state_type: str, cfg_type: str, va
     if not blamed:
         blamed = {k: v for k, v in values.items() if good.get(k) != v}
     shown = {k: (_enum_name(module, k, v) if (module, k) in _ENUMS else v) for k, v in blamed.items()}
-    raise ConfigError(module, shown, status)
+    raise config_error(module, shown, status)
 
 
 def _good(section: str) -> dict:

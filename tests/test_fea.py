@@ -199,7 +199,7 @@ def test_geometry_not_toml_and_missing_file(tmp_path):
 
 
 def test_no_saliency_still_writes_the_table_and_says_so(tmp_path):
-    from linsense.fea.pipeline import run_fea
+    from linsense.report.fea import run_fea
 
     geo = Path(__file__).resolve().parents[1] / "examples" / "fea" / "fig4_three_coils.toml"
     files, lines, warnings = run_fea(str(geo), str(tmp_path / "o"), 14, "coarse", 36)
@@ -249,7 +249,7 @@ def test_linear_curve_gives_the_linear_inductances():
 
 
 def test_load_current_refused_with_linear_iron(tmp_path):
-    from linsense.fea.pipeline import run_fea
+    from linsense.report.fea import run_fea
 
     with pytest.raises(InputError, match="linear iron"):
         run_fea("tubular56", str(tmp_path / "o"), 14, "coarse", 36, load_current=1.0)
@@ -356,7 +356,7 @@ def test_linear_iron_takes_only_zero(run_cli, tmp_path):
 
 
 def test_load_sweep_writes_per_load_files_and_the_lut_against_load(tmp_path):
-    from linsense.fea.pipeline import run_fea
+    from linsense.report.fea import run_fea
 
     d = _bh_doc("default")
     d["armature"]["repeat"] = 4

@@ -1,13 +1,17 @@
 """linsense: end-effect-aware saliency-based sensorless control of linear PM motors.
 
-The package follows the layout of DEVELOPERS.md: ``model`` (inductance models, frames,
-motor files), ``analysis`` (psi maps, saliency, uncompensated observer), ``compensation``
-(LUT generation and export) and ``report`` (figures). Angles are electrical radians inside.
+The package is in layers, each importing only from those below it (the layout in README.md;
+``.importlinter`` holds the contract that ``make lint`` checks): ``model`` (inductance models,
+frames, motor files) < ``analysis`` (psi maps, saliency, uncompensated observer) <
+``compensation`` (LUT generation and export) < ``tune`` (the drive's design) < ``sim`` (the
+simulator's binding, scenarios, metrics) < ``identify`` < ``sweep``, ``fea``, ``verify`` <
+``report`` (figures) < ``reproduce`` < ``cli``; under them all the shared modules (``errors``,
+``io``, ``limits``, ``validation``, ``version``, the C binding ``ctrl``). Angles are electrical
+radians inside.
 """
 
 from linsense.errors import InputError, LinsenseError, ModelError
-
-__version__ = "0.1.0"
+from linsense.version import __version__
 
 __all__ = ["InputError", "LinsenseError", "ModelError", "Motor", "load_motor", "simulate", "simulate_many",
            "__version__"]

@@ -15,9 +15,9 @@ from pathlib import Path
 import click
 import numpy as np
 
-from linsense import __version__
 from linsense.errors import InputError, LinsenseError
 from linsense.limits import MAX_POINTS, MAX_POSITIONS
+from linsense.version import __version__
 
 MOTOR_HELP = "preset name (e.g. ecce2010) or path to a motor .toml file"
 
@@ -213,6 +213,7 @@ def identify(bench: str, out: str, harmonics: int, motor_spec: str | None, pole_
     from linsense.identify.pipeline import identify as run_identify
     from linsense.identify.pipeline import render_outputs, summary_lines
     from linsense.io import output_set
+    from linsense.report.identify_figures import identify_figure_files
 
     base = _load(motor_spec) if motor_spec is not None else None
     ident = run_identify(
@@ -220,7 +221,7 @@ def identify(bench: str, out: str, harmonics: int, motor_spec: str | None, pole_
         pole_pitch=None if pole_pitch_mm is None else pole_pitch_mm * 1e-3,
         force_constant=force_constant, mass=mass, resistance=resistance, name=name, points=points,
     )
-    files = render_outputs(ident)
+    files = {**render_outputs(ident), **identify_figure_files(ident)}
     with output_set(out, "identify") as s:
         for rel, content in files.items():
             s.write(rel, content)
@@ -590,7 +591,7 @@ def fea(geometry: str, out: str, positions: int, level: str, lut_points: int, lo
         workers: int, polarity: str | None, polarity_positions: int) -> None:
     """Axisymmetric FEA of a tubular motor (GEOMETRY: .toml file or preset): inductances.csv, motor.toml,
     lut.csv, geometry.json, fea.json and figures."""
-    from linsense.fea.pipeline import run_fea
+    from linsense.report.fea import run_fea
 
     files, lines, warnings = run_fea(geometry, out, positions, level, lut_points,
                                      progress=sys.stderr.isatty(), load_current=load_current, workers=workers,

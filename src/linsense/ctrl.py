@@ -26,7 +26,7 @@ import numpy as np
 
 from linsense._ctrl import ffi, lib
 from linsense._digest import source_digest
-from linsense.errors import InputError, LinsenseError
+from linsense.errors import ConfigError, InputError
 
 __all__ = [
     "ffi",
@@ -152,8 +152,9 @@ _ENUMS = {
 }
 
 
-class ConfigError(LinsenseError):
-    """A configuration refused by the C library's ``ls_<module>_init`` (non-zero ``ls_status``).
+def config_error(module: str, fields: dict, status: int, detail: str = "", func: str = "") -> ConfigError:
+    """The :class:`~linsense.errors.ConfigError` of a configuration refused by the C library's
+    ``ls_<module>_init`` (non-zero ``ls_status``), its message naming each field with what C allows.
 
     Parameters
     ----------
@@ -169,19 +170,15 @@ class ConfigError(LinsenseError):
         The refusing C function (default ``<module>_init``).
     """
 
-    def __init__(self, module: str, fields: dict, status: int, detail: str = "", func: str = "") -> None:
-        self.module = module
-        self.fields = dict(fields)
-        self.status = int(status)
-        rules = _RULES.get(module, {})
-        parts = []
-        for k, v in self.fields.items():
-            rule = rules.get(k)
-            parts.append(f"{k} = {_show(v)}" + (f" (allowed: {rule})" if rule else ""))
-        what = "; ".join(parts) if parts else "configuration"
-        func = func or f"{module}_init"
-        msg = f"{module}: {what} refused by {func} ({_STATUS.get(self.status, self.status)})"
-        super().__init__(msg + (f": {detail}" if detail else ""))
+    rules = _RULES.get(module, {})
+    parts = []
+    for k, v in dict(fields).items():
+        rule = rules.get(k)
+        parts.append(f"{k} = {_show(v)}" + (f" (allowed: {rule})" if rule else ""))
+    what = "; ".join(parts) if parts else "configuration"
+    func = func or f"{module}_init"
+    msg = f"{module}: {what} refused by {func} ({_STATUS.get(int(status), int(status))})"
+    return ConfigError(module, fields, status, msg + (f": {detail}" if detail else ""))
 
 
 def _show(v: Any) -> str:
@@ -214,7 +211,7 @@ def _enum(module: str, field: str, value: Any) -> int:
         try:
             return table[value.lower()]
         except KeyError:
-            raise ConfigError(module, {field: value}, lib.LS_ERR_PARAM,
+            raise config_error(module, {field: value}, lib.LS_ERR_PARAM,
                               f"one of {', '.join(table)}") from None
     return int(value)
 
@@ -250,7 +247,7 @@ def to_pos(theta: float):
     """
     theta = float(theta)
     if not (np.isfinite(theta) and abs(theta) / _TWO_PI < lib.LS_POS_PERIOD_MAX):
-        raise ConfigError("ls_pos", {"theta": theta}, lib.LS_ERR_PARAM,
+        raise config_error("ls_pos", {"theta": theta}, lib.LS_ERR_PARAM,
                           f"a position is finite and within +-{lib.LS_POS_PERIOD_MAX} electrical periods",
                           func="ls_pos_norm")
     period = int(np.floor(theta / _TWO_PI))
@@ -313,7 +310,7 @@ class Lut:
                 fields = {f"table[{bad}]": float(table[bad])} if bad >= 0 else {}
             else:
                 fields = {"len": table.size}
-            raise ConfigError("ls_lut", fields, status)
+            raise config_error("ls_lut", fields, status)
 
     def __call__(self, theta: Any) -> np.ndarray:
         """``ls_lut_step`` at each ``theta`` (rad); returns float64 of ``theta``'s shape."""
@@ -373,7 +370,7 @@ class Drive:
         self.state = ffi.new("ls_drive *")
         status = lib.ls_drive_init(self.state, self.cfg)
         if status != lib.LS_OK:
-            raise ConfigError("ls_drive", self._blame(), status, self._detail())
+            raise config_error("ls_drive", self._blame(), status, self._detail())
 
     _SECTIONS = (("inject", "ls_inject"), ("bpf", "ls_biquad"), ("sep", "ls_biquad"),
                  ("demod", "ls_demod"), ("obs", "ls_observer"), ("enc_obs", "ls_observer"),
@@ -418,7 +415,7 @@ class Drive:
         m = _enum("ls_drive", "mode", mode)
         status = lib.ls_drive_set_mode(self.state, m)
         if status != lib.LS_OK:
-            raise ConfigError("ls_drive", {"mode": _enum_name("ls_drive", "mode", m)}, status,
+            raise config_error("ls_drive", {"mode": _enum_name("ls_drive", "mode", m)}, status,
                               "the mode needs cfg.demod.comp (sensorless_lut) or cfg.cal.table (calibration)",
                               func="ls_drive_set_mode")
 
@@ -426,14 +423,14 @@ class Drive:
         """Tell the HF observer where the mover is (unwrapped rad); :class:`ConfigError` if refused."""
         st = lib.ls_drive_set_position(self.state, to_pos(theta))
         if st != lib.LS_OK:
-            raise ConfigError("ls_drive", {"theta": theta}, st, func="ls_drive_set_position")
+            raise config_error("ls_drive", {"theta": theta}, st, func="ls_drive_set_position")
 
     def set_load(self, f_load: float) -> None:
         """``ls_drive_set_load``: start in equilibrium with the load force ``f_load`` (N, opposing
         positive motion when > 0); call after :meth:`set_position`."""
         st = lib.ls_drive_set_load(self.state, float(f_load))
         if st != lib.LS_OK:
-            raise ConfigError("ls_drive", {"f_load": f_load}, st, func="ls_drive_set_load")
+            raise config_error("ls_drive", {"f_load": f_load}, st, func="ls_drive_set_load")
 
 def _shape_ok(shape: tuple, shapes: tuple) -> bool:
     """``shape`` is one of ``shapes`` (None in one of them: any length)."""

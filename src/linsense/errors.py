@@ -93,3 +93,59 @@ class OutputError(InputError):
 
     def __init__(self, path, message: str) -> None:
         super().__init__(str(path), "", message)
+
+
+class SimulationError(LinsenseError):
+    """The C simulator refused its configuration or inputs."""
+
+
+class ConfigError(LinsenseError):
+    """A configuration refused by the C library's ``ls_<module>_init`` (non-zero ``ls_status``);
+    the binding (:mod:`linsense.ctrl`) composes the message: the refusing C function, each offending
+    field with its value and what the C library allows, the status.
+
+    Parameters
+    ----------
+    module : str
+        C module, e.g. ``"ls_inject"``.
+    fields : dict
+        The offending field(s) and their values (empty when no single field could be named).
+    status : int
+        The ``ls_status`` returned (``LS_ERR_NULL`` = 1, ``LS_ERR_PARAM`` = 2).
+    message : str
+        The whole message.
+    """
+
+    def __init__(self, module: str, fields: dict, status: int, message: str) -> None:
+        self.module = module
+        self.fields = dict(fields)
+        self.status = int(status)
+        super().__init__(message)
+
+
+class SaturationRangeError(LinsenseError, ValueError):
+    """Saturation data the C plant cannot take (:mod:`linsense.model.saturation`); ``key`` names the
+    motor-file key. Also a ``ValueError`` (a value out of the model's range), as it was."""
+
+    def __init__(self, key: str, message: str) -> None:
+        super().__init__(message)
+        self.key = key
+
+
+class KeyProblem(LinsenseError, ValueError):
+    """Raised inside a pydantic validator to name the offending sub-key of the section it checks;
+    :func:`linsense.validation.to_input_error` turns it into an :class:`InputError` (pydantic takes
+    only a ``ValueError`` from a validator, hence the second base).
+
+    Parameters
+    ----------
+    key : str
+        The key, relative to the section (dotted for deeper keys).
+    message : str
+        What is wrong, including the value.
+    """
+
+    def __init__(self, key: str, message: str) -> None:
+        self.key = key
+        self.message = message
+        super().__init__(message)

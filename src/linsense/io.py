@@ -680,8 +680,8 @@ class OutputSet:
                 d = d.parent
 
     def commit(self) -> None:
-        from linsense import __version__
         from linsense.errors import OutputError
+        from linsense.version import __version__
 
         files = _listed_files(self.tmp)
         doc = {"command": self.command, "files": files, "linsense": __version__}

@@ -2,16 +2,36 @@
 
 Each limit is far above what a real motor, bench or study needs and far below what exhausts a
 machine's memory; the message of a refused value names the option or key, the value and the limit.
-The simulator's own sizes come from the C library (``LS_SIM_MAX_ORDER``), not restated here.
+The simulator's own sizes come from the C library (``LS_SIM_MAX_ORDER``), not restated here: they
+are read from the compiled extension on first use (:func:`max_harmonic_order`), so that importing
+linsense, or its model, loads no C extension.
 """
 
 from __future__ import annotations
 
-from linsense._ctrl import lib
+import functools
+
 from linsense.errors import InputError
 
-#: highest Fourier order of L_abc(theta) and of the PM flux (the C plant keeps orders 0 .. 63)
-MAX_HARMONIC_ORDER = int(lib.LS_SIM_MAX_ORDER) - 1
+
+@functools.cache
+def max_harmonic_order() -> int:
+    """Highest Fourier order of L_abc(theta) and of the PM flux: the C plant keeps orders 0 ..
+    ``LS_SIM_MAX_ORDER - 1`` (63), read from the C library on first use. Also
+    ``MAX_HARMONIC_ORDER`` and ``MAX_TABLE_ORDER`` (the Fourier order of a tabulated L_abc(theta): a
+    longer table is fitted by least squares up to it; 8,000 rows interpolated exactly took minutes,
+    100,000 asked for 37 GiB), attributes of this module read the same way."""
+    from linsense._ctrl import lib
+
+    return int(lib.LS_SIM_MAX_ORDER) - 1
+
+
+def __getattr__(name: str) -> int:
+    # MAX_HARMONIC_ORDER and MAX_TABLE_ORDER come from the C library: read when first asked for
+    if name in ("MAX_HARMONIC_ORDER", "MAX_TABLE_ORDER"):
+        return max_harmonic_order()
+    raise AttributeError(f"module 'linsense.limits' has no attribute {name!r}")
+
 #: positions per electrical period of a table, a LUT or a figure (--points)
 MAX_POINTS = 100_000
 #: rows of a table a user gives (an inductance table of a motor file): as many as ``linsense model
@@ -21,9 +41,6 @@ MAX_TABLE_ROWS = MAX_POINTS
 #: number needs at most 24)
 MAX_TABLE_COLUMNS = 64
 MAX_TABLE_FIELD_CHARS = 100
-#: Fourier order of a tabulated L_abc(theta): a longer table is fitted by least squares up to it
-#: (8,000 rows interpolated exactly took minutes, 100,000 asked for 37 GiB); the simulator's limit
-MAX_TABLE_ORDER = MAX_HARMONIC_ORDER
 #: positions of an emulated bench measurement or of a calibration (--positions)
 MAX_POSITIONS = 10_000
 #: nesting of arrays and tables in a TOML file (motor, scenario, sweep): the deepest a file of

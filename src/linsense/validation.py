@@ -15,24 +15,7 @@ import typing
 
 from pydantic import BaseModel, ValidationError
 
-from linsense.errors import InputError
-
-
-class KeyProblem(ValueError):
-    """Raised inside a validator to name the offending sub-key of the section it checks.
-
-    Parameters
-    ----------
-    key : str
-        The key, relative to the section (dotted for deeper keys).
-    message : str
-        What is wrong, including the value.
-    """
-
-    def __init__(self, key: str, message: str) -> None:
-        self.key = key
-        self.message = message
-        super().__init__(message)
+from linsense.errors import InputError, KeyProblem
 
 
 def closest_key(key: str, known) -> str:

@@ -120,7 +120,7 @@ CASES = {
         lambda d, mp: (shutil.copy(d / "m.toml", d / "m2.toml"),
                        replace(d / "base.toml", 'motor = "m.toml"', 'motor = "m2.toml"')),
         [], ["base scenario", "m2.toml", "not an input before", "m.toml", "no longer an input"]),
-    "linsense version changed": (lambda d, mp: mp.setattr("linsense.__version__", "9.9.9"),
+    "linsense version changed": (lambda d, mp: mp.setattr("linsense.version.__version__", "9.9.9"),
                                  [], ["linsense version", "-> 9.9.9", "--restart"]),
     "C library rebuilt": (lambda d, mp: mp.setattr("linsense.ctrl.built_digest", lambda: "f" * 64),
                           [], ["compiled C library", "ffffffffffff", "--restart"]),

@@ -22,10 +22,10 @@ from pathlib import Path
 
 import numpy as np
 
-from linsense import __version__
 from linsense.analysis.hf import psi_lut, psi_lut_resistive, real_arg
 from linsense.errors import InputError, shown
 from linsense.io import check_width, csv_rows, read_text_file
+from linsense.version import __version__
 
 FORMATS = ("csv", "json", "c")
 

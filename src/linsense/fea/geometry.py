@@ -16,9 +16,9 @@ from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
-from linsense.errors import InputError
+from linsense.errors import InputError, KeyProblem
 from linsense.io import parse_toml, read_text_file
-from linsense.validation import KeyProblem, to_input_error
+from linsense.validation import to_input_error
 
 _STRICT = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
 Positive = Annotated[float, Field(gt=0)]

@@ -14,7 +14,6 @@ from pathlib import Path
 
 import numpy as np
 
-from linsense import __version__
 from linsense.analysis.hf import psi_lut
 from linsense.analysis.tables import table_to_csv
 from linsense.compensation.lut import Lut, build_lut, export
@@ -24,6 +23,7 @@ from linsense.identify.fit import T_SIGNIFICANT, FitResult, fit_inductances
 from linsense.identify.process import MeasuredTable, process_bench
 from linsense.identify.tables import measured_columns, measured_lut_csv
 from linsense.model.motor import Friction, Motor, check_motor, motor_to_toml
+from linsense.version import __version__
 
 
 @dataclass(frozen=True)
@@ -191,11 +191,9 @@ def fit_report(ident: Identification) -> dict:
     }
 
 
-def render_outputs(ident: Identification) -> dict[str, str | bytes]:
-    """Every output file of ``linsense identify`` (relative path -> content), rendered in memory."""
-    from linsense.report.figures import png_bytes
-    from linsense.report.identify_figures import fig_identified_inductances, fig_identified_luts
-
+def render_outputs(ident: Identification) -> dict[str, str]:
+    """The model, tables and record of ``linsense identify`` (relative path -> content), rendered in
+    memory; its figures are :func:`linsense.report.identify_figures.identify_figure_files`'s."""
     mo = ident.motor
     header = (
         f"# Identified by linsense {__version__} from {Path(ident.data.source).name}: HF model fitted "
@@ -207,10 +205,6 @@ def render_outputs(ident: Identification) -> dict[str, str | bytes]:
         "lut.csv": measured_lut_csv(ident.table.theta, ident.psi_measured),
         "lut_fit.csv": export(ident.lut_fit, "csv"),
         "fit.json": json.dumps(fit_report(ident), indent=1) + "\n",
-        "figures/identify_inductances.png": png_bytes(fig_identified_inductances(
-            mo, ident.measured, f"{mo.name}: measured (markers) and fitted (lines) inductances")),
-        "figures/identify_lut.png": png_bytes(fig_identified_luts(mo, ident.table.theta, ident.psi_measured,
-                                                                  ident.lut_fit)),
     }
 
 

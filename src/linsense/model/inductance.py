@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from linsense.limits import MAX_TABLE_ORDER
+from linsense.limits import max_harmonic_order
 from linsense.model.frames import ab_to_dq_matrix, abc_to_ab_matrix
 
 #: Names of the six independent entries, in storage order.
@@ -182,7 +182,8 @@ class InductanceModel:
         theta = np.asarray(theta, dtype=float)
         entries = np.asarray(entries, dtype=float)
         N = theta.size
-        K = min(N // 2, MAX_TABLE_ORDER if max_order is None else int(max_order), MAX_TABLE_ORDER)
+        k_max = max_harmonic_order()  # MAX_TABLE_ORDER, the simulator's limit (read from the C library)
+        K = min(N // 2, k_max if max_order is None else int(max_order), k_max)
         # (with 2K positions the order K has one degree of freedom: its cosine; N columns for N rows)
         nyquist = 2 * K == N
         coef = _fit(theta, entries, K, nyquist)

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from linsense.errors import SaturationRangeError
 from linsense.model.inductance import InductanceModel
 
 #: Powers 0..SAT_POW-1 of i_q the C plant takes (LS_SIM_SAT_POW).
@@ -73,14 +74,6 @@ class Saturation:
         """Everything that defines it, hashable (for caches)."""
         tab = tuple((t.a.tobytes(), t.b.tobytes()) for t in self.tables)
         return (self.polarity, self.magnet_current, self.q_drop, self.q_current, self.currents, tab)
-
-
-class SaturationRangeError(ValueError):
-    """Saturation data the C plant cannot take; ``key`` names the motor-file key."""
-
-    def __init__(self, key: str, message: str) -> None:
-        super().__init__(message)
-        self.key = key
 
 
 def i_sat_d_of(polarity: float, i_m: float) -> float:

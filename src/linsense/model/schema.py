@@ -11,15 +11,31 @@ import math
 import re
 from typing import Annotated
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic_core import PydanticCustomError
 
-from linsense.limits import MAX_HARMONIC_ORDER
-from linsense.validation import KeyProblem, closest_key, to_input_error
+from linsense.errors import KeyProblem
+from linsense.limits import max_harmonic_order
+from linsense.validation import closest_key, to_input_error
 
 _STRICT = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
 
 Positive = Annotated[float, Field(gt=0)]
 NonNegative = Annotated[float, Field(ge=0)]
+
+
+def _at_most_max_order(value: int) -> int:
+    # pydantic's own ``le`` refusal, with the limit read from the C library when a value is checked
+    # (a Field(le=...) would read it, and load the C extension, when linsense.model is imported)
+    limit = max_harmonic_order()
+    if value > limit:
+        raise PydanticCustomError("less_than_equal", "Input should be less than or equal to {le}",
+                                  {"le": limit})
+    return value
+
+
+#: a Fourier order of L_abc(theta) or of the PM flux: at most MAX_HARMONIC_ORDER (docs/limits.md)
+Order = Annotated[int, AfterValidator(_at_most_max_order)]
 #: a harmonic key as documented (docs/motor-files.md): L4, M4, L6 ... (ASCII digits, no leading
 #: zero: L04 was accepted and its value dropped, the model got L4 = 0; issue 23)
 _HARMONIC_KEY = re.compile(r"([LM])([1-9][0-9]*)")
@@ -52,7 +68,7 @@ class InductanceSection(BaseModel):
     M2: float | None = None  # H
     dM0: float | None = None  # H
     table: str | None = Field(default=None, min_length=1)  # CSV path, relative to the motor file
-    table_max_order: int | None = Field(default=None, ge=1, le=MAX_HARMONIC_ORDER)  # Fourier order of the fit
+    table_max_order: Order | None = Field(default=None, ge=1)  # Fourier order of the fit
 
     @model_validator(mode="after")
     def _check(self) -> InductanceSection:
@@ -68,9 +84,9 @@ class InductanceSection(BaseModel):
                 known = [k for k in type(self).model_fields] + ["L4", "M4", "L6", "M6"]
                 hint = closest_key(key, known)
                 raise KeyProblem(key, f"unknown key (harmonics are L4, M4, L6, M6 ...){hint}")
-            if int(m.group(2)) > MAX_HARMONIC_ORDER:
+            if int(m.group(2)) > max_harmonic_order():
                 raise KeyProblem(key, f"harmonic order {int(m.group(2))} beyond the limit of "
-                                 f"{MAX_HARMONIC_ORDER} (docs/limits.md)")
+                                 f"{max_harmonic_order()} (docs/limits.md)")
             if isinstance(value, bool) or not isinstance(value, int | float):
                 raise KeyProblem(key, f"expected a number, got {value!r}")
             if not math.isfinite(value):
@@ -105,7 +121,7 @@ class FrictionSection(BaseModel):
 
 class PmHarmonicEntry(BaseModel):
     model_config = _STRICT
-    order: int = Field(ge=2, le=MAX_HARMONIC_ORDER)  # harmonic order of the PM flux linkage in theta
+    order: Order = Field(ge=2)  # harmonic order of the PM flux linkage in theta
     amplitude: float  # relative to the fundamental PM flux linkage
     phase_deg: float = 0.0  # electrical degrees
 
@@ -137,7 +153,7 @@ class SaturationSection(BaseModel):
     q_current: Positive = 1.0  # A
     currents: list[float] | None = None  # A, q currents of the tables
     tables: list[Annotated[str, Field(min_length=1)]] | None = None  # L_abc(theta) CSVs
-    table_max_order: int | None = Field(default=None, ge=1, le=MAX_HARMONIC_ORDER)
+    table_max_order: Order | None = Field(default=None, ge=1)
 
     @model_validator(mode="after")
     def _check(self) -> SaturationSection:

@@ -26,7 +26,7 @@ def render_report(metrics: dict, figures: dict[str, bytes], scenarios: dict) -> 
     ``scenarios/<figure>_<variant>.toml``)."""
     from jinja2 import Environment, PackageLoader, StrictUndefined
 
-    from linsense import __version__
+    from linsense.version import __version__
 
     def img(name: str, caption: str) -> Markup:
         data = figures.get(name)

@@ -13,7 +13,7 @@ from matplotlib.figure import Figure
 
 from linsense.analysis.hf import psi_lut
 from linsense.model.inductance import ENTRIES
-from linsense.report.figures import _MH, _position_axis
+from linsense.report.figures import _MH, _position_axis, png_bytes
 
 _UH = 1e6
 
@@ -101,3 +101,15 @@ def fig_identified_luts(motor, theta_measured: np.ndarray, psi_measured: np.ndar
     for a in axes:
         _position_axis(a, motor)
     return fig
+
+
+def identify_figure_files(ident) -> dict[str, bytes]:
+    """The figures of ``linsense identify`` (relative path -> PNG) of an
+    :class:`~linsense.identify.pipeline.Identification`, rendered in memory."""
+    mo = ident.motor
+    return {
+        "figures/identify_inductances.png": png_bytes(fig_identified_inductances(
+            mo, ident.measured, f"{mo.name}: measured (markers) and fitted (lines) inductances")),
+        "figures/identify_lut.png": png_bytes(fig_identified_luts(mo, ident.table.theta, ident.psi_measured,
+                                                                  ident.lut_fit)),
+    }

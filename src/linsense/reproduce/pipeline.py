@@ -169,13 +169,13 @@ def _closed_loop(st, bars, motor, scen_motor, summ: dict, quick: bool, figs: dic
     """The stages after the model (Figs. 9, 11-13, beyond the paper) into the output set ``st``:
     the figures, metrics.json and report.html; returns the metrics."""
     from linsense.analysis.hf import psi_lut, psi_lut_resistive
-    from linsense.analysis.stability import margins_along
     from linsense.io import strip_timing
     from linsense.report import paper_figures as pf
     from linsense.report.figures import png_bytes
     from linsense.report.html import render_report
     from linsense.report.sweep_figures import stability_map as fig_stability_map
     from linsense.sim.calibrate import lut_csv
+    from linsense.sim.stability import margins_along
 
     # --- Fig. 9: the calibration at three loads
     n_cal = CAL_POSITIONS[quick]

@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from linsense._ctrl import ffi, lib
-from linsense.errors import LinsenseError
+from linsense.errors import SimulationError
 from linsense.sim import scenario as _sc
 from linsense.sim.plant import fill_plant
 
@@ -53,10 +53,6 @@ CHUNK = 2**18
 SIM_FAULT_TRAVEL = int(lib.LS_SIM_FAULT_TRAVEL)
 SIM_FAULT_DIVERGED = int(lib.LS_SIM_FAULT_DIVERGED)
 SIM_FAULT_STOPPED = int(lib.LS_SIM_FAULT_STOPPED)
-
-
-class SimulationError(LinsenseError):
-    """The C simulator refused its configuration or inputs."""
 
 
 def _default(section, key: str):

@@ -84,7 +84,8 @@ def fill_saturation(cfg, motor, sat) -> dict:
     """Switch an ``ls_sim_cfg`` (cffi) to the saturated plant of ``motor`` with the
     :class:`~linsense.model.saturation.Saturation` ``sat`` (``None``: back to the linear plant).
     Returns the series written (:func:`linsense.model.saturation.plant_series`)."""
-    from linsense.model.saturation import SaturationRangeError, plant_series
+    from linsense.errors import SaturationRangeError
+    from linsense.model.saturation import plant_series
 
     if sat is None:
         cfg.sat.on = 0

@@ -182,7 +182,7 @@ def simulate_many(scenarios, workers: int = 1, *, scheduler: str | None = None,
                          f"{type(scenarios).__name__}") from None
     if scheduler is None and (workers == 1 or len(items) <= 1):
         return [simulate(s, record=record) for s in items]
-    from linsense.sweep.engine import cluster_client
+    from linsense.sim.cluster import cluster_client
 
     with cluster_client(min(workers, len(items)), scheduler, processes=False) as client:
         return client.gather(client.map(simulate, items, record=record, pure=False))

@@ -16,19 +16,18 @@ docs/sweeps.md.
 from __future__ import annotations
 
 import json
-import logging
 import os
 import shutil
 import signal
 import tempfile
 import uuid
-import warnings
-from contextlib import contextmanager, nullcontext
+from contextlib import nullcontext
 from pathlib import Path
 
 import pandas as pd
 
 from linsense.errors import InputError
+from linsense.sim.cluster import cluster_client
 from linsense.sweep.inputs import changed_on_disk, changes, code_identity, show, sweep_inputs, valid_record
 from linsense.sweep.inputs import digest as inputs_digest
 from linsense.sweep.points import points
@@ -157,41 +156,6 @@ def _done_batches(parts: Path) -> set[int]:
     for aside in parts.parent.glob(".*.discarded-*"):  # what a killed --restart set aside
         shutil.rmtree(aside, ignore_errors=True)
     return {int(p.stem.split("-")[1]) for p in parts.glob("part-*.parquet")}
-
-
-@contextmanager
-def cluster_client(workers: int | None, scheduler: str | None, processes: bool):
-    """A dask client: of the cluster at ``scheduler``, or of a local cluster of ``workers`` (default
-    one per core) worker threads or processes, closed at the end."""
-    from dask.distributed import Client, LocalCluster
-
-    if scheduler:
-        with Client(scheduler) as c:
-            yield c
-        return
-    n = workers or os.cpu_count() or 1
-    with _quiet("distributed"):
-        with warnings.catch_warnings():
-            # the scheduler's HTTP server (health, metrics) takes port 8787 even with the dashboard
-            # off, and warns when another cluster has it: it then takes a free port, all we need
-            warnings.filterwarnings("ignore", message="Port .* is already in use", category=UserWarning)
-            cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=processes,
-                                   dashboard_address=None, silence_logs=40)
-        with cluster, Client(cluster) as c:
-            yield c
-
-
-@contextmanager
-def _quiet(name: str):
-    """Errors only from the logger ``name`` meanwhile: a local cluster that shuts down while a
-    message is in flight logs a harmless "Batched Comm Closed" with its traceback at INFO."""
-    log = logging.getLogger(name)
-    old = log.level
-    log.setLevel(logging.ERROR)
-    try:
-        yield
-    finally:
-        log.setLevel(old)
 
 
 def _progress(total: int, done: int, enabled: bool):

@@ -108,10 +108,10 @@ def sweep_inputs(sw: SweepSpec) -> list[dict]:
 def code_identity() -> dict:
     """The code the rows come from: linsense's version and the digest of the C sources its
     extension was compiled from."""
-    import linsense
+    from linsense import version
     from linsense.ctrl import built_digest
 
-    return {"linsense": linsense.__version__, "c_library": built_digest()}
+    return {"linsense": version.__version__, "c_library": built_digest()}
 
 
 def digest(inputs: list[dict], code: dict) -> str:

@@ -42,9 +42,9 @@ from typing import Annotated, Literal, get_args
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 from linsense._digest import bytes_sha256
-from linsense.errors import InputError
+from linsense.errors import InputError, KeyProblem
 from linsense.io import parse_toml, read_text_file
-from linsense.validation import KeyProblem, to_input_error
+from linsense.validation import to_input_error
 
 _STRICT = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
 #: most runs one sweep file may ask for (docs/limits.md)

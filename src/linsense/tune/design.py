@@ -23,15 +23,14 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from linsense.analysis.hf import (
-    demod_ratio,
     end_anisotropy,
     hf_current_amplitude,
     mean_dq,
-    psi_lut_resistive,
 )
 from linsense.compensation.lut import resistance_slope
 from linsense.errors import InputError
 from linsense.model.motor import Motor
+from linsense.tune.margins import error_gain
 
 #: the stated ratios (docs/tuning.md)
 RATIO_PWM_INJ = 16.0  # the most PWM periods per injection period (16 samples of the HF wave)
@@ -171,24 +170,6 @@ def speed_gains(bw_hz: float, mass: float) -> tuple[float, float]:
     modes keep it)."""
     w = 2.0 * math.pi * bw_hz
     return mass * w, mass * w * w / SPEED_KI_DIV
-
-
-def error_gain(motor: Motor, f_inj: float, quad: float, gain: float, n: int = 180,
-               table: Motor | None = None) -> np.ndarray:
-    """Local slope of the demodulated error against the position error over the period (1 = the
-    nominal), with the resistance-aware LUT of the injection: ``-gain d ratio / d theta_est`` at
-    the true position ``theta``, the table read at the estimate as the drive reads it (so its own
-    slope, ``1 + de*/dtheta`` of the end-effect, is part of the observer's loop gain: 0.6-2.9 for
-    ecce2010, which a schedule computed with the table read at ``theta`` left in the loop).
-    ``table``: the motor whose table the drive reads (default ``motor``; another one: a motor off
-    by a tolerance driven with the nominal table, :mod:`linsense.tune.margins`)."""
-    th = np.linspace(0.0, 2.0 * np.pi, n, endpoint=False)
-    h = 1e-3
-    tm = motor if table is None else table
-    psi_p, psi_m = (psi_lut_resistive(tm, th + s, f_inj, quad=quad) for s in (h, -h))
-    r_p = demod_ratio(motor, th, h, 1.0, f_inj, psi_p, quad=quad)
-    r_m = demod_ratio(motor, th, -h, 1.0, f_inj, psi_m, quad=quad)
-    return -gain * (r_p - r_m) / (2.0 * h)
 
 
 def observable_error_gain(motor: Motor, f_inj: float, quad: float, source: str) -> np.ndarray:

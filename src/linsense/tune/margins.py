@@ -69,12 +69,29 @@ def hold_error(nominal: Motor, plant: Motor, f_inj: float, quad: float, n: int =
     return e
 
 
+def error_gain(motor: Motor, f_inj: float, quad: float, gain: float, n: int = 180,
+               table: Motor | None = None) -> np.ndarray:
+    """Local slope of the demodulated error against the position error over the period (1 = the
+    nominal), with the resistance-aware LUT of the injection: ``-gain d ratio / d theta_est`` at
+    the true position ``theta``, the table read at the estimate as the drive reads it (so its own
+    slope, ``1 + de*/dtheta`` of the end-effect, is part of the observer's loop gain: 0.6-2.9 for
+    ecce2010, which a schedule computed with the table read at ``theta`` left in the loop).
+    ``table``: the motor whose table the drive reads (default ``motor``; another one: a motor off
+    by a tolerance driven with the nominal table, :func:`local_gain`). The gain schedule's
+    (:mod:`linsense.tune.design`) and the tolerances' one home."""
+    th = np.linspace(0.0, 2.0 * np.pi, n, endpoint=False)
+    h = 1e-3
+    tm = motor if table is None else table
+    psi_p, psi_m = (psi_lut_resistive(tm, th + s, f_inj, quad=quad) for s in (h, -h))
+    r_p = demod_ratio(motor, th, h, 1.0, f_inj, psi_p, quad=quad)
+    r_m = demod_ratio(motor, th, -h, 1.0, f_inj, psi_m, quad=quad)
+    return -gain * (r_p - r_m) / (2.0 * h)
+
+
 def local_gain(nominal: Motor, plant: Motor, f_inj: float, quad: float, n: int = 180) -> np.ndarray:
     """The local error gain of ``plant`` driven with ``nominal``'s table, relative to ``nominal``'s
     (which the gain schedule divides out): 1 everywhere for the nominal motor. The slope against
-    the estimate, as the observer sees it (:func:`linsense.tune.design.error_gain`)."""
-    from linsense.tune.design import error_gain
-
+    the estimate, as the observer sees it (:func:`error_gain`)."""
     return (error_gain(plant, f_inj, quad, 1.0, n, table=nominal)
             / error_gain(nominal, f_inj, quad, 1.0, n))
 

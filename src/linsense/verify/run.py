@@ -205,7 +205,7 @@ def run_cases(
     n = workers or os.cpu_count() or 1
     if n == 1 or len(cases) < 2:
         return [run_case(c, base, motor_spec, nominal, base_dir) for c in cases]
-    from linsense.sweep.engine import cluster_client
+    from linsense.sim.cluster import cluster_client
 
     # batches of runs per task: a task costs about a millisecond of scheduling
     size = max(1, math.ceil(len(cases) / (4 * n)))

@@ -1,0 +1,44 @@
+"""A dask client for running scenarios in parallel: :func:`linsense.sim.run.simulate_many`, the
+sweep engine (:mod:`linsense.sweep.engine`) and the certificate's cases (:mod:`linsense.verify.run`)."""
+
+from __future__ import annotations
+
+import logging
+import os
+import warnings
+from contextlib import contextmanager
+
+
+@contextmanager
+def cluster_client(workers: int | None, scheduler: str | None, processes: bool):
+    """A dask client: of the cluster at ``scheduler``, or of a local cluster of ``workers`` (default
+    one per core) worker threads or processes, closed at the end."""
+    from dask.distributed import Client, LocalCluster
+
+    if scheduler:
+        with Client(scheduler) as c:
+            yield c
+        return
+    n = workers or os.cpu_count() or 1
+    with quiet("distributed"):
+        with warnings.catch_warnings():
+            # the scheduler's HTTP server (health, metrics) takes port 8787 even with the dashboard
+            # off, and warns when another cluster has it: it then takes a free port, all we need
+            warnings.filterwarnings("ignore", message="Port .* is already in use", category=UserWarning)
+            cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=processes,
+                                   dashboard_address=None, silence_logs=40)
+        with cluster, Client(cluster) as c:
+            yield c
+
+
+@contextmanager
+def quiet(name: str):
+    """Errors only from the logger ``name`` meanwhile: a local cluster that shuts down while a
+    message is in flight logs a harmless "Batched Comm Closed" with its traceback at INFO."""
+    log = logging.getLogger(name)
+    old = log.level
+    log.setLevel(logging.ERROR)
+    try:
+        yield
+    finally:
+        log.setLevel(old)
