@@ -69,7 +69,7 @@ ls_status ls_lut_init(ls_lut *lut, const ls_lut_cfg *cfg);
 void ls_lut_reset(ls_lut *lut);
 LS_REAL ls_lut_step(const ls_lut *lut, LS_REAL theta);
 
-/* ls_filter.h */
+/* ls_biquad.h */
 typedef enum {
     LS_BIQUAD_LOWPASS = 0, LS_BIQUAD_BANDPASS = 1, LS_BIQUAD_NOTCH = 2, LS_BIQUAD_DIFF = 3
 } ls_biquad_type;
@@ -164,7 +164,7 @@ ls_status ls_observer_init(ls_observer *o, const ls_observer_cfg *cfg);
 void ls_observer_reset(ls_observer *o, ls_pos p);
 void ls_observer_step(ls_observer *o, LS_REAL eps, LS_REAL f_motor);
 
-/* ls_ctrl.h */
+/* ls_pi.h, ls_current.h, ls_posctrl.h */
 typedef struct { LS_REAL kp; LS_REAL ki; LS_REAL out_min; LS_REAL out_max; LS_REAL fs; } ls_pi_cfg;
 typedef struct { ls_pi_cfg cfg; LS_REAL integ; LS_REAL ts; bool saturated; LS_REAL ki_ts; } ls_pi;
 ls_status ls_pi_init(ls_pi *pi, const ls_pi_cfg *cfg);
@@ -227,7 +227,7 @@ typedef struct {
 ls_status ls_dtres_init(ls_dtres *r, const ls_dtres_cfg *cfg);
 void ls_dtres_reset(ls_dtres *r);
 
-/* ls_modulator.h */
+/* ls_mod.h */
 typedef struct {
     LS_REAL f_pwm; LS_REAL dead_time; bool dtc; LS_REAL i_band; LS_REAL dtc_lead; LS_REAL l_ripple;
 } ls_mod_cfg;
@@ -504,13 +504,15 @@ SOURCE = r"""
 #include "linsense/ls_types.h"
 #include "linsense/ls_pos.h"
 #include "linsense/ls_lut.h"
-#include "linsense/ls_filter.h"
+#include "linsense/ls_biquad.h"
 #include "linsense/ls_inject.h"
 #include "linsense/ls_demod.h"
 #include "linsense/ls_observer.h"
-#include "linsense/ls_ctrl.h"
+#include "linsense/ls_pi.h"
+#include "linsense/ls_current.h"
+#include "linsense/ls_posctrl.h"
 #include "linsense/ls_traj.h"
-#include "linsense/ls_modulator.h"
+#include "linsense/ls_mod.h"
 #include "linsense/ls_protect.h"
 #include "linsense/ls_drive.h"
 
