@@ -23,10 +23,7 @@ void ls_drive_sensored_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
     ls_drive_hf_(d, meas, &io);
     {
         /* with the table, at the encoder's angle */
-        LS_REAL c_psi, s_psi, psi, err;
-        psi = ls_demod_comp_norm(&d->demod, d->enc.pos.theta, LS_R(0.0), &c_psi, &s_psi);
-        err = ls_demod_step_psi(&d->demod, io.ihf_a, io.ihf_b, d->enc.pos.theta, io.c, io.s, d->inj.c, d->inj.s, psi,
-                                c_psi, s_psi);
+        const LS_REAL err = ls_drive_demod_(d, &io, d->enc.pos.theta);
         /* the HF estimate beside the encoder (commissioning; unchecked): the encoder's position plus
          * the demodulated error there, from the injection's full amplitude on */
         d->obs.pos = ls_pos_add(d->enc.pos, d->inj.amp >= d->cfg.inject.amplitude ? err : LS_R(0.0));

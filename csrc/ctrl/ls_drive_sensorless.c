@@ -22,8 +22,7 @@ void ls_drive_sensorless_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
     /* HF demodulation and observer, on the axis the injection used */
     {
         /* (advanced by the axis's turn over the HF path's delay) */
-        const LS_REAL err = ls_demod_step_cs_norm(&d->demod, io.ihf_a, io.ihf_b, d->obs.pos.theta, io.c, io.s,
-                                                  d->inj.c, d->inj.s, LS_R(0.0)) +
+        const LS_REAL err = ls_drive_demod_(d, &io, d->obs.pos.theta) +
                             d->cfg.hf_delay * d->obs.omega;
         if (ls_drive_observe_(d, err)) {
             ls_drive_disable_report_(d, cmd, d->prot.fault);

@@ -27,8 +27,7 @@ void ls_drive_square_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
     io.ihf_b = ls_biquad_step(&d->bpf[1], io.i_b);
 
     /* product demodulation with the table, and observer (the error counts once the injection is up) */
-    err = ls_demod_step_cs_norm(&d->demod, io.ihf_a, io.ihf_b, d->obs.pos.theta, io.c, io.s, d->inj.c, d->inj.s,
-                                LS_R(0.0));
+    err = ls_drive_demod_(d, &io, d->obs.pos.theta);
     if (ls_drive_observe_(d, err)) {
         ls_drive_disable_report_(d, cmd, d->prot.fault);
         return;

@@ -24,8 +24,7 @@ ls_startup_phase ls_drive_startup_run_(ls_drive *d, const ls_meas *meas, ls_cmd 
     ls_drive_hf_(d, meas, io);
     io->v_hf = LS_R(0.0);
     {
-        const LS_REAL err = ls_demod_step_cs_norm(&d->demod, io->ihf_a, io->ihf_b, d->obs.pos.theta, c_est, s_est,
-                                                  d->inj.c, d->inj.s, LS_R(0.0));
+        const LS_REAL err = ls_drive_demod_(d, io, d->obs.pos.theta);
         if (su->phase == LS_SU_LOCK || su->phase == LS_SU_SETTLE) { /* frozen in between */
             ls_observer_step_finite(&d->obs, su->env >= LS_R(1.0) ? err * cfg->startup.lock_gain : LS_R(0.0),
                                     LS_R(0.0));
