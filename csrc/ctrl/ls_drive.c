@@ -310,14 +310,14 @@ static void startup_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd);
 enum { LS_DRIVE_PULSE = 0, LS_DRIVE_ROT = 1, LS_DRIVE_ROTX = 2, LS_DRIVE_SQUARE = 3, LS_DRIVE_COLS = 4 };
 #define LS_DRIVE_ROW(f) {f, f, f, f}
 static const ls_drive_step_fn step_table[LS_MODE_STARTUP + 1][LS_DRIVE_COLS] = {
-    /* LS_MODE_OFF */ LS_DRIVE_ROW(ls_drive_off_step_),
-    /* LS_MODE_SENSORED */ LS_DRIVE_ROW(ls_drive_sensored_step_),
-    /* LS_MODE_SENSORLESS_LUT */
-    {ls_drive_sensorless_step_, ls_drive_rotating_step_, ls_drive_sensorless_step_, ls_drive_square_step_},
-    /* LS_MODE_SENSORLESS_NOLUT */
-    {ls_drive_sensorless_step_, ls_drive_rotating_step_, ls_drive_sensorless_step_, ls_drive_square_step_},
-    /* LS_MODE_CALIBRATION */ LS_DRIVE_ROW(ls_drive_calibration_step_),
-    /* LS_MODE_STARTUP */ LS_DRIVE_ROW(startup_step),
+    [LS_MODE_OFF] = LS_DRIVE_ROW(ls_drive_off_step_),
+    [LS_MODE_SENSORED] = LS_DRIVE_ROW(ls_drive_sensored_step_),
+    [LS_MODE_SENSORLESS_LUT] = {ls_drive_sensorless_step_, ls_drive_rotating_step_, ls_drive_sensorless_step_,
+                                ls_drive_square_step_},
+    [LS_MODE_SENSORLESS_NOLUT] = {ls_drive_sensorless_step_, ls_drive_rotating_step_, ls_drive_sensorless_step_,
+                                  ls_drive_square_step_},
+    [LS_MODE_CALIBRATION] = LS_DRIVE_ROW(ls_drive_calibration_step_),
+    [LS_MODE_STARTUP] = LS_DRIVE_ROW(startup_step),
 };
 
 /* The table's column for the configuration. */
