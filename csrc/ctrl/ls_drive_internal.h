@@ -99,7 +99,9 @@ static inline void ls_drive_cal_window_reset_(ls_drive *d)
  * simulator), and compiled once, out of line, in ls_drive_parts.c in a build for size (-Os,
  * __OPTIMIZE_SIZE__: a firmware image holds one copy of each; the dead-time residual model alone is
  * 3 kB of Cortex-M4F code, and six steps use it; tools/check_mcu.sh). Either build computes the
- * same numbers. */
+ * same numbers bit for bit under ISO C's floating-point semantics (-std=c99: no contraction of a
+ * multiply and an add into an FMA); with -ffp-contract=fast on a target with FMA the compiler
+ * fuses differently in each layout of the code, and the results differ in their last bits. */
 #if defined(__OPTIMIZE_SIZE__)
 #define LS_DRIVE_PART
 #else
