@@ -16,7 +16,9 @@ count() { # $1: dead-time compensation on (1) or off (0); $2: injection 0 pulsat
   awk '/^(summary|totals):/ {print $2; exit}' "$B/callgrind.$1${2:-0}${4:-0}.out"
 }
 per() { echo $(( ($1 + $2 / 2) / $2 )); }
-verdict() { if [ "$1" -le 1000 ]; then echo "$1 (target <= 1,000) PASS"; else echo "$1 (target <= 1,000) FAIL"; fi; }
+# the budget in every mode (issue 24: the steps are written with shared pieces, ls_drive_internal.h)
+BUDGET=1100
+verdict() { if [ "$1" -le $BUDGET ]; then echo "$1 (target <= 1,100) PASS"; else echo "$1 (target <= 1,100) FAIL"; fi; }
 misses=0 # (the instruction counts' misses: the exit status at the end, so that make bench names them)
 miss() { case "$1" in *FAIL*) misses=$((misses + 1)) ;; esac; echo "$1"; }
 total_dtc=$(count 1)

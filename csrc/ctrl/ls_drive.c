@@ -1,12 +1,11 @@
-/* The drive (see linsense/ls_drive.h). */
+/* The drive's API (see linsense/ls_drive.h): defaults, init, reset, modes, setters, and
+ * ls_drive_step, which runs the step of the mode and injection shape from the step table below;
+ * the steps live in a file per mode (ls_drive_internal.h lists them). */
 #include <math.h>
 #include <string.h>
 
-#include "linsense/ls_drive.h"
-#include "linsense/ls_math.h"
-#include "ls_drive_cmd.h"
 #include "ls_drive_defaults.h"
-#include "ls_drive_path.h"
+#include "ls_drive_internal.h"
 
 /* --------------------------------------------------------------------------- defaults */
 void ls_drive_default_cfg(ls_drive_cfg *c)
@@ -282,31 +281,73 @@ ls_status ls_drive_init(ls_drive *d, const ls_drive_cfg *cfg)
     return LS_OK;
 }
 
-/* The mode and what it runs. */
+/* --------------------------------------------------------------------------- the step table */
+#if defined(__GNUC__)
+#define LS_DRIVE_COLD __attribute__((noinline, cold)) /* out of the other modes' way */
+#else
+#define LS_DRIVE_COLD
+#endif
+static void startup_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd);
+
+/* The step table: which function runs ls_drive_step, by mode (rows) and injection shape (columns).
+ * The columns are cfg.inject.shape, the rotating injection split by its fundamental separation:
+ *   PULSE  LS_INJ_PULSATING (pulsating, or elliptical with inject.quad > 0)
+ *   ROT    LS_INJ_ROTATING with sep the notch at bpf's f0 and q (sep = 1 - bpf: no band-pass needed)
+ *   ROTX   LS_INJ_ROTATING with another sep
+ *   SQUARE LS_INJ_SQUARE (at fs/2)
+ *
+ *   mode                        PULSE        ROT         ROTX         SQUARE       file
+ *   LS_MODE_OFF                 off          off         off          off          ls_drive_off.c
+ *   LS_MODE_SENSORED            sensored     sensored    sensored     sensored     ls_drive_sensored.c
+ *   LS_MODE_SENSORLESS_LUT      sensorless   rotating    sensorless   square       ls_drive_sensorless.c,
+ *   LS_MODE_SENSORLESS_NOLUT    sensorless   rotating    sensorless   square         _rotating.c, _square.c
+ *   LS_MODE_CALIBRATION         calibration  calibration calibration  calibration  ls_drive_calibration.c
+ *   LS_MODE_STARTUP             startup      startup     startup      startup      ls_drive_startup.c
+ *
+ * mode_set picks the entry (d->path = row * LS_DRIVE_COLS + column) when the mode changes; while
+ * LS_MODE_STARTUP runs, d->mode holds LS_MODE_OFF (d->starting set, cmd.mode reports
+ * LS_MODE_STARTUP) and the entry is the start-up's row. */
+enum { LS_DRIVE_PULSE = 0, LS_DRIVE_ROT = 1, LS_DRIVE_ROTX = 2, LS_DRIVE_SQUARE = 3, LS_DRIVE_COLS = 4 };
+#define LS_DRIVE_ROW(f) {f, f, f, f}
+static const ls_drive_step_fn step_table[LS_MODE_STARTUP + 1][LS_DRIVE_COLS] = {
+    [LS_MODE_OFF] = LS_DRIVE_ROW(ls_drive_off_step_),
+    [LS_MODE_SENSORED] = LS_DRIVE_ROW(ls_drive_sensored_step_),
+    [LS_MODE_SENSORLESS_LUT] = {ls_drive_sensorless_step_, ls_drive_rotating_step_, ls_drive_sensorless_step_,
+                                ls_drive_square_step_},
+    [LS_MODE_SENSORLESS_NOLUT] = {ls_drive_sensorless_step_, ls_drive_rotating_step_, ls_drive_sensorless_step_,
+                                  ls_drive_square_step_},
+    [LS_MODE_CALIBRATION] = LS_DRIVE_ROW(ls_drive_calibration_step_),
+    [LS_MODE_STARTUP] = LS_DRIVE_ROW(startup_step),
+};
+
+/* The table's column for the configuration. */
+static unsigned step_column(const ls_drive_cfg *c)
+{
+    if (c->inject.shape == LS_INJ_SQUARE) {
+        return LS_DRIVE_SQUARE;
+    }
+    if (c->inject.shape == LS_INJ_ROTATING) {
+        /* (the notch at the band-pass's f0 and q is 1 - band-pass: ls_drive_rotating.c) */
+        return c->sep.type == LS_BIQUAD_NOTCH && c->sep.f0 == c->bpf.f0 && c->sep.q == c->bpf.q ? LS_DRIVE_ROT
+                                                                                            : LS_DRIVE_ROTX;
+    }
+    return LS_DRIVE_PULSE;
+}
+
+/* The mode and what it runs (the step table's entry; LS_MODE_STARTUP's row while d->starting). */
 static void mode_set(ls_drive *d, ls_mode mode)
 {
+    const unsigned row = d->starting ? (unsigned)LS_MODE_STARTUP : (unsigned)mode;
     d->mode = mode;
     d->hf_on = mode == LS_MODE_SENSORLESS_LUT || mode == LS_MODE_SENSORLESS_NOLUT ||
                mode == LS_MODE_CALIBRATION || (mode == LS_MODE_SENSORED && d->cfg.inject_sensored);
     d->v_hf_max = d->hf_on ? d->cfg.inject.amplitude : LS_R(0.0);
     d->i_d_ref = d->hf_on ? d->cfg.i_d_inj : LS_R(0.0);
-    if (mode == LS_MODE_SENSORED || mode == LS_MODE_CALIBRATION) {
-        d->path = LS_DRIVE_PATH_ENCODER;
-    } else if (mode != LS_MODE_SENSORLESS_LUT && mode != LS_MODE_SENSORLESS_NOLUT) {
-        d->path = LS_DRIVE_PATH_GENERAL; /* LS_MODE_OFF (and LS_MODE_STARTUP, which runs from there) */
-    } else if (d->cfg.inject.shape == LS_INJ_SQUARE) {
-        d->path = LS_DRIVE_PATH_SQUARE;
-    } else if (d->cfg.inject.shape == LS_INJ_ROTATING && d->cfg.sep.type == LS_BIQUAD_NOTCH &&
-               d->cfg.sep.f0 == d->cfg.bpf.f0 && d->cfg.sep.q == d->cfg.bpf.q) {
-        /* (the notch at the band-pass's f0 and q is 1 - band-pass: ls_drive_rotating.c) */
-        d->path = LS_DRIVE_PATH_ROTATING;
-    } else {
-        d->path = LS_DRIVE_PATH_GENERAL;
-    }
+    d->path = (uint8_t)(row * LS_DRIVE_COLS + step_column(&d->cfg));
 }
 
 /* The residual model starts again (keep_r: its measured resistance scale kept, ls_dtres_restart;
- * else ls_dtres_reset, k_r = 1), and what follows that scale with it (ls_drive_path_follow_r_). */
+ * else ls_dtres_reset, k_r = 1), and what follows that scale with it (ls_drive_follow_r_). */
 static void dtres_reset(ls_drive *d, bool keep_r)
 {
     if (keep_r) {
@@ -314,7 +355,7 @@ static void dtres_reset(ls_drive *d, bool keep_r)
     } else {
         ls_dtres_reset(&d->dtres);
     }
-    ls_drive_path_follow_r_(d);
+    ls_drive_follow_r_(d);
 }
 
 void ls_drive_reset(ls_drive *d, ls_pos p)
@@ -336,8 +377,8 @@ void ls_drive_reset(ls_drive *d, ls_pos p)
     ls_mod_reset(&d->mod);
     dtres_reset(d, false);
     ls_protect_reset(&d->prot);
-    mode_set(d, LS_MODE_OFF);
     d->starting = false;
+    mode_set(d, LS_MODE_OFF);
     ls_startup_reset(&d->su);
     d->align = false;
     d->pending = false;
@@ -396,8 +437,8 @@ ls_status ls_drive_set_mode(ls_drive *d, ls_mode mode)
     /* the modulator's history and the residual model start again (the outputs may have been off) */
     ls_mod_reset(&d->mod);
     dtres_reset(d, true);
-    /* LS_MODE_STARTUP runs in the outputs-off branch of ls_drive_step (see ls_drive.h): mode OFF,
-     * starting set; it enters LS_MODE_SENSORLESS_LUT, aligned, when it is done */
+    /* LS_MODE_STARTUP runs with mode OFF and starting set (the step table's start-up row); it
+     * enters LS_MODE_SENSORLESS_LUT, aligned, when it is done */
     d->starting = mode == LS_MODE_STARTUP;
     mode_set(d, d->starting ? LS_MODE_OFF : mode);
     if (d->starting) {
@@ -484,39 +525,17 @@ ls_status ls_drive_step_to(ls_drive *d, ls_pos target)
 }
 
 /* --------------------------------------------------------------------------- step */
-/* Outputs off: every command field cleared, then mode and fault; controllers reset. */
-void ls_drive_disable_(ls_drive *d, ls_cmd *cmd, uint32_t fault)
-{
-    memset(cmd, 0, sizeof *cmd);
-    cmd->mode = d->starting ? LS_MODE_STARTUP : d->mode;
-    cmd->fault = fault;
-    ls_current_reset(&d->cur);
-    ls_posctrl_reset(&d->pos);
-    d->f_ref = LS_R(0.0);
-}
-
-/* Outputs off after a fault or in LS_MODE_OFF, reporting the estimate and the reference. */
-void ls_drive_disable_report_(ls_drive *d, ls_cmd *cmd, uint32_t fault)
-{
-    ls_drive_disable_(d, cmd, fault);
-    cmd->pos_est = d->obs.pos;
-    cmd->pos_fb = d->obs.pos;
-    cmd->pos_ref = d->traj.target;
-}
-
-/* --------------------------------------------------------------------------- start-up */
-/* LS_MODE_STARTUP: one step of ls_drive_startup_step_ (ls_drive_startup.c, its own translation
- * unit so that the inline blocks it shares with ls_drive_step stay inlined there), then its end:
- * a failure turns the outputs off, the end enters LS_MODE_SENSORLESS_LUT with the reference
+/* LS_MODE_STARTUP: the step's opening, one step of the sequence (ls_drive_startup.c), then its
+ * end: a failure turns the outputs off, the end enters LS_MODE_SENSORLESS_LUT with the reference
  * aligned at the estimate from the next step on (no jump). */
-#if defined(__GNUC__)
-#define LS_DRIVE_COLD __attribute__((noinline, cold)) /* out of ls_drive_step's other modes */
-#else
-#define LS_DRIVE_COLD
-#endif
 static LS_DRIVE_COLD void startup_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
 {
-    const ls_startup_phase ph = ls_drive_startup_step_(d, meas, cmd);
+    ls_drive_io io;
+    ls_startup_phase ph;
+    if (!ls_drive_open_(d, meas, cmd, &io)) {
+        return;
+    }
+    ph = ls_drive_startup_run_(d, meas, cmd, &io);
     if (ph == LS_SU_FAILED) {
         if (d->prot.fault == LS_FAULT_NONE) {
             ls_protect_trip(&d->prot, LS_FAULT_OBSERVER);
@@ -529,76 +548,6 @@ static LS_DRIVE_COLD void startup_step(ls_drive *d, const ls_meas *meas, ls_cmd 
     }
 }
 
-/* LS_MODE_OFF (and LS_MODE_STARTUP from it), or a sensorless mode with the pulsating or elliptical
- * injection (or a rotating one whose sep is not bpf's complement). Out of line: ls_drive_step
- * only dispatches, and the other paths do not pay for this one's register saves. */
-#if defined(__GNUC__)
-__attribute__((noinline))
-#endif
-static void general_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
-{
-    LS_REAL i_a, i_b, ihf_a, ihf_b, if_a, if_b;
-    LS_REAL c_est, s_est, v_hf, v_d, v_q, v_a, v_b;
-    LS_REAL i_d, i_q, i_q_ref, omega, duty[3];
-    ls_pos x_ref, pos;
-    uint32_t fault;
-
-    fault = ls_protect_check_power(&d->prot, meas->i_abc, meas->v_dc);
-    if (fault != LS_FAULT_NONE || d->mode == LS_MODE_OFF) {
-        if (d->starting && fault == LS_FAULT_NONE) { /* LS_MODE_STARTUP (see ls_drive.h) */
-            startup_step(d, meas, cmd);
-            return;
-        }
-        ls_drive_disable_report_(d, cmd, fault);
-        return;
-    }
-
-    /* measurements: Clarke */
-    i_a = meas->i_abc[0];
-    i_b = (meas->i_abc[1] - meas->i_abc[2]) * (LS_R(1.0) / LS_SQRT3);
-    ls_drive_path_align_(d);
-
-    /* the estimated axis (the HF estimate of the previous step) */
-    ls_sincos(d->obs.pos.theta, &c_est, &s_est);
-
-    /* fundamental separation of the measured currents, and HF band-pass of the currents less what
-     * the dead-time residual drove (ls_dtres.h) */
-    ls_drive_path_hf_(d, meas, i_a, i_b, c_est, s_est, &if_a, &if_b, &ihf_a, &ihf_b);
-
-    /* HF demodulation and observer, on the axis the injection used */
-    {
-        /* (advanced by the axis's turn over the HF path's delay) */
-        const LS_REAL err = ls_demod_step_cs_norm(&d->demod, ihf_a, ihf_b, d->obs.pos.theta, c_est, s_est,
-                                             d->inj.c, d->inj.s, LS_R(0.0)) +
-                            d->cfg.hf_delay * d->obs.omega;
-        if (ls_drive_path_observe_(d, err)) {
-            ls_drive_disable_report_(d, cmd, d->prot.fault);
-            return;
-        }
-    }
-    pos = d->obs.pos;
-    omega = d->obs.omega;
-
-    /* position reference and control -> force -> current reference */
-    i_q_ref = ls_drive_path_force_(d, pos, omega, &x_ref);
-
-    /* current control in the estimated frame */
-    ls_drive_path_current_(d, meas->v_dc, c_est, s_est, if_a, if_b, i_q_ref, omega, &i_d, &i_q, &v_d, &v_q, &v_a,
-                           &v_b);
-    /* plus the HF injection on the estimated d-axis, with the optional quadrature component on q
-     * (rotating: the stationary-frame vector) */
-    v_hf = ls_inject_step(&d->inj);
-    if (d->cfg.inject.shape != LS_INJ_ROTATING) {
-        v_a += v_hf * c_est - d->inj.v_q * s_est;
-        v_b += v_hf * s_est + d->inj.v_q * c_est;
-    } else { /* in the stationary frame */
-        v_a += v_hf;
-        v_b += d->inj.v_q;
-    }
-    (void)ls_mod_step_finite(&d->mod, v_a, v_b, meas->v_dc, meas->i_abc, duty);
-    ls_drive_cmd_out_(cmd, d, duty, pos, x_ref, omega, i_d, i_q, i_q_ref, v_d, v_q, v_hf, false);
-}
-
 void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
 {
     if (cmd == NULL) {
@@ -609,18 +558,6 @@ void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
         cmd->fault = LS_FAULT_CONFIG;
         return;
     }
-    switch (d->path) { /* each path's step (ls_drive.h) */
-    case LS_DRIVE_PATH_ROTATING:
-        ls_drive_rot_step_(d, meas, cmd);
-        break;
-    case LS_DRIVE_PATH_SQUARE:
-        ls_drive_sq_step_(d, meas, cmd);
-        break;
-    case LS_DRIVE_PATH_ENCODER:
-        ls_drive_enc_step_(d, meas, cmd);
-        break;
-    default:
-        general_step(d, meas, cmd);
-        break;
-    }
+    /* the step of the mode and injection shape: the step table above */
+    step_table[d->path / LS_DRIVE_COLS][d->path % LS_DRIVE_COLS](d, meas, cmd);
 }

@@ -1,33 +1,30 @@
-/* ls_drive_step's LS_MODE_STARTUP path (ls_drive.h, ls_startup.h), in a translation unit of its
- * own: ls_drive.c calls it from the outputs-off branch (d->starting) and handles its end. */
-#include <math.h>
-
-#include "linsense/ls_drive.h"
-#include "linsense/ls_math.h"
-#include "ls_drive_cmd.h"
-#include "ls_drive_path.h"
+/* LS_MODE_STARTUP, every injection shape (ls_drive.h, ls_startup.h): ls_drive.c's step of the
+ * mode (ls_drive.c, "The step table") opens the step (ls_drive_open_), runs this and handles its
+ * end. */
+#include "ls_drive_internal.h"
 
 /* The HF chain of the sensorless modes (separation, residual, band-pass, demodulator with the
  * table, observer) with zero current references instead of the position loop; during the pulses
  * the observer is frozen, the injection off and the d-voltage the pulse's; at the end of the
  * pulses the estimate is turned by pi if they say so. Returns the sequence's phase after the step
  * (LS_SU_FAILED also for a non-finite output, with LS_FAULT_NONFINITE latched); writes cmd
- * unless it fails. */
-ls_startup_phase ls_drive_startup_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
+ * unless it fails. io: the step's values, opened (ls_drive_open_). */
+ls_startup_phase ls_drive_startup_run_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd, ls_drive_io *io)
 {
     const ls_drive_cfg *cfg = &d->cfg;
     ls_startup *su = &d->su;
-    LS_REAL i_a, i_b, ihf_a, ihf_b, if_a, if_b, c_est, s_est, i_d, i_q, i_dr, v_d, v_q, v_a, v_b;
-    LS_REAL v_hf = LS_R(0.0), v_lim, duty[3];
+    LS_REAL i_dr, v_lim;
     ls_startup_phase ph;
+    const LS_REAL i_a = io->i_a, i_b = io->i_b;
+    LS_REAL c_est, s_est;
 
-    i_a = meas->i_abc[0];
-    i_b = (meas->i_abc[1] - meas->i_abc[2]) * (LS_R(1.0) / LS_SQRT3);
-    ls_sincos(d->obs.pos.theta, &c_est, &s_est);
-    ls_drive_path_hf_(d, meas, i_a, i_b, c_est, s_est, &if_a, &if_b, &ihf_a, &ihf_b);
+    ls_sincos(d->obs.pos.theta, &io->c, &io->s);
+    c_est = io->c;
+    s_est = io->s;
+    ls_drive_hf_(d, meas, io);
+    io->v_hf = LS_R(0.0);
     {
-        const LS_REAL err = ls_demod_step_cs_norm(&d->demod, ihf_a, ihf_b, d->obs.pos.theta, c_est, s_est, d->inj.c,
-                                             d->inj.s, LS_R(0.0));
+        const LS_REAL err = ls_drive_demod_(d, io, d->obs.pos.theta);
         if (su->phase == LS_SU_LOCK || su->phase == LS_SU_SETTLE) { /* frozen in between */
             ls_observer_step_finite(&d->obs, su->env >= LS_R(1.0) ? err * cfg->startup.lock_gain : LS_R(0.0),
                                     LS_R(0.0));
@@ -65,43 +62,50 @@ ls_startup_phase ls_drive_startup_step_(ls_drive *d, const ls_meas *meas, ls_cmd
         const LS_REAL v_max = meas->v_dc * (LS_R(0.95) / LS_SQRT3); /* 95 % of the linear range */
         ls_current_reset(&d->cur);
         (void)ls_inject_step(&d->inj); /* the carrier goes on */
-        i_d = i_dr;
-        i_q = -s_est * i_a + c_est * i_b;
-        v_d = ls_clamp(su->v_d, -v_max, v_max);
-        v_q = LS_R(0.0);
-        v_a = c_est * v_d;
-        v_b = s_est * v_d;
+        io->i_d = i_dr;
+        io->i_q = -s_est * i_a + c_est * i_b;
+        io->v_d = ls_clamp(su->v_d, -v_max, v_max);
+        io->v_q = LS_R(0.0);
+        io->v_a = c_est * io->v_d;
+        io->v_b = s_est * io->v_d;
     } else {
         /* zero currents, on the fundamental currents, plus the injection (no speed loop even once
          * the polarity is known: the observer's speed while it relocks after the pulses is no
          * motion, and a loop on it pushes the mover) */
-        i_d = c_est * if_a + s_est * if_b;
-        i_q = -s_est * if_a + c_est * if_b;
+        io->i_d = c_est * io->if_a + s_est * io->if_b;
+        io->i_q = -s_est * io->if_a + c_est * io->if_b;
         v_lim = meas->v_dc * (LS_R(1.0) / LS_SQRT3) - d->v_hf_max;
         /* at zero speed: the observer's speed while it slews onto the axis is no motion, and its
          * back-EMF feed-forward would push the mover */
-        ls_current_step_finite(&d->cur, i_d, i_q, LS_R(0.0), LS_R(0.0), LS_R(0.0), v_lim, &v_d, &v_q);
-        const LS_REAL g = su->env * su->env * (LS_R(3.0) - LS_R(2.0) * su->env);
-        LS_REAL v_hq;
-        v_hf = g * ls_inject_step(&d->inj);
+        LS_REAL v_d, v_q, v_hq, g;
+        ls_current_step_finite(&d->cur, io->i_d, io->i_q, LS_R(0.0), LS_R(0.0), LS_R(0.0), v_lim, &v_d, &v_q);
+        g = su->env * su->env * (LS_R(3.0) - LS_R(2.0) * su->env);
+        io->v_d = v_d;
+        io->v_q = v_q;
+        io->v_hf = g * ls_inject_step(&d->inj);
         v_hq = g * d->inj.v_q;
-        v_a = c_est * v_d - s_est * v_q;
-        v_b = s_est * v_d + c_est * v_q;
+        io->v_a = c_est * v_d - s_est * v_q;
+        io->v_b = s_est * v_d + c_est * v_q;
         if (cfg->inject.shape != LS_INJ_ROTATING) { /* on the estimated axes */
-            v_a += v_hf * c_est - v_hq * s_est;
-            v_b += v_hf * s_est + v_hq * c_est;
+            io->v_a += io->v_hf * c_est - v_hq * s_est;
+            io->v_b += io->v_hf * s_est + v_hq * c_est;
         } else { /* the rotating vector, in the stationary frame */
-            v_a += v_hf;
-            v_b += v_hq;
+            io->v_a += io->v_hf;
+            io->v_b += v_hq;
         }
     }
-    (void)ls_mod_step_finite(&d->mod, v_a, v_b, meas->v_dc, meas->i_abc, duty);
-    if (!LS_ISFINITE(duty[0] + duty[1] + duty[2])) {
+    (void)ls_mod_step_finite(&d->mod, io->v_a, io->v_b, meas->v_dc, meas->i_abc, io->duty);
+    if (!LS_ISFINITE(io->duty[0] + io->duty[1] + io->duty[2])) {
         ls_protect_trip(&d->prot, LS_FAULT_NONFINITE);
         return LS_SU_FAILED;
     }
-    ls_drive_cmd_(cmd, d, duty, LS_MODE_STARTUP, d->obs.pos, d->obs.pos, ls_observer_speed(&d->obs), i_d, i_q,
-                  LS_R(0.0), LS_R(0.0), v_d, v_q, v_hf, 0u, false, LS_R(0.0));
+    /* the estimate is the feedback and the reference; no current references, no calibration */
+    io->pos = d->obs.pos;
+    io->x_ref = d->obs.pos;
+    io->i_q_ref = LS_R(0.0);
+    ls_drive_cmd_(cmd, d, io, LS_MODE_STARTUP, ls_observer_speed(&d->obs), LS_R(0.0), false);
+    cmd->cal_index = 0u;
+    cmd->psi_cal = LS_R(0.0);
     return ph;
 }
 

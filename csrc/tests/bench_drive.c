@@ -6,7 +6,7 @@
  * 2800 steps are the whole start-up, beyond it the drive holds in sensorless LUT mode).
  * 4 LS_MODE_SENSORED with the HF estimate beside the encoder (inject_sensored), 5
  * LS_MODE_CALIBRATION (12 points of period 1, the default injection), 6 LS_MODE_SENSORED with the
- * square wave beside the encoder (4 to 6: the encoder modes' step, ls_drive_encoder.c).
+ * square wave beside the encoder (4 and 6: ls_drive_sensored.c, 5: ls_drive_calibration.c).
  * G = 1: with a gain table (rotating, square); R = 1: without the dead-time residual model, 2: with
  * its interpolating model (dtres.forward false) instead of the forward one.
  * so that only the instructions executed inside ls_drive_step are counted (tools/bench.sh). */

@@ -10,7 +10,7 @@
 
 #include "itest_bench.h"
 #include "linsense/ls_dtres.h"
-#include "linsense/ls_modulator.h"
+#include "linsense/ls_mod.h"
 
 /* one period of the chosen model, from i0 with no carried edge */
 static void period(const bench *b, bool switching, const double duty[3], const double i0[2], double i1[2])

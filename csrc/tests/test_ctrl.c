@@ -3,7 +3,9 @@
  * circle), position controller structures. */
 #include <math.h>
 
-#include "linsense/ls_ctrl.h"
+#include "linsense/ls_current.h"
+#include "linsense/ls_pi.h"
+#include "linsense/ls_posctrl.h"
 #include "ls_test.h"
 
 static void test_pi_antiwindup(void)

@@ -27,7 +27,7 @@
 #ifndef LINSENSE_LS_DEMOD_H
 #define LINSENSE_LS_DEMOD_H
 
-#include "linsense/ls_filter.h"
+#include "linsense/ls_biquad.h"
 #include "linsense/ls_lut.h"
 #include "linsense/ls_math.h"
 #include "linsense/ls_types.h"

@@ -45,15 +45,17 @@
 #ifndef LINSENSE_LS_DRIVE_H
 #define LINSENSE_LS_DRIVE_H
 
-#include "linsense/ls_ctrl.h"
+#include "linsense/ls_biquad.h"
+#include "linsense/ls_current.h"
 #include "linsense/ls_demod.h"
 #include "linsense/ls_dtres.h"
-#include "linsense/ls_filter.h"
 #include "linsense/ls_inject.h"
 #include "linsense/ls_lut.h"
-#include "linsense/ls_modulator.h"
+#include "linsense/ls_mod.h"
 #include "linsense/ls_observer.h"
+#include "linsense/ls_pi.h"
 #include "linsense/ls_pos.h"
+#include "linsense/ls_posctrl.h"
 #include "linsense/ls_protect.h"
 #include "linsense/ls_startup.h"
 #include "linsense/ls_traj.h"
@@ -251,12 +253,11 @@ typedef struct {
                             positions of cfg.near_in) */
     LS_REAL near_c3_in;  /* -, sin(3 near_in): |cos(3 theta_est)| below it is near */
     LS_REAL near_c3_out; /* -, sin(3 near_out) (0: no schedule) */
-    uint8_t path;        /* the step that runs (LS_DRIVE_PATH_*): a sensorless mode's own step,
-                            the rotating injection with sep the notch at bpf's f0 and q or the
-                            square wave, or the encoder modes' */
+    uint8_t path;        /* the step that runs: its entry in the step table (csrc/ctrl/ls_drive.c),
+                            by mode and injection shape */
     LS_REAL enc_k;       /* rad, 2 pi / enc_counts: the angle of one encoder count */
-    /* LS_MODE_STARTUP: while it runs, mode holds LS_MODE_OFF and starting is set, so that
-     * ls_drive_step's other modes pay nothing for it (it is dispatched from the outputs-off branch) */
+    /* LS_MODE_STARTUP: while it runs, mode holds LS_MODE_OFF and starting is set (the step table's
+     * start-up row runs) */
     bool starting;       /* the start-up sequence runs (cmd.mode reports LS_MODE_STARTUP) */
     ls_startup su;       /* its sequence and decision (su.flip, su.i_diff, su.phase, su.steps) */
 } ls_drive;
@@ -293,22 +294,7 @@ ls_status ls_drive_set_load(ls_drive *d, LS_REAL f_load);
 ls_status ls_drive_move_to(ls_drive *d, ls_pos target);
 /* Step the reference to target (as ls_drive_move_to, without the profile). */
 ls_status ls_drive_step_to(ls_drive *d, ls_pos target);
-/* One PWM period. */
+/* One PWM period: the step of the active mode and injection shape (which one: the step table in
+ * csrc/ctrl/ls_drive.c; the files of the drive: csrc/ctrl/ls_drive_internal.h). */
 void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd);
-/* Internal: ls_drive_step's LS_MODE_STARTUP path (csrc/ctrl/ls_drive_startup.c); not an API. */
-ls_startup_phase ls_drive_startup_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd);
-/* Internal: ls_drive_step in the sensorless modes with the rotating injection
- * (csrc/ctrl/ls_drive_rotating.c) or the square wave (csrc/ctrl/ls_drive_square.c), in the
- * encoder modes (csrc/ctrl/ls_drive_encoder.c), and the outputs-off helpers they share; not an
- * API. */
-#define LS_DRIVE_PATH_GENERAL 0u  /* ls_drive.c: the sensorless modes' pulsating and elliptical step */
-#define LS_DRIVE_PATH_ROTATING 1u
-#define LS_DRIVE_PATH_SQUARE 2u
-#define LS_DRIVE_PATH_ENCODER 3u
-void ls_drive_rot_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd);
-void ls_drive_sq_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd);
-void ls_drive_enc_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd);
-void ls_drive_disable_(ls_drive *d, ls_cmd *cmd, uint32_t fault);
-void ls_drive_disable_report_(ls_drive *d, ls_cmd *cmd, uint32_t fault);
-
 #endif /* LINSENSE_LS_DRIVE_H */

@@ -6,8 +6,8 @@
  * Transposed direct form II. Used for signal separation (band-pass around the injected
  * frequency, notch for the current loop) and for the demodulator's low-pass filters.
  */
-#ifndef LINSENSE_LS_FILTER_H
-#define LINSENSE_LS_FILTER_H
+#ifndef LINSENSE_LS_BIQUAD_H
+#define LINSENSE_LS_BIQUAD_H
 
 #include "linsense/ls_types.h"
 
@@ -83,4 +83,4 @@ static inline LS_REAL ls_biquad_step_notch(ls_biquad *f, LS_REAL x)
     return y;
 }
 
-#endif /* LINSENSE_LS_FILTER_H */
+#endif /* LINSENSE_LS_BIQUAD_H */

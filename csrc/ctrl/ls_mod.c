@@ -1,7 +1,7 @@
-/* Min-max modulator (see linsense/ls_modulator.h). */
+/* Min-max modulator (see linsense/ls_mod.h). */
 #include <math.h>
 
-#include "linsense/ls_modulator.h"
+#include "linsense/ls_mod.h"
 
 ls_status ls_mod_init(ls_mod *m, const ls_mod_cfg *cfg)
 {

@@ -13,8 +13,8 @@
  * also puts each leg's two edges apart by the PWM ripple (cfg.l_ripple): a small current that
  * straddles zero between them loses no dead time (the square wave's relay band, docs/theory.md).
  */
-#ifndef LINSENSE_LS_MODULATOR_H
-#define LINSENSE_LS_MODULATOR_H
+#ifndef LINSENSE_LS_MOD_H
+#define LINSENSE_LS_MOD_H
 
 #include "linsense/ls_types.h"
 
@@ -403,4 +403,4 @@ static inline bool ls_mod_step_ripple_finite(ls_mod *m, LS_REAL v_a, LS_REAL v_b
     return clipped;
 }
 
-#endif /* LINSENSE_LS_MODULATOR_H */
+#endif /* LINSENSE_LS_MOD_H */

@@ -1,7 +1,7 @@
-/* Biquad design and reset (see linsense/ls_filter.h). */
+/* Biquad design and reset (see linsense/ls_biquad.h). */
 #include <math.h>
 
-#include "linsense/ls_filter.h"
+#include "linsense/ls_biquad.h"
 #include "linsense/ls_math.h"
 
 ls_status ls_biquad_init(ls_biquad *f, const ls_biquad_cfg *cfg)

@@ -5,7 +5,7 @@
 #include <math.h>
 #include <stdio.h>
 
-#include "linsense/ls_filter.h"
+#include "linsense/ls_biquad.h"
 #include "ls_test.h"
 
 #define PI 3.14159265358979323846
@@ -150,5 +150,5 @@ int main(void)
     cfg.fs = LS_R(16000.0); cfg.type = (ls_biquad_type)7;
     LS_CHECK(ls_biquad_init(&bq, &cfg) == LS_ERR_PARAM);
     LS_CHECK(ls_biquad_init(NULL, &cfg) == LS_ERR_NULL);
-    return ls_test_report("test_filter");
+    return ls_test_report("test_biquad");
 }

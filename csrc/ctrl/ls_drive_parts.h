@@ -1,0 +1,215 @@
+/* The definitions of the pieces every step of the drive is made of (declared and described in
+ * ls_drive_internal.h; included only there and by ls_drive_parts.c). LS_DRIVE_PART is
+ * `static inline` in a build for speed (each step its own inlined copy) and empty in a build for
+ * size (-Os: ls_drive_parts.c compiles the one copy; ls_drive_internal.h, "The pieces"). */
+#ifndef LINSENSE_LS_DRIVE_PARTS_H
+#define LINSENSE_LS_DRIVE_PARTS_H
+
+/* --------------------------------------------------------------------------- openings */
+/* After a mode change, once the reference is aligned: the move or step commanded with it. */
+static inline void pending_command(ls_drive *d)
+{
+    if (d->align) {
+        if (d->pending) {
+            d->pending = false;
+            if (d->pending_move) {
+                ls_traj_move(&d->traj, d->pending_target);
+            } else {
+                ls_traj_jump(&d->traj, d->pending_target);
+            }
+        }
+        d->align = false;
+    }
+}
+
+LS_DRIVE_PART bool ls_drive_est_open_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd, ls_drive_io *io)
+{
+    if (!ls_drive_open_(d, meas, cmd, io)) {
+        return false;
+    }
+    if (d->align) {
+        ls_traj_reset(&d->traj, d->obs.pos);
+    }
+    pending_command(d);
+    ls_sincos(d->obs.pos.theta, &io->c, &io->s);
+    return true;
+}
+
+/* The encoder count as a position (enc_counts per electrical period). */
+static inline ls_pos enc_pos(int32_t count, int32_t per_period, LS_REAL k_count)
+{
+    ls_pos p;
+    int32_t q = count / per_period;
+    int32_t r = count % per_period;
+    if (r < 0) {
+        r += per_period;
+        q -= 1;
+    }
+    p.period = q;
+    p.theta = (LS_REAL)r * k_count;
+    return p;
+}
+
+/* The encoder's sample plausible: a count change from the last sample of at most enc_jump_max
+ * (int64_t: no overflow whatever the counts; |jump| <= max as one unsigned comparison), except at
+ * the first step of the mode (d->align: there is no last sample), and its position pe within
+ * +-LS_POS_PERIOD_MAX periods (beyond only with enc_counts < 128). */
+static inline bool enc_plausible(ls_drive *d, int32_t count, ls_pos pe)
+{
+    const int64_t jump = (int64_t)count - (int64_t)d->enc_prev;
+    const bool ok = d->align || (uint64_t)(jump + d->enc_jump_max) <= (uint64_t)(2 * d->enc_jump_max);
+    d->enc_prev = count;
+    return ok && pe.period <= LS_POS_PERIOD_MAX && pe.period >= -LS_POS_PERIOD_MAX;
+}
+
+LS_DRIVE_PART bool ls_drive_enc_open_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd, ls_drive_io *io)
+{
+    const ls_drive_cfg *cfg = &d->cfg;
+    ls_pos pe;
+    if (!meas->enc_valid) {
+        ls_protect_trip(&d->prot, LS_FAULT_ENCODER);
+    }
+    if (!ls_drive_open_(d, meas, cmd, io)) { /* (and the latched faults) */
+        return false;
+    }
+    pe = enc_pos(meas->enc_count, cfg->enc_counts, d->enc_k);
+    if (!enc_plausible(d, meas->enc_count, pe)) {
+        ls_protect_trip(&d->prot, LS_FAULT_ENCODER);
+        ls_drive_disable_report_(d, cmd, d->prot.fault);
+        return false;
+    }
+    if (d->align) {
+        /* load_ff: the sensorless modes held the load in the HF observer's estimate (the speed PI's
+         * integrator at 0); the encoder modes hold it in the integrator */
+        if (cfg->load_ff && cfg->pos.type == LS_POSCTRL_P) {
+            d->pos.speed.integ = ls_clamp(d->obs.f_load, cfg->pos.speed.out_min, cfg->pos.speed.out_max);
+        }
+        ls_observer_reset(&d->enc, pe);
+        ls_observer_reset(&d->obs, pe);
+        ls_traj_reset(&d->traj, pe);
+        pending_command(d); /* (the move or step commanded with the mode change) */
+    }
+    ls_observer_step_finite(&d->enc, ls_pos_diff(pe, d->enc.pos), d->f_ref);
+    ls_sincos(d->enc.pos.theta, &io->c, &io->s);
+    return true;
+}
+
+/* --------------------------------------------------------------------------- HF path and estimation */
+LS_DRIVE_PART void ls_drive_residual_(ls_drive *d, const ls_meas *meas, const ls_drive_io *io, LS_REAL i_res[2])
+{
+    LS_REAL v_err[2];
+    if (d->dtres.cfg.forward) {
+        LS_REAL g[6], i_end[3], i_drop[3];
+        ls_dtres_phase_g(&d->dtres, io->c, io->s, g);
+        if (ls_mod_residual(&d->mod, meas->i_abc, meas->v_dc, g, d->dtres.cfg.r_s * d->dtres.k_r, v_err, i_end,
+                            i_drop) &&
+            d->dtres.cfg.adapt) {
+            /* (k_r held while the angle is not the motor's: the start-up, the table off) */
+            ls_dtres_adapt(&d->dtres, d->mod.i_prev, meas->i_abc, i_end, i_drop,
+                           !d->starting && d->mode != LS_MODE_SENSORLESS_NOLUT);
+            if (d->dtres.n_solve == 0u) { /* (k_r solved for) */
+                ls_drive_follow_r_(d);
+            }
+        }
+    } else {
+        (void)ls_mod_residual_interp(&d->mod, meas->i_abc, meas->v_dc, d->dtres.k_rip, v_err);
+    }
+    ls_dtres_step(&d->dtres, v_err, io->c, io->s, i_res);
+}
+
+LS_DRIVE_PART void ls_drive_hf_(ls_drive *d, const ls_meas *meas, ls_drive_io *io)
+{
+    if (d->cfg.sep.type == LS_BIQUAD_NOTCH) {
+        io->if_a = ls_biquad_step_notch(&d->sep[0], io->i_a);
+        io->if_b = ls_biquad_step_notch(&d->sep[1], io->i_b);
+    } else {
+        io->if_a = ls_biquad_step(&d->sep[0], io->i_a);
+        io->if_b = ls_biquad_step(&d->sep[1], io->i_b);
+    }
+    if (d->cfg.hf_dtres) { /* (bpf is then the band-pass: not with the square wave, ls_drive_init) */
+        LS_REAL i_res[2];
+        ls_drive_residual_(d, meas, io, i_res);
+        io->ihf_a = ls_biquad_step_bp(&d->bpf[0], io->i_a - i_res[0]);
+        io->ihf_b = ls_biquad_step_bp(&d->bpf[1], io->i_b - i_res[1]);
+    } else {
+        io->ihf_a = ls_biquad_step(&d->bpf[0], io->i_a);
+        io->ihf_b = ls_biquad_step(&d->bpf[1], io->i_b);
+    }
+}
+
+LS_DRIVE_PART LS_REAL ls_drive_demod_(ls_drive *d, const ls_drive_io *io, LS_REAL theta)
+{
+    return ls_demod_step_cs_norm(&d->demod, io->ihf_a, io->ihf_b, theta, io->c, io->s, d->inj.c, d->inj.s,
+                                 LS_R(0.0));
+}
+
+LS_DRIVE_PART bool ls_drive_observe_(ls_drive *d, LS_REAL err)
+{
+    const LS_REAL e_obs = d->inj.amp >= d->cfg.inject.amplitude ? err : LS_R(0.0);
+    ls_observer_step_finite(&d->obs, e_obs, d->f_ref);
+    ls_protect_check_observer(&d->prot, e_obs, d->demod.valid, d->obs.omega);
+    return d->prot.fault != LS_FAULT_NONE;
+}
+
+/* --------------------------------------------------------------------------- force and current */
+LS_DRIVE_PART void ls_drive_force_(ls_drive *d, ls_drive_io *io)
+{
+    LS_REAL v_ff, a_ff, x_err, f;
+    ls_traj_step(&d->traj, &io->x_ref, &v_ff, &a_ff);
+    x_err = ls_pos_diff(io->x_ref, io->pos) * d->inv_kx;
+    a_ff += d->ff_load_k * d->obs.f_load; /* load_ff: the observer's load-force estimate, */
+    d->pos.speed.integ *= d->integ_keep;   /* which is then the integral action */
+    f = ls_posctrl_step_finite(&d->pos, x_err, io->omega * d->inv_kx, v_ff, a_ff);
+    io->i_q_ref = ls_clamp(f * d->inv_kf, -d->cfg.i_max, d->cfg.i_max);
+    d->f_ref = io->i_q_ref * d->cfg.force_constant;
+}
+
+LS_DRIVE_PART void ls_drive_enc_force_(ls_drive *d, ls_drive_io *io, bool dithered, LS_REAL dither)
+{
+    LS_REAL v_ff, a_ff, x_err, f;
+    ls_traj_step(&d->traj, &io->x_ref, &v_ff, &a_ff);
+    x_err = ls_pos_diff(io->x_ref, io->pos) * d->inv_kx;
+    f = ls_posctrl_step_finite(&d->pos, x_err, io->omega * d->inv_kx, v_ff, a_ff);
+    io->i_q_ref = f * d->inv_kf;
+    d->obs.f_load = ls_clamp(d->pos.speed.integ, -d->cfg.obs.force_max, d->cfg.obs.force_max);
+    if (dithered) {
+        io->i_q_ref += dither;
+    }
+    io->i_q_ref = ls_clamp(io->i_q_ref, -d->cfg.i_max, d->cfg.i_max);
+    d->f_ref = io->i_q_ref * d->cfg.force_constant;
+}
+
+LS_DRIVE_PART void ls_drive_current_(ls_drive *d, LS_REAL v_dc, ls_drive_io *io)
+{
+    const LS_REAL c = io->c, s = io->s;
+    const LS_REAL v_lim = v_dc * (LS_R(1.0) / LS_SQRT3) - d->v_hf_max;
+    const LS_REAL dlt = d->delay_ts * io->omega;
+    const LS_REAL c_adv = c - s * dlt, s_adv = s + c * dlt;
+    LS_REAL vd, vq;
+    io->i_d = c * io->if_a + s * io->if_b;
+    io->i_q = -s * io->if_a + c * io->if_b;
+    ls_current_step_finite(&d->cur, io->i_d, io->i_q, d->i_d_ref, io->i_q_ref, io->omega, v_lim, &vd, &vq);
+    io->v_d = vd;
+    io->v_q = vq;
+    io->v_a = c_adv * vd - s_adv * vq;
+    io->v_b = s_adv * vd + c_adv * vq;
+}
+
+/* --------------------------------------------------------------------------- close */
+LS_DRIVE_PART void ls_drive_cmd_out_(ls_cmd *cmd, ls_drive *d, const ls_drive_io *io, bool cal_done)
+{
+    if (!LS_ISFINITE(io->duty[0] + io->duty[1] + io->duty[2])) {
+        ls_protect_trip(&d->prot, LS_FAULT_NONFINITE);
+        ls_drive_disable_(d, cmd, d->prot.fault);
+        return;
+    }
+    ls_drive_cmd_(cmd, d, io, d->mode, io->omega * d->inv_kx, d->i_d_ref, cal_done);
+}
+
+LS_DRIVE_PART void ls_drive_close_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd, ls_drive_io *io, bool cal_done)
+{
+    (void)ls_mod_step_finite(&d->mod, io->v_a, io->v_b, meas->v_dc, meas->i_abc, io->duty);
+    ls_drive_cmd_out_(cmd, d, io, cal_done);
+}
+
+#endif /* LINSENSE_LS_DRIVE_PARTS_H */
