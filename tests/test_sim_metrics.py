@@ -277,7 +277,9 @@ def _random_run(rng: np.random.Generator, blocks: bool, n: int):
     x_to = rng.choice([0.0, 3e-3, -6e-3])
     x0 = rng.choice([0.0, 1e-3])
     t0 = when(0.5 * t[-1])
-    x = np.where(t < t0, x0, x_to + rng.normal(0, 2e-5, n) + 3e-5 * np.sin(40 * t))
+    # (a third of the drives stop short of the target: beyond the bound, or within half the move)
+    short = (x_to - x0) * rng.choice([0.0, 0.0, 0.0, 0.03, 0.1, 0.3, 0.7])
+    x = np.where(t < t0, x0, x_to - short + rng.normal(0, 2e-5, n) + 3e-5 * np.sin(40 * t))
     e = rng.normal(0, 0.01, n)
     arrays = {"t": t, "x": x.copy(), "theta_err": e.copy()}
     if blocks:
@@ -300,19 +302,42 @@ def _random_run(rng: np.random.Generator, blocks: bool, n: int):
 
 
 @pytest.mark.parametrize("blocks", [False, True])
-def test_metrics_equal_the_mask_based_reference(blocks):
-    """compute_metrics (index ranges by bisection, a sweep's hot path) gives the same metrics as the
-    first, mask-based implementation (tests/ref_metrics.py) on 400 random runs: steps, moves,
-    faults, NaN and inf samples, short runs, windows longer than the run."""
+def test_metrics_equal_the_reference_from_the_docs(blocks):
+    """compute_metrics (index ranges by bisection, a sweep's hot path) gives the same metrics as a
+    reference written from docs/simulator.md's definitions alone (tests/ref_metrics.py: per-sample
+    records and time selections, nothing imported from linsense.sim.metrics) on 400 random runs:
+    steps, moves, faults, NaN and inf samples, short runs, windows longer than the run."""
     from ref_metrics import compute_metrics_ref
 
     rng = np.random.default_rng(7 + blocks)
+    kinds = set()
     for k in range(400):
         n = int(rng.choice([1, 2, 5, 50, 600]))
         arrays, kw = _random_run(rng, blocks, n)
         got = compute_metrics(arrays, **kw)
         want = compute_metrics_ref(arrays, **kw)
         assert got == want, (k, {key: (got[key], want[key]) for key in got if got[key] != want[key]})
+        kinds.add((got["verdict"], got["fault"] != "none", got["bias_deg"] is None))
+    # (the runs reach every verdict, with and without a fault and an error statistic)
+    assert {v for v, _, _ in kinds} == {"stable", "unstable", "not reached", "too short"}, kinds
+    assert {(f, b) for _, f, b in kinds} == {(False, False), (False, True), (True, False), (True, True)}
+
+
+def test_the_reference_is_not_the_code_it_checks():
+    """tests/ref_metrics.py imports nothing of linsense (its fault names come from the C headers),
+    and its names agree with the code's for every bit."""
+    import ast
+
+    import ref_metrics
+    from linsense.sim.metrics import fault_reason
+
+    tree = ast.parse(Path(ref_metrics.__file__).read_text())
+    imported = {a.name for n in ast.walk(tree) if isinstance(n, ast.Import) for a in n.names}
+    imported |= {n.module for n in ast.walk(tree) if isinstance(n, ast.ImportFrom)}
+    assert not any(m and m.startswith("linsense") for m in imported), imported
+    assert len(ref_metrics.FAULTS) == 10
+    for bits in (0, *(1 << k for k in range(12)), 0x109, 0x7FF):
+        assert ref_metrics.fault_text(bits) == fault_reason(bits), hex(bits)
 
 
 STEP = {"motor": "ecce2010", "control": {"mode": "sensored"},
