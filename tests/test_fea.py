@@ -272,6 +272,7 @@ def _dump(d):
     return tomli_w.dumps(d)
 
 
+@pytest.mark.slow
 def test_load_current_run_in_two_processes():
     from linsense.fea.solver import q_currents
 
@@ -355,6 +356,7 @@ def test_linear_iron_takes_only_zero(run_cli, tmp_path):
     assert r.code == 2 and "linear iron" in r.err and len(r.err.strip().splitlines()) == 1
 
 
+@pytest.mark.slow
 def test_load_sweep_writes_per_load_files_and_the_lut_against_load(tmp_path):
     from linsense.fea.pipeline import run_fea
 
@@ -406,6 +408,7 @@ def test_d_axis_current_strengthens_the_pm_flux():
     assert np.array_equal(dq_currents(th, 0.0, 1.5), q_currents(th, 1.5))
 
 
+@pytest.mark.slow
 def test_polarity_signal_with_saturating_and_linear_iron():
     from linsense.fea.polarity import polarity_signal
 
@@ -424,6 +427,7 @@ def test_polarity_signal_with_saturating_and_linear_iron():
         polarity_signal(load_geometry("tubular56"), [0.0], 3, "coarse")
 
 
+@pytest.mark.slow
 def test_cli_polarity_writes_the_csv(run_cli, tmp_path):
     out = tmp_path / "o"
     r = run_cli("fea", "tubular56", "--out", out, "--positions", "14", "--mesh", "coarse", "--lut-points",

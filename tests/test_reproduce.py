@@ -38,6 +38,7 @@ RUNS = {"fig11": ("lut", "nolut"), "fig12": ("lut", "nolut", "nolut_no_dead_time
 N_RUNS = sum(len(v) for v in RUNS.values())
 
 
+@pytest.mark.slow
 def test_metrics_json_has_the_issues_structure(rep):
     out, _, m = rep
     timing = json.loads((out / "timing.json").read_text())
@@ -65,6 +66,7 @@ def test_metrics_json_has_the_issues_structure(rep):
         assert all(isinstance(c["holds"], bool) for c in m[key]), key
 
 
+@pytest.mark.slow
 def test_the_paper_outcome_is_reproduced(rep):
     """The physics the report claims, checked on the numbers themselves (not on the verdicts): the
     LUT's peak, every calibration completed and within 0.5 deg of the model, the 3 and 6 mm steps
@@ -86,6 +88,7 @@ def test_the_paper_outcome_is_reproduced(rep):
     assert m["fig13"]["lut"]["transient_max_err_deg"] < 9.0 and m["fig13"]["lut"]["steady_max_err_deg"] < 3.0
 
 
+@pytest.mark.slow
 def test_the_rotating_vector_beside_the_pulsating_runs(rep):
     """The rotating-vector variant of Figs. 11-13 (the paper's scenarios with the injection alone
     changed): with its table every run stable and within 1 deg at rest (measured 0.79, 0.20, 0.53
@@ -113,6 +116,7 @@ def test_the_rotating_vector_beside_the_pulsating_runs(rep):
     assert sum(c["holds"] for c in m["claims_beyond"]) == len(m["claims_beyond"]) - 1
 
 
+@pytest.mark.slow
 def test_polarity_detection(rep):
     """The start-up (control.mode = "startup") from 12 random positions over two periods on the
     saturated ecce2010: the polarity right in every run, both decisions taken (estimate kept and
@@ -133,6 +137,7 @@ def test_polarity_detection(rep):
     assert f"{su['n']}/{su['n']}" in su_claims[0]["ours"]
 
 
+@pytest.mark.slow
 def test_beyond_claims_refuse_bad_evidence(rep):
     """A wrong polarity, a fault or a large motion, and a rotating run beside its model, each turn
     their claim to 'no'; a rotating 6 mm run that oscillates with and without dead time turns its
@@ -156,6 +161,7 @@ def test_beyond_claims_refuse_bad_evidence(rep):
             assert holds, k
 
 
+@pytest.mark.slow
 def test_claims_follow_the_runs_metrics(rep):
     """Each step claim's verdict is the run's own 'stable' against the paper's outcome, and the
     stdout summary counts the same."""
@@ -175,6 +181,7 @@ def test_claims_follow_the_runs_metrics(rep):
     assert f"(the rotating vector, the start-up): {held} of {len(m['claims_beyond'])} hold" in stdout
 
 
+@pytest.mark.slow
 def test_claims_refuse_invalid_evidence(rep):
     """A calibration that did not complete, a run that tripped on its set-up, or a dead-time-free
     run with a much smaller cycle does not count as evidence."""
@@ -195,6 +202,7 @@ def test_claims_refuse_invalid_evidence(rep):
     assert not dt["holds"]
 
 
+@pytest.mark.slow
 def test_runs_are_on_the_switching_inverter_with_dead_time(rep):
     out, _, _ = rep
     files = sorted((out / "scenarios").glob("*.toml"))
@@ -212,6 +220,7 @@ def test_runs_are_on_the_switching_inverter_with_dead_time(rep):
             assert sc["injection"].get("shape", "pulsating") == "pulsating", f.name
 
 
+@pytest.mark.slow
 def test_a_scenario_written_runs_again(rep):
     """The report's scenario files are runnable: the same metrics as the reproduction's run."""
     import linsense
@@ -229,6 +238,7 @@ def test_a_scenario_written_runs_again(rep):
     assert r.metrics["fault"] == "none" and moved == pytest.approx(su["motion_max_mm"], abs=1e-4)
 
 
+@pytest.mark.slow
 def test_report_is_one_self_contained_page(rep):
     out, _, m = rep
     html = (out / "report.html").read_text()
@@ -250,6 +260,7 @@ def _chromium() -> str | None:
     return shutil.which("chromium") or shutil.which("chromium-browser")
 
 
+@pytest.mark.slow
 def test_report_renders_in_headless_chromium(rep, tmp_path):
     """Chromium (installed by `make tools`) renders the page: the DOM has the claims table and the
     screenshot is not blank."""
@@ -290,6 +301,7 @@ def test_paper_scenario_refuses_another_inverter(tmp_path, monkeypatch):
         runs.paper_scenario("x.toml")
 
 
+@pytest.mark.slow
 def test_byte_identical_apart_from_timing(rep, tmp_path):
     """A second run of the same command writes the same bytes in every file but timing.json (the
     wall-clock times: docs/cli.md), the stability map's table and the report included."""
@@ -304,6 +316,7 @@ def test_byte_identical_apart_from_timing(rep, tmp_path):
     assert "wall_s" not in (rep[0] / "metrics.json").read_text()
 
 
+@pytest.mark.slow
 def test_a_motor_file_runs_every_stage(rep, tmp_path):
     """--motor with a file (the ecce2010 motor as a table, a path without the .toml suffix): every
     stage uses it, and the verdicts are those of the preset."""

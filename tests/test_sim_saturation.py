@@ -423,6 +423,7 @@ def test_calibrate_cli_saturated(tmp_path, run_cli):
 
 
 # ---------------------------------------------------------------------- the bar
+@pytest.mark.slow
 def test_calibrated_lut_against_load_agrees_with_fea():
     """Issue 14: on the saturated plant of the tubular motor with a thin back iron (FEA tables at
     0..2 A of i_q), the firmware's calibration at 0, 20 and 40 N (0, 0.73, 1.47 A) on the
