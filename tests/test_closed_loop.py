@@ -23,9 +23,8 @@ def _hold(x_mm: float, fidelity: str, seconds: float = 3.0):
             "inverter": {"fidelity": fidelity},
             "initial": {"position_mm": x_mm},
             "reference": {"type": "hold"},
-            # the former slow loops: this test measures the estimator under dead time, which the
-            # default design's faster loops (8 Hz, 20 1/s) make cycle by 0.03-0.07 mm at 2 of the 8
-            # positions (docs/tuning.md, "Where the design stands")
+            # the former slow loops (README.md's claim; the default design's faster loops, 8 Hz and
+            # 20 1/s, hold as well: tests/test_claims.py::test_hold_table)
             "controller": {"speed_bandwidth_hz": 4.0, "kp_x": 10.0},
         }
     )
@@ -50,15 +49,16 @@ def test_sensorless_hold_switching_no_limit_cycle(x_mm):
 
 def test_average_model_within_what_it_says():
     """The average inverter model does not reach the 0.2 deg agreement on the bias nor every
-    limit-cycle verdict at this margin (measured: up to 0.80 deg apart; with the designed mechanical
-    observer and its load estimate fed forward, cycles up to 0.16 mm at holds where the switching
-    model is still to 0.001 mm); it says so in metrics.json, and stays within what it says."""
+    limit-cycle verdict at this margin; it says so in metrics.json, and stays within what it says
+    (docs/simulator.md, "Fidelity"): its bias within about 0.8 deg of the switching model's, its
+    cycles below 0.1 mm (measured: 0.77 deg apart, cycles up to 0.095 mm at holds where the
+    switching model is still to 0.001 mm)."""
     for x_mm in POSITIONS_MM:
         ms, bs, _, _ = _hold(x_mm, "switching")
         ma, ba, _, ppa = _hold(x_mm, "average")
         assert "fidelity_note" in ma and "switching" in ma["fidelity_note"] and "fidelity_note" not in ms
-        assert abs(ba - bs) <= 1.0 and abs(ba) <= 1.0, (x_mm, ba, bs)
-        assert ppa <= 0.2, (x_mm, ppa)
+        assert abs(ba - bs) <= 0.8 and abs(ba) <= 1.0, (x_mm, ba, bs)
+        assert ppa <= 0.1, (x_mm, ppa)
 
 
 @pytest.mark.parametrize("load", [0.0, 20.0, 40.0])
