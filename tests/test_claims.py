@@ -71,6 +71,8 @@ Each line: the claim [where it is written]: the test that asserts it.
 * the examples' text: Fig. 13's sag 16 / 0.2 mm, 1.33 / 0.20 deg (average 1.13 / 0.20), the steps'
   19.5 deg bias, 0.21 mm cycle, 2.2 mm offset; tables 17 deg apart [simulator.md "Paper experiments",
   "Numerics", "Calibration"]: here: test_simulator_text_numbers
+* the built-in studies' summary lines (runs, stable, refused, bias, error) [sweeps.md "Built-in
+  studies"]: here: test_built_in_studies
 * the metrics' definitions [simulator.md "Metrics"]:
   test_sim_metrics.py::test_metrics_equal_the_reference_from_the_docs (tests/ref_metrics.py)
 """
@@ -328,3 +330,35 @@ def test_simulator_text_numbers():
     m = load_motor("ecce2010")
     pulsating, elliptical = (build_lut(m, 3600, f_inj=1000.0, quad=q).values for q in (0.0, 0.9))
     assert shown(np.degrees(np.abs(pulsating - elliptical)).max(), "17")
+
+
+#: docs/sweeps.md, "Built-in studies": each study's summary line, as the docs write it
+STUDY_LINES = {
+    "stability_map": "60 runs: 33 stable, 27 not, 0 refused; control.mode = sensorless_lut: 30/30 stable; "
+                     "control.mode = sensorless_nolut: 3/30 stable",
+    "stability_map_dm0": "48 runs: 43 stable, 5 not, 0 refused; control.mode = sensorless_lut: 24/24 stable; "
+                         "control.mode = sensorless_nolut: 19/24 stable",
+    "lut_robustness": "48 runs: 47 stable, 0 not, 1 refused; max |bias| 4.64 deg, "
+                      "max steady |error| 4.94 deg over ",
+    "injection": "21 runs: 18 stable, 0 not, 3 refused; lowest steady |error| 0.235 deg at "
+                 "injection.amplitude = 16, injection.frequency = 500, HF current 1.12 A",
+}
+
+
+@pytest.mark.slow
+def test_built_in_studies():
+    """docs/sweeps.md's summary line of each built-in study is the sweep's today (two worker
+    threads, about 8 s); with the LUT the stability map's cycles stay within 0.02 mm."""
+    from linsense.sweep import load_sweep
+    from linsense.sweep.engine import sweep
+    from linsense.sweep.studies import summary_line
+
+    docs = " ".join((ROOT / "docs" / "sweeps.md").read_text().split())
+    for name, want in STUDY_LINES.items():
+        sw = load_sweep(ROOT / "examples" / "sweeps" / f"{name}.toml")
+        df = sweep(sw, workers=2)
+        line = summary_line(sw.spec.sweep.study, df, [a.key for a in sw.spec.axis])
+        assert line.startswith(want), (name, line)
+        assert want.split(";")[0] in docs and " ".join(want.split()) in docs, name
+        if name == "stability_map":
+            assert df[df["control.mode"] == "sensorless_lut"]["limit_cycle_mm"].max() <= 0.02

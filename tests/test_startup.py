@@ -36,6 +36,7 @@ def test_polarity_right_200_starts_with_and_without_load(runs):
         assert 40 <= flips <= 160, (load, flips)
 
 
+@pytest.mark.slow
 def test_motion_during_detection(runs):
     """The mover moves at most 0.1 mm while the drive detects with the 20 N load (measured 0 mm:
     the friction holds it, the pulses' force stays below its margin). Without load and without any
