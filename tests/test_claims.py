@@ -73,6 +73,9 @@ Each line: the claim [where it is written]: the test that asserts it.
   "Numerics", "Calibration"]: here: test_simulator_text_numbers
 * the built-in studies' summary lines (runs, stable, refused, bias, error) [sweeps.md "Built-in
   studies"]: here: test_built_in_studies
+* the identification's accuracy table (3 motors, seed 2) and the example file's t = -316, L2 2.07 %
+  high, 1.5 % reciprocity, 13 % without R, 17 ohm [identify.md]:
+  test_identify.py::test_the_documented_accuracy_table, ::test_the_documented_numbers_of_the_example_file
 * the metrics' definitions [simulator.md "Metrics"]:
   test_sim_metrics.py::test_metrics_equal_the_reference_from_the_docs (tests/ref_metrics.py)
 """
