@@ -53,6 +53,13 @@ Each line: the claim [where it is written]: the test that asserts it.
   test_reproduce.py::test_the_documented_numbers
 * the design's rules for ecce2010 (1 kHz, 12 V, 250 Hz, 300 Hz, 4.69, 15/40 Hz, 1 ms, 8 Hz, 20 1/s, 1200
   V/s, 0.4 A at 55 Hz) [tuning.md:43-56]: here: test_design_table
+* the injection amplitude's numbers (0.92 V, 0.041, 23 V, 12 V, 1.9) and the limits (0.25 m/s, 44.9
+  rad/s, 0.4 m/s, 56.1 rad/s, 4.2 A, 4.19 m/s^2) [tuning.md "The injection amplitude", "The limits"]:
+  here: test_design_table
+* the calibration mode against the resistance-aware LUT within 0.02 deg [README.md:157; theory.md:199]:
+  csrc/tests/test_drive.c test_calibration (measured 0.010)
+* FEA: air-cored coils 0.18 % (README's 0.2 %), mesh convergence 0.40 % [fea.md]:
+  test_fea.py::test_air_cored_coils_match_maxwell, ::test_mesh_convergence
 * the start-up's design for ecce2010 (37.4 V, 7 periods, 31 mA, 16 pairs, 12.6 mA, 1.56 ms, 70/12/30 ms)
   [tuning.md:482-490]: here: test_startup_design_table
 * the example scenarios' table (16 rows) [simulator.md "Example scenarios"]: here:
@@ -158,7 +165,7 @@ def test_design_table():
     """docs/tuning.md's table of the design's rules, the column for ecce2010 at 16 kHz and 72 V."""
     from linsense.tune.design import DriveData, design
 
-    dz = design(load_motor("ecce2010"), DriveData())
+    dz = design(load_motor("ecce2010"), DriveData(), analyse=False)
     assert dz.f_inj == 1000.0 and dz.v_inj == 12.0 and shown(dz.i_hf, "0.51")
     assert shown(dz.quad * dz.v_inj, "10.8") and dz.current_bw == 250.0
     assert (dz.demod_lpf, dz.demod_notch) == (300.0, 2000.0) and shown(dz.demod_gain, "4.69")
@@ -170,6 +177,15 @@ def test_design_table():
     assert dz.observer_bw == dz.demod_lpf / 20 and dz.observer_bw_pll == dz.demod_lpf / 7.5
     assert dz.speed_bw == dz.demod_lpf / 37.5 and dz.kp_x == pytest.approx(2 * math.pi * dz.speed_bw / 2.5)
     assert dz.dither_a == pytest.approx(0.16 * 2.5) and dz.dither_hz == pytest.approx(0.055 * dz.f_inj)
+    # "The injection amplitude": dV 0.92 V, s_min 0.041, 23 V wanted, 12 V (V_dc / 6) taken, ratio 1.9
+    d_v = 0.8e-6 * 16000.0 * 72.0
+    assert shown(d_v, "0.92") and shown(dz.s_min, "0.041") and shown(d_v / dz.s_min, "23")
+    assert dz.v_inj == 72.0 / 6 and shown(dz.dead_time_ratio, "1.9")
+    # "The limits" at v_max 0.2 m/s: cap 0.25 m/s, trip 44.9 rad/s (0.4 m/s), clamp 56.1 rad/s, 4.2 A,
+    # a step's 4.19 m/s^2
+    assert dz.v_cap == 0.25 and shown(dz.omega_trip, "44.9")
+    assert shown(dz.omega_trip * 0.056 / (2 * math.pi), "0.4")
+    assert shown(dz.omega_obs, "56.1") and shown(dz.i_trip, "4.2") and shown(dz.a_step, "4.19")
 
 
 def test_startup_design_table():
@@ -179,7 +195,7 @@ def test_startup_design_table():
     from linsense.tune.startup import design_startup
 
     m = load_motor("ecce2010")
-    dz = design(m, DriveData())
+    dz = design(m, DriveData(), analyse=False)
     su = design_startup(m, v_dc=72.0, f_pwm=16000.0, i_max=2.5, observer_bw=dz.observer_bw_pll,
                         v_inj=dz.v_inj, polarity=0.0131)
     assert shown(su.v_pulse, "37.4") and su.t_pulse * 16000.0 == 7 and shown(su.t_pulse * 1e3, "0.44")
