@@ -24,14 +24,42 @@ from linsense.errors import InputError
 from linsense.io import TIMING_KEYS
 from linsense.sim.metrics import REQUIRED_KEYS
 
+MOTORS = Path(__file__).resolve().parents[1] / "examples" / "motors"
+
 
 @pytest.fixture(scope="module")
-def rep(tmp_path_factory):
-    out = tmp_path_factory.mktemp("reproduce") / "out"
-    p = subprocess.run([sys.executable, "-m", "linsense", "reproduce", "--quick", "--out", str(out)],
-                       capture_output=True, text=True, timeout=600)
-    assert p.returncode == 0, p.stderr
-    return out, p.stdout, json.loads((out / "metrics.json").read_text())
+def started(tmp_path_factory):
+    """The module's three `reproduce --quick` runs, started together (a 2-core machine runs them in
+    about the time of two): the one most tests read, the same again (test_byte_identical_...), and
+    one with the ecce2010 motor as a table file (test_a_motor_file_...). name -> (process, out)."""
+    base = tmp_path_factory.mktemp("reproduce")
+    mot = base / "mot"
+    mot.write_text((MOTORS / "tabulated.toml").read_text().replace('"ecce2010_table.csv"',
+                                                                    f'"{MOTORS / "ecce2010_table.csv"}"'))
+    cmd = [sys.executable, "-m", "linsense", "reproduce", "--quick"]
+    args = {"preset": ["--out", str(base / "out")], "again": ["--out", str(base / "again" / "out")],
+            "motor": ["--motor", str(mot), "--out", str(base / "o")]}
+    procs = {k: (subprocess.Popen([*cmd, *a], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True),
+                 Path(a[-1])) for k, a in args.items()}
+    yield {**procs, "mot": mot}
+    for name in args:
+        if procs[name][0].poll() is None:
+            procs[name][0].kill()
+            procs[name][0].wait()
+
+
+def finished(started, name: str) -> tuple[Path, str]:
+    """The output folder and stdout of the run ``name``, which must have succeeded."""
+    proc, out = started[name]
+    stdout, stderr = proc.communicate(timeout=600)
+    assert proc.returncode == 0, stderr[-3000:]
+    return out, stdout
+
+
+@pytest.fixture(scope="module")
+def rep(started):
+    out, stdout = finished(started, "preset")
+    return out, stdout, json.loads((out / "metrics.json").read_text())
 
 
 RUNS = {"fig11": ("lut", "nolut"), "fig12": ("lut", "nolut", "nolut_no_dead_time"), "fig13": ("lut", "nolut")}
@@ -308,13 +336,10 @@ def test_paper_scenario_refuses_another_inverter(tmp_path, monkeypatch):
 
 
 @pytest.mark.slow
-def test_byte_identical_apart_from_timing(rep, tmp_path):
+def test_byte_identical_apart_from_timing(rep, started):
     """A second run of the same command writes the same bytes in every file but timing.json (the
     wall-clock times: docs/cli.md), the stability map's table and the report included."""
-    out2 = tmp_path / "out"
-    p = subprocess.run([sys.executable, "-m", "linsense", "reproduce", "--quick", "--out", str(out2)],
-                       capture_output=True, text=True, timeout=600)
-    assert p.returncode == 0, p.stderr
+    out2, _ = finished(started, "again")
     files = sorted(f.relative_to(rep[0]) for f in rep[0].rglob("*") if f.is_file())
     assert files == sorted(f.relative_to(out2) for f in out2.rglob("*") if f.is_file())
     differ = [str(f) for f in files if (rep[0] / f).read_bytes() != (out2 / f).read_bytes()]
@@ -323,17 +348,11 @@ def test_byte_identical_apart_from_timing(rep, tmp_path):
 
 
 @pytest.mark.slow
-def test_a_motor_file_runs_every_stage(rep, tmp_path):
+def test_a_motor_file_runs_every_stage(rep, started):
     """--motor with a file (the ecce2010 motor as a table, a path without the .toml suffix): every
     stage uses it, and the verdicts are those of the preset."""
-    src = Path(__file__).resolve().parents[1] / "examples" / "motors"
-    mot = tmp_path / "mot"
-    mot.write_text((src / "tabulated.toml").read_text().replace('"ecce2010_table.csv"',
-                                                                 f'"{src / "ecce2010_table.csv"}"'))
-    out = tmp_path / "o"
-    cmd = [sys.executable, "-m", "linsense", "reproduce", "--quick", "--motor", str(mot), "--out", str(out)]
-    p = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
-    assert p.returncode == 0, p.stderr[-3000:]
+    out, _ = finished(started, "motor")
+    mot = started["mot"]
     m = json.loads((out / "metrics.json").read_text())
     assert m["motor"] == "tabulated_example"
     assert [c["holds"] for c in m["claims"]] == [c["holds"] for c in rep[2]["claims"]]
