@@ -60,6 +60,11 @@ Each line: the claim [where it is written]: the test that asserts it.
   csrc/tests/test_drive.c test_calibration (measured 0.010)
 * FEA: air-cored coils 0.18 % (README's 0.2 %), mesh convergence 0.40 % [fea.md]:
   test_fea.py::test_air_cored_coils_match_maxwell, ::test_mesh_convergence
+* the observer loop's margins, 46.7 deg and 10.9 dB at 46 Hz [tuning.md "The observer"]: here:
+  test_observer_margins
+* "Where the design stands" (bandwidths, steps, stiffness, holds, failed checks per test motor)
+  [tuning.md]: make bench's (tools/bench_tune.py), not pytest; checked against its output on this
+  commit
 * the start-up's design for ecce2010 (37.4 V, 7 periods, 31 mA, 16 pairs, 12.6 mA, 1.56 ms, 70/12/30 ms)
   [tuning.md:482-490]: here: test_startup_design_table
 * the example scenarios' table (16 rows) [simulator.md "Example scenarios"]: here:
@@ -394,3 +399,14 @@ def test_built_in_studies():
         assert want.split(";")[0] in docs and " ".join(want.split()) in docs, name
         if name == "stability_map":
             assert df[df["control.mode"] == "sensorless_lut"]["limit_cycle_mm"].max() <= 0.02
+
+
+def test_observer_margins():
+    """docs/tuning.md, "The observer": the observer loop's margins for ecce2010 (scheduled, k_e = 1)
+    are 46.7 deg and 10.9 dB at 46 Hz."""
+    from linsense.tune.design import DriveData, design
+
+    dz = design(load_motor("ecce2010"), DriveData())
+    loop = dz.margins["observer loop (scheduled, k_e = 1.00)"]
+    assert shown(loop["pm_deg"], "46.7") and shown(loop["gm_up_db"], "10.9")
+    assert shown(loop["crossover_hz"], "46")
