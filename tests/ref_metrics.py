@@ -30,7 +30,9 @@ The documented definitions, as this module reads them (an electrical degree is
   ``max(0, max(s (x_far - x_to)) - max(0, s offset))`` with ``s`` the move's sign and ``x_far`` the
   block's extreme in that direction (0 for a move of no length); ``reached``: the closest approach
   to ``x_to`` (0 for a block whose range holds it) is within half the move and within
-  ``bound_deg``; ``settling_time_s``: from ``t0`` (0 and the target without moves), the time of
+  ``bound_deg`` (not reached when no sample follows the move's start: linsense.sim.metrics says
+  reached there, the one disagreement: test_sim_metrics.py::test_reached_needs_a_sample_after_the_move);
+  ``settling_time_s``: from ``t0`` (0 and the target without moves), the time of
   the first sample after the last one whose block leaves ``x_to +- settling_band`` (0 if none
   does; None if the last one does).
 * Verdict, in this order: a fault; ``not reached`` (the last move starts at or after the run's end,
@@ -175,13 +177,12 @@ def compute_metrics_ref(arrays: dict, *, fault: int, steps_done: int, f_pwm: flo
             steady = max(0.0, s_dir * offset) if offset is not None else 0.0
             overshoot = max(0.0, beyond - steady)
         half = 0.5 * abs(x_to - x_from)
-        if half > 0.0 and after:
+        if half > 0.0:  # (no sample from the move's start on: it never came anywhere)
             def gap(p) -> float:
                 lo, hi, _ = p
                 return 0.0 if lo <= x_to <= hi else min(abs(lo - x_to), abs(hi - x_to))
 
-            closest = min(gap(s["pos"]) for s in after)
-            reached = closest * deg <= min(half * deg, bound_deg)
+            reached = bool(after) and min(gap(s["pos"]) for s in after) * deg <= min(half * deg, bound_deg)
     settle_t = None
     if after:
         band = settling_band_deg / deg
