@@ -1,53 +1,102 @@
-"""The first, mask-based implementation of ``compute_metrics`` (linsense 0.x, before the sweep made
-its cost matter): kept as the reference the faster one in linsense.sim.metrics is tested against
-(tests/test_sim_metrics.py, random runs with faults, non-finite samples and moves). Its bounds
-became electrical degrees with the fast one's (issue 22): the pole pitch converts them, and the
-position metrics are given in degrees beside mm."""
+"""A reference for ``linsense.sim.metrics.compute_metrics``, written from docs/simulator.md
+("Metrics (metrics.json)" and "Block statistics"), not from the code it checks.
+
+It shares nothing with ``linsense.sim.metrics``: no import from it, its own fault names (read from
+the C headers the docs name, ls_protect.h / ls_drive.h / ls_sim.h), and a different way to the same
+numbers: each window is a boolean selection by time over a list of per-sample records, each
+statistic a plain reduction over the samples it selects. tests/test_sim_metrics.py compares the two
+on hundreds of random runs (steps, moves, faults, NaN and inf samples, blocks, windows longer than
+the run).
+
+The documented definitions, as this module reads them (an electrical degree is
+``360 / pole_pitch`` per metre; errors are ``theta_err`` in degrees; positions the true position):
+
+* Samples: when a fault stopped the run, the last sample (the state that tripped) is left out of
+  every statistic; so is every sample from the first non-finite time on. A sample's error is its
+  block envelope ``max(|err_min|, |err_max|)`` (the point value without blocks), its position the
+  block's ``[x_min, x_max]`` and mean ``x_mean`` (the point value ``x`` without blocks); a sample
+  whose error (position) is not finite has none.
+* ``t_end``: the time of the last sample kept (0 without one). Windows are half-open in time
+  where they end before the run does: the transient window of a move is ``[t0, t1 + settle_s)``;
+  the end window ``[t_end - final_window_s, t_end]``; the error windows start at ``convergence_s``
+  and the last move's at its start ``t0`` (a sample at exactly a window's start belongs to it).
+* ``max_abs_err_deg``: max error over every sample; ``transient_max_err_deg`` /
+  ``steady_max_err_deg``: over the samples from ``convergence_s`` on, inside / outside every
+  transient window; ``bias_deg``: mean of ``err_mean`` over the end window's samples with an
+  error. ``None`` without an active observer or without a sample.
+* End window: ``limit_cycle`` = max(x_max) - min(x_min); ``final_error`` = max |x_min|, |x_max| -
+  target; ``final_offset`` = mean(x_mean - target) (samples with a position).
+* Last move ``(t0, t1, x_from, x_to)``, samples from ``t0`` with a position: ``overshoot`` =
+  ``max(0, max(s (x_far - x_to)) - max(0, s offset))`` with ``s`` the move's sign and ``x_far`` the
+  block's extreme in that direction (0 for a move of no length); ``reached``: the closest approach
+  to ``x_to`` (0 for a block whose range holds it) is within half the move and within
+  ``bound_deg`` (not reached when no sample follows the move's start: linsense.sim.metrics says
+  reached there, the one disagreement: test_sim_metrics.py::test_reached_needs_a_sample_after_the_move);
+  ``settling_time_s``: from ``t0`` (0 and the target without moves), the time of
+  the first sample after the last one whose block leaves ``x_to +- settling_band`` (0 if none
+  does; None if the last one does).
+* Verdict, in this order: a fault; ``not reached`` (the last move starts at or after the run's end,
+  ``min(steps / f_pwm, t[-1])`` with a fault); ``too short`` (the run is shorter than the end
+  window, or the end window starts before the last move ends); a non-finite position anywhere;
+  the target never approached; the end window beyond ``bound_deg``; a limit cycle beyond
+  ``settle_band_deg``. ``accurate``: stable and ``final_error <= tolerance_deg``.
+* ``final_position_mm``: the point ``x`` of the last recorded sample whose position is finite
+  (the tripped one included: "x at the last recorded sample", and never NaN).
+* Every float is rounded (6 decimals, times 9, the realtime factor 2); non-finite -> None.
+"""
 
 from __future__ import annotations
 
 import math
+import re
+from pathlib import Path
 
 import numpy as np
 
-from linsense.sim.metrics import fault_reason
+_INCLUDE = Path(__file__).resolve().parents[1] / "csrc" / "include" / "linsense"
+#: the fault reasons in the order docs/simulator.md lists them, and the header macro of each
+_DOC_FAULTS = ("overcurrent", "undervoltage", "overvoltage", "observer", "overspeed", "nonfinite",
+               "config", "encoder", "travel", "diverged")
 
 
-def _fmax(a: np.ndarray) -> float | None:
-    a = a[np.isfinite(a)]
-    return float(np.max(a)) if a.size else None
+def _fault_bits() -> list[tuple[int, str]]:
+    """(bit, reason) for each documented reason, the bits read from the C headers."""
+    text = "".join((_INCLUDE / h).read_text() for h in ("ls_protect.h", "ls_drive.h", "ls_sim.h"))
+    found = re.finditer(r"#define LS_(?:SIM_)?FAULT_(\w+)\s+0x([0-9a-fA-F]+)u", text)
+    bits = {m[1].lower(): int(m[2], 16) for m in found}
+    return [(bits[name], name) for name in _DOC_FAULTS]
 
 
-def _round(v: float | None, nd: int = 6) -> float | None:
-    return None if v is None or not math.isfinite(v) else round(float(v), nd)
+FAULTS = _fault_bits()
 
 
-def transient_mask(t: np.ndarray, moves, settle_s: float) -> np.ndarray:
-    """True while the reference moves or within ``settle_s`` after a step or the end of a move."""
-    m = np.zeros(t.shape, dtype=bool)
-    for t0, t1, _, _ in moves:
-        m |= (t >= t0) & (t < t1 + settle_s)
-    return m
+def fault_text(bits: int) -> str:
+    """``none``, or the documented reasons of the set bits joined by ``+`` (any other bits in hex)."""
+    if bits == 0:
+        return "none"
+    names = [name for bit, name in FAULTS if bits & bit]
+    known = 0
+    for bit, _ in FAULTS:
+        known |= bit
+    if bits & ~known:
+        names.append(hex(bits & ~known))
+    return "+".join(names)
 
 
-def settling_time(t: np.ndarray, x: np.ndarray, x_to: float, t0: float, band: float,
-                  x_hi: np.ndarray | None = None) -> float | None:
-    """Time (s) from ``t0`` after which ``|x - x_to| <= band`` holds to the end; None if it does
-    not hold at the last sample. With ``x_hi``, ``x`` and ``x_hi`` are each sample's block minimum
-    and maximum (the time then has the resolution of a block)."""
-    sel = t >= t0
-    if not np.any(sel):
+def _num(v, nd: int = 6):
+    if v is None:
         return None
-    dev = np.abs(x[sel] - x_to)
-    if x_hi is not None:
-        dev = np.maximum(dev, np.abs(x_hi[sel] - x_to))
-    out = dev > band
-    if out[-1]:
-        return None
-    if not np.any(out):
-        return 0.0
-    last_out = np.flatnonzero(out)[-1]
-    return float(t[sel][last_out + 1] - t0)
+    v = float(v)
+    return round(v, nd) if math.isfinite(v) else None
+
+
+def _max(values: list[float]) -> float | None:
+    values = [v for v in values if math.isfinite(v)]
+    return max(values) if values else None
+
+
+def _mean(values: list[float]) -> float | None:
+    return float(np.mean(values)) if values else None
 
 
 def compute_metrics_ref(arrays: dict, *, fault: int, steps_done: int, f_pwm: float, moves, wall_s: float,
@@ -55,158 +104,176 @@ def compute_metrics_ref(arrays: dict, *, fault: int, steps_done: int, f_pwm: flo
                         tolerance_deg: float, bound_deg: float, settle_band_deg: float,
                         settling_band_deg: float, final_window_s: float, x_target: float,
                         x_start: float) -> dict:
-    """Metrics of a run. ``x_target`` (m) is the last commanded position, ``x_start`` (m) the initial
-    one; ``moves`` the planned moves ``(t0, t1, x_from, x_to)``. Definitions: docs/simulator.md."""
-    deg_per_m = 360.0 / pole_pitch
-    t = arrays["t"]
-    # each sample's block: lowest, highest and mean value (the point value itself without blocks)
-    x = arrays.get("x_mean", arrays.get("x"))
-    x_lo, x_hi = arrays.get("x_min", x), arrays.get("x_max", x)
-    e_pt = arrays.get("theta_err", arrays.get("err_mean"))
-    e_lo = np.degrees(arrays.get("err_min", e_pt))
-    e_hi = np.degrees(arrays.get("err_max", e_pt))
-    err_signed = np.degrees(arrays.get("err_mean", e_pt))
-    sim_s = steps_done / f_pwm
-    ok = np.isfinite(t)
-    if fault:
-        # the last sample is the state that tripped: keep it out of the error statistics
-        ok[-1:] = False
-    err = np.maximum(np.abs(e_lo), np.abs(e_hi))
-    good = ok & np.isfinite(err)
-    after = good & (t >= convergence_s)
-    tr = transient_mask(t, moves, settle_s)
-    t_end = float(t[ok][-1]) if np.any(ok) else 0.0
-    win = ok & (t >= t_end - final_window_s)
+    """The metrics of a run by the definitions above (the arguments of ``compute_metrics``)."""
+    deg = 360.0 / pole_pitch  # electrical degrees per metre
+    to_deg = 180.0 / math.pi  # (radians -> degrees: the constant np.degrees multiplies by)
+    blocks = "x_min" in arrays
+    t = [float(v) for v in arrays["t"]]
+    n = len(t)
+    x_pt = arrays["x"]
+    x_mean = arrays["x_mean"] if blocks else x_pt
+    x_min = arrays["x_min"] if blocks else x_pt
+    x_max = arrays["x_max"] if blocks else x_pt
+    e_pt = arrays["theta_err"] if "theta_err" in arrays else arrays["err_mean"]
+    e_min = arrays.get("err_min", e_pt)
+    e_max = arrays.get("err_max", e_pt)
+    e_mean = arrays.get("err_mean", e_pt)
+
+    # the samples kept: not the one that tripped, none from a non-finite time on
+    kept = n - 1 if (fault and n) else n
+    for i in range(kept):
+        if not math.isfinite(t[i]):
+            kept = i
+            break
+    samples = []  # one record per kept sample
+    for i in range(kept):
+        pos = (float(x_min[i]), float(x_max[i]), float(x_mean[i]))
+        lo, hi = float(e_min[i]), float(e_max[i])
+        err = max(abs(lo), abs(hi)) if math.isfinite(lo) and math.isfinite(hi) else math.nan
+        samples.append({
+            "t": t[i],
+            "pos": pos if all(math.isfinite(p) for p in pos) else None,
+            "err": err * to_deg if math.isfinite(err) else None,
+            "err_mean": float(e_mean[i]) * to_deg,
+        })
+    t_end = samples[-1]["t"] if samples else 0.0
+    in_end = [s for s in samples if s["t"] >= t_end - final_window_s]
+
+    # estimation errors
     if observer_active:
-        max_err = _fmax(err[good])
-        tr_err = _fmax(err[after & tr])
-        st_err = _fmax(err[after & ~tr])
-        bias = float(np.mean(err_signed[win & good])) if np.any(win & good) else None
+        def transient(tt: float) -> bool:
+            return any(t0 <= tt < t1 + settle_s for t0, t1, _, _ in moves)
+
+        errs = [s for s in samples if s["err"] is not None]
+        later = [s for s in errs if s["t"] >= convergence_s]
+        max_err = _max([s["err"] for s in errs])
+        tr_err = _max([s["err"] for s in later if transient(s["t"])])
+        st_err = _max([s["err"] for s in later if not transient(s["t"])])
+        bias = _mean([s["err_mean"] for s in in_end if s["err"] is not None])
     else:
         max_err = tr_err = st_err = bias = None
 
-    # the final window: limit cycle (peak to peak of the true position) and offset from the target
-    x_fin = np.isfinite(x_lo) & np.isfinite(x_hi) & np.isfinite(x)
-    x_last = arrays.get("x", x)  # the point value at the last sample (the block mean without it)
-    final_x = float(x_last[x_fin][-1]) if np.any(x_fin) else float("nan")
-    wsel = win & x_fin
-    xw = x[wsel]
-    limit_cycle = float(np.max(x_hi[wsel]) - np.min(x_lo[wsel])) if xw.size else None  # m
-    end_err = float(max(np.max(np.abs(x_lo[wsel] - x_target)),
-                        np.max(np.abs(x_hi[wsel] - x_target)))) if xw.size else None
-    offset = float(np.mean(xw - x_target)) if xw.size else None
-
-    # the last move: overshoot beyond the reference (not counting the steady offset), settling time,
-    # and whether the drive reached the reference region at all
-    overshoot, reached = 0.0, True
-    t_last = moves[-1][0] if moves else 0.0
-    if moves:
-        t0, _, x_from, x_to = moves[-1]
-        direction = np.sign(x_to - x_from)
-        sel = ok & (t >= t0) & x_fin
-        if direction != 0 and np.any(sel):
-            x_far = x_hi if direction > 0 else x_lo  # the block's extreme in the move's direction
-            peak = float(np.max(direction * (x_far[sel] - x_to)))
-            steady = max(0.0, float(direction) * offset) if offset is not None else 0.0
-            overshoot = max(0.0, peak - steady)
-        dist = abs(x_to - x_from)
-        if dist > 0 and np.any(sel):
-            # at some time the true position came within half the move (and the bound) of the target
-            # (a block whose range contains the target came within 0 of it)
-            gap = np.maximum(np.maximum(x_lo[sel] - x_to, x_to - x_hi[sel]), 0.0) if x_lo is not x_hi \
-                else np.abs(x[sel] - x_to)
-            closest = float(np.min(gap))
-            reached = closest * deg_per_m <= min(0.5 * dist * deg_per_m, bound_deg)
-    x_to = moves[-1][3] if moves else x_target
-    t_from = moves[-1][0] if moves else 0.0
-    s_sel = ok & x_fin
-    settle_t = settling_time(t[s_sel], x_lo[s_sel], x_to, t_from, settling_band_deg / deg_per_m,
-                             None if x_lo is x_hi else x_hi[s_sel])
-
-    def deg(v):
-        return None if v is None else v * deg_per_m
-
-    def mm(v):
-        return None if v is None else v * 1e3
-
-    # stability: no fault; finite; reached the reference region; bounded (end window within
-    # bound_deg of the target) and settled (true position varies by at most settle_band_deg there)
-    # (issue 23: the run holds its moves and an end window after them, or the verdict says why not)
-    verdict, why = "", ""
-    t_run = sim_s
-    if fault and t.size:
-        t_run = min(sim_s, float(t[-1]))
-    if moves and moves[-1][0] >= t_run:
-        reached, verdict = False, "not reached"
-        why = (f"the run ends at {t_run:.6g} s, before the commanded move at {moves[-1][0]:.6g} s "
-               f"(scenario.duration, reference.at)")
+    # the end window's positions
+    target = x_target
+    w = [s["pos"] for s in in_end if s["pos"] is not None]
+    if w:
+        limit_cycle = max(p[1] for p in w) - min(p[0] for p in w)
+        final_error = max(max(abs(p[0] - target), abs(p[1] - target)) for p in w)
+        offset = _mean([p[2] - target for p in w])
     else:
-        t_move = max([m[1] for m in moves] + [0.0])
-        if t_run < final_window_s or (moves and t_run - final_window_s < t_move):
-            verdict = "too short"
-            why = (f"the end window ({final_window_s:g} s, metrics.final_window_s) needs the run "
-                   f"({t_run:.6g} s) to last at least {t_move + final_window_s:.6g} s")
-            if moves:
-                why += f" (the last move ends at {t_move:.6g} s)"
-    reason = ""
+        limit_cycle = final_error = offset = None
+
+    # the last move
+    t_from = moves[-1][0] if moves else 0.0
+    x_to = moves[-1][3] if moves else x_target
+    after = [s for s in samples if s["t"] >= t_from and s["pos"] is not None]
+    overshoot, reached = 0.0, True
+    if moves:
+        x_from = moves[-1][2]
+        s_dir = 1.0 if x_to > x_from else (-1.0 if x_to < x_from else 0.0)
+        if s_dir != 0.0 and after:
+            far = [(p["pos"][1] if s_dir > 0 else p["pos"][0]) for p in after]
+            beyond = max(s_dir * (v - x_to) for v in far)
+            steady = max(0.0, s_dir * offset) if offset is not None else 0.0
+            overshoot = max(0.0, beyond - steady)
+        half = 0.5 * abs(x_to - x_from)
+        if half > 0.0:  # (no sample from the move's start on: it never came anywhere)
+            def gap(p) -> float:
+                lo, hi, _ = p
+                return 0.0 if lo <= x_to <= hi else min(abs(lo - x_to), abs(hi - x_to))
+
+            reached = bool(after) and min(gap(s["pos"]) for s in after) * deg <= min(half * deg, bound_deg)
+    settle_t = None
+    if after:
+        band = settling_band_deg / deg
+        outside = [k for k, s in enumerate(after)
+                   if abs(s["pos"][0] - x_to) > band or abs(s["pos"][1] - x_to) > band]
+        if not outside:
+            settle_t = 0.0
+        elif outside[-1] < len(after) - 1:
+            settle_t = after[outside[-1] + 1]["t"] - t_from
+
+    # the verdict
+    sim_s = steps_done / f_pwm
+    t_run = min(sim_s, t[-1]) if (fault and n) else sim_s
+    move_end = max([m[1] for m in moves], default=0.0)
+    all_finite = all(math.isfinite(float(a[i])) for a in (x_min, x_max, x_mean) for i in range(n))
+    verdict, reason = "", None
+    if moves and t_from >= t_run:
+        reached, verdict = False, "not reached"
+        judged = (f"the run ends at {t_run:.6g} s, before the commanded move at {t_from:.6g} s "
+                  f"(scenario.duration, reference.at)")
+    elif t_run < final_window_s or (moves and t_run - final_window_s < move_end):
+        verdict = "too short"
+        judged = (f"the end window ({final_window_s:g} s, metrics.final_window_s) needs the run "
+                  f"({t_run:.6g} s) to last at least {move_end + final_window_s:.6g} s")
+        if moves:
+            judged += f" (the last move ends at {move_end:.6g} s)"
     if fault:
-        reason = f"fault: {fault_reason(fault)}"
+        reason = f"fault: {fault_text(fault)}"
     elif verdict:
-        reason = f"{verdict}: {why}"
-    elif not np.all(x_fin):
+        reason = f"{verdict}: {judged}"
+    elif not all_finite:
         reason = "non-finite position"
     elif not reached:
         move = abs(moves[-1][3] - moves[-1][2])
         reason = (f"never reached the target: the true position came no closer than half the move "
-                  f"({deg(move):.3g} deg, {mm(move):.3g} mm)")
-    elif end_err is None:
+                  f"({move * deg:.3g} deg, {move * 1e3:.3g} mm)")
+    elif final_error is None:
         reason = "no samples in the end window"
-    elif deg(end_err) > bound_deg:
-        reason = (f"|x - target| reaches {deg(end_err):.3g} deg ({mm(end_err):.3g} mm) in the last "
-                  f"{final_window_s:g} s (bound {bound_deg:g} deg)")
-    elif deg(limit_cycle) > settle_band_deg:
-        reason = (f"not settled (limit cycle): x varies by {deg(limit_cycle):.3g} deg "
-                  f"({mm(limit_cycle):.3g} mm) in the last {final_window_s:g} s "
+    elif final_error * deg > bound_deg:
+        reason = (f"|x - target| reaches {final_error * deg:.3g} deg ({final_error * 1e3:.3g} mm) in the "
+                  f"last {final_window_s:g} s (bound {bound_deg:g} deg)")
+    elif limit_cycle * deg > settle_band_deg:
+        reason = (f"not settled (limit cycle): x varies by {limit_cycle * deg:.3g} deg "
+                  f"({limit_cycle * 1e3:.3g} mm) in the last {final_window_s:g} s "
                   f"(tolerance {settle_band_deg:g} deg)")
-    stable = reason == ""
+    stable = reason is None
     verdict = verdict or ("stable" if stable else "unstable")
-    rt = sim_s / wall_s if wall_s > 0 else None
+
+    # the last recorded sample with a finite position (the point value)
+    last_x = float("nan")
+    for i in range(n - 1, -1, -1):
+        if all(math.isfinite(float(a[i])) for a in (x_min, x_max, x_mean)):
+            last_x = float(x_pt[i])
+            break
+
+    def scaled(v, k):
+        return None if v is None else v * k
+
     return {
-        "stable": bool(stable),
+        "stable": stable,
         "verdict": verdict,
-        "max_abs_err_deg": _round(max_err),
-        "transient_max_err_deg": _round(tr_err),
-        "steady_max_err_deg": _round(st_err),
-        "bias_deg": _round(bias),
-        "limit_cycle_mm": _round(mm(limit_cycle)),
-        "limit_cycle_deg": _round(deg(limit_cycle)),
-        "settling_time_s": _round(settle_t),
-        "final_position_mm": _round(final_x * 1e3),
-        "overshoot_mm": _round(mm(overshoot)),
-        "overshoot_deg": _round(deg(overshoot)),
-        "fault": fault_reason(fault),
-        "sim_s": _round(sim_s, 9),
-        "wall_s": _round(wall_s, 6),
-        "realtime_factor": _round(rt, 2),
-        # the windows the figures above cover (s): the whole run for max_abs_err_deg; transient and
-        # steady from convergence_s on; bias and limit cycle over the end window
-        "max_abs_err_window_s": [0.0, _round(t_end, 9)],
-        "errors_from_s": _round(convergence_s, 9),
-        "final_window_s": [_round(max(0.0, t_end - final_window_s), 9), _round(t_end, 9)],
-        "settling_from_s": _round(t_last, 9),
-        # extras
+        "max_abs_err_deg": _num(max_err),
+        "transient_max_err_deg": _num(tr_err),
+        "steady_max_err_deg": _num(st_err),
+        "bias_deg": _num(bias),
+        "limit_cycle_mm": _num(scaled(limit_cycle, 1e3)),
+        "limit_cycle_deg": _num(scaled(limit_cycle, deg)),
+        "settling_time_s": _num(settle_t),
+        "final_position_mm": _num(last_x * 1e3),
+        "overshoot_mm": _num(overshoot * 1e3),
+        "overshoot_deg": _num(overshoot * deg),
+        "fault": fault_text(fault),
+        "sim_s": _num(sim_s, 9),
+        "wall_s": _num(wall_s, 6),
+        "realtime_factor": _num(sim_s / wall_s, 2) if wall_s > 0 else None,
+        "max_abs_err_window_s": [0.0, _num(t_end, 9)],
+        "errors_from_s": _num(convergence_s, 9),
+        "final_window_s": [_num(max(0.0, t_end - final_window_s), 9), _num(t_end, 9)],
+        "settling_from_s": _num(t_from, 9),
         "fault_bits": int(fault),
-        "fault_time_s": _round(float(t[-1]), 9) if fault and t.size else None,
-        "unstable_reason": reason or None,
-        "target_mm": _round(x_target * 1e3),
-        "start_mm": _round(x_start * 1e3),
-        "final_error_mm": _round(mm(end_err)),
-        "final_error_deg": _round(deg(end_err)),
-        "final_offset_mm": _round(mm(offset)),
-        "final_offset_deg": _round(deg(offset)),
+        "fault_time_s": _num(t[-1], 9) if (fault and n) else None,
+        "unstable_reason": reason,
+        "target_mm": _num(x_target * 1e3),
+        "start_mm": _num(x_start * 1e3),
+        "final_error_mm": _num(scaled(final_error, 1e3)),
+        "final_error_deg": _num(scaled(final_error, deg)),
+        "final_offset_mm": _num(scaled(offset, 1e3)),
+        "final_offset_deg": _num(scaled(offset, deg)),
         "reached": bool(reached),
-        "accurate": bool(stable and end_err is not None and deg(end_err) <= tolerance_deg),
+        "accurate": bool(stable and final_error is not None and final_error * deg <= tolerance_deg),
         "steps": int(steps_done),
-        "samples": int(t.size),
-        "pole_pitch_mm": _round(pole_pitch * 1e3),
+        "samples": n,
+        "pole_pitch_mm": _num(pole_pitch * 1e3),
     }

@@ -26,6 +26,17 @@ CLASS = ROOT / "examples" / "motors" / "class"
 DRIVES = tomllib.loads((CLASS / "drives.toml").read_text())
 CLASS_MOTORS = sorted(p.stem for p in CLASS.glob("*.toml") if p.stem in DRIVES)
 BAR_DEG = 0.3
+#: docs/simulator.md, "Calibration": every drive within 0.1 deg with the pulsating injection
+BAR_PULSATING_DEG = 0.1
+#: docs/simulator.md's table (max |measured - model LUT with R_s|, deg, 56 points, 0 N unless named):
+#: pulsating, the design's elliptical injection; each asserted at the two decimals written there
+TABLE = {"ecce2010": ("0.03", "0.22"), "ecce2010 20 N": ("0.04", "0.26"), "ecce2010 40 N": ("0.03", "0.30"),
+         "m100_edge": ("0.03", "0.17"), "m20_hv": ("0.02", "0.27"), "m30_low": ("0.01", "0.06"),
+         "m45_24v": ("0.02", "0.17"), "m60_pos20k": ("0.02", "0.11"), "m90_heavy": ("0.02", "0.11")}
+
+
+def _table(name: str, load: float, column: int) -> str:
+    return TABLE[name if load == 0.0 else f"{name} {load:g} N"][column]
 
 #: measured above the bar at the time of writing, for reasons outside the calibration (its timings
 #: follow the design; see the report of issue 22 item 6 and docs/simulator.md, "Calibration"):
@@ -236,13 +247,15 @@ def test_ecce2010_design_drive_within_the_bar(load):
     assert m["fidelity"] == "switching" and m["dead_time_s"] > 0 and m["injection_quad"] == DriveData().quad
     assert cal.completed, m
     assert m["max_diff_deg"] <= BAR_DEG
+    assert f"{m['max_diff_deg']:.2f}" == _table("ecce2010", load, 1), m["max_diff_deg"]
 
 
 @pytest.mark.parametrize("load", [0.0, 20.0, 40.0])
 def test_ecce2010_pulsating_within_the_bar(load):
-    """The same with the paper's pulsating injection (kappa 0)."""
+    """The same with the paper's pulsating injection (kappa 0): within 0.1 deg."""
     cal = calibrate("ecce2010", 56, load, quad=0.0)
-    assert cal.completed and cal.metrics["max_diff_deg"] <= BAR_DEG, cal.metrics
+    assert cal.completed and cal.metrics["max_diff_deg"] <= BAR_PULSATING_DEG, cal.metrics
+    assert f"{cal.metrics['max_diff_deg']:.2f}" == _table("ecce2010", load, 0), cal.metrics["max_diff_deg"]
 
 
 @pytest.mark.parametrize("name", _class_params(ABOVE_BAR_ELLIPTICAL))
@@ -255,6 +268,7 @@ def test_class_motor_design_drive_within_the_bar(name):
     assert m["dead_time_s"] == _drive(name)["dead_time"] and m["f_pwm_hz"] == _drive(name)["f_pwm"]
     assert cal.completed, m
     assert m["max_diff_deg"] <= BAR_DEG
+    assert f"{m['max_diff_deg']:.2f}" == _table(name, 0.0, 1), m["max_diff_deg"]
 
 
 @pytest.mark.parametrize("name", _class_params(ABOVE_BAR_PULSATING))
@@ -263,4 +277,5 @@ def test_class_motor_pulsating_within_the_bar(name):
     class (before they followed the design, two of the six did not complete)."""
     cal = calibrate(str(CLASS / f"{name}.toml"), 56, 0.0, quad=0.0, drive=_drive(name))
     assert cal.completed, cal.metrics
-    assert cal.metrics["max_diff_deg"] <= BAR_DEG
+    assert cal.metrics["max_diff_deg"] <= BAR_PULSATING_DEG
+    assert f"{cal.metrics['max_diff_deg']:.2f}" == _table(name, 0.0, 0), cal.metrics["max_diff_deg"]

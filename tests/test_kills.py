@@ -205,6 +205,7 @@ def test_reproduce_keeps_hostile_motor_names_inside_out(tmp_path, run_cli, toml_
 
 
 # ------------------------------------------------------------------ byte-reproducible runs
+@pytest.mark.slow
 def test_identical_runs_write_identical_bytes(tmp_path, run_cli):
     """simulate (--mat, with the figure), calibrate and identify twice: every file identical,
     PNG and .mat included; only timing.json (wall-clock) differs."""

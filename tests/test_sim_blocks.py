@@ -171,6 +171,7 @@ def test_metrics_only_matches_the_full_trace(monkeypatch, scenario):
     assert abs(m["final_error_mm"] - full["final_error_mm"]) <= 2e-3
     assert abs(m["overshoot_mm"] - full["overshoot_mm"]) <= 2e-3
     for k in ("transient_max_err_deg", "steady_max_err_deg"):
+        assert (m[k] is None) == (full[k] is None), (k, m[k], full[k])
         if full[k] is not None:
             assert abs(m[k] - full[k]) <= 0.2, k
     if full["settling_time_s"] is None:

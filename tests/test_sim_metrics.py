@@ -277,7 +277,9 @@ def _random_run(rng: np.random.Generator, blocks: bool, n: int):
     x_to = rng.choice([0.0, 3e-3, -6e-3])
     x0 = rng.choice([0.0, 1e-3])
     t0 = when(0.5 * t[-1])
-    x = np.where(t < t0, x0, x_to + rng.normal(0, 2e-5, n) + 3e-5 * np.sin(40 * t))
+    # (a third of the drives stop short of the target: beyond the bound, or within half the move)
+    short = (x_to - x0) * rng.choice([0.0, 0.0, 0.0, 0.03, 0.1, 0.3, 0.7])
+    x = np.where(t < t0, x0, x_to - short + rng.normal(0, 2e-5, n) + 3e-5 * np.sin(40 * t))
     e = rng.normal(0, 0.01, n)
     arrays = {"t": t, "x": x.copy(), "theta_err": e.copy()}
     if blocks:
@@ -300,19 +302,87 @@ def _random_run(rng: np.random.Generator, blocks: bool, n: int):
 
 
 @pytest.mark.parametrize("blocks", [False, True])
-def test_metrics_equal_the_mask_based_reference(blocks):
-    """compute_metrics (index ranges by bisection, a sweep's hot path) gives the same metrics as the
-    first, mask-based implementation (tests/ref_metrics.py) on 400 random runs: steps, moves,
-    faults, NaN and inf samples, short runs, windows longer than the run."""
+def test_metrics_equal_the_reference_from_the_docs(blocks):
+    """compute_metrics (index ranges by bisection, a sweep's hot path) gives the same metrics as a
+    reference written from docs/simulator.md's definitions alone (tests/ref_metrics.py: per-sample
+    records and time selections, nothing imported from linsense.sim.metrics) on 400 random runs:
+    steps, moves, faults, NaN and inf samples, short runs, windows longer than the run."""
     from ref_metrics import compute_metrics_ref
 
     rng = np.random.default_rng(7 + blocks)
+    kinds, unobserved = set(), 0
     for k in range(400):
         n = int(rng.choice([1, 2, 5, 50, 600]))
         arrays, kw = _random_run(rng, blocks, n)
         got = compute_metrics(arrays, **kw)
         want = compute_metrics_ref(arrays, **kw)
-        assert got == want, (k, {key: (got[key], want[key]) for key in got if got[key] != want[key]})
+        differ = {key: (got[key], want[key]) for key in got if got[key] != want[key]}
+        if differ and _unobserved_move(arrays, kw):
+            # the one known disagreement (test_reached_needs_a_sample_after_the_move): the code says
+            # `reached` when no sample follows the last move's start, the docs (and the reference) not
+            assert differ == {"reached": (True, False)}, (k, differ)
+            unobserved += 1
+            continue
+        assert not differ, (k, differ)
+        kinds.add((got["verdict"], got["fault"] != "none", got["bias_deg"] is None))
+    assert unobserved < 40, unobserved  # (the rest, most of the 400, agree in every key)
+    # (the runs reach every verdict, with and without a fault and an error statistic)
+    assert {v for v, _, _ in kinds} == {"stable", "unstable", "not reached", "too short"}, kinds
+    assert {(f, b) for _, f, b in kinds} == {(False, False), (False, True), (True, False), (True, True)}
+
+
+def _unobserved_move(arrays: dict, kw: dict) -> bool:
+    """Whether the run has a last move of some length and no kept sample (not the tripped one) with a
+    finite position from its start on."""
+    if not kw["moves"] or kw["moves"][-1][2] == kw["moves"][-1][3]:
+        return False
+    t = arrays["t"][:-1] if kw["fault"] else arrays["t"]
+    finite = np.ones(t.size, dtype=bool)
+    for key in ("x", "x_min", "x_max", "x_mean"):
+        if key in arrays and (key != "x" or "x_min" not in arrays):
+            finite &= np.isfinite(arrays[key][:t.size])
+    return not np.any((t >= kw["moves"][-1][0]) & finite)
+
+
+@pytest.mark.xfail(strict=True, reason="linsense.sim.metrics bug: `reached` (and so `stable`) is true when "
+                   "no recorded sample follows the last move's start; docs/simulator.md defines reached as "
+                   "having come within half the move after it (tests/ref_metrics.py follows the docs)")
+def test_reached_needs_a_sample_after_the_move():
+    """Blocks of 0.1 s recorded at 0, 0.1 and 0.2 s of a 0.3 s run, a 1 mm step at 0.25 s and an end
+    window (0.04 s) shorter than a block: nothing was recorded after the step, so the drive was never
+    seen to reach it; compute_metrics says `reached` and `stable`, judged on the samples before the
+    step (1 mm = 6.4 deg beside the target, within the 22.5 deg bound)."""
+    from ref_metrics import compute_metrics_ref
+
+    t = np.array([0.0, 0.1, 0.2])
+    x, e = np.zeros(3), np.zeros(3)
+    arrays = {"t": t, "x": x, "theta_err": e, "x_min": x, "x_max": x, "x_mean": x, "err_min": e,
+              "err_max": e, "err_mean": e}
+    kw = dict(fault=0, steps_done=4800, f_pwm=16000.0, moves=[(0.25, 0.25, 0.0, 1e-3)], wall_s=0.01,
+              observer_active=True, convergence_s=0.0, settle_s=0.0, pole_pitch=0.056, tolerance_deg=3.0,
+              bound_deg=22.5, settle_band_deg=0.15, settling_band_deg=1.0, final_window_s=0.04,
+              x_target=1e-3, x_start=0.0)
+    want = compute_metrics_ref(arrays, **kw)
+    assert not want["reached"] and not want["stable"]  # (the reference, from the docs)
+    got = compute_metrics(arrays, **kw)
+    assert not got["reached"] and not got["stable"], (got["reached"], got["verdict"])
+
+
+def test_the_reference_is_not_the_code_it_checks():
+    """tests/ref_metrics.py imports nothing of linsense (its fault names come from the C headers),
+    and its names agree with the code's for every bit."""
+    import ast
+
+    import ref_metrics
+    from linsense.sim.metrics import fault_reason
+
+    tree = ast.parse(Path(ref_metrics.__file__).read_text())
+    imported = {a.name for n in ast.walk(tree) if isinstance(n, ast.Import) for a in n.names}
+    imported |= {n.module for n in ast.walk(tree) if isinstance(n, ast.ImportFrom)}
+    assert not any(m and m.startswith("linsense") for m in imported), imported
+    assert len(ref_metrics.FAULTS) == 10
+    for bits in (0, *(1 << k for k in range(12)), 0x109, 0x7FF):
+        assert ref_metrics.fault_text(bits) == fault_reason(bits), hex(bits)
 
 
 STEP = {"motor": "ecce2010", "control": {"mode": "sensored"},

@@ -17,6 +17,7 @@ def runs():
     return startup_runs(base_scenario(fidelity="switching"), n=200, loads=(0.0, 20.0))
 
 
+@pytest.mark.slow
 def test_polarity_right_200_starts_with_and_without_load(runs):
     """200 random starts over two electrical periods, the estimate at 0: the polarity is right in
     every run, without load (a free, frictionless mover) and with 20 N (held by 30 N of Coulomb
@@ -35,6 +36,7 @@ def test_polarity_right_200_starts_with_and_without_load(runs):
         assert 40 <= flips <= 160, (load, flips)
 
 
+@pytest.mark.slow
 def test_motion_during_detection(runs):
     """The mover moves at most 0.1 mm while the drive detects with the 20 N load (measured 0 mm:
     the friction holds it, the pulses' force stays below its margin). Without load and without any
@@ -46,6 +48,7 @@ def test_motion_during_detection(runs):
     assert s[0.0]["motion_mm"] <= 0.1
 
 
+@pytest.mark.slow
 def test_motion_with_guide_friction():
     """Without load on a guide with 0.5 N of Coulomb friction (1.7 % of the rated force): at most
     0.1 mm while detecting (measured 0.019 mm), 100 starts."""

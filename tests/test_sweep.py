@@ -121,6 +121,7 @@ def test_lut_motor_keys_leave_the_plant(tmp_path):
     assert abs(df["bias_deg"].iloc[1]) > abs(df["bias_deg"].iloc[0]) + 0.5  # a LUT without the end-effect
 
 
+@pytest.mark.slow
 def test_worker_processes_on_loopback_and_a_scheduler_by_address(tmp_path):
     from dask.distributed import LocalCluster
 
@@ -135,6 +136,7 @@ def test_worker_processes_on_loopback_and_a_scheduler_by_address(tmp_path):
     pd.testing.assert_frame_equal(threads[cols], remote[cols])
 
 
+@pytest.mark.slow
 def test_a_killed_sweep_resumes_without_lost_or_duplicated_rows(tmp_path):
     f = spec(tmp_path, AXES)
     out = tmp_path / "out"

@@ -61,6 +61,7 @@ def parts(out: Path) -> dict[str, bytes]:
     return {p.name: p.read_bytes() for p in sorted((out / "parts").glob("part-*.parquet"))}
 
 
+@pytest.mark.slow
 def test_killed_then_edited_base_is_refused_and_restart_gives_the_new_rows_only(d):
     out = d / "out"
     r = cli(d / "sweep.toml", "--out", out, env={"LINSENSE_TEST_KILL_AFTER_PARTS": "1"})
@@ -82,6 +83,7 @@ def test_killed_then_edited_base_is_refused_and_restart_gives_the_new_rows_only(
     assert parts(out) == parts(d / "fresh")  # every partition of the new base: none of the old is left
 
 
+@pytest.mark.slow
 def test_killed_and_resumed_unchanged_gives_the_same_bytes(d):
     out = d / "out"
     r = cli(d / "sweep.toml", "--out", out, env={"LINSENSE_TEST_KILL_AFTER_PARTS": "2"})

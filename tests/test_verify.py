@@ -168,7 +168,7 @@ def test_class_motor_tuned_and_quick_verified(name):
     cert = _quick_certificate(name)
     assert len(cert.rows) == C.POSITIONS_QUICK * len(C.HOLD_LOADS) + len(C.STEP_FRACTIONS)
     assert all(r["passed"] == (r["why"] == "") for r in cert.rows)
-    assert cert.passed == all(c.passed for c in cert.checks)
+    assert cert.passed == all(c.passed for c in cert.checks) and cert.checks
     for c in cert.checks:
         assert c.passed or (c.cause and c.failed > 0), c
     lines = cert.lines()
@@ -202,9 +202,13 @@ def test_every_test_motor_passes_all_but_the_end_effect_tolerance(name):
     failed = [c.line() for c in cert.checks if not c.passed]
     r = end_effect_ratio(load_motor(spec))
     assert all("dM0" in line for line in failed), failed
-    if r < 0.3:
-        assert cert.verified, failed
+    # README.md: "m30_low and m45_24v pass the full certificate"; the others fail the end effect only
+    assert cert.verified == (name in ("m30_low", "m45_24v")), (name, r, failed)
+    assert cert.verified or r >= 0.3, (name, r, failed)
+    if cert.verified:
         assert cert.lines()[-1] == "verified: every check passed"
+    else:
+        assert failed and cert.lines()[-1] != "verified: every check passed"
 
 
 def test_tune_cli_writes_certificate_and_exit_code(tmp_path, capsys):
@@ -217,6 +221,7 @@ def test_tune_cli_writes_certificate_and_exit_code(tmp_path, capsys):
     assert e.value.code == (0 if doc["passed"] else 1)
     assert doc["quick"] and not doc["verified"]  # (a quick run never claims the certificate)
     assert "verification (quick" in text and ("NOT verified" in text) != doc["passed"]
+    assert doc["checks"]
     for c in doc["checks"]:
         assert ("PASS  " + c["name"] if c["passed"] else "FAIL  " + c["name"]) in text
         if not c["passed"]:
@@ -312,6 +317,7 @@ def test_predicted_tolerance_costs_agree_with_the_simulation(name):
     simulation) agrees with the switching simulation with dead time within 1 deg or 25 %, so that
     its verdict against the 3 deg bound is the certificate's (measured: within 0.1-0.9 deg)."""
     dz, rows = _full_off_nominal(name)
+    assert dz.tolerances and rows
     for plant, pred in dz.tolerances.items():
         meas = max(r.get("err_deg", math.inf) for r in rows if r["plant"] == plant)
         tol = max(1.0, 0.25 * pred["error_deg"])

@@ -137,6 +137,7 @@ def test_hostile_table_or_value(run_cli, tmp_path, case):
     assert not out.exists()
 
 
+@pytest.mark.slow
 def test_a_table_too_long_is_refused_before_it_is_kept(run_cli, tmp_path):
     """Refusing 100,001 rows keeps a few MB (the rows are not kept as text, the fit never starts)."""
     (tmp_path / "m.toml").write_text(with_table())
@@ -151,6 +152,7 @@ def test_a_table_too_long_is_refused_before_it_is_kept(run_cli, tmp_path):
     assert peak < 20e6, f"{peak / 1e6:.0f} MB kept before refusing"
 
 
+@pytest.mark.slow
 def test_linsense_reads_the_longest_table_it_writes(run_cli, tmp_path):
     """``linsense model --points`` at its limit writes a table that linsense reads back (a 100,000-row
     table asked for 37 GiB): the table's limit is --points' and the fit's order is bounded."""

@@ -95,6 +95,7 @@ CALLS = {
 }
 
 
+@pytest.mark.slow
 @prop_settings(scale=4)
 @given(name=st.sampled_from(sorted(CALLS)), data=st.data())
 def test_an_api_call_gives_a_finite_result_or_names_the_argument(ecce, name, data):

@@ -9,6 +9,7 @@ import math
 import tomllib
 
 import numpy as np
+import pytest
 from hypothesis import event, given
 from hypothesis import strategies as st
 from prop_strategies import (
@@ -171,6 +172,7 @@ def check_points(sw, doc: dict) -> None:
                 assert finite_number(v) and a["min"] <= v <= a["max"], (v, a)
 
 
+@pytest.mark.slow
 @prop_settings(scale=3)
 @given(data=st.data())
 def test_a_sweep_file_gives_its_documented_points_or_is_refused_in_one_line(tmp_path, data):

@@ -13,6 +13,7 @@ import shutil
 import subprocess
 
 import numpy as np
+import pytest
 from hypothesis import event, example, given
 from hypothesis import strategies as st
 from prop_strategies import (
@@ -132,6 +133,7 @@ def eq3_table(ind: dict, n: int) -> tuple[list[list[str]], list[str], dict]:
 ECCE_L4 = {"L0": 2.75e-3, "L2": -0.317e-3, "M0": -0.92e-3, "M2": -0.317e-3, "dM0": -0.47e-3, "L4": 0.1e-3}
 
 
+@pytest.mark.slow
 @prop_settings(scale=3)
 # (found: an even number of positions was not passed through, the cosine of order N / 2 dropped: 8
 # positions of a motor with L4 were off by L4 at every point)
