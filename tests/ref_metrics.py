@@ -53,7 +53,7 @@ from pathlib import Path
 
 import numpy as np
 
-_INCLUDE = Path(__file__).resolve().parents[1] / "csrc" / "include" / "linsense"
+_CSRC = Path(__file__).resolve().parents[1] / "csrc"
 #: the fault reasons in the order docs/simulator.md lists them, and the header macro of each
 _DOC_FAULTS = ("overcurrent", "undervoltage", "overvoltage", "observer", "overspeed", "nonfinite",
                "config", "encoder", "travel", "diverged")
@@ -61,7 +61,8 @@ _DOC_FAULTS = ("overcurrent", "undervoltage", "overvoltage", "observer", "oversp
 
 def _fault_bits() -> list[tuple[int, str]]:
     """(bit, reason) for each documented reason, the bits read from the C headers."""
-    text = "".join((_INCLUDE / h).read_text() for h in ("ls_protect.h", "ls_drive.h", "ls_sim.h"))
+    text = "".join(p.read_text() for p in (_CSRC / "include" / "linsense" / "ls_protect.h",
+                                            _CSRC / "include" / "linsense" / "ls_drive.h", _CSRC / "sim" / "ls_sim.h"))
     found = re.finditer(r"#define LS_(?:SIM_)?FAULT_(\w+)\s+0x([0-9a-fA-F]+)u", text)
     bits = {m[1].lower(): int(m[2], 16) for m in found}
     return [(bits[name], name) for name in _DOC_FAULTS]

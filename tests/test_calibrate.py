@@ -32,7 +32,7 @@ BAR_PULSATING_DEG = 0.1
 #: pulsating, the design's elliptical injection; each asserted at the two decimals written there
 TABLE = {"ecce2010": ("0.03", "0.22"), "ecce2010 20 N": ("0.04", "0.26"), "ecce2010 40 N": ("0.03", "0.30"),
          "m100_edge": ("0.03", "0.17"), "m20_hv": ("0.02", "0.27"), "m30_low": ("0.01", "0.06"),
-         "m45_24v": ("0.02", "0.17"), "m60_pos20k": ("0.02", "0.11"), "m90_heavy": ("0.02", "0.11")}
+         "m45_24v": ("0.01", "0.17"), "m60_pos20k": ("0.02", "0.11"), "m90_heavy": ("0.02", "0.11")}
 
 
 def _table(name: str, load: float, column: int) -> str:
