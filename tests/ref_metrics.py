@@ -61,8 +61,8 @@ _DOC_FAULTS = ("overcurrent", "undervoltage", "overvoltage", "observer", "oversp
 
 def _fault_bits() -> list[tuple[int, str]]:
     """(bit, reason) for each documented reason, the bits read from the C headers."""
-    text = "".join(p.read_text() for p in (_CSRC / "include" / "linsense" / "ls_protect.h",
-                                            _CSRC / "include" / "linsense" / "ls_drive.h", _CSRC / "sim" / "ls_sim.h"))
+    api = _CSRC / "include" / "linsense"
+    text = "".join(p.read_text() for p in (api / "ls_protect.h", api / "ls_drive.h", _CSRC / "sim" / "ls_sim.h"))
     found = re.finditer(r"#define LS_(?:SIM_)?FAULT_(\w+)\s+0x([0-9a-fA-F]+)u", text)
     bits = {m[1].lower(): int(m[2], 16) for m in found}
     return [(bits[name], name) for name in _DOC_FAULTS]
