@@ -62,7 +62,8 @@ _DOC_FAULTS = ("overcurrent", "undervoltage", "overvoltage", "observer", "oversp
 def _fault_bits() -> list[tuple[int, str]]:
     """(bit, reason) for each documented reason, the bits read from the C headers."""
     api = _CSRC / "include" / "linsense"
-    text = "".join(p.read_text() for p in (api / "ls_protect.h", api / "ls_drive.h", _CSRC / "sim" / "ls_sim.h"))
+    headers = (api / "ls_protect.h", api / "ls_drive.h", _CSRC / "sim" / "ls_sim.h")
+    text = "".join(p.read_text() for p in headers)
     found = re.finditer(r"#define LS_(?:SIM_)?FAULT_(\w+)\s+0x([0-9a-fA-F]+)u", text)
     bits = {m[1].lower(): int(m[2], 16) for m in found}
     return [(bits[name], name) for name in _DOC_FAULTS]
