@@ -344,14 +344,12 @@ def _unobserved_move(arrays: dict, kw: dict) -> bool:
     return not np.any((t >= kw["moves"][-1][0]) & finite)
 
 
-@pytest.mark.xfail(strict=True, reason="linsense.sim.metrics bug: `reached` (and so `stable`) is true when "
-                   "no recorded sample follows the last move's start; docs/simulator.md defines reached as "
-                   "having come within half the move after it (tests/ref_metrics.py follows the docs)")
 def test_reached_needs_a_sample_after_the_move():
     """Blocks of 0.1 s recorded at 0, 0.1 and 0.2 s of a 0.3 s run, a 1 mm step at 0.25 s and an end
     window (0.04 s) shorter than a block: nothing was recorded after the step, so the drive was never
-    seen to reach it; compute_metrics says `reached` and `stable`, judged on the samples before the
-    step (1 mm = 6.4 deg beside the target, within the 22.5 deg bound)."""
+    seen to reach it: neither `reached` nor `stable`, although the samples before the step lie within
+    the bound (1 mm = 6.4 deg beside the target, bound 22.5 deg); the reason says so. (compute_metrics
+    said `reached` and `stable` here until the reference written from the docs caught it.)"""
     from ref_metrics import compute_metrics_ref
 
     t = np.array([0.0, 0.1, 0.2])
@@ -366,6 +364,7 @@ def test_reached_needs_a_sample_after_the_move():
     assert not want["reached"] and not want["stable"]  # (the reference, from the docs)
     got = compute_metrics(arrays, **kw)
     assert not got["reached"] and not got["stable"], (got["reached"], got["verdict"])
+    assert got["unstable_reason"].startswith("never seen to reach the target: nothing was recorded"), got
 
 
 def test_the_reference_is_not_the_code_it_checks():

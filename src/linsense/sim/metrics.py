@@ -237,7 +237,9 @@ def compute_metrics(arrays: dict, *, fault: int, steps_done: int, f_pwm: float, 
             steady = max(0.0, float(direction) * offset) if offset is not None else 0.0
             overshoot = max(0.0, peak - steady)
         dist = abs(x_to - x_from)
-        if dist > 0 and lo_f.size:
+        if dist > 0 and not lo_f.size:
+            reached = False  # (nothing recorded after the move's start: never seen to reach it)
+        elif dist > 0:
             # at some time the true position came within half the move (and the bound) of the target
             # (a block whose range contains the target came within 0 of it)
             if x_lo is not x_hi:
@@ -283,6 +285,9 @@ def compute_metrics(arrays: dict, *, fault: int, steps_done: int, f_pwm: float, 
         reason = f"{verdict}: {why_short}"
     elif not x_all:
         reason = "non-finite position"
+    elif not reached and not lo_f.size:
+        reason = (f"never seen to reach the target: nothing was recorded after the last move's start "
+                  f"({moves[-1][0]:.6g} s)")
     elif not reached:
         move = abs(moves[-1][3] - moves[-1][2])
         reason = (f"never reached the target: the true position came no closer than half the move "
