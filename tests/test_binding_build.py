@@ -56,3 +56,30 @@ def test_a_header_change_reaches_the_binding_without_a_python_edit(tmp_path):
     assert "#define LS_ADDED_MAX ..." in cdef and "typedef float... LS_REAL;" in cdef
     assert "ls_added_internal_" not in cdef and "LS_CFFI" not in cdef
     assert "{ return" not in cdef  # (no function body)
+
+
+def test_only_the_plant_is_compiled_with_contraction():
+    """setup.py: the extension is compiled as the firmware is (ISO C's contraction off), the plant
+    (csrc/sim/ls_sim_all.c) alone with -ffp-contract=fast. On an x86-64 host with FMA (the Makefile's
+    -march=native), no fused multiply-add may appear in a function of the controller, its inline
+    blocks or the binding's helpers: only in the simulator's."""
+    import platform
+    import subprocess
+
+    import linsense._ctrl as ext
+
+    if platform.machine() != "x86_64" or not shutil.which("objdump"):
+        import pytest
+
+        pytest.skip("needs objdump on x86-64")
+    text = subprocess.run(["objdump", "-d", "--no-show-raw-insn", ext.__file__], capture_output=True,
+                          text=True, check=True).stdout
+    fused, fn = set(), ""
+    for line in text.splitlines():
+        head = re.match(r"^[0-9a-f]+ <(.+)>:$", line)
+        if head:
+            fn = head[1]
+        elif re.search(r"\bv?f(n)?m(add|sub)\d", line):
+            fused.add(fn)
+    controller = sorted(f for f in fused if f.startswith(("ls_", "_cffi")) and not f.startswith("ls_sim"))
+    assert not controller, f"fused multiply-adds in the controller's code: {controller}"

@@ -50,12 +50,11 @@ UMBRELLA = "".join(f'#include "{next(h.relative_to(d) for d in INCLUDE_DIRS if d
 SOURCES = sorted((CSRC / "ctrl").glob("*.c")) + [CSRC / "sim" / "ls_sim_all.c"] + sorted(PY.glob("*.c"))
 if not (CSRC / "ctrl").is_dir() or not SIM_HEADER.is_file():
     raise RuntimeError(f"linsense C sources not found under {CSRC} (expected csrc/ctrl/*.c, {SIM_HEADER})")
-#: -O3 for the simulator's time loop; -ffp-contract=fast lets the compiler fuse a * b + c into one
-#: FMA where the target has it (ISO C mode, -std=c99, turns that off; it shortens the time loop's
-#: dependency chains by a fifth and changes results only at the rounding level). LINSENSE_NATIVE=1
-#: (set by the Makefile for the local venv) adds -march=native, which is faster but not portable,
-#: so wheels never get it by default.
-COMPILE_ARGS = ["-std=c99", "-O3", "-ffp-contract=fast"] + (
+#: -O3; ISO C's contraction off, as the firmware is compiled: every controller operation rounds as
+#: written. setup.py compiles the plant alone (ls_sim_all.c) with -ffp-contract=fast (fused
+#: multiply-adds: a fifth shorter dependency chains). LINSENSE_NATIVE=1 (the Makefile's venv) adds
+#: -march=native: faster, not portable, so never in wheels.
+COMPILE_ARGS = ["-std=c99", "-O3", "-ffp-contract=off"] + (
     ["-march=native"] if os.environ.get("LINSENSE_NATIVE") == "1" else [])
 #: the type names cffi knows by itself (int32_t, bool, size_t ...): declared for pycparser only
 KNOWN_TYPES = sorted(n for n in COMMON_TYPES if n.isidentifier())

@@ -159,6 +159,8 @@ static uint32_t steps_of(LS_REAL t, LS_REAL ts, bool strict)
     return n;
 }
 
+static bool step_table_complete(void);
+
 ls_status ls_drive_init(ls_drive *d, const ls_drive_cfg *cfg)
 {
     ls_pos zero = {0, LS_R(0.0)};
@@ -276,6 +278,9 @@ ls_status ls_drive_init(ls_drive *d, const ls_drive_cfg *cfg)
         ls_sincos_full(LS_R(3.0) * cfg->near_in, &c_unused, &d->near_c3_in);
         ls_sincos_full(LS_R(3.0) * cfg->near_out, &c_unused, &d->near_c3_out);
     }
+    if (!step_table_complete()) { /* (a mode or shape added without its step: never run a NULL) */
+        return LS_ERR_PARAM;
+    }
     d->initialised = true;
     ls_drive_reset(d, zero);
     return LS_OK;
@@ -319,6 +324,20 @@ static const ls_drive_step_fn step_table[LS_MODE_STARTUP + 1][LS_DRIVE_COLS] = {
     [LS_MODE_CALIBRATION] = LS_DRIVE_ROW(ls_drive_calibration_step_),
     [LS_MODE_STARTUP] = LS_DRIVE_ROW(startup_step),
 };
+
+/* Every mode x shape has its step (ls_drive_init refuses to run with a hole in the table). */
+static bool step_table_complete(void)
+{
+    unsigned r, c;
+    for (r = 0; r <= (unsigned)LS_MODE_STARTUP; r++) {
+        for (c = 0; c < (unsigned)LS_DRIVE_COLS; c++) {
+            if (step_table[r][c] == NULL) {
+                return false;
+            }
+        }
+    }
+    return true;
+}
 
 /* The table's column for the configuration. */
 static unsigned step_column(const ls_drive_cfg *c)

@@ -13,7 +13,7 @@ from pathlib import Path
 
 
 def source_digest(csrc: Path, build_script: Path) -> str:
-    """SHA-256 over the C sources, the library's internal and public headers and the build script."""
+    """SHA-256 over the C sources, the library's internal and public headers, the build script and setup.py."""
     h = hashlib.sha256()
     files = (
         sorted((csrc / "ctrl").glob("*.c"))
@@ -23,7 +23,8 @@ def source_digest(csrc: Path, build_script: Path) -> str:
         + sorted((csrc / "include" / "linsense").glob("*.h"))
         + sorted((csrc / "py").glob("*.[ch]"))  # (the binding's C helpers)
     )
-    for f in [*files, build_script]:
+    setup = csrc.parent / "setup.py"  # (its compiler flags; absent from an installed wheel's tree)
+    for f in [*files, build_script, *([setup] if setup.is_file() else [])]:
         h.update(f.name.encode())
         h.update(f.read_bytes())
     return h.hexdigest()
