@@ -13,7 +13,7 @@ from pathlib import Path
 
 
 def source_digest(csrc: Path, build_script: Path) -> str:
-    """SHA-256 over the C sources, the library's internal and public headers, the build script and setup.py."""
+    """SHA-256 over the C sources, the library's headers, the build script and setup.py."""
     h = hashlib.sha256()
     files = (
         sorted((csrc / "ctrl").glob("*.c"))
