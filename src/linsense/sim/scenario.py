@@ -15,8 +15,9 @@ them by ``tools/gen_docs.py``. A field's ``description`` is its meaning (Markdow
 ``json_schema_extra`` may hold ``unit`` (absent: ``bool`` for a boolean, else ``-``),
 ``default_note`` (the docs' default in words, where the field's default is not what a run uses:
 designed, derived or required by another key; ``{ecce2010}`` in it stands for the designed value
-for the reference motor, ``{default}`` for the field's default) and ``doc_after`` (the docs list
-the field after the one it names). None of them affects validation.
+for the reference motor, ``{default}`` for the field's default, ``{mm}`` and ``{pitch_mm}`` for
+an electrical angle as the distance it is on the reference motor and that motor's pole pitch) and
+``doc_after`` (the docs list the field after the one it names). None of them affects validation.
 """
 
 from __future__ import annotations
