@@ -39,8 +39,8 @@ def test_docs_table_is_the_generated_one():
     edited = page.replace(row, "| `inject.amplitude` | x | V |")
     assert edited != page and gen.render(edited) == page
     # the table of scenario keys likewise (a default edited by hand is written back)
-    row = "| `v_dc` | V | 72 | DC bus |"
-    edited = page.replace(row, "| `v_dc` | V | 48 | DC bus |")
+    row = "| `v_dc` | V | 72 | > 0 | DC bus |"
+    edited = page.replace(row, "| `v_dc` | V | 48 | > 0 | DC bus |")
     assert edited != page and gen.render(edited) == page
 
 
@@ -63,6 +63,13 @@ def test_docs_keys_table_has_every_key_with_its_meaning():
         assert field.description, f"{key}: no description (its meaning in docs/simulator.md)"
     names = [r.split(" | ")[0].strip("| `").split("] ")[-1] for r in rows]
     assert sorted(names) == sorted(k.rsplit(".", 1)[-1] for k, _ in keys)
+    # (numbers as the table writes them; the values a key accepts from its type and bounds)
+    shown = [gen.number(x) for x in (8e-7, 16000.0, 0.05, 1e6, -1000.0)]
+    assert shown == ["0.8e-6", "16000", "0.05", "1e6", "-1000"]
+    assert gen.number(20.106192982974676, 3) == "20.1"
+    cells = {r.split(" | ")[0].strip("| `").split("] ")[-1]: r.split(" | ")[3] for r in rows}
+    assert cells["hf_delay_s"] == "[0, 0.1]" and cells["lut_points"] == "integer [4, 65536]"
+    assert cells["quadrature"] == "[0, 1)" and cells["seed"] == "integer [0, 2^63)"
 
 
 @pytest.mark.parametrize("mode", ["sensorless_lut", "calibration"])

@@ -4,8 +4,8 @@ docs/simulator.md holds two, each between its own BEGIN marker (below) and ``<!-
 
 - "Scenario files": the table of every scenario key (:func:`keys_table`), from the pydantic models of
   :mod:`linsense.sim.scenario`, the one home of each key: its meaning (the field's ``description``),
-  unit and default (the field's default, or its ``default_note``; the convention is described in
-  that module's docstring);
+  unit, default (the field's default, or its ``default_note``; the convention is described in
+  that module's docstring) and the values it accepts (its type and bounds);
 - "The scenario keys in the drive's configuration": the table of the one scenario ->
   ``ls_drive_cfg`` mapping (:func:`linsense.tune.cfgmap.docs_table`).
 
@@ -75,6 +75,56 @@ def _is_bool(annotation) -> bool:
         args = typing.get_args(annotation)
         return bool(args) and all(a in (bool, type(None)) for a in args)
     return False
+
+
+def _bound(x) -> str:
+    if isinstance(x, int) and x >= 2**20 and x & (x - 1) == 0:
+        return f"2^{x.bit_length() - 1}"
+    return number(float(x))
+
+
+def _interval(c: dict) -> str:
+    lo = ("(", c["gt"]) if "gt" in c else ("[", c["ge"]) if "ge" in c else None
+    hi = (")", c["lt"]) if "lt" in c else ("]", c["le"]) if "le" in c else None
+    if lo and hi:
+        return f"{lo[0]}{_bound(lo[1])}, {_bound(hi[1])}{hi[0]}"
+    if lo:
+        return f"{'>' if lo[0] == '(' else '>='} {_bound(lo[1])}"
+    if hi:
+        return f"{'<' if hi[0] == ')' else '<='} {_bound(hi[1])}"
+    return ""
+
+
+def _constraints(metadata) -> dict:
+    names = ("gt", "ge", "lt", "le", "min_length", "max_length")
+    return {n: getattr(m, n) for m in metadata for n in names if getattr(m, n, None) is not None}
+
+
+def accepted(tp, cons: dict) -> str:
+    """The values a key of type ``tp`` with the constraints ``cons`` accepts, in words: its choices,
+    ``integer``, its interval, a list's length (empty where the type says all: a number, a boolean)."""
+    origin, args = typing.get_origin(tp), typing.get_args(tp)
+    if origin is typing.Annotated:
+        inner = dict(cons)
+        for m in args[1:]:
+            if isinstance(m, FieldInfo):
+                inner.update(_constraints(m.metadata))
+        return accepted(args[0], inner)
+    if origin is typing.Union or isinstance(tp, types.UnionType):
+        parts = [accepted(a, cons) or ("number" if a is float else "") for a in args if a is not type(None)]
+        return " or ".join(p for p in parts if p) if any(p != "number" for p in parts) else ""
+    if origin is typing.Literal:
+        return ", ".join(f'`"{a}"`' for a in args)
+    if origin is list:
+        lo, hi = cons.get("min_length"), cons.get("max_length")
+        return f"list of {hi}" if lo == hi and lo is not None else f"list of at most {hi}" if hi else "list"
+    if tp is str:
+        return "non-empty" if cons.get("min_length") else ""
+    if tp is int:
+        return " ".join(p for p in ("integer", _interval(cons)) if p)
+    if tp is float:
+        return _interval(cons)
+    return ""
 
 
 def _section(field: FieldInfo) -> type[BaseModel] | None:
@@ -157,7 +207,9 @@ def _rows(model: type[BaseModel], prefix: str, ref: dict, pitch: float) -> list[
         label = f"[{prefix[:-1]}] {name}" if prefix and first else name
         first = False
         unit = extra.get("unit") or ("bool" if _is_bool(field.annotation) else "-")
-        cells = (f"`{label}`", unit, _default(prefix + name, field, ref, pitch), field.description or "")
+        values = accepted(field.annotation, _constraints(field.metadata)) or "-"
+        default = _default(prefix + name, field, ref, pitch)
+        cells = (f"`{label}`", unit, default, values, field.description or "")
         rows.append("| " + " | ".join(_cell(c) for c in cells) + " |")
     return rows
 
@@ -166,7 +218,8 @@ def keys_table() -> str:
     """The docs' table of every scenario key (Markdown), from :class:`ScenarioFile`."""
     ref = reference_design()
     pitch = load_motor(REFERENCE_MOTOR).pole_pitch
-    rows = ["| key | unit | default | meaning |", "|---|---|---|---|"] + _rows(ScenarioFile, "", ref, pitch)
+    rows = ["| key | unit | default | values | meaning |", "|---|---|---|---|---|"]
+    rows += _rows(ScenarioFile, "", ref, pitch)
     return "\n".join(rows) + "\n"
 
 

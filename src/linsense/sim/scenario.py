@@ -75,7 +75,7 @@ class CalibrationSection(BaseModel):
     # deg, acceptance (see ls_drive.h); an electrical angle error is at most 180 deg
     tol_deg: float = Field(default=round(math.degrees(float(_C.cal.tol)), 6), gt=0.0, le=180.0,
                            description="acceptance: a point is accepted after a window `t_hold` whose mean "
-                           "demodulated error is below it (an angle error is at most 180)",
+                           "demodulated error is below it",
                            json_schema_extra={"unit": "electrical deg"})
     t_max: Positive = Field(
         _c(_C.cal.t_max), description="a point not accepted by then trips the observer fault",
@@ -120,7 +120,7 @@ class StartupSection(BaseModel):
 class ScenarioSection(BaseModel):
     model_config = _STRICT
     name: str = Field(default="scenario", min_length=1, description="name in outputs")
-    duration: Positive = Field(description="simulated time, > 0", json_schema_extra={"unit": "s"})
+    duration: Positive = Field(description="simulated time", json_schema_extra={"unit": "s"})
     seed: int = Field(default=0, ge=0, lt=2**63, description="current-noise seed")
 
 
@@ -245,7 +245,7 @@ class ObserverSection(BaseModel):
     # s, the HF path's delay: the pulsating/elliptical estimate is advanced by omega times it (designed)
     hf_delay_s: float = Field(
         default=_c(_C.hf_delay), ge=0.0, le=0.1,
-        description="the HF path's delay, in [0, 0.1]: the pulsating and elliptical estimate's demodulated "
+        description="the HF path's delay: the pulsating and elliptical estimate's demodulated "
         "error is advanced by the speed times it (docs/tuning.md, \"The HF path's delay\")",
         json_schema_extra={"unit": "s", "default_note": "designed (`1 / f_inj`; 0 for the rotating vector "
                            "and the square wave)"})
