@@ -38,6 +38,66 @@ def test_docs_table_is_the_generated_one():
     row = "| `inject.amplitude` | `injection.amplitude` | V |"
     edited = page.replace(row, "| `inject.amplitude` | x | V |")
     assert edited != page and gen.render(edited) == page
+    # the table of scenario keys likewise (a default edited by hand is written back)
+    row = "| `v_dc` | V | 72 | > 0 | DC bus |"
+    edited = page.replace(row, "| `v_dc` | V | 48 | > 0 | DC bus |")
+    assert edited != page and gen.render(edited) == page
+
+
+def _leaf_fields():
+    """Every scenario key: (dotted key, its pydantic field)."""
+    out = [("motor", ScenarioFile.model_fields["motor"])]
+    for path, model in _sections(ScenarioFile).values():
+        out += [(f"{path}.{n}", f) for n, f in model.model_fields.items()
+                if f"{path}.{n}" not in {p for p, _ in _sections(ScenarioFile).values()}]
+    return out
+
+
+def test_docs_keys_table_has_every_key_with_its_meaning():
+    """The generated table of scenario keys has one row per key of the schema, each with a meaning."""
+    gen = _gen_docs()
+    rows = gen.keys_table().splitlines()[2:]
+    keys = _leaf_fields()
+    assert len(rows) == len(keys) == 128
+    for key, field in keys:
+        assert field.description, f"{key}: no description (its meaning in docs/simulator.md)"
+    names = [r.split(" | ")[0].strip("| `").split("] ")[-1] for r in rows]
+    assert sorted(names) == sorted(k.rsplit(".", 1)[-1] for k, _ in keys)
+    # (numbers as the table writes them; the values a key accepts from its type and bounds)
+    shown = [gen.number(x) for x in (8e-7, 16000.0, 0.05, 1e6, -1000.0)]
+    assert shown == ["0.8e-6", "16000", "0.05", "1e6", "-1000"]
+    assert gen.number(20.106192982974676, 3) == "20.1"
+    cells = {r.split(" | ")[0].strip("| `").split("] ")[-1]: r.split(" | ")[3] for r in rows}
+    assert cells["hf_delay_s"] == "[0, 0.1]" and cells["lut_points"] == "integer [4, 65536]"
+    assert cells["quadrature"] == "[0, 1)" and cells["seed"] == "integer [0, 2^63)"
+
+
+@pytest.mark.parametrize("mode", ["sensorless_lut", "calibration"])
+def test_designed_keys_say_so_in_the_docs(mode):
+    """A key the design fills where the file leaves it out carries a default note (its schema default is
+    not what runs): on a drive other than the default one every designed value differs from it."""
+    from linsense.model.motor import load_motor
+    from linsense.sim.build import designed
+
+    data = {"motor": "ecce2010", "scenario": {"duration": 1.0},
+            "control": {"mode": mode}, "inverter": {"v_dc": 96.0, "f_pwm": 20000.0},
+            "controller": {"i_max": 2.0}, "reference": {"type": "hold", "v_max": 0.3}}
+    sc = scenario_from_dict(data)
+    after = designed(sc, load_motor("ecce2010")).spec
+    fields = dict(_leaf_fields())
+    changed = []
+    for key, field in fields.items():
+        sec, _, name = key.rpartition(".")
+        if not sec:
+            continue
+        owner_a, owner_b = sc.spec, after
+        for part in sec.split("."):
+            owner_a, owner_b = getattr(owner_a, part), getattr(owner_b, part)
+        if getattr(owner_a, name) != getattr(owner_b, name):
+            changed.append(key)
+            extra = field.json_schema_extra or {}
+            assert "default_note" in extra, f"{key} is designed but its docs' default is the schema's"
+    assert len(changed) >= 10  # (the check sees the design)
 
 
 def test_every_key_of_the_mapping_is_a_scenario_key():
