@@ -7,6 +7,7 @@ from pathlib import Path
 
 import pytest
 
+import linsense
 import linsense.sim.build as sim_build
 from linsense.errors import InputError
 from linsense.sim.build import build
@@ -101,3 +102,19 @@ def test_balanced_load_within_the_drive_builds():
                              "reference": {"type": "hold"}, "load": {"force": 3e38},
                              "initial": {"load_balanced": True}}, "load.toml")
     assert build(sc).drive is not None
+
+
+def test_a_trip_at_t0_on_the_sensor_names_the_sensor():
+    """A current sensor noisy enough to trip the designed over-current trip at the first step (4 A rms
+    against 4.2 A, under check_sensors' refusal at the trip itself) is refused naming the sensor key
+    the file gives, not protection.i_max, which it does not give (issue 23's rule); with
+    protection.i_max given, that key is named."""
+    base = {"motor": "ecce2010", "scenario": {"name": "noise", "duration": 0.01},
+            "reference": {"type": "hold"}, "sensors": {"current_noise": 4.0}}
+    with pytest.raises(InputError) as exc:
+        linsense.simulate(scenario_from_dict(base))
+    assert exc.value.key == "sensors.current_noise", str(exc.value)
+    assert "trips at t = 0 (overcurrent) on the current sensor: 4 A rms" in str(exc.value)
+    with pytest.raises(InputError) as exc:
+        linsense.simulate(scenario_from_dict({**base, "protection": {"i_max": 4.2}}))
+    assert exc.value.key == "protection.i_max", str(exc.value)

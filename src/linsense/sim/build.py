@@ -73,6 +73,7 @@ class Built:
     moves: list[tuple[float, float, float, float]]  # (t_start, t_end, x_from, x_to), m and s
     known: dict = field(default_factory=dict)  # motor values the controller uses
     extra: dict = field(default_factory=dict)  # cffi objects kept alive with the drive (calibration table)
+    user_keys: set = field(default_factory=set)  # the dotted keys the file gives (the design sets the others)
 
 
 # ------------------------------------------------------------------ the path of a scenario
@@ -102,7 +103,7 @@ def build(sc: Scenario, motor: Motor | None = None, trace_in_memory: bool = True
     start_drive(sc, drive, motor, setup)
     cmds, moves = reference_commands(sc)
     return Built(sc, motor, setup, cfg, drive, cmds, n_steps, moves, known,
-                 extra={} if cal_table is None else {"cal_table": cal_table})
+                 extra={} if cal_table is None else {"cal_table": cal_table}, user_keys=user_keys)
 
 
 def motors(sc: Scenario, motor: Motor | None = None) -> tuple[Motor, Motor]:

@@ -124,6 +124,17 @@ def finish_metrics(b, raw, m: dict, block: int) -> None:
     if raw.fault and raw.steps_done <= 1:
         # a trip at the very first step is the configuration's doing, not the closed loop's
         first = m["fault"].split("+")[0]  # the first fault named (several can trip together)
+        sens = s.sensors
+        offset = max(abs(o) for o in ([sens.current_offset] if isinstance(sens.current_offset, float)
+                                      else sens.current_offset))
+        on_sensor = first == "overcurrent" and (sens.current_noise or offset)
+        if on_sensor and "protection.i_max" not in b.user_keys:
+            # (the file gives the sensor, not the trip: name what it gives, issue 23)
+            key = "sensors.current_noise" if sens.current_noise else "sensors.current_offset"
+            raise InputError(sc.source, key, f"the drive trips at t = 0 (overcurrent) on the current "
+                             f"sensor: {sens.current_noise:g} A rms of noise and {offset:g} A of offset "
+                             f"against the over-current trip protection.i_max = {s.protection.i_max:.3g} A "
+                             "(designed)")
         raise InputError(sc.source, _FAULT_KEYS.get(first, ""),
                          f"the drive trips at t = 0 ({m['fault']}): the configuration cannot run")
     if s.inverter.fidelity == "average" and s.inverter.dead_time > 0:
