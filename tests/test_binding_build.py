@@ -48,7 +48,13 @@ def test_a_header_change_reaches_the_binding_without_a_python_edit(tmp_path):
                       "typedef struct { LS_REAL gain; int32_t count[3]; } ls_added;\n"
                       "ls_status ls_added_init(ls_added *a, LS_REAL gain);\n"
                       "static inline LS_REAL ls_added_step(ls_added *a, LS_REAL x) { return a->gain * x; }\n"
-                      "void ls_added_internal_(ls_added *a);\n#endif\n")
+                      "void ls_added_internal_(ls_added *a);\n"
+                      # (idioms a header may grow: a compiler attribute, a static assertion, float_t)
+                      "#ifdef __GNUC__\n"
+                      "#define LS_ADDED_INLINE static inline __attribute__((always_inline))\n"
+                      "#else\n#define LS_ADDED_INLINE static inline\n#endif\n"
+                      "_Static_assert(sizeof(ls_added) > 0, \"size\");\n#include <math.h>\n"
+                      "LS_ADDED_INLINE float_t ls_added_twice(float_t x) { return x + x; }\n#endif\n")
     cdef = _load(tmp_path / "tools" / "build_ctrl.py").cdef()
     assert "ls_status ls_added_init(ls_added *a, LS_REAL gain);" in cdef
     assert "LS_REAL ls_added_step(ls_added *a, LS_REAL x);" in cdef
@@ -56,6 +62,7 @@ def test_a_header_change_reaches_the_binding_without_a_python_edit(tmp_path):
     assert "#define LS_ADDED_MAX ..." in cdef and "typedef float... LS_REAL;" in cdef
     assert "ls_added_internal_" not in cdef and "LS_CFFI" not in cdef
     assert "{ return" not in cdef  # (no function body)
+    assert "float_t ls_added_twice(float_t x);" in cdef and "__attribute__" not in cdef
 
 
 def test_only_the_plant_is_compiled_with_contraction():

@@ -320,7 +320,7 @@ def test_metrics_equal_the_reference_from_the_docs(blocks):
         assert not differ, (k, differ)
         unobserved += _unobserved_move(arrays, kw)
         kinds.add((got["verdict"], got["fault"] != "none", got["bias_deg"] is None))
-    assert 0 < unobserved < 40, unobserved  # (runs with nothing recorded after their move: they agree too)
+    assert 0 < unobserved < 200, unobserved  # (runs with nothing recorded after their move: they agree too)
     # (the runs reach every verdict, with and without a fault and an error statistic)
     assert {v for v, _, _ in kinds} == {"stable", "unstable", "not reached", "too short"}, kinds
     assert {(f, b) for _, f, b in kinds} == {(False, False), (False, True), (True, False), (True, True)}

@@ -83,9 +83,9 @@ def preprocess(*flags: str) -> str:
         fake = Path(tmp)
         for name in {n for h in HEADERS for n in re.findall(r"#\s*include\s*<([^>]+)>", h.read_text())}:
             (fake / name).parent.mkdir(parents=True, exist_ok=True)
-            (fake / name).touch()
+            (fake / name).write_text("typedef float float_t;typedef double double_t;" * (name == "math.h"))
         (fake / "ls_cffi.c").write_text(UMBRELLA)
-        cmd = [*cc, "-E", "-P", "-std=c99", "-nostdinc", "-DLS_CFFI", f"-I{fake}",
+        cmd = [*cc, "-E", "-P", "-std=c99", "-nostdinc", "-DLS_CFFI", "-D__attribute__(x)=", f"-I{fake}",
                *(f"-I{d}" for d in INCLUDE_DIRS), *flags, str(fake / "ls_cffi.c")]
         return subprocess.run(cmd, check=True, stdout=subprocess.PIPE, text=True).stdout
 
@@ -100,7 +100,7 @@ def cdef() -> str:
         if isinstance(node, c_ast.FuncDef):  # a static inline function: its prototype (cffi calls it)
             node = node.decl
             node.storage, node.funcspec = [], []
-        if node.name not in KNOWN_TYPES and not (node.name or "").endswith("_"):
+        if hasattr(node, "name") and node.name not in KNOWN_TYPES and not (node.name or "").endswith("_"):
             decls.append(gen.visit(node) + ";")
     macros = [f"#define {name} ..." for name, body in
               sorted(re.findall(r"^#define ([A-Za-z]\w*) (.*)$", preprocess("-dM"), re.M))
