@@ -185,3 +185,19 @@ def test_the_check_sees_the_c_extension_when_loaded():
     code = "import sys, linsense.sim.core\nassert 'linsense._ctrl' in sys.modules\n"
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert r.returncode == 0, r.stderr
+
+
+def test_every_module_of_the_package_sits_in_a_layer():
+    """.importlinter's layers name every top-level module and package of linsense (a new one that
+    sits in no layer would escape the contract), and nothing that does not exist."""
+    import configparser
+
+    cfg = configparser.ConfigParser()
+    cfg.read(SRC.parent / ".importlinter")
+    named = {name.strip().removeprefix("linsense.") for line in cfg["importlinter:contract:layers"]["layers"]
+             .split("\n") for name in line.split("|") if name.strip()}
+    pkg = PKG
+    present = ({p.stem for p in pkg.glob("*.py") if p.stem != "__init__"}
+               | {p.name for p in pkg.iterdir() if (p / "__init__.py").is_file()})
+    assert present - named == set(), f"modules in no layer of .importlinter: {sorted(present - named)}"
+    assert named - present == set(), f".importlinter names what does not exist: {sorted(named - present)}"
