@@ -36,8 +36,21 @@ def _load(spec: str):
     return load_motor(spec)
 
 
+def _version(ctx: click.Context, _param: click.Parameter, value: bool) -> None:
+    """``--version``: the package's version and the C library's (``LS_VERSION_*``, ls_types.h)."""
+    if not value or ctx.resilient_parsing:
+        return
+    from linsense.ctrl import ffi, lib
+
+    c_version = f"{lib.LS_VERSION_MAJOR}.{lib.LS_VERSION_MINOR}.{lib.LS_VERSION_PATCH}"
+    real = "float" if ffi.sizeof("LS_REAL") == 4 else "double"
+    click.echo(f"linsense {__version__} (C library {c_version}, LS_REAL {real})")
+    ctx.exit()
+
+
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
-@click.version_option(__version__, prog_name="linsense")
+@click.option("--version", is_flag=True, expose_value=False, is_eager=True, callback=_version,
+              help="Show the version of linsense and of its C library, and exit.")
 def cli() -> None:
     """End-effect-aware HF-injection sensorless control of linear PM motors."""
 

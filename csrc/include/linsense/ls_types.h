@@ -14,6 +14,12 @@
 #include <stddef.h> /* NULL, size_t: a freestanding compiler header, not libc */
 #include <math.h>   /* the LS_SIN ... macros and the inline helpers use it */
 
+/* The library's version (semantic: major for an API change, minor for an addition); released with
+ * the Python package of the same number (`linsense --version` shows both; a test keeps them equal). */
+#define LS_VERSION_MAJOR 0
+#define LS_VERSION_MINOR 1
+#define LS_VERSION_PATCH 0
+
 #ifdef LS_REAL_DOUBLE
 typedef double LS_REAL;
 #define LS_R(x) (x)
