@@ -134,8 +134,9 @@ LS_DRIVE_PART bool ls_drive_est_open_(ls_drive *d, const ls_meas *meas, ls_cmd *
 LS_DRIVE_PART bool ls_drive_enc_open_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd, ls_drive_io *io);
 
 /* The HF observer on the demodulated error (counted once the injection has reached its
- * amplitude) and its plausibility check; true: a fault tripped. */
-LS_DRIVE_PART bool ls_drive_observe_(ls_drive *d, LS_REAL err);
+ * amplitude) and its plausibility check; true: a fault tripped, the drive disabled and reported in
+ * cmd (the step ends). Else the estimate is the step's position and speed (io->pos, io->omega). */
+LS_DRIVE_PART bool ls_drive_observe_(ls_drive *d, ls_cmd *cmd, ls_drive_io *io, LS_REAL err);
 
 /* The demodulator on the step's HF currents (io->ihf_a, io->ihf_b) in the frame (io->c, io->s) at
  * the angle theta (of that frame, in [0, 2 pi)), with the table when it is on; returns the error

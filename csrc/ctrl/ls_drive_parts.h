@@ -143,12 +143,18 @@ LS_DRIVE_PART LS_REAL ls_drive_demod_(ls_drive *d, const ls_drive_io *io, LS_REA
                                  LS_R(0.0));
 }
 
-LS_DRIVE_PART bool ls_drive_observe_(ls_drive *d, LS_REAL err)
+LS_DRIVE_PART bool ls_drive_observe_(ls_drive *d, ls_cmd *cmd, ls_drive_io *io, LS_REAL err)
 {
     const LS_REAL e_obs = d->inj.amp >= d->cfg.inject.amplitude ? err : LS_R(0.0);
     ls_observer_step_finite(&d->obs, e_obs, d->f_ref);
     ls_protect_check_observer(&d->prot, e_obs, d->demod.valid, d->obs.omega);
-    return d->prot.fault != LS_FAULT_NONE;
+    if (d->prot.fault != LS_FAULT_NONE) {
+        ls_drive_disable_report_(d, cmd, d->prot.fault);
+        return true;
+    }
+    io->pos = d->obs.pos;
+    io->omega = d->obs.omega;
+    return false;
 }
 
 /* --------------------------------------------------------------------------- force and current */

@@ -30,12 +30,9 @@ void ls_drive_rotating_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
 
     /* negative-sequence demodulation and observer (the error counts once the injection is up) */
     err = ls_drive_demod_(d, &io, d->obs.pos.theta);
-    if (ls_drive_observe_(d, err)) {
-        ls_drive_disable_report_(d, cmd, d->prot.fault);
+    if (ls_drive_observe_(d, cmd, &io, err)) {
         return;
     }
-    io.pos = d->obs.pos;
-    io.omega = d->obs.omega;
 
     /* position reference and control -> force -> current reference */
     ls_drive_force_(d, &io);

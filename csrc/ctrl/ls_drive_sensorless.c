@@ -24,13 +24,10 @@ void ls_drive_sensorless_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
         /* (advanced by the axis's turn over the HF path's delay) */
         const LS_REAL err = ls_drive_demod_(d, &io, d->obs.pos.theta) +
                             d->cfg.hf_delay * d->obs.omega;
-        if (ls_drive_observe_(d, err)) {
-            ls_drive_disable_report_(d, cmd, d->prot.fault);
+        if (ls_drive_observe_(d, cmd, &io, err)) {
             return;
         }
     }
-    io.pos = d->obs.pos;
-    io.omega = d->obs.omega;
 
     /* position reference and control -> force -> current reference */
     ls_drive_force_(d, &io);
