@@ -35,6 +35,7 @@ from linsense.sim.checks import (
     check_startup,
     check_trace_file,
     run_steps,
+    sensor_triples,
 )
 from linsense.sim.core import PlantSetup, SimulationError, plant_template, sim_cfg
 from linsense.sim.drive_cfg import calibration_table, drive_values, fill, value_of
@@ -158,7 +159,7 @@ def validate(sc: Scenario, motor: Motor, known: dict, user_keys: set[str],
     s = sc.spec
     if known["demod_gain"] is None:
         raise InputError(sc.source, "controller.model.L_q", "equals L_d: no saliency, no demodulator gain")
-    gain, offs = _sensor_triples(s.sensors)
+    gain, offs = sensor_triples(s.sensors)
     check_sensors(sc.source, gain, offs, s.sensors.current_noise, s.protection.i_max,
                   "protection.i_max" in user_keys)
     sat = plant_saturation(sc, motor)
@@ -173,19 +174,12 @@ def validate(sc: Scenario, motor: Motor, known: dict, user_keys: set[str],
     return sat, n_steps
 
 
-def _sensor_triples(sens) -> tuple[list, list]:
-    """The current sensors' gains and offsets, one per phase."""
-    gain = sens.current_gain if isinstance(sens.current_gain, list) else [sens.current_gain] * 3
-    offs = sens.current_offset if isinstance(sens.current_offset, list) else [sens.current_offset] * 3
-    return gain, offs
-
-
 def plant(sc: Scenario, motor: Motor, sat: Saturation | None) -> tuple[PlantSetup, object]:
     """The plant's set-up and its ``ls_sim_cfg *`` (from a cached template of the motor, saturated
     with ``sat``)."""
     s = sc.spec
     inv, sens, tr, ld = s.inverter, s.sensors, s.travel, s.load
-    gain, offs = _sensor_triples(sens)
+    gain, offs = sensor_triples(sens)
     setup = PlantSetup(
         fidelity=inv.fidelity, v_dc=inv.v_dc, f_pwm=inv.f_pwm, dead_time=inv.dead_time,
         i_gain=tuple(gain), i_offset=tuple(offs), i_noise=sens.current_noise, adc_bits=sens.adc_bits,

@@ -49,6 +49,13 @@ def check_positions(sc: Scenario, tau: float) -> None:
                              "docs/firmware.md)")
 
 
+def sensor_triples(sens) -> tuple[list, list]:
+    """The current sensors' gains and offsets (``[sensors]``), one per phase."""
+    gain = sens.current_gain if isinstance(sens.current_gain, list) else [sens.current_gain] * 3
+    offs = sens.current_offset if isinstance(sens.current_offset, list) else [sens.current_offset] * 3
+    return gain, offs
+
+
 def check_sensors(source: str, gain: list, offset: list, noise: float, i_trip: float,
                   trip_given: bool = False) -> None:
     """Refuse current sensors the drive cannot run with: a gain of 0 or below (the current not

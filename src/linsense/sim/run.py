@@ -14,6 +14,7 @@ import numpy as np
 from linsense.errors import InputError
 from linsense.limits import MAX_STEPS
 from linsense.sim.build import build
+from linsense.sim.checks import sensor_triples
 from linsense.sim.core import BLOCKS, run_closed_loop
 from linsense.sim.metrics import compute_metrics
 from linsense.sim.result import Result
@@ -125,8 +126,7 @@ def finish_metrics(b, raw, m: dict, block: int) -> None:
         # a trip at the very first step is the configuration's doing, not the closed loop's
         first = m["fault"].split("+")[0]  # the first fault named (several can trip together)
         sens = s.sensors
-        offset = max(abs(o) for o in ([sens.current_offset] if isinstance(sens.current_offset, float)
-                                      else sens.current_offset))
+        offset = max(abs(o) for o in sensor_triples(sens)[1])
         on_sensor = first == "overcurrent" and (sens.current_noise or offset)
         if on_sensor and "protection.i_max" not in b.user_keys:
             # (the file gives the sensor, not the trip: name what it gives, issue 23)
