@@ -78,5 +78,11 @@ def scenario_with(base: str, text: str) -> str:
     return out + "\n" + "\n".join(extra) + "\n"
 
 
+def shown(value: float, text: str) -> bool:
+    """``value`` written with as many decimals as ``text`` is ``text`` (the rounding the docs show)."""
+    decimals = len(text.split(".")[1]) if "." in text else 0
+    return f"{value:.{decimals}f}" == text
+
+
 def theta_grid(n: int = 721) -> np.ndarray:
     return np.linspace(0.0, 2.0 * np.pi, n, endpoint=False)

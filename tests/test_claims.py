@@ -106,16 +106,11 @@ import numpy as np
 import pytest
 
 import linsense
+from conftest import shown
 from linsense.model.motor import load_motor
 
 ROOT = Path(__file__).resolve().parents[1]
 CLASS = ROOT / "examples" / "motors" / "class"
-
-
-def shown(value: float, text: str) -> bool:
-    """``value`` written with as many decimals as ``text`` is ``text`` (the rounding the docs show)."""
-    decimals = len(text.split(".")[1]) if "." in text else 0
-    return f"{value:.{decimals}f}" == text
 
 
 def test_model_numbers():

@@ -20,6 +20,7 @@ from pathlib import Path
 
 import pytest
 
+from conftest import shown
 from linsense.errors import InputError
 from linsense.io import TIMING_KEYS
 from linsense.sim.metrics import REQUIRED_KEYS
@@ -369,12 +370,6 @@ def test_model_only_writes_no_report(run_cli, tmp_path):
     assert r.code == 0, r.err
     assert (tmp_path / "o" / "summary.json").is_file() and not (tmp_path / "o" / "report.html").exists()
 
-
-
-def shown(value: float, text: str) -> bool:
-    """``value`` written with as many decimals as ``text`` is ``text`` (the rounding the docs show)."""
-    decimals = len(text.split(".")[1]) if "." in text else 0
-    return f"{value:.{decimals}f}" == text
 
 
 def _at(m: dict, path: str):
