@@ -30,7 +30,28 @@ def _version(ctx: click.Context, _param: click.Parameter, value: bool) -> None:
     ctx.exit()
 
 
-@click.group(context_settings={"help_option_names": ["-h", "--help"]},
+class _Interrupted(Exception):
+    """Ctrl-C, carried past click (which would print an empty line and abort)."""
+
+
+class _Group(click.Group):
+    """The group, with Ctrl-C during parsing (``--version`` imports the C extension) or a command
+    (the imports of numpy and the rest) handed to :func:`main` as it is: one line, exit code 130."""
+
+    def make_context(self, *args, **kwargs):
+        try:
+            return super().make_context(*args, **kwargs)
+        except KeyboardInterrupt as exc:
+            raise _Interrupted from exc
+
+    def invoke(self, ctx):
+        try:
+            return super().invoke(ctx)
+        except KeyboardInterrupt as exc:
+            raise _Interrupted from exc
+
+
+@click.group(cls=_Group, context_settings={"help_option_names": ["-h", "--help"]},
              epilog=f"Documentation: {docs('cli')}")
 @click.option("--version", is_flag=True, expose_value=False, is_eager=True, callback=_version,
               help="Show the version of linsense and of its C library, and exit.")
@@ -66,7 +87,7 @@ def main(argv: list[str] | None = None) -> None:
             sys.exit(130)
         click.echo("linsense: aborted", err=True)
         sys.exit(1)
-    except KeyboardInterrupt:  # Ctrl-C: the run stops within a second, its outputs not written
+    except (KeyboardInterrupt, _Interrupted):  # Ctrl-C: the run stops within a second, no output written
         click.echo("linsense: interrupted", err=True)
         sys.exit(130)
     except click.UsageError as exc:

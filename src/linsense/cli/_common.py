@@ -95,8 +95,8 @@ def progress() -> bool:
 def elapsed() -> None:
     """``-v``: the command's CPU and wall time."""
     if "t0" in _STATE:
-        detail(f"({time.process_time() - _STATE['cpu0']:.2f} s CPU, {time.perf_counter() - _STATE['t0']:.2f} s "
-               "wall in the command)")
+        cpu, wall = time.process_time() - _STATE["cpu0"], time.perf_counter() - _STATE["t0"]
+        detail(f"({cpu:.2f} s CPU, {wall:.2f} s wall in the command)")
 
 
 def _plain(obj):

@@ -106,8 +106,8 @@ def plot(motor_spec: str, points: int, out: str, as_json: bool) -> None:
 @click.option("--noise", default=0.0, show_default=True, type=float, callback=c.finite(0.0, False),
               help="relative complex Gaussian noise on every phasor (0.01 = 1 %)")
 @click.option("--seed", default=0, show_default=True, type=click.IntRange(min=0), help="random seed")
-@click.option("--freq", "freq_hz", default=1000.0, show_default=True, type=float, callback=c.finite(0.0, True),
-              help="excitation frequency, Hz")
+@click.option("--freq", "freq_hz", default=1000.0, show_default=True, type=float,
+              callback=c.finite(0.0, True), help="excitation frequency, Hz")
 @click.option("--current", default=1.0, show_default=True, type=float, callback=c.finite(0.0, True),
               help="nominal current amplitude, A peak (each row: random phase, 0.8..1.2 times this)")
 @click.option("--amplitude-only", is_flag=True, help="write magnitudes only (I, VA, VB, VC), as the paper")

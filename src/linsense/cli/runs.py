@@ -81,8 +81,8 @@ def simulate(scenario: str, out: str, fidelity: str | None, trace_fmt: str, deci
     if mat and n_rec > MAT_MAX_SAMPLES:
         need = -(-b.n_steps // MAT_MAX_SAMPLES)
         raise InputError("--mat", "", f"trace.mat is written from the whole trace held in memory: {n_rec:,} "
-                                      f"samples is beyond the limit of {MAT_MAX_SAMPLES:,} ({docs('limits')}); "
-                                      f"record fewer (--decimate {need}) or use the Parquet trace")
+                         f"samples is beyond the limit of {MAT_MAX_SAMPLES:,} ({docs('limits')}); "
+                         f"record fewer (--decimate {need}) or use the Parquet trace")
     mat_parts: list[dict] = []
 
     def run(f=None):

@@ -8,13 +8,13 @@ import click
 
 from linsense.cli import _common as c
 from linsense.cli.runs import drive_options
-from linsense.version import docs
+
 
 @click.command(short_help="Design the drive for a motor and verify it.")
 @click.option("--motor", "motor_spec", required=True, help=c.MOTOR_HELP)
 @click.option("--scenario", "scenario_path", default=None,
-              help="scenario (a file or a packaged example's name) whose drive data (bus, PWM, dead time, i_max, injection) and other keys "
-                   "are kept")
+              help="scenario (a file or a packaged example's name) whose drive data (bus, PWM, dead "
+                   "time, i_max, injection) and other keys are kept")
 @drive_options
 @click.option("--quad", type=float, default=None, callback=c.quad,
               help="elliptical share kappa on q (0: pulsating; default 0.9)")

@@ -26,7 +26,7 @@ KINDS = {"motors": ".toml", "scenarios": ".toml", "sweeps": ".toml", "fea": ".to
 
 #: what a name of each kind is, for messages
 WHAT = {"motors": "motor", "scenarios": "scenario", "sweeps": "sweep", "fea": "geometry",
-        "bench": "bench file", "firmware": "firmware file"}
+        "bench": "bench", "firmware": "firmware"}
 
 
 def files() -> list[str]:
@@ -87,6 +87,17 @@ def path(kind: str, name: str) -> Path | None:
     return _index(kind).get(name)
 
 
+def named(kind: str, spec):
+    """``spec`` unchanged, unless it is a str that is not an existing path but a packaged example
+    of ``kind``'s name: then that example's path (the API's lenient form of :func:`resolve`: a
+    wrong path keeps its reader's own message)."""
+    if isinstance(spec, str) and not Path(spec).exists():
+        p = path(kind, spec)
+        if p is not None:
+            return p
+    return spec
+
+
 def resolve(kind: str, spec: str | Path, key: str = "", extra: tuple[str, ...] = ()) -> str:
     """A file argument: ``spec`` itself if it is an existing path, else the packaged example of
     ``kind`` it names, else :class:`~linsense.errors.InputError` listing the names.
@@ -113,6 +124,8 @@ def resolve(kind: str, spec: str | Path, key: str = "", extra: tuple[str, ...] =
     p = path(kind, s)
     if p is not None:
         return str(p)
+    if Path(s).suffix or any(sep in s for sep in "/\\"):  # (a path, not a name: the file is missing)
+        raise InputError(s, "", f"no such {WHAT[kind]} file ({listing(kind, extra)})")
     raise InputError(key or WHAT[kind], "", unknown(kind, s, extra))
 
 
@@ -120,9 +133,12 @@ def unknown(kind: str, spec: str, extra: tuple[str, ...] = ()) -> str:
     """The one-line message for a ``spec`` that is neither a file nor a packaged example of ``kind``
     (nor one of the ``extra`` names)."""
     what = WHAT[kind]
-    listed = ", ".join([*extra, *names(kind)])
-    return (f"unknown {what} {spec!r}: no such file, nor a packaged {what} (names: {listed}; "
-            "`linsense examples DIR` copies the examples out)")
+    return f"unknown {what} {spec!r}: no such file, nor a packaged {what} ({listing(kind, extra)})"
+
+
+def listing(kind: str, extra: tuple[str, ...] = ()) -> str:
+    """``names: a, b, ...; `linsense examples DIR` copies the examples out``, for a message."""
+    return f"names: {', '.join([*extra, *names(kind)])}; `linsense examples DIR` copies the examples out"
 
 
 def copy_to(dest: str | Path, force: bool = False) -> list[Path]:

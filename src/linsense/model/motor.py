@@ -189,15 +189,17 @@ def load_motor(spec: str | Path, check: bool = True) -> Motor:
     path = Path(spec_s)
     if names_a_file(spec_s):
         if not path.exists():
-            raise InputError("--motor", "", examples.unknown("motors", spec_s, tuple(preset_names())))
+            listing = examples.listing("motors", tuple(preset_names()))
+            raise InputError(spec_s, "", f"no such motor file ({listing})")
         text = read_text_file(spec_s, "motor file")
         motor = motor_from_toml(text, source=spec_s, base_dir=path.parent)
     elif spec_s in preset_names():
         text = preset_text(spec_s)
         motor = motor_from_toml(text, source=f"preset {spec_s}", base_dir=None)
     else:  # a packaged example's name (linsense.examples), else unknown: the names listed
-        p = example_motor(spec_s)
-        motor = motor_from_toml(read_text_file(p, "motor file"), source=f"example {spec_s}", base_dir=p.parent)
+        p = example_motor(spec_s)  # (a name: tables relative to the packaged file)
+        text = read_text_file(p, "motor file")
+        motor = motor_from_toml(text, source=f"example {spec_s}", base_dir=p.parent)
     check_plausible(motor)
     if check:
         check_motor(motor)

@@ -273,9 +273,9 @@ def resolve_motor(sc: Scenario, spec: str | None = None, key: str = "motor", che
         if spec in preset_names():
             return memo(("motor", check, "preset", spec), lambda: load_motor(spec, check=check))
         if motor_path(spec) == spec:  # (else a packaged example motor's name: its file)
-            raise InputError(sc.source, key, f"unknown preset {spec!r} (presets: {', '.join(preset_names())}; "
-                             f"examples: {', '.join(examples.names('motors'))}; or a path to a .toml "
-                             "motor file, relative to the scenario)")
+            raise InputError(sc.source, key, f"unknown preset {spec!r} (presets: "
+                             f"{', '.join(preset_names())}; examples: {', '.join(examples.names('motors'))}; "
+                             "or a path to a .toml motor file, relative to the scenario)")
     p = Path(motor_path(spec))
     if not p.is_absolute():
         p = sc.base_dir / p
