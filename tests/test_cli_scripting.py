@@ -327,3 +327,17 @@ def test_an_unknown_name_is_one_line_listing_the_names(run_cli, tmp_path, args, 
     for name in examples.names(kinds[kind]):
         assert name in line
     assert not Path("o").exists() and not Path("o.toml").exists()
+
+
+def test_docs_list_every_json_key():
+    """docs/cli.md's table of --json summaries names each command's keys (a key added to a summary
+    and not documented fails here)."""
+    rows = {}
+    for line in (ROOT / "docs" / "cli.md").read_text().splitlines():
+        m = re.match(r"^\| `([a-z-]+)` \| (.*)$", line)
+        if m and m.group(1) in JSON_KEYS:
+            rows[m.group(1)] = m.group(2)
+    assert set(rows) == set(JSON_KEYS)
+    for command, keys in JSON_KEYS.items():
+        for key in keys - COMMON:
+            assert f"`{key}`" in rows[command], (command, key)
