@@ -192,3 +192,8 @@ def example(kind: str, spec: str, key: str, extra: tuple[str, ...] = ()) -> str:
 def show(v: float | None, unit: str, fmt: str = ".2f") -> str:
     """A metric for a person: 'n/a' where it is not defined."""
     return "n/a" if v is None else f"{v:{fmt}} {unit}"
+
+
+def see(page: str) -> str:
+    """A command's help epilog: its page on the docs site."""
+    return f"Documentation: {docs(page)}"

@@ -13,7 +13,8 @@ from linsense.limits import MAX_POSITIONS
 from linsense.version import docs
 
 
-@click.command(short_help="Tabulate the HF inductance model (CSV).")
+@click.command(short_help="Tabulate the HF inductance model (CSV).",
+               epilog=c.see("cli"))
 @click.option("--motor", "motor_spec", required=True, help=c.MOTOR_HELP)
 @click.option("--points", default=360, show_default=True, callback=c.points, help="positions over one period")
 @click.option("--out", required=True, type=click.Path(dir_okay=False, allow_dash=True),
@@ -28,7 +29,8 @@ def model(motor_spec: str, points: int, out: str) -> None:
     c.elapsed()
 
 
-@click.command(short_help="Export the compensation LUT (CSV, JSON or C).")
+@click.command(short_help="Export the compensation LUT (CSV, JSON or C).",
+               epilog=c.see("theory"))
 @click.option("--motor", "motor_spec", required=True, help=c.MOTOR_HELP)
 @click.option("--points", default=360, show_default=True, callback=c.points, help="table length")
 @click.option("--format", "fmt", type=click.Choice(["csv", "json", "c"]), default="csv", show_default=True)
@@ -77,7 +79,8 @@ def lut(motor_spec: str, points: int, fmt: str, symbol: str | None, f_inj: float
     c.elapsed()
 
 
-@click.command(short_help="Draw the paper's model figures (PNG).")
+@click.command(short_help="Draw the paper's model figures (PNG).",
+               epilog=c.see("theory"))
 @click.option("--motor", "motor_spec", required=True, help=c.MOTOR_HELP)
 @click.option("--points", default=56, show_default=True, callback=c.points, help="LUT points drawn")
 @click.option("--out", required=True, type=click.Path(file_okay=False), help="output folder")
@@ -99,7 +102,8 @@ def plot(motor_spec: str, points: int, out: str, as_json: bool) -> None:
         c.emit_json("plot", s.files, True, motor=motor.name)
 
 
-@click.command("bench-emulate", short_help="Emulate a bench measurement on a motor (CSV).")
+@click.command("bench-emulate", short_help="Emulate a bench measurement on a motor (CSV).",
+               epilog=c.see("identify"))
 @click.option("--motor", "motor_spec", required=True, help=c.MOTOR_HELP)
 @click.option("--positions", default=56, show_default=True, type=click.IntRange(8, MAX_POSITIONS),
               help="equally spaced positions over one pole pitch")
@@ -125,7 +129,8 @@ def bench_emulate(motor_spec: str, positions: int, noise: float, seed: int, freq
     c.elapsed()
 
 
-@click.command(short_help="Identify the HF inductance model from a bench file.")
+@click.command(short_help="Identify the HF inductance model from a bench file.",
+               epilog=c.see("identify"))
 @click.argument("bench", type=click.Path(dir_okay=False))
 @click.option("--out", required=True, type=click.Path(file_okay=False), help="output folder")
 @click.option("--harmonics", default=1, show_default=True, type=click.IntRange(1, 20),
@@ -175,7 +180,8 @@ def identify(bench: str, out: str, harmonics: int, motor_spec: str | None, pole_
         c.emit_json("identify", s.files, True, fit=fit_report(ident), warnings=list(ident.warnings))
 
 
-@click.command(short_help="Copy the packaged examples into a folder.")
+@click.command(short_help="Copy the packaged examples into a folder.",
+               epilog=c.see("cli"))
 @click.argument("folder", type=click.Path(file_okay=False), required=False)
 @click.option("--force", is_flag=True, help="overwrite files that exist (else: refused, nothing copied)")
 @click.option("--list", "list_only", is_flag=True, help="only list the examples' names by kind, copy nothing")

@@ -37,7 +37,8 @@ def _scenario(spec: str):
     return load_scenario(c.example("scenarios", spec, "SCENARIO"))
 
 
-@click.command(short_help="Run a closed-loop drive simulation.")
+@click.command(short_help="Run a closed-loop drive simulation.",
+               epilog=c.see("simulator"))
 @click.argument("scenario")
 @click.option("--out", required=True, type=click.Path(file_okay=False), help="output folder")
 @click.option("--fidelity", type=click.Choice(["average", "switching"]), default=None,
@@ -171,7 +172,8 @@ def drive_options(f):
     return f
 
 
-@click.command(short_help="Run the firmware's LUT calibration in the simulator.")
+@click.command(short_help="Run the firmware's LUT calibration in the simulator.",
+               epilog=c.see("simulator"))
 @click.option("--motor", "motor_spec", default=None,
               help=c.MOTOR_HELP + "; with --scenario it must be the scenario's motor")
 @click.option("--scenario", "scenario_path", default=None,
@@ -248,7 +250,8 @@ def failed_claims(metrics: dict) -> list[str]:
     return out
 
 
-@click.command(short_help="Reproduce the paper's Section V, claim by claim.")
+@click.command(short_help="Reproduce the paper's Section V, claim by claim.",
+               epilog=c.see("reproduce"))
 @click.option("--motor", "motor_spec", default="ecce2010", show_default=True, help=c.MOTOR_HELP)
 @click.option("--out", default="out", show_default=True, type=click.Path(file_okay=False))
 @click.option("--quick", is_flag=True,
@@ -282,7 +285,8 @@ def reproduce(motor_spec: str, out: str, quick: bool, model_only: bool, check: b
         raise click.exceptions.Exit(1)
 
 
-@click.command("fea", short_help="Axisymmetric FEA of a tubular motor.")
+@click.command("fea", short_help="Axisymmetric FEA of a tubular motor.",
+               epilog=c.see("fea"))
 @click.argument("geometry")
 @click.option("--out", required=True, type=click.Path(file_okay=False), help="output folder")
 @click.option("--positions", type=click.IntRange(12, 720), default=56, show_default=True,
@@ -327,7 +331,8 @@ def fea(geometry: str, out: str, positions: int, level: str, lut_points: int, lo
                     warnings=list(warnings))
 
 
-@click.command("sweep", short_help="Run a sweep of scenarios on dask.")
+@click.command("sweep", short_help="Run a sweep of scenarios on dask.",
+               epilog=c.see("sweeps"))
 @click.argument("sweep_file")
 @click.option("--out", required=True, type=click.Path(file_okay=False),
               help="output folder (the same folder again resumes a killed sweep)")

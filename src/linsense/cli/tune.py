@@ -10,7 +10,8 @@ from linsense.cli import _common as c
 from linsense.cli.runs import drive_options
 
 
-@click.command(short_help="Design the drive for a motor and verify it.")
+@click.command(short_help="Design the drive for a motor and verify it.",
+               epilog=c.see("tuning"))
 @click.option("--motor", "motor_spec", required=True, help=c.MOTOR_HELP)
 @click.option("--scenario", "scenario_path", default=None,
               help="scenario (a file or a packaged example's name) whose drive data (bus, PWM, dead "
