@@ -43,7 +43,7 @@ install: $(STAMP)
 
 demo: $(STAMP)
 	$(VENV)/bin/linsense reproduce --motor ecce2010 --out out
-	@for f in examples/scenarios/*.toml; do \
+	@for f in src/linsense/examples/scenarios/*.toml; do \
 	  n=$$(basename $$f .toml); $(VENV)/bin/linsense simulate $$f --out out/sim/$$n --plot || exit 1; \
 	done
 
@@ -106,7 +106,7 @@ EXAMPLE := $(BUILD)/example
 example: $(STAMP)
 	@mkdir -p $(EXAMPLE)
 	$(VENV)/bin/linsense tune --motor ecce2010 --format c --no-verify --out $(EXAMPLE)/ls_cfg_ecce2010.h
-	$(CC) $(CSTD) -O2 -Icsrc/include -I$(EXAMPLE) examples/firmware/main.c $(CTRL_SRC) -lm -o $(EXAMPLE)/firmware_example
+	$(CC) $(CSTD) -O2 -Icsrc/include -I$(EXAMPLE) src/linsense/examples/firmware/main.c $(CTRL_SRC) -lm -o $(EXAMPLE)/firmware_example
 	$(EXAMPLE)/firmware_example
 
 # Fuzzing ls_drive_step and the ls_drive_* setters (csrc/tests/fuzz_drive.c: a structure-aware

@@ -15,7 +15,7 @@ from linsense.sim.scenario import scenario_from_dict
 from linsense.sim.startup import base_scenario
 
 ROOT = Path(__file__).resolve().parent.parent
-M20 = str(ROOT / "examples" / "motors" / "class" / "m20_hv.toml")  # (its design injects 49 V)
+M20 = str(ROOT / "src/linsense/examples" / "motors" / "class" / "m20_hv.toml")  # (its design injects 49 V)
 
 
 @pytest.fixture

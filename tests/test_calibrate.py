@@ -1,7 +1,8 @@
 """linsense calibrate on the drive that will run the table (issue 22 item 6): the scenario's or the
 design's drive, the model of the injection the drive actually runs (after the design), the
 calibration's own timings following the design, and the bar of 0.3 deg against that model for
-ecce2010 and the test motors of examples/motors/class (switching inverter with the drive's dead time).
+ecce2010 and the test motors of src/linsense/examples/motors/class (switching inverter with the
+drive's dead time).
 """
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ from linsense.sim.calibrate import DRIVE_KEYS, calibrate, calibration_scenario
 from linsense.tune.design import DriveData, design
 
 ROOT = Path(__file__).parents[1]
-CLASS = ROOT / "examples" / "motors" / "class"
+CLASS = ROOT / "src/linsense/examples" / "motors" / "class"
 DRIVES = tomllib.loads((CLASS / "drives.toml").read_text())
 CLASS_MOTORS = sorted(p.stem for p in CLASS.glob("*.toml") if p.stem in DRIVES)
 BAR_DEG = 0.3

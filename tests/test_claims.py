@@ -110,7 +110,7 @@ from conftest import shown
 from linsense.model.motor import load_motor
 
 ROOT = Path(__file__).resolve().parents[1]
-CLASS = ROOT / "examples" / "motors" / "class"
+CLASS = ROOT / "src/linsense/examples" / "motors" / "class"
 
 
 def test_model_numbers():
@@ -302,7 +302,7 @@ def _example_row(name: str, fidelity: str) -> str:
     """docs/simulator.md's row of the example scenario ``name`` on ``fidelity``."""
     from linsense.sim.scenario import load_scenario
 
-    sc = load_scenario(ROOT / "examples" / "scenarios" / f"{name}.toml")
+    sc = load_scenario(ROOT / "src/linsense/examples" / "scenarios" / f"{name}.toml")
     sc = sc.replace(inverter={"fidelity": fidelity})
     m = linsense.simulate(sc).metrics
     settling = "-" if m["settling_time_s"] is None else f"{m['settling_time_s']:.2f}"
@@ -319,7 +319,7 @@ def test_example_scenarios_table():
     rows = [line for line in text.splitlines()
             if line.startswith("| `") and (" | average | " in line or " | switching | " in line)]
     names = sorted({r.split("`")[1] for r in rows})
-    assert names == sorted(p.stem for p in (ROOT / "examples" / "scenarios").glob("*.toml")
+    assert names == sorted(p.stem for p in (ROOT / "src/linsense/examples" / "scenarios").glob("*.toml")
                            if not p.stem.endswith("_switching")), names
     assert len(rows) == 2 * len(names)
     got = [_example_row(r.split("`")[1], r.split(" | ")[1]) for r in rows]
@@ -337,7 +337,7 @@ def test_simulator_text_numbers():
     from linsense.compensation.lut import build_lut
     from linsense.sim.scenario import load_scenario
 
-    sc = load_scenario(ROOT / "examples" / "scenarios" / "fig13_trajectory.toml")
+    sc = load_scenario(ROOT / "src/linsense/examples" / "scenarios" / "fig13_trajectory.toml")
     assert sc.spec.initial.load_balanced
     sag = {}
     for balanced in (False, True):
@@ -352,7 +352,7 @@ def test_simulator_text_numbers():
     assert shown(sw["limit_cycle_mm"], "0.0003")
     steps = {}
     for n in ("step3_lut", "step6_lut", "step3_nolut", "step6_nolut"):
-        step = load_scenario(ROOT / "examples" / "scenarios" / f"{n}.toml")
+        step = load_scenario(ROOT / "src/linsense/examples" / "scenarios" / f"{n}.toml")
         steps[n] = linsense.simulate(step.replace(inverter={"fidelity": "switching"})).metrics
     for n in ("step3_lut", "step6_lut"):
         assert abs(steps[n]["bias_deg"]) <= 0.1 and steps[n]["limit_cycle_mm"] <= 0.002, (n, steps[n])
@@ -387,7 +387,7 @@ def test_built_in_studies():
 
     docs = " ".join((ROOT / "docs" / "sweeps.md").read_text().split())
     for name, want in STUDY_LINES.items():
-        sw = load_sweep(ROOT / "examples" / "sweeps" / f"{name}.toml")
+        sw = load_sweep(ROOT / "src/linsense/examples" / "sweeps" / f"{name}.toml")
         df = sweep(sw, workers=2)
         line = summary_line(sw.spec.sweep.study, df, [a.key for a in sw.spec.axis])
         assert line.startswith(want), (name, line)

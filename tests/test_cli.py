@@ -221,7 +221,7 @@ def test_table_motor_errors(run_cli, tmp_path, case):
 @pytest.mark.parametrize(
     "args, words",
     [
-        (["model", "--motor", "nosuch", "--out", "o.csv"], ["--motor", "unknown preset 'nosuch'"]),
+        (["model", "--motor", "nosuch", "--out", "o.csv"], ["--motor", "unknown motor 'nosuch'", "small30"]),
         (["model", "--motor", "ecce2010", "--points", "2", "--out", "o.csv"], ["--points", "2"]),
         (["model", "--motor", "ecce2010", "--points", "many", "--out", "o.csv"], ["--points", "many"]),
         (["lut", "--motor", "ecce2010", "--format", "xml", "--out", "o.csv"], ["--format", "xml"]),

@@ -135,7 +135,7 @@ def test_short_armature_end_effect_and_model_file(tmp_path):
 
 
 def test_fig4_three_coils_middle_coil_couples_equally():
-    g = load_geometry(Path(__file__).resolve().parents[1] / "examples" / "fea" / "fig4_three_coils.toml")
+    g = load_geometry(Path(__file__).resolve().parents[1] / "src/linsense/examples/fea/fig4_three_coils.toml")
     res = run(g, 8, "coarse")
     m = res.L.mean(axis=0)
     assert abs(m[1, 2] - m[2, 0]) / abs(m[2, 0]) < 0.02  # M_BC = M_CA (C in the middle)
@@ -205,7 +205,7 @@ def test_geometry_not_toml_and_missing_file(tmp_path):
 def test_no_saliency_still_writes_the_table_and_says_so(tmp_path):
     from linsense.report.fea import run_fea
 
-    geo = Path(__file__).resolve().parents[1] / "examples" / "fea" / "fig4_three_coils.toml"
+    geo = Path(__file__).resolve().parents[1] / "src/linsense/examples" / "fea" / "fig4_three_coils.toml"
     files, lines, warnings = run_fea(str(geo), str(tmp_path / "o"), 14, "coarse", 36)
     names = {f.name for f in files}
     assert {"inductances.csv", "motor.toml", "fea.json"} <= names and "lut.csv" not in names
@@ -280,8 +280,8 @@ def _dump(d):
 def test_load_current_run_in_two_processes():
     from linsense.fea.solver import q_currents
 
-    d = tomllib.loads((Path(__file__).resolve().parents[1] / "examples" / "fea" / "fig4_three_coils.toml")
-                      .read_text())
+    d = tomllib.loads((Path(__file__).resolve().parents[1] / "src/linsense/examples/fea/fig4_three_coils.toml"
+                       ).read_text())
     d["rod"]["bh"] = "default"
     d["armature"]["bh"] = "default"
     g = _geom(d)
@@ -389,7 +389,7 @@ def test_load_sweep_writes_per_load_files_and_the_lut_against_load(tmp_path):
 
 
 # ------------------------------------------------------------------ d-axis current, polarity signal
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "fea"
+EXAMPLES = Path(__file__).resolve().parents[1] / "src/linsense/examples" / "fea"
 
 
 def test_d_axis_current_strengthens_the_pm_flux():

@@ -51,7 +51,7 @@ def motors(tmp_path_factory):
     (d / "rod32.toml").write_text(ROD)
     return {
         "ecce2010": (load_motor("ecce2010"), 1),
-        "harmonic": (load_motor(ROOT / "examples/motors/harmonic.toml"), 2),
+        "harmonic": (load_motor(ROOT / "src/linsense/examples/motors/harmonic.toml"), 2),
         "rod32": (load_motor(d / "rod32.toml"), 1),
     }
 
@@ -308,8 +308,8 @@ def test_cli_noise_free_table_is_the_model_table(run_cli, tmp_path, motors):
     """inductances.csv of noise-free data equals `linsense model` of the true motor, every column."""
     motor, _ = motors["harmonic"]
     bench = tmp_path / "b.csv"
-    assert run_cli("bench-emulate", "--motor", ROOT / "examples/motors/harmonic.toml", "--positions", 45,
-                   "--out", bench).code == 0
+    assert run_cli("bench-emulate", "--motor", ROOT / "src/linsense/examples/motors/harmonic.toml",
+                   "--positions", 45, "--out", bench).code == 0
     out = tmp_path / "id"
     r = run_cli("identify", bench, "--out", out, "--harmonics", 2, "--pole-pitch", 56,
                 "--force-constant", 20, "--mass", 1.5)
@@ -449,7 +449,7 @@ def _amplitude_file(tmp_path: Path) -> Path:
         ("resistance too big", ["--motor", "ecce2010", "--resistance", 50, "--amp"],
          ["amp.csv", "row 2", "column VA", "below the resistance 50 ohm"]),
         ("no such file", ["--motor", "ecce2010", "--missing"], ["nosuch.csv", "no such bench file"]),
-        ("bad motor", ["--motor", "nosuch"], ["--motor", "unknown preset"]),
+        ("bad motor", ["--motor", "nosuch"], ["--motor", "unknown motor"]),
     ],
 )
 def test_bad_identify_options(run_cli, tmp_path, case, args, words):
@@ -517,8 +517,8 @@ def test_emulation_is_reproducible_and_randomises_the_current(motors):
 
 
 def test_example_bench_file_identifies(run_cli, tmp_path):
-    """examples/bench/ecce2010_56_1pct_seed1.csv is what bench-emulate writes for its command."""
-    example = ROOT / "examples/bench/ecce2010_56_1pct_seed1.csv"
+    """src/linsense/examples/bench/ecce2010_56_1pct_seed1.csv is what bench-emulate writes for its command."""
+    example = ROOT / "src/linsense/examples/bench/ecce2010_56_1pct_seed1.csv"
     out = tmp_path / "b.csv"
     assert run_cli("bench-emulate", "--motor", "ecce2010", "--positions", 56, "--noise", 0.01, "--seed", 1,
                    "--out", out).code == 0

@@ -95,7 +95,8 @@ def test_errors_are_linsense_errors(tmp_path):
         load_motor(f)
 
 
-@pytest.mark.parametrize("path", sorted((Path(__file__).parents[1] / "examples" / "motors").glob("*.toml")))
+@pytest.mark.parametrize("path", sorted((Path(__file__).parents[1] / "src/linsense/examples/motors")
+                                         .glob("*.toml")))
 def test_shipped_examples_load(path):
     m = load_motor(path)
     check_motor(m)

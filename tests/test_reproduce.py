@@ -25,7 +25,7 @@ from linsense.errors import InputError
 from linsense.io import TIMING_KEYS
 from linsense.sim.metrics import REQUIRED_KEYS
 
-MOTORS = Path(__file__).resolve().parents[1] / "examples" / "motors"
+MOTORS = Path(__file__).resolve().parents[1] / "src/linsense/examples" / "motors"
 
 
 @pytest.fixture(scope="module")

@@ -19,8 +19,8 @@ from linsense.analysis.rotating import (
 from linsense.compensation.lut import build_lut
 from linsense.model.motor import load_motor
 
-MOTORS = ("ecce2010", "examples/motors/harmonic.toml", "examples/motors/small30.toml",
-          "examples/motors/tabulated.toml")
+MOTORS = ("ecce2010", "src/linsense/examples/motors/harmonic.toml",
+          "src/linsense/examples/motors/small30.toml", "src/linsense/examples/motors/tabulated.toml")
 
 
 def _motor(spec):

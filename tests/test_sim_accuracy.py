@@ -38,7 +38,7 @@ from scipy.integrate import solve_ivp
 from linsense.model.motor import Motor, load_motor
 from linsense.sim import core
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "motors"
+EXAMPLES = Path(__file__).resolve().parents[1] / "src/linsense/examples" / "motors"
 MOTORS = {
     "ecce2010": "ecce2010",
     "harmonic": str(EXAMPLES / "harmonic.toml"),

@@ -15,7 +15,7 @@ from linsense.sim import core, run
 from linsense.sim.build import build
 from linsense.sim.scenario import as_scenario
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "scenarios"
+EXAMPLES = Path(__file__).resolve().parents[1] / "src/linsense/examples" / "scenarios"
 
 
 def _built(name_or_dict, **sections):

@@ -230,7 +230,7 @@ def test_cli_check_exit_codes(tmp_path, capsys):
     with pytest.raises(SystemExit) as e:
         main(["simulate", str(ok), "--out", str(tmp_path / "a"), "--no-plot", "--check"])
     assert e.value.code == 0
-    cyc = Path(__file__).parents[1] / "examples" / "scenarios" / "step6_nolut.toml"  # a limit cycle
+    cyc = Path(__file__).parents[1] / "src/linsense/examples/scenarios/step6_nolut.toml"  # a limit cycle
     with pytest.raises(SystemExit) as e:
         main(["simulate", str(cyc), "--out", str(tmp_path / "b"), "--no-plot", "--check"])
     assert e.value.code == 1

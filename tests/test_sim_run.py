@@ -30,7 +30,7 @@ def _finite_metrics(m):
             assert math.isfinite(v), (k, v)
 
 
-EXAMPLES = Path(__file__).parents[1] / "examples" / "scenarios"
+EXAMPLES = Path(__file__).parents[1] / "src/linsense/examples" / "scenarios"
 
 
 def test_step3_lut_stable_with_sane_metrics():

@@ -33,7 +33,7 @@ from linsense.sim.scenario import scenario_from_dict
 from test_sim_accuracy import F_PWM, average_segments, duties, switching_segments
 
 ROOT = Path(__file__).resolve().parents[1]
-THIN = ROOT / "examples" / "motors" / "tubular56_thin_sat" / "motor.toml"
+THIN = ROOT / "src/linsense/examples" / "motors" / "tubular56_thin_sat" / "motor.toml"
 T_RUN = 0.010  # s of the accuracy runs (the reference is slow)
 #: acceptance of the saturated plant against the reference, of the peak (see the test)
 ACCEPT_SAT = 1e-6  # of the peak: README.md's and docs/simulator.md's claim, the linear plant's bar
@@ -399,9 +399,9 @@ def test_bad_motor_saturation_is_one_line(tmp_path, body, key, words):
 
 
 def test_cli_refuses_bad_saturation_with_exit_2(tmp_path, run_cli):
-    """A motor without [saturation] (examples/motors/harmonic.toml) and no parametric keys."""
+    """A motor without [saturation] (src/linsense/examples/motors/harmonic.toml) and no parametric keys."""
     sc = tmp_path / "s.toml"
-    harmonic = ROOT / "examples" / "motors" / "harmonic.toml"
+    harmonic = ROOT / "src/linsense/examples" / "motors" / "harmonic.toml"
     sc.write_text(f'motor = "{harmonic}"\n[scenario]\nname = "s"\nduration = 0.01\n'
                   '[reference]\ntype = "hold"\n[saturation]\nenabled = true\n')
     r = run_cli("simulate", sc, "--out", tmp_path / "o")
@@ -418,8 +418,8 @@ def test_calibrate_cli_saturated(tmp_path, run_cli):
     import json
     m = json.loads((tmp_path / "c" / "metrics.json").read_text())
     assert m["completed"] and m["saturated"] is True
-    r = run_cli("calibrate", "--motor", ROOT / "examples" / "motors" / "harmonic.toml", "--positions", "4",
-                "--saturated", "--out", tmp_path / "d")
+    r = run_cli("calibrate", "--motor", ROOT / "src/linsense/examples/motors/harmonic.toml", "--positions",
+                "4", "--saturated", "--out", tmp_path / "d")
     assert r.code == 2 and "no [saturation] section" in r.err and r.err.count("\n") == 1, r.err
 
 

@@ -11,7 +11,7 @@ from linsense.errors import InputError
 from linsense.sim.build import reference_commands, trapezoid_time
 from linsense.sim.scenario import load_scenario, scenario_from_dict
 
-EXAMPLES = sorted((Path(__file__).parents[1] / "examples" / "scenarios").glob("*.toml"))
+EXAMPLES = sorted((Path(__file__).parents[1] / "src/linsense/examples" / "scenarios").glob("*.toml"))
 
 BASE = """motor = "ecce2010"
 [scenario]
@@ -153,7 +153,7 @@ def test_error_in_motor_file_names_the_motor_file(tmp_path):
 
 
 def test_motor_path_relative_to_scenario(tmp_path):
-    motors = Path(__file__).parents[1] / "examples" / "motors"
+    motors = Path(__file__).parents[1] / "src/linsense/examples" / "motors"
     (tmp_path / "m.toml").write_text((motors / "harmonic.toml").read_text())
     (tmp_path / "s.toml").write_text(BASE.replace('motor = "ecce2010"', 'motor = "m.toml"'))
     from linsense.sim.build import resolve_motor

@@ -173,14 +173,14 @@ def test_another_sweep_in_the_same_folder_is_refused(run_cli, tmp_path):
 
 @pytest.mark.parametrize("name", ["stability_map", "stability_map_dm0", "lut_robustness", "injection"])
 def test_shipped_sweep_files_are_valid(name):
-    sw = load_sweep(ROOT / "examples" / "sweeps" / f"{name}.toml")
+    sw = load_sweep(ROOT / "src/linsense/examples" / "sweeps" / f"{name}.toml")
     assert sw.scenario_path.is_file()
     assert len(points(sw)) >= 20
     assert sw.spec.sweep.study is not None
 
 
 def test_study_figure_and_summary(run_cli, tmp_path):
-    text = (ROOT / "examples" / "sweeps" / "stability_map.toml").read_text()
+    text = (ROOT / "src/linsense/examples" / "sweeps" / "stability_map.toml").read_text()
     text = text.replace('scenario = "../scenarios/step6_lut.toml"', f'scenario = "{tmp_path / "base.toml"}"')
     text = text.replace("values = [1.5, 3.0, 4.5, 6.0, 9.0]", "values = [2.0, 4.0]").replace("n = 6", "n = 2")
     (tmp_path / "base.toml").write_text(SCENARIO)

@@ -149,7 +149,7 @@ def test_the_record_covers_motors_tables_and_the_controllers_motor(tmp_path):
     and from an axis's values, a preset by its text; a missing file as absent."""
     from linsense.sweep.inputs import sweep_inputs
 
-    sat = ROOT / "examples" / "motors" / "tubular56_thin_sat"
+    sat = ROOT / "src/linsense/examples" / "motors" / "tubular56_thin_sat"
     shutil.copytree(sat, tmp_path / "sat")
     (tmp_path / "base.toml").write_text('motor = "sat/motor.toml"\n[scenario]\nduration = 0.1\n'
                                         '[controller.model]\nmotor = "ecce2010"\n')
@@ -172,7 +172,7 @@ def test_the_record_covers_motors_tables_and_the_controllers_motor(tmp_path):
 def test_a_motor_axis_on_a_saturated_motor_finds_its_tables(tmp_path):
     """An edited copy of a motor with [saturation] tables (written under DIR/motors/) reads them
     where the motor file is (every run was refused: 'no such table file DIR/motors/...')."""
-    shutil.copytree(ROOT / "examples" / "motors" / "tubular56_thin_sat", tmp_path / "sat")
+    shutil.copytree(ROOT / "src/linsense/examples" / "motors" / "tubular56_thin_sat", tmp_path / "sat")
     (tmp_path / "base.toml").write_text('motor = "sat/motor.toml"\n[scenario]\nduration = 0.05\n'
                                         '[reference]\ntype = "hold"\n')
     (tmp_path / "s.toml").write_text('[sweep]\nscenario = "base.toml"\n'

@@ -17,7 +17,7 @@ from linsense.sim.scenario import load_scenario, scenario_from_dict
 from linsense.tune import DriveData, design
 
 ROOT = Path(__file__).parents[1]
-SMALL = ROOT / "examples" / "motors" / "small30.toml"
+SMALL = ROOT / "src/linsense/examples" / "motors" / "small30.toml"
 
 
 def test_scenario_without_gains_gets_the_design_for_its_motor():

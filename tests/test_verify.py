@@ -1,5 +1,5 @@
 """The certificate of `linsense tune` (docs/tuning.md, "The certificate"): its judge on synthetic
-runs, the designed limits, the test motors of examples/motors/class tuned and verified (--quick),
+runs, the designed limits, the test motors of src/linsense/examples/motors/class tuned and verified (--quick),
 and the command's outputs and exit codes."""
 
 from __future__ import annotations
@@ -29,7 +29,7 @@ from linsense.verify.cases import Case, all_cases, off_nominal_motor
 from linsense.verify.run import judge
 
 ROOT = Path(__file__).parents[1]
-CLASS = ROOT / "examples" / "motors" / "class"
+CLASS = ROOT / "src/linsense/examples" / "motors" / "class"
 DRIVES = tomllib.loads((CLASS / "drives.toml").read_text())
 NAMES = sorted(DRIVES)
 
@@ -242,7 +242,7 @@ def test_tune_scenario_options_reach_the_file(tmp_path, capsys, monkeypatch):
     scenario's trajectory (the limits are designed from them); a scenario without its table gets
     the widened trips; a start-up scenario verifies; --travel shortens the certificate's moves."""
     monkeypatch.chdir(tmp_path)
-    (tmp_path / "m.toml").write_text((ROOT / "examples" / "motors" / "small30.toml").read_text())
+    (tmp_path / "m.toml").write_text((ROOT / "src/linsense/examples" / "motors" / "small30.toml").read_text())
     sub = tmp_path / "s"
     sub.mkdir()
     (sub / "sc.toml").write_text('motor = "ecce2010"\n[scenario]\nduration = 1.0\n[control]\n'

@@ -49,7 +49,7 @@ def fig13(fid):
     import linsense
     from linsense.sim.scenario import load_scenario
 
-    path = ROOT / "examples" / "scenarios" / "fig13_trajectory.toml"
+    path = ROOT / "src/linsense/examples" / "scenarios" / "fig13_trajectory.toml"
     sc = load_scenario(path).replace(inverter={"fidelity": fid})
     return fid, linsense.simulate(sc).metrics
 

@@ -1,6 +1,7 @@
 """Benchmark of the axisymmetric FEA (make bench): 56 positions x 3 excitations (+ the magnets' solve)
 with linear iron at the default mesh of the tubular56 preset, target <= 30 s on 2 cores; then the
-same with the default B-H curve and 1 A of q-current (examples/fea/tubular56_bh.toml), target 3 min;
+same with the default B-H curve and 1 A of q-current (src/linsense/examples/fea/tubular56_bh.toml), target
+3 min;
 then the load sweep 0, 1, 2 A of q-current in one run (one linear pass for theta's origin, each load
 started from the previous one's states) and the largest difference of the LUT against 0 A.
 A report: the exit status is 0 whatever the result."""
@@ -27,7 +28,8 @@ def main() -> None:
           f"(z step {m.size * 1e3:.2f} mm); 56 positions x 3 excitations + magnets, linear iron: "
           f"{wall:.1f} s ({res.times['per_position_s'] * 1e3:.0f} ms per position) "
           f"{'PASS' if wall <= 30 else 'FAIL'} (target <= 30 s)", flush=True)
-    g = load_geometry(str(Path(__file__).resolve().parents[1] / "examples" / "fea" / "tubular56_bh.toml"))
+    g = load_geometry(str(Path(__file__).resolve().parents[1] / "src/linsense/examples/fea"
+                          / "tubular56_bh.toml"))
     t0 = time.perf_counter()
     res = run(g, 56, "default", load_current=1.0, workers=2)
     wall = time.perf_counter() - t0

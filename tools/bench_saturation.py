@@ -1,7 +1,7 @@
 """Benchmark of the saturated plant (issue 14): the calibrated LUT against load versus the FEA, and
 the cost of the saturated plant.
 
-Run by ``make bench`` (never by the tests). The motor is examples/motors/tubular56_thin_sat (the
+Run by ``make bench`` (never by the tests). The motor is src/linsense/examples/motors/tubular56_thin_sat (the
 tubular motor with a 1 mm back iron; FEA tables at i_q = 0, 0.5, 1, 1.5, 2 A and its polarity
 signal). The firmware's calibration mode runs on its saturated plant at 0, 20 and 40 N (i_q = F /
 27.3 N/A = 0, 0.73, 1.47 A, inside the FEA's 0..2 A) on the switching inverter with 0.8 us dead
@@ -26,7 +26,7 @@ from linsense.sim.lut_load import lut_vs_load
 from linsense.sim.run import simulate
 from linsense.sim.scenario import scenario_from_dict
 
-MOTOR = (Path(__file__).resolve().parent.parent / "examples" / "motors" / "tubular56_thin_sat"
+MOTOR = (Path(__file__).resolve().parent.parent / "src/linsense/examples" / "motors" / "tubular56_thin_sat"
          / "motor.toml")
 TARGET_DEG = 0.3
 

@@ -15,7 +15,7 @@ against 150 MB, and ``linsense simulate`` of the same scenario with the default 
 (``--rss-seconds 0`` skips both; the CLI run gets ``--cli-timeout`` s).
 
 And the cost of a short single run (issue 10): ``linsense simulate`` of a 2 s scenario
-(examples/scenarios/step3_lut.toml) with its default outputs, the whole process's CPU time (user +
+(the example step3_lut.toml) with its default outputs, the whole process's CPU time (user +
 sys of the child, imports included) against 0.6 s: the best and the median of ``--cli-repeat``
 runs after one warm-up run (which lets Python cache the bytecode, as an installed package has it:
 the child runs without PYTHONDONTWRITEBYTECODE).
@@ -44,7 +44,7 @@ from linsense.sim import core
 TARGETS = {"average": 500.0, "switching": 100.0}  # realtime factor, the issue's targets
 RSS_TARGETS = {"metrics": 150.0, "cli": 400.0}  # MB, peak RSS of a 600 s run (issue 10)
 CPU_TARGET = 0.6  # s, CPU (user + sys) of linsense simulate of a 2 s scenario, default outputs (issue 10)
-CPU_SCENARIO = Path(__file__).resolve().parent.parent / "examples" / "scenarios" / "step3_lut.toml"
+CPU_SCENARIO = Path(__file__).resolve().parent.parent / "src/linsense/examples/scenarios/step3_lut.toml"
 
 #: runs argv[1:] and prints the peak RSS (kB on Linux) of that child alone, then its exit code
 _RSS_WRAPPER = ("import resource, subprocess, sys\n"

@@ -24,7 +24,7 @@ def spec(n: int, folder: Path) -> Path:
     f = folder / "bench_sweep.toml"
     f.write_text(f"""[sweep]
 name = "bench"
-scenario = "{ROOT / 'examples' / 'scenarios' / 'step3_lut.toml'}"
+scenario = "{ROOT / 'src/linsense/examples' / 'scenarios' / 'step3_lut.toml'}"
 set = {{ "inverter.fidelity" = "switching" }}
 
 [[axis]]

@@ -1,6 +1,6 @@
-"""make bench: each test motor of examples/motors/class (and ecce2010) designed by `linsense tune`
-and verified in full (switching inverter with dead time): bandwidths, settling times, stiffness,
-worst hold error and p-p, verification wall time, and the checks that fail (issue 22)."""
+"""make bench: each test motor of src/linsense/examples/motors/class (and ecce2010) designed by
+`linsense tune` and verified in full (switching inverter with dead time): bandwidths, settling times,
+stiffness, worst hold error and p-p, verification wall time, and the checks that fail (issue 22)."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ from linsense.tune.design import DriveData
 from linsense.verify.certificate import design_and_verify
 
 ROOT = Path(__file__).parents[1]
-CLASS = ROOT / "examples" / "motors" / "class"
+CLASS = ROOT / "src/linsense/examples" / "motors" / "class"
 
 
 def main() -> int:

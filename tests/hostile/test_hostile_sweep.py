@@ -48,9 +48,9 @@ def snapshot(folder: Path) -> dict[str, bytes | None]:
 @pytest.fixture
 def finished(tmp_path, run_cli):
     """A finished sweep in ``out`` of a base scenario whose motor file reads an inductance table."""
-    motor = (ROOT / "examples" / "motors" / "tabulated.toml").read_text()
+    motor = (ROOT / "src/linsense/examples" / "motors" / "tabulated.toml").read_text()
     (tmp_path / "m.toml").write_text(motor.replace("ecce2010_table.csv", "t.csv"))
-    shutil.copy(ROOT / "examples" / "motors" / "ecce2010_table.csv", tmp_path / "t.csv")
+    shutil.copy(ROOT / "src/linsense/examples" / "motors" / "ecce2010_table.csv", tmp_path / "t.csv")
     (tmp_path / "base.toml").write_text(BASE)
     (tmp_path / "sweep.toml").write_text(SWEEP)
     r = run_cli("sweep", tmp_path / "sweep.toml", "--out", tmp_path / "out", "--workers", 1, "--no-progress")

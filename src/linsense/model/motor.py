@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from linsense import examples
 from linsense.errors import InputError, ModelError
 from linsense.io import parse_toml, read_csv_table, read_text_file
 from linsense.model.inductance import ENTRIES, InductanceModel
@@ -120,6 +121,24 @@ def preset_text(name: str) -> str:
     return (resources.files("linsense.model") / "presets" / f"{name}.toml").read_text()
 
 
+def example_motor(spec: str, source: str = "--motor") -> Path:
+    """The packaged example motor named ``spec`` (:mod:`linsense.examples`), or InputError naming
+    ``source`` and listing the presets and the example motors."""
+    p = examples.path("motors", spec)
+    if p is None:
+        raise InputError(source, "", examples.unknown("motors", spec, tuple(preset_names())))
+    return p
+
+
+def motor_path(spec: str) -> str:
+    """A motor ``spec`` as a scenario or sweep names it, with a packaged example motor's name
+    replaced by its file's absolute path (a preset or a path unchanged)."""
+    if names_a_path(spec) or spec in preset_names():
+        return spec
+    p = examples.path("motors", spec)
+    return spec if p is None else str(p)
+
+
 def names_a_path(spec: str) -> bool:
     """Whether a scenario's (or a sweep's) motor ``spec`` names a file, relative to the scenario,
     rather than a preset: a ``.toml`` name or a path with a separator (the file need not exist: the
@@ -169,16 +188,18 @@ def load_motor(spec: str | Path, check: bool = True) -> Motor:
                          + ") or the path of a motor .toml file")
     path = Path(spec_s)
     if names_a_file(spec_s):
+        if not path.exists():
+            listing = examples.listing("motors", tuple(preset_names()))
+            raise InputError(spec_s, "", f"no such motor file ({listing})")
         text = read_text_file(spec_s, "motor file")
         motor = motor_from_toml(text, source=spec_s, base_dir=path.parent)
-    else:
-        if spec_s not in preset_names():
-            raise InputError(
-                "--motor", "", f"unknown preset '{spec_s}' (presets: {', '.join(preset_names())}; "
-                "or give a path to a .toml motor file)"
-            )
+    elif spec_s in preset_names():
         text = preset_text(spec_s)
         motor = motor_from_toml(text, source=f"preset {spec_s}", base_dir=None)
+    else:  # a packaged example's name (linsense.examples), else unknown: the names listed
+        p = example_motor(spec_s)  # (a name: tables relative to the packaged file)
+        text = read_text_file(p, "motor file")
+        motor = motor_from_toml(text, source=f"example {spec_s}", base_dir=p.parent)
     check_plausible(motor)
     if check:
         check_motor(motor)

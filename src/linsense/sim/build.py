@@ -22,9 +22,10 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 from pathlib import Path
 
+from linsense import examples
 from linsense.ctrl import ConfigError, Drive, ffi
 from linsense.errors import InputError, LinsenseError, ModelError
-from linsense.model.motor import Motor, load_motor, names_a_path, preset_names
+from linsense.model.motor import Motor, load_motor, motor_path, names_a_path, preset_names
 from linsense.model.saturation import Saturation
 from linsense.sim.cache import memo, motor_key
 from linsense.sim.checks import (
@@ -269,12 +270,13 @@ def resolve_motor(sc: Scenario, spec: str | None = None, key: str = "motor", che
     controller only believes in: its tables need not describe a realisable winding)."""
     spec = sc.spec.motor if spec is None else spec
     if not names_a_path(spec):
-        if spec not in preset_names():
-            raise InputError(sc.source, key, f"unknown preset {spec!r} "
-                             f"(presets: {', '.join(preset_names())}; "
+        if spec in preset_names():
+            return memo(("motor", check, "preset", spec), lambda: load_motor(spec, check=check))
+        if motor_path(spec) == spec:  # (else a packaged example motor's name: its file)
+            raise InputError(sc.source, key, f"unknown preset {spec!r} (presets: "
+                             f"{', '.join(preset_names())}; examples: {', '.join(examples.names('motors'))}; "
                              "or a path to a .toml motor file, relative to the scenario)")
-        return memo(("motor", check, "preset", spec), lambda: load_motor(spec, check=check))
-    p = Path(spec)
+    p = Path(motor_path(spec))
     if not p.is_absolute():
         p = sc.base_dir / p
     if not p.is_file():

@@ -993,7 +993,9 @@ def as_scenario(obj, caller: str = "simulate") -> Scenario:
     if isinstance(obj, dict):
         return scenario_from_dict(obj)
     if isinstance(obj, str | Path):
-        return load_scenario(obj)
+        from linsense import examples
+
+        return load_scenario(examples.named("scenarios", obj))  # (a packaged example's name: its file)
     shown = " ".join(repr(obj).split())
     raise InputError(caller, "scenario", f"expected a Scenario, a path of a TOML file or a dict of sections, "
                      f"got {type(obj).__name__} {shown}")

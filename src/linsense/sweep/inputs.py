@@ -55,8 +55,9 @@ def _toml(data: bytes | None, source: str) -> dict:
 
 def _motor(what: str, spec: str, scenario_dir: Path) -> list[dict]:
     """The entries of one motor (a preset's text, or a motor file and the tables it names)."""
-    from linsense.model.motor import names_a_path, preset_names, preset_text, table_files
+    from linsense.model.motor import motor_path, names_a_path, preset_names, preset_text, table_files
 
+    spec = motor_path(spec)  # (a packaged example motor's name: its file)
     if not names_a_path(spec):
         if spec not in preset_names():
             return []  # (every run refuses it: the rows do not depend on any file)

@@ -16,7 +16,7 @@ import tomli_w
 
 from linsense.errors import InputError, LinsenseError
 from linsense.io import parse_toml, read_toml, write_atomic
-from linsense.model.motor import names_a_path, preset_names, preset_text, table_files
+from linsense.model.motor import motor_path, names_a_path, preset_names, preset_text, table_files
 from linsense.sweep.spec import SweepSpec
 
 #: scalar metrics copied into a sweep's rows (lists and the long texts stay out; no wall-clock time:
@@ -46,6 +46,7 @@ class SweepContext:
 
 def _motor_data(spec: str, scenario_dir: Path, source: str) -> tuple[dict, Path]:
     """The base motor's TOML data (a preset's or a file's, table paths made absolute)."""
+    spec = motor_path(spec)  # (a packaged example motor's name: its file)
     if not names_a_path(spec) and spec in preset_names():
         return parse_toml(preset_text(spec), f"preset {spec}"), scenario_dir
     p = Path(spec) if Path(spec).is_absolute() else scenario_dir / spec

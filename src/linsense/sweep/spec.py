@@ -177,5 +177,7 @@ def as_sweep(obj) -> SweepSpec:
     if isinstance(obj, dict):
         return sweep_from_dict(obj)
     if isinstance(obj, str | Path):
-        return load_sweep(obj)
+        from linsense import examples
+
+        return load_sweep(examples.named("sweeps", obj))  # (a packaged example's name: its file)
     raise TypeError(f"expected a SweepSpec, a path or a dict, got {type(obj).__name__}")

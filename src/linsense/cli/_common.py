@@ -1,0 +1,199 @@
+"""What the commands share: option callbacks, name resolution, and the report (``logging``) and
+JSON outputs.
+
+Streams: the human report goes through the ``linsense.cli`` logger (``-q`` silences it, ``-v`` adds
+detail) to standard output, or to standard error when standard output carries data (``--out -`` or
+``--json``); warnings always go to standard error, errors too (one line, exit code 2). Nothing heavy
+is imported here (numpy, pydantic, the C extension load inside the commands).
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import math
+import os
+import sys
+import time
+
+import click
+
+from linsense.limits import MAX_POINTS
+from linsense.version import docs
+
+MOTOR_HELP = "motor: a file, a preset (ecce2010) or a packaged example's name (small30)"
+
+log = logging.getLogger("linsense.cli")
+
+
+class _Report(logging.Handler):
+    """The report's handler: INFO and DEBUG to standard output (standard error while standard
+    output carries data), warnings and worse to standard error; the streams are looked up at each
+    line (a test's captured streams, click's runner)."""
+
+    to_stderr = False
+
+    def emit(self, record: logging.LogRecord) -> None:
+        try:
+            msg = record.getMessage()
+            if record.levelno >= logging.WARNING:
+                msg = f"linsense: {record.levelname.lower()}: {msg}"
+            stream = sys.stderr if (record.levelno >= logging.WARNING or self.to_stderr) else sys.stdout
+            stream.write(msg + "\n")
+            stream.flush()
+        except Exception:  # pragma: no cover (logging's own convention)
+            self.handleError(record)
+
+
+_handler = _Report()
+log.addHandler(_handler)
+log.propagate = False
+
+
+def configure(quiet: bool, verbose: bool) -> None:
+    """Set the report's level for one invocation: ``-q`` warnings and errors only, ``-v`` details
+    too, else the report (INFO)."""
+    log.setLevel(logging.WARNING if quiet else logging.DEBUG if verbose else logging.INFO)
+    _handler.to_stderr = False
+    _STATE.update(t0=time.perf_counter(), cpu0=time.process_time())
+
+
+_STATE: dict = {}
+
+
+def data_on_stdout() -> None:
+    """Standard output carries data from now on (``--out -``, ``--json``): the report moves to
+    standard error."""
+    _handler.to_stderr = True
+
+
+def say(line: str) -> None:
+    """One line of the human report."""
+    log.info("%s", line)
+
+
+def detail(line: str) -> None:
+    """One line shown with ``-v`` only."""
+    log.debug("%s", line)
+
+
+def warn(line: str) -> None:
+    """A warning, on standard error (also with ``-q``)."""
+    log.warning("%s", line)
+
+
+def quiet() -> bool:
+    """``-q`` given: no report, so no progress bar either."""
+    return not log.isEnabledFor(logging.INFO)
+
+
+def progress() -> bool:
+    """Draw progress bars: standard error is a terminal and ``-q`` not given."""
+    return sys.stderr.isatty() and not quiet()
+
+
+def elapsed() -> None:
+    """``-v``: the command's CPU and wall time."""
+    if "t0" in _STATE:
+        cpu, wall = time.process_time() - _STATE["cpu0"], time.perf_counter() - _STATE["t0"]
+        detail(f"({cpu:.2f} s CPU, {wall:.2f} s wall in the command)")
+
+
+def _plain(obj):
+    """JSON-safe: non-finite floats as null, tuples and numpy scalars and arrays as plain values."""
+    if isinstance(obj, dict):
+        return {str(k): _plain(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [_plain(v) for v in obj]
+    if isinstance(obj, bool) or obj is None or isinstance(obj, str | int):
+        return obj
+    if isinstance(obj, float):
+        return obj if math.isfinite(obj) else None
+    if hasattr(obj, "tolist"):  # numpy scalars and arrays
+        return _plain(obj.tolist())
+    if isinstance(obj, os.PathLike):
+        return os.fspath(obj)
+    return str(obj)
+
+
+def emit_json(command: str, files, ok: bool | None, **fields) -> None:
+    """The ``--json`` summary: one JSON object on standard output, keys sorted (docs/cli.md lists
+    them): ``command``, ``files`` (written, in order), ``ok`` (what the command checks held), and
+    the command's own ``fields``."""
+    doc = {"command": command, "files": [os.fspath(f) for f in files], "ok": ok, **fields}
+    sys.stdout.write(json.dumps(_plain(doc), indent=1, sort_keys=True, allow_nan=False) + "\n")
+    sys.stdout.flush()
+
+
+def json_option(f):
+    """``--json``: the command's summary as one JSON object on standard output."""
+    return click.option("--json", "as_json", is_flag=True,
+                        help="print a machine-readable summary: one JSON object on standard output "
+                             "(the report goes to standard error)")(f)
+
+
+def files_report(files) -> None:
+    """The files written, one a line."""
+    for f in files:
+        say(str(f))
+
+
+def points(ctx, param, value: int) -> int:
+    """Click callback: a table length in [4, MAX_POINTS]."""
+    if value < 4:
+        raise click.BadParameter(f"must be >= 4, got {value}")
+    if value > MAX_POINTS:
+        raise click.BadParameter(f"{value:,} is beyond the limit of {MAX_POINTS:,} ({docs('limits')})")
+    return value
+
+
+def quad(ctx, param, value):
+    """Click callback: the injection's q-axis share kappa, in [0, 1), or None."""
+    if value is not None and not (math.isfinite(value) and 0.0 <= value < 1.0):
+        raise click.BadParameter(f"must be in [0, 1), got {value!r}")
+    return value
+
+
+def finite(minimum: float, strict: bool):
+    """Click callback: a finite number ``> minimum`` (``>=`` unless ``strict``), or None."""
+
+    def check(ctx, param, value):
+        if value is None:
+            return value
+        ok = math.isfinite(value) and (value > minimum if strict else value >= minimum)
+        if not ok:
+            op = ">" if strict else ">="
+            raise click.BadParameter(f"must be a finite number {op} {minimum:g}, got {value!r}")
+        return value
+
+    return check
+
+
+def load(spec: str):
+    """The motor ``spec`` names (a file, a preset, a packaged example)."""
+    from linsense.model.motor import load_motor
+
+    motor = load_motor(spec)
+    detail(f"motor {spec!r}: {motor.source}")
+    return motor
+
+
+def example(kind: str, spec: str, key: str, extra: tuple[str, ...] = ()) -> str:
+    """A file argument resolved: a path if it exists, else the packaged example of ``kind`` it
+    names, else exit code 2 and one line listing the names (:func:`linsense.examples.resolve`)."""
+    from linsense import examples
+
+    path = examples.resolve(kind, spec, key, extra)
+    if path != spec:
+        detail(f"{spec}: the packaged example {path}")
+    return path
+
+
+def show(v: float | None, unit: str, fmt: str = ".2f") -> str:
+    """A metric for a person: 'n/a' where it is not defined."""
+    return "n/a" if v is None else f"{v:{fmt}} {unit}"
+
+
+def see(page: str) -> str:
+    """A command's help epilog: its page on the docs site."""
+    return f"Documentation: {docs(page)}"

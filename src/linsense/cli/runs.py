@@ -1,0 +1,392 @@
+"""The commands that run the simulator or a solver: ``simulate``, ``calibrate``, ``reproduce``,
+``fea`` and ``sweep``."""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+from pathlib import Path
+
+import click
+
+from linsense.cli import _common as c
+from linsense.errors import InputError
+from linsense.version import docs
+
+
+def _scenario(spec: str):
+    """The scenario a command argument names: ``-`` reads it from standard input (relative paths
+    in it from the working folder), else a file or a packaged example's name."""
+    from linsense.sim.scenario import load_scenario, scenario_from_dict
+
+    if spec == "-":
+        from linsense.io import parse_toml
+        from linsense.limits import MAX_TEXT_FILE_BYTES
+
+        data = sys.stdin.buffer.read(MAX_TEXT_FILE_BYTES + 1) if hasattr(sys.stdin, "buffer") else \
+            sys.stdin.read().encode()
+        if len(data) > MAX_TEXT_FILE_BYTES:
+            raise InputError("<stdin>", "", f"larger than the limit of {MAX_TEXT_FILE_BYTES:,} bytes of a "
+                                            f"scenario ({docs('limits')})")
+        try:
+            text = data.decode("utf-8")
+        except UnicodeDecodeError as exc:
+            raise InputError("<stdin>", "", f"cannot read: {exc}") from None
+        return scenario_from_dict(parse_toml(text, "<stdin>"), "<stdin>", Path.cwd())
+    return load_scenario(c.example("scenarios", spec, "SCENARIO"))
+
+
+@click.command(short_help="Run a closed-loop drive simulation.",
+               epilog=c.see("simulator"))
+@click.argument("scenario")
+@click.option("--out", required=True, type=click.Path(file_okay=False), help="output folder")
+@click.option("--fidelity", type=click.Choice(["average", "switching"]), default=None,
+              help="override the scenario's inverter fidelity")
+@click.option("--trace", "trace_fmt", type=click.Choice(["parquet", "csv", "none"]), default="parquet",
+              show_default=True, help="trace file format (written chunk by chunk while the run goes)")
+@click.option("--decimate", type=click.IntRange(1, 1_000_000), default=None,
+              help="record one sample every N PWM periods (1 .. 1e6; overrides the scenario's "
+                   "record.decimate)")
+@click.option("--mat", is_flag=True, help="also write the trace as MATLAB trace.mat (held in memory: at most "
+                                          "1,000,000 samples)")
+@click.option("--plot/--no-plot", default=False, show_default=True, help="draw sim.png")
+@click.option("--check", is_flag=True, help="exit with code 1 when the run is not stable (for CI)")
+@c.json_option
+def simulate(scenario: str, out: str, fidelity: str | None, trace_fmt: str, decimate: int | None, mat: bool,
+             plot: bool, check: bool, as_json: bool) -> None:
+    """Run a closed-loop drive simulation of SCENARIO (a file, a packaged example's name such as
+    step3_lut, or - for standard input): metrics.json, timing.json, trace.parquet (or .csv; and
+    trace.mat), sim.png with --plot.
+
+    Exit codes: 0 done (with --check: and stable), 1 with --check: not stable, 2 bad input (the
+    scenario, or a configuration that trips the drive at t = 0)."""
+    import numpy as np
+
+    from linsense.io import output_set, split_timing
+    from linsense.sim.build import build, check_trace_file
+    from linsense.sim.stream import simulate_streamed
+    from linsense.sim.trace import MAT_MAX_SAMPLES, TraceWriter, trace_columns, write_mat
+
+    if as_json:
+        c.data_on_stdout()
+    sc = _scenario(scenario)
+    if fidelity is not None:
+        sc = sc.replace(inverter={"fidelity": fidelity})
+    if decimate is not None:
+        sc = sc.replace(record={"decimate": decimate})
+    b = build(sc, trace_in_memory=False)  # streamed: the trace is never whole in memory
+    if trace_fmt != "none":
+        check_trace_file(b)
+    n_rec = -(-b.n_steps // int(b.cfg.decimate))
+    if mat and n_rec > MAT_MAX_SAMPLES:
+        need = -(-b.n_steps // MAT_MAX_SAMPLES)
+        raise InputError("--mat", "", f"trace.mat is written from the whole trace held in memory: {n_rec:,} "
+                         f"samples is beyond the limit of {MAT_MAX_SAMPLES:,} ({docs('limits')}); "
+                         f"record fewer (--decimate {need}) or use the Parquet trace")
+    mat_parts: list[dict] = []
+
+    def run(f=None):
+        writer = TraceWriter(f, trace_fmt) if f is not None else None
+
+        def on_chunk(arrays):
+            if writer is not None:
+                writer.write(arrays)
+            if mat:
+                mat_parts.append({k: np.array(v, dtype=float) for k, v in trace_columns(arrays).items()})
+
+        try:
+            sr = simulate_streamed(b, on_chunk=on_chunk if writer is not None or mat else None, plot=plot)
+        except BaseException:
+            if writer is not None:
+                writer.abort()
+            raise
+        if writer is not None:
+            writer.close()
+        return sr
+
+    with output_set(out, "simulate") as s:
+        if trace_fmt == "none":
+            sr = run()
+        else:
+            done = []
+            s.write_with(f"trace.{trace_fmt}", lambda f: done.append(run(f)))
+            sr = done[0]
+        metrics, timing = split_timing(sr.metrics)
+        s.write("metrics.json", json.dumps(metrics, indent=1) + "\n")
+        s.write("timing.json", json.dumps(timing, indent=1) + "\n")
+        if mat:
+            cols = {k: np.concatenate([p[k] for p in mat_parts]) for k in mat_parts[0]}
+            mat_parts.clear()
+            write_mat(cols, s.path("trace.mat"), metrics=sr.metrics)
+        if plot:
+            from linsense.report.figures import save_png
+            from linsense.report.sim_figures import DPI, sim_figure
+
+            save_png(sim_figure(sr.plot), s.path("sim.png"), DPI)
+    c.files_report(s.files)
+    m = sr.metrics
+    show = c.show
+    c.say(
+        f"{m['scenario']}: "
+        f"{'stable' if m['stable'] else 'not stable: ' + str(m['unstable_reason'])} (fault {m['fault']}); "
+        f"max |err| {show(m['max_abs_err_deg'], 'deg')} "
+        f"(transient {show(m['transient_max_err_deg'], 'deg')}, "
+        f"steady {show(m['steady_max_err_deg'], 'deg')}, bias {show(m['bias_deg'], 'deg')}); "
+        f"final x {m['final_position_mm']} mm, limit cycle {show(m['limit_cycle_deg'], 'deg', '.3g')} "
+        f"({m['limit_cycle_mm']} mm), overshoot {show(m['overshoot_deg'], 'deg', '.3g')} "
+        f"({m['overshoot_mm']} mm); "
+        f"{m['sim_s']} s simulated in {m['wall_s']} s "
+        f"({m['realtime_factor']}x real time)"
+    )
+    c.detail("timing: " + ", ".join(f"{k} {v}" for k, v in timing.items()))
+    c.elapsed()
+    if as_json:
+        c.emit_json("simulate", s.files, bool(m["stable"]), metrics=metrics, timing=timing)
+    if check and not m["stable"]:
+        click.echo(f"linsense: not stable: {m['unstable_reason']}", err=True)
+        raise click.exceptions.Exit(1)
+
+
+def drive_options(f):
+    """The drive data as options (``--v-dc --f-pwm --dead-time --i-max --v-inj --f-inj``, SI units;
+    :class:`~linsense.tune.design.DriveData`'s names): a command gets them as keyword arguments,
+    None where not given."""
+    dflt = " (default: the scenario's, else the design's drive data)"
+    opts = [
+        click.option("--v-dc", type=float, default=None, callback=c.finite(0.0, True),
+                     help="bus voltage, V" + dflt),
+        click.option("--f-pwm", type=float, default=None, callback=c.finite(0.0, True),
+                     help="PWM rate, Hz" + dflt),
+        click.option("--dead-time", type=float, default=None, callback=c.finite(0.0, False),
+                     help="the inverter's dead time, s" + dflt),
+        click.option("--i-max", type=float, default=None, callback=c.finite(0.0, True),
+                     help="current limit, A" + dflt),
+        click.option("--v-inj", type=float, default=None, callback=c.finite(0.0, True),
+                     help="injection amplitude, V (default: the scenario's, else designed)"),
+        click.option("--f-inj", type=float, default=None, callback=c.finite(0.0, True),
+                     help="injection frequency, Hz (default: the scenario's, else designed)"),
+    ]
+    for opt in reversed(opts):
+        f = opt(f)
+    return f
+
+
+@click.command(short_help="Run the firmware's LUT calibration in the simulator.",
+               epilog=c.see("simulator"))
+@click.option("--motor", "motor_spec", default=None,
+              help=c.MOTOR_HELP + "; with --scenario it must be the scenario's motor")
+@click.option("--scenario", "scenario_path", default=None,
+              help="the drive to calibrate (a file or a packaged example's name): the scenario's motor, "
+                   "bus, PWM, dead time, injection (shape, amplitude, frequency, kappa), gains and "
+                   "[calibration] keys; the options below over it")
+@click.option("--positions", default=56, show_default=True, type=click.IntRange(4, 4096),
+              help="points over one electrical period")
+@click.option("--load", default=0.0, show_default=True, type=float, callback=c.finite(-math.inf, False),
+              help="constant load force, N (opposing positive motion when > 0)")
+@click.option("--fidelity", type=click.Choice(["switching", "average"]), default="switching",
+              show_default=True, help="inverter model, with the drive's dead time (a scenario's fidelity is "
+                                      "not used)")
+@click.option("--quad", default=None, type=float, callback=c.quad,
+              help="the injection's q-axis share kappa (default: the scenario's, else the design's; 0: the "
+                   "paper's pulsating injection)")
+@drive_options
+@click.option("--saturated", is_flag=True, default=False,
+              help=f"on the saturated plant (the motor file's [saturation], {docs('simulator')})")
+@click.option("--out", required=True, type=click.Path(file_okay=False), help="output folder")
+@c.json_option
+def calibrate(motor_spec: str | None, scenario_path: str | None, positions: int, load: float, fidelity: str,
+              quad: float | None, saturated: bool, out: str, as_json: bool, **drive) -> None:
+    """Run the firmware's LUT calibration in the simulator (paper Fig. 9) on the drive that will use
+    the table: a scenario's (--scenario), or the design for the motor (linsense tune's, with the
+    drive data given): lut_measured.csv, metrics.json, calibration.png. Exit code 1 if it does not
+    complete."""
+    from linsense.io import output_set, split_timing
+    from linsense.report.figures import fig_calibration, save_png
+    from linsense.sim.calibrate import calibrate as run_calibration
+    from linsense.sim.calibrate import lut_csv
+
+    if as_json:
+        c.data_on_stdout()
+    if motor_spec is None and scenario_path is None:
+        raise click.UsageError("give --motor or --scenario (the drive to calibrate)")
+    sc = _scenario(scenario_path) if scenario_path is not None else None
+    motor = c.load(motor_spec) if motor_spec is not None else None
+    extra = {"saturation": {"enabled": True}} if saturated else {}
+    cal = run_calibration(motor_spec if sc is not None else motor, positions, load, fidelity, quad=quad,
+                          source=motor_spec or "<calibrate>", scenario=sc, drive=drive, **extra)
+    metrics, timing = split_timing(cal.metrics)
+    with output_set(out, "calibrate") as s:
+        s.write("lut_measured.csv", lut_csv(cal))
+        s.write("metrics.json", json.dumps(metrics, indent=1) + "\n")
+        s.write("timing.json", json.dumps(timing, indent=1) + "\n")
+        save_png(fig_calibration(cal, cal.motor), s.path("calibration.png"))
+    c.files_report(s.files)
+    m = cal.metrics
+    show = c.show
+    c.say(f"{m['motor']}: {m['points_done']}/{m['points']} points, load {m['load_n']:g} N, "
+          f"{m['fidelity']}, {m['v_dc']:g} V, {m['f_pwm_hz']:g} Hz PWM, {m['dead_time_s'] * 1e6:g} us; "
+          f"{m['injection_shape']} injection {m['v_inj']:.3g} V at {m['f_inj_hz']:g} Hz, kappa "
+          f"{m['injection_quad']:g}: "
+          f"max |measured - model with R_s| {show(m['max_diff_deg'], 'deg', '.3g')}, against eq. 12 "
+          f"{show(m['max_diff_eq12_deg'], 'deg', '.3g')}; {m['sim_s']} s simulated in {m['wall_s']} s")
+    c.elapsed()
+    if as_json:
+        c.emit_json("calibrate", s.files, bool(cal.completed), metrics=metrics, timing=timing)
+    if not cal.completed:
+        click.echo(f"linsense: calibration did not complete ({m['points_done']} of {m['points']} points, "
+                   f"fault {m['fault']})", err=True)
+        raise click.exceptions.Exit(1)
+
+
+def failed_claims(metrics: dict) -> list[str]:
+    """The claims of a reproduction's ``metrics.json`` that do not hold (the paper's and those
+    beyond it), as ``claim: paper ..., ours ...`` lines; [] for a model-only run."""
+    out = []
+    for key in ("claims", "claims_beyond"):
+        for cl in metrics.get(key, ()):
+            if not cl["holds"]:
+                out.append(f"{cl['claim']}: paper {cl['paper']}, ours {cl['ours']}")
+    return out
+
+
+@click.command(short_help="Reproduce the paper's Section V, claim by claim.",
+               epilog=c.see("reproduce"))
+@click.option("--motor", "motor_spec", default="ecce2010", show_default=True, help=c.MOTOR_HELP)
+@click.option("--out", default="out", show_default=True, type=click.Path(file_okay=False))
+@click.option("--quick", is_flag=True,
+              help="fewer calibration points, hold positions and map cells (about 15 s)")
+@click.option("--model-only", is_flag=True, help="only the model's tables, LUT files and figures (no runs)")
+@click.option("--check", is_flag=True, help="exit with code 1 when a claim does not hold (for CI)")
+@c.json_option
+def reproduce(motor_spec: str, out: str, quick: bool, model_only: bool, check: bool, as_json: bool) -> None:
+    """Reproduce the paper's Section V, claim by claim (make demo): model tables and LUT files,
+    Figs. 5-13 with the closed-loop runs on the switching inverter with dead time, metrics.json and
+    a self-contained report.html in OUT."""
+    from linsense.reproduce.pipeline import reproduce as run
+
+    if as_json:
+        c.data_on_stdout()
+    c.load(motor_spec)  # (a bad motor: one line and exit code 2 before anything runs)
+    files, lines = run(out, motor_spec, quick=quick, progress=c.progress(), model_only=model_only)
+    c.files_report(files)
+    for line in lines:
+        c.say(line)
+    metrics = {} if model_only else json.loads((Path(out) / "metrics.json").read_text())
+    failed = failed_claims(metrics)
+    c.elapsed()
+    if as_json:
+        keep = ("claim", "paper", "ours", "holds")
+        c.emit_json("reproduce", files, not failed, motor=motor_spec, quick=quick, model_only=model_only,
+                    claims=[{k: cl[k] for k in keep} for cl in metrics.get("claims", [])],
+                    claims_beyond=[{k: cl[k] for k in keep} for cl in metrics.get("claims_beyond", [])])
+    if check and failed:
+        click.echo(f"linsense: {len(failed)} claim(s) do not hold: " + "; ".join(failed), err=True)
+        raise click.exceptions.Exit(1)
+
+
+@click.command("fea", short_help="Axisymmetric FEA of a tubular motor.",
+               epilog=c.see("fea"))
+@click.argument("geometry")
+@click.option("--out", required=True, type=click.Path(file_okay=False), help="output folder")
+@click.option("--positions", type=click.IntRange(12, 720), default=56, show_default=True,
+              help="rod positions over one electrical period (12 .. 720)")
+@click.option("--mesh", "level", type=click.Choice(["coarse", "default", "fine"]), default="default",
+              show_default=True, help="mesh level")
+@click.option("--lut-points", default=360, show_default=True, callback=c.points, help="length of lut.csv")
+@click.option("--load-current", default="0", show_default=True,
+              help="q-axis current (A) setting the state of a saturating iron (needs a B-H curve); a "
+                   "comma list (0,1,2) sweeps the loads: per-load tables and LUTs, lut_vs_load.png")
+@click.option("--workers", type=click.IntRange(1, 64), default=1, show_default=True,
+              help="processes for the Newton solves of a saturating iron")
+@click.option("--polarity", default=None,
+              help="d-axis pulse amplitudes (A, comma list: 0.5,1,2): the saturation signal for magnet "
+                   "polarity detection, L_d(-I) - L_d(+I), in polarity.csv and fea.json")
+@click.option("--polarity-positions", type=click.IntRange(3, 720), default=4, show_default=True,
+              help="rod positions over one electrical period for --polarity")
+@c.json_option
+def fea(geometry: str, out: str, positions: int, level: str, lut_points: int, load_current: str,
+        workers: int, polarity: str | None, polarity_positions: int, as_json: bool) -> None:
+    """Axisymmetric FEA of a tubular motor (GEOMETRY: a .toml file, a preset such as tubular56 or a
+    packaged example's name such as tubular56_bh): inductances.csv, motor.toml, lut.csv,
+    geometry.json, fea.json and figures."""
+    from linsense.fea.geometry import preset_names
+    from linsense.report.fea import run_fea
+
+    if as_json:
+        c.data_on_stdout()
+    geometry = c.example("fea", geometry, "GEOMETRY", tuple(preset_names()))
+    files, lines, warnings = run_fea(geometry, out, positions, level, lut_points,
+                                     progress=c.progress(), load_current=load_current, workers=workers,
+                                     polarity=polarity, polarity_positions=polarity_positions)
+    c.files_report(files)
+    for line in lines:
+        c.say(line)
+    for w in warnings:
+        c.warn(w)
+    c.elapsed()
+    if as_json:
+        fea_json = Path(out) / "fea.json"
+        c.emit_json("fea", files, True, fea=json.loads(fea_json.read_text()) if fea_json.is_file() else None,
+                    warnings=list(warnings))
+
+
+@click.command("sweep", short_help="Run a sweep of scenarios on dask.",
+               epilog=c.see("sweeps"))
+@click.argument("sweep_file")
+@click.option("--out", required=True, type=click.Path(file_okay=False),
+              help="output folder (the same folder again resumes a killed sweep)")
+@click.option("--workers", type=click.IntRange(1, 1024), default=None,
+              help="workers of the local cluster (default: one per core)")
+@click.option("--scheduler", default=None, help="address of a running dask scheduler (tcp://host:8786)")
+@click.option("--processes", is_flag=True, help="local workers as processes instead of threads")
+@click.option("--no-progress", is_flag=True, help="no progress bar")
+@click.option("--restart", is_flag=True,
+              help="discard the rows already in --out (a sweep whose inputs changed) and start over")
+@click.option("--check", is_flag=True, help="exit with code 1 when a point is not stable or refused (for CI)")
+@c.json_option
+def sweep_cmd(sweep_file: str, out: str, workers: int | None, scheduler: str | None, processes: bool,
+              no_progress: bool, restart: bool, check: bool, as_json: bool) -> None:
+    """Run a sweep (SWEEP_FILE: a file or a packaged example's name such as injection): a base
+    scenario with keys varied, on dask.distributed."""
+    from linsense.io import write_atomic, write_atomic_with
+    from linsense.report.sweep_figures import FIGURES
+    from linsense.sweep import load_sweep, sweep
+    from linsense.sweep.studies import summary_line
+
+    if as_json:
+        c.data_on_stdout()
+    sw = load_sweep(c.example("sweeps", sweep_file, "SWEEP_FILE"))
+    df = sweep(sw, out, workers=workers, scheduler=scheduler, processes=processes,
+               progress=not no_progress and c.progress(), restart=restart)
+    out_dir = Path(out)
+    axes = [a.key for a in sw.spec.axis]
+    relative = {a.key: a.relative for a in sw.spec.axis}
+    files = [write_atomic_with(out_dir / "results.parquet", lambda f: df.to_parquet(f, index=False))]
+    study = sw.spec.sweep.study
+    line = summary_line(study, df, axes)
+    files.append(write_atomic(out_dir / "summary.txt", f"{sw.name}: {line}\n"))
+    if study:
+        fig = FIGURES[study](df, axes, relative)
+        png = out_dir / f"{study}.png"
+        files.append(write_atomic_with(png, lambda f: fig.savefig(f, format="png", dpi=110,
+                                                                  metadata={"Software": None})))
+    c.files_report(files)
+    c.say(f"{sw.name}: {line}")
+    import pandas as pd
+
+    refused = df["error"].notna() if "error" in df else pd.Series(False, index=df.index)
+    stable = df["stable"].fillna(False).astype(bool) & ~refused
+    failed = [int(r) for r in df.loc[~stable, "run"]] if "run" in df else [int(i) for i in df.index[~stable]]
+    c.elapsed()
+    if as_json:
+        c.emit_json("sweep", files, not failed, name=sw.name, study=study, axes=axes, runs=len(df),
+                    stable=int(stable.sum()), not_stable=int((~stable & ~refused).sum()),
+                    refused=int(refused.sum()), failed_runs=failed, summary=line)
+    if check and failed:
+        click.echo(f"linsense: {len(failed)} of {len(df)} sweep points not stable or refused (runs "
+                   f"{', '.join(map(str, failed[:20]))}{', ...' if len(failed) > 20 else ''})", err=True)
+        raise click.exceptions.Exit(1)
+
+
+COMMANDS = [simulate, calibrate, reproduce, fea, sweep_cmd]

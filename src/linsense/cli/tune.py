@@ -1,0 +1,248 @@
+"""``linsense tune``: the drive designed for a motor, its report and its verification certificate."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from linsense.cli import _common as c
+from linsense.cli.runs import drive_options
+
+
+@click.command(short_help="Design the drive for a motor and verify it.",
+               epilog=c.see("tuning"))
+@click.option("--motor", "motor_spec", required=True, help=c.MOTOR_HELP)
+@click.option("--scenario", "scenario_path", default=None,
+              help="scenario (a file or a packaged example's name) whose drive data (bus, PWM, dead "
+                   "time, i_max, injection) and other keys are kept")
+@drive_options
+@click.option("--quad", type=float, default=None, callback=c.quad,
+              help="elliptical share kappa on q (0: pulsating; default 0.9)")
+@click.option("--format", "fmt", type=click.Choice(["toml", "c"]), default="toml", show_default=True,
+              help="toml: a complete scenario; c: an ls_drive_cfg set-up header for the firmware")
+@click.option("--polarity", type=float, default=None, callback=c.finite(0.0, True),
+              help="saturation data for the start-up pulses, 1/A: (L_d(-I) - L_d(+I)) / L_d per A of d "
+                   "pulse (polarity.csv of linsense fea --polarity: rel / I); default: the motor file's "
+                   "[saturation] polarity, else no start-up design")
+@click.option("--current-noise", type=float, default=0.01, show_default=True, callback=c.finite(0.0, False),
+              help="current-sensor noise, A rms per phase (a 12-bit ADC over +-10 A on top), for the "
+                   "pulse pairs")
+@click.option("--name", default=None, help="C name suffix (default: the motor name)")
+@click.option("--v-max", type=float, default=None, callback=c.finite(0.0, True),
+              help="the application's top speed, m/s (default 0.2): speed cap, trips, verification")
+@click.option("--a-max", type=float, default=None, callback=c.finite(0.0, True),
+              help="the application's acceleration, m/s^2 (default 1)")
+@click.option("--load", type=float, default=None, callback=c.finite(0.0, False),
+              help="the rated load force, N (default half of K_f i_max): verification's loads")
+@click.option("--travel", type=float, default=None, callback=c.finite(0.0, True),
+              help="the stroke, mm (default: unbounded)")
+@click.option("--injection", "shape", type=click.Choice(["pulsating", "rotating", "square"]), default=None,
+              help="the injection: pulsating/elliptical (default; kappa --quad), rotating vector, or "
+                   "square wave at f_pwm / 2 with its dead-time measures ({docs('firmware')})")
+@click.option("--quick", is_flag=True, help="verify at 8 positions on the nominal plant only")
+@click.option("--no-verify", is_flag=True, help="do not run the verification")
+@click.option("--out", required=True, type=click.Path(dir_okay=False, allow_dash=True),
+              help="output file (- for standard output: the report goes to standard error)")
+@c.json_option
+def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: float | None,
+         current_noise: float, name: str | None, v_max, a_max, load, travel, shape, quick: bool,
+         no_verify: bool, out: str, as_json: bool, **drive) -> None:
+    """Design the drive for a motor: injection, current loop, demodulator, observer, speed and
+    position loops, limits and trips; print the design and its margins; write a
+    scenario or a C header; then verify it in the simulator (switching inverter with dead time) and
+    write verification.json and verification.png beside the output (exit 1 if a check fails)."""
+    from linsense.io import write_atomic
+    from linsense.sim.build import compensation_of, drive_data
+    from linsense.sim.scenario import load_scenario
+    from linsense.tune.design import DriveData, design, uncompensated_speed_factor
+    from linsense.tune.export import c_header, scenario_dict, scenario_toml
+
+    if as_json and out == "-":
+        raise click.UsageError("--json and --out - both write to standard output: give --out a file")
+    if as_json or out == "-":
+        c.data_on_stdout()  # (stdout carries the file itself, or the JSON summary)
+    say = c.say
+    base, base_dir, src = None, None, motor_spec
+    dd = DriveData()
+    if scenario_path is not None:
+        sc = load_scenario(c.example("scenarios", scenario_path, "--scenario"))
+        base, base_dir, src = sc.given(), sc.base_dir, scenario_path
+        base.pop("motor", None)
+        dd = drive_data(sc)
+    given = {**drive, "quad": quad, "v_max": v_max, "a_max": a_max, "load": load,
+             "travel": None if travel is None else travel * 1e-3, "shape": shape}
+    for key, val in given.items():  # (the drive data options: _drive_options, DriveData's names)
+        if val is not None:
+            setattr(dd, key, val)
+    motor = c.load(motor_spec)
+    dz = design(motor, dd, src)
+    from linsense.tune.startup import design_startup
+    # (the start-up locks as the PLL would: startup.lock_gain, linsense.tune.design.startup_lock_gain)
+    su = design_startup(motor, v_dc=dd.v_dc, f_pwm=dd.f_pwm, i_max=dd.i_max, observer_bw=dz.observer_bw_pll,
+                        v_inj=dz.v_inj, polarity=polarity, current_noise=current_noise,
+                        ramp_rate=dz.inj_ramp_rate, source=src)
+    # a drive run without its table (sensorless_nolut) gets its trips on the estimate wider
+    mode = (base or {}).get("control", {}).get("mode", "sensorless_lut")
+    no_table = compensation_of(mode, (base or {}).get("observer", {}).get("compensation")) == "none"
+    k_est = uncompensated_speed_factor(motor) if no_table else 1.0
+    sc_dict = scenario_dict(dz, dd, motor_spec, base, startup=su, k_est=k_est, pole_pitch=motor.pole_pitch)
+    cert_run = None
+    if not no_verify:  # (its runs are built before anything is written: a refusal leaves no file)
+        from linsense.verify.certificate import motor_ref, prepare
+
+        cert_run = prepare(motor, motor_ref(motor_spec), _certificate_base(sc_dict),
+                           str(base_dir or Path.cwd()), v_max=dd.v_max, a_max=dd.a_max, load=dz.load,
+                           travel=dd.travel, quick=quick)
+    if fmt == "c":
+        text = c_header(dz, dd, motor, name, startup=su)
+    else:
+        text = scenario_toml(dz, dd, motor_spec, Path(out), base, Path.cwd(), startup=su, k_est=k_est,
+                             pole_pitch=motor.pole_pitch)
+    files = [write_atomic(out, text)]
+    if out != "-":
+        say(str(files[0]))
+    for line in design_lines(dz, motor.name, dd):
+        say(line)
+    if su is not None:
+        for line in su.lines():
+            say(line)
+    else:
+        say("  start-up       not designed: no saturation data (--polarity, or [saturation] polarity "
+            "in the motor file)")
+    for w in dz.warnings + (su.warnings if su is not None else []):
+        c.warn(w)
+    if mode != "sensorless_lut" and not no_verify:
+        say(f"  (the certificate judges the designed sensorless drive with its table, not control.mode = "
+            f"{mode!r} of the scenario)")
+    json_path, png_path = _certificate_paths(out)
+    summary = {"motor": motor.name, "design": dz.as_dict(),
+               "startup": None if su is None else su.scenario_keys(),
+               "warnings": list(dz.warnings + (su.warnings if su is not None else []))}
+    if cert_run is None:
+        for p in (json_path, png_path):  # (a certificate of an earlier design would be stale)
+            p.unlink(missing_ok=True)
+        c.elapsed()
+        if as_json:
+            c.emit_json("tune", files, None, verification=None, **summary)
+        return
+    cert = _verify_tuned(cert_run, motor, dd, dz, quick, json_path, png_path, files)
+    c.elapsed()
+    if as_json:
+        verification = {k: v for k, v in cert.as_dict().items() if k != "runs"}
+        c.emit_json("tune", files, bool(cert.passed), verification=verification, **summary)
+    if not cert.passed:
+        raise click.exceptions.Exit(1)
+
+
+def _certificate_base(sc: dict) -> dict:
+    """The tuned scenario the certificate varies: the designed sensorless drive (its mode, start-up
+    and the scenario's own reference and travel are the certificate's, per run)."""
+    base = {k: (dict(v) if isinstance(v, dict) else v) for k, v in sc.items()}
+    for k in ("control", "startup", "reference", "travel", "initial", "load"):
+        base.pop(k, None)
+    return base
+
+
+def _certificate_paths(out: str) -> tuple[Path, Path]:
+    """``<out stem>.verification.json`` and ``.png`` beside the output file (in the working folder
+    for ``-`` or a device such as /dev/null)."""
+    p = Path(out)
+    if out == "-" or (p.exists() and not p.is_file()):
+        folder, stem = Path.cwd(), "tune"
+    else:
+        folder, stem = p.resolve().parent, p.stem
+    return folder / f"{stem}.verification.json", folder / f"{stem}.verification.png"
+
+
+def _verify_tuned(cert_run, motor, dd, dz, quick: bool, json_path: Path, png_path: Path, files: list):
+    """Run the prepared certificate, print it, write its JSON and figure (appended to ``files``);
+    return it (a quick run never claims the full certificate)."""
+    say = c.say
+    import io
+    import json
+
+    from linsense.io import write_atomic
+    from linsense.report.verify_figures import certificate_figure
+
+    cert = cert_run()
+    for line in cert.lines():
+        say(line)
+    doc = cert.as_dict()
+    doc.update(motor=motor.name, drive={k: v for k, v in vars(dd).items()},
+               design={k: v for k, v in dz.as_dict().items() if k not in ("margins", "warnings")})
+    files.append(write_atomic(json_path, json.dumps(doc, indent=1, sort_keys=True) + "\n"))
+    say(str(files[-1]))
+    fig = certificate_figure(cert.rows, f"{motor.name}: {cert.verdict()}", quick=quick)
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=100, metadata={"Software": None})
+    files.append(write_atomic(png_path, buf.getvalue()))
+    say(str(files[-1]))
+    return cert
+
+
+
+
+def motor_pitch(dd, dz) -> float:
+    """m/s per electrical rad/s of the design (from its speed cap and trip)."""
+    from linsense.tune.design import OVERSPEED_MARGIN
+
+    return dz.v_cap * OVERSPEED_MARGIN / dz.omega_trip if dz.omega_trip else float("nan")
+
+
+def design_lines(dz, motor_name: str, dd) -> list[str]:
+    """The design as a person reads it."""
+    from linsense.tune.design import (  # noqa: F401 (the printed ratios)
+        CURRENT_TRIP_MARGIN,
+        RATIO_INJ_CURRENT,
+        RATIO_LPF,
+        SPEED_CAP_MARGIN,
+    )
+    lines = [
+        f"design for {motor_name}: {dd.v_dc:g} V bus, {dd.f_pwm:g} Hz PWM, "
+        f"{dd.dead_time * 1e6:g} us dead time, "
+        f"i_max {dd.i_max:g} A",
+        (f"  injection      {dz.v_inj:.4g} V at {dz.f_inj:g} Hz on d, kappa {dz.quad:g} on q: HF current "
+         f"{dz.i_hf:.3g} A; fundamental fits up to {dz.headroom_speed:.3g} m/s at i_max"
+         if dd.shape == "pulsating" else
+         f"  injection      {dd.shape}, {dz.v_inj:.4g} V"
+         f"{' at f_pwm / 2' if dd.shape == 'square' else f' at {dz.f_inj:g} Hz'} (the loops below are "
+         f"designed as for {dz.f_inj:g} Hz); fundamental fits up to {dz.headroom_speed:.3g} m/s"),
+        f"  current loop   {dz.current_bw:.4g} Hz (f_inj / {RATIO_INJ_CURRENT:g}): "
+        f"kp {dz.current_kp:.4g} V/A, "
+        f"ki {dz.current_ki:.4g} V/(A s)",
+        f"  demodulator    low-pass {dz.demod_lpf:.4g} Hz ({RATIO_LPF:g} f_inj), "
+        f"zeros at {dz.demod_notch:g} Hz; gain "
+        f"{dz.demod_gain:.4g}, scheduled (local error gain {dz.k_e_min:.2f}..{dz.k_e_max:.2f} unscheduled)",
+        f"  observer       {dz.observer_bw:.4g} Hz "
+        + ("mechanical, its load estimate fed forward" if dz.load_ff else dz.observer_type.upper())
+        + f" (limited by {dz.limits.get('observer', '')})"
+        + (f"; the HF path's delay {dz.hf_delay * 1e3:.3g} ms compensated (1 / f_inj)"
+           if dz.hf_delay > 0 else ""),
+        f"  speed loop     {dz.speed_bw:.4g} Hz ({dz.limits.get('speed loop', '')}): "
+        f"kp {dz.speed_kp:.4g} N s/m, "
+        f"ki {dz.speed_ki:.4g} N/m"
+        + (" (the encoder modes'; 0 sensorless: the load estimate)" if dz.load_ff else ""),
+        f"  position loop  kp_x {dz.kp_x:.4g} 1/s ({dz.limits.get('position loop', '')})",
+        f"  steps          {dz.limits.get('steps', '')}",
+        f"  limits         speed cap {dz.v_cap:.3g} m/s ({SPEED_CAP_MARGIN:g} v_max), over-speed trip "
+        f"{dz.omega_trip:.4g} rad/s ({dz.omega_trip * motor_pitch(dd, dz) :.3g} m/s), observer clamp "
+        f"{dz.omega_obs:.4g} rad/s, over-current trip {dz.i_trip:.3g} A ({CURRENT_TRIP_MARGIN:g} x (i_max "
+        f"+ HF "
+        f"peak)); rated load {dz.load:.3g} N",
+        f"  injection rule {dz.limits.get('injection', '')}",
+        f"  calibration    dither {dz.dither_a:.3g} A at {dz.dither_hz:.4g} Hz",
+        "  margins (linearised model: phase margin, gain margin up / down, crossover):",
+    ]
+    for k, m in dz.margins.items():
+        lines.append(f"    {k:48s} {m['pm_deg']} deg, {m['gm_up_db']} dB / {m['gm_down_db']} dB, "
+                     f"{m['crossover_hz']} Hz")
+    if dz.tolerances:
+        lines.append("  tolerances (model: worst hold error with the nominal LUT; scheduled error gain):")
+        for k, t in dz.tolerances.items():
+            lines.append(f"    {k:48s} {t['error_deg']:.3g} deg, k_e {t['k_lo']:.2f}..{t['k_hi']:.2f}")
+    return lines
+
+
+
+COMMANDS = [tune]

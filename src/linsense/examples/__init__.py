@@ -1,0 +1,179 @@
+"""The packaged examples: motors, scenarios, sweeps, FEA geometries, a bench file and the firmware
+example, shipped in the wheel beside this module (``linsense examples DIR`` copies them out).
+
+Every example is reachable by name wherever a file is taken: ``--motor small30``, ``linsense simulate
+step3_lut``, ``linsense sweep injection``, ``linsense fea tubular56_bh``, ``linsense identify
+ecce2010_56_1pct_seed1``, and a scenario's ``motor = "small30"``. A name resolves as: a path if it
+exists, else a packaged example of that kind, else :class:`~linsense.errors.InputError` (exit code 2)
+listing the names. The examples refer to each other by relative paths (a sweep's
+``scenario = "../scenarios/step3_lut.toml"``), which hold both here and in a copied-out folder.
+"""
+
+from __future__ import annotations
+
+import functools
+import shutil
+from pathlib import Path
+
+from linsense.errors import InputError
+
+#: the folder of the examples (the package's own: the wheel installs it unzipped)
+ROOT = Path(__file__).resolve().parent
+
+#: the kinds of example, each a sub-folder of :data:`ROOT`, with the suffix of its named files
+KINDS = {"motors": ".toml", "scenarios": ".toml", "sweeps": ".toml", "fea": ".toml", "bench": ".csv",
+         "firmware": None}
+
+#: what a name of each kind is, for messages
+WHAT = {"motors": "motor", "scenarios": "scenario", "sweeps": "sweep", "fea": "geometry",
+        "bench": "bench", "firmware": "firmware"}
+
+
+def files() -> list[str]:
+    """Every packaged example file, as a path relative to :data:`ROOT` with ``/`` separators, sorted
+    (this module and Python caches excluded)."""
+    return list(_files())
+
+
+@functools.cache
+def _files() -> tuple[str, ...]:  # (the package's files do not change while it runs)
+    out = []
+    for kind in KINDS:
+        for p in (ROOT / kind).rglob("*"):
+            if p.is_file() and "__pycache__" not in p.parts:
+                out.append(p.relative_to(ROOT).as_posix())
+    return tuple(sorted(out))
+
+
+def _is_motor(p: Path) -> bool:
+    """A motor file: ``motor.toml`` (a folder's motor, with its tables) or a TOML with a ``[motor]``
+    table (not, e.g., ``class/drives.toml``, the drive data of the class's motors)."""
+    if p.name == "motor.toml":
+        return True
+    return any(line.strip() == "[motor]" for line in p.read_text(encoding="utf-8").splitlines())
+
+
+@functools.cache
+def _index(kind: str) -> dict[str, Path]:
+    """``{name: path}`` of the examples of ``kind`` (a motor folder's ``motor.toml`` is named after
+    the folder; the motors of a sub-folder such as ``class/`` by their own names)."""
+    suffix = KINDS[kind]
+    out: dict[str, Path] = {}
+    if suffix is None:
+        return out
+    for rel in _files():
+        p = ROOT / rel
+        if not rel.startswith(kind + "/") or p.suffix != suffix:
+            continue
+        if kind == "motors":
+            if not _is_motor(p):
+                continue
+            name = p.parent.name if p.name == "motor.toml" else p.stem
+        else:
+            name = p.stem
+        if name in out:  # (a packaging error, caught by the tests)
+            raise RuntimeError(f"two packaged {WHAT[kind]} examples named {name!r}: {out[name]}, {p}")
+        out[name] = p
+    return out
+
+
+def names(kind: str) -> list[str]:
+    """The names of the packaged examples of ``kind`` (one of :data:`KINDS`), sorted."""
+    return sorted(_index(kind))
+
+
+def path(kind: str, name: str) -> Path | None:
+    """The packaged example ``name`` of ``kind``, or None."""
+    return _index(kind).get(name)
+
+
+def named(kind: str, spec):
+    """``spec`` unchanged, unless it is a str that is not an existing path but a packaged example
+    of ``kind``'s name: then that example's path (the API's lenient form of :func:`resolve`: a
+    wrong path keeps its reader's own message)."""
+    if isinstance(spec, str) and not Path(spec).exists():
+        p = path(kind, spec)
+        if p is not None:
+            return p
+    return spec
+
+
+def resolve(kind: str, spec: str | Path, key: str = "", extra: tuple[str, ...] = ()) -> str:
+    """A file argument: ``spec`` itself if it is an existing path, else the packaged example of
+    ``kind`` it names, else :class:`~linsense.errors.InputError` listing the names.
+
+    Parameters
+    ----------
+    kind : str
+        One of :data:`KINDS`.
+    spec : str or Path
+        What the user gave.
+    key : str
+        The option or key it was given at, for the message (e.g. ``"--motor"``).
+    extra : tuple of str
+        Further valid names to list in the message (a command's own presets, resolved by it).
+
+    Returns
+    -------
+    str
+        The path to read.
+    """
+    s = str(spec)
+    if Path(s).exists() or s in extra:
+        return s
+    p = path(kind, s)
+    if p is not None:
+        return str(p)
+    if Path(s).suffix or any(sep in s for sep in "/\\"):  # (a path, not a name: the file is missing)
+        raise InputError(s, "", f"no such {WHAT[kind]} file ({listing(kind, extra)})")
+    raise InputError(key or WHAT[kind], "", unknown(kind, s, extra))
+
+
+def unknown(kind: str, spec: str, extra: tuple[str, ...] = ()) -> str:
+    """The one-line message for a ``spec`` that is neither a file nor a packaged example of ``kind``
+    (nor one of the ``extra`` names)."""
+    what = WHAT[kind]
+    return f"unknown {what} {spec!r}: no such file, nor a packaged {what} ({listing(kind, extra)})"
+
+
+def listing(kind: str, extra: tuple[str, ...] = ()) -> str:
+    """``names: a, b, ...; `linsense examples DIR` copies the examples out``, for a message."""
+    return f"names: {', '.join([*extra, *names(kind)])}; `linsense examples DIR` copies the examples out"
+
+
+def copy_to(dest: str | Path, force: bool = False) -> list[Path]:
+    """Copy every packaged example into ``dest`` (created if needed), keeping the sub-folders.
+
+    Parameters
+    ----------
+    dest : str or Path
+        The folder to copy into.
+    force : bool
+        Overwrite files that exist; without it an existing file refuses the whole copy, before
+        anything is written.
+
+    Returns
+    -------
+    list of Path
+        The files written, in :func:`files` order.
+
+    Raises
+    ------
+    InputError
+        ``dest`` is a file, or (without ``force``) holds one of the files already.
+    """
+    dest = Path(dest)
+    if dest.exists() and not dest.is_dir():
+        raise InputError(str(dest), "", "exists and is not a folder")
+    targets = [(ROOT / rel, dest / rel) for rel in files()]
+    if not force:
+        there = [str(t) for _, t in targets if t.exists() or t.is_symlink()]
+        if there:
+            more = f" and {len(there) - 1} more" if len(there) > 1 else ""
+            raise InputError(there[0], "", f"exists{more}: nothing copied (--force overwrites)")
+    written = []
+    for src, t in targets:
+        t.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(src, t)
+        written.append(t)
+    return written
