@@ -632,7 +632,6 @@ def sweep_cmd(sweep_file: str, out: str, workers: int | None, scheduler: str | N
               no_progress: bool, restart: bool) -> None:
     """Run a sweep: a base scenario with keys varied, on dask.distributed (docs/sweeps.md)."""
     from linsense.io import write_atomic, write_atomic_with
-    from linsense.report.sweep_figures import FIGURES
     from linsense.sweep import load_sweep, sweep
     from linsense.sweep.studies import summary_line
 
@@ -647,6 +646,8 @@ def sweep_cmd(sweep_file: str, out: str, workers: int | None, scheduler: str | N
     line = summary_line(study, df, axes)
     click.echo(str(write_atomic(out_dir / "summary.txt", f"{sw.name}: {line}\n")))
     if study:
+        from linsense.report.sweep_figures import FIGURES  # (matplotlib: only for a study's figure)
+
         fig = FIGURES[study](df, axes, relative)
         png = out_dir / f"{study}.png"
         click.echo(str(write_atomic_with(png, lambda f: fig.savefig(f, format="png", dpi=110,
