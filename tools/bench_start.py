@@ -7,9 +7,10 @@ peak RSS), except the Parquet trace's CPU, which is the writer's own time inside
 - ``import linsense``: CPU of the import alone (process time around it), the least of 5;
 - ``linsense simulate`` of a 2 s scenario (step3_lut, default Parquet trace): CPU of the whole
   process, the least of 3;
-- a sweep's fixed cost: whole-process CPU of ``linsense sweep`` with 2 and with N runs on one
-  worker, the cost per run and the fixed part from the line through both;
-- N short runs (the 2 s step3_lut, metrics only) on 1 and on 2 workers: wall time of the whole
+- a sweep's fixed cost: whole-process CPU of ``linsense sweep`` with 2 and with N of those runs
+  on one worker, the cost per run and the fixed part from the line through both;
+- N short runs (the 2 s step3_lut on the switching inverter, metrics only: tools/bench_sweep.py's
+  runs, about 30 ms each) on 1 and on 2 workers: wall time of the whole
   ``linsense sweep`` process, their ratio, measured twice (a wall ratio needs a quiet machine:
   the load average is printed beside it);
 - ``linsense simulate --trace none`` of 1,800 s simulated: peak RSS of the process;
@@ -69,6 +70,7 @@ def sweep_file(tmp: Path, n: int) -> Path:
     f.write_text(f"""[sweep]
 name = "bench{n}"
 scenario = "{SCENARIO}"
+set = {{ "inverter.fidelity" = "switching" }}
 
 [[axis]]
 key = "scenario.seed"
