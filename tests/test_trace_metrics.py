@@ -45,7 +45,8 @@ def every_sample(b, metrics_cap: int) -> dict:
     from linsense.sim.run import finish_metrics, run_metrics
 
     dec = int(b.cfg.decimate)
-    k = max(1, -(-(-(-int(b.n_steps) // dec)) // metrics_cap))
+    n_rec = -(-int(b.n_steps) // dec)
+    k = max(1, -(-n_rec // metrics_cap))
     red = Reducer(k, BLOCK_SPEC if (k > 1 or dec > 1) else POINT_SPEC)
     raw = run_closed_loop_chunks(b.cfg, b.drive.state, b.n_steps, b.commands, on_chunk=red.add, chunk=1000,
                                  blocks=tuple(BLOCKS) if dec > 1 else ())
@@ -119,7 +120,8 @@ def test_metric_samples_against_compute_metrics(seed):
 def test_trace_none_metrics_equal_those_with_a_trace(run_cli, tmp_path):
     """`linsense simulate --trace none` writes the metrics of the same run with a Parquet or CSV trace."""
     p = tmp_path / "s.toml"
-    p.write_text('motor = "ecce2010"\n[scenario]\nname = "t"\nduration = 0.4\n[reference]\nposition_mm = 1.0\n')
+    p.write_text('motor = "ecce2010"\n[scenario]\nname = "t"\nduration = 0.4\n'
+                 '[reference]\nposition_mm = 1.0\n')
     got = {}
     for fmt in ("none", "parquet", "csv"):
         out = tmp_path / fmt

@@ -14,8 +14,8 @@ peak RSS), except the Parquet trace's CPU, which is the writer's own time inside
   ``linsense sweep`` process, their ratio, measured twice (a wall ratio needs a quiet machine:
   the load average is printed beside it);
 - ``linsense simulate --trace none`` of 1,800 s simulated: peak RSS of the process;
-- the Parquet trace: CPU of the trace writer per simulated second (a 60 s run written in chunks
-  into a file, as ``linsense simulate`` does), beside the C loop's.
+- the Parquet trace: CPU of the trace writer per simulated second (a 20 s run written in chunks
+  into a file, as ``linsense simulate`` does; the least of 3), beside the C loop's.
 
 Prints a table (target, measured, PASS/FAIL); exit status 1 if a target is missed.
 
@@ -93,7 +93,7 @@ def long_scenario(tmp: Path, seconds: float) -> Path:
     return f
 
 
-def parquet_cpu(tmp: Path, seconds: float = 60.0) -> tuple[float, float]:
+def parquet_cpu(tmp: Path, seconds: float = 20.0) -> tuple[float, float]:
     """(writer CPU, C loop wall) per simulated second: a run of ``seconds`` streamed into a Parquet
     trace in this process, the writer's calls timed with the process clock (the C loop is not
     running meanwhile: the chunks are handed on between its calls)."""
@@ -147,7 +147,8 @@ def main() -> int:
         per = (big["cpu"] - small["cpu"]) / (n - 2)
         fixed = small["cpu"] - 2 * per
         row("sweep fixed cost, CPU (linsense sweep, 2 and N runs)", "<= 1.0 s",
-            f"{fixed:.2f} s ({per * 1e3:.1f} ms per run; 2 runs {small['cpu']:.2f} s, wall {small['wall']:.2f} s)",
+            f"{fixed:.2f} s ({per * 1e3:.1f} ms per run; 2 runs {small['cpu']:.2f} s, "
+            f"wall {small['wall']:.2f} s)",
             fixed <= 1.0)
         for k in (1, 2):
             w1 = sweep_run(tmp, n, 1, f"w1-{k}")["wall"]
@@ -159,7 +160,7 @@ def main() -> int:
         r = child([*LINSENSE, "simulate", str(long), "--out", str(tmp / "long"), "--trace", "none"])
         row("simulate --trace none, 1,800 s simulated, peak RSS", "<= 60 MB",
             f"{r['rss_mb']:.1f} MB ({r['cpu']:.1f} s CPU)", r["rss_mb"] <= 60)
-        w, cl = parquet_cpu(tmp)
+        w, cl = min(parquet_cpu(tmp) for _ in range(3))
         row("Parquet trace, writer CPU per simulated s", "<= 5 ms",
             f"{w * 1e3:.2f} ms (the C loop: {cl * 1e3:.2f} ms wall)", w <= 5e-3)
     print("\npoint 7 summary (CPU times are robust to a busy machine; wall ratios are not)")
