@@ -10,9 +10,10 @@ peak RSS), except the Parquet trace's CPU, which is the writer's own time inside
 - a sweep's fixed cost: whole-process CPU of ``linsense sweep`` with 2 and with N of those runs
   on one worker, the cost per run and the fixed part from the line through both;
 - N short runs (the 2 s step3_lut on the switching inverter, metrics only: tools/bench_sweep.py's
-  runs, about 30 ms each) on 1 and on 2 workers: wall time of the whole
+  runs, about 10 ms of CPU each) on 1 and on 2 workers: wall time of the whole
   ``linsense sweep`` process, their ratio, measured twice (a wall ratio needs a quiet machine:
-  the load average is printed beside it);
+  the load average is printed beside it), and the ratio the CPU figures predict for 2 idle cores
+  (a model, not a measurement);
 - ``linsense simulate --trace none`` of 1,800 s simulated: peak RSS of the process;
 - the Parquet trace: CPU of the trace writer per simulated second (a 20 s run written in chunks
   into a file, as ``linsense simulate`` does; the least of 3), beside the C loop's.
@@ -150,6 +151,9 @@ def main() -> int:
             f"{fixed:.2f} s ({per * 1e3:.1f} ms per run; 2 runs {small['cpu']:.2f} s, "
             f"wall {small['wall']:.2f} s)",
             fixed <= 1.0)
+        model = (fixed + n * per) / (fixed + n * per / 2)  # (the runs in parallel, the rest not)
+        row(f"{n} short runs, 1 worker / 2 workers, from the CPU figures above", "(a model)",
+            f"{model:.2f}x if the runs alone ran in parallel on 2 idle cores", None)
         for k in (1, 2):
             w1 = sweep_run(tmp, n, 1, f"w1-{k}")["wall"]
             w2 = sweep_run(tmp, n, 2, f"w2-{k}")["wall"]
