@@ -1,4 +1,4 @@
-"""The sweep engine: runs in batches on dask.distributed, rows in Parquet partitions, resumable.
+"""The sweep engine: runs in batches on worker threads or dask, rows in Parquet partitions, resumable.
 
 ``sweep(spec, out)`` expands the sweep's points, groups them in batches of ``[sweep] batch`` runs
 and runs one task per batch: on a pool of worker threads by default (the C loop releases the GIL,
