@@ -202,7 +202,8 @@ tools:
 
 # every benchmark runs; make bench fails at the end if any did (naming them)
 BENCHES := tools/bench_sim.py tools/bench_closed_loop.py tools/bench_sweep.py tools/bench_fea.py \
-           tools/bench_reproduce.py tools/bench_saturation.py tools/bench_tune.py tools/bench_reference.py
+           tools/bench_reproduce.py tools/bench_saturation.py tools/bench_tune.py tools/bench_reference.py \
+           tools/bench_start.py
 bench: $(GEN_HDR) tools
 	@failed=""; tools/bench.sh || failed="$$failed tools/bench.sh"; \
 	for b in $(BENCHES); do echo "$(PY) $$b"; $(PY) $$b || failed="$$failed $$b"; done; \

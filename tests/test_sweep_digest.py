@@ -100,10 +100,11 @@ def test_finished_unchanged_is_reused_without_running(d, monkeypatch):
     first = sweep(load_sweep(d / "sweep.toml"), out, workers=1)
     stamps = {p.name: p.stat().st_mtime_ns for p in (out / "parts").iterdir()}
 
-    def no_cluster(*a, **k):
+    def no_run(*a, **k):
         raise AssertionError("a finished sweep of the same inputs ran again")
 
-    monkeypatch.setattr(engine_mod, "cluster_client", no_cluster)
+    monkeypatch.setattr(engine_mod, "run_batch", no_run)  # (the worker threads' and a cluster's task)
+    monkeypatch.setattr(engine_mod, "cluster_client", no_run)
     again = sweep(load_sweep(d / "sweep.toml"), out, workers=1)
     pd.testing.assert_frame_equal(first, again)
     assert {p.name: p.stat().st_mtime_ns for p in (out / "parts").iterdir()} == stamps

@@ -331,13 +331,13 @@ def fea(geometry: str, out: str, positions: int, level: str, lut_points: int, lo
                     warnings=list(warnings))
 
 
-@click.command("sweep", short_help="Run a sweep of scenarios on dask.",
+@click.command("sweep", short_help="Run a sweep of scenarios (threads or dask).",
                epilog=c.see("sweeps"))
 @click.argument("sweep_file")
 @click.option("--out", required=True, type=click.Path(file_okay=False),
               help="output folder (the same folder again resumes a killed sweep)")
 @click.option("--workers", type=click.IntRange(1, 1024), default=None,
-              help="workers of the local cluster (default: one per core)")
+              help="local worker threads (or processes) (default: one per core)")
 @click.option("--scheduler", default=None, help="address of a running dask scheduler (tcp://host:8786)")
 @click.option("--processes", is_flag=True, help="local workers as processes instead of threads")
 @click.option("--no-progress", is_flag=True, help="no progress bar")
@@ -348,9 +348,8 @@ def fea(geometry: str, out: str, positions: int, level: str, lut_points: int, lo
 def sweep_cmd(sweep_file: str, out: str, workers: int | None, scheduler: str | None, processes: bool,
               no_progress: bool, restart: bool, check: bool, as_json: bool) -> None:
     """Run a sweep (SWEEP_FILE: a file or a packaged example's name such as injection): a base
-    scenario with keys varied, on dask.distributed."""
+    scenario with keys varied, on local worker threads or a dask.distributed cluster."""
     from linsense.io import write_atomic, write_atomic_with
-    from linsense.report.sweep_figures import FIGURES
     from linsense.sweep import load_sweep, sweep
     from linsense.sweep.studies import summary_line
 
@@ -367,6 +366,8 @@ def sweep_cmd(sweep_file: str, out: str, workers: int | None, scheduler: str | N
     line = summary_line(study, df, axes)
     files.append(write_atomic(out_dir / "summary.txt", f"{sw.name}: {line}\n"))
     if study:
+        from linsense.report.sweep_figures import FIGURES  # (matplotlib: only for a study's figure)
+
         fig = FIGURES[study](df, axes, relative)
         png = out_dir / f"{study}.png"
         files.append(write_atomic_with(png, lambda f: fig.savefig(f, format="png", dpi=110,

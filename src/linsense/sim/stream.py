@@ -9,7 +9,11 @@ figure draws (:data:`PLOT_BINS` bins at most). Memory does not grow with the dur
 
 With up to :data:`METRICS_CAP` samples the metrics are exactly those of
 :func:`linsense.sim.run.simulate` on the same scenario; beyond, they are computed from the block
-envelopes as in a metrics-only run (times to one block, ``metrics["block_s"]``).
+envelopes as in a metrics-only run (times to one block, ``metrics["block_s"]``). Of those samples
+only the ones a metric can depend on are kept (:class:`MetricSamples`); a run without a trace and
+without a figure (``linsense simulate --trace none``) records only the signals the metrics read,
+in chunks of :data:`METRICS_CHUNK` periods: its memory stays flat at any duration, its metrics are
+those of the same run with a trace.
 """
 
 from __future__ import annotations
@@ -22,11 +26,14 @@ import numpy as np
 
 from linsense.sim.build import Built
 from linsense.sim.core import BLOCKS, CHUNK, run_closed_loop_chunks
-from linsense.sim.run import finish_metrics, run_metrics
+from linsense.sim.metrics import transient_mask
+from linsense.sim.run import METRICS_BLOCKS, METRICS_SIGNALS, finish_metrics, run_metrics
 
 #: samples the metrics keep at most (beyond, consecutive samples are merged into blocks): 2**19,
 #: 33 s at 16 kHz with ``decimate = 1``; at most 40 MB
 METRICS_CAP = 2**19
+#: PWM periods per chunk of a run that hands no chunk on (metrics only): 2**15, 1 MB of buffers
+METRICS_CHUNK = 2**15
 #: bins of the figure at most (each at least one injection period)
 PLOT_BINS = 2000
 
@@ -77,12 +84,14 @@ class Reducer:
     (NaN ignored) of the first source the chunks have (e.g. ``x_min`` when the run records block
     statistics, else the point value ``x``). Feed chunks with :meth:`add` (views are fine: what
     is kept is copied), then :meth:`finish`. ``k = 1`` keeps every sample (min of one = itself).
+    ``sink``: a callable given each batch of reduced samples (``{output name: array}``, in order)
+    instead of keeping them (:meth:`finish` then returns nothing).
     """
 
-    def __init__(self, k: int, spec: Spec) -> None:
+    def __init__(self, k: int, spec: Spec, sink: Callable | None = None) -> None:
         if k < 1:
             raise ValueError(f"k must be >= 1, got {k}")
-        self.k, self.spec = int(k), spec
+        self.k, self.spec, self.sink = int(k), spec, sink
         self.src: dict[str, str] | None = None
         self.pending: dict[str, np.ndarray] = {}
         self.parts: list[dict[str, np.ndarray]] = []
@@ -96,7 +105,10 @@ class Reducer:
             for out, (op, _) in self.spec.items():
                 a = arrays[self.src[out]]
                 part[out] = _OPS[op](a[: m * k].reshape(m, k, *a.shape[1:]))
-            self.parts.append(part)
+            if self.sink is not None:
+                self.sink(part)
+            else:
+                self.parts.append(part)
 
     def add(self, arrays: dict[str, np.ndarray]) -> None:
         if self.src is None:
@@ -116,9 +128,10 @@ class Reducer:
         self._reduce({s: arrays[s][: m * self.k] for s in names}, self.k)
         self.pending = {s: np.array(arrays[s][m * self.k:]) for s in names}
 
-    def finish(self, split_last: bool = False) -> dict[str, np.ndarray]:
-        """The reduced arrays; an unfinished last group is reduced as it is. ``split_last``: the last
-        sample (the state that tripped a fault) becomes a group of its own."""
+    def finish(self, split_last: bool = False) -> dict[str, np.ndarray] | None:
+        """The reduced arrays (None with a ``sink``: the rest handed to it); an unfinished last group
+        is reduced as it is. ``split_last``: the last sample (the state that tripped a fault) becomes
+        a group of its own."""
         rest = self.pending
         n = len(next(iter(rest.values()))) if rest else 0
         if n:
@@ -128,9 +141,121 @@ class Reducer:
             else:
                 self._reduce(rest, n)
         self.pending = {}
+        if self.sink is not None:
+            return None
         if not self.parts:
             return {out: np.empty(0) for out in self.spec}
         return {out: np.concatenate([p[out] for p in self.parts]) for out in self.spec}
+
+
+def _concat(a: dict[str, np.ndarray] | None, b: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    return b if a is None else {k: np.concatenate([a[k], b[k]]) for k in b}
+
+
+class MetricSamples:
+    """The reduced samples of a streamed run that its metrics can still depend on, in order: memory
+    that does not grow with the duration, metrics that are those of every sample.
+
+    Fed with the batches of reduced samples (the :data:`POINT_SPEC` or :data:`BLOCK_SPEC` outputs of
+    a :class:`Reducer`, as its ``sink``), it keeps every sample of the last ``final_window_s`` (the
+    end window's means: bias, offset) and, of the samples before, only those that decide a metric
+    of :func:`linsense.sim.metrics.compute_metrics`: the largest estimation error (over the run,
+    and in the transient and steady parts after ``convergence_s``), the first sample with a
+    non-finite position and the last with a finite one, and from the last move's start the extreme
+    in the move's direction (overshoot), the closest approach to the target (reached), the first
+    sample, and the last sample outside the settling band with the next one (settling time). Every
+    other sample before the end window enters the metrics only through a maximum or a minimum that
+    one of those holds, so :meth:`arrays` (a subsequence of the samples) gives the metrics of all of
+    them, bit for bit. A non-finite time (never from the C core) keeps every sample from then on.
+    """
+
+    def __init__(self, *, moves, convergence_s: float, settle_s: float, final_window_s: float,
+                 settling_band_deg: float, pole_pitch: float, x_target: float) -> None:
+        self.moves = list(moves)
+        self.convergence_s, self.settle_s = convergence_s, settle_s
+        self.window = max(0.0, float(final_window_s))
+        # (the band in m and the settling target as compute_metrics computes them, to the last bit)
+        self.band = settling_band_deg / (360.0 / pole_pitch)
+        self.x_to = self.moves[-1][3] if self.moves else x_target
+        self.t_last = self.moves[-1][0] if self.moves else 0.0
+        self.kept: dict[str, np.ndarray] | None = None
+        self.tail: dict[str, np.ndarray] | None = None
+        self.compact = True
+
+    def add(self, part: dict[str, np.ndarray]) -> None:
+        if not np.isfinite(part["t"]).all():
+            self.compact = False
+        self.tail = _concat(self.tail, part)
+        t = self.tail["t"]
+        if not self.compact or t.size < 3:
+            return
+        # samples before the end window whatever the run's end: the end window starts at or after
+        # t_end - window, t_end (the last sample, or the one before it after a fault) >= t[-2]
+        e = int(t.searchsorted(t[-2] - self.window))
+        if e:
+            cand = _concat(self.kept, {k: a[:e] for k, a in self.tail.items()})
+            idx = self._deciding(cand)
+            self.kept = {k: a[idx] for k, a in cand.items()}
+            self.tail = {k: a[e:].copy() for k, a in self.tail.items()}
+
+    def _deciding(self, a: dict[str, np.ndarray]) -> np.ndarray:
+        """The indices of the samples of ``a`` that decide a metric (see the class), ascending."""
+        t = a["t"]
+        # (the views of compute_metrics)
+        x = a.get("x_mean", a.get("x"))
+        x_lo, x_hi = a.get("x_min", x), a.get("x_max", x)
+        e_pt = a.get("theta_err", a.get("err_mean"))
+        e_lo, e_hi = a.get("err_min", e_pt), a.get("err_max", e_pt)
+        keep = np.zeros(t.size, dtype=bool)
+
+        def extreme(v: np.ndarray, where: np.ndarray, pick) -> None:
+            idx = np.flatnonzero(where)
+            if idx.size:
+                keep[idx[pick(v[idx])]] = True
+
+        err = np.maximum(np.abs(e_lo), np.abs(e_hi))
+        ok = np.isfinite(err)
+        after = t >= self.convergence_s
+        tr = transient_mask(t, self.moves, self.settle_s)
+        extreme(err, ok, np.argmax)
+        extreme(err, ok & after & tr, np.argmax)
+        extreme(err, ok & after & ~tr, np.argmax)
+        x_fin = np.isfinite(x)
+        if x_lo is not x:
+            x_fin &= np.isfinite(x_lo) & np.isfinite(x_hi)
+        idx = np.flatnonzero(~x_fin)
+        if idx.size:
+            keep[idx[0]] = True
+        idx = np.flatnonzero(x_fin)
+        if idx.size:
+            keep[idx[-1]] = True
+        idx = np.flatnonzero(x_fin & (t >= self.t_last))
+        if idx.size:
+            keep[idx[0]] = True
+            if self.moves:
+                _, _, x_from, x_to = self.moves[-1]
+                direction = np.sign(x_to - x_from)
+                if direction != 0:
+                    x_far = x_hi if direction > 0 else x_lo
+                    keep[idx[np.argmax(direction * (x_far[idx] - x_to))]] = True
+                if x_lo is not x_hi:
+                    gap = np.maximum(np.maximum(x_lo[idx] - x_to, x_to - x_hi[idx]), 0.0)
+                else:
+                    gap = np.abs(x[idx] - x_to)
+                keep[idx[np.argmin(gap)]] = True
+            dev = np.abs(x_lo[idx] - self.x_to)
+            if x_lo is not x_hi:
+                dev = np.maximum(dev, np.abs(x_hi[idx] - self.x_to))
+            out = np.flatnonzero(dev > self.band)
+            if out.size:
+                keep[idx[out[-1]:out[-1] + 2]] = True
+        return np.flatnonzero(keep)
+
+    def arrays(self, names) -> dict[str, np.ndarray]:
+        """The samples kept, ``{output name: array}`` (empty arrays of ``names`` when none came)."""
+        if self.tail is None:
+            return {k: np.empty(0) for k in names}
+        return _concat(self.kept, self.tail)
 
 
 def plot_bin(n_rec: int, decimate: int, f_pwm: float, f_inj: float | None) -> int:
@@ -207,11 +332,20 @@ def simulate_streamed(b: Built, *, on_chunk: Callable | None = None, plot: bool 
     dec = int(b.cfg.decimate)
     n_rec = -(-int(b.n_steps) // dec)
     k = max(1, -(-n_rec // int(metrics_cap)))
-    blocks = tuple(BLOCKS) if dec > 1 else ()
-    mred = Reducer(k, BLOCK_SPEC if (k > 1 or dec > 1) else POINT_SPEC)
+    spec = BLOCK_SPEC if (k > 1 or dec > 1) else POINT_SPEC
+    pitch = b.motor.pole_pitch  # (the metrics' parameters: linsense.sim.run.run_metrics)
+    keep = MetricSamples(moves=b.moves, convergence_s=s.metrics.convergence_s, settle_s=s.metrics.settle_s,
+                         final_window_s=s.metrics.final_window_s,
+                         settling_band_deg=s.metrics.bounds_deg(pitch)["settling_band_deg"], pole_pitch=pitch,
+                         x_target=b.commands[-1][1] if b.commands else b.setup.x0)
+    mred = Reducer(k, spec, sink=keep.add)
     f_inj = injection_hz(b)
     kp = plot_bin(n_rec, dec, s.inverter.f_pwm, f_inj)
     pred = Reducer(kp, PLOT_SPEC) if plot else None
+    signals, blocks = None, (tuple(BLOCKS) if dec > 1 else ())
+    if on_chunk is None and not plot:  # (metrics only: what they read, in smaller chunks)
+        signals, blocks = METRICS_SIGNALS, (METRICS_BLOCKS if dec > 1 else ())
+        chunk = min(int(chunk), METRICS_CHUNK)
 
     def take(arrays: dict[str, np.ndarray]) -> None:
         if on_chunk is not None:
@@ -222,9 +356,9 @@ def simulate_streamed(b: Built, *, on_chunk: Callable | None = None, plot: bool 
 
     chunk = min(int(chunk), int(b.n_steps))  # (a short run needs no buffers of a whole chunk)
     raw = run_closed_loop_chunks(b.cfg, b.drive.state, b.n_steps, b.commands, on_chunk=take, chunk=chunk,
-                                 blocks=blocks)
-    arrays = mred.finish(split_last=bool(raw.fault))
-    m = run_metrics(b, raw, arrays)
+                                 signals=signals, blocks=blocks)
+    mred.finish(split_last=bool(raw.fault))
+    m = run_metrics(b, raw, keep.arrays(spec))
     finish_metrics(b, raw, m, k * dec)
     m["samples"] = int(mred.n_in)
     pd_ = None

@@ -1,4 +1,4 @@
-"""Sweeps: thousands of runs of a base scenario with some keys varied, on dask.distributed.
+"""Sweeps: thousands of runs of a base scenario with some keys varied, on worker threads or dask.
 
 ``sweep(spec, out)`` returns one pandas row per run (the swept values and every scalar metric);
 ``load_sweep(path)`` reads a sweep file. docs/sweeps.md.

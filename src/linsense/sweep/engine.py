@@ -1,9 +1,10 @@
-"""The sweep engine: runs in batches on dask.distributed, rows in Parquet partitions, resumable.
+"""The sweep engine: runs in batches on worker threads or dask, rows in Parquet partitions, resumable.
 
 ``sweep(spec, out)`` expands the sweep's points, groups them in batches of ``[sweep] batch`` runs
-and submits one task per batch to a dask cluster: a local one by default (worker threads: the C
-loop releases the GIL, so threads run in parallel without starting processes), or any cluster by
-address (``scheduler="tcp://host:8786"``). Each finished batch is written as one Parquet
+and runs one task per batch: on a pool of worker threads by default (the C loop releases the GIL,
+so threads run in parallel; a pool starts in microseconds and needs no dask), on a local dask
+cluster of worker processes (``processes=True``), or on any dask cluster by address
+(``scheduler="tcp://host:8786"``). Each finished batch is written as one Parquet
 partition ``parts/part-NNNNNN.parquet`` through a temporary file and a rename, so a partition is
 either complete or absent; a sweep killed at any point and started again with the same command
 runs only the batches without a partition: no row is lost, none is duplicated. ``sweep.json``
@@ -20,11 +21,13 @@ import os
 import shutil
 import signal
 import tempfile
+import threading
 import uuid
-from contextlib import nullcontext
+from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import as_completed as futures_completed
+from contextlib import closing, nullcontext
 from pathlib import Path
-
-import pandas as pd
+from typing import TYPE_CHECKING
 
 from linsense.errors import InputError
 from linsense.sim.cluster import cluster_client
@@ -33,6 +36,9 @@ from linsense.sweep.inputs import digest as inputs_digest
 from linsense.sweep.points import points
 from linsense.sweep.runner import context, run_batch
 from linsense.sweep.spec import STUDIES, SweepSpec, as_sweep
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 MANIFEST = "sweep.json"
 #: what the CLI writes into a sweep's folder from its rows (``--restart`` deletes them first)
@@ -174,6 +180,34 @@ def _progress(total: int, done: int, enabled: bool):
     return p
 
 
+def _finished(ctx, batches: list, todo: list[int], relative: dict, workers: int | None,
+              scheduler: str | None, processes: bool):
+    """Run the batches ``todo`` and yield ``(batch index, rows)`` as each finishes: on worker threads
+    (no scheduler, no processes), else on a dask cluster (:func:`linsense.sim.cluster.cluster_client`).
+    Closed early (an error, an interrupt), the threads' batches stop at their next run and the
+    batches not started are cancelled."""
+    if scheduler or processes:
+        with cluster_client(workers, scheduler, processes) as client:
+            from dask.distributed import as_completed
+
+            ctx_f = client.scatter(ctx, broadcast=True)
+            futures = {client.submit(run_batch, ctx_f, batches[b], relative, pure=False): b for b in todo}
+            for fut in as_completed(futures):
+                yield futures[fut], fut.result()
+        return
+    stop = threading.Event()
+    n = max(1, min(workers or os.cpu_count() or 1, len(todo)))
+    with ThreadPoolExecutor(n, thread_name_prefix="linsense-sweep") as pool:
+        futures = {pool.submit(run_batch, ctx, batches[b], relative, stop): b for b in todo}
+        try:
+            for fut in futures_completed(futures):
+                yield futures[fut], fut.result()
+        finally:
+            stop.set()  # (a no-op when every batch is done)
+            for fut in futures:
+                fut.cancel()
+
+
 def sweep(spec, out: str | Path | None = None, *, workers: int | None = None, scheduler: str | None = None,
           processes: bool = False, progress: bool = False, restart: bool = False) -> pd.DataFrame:
     """Run a sweep (a :class:`SweepSpec`, a sweep TOML path or a dict) and return its rows.
@@ -191,8 +225,8 @@ def sweep(spec, out: str | Path | None = None, *, workers: int | None = None, sc
     scheduler : str, optional
         Address of a running dask scheduler (``tcp://host:8786``); ``workers`` is then ignored.
     processes : bool
-        Local workers as processes instead of threads (threads are the default: faster to start,
-        and the C loop runs without the GIL).
+        Local workers as processes of a dask cluster instead of threads (threads are the default:
+        they start at once, without dask, and the C loop runs without the GIL).
     progress : bool
         Show a progress bar (runs done, rate, time left).
     restart : bool
@@ -227,23 +261,19 @@ def sweep(spec, out: str | Path | None = None, *, workers: int | None = None, sc
         n_done = sum(len(batches[b]) for b in done)
         if todo:
             bar_ctx = _progress(len(pts), n_done, progress)
-            with cluster_client(workers, scheduler, processes) as client, bar_ctx as bar:
+            runs = _finished(ctx, batches, todo, relative, workers, scheduler, processes)
+            with closing(runs), bar_ctx as bar:
                 task = bar.add_task(sw.name, total=len(pts), completed=n_done) if bar else None
-                from dask.distributed import as_completed
-
-                ctx_f = client.scatter(ctx, broadcast=True)
-                futures = {client.submit(run_batch, ctx_f, batches[b], relative, pure=False): b
-                           for b in todo}
                 kill_after = int(os.environ.get("LINSENSE_TEST_KILL_AFTER_PARTS", "0"))  # (tests only)
-                for written, fut in enumerate(as_completed(futures), start=1):
-                    b = futures[fut]
-                    rows = fut.result()
+                for written, (b, rows) in enumerate(runs, start=1):
                     _unchanged_while_running(out_dir, inputs)  # (rows of the recorded inputs only)
                     _write_partition(parts, b, rows)
                     if bar:
                         bar.advance(task, len(batches[b]))
                     if kill_after and written >= kill_after:
                         os.kill(os.getpid(), signal.SIGKILL)
+        import pandas as pd
+
         frames = [pd.read_parquet(p) for p in sorted(parts.glob("part-*.parquet"))]
         df = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()
         if not df.empty:

@@ -9,7 +9,6 @@ from __future__ import annotations
 import itertools
 
 import numpy as np
-from scipy.stats import qmc
 
 from linsense.errors import InputError
 from linsense.sweep.spec import MAX_RUNS, Axis, SweepSpec
@@ -90,6 +89,8 @@ def points(sweep: SweepSpec) -> list[dict]:
     if s.sampling == "random":
         u = np.random.default_rng(s.seed).random((n, len(axes)))
     else:
+        from scipy.stats import qmc  # (1 s of imports: only for a Latin hypercube)
+
         u = qmc.LatinHypercube(d=len(axes), seed=np.random.default_rng(s.seed)).random(n)
     cols = [_from_unit(a, u[:, j], sweep.source) for j, a in enumerate(axes)]
     return [{a.key: cols[j][i] for j, a in enumerate(axes)} for i in range(n)]

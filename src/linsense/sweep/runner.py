@@ -203,6 +203,13 @@ def run_point(ctx: SweepContext, index: int, point: dict, relative: dict) -> dic
     return row
 
 
-def run_batch(ctx: SweepContext, batch: list[tuple[int, dict]], relative: dict) -> list[dict]:
-    """The rows of one batch of runs (one task of the engine, one Parquet partition)."""
-    return [run_point(ctx, i, p, relative) for i, p in batch]
+def run_batch(ctx: SweepContext, batch: list[tuple[int, dict]], relative: dict, stop=None) -> list[dict]:
+    """The rows of one batch of runs (one task of the engine, one Parquet partition). ``stop``: an
+    event (:class:`threading.Event`) that, once set, ends the batch before its next run (the
+    engine then discards its rows)."""
+    rows = []
+    for i, p in batch:
+        if stop is not None and stop.is_set():
+            break
+        rows.append(run_point(ctx, i, p, relative))
+    return rows
