@@ -216,8 +216,8 @@ def check(obj) -> list[str]:
     documented = _documented(sections, "parameters", "other parameters")
     if obj.is_class:
         fields = _fields(obj)
-        init = obj.members.get("__init__") if "__init__" in obj.members else None
-        if init is not None and not init.is_alias:
+        init = obj.members.get("__init__")  # (griffe writes a dataclass's: a record, below)
+        if init is not None and not init.is_alias and "dataclass" not in obj.labels:
             # the class documents its own __init__ (or __init__ itself does)
             if init.docstring is not None:
                 documented += _documented(parse(init)[0], "parameters", "other parameters")
