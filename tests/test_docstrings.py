@@ -178,9 +178,17 @@ def _returns_and_yields(node) -> tuple[bool, bool]:
     return returns, yields
 
 
+#: base classes that make a class a record (its annotated class attributes are its fields)
+RECORD_BASES = ("BaseModel", "NamedTuple", "TypedDict")
+
+
 def _fields(cls) -> list:
-    """The record fields of ``cls``: annotated class attributes of its own body (dataclass, pydantic,
-    NamedTuple), not ClassVar, not private, not pydantic's ``model_config``."""
+    """The record fields of ``cls`` (a dataclass, pydantic model, NamedTuple or TypedDict; none for
+    another class): annotated attributes of its own body, not ClassVar, not private, not pydantic's
+    ``model_config``."""
+    bases = [str(b).rsplit(".", 1)[-1] for b in cls.bases]
+    if "dataclass" not in cls.labels and not any(b in RECORD_BASES for b in bases):
+        return []
     out = []
     for name, member in cls.members.items():
         if member.is_alias or not member.is_attribute or name.startswith("_") or name == "model_config":

@@ -77,6 +77,18 @@ class Reducer:
     (NaN ignored) of the first source the chunks have (e.g. ``x_min`` when the run records block
     statistics, else the point value ``x``). Feed chunks with :meth:`add` (views are fine: what
     is kept is copied), then :meth:`finish`. ``k = 1`` keeps every sample (min of one = itself).
+
+    Parameters
+    ----------
+    k : int
+        Samples per group, at least 1.
+    spec : dict
+        Output name to ``(operation, sources)``.
+
+    Raises
+    ------
+    ValueError
+        When ``k`` is below 1.
     """
 
     def __init__(self, k: int, spec: Spec) -> None:
@@ -99,6 +111,18 @@ class Reducer:
             self.parts.append(part)
 
     def add(self, arrays: dict[str, np.ndarray]) -> None:
+        """Feed a chunk of samples.
+
+        Parameters
+        ----------
+        arrays : dict of str to ndarray
+            Signal name to the chunk's samples (views are fine).
+
+        Raises
+        ------
+        ValueError
+            When the first chunk has none of an output's sources.
+        """
         if self.src is None:
             self.src = {}
             for out, (_, sources) in self.spec.items():
@@ -117,8 +141,18 @@ class Reducer:
         self.pending = {s: np.array(arrays[s][m * self.k:]) for s in names}
 
     def finish(self, split_last: bool = False) -> dict[str, np.ndarray]:
-        """The reduced arrays; an unfinished last group is reduced as it is. ``split_last``: the last
-        sample (the state that tripped a fault) becomes a group of its own."""
+        """The reduced arrays; an unfinished last group is reduced as it is.
+
+        Parameters
+        ----------
+        split_last : bool, optional
+            The last sample (the state that tripped a fault) becomes a group of its own.
+
+        Returns
+        -------
+        dict of str to ndarray
+            Output name to the reduced samples (empty arrays when nothing was fed).
+        """
         rest = self.pending
         n = len(next(iter(rest.values()))) if rest else 0
         if n:
@@ -134,9 +168,28 @@ class Reducer:
 
 
 def plot_bin(n_rec: int, decimate: int, f_pwm: float, f_inj: float | None) -> int:
-    """Samples per figure bin: at least one injection period (so the envelope holds the whole HF
-    swing) and at most :data:`PLOT_BINS` bins; a whole number of injection periods when one is a
-    whole number of samples."""
+    """Samples per figure bin.
+
+    At least one injection period (so the envelope holds the whole HF swing) and at most
+    :data:`PLOT_BINS` bins; a whole number of injection periods when one is a whole number of
+    samples.
+
+    Parameters
+    ----------
+    n_rec : int
+        Recorded samples.
+    decimate : int
+        PWM periods per sample.
+    f_pwm : float
+        PWM frequency, Hz.
+    f_inj : float or None
+        Injection frequency, Hz (None: no injection).
+
+    Returns
+    -------
+    int
+        Samples per bin.
+    """
     per_inj = f_pwm / f_inj / decimate if f_inj else 1.0
     k = max(math.ceil(per_inj - 1e-9), math.ceil(n_rec / PLOT_BINS), 1)
     q = round(per_inj)
@@ -147,11 +200,29 @@ def plot_bin(n_rec: int, decimate: int, f_pwm: float, f_inj: float | None) -> in
 
 @dataclass
 class PlotData:
-    """What :func:`linsense.report.sim_figures.sim_figure` draws: the bins of :data:`PLOT_SPEC`
-    (``t`` the bins' mean time, ``*_lo``/``*_hi`` envelopes, ``*_mean``/``x_ref``/``x_est``/``force``
-    means; ``i_lo``/``i_hi`` (n, 3)), the metrics, the scenario's name, the recording period and the
-    samples per injection period of the trace (the force is drawn only when the samples resolve
-    the injection)."""
+    """What :func:`linsense.report.sim_figures.sim_figure` draws.
+
+    The samples per injection period of the trace decide whether the force is drawn (only when the
+    samples resolve the injection).
+
+    Attributes
+    ----------
+    bins : dict of str to ndarray
+        The bins of :data:`PLOT_SPEC`: ``t`` the bins' mean time, ``*_lo``/``*_hi`` envelopes,
+        ``*_mean``/``x_ref``/``x_est``/``force`` means; ``i_lo``/``i_hi`` (n, 3).
+    metrics : dict
+        The run's metrics.
+    name : str
+        The scenario's name.
+    f_pwm : float
+        PWM frequency, Hz.
+    decimate : int
+        PWM periods per recorded sample.
+    bin_samples : int
+        Samples per bin.
+    samples_per_injection : float or None
+        Samples per injection period (None: no injection).
+    """
 
     bins: dict[str, np.ndarray]
     metrics: dict
@@ -169,7 +240,30 @@ class PlotData:
 
 def plot_data(arrays_chunks, *, n_rec: int, decimate: int, f_pwm: float, f_inj: float | None, metrics: dict,
               name: str) -> PlotData:
-    """:class:`PlotData` from an iterable of chunks (``{name: array}``) of ``n_rec`` samples."""
+    """:class:`PlotData` from an iterable of chunks of ``n_rec`` samples.
+
+    Parameters
+    ----------
+    arrays_chunks : iterable of dict
+        Chunks, ``{name: array}``.
+    n_rec : int
+        Samples in all.
+    decimate : int
+        PWM periods per sample.
+    f_pwm : float
+        PWM frequency, Hz.
+    f_inj : float or None
+        Injection frequency, Hz.
+    metrics : dict
+        The run's metrics.
+    name : str
+        The scenario's name.
+
+    Returns
+    -------
+    PlotData
+        The figure's data.
+    """
     k = plot_bin(n_rec, decimate, f_pwm, f_inj)
     red = Reducer(k, PLOT_SPEC)
     for a in arrays_chunks:
@@ -180,8 +274,19 @@ def plot_data(arrays_chunks, *, n_rec: int, decimate: int, f_pwm: float, f_inj: 
 
 @dataclass
 class StreamedRun:
-    """The end of a streamed run: its metrics, fault bits, trace samples and (when asked) the
-    figure's :class:`PlotData`."""
+    """The end of a streamed run.
+
+    Attributes
+    ----------
+    metrics : dict
+        The run's metrics.
+    fault_bits : int
+        Fault bits at the end.
+    samples : int
+        Trace samples written.
+    plot : PlotData or None
+        The figure's data (when asked).
+    """
 
     metrics: dict
     fault_bits: int
@@ -190,19 +295,53 @@ class StreamedRun:
 
 
 def injection_hz(b: Built) -> float | None:
-    """The injection frequency of the built scenario (None without injection)."""
+    """The injection frequency of the built scenario (None without injection).
+
+    Parameters
+    ----------
+    b : Built
+        The built scenario.
+
+    Returns
+    -------
+    float or None
+        Hz.
+    """
     inj = b.scenario.spec.injection
     return float(inj.frequency) if inj.frequency and inj.amplitude else None
 
 
 def simulate_streamed(b: Built, *, on_chunk: Callable | None = None, plot: bool = False, chunk: int = CHUNK,
                       metrics_cap: int = METRICS_CAP) -> StreamedRun:
-    """Run the built scenario ``b`` (:func:`linsense.sim.build.build`, ``trace_in_memory=False``)
-    in chunks of about ``chunk`` PWM periods: ``on_chunk(arrays)`` gets each chunk's samples (every
-    point signal, and the block statistics when ``decimate > 1``; views valid until it returns),
-    the metrics are accumulated as the run goes (see the module's doc), and with ``plot`` the
-    figure's bins. Raises InputError as :func:`linsense.sim.run.simulate` when the drive trips at
-    t = 0."""
+    """Run the built scenario in chunks, with its metrics accumulated as the run goes.
+
+    ``b`` is built with :func:`linsense.sim.build.build` and ``trace_in_memory=False``; the
+    metrics are accumulated as the module's doc says, and with ``plot`` the figure's bins.
+
+    Parameters
+    ----------
+    b : Built
+        The built scenario.
+    on_chunk : callable or None, optional
+        ``on_chunk(arrays)`` gets each chunk's samples (every point signal, and the block statistics
+        when ``decimate > 1``; views valid until it returns).
+    plot : bool, optional
+        Also the figure's bins.
+    chunk : int, optional
+        PWM periods per chunk.
+    metrics_cap : int, optional
+        Most samples the metrics are computed on (groups reduced beyond).
+
+    Returns
+    -------
+    StreamedRun
+        Metrics, fault bits, samples and the figure's data.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        As :func:`linsense.sim.run.simulate` when the drive trips at t = 0.
+    """
     s = b.scenario.spec
     dec = int(b.cfg.decimate)
     n_rec = -(-int(b.n_steps) // dec)
