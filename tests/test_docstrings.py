@@ -54,6 +54,9 @@ SRC = Path(__file__).resolve().parents[1] / "src"
 #: public modules left to other owners: click help texts, the console entry
 EXCLUDED_MODULES = {"linsense.cli", "linsense.__main__"}
 #: annotations that mean "returns nothing"
+#: numpydoc's order of the sections a reader looks for (the rest: anywhere)
+SECTION_ORDER = {"parameters": 0, "attributes": 1, "returns": 2, "yields": 2, "receives": 3,
+                 "other parameters": 4, "raises": 5, "warns": 6, "examples": 9}
 #: the compiled cffi extension: exported by linsense.ctrl, no Python source
 COMPILED = "linsense._ctrl."
 NO_RETURN = {"None", "NoReturn", "Never", "typing.NoReturn", "typing.Never"}
@@ -244,6 +247,10 @@ def check(obj) -> list[str]:
         return problems
     problems += _compare(where, documented, _signature_names(obj))
     kinds = {s.kind.value for s in sections}
+    order = [SECTION_ORDER[s.kind.value] for s in sections if s.kind.value in SECTION_ORDER]
+    if order != sorted(order):
+        problems.append(f"{where}: sections out of numpydoc's order "
+                        f"({', '.join(s.kind.value for s in sections if s.kind.value in SECTION_ORDER)})")
     node = _own_body(obj)
     returns, yields = _returns_and_yields(node) if node is not None else (False, False)
     annotation = str(obj.returns) if obj.returns is not None else None

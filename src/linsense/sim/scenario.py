@@ -1121,16 +1121,16 @@ def as_scenario(obj, caller: str = "simulate") -> Scenario:
     caller : str
         The API function named when ``obj`` is none of these.
 
+    Returns
+    -------
+    Scenario
+        The scenario.
+
     Raises
     ------
     InputError
         ``obj`` is none of these (naming ``caller`` and the argument ``scenario``), or the scenario
         it gives is invalid.
-
-    Returns
-    -------
-    Scenario
-        The scenario.
     """
     if isinstance(obj, Scenario):
         return obj
