@@ -7,11 +7,11 @@ Public, precisely
   ``_`` (``linsense.model.motor`` is public, ``linsense._digest`` is not), except ``linsense.cli`` (its
   docstrings are click help texts) and ``linsense.__main__``. A package counts through its
   ``__init__``.
-- Its *public names*: when the module defines ``__all__``, the classes and functions named there
-  (re-exports included: ``linsense.sim.Result`` is :class:`linsense.sim.result.Result`; a name served
-  lazily by a module ``__getattr__``, such as ``linsense.Motor``, must be defined in some public
-  module); otherwise every class and function defined in the module (not imported into it) whose name
-  does not begin with ``_``.
+- Its *public names*: every class and function defined in the module (not imported into it) whose
+  name does not begin with ``_`` (what the site renders: its filter is ``!^_``), and the classes and
+  functions its ``__all__`` names (re-exports: ``linsense.sim.Result`` is
+  :class:`linsense.sim.result.Result`, checked where it is defined; a name served lazily by a module
+  ``__getattr__``, such as ``linsense.Motor``, must be defined in some public module).
 - Of each public class, every method and property defined in its body whose name does not begin with
   ``_``; ``__init__`` is documented in the class docstring (the numpydoc convention).
 - Constants and other module attributes are not definitions here (they carry ``#:`` comments).
@@ -26,8 +26,9 @@ formats...) are not what the site renders and whose import of each object would 
 package. For every public module, class, function, method and property:
 
 1. it has a docstring with a one-line summary;
-2. griffe's numpy parser reads it without a warning (unknown parameter, parameter without a type,
-   unparseable line, confusing indentation, empty section);
+2. griffe's numpy parser reads it without a warning (unknown parameter, unparseable line, confusing
+   indentation, empty section), and every documented parameter has a type (in the docstring or the
+   signature);
 3. a function's or method's ``Parameters`` (and ``Other Parameters``) name exactly the parameters of its
    signature, in any order, ``self``/``cls`` aside; a class with its own ``__init__`` documents
    exactly that ``__init__``'s (in the class docstring or the ``__init__``'s);
@@ -124,10 +125,9 @@ def public_api(package) -> tuple[list, list, list[str]]:
                     continue
                 if _is_definition(target):
                     found.setdefault(target.path, target)
-        else:
-            for name, member in module.members.items():
-                if not member.is_alias and not name.startswith("_") and _is_definition(member):
-                    found.setdefault(member.path, member)
+        for name, member in module.members.items():
+            if not member.is_alias and not name.startswith("_") and _is_definition(member):
+                found.setdefault(member.path, member)
     for cls in [o for o in found.values() if o.is_class]:
         for name, member in cls.members.items():
             if member.is_alias or name.startswith("_"):
@@ -225,6 +225,10 @@ def check(obj) -> list[str]:
     if obj.is_module or (obj.is_attribute and "property" in obj.labels):
         return problems
     documented = _documented(sections, "parameters", "other parameters")
+    for section in sections:
+        if section.kind.value in ("parameters", "other parameters"):
+            problems += [f"{where}: parameter without a type: {item.name}" for item in section.value
+                         if item.annotation is None]
     if obj.is_class:
         fields = _fields(obj)
         init = obj.members.get("__init__")  # (griffe writes a dataclass's: a record, below)
@@ -366,29 +370,36 @@ def test_checker_passes_a_good_module():
     assert _problems_of(GOOD) == []
 
 
-@pytest.mark.parametrize("broken, expected", [
-    # a parameter missing from Parameters
-    (GOOD.replace("    height : float, optional\n        Height, m.\n", ""), "parameters not documented: height"),
-    # a documented parameter not in the signature
-    (GOOD.replace("    width : float\n", "    depth : float\n"), "does not appear in the function signature"),
-    # no Returns section for a function returning a value
-    (GOOD.replace("\n    Returns\n    -------\n    float\n        The area, m^2.\n", ""), "no Returns section"),
-    # a parameter without a type, neither in the docstring nor in the signature
-    (GOOD.replace("    side : float\n", "    side\n").replace("side: float", "side"), "No types or annotations"),
-    # wrong indentation of a description
-    (GOOD.replace("        Width, m.", "      Width, m."), "Confusing indentation"),
-    # an empty section
-    (GOOD.replace("    Returns\n    -------\n    float\n        m^3.\n", "    Returns\n    -------\n"),
-     "no Returns section"),
-    # a class whose __init__ parameter is not documented
-    (GOOD.replace("    Parameters\n    ----------\n    side : float\n        Side, m.\n", ""),
-     "Box: parameters not documented: side"),
-    # no docstring at all
-    (GOOD.replace('        """The volume.\n\n        Returns\n        -------\n        float\n            m^3.\n'
-                  '        """\n', ""), "Box.volume: no docstring"),
-])
-def test_checker_fails_a_broken_docstring(broken, expected):
-    assert broken != GOOD
+HEIGHT = "    height : float, optional\n        Height, m.\n"
+AREA_RETURNS = "\n    Returns\n    -------\n    float\n        The area, m^2.\n"
+VOLUME_RETURNS = "        Returns\n        -------\n        float\n            m^3.\n"
+BOX_PARAMETERS = "    Parameters\n    ----------\n    side : float\n        Side, m.\n"
+VOLUME_DOC = ('        """The volume.\n\n        Returns\n        -------\n        float\n            m^3.\n'
+              '        """\n')
+BROKEN = {
+    "missing parameter": (GOOD.replace(HEIGHT, ""), "parameters not documented: height"),
+    "unknown parameter": (GOOD.replace("    width : float\n", "    depth : float\n"),
+                          "does not appear in the function signature"),
+    "parameter twice": (GOOD.replace(HEIGHT, HEIGHT + HEIGHT), "parameters documented twice: height"),
+    "no Returns": (GOOD.replace(AREA_RETURNS, ""), "no Returns section"),
+    "no type anywhere": (GOOD.replace("    side : float\n", "    side\n").replace("side: float", "side"),
+                         "parameter without a type: side"),
+    "bad indentation": (GOOD.replace("        Width, m.", "      Width, m."), "Confusing indentation"),
+    "empty section": (GOOD.replace(VOLUME_RETURNS, "        Returns\n        -------\n"),
+                      "Empty returns section"),
+    "section order": (GOOD.replace(AREA_RETURNS, "").replace("    Parameters\n    ----------\n    width",
+                                                             AREA_RETURNS.lstrip("\n")
+                                                             + "\n    Parameters\n    ----------\n    width"),
+                      "sections out of numpydoc's order"),
+    "class parameter": (GOOD.replace(BOX_PARAMETERS, ""), "Box: parameters not documented: side"),
+    "no docstring": (GOOD.replace(VOLUME_DOC, ""), "Box.volume: no docstring"),
+}
+
+
+@pytest.mark.parametrize("name", BROKEN)
+def test_checker_fails_a_broken_docstring(name):
+    broken, expected = BROKEN[name]
+    assert broken != GOOD, "the breakage did not apply"
     problems = _problems_of(broken)
     assert any(expected in p for p in problems), problems
 
@@ -413,7 +424,7 @@ def test_checker_wants_record_fields_documented():
         y: float
     '''
     assert any("field 'y' documented nowhere" in p for p in _problems_of(code))
-    assert not any("field" in p for p in _problems_of(code.replace("y: float", 'y: float\n    """m."""')))
+    assert not any("field" in p for p in _problems_of(code.replace("y: float", 'y: float\n        """m."""')))
 
 
 def test_checker_wants_yields_for_a_generator():

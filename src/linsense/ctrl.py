@@ -65,7 +65,13 @@ _realize_types()
 
 
 def built_digest() -> str:
-    """Digest of the sources the extension was compiled from ("" for an extension too old to say)."""
+    """Digest of the sources the extension was compiled from.
+
+    Returns
+    -------
+    str
+        Hex digest ("" for an extension too old to say).
+    """
     try:
         return ffi.string(lib.ls_py_source_digest()).decode()
     except AttributeError:
@@ -73,7 +79,13 @@ def built_digest() -> str:
 
 
 def source_tree_digest() -> str | None:
-    """Digest of ``csrc/`` and ``tools/build_ctrl.py`` in the source tree, None outside one (wheel)."""
+    """Digest of ``csrc/`` and ``tools/build_ctrl.py`` in the source tree.
+
+    Returns
+    -------
+    str or None
+        Hex digest; None outside a source tree (a wheel).
+    """
     root = Path(__file__).resolve().parents[2]
     csrc = root / "csrc"
     script = root / "tools" / "build_ctrl.py"
@@ -168,6 +180,11 @@ def config_error(module: str, fields: dict, status: int, detail: str = "", func:
         Extra explanation appended to the message.
     func : str, optional
         The refusing C function (default ``<module>_init``).
+
+    Returns
+    -------
+    ConfigError
+        The error to raise.
     """
 
     rules = _RULES.get(module, {})

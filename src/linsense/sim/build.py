@@ -153,9 +153,31 @@ def build(sc: Scenario, motor: Motor | None = None, trace_in_memory: bool = True
 
 
 def motors(sc: Scenario, motor: Motor | None = None) -> tuple[Motor, Motor]:
-    """The plant's motor (``motor``, else the scenario's) and the one the controller believes in (its
-    tables, gains and feed-forwards): the plant's unless ``controller.model.motor`` names another
-    (e.g. one with a parameter off, to test the LUT's robustness), with the same pole pitch."""
+    """The plant's motor and the one the controller believes in.
+
+    The plant's is ``motor``, else the scenario's; the controller's (its tables, gains and
+    feed-forwards) is the plant's unless ``controller.model.motor`` names another (e.g. one with a
+    parameter off, to test the LUT's robustness), with the same pole pitch.
+
+    Parameters
+    ----------
+    sc : Scenario
+        The scenario.
+    motor : Motor or None, optional
+        Replaces the scenario's motor.
+
+    Returns
+    -------
+    plant : Motor
+        The plant's motor.
+    model : Motor
+        The controller's.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        A motor that cannot be loaded, or a controller's motor of another pole pitch.
+    """
     motor = resolve_motor(sc) if motor is None else motor
     ov = sc.spec.controller.model
     model_motor = motor if ov.motor is None else resolve_motor(sc, ov.motor, "controller.model.motor",
@@ -168,9 +190,24 @@ def motors(sc: Scenario, motor: Motor | None = None) -> tuple[Motor, Motor]:
 
 
 def controller_model(sc: Scenario, model_motor: Motor) -> dict:
-    """What the controller believes about the motor: ``[controller.model]``'s values, else the
-    model's (mean L_d and L_q over a period; the demodulator gain ``L_q / (L_q - L_d)``, None
-    without saliency: refused by :func:`validate`)."""
+    """What the controller believes about the motor.
+
+    ``[controller.model]``'s values, else the model's (mean L_d and L_q over a period; the
+    demodulator gain ``L_q / (L_q - L_d)``, None without saliency: refused by :func:`validate`).
+
+    Parameters
+    ----------
+    sc : Scenario
+        The scenario.
+    model_motor : Motor
+        The motor the controller believes in.
+
+    Returns
+    -------
+    dict
+        ``L_d``, ``L_q`` (H), ``R_s`` (ohm), ``psi_pm`` (Wb), ``mass`` (kg), ``force_constant``
+        (N/A), ``demod_gain``.
+    """
     ov = sc.spec.controller.model
     L_d, L_q = memo(("mean_dq", motor_key(model_motor)), lambda: mean_dq(model_motor))
     known = {
@@ -240,8 +277,31 @@ def validate(sc: Scenario, motor: Motor, known: dict, user_keys: set[str],
 
 
 def plant(sc: Scenario, motor: Motor, sat: Saturation | None) -> tuple[PlantSetup, object]:
-    """The plant's set-up and its ``ls_sim_cfg *`` (from a cached template of the motor, saturated
-    with ``sat``)."""
+    """The plant's set-up and its ``ls_sim_cfg *``.
+
+    From a cached template of the motor, saturated with ``sat``.
+
+    Parameters
+    ----------
+    sc : Scenario
+        The scenario.
+    motor : Motor
+        The plant's motor.
+    sat : Saturation or None
+        The plant's saturation (None: linear).
+
+    Returns
+    -------
+    setup : PlantSetup
+        The set-up.
+    cfg : cffi ``ls_sim_cfg *``
+        The C configuration.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        The saturated plant or the simulator's configuration refused.
+    """
     s = sc.spec
     inv, sens, tr, ld = s.inverter, s.sensors, s.travel, s.load
     gain, offs = sensor_triples(sens)
@@ -271,10 +331,36 @@ def plant(sc: Scenario, motor: Motor, sat: Saturation | None) -> tuple[PlantSetu
 
 
 def make_drive(sc: Scenario, model_motor: Motor, known: dict, v: Values, d, user_keys: set[str]) -> Drive:
-    """The drive over the configuration ``d`` (``ls_drive_cfg *``, :func:`linsense.sim.drive_cfg.fill`
-    from the drive values ``v``) with its tables
-    (:func:`linsense.sim.tables.drive_tables`). A refusal of ``ls_drive_init`` (the C library's own
-    checks, the last line) names the one field at fault, its scenario key, the value and the limit."""
+    """The drive over a configuration, with its tables (:func:`linsense.sim.tables.drive_tables`).
+
+    A refusal of ``ls_drive_init`` (the C library's own checks, the last line) names the one field
+    at fault, its scenario key, the value and the limit.
+
+    Parameters
+    ----------
+    sc : Scenario
+        The designed scenario.
+    model_motor : Motor
+        The motor the controller believes in.
+    known : dict
+        Motor values the controller uses.
+    v : Values
+        The drive values.
+    d : cffi ``ls_drive_cfg *``
+        The configuration (:func:`linsense.sim.drive_cfg.fill` from ``v``).
+    user_keys : set of str
+        The dotted keys the file gives.
+
+    Returns
+    -------
+    Drive
+        The initialised drive.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        The configuration refused by the controller library.
+    """
     try:
         t = drive_tables(sc, model_motor, known["R_s"], v)
         return Drive(d, comp=t.comp, gain_table=t.gain_table, comp_r=t.comp_r, gain_r=t.gain_r)
@@ -287,8 +373,29 @@ def make_drive(sc: Scenario, model_motor: Motor, known: dict, v: Values, d, user
 
 
 def start_drive(sc: Scenario, drive: Drive, motor: Motor, setup: PlantSetup) -> None:
-    """Tell ``drive`` where the mover starts (the start-up does not know: its estimate starts at
-    ``startup.guess_mm``), the load it starts balanced with, and the scenario's mode."""
+    """Tell the drive where the mover starts, the load it starts balanced with, and the scenario's mode.
+
+    The start-up does not know where the mover starts: its estimate starts at
+    ``startup.guess_mm``.
+
+    Parameters
+    ----------
+    sc : Scenario
+        The scenario.
+    drive : Drive
+        The drive.
+    motor : Motor
+        The plant's motor (its pole pitch).
+    setup : PlantSetup
+        The plant's set-up (the start position).
+
+    Raises
+    ------
+    linsense.errors.InputError
+        The mode refused (naming ``control.mode``).
+    linsense.errors.ConfigError
+        The start position or load refused by the C library.
+    """
     s = sc.spec
     ctl = s.control
     x_known = s.startup.guess_mm * 1e-3 if ctl.mode == "startup" else setup.x0

@@ -62,7 +62,18 @@ OFFSET = 0.37
 
 
 def start(tau: float) -> float:
-    """Where the steps, the trajectory and the load step start (m)."""
+    """Where the steps, the trajectory and the load step start.
+
+    Parameters
+    ----------
+    tau : float
+        Pole pitch, m.
+
+    Returns
+    -------
+    float
+        m.
+    """
     return tau * OFFSET / C.POSITIONS
 
 
