@@ -370,7 +370,14 @@ def make_lut(values: Any) -> Lut:
     Returns
     -------
     Lut
-        The C table, holding its buffer.
+        The C table over a float32 copy of the values.
+
+    Raises
+    ------
+    InputError
+        ``values`` is not one dimension of real numbers, or a value is beyond a float32.
+    ConfigError
+        If ``ls_lut_init`` refuses the table.
     """
     return values if isinstance(values, Lut) else Lut(values)
 

@@ -415,7 +415,7 @@ def write_atomic(path: str | os.PathLike, data: str | bytes) -> Path:
     path : str or os.PathLike
         The file (``"-"``: standard output; see :func:`write_atomic_with`).
     data : str or bytes
-        Its content (text as UTF-8).
+        Its content (text encoded as UTF-8).
 
     Returns
     -------

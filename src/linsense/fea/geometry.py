@@ -394,7 +394,7 @@ class Geometry:
     bh_arm : tuple or None
         ``(B, H)`` of the back iron, None: linear ``mu_arm_iron``.
     notes : list of str
-        Remarks for the record.
+        Remarks on the layout (empty unless a caller adds some).
     """
 
     name: str

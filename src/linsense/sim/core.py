@@ -244,7 +244,7 @@ class RawRun:
     wall_s : float
         Wall time of the C run alone (outputs allocated before), s.
     extra : dict
-        Anything else of the run (a calibration's ``cal_table``).
+        Anything else a caller keeps with the run (empty from this module's functions).
     """
 
     arrays: dict[str, np.ndarray]

@@ -22,13 +22,13 @@ class Tables:
 
     Attributes
     ----------
-    comp : Lut or None
+    comp : linsense.ctrl.Lut or None
         The compensation table.
-    gain_table : Lut or None
+    gain_table : linsense.ctrl.Lut or None
         The demodulator's gain schedule.
-    comp_r : Lut or None
+    comp_r : linsense.ctrl.Lut or None
         The compensation table's slope in the resistance's scale.
-    gain_r : Lut or None
+    gain_r : linsense.ctrl.Lut or None
         The gain schedule's slope in the resistance's scale.
     """
 

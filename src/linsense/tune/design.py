@@ -162,7 +162,7 @@ class Design:
     demod_lpf : float
         Demodulator low-pass corner, Hz.
     demod_notch : float
-        Demodulator notch at ``2 f_inj``, Hz (0: none, at or above f_pwm / 4).
+        The demodulator low-pass's zeros at ``2 f_inj``, Hz (0: none, when ``4 f_inj >= f_pwm``).
     demod_gain : float
         Nominal demodulator gain ``L_q / (L_q - L_d)``, dimensionless.
     observer_bw : float
