@@ -364,8 +364,9 @@ def make_lut(values: Any) -> Lut:
 
     Parameters
     ----------
-    values : array_like or linsense.compensation.lut.Lut
-        The table over one electrical period (its ``values`` for a compensation ``Lut``).
+    values : array_like or Lut or linsense.compensation.lut.Lut
+        The table over one electrical period (its ``values`` for a compensation ``Lut``; a
+        :class:`Lut` is returned as it is).
 
     Returns
     -------

@@ -63,7 +63,7 @@ class Axis(BaseModel):
     key : str
         Dotted scenario key, or ``motor.*`` / ``lut_motor.*``.
     values : list or None
-        The values, or:
+        The values; else ``min`` and ``max`` (with ``n`` on a grid).
     min : float or None
         Lower end.
     max : float or None
