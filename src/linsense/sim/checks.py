@@ -153,7 +153,7 @@ def run_steps(source: str, duration: float, fs: float) -> int:
 def check_run_size(source: str, n_steps: int, decimate: int, fs: float, trace_in_memory: bool = True) -> None:
     """Refuse a run whose trace in memory would not fit in :data:`~linsense.limits.MAX_TRACE_BYTES`.
 
-    Before anything is allocated. A run streamed in chunks (``linsense simulate``) keeps no trace in
+    Refused before anything is allocated. A run streamed in chunks (``linsense simulate``) keeps no trace in
     memory.
 
     Parameters
@@ -192,7 +192,7 @@ def check_run_size(source: str, n_steps: int, decimate: int, fs: float, trace_in
 def check_trace_file(b) -> None:
     """Refuse a streamed run whose trace file would exceed :data:`~linsense.limits.MAX_TRACE_FILE_BYTES`.
 
-    144 B per sample, before it starts.
+    At 144 B per sample; refused before it starts.
 
     Parameters
     ----------
