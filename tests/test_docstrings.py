@@ -4,8 +4,8 @@
 Public, precisely
 -----------------
 - A *public module* is a module of the ``linsense`` package none of whose dotted-path parts begins with
-  ``_`` (``linsense.model.motor`` is public, ``linsense._digest`` is not), except ``linsense.cli`` (its
-  docstrings are click help texts) and ``linsense.__main__``. A package counts through its
+  ``_`` (``linsense.model.motor`` is public, ``linsense._digest`` is not), except ``linsense.cli`` and its
+  submodules (their docstrings are click help texts) and ``linsense.__main__``. A package counts through its
   ``__init__``.
 - Its *public names*: every class and function defined in the module (not imported into it) whose
   name does not begin with ``_`` (what the site renders: its filter is ``!^_``), and the classes and
@@ -57,7 +57,7 @@ import griffe
 import pytest
 
 SRC = Path(__file__).resolve().parents[1] / "src"
-#: public modules left to other owners: click help texts, the console entry
+#: modules (and their submodules) left to other owners: click help texts, the console entry
 EXCLUDED_MODULES = {"linsense.cli", "linsense.__main__"}
 #: numpydoc's order of the sections a reader looks for (the rest: anywhere)
 SECTION_ORDER = {"parameters": 0, "attributes": 1, "returns": 2, "yields": 2, "receives": 3,
@@ -105,7 +105,9 @@ def _modules(module):
 
 def is_public_module(module) -> bool:
     """Whether ``module`` is a public module as defined in this file's docstring."""
-    return module.path not in EXCLUDED_MODULES and not any(p.startswith("_") for p in module.path.split("."))
+    path = module.path
+    excluded = any(path == m or path.startswith(m + ".") for m in EXCLUDED_MODULES)
+    return not excluded and not any(p.startswith("_") for p in path.split("."))
 
 
 def _is_definition(obj) -> bool:
