@@ -65,7 +65,13 @@ _realize_types()
 
 
 def built_digest() -> str:
-    """Digest of the sources the extension was compiled from ("" for an extension too old to say)."""
+    """Digest of the sources the extension was compiled from.
+
+    Returns
+    -------
+    str
+        Hex digest ("" for an extension too old to say).
+    """
     try:
         return ffi.string(lib.ls_py_source_digest()).decode()
     except AttributeError:
@@ -73,7 +79,13 @@ def built_digest() -> str:
 
 
 def source_tree_digest() -> str | None:
-    """Digest of ``csrc/`` and ``tools/build_ctrl.py`` in the source tree, None outside one (wheel)."""
+    """Digest of ``csrc/`` and ``tools/build_ctrl.py`` in the source tree.
+
+    Returns
+    -------
+    str or None
+        Hex digest; None outside a source tree (a wheel).
+    """
     root = Path(__file__).resolve().parents[2]
     csrc = root / "csrc"
     script = root / "tools" / "build_ctrl.py"
@@ -168,6 +180,11 @@ def config_error(module: str, fields: dict, status: int, detail: str = "", func:
         Extra explanation appended to the message.
     func : str, optional
         The refusing C function (default ``<module>_init``).
+
+    Returns
+    -------
+    ConfigError
+        The error to raise.
     """
 
     rules = _RULES.get(module, {})
@@ -239,6 +256,16 @@ def drive_default_cfg():
 def to_pos(theta: float):
     """Unwrapped electrical angle (rad) -> ``ls_pos`` (period count + angle in [0, 2 pi)).
 
+    Parameters
+    ----------
+    theta : float
+        Unwrapped electrical angle, rad.
+
+    Returns
+    -------
+    cffi ``ls_pos``
+        The normalised position (``ls_pos_norm``).
+
     Raises
     ------
     ConfigError
@@ -256,7 +283,18 @@ def to_pos(theta: float):
 
 
 def from_pos(p) -> float:
-    """``ls_pos`` -> unwrapped electrical angle (rad), in double."""
+    """``ls_pos`` -> unwrapped electrical angle (rad), in double.
+
+    Parameters
+    ----------
+    p : cffi ``ls_pos``
+        The position.
+
+    Returns
+    -------
+    float
+        rad.
+    """
     return p.period * _TWO_PI + float(p.theta)
 
 
@@ -322,7 +360,26 @@ class Lut:
 
 
 def make_lut(values: Any) -> Lut:
-    """A :class:`Lut` from a numpy array (or a compensation ``Lut``); see :class:`Lut`."""
+    """A :class:`Lut` from a numpy array (or a compensation ``Lut``); see :class:`Lut`.
+
+    Parameters
+    ----------
+    values : array_like or Lut or linsense.compensation.lut.Lut
+        The table over one electrical period (its ``values`` for a compensation ``Lut``; a
+        :class:`Lut` is returned as it is).
+
+    Returns
+    -------
+    Lut
+        The C table over a float32 copy of the values.
+
+    Raises
+    ------
+    InputError
+        ``values`` is not one dimension of real numbers, or a value is beyond a float32.
+    ConfigError
+        If ``ls_lut_init`` refuses the table.
+    """
     return values if isinstance(values, Lut) else Lut(values)
 
 
@@ -405,7 +462,12 @@ class Drive:
                 "injection amplitude * sqrt(3) < 0.8 prot.v_dc_min, valid cal settings")
 
     def set_mode(self, mode: str | int) -> None:
-        """``ls_drive_set_mode``; ``mode`` a name ("sensorless_lut", ...) or an ``LS_MODE_*`` value.
+        """``ls_drive_set_mode``.
+
+        Parameters
+        ----------
+        mode : str or int
+            A name ("sensorless_lut", ...) or an ``LS_MODE_*`` value.
 
         Raises
         ------
@@ -420,14 +482,35 @@ class Drive:
                               func="ls_drive_set_mode")
 
     def set_position(self, theta: float) -> None:
-        """Tell the HF observer where the mover is (unwrapped rad); :class:`ConfigError` if refused."""
+        """Tell the HF observer where the mover is.
+
+        Parameters
+        ----------
+        theta : float
+            Unwrapped electrical angle, rad.
+
+        Raises
+        ------
+        ConfigError
+            When refused (:func:`to_pos`).
+        """
         st = lib.ls_drive_set_position(self.state, to_pos(theta))
         if st != lib.LS_OK:
             raise config_error("ls_drive", {"theta": theta}, st, func="ls_drive_set_position")
 
     def set_load(self, f_load: float) -> None:
-        """``ls_drive_set_load``: start in equilibrium with the load force ``f_load`` (N, opposing
-        positive motion when > 0); call after :meth:`set_position`."""
+        """``ls_drive_set_load``: start in equilibrium with a load force; call after :meth:`set_position`.
+
+        Parameters
+        ----------
+        f_load : float
+            Load force, N, opposing positive motion when > 0.
+
+        Raises
+        ------
+        ConfigError
+            When ``ls_drive_set_load`` refuses it (a force that is not finite in ``LS_REAL``).
+        """
         st = lib.ls_drive_set_load(self.state, float(f_load))
         if st != lib.LS_OK:
             raise config_error("ls_drive", {"f_load": f_load}, st, func="ls_drive_set_load")

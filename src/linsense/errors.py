@@ -29,8 +29,20 @@ def _cut_quoted(m: re.Match) -> str:
 
 
 def shown(value) -> str:
-    """``repr`` of a user's ``value`` for a message or a comment, a numpy scalar as the plain Python
-    number (``360.0``, not ``np.float64(360.0)``; issue 23)."""
+    """``repr`` of a user's value for a message or a comment, a numpy scalar as the plain Python number.
+
+    ``360.0``, not ``np.float64(360.0)`` (issue 23).
+
+    Parameters
+    ----------
+    value : object
+        The value to show.
+
+    Returns
+    -------
+    str
+        ``repr(value)``, of ``value.item()`` for a 0-d numpy value.
+    """
     item = getattr(value, "item", None)  # (numpy scalars; errors.py does not import numpy)
     return repr(item() if callable(item) and getattr(value, "ndim", None) == 0 else value)
 
@@ -43,6 +55,18 @@ def bounded(text: str, limit: int = MAX_MESSAGE_CHARS) -> str:
     and its length; what is still longer than ``limit`` is cut there the same way. Every message
     of :class:`InputError` and :class:`ModelError` goes through it, so no message quotes a whole
     50 MB value.
+
+    Parameters
+    ----------
+    text : str
+        The message (anything else is passed through ``str``).
+    limit : int, optional
+        Characters after which the whole text is cut, default :data:`MAX_MESSAGE_CHARS`.
+
+    Returns
+    -------
+    str
+        The bounded text.
     """
     text = str(text)
     if len(text) > MAX_WORD_CHARS:
@@ -77,7 +101,17 @@ class InputError(LinsenseError):
 
 
 class ModelError(LinsenseError):
-    """A motor model that loads but cannot be used (not positive definite, no saliency...)."""
+    """A motor model that loads but cannot be used (not positive definite, no saliency...).
+
+    Parameters
+    ----------
+    source : str
+        The motor file (or preset) the model came from.
+    key : str
+        Dotted key inside ``source`` at fault; may be empty.
+    message : str
+        What is wrong, including the value.
+    """
 
     def __init__(self, source: str, key: str, message: str) -> None:
         self.source = str(source)
@@ -88,8 +122,18 @@ class ModelError(LinsenseError):
 
 
 class OutputError(InputError):
-    """An output (``--out``) that linsense refuses to write or replace, e.g. a folder holding
-    files no linsense run wrote. Names the path and why."""
+    """An output (``--out``) that linsense refuses to write or replace.
+
+    E.g. a folder holding files no linsense run wrote. Names the path and why; an
+    :class:`InputError` with the path as its source and an empty key.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The output refused.
+    message : str
+        Why.
+    """
 
     def __init__(self, path, message: str) -> None:
         super().__init__(str(path), "", message)
@@ -124,8 +168,17 @@ class ConfigError(LinsenseError):
 
 
 class SaturationRangeError(LinsenseError, ValueError):
-    """Saturation data the C plant cannot take (:mod:`linsense.model.saturation`); ``key`` names the
-    motor-file key. Also a ``ValueError`` (a value out of the model's range), as it was."""
+    """Saturation data the C plant cannot take (:mod:`linsense.model.saturation`).
+
+    Also a ``ValueError`` (a value out of the model's range), as it was.
+
+    Parameters
+    ----------
+    key : str
+        The motor-file key at fault.
+    message : str
+        What is wrong, including the value.
+    """
 
     def __init__(self, key: str, message: str) -> None:
         super().__init__(message)

@@ -28,7 +28,29 @@ _DECIMAL_COMMA = re.compile(r"\s*[+-]?\d*,\d+([eE][+-]?\d+)?\s*")
 
 
 def finite_cell(source: str, row: int, column: str, cell: str) -> float:
-    """Parse one CSV cell as a finite number, or raise InputError naming row and column."""
+    """Parse one CSV cell as a finite number.
+
+    Parameters
+    ----------
+    source : str
+        The file, for messages.
+    row : int
+        Its line number.
+    column : str
+        Its column's name.
+    cell : str
+        The text.
+
+    Returns
+    -------
+    float
+        The number.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        Empty, not a number or not finite, naming row and column.
+    """
     from linsense.errors import InputError
 
     try:
@@ -107,8 +129,24 @@ _SEMICOLONS = "semicolon separators are not read: separate the columns with comm
 
 
 def check_width(src: str, number: int, row: list[str], header: list[str]) -> None:
-    """InputError naming row ``number`` of ``src`` when it has another number of fields than the
-    header, with the likely cause (semicolons, decimal commas)."""
+    """Refuse a row with another number of fields than the header.
+
+    Parameters
+    ----------
+    src : str
+        The file, for messages.
+    number : int
+        The row's line number.
+    row : list of str
+        Its cells.
+    header : list of str
+        The header's.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        Naming the row, with the likely cause (semicolons, decimal commas).
+    """
     from linsense.errors import InputError
 
     if len(row) != len(header):
@@ -130,6 +168,18 @@ def csv_rows(path: str | os.PathLike, what: str):
     mark is skipped; a file that cannot be read, is not UTF-8 or has no header is refused. The one
     CSV reader of every table a user gives (inductance and saturation tables, LUTs, bench files);
     :func:`check_width` checks a row's number of fields.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file.
+    what : str
+        What the file is ("LUT", "bench file"...), for messages.
+
+    Yields
+    ------
+    tuple of (int, list of str)
+        ``(line, cells)``.
 
     Raises
     ------
@@ -192,7 +242,25 @@ def csv_rows(path: str | os.PathLike, what: str):
 
 
 def read_text_file(path: str | os.PathLike, what: str) -> str:
-    """Text of a user file, or InputError naming it: ``what`` says what was expected."""
+    """Text of a user file.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file.
+    what : str
+        What was expected ("motor file"...), for messages.
+
+    Returns
+    -------
+    str
+        The text.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        Naming the file: missing, unreadable, not UTF-8 or too large.
+    """
     from linsense.errors import InputError
     from linsense.limits import MAX_TEXT_FILE_BYTES
 
@@ -212,9 +280,28 @@ def read_text_file(path: str | os.PathLike, what: str) -> str:
 
 
 def parse_toml(text: str, source: str) -> dict:
-    """The data of a TOML text, or InputError naming ``source`` (also for arrays and tables nested
-    deeper than :data:`linsense.limits.MAX_TOML_DEPTH`: a 900-deep array was a RecursionError
-    traceback in every reader)."""
+    """The data of a TOML text.
+
+    Also refuses arrays and tables nested deeper than :data:`linsense.limits.MAX_TOML_DEPTH` (a
+    900-deep array was a RecursionError traceback in every reader).
+
+    Parameters
+    ----------
+    text : str
+        The TOML text.
+    source : str
+        Its name in messages.
+
+    Returns
+    -------
+    dict
+        The data.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        Naming ``source``.
+    """
     import tomllib
 
     from linsense.errors import InputError
@@ -238,7 +325,25 @@ def parse_toml(text: str, source: str) -> dict:
 
 
 def read_toml(path: str | os.PathLike, what: str) -> dict:
-    """The data of a user's TOML file, or InputError naming it (``what`` says what was expected)."""
+    """The data of a user's TOML file.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file.
+    what : str
+        What was expected, for messages.
+
+    Returns
+    -------
+    dict
+        The data.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        Naming the file.
+    """
     return parse_toml(read_text_file(path, what), str(path))
 
 
@@ -270,9 +375,23 @@ def _shown(path: str | os.PathLike) -> Path:
 
 
 def output_error(path: str | os.PathLike, exc: OSError):
-    """The :class:`~linsense.errors.OutputError` of an OSError met writing ``path``: the path the
-    user named and the reason in words ("read-only file system", "no space left on the device",
-    "permission denied: its folder is read-only"), no errno, no temporary file."""
+    """The :class:`~linsense.errors.OutputError` of an OSError met writing ``path``.
+
+    The path the user named and the reason in words ("read-only file system", "no space left on the
+    device", "permission denied: its folder is read-only"), no errno, no temporary file.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The path the user named.
+    exc : OSError
+        The error met.
+
+    Returns
+    -------
+    OutputError
+        The error to raise.
+    """
     from linsense.errors import OutputError
 
     shown = _shown(path)
@@ -289,7 +408,25 @@ def output_error(path: str | os.PathLike, exc: OSError):
 
 
 def write_atomic(path: str | os.PathLike, data: str | bytes) -> Path:
-    """Write ``data`` to ``path`` through a temporary file in the same folder and a rename."""
+    """Write ``data`` to ``path`` through a temporary file in the same folder and a rename.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file (``"-"``: standard output; see :func:`write_atomic_with`).
+    data : str or bytes
+        Its content (text encoded as UTF-8).
+
+    Returns
+    -------
+    Path
+        ``path``.
+
+    Raises
+    ------
+    linsense.errors.OutputError
+        When it cannot be written.
+    """
     return write_atomic_with(path, lambda f: f.write(data.encode() if isinstance(data, str) else data))
 
 
@@ -301,6 +438,22 @@ def write_atomic_with(path: str | os.PathLike, writer: Callable) -> Path:
     :class:`~linsense.errors.OutputError` naming ``path`` (:func:`output_error`). ``"-"`` writes
     to standard output; an existing target that is not a regular file (``/dev/null``, a FIFO,
     ``/dev/stdout``) is written in place, never replaced.
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file.
+    writer : callable
+        ``writer(binary_file)`` writes the content.
+
+    Returns
+    -------
+    Path
+        ``path``.
+
+    Raises
+    ------
+    linsense.errors.OutputError
+        When it cannot be written.
     """
     try:
         return _write_atomic_with(path, writer)
@@ -354,9 +507,23 @@ TIMING_KEYS = ("wall_s", "realtime_factor")
 
 
 def strip_timing(obj):
-    """``(obj without the TIMING_KEYS at any depth, the removed values in the same nesting)``: for a
-    file of many runs' metrics (``linsense reproduce``'s ``metrics.json``), whose wall-clock times
-    go to ``timing.json``. The second item is ``None`` where nothing was removed."""
+    """The wall-clock times of a nested structure, separated from the rest.
+
+    For a file of many runs' metrics (``linsense reproduce``'s ``metrics.json``), whose wall-clock
+    times go to ``timing.json``.
+
+    Parameters
+    ----------
+    obj : object
+        Dicts, lists and tuples nested, or a value.
+
+    Returns
+    -------
+    kept : object
+        ``obj`` without the :data:`TIMING_KEYS` at any depth.
+    timing : object or None
+        The removed values in the same nesting; None where nothing was removed.
+    """
     if isinstance(obj, dict):
         keep, timing = {}, {}
         for k, v in obj.items():
@@ -375,7 +542,20 @@ def strip_timing(obj):
 
 
 def split_timing(metrics: dict) -> tuple[dict, dict]:
-    """``(reproducible metrics, timing)``: the :data:`TIMING_KEYS` moved to the second dict."""
+    """The :data:`TIMING_KEYS` of one run's metrics moved to a second dict.
+
+    Parameters
+    ----------
+    metrics : dict
+        The metrics.
+
+    Returns
+    -------
+    metrics : dict
+        The reproducible metrics.
+    timing : dict
+        The wall-clock ones.
+    """
     keep = {k: v for k, v in metrics.items() if k not in TIMING_KEYS}
     timing = {k: metrics[k] for k in TIMING_KEYS if k in metrics}
     if "sim_s" in metrics and timing:
@@ -391,6 +571,17 @@ def safe_name(name: str, max_len: int = 64) -> str:
     ``_``, so no ``/``, ``..``, NUL or leading ``-``/``.``); an empty result becomes ``unnamed``; a
     result longer than ``max_len`` is cut and ends with 8 hex digits of the name's SHA-1 (long
     names that differ anywhere stay distinct). Deterministic.
+    Parameters
+    ----------
+    name : str
+        The user's name.
+    max_len : int, optional
+        Longest result.
+
+    Returns
+    -------
+    str
+        The file-name part.
     """
     import hashlib
     import unicodedata
@@ -496,6 +687,10 @@ def recover(out: str | os.PathLike) -> None:
     between the two renames; what it had carried over goes back), removed when the new set is in
     place. Temporaries of live processes are left alone. Every command writing an output set calls
     this (under a lock on the parent folder) before it looks at ``out``.
+    Parameters
+    ----------
+    out : str or os.PathLike
+        The output folder.
     """
     target = _target(out)
     with _locked(target.parent):
@@ -609,8 +804,22 @@ def _check_rel(rel: str) -> str:
 
 
 class OutputSet:
-    """The files of one command run, written into a temporary sibling folder of ``out`` and
-    swapped into place as a whole (see :func:`output_set`)."""
+    """The files of one command run, written into a temporary sibling folder of ``out``.
+
+    Swapped into place as a whole (see :func:`output_set`).
+
+    Parameters
+    ----------
+    out : str or os.PathLike
+        The output folder.
+    command : str
+        The command, recorded in the manifest.
+
+    Raises
+    ------
+    linsense.errors.OutputError
+        ``out`` is the root folder.
+    """
 
     def __init__(self, out: str | os.PathLike, command: str) -> None:
         self.shown = Path(out)
@@ -628,8 +837,18 @@ class OutputSet:
 
     # -- writing
     def path(self, rel: str) -> Path:
-        """Where to write the set's file (or folder) ``rel`` (a fixed name, ``/``-separated, or
-        made with :func:`safe_name`); the folders above it exist."""
+        """Where to write the set's file (or folder) ``rel``; the folders above it exist.
+
+        Parameters
+        ----------
+        rel : str
+            A fixed name, ``/``-separated, or made with :func:`safe_name`.
+
+        Returns
+        -------
+        Path
+            In the temporary folder.
+        """
         rel = _check_rel(rel)
         p = self.tmp / rel
         p.parent.mkdir(parents=True, exist_ok=True)
@@ -641,13 +860,50 @@ class OutputSet:
         return self.tmp
 
     def write(self, rel: str, data: str | bytes) -> Path:
+        """Write the set's file ``rel`` (:func:`write_atomic`).
+
+        Parameters
+        ----------
+        rel : str
+            Its name in the set.
+        data : str or bytes
+            Its content.
+
+        Returns
+        -------
+        Path
+            Where it was written (in the temporary folder).
+        """
         return write_atomic(self.path(rel), data)
 
     def write_with(self, rel: str, writer: Callable) -> Path:
+        """Write the set's file ``rel`` with ``writer`` (:func:`write_atomic_with`).
+
+        Parameters
+        ----------
+        rel : str
+            Its name in the set.
+        writer : callable
+            ``writer(binary_file)``.
+
+        Returns
+        -------
+        Path
+            Where it was written (in the temporary folder).
+        """
         return write_atomic_with(self.path(rel), writer)
 
     # -- life cycle
     def open(self) -> None:
+        """Recover what an interrupted run left, check ``out`` and make the temporary folder.
+
+        Under a lock on the parent folder.
+
+        Raises
+        ------
+        linsense.errors.OutputError
+            ``out`` is not missing, empty or a previous output set.
+        """
         missing = self.target.parent
         while not missing.parent.exists() and missing.parent != missing:
             missing = missing.parent
@@ -666,6 +922,7 @@ class OutputSet:
         self.tmp = tmp
 
     def abort(self) -> None:
+        """Remove the temporary folder, and the folders above ``out`` this run created if still empty."""
         if self.tmp is not None:
             _rmtree(self.tmp)
         if self._made is not None:  # the folders above out this run created, if still empty
@@ -680,6 +937,13 @@ class OutputSet:
                 d = d.parent
 
     def commit(self) -> None:
+        """Write the manifest and swap the set into place (see :func:`output_set`).
+
+        Raises
+        ------
+        linsense.errors.OutputError
+            An entry of the old folder that no linsense run wrote would be replaced.
+        """
         from linsense.errors import OutputError
         from linsense.version import __version__
 
@@ -733,6 +997,17 @@ def output_set(out: str | os.PathLike, command: str) -> Iterator[OutputSet]:
     ``out`` holds the complete old or new set, or is recovered to the old one. ``out`` must be
     missing, empty or a previous output set (:func:`_check_existing`); else
     :class:`~linsense.errors.OutputError` (exit code 2) before anything is computed.
+    Parameters
+    ----------
+    out : str or os.PathLike
+        The output folder.
+    command : str
+        The command, recorded in the manifest.
+
+    Yields
+    ------
+    OutputSet
+        The set to write into.
     """
     s = OutputSet(out, command)
     try:

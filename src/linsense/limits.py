@@ -20,7 +20,13 @@ def max_harmonic_order() -> int:
     ``LS_SIM_MAX_ORDER - 1`` (63), read from the C library on first use. Also
     ``MAX_HARMONIC_ORDER`` and ``MAX_TABLE_ORDER`` (the Fourier order of a tabulated L_abc(theta): a
     longer table is fitted by least squares up to it; 8,000 rows interpolated exactly took minutes,
-    100,000 asked for 37 GiB), attributes of this module read the same way."""
+    100,000 asked for 37 GiB), attributes of this module read the same way.
+
+    Returns
+    -------
+    int
+        ``LS_SIM_MAX_ORDER - 1``.
+    """
     from linsense._ctrl import lib
 
     return int(lib.LS_SIM_MAX_ORDER) - 1
@@ -68,7 +74,31 @@ MAX_TRACE_FILE_BYTES = 32 * 1024**3
 
 
 def check_count(source: str, key: str, value: int, limit: int, what: str) -> int:
-    """``value`` if ``1 <= value <= limit``, else :class:`InputError` naming ``key`` and the limit."""
+    """``value`` if ``1 <= value <= limit``.
+
+    Parameters
+    ----------
+    source : str
+        Where it was given, for messages.
+    key : str
+        Its key or option.
+    value : int
+        The count.
+    limit : int
+        The largest allowed.
+    what : str
+        What is counted, for messages.
+
+    Returns
+    -------
+    int
+        ``value``.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        Naming ``key`` and the limit.
+    """
     if value < 1:
         raise InputError(source, key, f"must be at least 1, got {value}")
     if value > limit:

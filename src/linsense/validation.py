@@ -19,7 +19,20 @@ from linsense.errors import InputError, KeyProblem
 
 
 def closest_key(key: str, known) -> str:
-    """`` (did you mean 'x'?)`` for the known key closest to ``key``, or an empty string."""
+    """A hint naming the known key closest to ``key``.
+
+    Parameters
+    ----------
+    key : str
+        The unknown key.
+    known : iterable of str
+        The known keys.
+
+    Returns
+    -------
+    str
+        `` (did you mean 'x'?)``, or an empty string when none is close.
+    """
     known = list(known)
     if len(key) > 3 * max(map(len, known), default=0):
         return ""  # (no match can reach the cutoff 0.6; difflib took 6 s on a 50 MB key)
@@ -56,7 +69,22 @@ def _model_in(annotation) -> type[BaseModel] | None:
 
 
 def to_input_error(exc: ValidationError, source: str, root: type[BaseModel]) -> InputError:
-    """The first problem of ``exc`` (an unknown key first) as an :class:`InputError`."""
+    """The first problem of a pydantic ``ValidationError`` (an unknown key first) as an InputError.
+
+    Parameters
+    ----------
+    exc : pydantic.ValidationError
+        The error.
+    source : str
+        The file, named in the message.
+    root : type
+        The pydantic model validated (for the known keys of a section).
+
+    Returns
+    -------
+    InputError
+        The error to raise, naming the dotted key and the value.
+    """
     errors = exc.errors(include_url=False)
     extra = [e for e in errors if e["type"] == "extra_forbidden"]
     err = extra[0] if extra else errors[0]

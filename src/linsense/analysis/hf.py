@@ -27,7 +27,22 @@ F_NO_R = 1000.0
 
 def table_model(motor, f_inj: float | None):
     """``(motor, f)`` a table is computed for: ``f_inj`` None is the R_s = 0 limit, ``motor``
-    without its resistance at :data:`F_NO_R`; else ``(motor, f_inj)`` unchanged."""
+    without its resistance at :data:`F_NO_R`; else ``(motor, f_inj)`` unchanged.
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+    f_inj : float or None
+        Injection frequency, Hz (None: the R_s = 0 limit).
+
+    Returns
+    -------
+    motor : Motor
+        ``motor``, without its resistance when ``f_inj`` is None.
+    f : float
+        The frequency to evaluate at, Hz.
+    """
     import dataclasses
 
     if f_inj is None:
@@ -36,13 +51,45 @@ def table_model(motor, f_inj: float | None):
 
 
 def dq_components(model, theta: np.ndarray | float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``(L_d, L_q, L_dq)`` at ``theta`` (H), from the transformed 3x3 matrix."""
+    """``(L_d, L_q, L_dq)`` at ``theta`` (H), from the transformed 3x3 matrix.
+
+    Parameters
+    ----------
+    model : Motor or InductanceModel
+        The motor or its inductance model.
+    theta : float or ndarray
+        Electrical position(s), rad.
+
+    Returns
+    -------
+    L_d : ndarray
+        H, of ``theta``'s shape.
+    L_q : ndarray
+        H.
+    L_dq : ndarray
+        H.
+    """
     L = _model(model).L_dq(theta)
     return L[..., 0, 0], L[..., 1, 1], L[..., 0, 1]
 
 
 def mean_dq(motor, n: int = 720) -> tuple[float, float]:
-    """Mean L_d, L_q over one period (H): the motor without its end-effect."""
+    """Mean L_d, L_q over one period (H): the motor without its end-effect.
+
+    Parameters
+    ----------
+    motor : Motor or InductanceModel
+        The motor.
+    n : int, optional
+        Positions averaged over.
+
+    Returns
+    -------
+    L_d : float
+        H.
+    L_q : float
+        H.
+    """
     th = np.linspace(0.0, 2.0 * np.pi, n, endpoint=False)
     L_d, L_q, _ = dq_components(motor, th)
     return float(np.mean(L_d)), float(np.mean(L_q))
@@ -52,14 +99,42 @@ def end_anisotropy(motor, n: int = 720) -> tuple[float, float]:
     """The stationary anisotropy ``(l_ea, l_eb)`` (H) of the alpha-beta inductance: the traceless
     part of its mean over one period, ``[[l_ea, l_eb], [l_eb, -l_ea]]``. The saliency's part turns
     with ``2 theta`` and averages out; what stays is the end effect's (a 3x3 matrix that is not
-    cyclic: docs/theory.md), which the dead-time residual's model needs (ls_dtres.h)."""
+    cyclic: docs/theory.md), which the dead-time residual's model needs (ls_dtres.h).
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+    n : int, optional
+        Positions averaged over.
+
+    Returns
+    -------
+    l_ea : float
+        H.
+    l_eb : float
+        H.
+    """
     th = np.linspace(0.0, 2.0 * np.pi, n, endpoint=False)
     L = np.asarray(motor.inductance.L_ab(th)).mean(axis=0)
     return float(0.5 * (L[0, 0] - L[1, 1])), float(0.5 * (L[0, 1] + L[1, 0]))
 
 
 def saliency(model, theta: np.ndarray | float) -> np.ndarray:
-    """Saliency ``L_q - L_d`` (H)."""
+    """Saliency ``L_q - L_d`` (H).
+
+    Parameters
+    ----------
+    model : Motor or InductanceModel
+        The motor or its inductance model.
+    theta : float or ndarray
+        Electrical position(s), rad.
+
+    Returns
+    -------
+    ndarray
+        H.
+    """
     L_d, L_q, _ = dq_components(model, theta)
     return L_q - L_d
 
@@ -70,9 +145,18 @@ def hf_current_est(model, theta, theta_err) -> np.ndarray:
     Pulsating flux ``lambda_d_est = 1`` on the estimated d-axis is rotated into the true frame,
     mapped through the inverse dq model ``i_dq = L_dq^-1 lambda_dq`` (eq. 8) and rotated back.
 
+    Parameters
+    ----------
+    model : Motor or InductanceModel
+        The motor or its inductance model.
+    theta : float or ndarray
+        True electrical position(s), rad.
+    theta_err : float or ndarray
+        Estimation error ``theta_est - theta``, rad.
+
     Returns
     -------
-    ndarray, shape ``broadcast(theta, theta_err).shape + (2,)``
+    ndarray, shape broadcast(theta, theta_err).shape + (2,)
         ``(i_d_est, i_q_est)`` in A per Wb (1/H).
     """
     theta, theta_err = np.broadcast_arrays(np.asarray(theta, float), np.asarray(theta_err, float))
@@ -83,23 +167,78 @@ def hf_current_est(model, theta, theta_err) -> np.ndarray:
 
 
 def psi(model, theta, theta_err) -> np.ndarray:
-    """Phase ``psi`` (rad) of the HF current relative to the injected flux, eq. (11)."""
+    """Phase ``psi`` (rad) of the HF current relative to the injected flux, eq. (11).
+
+    Parameters
+    ----------
+    model : Motor or InductanceModel
+        The motor or its inductance model.
+    theta : float or ndarray
+        True electrical position(s), rad.
+    theta_err : float or ndarray
+        Estimation error, rad.
+
+    Returns
+    -------
+    ndarray
+        rad.
+    """
     i = hf_current_est(model, theta, theta_err)
     return np.arctan2(i[..., 1], i[..., 0])
 
 
 def psi_lut(model, theta) -> np.ndarray:
-    """Compensation angle ``Psi_LUT = psi(theta, 0) = atan(-L_dq / L_q)`` (rad), eq. (12)."""
+    """Compensation angle ``Psi_LUT = psi(theta, 0) = atan(-L_dq / L_q)`` (rad), eq. (12).
+
+    Parameters
+    ----------
+    model : Motor or InductanceModel
+        The motor or its inductance model.
+    theta : float or ndarray
+        Electrical position(s), rad.
+
+    Returns
+    -------
+    ndarray
+        rad.
+    """
     _, L_q, L_dq = dq_components(model, theta)
     return np.arctan2(-L_dq, L_q)
 
 
 def real_arg(v, source: str, name: str, low: float = -math.inf, high: float = math.inf, *,
              low_open: bool = False, high_open: bool = False, what: str = "a finite real number") -> float:
-    """``v`` as a float if it is a real (not a boolean, complex, string, None or array), finite
-    number within ``low`` .. ``high`` (open ends where asked), else InputError naming ``source``
-    and the argument ``name``: the API refuses what the CLI refuses (issue 23: a NaN amplitude, a
-    string or a complex number gave tables of NaN or a numpy traceback)."""
+    """``v`` as a float if it is a real, finite number within ``low`` .. ``high``.
+
+    Not a boolean, complex, string, None or array; open ends where asked. The API refuses what the
+    CLI refuses (issue 23: a NaN amplitude, a string or a complex number gave tables of NaN or a
+    numpy traceback).
+
+    Parameters
+    ----------
+    v : object
+        The argument.
+    source : str
+        Where it was given (the function), for the message.
+    name : str
+        The argument's name, for the message.
+    low, high : float, optional
+        The range (infinite by default).
+    low_open, high_open : bool, optional
+        Whether ``low`` / ``high`` themselves are refused.
+    what : str, optional
+        What the argument must be, for the message.
+
+    Returns
+    -------
+    float
+        ``float(v)``.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        Naming ``source``, ``name``, the range and the value.
+    """
     import numbers
 
     from linsense.errors import InputError, shown
@@ -152,6 +291,27 @@ def psi_lut_resistive(motor, theta, f_inj: float, quad: float = 0.0) -> np.ndarr
     ``quad`` (kappa) adds ``kappa sin`` on the estimated q-axis to the ``cos`` on d (elliptical
     injection, docs/theory.md): its direct q response is in quadrature with i_d only without
     resistance, so the angle then also cancels ``kappa Im((R + j w L_d)/(R + j w L_q))``.
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor (its ``R_s`` counts).
+    theta : float or ndarray
+        Electrical position(s), rad.
+    f_inj : float
+        Injection frequency, Hz.
+    quad : float, optional
+        Quadrature ratio ``kappa`` of the elliptical injection, in [0, 1) (0: pulsating).
+
+    Returns
+    -------
+    ndarray
+        rad.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        A frequency, amplitude or ``quad`` out of range (:func:`hf_current`).
     """
     i = hf_current(motor, theta, 1.0, f_inj, 0.0, quad=quad)
     p = np.real(i[..., 0] * np.conj(i[..., 1]))
@@ -164,6 +324,28 @@ def demod_ratio(motor, theta, theta_err, v_inj: float, f_inj: float, psi_comp,
 
     HF currents from :func:`hf_current` (with R_s), rotated by ``psi_comp`` (rad) from the
     estimated frame; the time averages of products of phasors are ``Re(a conj(b)) / 2``.
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+    theta : float or ndarray
+        True electrical position(s), rad.
+    theta_err : float or ndarray
+        Estimation error, rad.
+    v_inj : float
+        Injection amplitude, V.
+    f_inj : float
+        Injection frequency, Hz.
+    psi_comp : float or ndarray
+        Compensation angle, rad.
+    quad : float, optional
+        Quadrature ratio of the elliptical injection (0: pulsating).
+
+    Returns
+    -------
+    ndarray
+        Dimensionless, in [-1/2, 1/2].
     """
     i = hf_current(motor, theta, v_inj, f_inj, theta_err, quad=quad)
     c, s = np.cos(psi_comp), np.sin(psi_comp)
@@ -177,9 +359,25 @@ def psi_compensated(model, theta, theta_err, lut_at: str = "estimated") -> np.nd
 
     Parameters
     ----------
+    model : Motor or InductanceModel
+        The motor or its inductance model.
+    theta : float or ndarray
+        True electrical position(s), rad.
+    theta_err : float or ndarray
+        Estimation error, rad.
     lut_at : {"estimated", "actual"}
         Where the LUT is read: at ``theta_est = theta + theta_err`` as a drive does (default)
         or at the true position as drawn in the paper's Fig. 8b.
+
+    Returns
+    -------
+    ndarray
+        rad, wrapped to (-pi, pi].
+
+    Raises
+    ------
+    ValueError
+        Another ``lut_at``.
     """
     if lut_at not in ("estimated", "actual"):
         raise ValueError("lut_at must be 'estimated' or 'actual'")
@@ -197,6 +395,18 @@ def equilibrium_error(model, theta) -> np.ndarray:
 
     From eq. (11): ``tan(2 e*) = 2 L_dq / (L_d - L_q)``; the stable root is the one within
     45 deg of zero, ``e* = atan2(-2 L_dq s, (L_q - L_d) s) / 2`` with ``s`` the saliency sign.
+
+    Parameters
+    ----------
+    model : Motor or InductanceModel
+        The motor or its inductance model.
+    theta : float or ndarray
+        True electrical position(s), rad.
+
+    Returns
+    -------
+    ndarray
+        ``e*``, rad.
     """
     L_d, L_q, L_dq = dq_components(model, theta)
     s = _sal_sign(L_d, L_q)
@@ -208,6 +418,18 @@ def loop_gain_factor(model, theta) -> np.ndarray:
 
     The observer reports ``theta_est = theta + e*(theta)``, so the position loop sees the plant
     gain multiplied by this factor. Computed analytically from ``dL_dq/dtheta``.
+
+    Parameters
+    ----------
+    model : Motor or InductanceModel
+        The motor or its inductance model.
+    theta : float or ndarray
+        True electrical position(s), rad.
+
+    Returns
+    -------
+    ndarray
+        Dimensionless.
     """
     model = _model(model)
     L = model.L_dq(theta)
@@ -226,8 +448,33 @@ def hf_current(
     """Complex HF current phasors ``(i_d_est, i_q_est)`` (A, peak) for a pulsating voltage.
 
     Solves ``v = (R_s I + j omega L_dq) i`` in the true frame at standstill for a voltage of
-    amplitude ``v_inj`` (V) at ``f_inj`` (Hz) on the estimated d-axis, plus ``quad v_inj sin`` on
-    the estimated q-axis (phasor ``-j quad v_inj``; 0: pulsating). Returns shape ``(..., 2)``.
+    amplitude ``v_inj`` at ``f_inj`` on the estimated d-axis, plus ``quad v_inj sin`` on the
+    estimated q-axis (phasor ``-j quad v_inj``; 0: pulsating).
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+    theta : float or ndarray
+        True electrical position(s), rad.
+    v_inj : float
+        Injection amplitude, V.
+    f_inj : float
+        Injection frequency, Hz.
+    theta_err : float or ndarray, optional
+        Estimation error, rad.
+    quad : float, optional
+        Quadrature ratio, in [0, 1).
+
+    Returns
+    -------
+    ndarray, shape (..., 2)
+        Complex phasors, A.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        A frequency, amplitude or ``quad`` out of range, or currents beyond floating point.
     """
     f_inj = _frequency(f_inj, "f_inj")
     v_inj = _amplitude(v_inj)
@@ -252,6 +499,28 @@ def _finite_currents(i: np.ndarray, v_inj: float, f_inj: float) -> np.ndarray:
 
 
 def hf_current_amplitude(motor, theta, v_inj: float = 12.0, f_inj: float = 1000.0) -> np.ndarray:
-    """Peak amplitude (A) of the HF current vector for a pulsating injection at zero error."""
+    """Peak amplitude (A) of the HF current vector for a pulsating injection at zero error.
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+    theta : float or ndarray
+        Electrical position(s), rad.
+    v_inj : float, optional
+        Injection amplitude, V.
+    f_inj : float, optional
+        Injection frequency, Hz.
+
+    Returns
+    -------
+    ndarray
+        A.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        As :func:`hf_current`.
+    """
     i = np.abs(hf_current(motor, theta, v_inj, f_inj))
     return _finite_currents(np.hypot(i[..., 0], i[..., 1]), v_inj, f_inj)

@@ -23,9 +23,27 @@ from linsense.analysis.hf import _amplitude, _frequency, dq_components, mean_dq
 
 
 def negative_sequence_numeric(motor, theta, v_inj: float, f_inj: float) -> np.ndarray:
-    """Negative-sequence current phasor ``i_n`` (A, complex) of a rotating voltage of amplitude
-    ``v_inj`` (V) at ``f_inj`` (Hz), solved from the alpha-beta inductance matrix of the motor's
-    3x3 model at standstill: ``(R_s + j w L_ab) I = V [1, -j]``, ``i_n = (conj(I_a) + j conj(I_b))/2``."""
+    """Negative-sequence current phasor ``i_n`` of a rotating voltage, solved numerically.
+
+    From the alpha-beta inductance matrix of the motor's 3x3 model at standstill:
+    ``(R_s + j w L_ab) I = V [1, -j]``, ``i_n = (conj(I_a) + j conj(I_b))/2``.
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+    theta : float or ndarray
+        Electrical position(s), rad.
+    v_inj : float
+        Amplitude of the rotating voltage, V.
+    f_inj : float
+        Its frequency, Hz.
+
+    Returns
+    -------
+    ndarray
+        Complex, A.
+    """
     theta = np.asarray(theta, dtype=float)
     w = 2.0 * np.pi * f_inj
     Z = motor.R_s * np.eye(2) + 1j * w * motor.inductance.L_ab(theta)
@@ -42,10 +60,34 @@ def _i_n(R_s: float, w: float, S, D, v_inj: float):
 
 
 def negative_sequence(motor, theta, v_inj: float, f_inj: float) -> np.ndarray:
-    """Negative-sequence current phasor ``i_n`` (A, complex), closed form (docs/theory.md):
+    """Negative-sequence current phasor ``i_n`` of a rotating voltage, closed form (docs/theory.md).
+
     ``i_n = j w V D exp(j 2 theta) / (conj(a)^2 + w^2 |D|^2)`` with ``a = R_s + j w S``: with the
-    alpha-beta matrix ``L_ab x = S x + D exp(j 2 theta) conj(x)``, ``Z = a + j w K`` where ``K^2 = |D|^2``,
-    so ``Z^-1 = (a - j w K) / (a^2 + w^2 |D|^2)``, and only the ``K`` part has a negative sequence."""
+    alpha-beta matrix ``L_ab x = S x + D exp(j 2 theta) conj(x)``, ``Z = a + j w K`` where
+    ``K^2 = |D|^2``, so ``Z^-1 = (a - j w K) / (a^2 + w^2 |D|^2)``, and only the ``K`` part has a
+    negative sequence.
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+    theta : float or ndarray
+        Electrical position(s), rad.
+    v_inj : float
+        Amplitude of the rotating voltage, V.
+    f_inj : float
+        Its frequency, Hz.
+
+    Returns
+    -------
+    ndarray
+        Complex, A.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        A frequency or amplitude out of range.
+    """
     f_inj, v_inj = _frequency(f_inj, "f_inj"), _amplitude(v_inj)
     theta = np.asarray(theta, dtype=float)
     L_d, L_q, L_dq = dq_components(motor, theta)
@@ -55,18 +97,49 @@ def negative_sequence(motor, theta, v_inj: float, f_inj: float) -> np.ndarray:
 
 
 def reference_phase(motor, f_inj: float) -> float:
-    """The demodulator's constant phase ``c_ref`` (rad): ``arg(i_n exp(-j 2 theta))`` of a motor
-    with the mean ``L_d``, ``L_q`` over the period, no ``L_dq`` and the same R_s (what a drive designed
-    without the end-effect would use), so that ``theta_est = (arg(i_n) - c_ref) / 2``."""
+    """The demodulator's constant phase ``c_ref`` (rad).
+
+    ``arg(i_n exp(-j 2 theta))`` of a motor with the mean ``L_d``, ``L_q`` over the period, no
+    ``L_dq`` and the same R_s (what a drive designed without the end-effect would use), so that
+    ``theta_est = (arg(i_n) - c_ref) / 2``.
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+    f_inj : float
+        Injection frequency, Hz.
+
+    Returns
+    -------
+    float
+        rad.
+    """
     L_d, L_q = mean_dq(motor)
     S, D = 0.5 * (L_d + L_q), 0.5 * (L_d - L_q)
     return float(np.angle(_i_n(motor.R_s, 2.0 * np.pi * f_inj, S, D, 1.0)))
 
 
 def psi_rotating(motor, theta, f_inj: float) -> np.ndarray:
-    """Estimation error (rad) of the rotating-vector estimate at the true position ``theta``:
+    """Estimation error (rad) of the rotating-vector estimate at the true position ``theta``.
+
     ``theta_est - theta = angle(i_n exp(-j (2 theta + c_ref))) / 2`` (the compensation table of the
-    rotating injection, like Psi_LUT for the pulsating one; it does not depend on V)."""
+    rotating injection, like Psi_LUT for the pulsating one; it does not depend on V).
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+    theta : float or ndarray
+        True electrical position(s), rad.
+    f_inj : float
+        Injection frequency, Hz.
+
+    Returns
+    -------
+    ndarray
+        rad.
+    """
     f_inj = _frequency(f_inj, "f_inj")
     theta = np.asarray(theta, dtype=float)
     i_n = negative_sequence(motor, theta, 1.0, f_inj)
@@ -74,14 +147,37 @@ def psi_rotating(motor, theta, f_inj: float) -> np.ndarray:
 
 
 def rotating_lut(motor, theta_est, f_inj: float | None, n: int = 7200) -> np.ndarray:
-    """The rotating injection's compensation table, indexed by the ESTIMATE (rad): the angle to
-    take from ``theta_est`` to get the true position, ``theta = theta_est - table(theta_est)``.
+    """The rotating injection's compensation table, indexed by the estimate.
 
-    The error :func:`psi_rotating` is a function of the true position, and the map
-    ``theta -> theta + psi(theta)`` turns 1 + dpsi/dtheta as fast (0.6 to 2.9 for ecce2010: far from
-    a small correction), so the table is its inverse, found on ``n`` points over the period and
-    interpolated (the map is increasing: the factor stays positive, docs/theory.md). ``f_inj``
-    None: the R_s = 0 limit, where psi is the uncompensated equilibrium error e*."""
+    The angle to take from ``theta_est`` to get the true position,
+    ``theta = theta_est - table(theta_est)``. The error :func:`psi_rotating` is a function of the
+    true position, and the map ``theta -> theta + psi(theta)`` turns 1 + dpsi/dtheta as fast (0.6 to
+    2.9 for ecce2010: far from a small correction), so the table is its inverse, found on ``n``
+    points over the period and interpolated (the map is increasing: the factor stays positive,
+    docs/theory.md).
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+    theta_est : float or ndarray
+        Estimated electrical position(s), rad.
+    f_inj : float or None
+        Injection frequency, Hz; None: the R_s = 0 limit, where psi is the uncompensated
+        equilibrium error e*.
+    n : int, optional
+        Points over the period of the inversion.
+
+    Returns
+    -------
+    ndarray
+        rad.
+
+    Raises
+    ------
+    ValueError
+        When the estimate is not monotone in the position.
+    """
     from linsense.analysis.hf import equilibrium_error
 
     th = 2.0 * np.pi * np.arange(n + 1) / n
@@ -118,19 +214,56 @@ def _sampled_i_n(L_ab: np.ndarray, R_s: float, v_inj: float, f_inj: float, f_pwm
 
 
 def reference_phase_sampled(motor, f_inj: float, f_pwm: float, delay: float = 1.0) -> float:
-    """:func:`reference_phase` for the sampled drive (rad): the phase, less ``2 theta``, of the
-    sampled currents' negative sequence for the motor with the mean L_d, L_q and no L_dq, against
-    the carrier of the voltage computed at the same sample (it includes the one-period delay and
-    the hold, exactly; ``c_ref + 1.5 w T`` is its continuous approximation, 0.54 deg off for
-    ecce2010 at 1 kHz and 16 kHz). ``delay``: periods between a voltage's computation and the
-    period it acts in (the drive's ``delay_comp`` less the half period of the hold)."""
+    """:func:`reference_phase` for the sampled drive (rad).
+
+    The phase, less ``2 theta``, of the sampled currents' negative sequence for the motor with the
+    mean L_d, L_q and no L_dq, against the carrier of the voltage computed at the same sample (it
+    includes the one-period delay and the hold, exactly; ``c_ref + 1.5 w T`` is its continuous
+    approximation, 0.54 deg off for ecce2010 at 1 kHz and 16 kHz).
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+    f_inj : float
+        Injection frequency, Hz.
+    f_pwm : float
+        PWM (sampling) frequency, Hz.
+    delay : float, optional
+        Periods between a voltage's computation and the period it acts in (the drive's
+        ``delay_comp`` less the half period of the hold).
+
+    Returns
+    -------
+    float
+        rad.
+    """
     L = np.diag(mean_dq(motor))  # at theta = 0 the alpha-beta matrix is the dq one
     return float(np.angle(_sampled_i_n(L, motor.R_s, 1.0, f_inj, f_pwm, delay)))
 
 
 def psi_rotating_sampled(motor, theta, f_inj: float, f_pwm: float) -> np.ndarray:
-    """:func:`psi_rotating` for the sampled drive (rad): the estimate's error at the true position
-    with the negative sequence of the sampled currents (:func:`reference_phase_sampled`)."""
+    """:func:`psi_rotating` for the sampled drive (rad).
+
+    The estimate's error at the true position with the negative sequence of the sampled currents
+    (:func:`reference_phase_sampled`).
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+    theta : float or ndarray
+        True electrical position(s), rad.
+    f_inj : float
+        Injection frequency, Hz.
+    f_pwm : float
+        PWM (sampling) frequency, Hz.
+
+    Returns
+    -------
+    ndarray
+        rad.
+    """
     theta = np.asarray(theta, dtype=float)
     i_n = _sampled_i_n(motor.inductance.L_ab(theta), motor.R_s, 1.0, f_inj, f_pwm)
     return 0.5 * np.angle(i_n * np.exp(-1j * (2.0 * theta + reference_phase_sampled(motor, f_inj, f_pwm))))

@@ -34,7 +34,31 @@ def delta_current(motor, theta, f_inj: float, v_inj: float = 1.0, theta_err=0.0)
     """Change of the current (A, true dq frame, shape ``(..., 2)``) over the ``+V`` half period of a
     square wave of amplitude ``v_inj`` (V) at ``f_inj`` (Hz) in the periodic steady state, closed
     form ``(2/R_s) tanh(R_s T L^-1 / 2) v`` (``T = 1/(2 f_inj)``; the series of tanh when R_s T is
-    small against L, exactly ``T L^-1 v`` for R_s = 0)."""
+    small against L, exactly ``T L^-1 v`` for R_s = 0).
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+    theta : float or ndarray
+        True electrical position(s), rad.
+    f_inj : float
+        Square-wave frequency, Hz.
+    v_inj : float, optional
+        Amplitude, V.
+    theta_err : float or ndarray, optional
+        Estimation error, rad.
+
+    Returns
+    -------
+    ndarray, shape (..., 2)
+        A, in the true dq frame.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        A frequency or amplitude out of range.
+    """
     f_inj, v_inj = _frequency(f_inj, "f_inj"), _amplitude(v_inj)
     theta, theta_err = np.broadcast_arrays(np.asarray(theta, float), np.asarray(theta_err, float))
     T = 0.5 / f_inj
@@ -54,7 +78,30 @@ def delta_current_numeric(motor, theta: float, f_inj: float, v_inj: float = 1.0,
                           steps: int = 2000, periods: int = 400) -> np.ndarray:
     """The same change of the current by integrating ``L di/dt = v - R_s i`` (exact matrix
     exponential per step, ``steps`` steps per half period) for ``periods`` square-wave periods from
-    rest, until the periodic steady state (the decay time L/R_s is about 0.3 ms for ecce2010)."""
+    rest, until the periodic steady state (the decay time L/R_s is about 0.3 ms for ecce2010).
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+    theta : float
+        True electrical position, rad.
+    f_inj : float
+        Square-wave frequency, Hz.
+    v_inj : float, optional
+        Amplitude, V.
+    theta_err : float, optional
+        Estimation error, rad.
+    steps : int, optional
+        Steps per half period.
+    periods : int, optional
+        Square-wave periods simulated.
+
+    Returns
+    -------
+    ndarray, shape (2,)
+        The change over the last ``+V`` half period, A, true dq frame.
+    """
     from scipy.linalg import expm
 
     T = 0.5 / f_inj
@@ -80,6 +127,21 @@ def delta_current_numeric(motor, theta: float, f_inj: float, v_inj: float = 1.0,
 def psi_square(motor, theta, f_inj: float) -> np.ndarray:
     """Compensation angle (rad) of the square-wave injection: the angle of the current change over
     the ``+V`` half period at zero estimation error, ``atan2(delta_i_q, delta_i_d)`` (rotating the
-    measured change by it zeroes its q component, as Psi_LUT does for the pulsating injection)."""
+    measured change by it zeroes its q component, as Psi_LUT does for the pulsating injection).
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+    theta : float or ndarray
+        Electrical position(s), rad.
+    f_inj : float
+        Square-wave frequency, Hz.
+
+    Returns
+    -------
+    ndarray
+        rad.
+    """
     d = delta_current(motor, theta, f_inj)
     return np.arctan2(d[..., 1], d[..., 0])

@@ -20,7 +20,23 @@ from linsense.analysis.hf import demod_ratio, equilibrium_error, mean_dq
 
 @dataclass
 class LoopAlong:
-    """Margins of the motion loop of an uncompensated drive at each angle ``theta_deg``."""
+    """Margins of the motion loop of an uncompensated drive at each angle ``theta_deg``.
+
+    Parameters
+    ----------
+    theta_deg : ndarray
+        Electrical positions, deg.
+    g : ndarray
+        Position-loop gain factor ``1 + de*/dtheta``.
+    k_e : ndarray
+        Local error gain of the observer (1 = nominal).
+    pm_deg : ndarray
+        Phase margin, deg (NaN: no crossover).
+    gm_up_db : ndarray
+        Upward gain margin, dB (NaN: none).
+    max_pole_re : ndarray
+        Largest real part of the closed loop's poles, 1/s (> 0: unstable).
+    """
 
     theta_deg: np.ndarray
     g: np.ndarray  # 1 + de*/dtheta
@@ -30,7 +46,13 @@ class LoopAlong:
     max_pole_re: np.ndarray  # 1/s, largest real part of the closed loop's poles (> 0: unstable)
 
     def worst(self) -> dict | None:
-        """The angle of the smallest upward gain margin and its numbers (None if no angle has one)."""
+        """The angle of the smallest upward gain margin and its numbers (None if no angle has one).
+
+        Returns
+        -------
+        dict or None
+            ``theta_deg``, ``g``, ``k_e``, ``pm_deg``, ``gm_up_db``, ``max_pole_re`` at that angle.
+        """
         ok = np.isfinite(self.gm_up_db)
         if not ok.any():
             return None
@@ -40,15 +62,42 @@ class LoopAlong:
                 "max_pole_re": float(self.max_pole_re[k])}
 
     def any_unstable(self) -> bool:
-        """A negative phase or gain margin, or a closed-loop pole in the right half-plane, at any angle."""
+        """A negative phase or gain margin, or a closed-loop pole in the right half-plane, at any angle.
+
+        Returns
+        -------
+        bool
+            True when unstable somewhere.
+        """
         return bool(np.any(self.pm_deg < 0.0) or np.any(self.gm_up_db < 0.0)
                     or np.any(self.max_pole_re > 0.0))
 
 
 def nolut_error_gain(motor, theta, f_inj: float, quad: float = 0.0, h: float = 1e-4) -> np.ndarray:
-    """Local error gain of the uncompensated observer at its equilibrium ``e*(theta)``, relative to
-    the nominal demodulator gain ``L_q / (L_q - L_d)`` of the mean inductances (no gain schedule):
-    ``-G0 d ratio / d theta_err`` (:func:`linsense.analysis.hf.demod_ratio`, no compensation)."""
+    """Local error gain of the uncompensated observer at its equilibrium ``e*(theta)``.
+
+    Relative to the nominal demodulator gain ``L_q / (L_q - L_d)`` of the mean inductances (no gain
+    schedule): ``-G0 d ratio / d theta_err`` (:func:`linsense.analysis.hf.demod_ratio`, no
+    compensation), by central differences.
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+    theta : float or ndarray
+        True electrical position(s), rad.
+    f_inj : float
+        Injection frequency, Hz.
+    quad : float, optional
+        Quadrature ratio of the elliptical injection.
+    h : float, optional
+        Step of the difference, rad.
+
+    Returns
+    -------
+    ndarray
+        Dimensionless (1 = nominal).
+    """
     theta = np.asarray(theta, dtype=float)
     L_d, L_q = mean_dq(motor)
     g0 = L_q / (L_q - L_d)

@@ -21,7 +21,22 @@ def _local_minima_deg(theta: np.ndarray, y: np.ndarray, tol: float) -> list[floa
 
 
 def summarize(motor, v_inj: float = 12.0, f_inj: float = 1000.0) -> dict:
-    """Peak Psi_LUT, dq ranges, saliency minima, HF current and the uncompensated observer."""
+    """Peak Psi_LUT, dq ranges, saliency minima, HF current and the uncompensated observer.
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+    v_inj : float, optional
+        Injection amplitude, V.
+    f_inj : float, optional
+        Injection frequency, Hz.
+
+    Returns
+    -------
+    dict
+        ``psi_lut_peak_deg``, ``L_d_range_H``... (SI units and degrees, as the keys say).
+    """
     theta = check_grid(motor.inductance, 3600)
     L_d, L_q, L_dq = dq_components(motor, theta)
     sal = L_q - L_d

@@ -19,6 +19,24 @@ def model_table(motor, points: int) -> dict[str, np.ndarray]:
     """Model quantities at ``points`` equally spaced positions over [0, 360) deg.
 
     Inductances in H; angles in electrical degrees; ``gain_nolut`` = ``1 + de*/dtheta``.
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+    points : int
+        Positions, 4 .. :data:`linsense.limits.MAX_POINTS`.
+
+    Returns
+    -------
+    dict of str to ndarray
+        Columns by name: ``theta_deg``, the six entries, ``L_d, L_q, L_dq``, ``saliency``,
+        ``psi_lut_deg``, ``err_nolut_deg``, ``gain_nolut``, ``L_alpha, L_beta, L_alphabeta``.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        ``points`` not an integer in range.
     """
     import numbers
 
@@ -52,7 +70,18 @@ def model_table(motor, points: int) -> dict[str, np.ndarray]:
 
 
 def table_to_csv(cols: dict[str, np.ndarray]) -> str:
-    """CSV text with a header; floats with 12 significant digits (byte-reproducible)."""
+    """CSV text with a header; floats with 12 significant digits (byte-reproducible).
+
+    Parameters
+    ----------
+    cols : dict of str to ndarray
+        Columns by name (:func:`model_table`).
+
+    Returns
+    -------
+    str
+        The CSV text.
+    """
     names = list(cols)
     data = np.column_stack([cols[n] for n in names])
     lines = [",".join(names)]

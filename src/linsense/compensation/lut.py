@@ -57,6 +57,7 @@ class Lut:
 
     @property
     def points(self) -> int:
+        """Number of table points."""
         return self.values.size
 
     @property
@@ -70,7 +71,20 @@ class Lut:
 
 
 def interpolate(table: np.ndarray, theta: np.ndarray | float) -> np.ndarray:
-    """Periodic linear interpolation of ``table`` (N equally spaced points over 2 pi) at ``theta``."""
+    """Periodic linear interpolation of ``table`` (N equally spaced points over 2 pi) at ``theta``.
+
+    Parameters
+    ----------
+    table : ndarray, shape (N,)
+        Values at ``theta_k = 2 pi k / N``.
+    theta : float or ndarray
+        Electrical angle(s), rad.
+
+    Returns
+    -------
+    ndarray
+        Interpolated values, unit of ``table``.
+    """
     table = np.asarray(table, dtype=float)
     n = table.size
     u = np.mod(np.asarray(theta, dtype=float) / (2.0 * np.pi) * n, n)
@@ -91,6 +105,29 @@ def build_lut(motor, points: int, f_inj: float | None = None, quad: float = 0.0,
     docs/theory.md; :func:`~linsense.analysis.rotating.rotating_lut` is the open-loop inverse).
     ``injection="square"``: the square wave's table at ``f_inj`` (e.g. f_pwm / 2),
     :func:`~linsense.analysis.square.psi_square` (without ``f_inj``: eq. 12, its R_s = 0 limit).
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+    points : int
+        Table points over one electrical period, 4 .. :data:`linsense.limits.MAX_POINTS`.
+    f_inj : float or None, optional
+        Injection frequency, Hz (None: without resistance).
+    quad : float, optional
+        Quadrature share of the injection, in [0, 1).
+    injection : {"pulsating", "rotating", "square"}, optional
+        The injection the table is for.
+
+    Returns
+    -------
+    Lut
+        The table, rad, with the motor's provenance and the model used.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        ``points``, ``injection``, ``f_inj`` or ``quad`` out of range.
     """
     import numbers
 
@@ -144,10 +181,26 @@ R_SLOPE_STEP = 0.02
 
 
 def resistance_slope(motor, table, n: int) -> np.ndarray:
-    """``d table / dk_r`` (per unit of the resistance's scale ``k_r``, ``R_s = k_r R_s0``) of the
-    ``n``-point table that ``table(motor)`` computes: central difference over :data:`R_SLOPE_STEP`,
-    zeros for a motor without resistance. The tables' slopes the drive reads as it measures ``k_r``
-    (docs/tuning.md, "The hot winding")."""
+    """``d table / dk_r`` of the ``n``-point table that ``table(motor)`` computes.
+
+    Per unit of the resistance's scale ``k_r`` (``R_s = k_r R_s0``): central difference over
+    :data:`R_SLOPE_STEP`, zeros for a motor without resistance. The tables' slopes the drive reads
+    as it measures ``k_r`` (docs/tuning.md, "The hot winding").
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+    table : callable
+        ``table(motor) -> array of n values``.
+    n : int
+        The table's length.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        Unit of the table per unit of ``k_r``.
+    """
     if not motor.R_s > 0:
         return np.zeros(n)
     h = R_SLOPE_STEP
@@ -157,16 +210,45 @@ def resistance_slope(motor, table, n: int) -> np.ndarray:
 
 
 def lut_r_slope(motor, points: int, f_inj: float, quad: float = 0.0) -> np.ndarray:
-    """``dPsi_LUT/dk_r`` (rad per unit of ``k_r``) of the resistance-aware table (:func:`build_lut`
-    with ``f_inj``) at its ``points`` positions (:func:`resistance_slope`): the drive measures
-    ``k_r`` online (``ls_dtres_adapt``) and reads ``Psi_LUT + (k_r - 1) dPsi_LUT/dk_r``
-    (``ls_demod_cfg.comp_r``)."""
+    """``dPsi_LUT/dk_r`` (rad per unit of ``k_r``) of the resistance-aware table.
+
+    :func:`build_lut` with ``f_inj`` at its ``points`` positions (:func:`resistance_slope`): the
+    drive measures ``k_r`` online (``ls_dtres_adapt``) and reads
+    ``Psi_LUT + (k_r - 1) dPsi_LUT/dk_r`` (``ls_demod_cfg.comp_r``).
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+    points : int
+        Table points.
+    f_inj : float
+        Injection frequency, Hz.
+    quad : float, optional
+        Quadrature share of the injection.
+
+    Returns
+    -------
+    ndarray, shape (points,)
+        rad per unit of ``k_r``.
+    """
     return resistance_slope(motor, lambda m: build_lut(m, points, f_inj=f_inj, quad=quad).values, points)
 
 
 # ---------------------------------------------------------------------- exports
 def to_csv(lut: Lut) -> str:
-    """``theta_deg,psi_lut_deg`` rows (electrical degrees, 12 significant digits)."""
+    """``theta_deg,psi_lut_deg`` rows (electrical degrees, 12 significant digits).
+
+    Parameters
+    ----------
+    lut : Lut
+        The table.
+
+    Returns
+    -------
+    str
+        The CSV text.
+    """
     lines = ["theta_deg,psi_lut_deg"]
     pairs = zip(np.degrees(lut.theta), np.degrees(lut.values), strict=True)
     lines += [f"{t:.12g},{p:.12g}" for t, p in pairs]
@@ -174,7 +256,18 @@ def to_csv(lut: Lut) -> str:
 
 
 def to_json(lut: Lut) -> str:
-    """JSON document in SI units (rad) with provenance and the interpolation rule."""
+    """JSON document in SI units (rad) with provenance and the interpolation rule.
+
+    Parameters
+    ----------
+    lut : Lut
+        The table.
+
+    Returns
+    -------
+    str
+        The JSON text (format ``linsense-lut``, version 1).
+    """
     doc = {
         "format": "linsense-lut",
         "version": 1,
@@ -202,16 +295,41 @@ C_KEYWORDS = frozenset(
 
 
 def c_identifier(name: str) -> str:
-    """A valid lower-case C identifier derived from ``name`` (``m_`` before a leading digit, ``_t``
-    after a C keyword)."""
+    """A valid lower-case C identifier derived from ``name``.
+
+    ``m_`` before a leading digit, ``_t`` after a C keyword; ``motor`` when nothing is left.
+
+    Parameters
+    ----------
+    name : str
+        Any text.
+
+    Returns
+    -------
+    str
+        The identifier.
+    """
     ident = re.sub(r"[^0-9a-zA-Z_]", "_", name).lower().strip("_") or "motor"
     ident = ident if not ident[0].isdigit() else f"m_{ident}"
     return f"{ident}_t" if ident in C_KEYWORDS else ident
 
 
 def c_comment_text(text: str) -> str:
-    """``text`` safe inside a C comment: a user's ``*/`` (a motor name) ended the comment and the rest
-    was compiled as C; a ``/*`` is a -Wcomment warning."""
+    """``text`` safe inside a C comment.
+
+    A user's ``*/`` (a motor name) ended the comment and the rest was compiled as C; a ``/*`` is a
+    -Wcomment warning.
+
+    Parameters
+    ----------
+    text : str
+        Any text.
+
+    Returns
+    -------
+    str
+        ``text`` with ``*/`` and ``/*`` split by a space.
+    """
     return str(text).replace("*/", "* /").replace("/*", "/ *")
 
 
@@ -224,7 +342,20 @@ def _c_float(v: float) -> str:
 
 
 def to_c_header(lut: Lut, symbol: str | None = None) -> str:
-    """C99 header: ``static const float <symbol>[<SYMBOL>_LEN]`` in rad, with provenance."""
+    """C99 header: ``static const float <symbol>[<SYMBOL>_LEN]`` in rad, with provenance.
+
+    Parameters
+    ----------
+    lut : Lut
+        The table.
+    symbol : str or None, optional
+        The array's name (made a C identifier; default ``ls_lut_<motor name>``).
+
+    Returns
+    -------
+    str
+        The header's text.
+    """
     sym = c_identifier(symbol or f"ls_lut_{lut.name}")
     up = sym.upper()
     # (a motor name is the user's text: "*/" in it ended the comment and the header did not compile,
@@ -261,7 +392,27 @@ def to_c_header(lut: Lut, symbol: str | None = None) -> str:
 
 
 def export(lut: Lut, fmt: str, symbol: str | None = None) -> str:
-    """Text of ``lut`` in ``fmt`` (``csv``, ``json`` or ``c``)."""
+    """Text of ``lut`` in ``fmt`` (``csv``, ``json`` or ``c``).
+
+    Parameters
+    ----------
+    lut : Lut
+        The table.
+    fmt : {"csv", "json", "c"}
+        The format.
+    symbol : str or None, optional
+        The C array's name (``c`` only).
+
+    Returns
+    -------
+    str
+        The text.
+
+    Raises
+    ------
+    ValueError
+        An unknown ``fmt``.
+    """
     if fmt == "csv":
         return to_csv(lut)
     if fmt == "json":
@@ -283,7 +434,23 @@ def _check_grid(theta: np.ndarray, src: str) -> None:
 
 
 def read_lut_csv(path: str | Path) -> Lut:
-    """Read a LUT written by :func:`to_csv`."""
+    """Read a LUT written by :func:`to_csv`.
+
+    Parameters
+    ----------
+    path : str or Path
+        The CSV file.
+
+    Returns
+    -------
+    Lut
+        The table, rad, named after the file.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        A bad header, row or grid, naming the row.
+    """
     src = str(path)
     rows = csv_rows(path, "LUT")  # (bounded, BOM skipped: docs/limits.md)
     header = next(rows)[1]
@@ -305,7 +472,23 @@ def read_lut_csv(path: str | Path) -> Lut:
 
 
 def read_lut_json(path: str | Path) -> Lut:
-    """Read a LUT written by :func:`to_json`."""
+    """Read a LUT written by :func:`to_json`.
+
+    Parameters
+    ----------
+    path : str or Path
+        The JSON file.
+
+    Returns
+    -------
+    Lut
+        The table, rad, with the file's motor provenance.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        Not a linsense LUT, missing or non-finite arrays, a bad grid.
+    """
     src = str(path)
     try:
         doc = json.loads(read_text_file(path, "LUT"))
@@ -335,6 +518,16 @@ def read_lut_json(path: str | Path) -> Lut:
 def read_c_header(text: str) -> np.ndarray:
     """Values of the (single) float table in a header written by :func:`to_c_header`.
 
+    Parameters
+    ----------
+    text : str
+        The header's text.
+
+    Returns
+    -------
+    ndarray
+        The table's values, rad.
+
     Raises
     ------
     InputError
@@ -351,7 +544,23 @@ def read_c_header(text: str) -> np.ndarray:
 
 
 def read_lut(path: str | Path) -> Lut:
-    """Read a LUT from CSV or JSON, by the file's suffix."""
+    """Read a LUT from CSV or JSON, by the file's suffix.
+
+    Parameters
+    ----------
+    path : str or Path
+        A ``.json`` file (:func:`read_lut_json`) or else a CSV (:func:`read_lut_csv`).
+
+    Returns
+    -------
+    Lut
+        The table.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        As the reader.
+    """
     p = Path(path)
     if p.suffix.lower() == ".json":
         return read_lut_json(p)

@@ -30,8 +30,13 @@ WHAT = {"motors": "motor", "scenarios": "scenario", "sweeps": "sweep", "fea": "g
 
 
 def files() -> list[str]:
-    """Every packaged example file, as a path relative to :data:`ROOT` with ``/`` separators, sorted
-    (this module and Python caches excluded)."""
+    """Every packaged example file (this module and Python caches excluded).
+
+    Returns
+    -------
+    list of str
+        Paths relative to :data:`ROOT` with ``/`` separators, sorted.
+    """
     return list(_files())
 
 
@@ -78,19 +83,58 @@ def _index(kind: str) -> dict[str, Path]:
 
 
 def names(kind: str) -> list[str]:
-    """The names of the packaged examples of ``kind`` (one of :data:`KINDS`), sorted."""
+    """The names of the packaged examples of ``kind``, sorted.
+
+    Parameters
+    ----------
+    kind : str
+        One of :data:`KINDS`.
+
+    Returns
+    -------
+    list of str
+        The names.
+    """
     return sorted(_index(kind))
 
 
 def path(kind: str, name: str) -> Path | None:
-    """The packaged example ``name`` of ``kind``, or None."""
+    """The packaged example ``name`` of ``kind``, or None.
+
+    Parameters
+    ----------
+    kind : str
+        One of :data:`KINDS`.
+    name : str
+        The example's name.
+
+    Returns
+    -------
+    Path or None
+        Its file.
+    """
     return _index(kind).get(name)
 
 
 def named(kind: str, spec):
-    """``spec`` unchanged, unless it is a str that is not an existing path but a packaged example
-    of ``kind``'s name: then that example's path (the API's lenient form of :func:`resolve`: a
-    wrong path keeps its reader's own message)."""
+    """``spec``, or the path of the packaged example of ``kind`` it names.
+
+    ``spec`` unchanged, unless it is a str that is not an existing path but a packaged example's
+    name: then that example's path (the API's lenient form of :func:`resolve`: a wrong path keeps its
+    reader's own message).
+
+    Parameters
+    ----------
+    kind : str
+        One of :data:`KINDS`.
+    spec : object
+        What the caller gave.
+
+    Returns
+    -------
+    object
+        ``spec`` or the example's Path.
+    """
     if isinstance(spec, str) and not Path(spec).exists():
         p = path(kind, spec)
         if p is not None:
@@ -130,14 +174,41 @@ def resolve(kind: str, spec: str | Path, key: str = "", extra: tuple[str, ...] =
 
 
 def unknown(kind: str, spec: str, extra: tuple[str, ...] = ()) -> str:
-    """The one-line message for a ``spec`` that is neither a file nor a packaged example of ``kind``
-    (nor one of the ``extra`` names)."""
+    """The one-line message for a ``spec`` that is neither a file nor a packaged example of ``kind``.
+
+    Parameters
+    ----------
+    kind : str
+        One of :data:`KINDS`.
+    spec : str
+        What the user gave.
+    extra : tuple of str, optional
+        Further valid names, listed too.
+
+    Returns
+    -------
+    str
+        The message.
+    """
     what = WHAT[kind]
     return f"unknown {what} {spec!r}: no such file, nor a packaged {what} ({listing(kind, extra)})"
 
 
 def listing(kind: str, extra: tuple[str, ...] = ()) -> str:
-    """``names: a, b, ...; `linsense examples DIR` copies the examples out``, for a message."""
+    """The names of ``kind`` for a message, and how to copy the examples out.
+
+    Parameters
+    ----------
+    kind : str
+        One of :data:`KINDS`.
+    extra : tuple of str, optional
+        Further valid names, listed first.
+
+    Returns
+    -------
+    str
+        ``names: a, b, ...; `linsense examples DIR` copies the examples out``.
+    """
     return f"names: {', '.join([*extra, *names(kind)])}; `linsense examples DIR` copies the examples out"
 
 

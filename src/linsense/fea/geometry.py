@@ -29,6 +29,21 @@ _TOKEN_SIGN = {"+": 1, "-": -1}
 
 
 class MotorPart(BaseModel):
+    """The ``[motor]`` section of a geometry file (docs/fea.md).
+
+    Attributes
+    ----------
+    name : str
+        Motor name.
+    pole_pitch : float
+        One electrical period (as in motor files), m.
+    mass : float
+        Moving mass written into motor.toml, kg.
+    R_s : float
+        Phase resistance written into motor.toml, ohm.
+    force_constant : float or None
+        N/A; default: from the computed PM flux linkage.
+    """
     model_config = _STRICT
     name: str = Field(min_length=1, max_length=200)
     pole_pitch: Positive  # m, one electrical period (as in motor files)
@@ -49,6 +64,15 @@ DEFAULT_BH = ((0.0, 0.5, 1.0, 1.2, 1.4, 1.5, 1.6, 1.7, 1.8, 1.9, 2.0, 2.1),
 
 
 class BHTable(BaseModel):
+    """A B-H curve given as a table.
+
+    Attributes
+    ----------
+    B : list of float
+        Flux density, T.
+    H : list of float
+        Field strength, A/m.
+    """
     model_config = _STRICT
     B: list[Annotated[float, Field(ge=0, le=5)]] = Field(min_length=3, max_length=1000)  # T
     H: list[Annotated[float, Field(ge=0, le=1e8)]] = Field(min_length=3, max_length=1000)  # A/m
@@ -94,6 +118,25 @@ def _check_bh(part) -> None:
 
 
 class RodPart(BaseModel):
+    """The ``[rod]`` section: the magnet rod.
+
+    Attributes
+    ----------
+    radius : float
+        Outer radius of magnets and spacers (solid to the axis), m.
+    magnet_length : float
+        Axial length of one magnet, m; spacer = pole_pitch / 2 - magnet_length.
+    tube_thickness : float
+        Non-magnetic tube around the rod, m.
+    remanence : float
+        Axial magnetisation, alternating sign, T.
+    mu_r_magnet : float
+        Recoil permeability.
+    mu_r_iron : float
+        Relative permeability of the spacers (linear).
+    bh : str or dict or None
+        Or a B-H curve: ``"default"`` or ``{B = [...], H = [...]}`` (saturating spacers).
+    """
     model_config = _STRICT
     radius: Positive  # m, outer radius of magnets and spacers (solid to the axis)
     magnet_length: Positive  # m, axial length of one magnet; spacer = pole_pitch / 2 - magnet_length
@@ -110,6 +153,17 @@ class RodPart(BaseModel):
 
 
 class CoilEntry(BaseModel):
+    """One coil of ``[armature] coils``.
+
+    Attributes
+    ----------
+    phase : str
+        ``"A"``, ``"B"`` or ``"C"``.
+    sign : int
+        Winding sense, 1 or -1.
+    turns : int
+        Turns.
+    """
     model_config = _STRICT
     phase: Literal["A", "B", "C"]
     sign: Literal[1, -1]
@@ -117,6 +171,33 @@ class CoilEntry(BaseModel):
 
 
 class ArmaturePart(BaseModel):
+    """The ``[armature]`` section: an explicit coil list, or a sequence of tokens repeated.
+
+    Attributes
+    ----------
+    air_gap : float
+        Radial, tube to armature bore, m.
+    coil_depth : float
+        Radial depth of the coils, m.
+    back_iron : float
+        Radial thickness of the back iron, m.
+    coil_pitch : float or None
+        Axial length per coil, m (default pole_pitch / 6).
+    end_length : float
+        Back iron beyond the outer coils at each end, m.
+    mu_r_iron : float
+        Relative permeability of the back iron (linear).
+    bh : str or dict or None
+        Or a B-H curve: ``"default"`` or ``{B = [...], H = [...]}`` (saturating back iron).
+    coils : list of CoilEntry or None
+        The explicit coil list.
+    sequence : str or None
+        Tokens such as ``"A+ C- B+ A- C+ B-"``.
+    repeat : int
+        Repetitions of ``sequence``.
+    turns : int or None
+        Turns of each coil of ``sequence``.
+    """
     model_config = _STRICT
     air_gap: Positive  # m, radial, tube to armature bore
     coil_depth: Positive  # m, radial depth of the coils
@@ -155,6 +236,13 @@ class ArmaturePart(BaseModel):
         return self
 
     def coil_list(self) -> list[CoilEntry]:
+        """The coils: the explicit list, or ``sequence`` repeated ``repeat`` times.
+
+        Returns
+        -------
+        list of CoilEntry
+            In axial order.
+        """
         if self.coils is not None:
             return list(self.coils)
         tokens = self.sequence.split() * self.repeat
@@ -162,12 +250,34 @@ class ArmaturePart(BaseModel):
 
 
 class DomainPart(BaseModel):
+    """The ``[domain]`` section: the meshed domain.
+
+    Attributes
+    ----------
+    far : float
+        Far boundary, in armature outer radii.
+    margin_periods : float
+        Fine zone beyond the armature, in pole pitches.
+    """
     model_config = _STRICT
     far: Annotated[float, Field(ge=1.5, le=100.0)] = 4.0  # far boundary, in armature outer radii
     margin_periods: Annotated[float, Field(ge=0.0, le=10.0)] = 1.0  # fine zone beyond the armature
 
 
 class GeometryFile(BaseModel):
+    """A whole geometry file, validated (docs/fea.md).
+
+    Attributes
+    ----------
+    motor : MotorPart
+        ``[motor]``.
+    rod : RodPart
+        ``[rod]``.
+    armature : ArmaturePart
+        ``[armature]``.
+    domain : DomainPart
+        ``[domain]`` (defaults).
+    """
     model_config = _STRICT
     motor: MotorPart
     rod: RodPart
@@ -194,7 +304,27 @@ class GeometryFile(BaseModel):
 # ---------------------------------------------------------------------- layout
 @dataclass
 class Coil:
-    """One coil as meshed: r and z extents (m), phase, sign, turns."""
+    """One coil as meshed.
+
+    Attributes
+    ----------
+    index : int
+        Position in the armature, from the lower z end.
+    phase : str
+        ``"A"``, ``"B"`` or ``"C"``.
+    sign : int
+        Winding sense, 1 or -1.
+    turns : int
+        Turns.
+    r0 : float
+        Inner radius, m.
+    r1 : float
+        Outer radius, m.
+    z0 : float
+        Lower axial end, m.
+    z1 : float
+        Upper axial end, m.
+    """
 
     index: int
     phase: str
@@ -207,12 +337,65 @@ class Coil:
 
     @property
     def area(self) -> float:
+        """Cross-section in the r-z plane, m^2."""
         return (self.r1 - self.r0) * (self.z1 - self.z0)
 
 
 @dataclass
 class Geometry:
-    """The r-z layout of a geometry file (SI units); z = 0 is the armature's centre."""
+    """The r-z layout of a geometry file (SI units); z = 0 is the armature's centre.
+
+    Attributes
+    ----------
+    name : str
+        Motor name.
+    source : str
+        The file or preset, for messages.
+    pole_pitch : float
+        m.
+    mass : float
+        kg.
+    R_s : float
+        ohm.
+    force_constant : float or None
+        N/A (None: from the computed PM flux linkage).
+    r_rod : float
+        Rod radius, m.
+    r_tube : float
+        Outer radius of the tube, m.
+    r_bore : float
+        Armature bore radius, m.
+    r_coil : float
+        Outer radius of the coils, m.
+    r_out : float
+        Outer radius of the back iron, m.
+    magnet_length : float
+        m.
+    remanence : float
+        T.
+    mu_magnet : float
+        Recoil permeability.
+    mu_rod_iron : float
+        Relative permeability of the spacers.
+    mu_arm_iron : float
+        Relative permeability of the back iron.
+    z_arm0 : float
+        Lower end of the armature, m.
+    z_arm1 : float
+        Upper end of the armature, m.
+    coils : list of Coil
+        The coils as meshed.
+    far : float
+        Far boundary, in armature outer radii.
+    margin : float
+        Fine zone beyond the armature, m.
+    bh_rod : tuple or None
+        ``(B, H)`` of the spacers (T, A/m), None: linear ``mu_rod_iron``.
+    bh_arm : tuple or None
+        ``(B, H)`` of the back iron, None: linear ``mu_arm_iron``.
+    notes : list of str
+        Remarks on the layout (empty unless a caller adds some).
+    """
 
     name: str
     source: str
@@ -241,15 +424,23 @@ class Geometry:
 
     @property
     def r_far(self) -> float:
+        """Radius of the far boundary, m."""
         return self.far * self.r_out
 
     @property
     def z_far(self) -> tuple[float, float]:
+        """Axial ends of the domain, m."""
         ext = self.margin + self.far * self.r_out
         return self.z_arm0 - ext, self.z_arm1 + ext
 
     def regions(self) -> dict:
-        """Every region as meshed (for geometry.json)."""
+        """Every region as meshed (for geometry.json).
+
+        Returns
+        -------
+        dict
+            Region name to its extents and materials, m and T.
+        """
         return {
             "units": "m, T",
             "name": self.name,
@@ -274,6 +465,20 @@ class Geometry:
 
 
 def geometry_from_doc(doc: GeometryFile, source: str) -> Geometry:
+    """The r-z layout of a validated geometry file.
+
+    Parameters
+    ----------
+    doc : GeometryFile
+        The validated file.
+    source : str
+        Its name, for messages.
+
+    Returns
+    -------
+    Geometry
+        The layout, the armature centred on z = 0.
+    """
     m, rod, arm = doc.motor, doc.rod, doc.armature
     coils = arm.coil_list()
     pitch = arm.coil_pitch if arm.coil_pitch is not None else m.pole_pitch / 6
@@ -298,11 +503,37 @@ def geometry_from_doc(doc: GeometryFile, source: str) -> Geometry:
 
 
 def preset_names() -> list[str]:
+    """Names of the built-in geometry presets (``linsense/fea/presets/<name>.toml``).
+
+    Returns
+    -------
+    list of str
+        Sorted.
+    """
     return sorted(p.name[:-5] for p in (resources.files("linsense.fea") / "presets").iterdir()
                   if p.name.endswith(".toml"))
 
 
 def geometry_from_toml(text: str, source: str) -> Geometry:
+    """Parse and validate the text of a geometry file.
+
+    Parameters
+    ----------
+    text : str
+        The TOML text.
+    source : str
+        Its name, for messages.
+
+    Returns
+    -------
+    Geometry
+        The layout.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        Bad TOML or an invalid key, naming ``source`` and the key.
+    """
     data = parse_toml(text, source)
     try:
         doc = GeometryFile.model_validate(data)
@@ -312,7 +543,23 @@ def geometry_from_toml(text: str, source: str) -> Geometry:
 
 
 def load_geometry(spec: str | Path) -> Geometry:
-    """A geometry from a file path or a preset name (``linsense/fea/presets/<name>.toml``)."""
+    """A geometry from a file path or a preset name (``linsense/fea/presets/<name>.toml``).
+
+    Parameters
+    ----------
+    spec : str or Path
+        A ``.toml`` path, an existing path, or a preset name.
+
+    Returns
+    -------
+    Geometry
+        The layout.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        No such file or preset, or an invalid file.
+    """
     s = str(spec)
     p = Path(s)
     if p.suffix.lower() == ".toml" or p.exists() or "/" in s:

@@ -15,7 +15,22 @@ COLUMNS = ("L_A", "L_B", "L_C", "M_AB", "M_BC", "M_CA")
 
 
 def table(res: Result) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(theta rad sorted, entries (N, 6) H, PM flux linkages (N, 3) Wb) in the order of theta."""
+    """The FEA table in the order of theta.
+
+    Parameters
+    ----------
+    res : Result
+        The FEA result.
+
+    Returns
+    -------
+    theta : ndarray, shape (N,)
+        Electrical positions, sorted, rad.
+    entries : ndarray, shape (N, 6)
+        ``L_A, L_B, L_C, M_AB, M_BC, M_CA``, H.
+    psi_pm : ndarray, shape (N, 3)
+        PM flux linkages, Wb.
+    """
     order = np.argsort(res.theta)
     L = res.L[order]
     e = np.column_stack([L[:, 0, 0], L[:, 1, 1], L[:, 2, 2], L[:, 0, 1], L[:, 1, 2], L[:, 2, 0]])
@@ -23,6 +38,18 @@ def table(res: Result) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 def inductances_csv(res: Result) -> str:
+    """The table as ``inductances.csv``: theta, the six entries, the PM flux linkages and the rod position.
+
+    Parameters
+    ----------
+    res : Result
+        The FEA result.
+
+    Returns
+    -------
+    str
+        The CSV text (deg, H, Wb, m; 12 significant digits).
+    """
     theta, e, pm = table(res)
     lines = ["theta_deg,L_A,L_B,L_C,M_AB,M_BC,M_CA,psi_pm_A,psi_pm_B,psi_pm_C,x_m"]
     x = res.positions[np.argsort(res.theta)]
@@ -32,7 +59,20 @@ def inductances_csv(res: Result) -> str:
 
 
 def force_constant(res: Result) -> float | None:
-    """N/A per peak phase current from the PM flux linkage: ``3 pi psi_pm / pole_pitch``."""
+    """Force constant per peak phase current from the PM flux linkage: ``3 pi psi_pm / pole_pitch``.
+
+    The geometry file's ``motor.force_constant`` when it gives one.
+
+    Parameters
+    ----------
+    res : Result
+        The FEA result.
+
+    Returns
+    -------
+    float or None
+        N/A; None without PM flux linkage.
+    """
     g = res.geometry
     if g.force_constant is not None:
         return g.force_constant
@@ -42,6 +82,25 @@ def force_constant(res: Result) -> float | None:
 
 
 def motor_toml(res: Result, table_file: str = "inductances.csv") -> str:
+    """The motor file of the FEA's table.
+
+    Parameters
+    ----------
+    res : Result
+        The FEA result.
+    table_file : str, optional
+        The inductance table's file name, relative to the motor file.
+
+    Returns
+    -------
+    str
+        The TOML text with a comment on its provenance.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        No PM flux linkage and no ``motor.force_constant`` to give the force constant.
+    """
     g = res.geometry
     kf = force_constant(res)
     if kf is None:
@@ -62,7 +121,18 @@ def motor_toml(res: Result, table_file: str = "inductances.csv") -> str:
 
 
 def eq3_fit(res: Result) -> dict:
-    """The eq. 3 parameters fitted to the table (least squares), with standard errors."""
+    """The eq. 3 parameters fitted to the table (least squares), with standard errors.
+
+    Parameters
+    ----------
+    res : Result
+        The FEA result.
+
+    Returns
+    -------
+    dict
+        ``values_H``, ``stderr_H``, ``residual_rms_H``.
+    """
     from linsense.identify.fit import fit_inductances
 
     theta, e, _ = table(res)
@@ -71,6 +141,20 @@ def eq3_fit(res: Result) -> dict:
 
 
 def fea_json(res: Result, extra: dict) -> str:
+    """The text of ``fea.json``: mesh, timings, energy check, Newton iterations, theta's origin.
+
+    Parameters
+    ----------
+    res : Result
+        The FEA result.
+    extra : dict
+        Further keys written as they are.
+
+    Returns
+    -------
+    str
+        The JSON text.
+    """
     m = res.mesh
     s = res.keep["solver"]
     doc = {
@@ -96,8 +180,22 @@ def fea_json(res: Result, extra: dict) -> str:
 
 
 def dq_table(res: Result) -> tuple[np.ndarray, np.ndarray]:
-    """(theta rad sorted, L_dq (N, 2, 2) H) of the FEA table by the model's frame transforms
-    (amplitude-invariant Clarke with a floating star point, then the rotation by theta)."""
+    """The FEA table's dq inductances by the model's frame transforms.
+
+    Amplitude-invariant Clarke with a floating star point, then the rotation by theta.
+
+    Parameters
+    ----------
+    res : Result
+        The FEA result.
+
+    Returns
+    -------
+    theta : ndarray, shape (N,)
+        Sorted, rad.
+    L_dq : ndarray, shape (N, 2, 2)
+        H.
+    """
     from linsense.model.frames import ab_to_dq_matrix, abc_to_ab_matrix
 
     order = np.argsort(res.theta)

@@ -16,8 +16,29 @@ LOAD_OPTION = "--load-current"
 
 def parse_currents(value, option: str = LOAD_OPTION, what: str = "q-axis currents in A",
                    positive: bool = False) -> list[float]:
-    """The q-axis load currents (A) of ``--load-current``: a number or a comma list ("0,1,2");
-    ``option``, ``what`` and ``positive`` (all > 0) for another list of currents (``--polarity``)."""
+    """The q-axis load currents of ``--load-current``: a number or a comma list (``"0,1,2"``).
+
+    Parameters
+    ----------
+    value : float or str or iterable
+        The option's value.
+    option : str, optional
+        The option, named in messages.
+    what : str, optional
+        What the currents are, for messages.
+    positive : bool, optional
+        All must be above 0 (``--polarity``).
+
+    Returns
+    -------
+    list of float
+        A, in the order given.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        Empty, not a number, not finite or beyond 1e6 A, not positive where asked, or given twice.
+    """
     from linsense.errors import InputError
 
     if isinstance(value, (int, float)):
@@ -47,7 +68,18 @@ def parse_currents(value, option: str = LOAD_OPTION, what: str = "q-axis current
 
 
 def load_tag(current: float) -> str:
-    """The suffix of a load's files (``inductances_<I>A.csv``): ``2A``."""
+    """The suffix of a load's files (``inductances_<I>A.csv``): ``2A``.
+
+    Parameters
+    ----------
+    current : float
+        A.
+
+    Returns
+    -------
+    str
+        The suffix.
+    """
     return f"{current:g}A"
 
 
@@ -66,7 +98,25 @@ def _motor_of(res, folder: Path, tag: str = ""):
 
 
 def lut_of(res, points: int = 360) -> np.ndarray:
-    """Psi_LUT (rad, eq. 12) at ``points`` positions of the motor model of a Result's table."""
+    """Psi_LUT (eq. 12) at ``points`` positions of the motor model of a Result's table.
+
+    Parameters
+    ----------
+    res : Result
+        The FEA result.
+    points : int, optional
+        Table points.
+
+    Returns
+    -------
+    ndarray
+        rad.
+
+    Raises
+    ------
+    ValueError
+        When the table gives no usable motor (the model's refusal).
+    """
     from linsense.compensation.lut import build_lut
 
     with tempfile.TemporaryDirectory(prefix="linsense-fea-") as d:
@@ -77,7 +127,22 @@ def lut_of(res, points: int = 360) -> np.ndarray:
 
 
 def load_written(path: Path, shown: Path):
-    """(motor, None) or (None, the ModelError's message naming the final path ``shown``)."""
+    """Load the motor file just written, or say why it is refused.
+
+    Parameters
+    ----------
+    path : Path
+        Where it was written.
+    shown : Path
+        Its final path, named in the message instead of ``path``.
+
+    Returns
+    -------
+    motor : Motor or None
+        The motor.
+    problem : str or None
+        The ModelError's message when refused.
+    """
     from linsense.errors import ModelError
     from linsense.model.motor import load_motor
 
@@ -88,7 +153,21 @@ def load_written(path: Path, shown: Path):
 
 
 def load_sweep(results, luts) -> dict:
-    """fea.json's ``lut_vs_load``: the loads, their force, each LUT's largest difference from the first's."""
+    """fea.json's ``lut_vs_load``: the loads, their force, each LUT's largest difference from the first's.
+
+    Parameters
+    ----------
+    results : list of Result
+        One per load.
+    luts : list of Lut or None
+        Each load's LUT (None: none).
+
+    Returns
+    -------
+    dict
+        ``currents_A``, ``force_N``, ``max_diff_deg``, ``psi_lut_peak_deg``, ``table_max_rel_diff``,
+        ``newton_iterations``, ``solve_s``, ``rule``.
+    """
     kf = outputs.force_constant(results[0])
     ref = luts[0]
     diffs = [None if ref is None or lu is None else float(np.degrees(np.abs(lu.values - ref.values).max()))
@@ -110,6 +189,18 @@ def load_sweep(results, luts) -> dict:
 
 
 def load_sweep_line(v: dict) -> str:
+    """The LUT-against-load comparison in one line, for the report.
+
+    Parameters
+    ----------
+    v : dict
+        :func:`load_sweep`'s result.
+
+    Returns
+    -------
+    str
+        Per load the largest difference, and the largest of all.
+    """
     parts = []
     for i, f, d in zip(v["currents_A"], v["force_N"], v["max_diff_deg"], strict=True):
         force = "" if f is None else f" ({f:.0f} N)"

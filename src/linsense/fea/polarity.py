@@ -30,15 +30,40 @@ def _dq_flux(res: Result) -> np.ndarray:
 
 def polarity_signal(g: Geometry, currents_A, positions: int = 4, level: str = "default", workers: int = 1,
                     progress=None) -> dict:
-    """The polarity signal of d-axis current amplitudes ``currents_A`` (A, > 0) at ``positions`` rod
-    positions over one electrical period (the theta grid of :func:`linsense.fea.solver.run`).
+    """The polarity signal of d-axis current amplitudes.
 
-    Returns ``{"rows": [...], ...}`` with per amplitude (ascending): ``I_A``, the means over the
-    positions of ``L_d`` and ``L_q`` at ``+I`` and ``-I`` (H), ``diff_mean_H`` / ``diff_min_H``
-    (mean and min over the positions of ``L_d(-I) - L_d(+I)``), ``rel`` (``diff_mean_H`` over the
-    mean of ``(L_d(+I) + L_d(-I)) / 2``), ``psi_d_plus_Wb`` / ``psi_d_minus_Wb`` (the mean d-axis flux
-    linkage) and the Newton iterations. Linear iron goes through the same Newton solves (its
-    signal is zero to the solver's precision).
+    At ``positions`` rod positions over one electrical period (the theta grid of
+    :func:`linsense.fea.solver.run`). Linear iron goes through the same Newton solves (its signal is
+    zero to the solver's precision).
+
+    Parameters
+    ----------
+    g : Geometry
+        The geometry.
+    currents_A : iterable of float
+        d-axis current amplitudes, A, distinct and positive.
+    positions : int, optional
+        Rod positions over one period, at least 3.
+    level : str, optional
+        Mesh level.
+    workers : int, optional
+        Parallel solves.
+    progress : callable or None, optional
+        Called as solves finish.
+
+    Returns
+    -------
+    dict
+        ``rows``: per amplitude (ascending), ``I_A``, the means over the positions of ``L_d`` and
+        ``L_q`` at ``+I`` and ``-I`` (H), ``diff_mean_H`` / ``diff_min_H`` (mean and min over the
+        positions of ``L_d(-I) - L_d(+I)``), ``rel`` (``diff_mean_H`` over the mean of
+        ``(L_d(+I) + L_d(-I)) / 2``), ``psi_d_plus_Wb`` / ``psi_d_minus_Wb`` (the mean d-axis flux
+        linkage) and the Newton iterations; and the grid, the mesh level and the rule.
+
+    Raises
+    ------
+    ValueError
+        Amplitudes not distinct and positive, or fewer than 3 positions.
     """
     amps = sorted(float(c) for c in currents_A)
     if not amps or any(not np.isfinite(a) or a <= 0 for a in amps) or len(set(amps)) < len(amps):
@@ -78,6 +103,18 @@ def polarity_signal(g: Geometry, currents_A, positions: int = 4, level: str = "d
 
 
 def polarity_csv(sig: dict) -> str:
+    """The polarity signal's rows as CSV (:data:`COLUMNS`, 12 significant digits).
+
+    Parameters
+    ----------
+    sig : dict
+        :func:`polarity_signal`'s result.
+
+    Returns
+    -------
+    str
+        The CSV text.
+    """
     lines = [",".join(COLUMNS)]
     for row in sig["rows"]:
         lines.append(",".join(f"{row[c]:.12g}" for c in COLUMNS))
@@ -85,6 +122,18 @@ def polarity_csv(sig: dict) -> str:
 
 
 def polarity_line(sig: dict) -> str:
+    """The polarity signal in one line, for the report.
+
+    Parameters
+    ----------
+    sig : dict
+        :func:`polarity_signal`'s result.
+
+    Returns
+    -------
+    str
+        Per amplitude: the relative signal, its mean and minimum.
+    """
     parts = [f"{r['I_A']:g} A {r['rel'] * 100:.3g} % ({r['diff_mean_H'] * 1e6:.3g} uH, min "
              f"{r['diff_min_H'] * 1e6:.3g})" for r in sig["rows"]]
     return "polarity (L_d(-I) - L_d(+I), i_q = 0): " + ", ".join(parts)

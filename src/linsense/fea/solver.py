@@ -70,7 +70,13 @@ def _internal(v, w):  # integral nu / r grad psi . grad v
 
 class Curve:
     """A B-H curve: H(B) monotone cubic (PCHIP) through the table, slope 1/mu0 beyond its end;
-    ``nu(B) = H / B`` and ``dnu/ds`` with ``s = B^2`` at the quadrature points."""
+    ``nu(B) = H / B`` and ``dnu/ds`` with ``s = B^2`` at the quadrature points.
+
+    Parameters
+    ----------
+    bh : tuple
+        ``(B, H)`` of the table, T and A/m.
+    """
 
     def __init__(self, bh: tuple) -> None:
         from scipy.interpolate import CubicHermiteSpline, PchipInterpolator
@@ -185,6 +191,23 @@ def _graded(a: float, b: float, size: float, ratio: float = 1.35) -> np.ndarray:
 
 @dataclass
 class Mesh:
+    """The fixed structured r-z triangle mesh (:func:`build_mesh`).
+
+    Attributes
+    ----------
+    mesh : skfem.MeshTri
+        The mesh.
+    level : str
+        ``coarse``, ``default`` or ``fine``.
+    size : float
+        Element size near the motor, m.
+    r_nodes : ndarray
+        Radial node coordinates, m.
+    z_nodes : ndarray
+        Axial node coordinates, m.
+    rod_aligned : bool
+        The rod's interfaces are element edges at every position.
+    """
     mesh: MeshTri
     level: str
     size: float  # m, element size near the motor
@@ -194,9 +217,28 @@ class Mesh:
 
 
 def rod_step(g: Geometry, positions: int, target: float) -> tuple[float, bool]:
-    """The z step of the fine zone: ``h = (pole_pitch / positions) / k``, the largest such step not
-    above ``target`` that also divides the magnet and spacer ends (then every rod interface is an
-    element edge at every position: the rod's materials are exact). ``(h, aligned)``."""
+    """The z step of the fine zone.
+
+    ``h = (pole_pitch / positions) / k``, the largest such step not above ``target`` that also
+    divides the magnet and spacer ends (then every rod interface is an element edge at every
+    position: the rod's materials are exact).
+
+    Parameters
+    ----------
+    g : Geometry
+        The geometry.
+    positions : int
+        Rod positions over one period.
+    target : float
+        Largest step wanted, m.
+
+    Returns
+    -------
+    h : float
+        m.
+    aligned : bool
+        Whether ``h`` divides the rod's interfaces.
+    """
     step = g.pole_pitch / positions
     k0 = max(1, math.ceil(step / target - 1e-9))
     for k in range(k0, k0 + 64):
@@ -213,6 +255,25 @@ def build_mesh(g: Geometry, level: str = "default", positions: int = 56) -> Mesh
     at the rod's reference, so the rod's interfaces fall on element edges at every position when
     the step divides them), plus every coil and armature boundary, then graded rows to the far
     boundary; r: every radial interface, graded beyond the back iron.
+
+    Parameters
+    ----------
+    g : Geometry
+        The geometry.
+    level : {"coarse", "default", "fine"}, optional
+        Mesh level.
+    positions : int, optional
+        Rod positions over one period (the z step divides their spacing).
+
+    Returns
+    -------
+    Mesh
+        The mesh.
+
+    Raises
+    ------
+    ValueError
+        An unknown level.
     """
     if level not in LEVELS:
         raise ValueError(f"mesh level must be one of {', '.join(LEVELS)}, got {level!r}")
@@ -244,7 +305,25 @@ def build_mesh(g: Geometry, level: str = "default", positions: int = 56) -> Mesh
 
 @dataclass
 class Solution:
-    """What one position's solves give."""
+    """What one position's solves give.
+
+    Attributes
+    ----------
+    x : float
+        Rod position, m.
+    L : ndarray, shape (3, 3)
+        Inductances, H.
+    psi_pm : ndarray, shape (3,)
+        PM flux linkage per phase, Wb.
+    energy : ndarray, shape (3,)
+        Field energy of each phase at 1 A, J.
+    energy_li : ndarray, shape (3,)
+        ``L_pp / 2`` for the same, J.
+    newton : int
+        Newton iterations (0: linear materials).
+    fields : dict or None
+        psi per excitation (kept on request).
+    """
 
     x: float  # m, rod position
     L: np.ndarray  # 3x3, H
@@ -257,6 +336,41 @@ class Solution:
 
 @dataclass
 class Result:
+    """The FEA of a geometry at one load: inductances and PM flux linkages over the positions.
+
+    Attributes
+    ----------
+    geometry : Geometry
+        The geometry.
+    mesh : Mesh
+        The mesh.
+    positions : ndarray
+        Rod positions, m.
+    theta : ndarray
+        Electrical positions, rad, 0 where phase A's PM flux linkage peaks (raw if no PM).
+    L : ndarray, shape (N, 3, 3)
+        Inductances (incremental with a B-H curve), H.
+    psi_pm : ndarray, shape (N, 3)
+        PM flux linkages, Wb.
+    psi_pm_amplitude : float
+        Fundamental of phase A's, Wb.
+    theta_offset : float
+        ``theta = direction * 2 pi x / P - offset``, rad.
+    direction : int
+        1 or -1.
+    times : dict
+        Timings, s.
+    energy_error : float or None
+        ``max |W_field - i^T L i / 2| / (i^T L i / 2)``; None: nonlinear (not checked).
+    newton : dict or None
+        Newton iterations per position (max, mean); None: linear.
+    load_current : float
+        q-axis current, A.
+    keep : dict
+        The solver and the first position's solution (for fea.json and the checks).
+    d_current : float
+        d-axis current, A (along the magnets' flux: > 0 strengthens it).
+    """
     geometry: Geometry
     mesh: Mesh
     positions: np.ndarray  # m
@@ -275,7 +389,17 @@ class Result:
 
 
 class Solver:
-    """The mesh, the fixed armature, the coil load vectors: solves one rod position at a time."""
+    """The mesh, the fixed armature, the coil load vectors: solves one rod position at a time.
+
+    Parameters
+    ----------
+    g : Geometry
+        The geometry.
+    level : {"coarse", "default", "fine"}, optional
+        Mesh level.
+    positions : int, optional
+        Rod positions over one period.
+    """
 
     def __init__(self, g: Geometry, level: str = "default", positions: int = 56) -> None:
         self.g = g
@@ -304,10 +428,24 @@ class Solver:
 
     @property
     def ndofs(self) -> int:
+        """Degrees of freedom of the P2 basis."""
         return self.basis.N
 
     def rod_pattern(self, x: float) -> np.ndarray:
-        """+1 / -1 in the magnets (axial magnetisation sign), 0 in the spacers, at the quadrature points."""
+        """The rod's magnetisation pattern at rod position ``x``, at the quadrature points.
+
+        +1 / -1 in the magnets (axial magnetisation sign), 0 in the spacers (and outside the rod).
+
+        Parameters
+        ----------
+        x : float
+            Rod position, m.
+
+        Returns
+        -------
+        ndarray
+            Per element and quadrature point.
+        """
         P, half = self.g.pole_pitch, self.g.magnet_length / 2
         u = np.mod(self.z - x + P / 2, P) - P / 2  # in [-P/2, P/2): 0 at a + magnet's centre
         s = np.zeros(self.z.shape)
@@ -317,12 +455,41 @@ class Solver:
 
     @property
     def nonlinear(self) -> bool:
+        """Whether a B-H curve makes the solves nonlinear."""
         return self.curve_rod is not None or self.curve_arm is not None
 
     def solve_nonlinear(self, x: float, currents=(0.0, 0.0, 0.0), keep: bool = False, tol: float = 1e-7,
                         max_iter: int = 40, psi0: np.ndarray | None = None) -> Solution:
-        """Newton iterations for the state set by the magnets and the phase ``currents`` (A), then the
-        incremental inductances ``2 pi F^T J^-1 F`` with J the Jacobian (the tangent reluctivity) there."""
+        """Newton iterations for the state set by the magnets and the phase currents.
+
+        Then the incremental inductances ``2 pi F^T J^-1 F`` with J the Jacobian (the tangent
+        reluctivity) there.
+
+        Parameters
+        ----------
+        x : float
+            Rod position, m.
+        currents : sequence of float, optional
+            Phase currents, A.
+        keep : bool, optional
+            Keep the fields in the solution.
+        tol : float, optional
+            Relative step tolerance of the iterations.
+        max_iter : int, optional
+            Most iterations.
+        psi0 : ndarray or None, optional
+            Start (None: the linear solution with mu_r 1000 in the saturable iron).
+
+        Returns
+        -------
+        Solution
+            Incremental inductances, PM flux linkages and the iterations.
+
+        Raises
+        ------
+        RuntimeError
+            No convergence in ``max_iter`` iterations.
+        """
         g = self.g
         pat = self.rod_pattern(x)
         nu_mag = 1.0 / (MU0 * g.mu_magnet)
@@ -390,8 +557,22 @@ class Solver:
         return Solution(x, L, link, half, half, fields=fields, newton=it)
 
     def solve(self, x: float, keep: bool = False, energy: bool = True) -> Solution:
-        """Linear materials: the inductances (magnets off) and the PM flux linkages at rod position x;
-        the field energy of each phase at 1 A with ``energy`` (the check of fea.json)."""
+        """Linear materials: the inductances (magnets off) and the PM flux linkages at rod position x.
+
+        Parameters
+        ----------
+        x : float
+            Rod position, m.
+        keep : bool, optional
+            Keep the fields in the solution (for :func:`energy_of`).
+        energy : bool, optional
+            Compute the field energy of each phase at 1 A (the check of fea.json).
+
+        Returns
+        -------
+        Solution
+            The position's solution.
+        """
         g = self.g
         pat = self.rod_pattern(x)
         nu = self.nu_fixed.copy()
@@ -415,7 +596,24 @@ class Solver:
 
 
 def energy_of(solver: Solver, sol: Solution, currents) -> tuple[float, float]:
-    """(field energy, 1/2 i^T L i) for phase currents ``currents`` (A), magnets off; needs keep=True."""
+    """The field energy and ``i^T L i / 2`` for phase currents, magnets off.
+
+    Parameters
+    ----------
+    solver : Solver
+        The solver.
+    sol : Solution
+        A solution solved with ``keep=True``.
+    currents : sequence of float
+        Phase currents, A.
+
+    Returns
+    -------
+    field : float
+        J.
+    circuit : float
+        J.
+    """
     i = np.asarray(currents, float)
     psi = sol.fields["psi"][:, :3] @ i
     w = asm(_energy, solver.basis, nu=sol.fields["nu"], psi=solver.basis.interpolate(psi))
@@ -435,14 +633,43 @@ def _theta_origin(raw: np.ndarray, pm: np.ndarray) -> tuple[float, float, int]:
 
 
 def q_currents(theta: float, i_q: float) -> np.ndarray:
-    """Phase currents of q-axis current ``i_q`` (amplitude-invariant, i_d = 0) at electrical ``theta``."""
+    """Phase currents of q-axis current ``i_q`` (amplitude-invariant, i_d = 0) at electrical ``theta``.
+
+    Parameters
+    ----------
+    theta : float
+        Electrical position, rad.
+    i_q : float
+        A.
+
+    Returns
+    -------
+    ndarray, shape (3,)
+        A.
+    """
     return -i_q * np.sin(theta - np.array([0.0, 2 * np.pi / 3, -2 * np.pi / 3]))
 
 
 def dq_currents(theta: float, i_d: float, i_q: float) -> np.ndarray:
-    """Phase currents of ``(i_d, i_q)`` (amplitude-invariant) at electrical ``theta``: theta = 0 where
-    phase A's PM flux linkage peaks, so the d-axis is along the magnets' flux and ``i_d > 0``
-    strengthens it. With ``i_d = 0`` exactly :func:`q_currents`."""
+    """Phase currents of ``(i_d, i_q)`` (amplitude-invariant) at electrical ``theta``.
+
+    theta = 0 where phase A's PM flux linkage peaks, so the d-axis is along the magnets' flux and
+    ``i_d > 0`` strengthens it. With ``i_d = 0`` exactly :func:`q_currents`.
+
+    Parameters
+    ----------
+    theta : float
+        Electrical position, rad.
+    i_d : float
+        A.
+    i_q : float
+        A.
+
+    Returns
+    -------
+    ndarray, shape (3,)
+        A.
+    """
     if i_d == 0:
         return q_currents(theta, i_q) if i_q else np.zeros(3)
     phase = theta - np.array([0.0, 2 * np.pi / 3, -2 * np.pi / 3])
@@ -471,8 +698,37 @@ def run(g: Geometry, positions: int = 56, level: str = "default", progress=None,
     """Solve ``positions`` rod positions over one electrical period; 3 excitations (+ magnets) each.
 
     With a B-H curve (``rod.bh`` / ``armature.bh``) each position is a Newton solve at the state set
-    by the magnets, the q-axis ``load_current`` and the d-axis ``d_current`` (A; :func:`dq_currents`).
-    :func:`run_loads` for several loads; ``progress(k, n)`` after each position.
+    by the magnets, the q-axis ``load_current`` and the d-axis ``d_current`` (:func:`dq_currents`).
+    :func:`run_loads` for several loads.
+
+    Parameters
+    ----------
+    g : Geometry
+        The geometry.
+    positions : int, optional
+        Rod positions.
+    level : {"coarse", "default", "fine"}, optional
+        Mesh level.
+    progress : callable or None, optional
+        ``progress(k, n)`` after each position.
+    keep_first : bool, optional
+        Keep the first position's fields.
+    load_current : float, optional
+        q-axis current, A.
+    workers : int, optional
+        Processes.
+    d_current : float, optional
+        d-axis current, A.
+
+    Returns
+    -------
+    Result
+        The FEA.
+
+    Raises
+    ------
+    ValueError
+        A load current with linear iron.
     """
     prog = None if progress is None else (lambda stage, k, n: progress(k, n) if stage != "origin" else None)
     return run_loads(g, [(d_current, load_current)], positions, level, progress=prog, keep_first=keep_first,
@@ -499,6 +755,35 @@ def run_loads(g: Geometry, currents, positions: int = 56, level: str = "default"
     ``workers`` processes (forked where possible). ``progress(stage, k, n)``: stage ``"origin"``
     for the linear pass, else the index of the load. ``force_newton``: Newton solves at the loads' states
     with linear iron too (the incremental inductances then equal the linear ones: a check).
+
+    Parameters
+    ----------
+    g : Geometry
+        The geometry.
+    currents : iterable of float or (float, float)
+        Loads: a q-axis current or an ``(i_d, i_q)`` pair, A.
+    positions : int, optional
+        Rod positions.
+    level : {"coarse", "default", "fine"}, optional
+        Mesh level.
+    progress : callable or None, optional
+        ``progress(stage, k, n)``.
+    keep_first : bool, optional
+        Keep the first position's fields.
+    workers : int, optional
+        Processes.
+    force_newton : bool, optional
+        Newton solves with linear iron too.
+
+    Returns
+    -------
+    list of Result
+        One per load, in order.
+
+    Raises
+    ------
+    ValueError
+        A load current with linear iron (without ``force_newton``).
     """
     global _SHARED
     points = [_operating_point(c) for c in currents]

@@ -101,16 +101,27 @@ def _header_form(header: list[str], src: str) -> tuple[str, tuple[str, ...]]:
 
 
 def read_bench_csv(path: str | Path) -> BenchData:
-    """Read and check a bench file (either form).
+    """Read and check a bench file (either form, docs/identify.md).
 
     Checks, each naming row and column: missing columns, empty cells, non-numeric and non-finite
     values, an unknown phase, a non-positive frequency, negative magnitudes (amplitude-only), zero
     current, duplicate rows (same position and fed phase), frequencies differing by more than
     ``FREQ_TOLERANCE``, and a phase that is never fed.
 
+    Parameters
+    ----------
+    path : str or Path
+        The bench file.
+
+    Returns
+    -------
+    BenchData
+        Its rows, SI units.
+
     Raises
     ------
     InputError
+        The first problem found, naming the row and the column.
     """
     src = str(path)
     rows_in = csv_rows(path, "bench file")  # (bounded, BOM skipped: docs/limits.md)
@@ -199,7 +210,18 @@ def read_bench_csv(path: str | Path) -> BenchData:
 
 # ---------------------------------------------------------------------- writing
 def bench_to_csv(data: BenchData) -> str:
-    """CSV text of ``data`` in its form (12 significant digits; positions in mm)."""
+    """CSV text of ``data`` in its form (12 significant digits; positions in mm).
+
+    Parameters
+    ----------
+    data : BenchData
+        The rows.
+
+    Returns
+    -------
+    str
+        The bench file's text.
+    """
     pos = np.asarray(data.position) * 1e3
     if data.amplitude_only:
         lines = [",".join(AMPLITUDE_COLUMNS)]
@@ -251,6 +273,18 @@ def emulate_bench(
         Excitation frequency, Hz.
     current : float
         Nominal current amplitude, A peak.
+    amplitude_only : bool
+        Keep only the magnitudes (the amplitude-only form).
+
+    Returns
+    -------
+    BenchData
+        Three rows per position (one per fed phase), source ``"emulated <motor name>"``.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        An argument out of range, naming it.
     """
     import numbers
 

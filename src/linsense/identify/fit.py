@@ -34,7 +34,18 @@ T_SIGNIFICANT = 3.0
 
 
 def parameter_names(harmonics: int = 1) -> list[str]:
-    """Names of the fitted parameters for ``harmonics = K`` even orders ``2 .. 2K``."""
+    """Names of the fitted parameters for ``harmonics = K`` even orders ``2 .. 2K``.
+
+    Parameters
+    ----------
+    harmonics : int, optional
+        ``K``.
+
+    Returns
+    -------
+    list of str
+        ``L0, L2, M0, M2, dM0`` then ``L<n>, M<n>`` for n = 4 .. 2K.
+    """
     names = ["L0", "L2", "M0", "M2", "dM0"]
     for n in range(4, 2 * harmonics + 1, 2):
         names += [f"L{n}", f"M{n}"]
@@ -48,7 +59,22 @@ def _model_of(values: dict[str, float], harmonics: int) -> InductanceModel:
 
 
 def design_matrix(theta: np.ndarray, harmonics: int = 1) -> np.ndarray:
-    """Matrix ``A`` (6 N, P): row ``6 i + j`` is entry ``j`` at ``theta[i]``, column per parameter."""
+    """Matrix ``A`` (6 N, P) of the linear fit: row ``6 i + j`` is entry ``j`` at ``theta[i]``.
+
+    One column per parameter (:func:`parameter_names`).
+
+    Parameters
+    ----------
+    theta : ndarray, shape (N,)
+        Electrical positions, rad.
+    harmonics : int, optional
+        ``K``.
+
+    Returns
+    -------
+    ndarray, shape (6 N, P)
+        Dimensionless (entries per henry of each parameter).
+    """
     names = parameter_names(harmonics)
     theta = np.asarray(theta, dtype=float)
     cols = []
@@ -102,7 +128,13 @@ class FitResult:
         return bool(abs(self.end_effect_t) > T_SIGNIFICANT)
 
     def model(self) -> InductanceModel:
-        """The fitted :class:`InductanceModel` (eq. 3 with the fitted harmonics)."""
+        """The fitted :class:`InductanceModel` (eq. 3 with the fitted harmonics).
+
+        Returns
+        -------
+        InductanceModel
+            From :attr:`values`.
+        """
         return _model_of(self.values, self.harmonics)
 
 
@@ -121,10 +153,17 @@ def fit_inductances(theta: np.ndarray, entries: np.ndarray, harmonics: int = 1,
     source : str
         For messages.
 
+    Returns
+    -------
+    FitResult
+        Values, standard errors, residuals.
+
     Raises
     ------
     InputError
         The positions cannot separate the requested harmonics (rank-deficient design matrix).
+    ValueError
+        ``harmonics`` below 1.
     """
     if harmonics < 1:
         raise ValueError("harmonics must be >= 1")

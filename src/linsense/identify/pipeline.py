@@ -28,7 +28,32 @@ from linsense.version import __version__
 
 @dataclass(frozen=True)
 class Identification:
-    """Result of identifying a motor from a bench file."""
+    """Result of identifying a motor from a bench file.
+
+    Attributes
+    ----------
+    data : BenchData
+        The bench file's rows.
+    table : MeasuredTable
+        The measured inductances at the distinct positions.
+    fit : FitResult
+        The fitted eq. (3) parameters.
+    motor : Motor
+        The identified motor.
+    measured : dict of str to ndarray
+        The ``linsense model`` columns at the measured positions
+        (:func:`~linsense.identify.tables.measured_columns`).
+    psi_measured : ndarray
+        The compensation angle at the measured positions, rad.
+    lut_fit : Lut
+        The LUT built from the fit.
+    resistance_source : str
+        Where R_s came from.
+    motor_sources : dict of str to str
+        Where the pole pitch, force constant and mass came from.
+    warnings : list of str
+        What was assumed or ignored.
+    """
 
     data: BenchData
     table: MeasuredTable
@@ -78,6 +103,11 @@ def identify(
         Motor name (default: the bench file's stem).
     points : int
         Length of the LUT built from the fit.
+
+    Returns
+    -------
+    Identification
+        The data, the measured table, the fit and the motor.
 
     Raises
     ------
@@ -136,7 +166,18 @@ def identify(
 
 
 def fit_report(ident: Identification) -> dict:
-    """The content of ``fit.json`` (SI units, rad)."""
+    """The content of ``fit.json`` (SI units, rad).
+
+    Parameters
+    ----------
+    ident : Identification
+        The identification.
+
+    Returns
+    -------
+    dict
+        ``format``, ``fit`` (parameters, standard errors), ``end_effect``, ``reciprocity``, ``lut``...
+    """
     t, f, mo = ident.table, ident.fit, ident.motor
     i_worst, pair = t.reciprocity_worst()
     lut_diff = np.angle(np.exp(1j * (ident.psi_measured - psi_lut(mo, t.theta))))
@@ -192,8 +233,21 @@ def fit_report(ident: Identification) -> dict:
 
 
 def render_outputs(ident: Identification) -> dict[str, str]:
-    """The model, tables and record of ``linsense identify`` (relative path -> content), rendered in
-    memory; its figures are :func:`linsense.report.identify_figures.identify_figure_files`'s."""
+    """The model, tables and record of ``linsense identify``, rendered in memory.
+
+    Its figures are :func:`linsense.report.identify_figures.identify_figure_files`'s.
+
+    Parameters
+    ----------
+    ident : Identification
+        The identification.
+
+    Returns
+    -------
+    dict of str to str
+        Relative path to content: ``motor.toml``, ``inductances.csv``, ``lut.csv``, ``lut_fit.csv``,
+        ``fit.json``.
+    """
     mo = ident.motor
     header = (
         f"# Identified by linsense {__version__} from {Path(ident.data.source).name}: HF model fitted "
@@ -209,7 +263,18 @@ def render_outputs(ident: Identification) -> dict[str, str]:
 
 
 def summary_lines(ident: Identification) -> list[str]:
-    """Human-readable summary for stdout: parameters, end-effect significance, reciprocity."""
+    """Human-readable summary for stdout: parameters, end-effect significance, reciprocity.
+
+    Parameters
+    ----------
+    ident : Identification
+        The identification.
+
+    Returns
+    -------
+    list of str
+        The lines.
+    """
     f, t = ident.fit, ident.table
     lines = [f"{ident.motor.name}: {t.theta.size} positions, {ident.data.rows} rows, "
              f"R_s = {ident.motor.R_s:.4g} ohm ({ident.resistance_source})"]

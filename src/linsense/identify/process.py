@@ -59,6 +59,10 @@ class MeasuredTable:
         Relative difference of the reciprocal mutuals ``(L_jk - L_kj) / mean`` for AB, BC, CA.
     warnings : list of str
         One line each: what was assumed (amplitude-only data).
+    rows : int
+        Rows of the bench file.
+    amplitude_only : bool
+        The data were amplitude-only.
     """
 
     theta: np.ndarray
@@ -85,7 +89,15 @@ class MeasuredTable:
         return float(np.sqrt(np.mean(self.reciprocity**2)))
 
     def reciprocity_worst(self) -> tuple[int, str]:
-        """(position index, pair name) of the largest reciprocity error."""
+        """The position index and pair name of the largest reciprocity error.
+
+        Returns
+        -------
+        index : int
+            Position index.
+        pair : str
+            ``"AB"``, ``"BC"`` or ``"CA"``.
+        """
         i, j = np.unravel_index(int(np.argmax(np.abs(self.reciprocity))), self.reciprocity.shape)
         return int(i), _PAIRS[j]
 
@@ -94,6 +106,20 @@ def electrical_groups(data: BenchData, pole_pitch: float) -> tuple[np.ndarray, n
     """Electrical position of each row in [0, 2 pi) and the index of its distinct position.
 
     Positions one or more pole pitches apart fall into the same group.
+
+    Parameters
+    ----------
+    data : BenchData
+        The rows.
+    pole_pitch : float
+        m.
+
+    Returns
+    -------
+    theta : ndarray
+        Electrical position of each row, rad.
+    group : ndarray of int
+        Index of each row's distinct position.
     """
     theta = np.mod(2.0 * np.pi * np.asarray(data.position) / pole_pitch, 2.0 * np.pi)
     key = np.round(theta / (2.0 * np.pi) * 1e9).astype(np.int64) % 1_000_000_000
@@ -116,6 +142,11 @@ def process_bench(data: BenchData, pole_pitch: float, resistance: float | None =
         resistive drop, as the paper does). Not used with phasors.
     resistance_source : str
         Where ``resistance`` came from, for the warning.
+
+    Returns
+    -------
+    MeasuredTable
+        The table.
 
     Raises
     ------

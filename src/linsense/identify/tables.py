@@ -13,7 +13,18 @@ _INDEX = ((0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (2, 0))
 
 
 def matrices(entries: np.ndarray) -> np.ndarray:
-    """Symmetric 3x3 matrices ``(N, 3, 3)`` from the six entries ``(N, 6)``."""
+    """Symmetric 3x3 matrices ``(N, 3, 3)`` from the six entries ``(N, 6)``.
+
+    Parameters
+    ----------
+    entries : ndarray, shape (N, 6)
+        ``L_A .. M_CA``, H.
+
+    Returns
+    -------
+    ndarray, shape (N, 3, 3)
+        H.
+    """
     entries = np.asarray(entries, dtype=float)
     L = np.empty(entries.shape[:-1] + (3, 3))
     for j, (r, c) in enumerate(_INDEX):
@@ -39,6 +50,10 @@ def measured_columns(theta: np.ndarray, entries: np.ndarray) -> dict[str, np.nda
         Measured electrical positions, rad.
     entries : ndarray, shape (N, 6)
         ``L_A .. M_CA`` at those positions, H.
+    Returns
+    -------
+    dict of str to ndarray
+        The columns, as ``linsense model`` writes them.
     """
     theta = np.asarray(theta, dtype=float)
     L_ab = abc_to_ab_matrix(matrices(entries))
@@ -57,7 +72,20 @@ def measured_columns(theta: np.ndarray, entries: np.ndarray) -> dict[str, np.nda
 
 
 def psi_of_dq(L_q: np.ndarray, L_dq: np.ndarray) -> np.ndarray:
-    """``Psi_LUT = atan(-L_dq / L_q)`` (rad), paper eq. (12), from measured dq inductances."""
+    """``Psi_LUT = atan(-L_dq / L_q)``, paper eq. (12), from measured dq inductances.
+
+    Parameters
+    ----------
+    L_q : ndarray
+        H.
+    L_dq : ndarray
+        H.
+
+    Returns
+    -------
+    ndarray
+        rad.
+    """
     return np.arctan2(-np.asarray(L_dq), np.asarray(L_q))
 
 
@@ -67,6 +95,18 @@ def measured_lut_csv(theta: np.ndarray, psi: np.ndarray) -> str:
     Readable by :func:`linsense.compensation.lut.read_lut` when the positions are the equally
     spaced grid ``2 pi k / N`` (as ``bench-emulate`` writes them); otherwise it is a table at the
     measured positions for people and plots, and ``lut_fit.csv`` is the one to flash.
+
+    Parameters
+    ----------
+    theta : ndarray
+        Measured electrical positions, rad.
+    psi : ndarray
+        Compensation angle there, rad.
+
+    Returns
+    -------
+    str
+        The CSV text.
     """
     lines = ["theta_deg,psi_lut_deg"]
     lines += [f"{t:.12g},{p:.12g}" for t, p in zip(np.degrees(theta), np.degrees(psi), strict=True)]

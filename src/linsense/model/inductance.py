@@ -69,6 +69,14 @@ class InductanceModel:
         ``L_A, L_B, L_C, M_AB, M_BC, M_CA``. ``b[:, 0]`` is ignored (kept zero).
     description : str
         Human-readable provenance, e.g. ``"eq. 3 parameters"`` or the table file.
+    params : dict
+        The eq. (3) parameters (``L0, L2, M0, M2, dM0`` and ``L<n>, M<n>`` of higher harmonics), H,
+        of a parametric model (:meth:`from_params`); empty for a table.
+
+    Raises
+    ------
+    ValueError
+        When ``a`` and ``b`` are not both of shape ``(6, K + 1)``.
     """
 
     a: np.ndarray
@@ -114,6 +122,16 @@ class InductanceModel:
             Eq. (3) parameters, H.
         harmonics : dict, optional
             ``{n: (L_n, M_n)}`` for even orders ``n >= 4``, H.
+
+        Returns
+        -------
+        InductanceModel
+            The model, with ``params`` holding the parameters.
+
+        Raises
+        ------
+        ValueError
+            When a harmonic order is odd or below 4.
         """
         orders = {2: (L2, M2)}
         for n, (Ln, Mn) in (harmonics or {}).items():
@@ -199,7 +217,20 @@ class InductanceModel:
         return self.a.shape[1] - 1
 
     def entries(self, theta: np.ndarray | float, derivative: int = 0) -> np.ndarray:
-        """The six entries (or their ``derivative``-th derivative in theta), shape ``theta.shape + (6,)``."""
+        """The six entries, or their ``derivative``-th derivative in theta.
+
+        Parameters
+        ----------
+        theta : float or ndarray
+            Electrical position(s), rad.
+        derivative : int, optional
+            Order of the derivative in theta (0: the entries themselves).
+
+        Returns
+        -------
+        ndarray, shape theta.shape + (6,)
+            ``L_A, L_B, L_C, M_AB, M_BC, M_CA``, H (H/rad^derivative).
+        """
         theta = np.asarray(theta, dtype=float)
         k = np.arange(self.max_order + 1)
         kt = theta[..., None] * k
@@ -210,7 +241,20 @@ class InductanceModel:
         return c @ self.a.T + s @ self.b.T
 
     def L_abc(self, theta: np.ndarray | float, derivative: int = 0) -> np.ndarray:
-        """Phase inductance matrix ``(..., 3, 3)``, H (or its theta-derivative, H/rad)."""
+        """Phase inductance matrix ``(..., 3, 3)``, H (or its theta-derivative, H/rad).
+
+        Parameters
+        ----------
+        theta : float or ndarray
+            Electrical position(s), rad.
+        derivative : int, optional
+            Order of the derivative in theta.
+
+        Returns
+        -------
+        ndarray, shape theta.shape + (3, 3)
+            The symmetric phase matrix, H (H/rad^derivative).
+        """
         e = self.entries(theta, derivative)
         L = np.empty(e.shape[:-1] + (3, 3))
         for j, (r, c) in enumerate(_INDEX):
@@ -219,11 +263,35 @@ class InductanceModel:
         return L
 
     def L_ab(self, theta: np.ndarray | float, derivative: int = 0) -> np.ndarray:
-        """Alpha-beta block ``(..., 2, 2)`` seen by currents with a floating star point."""
+        """Alpha-beta block ``(..., 2, 2)`` seen by currents with a floating star point.
+
+        Parameters
+        ----------
+        theta : float or ndarray
+            Electrical position(s), rad.
+        derivative : int, optional
+            Order of the derivative in theta.
+
+        Returns
+        -------
+        ndarray, shape theta.shape + (2, 2)
+            H (H/rad^derivative).
+        """
         return abc_to_ab_matrix(self.L_abc(theta, derivative))
 
     def L_dq(self, theta: np.ndarray | float) -> np.ndarray:
-        """dq inductance matrix ``[[L_d, L_dq], [L_dq, L_q]]`` ``(..., 2, 2)``, by transforming L_abc."""
+        """dq inductance matrix ``[[L_d, L_dq], [L_dq, L_q]]`` ``(..., 2, 2)``, by transforming L_abc.
+
+        Parameters
+        ----------
+        theta : float or ndarray
+            Electrical position(s), rad (also the angle of the dq frame).
+
+        Returns
+        -------
+        ndarray, shape theta.shape + (2, 2)
+            H.
+        """
         return ab_to_dq_matrix(self.L_ab(theta), theta)
 
     def dL_dq(self, theta: np.ndarray | float) -> np.ndarray:
@@ -231,6 +299,16 @@ class InductanceModel:
 
         With ``L_dq = R' L_ab R`` and ``dR/dtheta = R J``, ``J = [[0, -1], [1, 0]]``:
         ``dL_dq = R' L_ab' R + J' L_dq + L_dq J``.
+
+        Parameters
+        ----------
+        theta : float or ndarray
+            Electrical position(s), rad.
+
+        Returns
+        -------
+        ndarray, shape theta.shape + (2, 2)
+            H/rad.
         """
         J = np.array([[0.0, -1.0], [1.0, 0.0]])
         Ldq = self.L_dq(theta)
@@ -240,6 +318,16 @@ class InductanceModel:
         """The same model with the end-effect removed (``dM0 = 0``), for paper Fig. 5.
 
         Only defined for parametric models: a table has no separable end-effect term.
+
+        Returns
+        -------
+        InductanceModel
+            The eq. (3) model of the same parameters with ``dM0 = 0``.
+
+        Raises
+        ------
+        ValueError
+            For a tabulated model (no ``params``).
         """
         if not self.params:
             raise ValueError("the end-effect is only separable for a parametric (eq. 3) model")

@@ -29,7 +29,15 @@ TABLE_COLUMNS = ("theta_deg",) + ENTRIES
 
 @dataclass(frozen=True)
 class Friction:
-    """Friction of the moving part."""
+    """Friction of the moving part.
+
+    Parameters
+    ----------
+    viscous : float
+        Viscous coefficient, N s/m.
+    coulomb : float
+        Coulomb force, N.
+    """
 
     viscous: float = 0.0  # N s/m
     coulomb: float = 0.0  # N
@@ -37,7 +45,17 @@ class Friction:
 
 @dataclass(frozen=True)
 class PmHarmonic:
-    """One harmonic of the PM flux linkage, relative to the fundamental."""
+    """One harmonic of the PM flux linkage, relative to the fundamental.
+
+    Parameters
+    ----------
+    order : int
+        Harmonic order in theta.
+    amplitude : float
+        Amplitude relative to ``psi_pm``, dimensionless.
+    phase : float
+        Phase, electrical rad.
+    """
 
     order: int  # harmonic order in theta
     amplitude: float  # relative to psi_pm
@@ -62,6 +80,14 @@ class Motor:
         Moving mass, kg.
     inductance : InductanceModel
         HF inductance model ``L_abc(theta)``.
+    friction : Friction
+        Friction of the moving part (none by default).
+    pm_harmonics : tuple of PmHarmonic
+        Harmonics of the PM flux linkage (none by default).
+    source : str
+        Where the motor came from (file path or ``preset <name>``), named in messages.
+    saturation : Saturation or None
+        Saturation data for the simulator's saturated plant (None: none given).
     """
 
     name: str
@@ -81,15 +107,44 @@ class Motor:
         return self.force_constant * self.pole_pitch / (3.0 * math.pi)
 
     def theta_of_x(self, x: np.ndarray | float) -> np.ndarray:
-        """Electrical angle (rad) of a position (m)."""
+        """Electrical angle (rad) of a position (m).
+
+        Parameters
+        ----------
+        x : float or ndarray
+            Position(s), m.
+
+        Returns
+        -------
+        ndarray
+            ``2 pi x / pole_pitch``, rad.
+        """
         return 2.0 * np.pi * np.asarray(x) / self.pole_pitch
 
     def x_of_theta(self, theta: np.ndarray | float) -> np.ndarray:
-        """Position (m) of an electrical angle (rad)."""
+        """Position (m) of an electrical angle (rad).
+
+        Parameters
+        ----------
+        theta : float or ndarray
+            Electrical angle(s), rad.
+
+        Returns
+        -------
+        ndarray
+            ``theta pole_pitch / (2 pi)``, m.
+        """
         return np.asarray(theta) * self.pole_pitch / (2.0 * np.pi)
 
     def provenance(self) -> dict:
-        """Parameters that identify this motor, for provenance comments and JSON exports."""
+        """Parameters that identify this motor, for provenance comments and JSON exports.
+
+        Returns
+        -------
+        dict
+            ``name``, ``R_s``, ``pole_pitch``, ``force_constant``, ``mass`` and the eq. (3) parameters
+            (or ``inductance``: the table's description).
+        """
         p = {
             "name": self.name,
             "R_s": self.R_s,
@@ -106,7 +161,13 @@ class Motor:
 
 # ---------------------------------------------------------------------- loading
 def preset_names() -> list[str]:
-    """Names of the built-in presets."""
+    """Names of the built-in presets.
+
+    Returns
+    -------
+    list of str
+        The preset names (``ecce2010``...).
+    """
     return list(_preset_names())
 
 
@@ -117,13 +178,41 @@ def _preset_names() -> tuple[str, ...]:  # (the package's files do not change wh
 
 
 def preset_text(name: str) -> str:
-    """The TOML text of the built-in preset ``name`` (one of :func:`preset_names`)."""
+    """The TOML text of a built-in preset.
+
+    Parameters
+    ----------
+    name : str
+        One of :func:`preset_names`.
+
+    Returns
+    -------
+    str
+        The preset's motor file.
+    """
     return (resources.files("linsense.model") / "presets" / f"{name}.toml").read_text()
 
 
 def example_motor(spec: str, source: str = "--motor") -> Path:
-    """The packaged example motor named ``spec`` (:mod:`linsense.examples`), or InputError naming
-    ``source`` and listing the presets and the example motors."""
+    """The packaged example motor named ``spec`` (:mod:`linsense.examples`).
+
+    Parameters
+    ----------
+    spec : str
+        The example's name.
+    source : str, optional
+        The option or key it was given at, named in the message.
+
+    Returns
+    -------
+    Path
+        Its motor file.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        No such example, naming ``source`` and listing the presets and the example motors.
+    """
     p = examples.path("motors", spec)
     if p is None:
         raise InputError(source, "", examples.unknown("motors", spec, tuple(preset_names())))
@@ -131,8 +220,21 @@ def example_motor(spec: str, source: str = "--motor") -> Path:
 
 
 def motor_path(spec: str) -> str:
-    """A motor ``spec`` as a scenario or sweep names it, with a packaged example motor's name
-    replaced by its file's absolute path (a preset or a path unchanged)."""
+    """A motor ``spec`` as a scenario or sweep names it, with an example motor's name made a path.
+
+    A packaged example motor's name is replaced by its file's absolute path; a preset or a path is
+    unchanged.
+
+    Parameters
+    ----------
+    spec : str
+        The ``motor`` value.
+
+    Returns
+    -------
+    str
+        The motor as the simulator reads it.
+    """
     if names_a_path(spec) or spec in preset_names():
         return spec
     p = examples.path("motors", spec)
@@ -140,16 +242,40 @@ def motor_path(spec: str) -> str:
 
 
 def names_a_path(spec: str) -> bool:
-    """Whether a scenario's (or a sweep's) motor ``spec`` names a file, relative to the scenario,
-    rather than a preset: a ``.toml`` name or a path with a separator (the file need not exist: the
-    scenario's reader says so)."""
+    """Whether a scenario's (or a sweep's) motor spec names a file rather than a preset.
+
+    A ``.toml`` name or a path with a separator, relative to the scenario (the file need not exist:
+    the scenario's reader says so).
+
+    Parameters
+    ----------
+    spec : str
+        The ``motor`` value as written.
+
+    Returns
+    -------
+    bool
+        True for a file.
+    """
     return spec.lower().endswith(".toml") or any(c in spec for c in "/\\")
 
 
 def table_files(data: dict) -> list[tuple[str, str]]:
-    """The tables a motor file's TOML ``data`` names, as ``(kind, path as written)``: its
-    ``[inductance] table`` and its ``[saturation] tables`` (kind "inductance table" or "saturation
-    table"); data that is not a motor file's names none."""
+    """The tables a motor file's TOML data names.
+
+    Its ``[inductance] table`` and its ``[saturation] tables``; data that is not a motor file's
+    names none.
+
+    Parameters
+    ----------
+    data : dict
+        The parsed TOML of a motor file.
+
+    Returns
+    -------
+    list of (str, str)
+        ``(kind, path as written)``, kind ``"inductance table"`` or ``"saturation table"``.
+    """
     ind = data.get("inductance")
     out = [("inductance table", ind.get("table"))] if isinstance(ind, dict) else []
     sat = data.get("saturation")
@@ -159,8 +285,20 @@ def table_files(data: dict) -> list[tuple[str, str]]:
 
 
 def names_a_file(spec: str | Path) -> bool:
-    """Whether :func:`load_motor` reads ``spec`` as a motor file (a ``.toml`` name, an existing path
-    or a path with a separator) rather than as a preset name."""
+    """Whether :func:`load_motor` reads ``spec`` as a motor file rather than as a preset name.
+
+    A ``.toml`` name, an existing path or a path with a separator.
+
+    Parameters
+    ----------
+    spec : str or Path
+        The motor as given.
+
+    Returns
+    -------
+    bool
+        True for a file.
+    """
     s = str(spec)
     return Path(s).suffix.lower() == ".toml" or Path(s).exists() or any(c in s for c in "/\\")
 
@@ -175,10 +313,15 @@ def load_motor(spec: str | Path, check: bool = True) -> Motor:
     check : bool
         Run :func:`check_motor` (positive definiteness, saliency) after loading.
 
+    Returns
+    -------
+    Motor
+        The motor, checked for plausible values (:func:`check_plausible`).
+
     Raises
     ------
     InputError
-        Unknown preset, unreadable file, schema violations.
+        Unknown preset, unreadable file, schema violations, implausible values.
     ModelError
         The model is not usable for HF sensorless control (see :func:`check_motor`).
     """
@@ -207,7 +350,27 @@ def load_motor(spec: str | Path, check: bool = True) -> Motor:
 
 
 def motor_from_toml(text: str, source: str, base_dir: Path | None = None) -> Motor:
-    """Parse and validate the text of a motor file."""
+    """Parse and validate the text of a motor file.
+
+    Parameters
+    ----------
+    text : str
+        The TOML text.
+    source : str
+        Its name in messages (the file path or ``preset <name>``).
+    base_dir : Path or None, optional
+        Folder that relative table paths are read from (None: as written).
+
+    Returns
+    -------
+    Motor
+        The motor, not checked (:func:`load_motor` checks).
+
+    Raises
+    ------
+    InputError
+        Bad TOML, schema violations, a missing or bad table file.
+    """
     doc = validate_motor_file(parse_toml(text, source), source)
     ind = doc.inductance
     if ind.table is not None:
@@ -262,8 +425,26 @@ def _saturation(sec, source: str, base_dir: Path | None) -> Saturation:
 def read_inductance_table(path: Path) -> tuple[np.ndarray, np.ndarray]:
     """Read a tabulated ``L_abc(theta)`` CSV (columns ``theta_deg, L_A .. M_CA``; H).
 
-    Returns positions in rad and a ``(N, 6)`` array. Every problem names the row and column; the
-    sizes are bounded while reading (:func:`linsense.io.read_csv_table`, docs/limits.md).
+    Every problem names the row and column; the sizes are bounded while reading
+    (:func:`linsense.io.read_csv_table`, docs/limits.md).
+
+    Parameters
+    ----------
+    path : Path
+        The CSV file.
+
+    Returns
+    -------
+    theta : ndarray, shape (N,)
+        Positions, rad, in file order.
+    entries : ndarray, shape (N, 6)
+        ``L_A, L_B, L_C, M_AB, M_BC, M_CA``, H.
+
+    Raises
+    ------
+    InputError
+        Fewer than 8 positions, a duplicate position (modulo 360 deg), a gap over 45 deg, or a bad
+        cell.
     """
     src = str(path)
     data, line = read_csv_table(path, TABLE_COLUMNS, "inductance table")
@@ -292,7 +473,20 @@ def read_inductance_table(path: Path) -> tuple[np.ndarray, np.ndarray]:
 
 # ---------------------------------------------------------------------- checks
 def check_grid(inductance: InductanceModel, n_min: int = 720) -> np.ndarray:
-    """Dense position grid (rad) fine enough to resolve every harmonic of ``inductance``."""
+    """Dense position grid (rad) fine enough to resolve every harmonic of ``inductance``.
+
+    Parameters
+    ----------
+    inductance : InductanceModel
+        The model to sample.
+    n_min : int, optional
+        Fewest positions.
+
+    Returns
+    -------
+    ndarray
+        ``max(n_min, 16 (K + 1))`` equally spaced positions over one period, rad.
+    """
     n = max(n_min, 16 * (inductance.max_order + 1))
     return np.linspace(0.0, 2.0 * np.pi, n, endpoint=False)
 
@@ -352,6 +546,11 @@ def _implausible(key: str, value: float, what: str = "") -> str | None:
 def check_plausible(motor: Motor) -> None:
     """Refuse values off by a unit prefix from any real linear motor (mm for m, mH for H ...).
 
+    Parameters
+    ----------
+    motor : Motor
+        The motor to check.
+
     Raises
     ------
     InputError
@@ -386,6 +585,11 @@ def check_motor(motor: Motor) -> None:
       currents with a floating star point);
     * the saliency ``L_q - L_d`` must keep one sign and stay above ``MIN_SALIENCY_RATIO`` of the
       mean inductance everywhere, else the position error signal vanishes or reverses.
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor to check.
 
     Raises
     ------
@@ -427,6 +631,23 @@ def motor_to_toml(motor: Motor, table: str | None = None) -> str:
 
     A parametric model writes its eq. (3) parameters; otherwise ``table`` must name the CSV.
     Every number is written as a plain float (a numpy scalar wrote ``np.float64(9.0)``, not TOML).
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+    table : str or None, optional
+        The inductance table's file name to write (needed for a tabulated model).
+
+    Returns
+    -------
+    str
+        The motor file's TOML text.
+
+    Raises
+    ------
+    ValueError
+        A tabulated model without ``table``.
     """
     f = motor.friction
     lines = [

@@ -53,6 +53,8 @@ class Saturation:
         A, q currents of ``tables`` (empty: the parametric model on the motor's inductance).
     tables : tuple of InductanceModel
         Incremental ``L_abc(theta)`` at ``currents`` (``i_d = 0``).
+    source : str
+        Where the data came from (the motor file's ``[saturation]``), for messages.
     """
 
     polarity: float = 0.0
@@ -64,6 +66,13 @@ class Saturation:
     source: str = ""
 
     def describe(self) -> str:
+        """One line describing the saturation data, for reports.
+
+        Returns
+        -------
+        str
+            The tables' currents and the polarity, or the parametric model's numbers.
+        """
         if self.tables:
             cur = ", ".join(f"{c:g}" for c in self.currents)
             return f"tables at i_q = {cur} A, polarity {self.polarity:g} /A"
@@ -71,15 +80,40 @@ class Saturation:
                 f"L_q -{100 * self.q_drop:g} % at {self.q_current:g} A")
 
     def key(self) -> tuple:
-        """Everything that defines it, hashable (for caches)."""
+        """Everything that defines it, hashable (for caches).
+
+        Returns
+        -------
+        tuple
+            ``(polarity, magnet_current, q_drop, q_current, currents, tables' coefficient bytes)``.
+        """
         tab = tuple((t.a.tobytes(), t.b.tobytes()) for t in self.tables)
         return (self.polarity, self.magnet_current, self.q_drop, self.q_current, self.currents, tab)
 
 
 def i_sat_d_of(polarity: float, i_m: float) -> float:
-    """A, the d saturation current ``a`` giving the small-pulse polarity signal ``polarity`` (1/A)
-    at the magnet current ``i_m`` (A): ``polarity = -2 k'(0) = 4 i_m / (a^2 + i_m^2)``. 0 for no
-    signal; ValueError when ``polarity`` is beyond ``4 / i_m`` (no ``a`` gives it)."""
+    """The d saturation current ``a`` giving a small-pulse polarity signal at a magnet current.
+
+    ``polarity = -2 k'(0) = 4 i_m / (a^2 + i_m^2)``.
+
+    Parameters
+    ----------
+    polarity : float
+        Polarity signal per ampere of pulse, 1/A (0: no d-axis saturation).
+    i_m : float
+        Magnet current, A.
+
+    Returns
+    -------
+    float
+        ``a``, A; 0 when ``polarity`` is 0.
+
+    Raises
+    ------
+    linsense.errors.SaturationRangeError
+        When ``polarity`` or ``i_m`` is not positive, or ``polarity`` is beyond ``4 / i_m`` (no ``a``
+        gives it).
+    """
     if polarity == 0.0:
         return 0.0
     if not (polarity > 0.0 and i_m > 0.0):
@@ -93,7 +127,22 @@ def i_sat_d_of(polarity: float, i_m: float) -> float:
 
 
 def d_factor(i_d: np.ndarray | float, i_m: float, i_sat_d: float) -> np.ndarray:
-    """-, ``k(i_d) = L_d,inc(i_d) / L_d,inc(0)`` of the d-axis saturation."""
+    """``k(i_d) = L_d,inc(i_d) / L_d,inc(0)`` of the d-axis saturation, dimensionless.
+
+    Parameters
+    ----------
+    i_d : float or ndarray
+        d current, A.
+    i_m : float
+        Magnet current, A.
+    i_sat_d : float
+        d saturation current (:func:`i_sat_d_of`), A; 0 or less: no saturation.
+
+    Returns
+    -------
+    ndarray
+        ``(1 + (i_m / a)^2) / (1 + ((i_m + i_d) / a)^2)``, ones without saturation.
+    """
     i_d = np.asarray(i_d, dtype=float)
     if i_sat_d <= 0.0:
         return np.ones_like(i_d)
@@ -114,9 +163,31 @@ def _dq_series(ind: InductanceModel, n_order: int) -> tuple[np.ndarray, np.ndarr
 
 def plant_series(sat: Saturation, inductance: InductanceModel, psi_pm: float,
                  max_order: int) -> dict:
-    """What ``ls_sim_sat`` takes: ``dq_cos``, ``dq_sin`` (n_pow, 3, n_order; H/A^p), ``n_pow``,
-    ``n_order``, ``i_m`` (A), ``i_sat_d`` (A). ``inductance``: the motor's (unsaturated) model;
-    ``max_order``: the C plant's limit of harmonic orders."""
+    """What the C plant's saturated model (``ls_sim_sat``) takes.
+
+    Parameters
+    ----------
+    sat : Saturation
+        The saturation data.
+    inductance : InductanceModel
+        The motor's (unsaturated) model, used when ``sat`` has no tables.
+    psi_pm : float
+        Magnet flux linkage, Wb (gives ``i_m`` when ``sat.magnet_current`` is None).
+    max_order : int
+        The C plant's limit of harmonic orders.
+
+    Returns
+    -------
+    dict
+        ``dq_cos``, ``dq_sin`` (n_pow, 3, n_order; H/A^p), ``n_pow``, ``n_order``, ``i_m`` (A),
+        ``i_sat_d`` (A).
+
+    Raises
+    ------
+    linsense.errors.SaturationRangeError
+        When the dq series needs more harmonic orders than ``max_order``, or the polarity is out of
+        range (:func:`i_sat_d_of`).
+    """
     models = sat.tables if sat.tables else (inductance,)
     # the dq series has the L_abc orders +-2 (the rotation); all shared by one length
     n_order = max(m.max_order for m in models) + 3
@@ -153,8 +224,24 @@ def plant_series(sat: Saturation, inductance: InductanceModel, psi_pm: float,
 
 
 def incremental_dq(series: dict, theta: np.ndarray | float, i_q: float) -> np.ndarray:
-    """``[[L_d, L_dq], [L_dq, L_q]]`` (H) at ``i_d = 0`` and ``i_q`` from :func:`plant_series`'s
-    output (the plant's incremental inductances there), shape ``theta.shape + (2, 2)``."""
+    """``[[L_d, L_dq], [L_dq, L_q]]`` at ``i_d = 0`` from :func:`plant_series`'s output.
+
+    The plant's incremental inductances there.
+
+    Parameters
+    ----------
+    series : dict
+        :func:`plant_series`'s output.
+    theta : float or ndarray
+        Electrical position(s), rad.
+    i_q : float
+        q current, A.
+
+    Returns
+    -------
+    ndarray, shape theta.shape + (2, 2)
+        H.
+    """
     theta = np.asarray(theta, dtype=float)
     k = np.arange(series["n_order"])
     c, s = np.cos(theta[..., None] * k), np.sin(theta[..., None] * k)

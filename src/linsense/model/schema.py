@@ -44,6 +44,21 @@ _ZERO_PADDED_KEY = re.compile(r"([LM])0+([0-9]+)")
 
 
 class MotorSection(BaseModel):
+    """The ``[motor]`` section of a motor file (docs/motor-files.md).
+
+    Attributes
+    ----------
+    name : str
+        Motor name.
+    R_s : float
+        Phase resistance, ohm.
+    pole_pitch : float
+        One electrical period, m.
+    force_constant : float
+        Thrust per peak phase current, N/A.
+    mass : float
+        Moving mass, kg.
+    """
     model_config = _STRICT
     name: str = Field(min_length=1)
     R_s: NonNegative  # ohm
@@ -59,7 +74,27 @@ class MotorSection(BaseModel):
 
 
 class InductanceSection(BaseModel):
-    """Either the eq. (3) parameters (plus optional ``L<n>``/``M<n>`` even harmonics) or a table."""
+    """The ``[inductance]`` section: the eq. (3) parameters or a table.
+
+    The parameters may come with optional ``L<n>``/``M<n>`` even harmonics (extra keys).
+
+    Attributes
+    ----------
+    L0 : float or None
+        Eq. (3) mean self-inductance, H.
+    L2 : float or None
+        Eq. (3) second-harmonic amplitude of the self-inductances, H.
+    M0 : float or None
+        Eq. (3) mean mutual inductance, H.
+    M2 : float or None
+        Eq. (3) second-harmonic amplitude of the mutual inductances, H.
+    dM0 : float or None
+        Eq. (3) end-effect: the excess of M_BC and M_CA over M_AB, H.
+    table : str or None
+        CSV path of ``L_abc(theta)``, relative to the motor file.
+    table_max_order : int or None
+        Fourier order of the table's fit.
+    """
 
     model_config = ConfigDict(extra="allow", strict=True, allow_inf_nan=False)
     L0: float | None = None  # H
@@ -107,19 +142,45 @@ class InductanceSection(BaseModel):
         return self
 
     def harmonics(self) -> dict[int, tuple[float, float]]:
-        """``{n: (L_n, M_n)}`` of the optional higher even harmonics (a missing partner is 0)."""
+        """``{n: (L_n, M_n)}`` of the optional higher even harmonics (a missing partner is 0).
+
+        Returns
+        -------
+        dict
+            ``{n: (L_n, M_n)}``, H.
+        """
         extra = self.model_extra or {}
         orders = sorted({int(k[1:]) for k in extra})
         return {n: (float(extra.get(f"L{n}", 0.0)), float(extra.get(f"M{n}", 0.0))) for n in orders}
 
 
 class FrictionSection(BaseModel):
+    """The ``[friction]`` section.
+
+    Attributes
+    ----------
+    viscous : float
+        Viscous coefficient, N s/m.
+    coulomb : float
+        Coulomb force, N.
+    """
     model_config = _STRICT
     viscous: NonNegative = 0.0  # N s/m
     coulomb: NonNegative = 0.0  # N
 
 
 class PmHarmonicEntry(BaseModel):
+    """One entry of ``[pm_flux] harmonics``.
+
+    Attributes
+    ----------
+    order : int
+        Harmonic order of the PM flux linkage in theta (at least 2).
+    amplitude : float
+        Relative to the fundamental PM flux linkage.
+    phase_deg : float
+        Phase, electrical degrees.
+    """
     model_config = _STRICT
     order: Order = Field(ge=2)  # harmonic order of the PM flux linkage in theta
     amplitude: float  # relative to the fundamental PM flux linkage
@@ -127,6 +188,13 @@ class PmHarmonicEntry(BaseModel):
 
 
 class PmFluxSection(BaseModel):
+    """The ``[pm_flux]`` section.
+
+    Attributes
+    ----------
+    harmonics : list of PmHarmonicEntry
+        The PM flux harmonics (none by default).
+    """
     model_config = _STRICT
     harmonics: list[PmHarmonicEntry] = Field(default_factory=list)
 
@@ -143,8 +211,27 @@ class PmFluxSection(BaseModel):
 
 
 class SaturationSection(BaseModel):
-    """Saturation for the simulator's saturated plant (:mod:`linsense.model.saturation`): the
-    parametric keys, or incremental inductance tables at several q currents (plus ``polarity``)."""
+    """The ``[saturation]`` section, for the simulator's saturated plant (:mod:`linsense.model.saturation`).
+
+    The parametric keys, or incremental inductance tables at several q currents (plus ``polarity``).
+
+    Attributes
+    ----------
+    polarity : float
+        ``(L_d(-I) - L_d(+I)) / L_d`` per ampere of d pulse, 1/A.
+    magnet_current : float or None
+        ``i_m``, A (default ``psi_pm / mean L_d``).
+    q_drop : float
+        Relative fall of ``L_q`` at ``q_current``, dimensionless.
+    q_current : float
+        A.
+    currents : list of float or None
+        q currents of the tables, A.
+    tables : list of str or None
+        ``L_abc(theta)`` CSVs, relative to the motor file.
+    table_max_order : int or None
+        Fourier order of the tables' fit.
+    """
 
     model_config = _STRICT
     polarity: NonNegative = 0.0  # 1/A, (L_d(-I) - L_d(+I)) / L_d per A of d pulse
@@ -178,6 +265,21 @@ class SaturationSection(BaseModel):
 
 
 class MotorFile(BaseModel):
+    """A whole motor file, validated (docs/motor-files.md).
+
+    Attributes
+    ----------
+    motor : MotorSection
+        ``[motor]``.
+    inductance : InductanceSection
+        ``[inductance]``.
+    friction : FrictionSection
+        ``[friction]`` (zero by default).
+    pm_flux : PmFluxSection
+        ``[pm_flux]`` (no harmonics by default).
+    saturation : SaturationSection or None
+        ``[saturation]`` (None: none).
+    """
     model_config = _STRICT
     motor: MotorSection
     inductance: InductanceSection
@@ -187,7 +289,25 @@ class MotorFile(BaseModel):
 
 
 def validate_motor_file(data: dict, source: str) -> MotorFile:
-    """Validate parsed TOML; raise :class:`InputError` naming ``source``, the key and the value."""
+    """Validate the parsed TOML of a motor file.
+
+    Parameters
+    ----------
+    data : dict
+        The parsed TOML.
+    source : str
+        Its name in messages.
+
+    Returns
+    -------
+    MotorFile
+        The validated file.
+
+    Raises
+    ------
+    InputError
+        Naming ``source``, the key and the value.
+    """
     try:
         return MotorFile.model_validate(data)
     except ValidationError as exc:

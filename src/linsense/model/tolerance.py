@@ -17,9 +17,30 @@ from linsense.model.motor import Motor
 
 def perturbed(motor: Motor, k_inductance: float = 1.0, k_resistance: float = 1.0, k_end_effect: float = 1.0,
               label: str = "") -> Motor:
-    """``motor`` with every inductance scaled by ``k_inductance``, R_s by ``k_resistance`` and the
-    end-effect (the constant part of M_BC and M_CA beyond M_AB) by ``k_end_effect``; works on any
-    inductance model (parametric, harmonic or tabulated: its Fourier form)."""
+    """``motor`` with its inductances, resistance and end-effect scaled.
+
+    Every inductance scaled by ``k_inductance``, R_s by ``k_resistance`` and the end-effect (the
+    constant part of M_BC and M_CA beyond M_AB) by ``k_end_effect``; works on any inductance model
+    (parametric, harmonic or tabulated: its Fourier form).
+
+    Parameters
+    ----------
+    motor : Motor
+        The nominal motor.
+    k_inductance : float, optional
+        Factor on every inductance coefficient, dimensionless.
+    k_resistance : float, optional
+        Factor on ``R_s``, dimensionless.
+    k_end_effect : float, optional
+        Factor on the end-effect ``dM0``, dimensionless.
+    label : str, optional
+        Appended in parentheses to the motor's name and the model's description (empty: none).
+
+    Returns
+    -------
+    Motor
+        A copy of ``motor`` with the perturbed values.
+    """
     ind = motor.inductance
     a, b = np.array(ind.a) * k_inductance, np.array(ind.b) * k_inductance
     d_m0 = 0.5 * (a[4, 0] + a[5, 0]) - a[3, 0]

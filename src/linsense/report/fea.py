@@ -67,13 +67,50 @@ class _Bar:
 def run_fea(spec: str, out: str, positions: int = 56, level: str = "default", lut_points: int = 360,
             progress: bool = False, load_current=0.0, workers: int = 1, polarity=None,
             polarity_positions: int = 4):
-    """Solve and write the output set; return (written files, summary lines, warnings).
+    """Solve a geometry and write the FEA's output set (``linsense fea``, docs/fea.md).
 
-    ``load_current``: a q-axis current in A, or several (a list or "0,1,2"): the main outputs are
-    those of the first; each load adds ``inductances_<I>A.csv``, ``motor_<I>A.toml``, ``lut_<I>A.csv``,
-    and the set gets ``lut_vs_load.png`` and fea.json's ``lut_vs_load``. ``polarity``: d-axis pulse
-    amplitudes in A (a list or "0.5,1,2"): ``polarity.csv`` and fea.json's ``polarity``, the saturation
-    signal ``L_d(-I) - L_d(+I)`` at ``polarity_positions`` positions (:mod:`linsense.fea.polarity`).
+    ``load_current``: a q-axis current, or several: the main outputs are those of the first; each
+    load adds ``inductances_<I>A.csv``, ``motor_<I>A.toml``, ``lut_<I>A.csv``, and the set gets
+    ``lut_vs_load.png`` and fea.json's ``lut_vs_load``. ``polarity``: ``polarity.csv`` and
+    fea.json's ``polarity``, the saturation signal ``L_d(-I) - L_d(+I)``
+    (:mod:`linsense.fea.polarity`).
+
+    Parameters
+    ----------
+    spec : str
+        Geometry file or preset.
+    out : str
+        Output folder.
+    positions : int, optional
+        Rod positions over one period.
+    level : {"coarse", "default", "fine"}, optional
+        Mesh level.
+    lut_points : int, optional
+        Points of the LUTs written.
+    progress : bool, optional
+        Show a progress bar.
+    load_current : float or str or list, optional
+        q-axis current(s), A (a number, a list or ``"0,1,2"``).
+    workers : int, optional
+        Processes.
+    polarity : str or list or None, optional
+        d-axis pulse amplitudes, A (a list or ``"0.5,1,2"``).
+    polarity_positions : int, optional
+        Rod positions of the polarity signal.
+
+    Returns
+    -------
+    files : list
+        The files written.
+    lines : list of str
+        The summary.
+    warnings : list of str
+        What the outputs could not give (e.g. a table without usable saliency).
+
+    Raises
+    ------
+    linsense.errors.InputError
+        A bad geometry or current list, or a load current with linear iron.
     """
     g = load_geometry(spec)
     currents = parse_currents(load_current)
@@ -156,7 +193,20 @@ def run_fea(spec: str, out: str, positions: int = 56, level: str = "default", lu
 
 
 def fig_field(res, excitation: int = 0) -> Figure:
-    """Flux lines (contours of r A_phi) of the first position, one phase at 1 A, magnets off (Fig. 4)."""
+    """Flux lines (contours of r A_phi) of the first position, one phase at 1 A, magnets off (Fig. 4).
+
+    Parameters
+    ----------
+    res : Result
+        The FEA result, its first position's fields kept.
+    excitation : int, optional
+        The phase, 0, 1, 2 for A, B, C.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
     s = res.keep["solver"]
     first = res.keep["first"]
     g = res.geometry
@@ -199,7 +249,18 @@ def fig_field(res, excitation: int = 0) -> Figure:
 
 
 def fig_table(res) -> Figure:
-    """The FEA inductances against position as computed (markers): ABC, and dq (the paper's Fig. 3)."""
+    """The FEA inductances against position as computed (markers): ABC, and dq (the paper's Fig. 3).
+
+    Parameters
+    ----------
+    res : Result
+        The FEA result.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
     theta, e, _ = outputs.table(res)
     _, dq = outputs.dq_table(res)
     deg = np.degrees(theta)
@@ -222,8 +283,26 @@ def fig_table(res) -> Figure:
 
 
 def fig_lut_vs_load(name: str, vs_load: dict, luts: list, pole_pitch: float) -> Figure:
-    """Psi_LUT against position, one curve per load current (the paper's Fig. 9), and each load's
-    difference from the first load's."""
+    """Psi_LUT against position, one curve per load current (the paper's Fig. 9).
+
+    And each load's difference from the first load's.
+
+    Parameters
+    ----------
+    name : str
+        Motor name, in the title.
+    vs_load : dict
+        :func:`linsense.fea.pipeline.load_sweep`'s result.
+    luts : list of Lut or None
+        Each load's LUT.
+    pole_pitch : float
+        m.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
     fig = Figure(figsize=(7.5, 7.0), layout="constrained")
     axes = fig.subplots(2, 1)
     ref = luts[0]

@@ -50,19 +50,60 @@ def _position_axis(ax, motor) -> None:
 
 
 def png_bytes(fig: Figure, dpi: int = _DPI) -> bytes:
-    """The PNG of ``fig`` (no software or date metadata: byte-reproducible)."""
+    """The PNG of ``fig`` (no software or date metadata: byte-reproducible).
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure.
+    dpi : int, optional
+        Resolution.
+
+    Returns
+    -------
+    bytes
+        The PNG.
+    """
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=dpi, metadata={"Software": None})
     return buf.getvalue()
 
 
 def save_png(fig: Figure, path: str | Path, dpi: int = _DPI) -> Path:
-    """Write ``fig`` as PNG to ``path`` (atomically)."""
+    """Write ``fig`` as PNG to ``path`` (atomically).
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure.
+    path : str or Path
+        The file.
+    dpi : int, optional
+        Resolution.
+
+    Returns
+    -------
+    Path
+        The file written.
+    """
     return write_atomic(path, png_bytes(fig, dpi))
 
 
 def fig_inductances(motor, title: str) -> Figure:
-    """Inductances in the ABC, alpha-beta and dq frames (paper Fig. 5 / Fig. 6 layout)."""
+    """Inductances in the ABC, alpha-beta and dq frames (paper Fig. 5 / Fig. 6 layout).
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+    title : str
+        The figure's title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
     th = _theta()
     deg = np.degrees(th)
     ind = motor.inductance
@@ -92,7 +133,20 @@ def fig_inductances(motor, title: str) -> Figure:
 
 
 def fig_psi(motor, compensated: bool) -> Figure:
-    """psi versus position for theta_err in -15..15 deg (paper Fig. 8a, or 8b if compensated)."""
+    """psi versus position for theta_err in -15..15 deg (paper Fig. 8a, or 8b if compensated).
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+    compensated : bool
+        Draw ``psi - Psi_LUT`` (Fig. 8b).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
     th = _theta()
     deg = np.degrees(th)
     fig = Figure(figsize=(7.5, 4.8), layout="constrained")
@@ -118,7 +172,20 @@ def fig_psi(motor, compensated: bool) -> Figure:
 
 
 def fig_lut(motor, lut) -> Figure:
-    """The compensation LUT: model curve and the exported table points (paper Fig. 9)."""
+    """The compensation LUT: model curve and the exported table points (paper Fig. 9).
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+    lut : Lut
+        The exported table.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
     th = _theta()
     fig = Figure(figsize=(7.5, 4.2), layout="constrained")
     ax = fig.subplots()
@@ -133,7 +200,18 @@ def fig_lut(motor, lut) -> Figure:
 
 
 def fig_uncompensated(motor) -> Figure:
-    """Saliency, equilibrium error and loop-gain factor of the uncompensated observer."""
+    """Saliency, equilibrium error and loop-gain factor of the uncompensated observer.
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
     th = _theta()
     deg = np.degrees(th)
     fig = Figure(figsize=(7.5, 8.0), layout="constrained")
@@ -156,9 +234,23 @@ def fig_uncompensated(motor) -> Figure:
 
 
 def write_model_figures(motor, lut, out_dir: str | Path) -> list[Path]:
-    """Write every model figure of ``motor`` into ``out_dir``; return the paths.
+    """Write every model figure of ``motor`` into ``out_dir``.
 
     ``fig5`` (no end-effect) needs a parametric model; it is skipped for tabulated ones.
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+    lut : Lut
+        Its exported table.
+    out_dir : str or Path
+        The folder.
+
+    Returns
+    -------
+    list of Path
+        The files written.
     """
     out = Path(out_dir)
     figs = {}
@@ -175,8 +267,22 @@ def write_model_figures(motor, lut, out_dir: str | Path) -> list[Path]:
 
 
 def fig_calibration(cal, motor) -> Figure:
-    """The calibration's measured table against the model (paper Fig. 9: LUT from the model and
-    measured at 56 positions under sensored control)."""
+    """The calibration's measured table against the model.
+
+    Paper Fig. 9: LUT from the model and measured at 56 positions under sensored control.
+
+    Parameters
+    ----------
+    cal : Calibration
+        The calibration.
+    motor : Motor
+        The motor.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
     th = _theta()
     m = cal.metrics
     fig = Figure(figsize=(7.5, 4.2), layout="constrained")

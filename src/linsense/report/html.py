@@ -21,9 +21,22 @@ def _absmax(values) -> float | None:
 
 
 def render_report(metrics: dict, figures: dict[str, bytes], scenarios: dict) -> str:
-    """The page for the reproduction's ``metrics`` (metrics.json's structure), ``figures`` (relative
-    path -> PNG bytes, embedded) and ``scenarios`` (figure -> variant -> Scenario, linked as
-    ``scenarios/<figure>_<variant>.toml``)."""
+    """The HTML page of a reproduction (``out/report.html``).
+
+    Parameters
+    ----------
+    metrics : dict
+        The reproduction's metrics (metrics.json's structure).
+    figures : dict of str to bytes
+        Relative path to PNG bytes, embedded.
+    scenarios : dict
+        Figure to variant to Scenario, linked as ``scenarios/<figure>_<variant>.toml``.
+
+    Returns
+    -------
+    str
+        The page.
+    """
     from jinja2 import Environment, PackageLoader, StrictUndefined
 
     from linsense.version import __version__

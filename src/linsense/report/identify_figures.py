@@ -32,6 +32,13 @@ def fig_identified_inductances(motor, measured: dict[str, np.ndarray], title: st
     measured : dict
         The ``linsense model`` columns at the measured positions
         (:func:`linsense.identify.tables.measured_columns`).
+    title : str
+        The figure's title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
     """
     th = np.linspace(0.0, 2.0 * np.pi, 721)
     deg = np.degrees(th)
@@ -80,6 +87,11 @@ def fig_identified_luts(motor, theta_measured: np.ndarray, psi_measured: np.ndar
         Measured positions and Psi_LUT there, rad.
     lut_fit : Lut
         The LUT built from the fit (``lut_fit.csv``).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
     """
     th = np.linspace(0.0, 2.0 * np.pi, 721)
     fig = Figure(figsize=(7.5, 6.5), layout="constrained")
@@ -104,8 +116,18 @@ def fig_identified_luts(motor, theta_measured: np.ndarray, psi_measured: np.ndar
 
 
 def identify_figure_files(ident) -> dict[str, bytes]:
-    """The figures of ``linsense identify`` (relative path -> PNG) of an
-    :class:`~linsense.identify.pipeline.Identification`, rendered in memory."""
+    """The figures of ``linsense identify``, rendered in memory.
+
+    Parameters
+    ----------
+    ident : Identification
+        An :class:`~linsense.identify.pipeline.Identification`.
+
+    Returns
+    -------
+    dict of str to bytes
+        Relative path to PNG.
+    """
     mo = ident.motor
     return {
         "figures/identify_inductances.png": png_bytes(fig_identified_inductances(

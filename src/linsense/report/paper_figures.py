@@ -23,8 +23,26 @@ _LOAD_STYLE = {0: ("o", "C3"), 20: ("s", "C2"), 40: ("^", "C4")}
 
 
 def fig9_luts(motor, cals: dict[float, object], f_inj: float, quad: float = 0.0) -> Figure:
-    """Paper Fig. 9: the LUT from the model (eq. 12, and with R_s for the injection used) and the
-    LUTs measured by the calibration at each load (``cals``: load in N -> Calibration)."""
+    """Paper Fig. 9: the LUT from the model and the LUTs measured by the calibration at each load.
+
+    The model's is drawn from eq. 12 and with R_s for the injection used.
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+    cals : dict of float to Calibration
+        Load in N to the calibration there.
+    f_inj : float
+        Injection frequency, Hz.
+    quad : float, optional
+        Elliptical share of the injection.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
     th = _theta()
     fig = Figure(figsize=(7.5, 4.4), layout="constrained")
     ax = fig.subplots()
@@ -105,7 +123,22 @@ def _run_columns(fig: Figure, runs: dict[str, object], pole_pitch: float, ylim_e
 
 
 def fig_runs(runs: dict[str, object], pole_pitch: float, title: str) -> Figure:
-    """Closed-loop runs side by side (paper Figs. 11-13): ``runs`` maps a column title to a Result."""
+    """Closed-loop runs side by side (paper Figs. 11-13).
+
+    Parameters
+    ----------
+    runs : dict of str to Result
+        Column title to run.
+    pole_pitch : float
+        m.
+    title : str
+        The figure's title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
     fig = Figure(figsize=(4.6 * len(runs), 6.4), layout="constrained")
     _run_columns(fig, runs, pole_pitch)
     fig.suptitle(title, fontsize=10)
@@ -113,9 +146,25 @@ def fig_runs(runs: dict[str, object], pole_pitch: float, title: str) -> Figure:
 
 
 def fig_runs_beside(runs: dict[str, object], pole_pitch: float, title: str) -> Figure:
-    """Closed-loop runs side by side in pairs (``runs``: column title -> Result, in the order
-    a1, b1, a2, b2, ...: e.g. the pulsating and the rotating injection with the table, then without
-    it), each pair's error panels on one scale so that the two injections compare at a glance."""
+    """Closed-loop runs side by side in pairs, each pair's error panels on one scale.
+
+    ``runs`` in the order a1, b1, a2, b2, ...: e.g. the pulsating and the rotating injection with
+    the table, then without it, so that the two injections compare at a glance.
+
+    Parameters
+    ----------
+    runs : dict of str to Result
+        Column title to run.
+    pole_pitch : float
+        m.
+    title : str
+        The figure's title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
     n = len(runs)
     fig = Figure(figsize=(4.0 * n, 6.6))  # (fixed margins: a constrained layout of 8 panels costs 0.4 s)
     ratios = [x for k in range(0, n, 2) for x in ([0.22, 1.0, 1.0] if k else [1.0, 1.0])][: n + (n - 1) // 2]
@@ -141,11 +190,31 @@ def fig_runs_beside(runs: dict[str, object], pole_pitch: float, title: str) -> F
 
 
 def fig_startup(runs: list, pole_pitch_mm: float, i_min: float, bound_mm: float, title: str) -> Figure:
-    """The magnet-polarity start-up from random positions (``runs``: :class:`~linsense.sim.startup.
-    StartupRun`): above, the pulses' signed current difference ``i_diff`` against the start
-    position, by decision (estimate kept, or turned by pi) and outcome (polarity right or wrong),
-    with the decision threshold +-``i_min``; below, the mover's largest motion while the drive
-    detects and in the position control that follows, with the bound ``bound_mm``."""
+    """The magnet-polarity start-up from random positions.
+
+    Above, the pulses' signed current difference ``i_diff`` against the start position, by decision
+    (estimate kept, or turned by pi) and outcome (polarity right or wrong), with the decision
+    threshold +-``i_min``; below, the mover's largest motion while the drive detects and in the
+    position control that follows, with the bound ``bound_mm``.
+
+    Parameters
+    ----------
+    runs : list of StartupRun
+        The start-ups (:class:`~linsense.sim.startup.StartupRun`).
+    pole_pitch_mm : float
+        mm.
+    i_min : float
+        Decision threshold, A.
+    bound_mm : float
+        Motion bound, mm.
+    title : str
+        The figure's title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
     fig = Figure(figsize=(9.0, 6.0), layout="constrained")
     ax_i, ax_m = fig.subplots(2, 1, sharex=True)
     x0 = np.array([r.x0_mm for r in runs])
@@ -186,10 +255,27 @@ def fig_startup(runs: list, pole_pitch_mm: float, i_min: float, bound_mm: float,
 
 
 def fig_gain_factor(motor, runs: dict, peak_deg: float, title: str) -> Figure:
-    """Where the uncompensated runs lose stability or not: the true position's electrical angle
-    against time (``runs``: label -> Result), beside the uncompensated loop-gain factor
-    ``1 + de*/dtheta`` (brief section 4) against angle, on a shared angle axis; ``peak_deg``: the
-    factor's peak the runs approach (marked)."""
+    """Where the uncompensated runs lose stability or not.
+
+    The true position's electrical angle against time, beside the uncompensated loop-gain factor
+    ``1 + de*/dtheta`` against angle, on a shared angle axis.
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+    runs : dict of str to Result
+        Label to run.
+    peak_deg : float
+        The factor's peak the runs approach (marked), electrical deg.
+    title : str
+        The figure's title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
     th_deg = np.linspace(peak_deg - 180.0, peak_deg + 180.0, 1441)
     g = loop_gain_factor(motor, np.radians(th_deg))
     fig = Figure(figsize=(9.0, 4.2), layout="constrained")
@@ -220,10 +306,28 @@ def fig_gain_factor(motor, runs: dict, peak_deg: float, title: str) -> Figure:
 
 def fig_bias(angles_deg: dict[str, np.ndarray], curves: dict[str, np.ndarray], title: str,
              motor=None) -> Figure:
-    """Steady estimation error (bias, electrical deg) of holds against the true angle the mover
-    settled at (``angles_deg``, per curve), one curve per variant (label "<variant>, dead time" /
-    "<variant>, no dead time", solid / dashed in one colour): the compensated variants above, the
-    uncompensated ones below beside the model's equilibrium error e*(theta) (``motor`` given)."""
+    """Steady estimation error (bias) of holds against the true angle the mover settled at.
+
+    One curve per variant (label "<variant>, dead time" / "<variant>, no dead time", solid / dashed
+    in one colour): the compensated variants above, the uncompensated ones below beside the model's
+    equilibrium error e*(theta) (``motor`` given).
+
+    Parameters
+    ----------
+    angles_deg : dict of str to ndarray
+        Per curve, the settled angles, electrical deg.
+    curves : dict of str to ndarray
+        Per curve, the bias, electrical deg.
+    title : str
+        The figure's title.
+    motor : Motor or None, optional
+        Draws e*(theta).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
     from linsense.analysis.hf import equilibrium_error
 
     fig = Figure(figsize=(10.5, 6.4), layout="constrained")
@@ -259,11 +363,27 @@ def fig_bias(angles_deg: dict[str, np.ndarray], curves: dict[str, np.ndarray], t
 
 
 def fig_margins(nolut, lut, run, title: str) -> Figure:
-    """The linearised motion loop against the true position's angle (:class:`~linsense.analysis.
-    stability.LoopAlong`): above, the uncompensated loop-gain factor g = 1 + de*/dθ and the
-    observer's local gain k_e; below, the phase margin and the upward gain margin without the LUT
-    and with it; ``run``: ``(Result, pole pitch)`` of an uncompensated run whose range of angles
-    after its step is shaded (or None)."""
+    """The linearised motion loop against the true position's angle.
+
+    Above, the uncompensated loop-gain factor g = 1 + de*/dθ and the observer's local gain k_e;
+    below, the phase margin and the upward gain margin without the LUT and with it.
+
+    Parameters
+    ----------
+    nolut : LoopAlong
+        Without the LUT (:class:`~linsense.analysis.stability.LoopAlong`).
+    lut : LoopAlong
+        With it.
+    run : tuple of (Result, float) or None
+        An uncompensated run and its pole pitch (m), whose range of angles after its step is shaded.
+    title : str
+        The figure's title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
     swing_deg = None
     if run is not None:
         res, tau = run

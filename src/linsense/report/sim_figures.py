@@ -28,8 +28,20 @@ _PHASES = (("a", "tab:blue"), ("b", "tab:orange"), ("c", "tab:green"))
 
 
 def result_plot_data(result) -> PlotData:
-    """The figure's bins of a :class:`~linsense.sim.result.Result` (with its block statistics when
-    it has them)."""
+    """The figure's bins of a :class:`~linsense.sim.result.Result`.
+
+    With its block statistics when it has them.
+
+    Parameters
+    ----------
+    result : Result
+        The run.
+
+    Returns
+    -------
+    PlotData
+        The bins.
+    """
     m = result.metrics
     spec = getattr(result.scenario, "spec", None)
     f_pwm = float(spec.inverter.f_pwm) if spec is not None else 16000.0
@@ -49,8 +61,19 @@ def _fmt(v, unit: str) -> str:
 
 
 def sim_figure(data) -> Figure:
-    """The five-panel run figure of a :class:`~linsense.sim.result.Result` or a streamed run's
-    :class:`~linsense.sim.stream.PlotData`."""
+    """The five-panel run figure.
+
+    Parameters
+    ----------
+    data : Result or PlotData
+        A :class:`~linsense.sim.result.Result` or a streamed run's
+        :class:`~linsense.sim.stream.PlotData`.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
     if not isinstance(data, PlotData):
         data = result_plot_data(data)
     b, m = data.bins, data.metrics
@@ -121,14 +144,38 @@ def sim_figure(data) -> Figure:
 
 
 def sim_figure_png(result) -> bytes:
-    """PNG bytes of :func:`sim_figure`."""
+    """PNG bytes of :func:`sim_figure`.
+
+    Parameters
+    ----------
+    result : Result or PlotData
+        The run.
+
+    Returns
+    -------
+    bytes
+        The PNG.
+    """
     from linsense.report.figures import png_bytes
 
     return png_bytes(sim_figure(result), DPI)
 
 
 def write_sim_figure(result, path: str | Path) -> Path:
-    """Write the run figure to ``path`` (atomically)."""
+    """Write the run figure to ``path`` (atomically).
+
+    Parameters
+    ----------
+    result : Result or PlotData
+        The run.
+    path : str or Path
+        The file.
+
+    Returns
+    -------
+    Path
+        The file written.
+    """
     from linsense.report.figures import save_png
 
     return save_png(sim_figure(result), path, DPI)

@@ -29,7 +29,18 @@ OUTCOMES = [("refused", "#bbbbbb", "refused by the checks"),
 
 
 def outcome(row) -> int:
-    """Index into :data:`OUTCOMES` of one sweep row (from ``stable``, ``error``, ``unstable_reason``)."""
+    """Index into :data:`OUTCOMES` of one sweep row (from ``stable``, ``error``, ``unstable_reason``).
+
+    Parameters
+    ----------
+    row : pandas.Series or dict
+        The row.
+
+    Returns
+    -------
+    int
+        The outcome's index.
+    """
     if isinstance(row.get("error"), str):
         return 0
     if bool(row.get("stable")):
@@ -47,8 +58,24 @@ def _tick(v) -> str:
 
 
 def stability_map(df: pd.DataFrame, axes: list[str], relative: dict | None = None) -> Figure:
-    """The outcome of each run (:data:`OUTCOMES`) over the first two axes, one panel per value of
-    the third; each cell gives the limit cycle in mm."""
+    """The outcome of each run over the first two axes, one panel per value of the third.
+
+    Each cell gives the limit cycle in mm.
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        The sweep's rows.
+    axes : list of str
+        The axis keys.
+    relative : dict or None, optional
+        Axis key to whether its values are factors of the base value (labelled "x base").
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
     relative = relative or {}
     kx, ky = axes[0], axes[1]
     kp = axes[2] if len(axes) > 2 else None
@@ -83,7 +110,22 @@ def stability_map(df: pd.DataFrame, axes: list[str], relative: dict | None = Non
 
 
 def lut_robustness(df: pd.DataFrame, axes: list[str], relative: dict | None = None) -> Figure:
-    """Steady bias and steady peak error against each parameter of the controller's motor."""
+    """Steady bias and steady peak error against each parameter of the controller's motor.
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        The sweep's rows.
+    axes : list of str
+        The axis keys.
+    relative : dict or None, optional
+        Axis key to whether its values are factors of the base value.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
     relative = relative or {}
     fig = Figure(figsize=(3.4 * len(axes), 4.6), layout="constrained")
     ok = df[df["error"].isna()] if "error" in df else df
@@ -102,7 +144,22 @@ def lut_robustness(df: pd.DataFrame, axes: list[str], relative: dict | None = No
 
 
 def injection(df: pd.DataFrame, axes: list[str], relative: dict | None = None) -> Figure:
-    """Steady error and HF current against the first axis, one curve per value of the second."""
+    """Steady error and HF current against the first axis, one curve per value of the second.
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        The sweep's rows.
+    axes : list of str
+        The axis keys.
+    relative : dict or None, optional
+        Axis key to whether its values are factors of the base value.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
     relative = relative or {}
     kx = axes[0]
     kc = axes[1] if len(axes) > 1 else None

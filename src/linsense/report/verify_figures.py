@@ -15,8 +15,22 @@ def _legend(a) -> None:
 
 
 def certificate_figure(rows: list[dict], title: str, quick: bool = False) -> Figure:
-    """Four panels from the certificate's judged runs (rows of :func:`linsense.verify.run.judge`);
-    ``quick``: the off-nominal and trajectory panels were not run."""
+    """Four panels from the certificate's judged runs.
+
+    Parameters
+    ----------
+    rows : list of dict
+        Rows of :func:`linsense.verify.run.judge`.
+    title : str
+        The figure's title.
+    quick : bool, optional
+        The off-nominal and trajectory panels were not run.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
     fig = Figure(figsize=(11, 8), layout="constrained")
     ax = fig.subplots(2, 2)
     fig.suptitle(title)

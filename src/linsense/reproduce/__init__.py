@@ -1,0 +1,1 @@
+"""Reproduction of the paper's results: ``linsense reproduce`` (runs, claims, figures, report)."""

@@ -14,7 +14,18 @@ _INVALID_FAULTS = ("config", "nonfinite")
 
 
 def finite_or_none(v) -> float | None:
-    """``v`` as a float, or None when it is missing or not finite (JSON has no NaN)."""
+    """``v`` as a float, or None when it is missing or not finite (JSON has no NaN).
+
+    Parameters
+    ----------
+    v : float or None
+        The value.
+
+    Returns
+    -------
+    float or None
+        ``float(v)`` or None.
+    """
     return None if v is None or (isinstance(v, float) and not math.isfinite(v)) else float(v)
 
 
@@ -45,7 +56,18 @@ def _verdict(run: dict) -> str:
 
 
 def claims(m: dict) -> list[dict]:
-    """The claim table from the reproduction's metrics ``m`` (the structure of metrics.json)."""
+    """The claim table from the reproduction's metrics (docs/reproduce.md).
+
+    Parameters
+    ----------
+    m : dict
+        The reproduction's metrics (the structure of metrics.json).
+
+    Returns
+    -------
+    list of dict
+        One per claim of the paper: ``claim``, ``paper``, ``ours``, ``holds``, ``rule``.
+    """
     out = []
 
     def add(claim: str, paper: str, ours: str, holds: bool, rule: str) -> None:
@@ -137,9 +159,21 @@ def _err(run: dict) -> str:
 
 
 def claims_beyond(m: dict) -> list[dict]:
-    """The claims beyond the paper (metrics.json ``claims_beyond``): the rotating-vector variant of
-    Figs. 11-13 judged by the paper's (pulsating) outcome and rules, the rotating estimate
-    without its table against its model, and the magnet-polarity start-up."""
+    """The claims beyond the paper (metrics.json ``claims_beyond``).
+
+    The rotating-vector variant of Figs. 11-13 judged by the paper's (pulsating) outcome and rules,
+    the rotating estimate without its table against its model, and the magnet-polarity start-up.
+
+    Parameters
+    ----------
+    m : dict
+        The reproduction's metrics.
+
+    Returns
+    -------
+    list of dict
+        As :func:`claims`.
+    """
     out = []
 
     def add(claim: str, paper: str, ours: str, holds: bool, rule: str) -> None:

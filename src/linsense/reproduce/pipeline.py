@@ -81,8 +81,34 @@ def _onset(motor, res6, res3) -> dict:
 
 def reproduce(out: str, motor_spec: str = "ecce2010", quick: bool = False, progress: bool = False,
               model_only: bool = False):
-    """Run every stage and write the output set ``out``; returns (files, summary lines).
-    ``model_only``: the model's tables, LUT files and figures alone (no run, no report)."""
+    """Run every stage of the reproduction and write the output set (docs/reproduce.md).
+
+    Parameters
+    ----------
+    out : str
+        Output folder.
+    motor_spec : str, optional
+        Preset or motor file.
+    quick : bool, optional
+        Fewer calibration and hold positions, start-ups and loop angles, and a coarser stability
+        map (``--quick``).
+    progress : bool, optional
+        Show progress bars.
+    model_only : bool, optional
+        The model's tables, LUT files and figures alone (no run, no report).
+
+    Returns
+    -------
+    files : list
+        The files written.
+    lines : list of str
+        The summary: the model, then each claim and whether it holds.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        A bad motor or output folder.
+    """
     from linsense.analysis.summary import summarize
     from linsense.analysis.tables import model_table, table_to_csv
     from linsense.compensation.lut import build_lut, export

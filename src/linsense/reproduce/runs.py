@@ -43,14 +43,43 @@ ROTATING = {"injection": {"shape": "rotating", "quadrature": None}, "observer": 
 
 
 def data_path(*parts: str) -> Path:
-    """A file of the package's reproduction data (scenarios/, sweeps/)."""
+    """A file of the package's reproduction data (scenarios/, sweeps/).
+
+    Parameters
+    ----------
+    *parts : str
+        Path parts below the package, e.g. ``"scenarios", "paper_hold.toml"``.
+
+    Returns
+    -------
+    Path
+        The file.
+    """
     return Path(str(resources.files("linsense.reproduce").joinpath(*parts)))
 
 
 def paper_scenario(name: str, motor: str | None = None):
-    """The scenario file ``name`` of scenarios/, checked to be the paper's set-up (switching
-    inverter, 0.8 us dead time), with its motor replaced by ``motor`` (a preset name or an
-    absolute path) when given."""
+    """The scenario file ``name`` of scenarios/, checked to be the paper's set-up.
+
+    Switching inverter, 0.8 us dead time.
+
+    Parameters
+    ----------
+    name : str
+        File name in scenarios/.
+    motor : str or None, optional
+        Replaces the scenario's motor (a preset name or an absolute path).
+
+    Returns
+    -------
+    Scenario
+        The scenario.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        A scenario that is not on the paper's inverter.
+    """
     from linsense.sim.scenario import load_scenario, scenario_from_dict
 
     sc = load_scenario(data_path("scenarios", name))
@@ -66,8 +95,20 @@ def paper_scenario(name: str, motor: str | None = None):
 
 
 def with_changes(sc, changes: dict):
-    """``sc`` with the sections in ``changes`` updated; a value None removes the key (back to its
-    default or its designed value)."""
+    """``sc`` with the sections in ``changes`` updated, validated again.
+
+    Parameters
+    ----------
+    sc : Scenario
+        The scenario.
+    changes : dict
+        Section to keys; a value None removes the key (back to its default or its designed value).
+
+    Returns
+    -------
+    Scenario
+        The new scenario.
+    """
     from linsense.sim.scenario import scenario_from_dict
 
     data = sc.given()
@@ -83,10 +124,28 @@ def with_changes(sc, changes: dict):
 
 def figure_runs(motor: str | None, tick=lambda: None, changes: dict | None = None,
                 prefix: str = "") -> tuple[dict, dict]:
-    """The runs of Figs. 11, 12, 13 (traces kept, for the figures) and Fig. 12's uncompensated run
-    without dead time. Returns ``(results, scenarios)``: figure -> variant -> Result / Scenario.
-    ``changes``: sections changed in every scenario (:func:`with_changes`), ``prefix`` before
-    their names."""
+    """The runs of Figs. 11, 12, 13 and Fig. 12's uncompensated run without dead time.
+
+    Traces kept, for the figures.
+
+    Parameters
+    ----------
+    motor : str or None
+        Preset or absolute motor-file path (None: the scenarios' own).
+    tick : callable, optional
+        Called after each run (progress).
+    changes : dict or None, optional
+        Sections changed in every scenario (:func:`with_changes`).
+    prefix : str, optional
+        Before the scenarios' names.
+
+    Returns
+    -------
+    results : dict
+        Figure to variant to Result.
+    scenarios : dict
+        Figure to variant to Scenario.
+    """
     from linsense.sim.run import simulate
 
     results: dict = {}
@@ -110,13 +169,44 @@ def figure_runs(motor: str | None, tick=lambda: None, changes: dict | None = Non
 
 
 def rotating_runs(motor: str | None, tick=lambda: None) -> tuple[dict, dict]:
-    """:func:`figure_runs` with the rotating vector (:data:`ROTATING`; names prefixed "rotating_")."""
+    """:func:`figure_runs` with the rotating vector (:data:`ROTATING`; names prefixed "rotating_").
+
+    Parameters
+    ----------
+    motor : str or None
+        Preset or absolute motor-file path.
+    tick : callable, optional
+        Called after each run.
+
+    Returns
+    -------
+    results : dict
+        Figure to variant to Result.
+    scenarios : dict
+        Figure to variant to Scenario.
+    """
     return figure_runs(motor, tick, ROTATING, "rotating_")
 
 
 def calibrations(motor, positions: int, tick=lambda: None) -> dict:
-    """The calibration (paper Fig. 9) at each of :data:`LOADS_N`, pulsating injection, switching
-    inverter with dead time: load -> :class:`~linsense.sim.calibrate.Calibration`."""
+    """The calibration (paper Fig. 9) at each of :data:`LOADS_N`.
+
+    Pulsating injection, switching inverter with dead time.
+
+    Parameters
+    ----------
+    motor : Motor or str
+        The motor.
+    positions : int
+        Calibration points.
+    tick : callable, optional
+        Called after each calibration.
+
+    Returns
+    -------
+    dict
+        Load (N) to :class:`~linsense.sim.calibrate.Calibration`.
+    """
     from linsense.sim.calibrate import calibrate
 
     out = {}
@@ -129,8 +219,21 @@ def calibrations(motor, positions: int, tick=lambda: None) -> dict:
 
 @dataclass
 class HoldStudy:
-    """Steady estimation error (bias, deg) at hold positions for each variant, with and without
-    the dead time; and the largest limit cycle of each (mm)."""
+    """Steady estimation error at hold positions for each variant, with and without the dead time.
+
+    And the largest limit cycle of each.
+
+    Attributes
+    ----------
+    positions_deg : ndarray
+        The commanded (estimated) hold positions, electrical deg.
+    bias_deg : dict
+        Label to the bias at each position, electrical deg.
+    true_deg : dict
+        Label to the true mean angle over the end window, electrical deg.
+    limit_cycle_mm : dict
+        Label to the largest limit cycle over the positions, mm.
+    """
 
     positions_deg: np.ndarray  # the commanded (estimated) hold positions
     bias_deg: dict = field(default_factory=dict)  # label -> array
@@ -139,8 +242,24 @@ class HoldStudy:
 
 
 def hold_study(motor: str | None, n_positions: int, tick=lambda: None) -> HoldStudy:
-    """The hold at ``n_positions`` over one period for :data:`HOLD_VARIANTS`, each with the
-    paper's dead time and without (metrics only)."""
+    """The hold at ``n_positions`` over one period for :data:`HOLD_VARIANTS` (metrics only).
+
+    Each with the paper's dead time and without.
+
+    Parameters
+    ----------
+    motor : str or None
+        Preset or absolute motor-file path.
+    n_positions : int
+        Hold positions.
+    tick : callable, optional
+        Called after each variant.
+
+    Returns
+    -------
+    HoldStudy
+        The biases and limit cycles.
+    """
     from linsense.sim.build import resolve_motor
     from linsense.sim.run import metrics_only
 
@@ -168,8 +287,28 @@ def hold_study(motor: str | None, n_positions: int, tick=lambda: None) -> HoldSt
 
 
 def stability_map(motor: str | None, quick: bool, out: Path):
-    """The stability map (step size x observer bandwidth, LUT on/off) on the sweep engine, one
-    worker thread per core; returns ``(DataFrame, axes, summary line)``."""
+    """The stability map (step size x observer bandwidth, LUT on/off) on the sweep engine.
+
+    One worker thread per core.
+
+    Parameters
+    ----------
+    motor : str or None
+        Preset or absolute motor-file path (None: the base scenario's).
+    quick : bool
+        A coarser grid: 3, 6 and 9 mm steps, 3 bandwidths.
+    out : Path
+        The sweep's folder.
+
+    Returns
+    -------
+    df : pandas.DataFrame
+        The sweep's rows.
+    axes : list of str
+        The axis keys.
+    summary : str
+        The summary line.
+    """
     from linsense.io import read_toml
     from linsense.sweep import sweep, sweep_from_dict
     from linsense.sweep.studies import summary_line
@@ -202,7 +341,19 @@ def stability_map(motor: str | None, quick: bool, out: Path):
 
 @dataclass
 class StartupStudy:
-    """Start-ups (control.mode = "startup") from random positions over two electrical periods."""
+    """Start-ups (control.mode = "startup") from random positions over two electrical periods.
+
+    Attributes
+    ----------
+    runs : list of StartupRun
+        One per start (:class:`linsense.sim.startup.StartupRun`).
+    pole_pitch_mm : float
+        mm.
+    scenario : Scenario
+        The start with the largest motion while detecting.
+    polarity : float
+        The saturated plant's polarity signal, 1/A.
+    """
 
     runs: list  # linsense.sim.startup.StartupRun, one per start
     pole_pitch_mm: float
@@ -216,10 +367,26 @@ STARTUP_POLARITY = 0.0131
 
 
 def startup_study(motor: str | None, n: int, tick=lambda: None) -> StartupStudy:
-    """The magnet-polarity start-up (docs/firmware.md, ``LS_MODE_STARTUP``) from ``n`` random
-    positions over two electrical periods, the drive's estimate at 0, on the saturated plant, the
+    """The magnet-polarity start-up from ``n`` random positions over two electrical periods.
+
+    docs/firmware.md, ``LS_MODE_STARTUP``: the drive's estimate at 0, on the saturated plant, the
     switching inverter with the paper's dead time, a free frictionless mover without load
-    (:mod:`linsense.sim.startup`)."""
+    (:mod:`linsense.sim.startup`).
+
+    Parameters
+    ----------
+    motor : str or None
+        Preset or absolute motor-file path (None: ecce2010).
+    n : int
+        Starts.
+    tick : callable, optional
+        Called after each start.
+
+    Returns
+    -------
+    StartupStudy
+        The runs.
+    """
     from linsense.sim.build import resolve_motor
     from linsense.sim.scenario import scenario_from_dict
     from linsense.sim.startup import AFTER_S, base_scenario, start_positions, startup_run

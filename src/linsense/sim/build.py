@@ -63,7 +63,33 @@ _SECTION = {"inject": "injection", "bpf": "injection", "sep": "injection", "demo
 
 @dataclass
 class Built:
-    """Everything one run needs; keeps the cffi objects (drive, tables) alive together."""
+    """Everything one run needs; keeps the cffi objects (drive, tables) alive together.
+
+    Attributes
+    ----------
+    scenario : Scenario
+        The scenario, with the designed values (:func:`designed`).
+    motor : Motor
+        The plant's motor.
+    setup : PlantSetup
+        The plant's setup.
+    cfg : cffi ``ls_sim_cfg *``
+        The plant's C configuration.
+    drive : Drive
+        The initialised drive.
+    commands : list of (float, float, bool)
+        ``(t [s], x [m], move)`` for :func:`linsense.sim.core.run_closed_loop`.
+    n_steps : int
+        PWM periods of the run.
+    moves : list of (float, float, float, float)
+        The planned moves ``(t_start, t_end, x_from, x_to)``, s and m.
+    known : dict
+        Motor values the controller uses.
+    extra : dict
+        cffi objects kept alive with the drive (the calibration table).
+    user_keys : set of str
+        The dotted keys the file gives (the design sets the others).
+    """
 
     scenario: Scenario
     motor: Motor
@@ -80,16 +106,35 @@ class Built:
 
 # ------------------------------------------------------------------ the path of a scenario
 def build(sc: Scenario, motor: Motor | None = None, trace_in_memory: bool = True) -> Built:
-    """Configure the plant and the drive of ``sc``; bad values end in :class:`InputError` naming
-    the scenario file. ``motor`` replaces the scenario's motor (a Motor object from Python). Gains
-    the scenario leaves unset are designed for its motor (:func:`designed`). ``trace_in_memory``
-    False: the run is streamed in chunks (:mod:`linsense.sim.stream`), its trace not kept, so the
-    limit on the trace kept in memory does not apply.
+    """Configure the plant and the drive of a scenario.
+
+    ``motor`` replaces the scenario's motor (a Motor object from Python). Gains the scenario leaves
+    unset are designed for its motor (:func:`designed`).
 
     The path: the motors and the design, every check of the scenario (:func:`validate`, before any
     C object is made), the plant, the drive's configuration (the mapping of
     :mod:`linsense.tune.cfgmap`), its tables, the drive. The C library keeps its own checks as the
     last line: a refusal there names the scenario key it comes from (:mod:`linsense.sim.refusal`).
+
+    Parameters
+    ----------
+    sc : Scenario
+        The scenario.
+    motor : Motor or None, optional
+        Replaces the scenario's motor.
+    trace_in_memory : bool, optional
+        False: the run is streamed in chunks (:mod:`linsense.sim.stream`), its trace not kept, so
+        the limit on the trace kept in memory does not apply.
+
+    Returns
+    -------
+    Built
+        Everything the run needs.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        Bad values, naming the scenario file and the key.
     """
     motor, model_motor = motors(sc, motor)
     user_keys = given_keys(sc.given())  # (the keys the file gives: designed() sets the others)
@@ -109,9 +154,31 @@ def build(sc: Scenario, motor: Motor | None = None, trace_in_memory: bool = True
 
 
 def motors(sc: Scenario, motor: Motor | None = None) -> tuple[Motor, Motor]:
-    """The plant's motor (``motor``, else the scenario's) and the one the controller believes in (its
-    tables, gains and feed-forwards): the plant's unless ``controller.model.motor`` names another
-    (e.g. one with a parameter off, to test the LUT's robustness), with the same pole pitch."""
+    """The plant's motor and the one the controller believes in.
+
+    The plant's is ``motor``, else the scenario's; the controller's (its tables, gains and
+    feed-forwards) is the plant's unless ``controller.model.motor`` names another (e.g. one with a
+    parameter off, to test the LUT's robustness), with the same pole pitch.
+
+    Parameters
+    ----------
+    sc : Scenario
+        The scenario.
+    motor : Motor or None, optional
+        Replaces the scenario's motor.
+
+    Returns
+    -------
+    plant : Motor
+        The plant's motor.
+    model : Motor
+        The controller's.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        A motor that cannot be loaded, or a controller's motor of another pole pitch.
+    """
     motor = resolve_motor(sc) if motor is None else motor
     ov = sc.spec.controller.model
     model_motor = motor if ov.motor is None else resolve_motor(sc, ov.motor, "controller.model.motor",
@@ -124,9 +191,24 @@ def motors(sc: Scenario, motor: Motor | None = None) -> tuple[Motor, Motor]:
 
 
 def controller_model(sc: Scenario, model_motor: Motor) -> dict:
-    """What the controller believes about the motor: ``[controller.model]``'s values, else the
-    model's (mean L_d and L_q over a period; the demodulator gain ``L_q / (L_q - L_d)``, None
-    without saliency: refused by :func:`validate`)."""
+    """What the controller believes about the motor.
+
+    ``[controller.model]``'s values, else the model's (mean L_d and L_q over a period; the
+    demodulator gain ``L_q / (L_q - L_d)``, None without saliency: refused by :func:`validate`).
+
+    Parameters
+    ----------
+    sc : Scenario
+        The scenario.
+    model_motor : Motor
+        The motor the controller believes in.
+
+    Returns
+    -------
+    dict
+        ``L_d``, ``L_q`` (H), ``R_s`` (ohm), ``psi_pm`` (Wb), ``mass`` (kg), ``force_constant``
+        (N/A), ``demod_gain``.
+    """
     ov = sc.spec.controller.model
     L_d, L_q = memo(("mean_dq", motor_key(model_motor)), lambda: mean_dq(model_motor))
     known = {
@@ -148,9 +230,29 @@ def controller_model(sc: Scenario, model_motor: Motor) -> dict:
 
 def validate(sc: Scenario, motor: Motor, known: dict, user_keys: set[str],
              trace_in_memory: bool = True) -> tuple[Saturation | None, int]:
-    """Every check of the designed scenario ``sc`` the build makes, before any C object is made (the
-    motor files and the design refuse while they are read): returns the plant's saturation and the
-    run's PWM periods.
+    """Every check of the designed scenario the build makes, before any C object is made.
+
+    The motor files and the design refuse while they are read.
+
+    Parameters
+    ----------
+    sc : Scenario
+        The designed scenario.
+    motor : Motor
+        The plant's motor.
+    known : dict
+        Motor values the controller uses.
+    user_keys : set of str
+        The dotted keys the file gives.
+    trace_in_memory : bool, optional
+        Whether the run keeps its trace in memory (its size is then limited).
+
+    Returns
+    -------
+    saturation : Saturation or None
+        The plant's saturation (:func:`plant_saturation`).
+    n_steps : int
+        The run's PWM periods.
 
     Raises
     ------
@@ -176,8 +278,31 @@ def validate(sc: Scenario, motor: Motor, known: dict, user_keys: set[str],
 
 
 def plant(sc: Scenario, motor: Motor, sat: Saturation | None) -> tuple[PlantSetup, object]:
-    """The plant's set-up and its ``ls_sim_cfg *`` (from a cached template of the motor, saturated
-    with ``sat``)."""
+    """The plant's set-up and its ``ls_sim_cfg *``.
+
+    From a cached template of the motor, saturated with ``sat``.
+
+    Parameters
+    ----------
+    sc : Scenario
+        The scenario.
+    motor : Motor
+        The plant's motor.
+    sat : Saturation or None
+        The plant's saturation (None: linear).
+
+    Returns
+    -------
+    setup : PlantSetup
+        The set-up.
+    cfg : cffi ``ls_sim_cfg *``
+        The C configuration.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        The saturated plant or the simulator's configuration refused.
+    """
     s = sc.spec
     inv, sens, tr, ld = s.inverter, s.sensors, s.travel, s.load
     gain, offs = sensor_triples(sens)
@@ -207,10 +332,36 @@ def plant(sc: Scenario, motor: Motor, sat: Saturation | None) -> tuple[PlantSetu
 
 
 def make_drive(sc: Scenario, model_motor: Motor, known: dict, v: Values, d, user_keys: set[str]) -> Drive:
-    """The drive over the configuration ``d`` (``ls_drive_cfg *``, :func:`linsense.sim.drive_cfg.fill`
-    from the drive values ``v``) with its tables
-    (:func:`linsense.sim.tables.drive_tables`). A refusal of ``ls_drive_init`` (the C library's own
-    checks, the last line) names the one field at fault, its scenario key, the value and the limit."""
+    """The drive over a configuration, with its tables (:func:`linsense.sim.tables.drive_tables`).
+
+    A refusal of ``ls_drive_init`` (the C library's own checks, the last line) names the one field
+    at fault, its scenario key, the value and the limit.
+
+    Parameters
+    ----------
+    sc : Scenario
+        The designed scenario.
+    model_motor : Motor
+        The motor the controller believes in.
+    known : dict
+        Motor values the controller uses.
+    v : Values
+        The drive values.
+    d : cffi ``ls_drive_cfg *``
+        The configuration (:func:`linsense.sim.drive_cfg.fill` from ``v``).
+    user_keys : set of str
+        The dotted keys the file gives.
+
+    Returns
+    -------
+    Drive
+        The initialised drive.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        The configuration refused by the controller library.
+    """
     try:
         t = drive_tables(sc, model_motor, known["R_s"], v)
         return Drive(d, comp=t.comp, gain_table=t.gain_table, comp_r=t.comp_r, gain_r=t.gain_r)
@@ -223,8 +374,29 @@ def make_drive(sc: Scenario, model_motor: Motor, known: dict, v: Values, d, user
 
 
 def start_drive(sc: Scenario, drive: Drive, motor: Motor, setup: PlantSetup) -> None:
-    """Tell ``drive`` where the mover starts (the start-up does not know: its estimate starts at
-    ``startup.guess_mm``), the load it starts balanced with, and the scenario's mode."""
+    """Tell the drive where the mover starts, the load it starts balanced with, and the scenario's mode.
+
+    The start-up does not know where the mover starts: its estimate starts at
+    ``startup.guess_mm``.
+
+    Parameters
+    ----------
+    sc : Scenario
+        The scenario.
+    drive : Drive
+        The drive.
+    motor : Motor
+        The plant's motor (its pole pitch).
+    setup : PlantSetup
+        The plant's set-up (the start position).
+
+    Raises
+    ------
+    linsense.errors.InputError
+        The mode refused (naming ``control.mode``).
+    linsense.errors.ConfigError
+        The start position or load refused by the C library.
+    """
     s = sc.spec
     ctl = s.control
     x_known = s.startup.guess_mm * 1e-3 if ctl.mode == "startup" else setup.x0
@@ -239,8 +411,28 @@ def start_drive(sc: Scenario, drive: Drive, motor: Motor, setup: PlantSetup) -> 
 
 # ------------------------------------------------------------------ the motors, the design, the reference
 def plant_saturation(sc: Scenario, motor: Motor) -> Saturation | None:
-    """The saturation of the plant ``sc`` runs (None: the linear plant): the motor file's
-    ``[saturation]`` with the scenario's ``[saturation]`` keys over it, when ``saturation.enabled``."""
+    """The saturation of the plant a scenario runs (None: the linear plant).
+
+    The motor file's ``[saturation]`` with the scenario's ``[saturation]`` keys over it, when
+    ``saturation.enabled``.
+
+    Parameters
+    ----------
+    sc : Scenario
+        The scenario.
+    motor : Motor
+        The plant's motor.
+
+    Returns
+    -------
+    Saturation or None
+        The saturation data.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        Saturation enabled for a motor without any, or ``q_drop`` given for tabulated saturation.
+    """
     ss = sc.spec.saturation
     if not ss.enabled:
         return None
@@ -265,9 +457,34 @@ def _load_motor_file_cached(path: Path, check: bool) -> Motor:
 
 
 def resolve_motor(sc: Scenario, spec: str | None = None, key: str = "motor", check: bool = True) -> Motor:
-    """The scenario's motor (or the motor ``spec`` given at ``key``): a preset name or a file path
-    relative to the scenario file. ``check = False`` skips :func:`check_motor` (for a motor the
-    controller only believes in: its tables need not describe a realisable winding)."""
+    """The scenario's motor, or the motor ``spec`` given at ``key``.
+
+    A preset name or a file path relative to the scenario file (loaded once per process).
+
+    Parameters
+    ----------
+    sc : Scenario
+        The scenario.
+    spec : str or None, optional
+        The motor (None: the scenario's ``motor``).
+    key : str, optional
+        The key that gave it, for messages.
+    check : bool, optional
+        False skips :func:`~linsense.model.motor.check_motor` (for a motor the controller only
+        believes in: its tables need not describe a realisable winding).
+
+    Returns
+    -------
+    Motor
+        The motor.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        An unknown preset or a missing file.
+    linsense.errors.ModelError
+        A motor unusable for HF sensorless control (``check``).
+    """
     spec = sc.spec.motor if spec is None else spec
     if not names_a_path(spec):
         if spec in preset_names():
@@ -293,7 +510,22 @@ def _sat_template(linear, motor: Motor, sat: Saturation):
 
 
 def trapezoid_time(distance: float, v_max: float, a_max: float) -> float:
-    """Duration (s) of a minimum-time move over ``distance`` (m), as ``ls_traj`` plans it."""
+    """Duration of a minimum-time move, as ``ls_traj`` plans it.
+
+    Parameters
+    ----------
+    distance : float
+        m (its sign ignored).
+    v_max : float
+        Speed limit, m/s.
+    a_max : float
+        Acceleration limit, m/s^2.
+
+    Returns
+    -------
+    float
+        s.
+    """
     d = abs(distance)
     if d <= v_max * v_max / a_max:
         return 2.0 * math.sqrt(d / a_max)
@@ -301,7 +533,20 @@ def trapezoid_time(distance: float, v_max: float, a_max: float) -> float:
 
 
 def reference_commands(sc: Scenario) -> tuple[list, list]:
-    """Commands ``(t, x, move)`` for run_closed_loop and the planned moves ``(t0, t1, x0, x1)``."""
+    """Commands for :func:`~linsense.sim.core.run_closed_loop` and the planned moves of a scenario.
+
+    Parameters
+    ----------
+    sc : Scenario
+        The scenario.
+
+    Returns
+    -------
+    commands : list of (float, float, bool)
+        ``(t [s], x [m], move)``.
+    moves : list of (float, float, float, float)
+        ``(t0, t1, x0, x1)``, s and m.
+    """
     ref = sc.spec.reference
     x0 = sc.spec.initial.position_mm * 1e-3
     if ref.type == "hold":
@@ -325,7 +570,20 @@ def reference_commands(sc: Scenario) -> tuple[list, list]:
 
 
 def initial_load(sc: Scenario, motor: Motor) -> float:
-    """The load force at t = 0 (N, opposing positive motion when > 0), as the plant applies it."""
+    """The load force at t = 0, as the plant applies it.
+
+    Parameters
+    ----------
+    sc : Scenario
+        The scenario.
+    motor : Motor
+        The motor (its mass, for an incline).
+
+    Returns
+    -------
+    float
+        N, opposing positive motion when > 0.
+    """
     ld = sc.spec.load
     if ld.type == "step":
         return ld.force_after if ld.time <= 0.0 else ld.force
@@ -361,8 +619,20 @@ def _design_refusal(sc: Scenario, exc: InputError) -> InputError:
 
 
 def drive_data(sc: Scenario) -> DriveData:
-    """The drive a scenario describes, as the design takes it: the injection's amplitude and
-    frequency only where the file gives them."""
+    """The drive a scenario describes, as the design takes it.
+
+    The injection's amplitude and frequency only where the file gives them.
+
+    Parameters
+    ----------
+    sc : Scenario
+        The scenario.
+
+    Returns
+    -------
+    DriveData
+        The drive.
+    """
     s = sc.spec
     inj, given = s.injection, s.injection.model_fields_set
     return DriveData(v_dc=s.inverter.v_dc, f_pwm=s.inverter.f_pwm, dead_time=s.inverter.dead_time,
@@ -391,9 +661,8 @@ CAL_MAX_WINDOWS = 30.0
 def calibration_timing(f_inj: float, dither_a: float, dither_hz: float, demod_lpf: float,
                        kp_x: float, k_int: float | None = None, t_hold: float | None = None,
                        source: str = "<calibration>") -> dict:
-    """The calibration's ``k_int`` (1/s), ``t_hold``, ``t_settle`` and ``t_max`` (s) for a drive
-    injecting at ``f_inj`` (Hz) with a q-current dither of ``dither_a`` (A) at ``dither_hz`` (Hz),
-    the demodulator's low-pass at ``demod_lpf`` (Hz) and the position loop's ``kp_x`` (1/s).
+    """The calibration's timings for a drive.
+
     A ``k_int`` or ``t_hold`` given is kept, and the others follow it.
 
     The window is a whole number of periods of the dither and of its beats with the injection
@@ -401,6 +670,30 @@ def calibration_timing(f_inj: float, dither_a: float, dither_hz: float, demod_lp
     ripple in the demodulated error then averages out of the window's mean, which the acceptance
     compares with ``tol`` (a window of 7.5 dither periods never accepts: the ripple's remainder
     stays above it).
+
+    Parameters
+    ----------
+    f_inj : float
+        Injection frequency, Hz.
+    dither_a : float
+        q-current dither amplitude, A.
+    dither_hz : float
+        Dither frequency, Hz.
+    demod_lpf : float
+        Demodulator low-pass corner, Hz.
+    kp_x : float
+        Position-loop gain, 1/s.
+    k_int : float or None, optional
+        Adaptation rate, 1/s (None: designed).
+    t_hold : float or None, optional
+        Acceptance window, s (None: designed).
+    source : str, optional
+        Named in messages.
+
+    Returns
+    -------
+    dict
+        ``k_int`` (1/s), ``t_hold``, ``t_settle``, ``t_max`` (s).
 
     Raises
     ------
@@ -435,8 +728,27 @@ def calibration_timing(f_inj: float, dither_a: float, dither_hz: float, demod_lp
 
 
 def designed(sc: Scenario, motor: Motor) -> Scenario:
-    """``sc`` with every gain it leaves unset taken from the design for its motor and drive
-    (:func:`linsense.tune.design`, docs/tuning.md); what the file gives is kept."""
+    """``sc`` with every gain it leaves unset taken from the design for its motor and drive.
+
+    :func:`linsense.tune.design`, docs/tuning.md; what the file gives is kept.
+
+    Parameters
+    ----------
+    sc : Scenario
+        The scenario.
+    motor : Motor
+        The motor the controller believes in.
+
+    Returns
+    -------
+    Scenario
+        The designed scenario.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        The design's refusal, naming the scenario's key.
+    """
     s = sc.spec
     con = s.controller
     sections = ("injection", "observer", "controller", "calibration", "protection")

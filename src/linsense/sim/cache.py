@@ -21,7 +21,20 @@ _CACHE_SIZE = 256
 
 
 def memo(key: tuple, fn):
-    """``fn()``, computed once per ``key`` while the key stays among the last cached."""
+    """``fn()``, computed once per ``key`` while the key stays among the last cached.
+
+    Parameters
+    ----------
+    key : tuple
+        Hashable key of the value.
+    fn : callable
+        ``fn()`` computes it.
+
+    Returns
+    -------
+    object
+        The cached or computed value.
+    """
     with _CACHE_LOCK:
         if key in _CACHE:
             _CACHE.move_to_end(key)
@@ -35,7 +48,18 @@ def memo(key: tuple, fn):
 
 
 def motor_key(motor: Motor) -> str:
-    """A fingerprint of everything that defines ``motor`` (parameters and inductance series)."""
+    """A fingerprint of everything that defines ``motor`` (parameters and inductance series).
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+
+    Returns
+    -------
+    str
+        The fingerprint.
+    """
     hit = memo(("key", id(motor)), lambda: (motor, _fingerprint(motor)))
     if hit[0] is motor:  # (the cache keeps the motor alive, so its id is not reused meanwhile)
         return hit[1]

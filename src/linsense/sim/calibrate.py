@@ -56,7 +56,23 @@ _RUN_SECTIONS = ("scenario", "reference", "load", "record", "metrics", "startup"
 
 @dataclass
 class Calibration:
-    """A measured compensation table and how it compares with the model (angles in rad)."""
+    """A measured compensation table and how it compares with the model (angles in rad).
+
+    Attributes
+    ----------
+    theta : ndarray
+        Table positions ``2 pi k / points``, rad.
+    psi_measured : ndarray
+        The calibration's table, rad (NaN where not reached).
+    psi_model : ndarray
+        The model LUT with R_s for the injection the drive runs, rad.
+    psi_eq12 : ndarray
+        Paper eq. (12), rad.
+    metrics : dict
+        ``completed``, ``points``, ``points_done``, ``max_diff_deg``... of the run.
+    motor : Motor or None
+        The plant's motor.
+    """
 
     theta: np.ndarray  # rad, table positions, 2 pi k / points
     psi_measured: np.ndarray  # rad, the calibration's table (NaN where not reached)
@@ -67,6 +83,7 @@ class Calibration:
 
     @property
     def completed(self) -> bool:
+        """Whether every point was reached without a fault."""
         return bool(self.metrics.get("completed"))
 
 
@@ -81,25 +98,43 @@ def calibration_scenario(
     drive: dict | None = None,
     **sections,
 ) -> tuple[Scenario, Motor | None]:
-    """The scenario a calibration runs (before the design fills in its unset gains) and the motor
-    object to build it with (None: the scenario's own motor).
+    """The scenario a calibration runs and the motor object to build it with.
+
+    The scenario is the one before the design fills in its unset gains; the motor is None for the
+    scenario's own motor.
 
     Parameters
     ----------
-    motor : Motor, preset name or motor-file path, or None with ``scenario``.
-    positions : points over one electrical period.
-    load : N, constant load opposing positive motion (the drive starts balanced against it).
-    fidelity : inverter model, ``"switching"`` or ``"average"`` (the scenario's is not used).
-    quad : kappa, the injection's q-axis share; None: the scenario's, else the design's.
-    source : name for messages when there is no scenario.
-    scenario : the drive to calibrate: everything it says about the drive (inverter, injection,
-        observer, controller, sensors, protection, calibration, saturation keys) is kept; its
-        reference, load, record and start-up are the calibration's. Without it the drive is the
-        design's: :class:`~linsense.tune.design.DriveData`'s defaults.
-    drive : drive data over the scenario's or the defaults, by
-        :class:`~linsense.tune.design.DriveData` name (``v_dc``, ``f_pwm``, ``dead_time``,
-        ``i_max``, ``v_max``, ``a_max``, ``v_inj``, ``f_inj``, ``quad``; SI units); None values are ignored.
-    sections : further scenario keys over all that (e.g. ``inverter={"dead_time": 0.0}``).
+    motor : Motor or str or None, optional
+        Motor, preset name or motor-file path, or None with ``scenario``.
+    positions : int, optional
+        Points over one electrical period.
+    load : float, optional
+        Constant load opposing positive motion, N (the drive starts balanced against it).
+    fidelity : str, optional
+        Inverter model, ``"switching"`` or ``"average"`` (the scenario's is not used).
+    quad : float or None, optional
+        Kappa, the injection's q-axis share; None: the scenario's, else the design's.
+    source : str, optional
+        Name for messages when there is no scenario.
+    scenario : Scenario or None, optional
+        The drive to calibrate: everything it says about the drive (inverter, injection, observer,
+        controller, sensors, protection, calibration, saturation keys) is kept; its reference, load,
+        record and start-up are the calibration's. Without it the drive is the design's:
+        :class:`~linsense.tune.design.DriveData`'s defaults.
+    drive : dict or None, optional
+        Drive data over the scenario's or the defaults, by :class:`~linsense.tune.design.DriveData`
+        name (``v_dc``, ``f_pwm``, ``dead_time``, ``i_max``, ``v_max``, ``a_max``, ``v_inj``,
+        ``f_inj``, ``quad``; SI units); None values are ignored.
+    **sections : dict
+        Further scenario keys over all that (e.g. ``inverter={"dead_time": 0.0}``).
+
+    Returns
+    -------
+    scenario : Scenario
+        The calibration's scenario.
+    motor : Motor or None
+        The motor to build it with (None: the scenario's own).
 
     Raises
     ------
@@ -191,29 +226,44 @@ def calibrate(
     drive: dict | None = None,
     **sections,
 ) -> Calibration:
-    """Run the calibration on the drive that will use the table.
+    """Run the calibration on the drive that will use the table (paper Fig. 9).
 
     Parameters
     ----------
-    motor : a Motor, a preset name or a motor-file path; None with ``scenario`` (its motor).
-        Both given: they must be the same motor (:class:`~linsense.errors.InputError` otherwise).
-    positions : points over one electrical period (the paper: 56).
-    load : N, constant load opposing positive motion (the drive starts balanced against it).
-    fidelity : inverter model, ``"switching"`` (default) or ``"average"``.
-    quad : the injection's q-axis share kappa; None (default): the scenario's, else the design's
+    motor : Motor or str or None, optional
+        A Motor, a preset name or a motor-file path; None with ``scenario`` (its motor; without
+        either, ``ecce2010``). Both given: they must be the same motor.
+    positions : int, optional
+        Points over one electrical period (the paper: 56).
+    load : float, optional
+        Constant load opposing positive motion, N (the drive starts balanced against it).
+    fidelity : str, optional
+        Inverter model, ``"switching"`` (default) or ``"average"``.
+    quad : float or None, optional
+        The injection's q-axis share kappa; None (default): the scenario's, else the design's
         (:class:`~linsense.tune.design.DriveData`); 0 is the paper's pulsating injection, with
         which the table is three times stiffer (docs/theory.md).
-    scenario : the drive (a :class:`~linsense.sim.scenario.Scenario`); None: the design for
-        ``motor`` on :class:`~linsense.tune.design.DriveData`'s drive.
-    drive : drive data over it, by :class:`~linsense.tune.design.DriveData` name
+    source : str, optional
+        Name for messages when there is no scenario.
+    scenario : Scenario or None, optional
+        The drive; None: the design for ``motor`` on :class:`~linsense.tune.design.DriveData`'s
+        drive.
+    drive : dict or None, optional
+        Drive data over it, by :class:`~linsense.tune.design.DriveData` name
         (:func:`calibration_scenario`).
-    sections : further scenario sections (e.g. ``inverter={"dead_time": 0.0}``).
+    **sections : dict
+        Further scenario sections (e.g. ``inverter={"dead_time": 0.0}``).
 
     Returns
     -------
     Calibration
         The measured table and the model's for the injection the drive runs (its frequency and
         kappa after the design), with ``metrics``.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        As :func:`calibration_scenario`, or a scenario the build refuses.
     """
     if motor is None and scenario is None:
         motor = "ecce2010"
@@ -268,7 +318,18 @@ def _max_deg(d: np.ndarray) -> float | None:
 
 
 def lut_csv(cal: Calibration) -> str:
-    """``theta_deg,psi_lut_deg`` rows of the measured table (the points reached)."""
+    """``theta_deg,psi_lut_deg`` rows of the measured table (the points reached).
+
+    Parameters
+    ----------
+    cal : Calibration
+        The calibration.
+
+    Returns
+    -------
+    str
+        The CSV text.
+    """
     lines = ["theta_deg,psi_lut_deg"]
     for th, p in zip(np.degrees(cal.theta), np.degrees(cal.psi_measured), strict=True):
         if math.isfinite(p):

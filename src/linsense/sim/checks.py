@@ -50,7 +50,20 @@ def check_positions(sc: Scenario, tau: float) -> None:
 
 
 def sensor_triples(sens) -> tuple[list, list]:
-    """The current sensors' gains and offsets (``[sensors]``), one per phase."""
+    """The current sensors' gains and offsets (``[sensors]``), one per phase.
+
+    Parameters
+    ----------
+    sens : SensorsSection
+        The ``[sensors]`` section.
+
+    Returns
+    -------
+    gain : list of float
+        Per-phase gains, dimensionless.
+    offset : list of float
+        Per-phase offsets, A.
+    """
     gain = sens.current_gain if isinstance(sens.current_gain, list) else [sens.current_gain] * 3
     offs = sens.current_offset if isinstance(sens.current_offset, list) else [sens.current_offset] * 3
     return gain, offs
@@ -58,11 +71,32 @@ def sensor_triples(sens) -> tuple[list, list]:
 
 def check_sensors(source: str, gain: list, offset: list, noise: float, i_trip: float,
                   trip_given: bool = False) -> None:
-    """Refuse current sensors the drive cannot run with: a gain of 0 or below (the current not
-    measured, or a phase reversed), an offset or an rms noise at the over-current trip
-    ``protection.i_max`` or beyond (the drive trips on the sensor alone, at t = 0; issue 23: the
-    message named protection.i_max where the file gave only the sensor). ``trip_given``: the file
-    gives protection.i_max, which is then named, with the sensor's value as its limit."""
+    """Refuse current sensors the drive cannot run with.
+
+    A gain of 0 or below (the current not measured, or a phase reversed), an offset or an rms noise
+    at the over-current trip ``protection.i_max`` or beyond (the drive trips on the sensor alone, at
+    t = 0; issue 23: the message named protection.i_max where the file gave only the sensor).
+
+    Parameters
+    ----------
+    source : str
+        The scenario file, named in messages.
+    gain : list of float
+        Per-phase gains.
+    offset : list of float
+        Per-phase offsets, A.
+    noise : float
+        Current noise, A rms.
+    i_trip : float
+        Over-current trip, A.
+    trip_given : bool, optional
+        The file gives protection.i_max, which is then named, with the sensor's value as its limit.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        Naming the sensor key (or protection.i_max) and the value.
+    """
     for g in gain:
         if not g > 0.0:
             raise InputError(source, "sensors.current_gain", f"must be above 0 (0 measures no current, "
@@ -117,10 +151,29 @@ def run_steps(source: str, duration: float, fs: float) -> int:
 
 
 def check_run_size(source: str, n_steps: int, decimate: int, fs: float, trace_in_memory: bool = True) -> None:
-    """Refuse (``trace_in_memory``) a run of ``n_steps`` periods (:func:`run_steps`, which bounds
-    them by :data:`~linsense.limits.MAX_STEPS`) whose trace would not fit in
-    :data:`~linsense.limits.MAX_TRACE_BYTES`, before anything is allocated. A run streamed in
-    chunks (``linsense simulate``) keeps no trace in memory."""
+    """Refuse a run whose trace in memory would not fit in :data:`~linsense.limits.MAX_TRACE_BYTES`.
+
+    Refused before anything is allocated. A run streamed in chunks (``linsense simulate``) keeps no trace in
+    memory.
+
+    Parameters
+    ----------
+    source : str
+        The scenario file, named in messages.
+    n_steps : int
+        PWM periods (:func:`run_steps`, which bounds them by :data:`~linsense.limits.MAX_STEPS`).
+    decimate : int
+        PWM periods per sample.
+    fs : float
+        PWM frequency, Hz.
+    trace_in_memory : bool, optional
+        Whether the trace is kept in memory (False: no check).
+
+    Raises
+    ------
+    linsense.errors.InputError
+        Naming ``record.decimate`` and the least that fits.
+    """
     if not trace_in_memory:
         return
     # with decimate > 1 every sample also keeps its block statistics (linsense.sim.run.simulate)
@@ -137,8 +190,20 @@ def check_run_size(source: str, n_steps: int, decimate: int, fs: float, trace_in
 
 
 def check_trace_file(b) -> None:
-    """Refuse a streamed run whose trace file would exceed :data:`~linsense.limits.MAX_TRACE_FILE_BYTES`
-    (144 B per sample), before it starts."""
+    """Refuse a streamed run whose trace file would exceed :data:`~linsense.limits.MAX_TRACE_FILE_BYTES`.
+
+    At 144 B per sample; refused before it starts.
+
+    Parameters
+    ----------
+    b : Built
+        The built scenario.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        Naming ``record.decimate`` and the least that fits.
+    """
     from linsense.sim.trace import COLUMNS
 
     s = b.scenario.spec
@@ -163,6 +228,11 @@ def check_startup(sc: Scenario) -> None:
     drive runs it, with the designed amplitude and ramp rate (the scenario's own check sees the
     file's or the default values; the designed ones were refused by the C library only when the mode
     was set). Compared as the library does, in ``LS_REAL``.
+
+    Parameters
+    ----------
+    sc : Scenario
+        The designed scenario.
 
     Raises
     ------
@@ -191,6 +261,13 @@ def check_initial_load(sc: Scenario, f_load: float) -> None:
     :func:`linsense.sim.build.initial_load`) beyond what the drive's ``LS_REAL`` holds:
     ``ls_drive_set_load`` refuses a non-finite force (it was a ConfigError naming no key, raised
     after the plant, the tables and the drive were made).
+
+    Parameters
+    ----------
+    sc : Scenario
+        The scenario.
+    f_load : float
+        The load force at t = 0, N.
 
     Raises
     ------

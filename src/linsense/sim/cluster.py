@@ -11,8 +11,25 @@ from contextlib import contextmanager
 
 @contextmanager
 def cluster_client(workers: int | None, scheduler: str | None, processes: bool):
-    """A dask client: of the cluster at ``scheduler``, or of a local cluster of ``workers`` (default
-    one per core) worker threads or processes, closed at the end."""
+    """A dask client, closed at the end (a context manager).
+
+    Of the cluster at ``scheduler``, or of a local cluster of ``workers`` worker threads or
+    processes.
+
+    Parameters
+    ----------
+    workers : int or None
+        Local workers (None: one per core).
+    scheduler : str or None
+        Address of a running scheduler (then ``workers`` and ``processes`` are not used).
+    processes : bool
+        Local workers as processes rather than threads.
+
+    Yields
+    ------
+    dask.distributed.Client
+        The client.
+    """
     from dask.distributed import Client, LocalCluster
 
     if scheduler:
@@ -33,8 +50,21 @@ def cluster_client(workers: int | None, scheduler: str | None, processes: bool):
 
 @contextmanager
 def quiet(name: str):
-    """Errors only from the logger ``name`` meanwhile: a local cluster that shuts down while a
-    message is in flight logs a harmless "Batched Comm Closed" with its traceback at INFO."""
+    """Errors only from the logger ``name`` meanwhile (a context manager).
+
+    A local cluster that shuts down while a message is in flight logs a harmless "Batched Comm
+    Closed" with its traceback at INFO.
+
+    Parameters
+    ----------
+    name : str
+        The logger's name.
+
+    Yields
+    ------
+    None
+        While the logger is quiet.
+    """
     log = logging.getLogger(name)
     old = log.level
     log.setLevel(logging.ERROR)

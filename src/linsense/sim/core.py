@@ -64,7 +64,57 @@ def _default(section, key: str):
 @dataclass
 class PlantSetup:
     """Everything of ``ls_sim_cfg`` that is not the motor (SI units); the defaults are the scenario
-    file's (docs/simulator.md), converted to SI."""
+    file's (docs/simulator.md), converted to SI.
+
+    Attributes
+    ----------
+    fidelity : str
+        ``"average"`` or ``"switching"``.
+    v_dc : float
+        DC bus, V.
+    f_pwm : float
+        PWM frequency = control rate, Hz.
+    dead_time : float
+        s.
+    i_gain : tuple of float
+        Per-phase current-sensor gains, dimensionless.
+    i_offset : tuple of float
+        Per-phase current-sensor offsets, A.
+    i_noise : float
+        Current-sensor noise, A rms.
+    adc_bits : int
+        ADC resolution (0: ideal).
+    adc_range : float
+        ADC full scale, +- A.
+    enc_counts : int
+        Encoder counts per electrical period.
+    seed : int
+        Current-noise seed.
+    motion : str
+        ``"free"``, ``"held"`` or ``"prescribed"`` (not a scenario key).
+    x0 : float
+        Initial position, m.
+    v0 : float
+        Initial speed, m/s.
+    x_min : float
+        Lower travel limit, m.
+    x_max : float
+        Upper travel limit, m.
+    load : str
+        ``"constant"``, ``"step"`` or ``"incline"``.
+    load_f0 : float
+        Load force, N (opposes positive motion when > 0).
+    load_f1 : float
+        Load force after the step, N.
+    load_t : float
+        Time of the step, s.
+    load_incline : float
+        Incline, rad.
+    decimate : int
+        Record every n-th period.
+    i_abort : float
+        ``|phase current|`` treated as divergence, A.
+    """
 
     fidelity: str = _default(_sc.InverterSection, "fidelity")  # "average" or "switching"
     v_dc: float = _default(_sc.InverterSection, "v_dc")  # V
@@ -92,8 +142,23 @@ class PlantSetup:
 
 
 def plant_template(motor, lab: tuple | None = None):
-    """An ``ls_sim_cfg`` (cffi) with only the motor part filled (:func:`fill_plant`): what
-    :func:`sim_cfg` copies instead of filling it again (a sweep runs one motor thousands of times)."""
+    """An ``ls_sim_cfg`` (cffi) with only the motor part filled (:func:`fill_plant`).
+
+    What :func:`sim_cfg` copies instead of filling it again (a sweep runs one motor thousands of
+    times).
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+    lab : tuple or None, optional
+        Passed to :func:`fill_plant`.
+
+    Returns
+    -------
+    cffi ``ls_sim_cfg *``
+        The configuration.
+    """
     c = ffi.new("ls_sim_cfg *")
     fill_plant(c, motor, lab=lab)
     return c
@@ -101,7 +166,28 @@ def plant_template(motor, lab: tuple | None = None):
 
 def sim_cfg(motor, setup: PlantSetup, lab: tuple | None = None, template=None):
     """A filled ``ls_sim_cfg`` (cffi) for ``motor`` and ``setup``; checked by the C side.
-    ``template``: :func:`plant_template` of ``motor`` (copied; never changed)."""
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+    setup : PlantSetup
+        Everything else of the plant.
+    lab : tuple or None, optional
+        Passed to :func:`fill_plant`.
+    template : cffi ``ls_sim_cfg *`` or None, optional
+        :func:`plant_template` of ``motor`` (copied; never changed).
+
+    Returns
+    -------
+    cffi ``ls_sim_cfg *``
+        The configuration.
+
+    Raises
+    ------
+    linsense.errors.SimulationError
+        When ``ls_sim_check`` refuses it.
+    """
     c = ffi.new("ls_sim_cfg *")
     if template is None:
         fill_plant(c, motor, lab=lab)
@@ -141,7 +227,25 @@ def _outputs(n_rec: int, signals=None, blocks=()) -> tuple[dict[str, np.ndarray]
 
 @dataclass
 class RawRun:
-    """Arrays and end state of one C run (arrays cut to the samples written)."""
+    """Arrays and end state of one C run (arrays cut to the samples written).
+
+    Attributes
+    ----------
+    arrays : dict of str to ndarray
+        Recorded signals by name (empty for a chunked run).
+    steps_done : int
+        PWM periods run.
+    fault : int
+        Fault bits at the end.
+    x_end : float
+        Final position, m.
+    v_end : float
+        Final speed, m/s.
+    wall_s : float
+        Wall time of the C run alone (outputs allocated before), s.
+    extra : dict
+        Anything else a caller keeps with the run (empty from this module's functions).
+    """
 
     arrays: dict[str, np.ndarray]
     steps_done: int
@@ -220,10 +324,33 @@ def _call_interruptible(call, stop) -> tuple[int, float]:
 
 
 def run_closed_loop(cfg, drive, n_steps: int, commands=(), *, signals=None, blocks=()) -> RawRun:
-    """Run ``n_steps`` PWM periods of ``drive`` (an initialised ``ls_drive *`` with its mode set)
-    around the plant ``cfg``. ``commands``: iterable of ``(t [s], x [m], move: bool)``.
-    ``signals``: the point signals to record (names of :data:`SIGNALS`; None: all), ``blocks``: the
-    block statistics (names of :data:`BLOCKS`); ``fault`` is always recorded."""
+    """Run ``n_steps`` PWM periods of ``drive`` around the plant ``cfg``.
+
+    Parameters
+    ----------
+    cfg : cffi ``ls_sim_cfg *``
+        The plant (:func:`sim_cfg`).
+    drive : cffi ``ls_drive *``
+        An initialised drive with its mode set.
+    n_steps : int
+        PWM periods.
+    commands : iterable of (float, float, bool), optional
+        ``(t [s], x [m], move)``.
+    signals : iterable of str or None, optional
+        The point signals to record (names of :data:`SIGNALS`; None: all).
+    blocks : iterable of str, optional
+        The block statistics (names of :data:`BLOCKS`); ``fault`` is always recorded.
+
+    Returns
+    -------
+    RawRun
+        The arrays and end state.
+
+    Raises
+    ------
+    linsense.errors.SimulationError
+        When ``ls_sim_run`` refuses its inputs.
+    """
     c_cmds, n_cmds = _c_commands(commands)
     n_rec = int(math.ceil(n_steps / cfg.decimate)) + 2
     arrays, out = _outputs(n_rec, signals, blocks)
@@ -239,12 +366,42 @@ def run_closed_loop(cfg, drive, n_steps: int, commands=(), *, signals=None, bloc
 
 def run_closed_loop_chunks(cfg, drive, n_steps: int, commands=(), *, on_chunk, chunk: int = CHUNK,
                            signals=None, blocks=()) -> RawRun:
-    """The run of :func:`run_closed_loop` in chunks of about ``chunk`` PWM periods (rounded up to
-    whole blocks of ``cfg.decimate``) that reuse one set of output buffers, so memory does not grow
-    with the duration: ``on_chunk(arrays)`` receives each chunk's samples (``{name: array}``, views
-    into the buffers, valid until it returns: copy or write them out) in order. The samples are bit
-    for bit those of one :func:`run_closed_loop`. Returns the end state with empty ``arrays``;
-    ``wall_s`` is the time spent in C alone."""
+    """The run of :func:`run_closed_loop` in chunks that reuse one set of output buffers.
+
+    Chunks of about ``chunk`` PWM periods (rounded up to whole blocks of ``cfg.decimate``), so memory
+    does not grow with the duration. The samples are bit for bit those of one
+    :func:`run_closed_loop`.
+
+    Parameters
+    ----------
+    cfg : cffi ``ls_sim_cfg *``
+        The plant.
+    drive : cffi ``ls_drive *``
+        An initialised drive with its mode set.
+    n_steps : int
+        PWM periods.
+    commands : iterable of (float, float, bool), optional
+        ``(t [s], x [m], move)``.
+    on_chunk : callable
+        ``on_chunk(arrays)`` receives each chunk's samples (``{name: array}``, views into the
+        buffers, valid until it returns: copy or write them out) in order.
+    chunk : int, optional
+        PWM periods per chunk.
+    signals : iterable of str or None, optional
+        The point signals to record (None: all).
+    blocks : iterable of str, optional
+        The block statistics.
+
+    Returns
+    -------
+    RawRun
+        The end state with empty ``arrays``; ``wall_s`` is the time spent in C alone.
+
+    Raises
+    ------
+    linsense.errors.SimulationError
+        When ``ls_sim_begin`` or ``ls_sim_continue`` refuses.
+    """
     c_cmds, n_cmds = _c_commands(commands)
     dec = int(cfg.decimate)
     per_call = max(1, -(-int(chunk) // dec)) * dec
@@ -271,9 +428,26 @@ def run_closed_loop_chunks(cfg, drive, n_steps: int, commands=(), *, on_chunk, c
 
 
 def run_open_loop(cfg, seg_t: np.ndarray, seg_v: np.ndarray) -> RawRun:
-    """Apply pole voltages ``seg_v`` (n, 3; V) for durations ``seg_t`` (n; s) to the plant.
+    """Apply pole voltages ``seg_v`` for durations ``seg_t`` to the plant.
 
-    Returns ``n + 1`` samples at the segment boundaries (``duty`` holds the applied voltages).
+    Parameters
+    ----------
+    cfg : cffi ``ls_sim_cfg *``
+        The plant.
+    seg_t : ndarray, shape (n,)
+        Durations, s.
+    seg_v : ndarray, shape (n, 3)
+        Pole voltages, V.
+
+    Returns
+    -------
+    RawRun
+        ``n + 1`` samples at the segment boundaries (``duty`` holds the applied voltages).
+
+    Raises
+    ------
+    linsense.errors.SimulationError
+        Mismatched segments, or ``ls_sim_open_loop`` refuses.
     """
     seg_t = np.ascontiguousarray(seg_t, dtype=float)
     seg_v = np.ascontiguousarray(seg_v, dtype=float).reshape(-1, 3)
@@ -291,8 +465,21 @@ def run_open_loop(cfg, seg_t: np.ndarray, seg_v: np.ndarray) -> RawRun:
 
 
 def plant_eval(cfg, theta: float) -> dict[str, np.ndarray]:
-    """The C plant's maps at ``theta`` (rad): L_ab entries (aa, bb, ab), their derivative,
-    the PM flux linkage and its derivative (alpha-beta)."""
+    """The C plant's maps at ``theta``.
+
+    Parameters
+    ----------
+    cfg : cffi ``ls_sim_cfg *``
+        The plant.
+    theta : float
+        Electrical position, rad.
+
+    Returns
+    -------
+    dict of str to ndarray
+        ``L_ab`` (aa, bb, ab; H), ``dL_ab`` (H/rad), ``lambda_pm`` (alpha-beta, Wb) and
+        ``dlambda_pm`` (Wb/rad).
+    """
     lab, dlab = ffi.new("double[3]"), ffi.new("double[3]")
     lpm, dlpm = ffi.new("double[2]"), ffi.new("double[2]")
     lib.ls_sim_plant_eval(cfg, float(theta), lab, dlab, lpm, dlpm)
@@ -301,7 +488,22 @@ def plant_eval(cfg, theta: float) -> dict[str, np.ndarray]:
 
 
 def plant_force(cfg, theta: float, i_ab) -> float:
-    """The C plant's force (N) at ``theta`` for alpha-beta currents ``i_ab`` (A)."""
+    """The C plant's force at ``theta`` for alpha-beta currents ``i_ab``.
+
+    Parameters
+    ----------
+    cfg : cffi ``ls_sim_cfg *``
+        The plant.
+    theta : float
+        Electrical position, rad.
+    i_ab : sequence of float
+        Alpha-beta currents, A.
+
+    Returns
+    -------
+    float
+        N.
+    """
     i = ffi.new("double[2]", [float(i_ab[0]), float(i_ab[1])])
     return float(lib.ls_sim_force(cfg, float(theta), i))
 

@@ -15,7 +15,20 @@ from linsense.tune.injection import rotating_design
 
 
 def value_of(spec, key: str):
-    """The value of the dotted scenario ``key`` in ``spec`` (given, designed or default)."""
+    """The value of the dotted scenario ``key`` in ``spec`` (given, designed or default).
+
+    Parameters
+    ----------
+    spec : ScenarioFile
+        The validated scenario.
+    key : str
+        Dotted key.
+
+    Returns
+    -------
+    object
+        The value (None for a key it does not have).
+    """
     obj = spec
     for part in key.split("."):
         obj = getattr(obj, part, None)
@@ -27,10 +40,28 @@ _GETTERS: dict[str, attrgetter] = {}
 
 
 def drive_values(sc: Scenario, motor: Motor, model_motor: Motor, known: dict) -> Values:
-    """The inputs of the mapping for the designed scenario ``sc``: its keys, what the controller
-    believes (``controller.model.*``: ``known``), the plant motor's pole pitch and the model's
-    derived values (end anisotropy, the rotating demodulator's constants, the square wave's
-    d-current schedule), each computed on first use."""
+    """The inputs of the mapping (:mod:`linsense.tune.cfgmap`) for a designed scenario.
+
+    Its keys, what the controller believes (``controller.model.*``: ``known``), the plant motor's
+    pole pitch and the model's derived values (end anisotropy, the rotating demodulator's constants,
+    the square wave's d-current schedule), each computed on first use.
+
+    Parameters
+    ----------
+    sc : Scenario
+        The designed scenario.
+    motor : Motor
+        The plant's motor.
+    model_motor : Motor
+        The motor the controller believes in.
+    known : dict
+        Motor values the controller uses.
+
+    Returns
+    -------
+    Values
+        The mapping's inputs.
+    """
     s = sc.spec
     model_key = motor_key(model_motor)
 
@@ -67,9 +98,21 @@ _SIM_ROWS = tuple((r, tuple(r.field.split(".")[:-1]), r.field.split(".")[-1]) fo
 
 
 def fill(v: Values):
-    """A new ``ls_drive_cfg *``: ``ls_drive_default_cfg`` with every field of the mapping the
-    simulator sets (in its order), then the observer's gains (``ls_observer_gains`` from
-    ``observer.bandwidth_hz``, or the file's ``k1``..``k3``)."""
+    """A new ``ls_drive_cfg *`` with every field of the mapping the simulator sets.
+
+    ``ls_drive_default_cfg`` with the mapping's fields (in its order), then the observer's gains
+    (``ls_observer_gains`` from ``observer.bandwidth_hz``, or the file's ``k1``..``k3``).
+
+    Parameters
+    ----------
+    v : Values
+        The mapping's inputs (:func:`drive_values`).
+
+    Returns
+    -------
+    cffi ``ls_drive_cfg *``
+        The configuration.
+    """
     d = drive_default_cfg()
     structs: dict[tuple[str, ...], object] = {(): d}  # (each sub-struct looked up once)
     for row, head, member in _SIM_ROWS:
@@ -92,8 +135,20 @@ def fill(v: Values):
 
 
 def calibration_table(d, points: int):
-    """The calibration's table (``float[points]``, caller-owned: keep it alive with the drive),
-    set in ``d``."""
+    """The calibration's table, set in ``d``.
+
+    Parameters
+    ----------
+    d : cffi ``ls_drive_cfg *``
+        The configuration.
+    points : int
+        Table points.
+
+    Returns
+    -------
+    cffi ``float[points]``
+        The table, caller-owned: keep it alive with the drive.
+    """
     table = ffi.new("float[]", points)
     d.cal.table = table
     return table

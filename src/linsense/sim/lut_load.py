@@ -24,8 +24,27 @@ from linsense.sim.calibrate import calibrate
 
 
 def read_lut_csv(path: Path) -> tuple[np.ndarray, np.ndarray]:
-    """``theta_deg, psi_lut_deg`` columns -> (theta, psi), rad (through the one bounded CSV reader,
-    :func:`linsense.io.read_csv_table`)."""
+    """``theta_deg, psi_lut_deg`` columns of a LUT file, in rad.
+
+    Through the one bounded CSV reader, :func:`linsense.io.read_csv_table`.
+
+    Parameters
+    ----------
+    path : Path
+        The CSV file.
+
+    Returns
+    -------
+    theta : ndarray
+        rad.
+    psi : ndarray
+        rad.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        A bad header or cell.
+    """
     data = read_csv_table(path, ("theta_deg", "psi_lut_deg"), "LUT")[0]
     return np.radians(data[:, 0]), np.radians(data[:, 1])
 
@@ -35,8 +54,31 @@ def _periodic_interp(theta: np.ndarray, th: np.ndarray, ps: np.ndarray) -> np.nd
 
 
 def fea_lut_change(folder: Path, currents: tuple[float, ...], i_q: float, theta: np.ndarray) -> np.ndarray:
-    """rad, the FEA's LUT at ``i_q`` (A) minus its LUT at ``currents[0]``, at ``theta`` (rad):
-    ``folder/lut_<I>A.csv`` interpolated linearly in the current between the two nearest loads."""
+    """The FEA's LUT at ``i_q`` minus its LUT at ``currents[0]``, at ``theta``.
+
+    ``folder/lut_<I>A.csv`` interpolated linearly in the current between the two nearest loads.
+
+    Parameters
+    ----------
+    folder : Path
+        Folder of the FEA's LUT files.
+    currents : tuple of float
+        The FEA's load currents, A, increasing.
+    i_q : float
+        q current, A.
+    theta : ndarray
+        Electrical positions, rad.
+
+    Returns
+    -------
+    ndarray
+        rad.
+
+    Raises
+    ------
+    ValueError
+        ``i_q`` outside ``currents``.
+    """
     cur = np.asarray(currents, dtype=float)
 
     def lut(c: float) -> np.ndarray:
@@ -53,7 +95,25 @@ def fea_lut_change(folder: Path, currents: tuple[float, ...], i_q: float, theta:
 
 @dataclass
 class LutLoad:
-    """Calibrated LUTs at several loads and their comparison with the FEA (angles in rad)."""
+    """Calibrated LUTs at several loads and their comparison with the FEA (angles in rad).
+
+    Attributes
+    ----------
+    theta : ndarray
+        Calibration positions, rad.
+    loads : tuple of float
+        Loads, N.
+    i_q : tuple of float
+        ``F / force_constant``, A.
+    tables : list of ndarray
+        Calibrated LUT per load, rad.
+    cal_change : list of ndarray
+        Table minus the first load's, rad.
+    fea_change : list of ndarray
+        The FEA's LUT change at the same i_q, rad.
+    metrics : dict
+        ``runs``: each calibration's metrics.
+    """
 
     theta: np.ndarray  # rad, calibration positions
     loads: tuple[float, ...]  # N
@@ -72,8 +132,33 @@ class LutLoad:
 
 def lut_vs_load(motor_file: str | Path, loads=(0.0, 20.0, 40.0), positions: int = 56,
                 fidelity: str = "switching") -> LutLoad:
-    """Calibrate on the saturated plant of ``motor_file`` (a ``[saturation]`` with FEA tables whose
-    ``lut_<I>A.csv`` sit beside it) at each load (N) and compare the change with the FEA's."""
+    """Calibrate on the saturated plant of a motor file at each load and compare with the FEA.
+
+    The motor file has a ``[saturation]`` with FEA tables whose ``lut_<I>A.csv`` sit beside it.
+
+    Parameters
+    ----------
+    motor_file : str or Path
+        The motor file.
+    loads : sequence of float, optional
+        Loads, N.
+    positions : int, optional
+        Calibration points.
+    fidelity : str, optional
+        Inverter model.
+
+    Returns
+    -------
+    LutLoad
+        The tables and their changes.
+
+    Raises
+    ------
+    ValueError
+        A motor file without FEA saturation tables.
+    RuntimeError
+        A calibration that did not complete.
+    """
     path = Path(motor_file)
     m = load_motor(path)
     if m.saturation is None or not m.saturation.tables:

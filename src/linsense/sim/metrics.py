@@ -45,7 +45,18 @@ REQUIRED_KEYS = ("stable", "max_abs_err_deg", "transient_max_err_deg", "steady_m
 
 
 def fault_reason(bits: int) -> str:
-    """``"none"`` or the names of the set bits joined by ``+`` (unknown bits in hex)."""
+    """``"none"`` or the names of the set bits joined by ``+`` (unknown bits in hex).
+
+    Parameters
+    ----------
+    bits : int
+        Fault bits.
+
+    Returns
+    -------
+    str
+        E.g. ``"observer"`` or ``"overcurrent+travel"``.
+    """
     bits = int(bits)
     if bits == 0:
         return "none"
@@ -76,8 +87,22 @@ def _round(v: float | None, nd: int = 6) -> float | None:
 
 
 def transient_mask(t: np.ndarray, moves, settle_s: float) -> np.ndarray:
-    """True while the reference moves or within ``settle_s`` after a step or the end of a move
-    (``t`` ascending)."""
+    """True while the reference moves or within ``settle_s`` after a step or the end of a move.
+
+    Parameters
+    ----------
+    t : ndarray
+        Sample times, s, ascending.
+    moves : iterable of (float, float, float, float)
+        The planned moves ``(t0, t1, x0, x1)``.
+    settle_s : float
+        Settling allowance, s.
+
+    Returns
+    -------
+    ndarray of bool
+        Per sample.
+    """
     m = np.zeros(t.shape, dtype=bool)
     for t0, t1, _, _ in moves:
         m[t.searchsorted(t0):t.searchsorted(t1 + settle_s)] = True
@@ -86,9 +111,28 @@ def transient_mask(t: np.ndarray, moves, settle_s: float) -> np.ndarray:
 
 def settling_time(t: np.ndarray, x: np.ndarray, x_to: float, t0: float, band: float,
                   x_hi: np.ndarray | None = None) -> float | None:
-    """Time (s) from ``t0`` after which ``|x - x_to| <= band`` holds to the end; None if it does
-    not hold at the last sample. With ``x_hi``, ``x`` and ``x_hi`` are each sample's block minimum
-    and maximum (the time then has the resolution of a block). ``t`` ascending."""
+    """Time from ``t0`` after which ``|x - x_to| <= band`` holds to the end.
+
+    Parameters
+    ----------
+    t : ndarray
+        Sample times, s, ascending.
+    x : ndarray
+        Position, m (with ``x_hi``: each sample's block minimum).
+    x_to : float
+        Target, m.
+    t0 : float
+        Start, s.
+    band : float
+        Band, m.
+    x_hi : ndarray or None, optional
+        Each sample's block maximum (the time then has the resolution of a block).
+
+    Returns
+    -------
+    float or None
+        s; None if the band does not hold at the last sample.
+    """
     i0 = int(t.searchsorted(t0))
     if i0 >= t.size:
         return None

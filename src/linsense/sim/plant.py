@@ -38,6 +38,25 @@ def lab_fourier(inductance: InductanceModel, tol: float = 0.0) -> tuple[np.ndarr
 
     Trailing orders whose coefficients are all below ``tol`` (H) are dropped, so the C plant
     evaluates only what the model has (three orders for eq. 3).
+
+    Parameters
+    ----------
+    inductance : InductanceModel
+        The model.
+    tol : float, optional
+        H.
+
+    Returns
+    -------
+    cos : ndarray, shape (3, n_order)
+        H.
+    sin : ndarray, shape (3, n_order)
+        H.
+
+    Raises
+    ------
+    linsense.errors.ModelError
+        More harmonic orders than the C plant takes.
     """
     out = []
     for coef in (inductance.a, inductance.b):
@@ -56,8 +75,24 @@ def lab_fourier(inductance: InductanceModel, tol: float = 0.0) -> tuple[np.ndarr
 
 
 def fill_plant(cfg, motor, tol: float = 1e-12, lab: tuple | None = None) -> None:
-    """Write the motor part of an ``ls_sim_cfg`` (cffi struct) from a :class:`Motor` (``lab``: its
-    :func:`lab_fourier` with ``tol``, when the caller has it)."""
+    """Write the motor part of an ``ls_sim_cfg`` (cffi struct) from a :class:`Motor`.
+
+    Parameters
+    ----------
+    cfg : cffi ``ls_sim_cfg *``
+        The configuration, written in place.
+    motor : Motor
+        The motor.
+    tol : float, optional
+        Of :func:`lab_fourier`, H.
+    lab : tuple or None, optional
+        :func:`lab_fourier` of the motor, when the caller has it.
+
+    Raises
+    ------
+    linsense.errors.ModelError
+        Too many harmonic orders or PM-flux harmonics for the C plant.
+    """
     cos, sin = lab_fourier(motor.inductance, tol) if lab is None else lab
     cfg.r_s = motor.R_s
     cfg.pole_pitch = motor.pole_pitch
@@ -81,9 +116,27 @@ def fill_plant(cfg, motor, tol: float = 1e-12, lab: tuple | None = None) -> None
 
 
 def fill_saturation(cfg, motor, sat) -> dict:
-    """Switch an ``ls_sim_cfg`` (cffi) to the saturated plant of ``motor`` with the
-    :class:`~linsense.model.saturation.Saturation` ``sat`` (``None``: back to the linear plant).
-    Returns the series written (:func:`linsense.model.saturation.plant_series`)."""
+    """Switch an ``ls_sim_cfg`` (cffi) to the saturated plant of ``motor`` (or back to the linear one).
+
+    Parameters
+    ----------
+    cfg : cffi ``ls_sim_cfg *``
+        The configuration, written in place.
+    motor : Motor
+        The motor.
+    sat : Saturation or None
+        The saturation data (None: back to the linear plant).
+
+    Returns
+    -------
+    dict
+        The series written (:func:`linsense.model.saturation.plant_series`; empty for None).
+
+    Raises
+    ------
+    linsense.errors.ModelError
+        Saturation data the C plant cannot take, naming the motor-file key.
+    """
     from linsense.errors import SaturationRangeError
     from linsense.model.saturation import plant_series
 

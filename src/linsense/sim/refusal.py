@@ -64,6 +64,18 @@ def culprit(cfg, given: set[str]):
     which ``field`` alone is refused (to find its limit in). A key none of whose fields is refused
     within the scenario's configuration is looked for in the firmware's default configuration
     (a rule of its own field alone, such as the largest sampling rate).
+
+    Parameters
+    ----------
+    cfg : cffi ``ls_drive_cfg *``
+        The refused configuration.
+    given : set of str
+        The dotted keys the scenario gives.
+
+    Returns
+    -------
+    tuple of (str, str, cffi ``ls_drive_cfg *``) or None
+        ``(key, field, base)``.
     """
     default = drive_default_cfg()
     groups: dict[str, list[str]] = {}
@@ -114,9 +126,23 @@ def culprit(cfg, given: set[str]):
 
 
 def c_limit(cfg, paths: tuple[str, ...]) -> float | None:
-    """The value of the fields ``paths`` (set together) nearest to the refused one that
-    ``ls_drive_init`` accepts with the rest of ``cfg`` as it is: a bisection between the default
-    and the refused value, in logarithmic steps across decades; None if the default is refused."""
+    """The value of the fields ``paths`` nearest to the refused one that ``ls_drive_init`` accepts.
+
+    With the rest of ``cfg`` as it is (the fields set together): a bisection between the default and
+    the refused value, in logarithmic steps across decades.
+
+    Parameters
+    ----------
+    cfg : cffi ``ls_drive_cfg *``
+        The refused configuration.
+    paths : tuple of str
+        The fields' struct paths.
+
+    Returns
+    -------
+    float or None
+        The limit, in the field's unit; None if the default is refused.
+    """
     c = _copy(cfg)
     good = float(_get(drive_default_cfg(), paths[0]))
     bad = float(_get(c, paths[0]))
@@ -152,8 +178,22 @@ def c_limit(cfg, paths: tuple[str, ...]) -> float | None:
 
 
 def scenario_key(path: str, given: set[str]) -> str:
-    """The scenario key to name for the C field ``path``: the first of its keys the scenario
-    gives, else the first (a designed or default value)."""
+    """The scenario key to name for the C field ``path``.
+
+    The first of its keys the scenario gives, else the first (a designed or default value).
+
+    Parameters
+    ----------
+    path : str
+        The struct path in ``ls_drive_cfg`` (``"fs"``: the sampling rates).
+    given : set of str
+        The dotted keys the scenario gives.
+
+    Returns
+    -------
+    str
+        The dotted key.
+    """
     keys = FIELDS[path][0] if path != "fs" else ("inverter.f_pwm",)
     for k in keys:
         if k in given:
@@ -162,7 +202,20 @@ def scenario_key(path: str, given: set[str]) -> str:
 
 
 def given_keys(data: dict, prefix: str = "") -> set[str]:
-    """The dotted keys of a scenario's given data (:meth:`Scenario.given`)."""
+    """The dotted keys of a scenario's given data (:meth:`Scenario.given`).
+
+    Parameters
+    ----------
+    data : dict
+        Nested keys.
+    prefix : str, optional
+        Prepended to every key.
+
+    Returns
+    -------
+    set of str
+        Every dotted key, sections included.
+    """
     out = set()
     for k, v in data.items():
         out.add(prefix + k)
@@ -187,6 +240,11 @@ def explain(cfg, given: set[str], value_of) -> tuple[str, str] | None:
         The dotted keys the scenario gives.
     value_of : callable
         ``value_of(key)``: the scenario's value of a dotted key (given, designed or default).
+
+    Returns
+    -------
+    tuple of (str, str) or None
+        ``(key, message)``.
     """
     found = culprit(cfg, given)
     if found is None:

@@ -21,15 +21,59 @@ class Result:
 
     Attributes
     ----------
-    t : s.  x, x_est, x_ref : m (true, HF observer estimate, reference).  v, v_est : m/s.
-    theta_err : rad, electrical ``theta_est - theta`` wrapped to [-pi, pi).
-    i_abc : (n, 3) A, true phase currents.  i_dq : (n, 2) A, true currents in the true dq frame.
-    duty : (n, 3) duties applied during the period (NaN in the sample that tripped a fault).
-    force : N, motor force.  err_sig : rad, demodulated error.  fault : uint32 fault bits so far.
-    metrics : dict (see :mod:`linsense.sim.metrics`).  scenario : the :class:`Scenario` run.
-    x_min, x_max, x_mean : m, err_min, err_max, err_mean : rad, i_abc_min, i_abc_max : (n, 3) A:
-    block statistics, the min, max and mean over the ``decimate`` periods each sample opens (None
-    when not recorded; recorded in metrics-only runs and whenever ``decimate > 1``). Unlike the
+    t : ndarray
+        Time, s.
+    x : ndarray
+        True position, m.
+    x_est : ndarray
+        HF observer estimate of the position, m.
+    v : ndarray
+        True speed, m/s.
+    v_est : ndarray
+        Estimated speed, m/s.
+    x_ref : ndarray
+        Reference position, m.
+    theta_err : ndarray
+        Electrical ``theta_est - theta`` wrapped to [-pi, pi), rad.
+    i_abc : ndarray, shape (n, 3)
+        True phase currents, A.
+    i_dq : ndarray, shape (n, 2)
+        True currents in the true dq frame, A.
+    duty : ndarray, shape (n, 3)
+        Duties applied during the period (NaN in the sample that tripped a fault).
+    force : ndarray
+        Motor force, N.
+    err_sig : ndarray
+        Demodulated error, rad.
+    fault : ndarray
+        uint32 fault bits so far.
+    metrics : dict
+        See :mod:`linsense.sim.metrics`.
+    scenario : Scenario
+        The scenario run.
+    fault_bits : int
+        The fault bits at the end.
+    x_min : ndarray or None
+        Minimum of the position over each block, m.
+    x_max : ndarray or None
+        Maximum of the position, m.
+    x_mean : ndarray or None
+        Mean of the position, m.
+    err_min : ndarray or None
+        Minimum of the demodulated error over each block, rad.
+    err_max : ndarray or None
+        Maximum of the demodulated error, rad.
+    err_mean : ndarray or None
+        Mean of the demodulated error, rad.
+    i_abc_min : ndarray or None
+        Minimum of each phase current over each block, shape (n, 3), A.
+    i_abc_max : ndarray or None
+        Maximum of each phase current, shape (n, 3), A.
+
+    Notes
+    -----
+    The block statistics are the min, max and mean over the ``decimate`` periods each sample opens
+    (None when not recorded; recorded in metrics-only runs and whenever ``decimate > 1``). Unlike the
     point values they cannot alias (docs/simulator.md, "Block statistics").
     """
 
@@ -65,22 +109,48 @@ class Result:
 
     @property
     def stable(self) -> bool:
+        """Whether the run's metrics call it stable (False without metrics)."""
         return bool(self.metrics.get("stable", False))
 
     def arrays(self) -> dict[str, np.ndarray]:
-        """The recorded arrays by name."""
+        """The recorded arrays by name.
+
+        Returns
+        -------
+        dict of str to ndarray
+            :data:`ARRAYS` by name.
+        """
         return {k: getattr(self, k) for k in ARRAYS}
 
     def blocks(self) -> dict[str, np.ndarray]:
-        """The block statistics recorded, by name (empty when none were)."""
+        """The block statistics recorded, by name (empty when none were).
+
+        Returns
+        -------
+        dict of str to ndarray
+            Of :data:`BLOCK_ARRAYS`.
+        """
         return {k: getattr(self, k) for k in BLOCK_ARRAYS if getattr(self, k) is not None}
 
     def to_dataframe(self, blocks: bool = False):
-        """A pandas DataFrame, one row per sample, the trace's columns (:data:`linsense.sim.trace.COLUMNS`:
-        ``t_s, x_m, ..., i_a_A, i_b_A, i_c_A, i_d_A, i_q_A, duty_a, ..., fault``; the same frame as
-        ``pandas.read_parquet`` of the run's ``trace.parquet``). ``blocks``: also the block statistics
-        recorded (``x_min_m, x_max_m, x_mean_m, err_min_rad, err_max_rad, err_mean_rad, i_a_min_A,
-        i_b_min_A, i_c_min_A, i_a_max_A, ...``; none when the run kept none). Imports pandas."""
+        """A pandas DataFrame, one row per sample, the trace's columns.
+
+        :data:`linsense.sim.trace.COLUMNS`: ``t_s, x_m, ..., i_a_A, i_b_A, i_c_A, i_d_A, i_q_A,
+        duty_a, ..., fault``; the same frame as ``pandas.read_parquet`` of the run's
+        ``trace.parquet``. Imports pandas.
+
+        Parameters
+        ----------
+        blocks : bool, optional
+            Also the block statistics recorded (``x_min_m, x_max_m, x_mean_m, err_min_rad, err_max_rad,
+            err_mean_rad, i_a_min_A, i_b_min_A, i_c_min_A, i_a_max_A, ...``; none when the run kept
+            none).
+
+        Returns
+        -------
+        pandas.DataFrame
+            The frame.
+        """
         import pandas as pd
 
         from linsense.sim.trace import trace_columns

@@ -39,8 +39,22 @@ RECORD_MODES = ("trace", "metrics")
 
 
 def metrics_decimate(n_steps: int, decimate: int = 1) -> int:
-    """Block length (PWM periods) of a metrics-only run of ``n_steps`` periods: the scenario's
-    ``decimate`` or more, so that at most :data:`METRICS_SAMPLES` samples are kept."""
+    """Block length of a metrics-only run.
+
+    The scenario's ``decimate`` or more, so that at most :data:`METRICS_SAMPLES` samples are kept.
+
+    Parameters
+    ----------
+    n_steps : int
+        PWM periods of the run.
+    decimate : int, optional
+        The scenario's ``record.decimate``.
+
+    Returns
+    -------
+    int
+        PWM periods per block.
+    """
     return max(int(decimate), -(-int(n_steps) // METRICS_SAMPLES))
 
 
@@ -57,6 +71,18 @@ def simulate(scenario: Scenario | str | Path | dict, record: str = "trace") -> R
 
     A run that diverges or trips a protection ends early and cleanly: ``metrics["stable"]`` is
     False and ``metrics["fault"]`` names the reason; no exception, no NaN in the metrics.
+
+    Parameters
+    ----------
+    scenario : Scenario or str or Path or dict
+        The scenario, a TOML path or a dict of sections.
+    record : {"trace", "metrics"}, optional
+        What to keep (above).
+
+    Returns
+    -------
+    Result
+        The arrays, metrics and scenario of the run.
 
     Raises
     ------
@@ -96,8 +122,26 @@ METRICS_BLOCKS = ("x_min", "x_max", "x_mean", "err_min", "err_max", "err_mean")
 
 
 def metrics_only(scenario: Scenario | str | Path | dict) -> dict:
-    """The metrics of ``simulate(scenario, record="metrics")``, recording only what they are
-    computed from (no Result: a sweep's run; its cost beyond the C loop is about 1 ms)."""
+    """The metrics of ``simulate(scenario, record="metrics")``.
+
+    Records only what they are computed from (no Result: a sweep's run; its cost beyond the C loop
+    is about 1 ms).
+
+    Parameters
+    ----------
+    scenario : Scenario or str or Path or dict
+        The scenario.
+
+    Returns
+    -------
+    dict
+        The metrics.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        As :func:`simulate`.
+    """
     return _run(_metrics_blocks(as_scenario(scenario, "metrics_only")), METRICS_SIGNALS, METRICS_BLOCKS)[1]
 
 
@@ -117,9 +161,26 @@ def _metrics_blocks(sc: Scenario) -> Scenario:
 
 
 def finish_metrics(b, raw, m: dict, block: int) -> None:
-    """Complete the metrics ``m`` of the run ``raw`` of the built scenario ``b`` (in place): refuse a
-    drive that trips at t = 0 (InputError), add the fidelity note, names and ``block_s`` (``block``
-    PWM periods, the resolution of the metrics' times)."""
+    """Complete the metrics of a run in place.
+
+    Refuses a drive that trips at t = 0, adds the fidelity note, names and ``block_s``.
+
+    Parameters
+    ----------
+    b : Built
+        The built scenario.
+    raw : RawRun
+        Its run.
+    m : dict
+        The metrics, completed in place.
+    block : int
+        PWM periods per block, the resolution of the metrics' times.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        The drive trips at its very first step (naming the key at fault).
+    """
     sc = b.scenario
     s = sc.spec
     if raw.fault and raw.steps_done <= 1:
@@ -147,9 +208,24 @@ def finish_metrics(b, raw, m: dict, block: int) -> None:
 
 
 def run_metrics(b, raw, arrays: dict | None = None) -> dict:
-    """The metrics of the run ``raw`` of the built scenario ``b`` (from ``arrays``, by default the
-    run's own: with block statistics among them, from those); the bounds in electrical degrees of
-    the plant motor's pole pitch."""
+    """The metrics of a run of a built scenario.
+
+    The bounds are in electrical degrees of the plant motor's pole pitch.
+
+    Parameters
+    ----------
+    b : Built
+        The built scenario.
+    raw : RawRun
+        Its run.
+    arrays : dict or None, optional
+        The samples (default the run's own; with block statistics among them, from those).
+
+    Returns
+    -------
+    dict
+        The metrics (:func:`linsense.sim.metrics.compute_metrics`).
+    """
     s = b.scenario.spec
     x_target = b.commands[-1][1] if b.commands else b.setup.x0
     observer_active = s.control.mode != "sensored" or s.control.inject_sensored
@@ -177,6 +253,27 @@ def simulate_many(scenarios, workers: int = 1, *, scheduler: str | None = None,
     GIL), so a script needs no ``if __name__ == "__main__"`` guard; ``scheduler`` sends them to a
     running cluster by address. For thousands of runs, or runs that must survive a kill, use
     :func:`linsense.sweep.sweep`, which keeps only the metrics.
+
+    Parameters
+    ----------
+    scenarios : iterable of Scenario or str or Path or dict
+        The scenarios.
+    workers : int, optional
+        Worker threads, at least 1.
+    scheduler : str or None, optional
+        Address of a running dask cluster.
+    record : {"trace", "metrics"}, optional
+        As :func:`simulate`.
+
+    Returns
+    -------
+    list of Result
+        In input order.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        Bad ``workers``, ``scenarios`` not a list, or an invalid scenario (before any run).
     """
     _check_record("simulate_many", record)
     integral = isinstance(workers, numbers.Integral) and not isinstance(workers, bool | np.bool_)

@@ -118,6 +118,7 @@ class StartupSection(BaseModel):
 
 
 class ScenarioSection(BaseModel):
+    """The ``[scenario]`` section of a scenario file; its keys are in docs/simulator.md."""
     model_config = _STRICT
     name: str = Field(default="scenario", min_length=1, description="name in outputs")
     duration: Positive = Field(description="simulated time", json_schema_extra={"unit": "s"})
@@ -125,6 +126,7 @@ class ScenarioSection(BaseModel):
 
 
 class InverterSection(BaseModel):
+    """The ``[inverter]`` section of a scenario file; its keys are in docs/simulator.md."""
     model_config = _STRICT
     fidelity: Literal["average", "switching"] = Field("average", description="`average` or `switching` "
                                                       "(see \"Fidelity\")")
@@ -141,6 +143,7 @@ class InverterSection(BaseModel):
 
 
 class ControlSection(BaseModel):
+    """The ``[control]`` section of a scenario file; its keys are in docs/simulator.md."""
     model_config = _STRICT
     mode: Literal["sensorless_lut", "sensorless_nolut", "sensored", "calibration", "startup"] = Field(
         "sensorless_lut", description="`sensorless_lut`, `sensorless_nolut`, `sensored`, `calibration` (the "
@@ -157,6 +160,7 @@ class ControlSection(BaseModel):
 
 
 class InjectionSection(BaseModel):
+    """The ``[injection]`` section of a scenario file; its keys are in docs/simulator.md."""
     model_config = _STRICT
     amplitude: NonNegative = Field(
         _c(_C.inject.amplitude), description="peak, on the estimated d-axis; `amplitude * sqrt(3) < 0.8 "
@@ -198,6 +202,7 @@ class InjectionSection(BaseModel):
 
 
 class ObserverSection(BaseModel):
+    """The ``[observer]`` section of a scenario file; its keys are in docs/simulator.md."""
     model_config = _STRICT
     compensation: Literal["lut", "none"] | None = Field(
         None, description="a contradiction with the mode is refused",
@@ -315,6 +320,13 @@ class ModelOverride(BaseModel):
 
 
 class ControllerSection(BaseModel):
+    """The ``[controller]`` section of a scenario file; its keys are in docs/simulator.md.
+
+    Attributes
+    ----------
+    model : ModelOverride
+        ``[controller.model]``: what the controller believes about the motor.
+    """
     model_config = _STRICT
     position_type: Literal["p", "pd"] = Field("p", description="`p` (P -> speed PI) or `pd` (PD -> force)")
     kp_x: Positive | None = Field(
@@ -358,6 +370,7 @@ class ControllerSection(BaseModel):
 
 
 class ReferenceSection(BaseModel):
+    """The ``[reference]`` section of a scenario file; its keys are in docs/simulator.md."""
     model_config = _STRICT
     type: Literal["step", "trajectory", "hold"] = Field("step", description="`step`, `trajectory` or `hold`")
     position_mm: float | None = Field(None, description="step target", json_schema_extra={
@@ -397,6 +410,7 @@ class ReferenceSection(BaseModel):
 
 
 class LoadSection(BaseModel):
+    """The ``[load]`` section of a scenario file; its keys are in docs/simulator.md."""
     model_config = _STRICT
     type: Literal["constant", "step", "incline"] = Field("constant", description="`constant`, `step`, "
                                                          "`incline`")
@@ -409,6 +423,7 @@ class LoadSection(BaseModel):
 
 
 class SensorsSection(BaseModel):
+    """The ``[sensors]`` section of a scenario file; its keys are in docs/simulator.md."""
     model_config = _STRICT
     current_gain: float | Triple = Field(1.0, description="one value or `[a, b, c]`")
     current_offset: float | Triple = Field(0.0, description="one value or `[a, b, c]`",
@@ -422,6 +437,7 @@ class SensorsSection(BaseModel):
 
 
 class InitialSection(BaseModel):
+    """The ``[initial]`` section of a scenario file; its keys are in docs/simulator.md."""
     model_config = _STRICT
     position_mm: float = Field(0.0, description="the mover starts here at rest; the sensorless observer is "
                                "told this position", json_schema_extra={"unit": "mm"})
@@ -432,6 +448,7 @@ class InitialSection(BaseModel):
 
 
 class TravelSection(BaseModel):
+    """The ``[travel]`` section of a scenario file; its keys are in docs/simulator.md."""
     model_config = _STRICT
     min_mm: float = Field(-1000.0, description="leaving the travel stops the run (fault `travel`)",
                           json_schema_extra={"unit": "mm"})
@@ -440,6 +457,7 @@ class TravelSection(BaseModel):
 
 
 class ProtectionSection(BaseModel):
+    """The ``[protection]`` section of a scenario file; its keys are in docs/simulator.md."""
     model_config = _STRICT
     i_max: Positive = Field(_c(_C.prot.i_max), description="phase over-current trip", json_schema_extra={
         "unit": "A", "default_note": "designed ({ecce2010} for ecce2010)"})
@@ -459,6 +477,7 @@ class ProtectionSection(BaseModel):
 
 
 class RecordSection(BaseModel):
+    """The ``[record]`` section of a scenario file; its keys are in docs/simulator.md."""
     model_config = _STRICT
     decimate: int = Field(default=1, ge=1, le=1_000_000, description="record every n-th period (with `> 1`, "
                           "also the block statistics of every period: see \"Block statistics\")")
@@ -570,6 +589,45 @@ class MetricsSection(BaseModel):
 
 
 class ScenarioFile(BaseModel):
+    """A whole scenario file, validated: the motor and one model per section (docs/simulator.md).
+
+    Attributes
+    ----------
+    scenario : ScenarioSection
+        ``[scenario]`` (required: ``duration``).
+    inverter : InverterSection
+        ``[inverter]``.
+    control : ControlSection
+        ``[control]``.
+    injection : InjectionSection
+        ``[injection]``.
+    observer : ObserverSection
+        ``[observer]``.
+    controller : ControllerSection
+        ``[controller]``.
+    reference : ReferenceSection
+        ``[reference]``.
+    load : LoadSection
+        ``[load]``.
+    sensors : SensorsSection
+        ``[sensors]``.
+    initial : InitialSection
+        ``[initial]``.
+    travel : TravelSection
+        ``[travel]``.
+    protection : ProtectionSection
+        ``[protection]``.
+    record : RecordSection
+        ``[record]``.
+    metrics : MetricsSection
+        ``[metrics]``.
+    calibration : CalibrationSection
+        ``[calibration]``.
+    saturation : SaturationSection
+        ``[saturation]``.
+    startup : StartupSection
+        ``[startup]``.
+    """
     model_config = _STRICT
     motor: str = Field(min_length=1, description="preset name (`ecce2010`) or motor-file path, relative to "
                        "the scenario file")
@@ -805,9 +863,24 @@ def _check_overrides(f: ScenarioFile) -> None:
 
 
 def compensation_of(mode: str, compensation: str | None) -> str:
-    """The compensation a drive runs: ``observer.compensation`` where the scenario gives it, else
-    the table (``"lut"``) in the modes that use one (sensorless_lut; sensored and startup for the HF
-    estimate) and ``"none"`` in the others."""
+    """The compensation a drive runs.
+
+    ``observer.compensation`` where the scenario gives it, else the table (``"lut"``) in the modes
+    that use one (sensorless_lut; sensored and startup for the HF estimate) and ``"none"`` in the
+    others.
+
+    Parameters
+    ----------
+    mode : str
+        ``control.mode``.
+    compensation : str or None
+        ``observer.compensation`` (None: not given).
+
+    Returns
+    -------
+    str
+        ``"lut"`` or ``"none"``.
+    """
     if compensation is not None:
         return compensation
     return "lut" if mode in ("sensorless_lut", "sensored", "startup") else "none"
@@ -816,7 +889,7 @@ def compensation_of(mode: str, compensation: str | None) -> str:
 class Scenario:
     """A validated scenario: the parsed file plus where it came from.
 
-    Attributes
+    Parameters
     ----------
     spec : ScenarioFile
         Every key, defaults filled in.
@@ -833,20 +906,51 @@ class Scenario:
 
     @property
     def name(self) -> str:
+        """The scenario's name (``scenario.name``)."""
         return self.spec.scenario.name
 
     def to_dict(self) -> dict:
-        """Plain data (every key, defaults filled in; ``None`` for unset optional keys dropped)."""
+        """Plain data (every key, defaults filled in; ``None`` for unset optional keys dropped).
+
+        Returns
+        -------
+        dict
+            Section to keys.
+        """
         return self.spec.model_dump(exclude_none=True)
 
     def given(self) -> dict:
         """The keys the file (or dict) gave, without the defaults (the rest is designed or defaulted
-        when the scenario is built)."""
+        when the scenario is built).
+
+        Returns
+        -------
+        dict
+            Section to the keys given.
+        """
         return self.spec.model_dump(exclude_unset=True, exclude_none=True)
 
     def replace(self, **sections) -> Scenario:
-        """A copy with some keys changed, e.g. ``replace(inverter={"fidelity": "switching"})``;
-        validated again. Keys left unset stay unset (their gains are still designed)."""
+        """A copy with some keys changed, validated again.
+
+        E.g. ``replace(inverter={"fidelity": "switching"})``. Keys left unset stay unset (their gains
+        are still designed).
+
+        Parameters
+        ----------
+        **sections : dict or object
+            Section name to the keys to change (a dict, merged), or a top-level key to its value.
+
+        Returns
+        -------
+        Scenario
+            The new scenario, same source and folder.
+
+        Raises
+        ------
+        linsense.errors.InputError
+            When the changed scenario is invalid.
+        """
         data = self.given()
         for sec, vals in sections.items():
             if isinstance(vals, dict):
@@ -936,11 +1040,30 @@ def toml_values(data, source: str, key: str = ""):
 
 
 def scenario_from_dict(data: dict, source: str = "<dict>", base_dir: str | Path | None = None) -> Scenario:
-    """Validate parsed scenario data; raise :class:`InputError` naming ``source``, key and value.
+    """Validate parsed scenario data.
 
     ``data`` from Python is held to what a TOML file can hold (:func:`toml_values`). A missing
     required key is named with its full dotted path, also when its whole section is missing
     (``reference.position_mm``: a scenario without ``[reference]`` steps to it by default).
+
+    Parameters
+    ----------
+    data : dict
+        Section name to keys, as parsed from TOML.
+    source : str, optional
+        Named in messages.
+    base_dir : str or Path or None, optional
+        Folder a relative motor path is resolved against (None: the working folder).
+
+    Returns
+    -------
+    Scenario
+        The validated scenario.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        Naming ``source``, the dotted key and the value.
     """
     if not isinstance(data, dict):
         raise InputError(source, "", f"a scenario is a table of sections, got {type(data).__name__}")
@@ -968,7 +1091,23 @@ def scenario_from_dict(data: dict, source: str = "<dict>", base_dir: str | Path 
 
 
 def load_scenario(path: str | Path) -> Scenario:
-    """Read and validate a scenario TOML file."""
+    """Read and validate a scenario TOML file.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file; a relative motor path in it is resolved against its folder.
+
+    Returns
+    -------
+    Scenario
+        The validated scenario.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        An unreadable file, bad TOML or an invalid key, naming the file and the key.
+    """
     return scenario_from_dict(read_toml(path, "scenario file"), str(path), Path(path).parent)
 
 
@@ -981,6 +1120,11 @@ def as_scenario(obj, caller: str = "simulate") -> Scenario:
         The scenario.
     caller : str
         The API function named when ``obj`` is none of these.
+
+    Returns
+    -------
+    Scenario
+        The scenario.
 
     Raises
     ------

@@ -15,12 +15,29 @@ from linsense.tune.design import error_gain, loop_margins, loops
 
 
 def margins_along(sc, theta_deg: np.ndarray | None = None, lut: bool = False, tick=None) -> LoopAlong:
-    """The motion loop's margins of the scenario ``sc`` (the gains of its drive as built:
-    :func:`linsense.sim.build.build`) run without the LUT, at each angle (default every 2 deg), with
-    the loop-gain factor and the local observer gain of the uncompensated drive there; ``lut``: run
-    with the resistance-aware LUT instead (``g = 1``, the compensated observer's local gain). With
-    the gain schedule on (``observer.gain_schedule``) the observer gain is taken as nominal (1).
-    ``tick``: called after each angle (progress)."""
+    """The motion loop's margins of a scenario's drive run without the LUT, at each angle.
+
+    The gains of its drive as built (:func:`linsense.sim.build.build`), with the loop-gain factor
+    and the local observer gain of the uncompensated drive there. With the gain schedule on
+    (``observer.gain_schedule``) the observer gain is taken as nominal (1).
+
+    Parameters
+    ----------
+    sc : Scenario
+        The scenario.
+    theta_deg : ndarray or None, optional
+        Electrical angles, deg (default every 2 deg).
+    lut : bool, optional
+        Run with the resistance-aware LUT instead (``g = 1``, the compensated observer's local
+        gain).
+    tick : callable or None, optional
+        Called after each angle (progress).
+
+    Returns
+    -------
+    LoopAlong
+        The margins at each angle.
+    """
     import control as ct
 
     b = build(sc)

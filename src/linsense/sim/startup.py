@@ -27,6 +27,33 @@ AFTER_S = 0.1
 
 @dataclass
 class StartupRun:
+    """One simulated start-up and what it did.
+
+    Attributes
+    ----------
+    x0_mm : float
+        True start position, mm.
+    load_n : float
+        Load, N.
+    fidelity : str
+        Inverter model.
+    right : bool
+        Polarity right: ``|theta_est - theta| < 90 deg`` at the end, no fault.
+    fault : int
+        Fault bits.
+    motion_mm : float
+        Largest ``|x - x0|`` while the drive was in LS_MODE_STARTUP, mm.
+    motion_after_mm : float
+        Largest ``|x - x0|`` over the ``AFTER_S`` of position control that follow, mm.
+    detect_s : float
+        Time in LS_MODE_STARTUP, s.
+    i_diff_a : float
+        ``mean(|di_+| - |di_-|)``, signed, A.
+    flip : bool
+        Whether the start-up flipped its estimate by pi.
+    err_end_deg : float
+        Final estimation error, electrical deg.
+    """
     x0_mm: float
     load_n: float
     fidelity: str
@@ -42,9 +69,31 @@ class StartupRun:
 
 def base_scenario(motor: str = "ecce2010", polarity: float | None = 0.0131, fidelity: str = "switching",
                   noise: float = 0.01, adc_bits: int = 12, startup: dict | None = None) -> dict:
-    """A start-up scenario (dict): the paper's drive (72 V, 16 kHz, 0.8 us dead time), current
-    sensors with ``noise`` A rms and a 12-bit ADC over +-10 A, the saturated plant (``polarity`` 1/A
-    over the motor's, None: the motor file's own [saturation])."""
+    """A start-up scenario (dict) on the paper's drive.
+
+    72 V, 16 kHz, 0.8 us dead time, current sensors with ``noise`` A rms and an ADC over +-10 A,
+    the saturated plant.
+
+    Parameters
+    ----------
+    motor : str, optional
+        Preset or motor file.
+    polarity : float or None, optional
+        Polarity signal over the motor's, 1/A (None: the motor file's own ``[saturation]``).
+    fidelity : str, optional
+        Inverter model.
+    noise : float, optional
+        Current-sensor noise, A rms.
+    adc_bits : int, optional
+        ADC resolution.
+    startup : dict or None, optional
+        ``[startup]`` keys.
+
+    Returns
+    -------
+    dict
+        The scenario's sections.
+    """
     sat = {"enabled": True} if polarity is None else {"enabled": True, "polarity": polarity}
     d = {"motor": motor, "scenario": {"name": "startup", "duration": 1.0},
          "inverter": {"fidelity": fidelity}, "control": {"mode": "startup"}, "reference": {"type": "hold"},
@@ -56,8 +105,30 @@ def base_scenario(motor: str = "ecce2010", polarity: float | None = 0.0131, fide
 
 def startup_run(base: dict, x0_mm: float, load_n: float = 0.0, coulomb: float = 30.0, seed: int = 1,
                 base_dir=None, coulomb_free: float = 0.0) -> StartupRun:
-    """One start-up from the true position ``x0_mm`` (the drive's estimate at startup.guess_mm);
-    Coulomb friction ``coulomb`` N with a load, ``coulomb_free`` N without."""
+    """One start-up from the true position ``x0_mm`` (the drive's estimate at startup.guess_mm).
+
+    Parameters
+    ----------
+    base : dict
+        The scenario (:func:`base_scenario`).
+    x0_mm : float
+        True start position, mm.
+    load_n : float, optional
+        Load, N.
+    coulomb : float, optional
+        Coulomb friction with a load, N.
+    seed : int, optional
+        Current-noise seed.
+    base_dir : str or Path or None, optional
+        Folder a relative motor path is resolved against.
+    coulomb_free : float, optional
+        Coulomb friction without a load, N.
+
+    Returns
+    -------
+    StartupRun
+        What the start-up did.
+    """
     d = {k: (dict(v) if isinstance(v, dict) else v) for k, v in base.items()}
     d["initial"] = {"position_mm": float(x0_mm)}
     d["load"] = {"force": float(load_n)}
@@ -87,21 +158,71 @@ def startup_run(base: dict, x0_mm: float, load_n: float = 0.0, coulomb: float = 
 
 
 def start_positions(n: int, pole_pitch_mm: float = 56.0, seed: int = 14) -> np.ndarray:
-    """``n`` random start positions (mm) spread over two electrical periods [-tau, tau)."""
+    """``n`` random start positions spread over two electrical periods ``[-tau, tau)``.
+
+    Parameters
+    ----------
+    n : int
+        Positions.
+    pole_pitch_mm : float, optional
+        ``tau``, mm.
+    seed : int, optional
+        Random seed.
+
+    Returns
+    -------
+    ndarray
+        mm.
+    """
     rng = np.random.default_rng(seed)
     return rng.uniform(-pole_pitch_mm, pole_pitch_mm, n)
 
 
 def startup_runs(base: dict, n: int = 200, loads=(0.0, 20.0), coulomb: float = 30.0, seed: int = 14,
                  base_dir=None, coulomb_free: float = 0.0) -> list[StartupRun]:
-    """:func:`startup_run` at ``n`` random positions over two periods, for each load."""
+    """:func:`startup_run` at ``n`` random positions over two periods, for each load.
+
+    Parameters
+    ----------
+    base : dict
+        The scenario.
+    n : int, optional
+        Positions.
+    loads : sequence of float, optional
+        Loads, N.
+    coulomb : float, optional
+        Coulomb friction with a load, N.
+    seed : int, optional
+        Seed of the positions.
+    base_dir : str or Path or None, optional
+        Folder a relative motor path is resolved against.
+    coulomb_free : float, optional
+        Coulomb friction without a load, N.
+
+    Returns
+    -------
+    list of StartupRun
+        Load by load, position by position.
+    """
     xs = start_positions(n, seed=seed)
     return [startup_run(base, x, load, coulomb, seed=k + 1, base_dir=base_dir, coulomb_free=coulomb_free)
             for load in loads for k, x in enumerate(xs)]
 
 
 def summary(runs: list[StartupRun]) -> dict:
-    """Per load: right / total, worst motion during detection, longest detection, smallest |i_diff|."""
+    """Per load: right / total, worst motion during detection, longest detection, smallest ``|i_diff|``.
+
+    Parameters
+    ----------
+    runs : list of StartupRun
+        The runs.
+
+    Returns
+    -------
+    dict
+        Load (N) to ``right``, ``n``, ``motion_mm``, ``motion_after_mm``, ``detect_s``,
+        ``i_diff_min_a``, ``worst_x0_mm``.
+    """
     out = {}
     for load in sorted({r.load_n for r in runs}):
         rs = [r for r in runs if r.load_n == load]

@@ -84,8 +84,22 @@ class Reducer:
     (NaN ignored) of the first source the chunks have (e.g. ``x_min`` when the run records block
     statistics, else the point value ``x``). Feed chunks with :meth:`add` (views are fine: what
     is kept is copied), then :meth:`finish`. ``k = 1`` keeps every sample (min of one = itself).
-    ``sink``: a callable given each batch of reduced samples (``{output name: array}``, in order)
-    instead of keeping them (:meth:`finish` then returns nothing).
+    ``sink`` receives the reduced samples instead of them being kept.
+
+    Parameters
+    ----------
+    k : int
+        Samples per group, at least 1.
+    spec : dict
+        Output name to ``(operation, sources)``.
+    sink : callable or None, optional
+        Given each batch of reduced samples (``{output name: array}``, in order) instead of keeping
+        them (:meth:`finish` then returns nothing).
+
+    Raises
+    ------
+    ValueError
+        When ``k`` is below 1.
     """
 
     def __init__(self, k: int, spec: Spec, sink: Callable | None = None) -> None:
@@ -111,6 +125,18 @@ class Reducer:
                 self.parts.append(part)
 
     def add(self, arrays: dict[str, np.ndarray]) -> None:
+        """Feed a chunk of samples.
+
+        Parameters
+        ----------
+        arrays : dict of str to ndarray
+            Signal name to the chunk's samples (views are fine).
+
+        Raises
+        ------
+        ValueError
+            When the first chunk has none of an output's sources.
+        """
         if self.src is None:
             self.src = {}
             for out, (_, sources) in self.spec.items():
@@ -129,9 +155,19 @@ class Reducer:
         self.pending = {s: np.array(arrays[s][m * self.k:]) for s in names}
 
     def finish(self, split_last: bool = False) -> dict[str, np.ndarray] | None:
-        """The reduced arrays (None with a ``sink``: the rest handed to it); an unfinished last group
-        is reduced as it is. ``split_last``: the last sample (the state that tripped a fault) becomes
-        a group of its own."""
+        """The reduced arrays; an unfinished last group is reduced as it is.
+
+        Parameters
+        ----------
+        split_last : bool, optional
+            The last sample (the state that tripped a fault) becomes a group of its own.
+
+        Returns
+        -------
+        dict of str to ndarray or None
+            Output name to the reduced samples (empty arrays when nothing was fed); None with a
+            ``sink``: the rest handed to it.
+        """
         rest = self.pending
         n = len(next(iter(rest.values()))) if rest else 0
         if n:
@@ -167,6 +203,23 @@ class MetricSamples:
     other sample before the end window enters the metrics only through a maximum or a minimum that
     one of those holds, so :meth:`arrays` (a subsequence of the samples) gives the metrics of all of
     them, bit for bit. A non-finite time (never from the C core) keeps every sample from then on.
+
+    Parameters
+    ----------
+    moves : iterable of (float, float, float, float)
+        The planned moves ``(t0, t1, x0, x1)``, s and m.
+    convergence_s : float
+        ``metrics.convergence_s``, s.
+    settle_s : float
+        ``metrics.settle_s``, s.
+    final_window_s : float
+        The end window, s.
+    settling_band_deg : float
+        The settling band, electrical deg.
+    pole_pitch : float
+        m.
+    x_target : float
+        The final target without a move, m.
     """
 
     def __init__(self, *, moves, convergence_s: float, settle_s: float, final_window_s: float,
@@ -183,6 +236,13 @@ class MetricSamples:
         self.compact = True
 
     def add(self, part: dict[str, np.ndarray]) -> None:
+        """Take a batch of reduced samples (a :class:`Reducer`'s ``sink``).
+
+        Parameters
+        ----------
+        part : dict of str to ndarray
+            Output name to the batch's samples, in order.
+        """
         if not np.isfinite(part["t"]).all():
             self.compact = False
         self.tail = _concat(self.tail, part)
@@ -252,16 +312,46 @@ class MetricSamples:
         return np.flatnonzero(keep)
 
     def arrays(self, names) -> dict[str, np.ndarray]:
-        """The samples kept, ``{output name: array}`` (empty arrays of ``names`` when none came)."""
+        """The samples kept.
+
+        Parameters
+        ----------
+        names : iterable of str
+            The output names, for the empty arrays when no sample came.
+
+        Returns
+        -------
+        dict of str to ndarray
+            Output name to the samples kept, in order.
+        """
         if self.tail is None:
             return {k: np.empty(0) for k in names}
         return _concat(self.kept, self.tail)
 
 
 def plot_bin(n_rec: int, decimate: int, f_pwm: float, f_inj: float | None) -> int:
-    """Samples per figure bin: at least one injection period (so the envelope holds the whole HF
-    swing) and at most :data:`PLOT_BINS` bins; a whole number of injection periods when one is a
-    whole number of samples."""
+    """Samples per figure bin.
+
+    At least one injection period (so the envelope holds the whole HF swing) and at most
+    :data:`PLOT_BINS` bins; a whole number of injection periods when one is a whole number of
+    samples.
+
+    Parameters
+    ----------
+    n_rec : int
+        Recorded samples.
+    decimate : int
+        PWM periods per sample.
+    f_pwm : float
+        PWM frequency, Hz.
+    f_inj : float or None
+        Injection frequency, Hz (None: no injection).
+
+    Returns
+    -------
+    int
+        Samples per bin.
+    """
     per_inj = f_pwm / f_inj / decimate if f_inj else 1.0
     k = max(math.ceil(per_inj - 1e-9), math.ceil(n_rec / PLOT_BINS), 1)
     q = round(per_inj)
@@ -272,11 +362,29 @@ def plot_bin(n_rec: int, decimate: int, f_pwm: float, f_inj: float | None) -> in
 
 @dataclass
 class PlotData:
-    """What :func:`linsense.report.sim_figures.sim_figure` draws: the bins of :data:`PLOT_SPEC`
-    (``t`` the bins' mean time, ``*_lo``/``*_hi`` envelopes, ``*_mean``/``x_ref``/``x_est``/``force``
-    means; ``i_lo``/``i_hi`` (n, 3)), the metrics, the scenario's name, the recording period and the
-    samples per injection period of the trace (the force is drawn only when the samples resolve
-    the injection)."""
+    """What :func:`linsense.report.sim_figures.sim_figure` draws.
+
+    The samples per injection period of the trace decide whether the force is drawn (only when the
+    samples resolve the injection).
+
+    Attributes
+    ----------
+    bins : dict of str to ndarray
+        The bins of :data:`PLOT_SPEC`: ``t`` the bins' mean time, ``*_lo``/``*_hi`` envelopes,
+        ``*_mean``/``x_ref``/``x_est``/``force`` means; ``i_lo``/``i_hi`` (n, 3).
+    metrics : dict
+        The run's metrics.
+    name : str
+        The scenario's name.
+    f_pwm : float
+        PWM frequency, Hz.
+    decimate : int
+        PWM periods per recorded sample.
+    bin_samples : int
+        Samples per bin.
+    samples_per_injection : float or None
+        Samples per injection period (None: no injection).
+    """
 
     bins: dict[str, np.ndarray]
     metrics: dict
@@ -294,7 +402,30 @@ class PlotData:
 
 def plot_data(arrays_chunks, *, n_rec: int, decimate: int, f_pwm: float, f_inj: float | None, metrics: dict,
               name: str) -> PlotData:
-    """:class:`PlotData` from an iterable of chunks (``{name: array}``) of ``n_rec`` samples."""
+    """:class:`PlotData` from an iterable of chunks of ``n_rec`` samples.
+
+    Parameters
+    ----------
+    arrays_chunks : iterable of dict
+        Chunks, ``{name: array}``.
+    n_rec : int
+        Samples in all.
+    decimate : int
+        PWM periods per sample.
+    f_pwm : float
+        PWM frequency, Hz.
+    f_inj : float or None
+        Injection frequency, Hz.
+    metrics : dict
+        The run's metrics.
+    name : str
+        The scenario's name.
+
+    Returns
+    -------
+    PlotData
+        The figure's data.
+    """
     k = plot_bin(n_rec, decimate, f_pwm, f_inj)
     red = Reducer(k, PLOT_SPEC)
     for a in arrays_chunks:
@@ -305,8 +436,19 @@ def plot_data(arrays_chunks, *, n_rec: int, decimate: int, f_pwm: float, f_inj: 
 
 @dataclass
 class StreamedRun:
-    """The end of a streamed run: its metrics, fault bits, trace samples and (when asked) the
-    figure's :class:`PlotData`."""
+    """The end of a streamed run.
+
+    Attributes
+    ----------
+    metrics : dict
+        The run's metrics.
+    fault_bits : int
+        Fault bits at the end.
+    samples : int
+        Trace samples written.
+    plot : PlotData or None
+        The figure's data (when asked).
+    """
 
     metrics: dict
     fault_bits: int
@@ -315,19 +457,53 @@ class StreamedRun:
 
 
 def injection_hz(b: Built) -> float | None:
-    """The injection frequency of the built scenario (None without injection)."""
+    """The injection frequency of the built scenario (None without injection).
+
+    Parameters
+    ----------
+    b : Built
+        The built scenario.
+
+    Returns
+    -------
+    float or None
+        Hz.
+    """
     inj = b.scenario.spec.injection
     return float(inj.frequency) if inj.frequency and inj.amplitude else None
 
 
 def simulate_streamed(b: Built, *, on_chunk: Callable | None = None, plot: bool = False, chunk: int = CHUNK,
                       metrics_cap: int = METRICS_CAP) -> StreamedRun:
-    """Run the built scenario ``b`` (:func:`linsense.sim.build.build`, ``trace_in_memory=False``)
-    in chunks of about ``chunk`` PWM periods: ``on_chunk(arrays)`` gets each chunk's samples (every
-    point signal, and the block statistics when ``decimate > 1``; views valid until it returns),
-    the metrics are accumulated as the run goes (see the module's doc), and with ``plot`` the
-    figure's bins. Raises InputError as :func:`linsense.sim.run.simulate` when the drive trips at
-    t = 0."""
+    """Run the built scenario in chunks, with its metrics accumulated as the run goes.
+
+    ``b`` is built with :func:`linsense.sim.build.build` and ``trace_in_memory=False``; the
+    metrics are accumulated as the module's doc says, and with ``plot`` the figure's bins.
+
+    Parameters
+    ----------
+    b : Built
+        The built scenario.
+    on_chunk : callable or None, optional
+        ``on_chunk(arrays)`` gets each chunk's samples (every point signal, and the block statistics
+        when ``decimate > 1``; views valid until it returns).
+    plot : bool, optional
+        Also the figure's bins.
+    chunk : int, optional
+        PWM periods per chunk.
+    metrics_cap : int, optional
+        Most samples the metrics are computed on (groups reduced beyond).
+
+    Returns
+    -------
+    StreamedRun
+        Metrics, fault bits, samples and the figure's data.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        As :func:`linsense.sim.run.simulate` when the drive trips at t = 0.
+    """
     s = b.scenario.spec
     dec = int(b.cfg.decimate)
     n_rec = -(-int(b.n_steps) // dec)

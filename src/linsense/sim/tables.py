@@ -18,7 +18,19 @@ from linsense.tune.injection import injection_tables, rotating_r_slopes
 
 @dataclasses.dataclass
 class Tables:
-    """The ``ls_lut`` objects of one drive (None: not used)."""
+    """The ``ls_lut`` objects of one drive (None: not used).
+
+    Attributes
+    ----------
+    comp : linsense.ctrl.Lut or None
+        The compensation table.
+    gain_table : linsense.ctrl.Lut or None
+        The demodulator's gain schedule.
+    comp_r : linsense.ctrl.Lut or None
+        The compensation table's slope in the resistance's scale.
+    gain_r : linsense.ctrl.Lut or None
+        The gain schedule's slope in the resistance's scale.
+    """
 
     comp: object = None
     gain_table: object = None
@@ -27,9 +39,28 @@ class Tables:
 
 
 def drive_tables(sc: Scenario, model_motor: Motor, R_s: float, v: Values) -> Tables:
-    """The tables of the designed scenario ``sc`` (``v``: its drive values): for ``sensorless_lut``,
-    and for the HF observer beside the encoder in sensored mode; the resistance-aware slopes when the
-    drive measures the resistance (``ls_dtres_adapt`` with the forward residual model)."""
+    """The tables of a designed scenario.
+
+    For ``sensorless_lut``, and for the HF observer beside the encoder in sensored mode; the
+    resistance-aware slopes when the drive measures the resistance (``ls_dtres_adapt`` with the
+    forward residual model).
+
+    Parameters
+    ----------
+    sc : Scenario
+        The designed scenario.
+    model_motor : Motor
+        The motor the controller believes in.
+    R_s : float
+        The resistance the controller believes, ohm.
+    v : Values
+        Its drive values (:func:`linsense.sim.drive_cfg.drive_values`).
+
+    Returns
+    -------
+    Tables
+        The tables.
+    """
     obs = sc.spec.observer
 
     def lut_motor() -> Motor:

@@ -31,8 +31,18 @@ COLUMNS = (
 
 
 def trace_columns(result) -> dict[str, np.ndarray]:
-    """The trace as ``{column: 1-D array}``, from a :class:`~linsense.sim.result.Result` or from a
-    chunk's ``{array name: array}``."""
+    """The trace as ``{column: 1-D array}``.
+
+    Parameters
+    ----------
+    result : Result or dict
+        A :class:`~linsense.sim.result.Result`, or a chunk's ``{array name: array}``.
+
+    Returns
+    -------
+    dict of str to ndarray
+        Columns of :data:`COLUMNS`.
+    """
     get = result.__getitem__ if isinstance(result, dict) else (lambda n: getattr(result, n))
     out = {}
     for col, name, k in COLUMNS:
@@ -56,17 +66,42 @@ def _csv_rows(cols: dict[str, np.ndarray], f, header: bool) -> None:
 
 
 def trace_csv(result) -> str:
-    """CSV text: a header line, then one row per sample (``%.10g``; NaN written as ``nan``)."""
+    """CSV text: a header line, then one row per sample (``%.10g``; NaN written as ``nan``).
+
+    Parameters
+    ----------
+    result : Result or dict
+        As :func:`trace_columns`.
+
+    Returns
+    -------
+    str
+        The CSV text.
+    """
     buf = io.StringIO()
     _csv_rows(trace_columns(result), buf, True)
     return buf.getvalue()
 
 
 class TraceWriter:
-    """Writes a trace chunk by chunk into an open binary file: ``write(arrays)`` per chunk (a
-    chunk's ``{array name: array}``), then ``close()``. ``fmt``: ``parquet`` (one row group per
-    chunk, :data:`PARQUET_OPTIONS`; the file is a valid Parquet file only once closed) or
-    ``csv`` (the header, then the rows of each chunk, as :func:`trace_csv`)."""
+    """Writes a trace chunk by chunk into an open binary file.
+
+    ``write(arrays)`` per chunk (a chunk's ``{array name: array}``), then ``close()``.
+
+    Parameters
+    ----------
+    f : binary file
+        The open file (its owner closes it).
+    fmt : {"parquet", "csv"}
+        ``parquet``: one row group per chunk, :data:`PARQUET_OPTIONS`; the file is a valid Parquet
+        file only once closed. ``csv``: the header, then the rows of each chunk, as
+        :func:`trace_csv`.
+
+    Raises
+    ------
+    ValueError
+        Another ``fmt``.
+    """
 
     def __init__(self, f, fmt: str) -> None:
         if fmt not in ("parquet", "csv"):
@@ -76,6 +111,13 @@ class TraceWriter:
         self._text = None
 
     def write(self, arrays: dict[str, np.ndarray]) -> None:
+        """Write one chunk.
+
+        Parameters
+        ----------
+        arrays : dict of str to ndarray
+            The chunk's ``{array name: array}``.
+        """
         cols = trace_columns(arrays)
         if self.fmt == "parquet":
             import pyarrow as pa
@@ -107,6 +149,10 @@ class TraceWriter:
             self._text = None
 
     def close(self) -> None:
+        """Finish the file (Parquet: its footer, with the columns even without a sample).
+
+        The file itself stays open: its owner closes it.
+        """
         if self.fmt == "parquet":
             if self._pq is None:  # no sample at all: an empty file with the columns
                 self.write({name: np.empty((0, 3) if name in ("i_abc", "duty") else (0, 2) if name == "i_dq"
@@ -119,7 +165,18 @@ class TraceWriter:
 
 
 def read_trace_csv(path: str | Path) -> dict[str, np.ndarray]:
-    """Read a trace CSV back as ``{column: array}``."""
+    """Read a trace CSV back as ``{column: array}``.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file.
+
+    Returns
+    -------
+    dict of str to ndarray
+        The columns.
+    """
     with open(path, encoding="utf-8") as f:
         header = f.readline().strip().split(",")
     data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
@@ -127,6 +184,13 @@ def read_trace_csv(path: str | Path) -> dict[str, np.ndarray]:
 
 
 def have_parquet() -> bool:
+    """Whether pyarrow is installed (the Parquet trace needs it).
+
+    Returns
+    -------
+    bool
+        True when ``import pyarrow`` works.
+    """
     try:
         import pyarrow  # noqa: F401
     except ImportError:
@@ -135,7 +199,18 @@ def have_parquet() -> bool:
 
 
 def read_trace(path: str | Path) -> dict[str, np.ndarray]:
-    """Read a trace file back (``.parquet`` or ``.csv``) as ``{column: array}``."""
+    """Read a trace file back (``.parquet`` or ``.csv``) as ``{column: array}``.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file.
+
+    Returns
+    -------
+    dict of str to ndarray
+        The columns.
+    """
     if str(path).endswith(".parquet"):
         import pyarrow.parquet as pq
 
@@ -145,7 +220,27 @@ def read_trace(path: str | Path) -> dict[str, np.ndarray]:
 
 
 def write_trace(result, path: str | Path, fmt: str = "csv") -> Path:
-    """Write the trace of ``result`` as ``csv`` or ``parquet``."""
+    """Write the trace of ``result`` as ``csv`` or ``parquet``.
+
+    Parameters
+    ----------
+    result : Result or dict
+        As :func:`trace_columns`.
+    path : str or Path
+        The file (written atomically).
+    fmt : {"csv", "parquet"}, optional
+        The format.
+
+    Returns
+    -------
+    Path
+        The file written.
+
+    Raises
+    ------
+    ValueError
+        Another ``fmt``.
+    """
     if fmt == "csv":
         return write_atomic(path, trace_csv(result))
     if fmt == "parquet":
@@ -167,10 +262,26 @@ MAT_MAX_SAMPLES = 1_000_000
 
 
 def write_mat(result, path: str | Path, metrics: dict | None = None) -> Path:
-    """MATLAB .mat (v5): one variable per column plus ``metrics_json`` (the metrics as JSON text,
-    without the wall-clock ones: :data:`linsense.io.TIMING_KEYS`). Byte-reproducible: the header
-    carries no date. ``result``: a :class:`~linsense.sim.result.Result`, or the trace's columns
-    ``{column: array}`` with ``metrics``."""
+    """MATLAB .mat (v5): one variable per column plus ``metrics_json``.
+
+    ``metrics_json`` holds the metrics as JSON text, without the wall-clock ones
+    (:data:`linsense.io.TIMING_KEYS`). Byte-reproducible: the header carries no date.
+
+    Parameters
+    ----------
+    result : Result or dict
+        A :class:`~linsense.sim.result.Result`, or the trace's columns ``{column: array}`` with
+        ``metrics``.
+    path : str or Path
+        The file (written atomically).
+    metrics : dict or None, optional
+        The metrics, with columns for ``result``.
+
+    Returns
+    -------
+    Path
+        The file written.
+    """
     from scipy.io import savemat
 
     from linsense.io import split_timing

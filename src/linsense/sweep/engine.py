@@ -46,8 +46,23 @@ OUTPUTS = ("results.parquet", "summary.txt", *(f"{s}.png" for s in STUDIES))
 
 
 def batch_size(sweep: SweepSpec, n_runs: int) -> int:
-    """Runs per batch: the file's ``batch``, or about 32 batches of at most 128 runs (a function of
-    the sweep alone, never of the workers: a resumed sweep cuts its batches the same way)."""
+    """Runs per batch: the file's ``batch``, or about 32 batches of at most 128 runs.
+
+    A function of the sweep alone, never of the workers: a resumed sweep cuts its batches the same
+    way.
+
+    Parameters
+    ----------
+    sweep : SweepSpec
+        The sweep.
+    n_runs : int
+        Its runs.
+
+    Returns
+    -------
+    int
+        Runs per batch.
+    """
     return sweep.spec.sweep.batch or max(1, min(128, -(-n_runs // 32)))
 
 
@@ -210,28 +225,42 @@ def _finished(ctx, batches: list, todo: list[int], relative: dict, workers: int 
 
 def sweep(spec, out: str | Path | None = None, *, workers: int | None = None, scheduler: str | None = None,
           processes: bool = False, progress: bool = False, restart: bool = False) -> pd.DataFrame:
-    """Run a sweep (a :class:`SweepSpec`, a sweep TOML path or a dict) and return its rows.
+    """Run a sweep and return its rows (docs/sweeps.md).
 
     Parameters
     ----------
-    out : path, optional
+    spec : SweepSpec or str or Path or dict
+        The sweep: a :class:`SweepSpec`, a sweep TOML path or a dict.
+    out : str or Path or None, optional
         Folder of the partitions (``parts/``), the manifest and the edited motor files; a sweep
         given the same ``out`` again resumes, or returns its rows when it is complete, if
-        everything its rows depend on is unchanged (``sweep.json`` records their digests; docs/
-        sweeps.md): otherwise :class:`InputError` naming what changed. Without it, a temporary
+        everything its rows depend on is unchanged (``sweep.json`` records their digests;
+        docs/sweeps.md): otherwise :class:`InputError` naming what changed. Without it, a temporary
         folder is used.
-    workers : int, optional
-        Workers of the local cluster (default: one per core).
-    scheduler : str, optional
+    workers : int or None, optional
+        Local workers (default: one per core).
+    scheduler : str or None, optional
         Address of a running dask scheduler (``tcp://host:8786``); ``workers`` is then ignored.
-    processes : bool
+    processes : bool, optional
         Local workers as processes of a dask cluster instead of threads (threads are the default:
         they start at once, without dask, and the C loop runs without the GIL).
-    progress : bool
+    progress : bool, optional
         Show a progress bar (runs done, rate, time left).
-    restart : bool
+    restart : bool, optional
         Discard the rows of the sweep already in ``out`` (of other inputs, or with an unreadable
         manifest) and start over; a folder that is not a sweep's is still refused.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per run, in run order: ``run``, the swept values, every scalar metric and ``error``
+        (the message of a run refused, else None).
+
+    Raises
+    ------
+    linsense.errors.InputError
+        An invalid sweep, an ``out`` that is not this sweep's or whose inputs changed, or an input
+        file changed while the sweep runs.
     """
     sw = as_sweep(spec)
     pts = points(sw)

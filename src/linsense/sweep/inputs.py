@@ -72,8 +72,20 @@ def _motor(what: str, spec: str, scenario_dir: Path) -> list[dict]:
 
 
 def sweep_inputs(sw: SweepSpec) -> list[dict]:
-    """Every input of ``sw``'s rows, in a fixed order, each ``{"what", "path", "sha256"}`` (a file
-    named twice is recorded once, under its first role)."""
+    """Every input of a sweep's rows, in a fixed order.
+
+    A file named twice is recorded once, under its first role.
+
+    Parameters
+    ----------
+    sw : SweepSpec
+        The sweep.
+
+    Returns
+    -------
+    list of dict
+        ``{"what", "path", "sha256"}`` each.
+    """
     if sw.text_sha256 is not None:
         entries = [_entry(SWEEP_FILE, os.path.abspath(sw.source), sw.text_sha256)]
     else:  # a sweep given as a dict: its validated content
@@ -107,8 +119,14 @@ def sweep_inputs(sw: SweepSpec) -> list[dict]:
 
 
 def code_identity() -> dict:
-    """The code the rows come from: linsense's version and the digest of the C sources its
-    extension was compiled from."""
+    """The code the rows come from.
+
+    Returns
+    -------
+    dict
+        ``linsense``: the version; ``c_library``: the digest of the C sources its extension was
+        compiled from.
+    """
     from linsense import version
     from linsense.ctrl import built_digest
 
@@ -116,12 +134,36 @@ def code_identity() -> dict:
 
 
 def digest(inputs: list[dict], code: dict) -> str:
-    """One SHA-256 over the inputs and the code (what ``sweep.json``'s ``digest`` holds)."""
+    """One SHA-256 over the inputs and the code (what ``sweep.json``'s ``digest`` holds).
+
+    Parameters
+    ----------
+    inputs : list of dict
+        :func:`sweep_inputs`.
+    code : dict
+        :func:`code_identity`.
+
+    Returns
+    -------
+    str
+        Hex digest.
+    """
     return bytes_sha256(json.dumps({"inputs": inputs, "code": code}, sort_keys=True).encode("utf-8"))
 
 
 def show(path: str) -> str:
-    """A recorded path as a person reads it: relative to the working folder when inside it."""
+    """A recorded path as a person reads it: relative to the working folder when inside it.
+
+    Parameters
+    ----------
+    path : str
+        The recorded path.
+
+    Returns
+    -------
+    str
+        The path to show.
+    """
     try:
         return str(Path(path).relative_to(Path.cwd()))
     except ValueError:
@@ -144,8 +186,24 @@ def _key(e: dict) -> tuple[str, str]:
 
 
 def changes(old_inputs: list[dict], old_code: dict, inputs: list[dict], code: dict) -> list[str]:
-    """What differs between a recorded digest and the present one, each as a phrase naming the
-    input and both digests (empty: the same inputs)."""
+    """What differs between a recorded digest and the present one.
+
+    Parameters
+    ----------
+    old_inputs : list of dict
+        The recorded inputs.
+    old_code : dict
+        The recorded code.
+    inputs : list of dict
+        The present inputs.
+    code : dict
+        The present code.
+
+    Returns
+    -------
+    list of str
+        Each a phrase naming the input and both digests (empty: the same inputs).
+    """
     out = []
     old = {_key(e): e for e in old_inputs}
     new = {_key(e): e for e in inputs}
@@ -165,8 +223,20 @@ def changes(old_inputs: list[dict], old_code: dict, inputs: list[dict], code: di
 
 
 def changed_on_disk(recorded: list[dict]) -> list[str]:
-    """The recorded files the runs read that no longer hold their recorded bytes (a check while the
-    sweep runs: the sweep file and presets are in memory)."""
+    """The recorded files the runs read that no longer hold their recorded bytes.
+
+    A check while the sweep runs: the sweep file and presets are in memory.
+
+    Parameters
+    ----------
+    recorded : list of dict
+        The recorded inputs.
+
+    Returns
+    -------
+    list of str
+        Each naming the file and both digests.
+    """
     out = []
     for e in recorded:
         if e["what"] in IN_MEMORY:
@@ -178,8 +248,18 @@ def changed_on_disk(recorded: list[dict]) -> list[str]:
 
 
 def valid_record(m) -> str | None:
-    """Why a manifest's digest record cannot be compared, as ``"<manifest> " + why`` reads (None:
-    it can)."""
+    """Why a manifest's digest record cannot be compared (None: it can).
+
+    Parameters
+    ----------
+    m : object
+        The manifest as read.
+
+    Returns
+    -------
+    str or None
+        What is wrong, as ``"<manifest> " + why`` reads.
+    """
     if not isinstance(m, dict):
         return f"is not a table of keys but a {type(m).__name__}"
     if m.get("format") != "linsense-sweep":

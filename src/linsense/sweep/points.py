@@ -41,8 +41,28 @@ def _convex(lo: float, hi: float, t: np.ndarray) -> np.ndarray:
 
 
 def grid_values(axis: Axis, source: str = "sweep") -> list:
-    """The values of one grid axis: its ``values``, or ``n`` points from ``min`` to ``max`` (both
-    included; equally spaced, or in log with ``log``), each finite and within ``[min, max]``."""
+    """The values of one grid axis.
+
+    Its ``values``, or ``n`` points from ``min`` to ``max`` (both included; equally spaced, or in
+    log with ``log``), each finite and within ``[min, max]``.
+
+    Parameters
+    ----------
+    axis : Axis
+        The axis.
+    source : str, optional
+        Named in messages.
+
+    Returns
+    -------
+    list
+        The values.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        A value that is not finite or out of ``[min, max]``.
+    """
     if axis.values is not None:
         return list(axis.values)
     lo, hi = float(axis.min), float(axis.max)
@@ -74,7 +94,23 @@ def _from_unit(axis: Axis, u: np.ndarray, source: str) -> list:
 
 
 def points(sweep: SweepSpec) -> list[dict]:
-    """The runs of ``sweep`` in order, each ``{axis key: value}`` (a factor for relative axes)."""
+    """The runs of a sweep in order.
+
+    Parameters
+    ----------
+    sweep : SweepSpec
+        The sweep.
+
+    Returns
+    -------
+    list of dict
+        ``{axis key: value}`` per run (a factor for relative axes).
+
+    Raises
+    ------
+    linsense.errors.InputError
+        A grid beyond :data:`~linsense.limits.MAX_RUNS` runs, or an axis value out of range.
+    """
     s = sweep.spec.sweep
     axes = sweep.spec.axis
     if s.sampling == "grid":

@@ -30,8 +30,29 @@ ROW_METRICS = ("stable", "accurate", "reached", "max_abs_err_deg", "transient_ma
 
 @dataclass
 class SweepContext:
-    """What every run of one sweep shares (pickled once per task): the base scenario's data and
-    folder, the base motor's data and folder, and where edited motor files go."""
+    """What every run of one sweep shares (pickled once per task).
+
+    Attributes
+    ----------
+    source : str
+        The sweep file, for messages.
+    scenario_data : dict
+        The base scenario's data.
+    scenario_dir : str
+        Its folder.
+    motor_data : dict
+        The base motor's data.
+    motor_dir : str
+        Its folder.
+    motors_out : str
+        Where edited motor files go.
+    trace : bool
+        Keep each run's trace.
+    fixed : dict
+        The keys the sweep sets in every run (``sweep.set``).
+    defaults : dict
+        Base values of relative scenario keys, found once.
+    """
 
     source: str
     scenario_data: dict
@@ -65,7 +86,25 @@ def _motor_data(spec: str, scenario_dir: Path, source: str) -> tuple[dict, Path]
 
 
 def context(sweep: SweepSpec, motors_out: Path) -> SweepContext:
-    """The shared context of ``sweep``; edited motor files will be written under ``motors_out``."""
+    """The shared context of a sweep.
+
+    Parameters
+    ----------
+    sweep : SweepSpec
+        The sweep.
+    motors_out : Path
+        Where edited motor files will be written.
+
+    Returns
+    -------
+    SweepContext
+        The context.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        No base scenario file, or one without a motor.
+    """
     p = sweep.scenario_path
     if not p.is_file():
         raise InputError(sweep.source, "sweep.scenario", f"no such scenario file {str(p)!r}")
@@ -127,8 +166,24 @@ def _motor_file(ctx: SweepContext, motor: dict) -> str:
 
 
 def scenario_for(ctx: SweepContext, point: dict, relative: dict) -> dict:
-    """The base scenario's data with the sweep's fixed keys and the point's values set (motor keys
-    through edited files)."""
+    """The base scenario's data with the sweep's fixed keys and the point's values set.
+
+    Motor keys are set through edited motor files.
+
+    Parameters
+    ----------
+    ctx : SweepContext
+        The sweep's context.
+    point : dict
+        ``{axis key: value}``.
+    relative : dict
+        Axis key to whether its values are factors of the base value.
+
+    Returns
+    -------
+    dict
+        The run's scenario data.
+    """
     data = dict(ctx.scenario_data)
     motors = {"motor": None, "lut_motor": None}
     for key, value in [*ctx.fixed.items(), *point.items()]:
@@ -155,8 +210,20 @@ def scenario_for(ctx: SweepContext, point: dict, relative: dict) -> dict:
 
 
 def hf_current(result) -> float | None:
-    """A, mean half peak-to-peak of phase a's current over injection periods of the end window
-    (the HF current's amplitude; None without a trace of the currents)."""
+    """The HF current's amplitude: mean half peak-to-peak of phase a's current.
+
+    Over injection periods of the end window.
+
+    Parameters
+    ----------
+    result : Result
+        A run with its trace.
+
+    Returns
+    -------
+    float or None
+        A; None without a trace of the currents.
+    """
     import numpy as np
 
     i = getattr(result, "i_abc", None)
@@ -176,7 +243,25 @@ def hf_current(result) -> float | None:
 
 
 def run_point(ctx: SweepContext, index: int, point: dict, relative: dict) -> dict:
-    """Simulate one point; the row holds ``run``, the swept values, the metrics and ``error``."""
+    """Simulate one point.
+
+    Parameters
+    ----------
+    ctx : SweepContext
+        The sweep's context.
+    index : int
+        The run's index.
+    point : dict
+        ``{axis key: value}``.
+    relative : dict
+        Axis key to whether its values are factors.
+
+    Returns
+    -------
+    dict
+        The row: ``run``, the swept values, the metrics of :data:`ROW_METRICS` and ``error`` (the
+        message when the run was refused, its metrics None).
+    """
     from linsense.sim.run import metrics_only, simulate
     from linsense.sim.scenario import scenario_from_dict
 
@@ -204,9 +289,24 @@ def run_point(ctx: SweepContext, index: int, point: dict, relative: dict) -> dic
 
 
 def run_batch(ctx: SweepContext, batch: list[tuple[int, dict]], relative: dict, stop=None) -> list[dict]:
-    """The rows of one batch of runs (one task of the engine, one Parquet partition). ``stop``: an
-    event (:class:`threading.Event`) that, once set, ends the batch before its next run (the
-    engine then discards its rows)."""
+    """The rows of one batch of runs (one task of the engine, one Parquet partition).
+
+    Parameters
+    ----------
+    ctx : SweepContext
+        The sweep's context.
+    batch : list of (int, dict)
+        ``(index, point)`` of each run.
+    relative : dict
+        Axis key to whether its values are factors.
+    stop : threading.Event or None, optional
+        Once set, ends the batch before its next run (the engine then discards its rows).
+
+    Returns
+    -------
+    list of dict
+        The rows (:func:`run_point`), fewer when stopped.
+    """
     rows = []
     for i, p in batch:
         if stop is not None and stop.is_set():

@@ -56,6 +56,25 @@ STUDIES: tuple[str, ...] = get_args(Study)
 
 
 class Axis(BaseModel):
+    """One ``[[axis]]`` of a sweep file: a key and its values (docs/sweeps.md).
+
+    Attributes
+    ----------
+    key : str
+        Dotted scenario key, or ``motor.*`` / ``lut_motor.*``.
+    values : list or None
+        The values; else ``min`` and ``max`` (with ``n`` on a grid).
+    min : float or None
+        Lower end.
+    max : float or None
+        Upper end.
+    n : int or None
+        Grid points between ``min`` and ``max``.
+    log : bool
+        Grid/random/lhs spaced in log between ``min`` and ``max``.
+    relative : bool
+        ``values``, ``min``, ``max`` are factors of the base value.
+    """
     model_config = _STRICT
     key: str
     values: Annotated[list[Value], Field(min_length=1, max_length=100_000)] | None = None
@@ -89,6 +108,29 @@ class Axis(BaseModel):
 
 
 class SweepSection(BaseModel):
+    """The ``[sweep]`` section of a sweep file.
+
+    Attributes
+    ----------
+    name : str
+        Name in outputs.
+    scenario : str
+        Base scenario file, relative to the sweep file.
+    sampling : str
+        ``grid``, ``random`` or ``lhs``.
+    samples : int or None
+        Runs of ``random`` and ``lhs``.
+    seed : int
+        Random seed.
+    study : str or None
+        ``stability-map``, ``lut-robustness`` or ``injection``.
+    batch : int or None
+        Runs per task and per Parquet partition; default: about 32 tasks, at most 128 runs each.
+    trace : bool
+        Keep each run's trace (memory grows with duration); default: metrics only.
+    set : dict
+        Keys set in every run before the axes' values (same keys as an axis).
+    """
     model_config = _STRICT
     name: str = Field(default="sweep", min_length=1)
     scenario: str = Field(min_length=1)  # base scenario file, relative to the sweep file
@@ -105,6 +147,15 @@ class SweepSection(BaseModel):
 
 
 class SweepFile(BaseModel):
+    """A whole sweep file, validated.
+
+    Attributes
+    ----------
+    sweep : SweepSection
+        ``[sweep]``.
+    axis : list of Axis
+        The ``[[axis]]`` tables (1 to 16).
+    """
     model_config = _STRICT
     sweep: SweepSection
     axis: Annotated[list[Axis], Field(min_length=1, max_length=16)]
@@ -130,9 +181,20 @@ class SweepFile(BaseModel):
 
 
 class SweepSpec:
-    """A validated sweep file: ``spec`` (the pydantic model), ``source``, ``base_dir`` and
-    ``text_sha256``, the SHA-256 of the file's text the spec was parsed from (None for a sweep given
-    as a dict: :mod:`linsense.sweep.inputs` then digests the validated spec)."""
+    """A validated sweep file.
+
+    Parameters
+    ----------
+    spec : SweepFile
+        The pydantic model.
+    source : str
+        The file, or ``"<dict>"``, named in messages.
+    base_dir : Path
+        Folder the base scenario is relative to.
+    text_sha256 : str or None, optional
+        The SHA-256 of the file's text the spec was parsed from (None for a sweep given as a dict:
+        :mod:`linsense.sweep.inputs` then digests the validated spec).
+    """
 
     def __init__(self, spec: SweepFile, source: str, base_dir: Path, text_sha256: str | None = None) -> None:
         self.spec = spec
@@ -142,16 +204,38 @@ class SweepSpec:
 
     @property
     def name(self) -> str:
+        """The sweep's name (``sweep.name``)."""
         return self.spec.sweep.name
 
     @property
     def scenario_path(self) -> Path:
+        """The base scenario file's path (relative to the sweep file's folder)."""
         p = Path(self.spec.sweep.scenario)
         return p if p.is_absolute() else self.base_dir / p
 
 
 def sweep_from_dict(data: dict, source: str = "<dict>", base_dir: str | Path | None = None) -> SweepSpec:
-    """Validate parsed sweep data; :class:`InputError` names ``source``, the key and the value."""
+    """Validate parsed sweep data.
+
+    Parameters
+    ----------
+    data : dict
+        Sections, as parsed from TOML.
+    source : str, optional
+        Named in messages.
+    base_dir : str or Path or None, optional
+        Folder the base scenario is relative to (None: the working folder).
+
+    Returns
+    -------
+    SweepSpec
+        The validated sweep.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        Naming ``source``, the key and the value.
+    """
     if not isinstance(data, dict):
         raise InputError(source, "", f"a sweep is a table of sections, got {type(data).__name__}")
     try:
@@ -162,8 +246,25 @@ def sweep_from_dict(data: dict, source: str = "<dict>", base_dir: str | Path | N
 
 
 def load_sweep(path: str | Path) -> SweepSpec:
-    """Read and validate a sweep TOML file (its text read once: the spec and its digest are of the
-    same bytes)."""
+    """Read and validate a sweep TOML file.
+
+    Its text is read once: the spec and its digest are of the same bytes.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file.
+
+    Returns
+    -------
+    SweepSpec
+        The validated sweep, with ``text_sha256``.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        An unreadable file, bad TOML or an invalid key.
+    """
     text = read_text_file(path, "sweep file")
     sw = sweep_from_dict(parse_toml(text, str(path)), str(path), Path(path).parent)
     sw.text_sha256 = bytes_sha256(text.encode("utf-8"))
@@ -171,7 +272,25 @@ def load_sweep(path: str | Path) -> SweepSpec:
 
 
 def as_sweep(obj) -> SweepSpec:
-    """A :class:`SweepSpec` from a SweepSpec, a path or a dict."""
+    """A :class:`SweepSpec` from a SweepSpec, a path or a dict.
+
+    Parameters
+    ----------
+    obj : SweepSpec or str or Path or dict
+        The sweep.
+
+    Returns
+    -------
+    SweepSpec
+        The sweep.
+
+    Raises
+    ------
+    TypeError
+        ``obj`` is none of these.
+    linsense.errors.InputError
+        An invalid sweep.
+    """
     if isinstance(obj, SweepSpec):
         return obj
     if isinstance(obj, dict):

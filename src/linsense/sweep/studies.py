@@ -14,7 +14,22 @@ def _n_stable(df: pd.DataFrame) -> int:
 
 
 def summary_line(study: str | None, df: pd.DataFrame, axes: list[str]) -> str:
-    """What the sweep found, in one line."""
+    """What the sweep found, in one line.
+
+    Parameters
+    ----------
+    study : str or None
+        The sweep's study (its summary names what the study looks for).
+    df : pandas.DataFrame
+        The sweep's rows.
+    axes : list of str
+        The axis keys.
+
+    Returns
+    -------
+    str
+        Runs stable, not, refused, and the study's finding.
+    """
     n = len(df)
     refused = int(df["error"].notna().sum()) if "error" in df else 0
     stable = _n_stable(df)

@@ -65,9 +65,10 @@ class Row:
         ``real``, ``count`` (an unsigned integer), ``bool``, ``enum`` (the value is a C name), ``fs``
         (a module's sampling rate: ``inverter.f_pwm``) or ``gains`` (``ls_observer_gains`` unless the
         file gives the gain).
-    sim, c : bool
-        Whether the simulator sets it; whether ``tune --format c`` writes it (``"startup"``: when the
-        design has a start-up).
+    sim : bool
+        Whether the simulator sets it.
+    c : bool or str
+        Whether ``tune --format c`` writes it (``"startup"``: when the design has a start-up).
     when : callable or None
         ``when(values)``: the simulator sets the field only then (else it keeps the default).
     blame : bool
@@ -90,7 +91,18 @@ class Row:
     doc: str = ""
 
     def value(self, v: Values):
-        """The field's value in the context ``v``."""
+        """The field's value in the context ``v``.
+
+        Parameters
+        ----------
+        v : Values
+            The scenario keys and derived values.
+
+        Returns
+        -------
+        object
+            The value, in the field's unit.
+        """
         if self.rule is not None:
             return self.rule(v)
         if self.conv is None:
@@ -131,7 +143,18 @@ class Values:
         return value
 
     def field(self, path: str):
-        """The value of the field ``path`` in this context (computed once)."""
+        """The value of the field ``path`` in this context (computed once).
+
+        Parameters
+        ----------
+        path : str
+            The struct path in ``ls_drive_cfg``.
+
+        Returns
+        -------
+        object
+            The value, in the field's unit.
+        """
         fields = self._fields
         if path in fields:
             return fields[path]
@@ -139,11 +162,34 @@ class Values:
         return value
 
     def given(self, key: str) -> bool:
+        """Whether the scenario sets the dotted key itself (else designed or default).
+
+        Parameters
+        ----------
+        key : str
+            The dotted scenario key.
+
+        Returns
+        -------
+        bool
+            False when no ``given`` was passed.
+        """
         return self._given is not None and self._given(key)
 
 
 def real(x: float) -> float:
-    """``x`` as an ``LS_REAL`` field holds it (single precision), read back."""
+    """``x`` as an ``LS_REAL`` field holds it (single precision), read back.
+
+    Parameters
+    ----------
+    x : float
+        The value.
+
+    Returns
+    -------
+    float
+        ``x`` rounded to single precision.
+    """
     return float(np.float32(x))
 
 
@@ -200,7 +246,18 @@ def _l_avg(v: Values) -> float:
 
 
 def square_schedule(v: Values) -> dict | None:
-    """The square wave's d-current schedule (docs/theory.md, "The dead time and the square wave")."""
+    """The square wave's d-current schedule (docs/theory.md, "The dead time and the square wave").
+
+    Parameters
+    ----------
+    v : Values
+        The scenario keys and derived values.
+
+    Returns
+    -------
+    dict or None
+        :func:`linsense.tune.injection.square_current_schedule`'s result.
+    """
     return square_current_schedule(_l_avg(v), v["controller.model.R_s"], v["injection.amplitude"],
                                    v["inverter.f_pwm"], real(v.field("i_d_inj")))
 
@@ -463,13 +520,29 @@ FS_FIELDS: tuple[str, ...] = tuple(r.field for r in ROWS if r.kind == "fs")
 
 
 def header_rows(startup: bool) -> list[Row]:
-    """The rows ``tune --format c`` writes, in the header's order (with the start-up design's when
-    ``startup``)."""
+    """The rows ``tune --format c`` writes, in the header's order.
+
+    Parameters
+    ----------
+    startup : bool
+        Include the start-up design's rows.
+
+    Returns
+    -------
+    list of Row
+        The rows.
+    """
     return [r for r in ROWS if r.c is True or (r.c == "startup" and startup)]
 
 
 def docs_table() -> str:
-    """The docs' table of the fields and the scenario keys that set them (Markdown)."""
+    """The docs' table of the fields and the scenario keys that set them (Markdown).
+
+    Returns
+    -------
+    str
+        The Markdown table.
+    """
     out = ["| `ls_drive_cfg` field | scenario keys (the first given is named in a refusal) | unit | rule | "
            "simulate | tune -c |", "|---|---|---|---|---|---|"]
     for r in ROWS:

@@ -94,7 +94,36 @@ V_DC_MAX_FRACTION = 5.0 / 4.0  # over-voltage limit (90 V at 72 V)
 
 @dataclass
 class DriveData:
-    """The drive around the motor (SI units)."""
+    """The drive around the motor (SI units).
+
+    Parameters
+    ----------
+    v_dc : float
+        DC bus, V.
+    f_pwm : float
+        PWM frequency = control rate, Hz.
+    dead_time : float
+        Inverter dead time, s.
+    i_max : float
+        Current-reference limit, A.
+    v_max : float
+        The fastest move the drive must make (speed cap, trips, bus headroom), m/s.
+    a_max : float
+        The application's acceleration (force check, verification), m/s^2.
+    load : float or None
+        Rated load, N (None: ``RATED_LOAD_FRACTION K_f i_max``).
+    travel : float or None
+        The stroke, m (None: unbounded).
+    v_inj : float or None
+        Injection amplitude, V (None: designed).
+    f_inj : float or None
+        Injection frequency, Hz (None: designed, :func:`injection_frequency`).
+    quad : float
+        Elliptical share on q, dimensionless (0: the paper's pulsating injection).
+    shape : str
+        Injection: ``"pulsating"`` (pulsating or elliptical), ``"rotating"`` or ``"square"`` (at
+        f_pwm / 2).
+    """
 
     v_dc: float = 72.0  # V
     f_pwm: float = 16000.0  # Hz, PWM = control rate
@@ -112,7 +141,89 @@ class DriveData:
 
 @dataclass
 class Design:
-    """The designed values (SI; bandwidths in Hz) and what the analysis found."""
+    """The designed values (SI; bandwidths in Hz) and what the analysis found (docs/tuning.md).
+
+    Attributes
+    ----------
+    f_inj : float
+        Injection frequency, Hz.
+    v_inj : float
+        Injection amplitude, V.
+    quad : float
+        Elliptical share on q, dimensionless.
+    i_hf : float
+        Mean HF current amplitude, A.
+    current_bw : float
+        Current-loop bandwidth, Hz.
+    current_kp : float
+        Current PI proportional gain, V/A.
+    current_ki : float
+        Current PI integral gain, V/(A s).
+    demod_lpf : float
+        Demodulator low-pass corner, Hz.
+    demod_notch : float
+        The demodulator low-pass's zeros at ``2 f_inj``, Hz (0: none, when ``4 f_inj >= f_pwm``).
+    demod_gain : float
+        Nominal demodulator gain ``L_q / (L_q - L_d)``, dimensionless.
+    observer_bw : float
+        Observer bandwidth, Hz (the mechanical observer's or the PLL's, by ``observer_type``).
+    speed_bw : float
+        Speed-loop bandwidth, Hz.
+    speed_kp : float
+        Speed PI proportional gain, N s/m.
+    speed_ki : float
+        Speed PI integral gain, N/m.
+    kp_x : float
+        Position-loop gain, 1/s.
+    dither_a : float
+        Calibration dither amplitude, A.
+    dither_hz : float
+        Calibration dither frequency, Hz.
+    hf_delay : float
+        The HF path's delay the estimate is advanced by (pulsating, elliptical), s.
+    k_e_min : float
+        Lowest local error gain over the period, relative.
+    k_e_max : float
+        Highest local error gain over the period, relative.
+    margins : dict
+        Loop margins by loop and case (:func:`margins`); empty when not analysed.
+    headroom_speed : float
+        Speed up to which the fundamental fits beside the injection, m/s.
+    dead_time_ratio : float
+        ``T_d f_pwm V_dc / (V_inj s_min)``, dimensionless.
+    inj_ramp_rate : float
+        The injection's ramp (``V_inj / INJ_RAMP_TIME``), V/s.
+    s_min : float
+        Lowest ``(L_q - L_d)/(L_q + L_d)`` over the period, dimensionless.
+    v_cap : float
+        Speed-reference cap (controller.v_max), m/s.
+    a_step : float
+        A step command's acceleration (reference.step_a_max; at v_cap), m/s^2.
+    omega_trip : float
+        Over-speed trip (protection.omega_max), electrical rad/s.
+    omega_obs : float
+        Observer speed clamp (observer.omega_max), electrical rad/s.
+    i_trip : float
+        Over-current trip (protection.i_max), A.
+    load : float
+        Rated load the verification uses, N.
+    observer_type : str
+        ``"mech"`` (with load_ff) or ``"pll"`` (observer.type).
+    load_ff : bool
+        The mechanical observer's load estimate fed forward (observer.load_feedforward).
+    observer_bw_pll : float
+        The PLL bandwidth by the rules (observer.type "pll"), Hz.
+    observer_bw_mech : float
+        The mechanical observer's bandwidth (observer.type "mech"), Hz.
+    force_max : float
+        ``K_f i_max``: the clamp of the load estimate (observer.force_max), N.
+    limits : dict
+        What limits each bandwidth (docs/tuning.md).
+    tolerances : dict
+        Per tolerance: predicted hold error and gain range (:func:`linsense.tune.margins.tolerance_costs`).
+    warnings : list of str
+        What the design could not meet.
+    """
 
     f_inj: float
     v_inj: float
@@ -155,28 +266,90 @@ class Design:
     warnings: list = field(default_factory=list)
 
     def as_dict(self) -> dict:
+        """The design as a plain dict (``dataclasses.asdict``).
+
+        Returns
+        -------
+        dict
+            Field name to value.
+        """
         return asdict(self)
 
 
 def current_gains(bw_hz: float, L_d: float, L_q: float, R_s: float) -> tuple[float, float]:
-    """PI gains of the d/q current loop for a bandwidth (Hz): pole-zero cancellation."""
+    """PI gains of the d/q current loop for a bandwidth: pole-zero cancellation.
+
+    Parameters
+    ----------
+    bw_hz : float
+        Bandwidth, Hz.
+    L_d, L_q : float
+        Mean d and q inductances, H.
+    R_s : float
+        Phase resistance, ohm.
+
+    Returns
+    -------
+    kp : float
+        ``w (L_d + L_q) / 2``, V/A.
+    ki : float
+        ``w R_s``, V/(A s).
+    """
     w = 2.0 * math.pi * bw_hz
     return w * 0.5 * (L_d + L_q), w * R_s
 
 
 def speed_gains(bw_hz: float, mass: float) -> tuple[float, float]:
-    """Speed PI gains for a bandwidth (Hz): kp = m w, ki = m w^2 / 4 (a double real closed-loop pole;
-    with the load estimate fed forward the sensorless modes hold the integrator at 0, the encoder
-    modes keep it)."""
+    """Speed PI gains for a bandwidth: ``kp = m w``, ``ki = m w^2 / 4``.
+
+    A double real closed-loop pole; with the load estimate fed forward the sensorless modes hold the
+    integrator at 0, the encoder modes keep it.
+
+    Parameters
+    ----------
+    bw_hz : float
+        Bandwidth, Hz.
+    mass : float
+        Moving mass, kg.
+
+    Returns
+    -------
+    kp : float
+        N s/m.
+    ki : float
+        N/m.
+    """
     w = 2.0 * math.pi * bw_hz
     return mass * w, mass * w * w / SPEED_KI_DIV
 
 
 def observable_error_gain(motor: Motor, f_inj: float, quad: float, source: str) -> np.ndarray:
-    """:func:`error_gain` with the nominal demodulator gain ``L_q / (L_q - L_d)``, or
-    :class:`InputError` naming ``source`` where it is not positive at every position: the HF
-    observer cannot hold there, and no table compensates it (``tune``, ``simulate``, ``calibrate``
-    and ``lut`` refuse such a motor alike)."""
+    """:func:`error_gain` with the nominal demodulator gain ``L_q / (L_q - L_d)``.
+
+    Where it is not positive at every position the HF observer cannot hold, and no table
+    compensates it (``tune``, ``simulate``, ``calibrate`` and ``lut`` refuse such a motor alike).
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+    f_inj : float
+        Injection frequency, Hz.
+    quad : float
+        Elliptical share on q.
+    source : str
+        Named in the message.
+
+    Returns
+    -------
+    ndarray
+        The local error gain over the period, relative.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        No mean saliency, or the gain is not positive everywhere.
+    """
     L_d, L_q = mean_dq(motor)
     if L_q == L_d:
         raise InputError(source, "motor",
@@ -193,35 +366,105 @@ def observable_error_gain(motor: Motor, f_inj: float, quad: float, source: str) 
 
 
 def end_effect_ratio(motor: Motor) -> float:
-    """``|(l_ea, l_eb)| / (|L_d - L_q| / 2)``: the end effect's stationary anisotropy over the
-    saliency's rotating one (alpha-beta inductance, :func:`linsense.analysis.hf.end_anisotropy`).
-    A fraction ``d`` of error in the end effect tilts the HF ellipse's axis by up to about
-    ``d ratio / 2`` rad, which no saliency estimator tells from a position shift where the tilt is
-    across the axis (docs/tuning.md, "The end-effect tolerance")."""
+    """The end effect's stationary anisotropy over the saliency's rotating one.
+
+    ``|(l_ea, l_eb)| / (|L_d - L_q| / 2)`` (alpha-beta inductance,
+    :func:`linsense.analysis.hf.end_anisotropy`). A fraction ``d`` of error in the end effect tilts
+    the HF ellipse's axis by up to about ``d ratio / 2`` rad, which no saliency estimator tells from a
+    position shift where the tilt is across the axis (docs/tuning.md, "The end-effect tolerance").
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+
+    Returns
+    -------
+    float
+        Dimensionless.
+    """
     l_ea, l_eb = end_anisotropy(motor)
     l_d, l_q = mean_dq(motor)
     return float(math.hypot(l_ea, l_eb) / (0.5 * abs(l_d - l_q)))
 
 
 def gain_schedule(motor: Motor, f_inj: float, quad: float, n: int) -> np.ndarray:
-    """The demodulator's gain table, ``1 / k_e(theta)`` at ``n`` positions (:func:`error_gain`):
-    the local error gain 1 everywhere (docs/tuning.md, "The gain schedule")."""
+    """The demodulator's gain table, ``1 / k_e(theta)`` at ``n`` positions (:func:`error_gain`).
+
+    The local error gain is then 1 everywhere (docs/tuning.md, "The gain schedule").
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+    f_inj : float
+        Injection frequency, Hz.
+    quad : float
+        Elliptical share on q.
+    n : int
+        Table points over the period.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        Dimensionless.
+    """
     return 1.0 / error_gain(motor, f_inj, quad, 1.0, n=n)
 
 
 def gain_r_slope(motor: Motor, f_inj: float, quad: float, n: int) -> np.ndarray:
-    """``d g / d k_r`` of :func:`gain_schedule` (per unit of the resistance's scale, ``R_s = k_r
-    R_s0``; :func:`~linsense.compensation.lut.resistance_slope`): the drive measures ``k_r`` and
-    reads ``g + (k_r - 1) dg/dk_r`` (``ls_demod_cfg.gain_r``), as its table follows it
-    (``lut_r_slope``)."""
+    """``d g / d k_r`` of :func:`gain_schedule`, per unit of the resistance's scale.
+
+    ``R_s = k_r R_s0``; :func:`~linsense.compensation.lut.resistance_slope`: the drive measures
+    ``k_r`` and reads ``g + (k_r - 1) dg/dk_r`` (``ls_demod_cfg.gain_r``), as its table follows it
+    (``lut_r_slope``).
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+    f_inj : float
+        Injection frequency, Hz.
+    quad : float
+        Elliptical share on q.
+    n : int
+        Table points over the period.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        Per unit of ``k_r``.
+    """
     return resistance_slope(motor, lambda m: gain_schedule(m, f_inj, quad, n), n)
 
 
 def design(
     motor: Motor, drive: DriveData | None = None, source: str = "<tune>", analyse: bool = True
 ) -> Design:
-    """Design the drive for ``motor``; bad drive data end in :class:`InputError` naming ``source``.
-    ``analyse``: also compute the margins of the linearised model (python-control)."""
+    """Design the drive for ``motor`` (docs/tuning.md).
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+    drive : DriveData or None, optional
+        The drive around it (None: the defaults, the paper's drive).
+    source : str, optional
+        Named in messages.
+    analyse : bool, optional
+        Also compute the margins of the linearised model (python-control) and the tolerances.
+
+    Returns
+    -------
+    Design
+        The designed values; ``warnings`` lists what could not be met.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        Bad drive data (naming ``source`` and the key), a motor without mean saliency, or a drive
+        that leaves no room for the injection.
+    """
     d = drive or DriveData()
     for key in ("v_dc", "f_pwm", "i_max", "v_max", "a_max"):
         v = getattr(d, key)
@@ -392,16 +635,43 @@ def design(
 
 
 def injection_frequency(f_pwm: float) -> float:
-    """``f_pwm / N`` (Hz): the largest integer ``N <= RATIO_PWM_INJ`` (and ``>= 4``) that keeps the
-    injection at ``F_INJ_MIN`` or above (ecce2010's 16 kHz: 1 kHz; 10 kHz: 1 kHz; 8 kHz: 1 kHz;
-    12 kHz: 1 kHz; 20 kHz: 1.25 kHz)."""
+    """``f_pwm / N``: the injection frequency for a PWM frequency.
+
+    The largest integer ``N <= RATIO_PWM_INJ`` (and ``>= 4``) that keeps the injection at
+    ``F_INJ_MIN`` or above (ecce2010's 16 kHz: 1 kHz; 10 kHz: 1 kHz; 8 kHz: 1 kHz; 12 kHz: 1 kHz;
+    20 kHz: 1.25 kHz).
+
+    Parameters
+    ----------
+    f_pwm : float
+        PWM frequency, Hz.
+
+    Returns
+    -------
+    float
+        Hz.
+    """
     n = int(min(RATIO_PWM_INJ, max(4.0, math.floor(f_pwm / F_INJ_MIN))))
     return f_pwm / n
 
 
 def saliency_min(motor: Motor, n: int = 360) -> float:
-    """The lowest local saliency ratio ``(L_q - L_d)/(L_q + L_d)`` over the period (-): the
-    weakest HF error signal, relative (docs/tuning.md, "The injection amplitude")."""
+    """The lowest local saliency ratio ``(L_q - L_d)/(L_q + L_d)`` over the period.
+
+    The weakest HF error signal, relative (docs/tuning.md, "The injection amplitude").
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+    n : int, optional
+        Positions over the period.
+
+    Returns
+    -------
+    float
+        Dimensionless.
+    """
     from linsense.analysis.hf import dq_components
 
     L_d, L_q, _ = dq_components(motor, np.linspace(0.0, 2.0 * np.pi, n, endpoint=False))
@@ -409,9 +679,21 @@ def saliency_min(motor: Motor, n: int = 360) -> float:
 
 
 def uncompensated_speed_factor(motor: Motor) -> float:
-    """The largest ratio of the estimate's speed to the mover's without a compensation table:
-    ``max(1 + de*/dtheta)`` (../shared/brief.md section 4; 2.93 for ecce2010). The drive's trips
-    and clamps act on the estimate, so a drive run without its table needs them this much wider."""
+    """The largest ratio of the estimate's speed to the mover's without a compensation table.
+
+    ``max(1 + de*/dtheta)`` (2.93 for ecce2010). The drive's trips and clamps act on the estimate,
+    so a drive run without its table needs them this much wider.
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+
+    Returns
+    -------
+    float
+        At least 1.
+    """
     from linsense.analysis.hf import loop_gain_factor
 
     th = np.linspace(0.0, 2.0 * np.pi, 360, endpoint=False)
@@ -464,12 +746,28 @@ def _limits(dz: Design, motor: Motor, d: DriveData, warnings: list, source: str)
 
 
 def startup_lock_gain(observer_type: str, f_obs: float, f_lpf: float) -> float:
-    """The start-up's gain on the demodulated error while the HF observer locks at zero current
-    (``startup.lock_gain``): without a load estimate the mechanical observer's gains (3 w, 3 w^2) act
+    """The start-up's gain on the demodulated error while the HF observer locks at zero current.
+
+    ``startup.lock_gain``: without a load estimate the mechanical observer's gains (3 w, 3 w^2) act
     as a PLL's; times ``2 w_pll / (3 w)`` its k1 is the PLL's at ``f_lpf / RATIO_LPF_OBS`` (k2 then
     0.75 of it: damping 1.15), so it slews onto the axis as the PLL does (measured, 200 starts on
     ecce2010 without load or friction: 0.096 mm of motion while detecting, 0.099 with the PLL;
-    0.121 without the gain, 0.111 with k2 matched instead); 1 with the PLL."""
+    0.121 without the gain, 0.111 with k2 matched instead); 1 with the PLL.
+
+    Parameters
+    ----------
+    observer_type : str
+        ``"mech"`` or ``"pll"``.
+    f_obs : float
+        The observer's bandwidth, Hz.
+    f_lpf : float
+        The demodulator's low-pass corner, Hz.
+
+    Returns
+    -------
+    float
+        Dimensionless.
+    """
     if observer_type != "mech":
         return 1.0
     return 2.0 * (f_lpf / RATIO_LPF_OBS) / (3.0 * f_obs)
@@ -501,7 +799,42 @@ def loops(*, mass: float, kp_x: float, speed_kp: float, speed_ki: float, observe
     force reference u (the estimate of the load aside), so its error sees only what the model
     misses, the current loop: ``E = eps/u = k_e H (C_i - 1) / (m s^2 (1 + k_e H G_o))``, and the
     motion loop broken at u is ``C_v (kp_x x_est + v_est)/u + load_ff k3 m E / s`` with
-    ``x_est/u = 1/(m s^2) + G_o E`` and ``v_est/u = 1/(m s) + (k2/s + k3/s^2) E``."""
+    ``x_est/u = 1/(m s^2) + G_o E`` and ``v_est/u = 1/(m s) + (k2/s + k3/s^2) E``.
+
+    Parameters
+    ----------
+    mass : float
+        Moving mass, kg.
+    kp_x : float
+        Position gain, 1/s.
+    speed_kp : float
+        Speed PI proportional gain, N s/m.
+    speed_ki : float
+        Speed PI integral gain, N/m.
+    observer_k : tuple of float
+        ``(k1, k2)`` of the PLL (1/s, 1/s^2) or ``(k1, k2, k3)`` of the mechanical observer.
+    current_bw : float
+        Current-loop bandwidth, Hz.
+    demod_lpf : float
+        Demodulator low-pass corner, Hz.
+    f_inj : float
+        Injection frequency, Hz.
+    f_pwm : float
+        PWM frequency, Hz.
+    k_e : float
+        Local error gain, relative.
+    g : float, optional
+        Factor on what the observer reports.
+    load_ff : bool, optional
+        The mechanical observer's load estimate fed forward.
+
+    Returns
+    -------
+    observer_loop : control.TransferFunction
+        The observer loop.
+    motion_loop : control.TransferFunction
+        The motion loop broken at the force reference.
+    """
     import control as ct
 
     s = ct.tf("s")
@@ -537,7 +870,25 @@ def margins(dz: Design, motor: Motor, drive: DriveData, k_lo: float = 1.0, k_hi:
     demodulator's gain schedule that makes the local error gain 1 everywhere for the nominal motor
     (the design's), at the lowest and highest local gain the tolerances leave (``k_lo``, ``k_hi``:
     :func:`linsense.tune.margins.tolerance_costs`), and without the schedule at its lowest and
-    highest (informative)."""
+    highest (informative).
+
+    Parameters
+    ----------
+    dz : Design
+        The design.
+    motor : Motor
+        The motor.
+    drive : DriveData
+        The drive.
+    k_lo, k_hi : float, optional
+        Lowest and highest local error gain the tolerances leave.
+
+    Returns
+    -------
+    dict
+        ``"observer loop (<case>, k_e = <k>)"`` and ``"motion loop (...)"`` to
+        :func:`loop_margins`' dict.
+    """
     out = {}
     cases = (
         ("tolerances, lowest", k_lo),
@@ -561,7 +912,20 @@ def margins(dz: Design, motor: Motor, drive: DriveData, k_lo: float = 1.0, k_hi:
 def loop_margins(loop, f_lo: float = 0.01, f_hi: float = 5000.0) -> dict:
     """Phase margin at the (highest) gain crossover, and the gain margins above it (upward: how much
     more gain makes it unstable) and below it (downward, for conditionally stable loops such as a
-    double integrator under a PI: how much less gain does), from the frequency response."""
+    double integrator under a PI: how much less gain does), from the frequency response.
+
+    Parameters
+    ----------
+    loop : callable
+        The loop transfer function, evaluated at ``1j w`` (rad/s).
+    f_lo, f_hi : float, optional
+        Frequency range of the response, Hz.
+
+    Returns
+    -------
+    dict
+        ``pm_deg``, ``gm_up_db``, ``gm_down_db``, ``crossover_hz`` (None where there is none).
+    """
     w = 2.0 * np.pi * np.logspace(np.log10(f_lo), np.log10(f_hi), 6000)
     resp = loop(1j * w)
     mag = np.abs(resp)

@@ -24,17 +24,56 @@ from linsense.tune.design import (
 
 
 def end_stops(pole_pitch: float, travel: float) -> dict:
-    """The ``[travel]`` section for a stroke of ``travel`` (m) from 0: the end stops a twentieth of
-    the pole pitch beyond each end (a run that reaches them ends with the travel fault)."""
+    """The ``[travel]`` section for a stroke from 0.
+
+    The end stops lie a twentieth of the pole pitch beyond each end (a run that reaches them ends
+    with the travel fault).
+
+    Parameters
+    ----------
+    pole_pitch : float
+        Pole pitch, m.
+    travel : float
+        Stroke, m.
+
+    Returns
+    -------
+    dict
+        ``min_mm``, ``max_mm`` (mm).
+    """
     return {"min_mm": _r(-0.05 * pole_pitch * 1e3), "max_mm": _r((travel + 0.05 * pole_pitch) * 1e3)}
 
 
 def scenario_dict(dz: Design, drive: DriveData, motor_ref: str, base: dict | None = None,
                   startup=None, k_est: float = 1.0, pole_pitch: float | None = None) -> dict:
-    """A complete scenario: ``base`` (a scenario's given keys, or a 2 s hold) with the design's
-    drive data and gains written out; ``startup`` (a :class:`linsense.tune.startup.StartupDesign`)
-    fills ``[startup]`` when the scenario's mode is "startup". ``k_est``: the trips and clamp on the
-    estimate widened by it (a drive without its table: ``uncompensated_speed_factor``)."""
+    """A complete scenario with the design's drive data and gains written out.
+
+    ``base`` (a scenario's given keys, or a 2 s hold) with the design written over it;
+    ``startup`` fills ``[startup]`` when the scenario's mode is "startup".
+
+    Parameters
+    ----------
+    dz : Design
+        The design.
+    drive : DriveData
+        The drive.
+    motor_ref : str
+        The scenario's ``motor`` value (preset or path).
+    base : dict or None, optional
+        The scenario's given keys (None: a 2 s hold).
+    startup : StartupDesign or None, optional
+        The start-up design (:class:`linsense.tune.startup.StartupDesign`).
+    k_est : float, optional
+        The trips and clamp on the estimate widened by it (a drive without its table:
+        ``uncompensated_speed_factor``).
+    pole_pitch : float or None, optional
+        Pole pitch, m, for the ``[travel]`` end stops when the drive has a travel.
+
+    Returns
+    -------
+    dict
+        The scenario, as nested dicts of its TOML.
+    """
     sc = {k: (dict(v) if isinstance(v, dict) else v) for k, v in (base or {}).items()}
     sc["motor"] = motor_ref
     sc.setdefault("scenario", {"name": "tuned", "duration": 2.0})
@@ -112,8 +151,37 @@ def scenario_toml(
     k_est: float = 1.0,
     pole_pitch: float | None = None,
 ) -> str:
-    """The scenario as TOML; a motor-file path (relative to ``base_dir``, default the working
-    folder, as the command line gives it) is made relative to the output file's folder."""
+    """The scenario as TOML.
+
+    A motor-file path (relative to ``base_dir``, default the working folder, as the command line
+    gives it) is made relative to the output file's folder.
+
+    Parameters
+    ----------
+    dz : Design
+        The design.
+    drive : DriveData
+        The drive.
+    motor_spec : str
+        The motor as given (preset name or path).
+    out : Path
+        The output file.
+    base : dict or None, optional
+        The scenario's given keys.
+    base_dir : Path or None, optional
+        The folder a relative motor path is relative to.
+    startup : StartupDesign or None, optional
+        The start-up design.
+    k_est : float, optional
+        Widening of the trips and clamp on the estimate.
+    pole_pitch : float or None, optional
+        Pole pitch, m.
+
+    Returns
+    -------
+    str
+        The TOML text, with a comment line summarising the design.
+    """
     ref = motor_spec
     if names_a_path(motor_spec):
         p = Path(motor_spec)
@@ -133,9 +201,28 @@ def _r(v: float) -> float:
 
 
 def design_values(dz: Design, drive: DriveData, motor: Motor, startup=None) -> Values:
-    """The design as the scenario keys of the mapping (:mod:`linsense.tune.cfgmap`), unrounded: what
-    ``tune --format c`` writes. The pulsating/elliptical injection, the forward dead-time model, the
-    motor's own parameters (the controller believes the motor); the start-up design's SI values."""
+    """The design as the scenario keys of the mapping (:mod:`linsense.tune.cfgmap`), unrounded.
+
+    What ``tune --format c`` writes. The pulsating/elliptical injection, the forward dead-time
+    model, the motor's own parameters (the controller believes the motor); the start-up design's SI
+    values.
+
+    Parameters
+    ----------
+    dz : Design
+        The design.
+    drive : DriveData
+        The drive.
+    motor : Motor
+        The motor.
+    startup : StartupDesign or None, optional
+        The start-up design.
+
+    Returns
+    -------
+    Values
+        The keys, derived values and fields.
+    """
     L_d, L_q = mean_dq(motor)
     keys = {
         "inverter.f_pwm": drive.f_pwm, "inverter.dead_time": drive.dead_time,
@@ -170,9 +257,37 @@ def design_values(dz: Design, drive: DriveData, motor: Motor, startup=None) -> V
 
 def c_header(dz: Design, drive: DriveData, motor: Motor, name: str | None = None, points: int = 256,
              startup=None) -> str:
-    """``ls_cfg_<name>.h``: the compensation and gain tables, their slopes in the resistance's scale,
-    and ``ls_cfg_<name>(cfg, comp, gain, comp_r, gain_r)``, which fills an ``ls_drive_cfg`` from
-    ``ls_drive_default_cfg`` with the design (the library holds no motor's numbers)."""
+    """``ls_cfg_<name>.h``: the drive's configuration for the C library.
+
+    The compensation and gain tables, their slopes in the resistance's scale, and
+    ``ls_cfg_<name>(cfg, comp, gain, comp_r, gain_r)``, which fills an ``ls_drive_cfg`` from
+    ``ls_drive_default_cfg`` with the design (the library holds no motor's numbers).
+
+    Parameters
+    ----------
+    dz : Design
+        The design.
+    drive : DriveData
+        The drive.
+    motor : Motor
+        The motor.
+    name : str or None, optional
+        The name in the symbols (default the motor's).
+    points : int, optional
+        Table points.
+    startup : StartupDesign or None, optional
+        The start-up design.
+
+    Returns
+    -------
+    str
+        The header's text.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        For an injection other than the pulsating/elliptical one.
+    """
     if drive.shape != "pulsating":
         from linsense.errors import InputError
 

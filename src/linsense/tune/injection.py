@@ -52,9 +52,31 @@ _H = 1e-4  # rad, step of the numerical derivatives
 
 
 def rotating_tables(motor: Motor, n: int, f_inj: float | None) -> tuple[np.ndarray, np.ndarray]:
-    """``(psi_rot, gain)`` on ``n`` positions over the period: the rotating injection's
-    compensation table (rad, :func:`linsense.analysis.rotating.psi_rotating`) and the gain
-    schedule ``1 / (1 + dpsi_rot/dtheta)``."""
+    """The rotating injection's compensation table and gain schedule on ``n`` positions.
+
+    ``psi_rot`` (:func:`linsense.analysis.rotating.psi_rotating`) and ``1 / (1 + dpsi_rot/dtheta)``.
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+    n : int
+        Positions over the period.
+    f_inj : float or None
+        Injection frequency, Hz (None: the R_s = 0 limit).
+
+    Returns
+    -------
+    psi_rot : ndarray
+        rad.
+    gain : ndarray
+        Dimensionless.
+
+    Raises
+    ------
+    ValueError
+        When the estimate is not monotone in the position.
+    """
     m, f = table_model(motor, f_inj)
     th = 2.0 * np.pi * np.arange(n) / n
     psi = psi_rotating(m, th, f)
@@ -66,12 +88,36 @@ def rotating_tables(motor: Motor, n: int, f_inj: float | None) -> tuple[np.ndarr
 
 def rotating_r_slopes(motor: Motor, n: int, f_inj: float, fs: float, delay_comp: float,
                       v_inj: float) -> tuple[np.ndarray, np.ndarray]:
-    """The rotating injection's tables' slopes in the resistance's scale ``k_r`` (``R_s = k_r
-    R_s0``; central differences over :data:`~linsense.compensation.lut.R_SLOPE_STEP`), for
-    ``ls_demod_cfg.comp_r`` and ``gain_r`` (docs/tuning.md, "The hot winding"): the compensation's
-    is ``dpsi_rot/dk_r + (d ref_phase/dk_r) / 2``, since the demodulator compares the negative
-    sequence's phase with ``2 (theta_est + Psi) + ref_phase`` and ``ref_phase`` (the motor without
-    its end effect, :func:`rotating_design`) moves with the resistance too."""
+    """The rotating injection's tables' slopes in the resistance's scale ``k_r``.
+
+    ``R_s = k_r R_s0``; central differences over :data:`~linsense.compensation.lut.R_SLOPE_STEP`,
+    for ``ls_demod_cfg.comp_r`` and ``gain_r`` (docs/tuning.md, "The hot winding"): the
+    compensation's is ``dpsi_rot/dk_r + (d ref_phase/dk_r) / 2``, since the demodulator compares the
+    negative sequence's phase with ``2 (theta_est + Psi) + ref_phase`` and ``ref_phase`` (the motor
+    without its end effect, :func:`rotating_design`) moves with the resistance too.
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+    n : int
+        Positions over the period.
+    f_inj : float
+        Injection frequency, Hz.
+    fs : float
+        Sampling (PWM) frequency, Hz.
+    delay_comp : float
+        The drive's delay compensation, periods.
+    v_inj : float
+        Injection amplitude, V.
+
+    Returns
+    -------
+    comp_r : ndarray
+        rad per unit of ``k_r`` (zeros without resistance).
+    gain_r : ndarray
+        Per unit of ``k_r``.
+    """
     h = R_SLOPE_STEP
     if not motor.R_s > 0:
         return np.zeros(n), np.zeros(n)
@@ -95,9 +141,32 @@ def _square_ratio(motor: Motor, theta, theta_est, f_inj: float, psi_est) -> np.n
 
 
 def square_tables(motor: Motor, n: int, f_inj: float | None) -> tuple[np.ndarray, np.ndarray]:
-    """``(psi_square, gain)`` on ``n`` positions over the period: the square wave's compensation
-    table (rad, :func:`linsense.analysis.square.psi_square`) and the gain ``-1 / (d ratio / d
-    theta_est)`` that makes the error's slope against ``theta - theta_est`` one."""
+    """The square wave's compensation table and gain on ``n`` positions.
+
+    ``psi_square`` (:func:`linsense.analysis.square.psi_square`) and the gain
+    ``-1 / (d ratio / d theta_est)`` that makes the error's slope against ``theta - theta_est`` one.
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+    n : int
+        Positions over the period.
+    f_inj : float or None
+        Square-wave frequency, Hz (None: the R_s = 0 limit).
+
+    Returns
+    -------
+    psi_square : ndarray
+        rad.
+    gain : ndarray
+        Dimensionless.
+
+    Raises
+    ------
+    ValueError
+        When the error has no restoring slope somewhere.
+    """
     m, f = table_model(motor, f_inj)
     th = 2.0 * np.pi * np.arange(n) / n
     psi = psi_square(m, th, f)
@@ -110,7 +179,31 @@ def square_tables(motor: Motor, n: int, f_inj: float | None) -> tuple[np.ndarray
 
 
 def injection_tables(motor: Motor, shape: str, n: int, f_inj: float | None) -> tuple[np.ndarray, np.ndarray]:
-    """The compensation and gain tables of the ``rotating`` or ``square`` injection."""
+    """The compensation and gain tables of the ``rotating`` or ``square`` injection.
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+    shape : {"rotating", "square"}
+        The injection.
+    n : int
+        Positions over the period.
+    f_inj : float or None
+        Injection frequency, Hz (None: the R_s = 0 limit).
+
+    Returns
+    -------
+    psi : ndarray
+        Compensation table, rad.
+    gain : ndarray
+        Gain table, dimensionless.
+
+    Raises
+    ------
+    ValueError
+        Another ``shape``, or tables that do not exist (see the shape's function).
+    """
     if shape == "rotating":
         return rotating_tables(motor, n, f_inj)
     if shape == "square":
@@ -119,7 +212,18 @@ def injection_tables(motor: Motor, shape: str, n: int, f_inj: float | None) -> t
 
 
 def square_d_current(i_max: float) -> float:
-    """The square wave's d-current reference while injecting (A): ``SQUARE_D_FRACTION i_max``."""
+    """The square wave's d-current reference while injecting: ``SQUARE_D_FRACTION i_max``.
+
+    Parameters
+    ----------
+    i_max : float
+        Current-reference limit, A.
+
+    Returns
+    -------
+    float
+        A.
+    """
     return SQUARE_D_FRACTION * i_max
 
 
@@ -144,6 +248,26 @@ def square_current_schedule(l_avg: float, R_s: float, v_inj: float, f_pwm: float
       their own edges' reach in either half, ``(T/L)(sqrt(3)/4)(V + R_s i_d_near) + margin``.
 
     ``l_avg`` (H) is the inductance of the compensation's ripple model, ``(L_d + L_q) / 2``.
+
+    Parameters
+    ----------
+    l_avg : float
+        Inductance of the ripple model, H.
+    R_s : float
+        Phase resistance, ohm.
+    v_inj : float
+        Square-wave amplitude, V.
+    f_pwm : float
+        PWM frequency, Hz.
+    i_d_far : float
+        d current far from the phase axes, A.
+    margin : float, optional
+        Margin of the current beyond the band, A.
+
+    Returns
+    -------
+    dict or None
+        ``{"i_d_near": A, "near_in": rad, "near_out": rad}``, or None.
     """
     T = 1.0 / f_pwm
     k = math.sqrt(3.0) * T / (12.0 * l_avg)
@@ -169,13 +293,36 @@ def square_current_schedule(l_avg: float, R_s: float, v_inj: float, f_pwm: float
 
 def rotating_design(motor: Motor, R_s: float, v_inj: float, f_inj: float, fs: float,
                     delay_comp: float) -> dict:
-    """The rotating demodulator's constants: ``ref_phase`` (rad), the phase less ``2 theta`` of
-    the SAMPLED currents' negative sequence for the motor without its end-effect, against the
-    carrier of the voltage computed at the same sample
-    (:func:`~linsense.analysis.rotating.reference_phase_sampled`: the voltage acts ``delay_comp -
-    1/2`` periods later and is held over a period, exactly; the continuous ``c_ref + delay_comp
-    2 pi f_inj / fs`` is 0.54 deg off, a 0.27 deg bias, for ecce2010 at 1 kHz, 16 kHz); ``min_level``
-    (A^2), a fraction of the model's smallest ``|i_n|^2`` over the period at ``v_inj``."""
+    """The rotating demodulator's constants ``ref_phase`` and ``min_level``.
+
+    ``ref_phase`` (rad) is the phase less ``2 theta`` of the SAMPLED currents' negative sequence for
+    the motor without its end-effect, against the carrier of the voltage computed at the same sample
+    (:func:`~linsense.analysis.rotating.reference_phase_sampled`: the voltage acts
+    ``delay_comp - 1/2`` periods later and is held over a period, exactly; the continuous
+    ``c_ref + delay_comp 2 pi f_inj / fs`` is 0.54 deg off, a 0.27 deg bias, for ecce2010 at 1 kHz,
+    16 kHz); ``min_level`` (A^2) is a fraction of the model's smallest ``|i_n|^2`` over the period at
+    ``v_inj``.
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+    R_s : float
+        The resistance to design with, ohm.
+    v_inj : float
+        Injection amplitude, V.
+    f_inj : float
+        Injection frequency, Hz.
+    fs : float
+        Sampling (PWM) frequency, Hz.
+    delay_comp : float
+        The drive's delay compensation, periods.
+
+    Returns
+    -------
+    dict
+        ``{"ref_phase": rad, "min_level": A^2}``.
+    """
     m = dataclasses.replace(motor, R_s=R_s)
     ref = math.remainder(reference_phase_sampled(m, f_inj, fs, delay_comp - 0.5), 2.0 * math.pi)
     th = np.linspace(0.0, 2.0 * np.pi, 720, endpoint=False)

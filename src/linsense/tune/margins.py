@@ -44,10 +44,32 @@ def _ratio(plant: Motor, target: np.ndarray, e: np.ndarray, f_inj: float, quad: 
 
 def hold_error(nominal: Motor, plant: Motor, f_inj: float, quad: float, n: int = 180,
                k_r: float = 1.0) -> np.ndarray:
-    """The hold error ``e`` (rad, true position = target - e) at ``n`` targets over the period, for
-    ``plant`` driven with ``nominal``'s resistance-aware table, corrected for the resistance's scale
-    ``k_r`` the drive measured (Newton from ``e = 0``, the branch a drive starting on target
-    follows); NaN where it does not converge within 0.6 rad."""
+    """The hold error ``e`` (rad, true position = target - e) at ``n`` targets over the period.
+
+    For ``plant`` driven with ``nominal``'s resistance-aware table, corrected for the resistance's
+    scale ``k_r`` the drive measured (Newton from ``e = 0``, the branch a drive starting on target
+    follows); NaN where it does not converge within 0.6 rad.
+
+    Parameters
+    ----------
+    nominal : Motor
+        The motor whose table the drive holds.
+    plant : Motor
+        The motor driven.
+    f_inj : float
+        Injection frequency, Hz.
+    quad : float
+        Elliptical share on q.
+    n : int, optional
+        Targets over the period.
+    k_r : float, optional
+        The resistance's scale the drive measured.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        rad.
+    """
     target = np.linspace(0.0, 2.0 * np.pi, n, endpoint=False)
     psi_t = psi_lut_resistive(nominal, target, f_inj, quad=quad)
     if k_r != 1.0:
@@ -71,14 +93,35 @@ def hold_error(nominal: Motor, plant: Motor, f_inj: float, quad: float, n: int =
 
 def error_gain(motor: Motor, f_inj: float, quad: float, gain: float, n: int = 180,
                table: Motor | None = None) -> np.ndarray:
-    """Local slope of the demodulated error against the position error over the period (1 = the
-    nominal), with the resistance-aware LUT of the injection: ``-gain d ratio / d theta_est`` at
-    the true position ``theta``, the table read at the estimate as the drive reads it (so its own
-    slope, ``1 + de*/dtheta`` of the end-effect, is part of the observer's loop gain: 0.6-2.9 for
-    ecce2010, which a schedule computed with the table read at ``theta`` left in the loop).
-    ``table``: the motor whose table the drive reads (default ``motor``; another one: a motor off
-    by a tolerance driven with the nominal table, :func:`local_gain`). The gain schedule's
-    (:mod:`linsense.tune.design`) and the tolerances' one home."""
+    """Local slope of the demodulated error against the position error over the period (1 = nominal).
+
+    With the resistance-aware LUT of the injection: ``-gain d ratio / d theta_est`` at the true
+    position ``theta``, the table read at the estimate as the drive reads it (so its own slope,
+    ``1 + de*/dtheta`` of the end-effect, is part of the observer's loop gain: 0.6-2.9 for ecce2010,
+    which a schedule computed with the table read at ``theta`` left in the loop). The gain
+    schedule's (:mod:`linsense.tune.design`) and the tolerances' one home.
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor driven.
+    f_inj : float
+        Injection frequency, Hz.
+    quad : float
+        Elliptical share on q.
+    gain : float
+        The demodulator's gain.
+    n : int, optional
+        Positions over the period.
+    table : Motor or None, optional
+        The motor whose table the drive reads (default ``motor``; another one: a motor off by a
+        tolerance driven with the nominal table, :func:`local_gain`).
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        Dimensionless.
+    """
     th = np.linspace(0.0, 2.0 * np.pi, n, endpoint=False)
     h = 1e-3
     tm = motor if table is None else table
@@ -89,17 +132,55 @@ def error_gain(motor: Motor, f_inj: float, quad: float, gain: float, n: int = 18
 
 
 def local_gain(nominal: Motor, plant: Motor, f_inj: float, quad: float, n: int = 180) -> np.ndarray:
-    """The local error gain of ``plant`` driven with ``nominal``'s table, relative to ``nominal``'s
-    (which the gain schedule divides out): 1 everywhere for the nominal motor. The slope against
-    the estimate, as the observer sees it (:func:`error_gain`)."""
+    """The local error gain of ``plant`` driven with ``nominal``'s table, relative to ``nominal``'s.
+
+    The gain schedule divides ``nominal``'s out: 1 everywhere for the nominal motor. The slope
+    against the estimate, as the observer sees it (:func:`error_gain`).
+
+    Parameters
+    ----------
+    nominal : Motor
+        The motor whose table the drive reads.
+    plant : Motor
+        The motor driven.
+    f_inj : float
+        Injection frequency, Hz.
+    quad : float
+        Elliptical share on q.
+    n : int, optional
+        Positions over the period.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        Dimensionless.
+    """
     return (error_gain(plant, f_inj, quad, 1.0, n, table=nominal)
             / error_gain(nominal, f_inj, quad, 1.0, n))
 
 
 def tolerance_costs(motor: Motor, f_inj: float, quad: float, n: int = 180, r_adapt: bool = True) -> dict:
-    """Per tolerance: the predicted worst hold error (deg; inf where the model finds no hold) and
-    the range of the scheduled local error gain. ``r_adapt``: the drive measures the resistance
-    and its table follows it (the default drive: ``observer.resistance_adapt``)."""
+    """Per tolerance: the predicted worst hold error and the range of the scheduled local error gain.
+
+    Parameters
+    ----------
+    motor : Motor
+        The nominal motor.
+    f_inj : float
+        Injection frequency, Hz.
+    quad : float
+        Elliptical share on q.
+    n : int, optional
+        Positions over the period.
+    r_adapt : bool, optional
+        The drive measures the resistance and its table follows it (the default drive:
+        ``observer.resistance_adapt``).
+
+    Returns
+    -------
+    dict
+        Tolerance name to ``{"error_deg": deg (inf where the model finds no hold), "k_lo", "k_hi"}``.
+    """
     out = {}
     for name, (k_l, k_r, k_e) in TOLERANCES.items():
         plant = perturbed(motor, k_l, k_r, k_e, label=name)

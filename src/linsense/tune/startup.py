@@ -51,7 +51,43 @@ MOTION_BAR_MM = 0.1  # mm, the motion while detecting that the design warns beyo
 
 @dataclass
 class StartupDesign:
-    """The designed ``ls_startup_cfg`` (SI) and what the model predicts."""
+    """The designed ``ls_startup_cfg`` (SI) and what the model predicts (docs/firmware.md).
+
+    Attributes
+    ----------
+    polarity : float
+        The saturation data used, 1/A.
+    v_pulse : float
+        Pulse amplitude, V.
+    t_pulse : float
+        Pulse length, s.
+    t_rest : float
+        Zero voltage before each pulse, s.
+    pairs : int
+        (+, -) pulse pairs.
+    i_min : float
+        Smallest ``|i_diff|`` accepted as a decision, A.
+    t_lock : float
+        HF lock before the pulses, s.
+    err_lock : float
+        The lock is accepted within it, rad.
+    t_quiet : float
+        Injection ramp-down before the pulses, s.
+    t_settle : float
+        HF relock after the pulses, s.
+    i_peak : float
+        Current at the end of a +V pulse, A.
+    signal : float
+        Expected ``|di_+| - |di_-|``, A.
+    sigma : float
+        Standard deviation of the decision (i_diff), A.
+    detect_s : float
+        The whole sequence (shortest lock), s.
+    motion_mm : float
+        Predicted drift over the pulses, mm.
+    warnings : list of str
+        What the design could not meet.
+    """
 
     polarity: float  # 1/A, the saturation data used
     v_pulse: float  # V
@@ -71,10 +107,23 @@ class StartupDesign:
     warnings: list = field(default_factory=list)
 
     def as_dict(self) -> dict:
+        """The design as a plain dict (``dataclasses.asdict``).
+
+        Returns
+        -------
+        dict
+            Field name to value.
+        """
         return asdict(self)
 
     def scenario_keys(self) -> dict:
-        """The scenario's ``[startup]`` section."""
+        """The scenario's ``[startup]`` section.
+
+        Returns
+        -------
+        dict
+            Key to value (``err_lock_deg`` in degrees), 6 significant digits.
+        """
         r = lambda v: float(f"{v:.6g}")  # noqa: E731
         return {"t_lock": r(self.t_lock), "err_lock_deg": r(math.degrees(self.err_lock)),
                 "t_quiet": r(self.t_quiet), "v_pulse": r(self.v_pulse), "t_pulse": r(self.t_pulse),
@@ -82,6 +131,13 @@ class StartupDesign:
                 "t_settle": r(self.t_settle)}
 
     def lines(self) -> list[str]:
+        """The report's lines on the start-up.
+
+        Returns
+        -------
+        list of str
+            One line: pulses, pairs, signal against noise, lock, detection time and drift.
+        """
         return [
             f"  start-up       pulses {self.v_pulse:.3g} V x {self.t_pulse * 1e3:.3g} ms "
             f"({self.i_peak:.2f} A), {self.pairs} pairs, rests {self.t_rest * 1e3:.3g} ms; signal "
@@ -94,8 +150,32 @@ class StartupDesign:
 
 def pulse_currents(L_d0: float, R_s: float, i_m: float, a: float, v: float, t: float,
                    n_sub: int = 400) -> tuple[float, float]:
-    """Current change (A) of a ``+v`` and a ``-v`` pulse of ``t`` s from zero current (RK2 on the
-    saturated d-axis)."""
+    """Current change of a ``+v`` and a ``-v`` pulse from zero current (RK2 on the saturated d-axis).
+
+    Parameters
+    ----------
+    L_d0 : float
+        Unsaturated d inductance, H.
+    R_s : float
+        Phase resistance, ohm.
+    i_m : float
+        Magnet current, A.
+    a : float
+        d saturation current (:func:`linsense.model.saturation.i_sat_d_of`), A.
+    v : float
+        Pulse amplitude, V.
+    t : float
+        Pulse length, s.
+    n_sub : int, optional
+        Integration steps.
+
+    Returns
+    -------
+    di_plus : float
+        A.
+    di_minus : float
+        A (negative).
+    """
     def di(x: float, vs: float) -> float:
         return (vs - R_s * x) / (L_d0 * float(d_factor(x, i_m, a)))
 
@@ -112,9 +192,49 @@ def design_startup(motor: Motor, *, v_dc: float, f_pwm: float, i_max: float, obs
                    v_inj: float, polarity: float | None = None, current_noise: float = 0.01,
                    adc_bits: int = 12, adc_range: float = 10.0, ramp_rate: float | None = None,
                    i_trip: float | None = None, source: str = "<tune>") -> StartupDesign | None:
-    """The start-up for ``motor``, or None without saturation data (``polarity`` None and no
-    ``[saturation] polarity`` in the motor file). ``ramp_rate`` (V/s): the injection's ramp, and
-    ``i_trip`` (A): the over-current protection's limit (None: the C library's defaults)."""
+    """The start-up for ``motor``, or None without saturation data.
+
+    None when ``polarity`` is None and the motor file has no ``[saturation] polarity``.
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+    v_dc : float
+        DC bus, V.
+    f_pwm : float
+        PWM frequency, Hz.
+    i_max : float
+        Current-reference limit, A.
+    observer_bw : float
+        Observer bandwidth, Hz.
+    v_inj : float
+        Injection amplitude, V.
+    polarity : float or None, optional
+        Polarity signal, 1/A (None: the motor's saturation data).
+    current_noise : float, optional
+        Current-sensor noise, A rms.
+    adc_bits : int, optional
+        ADC resolution, bits (0: none).
+    adc_range : float, optional
+        ADC range, +- A.
+    ramp_rate : float or None, optional
+        The injection's ramp, V/s (None: the C library's default).
+    i_trip : float or None, optional
+        The over-current protection's limit, A (None: the C library's default).
+    source : str, optional
+        Named in messages.
+
+    Returns
+    -------
+    StartupDesign or None
+        The design.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        A polarity or noise out of range.
+    """
     from linsense.ctrl import drive_default_cfg
 
     c_def = drive_default_cfg()

@@ -22,10 +22,28 @@ from linsense.verify import criteria as C
 class Case:
     """One verification run.
 
-    ``kind``: ``hold``, ``step``, ``trajectory`` or ``load_step``; ``plant``: the off-nominal
-    name (a key of :data:`~linsense.verify.criteria.OFF_NOMINAL`) or ``"nominal"``; ``sections``:
-    the scenario sections this run sets over the tuned scenario; ``target`` (m): where the mover
-    must end; ``t_event`` (s): the step, the move's start or the load step."""
+    Attributes
+    ----------
+    name : str
+        The run's name in the certificate.
+    kind : str
+        ``hold``, ``step``, ``trajectory`` or ``load_step``.
+    plant : str
+        The off-nominal name (a key of :data:`~linsense.verify.criteria.OFF_NOMINAL`) or
+        ``"nominal"``.
+    sections : dict
+        The scenario sections this run sets over the tuned scenario.
+    target : float
+        Where the mover must end, m.
+    t_event : float
+        The step, the move's start or the load step, s.
+    t_end_move : float
+        End of the commanded motion, s.
+    load : float
+        Load force, N.
+    position_deg : float
+        Hold position, electrical deg.
+    """
 
     name: str
     kind: str
@@ -44,15 +62,46 @@ OFFSET = 0.37
 
 
 def start(tau: float) -> float:
-    """Where the steps, the trajectory and the load step start (m)."""
+    """Where the steps, the trajectory and the load step start.
+
+    Parameters
+    ----------
+    tau : float
+        Pole pitch, m.
+
+    Returns
+    -------
+    float
+        m.
+    """
     return tau * OFFSET / C.POSITIONS
 
 
 def hold_cases(
     tau: float, load_rated: float, n_pos: int, plant: str = "nominal", loads=C.HOLD_LOADS
 ) -> list[Case]:
-    """Holds at ``n_pos`` positions over the period (offset by half a step from 0, so the grid does
-    not sit on the symmetric positions only) at ``loads`` (fractions of ``load_rated``)."""
+    """Holds at ``n_pos`` positions over the period at ``loads``.
+
+    Offset by half a step from 0, so the grid does not sit on the symmetric positions only.
+
+    Parameters
+    ----------
+    tau : float
+        Pole pitch, m.
+    load_rated : float
+        Rated load, N.
+    n_pos : int
+        Positions.
+    plant : str, optional
+        ``"nominal"`` or an off-nominal name.
+    loads : sequence of float, optional
+        Fractions of ``load_rated``.
+
+    Returns
+    -------
+    list of Case
+        Position by position, load by load.
+    """
     out = []
     for k in range(n_pos):
         deg = 360.0 * (k + OFFSET) / n_pos
@@ -79,7 +128,18 @@ def hold_cases(
 
 
 def step_cases(tau: float) -> list[Case]:
-    """Steps of :data:`~linsense.verify.criteria.STEP_FRACTIONS` of the pole pitch from rest."""
+    """Steps of :data:`~linsense.verify.criteria.STEP_FRACTIONS` of the pole pitch from rest.
+
+    Parameters
+    ----------
+    tau : float
+        Pole pitch, m.
+
+    Returns
+    -------
+    list of Case
+        One per fraction.
+    """
     out = []
     t0 = 0.05
     x0 = start(tau)
@@ -105,9 +165,28 @@ def step_cases(tau: float) -> list[Case]:
 
 def trajectory_case(tau: float, v_max: float, a_max: float, load_rated: float,
                     pitches: float = C.TRAJ_PITCHES) -> Case:
-    """Out over ``pitches`` pole pitches (:data:`~linsense.verify.criteria.TRAJ_PITCHES`, or what
-    the stroke allows) and back, at the application's speed and acceleration, against the rated
-    load."""
+    """Out over ``pitches`` pole pitches and back, at the application's speed and acceleration.
+
+    Against the rated load.
+
+    Parameters
+    ----------
+    tau : float
+        Pole pitch, m.
+    v_max : float
+        Speed, m/s.
+    a_max : float
+        Acceleration, m/s^2.
+    load_rated : float
+        Rated load, N.
+    pitches : float, optional
+        Pole pitches (:data:`~linsense.verify.criteria.TRAJ_PITCHES`, or what the stroke allows).
+
+    Returns
+    -------
+    Case
+        The run.
+    """
     x0 = start(tau)
     x1 = x0 + pitches * tau
     t0, dwell = 0.1, 0.3
@@ -139,8 +218,20 @@ def trajectory_case(tau: float, v_max: float, a_max: float, load_rated: float,
 
 
 def load_step_case(tau: float, load_rated: float) -> Case:
-    """A step of :data:`~linsense.verify.criteria.LOAD_STEP_FRACTION` of the rated load while
-    holding."""
+    """A step of :data:`~linsense.verify.criteria.LOAD_STEP_FRACTION` of the rated load while holding.
+
+    Parameters
+    ----------
+    tau : float
+        Pole pitch, m.
+    load_rated : float
+        Rated load, N.
+
+    Returns
+    -------
+    Case
+        The run.
+    """
     x0 = start(tau)
     t0 = 0.3
     f = C.LOAD_STEP_FRACTION * load_rated
@@ -162,10 +253,30 @@ def load_step_case(tau: float, load_rated: float) -> Case:
 
 def all_cases(tau: float, v_max: float, a_max: float, load_rated: float, quick: bool,
               travel: float | None = None) -> list[Case]:
-    """The certificate's runs: ``quick`` is the nominal holds at
-    :data:`~linsense.verify.criteria.POSITIONS_QUICK` positions and the steps. ``travel`` (m, at
-    least a pole pitch): the stroke from 0; the trajectory is shortened to it and every run gets
-    its end stops (:func:`linsense.tune.export.end_stops`)."""
+    """The certificate's runs.
+
+    Parameters
+    ----------
+    tau : float
+        Pole pitch, m.
+    v_max : float
+        The application's speed, m/s.
+    a_max : float
+        Its acceleration, m/s^2.
+    load_rated : float
+        Rated load, N.
+    quick : bool
+        Only the nominal holds at :data:`~linsense.verify.criteria.POSITIONS_QUICK` positions and
+        the steps.
+    travel : float or None, optional
+        The stroke from 0, m, at least a pole pitch: the trajectory is shortened to it and every run
+        gets its end stops (:func:`linsense.tune.export.end_stops`).
+
+    Returns
+    -------
+    list of Case
+        The runs.
+    """
     if quick:
         cases = hold_cases(tau, load_rated, C.POSITIONS_QUICK) + step_cases(tau)
     else:
@@ -183,8 +294,21 @@ def all_cases(tau: float, v_max: float, a_max: float, load_rated: float, quick: 
 
 
 def off_nominal_motor(motor: Motor, name: str) -> Motor:
-    """``motor`` with the tolerance ``name`` (a key of :data:`~linsense.verify.criteria.OFF_NOMINAL`)
-    applied (:func:`linsense.model.tolerance.perturbed`); ``"nominal"`` returns it unchanged."""
+    """``motor`` with a tolerance applied (:func:`linsense.model.tolerance.perturbed`).
+
+    Parameters
+    ----------
+    motor : Motor
+        The nominal motor.
+    name : str
+        A key of :data:`~linsense.verify.criteria.OFF_NOMINAL`, or ``"nominal"`` (``motor``
+        unchanged).
+
+    Returns
+    -------
+    Motor
+        The plant.
+    """
     if name == "nominal":
         return motor
     k_l, k_r, k_e = C.OFF_NOMINAL[name]
@@ -192,7 +316,20 @@ def off_nominal_motor(motor: Motor, name: str) -> Motor:
 
 
 def deg_of(x: np.ndarray | float, tau: float) -> np.ndarray | float:
-    """Metres -> electrical degrees."""
+    """Metres to electrical degrees.
+
+    Parameters
+    ----------
+    x : float or ndarray
+        m.
+    tau : float
+        Pole pitch, m.
+
+    Returns
+    -------
+    float or ndarray
+        Electrical deg.
+    """
     return np.asarray(x) * (360.0 / tau) if not isinstance(x, float) else x * 360.0 / tau
 
 

@@ -36,7 +36,25 @@ REMEDY = {
 
 @dataclass
 class Check:
-    """One line of the certificate."""
+    """One line of the certificate.
+
+    Attributes
+    ----------
+    name : str
+        What is checked.
+    passed : bool
+        Whether it passed.
+    value : str
+        What the runs gave.
+    bound : str
+        The bound.
+    cause : str
+        The likely cause of a failure.
+    runs : int
+        Runs behind it.
+    failed : int
+        Runs that failed.
+    """
 
     name: str
     passed: bool
@@ -47,6 +65,13 @@ class Check:
     failed: int = 0
 
     def line(self) -> str:
+        """The check as the report prints it (with the likely cause of a failure).
+
+        Returns
+        -------
+        str
+            One or two lines.
+        """
         mark = "PASS" if self.passed else "FAIL"
         n_ok = self.runs - self.failed
         out = f"  {mark}  {self.name:34s} {self.value}  (bound {self.bound}; {n_ok}/{self.runs} runs)"
@@ -57,7 +82,21 @@ class Check:
 
 @dataclass
 class Certificate:
-    """The checks, the runs behind them and the wall time of the verification."""
+    """The checks, the runs behind them and the wall time of the verification.
+
+    Attributes
+    ----------
+    checks : list of Check
+        The checks.
+    rows : list of dict
+        The judged runs (:func:`linsense.verify.run.judge`).
+    wall_s : float
+        Wall time, s.
+    quick : bool
+        Only the quick checks were run.
+    extra : dict
+        Further keys of :meth:`as_dict`.
+    """
 
     checks: list[Check]
     rows: list[dict]
@@ -67,9 +106,17 @@ class Certificate:
 
     @property
     def passed(self) -> bool:
+        """Whether every check passed."""
         return all(c.passed for c in self.checks)
 
     def lines(self) -> list[str]:
+        """The certificate as the report prints it.
+
+        Returns
+        -------
+        list of str
+            A heading, one line per check, the verdict.
+        """
         n = len(self.rows)
         head = (
             f"verification ({'quick: ' if self.quick else ''}{n} runs, switching inverter with the drive's "
@@ -83,6 +130,13 @@ class Certificate:
         return self.passed and not self.quick
 
     def verdict(self) -> str:
+        """The verdict in one line: verified, quick checks passed, or how many checks failed.
+
+        Returns
+        -------
+        str
+            The verdict.
+        """
         n_bad = sum(not c.passed for c in self.checks)
         if self.passed:
             return ("verified: every check passed" if not self.quick else
@@ -90,6 +144,13 @@ class Certificate:
         return f"NOT verified: {n_bad} of {len(self.checks)} checks failed"
 
     def as_dict(self) -> dict:
+        """The certificate as plain data (without the runs' traces and wall times).
+
+        Returns
+        -------
+        dict
+            ``passed``, ``verified``, ``quick``, ``checks``, ``runs`` and :attr:`extra`.
+        """
         runs = [{k: v for k, v in r.items() if k not in ("trace", "wall_s")} for r in self.rows]
         return {
             "passed": self.passed,
@@ -157,7 +218,19 @@ def _single(r: dict, name: str, value: str, bound: str, remedy: str) -> Check:
 
 
 def checks(rows: list[dict]) -> list[Check]:
-    """The certificate's checks from the judged runs."""
+    """The certificate's checks from the judged runs.
+
+    Parameters
+    ----------
+    rows : list of dict
+        The judged runs.
+
+    Returns
+    -------
+    list of Check
+        Holds of the nominal plant, each step, the trajectory, the load step, then the holds of
+        each off-nominal plant.
+    """
     out = []
     nominal = [r for r in rows if r["kind"] == "hold" and r["plant"] == "nominal"]
     out.append(_hold_check("holds, nominal plant", nominal, C.HOLD_ERR_DEG))
@@ -219,9 +292,44 @@ def checks(rows: list[dict]) -> list[Check]:
 
 def prepare(motor: Motor, motor_spec: str, base: dict, base_dir: str, *, v_max: float, a_max: float,
             load: float, travel: float | None = None, quick: bool = False, workers: int | None = None):
-    """The certificate's runs, each built once here (so that a configuration any of them refuses
-    ends in one InputError before anything runs or is written); returns a callable that runs them
-    and returns the :class:`Certificate`. ``travel`` (m): the stroke the moves must stay within."""
+    """The certificate's runs, each kind built once here; a callable that runs them.
+
+    So that a configuration any of them refuses ends in one InputError before anything runs or is
+    written.
+
+    Parameters
+    ----------
+    motor : Motor
+        The nominal motor.
+    motor_spec : str
+        Its preset name or absolute file path (the controller's model).
+    base : dict
+        The tuned scenario.
+    base_dir : str
+        Folder the scenarios are relative to.
+    v_max : float
+        The application's speed, m/s.
+    a_max : float
+        Its acceleration, m/s^2.
+    load : float
+        Rated load, N.
+    travel : float or None, optional
+        The stroke the moves must stay within, m.
+    quick : bool, optional
+        Only the quick checks.
+    workers : int or None, optional
+        Worker threads (default: one per core).
+
+    Returns
+    -------
+    callable
+        ``run() -> Certificate``.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        A run's configuration refused.
+    """
     from linsense.sim.build import build
     from linsense.sim.scenario import scenario_from_dict
     from linsense.verify.cases import off_nominal_motor
@@ -267,17 +375,56 @@ def verify(
     quick: bool = False,
     workers: int | None = None,
 ) -> Certificate:
-    """Run the certificate of the tuned scenario ``base`` (a dict, as ``linsense tune`` writes it)
-    for ``motor`` (``motor_spec``: its preset name or absolute file path, the controller's model).
+    """Run the certificate of a tuned scenario.
 
-    ``v_max``, ``a_max`` (m/s, m/s^2) and ``load`` (N, rated) are the application's."""
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+    motor_spec : str
+        Its preset name or absolute file path, the controller's model.
+    base : dict
+        The tuned scenario, as ``linsense tune`` writes it.
+    base_dir : str
+        Folder the scenarios are relative to.
+    v_max : float
+        The application's speed, m/s.
+    a_max : float
+        Its acceleration, m/s^2.
+    load : float
+        Rated load, N.
+    quick : bool, optional
+        Only the quick checks.
+    workers : int or None, optional
+        Worker threads.
+
+    Returns
+    -------
+    Certificate
+        The checks and runs.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        A run's configuration refused (:func:`prepare`).
+    """
     return prepare(motor, motor_spec, base, base_dir, v_max=v_max, a_max=a_max, load=load, quick=quick,
                    workers=workers)()
 
 
 def motor_ref(motor_spec: str) -> str:
-    """The motor as the certificate's scenarios name it (they run from other folders): a preset's
-    name, or the motor file's absolute path."""
+    """The motor as the certificate's scenarios name it (they run from other folders).
+
+    Parameters
+    ----------
+    motor_spec : str
+        Preset or motor-file path.
+
+    Returns
+    -------
+    str
+        A preset's name, or the motor file's absolute path.
+    """
     from pathlib import Path
 
     from linsense.model.motor import names_a_file
@@ -287,9 +434,33 @@ def motor_ref(motor_spec: str) -> str:
 
 def design_and_verify(motor_spec: str, drive, *, quick: bool = False, workers: int | None = None,
                       base_dir: str | None = None):
-    """``(design, certificate)`` of ``linsense tune`` from Python: the design for the motor
-    ``motor_spec`` (a preset or a motor-file path) on ``drive`` (a
-    :class:`~linsense.tune.design.DriveData`), and its certificate."""
+    """The design and certificate of ``linsense tune``, from Python.
+
+    Parameters
+    ----------
+    motor_spec : str
+        A preset or a motor-file path.
+    drive : DriveData
+        The drive (:class:`~linsense.tune.design.DriveData`).
+    quick : bool, optional
+        Only the quick checks.
+    workers : int or None, optional
+        Worker threads.
+    base_dir : str or None, optional
+        Folder the scenarios are relative to (None: the working folder).
+
+    Returns
+    -------
+    design : Design
+        The design.
+    certificate : Certificate
+        Its certificate.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        A bad motor or drive, or a run's configuration refused.
+    """
     from pathlib import Path
 
     from linsense.model.motor import load_motor

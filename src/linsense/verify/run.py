@@ -42,8 +42,25 @@ def _merge(base: dict, over: dict) -> dict:
 
 
 def case_scenario(case: Case, base: dict, motor_spec: str) -> dict:
-    """The scenario dict of ``case``: ``base`` (the tuned scenario) with the case's sections, the
-    switching inverter, and the controller's model pinned to the nominal motor ``motor_spec``."""
+    """The scenario dict of a case.
+
+    ``base`` (the tuned scenario) with the case's sections, the switching inverter, and the
+    controller's model pinned to the nominal motor.
+
+    Parameters
+    ----------
+    case : Case
+        The run.
+    base : dict
+        The tuned scenario.
+    motor_spec : str
+        The nominal motor (preset or absolute path).
+
+    Returns
+    -------
+    dict
+        The scenario's sections.
+    """
     sc = _merge(base, case.sections)
     sc["motor"] = motor_spec
     sc["scenario"]["name"] = case.name
@@ -57,7 +74,26 @@ def case_scenario(case: Case, base: dict, motor_spec: str) -> dict:
 
 
 def run_case(case: Case, base: dict, motor_spec: str, nominal: Motor, base_dir: str) -> dict:
-    """Run ``case`` and judge it: a row of plain values (JSON-ready)."""
+    """Run a case and judge it.
+
+    Parameters
+    ----------
+    case : Case
+        The run.
+    base : dict
+        The tuned scenario.
+    motor_spec : str
+        The nominal motor (preset or absolute path).
+    nominal : Motor
+        The nominal motor.
+    base_dir : str
+        Folder the scenario is relative to.
+
+    Returns
+    -------
+    dict
+        A row of plain values (JSON-ready; :func:`judge`) with ``wall_s``.
+    """
     sc = scenario_from_dict(
         case_scenario(case, base, motor_spec), source=f"<verify: {case.name}>", base_dir=base_dir
     )
@@ -78,8 +114,31 @@ def run_case(case: Case, base: dict, motor_spec: str, nominal: Motor, base_dir: 
 
 
 def judge(case: Case, a: dict, fault: int, t_done: float, duration: float, tau: float) -> dict:
-    """The figures of one run (electrical degrees, mm beside) and its verdict against
-    :mod:`linsense.verify.criteria`."""
+    """The figures of one run and its verdict against :mod:`linsense.verify.criteria`.
+
+    Electrical degrees, mm beside.
+
+    Parameters
+    ----------
+    case : Case
+        The run.
+    a : dict
+        Its recorded arrays (``t`` and the block statistics ``x_min``, ``x_max``, ``err_min``...).
+    fault : int
+        Fault bits at the end.
+    t_done : float
+        Time run, s.
+    duration : float
+        Time planned, s.
+    tau : float
+        Pole pitch, m.
+
+    Returns
+    -------
+    dict
+        ``case``, ``kind``, ``plant``, ``position_deg``, ``load_n``, ``fault``, ``passed``, ``why``
+        and the kind's figures.
+    """
     deg = 360.0 / tau
     t = a["t"]
     n = t.size - 1 if fault else t.size  # (the sample that tripped is not judged)
@@ -198,8 +257,31 @@ def _s(v: float | None) -> str:
 def run_cases(
     cases: list[Case], base: dict, motor_spec: str, nominal: Motor, base_dir: str, workers: int | None = None
 ) -> list[dict]:
-    """Every case's row, in order, on a local dask cluster of ``workers`` threads (default: one per
-    core; 1 runs them in this thread)."""
+    """Every case's row, in order.
+
+    On a local dask cluster of ``workers`` threads (default: one per core; 1 runs them in this
+    thread).
+
+    Parameters
+    ----------
+    cases : list of Case
+        The runs.
+    base : dict
+        The tuned scenario.
+    motor_spec : str
+        The nominal motor (preset or absolute path).
+    nominal : Motor
+        The nominal motor.
+    base_dir : str
+        Folder the scenarios are relative to.
+    workers : int or None, optional
+        Worker threads.
+
+    Returns
+    -------
+    list of dict
+        The rows (:func:`run_case`).
+    """
     import os
 
     n = workers or os.cpu_count() or 1
