@@ -251,8 +251,9 @@ def identify(bench: str, out: str, harmonics: int, motor_spec: str | None, pole_
 @click.option("--out", required=True, type=click.Path(file_okay=False), help="output folder")
 @click.option("--fidelity", type=click.Choice(["average", "switching"]), default=None,
               help="override the scenario's inverter fidelity")
-@click.option("--trace", "trace_fmt", type=click.Choice(["parquet", "csv", "none"]), default="parquet",
-              show_default=True, help="trace file format (written chunk by chunk while the run goes)")
+@click.option("--trace", "trace_fmt", type=click.Choice(["parquet", "csv", "none"]), default=None,
+              help="trace file format (written chunk by chunk while the run goes)  [default: parquet; csv "
+                   "without the parquet extra]")
 @click.option("--decimate", type=click.IntRange(1, 1_000_000), default=None,
               help="record one sample every N PWM periods (1 .. 1e6; overrides the scenario's "
                    "record.decimate)")
@@ -271,8 +272,13 @@ def simulate(scenario: str, out: str, fidelity: str | None, trace_fmt: str, deci
     from linsense.sim.build import build, check_trace_file
     from linsense.sim.scenario import load_scenario
     from linsense.sim.stream import simulate_streamed
-    from linsense.sim.trace import MAT_MAX_SAMPLES, TraceWriter, trace_columns, write_mat
+    from linsense.sim.trace import MAT_MAX_SAMPLES, TraceWriter, have_parquet, trace_columns, write_mat
 
+    if trace_fmt is None:  # (the core install has no pyarrow: its default trace is the CSV one)
+        trace_fmt = "parquet" if have_parquet() else "csv"
+        if trace_fmt == "csv":
+            click.echo("linsense: note: trace.csv, not trace.parquet: the Parquet trace needs pyarrow "
+                       "(pip install 'linsense[parquet]')", err=True)
     sc = load_scenario(scenario)
     if fidelity is not None:
         sc = sc.replace(inverter={"fidelity": fidelity})

@@ -8,13 +8,15 @@ import os
 import warnings
 from contextlib import contextmanager
 
+from linsense._extras import require
+
 
 @contextmanager
 def cluster_client(workers: int | None, scheduler: str | None, processes: bool):
     """A dask client: of the cluster at ``scheduler``, or of a local cluster of ``workers`` (default
     one per core) worker threads or processes, closed at the end."""
-    from dask.distributed import Client, LocalCluster
-
+    distributed = require("dask.distributed", extra="sweep", feature="running scenarios on a dask cluster")
+    Client, LocalCluster = distributed.Client, distributed.LocalCluster
     if scheduler:
         with Client(scheduler) as c:
             yield c

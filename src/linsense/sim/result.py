@@ -81,9 +81,10 @@ class Result:
         ``pandas.read_parquet`` of the run's ``trace.parquet``). ``blocks``: also the block statistics
         recorded (``x_min_m, x_max_m, x_mean_m, err_min_rad, err_max_rad, err_mean_rad, i_a_min_A,
         i_b_min_A, i_c_min_A, i_a_max_A, ...``; none when the run kept none). Imports pandas."""
-        import pandas as pd
-
+        from linsense._extras import require
         from linsense.sim.trace import trace_columns
+
+        pd = require("pandas", extra="parquet", feature="Result.to_dataframe")
 
         cols = trace_columns(self)
         if blocks:
