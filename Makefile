@@ -37,6 +37,7 @@ $(STAMP): pyproject.toml setup.py tools/build_ctrl.py $(wildcard csrc/ctrl/*.c c
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install -q --upgrade pip
 	LINSENSE_NATIVE=1 $(PY) -m pip install -q -e '.[all,dev]'
+	$(PY) -m compileall -q src/linsense  # (what pip does for a wheel; kept where PYTHONDONTWRITEBYTECODE is set)
 	touch $@
 
 install: $(STAMP)
