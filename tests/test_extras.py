@@ -25,7 +25,9 @@ from linsense._extras import EXTRAS, available, require, require_extras
 from linsense.errors import LinsenseError, MissingExtraError
 
 ROOT = Path(__file__).resolve().parents[1]
-SCENARIO = ROOT / "examples" / "scenarios" / "step3_lut.toml"
+#: the examples: in the package (src/linsense/examples) or, before they moved there, beside it
+EXAMPLES = next(p for p in (ROOT / "src" / "linsense" / "examples", ROOT / "examples") if p.is_dir())
+SCENARIO = EXAMPLES / "scenarios" / "step3_lut.toml"
 #: every module an extra brings (what the core must never import)
 BLOCKED = sorted({m for mods in EXTRAS.values() for m in mods})
 #: distribution (pyproject.toml) -> the top-level modules linsense imports from it
@@ -94,7 +96,7 @@ CORE = [
 GATED = [
     ("simulate parquet", ["simulate", str(SCENARIO), "--trace", "parquet", "--out", "sim_pq"], "parquet"),
     ("fea", ["fea", "tubular56", "--positions", "12", "--mesh", "coarse", "--out", "fea"], "fea"),
-    ("sweep", ["sweep", str(ROOT / "examples" / "sweeps" / "SWEEP"), "--out", "sweep"], "sweep"),
+    ("sweep", ["sweep", str(EXAMPLES / "sweeps" / "SWEEP"), "--out", "sweep"], "sweep"),
     ("reproduce", ["reproduce", "--quick", "--out", "repro"], "report,sweep"),
 ]
 
@@ -102,7 +104,7 @@ GATED = [
 @pytest.fixture(scope="module")
 def core_session(tmp_path_factory):
     cwd = tmp_path_factory.mktemp("core")
-    sweeps = sorted((ROOT / "examples" / "sweeps").glob("*.toml"))
+    sweeps = sorted((EXAMPLES / "sweeps").glob("*.toml"))
     assert sweeps, "no example sweep"
     gated = [(n, [a.replace("SWEEP", sweeps[0].name) for a in argv]) for n, argv, _ in GATED]
     return cwd, _session(CORE + gated, cwd)
