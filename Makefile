@@ -36,7 +36,8 @@ all: test
 $(STAMP): pyproject.toml setup.py tools/build_ctrl.py $(wildcard csrc/ctrl/*.c csrc/ctrl/*.h csrc/sim/*.c csrc/sim/*.h csrc/include/linsense/*.h csrc/py/*.c csrc/py/*.h)
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install -q --upgrade pip
-	LINSENSE_NATIVE=1 $(PY) -m pip install -q -e '.[dev]'
+	LINSENSE_NATIVE=1 $(PY) -m pip install -q -e '.[all,dev]'
+	$(PY) -m compileall -q src/linsense  # (what pip does for a wheel; kept where PYTHONDONTWRITEBYTECODE is set)
 	touch $@
 
 install: $(STAMP)

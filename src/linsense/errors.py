@@ -202,3 +202,33 @@ class KeyProblem(LinsenseError, ValueError):
         self.key = key
         self.message = message
         super().__init__(message)
+
+
+class MissingExtraError(LinsenseError, ImportError):
+    """A feature whose optional dependencies (a pip extra of linsense) are not installed; raised by
+    :func:`linsense._extras.require`. The message is one line naming the feature, the missing
+    module and the command that installs the extra. Also an ``ImportError`` (a module that cannot be
+    imported), so that code testing for a module with ``except ImportError`` keeps working.
+
+    Parameters
+    ----------
+    feature : str
+        What needs the module, e.g. ``"the Parquet trace"``.
+    modules : tuple of str
+        The missing (or failing) modules.
+    extras : tuple of str
+        The extras that bring them, e.g. ``("parquet",)``.
+    reason : str, optional
+        Why the import failed when the module is installed but does not import.
+    """
+
+    def __init__(self, feature: str, modules: tuple[str, ...], extras: tuple[str, ...],
+                 reason: str = "") -> None:
+        self.feature = feature
+        self.modules = tuple(modules)
+        self.extras = tuple(extras)
+        names = ", ".join(self.modules)
+        what = f"which fails to import ({bounded(reason, MAX_SHOWN_CHARS)})" if reason else \
+            f"{'which is' if len(self.modules) == 1 else 'which are'} not installed"
+        message = f"{feature} needs {names}, {what}: pip install 'linsense[{','.join(self.extras)}]'"
+        super().__init__(message.replace("\n", " "), name=self.modules[0] if self.modules else None)

@@ -43,8 +43,9 @@ def _scenario(spec: str):
 @click.option("--out", required=True, type=click.Path(file_okay=False), help="output folder")
 @click.option("--fidelity", type=click.Choice(["average", "switching"]), default=None,
               help="override the scenario's inverter fidelity")
-@click.option("--trace", "trace_fmt", type=click.Choice(["parquet", "csv", "none"]), default="parquet",
-              show_default=True, help="trace file format (written chunk by chunk while the run goes)")
+@click.option("--trace", "trace_fmt", type=click.Choice(["parquet", "csv", "none"]), default=None,
+              help="trace file format (written chunk by chunk while the run goes)  [default: parquet; csv "
+                   "without the parquet extra]")
 @click.option("--decimate", type=click.IntRange(1, 1_000_000), default=None,
               help="record one sample every N PWM periods (1 .. 1e6; overrides the scenario's "
                    "record.decimate)")
@@ -53,8 +54,8 @@ def _scenario(spec: str):
 @click.option("--plot/--no-plot", default=False, show_default=True, help="draw sim.png")
 @click.option("--check", is_flag=True, help="exit with code 1 when the run is not stable (for CI)")
 @c.json_option
-def simulate(scenario: str, out: str, fidelity: str | None, trace_fmt: str, decimate: int | None, mat: bool,
-             plot: bool, check: bool, as_json: bool) -> None:
+def simulate(scenario: str, out: str, fidelity: str | None, trace_fmt: str | None, decimate: int | None,
+             mat: bool, plot: bool, check: bool, as_json: bool) -> None:
     """Run a closed-loop drive simulation of SCENARIO (a file, a packaged example's name such as
     step3_lut, or - for standard input): metrics.json, timing.json, trace.parquet (or .csv; and
     trace.mat), sim.png with --plot.
@@ -66,10 +67,15 @@ def simulate(scenario: str, out: str, fidelity: str | None, trace_fmt: str, deci
     from linsense.io import output_set, split_timing
     from linsense.sim.build import build, check_trace_file
     from linsense.sim.stream import simulate_streamed
-    from linsense.sim.trace import MAT_MAX_SAMPLES, TraceWriter, trace_columns, write_mat
+    from linsense.sim.trace import MAT_MAX_SAMPLES, TraceWriter, have_parquet, trace_columns, write_mat
 
     if as_json:
         c.data_on_stdout()
+    if trace_fmt is None:  # (the core install has no pyarrow: its default trace is the CSV one)
+        trace_fmt = "parquet" if have_parquet() else "csv"
+        if trace_fmt == "csv":
+            c.warn("trace.csv, not trace.parquet: the Parquet trace needs pyarrow "
+                   "(pip install 'linsense[parquet]')")
     sc = _scenario(scenario)
     if fidelity is not None:
         sc = sc.replace(inverter={"fidelity": fidelity})

@@ -29,10 +29,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.sparse.linalg import splu
-from skfem import Basis, BilinearForm, ElementTriP2, Functional, LinearForm, MeshTri, asm
-from skfem.helpers import dot, grad
 
+from linsense._extras import require
 from linsense.fea.geometry import Geometry
+
+# the finite elements are scikit-fem's (the fea extra): without it this module stops in one line
+require("skfem", extra="fea", feature="the FEA (linsense fea)")
+from skfem import Basis, BilinearForm, ElementTriP2, Functional, LinearForm, MeshTri, asm  # noqa: E402
+from skfem.helpers import dot, grad  # noqa: E402
 
 MU0 = 4e-7 * math.pi
 PHASES = ("A", "B", "C")

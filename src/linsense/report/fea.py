@@ -15,6 +15,7 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Rectangle
 from matplotlib.tri import Triangulation
 
+from linsense._extras import require
 from linsense.analysis.summary import summarize
 from linsense.compensation.lut import build_lut, to_csv
 from linsense.errors import InputError
@@ -38,6 +39,7 @@ class _Bar:
     """A rich progress bar on stderr (positions done / total, rate, time left), one task per stage."""
 
     def __init__(self, currents: list[float], name: str, what: str = "load") -> None:
+        require("rich", extra="fea", feature="the FEA's progress display")
         from rich.console import Console
         from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 

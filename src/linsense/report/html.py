@@ -6,7 +6,7 @@ from __future__ import annotations
 import base64
 import math
 
-from markupsafe import Markup, escape
+from linsense._extras import require
 
 
 def _fmt(v, nd: int = 2) -> str:
@@ -37,9 +37,11 @@ def render_report(metrics: dict, figures: dict[str, bytes], scenarios: dict) -> 
     str
         The page.
     """
-    from jinja2 import Environment, PackageLoader, StrictUndefined
-
     from linsense.version import __version__
+
+    require("jinja2", extra="report", feature="the HTML report")
+    from jinja2 import Environment, PackageLoader, StrictUndefined
+    from markupsafe import Markup, escape  # (jinja2's own dependency)
 
     def img(name: str, caption: str) -> Markup:
         data = figures.get(name)

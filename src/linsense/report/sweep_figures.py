@@ -2,10 +2,16 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
-import pandas as pd
 from matplotlib.colors import ListedColormap
 from matplotlib.figure import Figure
+
+from linsense._extras import require
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 
 def _label(key: str, relative: bool = False) -> str:
@@ -76,6 +82,7 @@ def stability_map(df: pd.DataFrame, axes: list[str], relative: dict | None = Non
     matplotlib.figure.Figure
         The figure.
     """
+    isna = require("pandas", extra="sweep", feature="the sweep figures").isna
     relative = relative or {}
     kx, ky = axes[0], axes[1]
     kp = axes[2] if len(axes) > 2 else None
@@ -92,7 +99,7 @@ def stability_map(df: pd.DataFrame, axes: list[str], relative: dict | None = Non
             code = outcome(r)
             grid[i, k] = code
             lc = r.get("limit_cycle_mm")
-            txt = "x" if code == 0 else ("" if lc is None or pd.isna(lc) else f"{lc:.2f}")
+            txt = "x" if code == 0 else ("" if lc is None or isna(lc) else f"{lc:.2f}")
             ax.text(k, i, txt, ha="center", va="center", fontsize=7)
         ax.imshow(grid, cmap=cmap, vmin=-0.5, vmax=len(OUTCOMES) - 0.5, origin="lower", aspect="auto")
         ax.set_xticks(range(len(xs)), [_tick(v) for v in xs], fontsize=8)

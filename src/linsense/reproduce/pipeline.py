@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from linsense._extras import available, require_extras
 from linsense.reproduce import runs
 from linsense.reproduce.claims import STARTUP_MOTION_MM, claims, claims_beyond, finite_or_none
 
@@ -32,7 +33,7 @@ STARTUP_STARTS = {False: 24, True: 12}
 @contextmanager
 def _stages(enabled: bool):
     """A rich progress display with one bar per stage (or nothing)."""
-    if not enabled:
+    if not enabled or not available("rich"):  # (rich comes with the report and sweep extras)
         yield None
         return
     from rich.console import Console
@@ -116,6 +117,8 @@ def reproduce(out: str, motor_spec: str = "ecce2010", quick: bool = False, progr
     from linsense.model.motor import load_motor, names_a_file
     from linsense.report.figures import write_model_figures
 
+    if not model_only:  # (the closed-loop stages run the sweep engine and write report.html)
+        require_extras("report", "sweep", feature="the reproduction (linsense reproduce)")
     t_start = time.perf_counter()
     motor = load_motor(motor_spec)
     # the scenarios name the motor: a preset by name, a file by its absolute path

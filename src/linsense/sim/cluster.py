@@ -8,6 +8,8 @@ import os
 import warnings
 from contextlib import contextmanager
 
+from linsense._extras import require
+
 
 @contextmanager
 def cluster_client(workers: int | None, scheduler: str | None, processes: bool):
@@ -30,8 +32,8 @@ def cluster_client(workers: int | None, scheduler: str | None, processes: bool):
     dask.distributed.Client
         The client.
     """
-    from dask.distributed import Client, LocalCluster
-
+    distributed = require("dask.distributed", extra="sweep", feature="running scenarios on a dask cluster")
+    Client, LocalCluster = distributed.Client, distributed.LocalCluster
     if scheduler:
         with Client(scheduler) as c:
             yield c

@@ -151,9 +151,10 @@ class Result:
         pandas.DataFrame
             The frame.
         """
-        import pandas as pd
-
+        from linsense._extras import require
         from linsense.sim.trace import trace_columns
+
+        pd = require("pandas", extra="parquet", feature="Result.to_dataframe")
 
         cols = trace_columns(self)
         if blocks:

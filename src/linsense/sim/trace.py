@@ -17,7 +17,11 @@ from pathlib import Path
 
 import numpy as np
 
+from linsense._extras import available, require
 from linsense.io import write_atomic, write_atomic_with
+
+#: what needs pyarrow, in the message when it is missing (pip install 'linsense[parquet]')
+_PARQUET = "the Parquet trace"
 
 #: (column, array name, component or None)
 COLUMNS = (
@@ -106,6 +110,8 @@ class TraceWriter:
     def __init__(self, f, fmt: str) -> None:
         if fmt not in ("parquet", "csv"):
             raise ValueError(f"unknown trace format {fmt!r}")
+        if fmt == "parquet":  # (before the run starts: refused in one line when pyarrow is missing)
+            require("pyarrow.parquet", extra="parquet", feature=_PARQUET)
         self.f, self.fmt, self.rows = f, fmt, 0
         self._pq = None
         self._text = None
@@ -191,11 +197,7 @@ def have_parquet() -> bool:
     bool
         True when ``import pyarrow`` works.
     """
-    try:
-        import pyarrow  # noqa: F401
-    except ImportError:
-        return False
-    return True
+    return available("pyarrow")
 
 
 def read_trace(path: str | Path) -> dict[str, np.ndarray]:
@@ -212,8 +214,7 @@ def read_trace(path: str | Path) -> dict[str, np.ndarray]:
         The columns.
     """
     if str(path).endswith(".parquet"):
-        import pyarrow.parquet as pq
-
+        pq = require("pyarrow.parquet", extra="parquet", feature=_PARQUET)
         t = pq.read_table(path)
         return {c: t.column(c).to_numpy() for c in t.column_names}
     return read_trace_csv(path)
@@ -244,9 +245,8 @@ def write_trace(result, path: str | Path, fmt: str = "csv") -> Path:
     if fmt == "csv":
         return write_atomic(path, trace_csv(result))
     if fmt == "parquet":
-        import pyarrow as pa
-        import pyarrow.parquet as pq
-
+        pa = require("pyarrow", extra="parquet", feature=_PARQUET)
+        pq = require("pyarrow.parquet", extra="parquet", feature=_PARQUET)
         table = pa.table(trace_columns(result))
         return write_atomic_with(path, lambda f: pq.write_table(table, f, **PARQUET_OPTIONS))
     raise ValueError(f"unknown trace format {fmt!r}")

@@ -4,7 +4,12 @@
 ``load_sweep(path)`` reads a sweep file. docs/sweeps.md.
 """
 
-from linsense.sweep.engine import sweep
-from linsense.sweep.spec import SweepSpec, load_sweep, sweep_from_dict
+from linsense._extras import require_extras
+
+# (dask.distributed, pandas, pyarrow: the sweep extra; without it one line naming the extra)
+require_extras("sweep", feature="the sweep engine (linsense sweep)")
+
+from linsense.sweep.engine import sweep  # noqa: E402
+from linsense.sweep.spec import SweepSpec, load_sweep, sweep_from_dict  # noqa: E402
 
 __all__ = ["SweepSpec", "load_sweep", "sweep", "sweep_from_dict"]
