@@ -1,7 +1,8 @@
 # linsense: two commands on a fresh machine
 #   make demo   creates .venv, installs, runs the main job into out/
 #   make test   creates or reuses .venv, runs every C and Python test
-# Also: make bench (benchmarks), make fuzz (libFuzzer, FUZZ_TIME s per variant), make lint, make clean.
+# Also: make dist (sdist and abi3 manylinux wheel in dist/; make test checks them: wheeltest),
+# make bench (benchmarks), make fuzz (libFuzzer, FUZZ_TIME s per variant), make lint, make clean.
 
 PYTHON ?= python3
 VENV   := .venv
