@@ -24,7 +24,8 @@ DIST = ROOT / "dist"
 #: what the wheel must hold besides the Python modules (package data read at run time)
 REQUIRED = ["linsense/_ctrl.abi3.so", "linsense/model/presets/ecce2010.toml",
             "linsense/fea/presets/tubular56.toml", "linsense/report/templates/report.html.j2",
-            "linsense/reproduce/scenarios/paper_step3_lut.toml", "linsense/reproduce/sweeps/stability_map.toml"]
+            "linsense/reproduce/scenarios/paper_step3_lut.toml",
+            "linsense/reproduce/sweeps/stability_map.toml"]
 
 
 def forbidden(names: list[str]) -> list[str]:
@@ -38,9 +39,10 @@ def forbidden(names: list[str]) -> list[str]:
         top = p.parts[0]
         if not (top == "linsense" or re.fullmatch(r"linsense-[^/]+\.dist-info", top)):
             bad.append(n)
-        elif (re.search(r"build_ctrl", p.name) or "tests" in p.parts or "tools" in p.parts or "csrc" in p.parts
+        elif (re.search(r"build_ctrl", p.name) or {"tests", "tools", "csrc"} & set(p.parts)
               or re.fullmatch(r"test_.*\.py|conftest\.py", p.name) or p.suffix in (".c", ".h", ".o")
-              or (p.suffix in (".so", ".pyd", ".dylib") and not re.fullmatch(r"_ctrl\.(abi3\.so|pyd)", p.name))):
+              or (p.suffix in (".so", ".pyd", ".dylib")
+                  and not re.fullmatch(r"_ctrl\.(abi3\.so|pyd)", p.name))):
             bad.append(n)
     return bad
 
@@ -49,8 +51,9 @@ def test_the_rule_names_every_kind_of_forbidden_file():
     clean = ["linsense/__init__.py", "linsense/_ctrl.abi3.so", "linsense/model/presets/ecce2010.toml",
              "linsense-0.1.0.dist-info/METADATA", "linsense-0.1.0.dist-info/licenses/LICENSE"]
     assert forbidden(clean) == []
-    bad = ["linsense/_build_ctrl.py", "tools/build_ctrl.py", "linsense/tools/build_ctrl.py", "tests/test_io.py",
-           "linsense/tests/conftest.py", "linsense/test_x.py", "csrc/ctrl/ls_pi.c", "linsense/ls_drive.h",
+    bad = ["linsense/_build_ctrl.py", "tools/build_ctrl.py", "linsense/tools/build_ctrl.py",
+           "tests/test_io.py", "linsense/tests/conftest.py", "linsense/test_x.py", "csrc/ctrl/ls_pi.c",
+           "linsense/ls_drive.h",
            "linsense/_other.cpython-311-x86_64-linux-gnu.so", "linsense.libs/libm-1234.so.6", "setup.py"]
     assert forbidden(clean + bad) == bad
 
@@ -73,7 +76,7 @@ def test_the_wheel_is_abi3_manylinux_and_holds_the_package_only():
     assert forbidden(names) == []
     assert not [n for n in REQUIRED if n not in names], "package data missing from the wheel"
     sources = {p.relative_to(ROOT / "src").as_posix() for p in (ROOT / "src" / "linsense").rglob("*.py")}
-    assert not sources - set(names), "modules missing from the wheel"
+    assert not sources - set(names), "modules missing from the wheel (or dist/ is stale: make dist)"
     wheel_meta = zipfile.ZipFile(whl).read(next(n for n in names if n.endswith(".dist-info/WHEEL"))).decode()
     assert "Root-Is-Purelib: false" in wheel_meta and re.search(r"Tag: cp311-abi3-manylinux", wheel_meta)
 
@@ -92,5 +95,5 @@ def test_the_sdist_holds_what_the_build_and_the_tests_need():
         pytest.skip("not a git checkout")
     tracked = [t for t in tracked if "fuzz_corpus/" not in t and "fuzz_coverage/" not in t]
     missing = sorted(set(tracked) - names)
-    assert not missing, f"tracked files missing from the sdist: {missing[:10]}"
+    assert not missing, f"tracked files missing from the sdist (or dist/ is stale: make dist): {missing[:10]}"
     assert not [n for n in names if "__pycache__" in n or n.endswith((".so", ".pyc", ".o"))]
