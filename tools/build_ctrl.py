@@ -50,12 +50,14 @@ UMBRELLA = "".join(f'#include "{next(h.relative_to(d) for d in INCLUDE_DIRS if d
 SOURCES = sorted((CSRC / "ctrl").glob("*.c")) + [CSRC / "sim" / "ls_sim_all.c"] + sorted(PY.glob("*.c"))
 if not (CSRC / "ctrl").is_dir() or not SIM_HEADER.is_file():
     raise RuntimeError(f"linsense C sources not found under {CSRC} (expected csrc/ctrl/*.c, {SIM_HEADER})")
-#: -O3; ISO C's contraction off, as the firmware is compiled: every controller operation rounds as
-#: written. setup.py compiles the plant alone (ls_sim_all.c) with -ffp-contract=fast (fused
-#: multiply-adds: a fifth shorter dependency chains). LINSENSE_NATIVE=1 (the Makefile's venv) adds
-#: -march=native: faster, not portable, so never in wheels.
-COMPILE_ARGS = ["-std=c99", "-O3", "-ffp-contract=off"] + (
-    ["-march=native"] if os.environ.get("LINSENSE_NATIVE") == "1" else [])
+#: compiler flags by family (setup.py picks them by the compiler setuptools runs): gcc and clang
+#: (Linux, macOS, MinGW) -O3, C99, ISO C's contraction off as the firmware is compiled (every
+#: controller operation rounds as written), the plant (csrc/sim/ls_sim_all.c) with it on (fused
+#: multiply-adds: a fifth shorter dependency chains); MSVC /O2 /fp:precise (no contraction). A direct
+#: run takes the platform's default. LINSENSE_NATIVE=1 (the Makefile's venv) adds -march=native.
+_NATIVE = ["-march=native"] if os.environ.get("LINSENSE_NATIVE") == "1" else []  # (never in wheels)
+COMPILE_ARGS = {"gcc": ["-std=c99", "-O3", "-ffp-contract=off", *_NATIVE], "msvc": ["/O2", "/fp:precise"]}
+PLANT_ARGS = {"gcc": ["-ffp-contract=fast"], "msvc": []}
 #: the type names cffi knows by itself (int32_t, bool, size_t ...): declared for pycparser only
 KNOWN_TYPES = sorted(n for n in COMMON_TYPES if n.isidentifier())
 #: an integer constant expression (a macro cffi can read as ``#define NAME ...``)
@@ -131,7 +133,7 @@ def make_ffibuilder(absolute_paths: bool = False) -> FFI:
         UMBRELLA + f'const char *ls_py_source_digest(void) {{ return "{DIGEST}"; }}\n',
         sources=[path(p) for p in SOURCES],
         include_dirs=[path(d) for d in INCLUDE_DIRS],
-        extra_compile_args=COMPILE_ARGS,
+        extra_compile_args=COMPILE_ARGS["msvc" if os.name == "nt" else "gcc"],
         libraries=["m"] if os.name == "posix" else [],
     )
     return ffi

@@ -625,15 +625,17 @@ def _stem(target: Path) -> str:
 
 
 def _alive(pid: int) -> bool:
+    """Whether process ``pid`` exists (someone else's included), on every platform (psutil: a
+    signal 0 on POSIX, ``OpenProcess`` on Windows, where ``os.kill`` would terminate it). A number no
+    process can have (beyond the platform's pid range) is not alive."""
     if pid == os.getpid():
         return True
+    import psutil
+
     try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
+        return psutil.pid_exists(pid)
+    except (OverflowError, ValueError):  # (a number beyond the C pid type)
         return False
-    except OSError:  # EPERM: someone else's live process
-        return True
-    return True
 
 
 def _rmtree(p: Path) -> None:
@@ -731,27 +733,52 @@ def _target(out: str | os.PathLike) -> Path:
     return Path(os.path.realpath(os.fspath(out)))
 
 
+#: the lock file where a folder cannot be locked itself (Windows; filelock deletes it on release)
+LOCK_FILE = ".linsense.lock"
+
+
 class _Locked:
+    """An exclusive lock on a folder, waited for: ``flock`` on the folder itself where the OS has it
+    (POSIX: no lock file to leave behind), else (Windows) :class:`filelock.FileLock` on
+    :data:`LOCK_FILE` in the folder."""
+
+    #: False: always use filelock (what Windows runs; the tests check both on POSIX)
+    use_flock = True
+
     def __init__(self, folder: Path) -> None:
         self.folder = folder
+        self.fd: int | None = None
+        self.filelock = None
 
-    def __enter__(self) -> int:
+    def __enter__(self) -> int | None:
         self.folder.mkdir(parents=True, exist_ok=True)
-        self.fd = os.open(self.folder, os.O_RDONLY)
         try:
             import fcntl
+        except ImportError:
+            fcntl = None
+        if fcntl is not None and self.use_flock:
+            self.fd = os.open(self.folder, os.O_RDONLY)
+            try:
+                fcntl.flock(self.fd, fcntl.LOCK_EX)
+            except BaseException:
+                os.close(self.fd)
+                raise
+            return self.fd  # (also what commit fsyncs)
+        from filelock import FileLock
 
-            fcntl.flock(self.fd, fcntl.LOCK_EX)
-        except ImportError:  # pragma: no cover - not POSIX
-            pass
-        return self.fd
+        self.filelock = FileLock(self.folder / LOCK_FILE)
+        self.filelock.acquire()
+        return None
 
     def __exit__(self, *exc) -> None:
-        os.close(self.fd)  # releases the lock
+        if self.fd is not None:
+            os.close(self.fd)  # releases the lock
+        else:
+            self.filelock.release()
 
 
 def _locked(folder: Path) -> _Locked:
-    """An exclusive lock on ``folder`` (flock on the folder itself: no lock file to leave behind)."""
+    """An exclusive lock on ``folder`` (see :class:`_Locked`)."""
     return _Locked(folder)
 
 
@@ -977,7 +1004,8 @@ class OutputSet:
             else:
                 os.rename(tmp, target)
             try:
-                os.fsync(fd)
+                if fd is not None:  # (a folder cannot be opened, so not synced, on Windows)
+                    os.fsync(fd)
             except OSError:  # pragma: no cover - folders that cannot be synced
                 pass
         self.files = [self.shown / f for f in files]
