@@ -55,7 +55,7 @@ run "$V/linsense" reproduce --quick --out "$WORK/reproduce" > reproduce.log 2>&1
 grep -E "^ecce2010: .* claims" reproduce.log
 test -s "$WORK/reproduce/metrics.json" && test -s "$WORK/reproduce/report.html"
 # packaged examples by name (linsense/examples), as the README's commands use them
-run "$V/linsense" model --motor small30 --out "$WORK/model_small30" > model.log 2>&1 || { cat model.log; exit 1; }
+run "$V/linsense" model --motor small30 --out "$WORK/model_small30.csv" > model.log 2>&1 || { cat model.log; exit 1; }
 run "$V/linsense" simulate step3_lut --out "$WORK/simulate" --plot > simulate.log 2>&1 || { cat simulate.log; exit 1; }
 tail -1 simulate.log
 test -s "$WORK/simulate/metrics.json" && test -s "$WORK/simulate/sim.png"
