@@ -32,7 +32,9 @@ def forbidden(names: list[str]) -> list[str]:
     """The entries of a wheel that have no place in it: anything outside ``linsense/`` and its
     ``.dist-info``; a build script (``build_ctrl.py``, ``_build_ctrl.py``), a test (``tests/``,
     ``test_*.py``, ``conftest.py``), a C source or header, a tool; a compiled module other than
-    the abi3 extension; grafted libraries (``linsense.libs/``: the extension needs none)."""
+    the abi3 extension; grafted libraries (``linsense.libs/``: the extension needs none). The
+    packaged firmware example (``linsense/examples/firmware/*.c``, what ``linsense examples``
+    copies out) is an example, not a source of the build."""
     bad = []
     for n in names:
         p = PurePosixPath(n)
@@ -40,7 +42,8 @@ def forbidden(names: list[str]) -> list[str]:
         if not (top == "linsense" or re.fullmatch(r"linsense-[^/]+\.dist-info", top)):
             bad.append(n)
         elif (re.search(r"build_ctrl", p.name) or {"tests", "tools", "csrc"} & set(p.parts)
-              or re.fullmatch(r"test_.*\.py|conftest\.py", p.name) or p.suffix in (".c", ".h", ".o")
+              or re.fullmatch(r"test_.*\.py|conftest\.py", p.name)
+              or (p.suffix in (".c", ".h", ".o") and p.parts[:3] != ("linsense", "examples", "firmware"))
               or (p.suffix in (".so", ".pyd", ".dylib")
                   and not re.fullmatch(r"_ctrl\.(abi3\.so|pyd)", p.name))):
             bad.append(n)
@@ -49,7 +52,8 @@ def forbidden(names: list[str]) -> list[str]:
 
 def test_the_rule_names_every_kind_of_forbidden_file():
     clean = ["linsense/__init__.py", "linsense/_ctrl.abi3.so", "linsense/model/presets/ecce2010.toml",
-             "linsense-0.1.0.dist-info/METADATA", "linsense-0.1.0.dist-info/licenses/LICENSE"]
+             "linsense-0.1.0.dist-info/METADATA", "linsense-0.1.0.dist-info/licenses/LICENSE",
+             "linsense/examples/firmware/main.c"]
     assert forbidden(clean) == []
     bad = ["linsense/_build_ctrl.py", "tools/build_ctrl.py", "linsense/tools/build_ctrl.py",
            "tests/test_io.py", "linsense/tests/conftest.py", "linsense/test_x.py", "csrc/ctrl/ls_pi.c",
