@@ -36,7 +36,7 @@ all: test
 $(STAMP): pyproject.toml setup.py tools/build_ctrl.py $(wildcard csrc/ctrl/*.c csrc/ctrl/*.h csrc/sim/*.c csrc/sim/*.h csrc/include/linsense/*.h csrc/py/*.c csrc/py/*.h)
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install -q --upgrade pip
-	LINSENSE_NATIVE=1 $(PY) -m pip install -q -e '.[dev]'
+	LINSENSE_NATIVE=1 $(PY) -m pip install -q -e '.[dev,docs]'
 	touch $@
 
 install: $(STAMP)
