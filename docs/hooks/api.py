@@ -48,8 +48,8 @@ def on_config(config):
 
 def page(src: Path, package: str) -> str:
     """The Markdown of one package's page: mkdocstrings directives, one per module."""
-    parts = [f"# linsense.{package}\n", f"::: linsense.{package}\n    options:\n      show_root_heading: false\n"
-             "      members: false\n"]
+    parts = [f"# linsense.{package}\n",
+             f"::: linsense.{package}\n    options:\n      show_root_heading: false\n      members: false\n"]
     for mod in modules(src, package):
         parts.append(f"::: linsense.{package}.{mod}\n")
     return "\n".join(parts)

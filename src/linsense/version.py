@@ -2,3 +2,14 @@
 re-exports it; the package itself imports from the layers above)."""
 
 __version__ = "0.1.0"
+
+#: the documentation site's address (mkdocs, built from docs/*.md: ``docs/simulator.md`` is
+#: ``{DOCS_URL}/simulator/``); every help text links here. A placeholder (a reserved example
+#: domain) until the site is published: change it here alone.
+DOCS_URL = "https://linsense.example.org"
+
+
+def docs(page: str, anchor: str = "") -> str:
+    """The address of the docs site's ``page`` (``"simulator"`` for docs/simulator.md), with an
+    optional ``#anchor``."""
+    return f"{DOCS_URL}/{page}/" + (f"#{anchor}" if anchor else "")
