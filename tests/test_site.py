@@ -142,6 +142,25 @@ def test_readme_links_into_the_site_resolve(site):
     assert not re.findall(r"\]\(docs/[^)]*\.md[^)]*\)", (ROOT / "README.md").read_text())
 
 
+def test_help_texts_link_pages_of_the_site(site):
+    """Every ``docs(page[, anchor])`` of the package's sources (linsense.version.docs: the links of
+    the help texts and messages) names a page, and anchor, that the build made."""
+    calls = set()
+    for f in (ROOT / "src" / "linsense").rglob("*.py"):
+        calls |= set(re.findall(r"""\bdocs\(\s*["']([^"']*)["'](?:\s*,\s*["']([^"']*)["'])?\s*\)""",
+                                f.read_text()))
+    if not calls:
+        pytest.skip("no help text links the docs site (linsense.version.docs is not called)")
+    bad = []
+    for page, anchor in sorted(calls):
+        f = site_file(site, f"{DOCS_URL.rstrip('/')}/{page}/")
+        if not f.is_file():
+            bad.append(f"docs({page!r}): no {f.relative_to(site)}")
+        elif anchor and anchor not in _ids(f.read_text()):
+            bad.append(f"docs({page!r}, {anchor!r}): no such anchor")
+    assert not bad, bad
+
+
 def test_readme_picture_is_committed():
     imgs = re.findall(r"!\[[^\]]*\]\(([^)\s]+)", (ROOT / "README.md").read_text())
     assert imgs, "the README shows no picture"
@@ -337,7 +356,10 @@ def test_every_page_of_the_site_in_chromium(site, browser, report_run):
     pages = {urlparse(u).path for u in visits}
     for must in ["/", "/theory/", "/cli/", "/gallery/", "/api/", *(f"/api/{p}/" for p in PACKAGES),
                  *(f"/notebooks/{n}/" for n in NOTEBOOKS)]:
-        assert must in pages, must  # (reachable by links from the home page)
+        assert must in pages, must
+    # every page the build made was reached by links from the home page, and so checked
+    built = {"/" + p.parent.relative_to(site).as_posix() + "/" for p in site.rglob("index.html")}
+    assert {p.replace("/./", "/") for p in built} == pages
     figures = [src for v in visits.values() for src, _, w in v.images if "/gallery/" in src and w > 0]
     assert len(set(figures)) == len(list((site / "gallery").glob("*.png")))
     assert (SHOTS / "home.png").stat().st_size > 20_000

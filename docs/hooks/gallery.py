@@ -105,7 +105,7 @@ def render(path: Path, rel: str) -> tuple[str, bytes, dict]:
     from linsense.io import split_timing
     from linsense.report.sim_figures import sim_figure_png
 
-    result = linsense.simulate(path)
+    result = linsense.simulate(str(path))
     png = sim_figure_png(result)
     metrics, _timing = split_timing(result.metrics)
     name = path.stem
@@ -117,9 +117,9 @@ def render(path: Path, rel: str) -> tuple[str, bytes, dict]:
 
 ![The run of {name}: position, estimation error, currents, HF current, force]({name}.png)
 
-The run above is made while the site is built: `linsense.simulate("{rel}")`, drawn by
-`linsense.report.sim_figures.sim_figure` (what `linsense simulate {rel} --out DIR --plot` writes as
-`sim.png`). The metrics are defined in [the simulator's guide](../simulator.md).
+The run above was made while the site was built, by `linsense.simulate` on the scenario file below,
+and drawn by `linsense.report.sim_figures.sim_figure`: what `linsense simulate {rel} --out DIR --plot`
+writes as `sim.png`. The metrics are defined in [the simulator's guide](../simulator.md).
 
 ## Metrics
 
@@ -143,7 +143,9 @@ def on_files(files: Files, config) -> Files:
     t0, c0 = time.perf_counter(), time.process_time()
     index_rows = []
     for path in paths:
-        rel = path.relative_to(root).as_posix()
+        # (the command a reader types: a scenario the package ships is named, a file of the clone is a path)
+        packaged = "src/linsense/" in path.relative_to(root).as_posix()
+        rel = path.stem if packaged else path.relative_to(root).as_posix()
         page, png, metrics = render(path, rel)
         files.append(File.generated(config, f"gallery/{path.stem}.md", content=page))
         files.append(File.generated(config, f"gallery/{path.stem}.png", content=png))
