@@ -118,11 +118,10 @@ def site_file(site: Path, url: str) -> Path:
 
 
 def test_site_url_is_the_packages_docs_url():
-    import yaml
-
-    cfg = yaml.safe_load((ROOT / "mkdocs.yml").read_text())
-    assert cfg["site_url"].rstrip("/") == DOCS_URL.rstrip("/")
-    assert cfg["strict"] is True
+    text = (ROOT / "mkdocs.yml").read_text()
+    (url,) = re.findall(r"^site_url:\s*(\S+)\s*$", text, re.M)
+    assert url.rstrip("/") == DOCS_URL.rstrip("/")
+    assert re.findall(r"^strict:\s*(\S+)\s*$", text, re.M) == ["true"]
 
 
 def test_readme_links_into_the_site_resolve(site):
