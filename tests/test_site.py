@@ -160,6 +160,18 @@ def test_help_texts_link_pages_of_the_site(site):
     assert not bad, bad
 
 
+def test_notebooks_are_stored_without_outputs():
+    """The notebooks are executed when the site is built; the repository keeps their source only."""
+    import json
+
+    found = sorted((ROOT / "docs" / "notebooks").glob("*.ipynb"))
+    assert [p.stem for p in found] == sorted(NOTEBOOKS)
+    for path in found:
+        nb = json.loads(path.read_text())
+        code = [c for c in nb["cells"] if c["cell_type"] == "code"]
+        assert code and all(c["outputs"] == [] and c["execution_count"] is None for c in code), path.name
+
+
 def test_readme_picture_is_committed():
     imgs = re.findall(r"!\[[^\]]*\]\(([^)\s]+)", (ROOT / "README.md").read_text())
     assert imgs, "the README shows no picture"
