@@ -9,6 +9,7 @@ tree at build time, so that a new module is documented without editing anything.
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 from mkdocs.structure.files import File, Files
@@ -17,6 +18,10 @@ INDEX = "api/index.md"
 #: the public packages of linsense, in their layer order (bottom first: docs/architecture.md)
 PACKAGES = ("model", "analysis", "compensation", "tune", "sim", "identify", "fea", "sweep", "report",
             "reproduce")
+
+
+#: the shared modules under the layers (docs/architecture.md), on one page of their own
+SHARED = ("errors", "version", "io", "limits", "validation", "ctrl")
 
 
 def _src(config) -> Path:
@@ -36,7 +41,8 @@ def modules(src: Path, package: str) -> list[str]:
 
 def on_config(config):
     """Expand the ``API reference`` entry of the navigation to the index and one page per package."""
-    pages = [INDEX] + [{f"linsense.{p}": f"api/{p}.md"} for p in PACKAGES]
+    pages = [INDEX, *({f"linsense.{p}": f"api/{p}.md"} for p in PACKAGES),
+             {"Shared modules": "api/shared.md"}]
     for item in config.nav or []:
         if isinstance(item, dict):
             for title, value in item.items():
@@ -55,6 +61,23 @@ def page(src: Path, package: str) -> str:
     return "\n".join(parts)
 
 
+#: a Sphinx role of a docstring as the page renders it, ``:func:<code>~linsense.sim.run.simulate</code>``
+_ROLE = re.compile(r":(?:py:)?(?:class|func|meth|mod|attr|data|exc|obj|const):<code>(~?)([^<]*)</code>")
+
+
+def _role(m: re.Match) -> str:
+    # (``~a.b.c`` shows ``c``, as Sphinx does)
+    return f"<code>{m[2].rsplit('.', 1)[-1] if m[1] else m[2]}</code>"
+
+
+def on_page_content(html: str, page, config, files) -> str:
+    """The numpydoc docstrings' Sphinx roles (``:func:`x```), which Markdown leaves as text, shown as
+    the code they name."""
+    if not page.file.src_uri.startswith("api/"):
+        return html
+    return _ROLE.sub(_role, html)
+
+
 def on_files(files: Files, config) -> Files:
     """Add the index and the package pages to the site."""
     src = _src(config)
@@ -63,12 +86,18 @@ def on_files(files: Files, config) -> Files:
         files.append(File.generated(config, f"api/{package}.md", content=page(src, package)))
         mods = ", ".join(f"`{m}`" for m in modules(src, package))
         rows.append(f"| [linsense.{package}]({package}.md) | {mods} |")
+    intro = ("The modules under every layer: the one exception hierarchy, the version and the docs' "
+             "address, files and atomic writes, the size limits, the key checks, the C binding.\n")
+    shared = "\n".join(["# Shared modules\n", intro, *(f"::: linsense.{m}\n" for m in SHARED)])
+    files.append(File.generated(config, "api/shared.md", content=shared))
+    rows.append("| [shared modules](shared.md) | " + ", ".join(f"`linsense.{m}`" for m in SHARED) + " |")
     index = ("# API reference\n\nGenerated from the docstrings (numpy style) of the public modules of each "
              "package, in the layer order of [the architecture](../architecture.md): each package imports "
              "only from those above it in this list, and from the shared modules (`linsense.errors`, "
              "`linsense.io`, `linsense.limits`, ...).\n\n"
              "The top-level names `linsense.load_motor`, `linsense.simulate` and `linsense.simulate_many` "
-             "are documented under [linsense.model](model.md) and [linsense.sim](sim.md).\n\n"
+             "are documented under [linsense.model](model.md) and [linsense.sim](sim.md), the exceptions "
+             "(`linsense.LinsenseError`, `InputError`, `ModelError`) under [shared modules](shared.md).\n\n"
              "| package | modules |\n|---|---|\n" + "\n".join(rows) + "\n")
     files.append(File.generated(config, INDEX, content=index))
     return files
