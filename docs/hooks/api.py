@@ -46,7 +46,8 @@ def on_config(config):
     for item in config.nav or []:
         if isinstance(item, dict):
             for title, value in item.items():
-                if value == INDEX:
+                # (the entry, or the list it became when this config was expanded before)
+                if value == INDEX or (isinstance(value, list) and value[:1] == [INDEX]):
                     item[title] = pages
                     return config
     raise ValueError(f"mkdocs.yml: the nav has no {INDEX} entry for the API reference")

@@ -57,7 +57,8 @@ def on_config(config):
         for i, item in enumerate(items):
             if isinstance(item, dict):
                 for title, value in item.items():
-                    if value == INDEX:
+                    # (the entry, or the list it became when this config was expanded before)
+                    if value == INDEX or (isinstance(value, list) and value[:1] == [INDEX]):
                         item[title] = pages
                         return True
                     if isinstance(value, list) and expand(value):
