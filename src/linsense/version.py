@@ -10,6 +10,18 @@ DOCS_URL = "https://linsense.example.org"
 
 
 def docs(page: str, anchor: str = "") -> str:
-    """The address of the docs site's ``page`` (``"simulator"`` for docs/simulator.md), with an
-    optional ``#anchor``."""
+    """The address of a page of the docs site.
+
+    Parameters
+    ----------
+    page : str
+        The page, e.g. ``"simulator"`` for docs/simulator.md.
+    anchor : str, optional
+        A ``#anchor`` in it.
+
+    Returns
+    -------
+    str
+        The URL.
+    """
     return f"{DOCS_URL}/{page}/" + (f"#{anchor}" if anchor else "")
