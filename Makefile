@@ -1,8 +1,9 @@
 # linsense: two commands on a fresh machine
 #   make demo   creates .venv, installs, runs the main job into out/
-#   make test   creates or reuses .venv, runs every C and Python test
+#   make test   creates or reuses .venv, runs every C and Python test, builds and checks the docs site
 # Also: make dist (sdist and abi3 manylinux wheel in dist/; make test checks them: wheeltest),
-# make bench (benchmarks), make fuzz (libFuzzer, FUZZ_TIME s per variant), make lint, make clean.
+# make bench (benchmarks), make fuzz (libFuzzer, FUZZ_TIME s per variant), make lint, make docs
+#   (serves the docs site; make docs-build builds it), make clean.
 
 PYTHON ?= python3
 VENV   := .venv
@@ -29,7 +30,7 @@ GEN_HDR  := $(BUILD)/gen/ls_lut_ecce2010.h $(BUILD)/gen/ls_lut_ecce2010_r.h $(BU
 # variant name : extra flags
 VARIANTS := float-san double-san float-plain
 
-.PHONY: all install demo test ctest mcu example pytest lint bench tools fuzz fuzz-merge fuzztest clean dist wheeltest
+.PHONY: all install demo test ctest mcu example pytest lint bench tools fuzz fuzz-merge fuzztest clean dist wheeltest docs docs-build
 
 all: test
 
@@ -37,7 +38,7 @@ all: test
 $(STAMP): pyproject.toml setup.py tools/build_ctrl.py $(wildcard csrc/ctrl/*.c csrc/ctrl/*.h csrc/sim/*.c csrc/sim/*.h csrc/include/linsense/*.h csrc/py/*.c csrc/py/*.h)
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install -q --upgrade pip
-	LINSENSE_NATIVE=1 $(PY) -m pip install -q -e '.[all,dev]'
+	LINSENSE_NATIVE=1 $(PY) -m pip install -q -e '.[all,dev,docs]'
 	$(PY) -m compileall -q src/linsense  # (what pip does for a wheel; kept where PYTHONDONTWRITEBYTECODE is set)
 	touch $@
 
@@ -49,7 +50,7 @@ demo: $(STAMP)
 	  n=$$(basename $$f .toml); $(VENV)/bin/linsense simulate $$f --out out/sim/$$n --plot || exit 1; \
 	done
 
-test: lint ctest mcu example wheeltest pytest fuzztest
+test: lint ctest mcu example wheeltest docs-build pytest fuzztest
 
 GEN_DEPS := $(STAMP) $(wildcard src/linsense/compensation/*.py src/linsense/model/*.py src/linsense/analysis/*.py)
 $(BUILD)/gen/ls_lut_ecce2010.h: $(GEN_DEPS)
@@ -95,6 +96,18 @@ ctest: $(GEN_HDR)
 	    [ $$rc -eq 0 ] || exit $$rc; \
 	  done; \
 	done
+
+# The docs site (mkdocs.yml): `make docs` serves it on localhost:8000 while you edit, `make docs-build`
+# builds it strictly (a warning fails) into build/site, running every example scenario for the
+# gallery and executing the notebooks; the stamp tells tests/test_site.py that the build is current
+# (it builds again when an input is newer). pytest then checks the site in headless Chromium.
+DOCS_ENV := NO_MKDOCS_2_WARNING=1
+docs: $(STAMP)
+	$(DOCS_ENV) $(VENV)/bin/mkdocs serve --no-strict
+
+docs-build: $(STAMP)
+	$(DOCS_ENV) $(VENV)/bin/mkdocs build --strict
+	touch $(BUILD)/site/.strict-ok
 
 pytest: $(STAMP)
 	$(PY) -m pytest -q
