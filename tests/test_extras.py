@@ -265,7 +265,9 @@ def test_core_dependencies_hold_none_of_the_extras_packages():
 
 def test_pyproject_extras_bring_the_modules_extras_names():
     extras = _project()["optional-dependencies"]
-    assert set(extras) == set(EXTRAS) | {"all", "dev"}
+    # (the developers' extras: dev for the tests and lint, docs for the site and its browser check;
+    # no feature of the package is gated on them)
+    assert set(extras) == set(EXTRAS) | {"all", "dev", "docs"}
     for extra, modules in EXTRAS.items():
         brought = set().union(*(MODULES_OF[_name(r)] for r in extras[extra]))
         assert brought == set(modules), extra
