@@ -341,3 +341,19 @@ def test_docs_list_every_json_key():
     for command, keys in JSON_KEYS.items():
         for key in keys - COMMON:
             assert f"`{key}`" in rows[command], (command, key)
+
+
+def test_the_command_runs_blas_on_one_thread_unless_told(monkeypatch, capsys):
+    # (OpenBLAS's pool, started at numpy's import, costs ~50 ms of CPU per process; the command's
+    # linear algebra is small and a sweep runs in parallel by runs)
+    from linsense.__main__ import entry
+
+    monkeypatch.delenv("OPENBLAS_NUM_THREADS", raising=False)
+    with pytest.raises(SystemExit):
+        entry(["--version"])
+    assert os.environ["OPENBLAS_NUM_THREADS"] == "1"
+    monkeypatch.setenv("OPENBLAS_NUM_THREADS", "3")
+    with pytest.raises(SystemExit):
+        entry(["--version"])
+    assert os.environ["OPENBLAS_NUM_THREADS"] == "3"  # (the user's setting wins)
+    capsys.readouterr()
