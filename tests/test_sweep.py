@@ -206,10 +206,13 @@ def test_simulate_many_from_a_script_without_a_main_guard(tmp_path):
     script.write_text(
         "import linsense\n"
         f"rs = linsense.simulate_many([{str(tmp_path / 'base.toml')!r}] * 3, workers=2)\n"
-        "print(sum(r.metrics['final_position_mm'] > 1.5 for r in rs), len(rs))\n")
+        "print(sum(r.metrics['final_position_mm'] > 1.5 for r in rs), len(rs))\n"
+        "import sys\n"
+        "print(sorted(m for m in sys.modules if m.split('.')[0] in ('dask', 'distributed')))\n")
     r = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=120)
     assert r.returncode == 0, r.stderr
-    assert r.stdout.split() == ["3", "3"]
+    # 3 runs on 2 local threads, without dask (the core install has none)
+    assert r.stdout.split("\n")[:2] == ["3 3", "[]"]
 
 
 def test_metrics_only_equals_simulate_metrics(tmp_path):

@@ -1,5 +1,7 @@
-"""A dask client for running scenarios in parallel: :func:`linsense.sim.run.simulate_many`, the
-sweep engine (:mod:`linsense.sweep.engine`) and the certificate's cases (:mod:`linsense.verify.run`)."""
+"""A dask client for running scenarios on a dask cluster (the ``sweep`` extra): the sweep engine
+(:mod:`linsense.sweep.engine`) with ``--scheduler`` or ``--processes``, and
+:func:`linsense.sim.run.simulate_many` with a scheduler's address. Local runs otherwise go on a
+pool of worker threads of the standard library."""
 
 from __future__ import annotations
 

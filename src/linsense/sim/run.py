@@ -245,14 +245,14 @@ def _round_s(v: float) -> float:
 
 def simulate_many(scenarios, workers: int = 1, *, scheduler: str | None = None,
                   record: str = "trace") -> list[Result]:
-    """Run several scenarios on the sweep engine's cluster (docs/sweeps.md); results in input order.
+    """Run several scenarios on worker threads or a dask cluster; results in input order.
 
     Scenarios may be :class:`Scenario` objects, paths or dicts. Every scenario is validated here
     first, so a bad one raises before any run starts. ``workers=1`` runs them one after the other
-    in this process; more run on a local dask cluster of worker threads (the C loop releases the
-    GIL), so a script needs no ``if __name__ == "__main__"`` guard; ``scheduler`` sends them to a
-    running cluster by address. For thousands of runs, or runs that must survive a kill, use
-    :func:`linsense.sweep.sweep`, which keeps only the metrics.
+    in this process; more run on a pool of worker threads (the C loop releases the GIL; no dask
+    needed, and a script needs no ``if __name__ == "__main__"`` guard); ``scheduler`` sends them to
+    a running dask cluster by address (the ``sweep`` extra). For thousands of runs, or runs that
+    must survive a kill, use :func:`linsense.sweep.sweep`, which keeps only the metrics.
 
     Parameters
     ----------
@@ -290,6 +290,13 @@ def simulate_many(scenarios, workers: int = 1, *, scheduler: str | None = None,
                          f"{type(scenarios).__name__}") from None
     if scheduler is None and (workers == 1 or len(items) <= 1):
         return [simulate(s, record=record) for s in items]
+    if scheduler is None:
+        # local: a thread pool of the standard library (the core install has no dask; the C loop
+        # releases the GIL, so the threads run in parallel), results in input order
+        from concurrent.futures import ThreadPoolExecutor
+
+        with ThreadPoolExecutor(min(workers, len(items)), thread_name_prefix="linsense-sim") as pool:
+            return list(pool.map(lambda s: simulate(s, record=record), items))
     from linsense.sim.cluster import cluster_client
 
     with cluster_client(min(workers, len(items)), scheduler, processes=False) as client:

@@ -3,7 +3,8 @@
 Each case is the tuned scenario with its own reference, load and plant, on the switching
 inverter with the drive's dead time. Off-nominal plants keep the controller's nominal model
 (``controller.model.motor``): its LUT, gain table and feed-forwards are the nominal motor's.
-The runs go through a local dask cluster of worker threads (the C loop releases the GIL).
+The runs go through a pool of worker threads of the standard library (the C loop releases the
+GIL; no dask, which the core install has not).
 """
 
 from __future__ import annotations
@@ -259,8 +260,7 @@ def run_cases(
 ) -> list[dict]:
     """Every case's row, in order.
 
-    On a local dask cluster of ``workers`` threads (default: one per core; 1 runs them in this
-    thread).
+    On a pool of ``workers`` threads (default: one per core; 1 runs them in this thread).
 
     Parameters
     ----------
