@@ -291,8 +291,11 @@ def test_every_example_resolves_by_name(tmp_path):
     for name in examples.names("bench"):
         read_bench_csv(examples.resolve("bench", name))
     assert examples.names("firmware") == [] and "firmware/main.c" in examples.files()
-    # a path that exists wins over a name
+    # a file that exists wins over a name; a folder of that name does not hide it (a sweep's --out
+    # named after the sweep, run again from the same place)
     os.chdir(tmp_path)
+    Path("injection").mkdir()
+    assert examples.resolve("sweeps", "injection") == str(examples.path("sweeps", "injection"))
     Path("small30").write_text("")
     assert examples.resolve("motors", "small30") == "small30"
 

@@ -143,7 +143,7 @@ def named(kind: str, spec):
 
 
 def resolve(kind: str, spec: str | Path, key: str = "", extra: tuple[str, ...] = ()) -> str:
-    """A file argument: ``spec`` itself if it is an existing path, else the packaged example of
+    """A file argument: ``spec`` itself if it is an existing file, else the packaged example of
     ``kind`` it names, else :class:`~linsense.errors.InputError` listing the names.
 
     Parameters
@@ -163,7 +163,8 @@ def resolve(kind: str, spec: str | Path, key: str = "", extra: tuple[str, ...] =
         The path to read.
     """
     s = str(spec)
-    if Path(s).exists() or s in extra:
+    # (a file: a folder of the same name as an example, e.g. a sweep's --out, does not hide it)
+    if Path(s).is_file() or s in extra:
         return s
     p = path(kind, s)
     if p is not None:
