@@ -49,8 +49,10 @@ def forbidden(names: list[str]) -> list[str]:
     for n in names:
         p = PurePosixPath(n)
         top = p.parts[0]
-        shipped_c = p.parts[:2] == ("linsense", "csrc") and any(
-            re.fullmatch(r, "/".join(p.parts[2:])) for r in SHIPPED_C)
+        rel = "/".join(p.parts[2:])
+        shipped_c = p.parts[:2] == ("linsense", "csrc") and (
+            any(re.fullmatch(r, rel) for r in SHIPPED_C)
+            or (n.endswith("/") and rel in ("", "cmake", "ctrl", "include", "include/linsense")))  # (folders)
         if not (top == "linsense" or re.fullmatch(r"linsense-[^/]+\.dist-info", top)):
             bad.append(n)
         elif (re.search(r"build_ctrl", p.name) or {"tests", "tools"} & set(p.parts)
@@ -70,14 +72,15 @@ def test_the_rule_names_every_kind_of_forbidden_file():
              "linsense/examples/firmware/main.c", "linsense/csrc/ctrl/ls_pi.c",
              "linsense/csrc/ctrl/ls_drive_internal.h", "linsense/csrc/include/linsense/ls_drive.h",
              "linsense/csrc/CMakeLists.txt", "linsense/csrc/cmake/arm-none-eabi-m4f.cmake",
-             "linsense/csrc/cmake/linsense-config.cmake.in"]
+             "linsense/csrc/cmake/linsense-config.cmake.in", "linsense/csrc/",
+             "linsense/csrc/include/linsense/"]
     assert forbidden(clean) == []
     bad = ["linsense/_build_ctrl.py", "tools/build_ctrl.py", "linsense/tools/build_ctrl.py",
            "tests/test_io.py", "linsense/tests/conftest.py", "linsense/test_x.py", "csrc/ctrl/ls_pi.c",
            "linsense/ls_drive.h", "linsense/csrc/sim/ls_sim.c", "linsense/csrc/sim/ls_sim.h",
            "linsense/csrc/tests/test_drive.c", "linsense/csrc/tests/ls_test.h", "linsense/csrc/py/ls_py.c",
            "linsense/csrc/ctrl/ls_pi.o", "linsense/csrc/ctrl/sub/ls_x.c", "linsense/csrc/include/ls_x.h",
-           "linsense/csrc/cmake/notes.txt",
+           "linsense/csrc/cmake/notes.txt", "linsense/csrc/sim/", "linsense/csrc/tests/",
            "linsense/_other.cpython-311-x86_64-linux-gnu.so", "linsense.libs/libm-1234.so.6", "setup.py"]
     assert forbidden(clean + bad) == bad
 
@@ -115,7 +118,8 @@ def test_the_wheel_is_abi3_manylinux_and_holds_the_package_only():
     # the C library, whole: every file the exporter copies from a source tree, nothing more
     from linsense.firmware.export import library_files
 
-    shipped = {n.removeprefix("linsense/csrc/") for n in names if n.startswith("linsense/csrc/")}
+    shipped = {n.removeprefix("linsense/csrc/") for n in names
+               if n.startswith("linsense/csrc/") and not n.endswith("/")}
     assert shipped == set(library_files(ROOT / "csrc")), "the wheel's C library differs from csrc/'s"
     sources = {p.relative_to(ROOT / "src").as_posix() for p in (ROOT / "src" / "linsense").rglob("*.py")}
     assert not sources - set(names), "modules missing from the wheel (or dist/ is stale: make dist)"
