@@ -17,20 +17,11 @@ CLIBWARN := -Wdouble-promotion -Wconversion -Wshadow
 SAN      := -fsanitize=address,undefined,float-cast-overflow -fno-sanitize-recover=all -fno-omit-frame-pointer
 CINC     := -Icsrc/include -Icsrc/tests -I$(BUILD)/gen
 CTRL_SRC := $(wildcard csrc/ctrl/*.c)
-# the simulator by part (csrc/sim/ls_sim_*.c behind ls_sim_internal.h); ls_sim_all.c is the same
-# parts as one translation unit, what the extension compiles (its time loop inlines the parts)
-SIM_ALL  := csrc/sim/ls_sim_all.c
-SIM_SRC  := $(filter-out $(SIM_ALL),$(wildcard csrc/sim/*.c))
-TINC     := $(CINC) -Icsrc/sim
-CTESTS   := $(patsubst csrc/tests/%.c,%,$(wildcard csrc/tests/test_*.c))
-# tests of the simulator's internal functions (ls_sim_internal.h): linked with the parts' objects
-ITESTS   := $(patsubst csrc/tests/%.c,%,$(wildcard csrc/tests/itest_*.c))
+# (the C tests' sources, variants and flags: csrc/CMakeLists.txt, LINSENSE_BUILD_TESTS)
 GEN_HDR  := $(BUILD)/gen/ls_lut_ecce2010.h $(BUILD)/gen/ls_lut_ecce2010_r.h $(BUILD)/gen/ls_lut_ecce2010_q.h \
             $(BUILD)/gen/ls_lut_ecce2010_rot.h $(BUILD)/gen/ls_lut_ecce2010_sq.h
-# variant name : extra flags
-VARIANTS := float-san double-san float-plain
 
-.PHONY: all install demo test ctest mcu example pytest lint bench tools fuzz fuzz-merge fuzztest clean dist wheeltest docs docs-build
+.PHONY: all install demo test ctest mcu example example-export cmake-tool pytest lint bench tools fuzz fuzz-merge fuzztest clean dist wheeltest docs docs-build
 
 all: test
 
@@ -64,38 +55,27 @@ $(BUILD)/gen/ls_lut_ecce2010_rot.h: $(GEN_DEPS)
 $(BUILD)/gen/ls_lut_ecce2010_sq.h: $(GEN_DEPS)
 	$(VENV)/bin/linsense lut --motor ecce2010 --points 360 --format c --f-inj 8000 --injection square --symbol ls_lut_ecce2010_sq --out $@
 
-# Build and run every C test in three variants: float and double under ASan+UBSan, and float
-# without sanitizers. Library sources get the stricter warnings (-Wdouble-promotion ...). The
-# test_* link the simulator as the extension compiles it (ls_sim_all.c), the itest_* its parts.
-ctest: $(GEN_HDR)
-	@set -e; for v in $(VARIANTS); do \
-	  case $$v in \
-	    float-san)   flags="$(SAN) -O1 -g" ;; \
-	    double-san)  flags="$(SAN) -O1 -g -DLS_REAL_DOUBLE" ;; \
-	    float-plain) flags="-O2" ;; \
-	  esac; \
-	  dir=$(BUILD)/ctest/$$v; mkdir -p $$dir; objs=""; \
-	  for src in $(CTRL_SRC); do \
-	    obj=$$dir/$$(basename $$src .c).o; \
-	    $(CC) $(CSTD) $(CLIBWARN) $$flags $(CINC) -c $$src -o $$obj; objs="$$objs $$obj"; \
-	  done; \
-	  sobjs=""; \
-	  for src in $(SIM_SRC); do \
-	    obj=$$dir/$$(basename $$src .c).o; \
-	    $(CC) $(CSTD) -Wshadow $$flags $(CINC) -c $$src -o $$obj; sobjs="$$sobjs $$obj"; \
-	  done; \
-	  $(CC) $(CSTD) -Wshadow $$flags $(CINC) -c $(SIM_ALL) -o $$dir/ls_sim_all.o; \
-	  for t in $(ITESTS); do \
-	    $(CC) $(CSTD) -Wshadow $$flags $(TINC) csrc/tests/$$t.c $$objs $$sobjs -lm -o $$dir/$$t; \
-	    out=$$($$dir/$$t) && rc=0 || rc=$$?; printf '%s\n' "$$out" | sed "s/^/[$$v] /"; \
-	    [ $$rc -eq 0 ] || exit $$rc; \
-	  done; \
-	  for t in $(CTESTS); do \
-	    $(CC) $(CSTD) $$flags $(TINC) csrc/tests/$$t.c $$objs $$dir/ls_sim_all.o -lm -o $$dir/$$t; \
-	    out=$$($$dir/$$t) && rc=0 || rc=$$?; printf '%s\n' "$$out" | sed "s/^/[$$v] /"; \
-	    [ $$rc -eq 0 ] || exit $$rc; \
-	  done; \
-	done
+# Build and run every C test in three variants through CMake (csrc/CMakeLists.txt,
+# LINSENSE_BUILD_TESTS): float and double under ASan+UBSan, and float without sanitizers (linked
+# with the linsense::ctrl target itself, -O2). Library sources get the stricter warnings
+# (-Wdouble-promotion ...). The test_* link the simulator as the extension compiles it
+# (ls_sim_all.c), the itest_* its parts. The build is incremental (build/cmake) and parallel
+# (CTEST_JOBS); CTest prints the output of a failing test.
+CMAKE_DIR  := $(BUILD)/cmake
+CTEST_JOBS ?= $(shell nproc 2>/dev/null || echo 2)
+ctest: $(GEN_HDR) cmake-tool
+	cmake -S csrc -B $(CMAKE_DIR) -DLINSENSE_BUILD_TESTS=ON -DLINSENSE_GEN_DIR=$(abspath $(BUILD)/gen) \
+	  -DCMAKE_BUILD_TYPE=Release -DCMAKE_C_FLAGS_RELEASE=-O2 -DCMAKE_C_COMPILER=$(CC) >/dev/null
+	@cmake --build $(CMAKE_DIR) -j $(CTEST_JOBS) > $(CMAKE_DIR)/build.log 2>&1 || { cat $(CMAKE_DIR)/build.log; exit 1; }
+	ctest --test-dir $(CMAKE_DIR) -j $(CTEST_JOBS) --output-on-failure --progress
+
+# CMake, which make ctest, make example and make mcu use: installed when missing and possible
+cmake-tool:
+	@command -v cmake >/dev/null || { \
+	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null; then \
+	    echo "installing: cmake"; \
+	    (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq cmake >/dev/null); \
+	  else echo "please install: cmake" >&2; exit 1; fi; }
 
 # The docs site (mkdocs.yml): `make docs` serves it on localhost:8000 while you edit, `make docs-build`
 # builds it strictly (a warning fails) into build/site, running every example scenario for the
@@ -116,13 +96,20 @@ lint: $(STAMP)
 	$(VENV)/bin/ruff check src tests tools
 	$(VENV)/bin/lint-imports
 
-# The firmware example: generated LUT header + library + host main, a few thousand steps
+# The firmware example as a user gets it: `linsense firmware export` writes a self-contained folder
+# (the library's sources and headers, the design's ls_cfg_ecce2010.h, main.c, CMakeLists.txt, the
+# Cortex-M4F toolchain file) into build/example/export; make example builds it with CMake on the
+# host and runs it (a few thousand steps), make mcu builds it for the Cortex-M4F with the toolchain
+# file (when arm-none-eabi-gcc is there: make tools installs it) after the library's size check.
 EXAMPLE := $(BUILD)/example
-example: $(STAMP)
-	@mkdir -p $(EXAMPLE)
-	$(VENV)/bin/linsense tune --motor ecce2010 --format c --no-verify --out $(EXAMPLE)/ls_cfg_ecce2010.h
-	$(CC) $(CSTD) -O2 -Icsrc/include -I$(EXAMPLE) src/linsense/examples/firmware/main.c $(CTRL_SRC) -lm -o $(EXAMPLE)/firmware_example
-	$(EXAMPLE)/firmware_example
+EXPORT  := $(EXAMPLE)/export
+example-export: $(STAMP)
+	$(VENV)/bin/linsense -q firmware export $(EXPORT) --motor ecce2010
+
+example: example-export cmake-tool
+	cmake -S $(EXPORT) -B $(EXAMPLE)/host -DCMAKE_C_COMPILER=$(CC) >/dev/null
+	@cmake --build $(EXAMPLE)/host -j $(CTEST_JOBS) > $(EXAMPLE)/host/build.log 2>&1 || { cat $(EXAMPLE)/host/build.log; exit 1; }
+	$(EXAMPLE)/host/firmware_example
 
 # Distributions, as users install them. `make dist`: the sdist and a cp311-abi3 wheel built from it
 # (python -m build: the wheel is compiled from the unpacked sdist, without -march=native), repaired
@@ -215,9 +202,14 @@ fuzztest: tools
 	  echo "fuzz: skipped ($(FUZZ_CC) with libFuzzer not available; make tools installs it as root)"; \
 	fi
 
-# Cortex-M4F cross build of the library: warning-free, float only, no libc beyond math/string
-mcu: tools
+# Cortex-M4F cross build of the library: warning-free, float only, no libc beyond math/string, its
+# code at most 32 kB (tools/check_mcu.sh); then the exported firmware (library and example) built
+# by CMake with csrc/cmake/arm-none-eabi-m4f.cmake (as copied into the export)
+mcu: tools example-export cmake-tool
 	tools/check_mcu.sh build/arm
+	cmake -S $(EXPORT) -B $(EXAMPLE)/m4f -DCMAKE_TOOLCHAIN_FILE=$(abspath $(EXPORT))/cmake/arm-none-eabi-m4f.cmake >/dev/null
+	@cmake --build $(EXAMPLE)/m4f -j $(CTEST_JOBS) > $(EXAMPLE)/m4f/build.log 2>&1 || { cat $(EXAMPLE)/m4f/build.log; exit 1; }
+	@arm-none-eabi-size $(EXAMPLE)/m4f/firmware_example | awk 'NR == 2 {print "mcu: the exported firmware built by CMake for the Cortex-M4F (-Os): firmware_example text " $$1 " data " $$2 " bss " $$3 " bytes"}'
 
 # System tools the checks need (Debian packages), installed when missing and possible: the ARM
 # cross compiler and valgrind; clang's libFuzzer and chromium (reproduce's report render test) optional
@@ -225,6 +217,7 @@ tools:
 	@missing=""; optional=""; \
 	command -v arm-none-eabi-gcc >/dev/null || missing="$$missing gcc-arm-none-eabi libnewlib-arm-none-eabi"; \
 	command -v valgrind >/dev/null || missing="$$missing valgrind"; \
+	command -v cmake >/dev/null || missing="$$missing cmake"; \
 	printf 'int LLVMFuzzerTestOneInput(const char *d, unsigned long n) { (void)d; (void)n; return 0; }\n' | \
 	  $(FUZZ_CC) -x c -fsanitize=fuzzer - -o /dev/null 2>/dev/null || optional="clang libclang-rt-dev"; \
 	command -v chromium >/dev/null || optional="$$optional chromium"; \

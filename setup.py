@@ -13,10 +13,17 @@ written, whatever the code's layout and whether the host has FMA. Only the simul
 (``csrc/sim/ls_sim_all.c``) is compiled with ``-ffp-contract=fast`` (fused multiply-adds where the
 host has them, for speed). MSVC gets ``/O2 /fp:precise`` (no contraction, no ``-std``).
 
+``build_py`` also copies the C controller library into the package, as data: ``csrc/ctrl`` (sources
+and internal headers), ``csrc/include/linsense`` (public headers) and the CMake package
+(``csrc/CMakeLists.txt``, ``csrc/cmake``) become ``linsense/csrc/...`` in the wheel
+(``linsense.get_include()``, ``linsense firmware export``); not the simulator, the tests or the
+binding's helpers. An editable install reads them from ``csrc/`` itself.
+
 The extension uses only CPython's limited API (cffi defines ``Py_LIMITED_API``; the file is
 ``_ctrl.abi3.so``), so the wheel is tagged ``cp311-abi3``: one wheel for Python 3.11 and later.
 """
 
+import glob
 import importlib.util
 import os
 import sys
@@ -24,8 +31,13 @@ import sysconfig
 
 from setuptools import setup
 from setuptools.command.build_ext import build_ext
+from setuptools.command.build_py import build_py
 
 HERE = os.path.dirname(os.path.abspath(__file__))
+#: the C library's files shipped in the wheel, relative to csrc/ (linsense.firmware.export.LIBRARY_FILES;
+#: tests/test_dist.py checks the wheel holds exactly these)
+C_LIBRARY = ("CMakeLists.txt", "cmake/*.cmake", "cmake/*.cmake.in", "include/linsense/*.h",
+             "ctrl/*.c", "ctrl/*.h")
 
 
 def _flags():
@@ -54,7 +66,23 @@ class BuildExt(build_ext):
         super().build_extension(ext)
 
 
+class BuildPy(build_py):
+    """``build_py``, and the C library copied into the package as ``linsense/csrc/...`` (not in an
+    editable install, which reads the repository's ``csrc/``)."""
+
+    def run(self):
+        super().run()
+        if getattr(self, "editable_mode", False):
+            return
+        csrc = os.path.join(HERE, "csrc")
+        for pattern in C_LIBRARY:
+            for src in sorted(glob.glob(os.path.join(csrc, pattern))):
+                dst = os.path.join(self.build_lib, "linsense", "csrc", os.path.relpath(src, csrc))
+                self.mkpath(os.path.dirname(dst))
+                self.copy_file(src, dst)
+
+
 # the abi3 tag (not for a free-threaded or non-CPython build, which cannot use the limited API)
 abi3 = sys.implementation.name == "cpython" and not sysconfig.get_config_var("Py_GIL_DISABLED")
-setup(cmdclass={"build_ext": BuildExt}, cffi_modules=["tools/build_ctrl.py:ffibuilder"],
+setup(cmdclass={"build_ext": BuildExt, "build_py": BuildPy}, cffi_modules=["tools/build_ctrl.py:ffibuilder"],
       options={"bdist_wheel": {"py_limited_api": "cp311"}} if abi3 else {})

@@ -1,5 +1,6 @@
 """What `make dist` puts in dist/ (issue 25): a cp311-abi3 manylinux wheel holding the package and
-nothing of the build (no build script, test or C source), and an sdist holding what the build and the
+nothing of the build (no build script, test, or C source but the controller library's, which ships as
+package data for `linsense firmware export`: issue 26), and an sdist holding what the build and the
 tests need.
 
 The distributions are built by `make dist` (tools/wheeltest.sh runs this file first, with
@@ -28,22 +29,37 @@ REQUIRED = ["linsense/_ctrl.abi3.so", "linsense/model/presets/ecce2010.toml",
             "linsense/reproduce/sweeps/stability_map.toml"]
 
 
+#: the C library's files the wheel ships (setup.py's C_LIBRARY, under linsense/csrc/): the CMake
+#: package, the public headers, the sources and their internal headers
+SHIPPED_C = (r"CMakeLists\.txt", r"cmake/[\w.-]+\.cmake(\.in)?", r"include/linsense/\w+\.h",
+             r"ctrl/\w+\.[ch]")
+
+
 def forbidden(names: list[str]) -> list[str]:
     """The entries of a wheel that have no place in it: anything outside ``linsense/`` and its
     ``.dist-info``; a build script (``build_ctrl.py``, ``_build_ctrl.py``), a test (``tests/``,
-    ``test_*.py``, ``conftest.py``), a C source or header, a tool; a compiled module other than
-    the abi3 extension; grafted libraries (``linsense.libs/``: the extension needs none). The
-    packaged firmware example (``linsense/examples/firmware/*.c``, what ``linsense examples``
-    copies out) is an example, not a source of the build."""
+    ``test_*.py``, ``conftest.py``), a C source or header but the controller library's, a tool;
+    a compiled module other than the abi3 extension; grafted libraries (``linsense.libs/``: the
+    extension needs none). The controller library ships as package data under ``linsense/csrc/``
+    (:data:`SHIPPED_C`: ``ctrl/``, ``include/linsense/``, its CMake files), never the simulator
+    (``csrc/sim``), the C tests or the binding's helpers (``csrc/py``). The packaged firmware
+    example (``linsense/examples/firmware/*.c``, what ``linsense examples`` copies out) is an
+    example, not a source of the build."""
     bad = []
     for n in names:
         p = PurePosixPath(n)
         top = p.parts[0]
+        rel = "/".join(p.parts[2:])
+        shipped_c = p.parts[:2] == ("linsense", "csrc") and (
+            any(re.fullmatch(r, rel) for r in SHIPPED_C)
+            or (n.endswith("/") and rel in ("", "cmake", "ctrl", "include", "include/linsense")))  # (folders)
         if not (top == "linsense" or re.fullmatch(r"linsense-[^/]+\.dist-info", top)):
             bad.append(n)
-        elif (re.search(r"build_ctrl", p.name) or {"tests", "tools", "csrc"} & set(p.parts)
+        elif (re.search(r"build_ctrl", p.name) or {"tests", "tools"} & set(p.parts)
+              or ("csrc" in p.parts and not shipped_c)
               or re.fullmatch(r"test_.*\.py|conftest\.py", p.name)
-              or (p.suffix in (".c", ".h", ".o") and p.parts[:3] != ("linsense", "examples", "firmware"))
+              or (p.suffix in (".c", ".h", ".o") and not shipped_c
+                  and p.parts[:3] != ("linsense", "examples", "firmware"))
               or (p.suffix in (".so", ".pyd", ".dylib")
                   and not re.fullmatch(r"_ctrl\.(abi3\.so|pyd)", p.name))):
             bad.append(n)
@@ -53,13 +69,33 @@ def forbidden(names: list[str]) -> list[str]:
 def test_the_rule_names_every_kind_of_forbidden_file():
     clean = ["linsense/__init__.py", "linsense/_ctrl.abi3.so", "linsense/model/presets/ecce2010.toml",
              "linsense-0.1.0.dist-info/METADATA", "linsense-0.1.0.dist-info/licenses/LICENSE",
-             "linsense/examples/firmware/main.c"]
+             "linsense/examples/firmware/main.c", "linsense/csrc/ctrl/ls_pi.c",
+             "linsense/csrc/ctrl/ls_drive_internal.h", "linsense/csrc/include/linsense/ls_drive.h",
+             "linsense/csrc/CMakeLists.txt", "linsense/csrc/cmake/arm-none-eabi-m4f.cmake",
+             "linsense/csrc/cmake/linsense-config.cmake.in", "linsense/csrc/",
+             "linsense/csrc/include/linsense/"]
     assert forbidden(clean) == []
     bad = ["linsense/_build_ctrl.py", "tools/build_ctrl.py", "linsense/tools/build_ctrl.py",
            "tests/test_io.py", "linsense/tests/conftest.py", "linsense/test_x.py", "csrc/ctrl/ls_pi.c",
-           "linsense/ls_drive.h",
+           "linsense/ls_drive.h", "linsense/csrc/sim/ls_sim.c", "linsense/csrc/sim/ls_sim.h",
+           "linsense/csrc/tests/test_drive.c", "linsense/csrc/tests/ls_test.h", "linsense/csrc/py/ls_py.c",
+           "linsense/csrc/ctrl/ls_pi.o", "linsense/csrc/ctrl/sub/ls_x.c", "linsense/csrc/include/ls_x.h",
+           "linsense/csrc/cmake/notes.txt", "linsense/csrc/sim/", "linsense/csrc/tests/",
            "linsense/_other.cpython-311-x86_64-linux-gnu.so", "linsense.libs/libm-1234.so.6", "setup.py"]
     assert forbidden(clean + bad) == bad
+
+
+def test_the_shipped_c_library_is_the_exporters():
+    """The rule's C files are what linsense firmware export copies (LIBRARY_FILES over csrc/), and
+    setup.py copies the same globs (its C_LIBRARY)."""
+    from linsense.firmware.export import LIBRARY_FILES, library_files
+
+    expected = library_files(ROOT / "csrc")
+    assert {"ctrl/ls_drive.c", "include/linsense/ls_drive.h", "CMakeLists.txt",
+            "cmake/arm-none-eabi-m4f.cmake", "cmake/linsense-config.cmake.in"} <= set(expected)
+    assert forbidden([f"linsense/csrc/{rel}" for rel in expected]) == []
+    setup_globs = re.search(r"C_LIBRARY = \(([^)]*)\)", (ROOT / "setup.py").read_text())[1]
+    assert tuple(re.findall(r'"([^"]+)"', setup_globs)) == LIBRARY_FILES
 
 
 def _one(pattern: str) -> Path:
@@ -79,6 +115,12 @@ def test_the_wheel_is_abi3_manylinux_and_holds_the_package_only():
     names = zipfile.ZipFile(whl).namelist()
     assert forbidden(names) == []
     assert not [n for n in REQUIRED if n not in names], "package data missing from the wheel"
+    # the C library, whole: every file the exporter copies from a source tree, nothing more
+    from linsense.firmware.export import library_files
+
+    shipped = {n.removeprefix("linsense/csrc/") for n in names
+               if n.startswith("linsense/csrc/") and not n.endswith("/")}
+    assert shipped == set(library_files(ROOT / "csrc")), "the wheel's C library differs from csrc/'s"
     sources = {p.relative_to(ROOT / "src").as_posix() for p in (ROOT / "src" / "linsense").rglob("*.py")}
     assert not sources - set(names), "modules missing from the wheel (or dist/ is stale: make dist)"
     wheel_meta = zipfile.ZipFile(whl).read(next(n for n in names if n.endswith(".dist-info/WHEEL"))).decode()

@@ -63,12 +63,14 @@ test -s "$WORK/simulate/metrics.json" && test -s "$WORK/simulate/sim.png"
 # 3. the sdist's tests against the installed wheel. SDIST_TESTS: the C binding (test_ctrl_binding:
 #    the extension's declarations, struct layouts, calls), every CLI command on the packaged presets
 #    and scenarios (test_cli), the output files and their portable lock with real processes
-#    (test_io, test_io_lock) and the version: what a packaging mistake breaks (a missing module,
+#    (test_io, test_io_lock), the version, and `linsense firmware export` from the C library the wheel
+#    ships (test_firmware_export; its builds skip there: no compiler): what a packaging mistake breaks (a missing module,
 #    preset, template or dependency, an extension built wrong), in ~10 s of CPU. Not the rest: the
 #    numerics are the same code as in `make pytest` (test_kills alone is 13 s of CPU), and the tests
 #    of the build (test_binding_build, test_layers, test_dist) need a compiler, the dev tools or git.
 mkdir -p sdist && tar -xzf "$sdist" -C sdist
 cd sdist/*/
-SDIST_TESTS="tests/test_io.py tests/test_io_lock.py tests/test_ctrl_binding.py tests/test_cli.py tests/test_version.py"
+SDIST_TESTS="tests/test_io.py tests/test_io_lock.py tests/test_ctrl_binding.py tests/test_cli.py tests/test_version.py
+  tests/test_firmware_export.py"
 run "$V/python" -m pytest -q -p no:cacheprovider -m "not slow" $SDIST_TESTS
 echo "wheeltest: OK"

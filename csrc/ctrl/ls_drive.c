@@ -17,6 +17,7 @@ void ls_drive_default_cfg(ls_drive_cfg *c)
     const LS_REAL tau = LS_DEF_TAU, kf = LS_DEF_KF, mass = LS_DEF_MASS, r_s = LS_DEF_R_S;
     const LS_REAL w_i = LS_TWO_PI * LS_DEF_CURRENT_BW; /* current-loop bandwidth, rad/s */
     memset(c, 0, sizeof *c);
+    c->lib_version = LS_VERSION;
     c->fs = fs;
     c->pole_pitch = tau;
     c->force_constant = kf;
@@ -170,6 +171,9 @@ ls_status ls_drive_init(ls_drive *d, const ls_drive_cfg *cfg)
         return LS_ERR_NULL;
     }
     memset(d, 0, sizeof *d);
+    if (cfg->lib_version != LS_VERSION) {
+        return LS_ERR_VERSION; /* made for another library version: its fields may mean other things */
+    }
     if (!pos_finite(cfg->fs) || !pos_finite(cfg->pole_pitch) || !pos_finite(cfg->force_constant) ||
         !pos_finite(cfg->i_max) || !LS_ISFINITE(cfg->i_d_inj) || !(LS_FABS(cfg->i_d_inj) < cfg->i_max) ||
         !LS_ISFINITE(cfg->i_d_near) || !(LS_FABS(cfg->i_d_near) < cfg->i_max) || !(cfg->near_in >= LS_R(0.0)) ||

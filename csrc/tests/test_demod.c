@@ -43,6 +43,8 @@ int main(void)
     cfg.gain = LS_R(1.0);
     cfg.comp = NULL;
     cfg.gain_table = NULL;
+    cfg.comp_r = NULL; /* (left unset, init read stack garbage: a CMake build's layout trapped it) */
+    cfg.gain_r = NULL;
     cfg.min_level = LS_R(1e-4);
     cfg.f_notch = LS_R(2000.0);
     cfg.ref_phase = LS_R(1.3);

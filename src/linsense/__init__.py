@@ -13,8 +13,36 @@ radians inside.
 from linsense.errors import InputError, LinsenseError, ModelError
 from linsense.version import __version__
 
-__all__ = ["InputError", "LinsenseError", "ModelError", "Motor", "load_motor", "simulate", "simulate_many",
-           "__version__"]
+__all__ = ["InputError", "LinsenseError", "ModelError", "Motor", "get_include", "load_motor", "simulate",
+           "simulate_many", "__version__"]
+
+
+def get_include() -> str:
+    """The folder of the C library's public headers (``#include "linsense/ls_drive.h"``).
+
+    The wheel ships the controller library's headers and sources in the package
+    (``linsense/csrc/include``, ``linsense/csrc/ctrl``, its CMake files beside them); an editable
+    install reads them from the repository's ``csrc/``. ``linsense firmware export`` copies them
+    from here.
+
+    Returns
+    -------
+    str
+        The absolute path of the folder holding ``linsense/ls_types.h`` and the other headers.
+
+    Raises
+    ------
+    LinsenseError
+        When neither holds the headers (a broken installation).
+    """
+    from pathlib import Path
+
+    here = Path(__file__).resolve().parent
+    for root in (here / "csrc", here.parents[1] / "csrc"):  # (the wheel's, then a source tree's)
+        if (root / "include" / "linsense" / "ls_types.h").is_file() and (root / "ctrl").is_dir():
+            return str(root / "include")
+    raise LinsenseError(f"the C library's headers are not installed with linsense "
+                        f"({here / 'csrc' / 'include'} is missing): reinstall linsense")
 
 
 def __getattr__(name: str):

@@ -112,7 +112,8 @@ _check_stale()
 REAL = np.dtype(np.float32) if ffi.sizeof("LS_REAL") == 4 else np.dtype(np.float64)
 
 _TWO_PI = 2.0 * np.pi
-_STATUS = {lib.LS_OK: "LS_OK", lib.LS_ERR_NULL: "LS_ERR_NULL", lib.LS_ERR_PARAM: "LS_ERR_PARAM"}
+_STATUS = {lib.LS_OK: "LS_OK", lib.LS_ERR_NULL: "LS_ERR_NULL", lib.LS_ERR_PARAM: "LS_ERR_PARAM",
+           lib.LS_ERR_VERSION: "LS_ERR_VERSION"}
 
 # Allowed ranges of the configuration fields, as documented in the C headers (for messages only:
 # the C init functions decide what is refused).

@@ -19,6 +19,11 @@
 #define LS_VERSION_MAJOR 0
 #define LS_VERSION_MINOR 1
 #define LS_VERSION_PATCH 0
+/* The version as one number, 0xMMmmpp (LS_VERSION_OF(0, 1, 0) = 0x000100): what a configuration
+ * records as made for (ls_drive_cfg.lib_version, set by ls_drive_default_cfg and by every generated
+ * ls_cfg_*.h) and ls_drive_init compares. */
+#define LS_VERSION_OF(major, minor, patch) ((uint32_t)(((major) << 16) | ((minor) << 8) | (patch)))
+#define LS_VERSION LS_VERSION_OF(LS_VERSION_MAJOR, LS_VERSION_MINOR, LS_VERSION_PATCH)
 
 #ifdef LS_REAL_DOUBLE
 typedef double LS_REAL;
@@ -62,7 +67,9 @@ typedef float LS_REAL;
 typedef enum {
     LS_OK = 0,
     LS_ERR_NULL = 1,  /* a required pointer is NULL */
-    LS_ERR_PARAM = 2  /* a configuration value is out of its allowed range (or not finite) */
+    LS_ERR_PARAM = 2, /* a configuration value is out of its allowed range (or not finite) */
+    LS_ERR_VERSION = 3 /* ls_drive_init: a configuration made for another library version
+                          (ls_drive_cfg.lib_version is not LS_VERSION; regenerate its header) */
 } ls_status;
 
 /* Clamp x into [lo, hi] (lo <= hi; NaN stays NaN). Written as min then max, each a form compilers

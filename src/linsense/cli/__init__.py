@@ -13,7 +13,7 @@ import sys
 
 import click
 
-from linsense.cli import _common, models, runs, tune
+from linsense.cli import _common, firmware, models, runs, tune
 from linsense.errors import InputError, LinsenseError
 from linsense.version import __version__, docs
 
@@ -67,7 +67,7 @@ def cli(quiet: bool, verbose: bool) -> None:
     np.seterr(all="ignore")
 
 
-for _cmd in models.COMMANDS + runs.COMMANDS + tune.COMMANDS:
+for _cmd in models.COMMANDS + runs.COMMANDS + tune.COMMANDS + firmware.COMMANDS:
     cli.add_command(_cmd)
 
 

@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from linsense.analysis.hf import psi_lut, psi_lut_resistive, real_arg
+from linsense.compensation.stamp import data_digest, stamp_comment, stamp_macros
 from linsense.errors import InputError, shown
 from linsense.io import check_width, csv_rows, read_text_file
 from linsense.version import __version__
@@ -42,11 +43,15 @@ class Lut:
         Motor name, used in C identifiers and provenance.
     provenance : dict
         Motor parameters the table was computed from.
+    digest : str
+        SHA-256 of the motor data and table settings it was computed from (:func:`build_lut`;
+        :mod:`linsense.compensation.stamp`), "" for a table read from a file.
     """
 
     values: np.ndarray
     name: str = "motor"
     provenance: dict = field(default_factory=dict)
+    digest: str = field(default="", compare=False)
 
     def __post_init__(self) -> None:
         v = np.array(self.values, dtype=float)
@@ -148,6 +153,8 @@ def build_lut(motor, points: int, f_inj: float | None = None, quad: float = 0.0,
     points = int(points)
     theta = 2.0 * np.pi * np.arange(points) / points
     prov = motor.provenance()
+    digest = data_digest(motor=motor, table={"points": points, "f_inj": f_inj, "quad": quad,
+                                             "injection": injection})
     if injection == "rotating":
         from linsense.analysis.hf import table_model
         from linsense.analysis.rotating import psi_rotating
@@ -172,7 +179,7 @@ def build_lut(motor, points: int, f_inj: float | None = None, quad: float = 0.0,
         prov = {**prov, "f_inj": f_inj, "lut_model": "with R_s at f_inj"}
         if quad:
             prov["inject_quad"] = quad
-    return Lut(values, name=motor.name, provenance=prov)
+    return Lut(values, name=motor.name, provenance=prov, digest=digest)
 
 
 #: relative step of R_s for the tables' slopes in it (central differences; the tables are smooth in
@@ -344,6 +351,11 @@ def _c_float(v: float) -> str:
 def to_c_header(lut: Lut, symbol: str | None = None) -> str:
     """C99 header: ``static const float <symbol>[<SYMBOL>_LEN]`` in rad, with provenance.
 
+    Stamped (:mod:`linsense.compensation.stamp`) with the linsense version and the SHA-256 of the
+    motor data and table settings (:attr:`Lut.digest`; of the values and provenance for a table
+    read from a file), as comment lines and the macros ``<SYMBOL>_LIB_VERSION`` and
+    ``<SYMBOL>_DATA_SHA256``.
+
     Parameters
     ----------
     lut : Lut
@@ -362,6 +374,9 @@ def to_c_header(lut: Lut, symbol: str | None = None) -> str:
     # "/*" in it is a -Wcomment warning)
     prov = "\n".join(c_comment_text(f" *   {k} = {shown(v)}")
                      for k, v in (lut.provenance or {"name": lut.name}).items())
+    # (the data it was made from: the motor and the table's settings; a table read from a file: its
+    # values and provenance)
+    digest = lut.digest or data_digest(table=lut.values, provenance=lut.provenance or {})
     rows = []
     vals = [_c_float(v) for v in lut.values]
     for i in range(0, len(vals), 6):
@@ -381,11 +396,13 @@ def to_c_header(lut: Lut, symbol: str | None = None) -> str:
         f" * Angle unit of the values: rad (electrical). Read with periodic linear interpolation\n"
         f" * (ls_lut_step in linsense/ls_lut.h).\n"
         f" * Motor:\n{prov}\n"
+        + stamp_comment(digest, "the motor data and table settings" if lut.digest else "the table") +
         f" */\n"
         f"#ifndef {up}_H\n"
         f"#define {up}_H\n\n"
         f"#define {up}_LEN {lut.points}\n"
-        f"#define {up}_ANGLE_UNIT_RAD 1\n\n"
+        f"#define {up}_ANGLE_UNIT_RAD 1\n"
+        + stamp_macros(up, digest) + "\n"
         f"static const float {sym}[{up}_LEN] = {{\n" + "\n".join(rows) + "\n};\n\n"
         f"#endif /* {up}_H */\n"
     )

@@ -10,6 +10,7 @@ import tomli_w
 
 from linsense.analysis.hf import end_anisotropy
 from linsense.compensation.lut import build_lut, c_comment_text, c_identifier, lut_r_slope
+from linsense.compensation.stamp import data_digest, stamp_comment, stamp_macros
 from linsense.model.motor import Motor, names_a_path
 from linsense.tune.cfgmap import Values, header_rows
 from linsense.tune.design import (
@@ -261,7 +262,11 @@ def c_header(dz: Design, drive: DriveData, motor: Motor, name: str | None = None
 
     The compensation and gain tables, their slopes in the resistance's scale, and
     ``ls_cfg_<name>(cfg, comp, gain, comp_r, gain_r)``, which fills an ``ls_drive_cfg`` from
-    ``ls_drive_default_cfg`` with the design (the library holds no motor's numbers).
+    ``ls_drive_default_cfg`` with the design (the library holds no motor's numbers) and sets
+    ``cfg->lib_version`` to this linsense's version, which ``ls_drive_init`` compares with the
+    library's (another is refused: ``LS_ERR_VERSION``). Stamped with that version and the SHA-256
+    of the motor and drive data (:mod:`linsense.compensation.stamp`; ``LS_CFG_<NAME>_LIB_VERSION``,
+    ``LS_CFG_<NAME>_DATA_SHA256``).
 
     Parameters
     ----------
@@ -313,7 +318,9 @@ def c_header(dz: Design, drive: DriveData, motor: Motor, name: str | None = None
     bw = v["observer.bandwidth_hz"]
     body += "".join(f"\n    cfg->{r.field} = {int(v.field(r.field))}u;" for r in rows if r.kind == "count")
     guard = f"LS_CFG_{sym.upper()}_H"
+    prefix = f"LS_CFG_{sym.upper()}"
     shown = c_comment_text(motor.name)
+    digest = data_digest(motor=motor, drive=drive, points=points)
     return f"""/* Drive configuration for motor {shown}, designed by `linsense tune` (docs/tuning.md).
  * Drive: {drive.v_dc:g} V bus, {drive.f_pwm:g} Hz PWM, {drive.dead_time * 1e6:g} us dead time,
  * i_max {drive.i_max:g} A.
@@ -326,14 +333,16 @@ def c_header(dz: Design, drive: DriveData, motor: Motor, name: str | None = None
  *   ls_lut_cfg rc = {{{fn}_comp_r, {sym.upper()}_LEN}}, hc = {{{fn}_gain_r, {sym.upper()}_LEN}};
  *   ls_lut_init(&comp, &cc); ls_lut_init(&gain, &gc); ls_lut_init(&comp_r, &rc); ls_lut_init(&gain_r, &hc);
  *   {fn}(&cfg, &comp, &gain, &comp_r, &gain_r);      then ls_drive_init(&drive, &cfg)
- */
+ *
+ * ls_drive_init refuses it (LS_ERR_VERSION) with a library of another version than linsense's below:
+{stamp_comment(digest)} */
 #ifndef {guard}
 #define {guard}
 
 #include "linsense/ls_drive.h"
 
 #define {sym.upper()}_LEN {points}u
-
+{stamp_macros(prefix, digest)}
 /* Psi_LUT (rad) over one electrical period for this injection, with R_s */
 static const float {fn}_comp[{points}] = {{
     {table(lut)}
@@ -361,6 +370,7 @@ static inline void {fn}(ls_drive_cfg *cfg, const ls_lut *comp, const ls_lut *gai
                         const ls_lut *gain_r)
 {{
     ls_drive_default_cfg(cfg);
+    cfg->lib_version = {prefix}_LIB_VERSION; /* made for this version of the library */
 {body}
     cfg->obs.type = {v.field("obs.type")};
     cfg->load_ff = {"true" if v.field("load_ff") else "false"}; /* the observer's load estimate fed forward */
