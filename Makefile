@@ -30,7 +30,7 @@ GEN_HDR  := $(BUILD)/gen/ls_lut_ecce2010.h $(BUILD)/gen/ls_lut_ecce2010_r.h $(BU
 # variant name : extra flags
 VARIANTS := float-san double-san float-plain
 
-.PHONY: all install demo test ctest mcu example pytest lint bench tools fuzz fuzz-merge fuzztest clean dist wheeltest docs docs-build
+.PHONY: all install demo test ctest mcu pil example pytest lint bench tools fuzz fuzz-merge fuzztest clean dist wheeltest docs docs-build
 
 all: test
 
@@ -50,7 +50,7 @@ demo: $(STAMP)
 	  n=$$(basename $$f .toml); $(VENV)/bin/linsense simulate $$f --out out/sim/$$n --plot || exit 1; \
 	done
 
-test: lint ctest mcu example wheeltest docs-build pytest fuzztest
+test: lint ctest mcu pil example wheeltest docs-build pytest fuzztest
 
 GEN_DEPS := $(STAMP) $(wildcard src/linsense/compensation/*.py src/linsense/model/*.py src/linsense/analysis/*.py)
 $(BUILD)/gen/ls_lut_ecce2010.h: $(GEN_DEPS)
@@ -219,11 +219,22 @@ fuzztest: tools
 mcu: tools
 	tools/check_mcu.sh build/arm
 
+# Processor in the loop (docs/firmware.md, "Processor in the loop"): tools/pil.py records the host's
+# closed loop of the Fig. 13 trajectory and a hold in every mode and injection shape (the drive's
+# inputs at ls_drive_step), replays them on the Cortex-M4F build (csrc/pil/: start-up, semihosting,
+# mps2-an386 linker script) under qemu-system-arm and on the host build, and fails unless the two
+# agree bit for bit on every output of every step (with one expf on both sides; with each side's
+# libm the differences are printed). About 10 s.
+pil: $(STAMP) tools
+	$(PY) tools/pil.py
+
 # System tools the checks need (Debian packages), installed when missing and possible: the ARM
-# cross compiler and valgrind; clang's libFuzzer and chromium (reproduce's report render test) optional
+# cross compiler, QEMU's system emulator for ARM (make pil) and valgrind; clang's libFuzzer and
+# chromium (reproduce's report render test) optional
 tools:
 	@missing=""; optional=""; \
 	command -v arm-none-eabi-gcc >/dev/null || missing="$$missing gcc-arm-none-eabi libnewlib-arm-none-eabi"; \
+	command -v qemu-system-arm >/dev/null || missing="$$missing qemu-system-arm"; \
 	command -v valgrind >/dev/null || missing="$$missing valgrind"; \
 	printf 'int LLVMFuzzerTestOneInput(const char *d, unsigned long n) { (void)d; (void)n; return 0; }\n' | \
 	  $(FUZZ_CC) -x c -fsanitize=fuzzer - -o /dev/null 2>/dev/null || optional="clang libclang-rt-dev"; \
@@ -242,7 +253,7 @@ tools:
 # every benchmark runs; make bench fails at the end if any did (naming them)
 BENCHES := tools/bench_sim.py tools/bench_closed_loop.py tools/bench_sweep.py tools/bench_fea.py \
            tools/bench_reproduce.py tools/bench_saturation.py tools/bench_tune.py tools/bench_reference.py \
-           tools/bench_start.py
+           tools/bench_start.py tools/bench_pil.py
 bench: $(GEN_HDR) tools
 	@failed=""; tools/bench.sh || failed="$$failed tools/bench.sh"; \
 	for b in $(BENCHES); do echo "$(PY) $$b"; $(PY) $$b || failed="$$failed $$b"; done; \

@@ -69,7 +69,7 @@ def cases(quick: bool = False) -> list[tuple[str, object]]:
                        "scenario": {"duration": 0.5 if quick else 3.0}})
     return [
         fig13,
-        _hold("sensored", d, "sensored"),
+        _hold("sensored", d, "sensored", control={"inject_sensored": False}),
         _hold("sensored_inject", d, "sensored", control={"inject_sensored": True}),
         _hold("lut_pulsating", d, "sensorless_lut"),
         _hold("lut_elliptical", d, "sensorless_lut", {"quadrature": 0.5}),
@@ -188,7 +188,7 @@ def build_replay(out: Path, tag: str, target: str, common_expf: bool) -> Path:
         return exe
     exe = out / f"pil_replay_{tag}.elf"
     arm = os.environ.get("ARM_CC", "arm-none-eabi-gcc")
-    subprocess.run([arm, *WARN, *ARM, "-O2", "-ffp-contract=off", *inc,
+    subprocess.run([arm, *WARN, *ARM, "-O2", "-ffp-contract=off", "-DPIL_TARGET", *inc,
                     str(PIL / "pil_replay.c"), str(PIL / "pil_io_semihost.c"), str(PIL / "startup_m4.c"), *srcs,
                     "-nostartfiles", "--specs=nano.specs", "--specs=nosys.specs", f"-T{PIL / 'mps2_an386.ld'}",
                     "-Wl,--gc-sections", f"-Wl,-Map={out / f'pil_replay_{tag}.map'}", "-lm", "-o", str(exe)],

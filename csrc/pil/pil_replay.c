@@ -86,11 +86,16 @@ static __attribute__((noinline)) int replay_case(const pil_case *cs)
     return rc;
 }
 
-int main(void)
+/* every case, or only the one named (the host build's argument: tools/bench_pil.py counts one case
+ * at a time under callgrind) */
+static int replay_all(const char *only)
 {
     size_t i;
     int rc = 0;
     for (i = 0; i < sizeof pil_cases / sizeof pil_cases[0]; i++) {
+        if (only != NULL && strcmp(only, pil_cases[i].name) != 0) {
+            continue;
+        }
         if (replay_case(&pil_cases[i]) != 0) {
             pil_log("pil_replay: I/O error in case:");
             pil_log(pil_cases[i].name);
@@ -100,3 +105,15 @@ int main(void)
     pil_log(rc == 0 ? "pil_replay (" PIL_TAG "): done" : "pil_replay (" PIL_TAG "): FAILED");
     return rc;
 }
+
+#ifdef PIL_TARGET
+int main(void)
+{
+    return replay_all(NULL);
+}
+#else
+int main(int argc, char **argv)
+{
+    return replay_all(argc > 1 ? argv[1] : NULL);
+}
+#endif
