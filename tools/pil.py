@@ -36,9 +36,10 @@ PIL = ROOT / "csrc" / "pil"
 SCEN = ROOT / "src" / "linsense" / "examples" / "scenarios"
 
 #: per step, the words of pil_pack_cmd (csrc/pil/pil.h): name, kind ("f" float bits, "i" int32, "u" uint32)
-OUT_FIELDS = [("duty_a", "f"), ("duty_b", "f"), ("duty_c", "f"), ("enable", "u"), ("fault", "u"), ("mode", "u"),
-              ("pos_fb.period", "i"), ("pos_fb.theta", "f"), ("pos_est.period", "i"), ("pos_est.theta", "f"),
-              ("pos_ref.period", "i"), ("pos_ref.theta", "f"), ("v_est", "f"), ("v_fb", "f"), ("f_load_est", "f"),
+OUT_FIELDS = [("duty_a", "f"), ("duty_b", "f"), ("duty_c", "f"), ("enable", "u"), ("fault", "u"),
+              ("mode", "u"), ("pos_fb.period", "i"), ("pos_fb.theta", "f"), ("pos_est.period", "i"),
+              ("pos_est.theta", "f"), ("pos_ref.period", "i"), ("pos_ref.theta", "f"), ("v_est", "f"),
+              ("v_fb", "f"), ("f_load_est", "f"),
               ("err_sig", "f"), ("err_valid", "u"), ("hf_level", "f"), ("psi_comp", "f"), ("i_d", "f"),
               ("i_q", "f"), ("i_d_ref", "f"), ("i_q_ref", "f"), ("v_d", "f"), ("v_q", "f"), ("v_hf", "f"),
               ("cal_index", "u"), ("cal_done", "u"), ("psi_cal", "f")]
@@ -71,9 +72,9 @@ def cases(quick: bool = False) -> list[tuple[str, object]]:
         fig13,
         _hold("sensored", d, "sensored", control={"inject_sensored": False}),
         _hold("sensored_inject", d, "sensored", control={"inject_sensored": True}),
-        _hold("lut_pulsating", d, "sensorless_lut"),
-        _hold("lut_elliptical", d, "sensorless_lut", {"quadrature": 0.5}),
-        _hold("nolut_pulsating", d, "sensorless_nolut"),
+        _hold("lut_elliptical", d, "sensorless_lut"),  # (the default: quadrature 0.9)
+        _hold("lut_pulsating", d, "sensorless_lut", {"quadrature": 0.0}),
+        _hold("nolut_elliptical", d, "sensorless_nolut"),
         _hold("lut_rotating", d, "sensorless_lut", {"shape": "rotating"}),
         _hold("lut_square", d, "sensorless_lut", {"shape": "square"}),
         _hold("nolut_square", d, "sensorless_nolut", {"shape": "square"}),
@@ -120,11 +121,11 @@ def build_recorder(out: Path) -> Path:
 def record(out: Path, quick: bool) -> list[tuple[str, int]]:
     """Record every case; writes pil_cases.h, <case>.in, <case>.sim.out. Returns (name, steps)."""
     import cffi
-
     from linsense._ctrl import ffi
+    from pil_cgen import DriveWriter
+
     from linsense.sim.build import build
     from linsense.sim.core import _c_commands, _outputs, run_closed_loop
-    from pil_cgen import DriveWriter
 
     rffi = cffi.FFI()
     rffi.cdef("int pil_record(void *cfg, void *drive, void *cmds, int32_t n_cmds, int64_t n_steps, "
@@ -160,7 +161,8 @@ def record(out: Path, quick: bool) -> list[tuple[str, int]]:
         mine = (int(res.steps_done), int(res.fault), float(res.x_end), float(res.v_end))
         theirs = (ref.steps_done, ref.fault, ref.x_end, ref.v_end)
         if mine != theirs:
-            raise SystemExit(f"pil: {name}: the recorder's closed loop {mine} is not the extension's {theirs}")
+            raise SystemExit(f"pil: {name}: the recorder's closed loop {mine} is not the extension's "
+                             f"{theirs}")
         done.append((name, int(res.steps_done)))
     header.append("static const pil_case pil_cases[] = {")
     header += [f'    {{"{n}", &pil_{n}_drive}},' for n in names]
@@ -174,9 +176,10 @@ ARM = ["-mcpu=cortex-m4", "-mthumb", "-mfpu=fpv4-sp-d16", "-mfloat-abi=hard", "-
        "-fdata-sections"]
 
 
-def build_replay(out: Path, tag: str, target: str, common_expf: bool) -> Path:
+def build_replay(out: Path, tag: str, target: str, common_expf: bool, opt: str = "-O2") -> Path:
     """The replay for the host or the Cortex-M4F (``target`` "host" or "m4f"; an ELF for QEMU), with the
-    C library's expf or the common one (csrc/pil/pil_expf.c); its outputs go to <case>.<tag>.out."""
+    C library's expf or the common one (csrc/pil/pil_expf.c), at ``opt``; its outputs go to
+    <case>.<tag>.out."""
     srcs = [str(p) for p in sorted((ROOT / "csrc" / "ctrl").glob("*.c"))]
     srcs += [str(PIL / "pil_expf.c")] if common_expf else []
     inc = [f"-I{ROOT / 'csrc/include'}", f"-I{PIL}", f"-I{out}", f'-DPIL_TAG="{tag}"']
@@ -188,23 +191,26 @@ def build_replay(out: Path, tag: str, target: str, common_expf: bool) -> Path:
         return exe
     exe = out / f"pil_replay_{tag}.elf"
     arm = os.environ.get("ARM_CC", "arm-none-eabi-gcc")
-    subprocess.run([arm, *WARN, *ARM, "-O2", "-ffp-contract=off", "-DPIL_TARGET", *inc,
-                    str(PIL / "pil_replay.c"), str(PIL / "pil_io_semihost.c"), str(PIL / "startup_m4.c"), *srcs,
-                    "-nostartfiles", "--specs=nano.specs", "--specs=nosys.specs", f"-T{PIL / 'mps2_an386.ld'}",
+    subprocess.run([arm, *WARN, *ARM, opt, "-ffp-contract=off", "-DPIL_TARGET", *inc,
+                    str(PIL / "pil_replay.c"), str(PIL / "pil_io_semihost.c"), str(PIL / "startup_m4.c"),
+                    *srcs, "-nostartfiles", "--specs=nano.specs", "--specs=nosys.specs",
+                    f"-T{PIL / 'mps2_an386.ld'}",
                     "-Wl,--gc-sections", f"-Wl,-Map={out / f'pil_replay_{tag}.map'}", "-lm", "-o", str(exe)],
                    check=True)
     return exe
 
 
-#: the replays: tag -> (target, common expf)
-REPLAYS = {"host": ("host", False), "m4f": ("m4f", False), "host_c": ("host", True), "m4f_c": ("m4f", True)}
+#: the replays: tag -> (target, common expf, optimisation); the firmware flags' -O2, and -Os (the size
+#: tools/check_mcu.sh holds to 32 kB) with the common expf
+REPLAYS = {"host": ("host", False, "-O2"), "m4f": ("m4f", False, "-O2"), "host_c": ("host", True, "-O2"),
+           "m4f_c": ("m4f", True, "-O2"), "m4f_os_c": ("m4f", True, "-Os")}
 
 
 def run_replays(out: Path) -> float:
     """Build and run every replay of :data:`REPLAYS`; the CPU time (s) of the QEMU runs."""
     cpu = 0.0
-    for tag, (target, common) in REPLAYS.items():
-        exe = build_replay(out, tag, target, common)
+    for tag, (target, common, opt) in REPLAYS.items():
+        exe = build_replay(out, tag, target, common, opt)
         c0 = os.times()
         cmd = [str(exe)] if target == "host" else qemu_cmd(exe)
         subprocess.run(cmd, cwd=out, check=True, timeout=600, stdout=subprocess.DEVNULL)
@@ -276,22 +282,24 @@ def compare(out: Path, names: list[tuple[str, int]]) -> bool:
                   f"({_summary(differences(r['sim'], r['host']))}): the recording is incomplete")
             ok = False
         common = differences(r["host_c"], r["m4f_c"])
+        common_os = differences(r["host_c"], r["m4f_os_c"])
         libm = differences(r["host"], r["m4f"])
         for t, dif in (("common", common), ("libm", libm)):
             for k, (v, _) in dif.items():
                 worst[t][k] = max(worst[t][k], v)
         modes = sorted({int(m) for m in r["m4f"][:, 5]})
-        print(f"pil: {name:16s} {steps:6d} steps, modes {modes}: target/host {_summary(common)}; "
-              f"with each side's libm {_summary(libm)}")
-        if any(v > BOUND for v, _ in common.values()):
+        print(f"pil: {name:16s} {steps:6d} steps, modes {modes}: target/host {_summary(common)} (-O2), "
+              f"{_summary(common_os)} (-Os); with each side's libm {_summary(libm)}")
+        if any(v > BOUND for v, _ in (*common.values(), *common_os.values())):
             ok = False
         if not np.array_equal(r["host"][:, ints], r["m4f"][:, ints]):
-            print(f"pil: {name}: an integer output (enable, fault, mode, period, err_valid, cal_index, cal_done) "
-                  "differs between the target and the host with their own libms")
+            print(f"pil: {name}: an integer output (enable, fault, mode, period, err_valid, cal_index, "
+                  "cal_done) differs between the target and the host with their own libms")
             ok = False
     for t, label in (("common", "the same expf"), ("libm", "each side's libm (newlib, glibc)")):
+        floats = [n for n, kind in OUT_FIELDS if kind == "f"]
         print(f"pil: largest |target - host| per output over {total} steps, {label}: "
-              + ", ".join(f"{k} {v:.3g}" for k, v in worst[t].items() if OUT_FIELDS[[n for n, _ in OUT_FIELDS].index(k)][1] == "f"))
+              + ", ".join(f"{k} {worst[t][k]:.3g}" for k in floats))
     return ok
 
 
@@ -309,8 +317,8 @@ def main(argv=None) -> int:
     names = record(out, a.quick)
     t1 = time.process_time()
     cpu = run_replays(out)
-    print(f"pil: {sum(n for _, n in names)} steps in {len(names)} cases recorded ({t1 - t0:.1f} s CPU), replayed "
-          f"on the host and on the Cortex-M4F under QEMU ({cpu:.1f} s CPU)")
+    print(f"pil: {sum(n for _, n in names)} steps in {len(names)} cases recorded ({t1 - t0:.1f} s CPU), "
+          f"replayed on the host and on the Cortex-M4F under QEMU ({cpu:.1f} s CPU)")
     ok = compare(out, names)
     print("pil: " + ("PASS" if ok else "FAIL"))
     return 0 if ok else 1

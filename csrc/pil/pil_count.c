@@ -2,7 +2,7 @@
  * log (qemu-system-arm -singlestep -d exec,nochain: one "Trace" line per executed instruction, its
  * address the second field in brackets). Host tool of tools/bench_pil.py.
  *
- *   pil_count COSTS ENTRY RETURN LOG
+ *   pil_count COSTS ENTRY RETURN LOG [HITS]
  *
  * COSTS: one line per instruction of the image, "addr size base_nom base_up taken_nom taken_up"
  * (hex address and size, then the cycle model's costs of tools/bench_pil.py: the instruction's
@@ -10,19 +10,21 @@
  * following instruction). ENTRY: the address of ls_drive_step; RETURN: the address after the replay's
  * one call of it. A step runs from ENTRY up to RETURN (the call's return). Prints one line per step:
  * "instructions cycles_nominal cycles_upper", then "unknown N" (executed addresses not in COSTS). LOG
- * is read as it is written (a named pipe: the log of a replay is gigabytes). */
+ * is read as it is written (a named pipe: the log of a replay is gigabytes). HITS: written at the end,
+ * "addr executions taken" of every instruction of COSTS executed inside the steps. */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 typedef struct {
     unsigned addr, size, base_nom, base_up, taken_nom, taken_up;
+    unsigned long long hits, taken;
 } cost;
 
 static cost *costs;
 static size_t n_costs;
 
-static const cost *find(unsigned a)
+static cost *find(unsigned a)
 {
     size_t lo = 0, hi = n_costs;
     while (lo < hi) {
@@ -50,8 +52,8 @@ int main(int argc, char **argv)
     unsigned entry, ret, prev = 0;
     int in_step = 0, have_prev = 0;
     unsigned long long n = 0, nom = 0, up = 0, unknown = 0;
-    if (argc != 5 || (f = fopen(argv[1], "r")) == NULL) {
-        fprintf(stderr, "usage: pil_count COSTS ENTRY RETURN LOG\n");
+    if ((argc != 5 && argc != 6) || (f = fopen(argv[1], "r")) == NULL) {
+        fprintf(stderr, "usage: pil_count COSTS ENTRY RETURN LOG [HITS]\n");
         return 2;
     }
     entry = (unsigned)strtoul(argv[2], NULL, 16);
@@ -59,6 +61,7 @@ int main(int argc, char **argv)
     costs = malloc(cap * sizeof *costs);
     while (costs != NULL && fgets(line, sizeof line, f) != NULL) {
         cost c;
+        c.hits = c.taken = 0;
         if (sscanf(line, "%x %x %u %u %u %u", &c.addr, &c.size, &c.base_nom, &c.base_up, &c.taken_nom, &c.taken_up) !=
             6) {
             continue;
@@ -88,13 +91,15 @@ int main(int argc, char **argv)
         }
         pc = (unsigned)strtoul(b + 1, NULL, 16);
         if (in_step && have_prev) { /* the previous instruction's cost, now that its successor is known */
-            const cost *c = find(prev);
+            cost *c = find(prev);
             if (c == NULL) {
                 unknown++;
                 nom++;
                 up++;
             } else {
                 const int taken = pc != prev + c->size;
+                c->hits++;
+                c->taken += taken ? 1u : 0u;
                 nom += c->base_nom + (taken ? c->taken_nom : 0u);
                 up += c->base_up + (taken ? c->taken_up : 0u);
             }
@@ -115,5 +120,14 @@ int main(int argc, char **argv)
     }
     fclose(log);
     printf("unknown %llu\n", unknown);
+    if (argc == 6 && (f = fopen(argv[5], "w")) != NULL) {
+        size_t i;
+        for (i = 0; i < n_costs; i++) {
+            if (costs[i].hits != 0u) {
+                fprintf(f, "%x %llu %llu\n", costs[i].addr, costs[i].hits, costs[i].taken);
+            }
+        }
+        fclose(f);
+    }
     return 0;
 }
