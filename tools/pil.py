@@ -162,7 +162,8 @@ def record(out: Path, quick: bool) -> list[tuple[str, int]]:
         theirs = (ref.steps_done, ref.fault, ref.x_end, ref.v_end)
         if mine != theirs:
             raise SystemExit(f"pil: {name}: the recorder's closed loop {mine} is not the extension's "
-                             f"{theirs}")
+                             f"{theirs} (the recorder is built as the Makefile's venv builds the extension, "
+                             "-O3 -march=native: another build fuses the plant's multiply-adds differently)")
         done.append((name, int(res.steps_done)))
     header.append("static const pil_case pil_cases[] = {")
     header += [f'    {{"{n}", &pil_{n}_drive}},' for n in names]
