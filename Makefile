@@ -224,9 +224,12 @@ mcu: tools
 # inputs at ls_drive_step), replays them on the Cortex-M4F build (csrc/pil/: start-up, semihosting,
 # mps2-an386 linker script) under qemu-system-arm and on the host build, and fails unless the two
 # agree bit for bit on every output of every step (with one expf on both sides; with each side's
-# libm the differences are printed). About 10 s.
+# libm the differences are printed); then tools/pil_closed.py closes the loop through the target:
+# 1 s of the Fig. 13 trajectory with the plant on the host and the drive under QEMU, one exchange
+# per PWM period, identical to the host's run. About 15 s.
 pil: $(STAMP) tools
 	$(PY) tools/pil.py
+	$(PY) tools/pil_closed.py src/linsense/examples/scenarios/fig13_trajectory_switching.toml --duration 1.0
 
 # System tools the checks need (Debian packages), installed when missing and possible: the ARM
 # cross compiler, QEMU's system emulator for ARM (make pil) and valgrind; clang's libFuzzer and

@@ -93,10 +93,11 @@ def _scenario(spec):
     return as_scenario(spec)
 
 
-def build_recorder(out: Path) -> Path:
-    """The host recorder as a shared object, with the extension's flags (tools/build_ctrl.py)."""
-    lib = out / "pil_record.so"
-    srcs = sorted((ROOT / "csrc" / "ctrl").glob("*.c"))
+def build_recorder(out: Path, common_expf: bool = False) -> Path:
+    """The host recorder as a shared object, with the extension's flags (tools/build_ctrl.py); with the
+    common expf (csrc/pil/pil_expf.c) instead of the C library's when ``common_expf``."""
+    lib = out / ("pil_record_c.so" if common_expf else "pil_record.so")
+    srcs = sorted((ROOT / "csrc" / "ctrl").glob("*.c")) + ([PIL / "pil_expf.c"] if common_expf else [])
     deps = srcs + list(PIL.glob("*")) + list((ROOT / "csrc" / "sim").glob("*")) + \
         list((ROOT / "csrc" / "include" / "linsense").glob("*.h"))
     if lib.exists() and lib.stat().st_mtime > max(p.stat().st_mtime for p in deps):
@@ -107,11 +108,11 @@ def build_recorder(out: Path) -> Path:
     base = ["-std=c99", "-O3", "-march=native", "-fPIC", "-fvisibility=hidden", f"-I{ROOT / 'csrc/include'}"]
     objs = []
     for s in srcs:
-        o = out / "rec" / (s.stem + ".o")
+        o = out / ("rec_c" if common_expf else "rec") / (s.stem + ".o")
         o.parent.mkdir(parents=True, exist_ok=True)
         subprocess.run([cc, *base, "-ffp-contract=off", "-c", str(s), "-o", str(o)], check=True)
         objs.append(str(o))
-    o = out / "rec" / "pil_record.o"
+    o = out / ("rec_c" if common_expf else "rec") / "pil_record.o"
     subprocess.run([cc, *base, "-ffp-contract=fast", f"-I{ROOT / 'csrc/sim'}", f"-I{PIL}", "-c",
                     str(PIL / "pil_record.c"), "-o", str(o)], check=True)
     subprocess.run([cc, "-shared", "-Wl,-Bsymbolic", str(o), *objs, "-lm", "-o", str(lib)], check=True)
@@ -177,13 +178,14 @@ ARM = ["-mcpu=cortex-m4", "-mthumb", "-mfpu=fpv4-sp-d16", "-mfloat-abi=hard", "-
        "-fdata-sections"]
 
 
-def build_replay(out: Path, tag: str, target: str, common_expf: bool, opt: str = "-O2") -> Path:
+def build_replay(out: Path, tag: str, target: str, common_expf: bool, opt: str = "-O2",
+                 defines: tuple = ()) -> Path:
     """The replay for the host or the Cortex-M4F (``target`` "host" or "m4f"; an ELF for QEMU), with the
     C library's expf or the common one (csrc/pil/pil_expf.c), at ``opt``; its outputs go to
     <case>.<tag>.out."""
     srcs = [str(p) for p in sorted((ROOT / "csrc" / "ctrl").glob("*.c"))]
     srcs += [str(PIL / "pil_expf.c")] if common_expf else []
-    inc = [f"-I{ROOT / 'csrc/include'}", f"-I{PIL}", f"-I{out}", f'-DPIL_TAG="{tag}"']
+    inc = [f"-I{ROOT / 'csrc/include'}", f"-I{PIL}", f"-I{out}", f'-DPIL_TAG="{tag}"', *defines]
     if target == "host":
         exe = out / f"pil_replay_{tag}"
         subprocess.run([os.environ.get("CC", "cc"), *WARN, "-O2", "-ffp-contract=off", *inc,

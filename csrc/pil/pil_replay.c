@@ -13,7 +13,30 @@
 #define PIL_TAG "host"
 #endif
 
-#define BLOCK 128 /* events read per call */
+/* events read per call; one in the closed-loop build (PIL_REMOTE: the host's plant waits for each
+ * step's outputs, through named pipes) */
+#ifdef PIL_REMOTE
+#define BLOCK 1
+#else
+#define BLOCK 128
+#endif
+
+/* read n bytes unless the input ends first (a pipe returns what it holds); bytes read or -1 */
+static long read_full(int fd, void *buf, size_t n)
+{
+    size_t got = 0;
+    while (got < n) {
+        long r = pil_read(fd, (char *)buf + got, n - got);
+        if (r < 0) {
+            return -1;
+        }
+        if (r == 0) {
+            break;
+        }
+        got += (size_t)r;
+    }
+    return (long)got;
+}
 
 static uint32_t in_buf[BLOCK * PIL_IN_WORDS];
 static uint32_t out_buf[BLOCK * PIL_OUT_WORDS];
@@ -45,7 +68,7 @@ static __attribute__((noinline)) int replay_case(const pil_case *cs)
         return -1;
     }
     drive = *cs->drive0;
-    while ((got = pil_read(fin, in_buf, sizeof in_buf)) > 0) {
+    while ((got = read_full(fin, in_buf, sizeof in_buf)) > 0) {
         size_t k, n = (size_t)got / (PIL_IN_WORDS * sizeof(uint32_t)), n_out = 0;
         for (k = 0; k < n; k++) {
             const uint32_t *w = &in_buf[k * PIL_IN_WORDS];
