@@ -226,7 +226,7 @@ mcu: tools
 # agree bit for bit on every output of every step (with one expf on both sides; with each side's
 # libm the differences are printed); then tools/pil_closed.py closes the loop through the target:
 # 1 s of the Fig. 13 trajectory with the plant on the host and the drive under QEMU, one exchange
-# per PWM period, identical to the host's run. About 15 s.
+# per PWM period, identical to the host's run. 15-30 s.
 pil: $(STAMP) tools
 	$(PY) tools/pil.py
 	$(PY) tools/pil_closed.py src/linsense/examples/scenarios/fig13_trajectory_switching.toml --duration 1.0
