@@ -205,6 +205,15 @@ def cost_table(elf: Path, dest: Path) -> tuple[str, str]:
     return entry, ret
 
 
+def one_insn_per_tb() -> list[str]:
+    """QEMU's option for one instruction per translation block: ``-singlestep`` up to 8.0,
+    ``-accel tcg,one-insn-per-tb=on`` from 8.1 (where -singlestep is deprecated)."""
+    v = subprocess.run(["qemu-system-arm", "--version"], capture_output=True, text=True).stdout
+    m = re.search(r"version (\d+)\.(\d+)", v)
+    new = m is not None and (int(m.group(1)), int(m.group(2))) >= (8, 1)
+    return ["-accel", "tcg,one-insn-per-tb=on"] if new else ["-singlestep"]
+
+
 def count_target(out: Path, elf: Path) -> np.ndarray:
     """(steps, 3): instructions, nominal and upper cycles of every ls_drive_step of the replay."""
     counter = out / "pil_count"
@@ -219,7 +228,7 @@ def count_target(out: Path, elf: Path) -> np.ndarray:
             # (the counter opens the pipe for reading, QEMU for writing: each waits for the other)
             cnt = subprocess.Popen([str(counter), str(out / "costs.txt"), entry, ret, str(fifo),
                                     str(out / "hits.txt")], stdout=f)
-            q = subprocess.Popen(pil.qemu_cmd(elf, "-singlestep", "-d", "exec,nochain", "-D", str(fifo)),
+            q = subprocess.Popen(pil.qemu_cmd(elf, *one_insn_per_tb(), "-d", "exec,nochain", "-D", str(fifo)),
                                  cwd=out, stdout=null)
             q.wait()
             cnt.wait()
