@@ -21,7 +21,7 @@ CTRL_SRC := $(wildcard csrc/ctrl/*.c)
 GEN_HDR  := $(BUILD)/gen/ls_lut_ecce2010.h $(BUILD)/gen/ls_lut_ecce2010_r.h $(BUILD)/gen/ls_lut_ecce2010_q.h \
             $(BUILD)/gen/ls_lut_ecce2010_rot.h $(BUILD)/gen/ls_lut_ecce2010_sq.h
 
-.PHONY: all install demo test ctest mcu example example-export cmake-tool pytest lint bench tools fuzz fuzz-merge fuzztest clean dist wheeltest docs docs-build
+.PHONY: all install demo test ctest mcu pil example example-export cmake-tool pytest lint bench tools fuzz fuzz-merge fuzztest clean dist wheeltest docs docs-build
 
 all: test
 
@@ -41,7 +41,7 @@ demo: $(STAMP)
 	  n=$$(basename $$f .toml); $(VENV)/bin/linsense simulate $$f --out out/sim/$$n --plot || exit 1; \
 	done
 
-test: lint ctest mcu example wheeltest docs-build pytest fuzztest
+test: lint ctest mcu pil example wheeltest docs-build pytest fuzztest
 
 GEN_DEPS := $(STAMP) $(wildcard src/linsense/compensation/*.py src/linsense/model/*.py src/linsense/analysis/*.py)
 $(BUILD)/gen/ls_lut_ecce2010.h: $(GEN_DEPS)
@@ -211,11 +211,25 @@ mcu: tools example-export cmake-tool
 	@cmake --build $(EXAMPLE)/m4f -j $(CTEST_JOBS) > $(EXAMPLE)/m4f/build.log 2>&1 || { cat $(EXAMPLE)/m4f/build.log; exit 1; }
 	@arm-none-eabi-size $(EXAMPLE)/m4f/firmware_example | awk 'NR == 2 {print "mcu: the exported firmware built by CMake for the Cortex-M4F (-Os): firmware_example text " $$1 " data " $$2 " bss " $$3 " bytes"}'
 
+# Processor in the loop (docs/firmware.md, "Processor in the loop"): tools/pil.py records the host's
+# closed loop of the Fig. 13 trajectory and a hold in every mode and injection shape (the drive's
+# inputs at ls_drive_step), replays them on the Cortex-M4F build (csrc/pil/: start-up, semihosting,
+# mps2-an386 linker script) under qemu-system-arm and on the host build, and fails unless the two
+# agree bit for bit on every output of every step (with one expf on both sides; with each side's
+# libm the differences are printed); then tools/pil_closed.py closes the loop through the target:
+# 1 s of the Fig. 13 trajectory with the plant on the host and the drive under QEMU, one exchange
+# per PWM period, identical to the host's run. 15-30 s.
+pil: $(STAMP) tools
+	$(PY) tools/pil.py
+	$(PY) tools/pil_closed.py src/linsense/examples/scenarios/fig13_trajectory_switching.toml --duration 1.0
+
 # System tools the checks need (Debian packages), installed when missing and possible: the ARM
-# cross compiler and valgrind; clang's libFuzzer and chromium (reproduce's report render test) optional
+# cross compiler, QEMU's system emulator for ARM (make pil) and valgrind; clang's libFuzzer and
+# chromium (reproduce's report render test) optional
 tools:
 	@missing=""; optional=""; \
 	command -v arm-none-eabi-gcc >/dev/null || missing="$$missing gcc-arm-none-eabi libnewlib-arm-none-eabi"; \
+	command -v qemu-system-arm >/dev/null || missing="$$missing qemu-system-arm"; \
 	command -v valgrind >/dev/null || missing="$$missing valgrind"; \
 	command -v cmake >/dev/null || missing="$$missing cmake"; \
 	printf 'int LLVMFuzzerTestOneInput(const char *d, unsigned long n) { (void)d; (void)n; return 0; }\n' | \
@@ -235,7 +249,7 @@ tools:
 # every benchmark runs; make bench fails at the end if any did (naming them)
 BENCHES := tools/bench_sim.py tools/bench_closed_loop.py tools/bench_sweep.py tools/bench_fea.py \
            tools/bench_reproduce.py tools/bench_saturation.py tools/bench_tune.py tools/bench_reference.py \
-           tools/bench_start.py
+           tools/bench_start.py tools/bench_pil.py
 bench: $(GEN_HDR) tools
 	@failed=""; tools/bench.sh || failed="$$failed tools/bench.sh"; \
 	for b in $(BENCHES); do echo "$(PY) $$b"; $(PY) $$b || failed="$$failed $$b"; done; \

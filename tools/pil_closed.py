@@ -1,0 +1,129 @@
+"""Closed-loop processor in the loop: a scenario's plant on the host, its drive on the Cortex-M4F under
+QEMU (docs/firmware.md, "Processor in the loop").
+
+The simulator's time loop (the host recorder, csrc/pil/pil_record.c, ``pil_remote``) sends each
+step's measurements (and the commands between them) through a named pipe to the firmware's replay in
+its closed-loop build (``-DPIL_REMOTE``: one event at a time) and applies the duties the firmware
+returns through another, one exchange per PWM period. The same loop is run on the host with the
+host build of the drive (``pil_record``) for the reference. With ``--libm common`` (the default)
+both sides link the same expf (csrc/pil/pil_expf.c) and the two runs must agree bit for bit on
+every output of every step, hence on every metric; with ``--libm own`` the firmware keeps newlib's
+and the host glibc's, and the metrics' differences are printed.
+
+Usage: ``python tools/pil_closed.py SCENARIO [--duration S] [--libm common|own]``; exit 1 on a
+difference where none is allowed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tools"))
+import pil  # noqa: E402
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("scenario", type=Path)
+    ap.add_argument("--duration", type=float, default=None, help="s (default: the scenario's)")
+    ap.add_argument("--libm", choices=("common", "own"), default="common")
+    ap.add_argument("--out", type=Path, default=ROOT / "build" / "pil-closed")
+    a = ap.parse_args(argv)
+
+    import cffi
+    from linsense._ctrl import ffi
+    from pil_cgen import DriveWriter
+
+    from linsense.sim.build import build
+    from linsense.sim.core import BLOCKS, _c_commands, _collect, _outputs
+    from linsense.sim.run import finish_metrics, run_metrics
+
+    out = a.out.resolve()
+    out.mkdir(parents=True, exist_ok=True)
+    spec = {"file": a.scenario} if a.duration is None else {"file": a.scenario,
+                                                            "scenario": {"duration": a.duration}}
+    sc = pil._scenario(spec)
+    common = a.libm == "common"
+    w = DriveWriter(ffi, "pil_closed")
+    b = build(sc)
+    cases = '\nstatic const pil_case pil_cases[] = {{"closed", &pil_closed_drive}};\n'
+    (out / "pil_cases.h").write_text('#include <math.h>\n#include <stddef.h>\n#include "pil.h"\n'
+                                     + w.drive(b.drive.state) + cases)
+    elf = pil.build_replay(out, "m4f", "m4f", common, "-O2", ("-DPIL_REMOTE",))
+    rffi = cffi.FFI()
+    args = ("void *cfg, void *drive, void *cmds, int32_t n_cmds, int64_t n_steps, void *out, void *res, "
+            "const char *in_path, const char *out_path")
+    rffi.cdef(f"int pil_record({args}); int pil_remote({args}, const char *to_path, const char *from_path);")
+    rlib = rffi.dlopen(str(pil.build_recorder(out, common_expf=common)))
+
+    def addr(p):
+        return rffi.cast("void *", int(ffi.cast("uintptr_t", p)))
+
+    def run(remote: bool):
+        """One closed loop (the scenario's drive copied): its RawRun and metrics."""
+        drive = ffi.new("ls_drive *")
+        ffi.memmove(drive, b.drive.state, ffi.sizeof("ls_drive"))
+        c_cmds, n_cmds = _c_commands(b.commands)
+        blocks = tuple(BLOCKS) if b.cfg.decimate > 1 else ()
+        arrays, o = _outputs(int(math.ceil(b.n_steps / b.cfg.decimate)) + 2, None, blocks)
+        res = ffi.new("ls_sim_result *")
+        tag = "pil" if remote else "host"
+        paths = [str(out / f"closed.{tag}.in").encode(), str(out / f"closed.{tag}.steps").encode()]
+        t0 = time.perf_counter()
+        if remote:
+            for f in ("closed.in", "closed.m4f.out"):
+                (out / f).unlink(missing_ok=True)
+                os.mkfifo(out / f)
+            q = subprocess.Popen(pil.qemu_cmd(elf), cwd=out, stdout=subprocess.DEVNULL)
+            st = rlib.pil_remote(addr(b.cfg), addr(drive), addr(c_cmds), n_cmds, b.n_steps, addr(o),
+                                 addr(res), *paths, str(out / "closed.in").encode(),
+                                 str(out / "closed.m4f.out").encode())
+            q.wait(timeout=60)
+        else:
+            st = rlib.pil_record(addr(b.cfg), addr(drive), addr(c_cmds), n_cmds, b.n_steps, addr(o),
+                                 addr(res), *paths)
+        wall = time.perf_counter() - t0
+        if st != 0:
+            raise SystemExit(f"pil_closed: the {tag} run failed (status {st})")
+        raw = _collect(arrays, res, wall)
+        m = run_metrics(b, raw)
+        finish_metrics(b, raw, m, b.cfg.decimate)
+        return raw, m, wall
+
+    host, m_host, _ = run(False)
+    c0 = os.times()
+    fw, m_fw, wall = run(True)
+    c1 = os.times()
+    cpu = c1.children_user - c0.children_user + c1.children_system - c0.children_system
+    steps = fw.steps_done
+    print(f"pil_closed: {sc.name}: {steps} steps ({steps / b.setup.f_pwm:.3g} s simulated) with the drive on "
+          f"the Cortex-M4F under QEMU: {wall:.1f} s wall, QEMU {cpu:.1f} s CPU; libm: {a.libm}")
+    same_steps = np.array_equal(pil.read_out(out / "closed.host.steps"),
+                                pil.read_out(out / "closed.pil.steps"))
+    keys = [k for k, v in m_host.items() if isinstance(v, int | float) and not isinstance(v, bool)
+            and k not in ("wall_s", "realtime_factor")]
+    diffs = {k: abs(float(m_fw[k]) - float(m_host[k])) for k in keys
+             if not (isinstance(m_fw.get(k), int | float) and m_fw[k] == m_host[k])
+             and not (math.isnan(float(m_host[k])) and math.isnan(float(m_fw.get(k, math.nan))))}
+    print(f"pil_closed: every output of every step {'identical' if same_steps else 'NOT identical'} to the "
+          f"host run's; metrics {'identical' if not diffs else 'differing: ' + str(diffs)}; "
+          f"stable {m_fw.get('stable')} / {m_host.get('stable')}, fault {m_fw.get('fault')!r} / "
+          f"{m_host.get('fault')!r}")
+    if common and (not same_steps or diffs):
+        print("pil_closed: FAIL (with one expf the firmware must reproduce the host bit for bit)")
+        return 1
+    print("pil_closed: " + ("PASS" if common else "reported"))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
