@@ -10,13 +10,15 @@ both sides link the same expf (csrc/pil/pil_expf.c) and the two runs must agree 
 every output of every step, hence on every metric; with ``--libm own`` the firmware keeps newlib's
 and the host glibc's, and the metrics' differences are printed.
 
-Usage: ``python tools/pil_closed.py SCENARIO [--duration S] [--libm common|own]``; exit 1 on a
-difference where none is allowed.
+Usage: ``python tools/pil_closed.py SCENARIO [--duration S] [--libm common|own] [--out DIR]``; exit 1
+on a difference where none is allowed. ``DIR/pil.json`` holds both runs' metrics and their
+differences (what ``linsense simulate SCENARIO --pil`` reports).
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import os
 import subprocess
@@ -118,11 +120,22 @@ def main(argv=None) -> int:
           f"host run's; metrics {'identical' if not diffs else 'differing: ' + str(diffs)}; "
           f"stable {m_fw.get('stable')} / {m_host.get('stable')}, fault {m_fw.get('fault')!r} / "
           f"{m_host.get('fault')!r}")
-    if common and (not same_steps or diffs):
+    ok = not (common and (not same_steps or diffs))
+    # what `linsense simulate --pil` reads: the firmware's run, the host's, and how they differ
+    record = {"scenario": sc.name, "steps": int(steps), "simulated_s": steps / b.setup.f_pwm,
+              "wall_s": wall, "qemu_cpu_s": cpu, "libm": a.libm, "identical_steps": bool(same_steps),
+              "metric_differences": diffs, "pass": ok, "metrics_pil": m_fw, "metrics_host": m_host}
+    (out / "pil.json").write_text(json.dumps(record, indent=1, sort_keys=True, default=_plain) + "\n")
+    if not ok:
         print("pil_closed: FAIL (with one expf the firmware must reproduce the host bit for bit)")
         return 1
     print("pil_closed: " + ("PASS" if common else "reported"))
     return 0
+
+
+def _plain(v):
+    """numpy scalars and arrays as JSON values."""
+    return v.tolist() if hasattr(v, "tolist") else str(v)
 
 
 if __name__ == "__main__":

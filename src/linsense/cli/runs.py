@@ -53,15 +53,24 @@ def _scenario(spec: str):
                                           "1,000,000 samples)")
 @click.option("--plot/--no-plot", default=False, show_default=True, help="draw sim.png")
 @click.option("--check", is_flag=True, help="exit with code 1 when the run is not stable (for CI)")
+@click.option("--pil", is_flag=True,
+              help="processor in the loop: the drive on a Cortex-M4F under QEMU, the plant on the host "
+                   "(a source tree with make tools run): metrics.json of that run, pil.json comparing it "
+                   "with the host build's")
 @c.json_option
 def simulate(scenario: str, out: str, fidelity: str | None, trace_fmt: str | None, decimate: int | None,
-             mat: bool, plot: bool, check: bool, as_json: bool) -> None:
+             mat: bool, plot: bool, check: bool, pil: bool, as_json: bool) -> None:
     """Run a closed-loop drive simulation of SCENARIO (a file, a packaged example's name such as
     step3_lut, or - for standard input): metrics.json, timing.json, trace.parquet (or .csv; and
-    trace.mat), sim.png with --plot.
+    trace.mat), sim.png with --plot. With --pil the drive runs on the Cortex-M4F under QEMU.
 
-    Exit codes: 0 done (with --check: and stable), 1 with --check: not stable, 2 bad input (the
-    scenario, or a configuration that trips the drive at t = 0)."""
+    Exit codes: 0 done (with --check: and stable, and with --pil the firmware's run identical to the
+    host build's), 1 with --check: not so, 2 bad input (the scenario, or a configuration that trips
+    the drive at t = 0)."""
+    if pil:
+        others = {"--fidelity": fidelity, "--trace": trace_fmt, "--decimate": decimate, "--mat": mat,
+                  "--plot": plot}
+        return _simulate_pil(scenario, out, [k for k, v in others.items() if v], check, as_json)
     import numpy as np
 
     from linsense.io import output_set, split_timing
@@ -132,6 +141,18 @@ def simulate(scenario: str, out: str, fidelity: str | None, trace_fmt: str | Non
             save_png(sim_figure(sr.plot), s.path("sim.png"), DPI)
     c.files_report(s.files)
     m = sr.metrics
+    _say_metrics(m)
+    c.detail("timing: " + ", ".join(f"{k} {v}" for k, v in timing.items()))
+    c.elapsed()
+    if as_json:
+        c.emit_json("simulate", s.files, bool(m["stable"]), metrics=metrics, timing=timing)
+    if check and not m["stable"]:
+        click.echo(f"linsense: not stable: {m['unstable_reason']}", err=True)
+        raise click.exceptions.Exit(1)
+
+
+def _say_metrics(m: dict) -> None:
+    """The run's one-line report."""
     show = c.show
     c.say(
         f"{m['scenario']}: "
@@ -145,12 +166,51 @@ def simulate(scenario: str, out: str, fidelity: str | None, trace_fmt: str | Non
         f"{m['sim_s']} s simulated in {m['wall_s']} s "
         f"({m['realtime_factor']}x real time)"
     )
-    c.detail("timing: " + ", ".join(f"{k} {v}" for k, v in timing.items()))
-    c.elapsed()
+
+
+def _simulate_pil(scenario: str, out: str, others: list[str], check: bool, as_json: bool) -> None:
+    """``simulate --pil``: the closed loop with the firmware under QEMU (:mod:`linsense.firmware.pil`);
+    metrics.json of that run, timing.json, pil.json (both runs' metrics and how they differ)."""
+    import tempfile
+
+    from linsense.firmware.pil import closed_loop
+    from linsense.io import output_set, split_timing
+
+    if scenario == "-":
+        raise InputError("--pil", "", "runs a scenario file or a packaged example's name, not standard input")
+    if others:
+        raise InputError("--pil", "", f"runs the scenario as its file sets it: not with {', '.join(others)}")
     if as_json:
-        c.emit_json("simulate", s.files, bool(m["stable"]), metrics=metrics, timing=timing)
-    if check and not m["stable"]:
-        click.echo(f"linsense: not stable: {m['unstable_reason']}", err=True)
+        c.data_on_stdout()
+    path = c.example("scenarios", scenario, "SCENARIO")
+    _scenario(path)  # (bad input refused before anything is built)
+    with tempfile.TemporaryDirectory(prefix="linsense-pil-") as tmp:
+        rec = closed_loop(path, tmp)
+    metrics, timing = split_timing(rec.pop("metrics_pil"))
+    host, _ = split_timing(rec.pop("metrics_host"))
+    rec.pop("wall_s")  # (the run's wall time is timing.json's wall_s)
+    timing["qemu_cpu_s"] = rec.pop("qemu_cpu_s")
+    rec["metrics_host"] = host
+    with output_set(out, "simulate") as s:
+        s.write("metrics.json", json.dumps(metrics, indent=1) + "\n")
+        s.write("timing.json", json.dumps(timing, indent=1) + "\n")
+        s.write("pil.json", json.dumps(rec, indent=1, sort_keys=True) + "\n")
+    c.files_report(s.files)
+    _say_metrics({**metrics, "wall_s": timing.get("wall_s"),
+                  "realtime_factor": timing.get("realtime_factor")})
+    same = ("every output of every step identical to the host build's" if rec["identical_steps"]
+            else "not identical to the host build's; metrics differ by " + (", ".join(
+                f"{k} {v:.3g}" for k, v in sorted(rec["metric_differences"].items())) or "nothing"))
+    c.say(f"{metrics['scenario']}: the drive on the Cortex-M4F under QEMU ({rec['steps']} steps, "
+          f"{timing['wall_s']:.1f} s wall, libm {rec['libm']}): {same}")
+    c.elapsed()
+    ok = bool(metrics["stable"]) and bool(rec["pass"])
+    if as_json:
+        c.emit_json("simulate", s.files, ok, metrics=metrics, timing=timing, pil=rec)
+    if check and not ok:
+        why = "not stable: " + str(metrics["unstable_reason"]) if not metrics["stable"] else \
+            "the firmware's run differs from the host build's"
+        click.echo(f"linsense: {why}", err=True)
         raise click.exceptions.Exit(1)
 
 
