@@ -67,17 +67,11 @@ def simulate_cpu(tmp: Path) -> float:
 
 
 def sweep_file(tmp: Path, n: int) -> Path:
-    f = tmp / f"sweep{n}.toml"
-    f.write_text(f"""[sweep]
-name = "bench{n}"
-scenario = "{SCENARIO}"
-set = {{ "inverter.fidelity" = "switching" }}
+    """tools/bench_sweep.py's sweep of ``n`` short runs, written into its own folder of ``tmp``."""
+    sys.path.insert(0, str(ROOT / "tools"))
+    from bench_sweep import spec
 
-[[axis]]
-key = "scenario.seed"
-values = {list(range(n))}
-""")
-    return f
+    return spec(n, tmp / f"sweep{n}")
 
 
 def sweep_run(tmp: Path, n: int, workers: int, tag: str) -> dict:
