@@ -1,16 +1,51 @@
-"""A dask client for running scenarios on a dask cluster (the ``sweep`` extra): the sweep engine
+"""Where scenarios run in parallel.
+
+A dask client for a dask cluster (the ``sweep`` extra): the sweep engine
 (:mod:`linsense.sweep.engine`) with ``--scheduler`` or ``--processes``, and
 :func:`linsense.sim.run.simulate_many` with a scheduler's address. Local runs otherwise go on a
-pool of worker threads of the standard library."""
+pool of worker threads of the standard library (:func:`thread_map`; the sweep engine keeps its own,
+which yields batches as they finish and stops them when told).
+"""
 
 from __future__ import annotations
 
 import logging
 import os
 import warnings
+from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
 
 from linsense._extras import require
+
+
+def thread_map(fn, items, workers: int | None, name: str) -> list:
+    """``[fn(x) for x in items]``, on a pool of worker threads; results in input order.
+
+    The C loop releases the GIL, so the threads run in parallel; the pool is the standard
+    library's, so the core install (without dask) runs in parallel too.
+
+    Parameters
+    ----------
+    fn : callable
+        One item's work.
+    items : iterable
+        The items.
+    workers : int or None
+        Worker threads (None: one per core); one worker, or fewer than two items, run in this thread.
+    name : str
+        The threads' name prefix.
+
+    Returns
+    -------
+    list
+        ``fn`` of each item, in order.
+    """
+    items = list(items)
+    n = min(workers or os.cpu_count() or 1, len(items))
+    if n <= 1:
+        return [fn(x) for x in items]
+    with ThreadPoolExecutor(n, thread_name_prefix=name) as pool:
+        return list(pool.map(fn, items))
 
 
 @contextmanager

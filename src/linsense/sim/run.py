@@ -288,15 +288,10 @@ def simulate_many(scenarios, workers: int = 1, *, scheduler: str | None = None,
     except TypeError:  # (not iterable)
         raise InputError("simulate_many", "scenarios", f"expected a list of scenarios, got "
                          f"{type(scenarios).__name__}") from None
-    if scheduler is None and (workers == 1 or len(items) <= 1):
-        return [simulate(s, record=record) for s in items]
     if scheduler is None:
-        # local: a thread pool of the standard library (the core install has no dask; the C loop
-        # releases the GIL, so the threads run in parallel), results in input order
-        from concurrent.futures import ThreadPoolExecutor
+        from linsense.sim.cluster import thread_map
 
-        with ThreadPoolExecutor(min(workers, len(items)), thread_name_prefix="linsense-sim") as pool:
-            return list(pool.map(lambda s: simulate(s, record=record), items))
+        return thread_map(lambda s: simulate(s, record=record), items, workers, "linsense-sim")
     from linsense.sim.cluster import cluster_client
 
     with cluster_client(min(workers, len(items)), scheduler, processes=False) as client:

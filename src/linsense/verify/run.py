@@ -10,7 +10,6 @@ GIL; no dask, which the core install has not).
 from __future__ import annotations
 
 import copy
-import math
 
 import numpy as np
 
@@ -282,24 +281,10 @@ def run_cases(
     list of dict
         The rows (:func:`run_case`).
     """
-    import os
+    from linsense.sim.cluster import thread_map
 
-    n = workers or os.cpu_count() or 1
-    if n == 1 or len(cases) < 2:
-        return [run_case(c, base, motor_spec, nominal, base_dir) for c in cases]
-    from concurrent.futures import ThreadPoolExecutor
-
-    # batches of runs per task (a thread pool of the standard library: tune is in the core install,
-    # which has no dask; the C loop releases the GIL, so the threads run in parallel)
-    size = max(1, math.ceil(len(cases) / (4 * n)))
-    batches = [cases[i : i + size] for i in range(0, len(cases), size)]
-
-    def batch(cs):
-        return [run_case(c, base, motor_spec, nominal, base_dir) for c in cs]
-
-    with ThreadPoolExecutor(max_workers=n, thread_name_prefix="linsense-verify") as pool:
-        out = list(pool.map(batch, batches))
-    return [r for rows in out for r in rows]
+    return thread_map(lambda c: run_case(c, base, motor_spec, nominal, base_dir), cases, workers,
+                      "linsense-verify")
 
 
 __all__ = ["run_case", "run_cases", "judge", "case_scenario"]
