@@ -13,9 +13,6 @@ short ``linsense simulate``) and oversubscribes the cores of a sweep's worker th
 import os
 import sys
 
-#: BLAS threads of the command's process (an environment variable read once, at numpy's import)
-BLAS_THREADS = {"OPENBLAS_NUM_THREADS": "1"}
-
 #: exit code of a run stopped by Ctrl-C (128 + SIGINT), as a shell reports it
 INTERRUPTED = 130
 
@@ -28,8 +25,8 @@ def entry(argv=None) -> None:
     argv : list of str, optional
         The arguments (default: ``sys.argv[1:]``).
     """
-    for key, value in BLAS_THREADS.items():
-        os.environ.setdefault(key, value)  # (before numpy is imported; the user's setting wins)
+    # one BLAS thread (read once, at numpy's import, so set before it; the user's setting wins)
+    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     try:
         from linsense.cli import main
 

@@ -14,7 +14,7 @@ import sys
 import click
 
 from linsense.cli import _common, firmware, models, runs, tune
-from linsense.errors import InputError, LinsenseError
+from linsense.errors import LinsenseError
 from linsense.version import __version__, docs
 
 
@@ -94,10 +94,7 @@ def main(argv: list[str] | None = None) -> None:
         ctx = f"{exc.ctx.command_path}: " if exc.ctx else ""
         click.echo(f"linsense: error: {ctx}{exc.format_message()}".replace("\n", " "), err=True)
         sys.exit(2)
-    except (LinsenseError, InputError) as exc:
-        click.echo(f"linsense: error: {exc}".replace("\n", " "), err=True)
-        sys.exit(2)
-    except (OSError, ValueError) as exc:
+    except (LinsenseError, OSError, ValueError) as exc:  # (InputError is a LinsenseError)
         click.echo(f"linsense: error: {exc}".replace("\n", " "), err=True)
         sys.exit(2)
     sys.exit(0)

@@ -128,8 +128,7 @@ def simulate(scenario: str, out: str, fidelity: str | None, trace_fmt: str | Non
             s.write_with(f"trace.{trace_fmt}", lambda f: done.append(run(f)))
             sr = done[0]
         metrics, timing = split_timing(sr.metrics)
-        s.write("metrics.json", json.dumps(metrics, indent=1) + "\n")
-        s.write("timing.json", json.dumps(timing, indent=1) + "\n")
+        _write_metrics(s, metrics, timing)
         if mat:
             cols = {k: np.concatenate([p[k] for p in mat_parts]) for k in mat_parts[0]}
             mat_parts.clear()
@@ -149,6 +148,12 @@ def simulate(scenario: str, out: str, fidelity: str | None, trace_fmt: str | Non
     if check and not m["stable"]:
         click.echo(f"linsense: not stable: {m['unstable_reason']}", err=True)
         raise click.exceptions.Exit(1)
+
+
+def _write_metrics(s, metrics: dict, timing: dict) -> None:
+    """A run's ``metrics.json`` and ``timing.json`` into the output set ``s``."""
+    s.write("metrics.json", json.dumps(metrics, indent=1) + "\n")
+    s.write("timing.json", json.dumps(timing, indent=1) + "\n")
 
 
 def _say_metrics(m: dict) -> None:
@@ -192,8 +197,7 @@ def _simulate_pil(scenario: str, out: str, others: list[str], check: bool, as_js
     timing["qemu_cpu_s"] = rec.pop("qemu_cpu_s")
     rec["metrics_host"] = host
     with output_set(out, "simulate") as s:
-        s.write("metrics.json", json.dumps(metrics, indent=1) + "\n")
-        s.write("timing.json", json.dumps(timing, indent=1) + "\n")
+        _write_metrics(s, metrics, timing)
         s.write("pil.json", json.dumps(rec, indent=1, sort_keys=True) + "\n")
     c.files_report(s.files)
     _say_metrics({**metrics, "wall_s": timing.get("wall_s"),
@@ -284,8 +288,7 @@ def calibrate(motor_spec: str | None, scenario_path: str | None, positions: int,
     metrics, timing = split_timing(cal.metrics)
     with output_set(out, "calibrate") as s:
         s.write("lut_measured.csv", lut_csv(cal))
-        s.write("metrics.json", json.dumps(metrics, indent=1) + "\n")
-        s.write("timing.json", json.dumps(timing, indent=1) + "\n")
+        _write_metrics(s, metrics, timing)
         save_png(fig_calibration(cal, cal.motor), s.path("calibration.png"))
     c.files_report(s.files)
     m = cal.metrics
@@ -432,12 +435,10 @@ def sweep_cmd(sweep_file: str, out: str, workers: int | None, scheduler: str | N
     line = summary_line(study, df, axes)
     files.append(write_atomic(out_dir / "summary.txt", f"{sw.name}: {line}\n"))
     if study:
-        from linsense.report.sweep_figures import FIGURES  # (matplotlib: only for a study's figure)
+        from linsense.report.figures import save_png  # (matplotlib: only for a study's figure)
+        from linsense.report.sweep_figures import FIGURES
 
-        fig = FIGURES[study](df, axes, relative)
-        png = out_dir / f"{study}.png"
-        files.append(write_atomic_with(png, lambda f: fig.savefig(f, format="png", dpi=110,
-                                                                  metadata={"Software": None})))
+        files.append(save_png(FIGURES[study](df, axes, relative), out_dir / f"{study}.png", 110))
     c.files_report(files)
     c.say(f"{sw.name}: {line}")
     import pandas as pd

@@ -8,6 +8,7 @@ import click
 
 from linsense.cli import _common as c
 from linsense.cli.runs import drive_options
+from linsense.version import docs
 
 
 @click.command(short_help="Design the drive for a motor and verify it.",
@@ -39,7 +40,7 @@ from linsense.cli.runs import drive_options
               help="the stroke, mm (default: unbounded)")
 @click.option("--injection", "shape", type=click.Choice(["pulsating", "rotating", "square"]), default=None,
               help="the injection: pulsating/elliptical (default; kappa --quad), rotating vector, or "
-                   "square wave at f_pwm / 2 with its dead-time measures ({docs('firmware')})")
+                   f"square wave at f_pwm / 2 with its dead-time measures ({docs('firmware')})")
 @click.option("--quick", is_flag=True, help="verify at 8 positions on the nominal plant only")
 @click.option("--no-verify", is_flag=True, help="do not run the verification")
 @click.option("--out", required=True, type=click.Path(dir_okay=False, allow_dash=True),
@@ -110,7 +111,8 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
     else:
         say("  start-up       not designed: no saturation data (--polarity, or [saturation] polarity "
             "in the motor file)")
-    for w in dz.warnings + (su.warnings if su is not None else []):
+    warnings = dz.warnings + (su.warnings if su is not None else [])
+    for w in warnings:
         c.warn(w)
     if mode != "sensorless_lut" and not no_verify:
         say(f"  (the certificate judges the designed sensorless drive with its table, not control.mode = "
@@ -118,7 +120,7 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
     json_path, png_path = _certificate_paths(out)
     summary = {"motor": motor.name, "design": dz.as_dict(),
                "startup": None if su is None else su.scenario_keys(),
-               "warnings": list(dz.warnings + (su.warnings if su is not None else []))}
+               "warnings": list(warnings)}
     if cert_run is None:
         for p in (json_path, png_path):  # (a certificate of an earlier design would be stale)
             p.unlink(missing_ok=True)
@@ -159,10 +161,10 @@ def _verify_tuned(cert_run, motor, dd, dz, quick: bool, json_path: Path, png_pat
     """Run the prepared certificate, print it, write its JSON and figure (appended to ``files``);
     return it (a quick run never claims the full certificate)."""
     say = c.say
-    import io
     import json
 
     from linsense.io import write_atomic
+    from linsense.report.figures import save_png
     from linsense.report.verify_figures import certificate_figure
 
     cert = cert_run()
@@ -174,9 +176,7 @@ def _verify_tuned(cert_run, motor, dd, dz, quick: bool, json_path: Path, png_pat
     files.append(write_atomic(json_path, json.dumps(doc, indent=1, sort_keys=True) + "\n"))
     say(str(files[-1]))
     fig = certificate_figure(cert.rows, f"{motor.name}: {cert.verdict()}", quick=quick)
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=100, metadata={"Software": None})
-    files.append(write_atomic(png_path, buf.getvalue()))
+    files.append(save_png(fig, png_path, 100))
     say(str(files[-1]))
     return cert
 
