@@ -55,7 +55,6 @@ build -O2
 o2_lib=$lib_bytes
 o2_image=$image_bytes
 build -Os
-"${CC%gcc}size" -t "${objs[@]}" > "$OUT/size.txt"
 
 defined=$("${CC%gcc}nm" --defined-only "${objs[@]}" | awk 'NF == 3 {print $3}' | sort -u)
 undefined=$("${CC%gcc}nm" -u "${objs[@]}" | awk 'NF == 2 {print $2}' | sort -u)

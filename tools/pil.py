@@ -126,7 +126,7 @@ def record(out: Path, quick: bool) -> list[tuple[str, int]]:
     from pil_cgen import DriveWriter
 
     from linsense.sim.build import build
-    from linsense.sim.core import _c_commands, _outputs, run_closed_loop
+    from linsense.sim.core import _c_commands, run_closed_loop
 
     rffi = cffi.FFI()
     rffi.cdef("int pil_record(void *cfg, void *drive, void *cmds, int32_t n_cmds, int64_t n_steps, "
@@ -150,10 +150,8 @@ def record(out: Path, quick: bool) -> list[tuple[str, int]]:
         drive = ffi.new("ls_drive *")
         ffi.memmove(drive, b.drive.state, ffi.sizeof("ls_drive"))
         c_cmds, n_cmds = _c_commands(b.commands)
-        arrays, o = _outputs(2, ["t"])
+        o = ffi.new("ls_sim_out *")  # (every pointer NULL: nothing recorded; the recorder writes files)
         res = ffi.new("ls_sim_result *")
-        o.t = ffi.NULL
-        o.fault = ffi.NULL
         st = rlib.pil_record(addr(b.cfg), addr(drive), addr(c_cmds), n_cmds, b.n_steps, addr(o), addr(res),
                              str(out / f"{name}.in").encode(), str(out / f"{name}.sim.out").encode())
         if st != 0:

@@ -158,6 +158,10 @@ __attribute__((visibility("default"))) int pil_remote(const ls_sim_cfg *cfg, ls_
     to_fw = fopen(to_path, "wb");
     from_fw = to_fw == NULL ? NULL : fopen(from_path, "rb");
     if (to_fw == NULL || from_fw == NULL) {
+        if (to_fw != NULL) {
+            fclose(to_fw); /* (the other pipe failed to open: none left open, none reused) */
+        }
+        to_fw = from_fw = NULL;
         return -1;
     }
     st = pil_record(cfg, drive, cmds, n_cmds, n_steps, out, res, in_path, out_path);
