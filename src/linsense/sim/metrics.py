@@ -109,6 +109,49 @@ def transient_mask(t: np.ndarray, moves, settle_s: float) -> np.ndarray:
     return m
 
 
+def block_views(arrays: dict) -> tuple:
+    """Each sample's block of the position and of the estimation error: its lowest, highest and
+    mean value (the point value itself where the run kept no blocks).
+
+    Parameters
+    ----------
+    arrays : dict of str to ndarray
+        A run's recorded signals (``x`` or ``x_mean``/``x_min``/``x_max``, ``theta_err`` or
+        ``err_mean``/``err_min``/``err_max``).
+
+    Returns
+    -------
+    tuple of ndarray
+        ``x, x_lo, x_hi, e_pt, e_lo, e_hi``: the position (the block mean, else the point value), its
+        block's lowest and highest value (``x`` itself without blocks), the error's point value
+        (else the block mean) and its block's lowest and highest value.
+    """
+    x = arrays.get("x_mean", arrays.get("x"))
+    x_lo, x_hi = arrays.get("x_min", x), arrays.get("x_max", x)
+    e_pt = arrays.get("theta_err", arrays.get("err_mean"))
+    e_lo, e_hi = arrays.get("err_min", e_pt), arrays.get("err_max", e_pt)
+    return x, x_lo, x_hi, e_pt, e_lo, e_hi
+
+
+def finite_positions(x: np.ndarray, x_lo: np.ndarray, x_hi: np.ndarray) -> np.ndarray:
+    """The samples whose position (and, with blocks, its block's extremes) is finite.
+
+    Parameters
+    ----------
+    x, x_lo, x_hi : ndarray
+        :func:`block_views`'s position views.
+
+    Returns
+    -------
+    ndarray of bool
+        One flag per sample.
+    """
+    x_fin = np.isfinite(x)
+    if x_lo is not x:
+        x_fin &= np.isfinite(x_lo) & np.isfinite(x_hi)
+    return x_fin
+
+
 def settling_time(t: np.ndarray, x: np.ndarray, x_to: float, t0: float, band: float,
                   x_hi: np.ndarray | None = None) -> float | None:
     """Time from ``t0`` after which ``|x - x_to| <= band`` holds to the end.
@@ -209,11 +252,7 @@ def compute_metrics(arrays: dict, *, fault: int, steps_done: int, f_pwm: float, 
         raise ValueError(f"pole_pitch must be a positive length (m), got {pole_pitch!r}")
     deg_per_m = 360.0 / pole_pitch  # electrical degrees per metre of travel
     t = arrays["t"]
-    # each sample's block: lowest, highest and mean value (the point value itself without blocks)
-    x = arrays.get("x_mean", arrays.get("x"))
-    x_lo, x_hi = arrays.get("x_min", x), arrays.get("x_max", x)
-    e_pt = arrays.get("theta_err", arrays.get("err_mean"))
-    e_lo, e_hi = arrays.get("err_min", e_pt), arrays.get("err_max", e_pt)
+    x, x_lo, x_hi, e_pt, e_lo, e_hi = block_views(arrays)
     e_mean = arrays.get("err_mean", e_pt)
     sim_s = steps_done / f_pwm
     # the samples the error statistics use: [0, n_ok), all but the state that tripped (the last
@@ -243,9 +282,7 @@ def compute_metrics(arrays: dict, *, fault: int, steps_done: int, f_pwm: float, 
         max_err = tr_err = st_err = bias = None
 
     # the final window: limit cycle (peak to peak of the true position) and offset from the target
-    x_fin = np.isfinite(x)
-    if x_lo is not x:
-        x_fin &= np.isfinite(x_lo) & np.isfinite(x_hi)
+    x_fin = finite_positions(x, x_lo, x_hi)
     x_all = bool(x_fin.all())
     x_last = arrays.get("x", x)  # the point value at the last sample (the block mean without it)
     if x_all:

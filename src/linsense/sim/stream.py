@@ -26,7 +26,7 @@ import numpy as np
 
 from linsense.sim.build import Built
 from linsense.sim.core import BLOCKS, CHUNK, run_closed_loop_chunks
-from linsense.sim.metrics import transient_mask
+from linsense.sim.metrics import block_views, finite_positions, transient_mask
 from linsense.sim.run import METRICS_BLOCKS, METRICS_SIGNALS, finish_metrics, run_metrics
 
 #: samples the metrics keep at most (beyond, consecutive samples are merged into blocks): 2**19,
@@ -261,11 +261,7 @@ class MetricSamples:
     def _deciding(self, a: dict[str, np.ndarray]) -> np.ndarray:
         """The indices of the samples of ``a`` that decide a metric (see the class), ascending."""
         t = a["t"]
-        # (the views of compute_metrics)
-        x = a.get("x_mean", a.get("x"))
-        x_lo, x_hi = a.get("x_min", x), a.get("x_max", x)
-        e_pt = a.get("theta_err", a.get("err_mean"))
-        e_lo, e_hi = a.get("err_min", e_pt), a.get("err_max", e_pt)
+        x, x_lo, x_hi, _, e_lo, e_hi = block_views(a)  # (the views of compute_metrics)
         keep = np.zeros(t.size, dtype=bool)
 
         def extreme(v: np.ndarray, where: np.ndarray, pick) -> None:
@@ -280,9 +276,7 @@ class MetricSamples:
         extreme(err, ok, np.argmax)
         extreme(err, ok & after & tr, np.argmax)
         extreme(err, ok & after & ~tr, np.argmax)
-        x_fin = np.isfinite(x)
-        if x_lo is not x:
-            x_fin &= np.isfinite(x_lo) & np.isfinite(x_hi)
+        x_fin = finite_positions(x, x_lo, x_hi)
         idx = np.flatnonzero(~x_fin)
         if idx.size:
             keep[idx[0]] = True
