@@ -229,7 +229,7 @@ HOLD_TABLE = {
     "switching, 4 Hz": ({**SLOW}, ("0.33", "0.33", "0.0009")),
     "average, 4 Hz": ({**SLOW, "inverter": {"fidelity": "average"}}, ("0.48", "1.07", "0.095")),
     "switching, defaults": ({}, ("0.33", "0.33", "0.0008")),
-    "average, defaults": ({"inverter": {"fidelity": "average"}}, ("0.32", "0.81", "0.086")),
+    "average, defaults": ({"inverter": {"fidelity": "average"}}, ("0.32", "1.08", "0.086")),
     "pulsating, with the residual": ({**SLOW, **PULSATING}, ("0.16", "0.66", "0.083")),
     "pulsating, without it": ({**SLOW, **BARE}, ("1.25", "3.93", "0.80")),
 }

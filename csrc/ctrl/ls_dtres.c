@@ -1,12 +1,12 @@
 /* Dead-time residual response model (see linsense/ls_dtres.h). */
 #include "linsense/ls_dtres.h"
+#include "linsense/ls_math.h"
 
-static void axis(LS_REAL r_s, LS_REAL l, LS_REAL ts, LS_REAL *a, LS_REAL *b)
+/* One axis's gain b = (1 - a) / R = (T / L) (1 - e^-x) / x from its decay a = e^-x (x = R T / L;
+ * its series where x is tiny: no 0/0 at R = 0); ts_l = T / L. */
+static LS_REAL gain(LS_REAL x, LS_REAL a, LS_REAL ts_l)
 {
-    const LS_REAL x = r_s * ts / l;
-    *a = LS_EXP(-x);
-    /* (1 - a) / R = (T / L) (1 - e^-x) / x, with its series where x is tiny (no 0/0 at R = 0) */
-    *b = (ts / l) * (x > LS_R(1e-4) ? (LS_R(1.0) - *a) / x : LS_R(1.0) - LS_R(0.5) * x);
+    return ts_l * (x > LS_R(1e-4) ? (LS_R(1.0) - a) / x : LS_R(1.0) - LS_R(0.5) * x);
 }
 
 ls_status ls_dtres_init(ls_dtres *r, const ls_dtres_cfg *cfg)
@@ -28,27 +28,54 @@ ls_status ls_dtres_init(ls_dtres *r, const ls_dtres_cfg *cfg)
     }
     r->cfg = *cfg;
     ts = LS_R(1.0) / cfg->fs;
-    axis(cfg->r_s, cfg->l_d, ts, &r->a_d, &r->b_d);
-    axis(cfg->r_s, cfg->l_q, ts, &r->a_q, &r->b_q);
+    r->x_d = cfg->r_s * ts / cfg->l_d;
+    r->x_q = cfg->r_s * ts / cfg->l_q;
+    r->ts_l_d = ts / cfg->l_d;
+    r->ts_l_q = ts / cfg->l_q;
     /* an inductance so small against R Ts that the response overflows: refused */
     r->k_rip = LS_R(2.0) * ts / (cfg->l_d + cfg->l_q);
-    if (!LS_ISFINITE4(r->a_d, r->b_d, r->a_q, r->b_q) || !LS_ISFINITE(r->k_rip)) {
+    ls_dtres_reset(r);
+    if (!LS_ISFINITE4(r->a_d, r->b_d, r->a_q, r->b_q) || !LS_ISFINITE4(r->x_d, r->x_q, r->ts_l_d, r->ts_l_q) ||
+        !LS_ISFINITE(r->k_rip)) {
         return LS_ERR_PARAM;
     }
-    ls_dtres_reset(r);
     return LS_OK;
 }
 
 void ls_dtres_resistance_(ls_dtres *r)
 {
-    LS_REAL ts;
     r->k_r_resp = r->k_r;
+    r->resp_stage = 0u;
     if (!(r->cfg.fs > LS_R(0.0)) || !(r->cfg.l_d > LS_R(0.0)) || !(r->cfg.l_q > LS_R(0.0))) {
         return; /* (not initialised: a drive without hf_dtres resets it too) */
     }
-    ts = LS_R(1.0) / r->cfg.fs;
-    axis(r->cfg.r_s * r->k_r, r->cfg.l_d, ts, &r->a_d, &r->b_d);
-    axis(r->cfg.r_s * r->k_r, r->cfg.l_q, ts, &r->a_q, &r->b_q);
+    r->a_d = ls_exp(-(r->x_d * r->k_r));
+    r->b_d = gain(r->x_d * r->k_r, r->a_d, r->ts_l_d);
+    r->a_q = ls_exp(-(r->x_q * r->k_r));
+    r->b_q = gain(r->x_q * r->k_r, r->a_q, r->ts_l_q);
+}
+
+void ls_dtres_response_step_(ls_dtres *r)
+{
+    switch (r->resp_stage) {
+    case 1u:
+        r->a_next[0] = ls_exp(-(r->x_d * r->k_r_resp));
+        break;
+    case 2u:
+        r->b_next = gain(r->x_d * r->k_r_resp, r->a_next[0], r->ts_l_d);
+        break;
+    case 3u:
+        r->a_next[1] = ls_exp(-(r->x_q * r->k_r_resp));
+        break;
+    default:
+        r->a_d = r->a_next[0];
+        r->b_d = r->b_next;
+        r->a_q = r->a_next[1];
+        r->b_q = gain(r->x_q * r->k_r_resp, r->a_next[1], r->ts_l_q);
+        r->resp_stage = 0u;
+        return;
+    }
+    r->resp_stage++;
 }
 
 void ls_dtres_restart(ls_dtres *r)

@@ -17,6 +17,7 @@ ls_status ls_mod_init(ls_mod *m, const ls_mod_cfg *cfg)
     }
     m->cfg = *cfg;
     m->d_dead = cfg->dead_time * cfg->f_pwm;
+    m->t_pwm = LS_R(1.0) / cfg->f_pwm;
     m->inv_band = LS_R(1.0) / cfg->i_band;
     m->k_now = (LS_R(1.0) + cfg->dtc_lead) * m->inv_band;
     m->k_prev = cfg->dtc_lead * m->inv_band;

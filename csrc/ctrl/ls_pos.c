@@ -10,6 +10,9 @@ bool ls_pos_norm_full(ls_pos *p)
     LS_REAL th = p->theta, k;
     int32_t n = p->period;
     int round;
+    if (th >= LS_R(0.0) && th < LS_TWO_PI && n <= LS_POS_PERIOD_MAX && n >= -LS_POS_PERIOD_MAX) {
+        return false; /* (already normalised: the usual case of a mode change's ls_traj_reset) */
+    }
     if (!LS_ISFINITE(th)) {
         th = LS_R(0.0);
     }
@@ -58,6 +61,26 @@ bool ls_pos_norm_full(ls_pos *p)
 
 ls_pos ls_pos_norm_wide(ls_pos p)
 {
+    /* a step across one end of the period (the usual way out of [0, 2 pi)), with the period
+     * inside the range: what ls_pos_norm_full computes there, without its division and floor
+     * (theta in [2 pi, 3 pi): floor(theta / 2 pi) = 1 and theta - 2 pi is exact; theta in
+     * [-pi, 0): -1, and theta + 2 pi may round up to 2 pi, the next period's start) */
+    if (p.period < LS_POS_PERIOD_MAX && p.period > -LS_POS_PERIOD_MAX) {
+        if (p.theta >= LS_TWO_PI && p.theta < LS_R(1.5) * LS_TWO_PI) {
+            p.theta -= LS_TWO_PI;
+            p.period += 1;
+            return p;
+        }
+        if (p.theta < LS_R(0.0) && p.theta >= -LS_PI) {
+            p.theta += LS_TWO_PI;
+            if (p.theta < LS_TWO_PI) {
+                p.period -= 1;
+            } else {
+                p.theta = LS_R(0.0);
+            }
+            return p;
+        }
+    }
     (void)ls_pos_norm_full(&p);
     return p;
 }

@@ -256,6 +256,26 @@ static void dtres_response(void)
     c.r_s = LS_R(0.0); /* R = 0: the series limit, T / L */
     LS_CHECK(ls_dtres_init(&r, &c) == LS_OK);
     LS_CHECK_NEAR(r.b_d, 1.0 / 16000.0 / 3.5e-3, 1e-6);
+    /* the response for a new resistance scale, over four periods (ls_dtres_response_step_): the
+     * old one until the fourth, then exactly what ls_dtres_resistance_ computes at once */
+    c.r_s = LS_R(9.0);
+    LS_CHECK(ls_dtres_init(&r, &c) == LS_OK);
+    {
+        ls_dtres now = r;
+        const LS_REAL a_d = r.a_d, b_d = r.b_d, a_q = r.a_q, b_q = r.b_q;
+        now.k_r = LS_R(1.3);
+        ls_dtres_resistance_(&now);
+        r.k_r = r.k_r_resp = LS_R(1.3);
+        r.resp_stage = 1u;
+        for (k = 0; k < 3; ++k) {
+            ls_dtres_response_step_(&r);
+            LS_CHECK(r.a_d == a_d && r.b_d == b_d && r.a_q == a_q && r.b_q == b_q && r.resp_stage == (uint32_t)k + 2u);
+        }
+        ls_dtres_response_step_(&r);
+        LS_CHECK(r.resp_stage == 0u && r.a_d == now.a_d && r.b_d == now.b_d && r.a_q == now.a_q && r.b_q == now.b_q);
+        LS_CHECK_NEAR(r.a_q, exp(-1.3 * 9.0 / 16000.0 / 4.5e-3), 1e-7);
+        LS_CHECK_NEAR(r.b_q, (1.0 - exp(-1.3 * 9.0 / 16000.0 / 4.5e-3)) / (1.3 * 9.0), 1e-7);
+    }
 }
 
 /* The compensation with the edges' ripple (ls_mod_step_ripple_finite) against the switching model,

@@ -16,6 +16,11 @@
 #include "ls_test.h"
 
 #define TWO_PI_D 6.28318530717958647692
+#ifdef LS_REAL_DOUBLE
+#define NEXTAFTER_ nextafter
+#else
+#define NEXTAFTER_ nextafterf
+#endif
 
 static const float comp_tab[8] = {0.0f, 0.05f, 0.07f, 0.05f, 0.0f, -0.05f, -0.07f, -0.05f};
 static ls_lut g_comp;
@@ -99,6 +104,30 @@ static void test_pos(void)
     /* the hot path's add across the end saturates there instead of overflowing */
     p = ls_pos_add(mkpos(LS_POS_PERIOD_MAX, LS_R(6.0)), LS_R(1.0));
     LS_CHECK(p.period == LS_POS_PERIOD_MAX && p.theta == LS_R(0.0));
+    /* the per-step slow path's shortcuts across one end of the period (ls_pos_norm_wide) give
+     * ls_pos_norm_full's result bit for bit, at and around their bounds and the range's ends */
+    {
+        static const int32_t periods[] = {0, 7, -7, LS_POS_PERIOD_MAX - 1, -LS_POS_PERIOD_MAX + 1,
+                                          LS_POS_PERIOD_MAX, -LS_POS_PERIOD_MAX};
+        const LS_REAL base[] = {LS_TWO_PI, LS_R(1.5) * LS_TWO_PI, -LS_PI, LS_R(0.0), LS_R(-1e-30), LS_R(3.0)};
+        size_t i, j;
+        int k;
+        for (i = 0; i < sizeof periods / sizeof periods[0]; ++i) {
+            for (j = 0; j < sizeof base / sizeof base[0]; ++j) {
+                LS_REAL th = base[j];
+                for (k = 0; k < 3; ++k) {
+                    ls_pos full = mkpos(periods[i], th), wide = ls_pos_norm_wide(full);
+                    (void)ls_pos_norm_full(&full);
+                    LS_CHECK(wide.period == full.period && memcmp(&wide.theta, &full.theta, sizeof th) == 0);
+                    full = mkpos(periods[i], -th);
+                    wide = ls_pos_norm_wide(full);
+                    (void)ls_pos_norm_full(&full);
+                    LS_CHECK(wide.period == full.period && memcmp(&wide.theta, &full.theta, sizeof th) == 0);
+                    th = k == 0 ? NEXTAFTER_(th, LS_R(-100.0)) : NEXTAFTER_(base[j], LS_R(100.0));
+                }
+            }
+        }
+    }
     /* the difference of the range's ends does not overflow */
     LS_CHECK_NEAR(ls_pos_diff(mkpos(LS_POS_PERIOD_MAX, 0), mkpos(-LS_POS_PERIOD_MAX, 0)),
                   2.0 * LS_POS_PERIOD_MAX * TWO_PI_D, 1e3);

@@ -12,7 +12,7 @@
  * the drive subtracts before the HF band-pass:
  *   i_dq[k+1] = a (.) i_dq[k] + k_l diag(b_d L_d, b_q L_q) L_dq^-1 v_dq[k]   (forward model),
  *   i_dq[k+1] = a (.) i_dq[k] + diag(b_d, b_q) v_dq[k]   (the interpolation: the former model),
- *   a_d = exp(-R T / L_d),  b_d = (1 - a_d) / R  (T / L_d for R = 0), likewise on q,
+ *   a_d = exp(-R T / L_d),  b_d = (1 - a_d) / R  (T / L_d for R = 0), likewise on q (ls_exp),
  * L_dq the model's inductance in the estimated frame. k_l, the scale of the model's inverse
  * inductance, is measured from every period (ls_dtres_adapt: the current change the model predicted
  * against the measured one), so that an inductance off by 10 % (a tolerance, a warm motor) does not
@@ -56,7 +56,15 @@ typedef struct {
                                <a,a>, <a,b>, <b,b>, <m,a>, <m,b> (high-passed), <m,c>, <c,c> */
     LS_REAL hp[6];        /**< unit: A, the slow parts of m, a and b (alpha-beta), taken out of them */
     uint32_t n_solve;     /**< unit: -, periods since k_r was last solved for (0: just now) */
-    LS_REAL k_r_resp;     /**< unit: -, the k_r that a_d, b_d, a_q, b_q were computed for */
+    LS_REAL k_r_resp;     /**< unit: -, the k_r that a_d, b_d, a_q, b_q are computed for (or, while
+                               resp_stage is not 0, are being computed for) */
+    LS_REAL x_d, x_q;     /**< unit: -, r_s T / L_d and r_s T / L_q (the exponents at k_r = 1) */
+    LS_REAL ts_l_d, ts_l_q; /**< unit: s/H, T / L_d and T / L_q */
+    LS_REAL a_next[2];    /**< unit: -, a_d and a_q being computed for k_r_resp */
+    LS_REAL b_next;       /**< unit: A/V, b_d being computed for k_r_resp */
+    uint32_t resp_stage;  /**< unit: -, the response's recomputation after a solve moved k_r: 0 none,
+                               1 to 4 the part the next period computes (a_d, b_d, a_q, b_q; after
+                               the fourth all four apply) */
 } ls_dtres;
 
 ls_status ls_dtres_init(ls_dtres *r, const ls_dtres_cfg *cfg);
@@ -65,9 +73,13 @@ void ls_dtres_reset(ls_dtres *r);
 /* The state, k_l and the fits' sums back to the start, k_r kept (the winding's resistance does not
  * change with the drive's mode: ls_drive_set_mode). */
 void ls_dtres_restart(ls_dtres *r);
-/* The response's per-step decay and gain (a_d, b_d, a_q, b_q) for the resistance k_r r_s (called
- * by ls_dtres_adapt when k_r has moved by LS_DTRES_KR_RESP since; out of line: two exponentials). */
+/* The response's per-step decay and gain (a_d, b_d, a_q, b_q) for the resistance k_r r_s, at once
+ * (ls_dtres_reset; out of line: two exponentials, ls_exp). */
 void ls_dtres_resistance_(ls_dtres *r);
+/* The same for k_r_resp, one part per call (ls_dtres_adapt, in the four periods after a solve that
+ * moved k_r by more than LS_DTRES_KR_RESP: one exponential or one division per period, not two of
+ * each with the solve; the four apply together, four periods after the solve). */
+void ls_dtres_response_step_(ls_dtres *r);
 
 /* v_ab: the voltage error of the period that has just ended (V, alpha-beta); (c, s): cos and sin
  * of the estimated angle. Writes the modelled current at this sample into i_ab (A, alpha-beta).
@@ -132,8 +144,10 @@ static inline void ls_dtres_phase_g(const ls_dtres *r, LS_REAL c, LS_REAL s, LS_
  * high-pass at LS_DTRES_HP_RATE per period): the fit reads the injection's changes, not the
  * fundamental's, whose back-EMF the model does not know and which would read as a resistance
  * while the mover moves under load; solved every LS_DTRES_SOLVE_EVERY periods, moving by at most
- * LS_DTRES_KR_STEP each time. Each within its bounds. fit_r false holds k_r (the drive's start-up, whose angle is not
- * known yet: the model's drop is then read on the wrong axes). Inline (called every PWM period). */
+ * LS_DTRES_KR_STEP each time; once it has moved by LS_DTRES_KR_RESP, the response (a, b) follows
+ * over the next four periods (ls_dtres_response_step_). Each within its bounds. fit_r false holds
+ * k_r (the drive's start-up, whose angle is not known yet: the model's drop is then read on the
+ * wrong axes). Inline (called every PWM period). */
 #define LS_DTRES_KL_RATE LS_R(0.002)
 #define LS_DTRES_KR_RATE LS_R(0.002)
 #define LS_DTRES_HP_RATE LS_R(0.05)
@@ -152,12 +166,12 @@ static inline void ls_dtres_phase_g(const ls_dtres *r, LS_REAL c, LS_REAL s, LS_
  * a PWM update other than one period after the sample, a current-sensing gain error) */
 #define LS_DTRES_KR_MIN LS_R(0.7)
 #define LS_DTRES_KR_MAX LS_R(1.8)
+#define LS_DTRES_HP_(k) (r->hp[k] += LS_DTRES_HP_RATE * (x[k] - r->hp[k]), x[k] -= r->hp[k])
 static inline void ls_dtres_adapt(ls_dtres *r, const LS_REAL i0[3], const LS_REAL i1[3], const LS_REAL i_pred[3],
                                   const LS_REAL i_drop[3], bool fit_r)
 {
     const LS_REAL k3 = LS_R(0.57735026919), ul = LS_R(1.0) / r->k_l, ub = ul / r->k_r;
     LS_REAL x[6];
-    int k;
     {
         /* k_l: <m, p - i0> k_l and <p - i0, p - i0> = <m, c> k_l^2 and <c, c> k_l^2 (each period
          * weighted by the change the model predicted), over the phases */
@@ -175,10 +189,14 @@ static inline void ls_dtres_adapt(ls_dtres *r, const LS_REAL i0[3], const LS_REA
         x[3] = (i_pred[1] - i0[1] + i_drop[1] - i_pred[2] + i0[2] - i_drop[2]) * (k3 * ul);
         x[4] = i_drop[0] * ub;
         x[5] = (i_drop[1] - i_drop[2]) * (k3 * ub);
-        for (k = 0; k < 6; ++k) { /* each less its slow part */
-            r->hp[k] += LS_DTRES_HP_RATE * (x[k] - r->hp[k]);
-            x[k] -= r->hp[k];
-        }
+        /* each less its slow part (written out: a loop kept x[] in memory, 40 cycles on a
+         * Cortex-M4F) */
+        LS_DTRES_HP_(0);
+        LS_DTRES_HP_(1);
+        LS_DTRES_HP_(2);
+        LS_DTRES_HP_(3);
+        LS_DTRES_HP_(4);
+        LS_DTRES_HP_(5);
         /* m = x[0..1], a = x[2..3], b = x[4..5]: <a,a>, <a,b>, <b,b>, <m,a>, <m,b> */
         r->s[0] += LS_DTRES_KR_RATE * (x[2] * x[2] + x[3] * x[3] - r->s[0]);
         r->s[1] += LS_DTRES_KR_RATE * (x[2] * x[4] + x[3] * x[5] - r->s[1]);
@@ -209,9 +227,13 @@ static inline void ls_dtres_adapt(ls_dtres *r, const LS_REAL i0[3], const LS_REA
                                               : (kr < r->k_r - LS_DTRES_KR_STEP ? r->k_r - LS_DTRES_KR_STEP : kr);
         r->k_r = kr > LS_DTRES_KR_MIN ? (kr < LS_DTRES_KR_MAX ? kr : LS_DTRES_KR_MAX) : LS_DTRES_KR_MIN;
         if (LS_FABS(r->k_r - r->k_r_resp) > LS_DTRES_KR_RESP) {
-            ls_dtres_resistance_(r);
+            r->k_r_resp = r->k_r; /* (the response follows over the next two periods) */
+            r->resp_stage = 1u;
         }
+    } else if (r->resp_stage != 0u) {
+        ls_dtres_response_step_(r);
     }
 }
+#undef LS_DTRES_HP_
 
 #endif /* LINSENSE_LS_DTRES_H */

@@ -1,8 +1,9 @@
-/* linsense firmware library: sine and cosine of one angle.
+/* linsense firmware library: sine and cosine of one angle, and the exponential.
  *
  *   ls_sincos(x, &c, &s)        c = cos(x), s = sin(x), x in rad; inline
  *   ls_sincos_full(x, &c, &s)   the same, out of line (for init code: no inline copy)
  *   ls_phasor_advance(p, dc, ds)   the unit phasor p = (c, s) turned by the step (dc, ds)
+ *   ls_exp(x)                   e^x; inline
  *
  * Float build: no libm call. Where the drive works, |x| <= LS_SINCOS_TAB_MAX (25 rad: the
  * position within the period, a compensation angle), x = k 2 pi / N + r with |r| <= pi / N
@@ -18,7 +19,14 @@
  * finite float; NaN and +-Inf give NaN. The drive uses it every step, and with it the library
  * needs no sinf/cosf (on a Cortex-M4F, newlib's are slow and large).
  *
- * Double build (-DLS_REAL_DOUBLE): libm sin and cos.
+ * ls_exp, float build: no libm call either (newlib's expf costs about 115 Cortex-M4F cycles and,
+ * being another implementation than glibc's, rounds some results differently from the host's: with
+ * ls_exp the library's steps compute the same floats on every target). Cody-Waite reduction by
+ * ln 2 and Cephes' degree-7 minimax polynomial (about 30 instructions); relative error at most
+ * 2.4e-7 over [LS_EXP_MIN, LS_EXP_MAX] (csrc/tests/test_math.c checks <= 3e-7 against double exp
+ * over a dense sweep); 0 below LS_EXP_MIN, +Inf above LS_EXP_MAX, NaN for NaN.
+ *
+ * Double build (-DLS_REAL_DOUBLE): libm sin, cos and exp.
  */
 #ifndef LINSENSE_LS_MATH_H
 #define LINSENSE_LS_MATH_H
@@ -41,6 +49,7 @@ extern const float ls_sin_tab[LS_SIN_TAB_N];
 
 /* cos and sin of any x (rad), out of line; NaN for a non-finite x. */
 void ls_sincos_full(LS_REAL x, LS_REAL *c, LS_REAL *s);
+
 
 /* Turn the unit phasor (c, s) by the step (dc, ds) = (cos, sin) of a fixed angle and pull it back
  * onto the unit circle (first-order Newton step for 1/|z|, exact to O(err^2) per step, so the error
@@ -67,6 +76,11 @@ static inline void ls_sincos(LS_REAL x, LS_REAL *c, LS_REAL *s)
 {
     *c = cos(x);
     *s = sin(x);
+}
+
+static inline LS_REAL ls_exp(LS_REAL x)
+{
+    return exp(x);
 }
 
 #else
@@ -125,6 +139,41 @@ static inline void ls_sincos(float x, float *c, float *s)
         *c = c1;
         *s = s1;
     }
+}
+
+/* the range where e^x is a normal float: below, ls_exp gives 0, above +Inf */
+#define LS_EXP_MIN -87.0f
+#define LS_EXP_MAX 88.0f
+
+/* e^x = 2^k e^r: k = nearest(x / ln 2), r = x - k ln 2 by a two-part Cody-Waite subtraction (ln 2 =
+ * 0.693359375 - 2.12194440e-4, the first of 9 bits: k times it is exact for |k| <= 2^15), so
+ * |r| <= ln 2 / 2 (a little more: the rounding of x / ln 2); e^r by Cephes' minimax polynomial on
+ * that interval (expf.c: 1 + r + r^2 (1/2 + ...)), times 2^k built in the exponent field (a normal
+ * float for every k here). */
+static inline float ls_exp(float x)
+{
+    float r, z, p;
+    int32_t k;
+    union {
+        uint32_t u;
+        float f;
+    } scale; /* (2^k: C99's union punning, no memcpy in a header) */
+    if (!(x >= LS_EXP_MIN)) { /* (NaN: NaN) */
+        return x == x ? 0.0f : x;
+    }
+    if (x > LS_EXP_MAX) {
+        return HUGE_VALF;
+    }
+    /* x / ln 2 in [-125.52, 126.96]: + 128.5 > 0 truncates to floor(x / ln 2 + 1/2) + 128 */
+    k = (int32_t)(x * 1.44269504088896341f + 128.5f) - 128;
+    r = (x - (float)k * 0.693359375f) - (float)k * -2.12194440e-4f;
+    z = r * r;
+    p = ((((1.9875691500e-4f * r + 1.3981999507e-3f) * r + 8.3334519073e-3f) * r + 4.1665795894e-2f) * r +
+         1.6666665459e-1f) * r +
+        5.0000001201e-1f;
+    p = (p * z + r) + 1.0f;
+    scale.u = (uint32_t)(k + 127) << 23; /* (k in [-126, 127]) */
+    return p * scale.f;
 }
 
 #endif /* LS_REAL_DOUBLE */

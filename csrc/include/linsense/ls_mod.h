@@ -40,6 +40,7 @@ typedef struct {
 typedef struct {
     ls_mod_cfg cfg;    /* copy of the configuration */
     LS_REAL d_dead;    /* -, duty equivalent of the dead time */
+    LS_REAL t_pwm;     /* s, the period 1 / f_pwm */
     LS_REAL i_prev[3]; /* A, phase currents of the previous step (for the extrapolation) */
     bool have_prev;    /* i_prev is valid */
     LS_REAL inv_band;  /* 1/A, 1 / i_band */
@@ -216,7 +217,7 @@ static inline bool ls_mod_residual(const ls_mod *m, const LS_REAL i_abc[3], LS_R
     {
         /* in the sorted order (a = o0, b = o1, c = o2): G's entries (diagonal g[k], off-diagonal
          * g[k + j + 2]), the start currents and their change over the period */
-        const LS_REAL T = LS_R(1.0) / m->cfg.f_pwm;
+        const LS_REAL T = m->t_pwm;
         const LS_REAL kv = LS_R(2.0) / LS_R(3.0) * v_dc, kr = LS_R(2.0) / LS_R(3.0) * r_s;
         const LS_REAL kd = kv * m->cfg.dead_time; /* a whole dead time's volt-seconds, per unit of G */
         const LS_REAL gaa = g[o0], gbb = g[o1], gcc = g[o2];
