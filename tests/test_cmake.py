@@ -83,7 +83,7 @@ def test_install_holds_the_library_its_public_headers_and_the_package_files(inst
     public = {f"include/linsense/{p.name}" for p in (CSRC / "include" / "linsense").glob("*.h")}
     assert public <= files
     assert not [f for f in files if f.startswith("include/") and f not in public]  # (no internal header)
-    for f in ("liblinsense_ctrl.a", "cmake/linsense/linsense-config.cmake",
+    for f in ("liblinsense_ctrl.a", "pkgconfig/linsense.pc", "cmake/linsense/linsense-config.cmake",
               "cmake/linsense/linsense-config-version.cmake", "cmake/linsense/linsense-targets.cmake"):
         assert f"{libdir}/{f}" in files, f
     version = (installed / libdir / "cmake/linsense/linsense-config-version.cmake").read_text()
@@ -99,6 +99,23 @@ def test_find_package_after_install(installed, tmp_path):
     _run("cmake", "--build", app / "b", cwd=tmp_path)
     out = _run(app / "b" / "app", cwd=tmp_path).stdout
     assert out == f"{_version_line()}real 4 init 0\nother version 3\n"
+
+
+@pytest.mark.skipif(shutil.which("pkg-config") is None, reason="needs pkg-config")
+def test_pkg_config_after_install(installed, tmp_path):
+    """Without CMake: ``pkg-config --cflags --libs linsense`` builds the same program."""
+    pc = next(installed.rglob("pkgconfig/linsense.pc"))
+    env = {**os.environ, "PKG_CONFIG_PATH": str(pc.parent)}
+    def query(*what: str) -> str:
+        return subprocess.run(["pkg-config", *what, "linsense"], capture_output=True, text=True, env=env,
+                              check=True).stdout.strip()
+
+    flags = query("--cflags", "--libs")
+    assert query("--modversion") == linsense.__version__
+    assert "-ffp-contract=off" in flags and "-llinsense_ctrl" in flags and "LS_REAL_DOUBLE" not in flags, flags
+    (tmp_path / "app.c").write_text(APP)
+    _run("cc", "-std=c99", "app.c", "-o", "app", *flags.split(), cwd=tmp_path)
+    assert _run(tmp_path / "app", cwd=tmp_path).stdout == f"{_version_line()}real 4 init 0\nother version 3\n"
 
 
 def test_find_package_refuses_another_version(installed, tmp_path):
