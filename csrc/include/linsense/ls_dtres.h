@@ -166,12 +166,18 @@ static inline void ls_dtres_phase_g(const ls_dtres *r, LS_REAL c, LS_REAL s, LS_
  * a PWM update other than one period after the sample, a current-sensing gain error) */
 #define LS_DTRES_KR_MIN LS_R(0.7)
 #define LS_DTRES_KR_MAX LS_R(1.8)
-#define LS_DTRES_HP_(k) (r->hp[k] += LS_DTRES_HP_RATE * (x[k] - r->hp[k]), x[k] -= r->hp[k])
+/* x less its slow part: the state hp moves towards x by LS_DTRES_HP_RATE of the way (a first-order
+ * high-pass); ls_dtres_adapt's. */
+static inline LS_REAL ls_dtres_hp_(LS_REAL *hp, LS_REAL x)
+{
+    *hp += LS_DTRES_HP_RATE * (x - *hp);
+    return x - *hp;
+}
+
 static inline void ls_dtres_adapt(ls_dtres *r, const LS_REAL i0[3], const LS_REAL i1[3], const LS_REAL i_pred[3],
                                   const LS_REAL i_drop[3], bool fit_r)
 {
     const LS_REAL k3 = LS_R(0.57735026919), ul = LS_R(1.0) / r->k_l, ub = ul / r->k_r;
-    LS_REAL x[6];
     {
         /* k_l: <m, p - i0> k_l and <p - i0, p - i0> = <m, c> k_l^2 and <c, c> k_l^2 (each period
          * weighted by the change the model predicted), over the phases */
@@ -182,27 +188,22 @@ static inline void ls_dtres_adapt(ls_dtres *r, const LS_REAL i0[3], const LS_REA
     }
     fit_r = fit_r && r->cfg.adapt_r;
     if (fit_r) {
-        /* m, a and b in alpha-beta: alpha = x_a, beta = (x_b - x_c) / sqrt 3 */
-        x[0] = i1[0] - i0[0];
-        x[1] = (i1[1] - i0[1] - i1[2] + i0[2]) * k3;
-        x[2] = (i_pred[0] - i0[0] + i_drop[0]) * ul;
-        x[3] = (i_pred[1] - i0[1] + i_drop[1] - i_pred[2] + i0[2] - i_drop[2]) * (k3 * ul);
-        x[4] = i_drop[0] * ub;
-        x[5] = (i_drop[1] - i_drop[2]) * (k3 * ub);
-        /* each less its slow part (written out: a loop kept x[] in memory, 40 cycles on a
+        /* m, a and b in alpha-beta: alpha = x_a, beta = (x_b - x_c) / sqrt 3, each less its slow
+         * part (written out in scalars: a loop over an array kept it in memory, 80 cycles on a
          * Cortex-M4F) */
-        LS_DTRES_HP_(0);
-        LS_DTRES_HP_(1);
-        LS_DTRES_HP_(2);
-        LS_DTRES_HP_(3);
-        LS_DTRES_HP_(4);
-        LS_DTRES_HP_(5);
-        /* m = x[0..1], a = x[2..3], b = x[4..5]: <a,a>, <a,b>, <b,b>, <m,a>, <m,b> */
-        r->s[0] += LS_DTRES_KR_RATE * (x[2] * x[2] + x[3] * x[3] - r->s[0]);
-        r->s[1] += LS_DTRES_KR_RATE * (x[2] * x[4] + x[3] * x[5] - r->s[1]);
-        r->s[2] += LS_DTRES_KR_RATE * (x[4] * x[4] + x[5] * x[5] - r->s[2]);
-        r->s[3] += LS_DTRES_KR_RATE * (x[0] * x[2] + x[1] * x[3] - r->s[3]);
-        r->s[4] += LS_DTRES_KR_RATE * (x[0] * x[4] + x[1] * x[5] - r->s[4]);
+        const LS_REAL m_a = ls_dtres_hp_(&r->hp[0], i1[0] - i0[0]);
+        const LS_REAL m_b = ls_dtres_hp_(&r->hp[1], (i1[1] - i0[1] - i1[2] + i0[2]) * k3);
+        const LS_REAL a_a = ls_dtres_hp_(&r->hp[2], (i_pred[0] - i0[0] + i_drop[0]) * ul);
+        const LS_REAL a_b = ls_dtres_hp_(
+            &r->hp[3], (i_pred[1] - i0[1] + i_drop[1] - i_pred[2] + i0[2] - i_drop[2]) * (k3 * ul));
+        const LS_REAL b_a = ls_dtres_hp_(&r->hp[4], i_drop[0] * ub);
+        const LS_REAL b_b = ls_dtres_hp_(&r->hp[5], (i_drop[1] - i_drop[2]) * (k3 * ub));
+        /* <a,a>, <a,b>, <b,b>, <m,a>, <m,b> */
+        r->s[0] += LS_DTRES_KR_RATE * (a_a * a_a + a_b * a_b - r->s[0]);
+        r->s[1] += LS_DTRES_KR_RATE * (a_a * b_a + a_b * b_b - r->s[1]);
+        r->s[2] += LS_DTRES_KR_RATE * (b_a * b_a + b_b * b_b - r->s[2]);
+        r->s[3] += LS_DTRES_KR_RATE * (m_a * a_a + m_b * a_b - r->s[3]);
+        r->s[4] += LS_DTRES_KR_RATE * (m_a * b_a + m_b * b_b - r->s[4]);
     }
     if (r->s[6] > LS_R(1e-12)) { /* (A^2: below, no current has changed yet) */
         const LS_REAL kl = r->s[5] / r->s[6];
@@ -234,6 +235,5 @@ static inline void ls_dtres_adapt(ls_dtres *r, const LS_REAL i0[3], const LS_REA
         ls_dtres_response_step_(r);
     }
 }
-#undef LS_DTRES_HP_
 
 #endif /* LINSENSE_LS_DTRES_H */
