@@ -214,11 +214,11 @@ mcu: tools example-export cmake-tool
 # Processor in the loop (docs/firmware.md, "Processor in the loop"): tools/pil.py records the host's
 # closed loop of the Fig. 13 trajectory and a hold in every mode and injection shape (the drive's
 # inputs at ls_drive_step), replays them on the Cortex-M4F build (csrc/pil/: start-up, semihosting,
-# mps2-an386 linker script) under qemu-system-arm and on the host build, and fails unless the two
-# agree bit for bit on every output of every step (with one expf on both sides; with each side's
-# libm the differences are printed); then tools/pil_closed.py closes the loop through the target:
-# 1 s of the Fig. 13 trajectory with the plant on the host and the drive under QEMU, one exchange
-# per PWM period, identical to the host's run. 15-30 s.
+# mps2-an386 linker script; -O2 and -Os, newlib) under qemu-system-arm and on the host build
+# (glibc), and fails unless they agree bit for bit on every output of every step; then
+# tools/pil_closed.py closes the loop through the target: 1 s of the Fig. 13 trajectory with the
+# plant on the host and the drive under QEMU, one exchange per PWM period, identical to the host's
+# run. 15-30 s.
 pil: $(STAMP) tools
 	$(PY) tools/pil.py
 	$(PY) tools/pil_closed.py src/linsense/examples/scenarios/fig13_trajectory_switching.toml --duration 1.0

@@ -33,6 +33,7 @@ def _load(name: str):
 pil = _load("pil")
 bench_pil = _load("bench_pil")
 pil_cgen = _load("pil_cgen")
+pil_closed = _load("pil_closed")
 
 
 def _outputs(steps: int, seed: int = 0) -> np.ndarray:
@@ -51,18 +52,39 @@ def _write_case(tmp: Path, name: str, arrays: dict) -> None:
         a.tofile(tmp / f"{name}.{tag}.out")
 
 
-@pytest.mark.parametrize("field", ["duty_a", "fault", "pos_est.period", "psi_cal"])
-def test_compare_fails_on_one_bit_of_one_output(tmp_path, field, capsys):
+@pytest.mark.parametrize("target", ["m4f", "m4f_os"])
+@pytest.mark.parametrize("field", ["duty_a", "fault", "pos_est.period", "pos_est.theta", "psi_cal"])
+def test_compare_fails_on_one_bit_of_one_output(tmp_path, field, target, capsys):
+    """Any output of either target build, floats included, one bit off in one step: a failure."""
     ref = _outputs(50)
     tags = ("sim", *pil.REPLAYS)
     _write_case(tmp_path, "c", {t: ref for t in tags})
     assert pil.compare(tmp_path, [("c", 50)])
+    capsys.readouterr()
     bad = ref.copy()
     j = [n for n, _ in pil.OUT_FIELDS].index(field)
     bad[17, j] ^= 1  # the last bit of one word of one step
-    _write_case(tmp_path, "c", {**{t: ref for t in tags}, "m4f_c": bad})
+    _write_case(tmp_path, "c", {**{t: ref for t in tags}, target: bad})
     assert not pil.compare(tmp_path, [("c", 50)])
-    assert "1 steps differ" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "1 steps differ" in out
+    largest = out.split("largest |target - host| per output")[1]
+    assert f" {field} 0," not in largest and f" {field} 0\n" not in largest  # (its difference printed)
+
+
+def test_compare_fails_on_a_sign_of_zero(tmp_path):
+    """-0 against +0 differs by 0 in value but not in bits: a failure (bit for bit, not a tolerance)."""
+    ref = _outputs(10)
+    ref[:, 0] = np.float32(0.0).view("<u4")
+    neg = ref.copy()
+    neg[4, 0] = np.float32(-0.0).view("<u4")
+    _write_case(tmp_path, "c", {**{t: ref for t in ("sim", *pil.REPLAYS)}, "m4f": neg})
+    assert not pil.compare(tmp_path, [("c", 10)])
+
+
+def test_the_replays_are_the_host_and_the_target_at_two_optimisations():
+    assert pil.REPLAYS == {"host": ("host", "-O2"), "m4f": ("m4f", "-O2"), "m4f_os": ("m4f", "-Os")}
+    assert pil.TARGETS == ["m4f", "m4f_os"] and pil.BOUND == 0.0
 
 
 def test_compare_fails_on_an_incomplete_recording_or_a_short_replay(tmp_path):
@@ -71,19 +93,36 @@ def test_compare_fails_on_an_incomplete_recording_or_a_short_replay(tmp_path):
     other[3, 0] ^= 4
     _write_case(tmp_path, "c", {"sim": other, **{t: ref for t in pil.REPLAYS}})
     assert not pil.compare(tmp_path, [("c", 30)])  # the host replay is not the closed loop's steps
-    _write_case(tmp_path, "c", {"sim": ref, **{t: ref for t in pil.REPLAYS}, "m4f": ref[:-1]})
-    assert not pil.compare(tmp_path, [("c", 30)])
+    for t in pil.TARGETS:
+        _write_case(tmp_path, "c", {"sim": ref, **{u: ref for u in pil.REPLAYS}, t: ref[:-1]})
+        assert not pil.compare(tmp_path, [("c", 30)])
 
 
-def test_compare_reports_but_accepts_float_differences_of_the_libms(tmp_path):
-    ref = _outputs(20)
-    libm = ref.copy()
-    libm[5, 0] ^= 1  # a float output: reported, not a failure
-    _write_case(tmp_path, "c", {**{t: ref for t in ("sim", *pil.REPLAYS)}, "m4f": libm})
-    assert pil.compare(tmp_path, [("c", 20)])
-    libm[5, 4] ^= 1  # the fault bits: a failure
-    _write_case(tmp_path, "c", {**{t: ref for t in ("sim", *pil.REPLAYS)}, "m4f": libm})
-    assert not pil.compare(tmp_path, [("c", 20)])
+def test_compare_accepts_nan_payloads_only(tmp_path):
+    """NaN equals NaN whatever its payload (x86's default NaN is negative, the M4F's positive)."""
+    ref = _outputs(10)
+    ref[2, 0] = np.float32(np.nan).view("<u4")
+    other = ref.copy()
+    other[2, 0] = np.uint32(0xFFC00000)
+    _write_case(tmp_path, "c", {**{t: ref for t in ("sim", *pil.REPLAYS)}, "m4f_os": other})
+    assert pil.compare(tmp_path, [("c", 10)])
+    other[2, 0] = np.float32(1.0).view("<u4")  # a NaN against a number: a failure
+    _write_case(tmp_path, "c", {**{t: ref for t in ("sim", *pil.REPLAYS)}, "m4f_os": other})
+    assert not pil.compare(tmp_path, [("c", 10)])
+
+
+def test_closed_loop_metrics_must_match_bit_for_bit():
+    """tools/pil_closed.py: every metric but the timing compared; -0 is not +0, NaN is NaN."""
+    host = {"bias_deg": 0.25, "final_error_mm": 0.0, "samples": 16000, "stable": True, "fault": "none",
+            "settling_time_s": None, "limit_cycle_deg": float("nan"), "wall_s": 1.0, "realtime_factor": 2.0}
+    same = {**host, "wall_s": 3.0, "realtime_factor": 0.5}
+    assert pil_closed.metric_differences(same, host) == ({}, {})
+    d, m = pil_closed.metric_differences({**same, "bias_deg": np.nextafter(0.25, 1.0), "final_error_mm": -0.0,
+                                          "stable": False}, host)
+    assert set(d) == {"bias_deg", "final_error_mm"} and d["final_error_mm"] == 0.0 and d["bias_deg"] > 0
+    assert m == {"stable": [False, True]}
+    _, m = pil_closed.metric_differences({k: v for k, v in same.items() if k != "fault"}, host)
+    assert m == {"fault": [None, "none"]}
 
 
 def test_differences_treat_nan_as_equal_and_measure_floats():

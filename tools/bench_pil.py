@@ -325,10 +325,10 @@ def main() -> int:
         return 1
     t0 = time.time()
     names = pil.record(out, quick=True)
-    host = pil.build_replay(out, "host", "host", False)
+    host = pil.build_replay(out, "host", "host")
     ok = True
     for opt in ("-O2", "-Os"):
-        elf = pil.build_replay(out, "m4f", "m4f", False, opt)
+        elf = pil.build_replay(out, "m4f", "m4f", opt)
         ok &= report(out, names, elf, host, opt)
     lib_os, lib_o2, limit, within = code_size()
     if lib_os is None:

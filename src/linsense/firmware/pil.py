@@ -5,9 +5,10 @@ The loop itself is the source tree's ``tools/pil_closed.py`` (``make pil`` runs 
 trajectory): it cross-compiles the firmware's replay in its closed-loop build (csrc/pil/), builds the
 host side around the simulator's own time loop (csrc/sim/), exchanges one PWM period at a time
 through named pipes with the firmware under ``qemu-system-arm``, and runs the same loop on the host
-build of the drive for the reference. It needs what a wheel does not ship (the simulator's and the
-harness's C sources, the ARM cross compiler, QEMU, a C compiler): a source tree of linsense, with
-``make tools`` run once.
+build of the drive for the reference, each side with its own C library (newlib on the target,
+glibc on the host): the two must agree bit for bit on every output of every step. It needs what a
+wheel does not ship (the simulator's and the harness's C sources, the ARM cross compiler, QEMU, a C
+compiler): a source tree of linsense, with ``make tools`` run once.
 """
 
 from __future__ import annotations
@@ -38,8 +39,7 @@ def source_tree() -> Path | None:
     return root if all(p.exists() for p in needed) else None
 
 
-def closed_loop(scenario: str | Path, out: str | Path, *, duration: float | None = None,
-                libm: str = "common") -> dict:
+def closed_loop(scenario: str | Path, out: str | Path, *, duration: float | None = None) -> dict:
     """Run a scenario with its drive on the Cortex-M4F under QEMU and on the host; both runs' metrics.
 
     Parameters
@@ -50,16 +50,15 @@ def closed_loop(scenario: str | Path, out: str | Path, *, duration: float | None
         Folder for the builds, the pipes and ``pil.json``.
     duration : float or None, optional
         Simulated time in s (default: the scenario's).
-    libm : {"common", "own"}, optional
-        ``"common"``: both sides link one ``expf``, and the runs must agree bit for bit; ``"own"``:
-        newlib's on the target, glibc's on the host (differences reported).
 
     Returns
     -------
     dict
         ``pil.json``: ``metrics_pil`` (the firmware's run), ``metrics_host``, ``metric_differences``
-        (absolute, of the metrics that differ), ``identical_steps`` (every output of every step),
-        ``pass``, ``steps``, ``simulated_s``, ``wall_s``, ``qemu_cpu_s``, ``libm``.
+        (absolute, of the numeric metrics that differ), ``metric_mismatches`` (the other metrics that
+        differ: [pil, host]), ``identical_steps`` (every output of every step), ``pass`` (identical
+        steps and metrics), ``steps``, ``simulated_s``, ``wall_s``, ``qemu_cpu_s``, ``libm`` (each
+        side's C library).
 
     Raises
     ------
@@ -78,8 +77,7 @@ def closed_loop(scenario: str | Path, out: str | Path, *, duration: float | None
     out = Path(out)
     record = out / "pil.json"
     record.unlink(missing_ok=True)  # (a folder used before: never an earlier run's record)
-    cmd = [sys.executable, str(root / "tools" / "pil_closed.py"), str(scenario), "--out", str(out),
-           "--libm", libm]
+    cmd = [sys.executable, str(root / "tools" / "pil_closed.py"), str(scenario), "--out", str(out)]
     if duration is not None:
         cmd += ["--duration", repr(float(duration))]
     r = subprocess.run(cmd, capture_output=True, text=True)
