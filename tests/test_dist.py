@@ -92,7 +92,8 @@ def test_the_shipped_c_library_is_the_exporters():
 
     expected = library_files(ROOT / "csrc")
     assert {"ctrl/ls_drive.c", "include/linsense/ls_drive.h", "CMakeLists.txt",
-            "cmake/arm-none-eabi-m4f.cmake", "cmake/linsense-config.cmake.in"} <= set(expected)
+            "cmake/arm-none-eabi-m4f.cmake", "cmake/linsense-config.cmake.in",
+            "cmake/linsense.pc.cmake.in"} <= set(expected)
     assert forbidden([f"linsense/csrc/{rel}" for rel in expected]) == []
     setup_globs = re.search(r"C_LIBRARY = \(([^)]*)\)", (ROOT / "setup.py").read_text())[1]
     assert tuple(re.findall(r'"([^"]+)"', setup_globs)) == LIBRARY_FILES
