@@ -12,7 +12,14 @@ CC=${ARM_CC:-arm-none-eabi-gcc}
 OUT=${1:-build/arm}
 LIMIT=32768 # bytes, the library's code and constants in the -Os image
 WARN="-std=c99 -Wall -Wextra -Wpedantic -Werror -Wdouble-promotion -Wconversion -Wshadow"
-ARCH="-mcpu=cortex-m4 -mthumb -mfpu=fpv4-sp-d16 -mfloat-abi=hard -ffunction-sections -fdata-sections"
+# the firmware flags, from their one home: the CMake toolchain file
+TOOLCHAIN=csrc/cmake/arm-none-eabi-m4f.cmake
+ARCH=$(sed -n 's/^set(CMAKE_C_FLAGS_INIT "\(.*\)")$/\1/p' "$TOOLCHAIN")
+LINK=$(sed -n 's/^set(CMAKE_EXE_LINKER_FLAGS_INIT "\(.*\)")$/\1/p' "$TOOLCHAIN")
+if [ -z "$ARCH" ] || [ -z "$LINK" ]; then
+  echo "check_mcu: FAILED: no one-line CMAKE_C_FLAGS_INIT or CMAKE_EXE_LINKER_FLAGS_INIT in $TOOLCHAIN" >&2
+  exit 1
+fi
 mkdir -p "$OUT"
 
 # build the library and the image at one optimisation level; sets objs, lib_bytes, image_bytes
@@ -29,7 +36,7 @@ build() { # $1: -Os or -O2
   # shellcheck disable=SC2086
   $CC $WARN $ARCH "$1" -Icsrc/include -c tools/mcu_image.c -o "$dir/mcu_image.o"
   # shellcheck disable=SC2086
-  $CC $ARCH "$1" --specs=nano.specs --specs=nosys.specs -Wl,--gc-sections -Wl,-Map="$dir/image.map" \
+  $CC $ARCH "$1" $LINK -Wl,-Map="$dir/image.map" \
     "$dir/mcu_image.o" "${objs[@]}" -lm -o "$dir/image.elf"
   image_bytes=$("${CC%gcc}size" "$dir/image.elf" | awk 'NR == 2 {print $1}')
   # the input sections of .text and .rodata the link kept from the library's objects (map lines

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -174,8 +175,18 @@ def record(out: Path, quick: bool) -> list[tuple[str, int]]:
 
 
 WARN = ["-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Werror", "-Wdouble-promotion", "-Wshadow"]
-ARM = ["-mcpu=cortex-m4", "-mthumb", "-mfpu=fpv4-sp-d16", "-mfloat-abi=hard", "-ffunction-sections",
-       "-fdata-sections"]
+#: the firmware flags (compile, link), from their one home: the CMake toolchain file
+TOOLCHAIN = ROOT / "csrc" / "cmake" / "arm-none-eabi-m4f.cmake"
+
+
+def _toolchain_flags(var: str) -> list[str]:
+    m = re.search(rf'^set\({var} "([^"]*)"\)$', TOOLCHAIN.read_text(), re.M)
+    if m is None:
+        raise SystemExit(f"pil: no one-line {var} in {TOOLCHAIN}")
+    return m.group(1).split()
+
+
+ARM, ARM_LINK = _toolchain_flags("CMAKE_C_FLAGS_INIT"), _toolchain_flags("CMAKE_EXE_LINKER_FLAGS_INIT")
 
 
 def build_replay(out: Path, tag: str, target: str, opt: str = "-O2", defines: tuple = ()) -> Path:
@@ -193,9 +204,8 @@ def build_replay(out: Path, tag: str, target: str, opt: str = "-O2", defines: tu
     arm = os.environ.get("ARM_CC", "arm-none-eabi-gcc")
     subprocess.run([arm, *WARN, *ARM, opt, "-ffp-contract=off", "-DPIL_TARGET", *inc,
                     str(PIL / "pil_replay.c"), str(PIL / "pil_io_semihost.c"), str(PIL / "startup_m4.c"),
-                    *srcs, "-nostartfiles", "--specs=nano.specs", "--specs=nosys.specs",
-                    f"-T{PIL / 'mps2_an386.ld'}",
-                    "-Wl,--gc-sections", f"-Wl,-Map={out / f'pil_replay_{tag}.map'}", "-lm", "-o", str(exe)],
+                    *srcs, "-nostartfiles", *ARM_LINK, f"-T{PIL / 'mps2_an386.ld'}",
+                    f"-Wl,-Map={out / f'pil_replay_{tag}.map'}", "-lm", "-o", str(exe)],
                    check=True)
     return exe
 

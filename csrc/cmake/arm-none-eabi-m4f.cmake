@@ -3,10 +3,11 @@
 #
 #   cmake -S <source> -B build-m4f -DCMAKE_TOOLCHAIN_FILE=<this file>
 #
-# The flags of the repository's size check (tools/check_mcu.sh): -mcpu=cortex-m4 -mthumb
-# -mfpu=fpv4-sp-d16 -mfloat-abi=hard -ffunction-sections -fdata-sections; executables linked with
-# newlib-nano and no system calls (--specs=nano.specs --specs=nosys.specs) and -Wl,--gc-sections;
-# MinSizeRel (-Os) unless CMAKE_BUILD_TYPE says otherwise. Set ARM_NONE_EABI_PREFIX (e.g.
+# The firmware flags (CMAKE_C_FLAGS_INIT and CMAKE_EXE_LINKER_FLAGS_INIT below, each on one line: the
+# repository's size check, tools/check_mcu.sh, and its processor in the loop, tools/pil.py, read
+# them from here): -mcpu=cortex-m4 -mthumb -mfpu=fpv4-sp-d16 -mfloat-abi=hard -ffunction-sections
+# -fdata-sections; executables linked with newlib-nano and no system calls (--specs=nano.specs
+# --specs=nosys.specs) and -Wl,--gc-sections; MinSizeRel (-Os) unless CMAKE_BUILD_TYPE says otherwise. Set ARM_NONE_EABI_PREFIX (e.g.
 # /opt/arm/bin/arm-none-eabi-) for a toolchain that is not on PATH. An executable linked this way
 # has no linker script for a part: give your part's (-T) and start-up code in your project.
 set(CMAKE_SYSTEM_NAME Generic)
