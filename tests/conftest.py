@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import signal
+
 import numpy as np
 import pytest
 from hypothesis import strategies as st
@@ -9,6 +11,13 @@ from hypothesis import strategies as st
 from linsense.cli import main
 from linsense.model.inductance import InductanceModel
 from linsense.model.motor import Motor, load_motor
+
+# A run launched in the background of a shell without job control (`cmd &` in a script) starts with
+# SIGINT ignored (POSIX), and its children inherit that: the Ctrl-C tests (tests/hostile) would fail
+# for the launcher's sake. Python's own handler, as a run from a terminal has it (children start
+# with the default again).
+if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 ECCE = dict(L0=2.75e-3, L2=-0.317e-3, M0=-0.92e-3, M2=-0.317e-3, dM0=-0.47e-3)
 
