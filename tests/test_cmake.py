@@ -67,13 +67,16 @@ def _version_line() -> str:
 
 @pytest.fixture(scope="module")
 def installed(tmp_path_factory):
-    """The library configured, built (Debug: quick) and installed into a prefix."""
+    """The library configured, built (Debug: quick) and installed into a prefix, not the one it was
+    configured for (``cmake --install --prefix``, as docs/firmware.md shows it: the package and
+    linsense.pc must follow)."""
     tmp = tmp_path_factory.mktemp("cmake")
     prefix = tmp / "prefix"
     _run("cmake", "-S", CSRC, "-B", tmp / "lib", "-DCMAKE_BUILD_TYPE=Debug",
-         f"-DCMAKE_INSTALL_PREFIX={prefix}", cwd=tmp)
+         f"-DCMAKE_INSTALL_PREFIX={tmp / 'configured'}", cwd=tmp)
     _run("cmake", "--build", tmp / "lib", "-j", "2", cwd=tmp)
-    _run("cmake", "--install", tmp / "lib", cwd=tmp)
+    _run("cmake", "--install", tmp / "lib", "--prefix", prefix, cwd=tmp)
+    assert not (tmp / "configured").exists()
     return prefix
 
 

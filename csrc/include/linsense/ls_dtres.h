@@ -228,7 +228,7 @@ static inline void ls_dtres_adapt(ls_dtres *r, const LS_REAL i0[3], const LS_REA
                                               : (kr < r->k_r - LS_DTRES_KR_STEP ? r->k_r - LS_DTRES_KR_STEP : kr);
         r->k_r = kr > LS_DTRES_KR_MIN ? (kr < LS_DTRES_KR_MAX ? kr : LS_DTRES_KR_MAX) : LS_DTRES_KR_MIN;
         if (LS_FABS(r->k_r - r->k_r_resp) > LS_DTRES_KR_RESP) {
-            r->k_r_resp = r->k_r; /* (the response follows over the next two periods) */
+            r->k_r_resp = r->k_r; /* (the response follows over the next four periods) */
             r->resp_stage = 1u;
         }
     } else if (r->resp_stage != 0u) {

@@ -142,7 +142,8 @@ static inline void ls_sincos(float x, float *c, float *s)
     }
 }
 
-/* the range where e^x is a normal float: below, ls_exp gives 0, above +Inf */
+/* ls_exp's range: below LS_EXP_MIN it gives 0, above LS_EXP_MAX +Inf (e^x is still a normal float
+ * down to -87.34 and up to 88.72: a little of the float range is given up for a simple reduction) */
 #define LS_EXP_MIN (-87.0f)
 #define LS_EXP_MAX (88.0f)
 
