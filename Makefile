@@ -63,10 +63,12 @@ $(BUILD)/gen/ls_lut_ecce2010_sq.h: $(GEN_DEPS)
 # (CTEST_JOBS); CTest prints the output of a failing test.
 CMAKE_DIR  := $(BUILD)/cmake
 CTEST_JOBS ?= $(shell nproc 2>/dev/null || echo 2)
+# build a configured CMake folder quietly, printing its log only when the build fails
+cmake_build = @cmake --build $(1) -j $(CTEST_JOBS) > $(1)/build.log 2>&1 || { cat $(1)/build.log; exit 1; }
 ctest: $(GEN_HDR) cmake-tool
 	cmake -S csrc -B $(CMAKE_DIR) -DLINSENSE_BUILD_TESTS=ON -DLINSENSE_GEN_DIR=$(abspath $(BUILD)/gen) \
 	  -DCMAKE_BUILD_TYPE=Release -DCMAKE_C_FLAGS_RELEASE=-O2 -DCMAKE_C_COMPILER=$(CC) >/dev/null
-	@cmake --build $(CMAKE_DIR) -j $(CTEST_JOBS) > $(CMAKE_DIR)/build.log 2>&1 || { cat $(CMAKE_DIR)/build.log; exit 1; }
+	$(call cmake_build,$(CMAKE_DIR))
 	ctest --test-dir $(CMAKE_DIR) -j $(CTEST_JOBS) --output-on-failure --progress
 
 # CMake, which make ctest, make example and make mcu use: installed when missing and possible
@@ -108,7 +110,7 @@ example-export: $(STAMP)
 
 example: example-export cmake-tool
 	cmake -S $(EXPORT) -B $(EXAMPLE)/host -DCMAKE_C_COMPILER=$(CC) >/dev/null
-	@cmake --build $(EXAMPLE)/host -j $(CTEST_JOBS) > $(EXAMPLE)/host/build.log 2>&1 || { cat $(EXAMPLE)/host/build.log; exit 1; }
+	$(call cmake_build,$(EXAMPLE)/host)
 	$(EXAMPLE)/host/firmware_example
 
 # Distributions, as users install them. `make dist`: the sdist and a cp311-abi3 wheel built from it
@@ -208,7 +210,7 @@ fuzztest: tools
 mcu: tools example-export cmake-tool
 	tools/check_mcu.sh build/arm
 	cmake -S $(EXPORT) -B $(EXAMPLE)/m4f -DCMAKE_TOOLCHAIN_FILE=$(abspath $(EXPORT))/cmake/arm-none-eabi-m4f.cmake >/dev/null
-	@cmake --build $(EXAMPLE)/m4f -j $(CTEST_JOBS) > $(EXAMPLE)/m4f/build.log 2>&1 || { cat $(EXAMPLE)/m4f/build.log; exit 1; }
+	$(call cmake_build,$(EXAMPLE)/m4f)
 	@arm-none-eabi-size $(EXAMPLE)/m4f/firmware_example | awk 'NR == 2 {print "mcu: the exported firmware built by CMake for the Cortex-M4F (-Os): firmware_example text " $$1 " data " $$2 " bss " $$3 " bytes"}'
 
 # Processor in the loop (docs/firmware.md, "Processor in the loop"): tools/pil.py records the host's
