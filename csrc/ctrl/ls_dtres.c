@@ -49,10 +49,10 @@ void ls_dtres_resistance_(ls_dtres *r)
     if (!(r->cfg.fs > LS_R(0.0)) || !(r->cfg.l_d > LS_R(0.0)) || !(r->cfg.l_q > LS_R(0.0))) {
         return; /* (not initialised: a drive without hf_dtres resets it too) */
     }
-    r->a_d = ls_exp(-(r->x_d * r->k_r));
-    r->b_d = gain(r->x_d * r->k_r, r->a_d, r->ts_l_d);
-    r->a_q = ls_exp(-(r->x_q * r->k_r));
-    r->b_q = gain(r->x_q * r->k_r, r->a_q, r->ts_l_q);
+    r->resp_stage = 1u; /* (the four parts of ls_dtres_response_step_ at once) */
+    while (r->resp_stage != 0u) {
+        ls_dtres_response_step_(r);
+    }
 }
 
 void ls_dtres_response_step_(ls_dtres *r)

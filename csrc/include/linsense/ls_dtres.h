@@ -74,7 +74,7 @@ void ls_dtres_reset(ls_dtres *r);
  * change with the drive's mode: ls_drive_set_mode). */
 void ls_dtres_restart(ls_dtres *r);
 /* The response's per-step decay and gain (a_d, b_d, a_q, b_q) for the resistance k_r r_s, at once
- * (ls_dtres_reset; out of line: two exponentials, ls_exp). */
+ * (ls_dtres_reset: the four parts of ls_dtres_response_step_ in one call). */
 void ls_dtres_resistance_(ls_dtres *r);
 /* The same for k_r_resp, one part per call (ls_dtres_adapt, in the four periods after a solve that
  * moved k_r by more than LS_DTRES_KR_RESP: one exponential or one division per period, not two of
