@@ -170,6 +170,23 @@ def test_the_record_covers_motors_tables_and_the_controllers_motor(tmp_path):
     json.dumps(rec)  # (what sweep.json stores)
 
 
+def test_the_record_covers_the_measured_table(tmp_path):
+    """observer.lut_file of the base scenario, of ``set`` and of an axis, relative to the scenario
+    (a resume after the table was measured again would mix rows of two tables)."""
+    from linsense.sweep.inputs import sweep_inputs
+
+    (tmp_path / "base.toml").write_text('motor = "ecce2010"\n[scenario]\nduration = 0.1\n'
+                                        '[observer]\nlut_model = "measured"\nlut_file = "a.json"\n')
+    (tmp_path / "s.toml").write_text(
+        '[sweep]\nscenario = "base.toml"\nset = { "observer.lut_file" = "b.json" }\n'
+        '[[axis]]\nkey = "observer.lut_file"\nvalues = ["c.json", "a.json"]\n')
+    (tmp_path / "a.json").write_text("{}")
+    rec = sweep_inputs(load_sweep(tmp_path / "s.toml"))
+    got = [(e["what"], Path(e["path"]).name, e["sha256"] == "absent") for e in rec[3:]]
+    assert got == [("measured table", "a.json", False), ("measured table", "b.json", True),
+                   ("measured table", "c.json", True)]
+
+
 def test_a_motor_axis_on_a_saturated_motor_finds_its_tables(tmp_path):
     """An edited copy of a motor with [saturation] tables (written under DIR/motors/) reads them
     where the motor file is (every run was refused: 'no such table file DIR/motors/...')."""

@@ -160,3 +160,78 @@ def test_a_json_lut_beyond_the_size_limit(tmp_path, monkeypatch):
     f.write_text('{"format": "linsense-lut", "theta": [' + ", ".join(["0.0"] * 400) + "]}")
     with pytest.raises(InputError, match="larger than the limit of 1,000 bytes"):
         read_lut(f)
+
+
+# ---------------------------------------------------------------------- measured tables
+def _measured_text() -> str:
+    from linsense.compensation.lut import build_lut
+    from linsense.compensation.measured import measured_table_json, table_stamp
+    from linsense.model.motor import load_motor
+
+    m = load_motor("ecce2010")
+    return measured_table_json(build_lut(m, 16, f_inj=1000.0, quad=0.9).values,
+                               table_stamp(m, "pulsating", 1000.0, 0.9, 16))
+
+
+def _nan_row(t: str) -> str:
+    import json
+
+    doc = json.loads(t)
+    doc["psi_lut"][12] = float("nan")
+    return json.dumps(doc)  # (Python's json writes NaN, which is not JSON: read, then refused)
+
+
+# name: (function of a valid table's text -> hostile text or bytes, words of the one line)
+MEASURED = {
+    "an empty file": (lambda t: "", ["lut.json", "empty file"]),
+    "blanks only": (lambda t: " \n\t\n", ["lut.json", "empty file"]),
+    "not UTF-8": (lambda t: b"\xff\xfe{" + t.encode(), ["lut.json", "cannot read"]),
+    "cut short": (lambda t: t[: len(t) // 2], ["lut.json", "not JSON"]),
+    "nested 100000 deep": (lambda t: "[" * 100_000 + "]" * 100_000, ["lut.json", "not JSON"]),
+    "a JSON string": (lambda t: '"lut"', ["lut.json", "a JSON str"]),
+    "a NaN": (_nan_row, ["lut.json", "psi_lut[12]", "not finite"]),
+    "an integer of 400 digits": (lambda t: t.replace('"psi_lut": [', '"psi_lut": [1' + "0" * 400 + ",", 1),
+                                 ["lut.json", "psi_lut[0]", "not finite"]),
+    "a 100 kB key": (lambda t: t.replace('"format"', '"' + "k" * 100_000 + '": 1, "format"', 1),
+                     ["lut.json", "not a key of a measured table"]),
+    "the CSV": (lambda t: "theta_deg,psi_lut_deg\n0,1\n90,1\n180,1\n270,1\n", ["lut.json", "CSV"]),
+}
+
+
+@pytest.mark.parametrize("case", list(MEASURED))
+def test_hostile_measured_table_through_the_simulator(run_cli, tmp_path, case):
+    """A scenario's observer.lut_file: one line naming the scenario, its key, the table file and
+    the table's key or row; nothing written."""
+    make, words = MEASURED[case]
+    data = make(_measured_text())
+    f = tmp_path / "lut.json"
+    f.write_bytes(data if isinstance(data, bytes) else data.encode())
+    s = tmp_path / "s.toml"
+    s.write_text('motor = "ecce2010"\n[scenario]\nduration = 0.05\n[reference]\ntype = "hold"\n'
+                 '[observer]\nlut_model = "measured"\nlut_file = "lut.json"\n')
+    out = tmp_path / "o"
+    line = run_cli("simulate", s, "--out", out).refused("s.toml", "observer.lut_file", *words)
+    assert len(line) < 1500 and not out.exists()
+
+
+def test_a_measured_table_with_a_byte_order_mark_is_read(tmp_path):
+    from linsense.compensation.measured import read_measured_table
+    from linsense.model.motor import load_motor
+
+    f = tmp_path / "lut.json"
+    f.write_bytes(b"\xef\xbb\xbf" + _measured_text().encode())
+    t = read_measured_table(f, motor=load_motor("ecce2010"), injection="pulsating", f_inj=1000.0, quad=0.9,
+                            points=16)
+    assert t.values.size == 16
+
+
+def test_a_measured_table_beyond_the_size_limit(tmp_path, monkeypatch):
+    from linsense.compensation.measured import read_measured_table
+    from linsense.model.motor import load_motor
+
+    monkeypatch.setattr(linsense.limits, "MAX_TEXT_FILE_BYTES", 500)
+    f = tmp_path / "lut.json"
+    f.write_text(_measured_text())
+    with pytest.raises(InputError, match="larger than the limit of 500 bytes"):
+        read_measured_table(f, motor=load_motor("ecce2010"), injection="pulsating", f_inj=1000.0, quad=0.9,
+                            points=16)

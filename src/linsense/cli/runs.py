@@ -269,12 +269,13 @@ def calibrate(motor_spec: str | None, scenario_path: str | None, positions: int,
               quad: float | None, saturated: bool, out: str, as_json: bool, **drive) -> None:
     """Run the firmware's LUT calibration in the simulator (paper Fig. 9) on the drive that will use
     the table: a scenario's (--scenario), or the design for the motor (linsense tune's, with the
-    drive data given): lut_measured.csv, metrics.json, calibration.png. Exit code 1 if it does not
-    complete."""
+    drive data given): lut_measured.csv, lut_measured.json (stamped with the drive it is valid for,
+    for a scenario's observer.lut_model = "measured"; when the calibration completed), metrics.json,
+    calibration.png. Exit code 1 if it does not complete."""
     from linsense.io import output_set, split_timing
     from linsense.report.figures import fig_calibration, save_png
     from linsense.sim.calibrate import calibrate as run_calibration
-    from linsense.sim.calibrate import lut_csv
+    from linsense.sim.calibrate import lut_csv, measured_json
 
     if as_json:
         c.data_on_stdout()
@@ -288,6 +289,8 @@ def calibrate(motor_spec: str | None, scenario_path: str | None, positions: int,
     metrics, timing = split_timing(cal.metrics)
     with output_set(out, "calibrate") as s:
         s.write("lut_measured.csv", lut_csv(cal))
+        if cal.completed:  # (the stamped table a scenario reads: observer.lut_model = "measured")
+            s.write("lut_measured.json", measured_json(cal))
         _write_metrics(s, metrics, timing)
         save_png(fig_calibration(cal, cal.motor), s.path("calibration.png"))
     c.files_report(s.files)

@@ -105,11 +105,13 @@ class Built:
 
 
 # ------------------------------------------------------------------ the path of a scenario
-def build(sc: Scenario, motor: Motor | None = None, trace_in_memory: bool = True) -> Built:
+def build(sc: Scenario, motor: Motor | None = None, trace_in_memory: bool = True, *,
+          model: Motor | None = None) -> Built:
     """Configure the plant and the drive of a scenario.
 
-    ``motor`` replaces the scenario's motor (a Motor object from Python). Gains the scenario leaves
-    unset are designed for its motor (:func:`designed`).
+    ``motor`` replaces the scenario's motor (a Motor object from Python), ``model`` the motor the
+    controller believes in. Gains the scenario leaves unset are designed for the controller's motor
+    (:func:`designed`).
 
     The path: the motors and the design, every check of the scenario (:func:`validate`, before any
     C object is made), the plant, the drive's configuration (the mapping of
@@ -125,6 +127,9 @@ def build(sc: Scenario, motor: Motor | None = None, trace_in_memory: bool = True
     trace_in_memory : bool, optional
         False: the run is streamed in chunks (:mod:`linsense.sim.stream`), its trace not kept, so
         the limit on the trace kept in memory does not apply.
+    model : Motor or None, optional
+        Replaces the motor the controller believes in (``controller.model.motor``, else the plant's):
+        e.g. the nominal motor of a drive run on an off-nominal plant (:func:`motors`).
 
     Returns
     -------
@@ -136,7 +141,7 @@ def build(sc: Scenario, motor: Motor | None = None, trace_in_memory: bool = True
     linsense.errors.InputError
         Bad values, naming the scenario file and the key.
     """
-    motor, model_motor = motors(sc, motor)
+    motor, model_motor = motors(sc, motor, model)
     user_keys = given_keys(sc.given())  # (the keys the file gives: designed() sets the others)
     sc = designed(sc, model_motor)
     known = controller_model(sc, model_motor)
@@ -153,12 +158,12 @@ def build(sc: Scenario, motor: Motor | None = None, trace_in_memory: bool = True
                  extra={} if cal_table is None else {"cal_table": cal_table}, user_keys=user_keys)
 
 
-def motors(sc: Scenario, motor: Motor | None = None) -> tuple[Motor, Motor]:
+def motors(sc: Scenario, motor: Motor | None = None, model: Motor | None = None) -> tuple[Motor, Motor]:
     """The plant's motor and the one the controller believes in.
 
     The plant's is ``motor``, else the scenario's; the controller's (its tables, gains and
-    feed-forwards) is the plant's unless ``controller.model.motor`` names another (e.g. one with a
-    parameter off, to test the LUT's robustness), with the same pole pitch.
+    feed-forwards) is ``model``, else the plant's unless ``controller.model.motor`` names another
+    (e.g. one with a parameter off, to test the LUT's robustness), with the same pole pitch.
 
     Parameters
     ----------
@@ -166,6 +171,8 @@ def motors(sc: Scenario, motor: Motor | None = None) -> tuple[Motor, Motor]:
         The scenario.
     motor : Motor or None, optional
         Replaces the scenario's motor.
+    model : Motor or None, optional
+        Replaces the controller's motor.
 
     Returns
     -------
@@ -181,10 +188,13 @@ def motors(sc: Scenario, motor: Motor | None = None) -> tuple[Motor, Motor]:
     """
     motor = resolve_motor(sc) if motor is None else motor
     ov = sc.spec.controller.model
-    model_motor = motor if ov.motor is None else resolve_motor(sc, ov.motor, "controller.model.motor",
-                                                               check=False)
+    if model is not None:
+        model_motor = model
+    else:
+        model_motor = motor if ov.motor is None else resolve_motor(sc, ov.motor, "controller.model.motor",
+                                                                   check=False)
     if not math.isclose(model_motor.pole_pitch, motor.pole_pitch, rel_tol=1e-9):
-        raise InputError(sc.source, "controller.model.motor",
+        raise InputError(sc.source, "controller.model.motor" if model is None else "motor",
                          f"pole pitch {model_motor.pole_pitch:g} m differs from the motor's "
                          f"{motor.pole_pitch:g} m: a controller cannot believe in another pole pitch")
     return motor, model_motor

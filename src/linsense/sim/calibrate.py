@@ -13,6 +13,12 @@ injection shape, amplitude, frequency and kappa, gains), or the design for the m
 keys given over either. The measured table is compared with the model's for the injection the
 drive actually runs, once the design has filled it in: the resistance-aware LUT at that frequency
 and kappa (or the rotating or square wave's own table), and the paper's eq. (12).
+
+The drive may run on another plant than the motor it believes in (``plant``: an off-nominal motor,
+as a real drive runs on its real motor): the drive's gains and tables are its model motor's, the
+table measured is the plant's. The table is stamped (:func:`linsense.compensation.measured.table_stamp`)
+with the drive it is valid for, the model motor's data digest, the injection's shape, frequency and
+kappa, and :func:`measured_json` writes it for ``observer.lut_model = "measured"``.
 """
 
 from __future__ import annotations
@@ -24,6 +30,7 @@ import numpy as np
 
 from linsense.analysis.hf import psi_lut
 from linsense.compensation.lut import build_lut
+from linsense.compensation.measured import TableStamp, measured_table_json, table_stamp
 from linsense.errors import InputError
 from linsense.model.motor import Motor
 from linsense.sim.build import build, designed, motor_key, resolve_motor
@@ -65,21 +72,27 @@ class Calibration:
     psi_measured : ndarray
         The calibration's table, rad (NaN where not reached).
     psi_model : ndarray
-        The model LUT with R_s for the injection the drive runs, rad.
+        The plant's model LUT with R_s for the injection the drive runs, rad (the plant's true
+        table: the one the calibration should find).
     psi_eq12 : ndarray
-        Paper eq. (12), rad.
+        Paper eq. (12) of the plant, rad.
     metrics : dict
         ``completed``, ``points``, ``points_done``, ``max_diff_deg``... of the run.
     motor : Motor or None
         The plant's motor.
+    stamp : TableStamp or None
+        The drive the table is valid for (:func:`linsense.compensation.measured.table_stamp`): the
+        motor the drive believes in, the injection's shape, the frequency it ran and kappa, the
+        number of positions.
     """
 
     theta: np.ndarray  # rad, table positions, 2 pi k / points
     psi_measured: np.ndarray  # rad, the calibration's table (NaN where not reached)
-    psi_model: np.ndarray  # rad, the model LUT with R_s for the injection the drive runs
+    psi_model: np.ndarray  # rad, the plant's model LUT with R_s for the injection the drive runs
     psi_eq12: np.ndarray  # rad, paper eq. (12)
     metrics: dict = field(default_factory=dict)
     motor: Motor | None = None  # the plant's motor
+    stamp: TableStamp | None = None  # the drive the table is valid for
 
     @property
     def completed(self) -> bool:
@@ -157,7 +170,8 @@ def calibration_scenario(
         keep_ref = {k: v for k, v in scenario.given().get("reference", {}).items() if k in ("v_max", "a_max")}
         data["reference"] = {"type": "hold", **keep_ref}
         # the scenario's table, if any, is not used: the calibration measures one
-        data.get("observer", {}).pop("compensation", None)
+        for k in ("compensation", "lut_model", "lut_file"):
+            data.get("observer", {}).pop(k, None)
         if motor is not None:
             _same_motor(scenario, spec, obj)
             obj = obj if obj is not None else resolve_motor(scenario)
@@ -194,12 +208,32 @@ def calibration_scenario(
         raise InputError(exc.source, f"{exc.key} (drive data {given[exc.key]})", exc.message) from None
     # the run's budget: per point the settling and half the time after which a point trips, with
     # the calibration's timings as the drive runs them (designed for the model the drive believes)
-    ov = sc.spec.controller.model.motor
-    model = (obj if obj is not None else resolve_motor(sc)) if ov is None else \
-        resolve_motor(sc, ov, "controller.model.motor", check=False)
-    cal = designed(sc, model).spec.calibration
+    cal = designed(sc, drive_motor(sc, obj)).spec.calibration
     sc = sc.replace(scenario={"duration": positions * (cal.t_settle + _BUDGET_OF_T_MAX * cal.t_max)})
     return sc, obj
+
+
+def drive_motor(sc: Scenario, obj: Motor | None = None) -> Motor:
+    """The motor a calibration's drive believes in, as loaded.
+
+    ``controller.model.motor`` where the scenario names one, else ``obj``, else the scenario's motor.
+
+    Parameters
+    ----------
+    sc : Scenario
+        The calibration's scenario (:func:`calibration_scenario`).
+    obj : Motor or None, optional
+        The motor object it is built with (None: the scenario's own).
+
+    Returns
+    -------
+    Motor
+        The motor.
+    """
+    ov = sc.spec.controller.model.motor
+    if ov is not None:
+        return resolve_motor(sc, ov, "controller.model.motor", check=False)
+    return obj if obj is not None else resolve_motor(sc)
 
 
 def _same_motor(sc: Scenario, spec: str | None, obj: Motor | None) -> None:
@@ -224,6 +258,7 @@ def calibrate(
     source: str = "<calibrate>",
     scenario: Scenario | None = None,
     drive: dict | None = None,
+    plant: Motor | None = None,
     **sections,
 ) -> Calibration:
     """Run the calibration on the drive that will use the table (paper Fig. 9).
@@ -251,25 +286,36 @@ def calibrate(
     drive : dict or None, optional
         Drive data over it, by :class:`~linsense.tune.design.DriveData` name
         (:func:`calibration_scenario`).
+    plant : Motor or None, optional
+        The motor the drive runs on, where it differs from the one the drive believes in (an
+        off-nominal plant): the drive stays the one of ``motor`` or the scenario (its design, its
+        gains and tables, ``controller.model.motor`` where the scenario names one), the plant is
+        this motor. None: the plant is the motor the scenario or ``motor`` names.
     **sections : dict
         Further scenario sections (e.g. ``inverter={"dead_time": 0.0}``).
 
     Returns
     -------
     Calibration
-        The measured table and the model's for the injection the drive runs (its frequency and
-        kappa after the design), with ``metrics``.
+        The measured table and the plant's model table for the injection the drive runs (its
+        frequency and kappa after the design), with ``metrics`` and the table's ``stamp`` (the motor
+        the drive believes in, not the plant).
 
     Raises
     ------
     linsense.errors.InputError
-        As :func:`calibration_scenario`, or a scenario the build refuses.
+        As :func:`calibration_scenario`, a ``plant`` that is not a Motor, or a scenario the build
+        refuses.
     """
     if motor is None and scenario is None:
         motor = "ecce2010"
+    if plant is not None and not isinstance(plant, Motor):
+        raise InputError(source if scenario is None else scenario.source, "plant",
+                         f"expected a Motor (the motor the drive runs on), got {type(plant).__name__}")
     sc, obj = calibration_scenario(motor, positions, load, fidelity, quad, source, scenario, drive,
                                    **sections)
-    b = build(sc, obj)
+    model = drive_motor(sc, obj)
+    b = build(sc, obj) if plant is None else build(sc, plant, model=model)
     raw = run_closed_loop(b.cfg, b.drive.state, b.n_steps, b.commands)
     done = int(b.drive.state.cal_index)
     table = np.array([b.extra["cal_table"][k] for k in range(positions)], dtype=float)
@@ -279,14 +325,15 @@ def calibrate(
     inj = s.injection
     f_inj = s.inverter.f_pwm / 2.0 if inj.shape == "square" else inj.frequency
     theta = 2.0 * np.pi * np.arange(positions) / positions
-    model = build_lut(m, positions, f_inj=f_inj, quad=inj.quadrature, injection=inj.shape).values
+    # (the plant's own table: the one the calibration should find)
+    psi_model = build_lut(m, positions, f_inj=f_inj, quad=inj.quadrature, injection=inj.shape).values
     eq12 = psi_lut(m, theta)
     ok = np.isfinite(table)
     metrics = {
         "completed": bool(done == positions and raw.fault == 0),
         "points": int(positions),
         "points_done": done,
-        "max_diff_deg": _max_deg(table[ok] - model[ok]),
+        "max_diff_deg": _max_deg(table[ok] - psi_model[ok]),
         "max_diff_eq12_deg": _max_deg(table[ok] - eq12[ok]),
         "load_n": float(load),
         "fidelity": s.inverter.fidelity,
@@ -310,7 +357,8 @@ def calibrate(
         "wall_s": round(raw.wall_s, 6),
         "motor": m.name,
     }
-    return Calibration(theta, table, model, eq12, metrics, m)
+    stamp = table_stamp(model, inj.shape, f_inj, inj.quadrature, positions)
+    return Calibration(theta, table, psi_model, eq12, metrics, m, stamp)
 
 
 def _max_deg(d: np.ndarray) -> float | None:
@@ -335,3 +383,41 @@ def lut_csv(cal: Calibration) -> str:
         if math.isfinite(p):
             lines.append(f"{th:.6g},{p:.6f}")
     return "\n".join(lines) + "\n"
+
+
+def measured_json(cal: Calibration) -> str:
+    """The stamped JSON of a completed calibration's table (``lut_measured.json``).
+
+    :func:`linsense.compensation.measured.measured_table_json` with the calibration's stamp and its
+    reproducible metrics (``metrics``: without the wall-clock ones), for
+    ``observer.lut_model = "measured"``.
+
+    Parameters
+    ----------
+    cal : Calibration
+        A calibration of :func:`calibrate`.
+
+    Returns
+    -------
+    str
+        The JSON text.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        The calibration did not complete, has a point not reached (NaN, naming its index) or no stamp.
+    """
+    from linsense.io import split_timing
+
+    src = "linsense.sim.calibrate.measured_json"
+    m = cal.metrics
+    if not cal.completed:
+        raise InputError(src, "completed", f"the calibration did not complete ({m.get('points_done')} of "
+                         f"{m.get('points')} points, fault {m.get('fault')}): no table to write")
+    bad = np.nonzero(~np.isfinite(np.asarray(cal.psi_measured, dtype=float)))[0]
+    if bad.size:
+        raise InputError(src, f"psi_measured[{bad[0]}]", "not reached (NaN): a table needs every point")
+    if cal.stamp is None:
+        raise InputError(src, "stamp", "the calibration has no stamp (made by calibrate(), it has one)")
+    metrics, _ = split_timing(m)
+    return measured_table_json(cal.psi_measured, cal.stamp, {"metrics": metrics})

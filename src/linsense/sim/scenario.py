@@ -208,9 +208,17 @@ class ObserverSection(BaseModel):
         None, description="a contradiction with the mode is refused",
         json_schema_extra={"default_note": "`lut` in `sensorless_lut`, `startup` and `sensored` (for the HF "
                            "estimate beside the encoder), else `none`"})
-    lut_model: Literal["resistive", "eq12"] = Field(
+    lut_model: Literal["resistive", "eq12", "measured"] = Field(
         "resistive", description="`resistive`: `build_lut(motor, lut_points, f_inj=frequency, "
-        "quad=quadrature)` with the R_s the controller believes; `eq12`: paper eq. 12")
+        "quad=quadrature)` with the R_s the controller believes; `eq12`: paper eq. 12; `measured`: the "
+        "table of `lut_file` (\"Measured tables\" below), its slope in R_s and the gain table the model's")
+    # a stamped measured table (linsense calibrate's lut_measured.json), relative to the scenario file
+    lut_file: str | None = Field(
+        None, min_length=1, description="the measured table (`lut_measured.json` of `linsense calibrate`), "
+        "a path relative to the scenario file; its stamp must be this drive's (the controller's model "
+        "motor, the injection's shape, frequency and kappa), a table of another length is resampled to "
+        "`lut_points` (\"Measured tables\" below)",
+        json_schema_extra={"default_note": "required with `lut_model = \"measured\"`, refused otherwise"})
     lut_points: int = Field(default=256, ge=4, le=65536, description="table length (also of the gain table)")
     # "mech": the mechanical observer (mass, force, load estimate); "pll": the type-2 tracking loop
     type: Literal["pll", "mech"] = Field(
@@ -665,6 +673,10 @@ class ScenarioFile(BaseModel):
             raise KeyProblem("inverter.dead_time", f"must be below 10 % of the PWM period "
                             f"({0.1 / inv.f_pwm:g} s), got {inv.dead_time!r}")
         _check_overrides(self)
+        if self.observer.lut_model == "measured" and self.observer.lut_file is None:
+            raise KeyProblem("observer.lut_file", "missing: observer.lut_model = \"measured\" reads the "
+                             "table from this file (the lut_measured.json of linsense calibrate, relative to "
+                             "the scenario file)")
         inj = self.injection
         if inj.shape != "pulsating":
             if "quadrature" in inj.model_fields_set and inj.quadrature != 0.0:
@@ -830,6 +842,8 @@ def _check_overrides(f: ScenarioFile) -> None:
          "the square wave's filters are a difference and a fixed low-pass"),
         (obs, "lut_model", compensation_of(mode, obs.compensation) == "none",
          f"observer.compensation = 'none' (control.mode = {mode!r})", "there is no table"),
+        (obs, "lut_file", obs.lut_model != "measured", f"observer.lut_model = {obs.lut_model!r}",
+         "only the measured table is read from a file"),
         (obs, "lut_points", compensation_of(mode, obs.compensation) == "none" and not obs.gain_schedule,
          "observer.compensation = 'none' and observer.gain_schedule = false", "there is no table"),
         (obs, "dead_time_model", not obs.dead_time_residual, "observer.dead_time_residual = false",

@@ -3,7 +3,8 @@ whenever the sweep resumes or its folder is reused (docs/sweeps.md, "What a swee
 
 The rows are a function of the sweep file, its base scenario, the motors the scenario names (the
 plant's ``motor``, the controller's ``controller.model.motor``, also when the sweep's ``set`` or an
-axis gives it), the tables those motor files name (``inductance.table``, ``saturation.tables``) and
+axis gives it), the tables those motor files name (``inductance.table``, ``saturation.tables``), the
+measured compensation table the scenario, ``set`` or an axis names (``observer.lut_file``) and
 the code (linsense's version and the sources the C library was compiled from). Each input is
 recorded by its SHA-256: the sweep file's as read, the other files' on disk, a preset's text; a
 file named but missing is recorded as absent (creating it is a change).
@@ -24,6 +25,7 @@ ABSENT = "absent"
 SWEEP_FILE = "sweep file"
 BASE = "base scenario"
 PRESET = "motor preset"
+MEASURED = "measured table"
 #: inputs held in memory for the whole sweep (not re-read by the runs): not checked while it runs
 IN_MEMORY = (SWEEP_FILE, PRESET)
 
@@ -108,6 +110,16 @@ def sweep_inputs(sw: SweepSpec) -> list[dict]:
     for what, spec in specs:
         if isinstance(spec, str) and spec.strip():
             entries += _motor(what, spec, scenario_dir)
+    # the measured compensation table (observer.lut_file), relative to the scenario like a motor file
+    observer = scenario.get("observer")
+    key = "observer.lut_file"
+    luts = [observer.get("lut_file") if isinstance(observer, dict) else None, sw.spec.sweep.set.get(key)]
+    for axis in sw.spec.axis:
+        if axis.key == key and axis.values is not None:
+            luts += list(axis.values)
+    for lut in luts:
+        if isinstance(lut, str) and lut.strip():
+            entries.append(_file(MEASURED, Path(lut) if Path(lut).is_absolute() else scenario_dir / lut)[0])
     seen: set[tuple[str, str]] = set()
     unique = []
     for e in entries:
