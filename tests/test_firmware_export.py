@@ -103,7 +103,7 @@ def test_export_takes_a_scenarios_drive_and_refuses_what_it_cannot_write(run_cli
 def test_the_design_is_tunes(run_cli, tmp_path):
     """The exported ls_cfg header is what `linsense tune --format c` writes for the same motor."""
     hdr = tmp_path / "ls_cfg_small30.h"
-    assert run_cli("tune", "--no-verify", "--motor", "small30", "--format", "c", "--out", hdr).code == 0
+    assert run_cli("tune", "--quick", "--motor", "small30", "--format", "c", "--out", hdr).code == 0
     from linsense.model.motor import load_motor
 
     made = firmware_files(load_motor("small30"))

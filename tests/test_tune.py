@@ -83,7 +83,7 @@ def test_tune_outputs(tmp_path, capsys):
     # the C set-up compiles under the library's strict warnings, with the library
     hdr = tmp_path / "ls_cfg_small30.h"
     with pytest.raises(SystemExit) as e:
-        main(["tune", "--no-verify", "--motor", str(SMALL), "--format", "c", "--out", str(hdr)])
+        main(["tune", "--quick", "--motor", str(SMALL), "--format", "c", "--out", str(hdr)])
     assert e.value.code == 0
     src = tmp_path / "use.c"
     src.write_text(

@@ -21,17 +21,27 @@ def firmware() -> None:
               help="scenario (a file or a packaged example's name) whose drive data (bus, PWM, dead "
                    "time, i_max, injection) the design takes, as linsense tune does")
 @click.option("--name", default=None, help="C name suffix of ls_cfg_<name>.h (default: the motor name)")
+@click.option("--table", "table_path", default=None, type=click.Path(dir_okay=False),
+              help="a measured compensation table (lut_measured.json of linsense calibrate) in place of "
+                   "the motor file's")
+@click.option("--unverified", is_flag=True,
+              help="write the project even if the quick certificate fails (the reason in the header's "
+                   "comment and the JSON)")
 @c.json_option
-def export(folder: str, motor_spec: str, scenario_path: str | None, name: str | None, as_json: bool) -> None:
+def export(folder: str, motor_spec: str, scenario_path: str | None, name: str | None, table_path: str | None,
+           unverified: bool, as_json: bool) -> None:
     """Write FOLDER: the C library's sources and headers with its CMake package, the drive's
     configuration designed for the motor (ls_cfg_<name>.h, as linsense tune --format c writes it),
     an example main.c with a synthetic motor, a CMakeLists.txt and the Cortex-M4F toolchain file.
     `cmake -S FOLDER -B b && cmake --build b` builds it on the host, with
     -DCMAKE_TOOLCHAIN_FILE=FOLDER/cmake/arm-none-eabi-m4f.cmake for the Cortex-M4F; nothing in it
     refers to a file outside FOLDER. FOLDER must be missing, empty or an earlier output of linsense
-    (files it did not write, such as a build folder, are kept)."""
+    (files it did not write, such as a build folder, are kept). The drive is verified first (the
+    quick certificate of linsense tune --quick, switching inverter with dead time): a drive that
+    fails is not written (exit 1, naming the failed checks) unless --unverified."""
     from linsense.firmware.export import firmware_files, write_firmware
     from linsense.tune.design import DriveData
+    from linsense.verify.certificate import failed_summary
 
     if as_json:
         c.data_on_stdout()
@@ -43,14 +53,42 @@ def export(folder: str, motor_spec: str, scenario_path: str | None, name: str | 
         dd = drive_data(load_scenario(c.example("scenarios", scenario_path, "--scenario")))
         src = scenario_path
     motor = c.load(motor_spec)
-    made = firmware_files(motor, dd, src, name)
-    files = write_firmware(folder, made)
-    c.files_report(files)
+    made = firmware_files(motor, dd, src, name, table=table_path)
     for line in made.lines:
         c.say(line)
+    cert = _quick_certificate(motor_spec, motor, dd, made, table_path)
+    for line in cert.lines():
+        c.say(line)
+    reason = "" if cert.passed else failed_summary(cert)
+    if reason and not unverified:
+        c.elapsed()
+        if as_json:
+            c.emit_json("firmware export", [], False, motor=made.motor, name=made.name, digest=made.digest,
+                        refused=reason)
+        c.warn(f"{folder} not written: {reason} (--unverified writes it anyway)")
+        raise click.exceptions.Exit(1)
+    if reason:
+        made = made.unverified(reason)
+    files = write_firmware(folder, made)
+    c.files_report(files)
     c.elapsed()
     if as_json:
-        c.emit_json("firmware export", files, True, motor=made.motor, name=made.name, digest=made.digest)
+        c.emit_json("firmware export", files, not reason, motor=made.motor, name=made.name,
+                    digest=made.digest, verified=cert.passed, **({"unverified": reason} if reason else {}))
+
+
+def _quick_certificate(motor_spec: str, motor, dd, made, table_path: str | None):
+    """The quick certificate of the exported drive (the design ``made`` holds, with its table)."""
+    from pathlib import Path
+
+    from linsense.tune.export import scenario_dict
+    from linsense.verify.certificate import certificate_base, motor_ref, prepare
+
+    spec = motor_ref(motor_spec)
+    table = None if table_path is None else str(Path(table_path).resolve())
+    base = certificate_base(scenario_dict(made.design, dd, spec, pole_pitch=motor.pole_pitch, table=table))
+    return prepare(motor, spec, base, str(Path.cwd()), v_max=dd.v_max, a_max=dd.a_max, load=made.design.load,
+                   travel=dd.travel, quick=True)()
 
 
 COMMANDS = [firmware]

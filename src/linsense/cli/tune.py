@@ -41,26 +41,41 @@ from linsense.version import docs
 @click.option("--injection", "shape", type=click.Choice(["pulsating", "rotating", "square"]), default=None,
               help="the injection: pulsating/elliptical (default; kappa --quad), rotating vector, or "
                    f"square wave at f_pwm / 2 with its dead-time measures ({docs('firmware')})")
-@click.option("--quick", is_flag=True, help="verify at 8 positions on the nominal plant only")
-@click.option("--no-verify", is_flag=True, help="do not run the verification")
+@click.option("--table", "table_path", default=None, type=click.Path(dir_okay=False),
+              help="a measured compensation table (lut_measured.json of linsense calibrate) in place of "
+                   "the motor file's: checked against the motor and the injection, resampled if its "
+                   "grid differs")
+@click.option("--quick", is_flag=True, help="verify the nominal plant only (holds at 8 positions, the steps, "
+              "moves at +-rated load)")
+@click.option("--no-verify", is_flag=True, help="do not run the verification (not with --format c: a C "
+              "header is written only for a verified drive, or with --unverified)")
+@click.option("--unverified", is_flag=True, help="--format c: write the header even if the certificate "
+              "fails, with the reason in its comment and in the JSON")
 @click.option("--out", required=True, type=click.Path(dir_okay=False, allow_dash=True),
               help="output file (- for standard output: the report goes to standard error)")
 @c.json_option
 def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: float | None,
-         current_noise: float, name: str | None, v_max, a_max, load, travel, shape, quick: bool,
-         no_verify: bool, out: str, as_json: bool, **drive) -> None:
+         current_noise: float, name: str | None, v_max, a_max, load, travel, shape, table_path,
+         quick: bool, no_verify: bool, unverified: bool, out: str, as_json: bool, **drive) -> None:
     """Design the drive for a motor: injection, current loop, demodulator, observer, speed and
     position loops, limits and trips; print the design and its margins; write a
     scenario or a C header; then verify it in the simulator (switching inverter with dead time) and
-    write verification.json and verification.png beside the output (exit 1 if a check fails)."""
+    write verification.json and verification.png beside the output (exit 1 if a check fails). A C
+    header is written only for a drive that passes (--unverified: anyway, saying why in it)."""
     from linsense.io import write_atomic
     from linsense.sim.build import compensation_of, drive_data
     from linsense.sim.scenario import load_scenario
     from linsense.tune.design import DriveData, design, uncompensated_speed_factor
-    from linsense.tune.export import c_header, scenario_dict, scenario_toml
+    from linsense.tune.export import c_header, check_c_header, design_digest, scenario_dict, scenario_toml
 
     if as_json and out == "-":
         raise click.UsageError("--json and --out - both write to standard output: give --out a file")
+    if fmt == "c" and no_verify and not unverified:
+        raise click.UsageError("--format c writes a header only for a verified drive: drop --no-verify "
+                               "(or give --unverified to write it unverified)")
+    if unverified and fmt != "c":
+        raise click.UsageError("--unverified is for --format c (a scenario is written whatever the "
+                               "certificate says)")
     if as_json or out == "-":
         c.data_on_stdout()  # (stdout carries the file itself, or the JSON summary)
     say = c.say
@@ -76,6 +91,8 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
     for key, val in given.items():  # (the drive data options: _drive_options, DriveData's names)
         if val is not None:
             setattr(dd, key, val)
+    if fmt == "c":
+        check_c_header(dd)
     motor = c.load(motor_spec)
     dz = design(motor, dd, src)
     from linsense.tune.startup import design_startup
@@ -87,22 +104,25 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
     mode = (base or {}).get("control", {}).get("mode", "sensorless_lut")
     no_table = compensation_of(mode, (base or {}).get("observer", {}).get("compensation")) == "none"
     k_est = uncompensated_speed_factor(motor) if no_table else 1.0
-    sc_dict = scenario_dict(dz, dd, motor_spec, base, startup=su, k_est=k_est, pole_pitch=motor.pole_pitch)
+    table = None
+    if table_path is not None:
+        from linsense.compensation.measured import read_measured_table
+
+        f_table = dd.f_pwm / 2.0 if dd.shape == "square" else dz.f_inj
+        table = read_measured_table(table_path, motor=motor, injection=dd.shape, f_inj=f_table,
+                                    quad=dz.quad if dd.shape == "pulsating" else 0.0, points=256)
+        if table.note:
+            say(f"  table          {table.note}")
+    table_abs = None if table_path is None else str(Path(table_path).resolve())
+    sc_dict = scenario_dict(dz, dd, motor_spec, base, startup=su, k_est=k_est, pole_pitch=motor.pole_pitch,
+                            table=table_abs)
     cert_run = None
     if not no_verify:  # (its runs are built before anything is written: a refusal leaves no file)
-        from linsense.verify.certificate import motor_ref, prepare
+        from linsense.verify.certificate import certificate_base, motor_ref, prepare
 
-        cert_run = prepare(motor, motor_ref(motor_spec), _certificate_base(sc_dict),
+        cert_run = prepare(motor, motor_ref(motor_spec), certificate_base(sc_dict),
                            str(base_dir or Path.cwd()), v_max=dd.v_max, a_max=dd.a_max, load=dz.load,
                            travel=dd.travel, quick=quick)
-    if fmt == "c":
-        text = c_header(dz, dd, motor, name, startup=su)
-    else:
-        text = scenario_toml(dz, dd, motor_spec, Path(out), base, Path.cwd(), startup=su, k_est=k_est,
-                             pole_pitch=motor.pole_pitch)
-    files = [write_atomic(out, text)]
-    if out != "-":
-        say(str(files[0]))
     for line in design_lines(dz, motor.name, dd):
         say(line)
     if su is not None:
@@ -117,10 +137,34 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
     if mode != "sensorless_lut" and not no_verify:
         say(f"  (the certificate judges the designed sensorless drive with its table, not control.mode = "
             f"{mode!r} of the scenario)")
+    files: list = []
+    cert = None
     json_path, png_path = _certificate_paths(out)
+    digest = design_digest(motor, dd, 256, table)
+    reason = ""
+    if fmt == "c":  # (the header waits for the verdict: written only for a drive that passed)
+        from linsense.verify.certificate import failed_summary
+
+        if cert_run is not None:
+            cert = _verify_tuned(cert_run, motor, dd, dz, quick, json_path, png_path, files, digest)
+        reason = "not verified (--no-verify)" if cert is None else "" if cert.passed else failed_summary(cert)
+        if reason and not unverified:
+            c.elapsed()
+            if as_json:
+                verification = {k: v for k, v in cert.as_dict().items() if k != "runs"}
+                c.emit_json("tune", files, False, verification=verification, refused=reason)
+            c.warn(f"{out} not written: {reason} (--unverified writes it anyway)")
+            raise click.exceptions.Exit(1)
+        text = c_header(dz, dd, motor, name, startup=su, table=table, unverified=reason)
+    else:
+        text = scenario_toml(dz, dd, motor_spec, Path(out), base, Path.cwd(), startup=su, k_est=k_est,
+                             pole_pitch=motor.pole_pitch, table=table_abs)
+    files.insert(0, write_atomic(out, text))
+    if out != "-":
+        say(str(files[0]))
     summary = {"motor": motor.name, "design": dz.as_dict(),
                "startup": None if su is None else su.scenario_keys(),
-               "warnings": list(warnings)}
+               "warnings": list(warnings), **({"unverified": reason} if reason else {})}
     if cert_run is None:
         for p in (json_path, png_path):  # (a certificate of an earlier design would be stale)
             p.unlink(missing_ok=True)
@@ -128,22 +172,14 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
         if as_json:
             c.emit_json("tune", files, None, verification=None, **summary)
         return
-    cert = _verify_tuned(cert_run, motor, dd, dz, quick, json_path, png_path, files)
+    if cert is None:
+        cert = _verify_tuned(cert_run, motor, dd, dz, quick, json_path, png_path, files, digest)
     c.elapsed()
     if as_json:
         verification = {k: v for k, v in cert.as_dict().items() if k != "runs"}
         c.emit_json("tune", files, bool(cert.passed), verification=verification, **summary)
     if not cert.passed:
         raise click.exceptions.Exit(1)
-
-
-def _certificate_base(sc: dict) -> dict:
-    """The tuned scenario the certificate varies: the designed sensorless drive (its mode, start-up
-    and the scenario's own reference and travel are the certificate's, per run)."""
-    base = {k: (dict(v) if isinstance(v, dict) else v) for k, v in sc.items()}
-    for k in ("control", "startup", "reference", "travel", "initial", "load"):
-        base.pop(k, None)
-    return base
 
 
 def _certificate_paths(out: str) -> tuple[Path, Path]:
@@ -157,7 +193,8 @@ def _certificate_paths(out: str) -> tuple[Path, Path]:
     return folder / f"{stem}.verification.json", folder / f"{stem}.verification.png"
 
 
-def _verify_tuned(cert_run, motor, dd, dz, quick: bool, json_path: Path, png_path: Path, files: list):
+def _verify_tuned(cert_run, motor, dd, dz, quick: bool, json_path: Path, png_path: Path, files: list,
+                  digest: str = ""):
     """Run the prepared certificate, print it, write its JSON and figure (appended to ``files``);
     return it (a quick run never claims the full certificate)."""
     say = c.say
@@ -171,11 +208,12 @@ def _verify_tuned(cert_run, motor, dd, dz, quick: bool, json_path: Path, png_pat
     for line in cert.lines():
         say(line)
     doc = cert.as_dict()
-    doc.update(motor=motor.name, drive={k: v for k, v in vars(dd).items()},
+    doc.update(motor=motor.name, drive={k: v for k, v in vars(dd).items()}, data_sha256=digest,
                design={k: v for k, v in dz.as_dict().items() if k not in ("margins", "warnings")})
     files.append(write_atomic(json_path, json.dumps(doc, indent=1, sort_keys=True) + "\n"))
     say(str(files[-1]))
-    fig = certificate_figure(cert.rows, f"{motor.name}: {cert.verdict()}", quick=quick)
+    fig = certificate_figure(cert.rows, f"{motor.name}: {cert.verdict()}", quick=quick,
+                             calibrations=cert.extra.get("calibrations"))
     files.append(save_png(fig, png_path, 100))
     say(str(files[-1]))
     return cert

@@ -40,7 +40,7 @@ from linsense.compensation.lut import interpolate
 from linsense.compensation.stamp import data_digest
 from linsense.errors import InputError, shown
 
-__all__ = ["FORMAT", "INFO_KEYS", "INJECTIONS", "PSI_MAX", "MeasuredTable", "TableStamp",
+__all__ = ["FORMAT", "INFO_KEYS", "INJECTIONS", "PSI_MAX", "MeasuredTable", "TableStamp", "end_effect_fit",
            "measured_table_json", "read_measured_table", "table_stamp"]
 
 #: the document's ``format``
@@ -491,3 +491,66 @@ def _check_stamp(src: str, stamp: TableStamp, motor, injection: str, f_inj: floa
     if abs(stamp.quad - quad) > QUAD_ATOL:
         raise InputError(src, "stamp.quad", f"the table was measured with kappa {stamp.quad!r}, the drive "
                          f"runs kappa {quad!r} (the table depends on the injection's q-axis share)")
+
+
+#: the end-effect scales :func:`end_effect_fit` searches (of the motor file's dM0)
+FIT_RANGE = (0.0, 3.0)
+
+
+def end_effect_fit(motor, values: np.ndarray, injection: str, f_inj: float, quad: float) -> tuple:
+    """The motor whose model table fits a measured one best, by its end effect alone.
+
+    A measured table departs from the motor file's mostly by the end effect (the paper's dM0: the
+    part of the motor the file knows least, docs/tuning.md, "The end-effect tolerance"); the drive's
+    other tables (the demodulator's gain schedule, the table's slope in the resistance) follow the
+    same end effect, so they are computed from the motor whose end effect the measured table says:
+    ``perturbed(motor, 1, 1, k)`` with ``k`` minimising the mean square difference between its
+    model table (:func:`linsense.compensation.lut.build_lut` for the injection) and ``values``,
+    over :data:`FIT_RANGE`.
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor the drive believes in (with the resistance it believes).
+    values : ndarray
+        The measured table, rad, on the grid ``2 pi k / N``.
+    injection : str
+        ``"pulsating"``, ``"rotating"`` or ``"square"``.
+    f_inj : float
+        The injection frequency the drive runs, Hz.
+    quad : float
+        Kappa (0 for the rotating vector and the square wave).
+
+    Returns
+    -------
+    motor : Motor
+        The fitted motor (``motor`` itself where the fit gives the file's end effect).
+    k : float
+        The end-effect scale.
+    rms : float
+        The fitted table's root-mean-square difference from ``values``, rad.
+    """
+    from scipy.optimize import minimize_scalar
+
+    from linsense.compensation.lut import build_lut
+    from linsense.model.tolerance import perturbed
+
+    values = np.asarray(values, dtype=float)
+    n = values.size
+    shape_quad = quad if injection == "pulsating" else 0.0
+
+    def table(k: float) -> np.ndarray:
+        return build_lut(perturbed(motor, 1.0, 1.0, k), n, f_inj=f_inj, quad=shape_quad,
+                         injection=injection).values
+
+    def cost(k: float) -> float:
+        try:
+            return float(np.mean((table(k) - values) ** 2))
+        except (ValueError, FloatingPointError, ArithmeticError):  # (no longer a motor: not a fit)
+            return math.inf
+
+    res = minimize_scalar(cost, bounds=FIT_RANGE, method="bounded", options={"xatol": 1e-4})
+    k = float(res.x)
+    if not math.isfinite(res.fun) or cost(1.0) <= res.fun:
+        return motor, 1.0, math.sqrt(cost(1.0))
+    return perturbed(motor, 1.0, 1.0, k), k, math.sqrt(float(res.fun))

@@ -25,6 +25,7 @@ version.
 
 from __future__ import annotations
 
+import dataclasses
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -32,7 +33,7 @@ from pathlib import Path
 import numpy as np
 
 from linsense.compensation.lut import c_comment_text, c_identifier
-from linsense.compensation.stamp import data_digest, stamp_comment, stamp_macros
+from linsense.compensation.stamp import stamp_comment, stamp_macros
 from linsense.errors import InputError
 from linsense.version import __version__, docs
 
@@ -117,6 +118,10 @@ class FirmwareExport:
         SHA-256 of the motor and drive data (the headers' stamp).
     lines : list of str
         The design as a person reads it (one line each).
+    design : Design
+        The design (:func:`linsense.tune.design.design`), for its certificate.
+    header : callable
+        ``header(unverified: str) -> str``: the configuration header (:meth:`unverified`).
     """
 
     files: dict[str, bytes]
@@ -124,10 +129,29 @@ class FirmwareExport:
     motor: str
     digest: str
     lines: list[str] = field(default_factory=list)
+    design: object = None
+    header: object = None
+
+    def unverified(self, reason: str) -> FirmwareExport:
+        """The same files with the configuration header saying why it is written unverified.
+
+        Parameters
+        ----------
+        reason : str
+            The certificate's failed checks (or why none ran).
+
+        Returns
+        -------
+        FirmwareExport
+            A copy whose ``ls_cfg_<name>.h`` carries ``reason`` in its comment.
+        """
+        files = dict(self.files)
+        files[f"ls_cfg_{self.name}.h"] = self.header(reason).encode()
+        return dataclasses.replace(self, files=files)
 
 
 def firmware_files(motor, drive=None, source: str = "<firmware export>", name: str | None = None,
-                   points: int = 256) -> FirmwareExport:
+                   points: int = 256, table=None) -> FirmwareExport:
     """Design the drive for ``motor`` and make the exported folder's files.
 
     The design is ``linsense tune``'s (:func:`linsense.tune.design.design`, the start-up from the
@@ -145,6 +169,10 @@ def firmware_files(motor, drive=None, source: str = "<firmware export>", name: s
         The C name (default the motor's, made an identifier).
     points : int, optional
         Table points.
+    table : str or None, optional
+        A measured compensation table's file in place of the motor file's table
+        (:func:`linsense.compensation.measured.read_measured_table`: checked against the motor and
+        the designed injection, resampled to ``points``).
 
     Returns
     -------
@@ -160,7 +188,7 @@ def firmware_files(motor, drive=None, source: str = "<firmware export>", name: s
         The library's files not found (:func:`linsense.get_include`).
     """
     from linsense.tune.design import DriveData, design
-    from linsense.tune.export import c_header
+    from linsense.tune.export import c_header, design_digest
     from linsense.tune.startup import design_startup
 
     dd = drive if drive is not None else DriveData()
@@ -178,17 +206,26 @@ def firmware_files(motor, drive=None, source: str = "<firmware export>", name: s
         raise LinsenseError(f"the C library's files are incomplete under {library_root()}: "
                             f"{', '.join(missing)} missing (a broken installation: reinstall linsense)")
     dz = design(motor, dd, source, analyse=False)
+    if table is not None:
+        from linsense.compensation.measured import read_measured_table
+
+        table = read_measured_table(table, motor=motor, injection=dd.shape, f_inj=dz.f_inj, quad=dz.quad,
+                                    points=points)
     su = design_startup(motor, v_dc=dd.v_dc, f_pwm=dd.f_pwm, i_max=dd.i_max, observer_bw=dz.observer_bw_pll,
                         v_inj=dz.v_inj, ramp_rate=dz.inj_ramp_rate, source=source)
     sym = c_identifier(name or motor.name)
-    digest = data_digest(motor=motor, drive=dd, points=points)
+    digest = design_digest(motor, dd, points, table)
     cfg_name = f"ls_cfg_{sym}.h"
     files: dict[str, bytes] = {}
     for rel, path in lib.items():
         files[f"{LIBRARY_DIR}/{rel}"] = path.read_bytes()
     toolchain = "cmake/arm-none-eabi-m4f.cmake"
     files[toolchain] = lib[toolchain].read_bytes() if toolchain in lib else b""
-    files[cfg_name] = c_header(dz, dd, motor, name, points=points, startup=su).encode()
+
+    def header(unverified: str = "") -> str:
+        return c_header(dz, dd, motor, name, points=points, startup=su, table=table, unverified=unverified)
+
+    files[cfg_name] = header().encode()
     files["ls_example.h"] = example_header(motor, dd, sym, digest).encode()
     files["main.c"] = example_main().encode()
     files["CMakeLists.txt"] = cmake_lists(sym).encode()
@@ -197,7 +234,8 @@ def firmware_files(motor, drive=None, source: str = "<firmware export>", name: s
              f"{dz.v_inj:.4g} V / {dz.f_inj:g} Hz (kappa {dz.quad:g}), observer {dz.observer_bw:.4g} Hz, "
              f"start-up {'designed' if su is not None else 'not designed (no saturation data)'}",
              f"  linsense {__version__}, data sha256 {digest}"]
-    return FirmwareExport(files=files, name=sym, motor=motor.name, digest=digest, lines=lines)
+    return FirmwareExport(files=files, name=sym, motor=motor.name, digest=digest, lines=lines, design=dz,
+                          header=header)
 
 
 def example_header(motor, drive, sym: str, digest: str) -> str:

@@ -14,8 +14,9 @@ def _legend(a) -> None:
         a.legend(fontsize=7)
 
 
-def certificate_figure(rows: list[dict], title: str, quick: bool = False) -> Figure:
-    """Four panels from the certificate's judged runs.
+def certificate_figure(rows: list[dict], title: str, quick: bool = False,
+                       calibrations: dict | None = None) -> Figure:
+    """Six panels from the certificate's judged runs.
 
     Parameters
     ----------
@@ -24,15 +25,18 @@ def certificate_figure(rows: list[dict], title: str, quick: bool = False) -> Fig
     title : str
         The figure's title.
     quick : bool, optional
-        The off-nominal and trajectory panels were not run.
+        The off-nominal panels were not run.
+    calibrations : dict or None, optional
+        The tables measured on the off-nominal plants
+        (:func:`linsense.verify.certificate.calibration_summary` by plant).
 
     Returns
     -------
     matplotlib.figure.Figure
         The figure.
     """
-    fig = Figure(figsize=(11, 8), layout="constrained")
-    ax = fig.subplots(2, 2)
+    fig = Figure(figsize=(11, 11.5), layout="constrained")
+    ax = fig.subplots(3, 2)
     fig.suptitle(title)
     a = ax[0, 0]
     for lf in C.HOLD_LOADS:
@@ -69,18 +73,24 @@ def certificate_figure(rows: list[dict], title: str, quick: bool = False) -> Fig
     _legend(a)
     a = ax[0, 1]
     for plant in C.OFF_NOMINAL:
-        rs = [
-            r
-            for r in rows
-            if r["kind"] == "hold" and r["plant"] == plant and "err_deg" in r and r["load_n"] == 0.0
-        ]
-        if rs:
-            a.plot([r["position_deg"] for r in rs], [r["err_deg"] for r in rs], ".-", label=plant)
+        for table, style in (("design", ".-"), ("measured", "s-")):
+            rs = [
+                r
+                for r in rows
+                if r["kind"] == "hold" and r["plant"] == plant and "err_deg" in r and r["load_n"] == 0.0
+                and r.get("table", "design") == table
+            ]
+            if rs:
+                what = "the file's table" if table == "design" else "table measured on it"
+                a.plot([r["position_deg"] for r in rs], [r["err_deg"] for r in rs], style, ms=3,
+                       label=f"{plant}, {what}")
     a.axhline(C.OFF_ERR_DEG, color="k", lw=0.8)
+    a.axhline(C.HOLD_ERR_DEG, color="k", lw=0.8, ls=":")
     a.set(
-        title="holds at no load, off-nominal plants (nominal LUT)",
+        title="holds at no load, off-nominal plants",
         xlabel="position (electrical deg)",
         ylabel="|x - target| (electrical deg)",
+        yscale="log",
     )
     _legend(a)
     a = ax[1, 0]
@@ -96,12 +106,43 @@ def certificate_figure(rows: list[dict], title: str, quick: bool = False) -> Fig
     _legend(a)
     a = ax[1, 1]
     for r in rows:
-        if r["kind"] == "trajectory" and "trace" in r:
+        if r["kind"] in ("trajectory", "reversal", "move_hold") and r["plant"] == "nominal" and "trace" in r:
             tr = r["trace"]
-            a.plot(tr["t"], tr["err_deg"], label="estimation error")
+            what = r["kind"].replace("_", " ")
+            a.plot(tr["t"], tr["err_deg"], lw=0.8, label=f"{what}, {r['load_n']:+.3g} N")
     a.axhspan(-C.TRAJ_PEAK_ERR_DEG, C.TRAJ_PEAK_ERR_DEG, color="0.9")
     a.axhspan(-C.TRAJ_REST_ERR_DEG, C.TRAJ_REST_ERR_DEG, color="0.8")
-    a.set(title="trajectory with the rated load", xlabel="t (s)", ylabel="electrical deg")
+    a.set(title="moves at v_max: estimation error", xlabel="t (s)", ylabel="electrical deg")
+    if a.get_legend_handles_labels()[0]:
+        a.legend(fontsize=6, ncol=2)
+    a = ax[2, 0]
+    mv = [r for r in rows if r["kind"] in ("trajectory", "reversal", "move_hold") and r["plant"] == "nominal"
+          and "peak_err_deg" in r]
+    for kind, mark in (("trajectory", "o"), ("reversal", "^"), ("move_hold", "s")):
+        rs = sorted((r for r in mv if r["kind"] == kind), key=lambda r: r["load_n"])
+        if rs:
+            line = mark + ("-" if len(rs) > 1 else "")
+            a.plot([r["load_n"] for r in rs], [r["peak_err_deg"] for r in rs], line,
+                   label=f"{kind.replace('_', ' ')}: peak moving")
+            a.plot([r["load_n"] for r in rs], [r["est_err_deg"] for r in rs], mark, mfc="none",
+                   label=f"{kind.replace('_', ' ')}: at rest")
+    a.axhline(C.TRAJ_PEAK_ERR_DEG, color="k", lw=0.8)
+    a.axhline(C.TRAJ_REST_ERR_DEG, color="k", lw=0.8, ls=":")
+    top = max((r.get("speed_peak_m_s", 0.0) for r in mv), default=0.0)
+    a.set(title=f"moves at v_max (reached {top:.3g} m/s): |estimation error| against load",
+          xlabel="load opposing + motion (N)", ylabel="electrical deg")
+    _legend(a)
+    a = ax[2, 1]
+    for i, (plant, cal) in enumerate((calibrations or {}).items()):
+        th = cal["theta_deg"]
+        color = f"C{i}"
+        a.plot(th, [float("nan") if v is None else v for v in cal["psi_measured_deg"]], "o", ms=3,
+               color=color, label=f"{plant}: measured ({cal['max_diff_deg']:.2g} deg off the plant's)")
+        a.plot(th, cal["psi_plant_deg"], "-", color=color, lw=0.8, label=f"{plant}: the plant's own")
+        if i == 0:
+            a.plot(th, cal["psi_file_deg"], "k--", lw=1.0, label="from the motor file")
+    a.set(title="compensation table: measured on the off-nominal plants", xlabel="position (electrical deg)",
+          ylabel="Psi_LUT (electrical deg)")
     _legend(a)
     faulted = "\n".join(f"{r['case']}: {r['why']}" for r in rows if r["fault"] != "none")
     for a in ax.flat:  # (a quick certificate runs neither the off-nominal plants nor the trajectory)

@@ -43,7 +43,7 @@ from linsense.sim.drive_cfg import calibration_table, drive_values, fill, value_
 from linsense.sim.plant import fill_saturation, lab_fourier
 from linsense.sim.refusal import explain, given_keys
 from linsense.sim.scenario import Scenario, compensation_of
-from linsense.sim.tables import Tables, drive_tables
+from linsense.sim.tables import Tables, drive_tables, measured_model
 from linsense.tune.cfgmap import Values
 from linsense.tune.design import DriveData, design, mean_dq, uncompensated_speed_factor
 
@@ -144,6 +144,8 @@ def build(sc: Scenario, motor: Motor | None = None, trace_in_memory: bool = True
     motor, model_motor = motors(sc, motor, model)
     user_keys = given_keys(sc.given())  # (the keys the file gives: designed() sets the others)
     sc = designed(sc, model_motor)
+    stamp_motor = model_motor  # (a measured table's stamp names the motor as loaded)
+    model_motor = measured_model(sc, model_motor)  # (its end effect, with a measured table)
     known = controller_model(sc, model_motor)
     sat, n_steps = validate(sc, motor, known, user_keys, trace_in_memory)
     setup, cfg = plant(sc, motor, sat)
@@ -151,7 +153,7 @@ def build(sc: Scenario, motor: Motor | None = None, trace_in_memory: bool = True
     d = fill(v)
     calibrating = sc.spec.control.mode == "calibration"
     cal_table = calibration_table(d, sc.spec.calibration.points) if calibrating else None
-    drive = make_drive(sc, model_motor, known, v, d, user_keys)
+    drive = make_drive(sc, model_motor, known, v, d, user_keys, stamp_motor)
     start_drive(sc, drive, motor, setup)
     cmds, moves = reference_commands(sc)
     return Built(sc, motor, setup, cfg, drive, cmds, n_steps, moves, known,
@@ -341,7 +343,8 @@ def plant(sc: Scenario, motor: Motor, sat: Saturation | None) -> tuple[PlantSetu
     return setup, cfg
 
 
-def make_drive(sc: Scenario, model_motor: Motor, known: dict, v: Values, d, user_keys: set[str]) -> Drive:
+def make_drive(sc: Scenario, model_motor: Motor, known: dict, v: Values, d, user_keys: set[str],
+               stamp_motor: Motor | None = None) -> Drive:
     """The drive over a configuration, with its tables (:func:`linsense.sim.tables.drive_tables`).
 
     A refusal of ``ls_drive_init`` (the C library's own checks, the last line) names the one field
@@ -361,6 +364,8 @@ def make_drive(sc: Scenario, model_motor: Motor, known: dict, v: Values, d, user
         The configuration (:func:`linsense.sim.drive_cfg.fill` from ``v``).
     user_keys : set of str
         The dotted keys the file gives.
+    stamp_motor : Motor or None, optional
+        The motor a measured table's stamp must name (default ``model_motor``).
 
     Returns
     -------
@@ -373,7 +378,7 @@ def make_drive(sc: Scenario, model_motor: Motor, known: dict, v: Values, d, user
         The configuration refused by the controller library.
     """
     try:
-        t = drive_tables(sc, model_motor, known["R_s"], v)
+        t = drive_tables(sc, model_motor, known["R_s"], v, stamp_motor)
         return Drive(d, comp=t.comp, gain_table=t.gain_table, comp_r=t.comp_r, gain_r=t.gain_r)
     except ConfigError as exc:
         told = explain(d, user_keys, lambda k: value_of(sc.spec, k))

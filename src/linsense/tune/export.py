@@ -46,7 +46,8 @@ def end_stops(pole_pitch: float, travel: float) -> dict:
 
 
 def scenario_dict(dz: Design, drive: DriveData, motor_ref: str, base: dict | None = None,
-                  startup=None, k_est: float = 1.0, pole_pitch: float | None = None) -> dict:
+                  startup=None, k_est: float = 1.0, pole_pitch: float | None = None,
+                  table: str | None = None) -> dict:
     """A complete scenario with the design's drive data and gains written out.
 
     ``base`` (a scenario's given keys, or a 2 s hold) with the design written over it;
@@ -69,6 +70,10 @@ def scenario_dict(dz: Design, drive: DriveData, motor_ref: str, base: dict | Non
         ``uncompensated_speed_factor``).
     pole_pitch : float or None, optional
         Pole pitch, m, for the ``[travel]`` end stops when the drive has a travel.
+    table : str or None, optional
+        A measured table's file (``linsense calibrate``'s ``lut_measured.json``): the drive's
+        compensation table (``observer.lut_model = "measured"``, ``observer.lut_file``); None: the
+        table from the motor file.
 
     Returns
     -------
@@ -107,6 +112,8 @@ def scenario_dict(dz: Design, drive: DriveData, motor_ref: str, base: dict | Non
     )
     for k in ("k1", "k2", "k3"):
         sc["observer"].pop(k, None)
+    if table is not None:
+        sc["observer"].update({"lut_model": "measured", "lut_file": table})
     if dz.observer_type == "mech":  # (the clamp of its load estimate; the PLL has none)
         sc["observer"]["force_max"] = _r(dz.force_max)
     else:
@@ -151,11 +158,12 @@ def scenario_toml(
     startup=None,
     k_est: float = 1.0,
     pole_pitch: float | None = None,
+    table: str | None = None,
 ) -> str:
     """The scenario as TOML.
 
-    A motor-file path (relative to ``base_dir``, default the working folder, as the command line
-    gives it) is made relative to the output file's folder.
+    A motor-file or table path (relative to ``base_dir``, default the working folder, as the command
+    line gives it) is made relative to the output file's folder.
 
     Parameters
     ----------
@@ -177,24 +185,75 @@ def scenario_toml(
         Widening of the trips and clamp on the estimate.
     pole_pitch : float or None, optional
         Pole pitch, m.
+    table : str or None, optional
+        A measured table's file (:func:`scenario_dict`).
 
     Returns
     -------
     str
         The TOML text, with a comment line summarising the design.
     """
-    ref = motor_spec
-    if names_a_path(motor_spec):
-        p = Path(motor_spec)
+
+    def relative(path: str) -> str:
+        p = Path(path)
         if not p.is_absolute():
             p = (base_dir or Path.cwd()) / p
-        ref = os.path.relpath(p.resolve(), Path(out).resolve().parent)
+        return os.path.relpath(p.resolve(), Path(out).resolve().parent)
+
+    ref = relative(motor_spec) if names_a_path(motor_spec) else motor_spec
+    table = None if table is None else relative(table)
     head = (
         f"# Designed by `linsense tune` for motor {ref!r} (docs/tuning.md): {dz.v_inj:.3g} V / "
         f"{dz.f_inj:g} Hz injection, current loop {dz.current_bw:.3g} Hz, observer {dz.observer_bw:.3g} Hz, "
         f"speed loop {dz.speed_bw:.3g} Hz, position {dz.kp_x:.3g} 1/s.\n"
     )
-    return head + tomli_w.dumps(scenario_dict(dz, drive, ref, base, startup, k_est, pole_pitch))
+    return head + tomli_w.dumps(scenario_dict(dz, drive, ref, base, startup, k_est, pole_pitch, table))
+
+
+def check_c_header(drive: DriveData) -> None:
+    """Refuse a drive that :func:`c_header` cannot configure (before anything is designed or run).
+
+    Parameters
+    ----------
+    drive : DriveData
+        The drive.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        For an injection other than the pulsating/elliptical one.
+    """
+    if drive.shape != "pulsating":
+        from linsense.errors import InputError
+
+        raise InputError("--format", "c", f"the C header configures the pulsating/elliptical injection; "
+                         f"for the {drive.shape} injection write a scenario (--format toml)")
+
+
+def design_digest(motor: Motor, drive: DriveData, points: int = 256, table=None) -> str:
+    """The SHA-256 of a drive's data: the motor, the drive data, the table length and a measured
+    table's values (:mod:`linsense.compensation.stamp`); the stamp of ``ls_cfg_<name>.h`` and the
+    key by which a verification is matched to a header.
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+    drive : DriveData
+        The drive.
+    points : int, optional
+        Table points.
+    table : MeasuredTable or None, optional
+        A measured compensation table.
+
+    Returns
+    -------
+    str
+        64 hexadecimal digits.
+    """
+    if table is None:
+        return data_digest(motor=motor, drive=drive, points=points)
+    return data_digest(motor=motor, drive=drive, points=points, table=np.asarray(table.values))
 
 
 def _r(v: float) -> float:
@@ -257,7 +316,7 @@ def design_values(dz: Design, drive: DriveData, motor: Motor, startup=None) -> V
 
 
 def c_header(dz: Design, drive: DriveData, motor: Motor, name: str | None = None, points: int = 256,
-             startup=None) -> str:
+             startup=None, table=None, unverified: str = "") -> str:
     """``ls_cfg_<name>.h``: the drive's configuration for the C library.
 
     The compensation and gain tables, their slopes in the resistance's scale, and
@@ -282,6 +341,13 @@ def c_header(dz: Design, drive: DriveData, motor: Motor, name: str | None = None
         Table points.
     startup : StartupDesign or None, optional
         The start-up design.
+    table : MeasuredTable or None, optional
+        A measured compensation table at ``points`` points
+        (:func:`linsense.compensation.measured.read_measured_table`) in place of the motor file's;
+        its values are in the data's digest.
+    unverified : str, optional
+        Why the drive is written without a passed certificate (``--unverified``): said in the
+        header's comment; "" for a verified drive.
 
     Returns
     -------
@@ -293,14 +359,10 @@ def c_header(dz: Design, drive: DriveData, motor: Motor, name: str | None = None
     linsense.errors.InputError
         For an injection other than the pulsating/elliptical one.
     """
-    if drive.shape != "pulsating":
-        from linsense.errors import InputError
-
-        raise InputError("--format", "c", f"the C header configures the pulsating/elliptical injection; "
-                         f"for the {drive.shape} injection write a scenario (--format toml)")
+    check_c_header(drive)
     sym = c_identifier(name or motor.name)
     fn = f"ls_cfg_{sym}"
-    lut = build_lut(motor, points, f_inj=dz.f_inj, quad=dz.quad).values
+    lut = build_lut(motor, points, f_inj=dz.f_inj, quad=dz.quad).values if table is None else table.values
     lut_r = lut_r_slope(motor, points, dz.f_inj, dz.quad)
     gain = gain_schedule(motor, dz.f_inj, dz.quad, points)
     gain_r = gain_r_slope(motor, dz.f_inj, dz.quad, points)
@@ -308,7 +370,7 @@ def c_header(dz: Design, drive: DriveData, motor: Motor, name: str | None = None
     def f(v: float) -> str:
         return f"LS_R({v:.9e})"
 
-    def table(vals: np.ndarray) -> str:
+    def array(vals: np.ndarray) -> str:
         rows = [", ".join(f"{v:.9e}f" for v in vals[i : i + 4]) for i in range(0, len(vals), 4)]
         return ",\n    ".join(rows)
 
@@ -320,8 +382,14 @@ def c_header(dz: Design, drive: DriveData, motor: Motor, name: str | None = None
     guard = f"LS_CFG_{sym.upper()}_H"
     prefix = f"LS_CFG_{sym.upper()}"
     shown = c_comment_text(motor.name)
-    digest = data_digest(motor=motor, drive=drive, points=points)
+    digest = design_digest(motor, drive, points, table)
+    comp_what = ("with R_s" if table is None else
+                 f"measured ({c_comment_text(Path(table.source).name)}, {table.stamp.points} points"
+                 f"{', resampled' if table.resampled else ''})")
+    status = (" * NOT VERIFIED: written with --unverified; " + c_comment_text(unverified) + "\n *\n"
+              if unverified else "")
     return f"""/* Drive configuration for motor {shown}, designed by `linsense tune` (docs/tuning.md).
+{status}
  * Drive: {drive.v_dc:g} V bus, {drive.f_pwm:g} Hz PWM, {drive.dead_time * 1e6:g} us dead time,
  * i_max {drive.i_max:g} A.
  * Injection {dz.v_inj:.4g} V / {dz.f_inj:g} Hz (kappa {dz.quad:g}), current loop {dz.current_bw:.4g} Hz,
@@ -343,25 +411,25 @@ def c_header(dz: Design, drive: DriveData, motor: Motor, name: str | None = None
 
 #define {sym.upper()}_LEN {points}u
 {stamp_macros(prefix, digest)}
-/* Psi_LUT (rad) over one electrical period for this injection, with R_s */
+/* Psi_LUT (rad) over one electrical period for this injection, {comp_what} */
 static const float {fn}_comp[{points}] = {{
-    {table(lut)}
+    {array(lut)}
 }};
 
 /* dPsi_LUT/dk_r (rad per unit of the resistance's scale): the table follows the resistance the
  * drive measures (ls_dtres_adapt, ls_demod_cfg.comp_r) */
 static const float {fn}_comp_r[{points}] = {{
-    {table(lut_r)}
+    {array(lut_r)}
 }};
 
 /* demodulator gain (-) that makes the local error gain 1 everywhere */
 static const float {fn}_gain[{points}] = {{
-    {table(gain)}
+    {array(gain)}
 }};
 
 /* dg/dk_r (-): the gain follows the measured resistance too */
 static const float {fn}_gain_r[{points}] = {{
-    {table(gain_r)}
+    {array(gain_r)}
 }};
 
 /* ls_drive_default_cfg, then the design; comp, gain, comp_r and gain_r: ls_lut objects over the

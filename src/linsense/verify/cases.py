@@ -1,7 +1,9 @@
 """The runs of the certificate (docs/tuning.md, "The certificate"): holds over the period at
-three loads, two steps, a trajectory and a load step on the nominal plant; the holds again on the
-off-nominal plants. Every run is the tuned scenario on the switching inverter with the drive's
-dead time; only the reference, the load and (off-nominal) the plant change.
+three loads, two steps, moves at the application's speed and acceleration over the loads (out and
+back, a reversal, a hold after a move) and a load step on the nominal plant; the holds again on the
+off-nominal plants, and a move on those whose table is measured. Every run is the tuned scenario on
+the switching inverter with the drive's dead time; only the reference, the load, (off-nominal) the
+plant and (measured) the table change.
 """
 
 from __future__ import annotations
@@ -43,6 +45,11 @@ class Case:
         Load force, N.
     position_deg : float
         Hold position, electrical deg.
+    speed : float
+        A move's top speed as planned, m/s.
+    table : str
+        ``"design"``: the drive's own table; ``"measured"``: the table the calibration measured on
+        this run's plant (:data:`~linsense.verify.criteria.CALIBRATED`).
     """
 
     name: str
@@ -54,6 +61,8 @@ class Case:
     t_end_move: float = 0.0
     load: float = 0.0
     position_deg: float = 0.0
+    speed: float = 0.0
+    table: str = "design"
 
 
 #: the position grid's offset, in grid steps from 0 (so that it does not sit on the symmetric
@@ -163,11 +172,10 @@ def step_cases(tau: float) -> list[Case]:
     return out
 
 
-def trajectory_case(tau: float, v_max: float, a_max: float, load_rated: float,
-                    pitches: float = C.TRAJ_PITCHES) -> Case:
-    """Out over ``pitches`` pole pitches and back, at the application's speed and acceleration.
-
-    Against the rated load.
+def move_distance(tau: float, v_max: float, a_max: float) -> float:
+    """The length of a certificate move: at least :data:`~linsense.verify.criteria.TRAJ_PITCHES`
+    pole pitches, and long enough to cruise at ``v_max`` over
+    :data:`~linsense.verify.criteria.CRUISE_PITCHES` of them after reaching it.
 
     Parameters
     ----------
@@ -177,43 +185,104 @@ def trajectory_case(tau: float, v_max: float, a_max: float, load_rated: float,
         Speed, m/s.
     a_max : float
         Acceleration, m/s^2.
-    load_rated : float
-        Rated load, N.
-    pitches : float, optional
-        Pole pitches (:data:`~linsense.verify.criteria.TRAJ_PITCHES`, or what the stroke allows).
+
+    Returns
+    -------
+    float
+        m.
+    """
+    return max(C.TRAJ_PITCHES * tau, v_max * v_max / a_max + C.CRUISE_PITCHES * tau)
+
+
+def peak_speed(distance: float, v_max: float, a_max: float) -> float:
+    """The top speed of a trapezoidal move over ``distance`` (``v_max``, or less on a short move).
+
+    Parameters
+    ----------
+    distance : float
+        m.
+    v_max : float
+        m/s.
+    a_max : float
+        m/s^2.
+
+    Returns
+    -------
+    float
+        m/s.
+    """
+    return min(v_max, float(np.sqrt(abs(distance) * a_max)))
+
+
+def trajectory_case(tau: float, v_max: float, a_max: float, load: float, distance: float | None = None,
+                    kind: str = "trajectory", plant: str = "nominal") -> Case:
+    """A move at the application's speed and acceleration, against a constant load.
+
+    ``kind``: ``"trajectory"`` out and back with a pause (the load opposing one way and aiding the
+    other), ``"reversal"`` out and back without one (through zero speed under load), ``"move_hold"``
+    out only, then a hold judged as the holds are.
+
+    Parameters
+    ----------
+    tau : float
+        Pole pitch, m.
+    v_max : float
+        Speed, m/s.
+    a_max : float
+        Acceleration, m/s^2.
+    load : float
+        Load force opposing positive motion, N.
+    distance : float or None, optional
+        The move, m (default :func:`move_distance`; shorter where the stroke is).
+    kind : str, optional
+        ``"trajectory"``, ``"reversal"`` or ``"move_hold"``.
+    plant : str, optional
+        ``"nominal"`` or an off-nominal name.
 
     Returns
     -------
     Case
         The run.
     """
+    d = move_distance(tau, v_max, a_max) if distance is None else distance
     x0 = start(tau)
-    x1 = x0 + pitches * tau
-    t0, dwell = 0.1, 0.3
-    dur = trapezoid_time(x1 - x0, v_max, a_max)
-    t_end = t0 + 2.0 * dur + dwell + 0.01
+    x1 = x0 + d
+    t0 = 0.1
+    dwell = 0.0 if kind == "reversal" else C.TRAJ_DWELL_S
+    dur = trapezoid_time(d, v_max, a_max)
+    v_top = peak_speed(d, v_max, a_max)
+    if kind == "move_hold":
+        waypoints, target, t_end = [x1 * 1e3], x1, t0 + dur + 0.01
+        tail = C.HOLD_SETTLE_S + C.END_WINDOW_S
+        what = f"hold after a {d * 1e3:.4g} mm move"
+    else:
+        waypoints, target, t_end = [x1 * 1e3, x0 * 1e3], x0, t0 + 2.0 * dur + dwell + 0.01
+        tail = C.END_WINDOW_S + 0.2
+        what = (f"reversal {d * 1e3:.4g} mm and back" if kind == "reversal" else
+                f"trajectory {d * 1e3:.4g} mm and back")
+    speed = f"{v_top:.3g} m/s" + ("" if v_top >= v_max * (1 - 1e-9) else f" (of {v_max:g}: the stroke)")
     return Case(
-        name=f"trajectory {pitches:.3g} pole pitches and back, {v_max:g} m/s, {a_max:g} m/s^2, "
-        f"{load_rated:.3g} N",
-        kind="trajectory",
-        plant="nominal",
+        name=f"{what}, {speed}, {a_max:g} m/s^2, {load:+.3g} N",
+        kind=kind,
+        plant=plant,
         sections={
-            "scenario": {"duration": t_end + C.END_WINDOW_S + 0.2},
+            "scenario": {"duration": t_end + tail},
             "reference": {
                 "type": "trajectory",
-                "waypoints_mm": [x1 * 1e3, x0 * 1e3],
+                "waypoints_mm": waypoints,
                 "at": t0,
                 "v_max": v_max,
                 "a_max": a_max,
                 "dwell": dwell,
             },
             "initial": {"position_mm": x0 * 1e3, "load_balanced": True},
-            "load": {"type": "constant", "force": load_rated},
+            "load": {"type": "constant", "force": load},
         },
-        target=x0,
+        target=target,
         t_event=t0,
         t_end_move=t_end,
-        load=load_rated,
+        load=load,
+        speed=v_top,
     )
 
 
@@ -251,6 +320,51 @@ def load_step_case(tau: float, load_rated: float) -> Case:
     )
 
 
+def moves(tau: float, v_max: float, a_max: float, load_rated: float, quick: bool,
+          travel: float | None = None, plant: str = "nominal") -> list[Case]:
+    """The certificate's moves at ``v_max`` and ``a_max``.
+
+    Out and back over the loads of :data:`~linsense.verify.criteria.TRAJ_LOADS` (``quick``:
+    :data:`~linsense.verify.criteria.TRAJ_LOADS_QUICK`), a reversal through zero speed at the rated
+    load and a hold right after a move against it; an off-nominal plant gets the rated load's
+    out-and-back only.
+
+    Parameters
+    ----------
+    tau : float
+        Pole pitch, m.
+    v_max : float
+        Speed, m/s.
+    a_max : float
+        Acceleration, m/s^2.
+    load_rated : float
+        Rated load, N.
+    quick : bool
+        The representative subset.
+    travel : float or None, optional
+        The stroke from 0, m: the moves are shortened to it (their names then say the speed they
+        reach).
+    plant : str, optional
+        ``"nominal"`` or an off-nominal name.
+
+    Returns
+    -------
+    list of Case
+        The runs.
+    """
+    d = move_distance(tau, v_max, a_max)
+    if travel is not None:
+        d = min(d, travel - 2.0 * start(tau))
+    if plant != "nominal":
+        return [trajectory_case(tau, v_max, a_max, load_rated, d, plant=plant)]
+    fracs = C.TRAJ_LOADS_QUICK if quick else C.TRAJ_LOADS
+    out = [trajectory_case(tau, v_max, a_max, f * load_rated, d) for f in fracs]
+    if not quick:
+        out += [trajectory_case(tau, v_max, a_max, load_rated, d, kind="reversal"),
+                trajectory_case(tau, v_max, a_max, load_rated, d, kind="move_hold")]
+    return out
+
+
 def all_cases(tau: float, v_max: float, a_max: float, load_rated: float, quick: bool,
               travel: float | None = None) -> list[Case]:
     """The certificate's runs.
@@ -266,27 +380,33 @@ def all_cases(tau: float, v_max: float, a_max: float, load_rated: float, quick: 
     load_rated : float
         Rated load, N.
     quick : bool
-        Only the nominal holds at :data:`~linsense.verify.criteria.POSITIONS_QUICK` positions and
-        the steps.
+        Only the nominal holds at :data:`~linsense.verify.criteria.POSITIONS_QUICK` positions, the
+        steps and the moves at +-rated load.
     travel : float or None, optional
-        The stroke from 0, m, at least a pole pitch: the trajectory is shortened to it and every run
+        The stroke from 0, m, at least a pole pitch: the moves are shortened to it and every run
         gets its end stops (:func:`linsense.tune.export.end_stops`).
 
     Returns
     -------
     list of Case
-        The runs.
+        The runs; those of the plants of :data:`~linsense.verify.criteria.CALIBRATED` run with the
+        table measured on them (:mod:`linsense.verify.certificate`).
     """
     if quick:
         cases = hold_cases(tau, load_rated, C.POSITIONS_QUICK) + step_cases(tau)
+        cases += moves(tau, v_max, a_max, load_rated, True, travel)
     else:
         cases = hold_cases(tau, load_rated, C.POSITIONS) + step_cases(tau)
-        traj = trajectory_case(tau, v_max, a_max, load_rated)
-        if travel is not None and travel < C.TRAJ_PITCHES * tau + 2 * start(tau):
-            traj = trajectory_case(tau, v_max, a_max, load_rated, pitches=(travel - 2 * start(tau)) / tau)
-        cases += [traj, load_step_case(tau, load_rated)]
+        cases += moves(tau, v_max, a_max, load_rated, False, travel)
+        cases.append(load_step_case(tau, load_rated))
         for name in C.OFF_NOMINAL:
-            cases += hold_cases(tau, load_rated, C.POSITIONS, plant=name)
+            runs = hold_cases(tau, load_rated, C.POSITIONS, plant=name)
+            if name in C.CALIBRATED:
+                runs += moves(tau, v_max, a_max, load_rated, False, travel, plant=name)
+                runs = [dataclasses.replace(c, table="measured") for c in runs]
+                # for information, not judged: the same plant at no load with the drive's own table
+                runs += hold_cases(tau, load_rated, C.POSITIONS, plant=name, loads=(0.0,))
+            cases += runs
     if travel is not None:
         stops = end_stops(tau, travel)
         cases = [dataclasses.replace(c, sections={**c.sections, "travel": stops}) for c in cases]
@@ -340,6 +460,9 @@ __all__ = [
     "hold_cases",
     "step_cases",
     "trajectory_case",
+    "moves",
+    "move_distance",
+    "peak_speed",
     "load_step_case",
     "deg_of",
 ]

@@ -4,12 +4,16 @@ bound, and where it fails the likely cause and what to change (docs/tuning.md, "
 
 from __future__ import annotations
 
+import copy
+import dataclasses
 import time
 from dataclasses import dataclass, field
+from pathlib import Path
 
 from linsense.model.motor import Motor
 from linsense.verify import criteria as C
 from linsense.verify.cases import all_cases
+from linsense.verify.run import MOVES as C_MOVES
 from linsense.verify.run import run_cases
 
 #: the likely cause of a failed check and what to change
@@ -96,6 +100,8 @@ class Certificate:
         Only the quick checks were run.
     extra : dict
         Further keys of :meth:`as_dict`.
+    notes : list of str
+        Lines of information after the checks (not judged).
     """
 
     checks: list[Check]
@@ -103,6 +109,7 @@ class Certificate:
     wall_s: float
     quick: bool
     extra: dict = field(default_factory=dict)
+    notes: list[str] = field(default_factory=list)
 
     @property
     def passed(self) -> bool:
@@ -122,7 +129,7 @@ class Certificate:
             f"verification ({'quick: ' if self.quick else ''}{n} runs, switching inverter with the drive's "
             f"dead time, {self.wall_s:.1f} s):"
         )
-        return [head] + [c.line() for c in self.checks] + [self.verdict()]
+        return [head] + [c.line() for c in self.checks] + self.notes + [self.verdict()]
 
     @property
     def verified(self) -> bool:
@@ -140,7 +147,8 @@ class Certificate:
         n_bad = sum(not c.passed for c in self.checks)
         if self.passed:
             return ("verified: every check passed" if not self.quick else
-                    "quick checks passed (nominal holds and steps only): not verified, run without --quick")
+                    "quick checks passed (nominal holds, steps and moves at +-rated load only): not "
+                    "verified, run without --quick")
         return f"NOT verified: {n_bad} of {len(self.checks)} checks failed"
 
     def as_dict(self) -> dict:
@@ -157,6 +165,7 @@ class Certificate:
             "verified": self.verified,
             "quick": self.quick,
             "checks": [c.__dict__ for c in self.checks],
+            "notes": [n.strip() for n in self.notes],
             "runs": runs,
             **self.extra,
         }
@@ -212,30 +221,74 @@ def _single(r: dict, name: str, value: str, bound: str, remedy: str) -> Check:
             cause = REMEDY["limit cycle"]
         else:
             cause = REMEDY[remedy]
-    pp = (f", p-p <= {C.HOLD_PP_DEG:g} deg at the end" if r["kind"] == "step" else
+    pp = (f", p-p <= {C.HOLD_PP_DEG:g} deg at the end" if r["kind"] in ("step", "move_hold") else
           f", no limit cycle above {C.HOLD_PP_DEG:g} deg p-p at the end")
     return Check(name, r["passed"], value, bound + pp, cause, 1, int(not r["passed"]))
 
 
-def checks(rows: list[dict]) -> list[Check]:
+def _moves_check(rows: list[dict]) -> Check:
+    """The out-and-back moves over the loads: the worst estimation error moving and at rest."""
+    ok = [r for r in rows if "peak_err_deg" in r]
+    failed = [r for r in rows if not r["passed"]]
+    worst = max(ok, key=lambda r: r["peak_err_deg"], default=None)
+    if worst is None:
+        value = "no run finished"
+    else:
+        rest = max(r["est_err_deg"] for r in ok)
+        top = min(r["speed_peak_m_s"] for r in ok)
+        value = (f"peak estimation error {worst['peak_err_deg']:.3g} deg (at {worst['load_n']:+.3g} N), "
+                 f"at rest {rest:.3g} deg; top speed reached >= {top:.3g} m/s")
+    cause = ""
+    if failed:
+        value += f"; e.g. {failed[0]['case']}: {failed[0]['why']}"
+        whys = " ".join(r["why"] for r in failed)
+        cause = (REMEDY["fault"] if "fault" in whys or "did not finish" in whys else
+                 REMEDY["limit cycle"] if "limit cycle" in whys else REMEDY["trajectory"])
+    loads = sorted({r["load_n"] for r in rows})
+    span = f"{loads[0]:+.3g}..{loads[-1]:+.3g} N" if len(loads) > 1 else f"{loads[0]:+.3g} N" if loads else ""
+    return Check(f"moves at v_max, {span}", not failed, value,
+                 f"{C.TRAJ_PEAK_ERR_DEG:g} deg moving, {C.TRAJ_REST_ERR_DEG:g} deg at rest, no fault",
+                 cause, len(rows), len(failed))
+
+
+def _calibration_check(plant: str, cal: dict | None) -> Check:
+    """The calibration of a plant's table: completed, and how far from the plant's own table."""
+    if cal is None:
+        return Check(f"table measured on {plant}", False, "not run", "completed", REMEDY["fault"], 1, 1)
+    ok = bool(cal["completed"])
+    value = (f"{cal['points_done']}/{cal['points']} points; within {cal['max_diff_deg']:.3g} deg of the "
+             f"plant's own table (the motor file's: {cal['file_diff_deg']:.3g} deg)" if ok else
+             f"did not complete ({cal['points_done']} of {cal['points']} points, fault {cal['fault']})")
+    return Check(f"table measured on {plant}", ok, value, "every point, no fault",
+                 "" if ok else REMEDY["fault"], 1, int(not ok))
+
+
+def checks(rows: list[dict], calibrations: dict | None = None) -> list[Check]:
     """The certificate's checks from the judged runs.
 
     Parameters
     ----------
     rows : list of dict
         The judged runs.
+    calibrations : dict or None, optional
+        Plant name -> its calibration's summary (:func:`calibration_summary`), for the plants of
+        :data:`~linsense.verify.criteria.CALIBRATED`.
 
     Returns
     -------
     list of Check
-        Holds of the nominal plant, each step, the trajectory, the load step, then the holds of
-        each off-nominal plant.
+        Holds of the nominal plant, each step, the moves, the load step, then for each off-nominal
+        plant its holds (and, where its table is measured, the calibration and a move).
     """
+    calibrations = calibrations or {}
     out = []
     nominal = [r for r in rows if r["kind"] == "hold" and r["plant"] == "nominal"]
     out.append(_hold_check("holds, nominal plant", nominal, C.HOLD_ERR_DEG))
     e_nom = max((r.get("err_deg", 0.0) for r in nominal), default=0.0)
+    trajectories = [r for r in rows if r["kind"] == "trajectory" and r["plant"] == "nominal"]
     for r in rows:
+        if r["plant"] != "nominal":
+            continue
         if r["kind"] == "step":
             out.append(
                 _single(
@@ -246,17 +299,11 @@ def checks(rows: list[dict]) -> list[Check]:
                     "settle",
                 )
             )
-        elif r["kind"] == "trajectory":
-            out.append(
-                _single(
-                    r,
-                    "trajectory",
-                    f"peak estimation error {r.get('peak_err_deg', NAN):.3g} deg, "
-                    f"at rest {r.get('est_err_deg', NAN):.3g} deg",
-                    f"{C.TRAJ_PEAK_ERR_DEG:g} deg, {C.TRAJ_REST_ERR_DEG:g} deg at rest",
-                    "trajectory",
-                )
-            )
+        elif r is (trajectories[0] if trajectories else None):
+            out.append(_moves_check(trajectories))
+        elif r["kind"] in ("reversal", "move_hold"):
+            out.append(_move_check(r, "reversal through zero speed" if r["kind"] == "reversal" else
+                                   "hold after the fastest move"))
         elif r["kind"] == "load_step":
             out.append(
                 _single(
@@ -271,15 +318,19 @@ def checks(rows: list[dict]) -> list[Check]:
                 )
             )
     for plant in C.OFF_NOMINAL:
-        rs = [r for r in rows if r["plant"] == plant]
+        measured = plant in C.CALIBRATED
+        rs = [r for r in rows if r["plant"] == plant and r["kind"] == "hold"
+              and r["table"] == ("measured" if measured else "design")]
         if not rs:
             continue
+        if measured:
+            out.append(_calibration_check(plant, calibrations.get(plant)))
         c = _hold_check(
-            f"holds, {plant}",
+            f"holds, {plant}" + (", measured table" if measured else ""),
             rs,
-            C.OFF_ERR_DEG,
+            C.HOLD_ERR_DEG if measured else C.OFF_ERR_DEG,
             REMEDY["off-nominal"]
-            if any(not r["passed"] and "limit cycle" not in r["why"] for r in rs)
+            if any(not r["passed"] and "limit cycle" not in r["why"] for r in rs) and not measured
             else "",
         )
         e = max((r.get("err_deg", float("nan")) for r in rs), default=float("nan"))
@@ -287,6 +338,137 @@ def checks(rows: list[dict]) -> list[Check]:
         if not c.passed and not c.cause:
             c.cause = _cause(rs)
         out.append(c)
+        for r in rows:
+            if r["plant"] == plant and r["kind"] in C_MOVES:
+                out.append(_move_check(r, f"move at v_max, {plant}, measured table"))
+    return out
+
+
+def _move_check(r: dict, name: str) -> Check:
+    """The check of one move (a reversal, a hold after a move, an off-nominal plant's)."""
+    bound = f"{C.TRAJ_PEAK_ERR_DEG:g} deg moving, {C.TRAJ_REST_ERR_DEG:g} deg at rest"
+    if r["kind"] == "move_hold":
+        bound += f", then {C.HOLD_ERR_DEG:g} deg"
+    return _single(
+        r,
+        name,
+        f"peak estimation error {r.get('peak_err_deg', NAN):.3g} deg at up to "
+        f"{r.get('speed_peak_m_s', NAN):.3g} m/s, {r.get('load_n', NAN):+.3g} N; at rest "
+        f"{r.get('est_err_deg', NAN):.3g} deg, |x - target| {r.get('err_deg', NAN):.3g} deg",
+        bound,
+        "trajectory",
+    )
+
+
+def _calibration_base(base: dict, motor_spec: str, travel: float | None, tau: float) -> dict:
+    """The drive under test as the calibration runs it: the controller's model pinned to the
+    nominal motor, its own table left out (the calibration measures one)."""
+    from linsense.tune.export import end_stops
+
+    sc = copy.deepcopy(base)
+    sc["motor"] = motor_spec
+    sc.setdefault("controller", {}).setdefault("model", {})["motor"] = motor_spec
+    for key in ("lut_model", "lut_file", "compensation"):
+        sc.get("observer", {}).pop(key, None)
+    sc["travel"] = end_stops(tau, travel) if travel is not None else {"min_mm": -1e4, "max_mm": 1e4}
+    sc["reference"] = {"type": "hold"}
+    return sc
+
+
+def calibrate_plant(motor: Motor, motor_spec: str, base: dict, base_dir: str, plant: str,
+                    travel: float | None = None):
+    """The firmware's calibration (paper Fig. 9) with the drive under test on an off-nominal plant.
+
+    Parameters
+    ----------
+    motor : Motor
+        The nominal motor (the drive's model).
+    motor_spec : str
+        Its preset name or absolute file path.
+    base : dict
+        The tuned scenario.
+    base_dir : str
+        Folder the scenario is relative to.
+    plant : str
+        A key of :data:`~linsense.verify.criteria.OFF_NOMINAL`.
+    travel : float or None, optional
+        The stroke, m.
+
+    Returns
+    -------
+    linsense.sim.calibrate.Calibration
+        The measured table; its ``psi_model`` is the plant's own.
+    """
+    from linsense.sim.calibrate import calibrate
+    from linsense.sim.scenario import scenario_from_dict
+    from linsense.verify.cases import off_nominal_motor
+
+    sc = scenario_from_dict(_calibration_base(base, motor_spec, travel, motor.pole_pitch),
+                            source=f"the certificate's calibration on {plant}", base_dir=base_dir)
+    return calibrate(scenario=sc, plant=off_nominal_motor(motor, plant), positions=C.CAL_POSITIONS,
+                     load=0.0, fidelity="switching")
+
+
+def calibration_summary(cal, motor: Motor) -> dict:
+    """A calibration as the certificate reports it: the measured table against the plant's own and
+    the motor file's (electrical deg).
+
+    Parameters
+    ----------
+    cal : linsense.sim.calibrate.Calibration
+        The calibration on the plant.
+    motor : Motor
+        The nominal motor (the file's table is its model's, for the injection the drive runs).
+
+    Returns
+    -------
+    dict
+        ``completed``, ``points``, ``points_done``, ``fault``, ``max_diff_deg`` (measured against the
+        plant's own table), ``file_diff_deg`` (the file's against the plant's), and the tables
+        ``theta_deg``, ``psi_measured_deg``, ``psi_plant_deg``, ``psi_file_deg``.
+    """
+    import numpy as np
+
+    from linsense.compensation.lut import build_lut
+
+    m = cal.metrics
+    n = int(m["points"])
+    psi_file = build_lut(motor, n, f_inj=m["f_inj_hz"], quad=m["injection_quad"],
+                         injection=m["injection_shape"]).values
+    deg = np.degrees
+    meas = deg(cal.psi_measured)
+    ok = np.isfinite(meas)
+
+    def rnd(a) -> list:
+        return [None if not np.isfinite(v) else round(float(v), 6) for v in a]
+
+    return {
+        "completed": bool(cal.completed),
+        "points": n,
+        "points_done": int(m["points_done"]),
+        "fault": m["fault"],
+        "max_diff_deg": float(np.max(np.abs(meas[ok] - deg(cal.psi_model)[ok]))) if ok.any() else NAN,
+        "file_diff_deg": float(np.max(np.abs(deg(psi_file - cal.psi_model)))),
+        "theta_deg": rnd(deg(cal.theta)),
+        "psi_measured_deg": rnd(meas),
+        "psi_plant_deg": rnd(deg(cal.psi_model)),
+        "psi_file_deg": rnd(deg(psi_file)),
+    }
+
+
+def _file_table_notes(rows: list[dict], calibrations: dict) -> list[str]:
+    """The cost of the motor file's table on the plants whose table the certificate measured (for
+    information: not judged)."""
+    out = []
+    for plant, (_, _, k_e) in C.OFF_NOMINAL.items():
+        rs = [r for r in rows if r["plant"] == plant and r["table"] == "design" and "err_deg" in r]
+        if plant not in C.CALIBRATED or not rs:
+            continue
+        e = max(r["err_deg"] for r in rs)
+        per10 = e / (abs(k_e - 1.0) * 10.0)
+        out.append(f"  info  {plant} with the motor file's table: |x - target| <= {e:.3g} deg at no load "
+                   f"({per10:.2g} deg per 10 % of dM0; the bound is {C.HOLD_ERR_DEG:g} deg): measure the "
+                   f"table on the machine (linsense calibrate), as this certificate did")
     return out
 
 
@@ -295,7 +477,10 @@ def prepare(motor: Motor, motor_spec: str, base: dict, base_dir: str, *, v_max: 
     """The certificate's runs, each kind built once here; a callable that runs them.
 
     So that a configuration any of them refuses ends in one InputError before anything runs or is
-    written.
+    written. The callable first measures the table of each plant of
+    :data:`~linsense.verify.criteria.CALIBRATED` with the drive under test (the firmware's
+    calibration; the tables go through the same stamped file a user gives, in a temporary folder),
+    then runs every case.
 
     Parameters
     ----------
@@ -331,6 +516,7 @@ def prepare(motor: Motor, motor_spec: str, base: dict, base_dir: str, *, v_max: 
         A run's configuration refused.
     """
     from linsense.sim.build import build
+    from linsense.sim.calibrate import calibration_scenario
     from linsense.sim.scenario import scenario_from_dict
     from linsense.verify.cases import off_nominal_motor
     from linsense.verify.run import case_scenario
@@ -341,6 +527,7 @@ def prepare(motor: Motor, motor_spec: str, base: dict, base_dir: str, *, v_max: 
     saturated = bool(base.get("saturation", {}).get("enabled"))
     if saturated:
         cases = [c for c in cases if c.plant == "nominal"]
+    calibrated = sorted({c.plant for c in cases if c.table == "measured"})
     seen = set()
     for c in cases:
         if (c.kind, c.plant) in seen:
@@ -349,18 +536,83 @@ def prepare(motor: Motor, motor_spec: str, base: dict, base_dir: str, *, v_max: 
         sc = scenario_from_dict(case_scenario(c, base, motor_spec), source=f"the certificate's {c.kind} run",
                                 base_dir=base_dir)
         build(sc, motor=off_nominal_motor(motor, c.plant))
+    if calibrated:
+        sc = scenario_from_dict(_calibration_base(base, motor_spec, travel, motor.pole_pitch),
+                                source="the certificate's calibration", base_dir=base_dir)
+        calibration_scenario(scenario=sc, positions=C.CAL_POSITIONS)
 
     def run() -> Certificate:
+        import tempfile
+
+        from linsense.io import write_atomic
+        from linsense.sim.calibrate import measured_json
+        from linsense.sim.cluster import thread_map
+
         t0 = time.perf_counter()
-        rows = run_cases(cases, base, motor_spec, motor, base_dir, workers)
-        cks = checks(rows)
+        cals = dict(zip(calibrated, thread_map(
+            lambda p: calibrate_plant(motor, motor_spec, base, base_dir, p, travel), calibrated, workers,
+            "linsense-calibrate"), strict=True))
+        summaries = {p: calibration_summary(cal, motor) for p, cal in cals.items()}
+        with tempfile.TemporaryDirectory(prefix="linsense-cert-") as tmp:
+            files = {}
+            for i, (p, cal) in enumerate(cals.items()):
+                if cal.completed:
+                    files[p] = str(write_atomic(Path(tmp) / f"table{i}.json", measured_json(cal)))
+            todo = []
+            for c in cases:
+                if c.table == "measured":
+                    if c.plant not in files:  # (no table measured: those runs are not run)
+                        continue
+                    obs = {"lut_model": "measured", "lut_file": files[c.plant]}
+                    c = dataclasses.replace(c, sections={**c.sections, "observer": obs})
+                todo.append(c)
+            rows = run_cases(todo, base, motor_spec, motor, base_dir, workers)
+        cks = checks(rows, summaries)
         if saturated and not quick:
             cks.append(Check("holds, off-nominal plants", False, "not run: the tolerances scale the linear "
                              "inductance model, not the saturation data", "run", "verify the linear plant "
                              "(a scenario without [saturation]) for the tolerances", 0, 0))
-        return Certificate(cks, rows, time.perf_counter() - t0, quick)
+        return Certificate(cks, rows, time.perf_counter() - t0, quick,
+                           extra={"calibrations": summaries}, notes=_file_table_notes(rows, summaries))
 
     return run
+
+
+def certificate_base(sc: dict) -> dict:
+    """The tuned scenario the certificate varies: the designed sensorless drive (its mode, start-up
+    and the scenario's own reference, travel, start and load are the certificate's, per run).
+
+    Parameters
+    ----------
+    sc : dict
+        The tuned scenario (:func:`linsense.tune.export.scenario_dict`).
+
+    Returns
+    -------
+    dict
+        Its drive's sections.
+    """
+    base = {k: (dict(v) if isinstance(v, dict) else v) for k, v in sc.items()}
+    for k in ("control", "startup", "reference", "travel", "initial", "load"):
+        base.pop(k, None)
+    return base
+
+
+def failed_summary(cert: Certificate) -> str:
+    """The failed checks in one line (for a refusal and a header's comment).
+
+    Parameters
+    ----------
+    cert : Certificate
+        The certificate.
+
+    Returns
+    -------
+    str
+        ``"<verdict>: <check>: <value>; ..."``.
+    """
+    bad = [f"{c.name}: {c.value}" for c in cert.checks if not c.passed]
+    return cert.verdict() + (": " + "; ".join(bad) if bad else "")
 
 
 def verify(
@@ -425,8 +677,6 @@ def motor_ref(motor_spec: str) -> str:
     str
         A preset's name, or the motor file's absolute path.
     """
-    from pathlib import Path
-
     from linsense.model.motor import names_a_file
 
     return str(Path(motor_spec).resolve()) if names_a_file(motor_spec) else motor_spec
@@ -461,7 +711,7 @@ def design_and_verify(motor_spec: str, drive, *, quick: bool = False, workers: i
     linsense.errors.InputError
         A bad motor or drive, or a run's configuration refused.
     """
-    from pathlib import Path
+
 
     from linsense.model.motor import load_motor
     from linsense.tune.design import design
