@@ -363,6 +363,12 @@ def c_header(dz: Design, drive: DriveData, motor: Motor, name: str | None = None
     sym = c_identifier(name or motor.name)
     fn = f"ls_cfg_{sym}"
     lut = build_lut(motor, points, f_inj=dz.f_inj, quad=dz.quad).values if table is None else table.values
+    stamped = motor  # (the stamp's and the digest's motor: the file's)
+    if table is not None:  # (the rest of the drive's model takes the end effect the table says, as the
+        # simulator's does: linsense.sim.tables.measured_model)
+        from linsense.compensation.measured import end_effect_fit
+
+        motor = end_effect_fit(motor, table.values, "pulsating", dz.f_inj, dz.quad)[0]
     lut_r = lut_r_slope(motor, points, dz.f_inj, dz.quad)
     gain = gain_schedule(motor, dz.f_inj, dz.quad, points)
     gain_r = gain_r_slope(motor, dz.f_inj, dz.quad, points)
@@ -381,8 +387,8 @@ def c_header(dz: Design, drive: DriveData, motor: Motor, name: str | None = None
     body += "".join(f"\n    cfg->{r.field} = {int(v.field(r.field))}u;" for r in rows if r.kind == "count")
     guard = f"LS_CFG_{sym.upper()}_H"
     prefix = f"LS_CFG_{sym.upper()}"
-    shown = c_comment_text(motor.name)
-    digest = design_digest(motor, drive, points, table)
+    shown = c_comment_text(stamped.name)
+    digest = design_digest(stamped, drive, points, table)
     comp_what = ("with R_s" if table is None else
                  f"measured ({c_comment_text(Path(table.source).name)}, {table.stamp.points} points"
                  f"{', resampled' if table.resampled else ''})")
