@@ -5,6 +5,7 @@ from __future__ import annotations
 import click
 
 from linsense.cli import _common as c
+from linsense.cli.runs import application_options, apply_drive_data, drive_options
 
 
 @click.group(short_help="The firmware: export a project that builds with CMake.",
@@ -20,6 +21,10 @@ def firmware() -> None:
 @click.option("--scenario", "scenario_path", default=None,
               help="scenario (a file or a packaged example's name) whose drive data (bus, PWM, dead "
                    "time, i_max, injection) the design takes, as linsense tune does")
+@drive_options
+@application_options
+@click.option("--quad", type=float, default=None, callback=c.quad,
+              help="elliptical share kappa on q (0: pulsating; default 0.9)")
 @click.option("--name", default=None, help="C name suffix of ls_cfg_<name>.h (default: the motor name)")
 @click.option("--table", "table_path", default=None, type=click.Path(dir_okay=False),
               help="a measured compensation table (lut_measured.json of linsense calibrate) in place of "
@@ -29,10 +34,11 @@ def firmware() -> None:
                    "comment and the JSON)")
 @c.json_option
 def export(folder: str, motor_spec: str, scenario_path: str | None, name: str | None, table_path: str | None,
-           unverified: bool, as_json: bool) -> None:
+           unverified: bool, as_json: bool, quad, v_max, a_max, load, travel, **drive) -> None:
     """Write FOLDER: the C library's sources and headers with its CMake package, the drive's
-    configuration designed for the motor (ls_cfg_<name>.h, as linsense tune --format c writes it),
-    an example main.c with a synthetic motor, a CMakeLists.txt and the Cortex-M4F toolchain file.
+    configuration designed for the motor, its drive and application (ls_cfg_<name>.h, as linsense
+    tune --format c writes it with the same options), an example main.c with a synthetic motor, a
+    CMakeLists.txt and the Cortex-M4F toolchain file.
     `cmake -S FOLDER -B b && cmake --build b` builds it on the host, with
     -DCMAKE_TOOLCHAIN_FILE=FOLDER/cmake/arm-none-eabi-m4f.cmake for the Cortex-M4F; nothing in it
     refers to a file outside FOLDER. FOLDER must be missing, empty or an earlier output of linsense
@@ -52,6 +58,7 @@ def export(folder: str, motor_spec: str, scenario_path: str | None, name: str | 
 
         dd = drive_data(load_scenario(c.example("scenarios", scenario_path, "--scenario")))
         src = scenario_path
+    apply_drive_data(dd, drive, quad, v_max, a_max, load, travel)
     motor = c.load(motor_spec)
     made = firmware_files(motor, dd, src, name, table=table_path)
     for line in made.lines:

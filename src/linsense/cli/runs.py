@@ -242,6 +242,53 @@ def drive_options(f):
     return f
 
 
+def application_options(f):
+    """The application's data as options (``--v-max --a-max --load --travel``; the design's speed cap,
+    trips and verification follow them): a command gets them as keyword arguments, None where not
+    given (``travel`` in mm, as typed)."""
+    opts = [
+        click.option("--v-max", type=float, default=None, callback=c.finite(0.0, True),
+                     help="the application's top speed, m/s (default 0.2): speed cap, trips, verification"),
+        click.option("--a-max", type=float, default=None, callback=c.finite(0.0, True),
+                     help="the application's acceleration, m/s^2 (default 1)"),
+        click.option("--load", type=float, default=None, callback=c.finite(0.0, False),
+                     help="the rated load force, N (default half of K_f i_max): verification's loads"),
+        click.option("--travel", type=float, default=None, callback=c.finite(0.0, True),
+                     help="the stroke, mm (default: unbounded)"),
+    ]
+    for opt in reversed(opts):
+        f = opt(f)
+    return f
+
+
+def apply_drive_data(dd, drive: dict, quad=None, v_max=None, a_max=None, load=None, travel=None,
+                     shape=None):
+    """Set the options given (not None) on a :class:`~linsense.tune.design.DriveData`.
+
+    Parameters
+    ----------
+    dd : DriveData
+        The drive data to update.
+    drive : dict
+        The :func:`drive_options` by name.
+    quad, v_max, a_max, load, shape : optional
+        Kappa, m/s, m/s^2, N, the injection's shape.
+    travel : float or None, optional
+        The stroke, mm.
+
+    Returns
+    -------
+    DriveData
+        ``dd``.
+    """
+    given = {**drive, "quad": quad, "v_max": v_max, "a_max": a_max, "load": load,
+             "travel": None if travel is None else travel * 1e-3, "shape": shape}
+    for key, val in given.items():
+        if val is not None:
+            setattr(dd, key, val)
+    return dd
+
+
 @click.command(short_help="Run the firmware's LUT calibration in the simulator.",
                epilog=c.see("simulator"))
 @click.option("--motor", "motor_spec", default=None,

@@ -7,7 +7,7 @@ from pathlib import Path
 import click
 
 from linsense.cli import _common as c
-from linsense.cli.runs import drive_options
+from linsense.cli.runs import application_options, apply_drive_data, drive_options
 from linsense.version import docs
 
 
@@ -30,14 +30,7 @@ from linsense.version import docs
               help="current-sensor noise, A rms per phase (a 12-bit ADC over +-10 A on top), for the "
                    "pulse pairs")
 @click.option("--name", default=None, help="C name suffix (default: the motor name)")
-@click.option("--v-max", type=float, default=None, callback=c.finite(0.0, True),
-              help="the application's top speed, m/s (default 0.2): speed cap, trips, verification")
-@click.option("--a-max", type=float, default=None, callback=c.finite(0.0, True),
-              help="the application's acceleration, m/s^2 (default 1)")
-@click.option("--load", type=float, default=None, callback=c.finite(0.0, False),
-              help="the rated load force, N (default half of K_f i_max): verification's loads")
-@click.option("--travel", type=float, default=None, callback=c.finite(0.0, True),
-              help="the stroke, mm (default: unbounded)")
+@application_options
 @click.option("--injection", "shape", type=click.Choice(["pulsating", "rotating", "square"]), default=None,
               help="the injection: pulsating/elliptical (default; kappa --quad), rotating vector, or "
                    f"square wave at f_pwm / 2 with its dead-time measures ({docs('firmware')})")
@@ -86,11 +79,7 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
         base, base_dir, src = sc.given(), sc.base_dir, scenario_path
         base.pop("motor", None)
         dd = drive_data(sc)
-    given = {**drive, "quad": quad, "v_max": v_max, "a_max": a_max, "load": load,
-             "travel": None if travel is None else travel * 1e-3, "shape": shape}
-    for key, val in given.items():  # (the drive data options: _drive_options, DriveData's names)
-        if val is not None:
-            setattr(dd, key, val)
+    apply_drive_data(dd, drive, quad, v_max, a_max, load, travel, shape)
     if fmt == "c":
         check_c_header(dd)
     motor = c.load(motor_spec)
