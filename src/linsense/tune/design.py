@@ -605,7 +605,7 @@ def design(
     _limits(dz, motor, d, warnings, source)
     if not analyse:
         return dz
-    from linsense.tune.margins import TOLERANCE_ERR_DEG, tolerance_costs
+    from linsense.tune.margins import TOLERANCE_ERR_DEG, TOLERANCES, tolerance_costs
 
     # (the model of the tolerances is the pulsating/elliptical injection's; the other shapes have
     # their own tables: not predicted, the certificate measures them)
@@ -625,12 +625,17 @@ def design(
         if not t["error_deg"] <= TOLERANCE_ERR_DEG:
             held = (f"holds {t['error_deg']:.3g} deg off target" if math.isfinite(t["error_deg"])
                     else "has no hold near the target at some positions")
-            why = ""
             if name.startswith("dM0"):  # (docs/tuning.md, "The end-effect tolerance")
-                why = (f"; the end effect is {end_effect_ratio(motor):.2f} of the saliency, and an error in "
-                       f"it reads as a position shift at the weak positions whatever the drive does")
+                k_e = TOLERANCES[name][2]
+                per10 = t["error_deg"] / (abs(k_e - 1.0) * 10.0)
+                warnings.append(
+                    f"the motor file's table costs {per10:.2g} deg per 10 % of error in the end effect (a "
+                    f"motor off by {name} {held}; model, bound {TOLERANCE_ERR_DEG:g} deg; the end effect is "
+                    f"{end_effect_ratio(motor):.2f} of the saliency): measure the table on the machine "
+                    f"(linsense calibrate, then --table), as the certificate does")
+                continue
             warnings.append(f"a motor off by {name} {held} with this drive's nominal LUT (model; bound "
-                            f"{TOLERANCE_ERR_DEG:g} deg{why}): identify or calibrate the motor")
+                            f"{TOLERANCE_ERR_DEG:g} deg): identify or calibrate the motor")
     return dz
 
 
@@ -700,6 +705,31 @@ def uncompensated_speed_factor(motor: Motor) -> float:
     return float(max(1.0, np.max(loop_gain_factor(motor, th))))
 
 
+def bus_speed(motor: Motor, v_dc: float, i_q: float) -> float:
+    """The speed beyond which the bus cannot drive ``i_q``: where ``|R_s i + j w (L_q i + psi_pm)|``
+    reaches the linear range ``V_dc / sqrt(3)`` (no voltage left for an injection).
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+    v_dc : float
+        Bus voltage, V.
+    i_q : float
+        The q current, A.
+
+    Returns
+    -------
+    float
+        m/s (0 where ``R_s i_q`` alone takes the range).
+    """
+    _, L_q = mean_dq(motor)
+    v_lin = v_dc / math.sqrt(3.0)
+    v_r = motor.R_s * i_q
+    w = math.sqrt(max(v_lin**2 - v_r**2, 0.0)) / (L_q * i_q + motor.psi_pm)
+    return w * motor.pole_pitch / (2.0 * math.pi)
+
+
 def _limits(dz: Design, motor: Motor, d: DriveData, warnings: list, source: str) -> None:
     """The speed cap, the trips and the observer's clamp with their margins over the application
     (docs/tuning.md, "The limits"); the rated load. Fills ``dz`` in place."""
@@ -715,6 +745,13 @@ def _limits(dz: Design, motor: Motor, d: DriveData, warnings: list, source: str)
         raise InputError(source, "load", f"the application needs {need:.3g} N (load {dz.load:.3g} N + "
                          f"m a_max {motor.mass * d.a_max:.3g} N), beyond K_f i_max = {f_max:.3g} N: raise "
                          "i_max or lower a_max / the load")
+    v_bus = bus_speed(motor, d.v_dc, need / motor.force_constant)
+    if d.v_max > v_bus:
+        raise InputError(source, "v_max", f"{d.v_max:g} m/s is beyond what the {d.v_dc:g} V bus allows: "
+                         f"{v_bus:.3g} m/s, where the back-EMF, R_s i and omega L_q i at the current the "
+                         f"application needs at speed ({need / motor.force_constant:.3g} A: the load and "
+                         f"m a_max) take the whole linear range V_dc / sqrt(3), injection aside: lower "
+                         f"--v-max or raise the bus")
     if need > FORCE_MARGIN * f_max:
         warnings.append(
             f"the application needs {need:.3g} N (load {dz.load:.3g} N + m a_max "

@@ -242,8 +242,12 @@ def _moves_check(rows: list[dict]) -> Check:
     if failed:
         value += f"; e.g. {failed[0]['case']}: {failed[0]['why']}"
         whys = " ".join(r["why"] for r in failed)
+        crossed = [r["err_crosses_at_speed"] for r in failed if r.get("err_crosses_at_speed") is not None]
         cause = (REMEDY["fault"] if "fault" in whys or "did not finish" in whys else
-                 REMEDY["limit cycle"] if "limit cycle" in whys else REMEDY["trajectory"])
+                 REMEDY["limit cycle"] if "limit cycle" in whys else
+                 f"the HF estimate's error grows with the speed and crosses {C.TRAJ_PEAK_ERR_DEG:g} deg at "
+                 f"{min(crossed):.3g} m/s on this drive: a --v-max below it" if crossed else
+                 REMEDY["trajectory"])
     loads = sorted({r["load_n"] for r in rows})
     span = f"{loads[0]:+.3g}..{loads[-1]:+.3g} N" if len(loads) > 1 else f"{loads[0]:+.3g} N" if loads else ""
     return Check(f"moves at v_max, {span}", not failed, value,
