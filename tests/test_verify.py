@@ -250,6 +250,11 @@ def test_every_shipped_motor_is_verified(name):
         assert cal["completed"] and cal["max_diff_deg"] <= bound, (plant, cal["max_diff_deg"])
     moving = [r for r in cert.rows if r["kind"] in ("trajectory", "reversal", "move_hold")]
     assert moving and all(r["speed_peak_m_s"] >= dd.v_max for r in moving if r["plant"] == "nominal")
+    # docs/tuning.md's class table (tools/class_table.py) says what this run says
+    from linsense.verify.certificate import summary_row
+
+    row = "| " + " | ".join(summary_row(name, cert)) + " |"
+    assert row in (ROOT / "docs" / "tuning.md").read_text().splitlines(), row
 
 
 def test_tune_cli_writes_certificate_and_exit_code(tmp_path, capsys):

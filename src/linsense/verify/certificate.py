@@ -619,6 +619,71 @@ def failed_summary(cert: Certificate) -> str:
     return cert.verdict() + (": " + "; ".join(bad) if bad else "")
 
 
+#: the columns of :func:`summary_row` (docs/tuning.md's class table, tools/class_table.py)
+SUMMARY_COLUMNS = (
+    "motor", "verdict", "holds: worst error / p-p (deg)", "steps 0.1 / 0.75 pitch (s)",
+    "moves: worst error moving (deg, at load) / at rest", "top speed (m/s)",
+    "reversal / hold after move (deg)",
+    "load step (s)", "dM0 -25 / +25 %, measured table: holds (deg)", "table vs the plant's (deg)",
+    "the file's table at dM0 +-25 % (deg)")
+
+
+def summary_row(name: str, cert: Certificate) -> list[str]:
+    """A certificate as one row of the class table (docs/tuning.md, "Where the design stands").
+
+    Parameters
+    ----------
+    name : str
+        The motor.
+    cert : Certificate
+        Its full certificate.
+
+    Returns
+    -------
+    list of str
+        One cell per :data:`SUMMARY_COLUMNS`.
+    """
+    rows = cert.rows
+
+    def worst(rs, key):
+        vals = [r[key] for r in rs if r.get(key) is not None]
+        return max(vals) if vals else NAN
+
+    nominal = [r for r in rows if r["plant"] == "nominal"]
+    holds = [r for r in nominal if r["kind"] == "hold"]
+    steps = [r for r in nominal if r["kind"] == "step"]
+    trajs = [r for r in nominal if r["kind"] == "trajectory" and "peak_err_deg" in r]
+    top = max(trajs, key=lambda r: r["peak_err_deg"], default=None)
+    other = {r["kind"]: r for r in nominal if r["kind"] in ("reversal", "move_hold", "load_step")}
+    measured = {p: [r for r in rows if r["plant"] == p and r["table"] == "measured" and r["kind"] == "hold"]
+                for p in C.CALIBRATED}
+    filed = {p: [r for r in rows if r["plant"] == p and r["table"] == "design"] for p in C.CALIBRATED}
+    cals = cert.extra.get("calibrations", {})
+
+    def s(v, fmt=".2f"):
+        return "never" if v is None else f"{v:{fmt}}"
+
+    def pair(p):
+        return " / ".join(f"{worst(p[k], 'err_deg'):.2f}" for k in sorted(p, reverse=True))
+
+    failed = sum(not c.passed for c in cert.checks)
+    return [
+        name,
+        "**verified**" if cert.verified else f"{failed} of {len(cert.checks)} failed",
+        f"{worst(holds, 'err_deg'):.2f} / {worst(holds, 'pp_deg'):.3f}",
+        " / ".join(s(r.get("settle_s")) for r in steps),
+        "n/a" if top is None else (f"{top['peak_err_deg']:.2f} ({top['load_n']:+.3g} N) / "
+                                   f"{worst(trajs, 'est_err_deg'):.2f}"),
+        f"{min((r['speed_peak_m_s'] for r in trajs), default=NAN):.2f}",
+        " / ".join(f"{other[k].get('peak_err_deg', NAN):.2f}" for k in ("reversal", "move_hold")
+                   if k in other),
+        s(other["load_step"].get("recover_s")) if "load_step" in other else "n/a",
+        pair(measured),
+        " / ".join(f"{cals[p]['max_diff_deg']:.2f}" for p in sorted(cals, reverse=True)),
+        pair(filed),
+    ]
+
+
 def verify(
     motor: Motor,
     motor_spec: str,
