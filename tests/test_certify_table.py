@@ -108,3 +108,21 @@ def test_only_a_verified_drive_is_written_for_the_firmware(run_cli, tmp_path):
     assert r.code == 2 and "--unverified" in r.err and not out.exists()
     r = run_cli("tune", "--motor", "ecce2010", "--no-verify", "--unverified", "--format", "c", "--out", out)
     assert r.code == 0 and "NOT VERIFIED" in out.read_text() and "--no-verify" in out.read_text()
+
+
+def test_a_v_max_beyond_the_bus_is_refused_naming_the_bus_limited_speed(run_cli, tmp_path):
+    """ecce2010 at 72 V: the back-EMF, R_s i and omega L_q i at the application's current at speed
+    take V_dc / sqrt(3) at 2.85 m/s; --v-max 5 is refused there, in one line, before anything runs or
+    is written; 24 V on m45_24v has its own limit."""
+    from linsense.tune.design import bus_speed
+
+    m = load_motor("ecce2010")
+    assert bus_speed(m, 72.0, (25.0 + 1.5 * 1.0) / 20.0) == pytest.approx(2.85, abs=0.005)
+    assert bus_speed(m, 36.0, 1.0) < 0.5 * bus_speed(m, 72.0, 1.0) + 0.1
+    out = tmp_path / "t.toml"
+    r = run_cli("tune", "--motor", "ecce2010", "--v-max", "5", "--out", out)
+    err = r.err.strip().splitlines()
+    assert r.code == 2 and len(err) == 1 and "v_max" in err[0] and "2.85 m/s" in err[0], r.err
+    assert not out.exists() and not (tmp_path / "t.verification.json").exists()
+    r = run_cli("firmware", "export", tmp_path / "fw", "--motor", "ecce2010", "--v-max", "5")
+    assert r.code == 2 and "2.85 m/s" in r.err and not (tmp_path / "fw").exists()
