@@ -34,9 +34,12 @@ Each line: the claim [where it is written]: the test that asserts it.
   deg = 0.16 mm [README.md; simulator.md]: here: test_metric_bounds_in_mm
 * six test motors; every one passes the quick certificate [README.md]:
   test_verify.py::test_every_class_motor_passes_the_quick_certificate; here: test_class_motors
-* m30_low and m45_24v pass the full certificate, the others fail the end effect only [README.md]:
-  test_verify.py::test_every_test_motor_passes_all_but_the_end_effect_tolerance
-* ... whose end effect is over about 0.4 of the saliency [README.md]: here: test_class_motors
+* each of the six test motors, ecce2010 and small30 passes the full certificate (the end effect with
+  the table measured on the plant) [README.md; tuning.md class table]:
+  test_verify.py::test_every_shipped_motor_is_verified
+* the bus-limited speed named for a --v-max beyond it [README.md]:
+  test_certify_table.py::test_a_v_max_beyond_the_bus_is_refused_naming_the_bus_limited_speed
+* README's command block runs as written [README.md]: test_readme.py
 * pulsating calibration within 0.1 deg at 0, 20, 40 N [README.md]:
   test_closed_loop.py::test_calibration_as_the_paper
 * elliptical calibration within 0.3 deg [README.md; simulator.md calibration table]:
@@ -154,15 +157,16 @@ def test_metric_bounds_in_mm():
 
 
 def test_class_motors():
-    """README.md: six test motors spanning the class; the ones that fail the end-effect tolerance
-    have an end effect over about 0.4 of their saliency (the smallest, m20_hv, 0.375), the two
-    verified ones less (m30_low 0.18, m45_24v 0.36)."""
+    """README.md: six test motors spanning the class, both end-effect signs, end-effect ratios from
+    0.18 (m30_low) to 0.72 (m100_edge): those above about 0.4 cannot meet the end-effect tolerance
+    with a table from the motor file (docs/tuning.md, "The end-effect tolerance"), which is why the
+    certificate measures it."""
     from linsense.tune.design import end_effect_ratio
 
     ratio = {p.stem: end_effect_ratio(load_motor(p)) for p in sorted(CLASS.glob("m*.toml"))}
     assert len(ratio) == 6, ratio
-    failing = {k: v for k, v in ratio.items() if k not in ("m30_low", "m45_24v")}
-    assert shown(min(failing.values()), "0.4") and all(v > ratio["m45_24v"] for v in failing.values()), ratio
+    assert shown(ratio["m30_low"], "0.18") and shown(max(ratio.values()), "0.72"), ratio
+    assert sum(v > 0.4 for v in ratio.values()) >= 3, ratio
 
 
 def test_design_table():
