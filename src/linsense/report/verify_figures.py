@@ -105,16 +105,22 @@ def certificate_figure(rows: list[dict], title: str, quick: bool = False,
     a.set(title="steps and load step: x - target", xlabel="t (s)", ylabel="electrical deg", ylim=(-lim, lim))
     _legend(a)
     a = ax[1, 1]
-    for r in rows:
-        if r["kind"] in ("trajectory", "reversal", "move_hold") and r["plant"] == "nominal" and "trace" in r:
-            tr = r["trace"]
-            what = r["kind"].replace("_", " ")
-            a.plot(tr["t"], tr["err_deg"], lw=0.8, label=f"{what}, {r['load_n']:+.3g} N")
+    shown = [r for r in rows if r["kind"] in ("trajectory", "reversal", "move_hold")
+             and r["plant"] == "nominal" and r.get("trace")]
+    trajs = [r for r in shown if r["kind"] == "trajectory"]
+    worst = max(trajs, key=lambda r: r.get("peak_err_deg", 0.0), default=None)
+    # (the worst out-and-back, the no-load one, the reversal and the hold after a move: all nine
+    # loads drawn over each other hide each other; every one is in the panel below)
+    picked = [r for r in shown if r is worst or (r["kind"] == "trajectory" and r["load_n"] == 0.0)
+              or r["kind"] != "trajectory"]
+    for r in picked:
+        tr = r["trace"]
+        what = r["kind"].replace("_", " ") + (" (worst)" if r is worst else "")
+        a.plot(tr["t"], tr["err_deg"], lw=0.8, label=f"{what}, {r['load_n']:+.3g} N")
     a.axhspan(-C.TRAJ_PEAK_ERR_DEG, C.TRAJ_PEAK_ERR_DEG, color="0.9")
     a.axhspan(-C.TRAJ_REST_ERR_DEG, C.TRAJ_REST_ERR_DEG, color="0.8")
     a.set(title="moves at v_max: estimation error", xlabel="t (s)", ylabel="electrical deg")
-    if a.get_legend_handles_labels()[0]:
-        a.legend(fontsize=6, ncol=2)
+    _legend(a)
     a = ax[2, 0]
     mv = [r for r in rows if r["kind"] in ("trajectory", "reversal", "move_hold") and r["plant"] == "nominal"
           and "peak_err_deg" in r]
