@@ -96,14 +96,16 @@ def test_only_a_verified_drive_is_written_for_the_firmware(run_cli, tmp_path):
                 "--unverified", "--json")
     assert r.code == 0, r.err
     doc = json.loads(r.out)
-    assert doc["ok"] is False and "moves at v_max" in doc["unverified"]
+    assert doc["ok"] is False and "moves at v_max" in doc["unverified"] and doc["certificate"] == "quick"
     hdr = (tmp_path / "fw" / "ls_cfg_ecce2010.h").read_text()
     assert "NOT VERIFIED: written with --unverified" in hdr and "moves at v_max" in hdr
     out = tmp_path / "c.h"
     r = run_cli("tune", "--motor", "ecce2010", "--v-max", "1.2", "--a-max", "3", "--quick", "--format", "c",
                 "--out", out)
     assert r.code == 1 and not out.exists() and "not written" in r.err
-    assert (tmp_path / "c.verification.json").exists()  # (why, for the user to read)
+    # (the certificate is printed; its files are written with a header only: a refusal leaves an
+    # earlier output set, header and certificate, as it was)
+    assert "FAIL  moves at v_max" in r.out and not (tmp_path / "c.verification.json").exists()
     r = run_cli("tune", "--motor", "ecce2010", "--no-verify", "--format", "c", "--out", out)
     assert r.code == 2 and "--unverified" in r.err and not out.exists()
     r = run_cli("tune", "--motor", "ecce2010", "--no-verify", "--unverified", "--format", "c", "--out", out)

@@ -101,13 +101,16 @@ def test_export_takes_a_scenarios_drive_and_refuses_what_it_cannot_write(run_cli
 
 
 def test_the_design_is_tunes(run_cli, tmp_path):
-    """The exported ls_cfg header is what `linsense tune --format c` writes for the same motor."""
+    """The exported ls_cfg header is what `linsense tune --format c --quick` writes for the same
+    motor (both passed the quick certificate, and say so)."""
     hdr = tmp_path / "ls_cfg_small30.h"
     assert run_cli("tune", "--quick", "--motor", "small30", "--format", "c", "--out", hdr).code == 0
     from linsense.model.motor import load_motor
+    from linsense.verify.certificate import VERIFIED_BY
 
-    made = firmware_files(load_motor("small30"))
+    made = firmware_files(load_motor("small30")).certified("", VERIFIED_BY[True])  # (what the export writes)
     assert made.files["ls_cfg_small30.h"].decode() == hdr.read_text()
+    assert "Verified: the quick certificate" in hdr.read_text()
 
 
 # ---------------------------------------------------------------------------------- the stamps

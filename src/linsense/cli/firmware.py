@@ -5,7 +5,7 @@ from __future__ import annotations
 import click
 
 from linsense.cli import _common as c
-from linsense.cli.runs import application_options, apply_drive_data, drive_options
+from linsense.cli.runs import application_options, apply_drive_data, drive_options, scenario_table
 
 
 @click.group(short_help="The firmware: export a project that builds with CMake.",
@@ -47,7 +47,7 @@ def export(folder: str, motor_spec: str, scenario_path: str | None, name: str | 
     fails is not written (exit 1, naming the failed checks) unless --unverified."""
     from linsense.firmware.export import firmware_files, write_firmware
     from linsense.tune.design import DriveData
-    from linsense.verify.certificate import failed_summary
+    from linsense.verify.certificate import VERIFIED_BY, failed_summary
 
     if as_json:
         c.data_on_stdout()
@@ -56,32 +56,38 @@ def export(folder: str, motor_spec: str, scenario_path: str | None, name: str | 
         from linsense.sim.build import drive_data
         from linsense.sim.scenario import load_scenario
 
-        dd = drive_data(load_scenario(c.example("scenarios", scenario_path, "--scenario")))
+        sc = load_scenario(c.example("scenarios", scenario_path, "--scenario"))
+        dd = drive_data(sc)
         src = scenario_path
+        if table_path is None:  # (the scenario's measured table is the drive's; --table over it)
+            table_path = scenario_table(sc)
     apply_drive_data(dd, drive, quad, v_max, a_max, load, travel)
     motor = c.load(motor_spec)
     made = firmware_files(motor, dd, src, name, table=table_path)
     for line in made.lines:
         c.say(line)
     cert = _quick_certificate(motor_spec, motor, dd, made, table_path)
-    for line in cert.lines():
+    lines = cert.lines()
+    if cert.passed:  # (the export's own check: the quick certificate; tune --format c runs the full one)
+        lines[-1] = ("quick certificate passed: written (linsense tune --format c runs the full "
+                     "certificate of the same drive)")
+    for line in lines:
         c.say(line)
     reason = "" if cert.passed else failed_summary(cert)
     if reason and not unverified:
         c.elapsed()
         if as_json:
             c.emit_json("firmware export", [], False, motor=made.motor, name=made.name, digest=made.digest,
-                        refused=reason)
+                        certificate="quick", refused=reason)
         c.warn(f"{folder} not written: {reason} (--unverified writes it anyway)")
         raise click.exceptions.Exit(1)
-    if reason:
-        made = made.unverified(reason)
+    made = made.certified(reason, "" if reason else VERIFIED_BY[True])
     files = write_firmware(folder, made)
     c.files_report(files)
     c.elapsed()
     if as_json:
         c.emit_json("firmware export", files, not reason, motor=made.motor, name=made.name,
-                    digest=made.digest, verified=cert.passed, **({"unverified": reason} if reason else {}))
+                    digest=made.digest, certificate="quick", **({"unverified": reason} if reason else {}))
 
 
 def _quick_certificate(motor_spec: str, motor, dd, made, table_path: str | None):

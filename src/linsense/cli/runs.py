@@ -261,6 +261,27 @@ def application_options(f):
     return f
 
 
+def scenario_table(sc) -> str | None:
+    """The measured table a scenario's drive runs (``observer.lut_model = "measured"``), as an
+    absolute path, or None (the model's table).
+
+    Parameters
+    ----------
+    sc : linsense.sim.scenario.Scenario
+        The scenario.
+
+    Returns
+    -------
+    str or None
+        The table's file.
+    """
+    from linsense.sim.tables import lut_file_path
+
+    if sc.spec.observer.lut_model != "measured":
+        return None
+    return str(lut_file_path(sc).resolve())
+
+
 def apply_drive_data(dd, drive: dict, quad=None, v_max=None, a_max=None, load=None, travel=None,
                      shape=None):
     """Set the options given (not None) on a :class:`~linsense.tune.design.DriveData`.

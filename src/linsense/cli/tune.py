@@ -7,7 +7,7 @@ from pathlib import Path
 import click
 
 from linsense.cli import _common as c
-from linsense.cli.runs import application_options, apply_drive_data, drive_options
+from linsense.cli.runs import application_options, apply_drive_data, drive_options, scenario_table
 from linsense.version import docs
 
 
@@ -79,6 +79,14 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
         base, base_dir, src = sc.given(), sc.base_dir, scenario_path
         base.pop("motor", None)
         dd = drive_data(sc)
+        # the scenario's measured table is the drive's (--table over it): designed, verified and
+        # written with it, its path made relative to the output again
+        own_table = scenario_table(sc)
+        for key in ("lut_model", "lut_file"):
+            base.get("observer", {}).pop(key, None)
+        if table_path is None and own_table is not None:
+            table_path = own_table
+            say(f"  table          the scenario's measured table {own_table}")
     apply_drive_data(dd, drive, quad, v_max, a_max, load, travel, shape)
     if fmt == "c":
         check_c_header(dd)
@@ -95,13 +103,16 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
     k_est = uncompensated_speed_factor(motor) if no_table else 1.0
     table = None
     if table_path is not None:
-        from linsense.compensation.measured import read_measured_table
+        from linsense.compensation.measured import fit_report, read_measured_table
 
         f_table = dd.f_pwm / 2.0 if dd.shape == "square" else dz.f_inj
         table = read_measured_table(table_path, motor=motor, injection=dd.shape, f_inj=f_table,
                                     quad=dz.quad if dd.shape == "pulsating" else 0.0, points=256)
         if table.note:
             say(f"  table          {table.note}")
+        fit_line, fit_warning = fit_report(motor, table.values, dd.shape, f_table,
+                                           dz.quad if dd.shape == "pulsating" else 0.0)
+        say(f"  table          {fit_line}")
     table_abs = None if table_path is None else str(Path(table_path).resolve())
     sc_dict = scenario_dict(dz, dd, motor_spec, base, startup=su, k_est=k_est, pole_pitch=motor.pole_pitch,
                             table=table_abs)
@@ -121,6 +132,9 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
         say("  start-up       not designed: no saturation data (--polarity, or [saturation] polarity "
             "in the motor file)")
     warnings = dz.warnings + (su.warnings if su is not None else [])
+    if table is not None:  # (the file's table's cost is moot: the drive runs the measured one)
+        warnings = [w for w in warnings if not w.startswith("the motor file's table costs")]
+        warnings += [fit_warning] if fit_warning else []
     for w in warnings:
         c.warn(w)
     if mode != "sensorless_lut" and not no_verify:
@@ -132,10 +146,11 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
     digest = design_digest(motor, dd, 256, table)
     reason = ""
     if fmt == "c":  # (the header waits for the verdict: written only for a drive that passed)
-        from linsense.verify.certificate import failed_summary
+        from linsense.verify.certificate import VERIFIED_BY, failed_summary
 
-        if cert_run is not None:
-            cert = _verify_tuned(cert_run, motor, dd, dz, quick, json_path, png_path, files, digest)
+        if cert_run is not None:  # (its files written with the header only: a refusal leaves the
+            # earlier output set, header and certificate, as it was)
+            cert = _run_certificate(cert_run)
         reason = "not verified (--no-verify)" if cert is None else "" if cert.passed else failed_summary(cert)
         if reason and not unverified:
             c.elapsed()
@@ -144,7 +159,10 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
                 c.emit_json("tune", files, False, verification=verification, refused=reason)
             c.warn(f"{out} not written: {reason} (--unverified writes it anyway)")
             raise click.exceptions.Exit(1)
-        text = c_header(dz, dd, motor, name, startup=su, table=table, unverified=reason)
+        by = "" if reason else VERIFIED_BY[cert.quick]
+        text = c_header(dz, dd, motor, name, startup=su, table=table, unverified=reason, verified_by=by)
+        if cert is not None:
+            _write_certificate(cert, motor, dd, dz, quick, json_path, png_path, files, digest)
     else:
         text = scenario_toml(dz, dd, motor_spec, Path(out), base, Path.cwd(), startup=su, k_est=k_est,
                              pole_pitch=motor.pole_pitch, table=table_abs)
@@ -162,7 +180,8 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
             c.emit_json("tune", files, None, verification=None, **summary)
         return
     if cert is None:
-        cert = _verify_tuned(cert_run, motor, dd, dz, quick, json_path, png_path, files, digest)
+        cert = _run_certificate(cert_run)
+        _write_certificate(cert, motor, dd, dz, quick, json_path, png_path, files, digest)
     c.elapsed()
     if as_json:
         verification = {k: v for k, v in cert.as_dict().items() if k != "runs"}
@@ -182,32 +201,32 @@ def _certificate_paths(out: str) -> tuple[Path, Path]:
     return folder / f"{stem}.verification.json", folder / f"{stem}.verification.png"
 
 
-def _verify_tuned(cert_run, motor, dd, dz, quick: bool, json_path: Path, png_path: Path, files: list,
-                  digest: str = ""):
-    """Run the prepared certificate, print it, write its JSON and figure (appended to ``files``);
-    return it (a quick run never claims the full certificate)."""
-    say = c.say
+def _run_certificate(cert_run):
+    """Run the prepared certificate and print it."""
+    cert = cert_run()
+    for line in cert.lines():
+        c.say(line)
+    return cert
+
+
+def _write_certificate(cert, motor, dd, dz, quick: bool, json_path: Path, png_path: Path, files: list,
+                       digest: str = "") -> None:
+    """Write the certificate's JSON and figure (appended to ``files``)."""
     import json
 
     from linsense.io import write_atomic
     from linsense.report.figures import save_png
     from linsense.report.verify_figures import certificate_figure
 
-    cert = cert_run()
-    for line in cert.lines():
-        say(line)
     doc = cert.as_dict()
     doc.update(motor=motor.name, drive={k: v for k, v in vars(dd).items()}, data_sha256=digest,
                design={k: v for k, v in dz.as_dict().items() if k not in ("margins", "warnings")})
     files.append(write_atomic(json_path, json.dumps(doc, indent=1, sort_keys=True) + "\n"))
-    say(str(files[-1]))
+    c.say(str(files[-1]))
     fig = certificate_figure(cert.rows, f"{motor.name}: {cert.verdict()}", quick=quick,
                              calibrations=cert.extra.get("calibrations"))
     files.append(save_png(fig, png_path, 100))
-    say(str(files[-1]))
-    return cert
-
-
+    c.say(str(files[-1]))
 
 
 def motor_pitch(dd, dz) -> float:

@@ -41,7 +41,7 @@ from linsense.compensation.stamp import data_digest
 from linsense.errors import InputError, shown
 
 __all__ = ["FORMAT", "INFO_KEYS", "INJECTIONS", "PSI_MAX", "MeasuredTable", "TableStamp", "end_effect_fit",
-           "measured_table_json", "read_measured_table", "table_stamp"]
+           "fit_report", "measured_table_json", "read_measured_table", "table_stamp"]
 
 #: the document's ``format``
 FORMAT = "linsense-measured-lut"
@@ -554,3 +554,46 @@ def end_effect_fit(motor, values: np.ndarray, injection: str, f_inj: float, quad
     if not math.isfinite(res.fun) or cost(1.0) <= res.fun:
         return motor, 1.0, math.sqrt(cost(1.0))
     return perturbed(motor, 1.0, 1.0, k), k, math.sqrt(float(res.fun))
+
+
+#: a measured table whose end-effect fit leaves more than this (rms, electrical deg), or whose
+#: end effect is off the file's by more than a factor :data:`FIT_SCALE_WARN`, is doubtful: a
+#: calibration measures the paper's table to 0.1-0.4 deg, and an end effect off by a factor 2 is
+#: another motor than the file's
+FIT_RMS_WARN_DEG = 0.5
+FIT_SCALE_WARN = 2.0
+
+
+def fit_report(motor, values: np.ndarray, injection: str, f_inj: float, quad: float) -> tuple[str, str]:
+    """What :func:`end_effect_fit` made of a measured table, as a person reads it.
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor the drive believes in.
+    values : ndarray
+        The measured table, rad.
+    injection : str
+        The injection's shape.
+    f_inj : float
+        The injection frequency the drive runs, Hz.
+    quad : float
+        Kappa.
+
+    Returns
+    -------
+    line : str
+        The fit: the end effect's scale and the fit's rms.
+    warning : str
+        "" for a table the fit explains; else why the table is doubtful.
+    """
+    _, k, rms = end_effect_fit(motor, values, injection, f_inj, quad)
+    rms_deg = math.degrees(rms)
+    line = (f"the end effect it says: {k:.3g} x the motor file's (the drive's model takes it; the fit "
+            f"leaves {rms_deg:.2g} deg rms)")
+    doubtful = rms_deg > FIT_RMS_WARN_DEG or not (1.0 / FIT_SCALE_WARN <= k <= FIT_SCALE_WARN)
+    warning = (f"the measured table does not look like this motor's: its end effect {k:.3g} x the file's, "
+               f"{rms_deg:.2g} deg rms left by the fit (a calibration: 0.1-0.4 deg; bounds "
+               f"{FIT_RMS_WARN_DEG:g} deg and a factor {FIT_SCALE_WARN:g}): check the calibration (its "
+               f"metrics.json) and the motor file" if doubtful else "")
+    return line, warning

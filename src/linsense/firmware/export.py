@@ -121,7 +121,8 @@ class FirmwareExport:
     design : Design
         The design (:func:`linsense.tune.design.design`), for its certificate.
     header : callable
-        ``header(unverified: str) -> str``: the configuration header (:meth:`unverified`).
+        ``header(unverified: str, verified_by: str) -> str``: the configuration header
+        (:meth:`certified`).
     """
 
     files: dict[str, bytes]
@@ -132,21 +133,24 @@ class FirmwareExport:
     design: object = None
     header: object = None
 
-    def unverified(self, reason: str) -> FirmwareExport:
-        """The same files with the configuration header saying why it is written unverified.
+    def certified(self, unverified: str = "", verified_by: str = "") -> FirmwareExport:
+        """The same files with the configuration header saying what verified it, or why it is
+        written unverified.
 
         Parameters
         ----------
-        reason : str
-            The certificate's failed checks (or why none ran).
+        unverified : str, optional
+            The certificate's failed checks (``--unverified``).
+        verified_by : str, optional
+            The certificate it passed.
 
         Returns
         -------
         FirmwareExport
-            A copy whose ``ls_cfg_<name>.h`` carries ``reason`` in its comment.
+            A copy whose ``ls_cfg_<name>.h`` says so in its comment.
         """
         files = dict(self.files)
-        files[f"ls_cfg_{self.name}.h"] = self.header(reason).encode()
+        files[f"ls_cfg_{self.name}.h"] = self.header(unverified, verified_by).encode()
         return dataclasses.replace(self, files=files)
 
 
@@ -222,8 +226,9 @@ def firmware_files(motor, drive=None, source: str = "<firmware export>", name: s
     toolchain = "cmake/arm-none-eabi-m4f.cmake"
     files[toolchain] = lib[toolchain].read_bytes() if toolchain in lib else b""
 
-    def header(unverified: str = "") -> str:
-        return c_header(dz, dd, motor, name, points=points, startup=su, table=table, unverified=unverified)
+    def header(unverified: str = "", verified_by: str = "") -> str:
+        return c_header(dz, dd, motor, name, points=points, startup=su, table=table, unverified=unverified,
+                        verified_by=verified_by)
 
     files[cfg_name] = header().encode()
     files["ls_example.h"] = example_header(motor, dd, sym, digest).encode()

@@ -142,8 +142,10 @@ def certificate_figure(rows: list[dict], title: str, quick: bool = False,
     for i, (plant, cal) in enumerate((calibrations or {}).items()):
         th = cal["theta_deg"]
         color = f"C{i}"
+        what = (f"measured ({cal['max_diff_deg']:.2g} deg off the plant's)" if cal["completed"] else
+                f"DID NOT COMPLETE ({cal['points_done']} of {cal['points']} points, {cal['fault']})")
         a.plot(th, [float("nan") if v is None else v for v in cal["psi_measured_deg"]], "o", ms=3,
-               color=color, label=f"{plant}: measured ({cal['max_diff_deg']:.2g} deg off the plant's)")
+               color=color, label=f"{plant}: {what}")
         a.plot(th, cal["psi_plant_deg"], "-", color=color, lw=0.8, label=f"{plant}: the plant's own")
         if i == 0:
             a.plot(th, cal["psi_file_deg"], "k--", lw=1.0, label="from the motor file")

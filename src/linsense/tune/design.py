@@ -486,6 +486,15 @@ def design(
             source, "f_inj", f"must be between {F_INJ_MIN / 8.0:g} Hz (the loops' bandwidths follow it) and "
             f"f_pwm / 4 = {d.f_pwm / 4:g} Hz, got {f_inj:g}"
         )
+    # a speed beyond what the bus allows first (the move's time below would blame the acceleration)
+    need = rated_load(motor, d) + motor.mass * d.a_max
+    v_bus = bus_speed(motor, d.v_dc, need / motor.force_constant)
+    if d.v_max > v_bus:
+        raise InputError(source, "v_max", f"{d.v_max:g} m/s is beyond what the {d.v_dc:g} V bus allows: "
+                         f"{v_bus:.3g} m/s, where the back-EMF, R_s i and omega L_q i at the current the "
+                         f"application needs at speed ({need / motor.force_constant:.3g} A: the load and "
+                         f"m a_max) take the whole linear range V_dc / sqrt(3), injection aside: lower "
+                         f"--v-max or raise the bus")
     # the application's move over two pole pitches (the certificate's trajectory) within a minute
     t_move = 2.0 * motor.pole_pitch / d.v_max + d.v_max / d.a_max
     if t_move > MOVE_TIME_MAX:
@@ -705,6 +714,24 @@ def uncompensated_speed_factor(motor: Motor) -> float:
     return float(max(1.0, np.max(loop_gain_factor(motor, th))))
 
 
+def rated_load(motor: Motor, d: DriveData) -> float:
+    """The rated load: the application's, else :data:`RATED_LOAD_FRACTION` of ``K_f i_max``.
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+    d : DriveData
+        The drive and application.
+
+    Returns
+    -------
+    float
+        N.
+    """
+    return d.load if d.load is not None else RATED_LOAD_FRACTION * motor.force_constant * d.i_max
+
+
 def bus_speed(motor: Motor, v_dc: float, i_q: float) -> float:
     """The speed beyond which the bus cannot drive ``i_q``: where ``|R_s i + j w (L_q i + psi_pm)|``
     reaches the linear range ``V_dc / sqrt(3)`` (no voltage left for an injection).
@@ -735,7 +762,7 @@ def _limits(dz: Design, motor: Motor, d: DriveData, warnings: list, source: str)
     (docs/tuning.md, "The limits"); the rated load. Fills ``dz`` in place."""
     w_per_v = 2.0 * math.pi / motor.pole_pitch  # electrical rad/s per m/s
     f_max = motor.force_constant * d.i_max
-    dz.load = d.load if d.load is not None else RATED_LOAD_FRACTION * f_max
+    dz.load = rated_load(motor, d)
     dz.force_max = f_max
     if not (math.isfinite(dz.load) and dz.load > 0.0):
         raise InputError(source, "load", f"the rated load must be a force > 0 N (the certificate's loads "
@@ -745,13 +772,6 @@ def _limits(dz: Design, motor: Motor, d: DriveData, warnings: list, source: str)
         raise InputError(source, "load", f"the application needs {need:.3g} N (load {dz.load:.3g} N + "
                          f"m a_max {motor.mass * d.a_max:.3g} N), beyond K_f i_max = {f_max:.3g} N: raise "
                          "i_max or lower a_max / the load")
-    v_bus = bus_speed(motor, d.v_dc, need / motor.force_constant)
-    if d.v_max > v_bus:
-        raise InputError(source, "v_max", f"{d.v_max:g} m/s is beyond what the {d.v_dc:g} V bus allows: "
-                         f"{v_bus:.3g} m/s, where the back-EMF, R_s i and omega L_q i at the current the "
-                         f"application needs at speed ({need / motor.force_constant:.3g} A: the load and "
-                         f"m a_max) take the whole linear range V_dc / sqrt(3), injection aside: lower "
-                         f"--v-max or raise the bus")
     if need > FORCE_MARGIN * f_max:
         warnings.append(
             f"the application needs {need:.3g} N (load {dz.load:.3g} N + m a_max "

@@ -316,7 +316,7 @@ def design_values(dz: Design, drive: DriveData, motor: Motor, startup=None) -> V
 
 
 def c_header(dz: Design, drive: DriveData, motor: Motor, name: str | None = None, points: int = 256,
-             startup=None, table=None, unverified: str = "") -> str:
+             startup=None, table=None, unverified: str = "", verified_by: str = "") -> str:
     """``ls_cfg_<name>.h``: the drive's configuration for the C library.
 
     The compensation and gain tables, their slopes in the resistance's scale, and
@@ -348,6 +348,8 @@ def c_header(dz: Design, drive: DriveData, motor: Motor, name: str | None = None
     unverified : str, optional
         Why the drive is written without a passed certificate (``--unverified``): said in the
         header's comment; "" for a verified drive.
+    verified_by : str, optional
+        The certificate the drive passed (said in the header's comment).
 
     Returns
     -------
@@ -392,8 +394,13 @@ def c_header(dz: Design, drive: DriveData, motor: Motor, name: str | None = None
     comp_what = ("with R_s" if table is None else
                  f"measured ({c_comment_text(Path(table.source).name)}, {table.stamp.points} points"
                  f"{', resampled' if table.resampled else ''})")
-    status = (" * NOT VERIFIED: written with --unverified; " + c_comment_text(unverified) + "\n *\n"
-              if unverified else "")
+    import textwrap
+
+    if unverified:
+        said = textwrap.wrap("NOT VERIFIED: written with --unverified; " + c_comment_text(unverified), 96)
+    else:
+        said = textwrap.wrap("Verified: " + c_comment_text(verified_by), 96) if verified_by else []
+    status = "".join(f" * {ln}\n" for ln in said) + (" *\n" if said else "")
     return f"""/* Drive configuration for motor {shown}, designed by `linsense tune` (docs/tuning.md).
 {status}
  * Drive: {drive.v_dc:g} V bus, {drive.f_pwm:g} Hz PWM, {drive.dead_time * 1e6:g} us dead time,

@@ -286,7 +286,7 @@ def trajectory_case(tau: float, v_max: float, a_max: float, load: float, distanc
     )
 
 
-def load_step_case(tau: float, load_rated: float) -> Case:
+def load_step_case(tau: float, load_rated: float, x0: float | None = None) -> Case:
     """A step of :data:`~linsense.verify.criteria.LOAD_STEP_FRACTION` of the rated load while holding.
 
     Parameters
@@ -295,13 +295,16 @@ def load_step_case(tau: float, load_rated: float) -> Case:
         Pole pitch, m.
     load_rated : float
         Rated load, N.
+    x0 : float or None, optional
+        Where it holds, m (default :func:`start`; the middle of a stroke, whose end stops the step's
+        deviation must not reach).
 
     Returns
     -------
     Case
         The run.
     """
-    x0 = start(tau)
+    x0 = start(tau) if x0 is None else x0
     t0 = 0.3
     f = C.LOAD_STEP_FRACTION * load_rated
     return Case(
@@ -398,7 +401,7 @@ def all_cases(tau: float, v_max: float, a_max: float, load_rated: float, quick: 
     else:
         cases = hold_cases(tau, load_rated, C.POSITIONS) + step_cases(tau)
         cases += moves(tau, v_max, a_max, load_rated, False, travel)
-        cases.append(load_step_case(tau, load_rated))
+        cases.append(load_step_case(tau, load_rated, None if travel is None else 0.5 * travel))
         for name in C.OFF_NOMINAL:
             runs = hold_cases(tau, load_rated, C.POSITIONS, plant=name)
             if name in C.CALIBRATED:

@@ -30,7 +30,14 @@ REMEDY = {
     "settle": "a faster position loop or a higher speed cap (--v-max), within the observer's bandwidth",
     "trajectory": "a smaller speed or acceleration (--v-max, --a-max) or a faster observer",
     "load": "a stiffer position/speed loop, or a smaller load step",
-    "fault": "see the fault: overspeed -> raise --v-max; overcurrent -> raise --i-max or lower --a-max",
+    "fault": ("see the fault: overspeed -> raise --v-max; overcurrent -> raise --i-max or lower --a-max; "
+              "travel -> the mover reached an end stop: a longer --travel"),
+    "calibration": (
+        "the firmware's calibration (encoder control, the dither, the table integrated point by point) "
+        "stopped on this plant: 'observer' is a point not accepted within calibration.t_max or the HF "
+        "signal lost (docs/simulator.md, \"Calibration\"); the injection's shape and amplitude set how "
+        "well it converges"
+    ),
     "off-nominal": (
         "the LUT and gains depend on this parameter: identify the motor (linsense identify) "
         "or calibrate the LUT (linsense calibrate)"
@@ -214,7 +221,9 @@ def _single(r: dict, name: str, value: str, bound: str, remedy: str) -> Check:
     if r.get("note"):  # (still approaching within the band at the end: said, not failed)
         value = f"{value}; {r['note']}"
     if not r["passed"]:
-        value = r["why"] if r["kind"] == "step" else f"{value}; {r['why']}"  # (a step's why says its time)
+        # (a step's why says its time; a run that faulted or did not finish has no figures to show)
+        faulted = r["fault"] != "none" or "did not finish" in r["why"]
+        value = r["why"] if r["kind"] == "step" or faulted else f"{value}; {r['why']}"
         if r["fault"] != "none" or "did not finish" in r["why"]:
             cause = REMEDY["fault"]
         elif r["why"].startswith("limit cycle"):
@@ -262,9 +271,10 @@ def _calibration_check(plant: str, cal: dict | None) -> Check:
     ok = bool(cal["completed"])
     value = (f"{cal['points_done']}/{cal['points']} points; within {cal['max_diff_deg']:.3g} deg of the "
              f"plant's own table (the motor file's: {cal['file_diff_deg']:.3g} deg)" if ok else
-             f"did not complete ({cal['points_done']} of {cal['points']} points, fault {cal['fault']})")
+             f"did not complete ({cal['points_done']} of {cal['points']} points, fault {cal['fault']}): "
+             f"the holds and the move with a measured table not run on this plant")
     return Check(f"table measured on {plant}", ok, value, "every point, no fault",
-                 "" if ok else REMEDY["fault"], 1, int(not ok))
+                 "" if ok else REMEDY["calibration"], 1, int(not ok))
 
 
 def checks(rows: list[dict], calibrations: dict | None = None) -> list[Check]:
@@ -325,10 +335,10 @@ def checks(rows: list[dict], calibrations: dict | None = None) -> list[Check]:
         measured = plant in C.CALIBRATED
         rs = [r for r in rows if r["plant"] == plant and r["kind"] == "hold"
               and r["table"] == ("measured" if measured else "design")]
+        if measured and plant in calibrations:  # (a calibration that did not complete fails here)
+            out.append(_calibration_check(plant, calibrations[plant]))
         if not rs:
             continue
-        if measured:
-            out.append(_calibration_check(plant, calibrations.get(plant)))
         c = _hold_check(
             f"holds, {plant}" + (", measured table" if measured else ""),
             rs,
@@ -580,6 +590,15 @@ def prepare(motor: Motor, motor_spec: str, base: dict, base_dir: str, *, v_max: 
                            extra={"calibrations": summaries}, notes=_file_table_notes(rows, summaries))
 
     return run
+
+
+#: what a firmware header says of the certificate its drive passed (tune --format c, firmware export)
+VERIFIED_BY = {
+    True: ("the quick certificate of linsense tune (switching inverter with dead time: nominal holds, "
+           "steps, moves at v_max at +-rated load) only: linsense tune --format c without --quick runs the "
+           "full one"),
+    False: "the full certificate of linsense tune (switching inverter with dead time), data sha256 below",
+}
 
 
 def certificate_base(sc: dict) -> dict:
