@@ -267,7 +267,10 @@ def read_text_file(path: str | os.PathLike, what: str) -> str:
     src = str(path)
     p = Path(path)
     if not p.is_file():
-        raise InputError(src, "", f"no such {what}")
+        if p.is_dir():
+            raise InputError(src, "", f"is a folder, not a {what}")
+        why = f"no such {what}" if not p.exists() else f"not a regular file: expected a {what}"
+        raise InputError(src, "", why)
     try:
         with open(p, "rb") as f:
             data = f.read(MAX_TEXT_FILE_BYTES + 1)  # (bounded: no more is read)

@@ -486,21 +486,6 @@ def design(
             source, "f_inj", f"must be between {F_INJ_MIN / 8.0:g} Hz (the loops' bandwidths follow it) and "
             f"f_pwm / 4 = {d.f_pwm / 4:g} Hz, got {f_inj:g}"
         )
-    # a speed beyond what the bus allows first (the move's time below would blame the acceleration)
-    need = rated_load(motor, d) + motor.mass * d.a_max
-    v_bus = bus_speed(motor, d.v_dc, need / motor.force_constant)
-    if d.v_max > v_bus:
-        raise InputError(source, "v_max", f"{d.v_max:g} m/s is beyond what the {d.v_dc:g} V bus allows: "
-                         f"{v_bus:.3g} m/s, where the back-EMF, R_s i and omega L_q i at the current the "
-                         f"application needs at speed ({need / motor.force_constant:.3g} A: the load and "
-                         f"m a_max) take the whole linear range V_dc / sqrt(3), injection aside: lower "
-                         f"--v-max or raise the bus")
-    # the application's move over two pole pitches (the certificate's trajectory) within a minute
-    t_move = 2.0 * motor.pole_pitch / d.v_max + d.v_max / d.a_max
-    if t_move > MOVE_TIME_MAX:
-        key = "v_max" if 2.0 * motor.pole_pitch / d.v_max >= d.v_max / d.a_max else "a_max"
-        raise InputError(source, key, f"a move over two pole pitches at v_max = {d.v_max:g} m/s, a_max = "
-                         f"{d.a_max:g} m/s^2 lasts {t_move:.3g} s, beyond {MOVE_TIME_MAX:g} s")
     if d.travel is not None and not (math.isfinite(d.travel) and d.travel >= motor.pole_pitch):
         raise InputError(source, "travel", f"{d.travel * 1e3:g} mm: the stroke must cover at least one pole "
                          f"pitch ({motor.pole_pitch * 1e3:g} mm: the drive holds anywhere in the period)")
@@ -555,6 +540,21 @@ def design(
             f"{d.v_dc:g} V: after the injection ({v_inj:.3g} V) there is "
             f"{v_avail:.3g} V left, below R_s i_max = {v_r:.3g} V",
         )
+    # a speed beyond what the bus allows (before the move's time, which would blame the acceleration)
+    need = rated_load(motor, d) + motor.mass * d.a_max
+    v_bus = bus_speed(motor, d.v_dc, need / motor.force_constant)
+    if d.v_max > v_bus and need <= motor.force_constant * d.i_max:  # (else the force is refused first)
+        raise InputError(source, "v_max", f"{d.v_max:g} m/s is beyond what the {d.v_dc:g} V bus allows: "
+                         f"{v_bus:.3g} m/s, where the back-EMF, R_s i and omega L_q i at the current the "
+                         f"application needs at speed ({need / motor.force_constant:.3g} A: the load and "
+                         f"m a_max) take the whole linear range V_dc / sqrt(3), injection aside: lower "
+                         f"--v-max or raise the bus")
+    # the application's move over two pole pitches (the certificate's trajectory) within a minute
+    t_move = 2.0 * motor.pole_pitch / d.v_max + d.v_max / d.a_max
+    if t_move > MOVE_TIME_MAX:
+        key = "v_max" if 2.0 * motor.pole_pitch / d.v_max >= d.v_max / d.a_max else "a_max"
+        raise InputError(source, key, f"a move over two pole pitches at v_max = {d.v_max:g} m/s, a_max = "
+                         f"{d.a_max:g} m/s^2 lasts {t_move:.3g} s, beyond {MOVE_TIME_MAX:g} s")
     # |V| = |R i + j w (L_q i + psi_pm)| at speed v: solve for the speed where it reaches v_avail
     lq_i = L_q * d.i_max + motor.psi_pm
     headroom = w_e**-1 * math.sqrt(max(v_avail**2 - v_r**2, 0.0)) / lq_i
