@@ -460,6 +460,7 @@ ls_status ls_drive_set_mode(ls_drive *d, ls_mode mode)
     /* the modulator's history and the residual model start again (the outputs may have been off) */
     ls_mod_reset(&d->mod);
     dtres_reset(d, true);
+    d->w_ref = LS_R(0.0); /* (its back-EMF: the sensorless steps' trajectory sets it) */
     /* LS_MODE_STARTUP runs with mode OFF and starting set (the step table's start-up row); it
      * enters LS_MODE_SENSORLESS_LUT, aligned, when it is done */
     d->starting = mode == LS_MODE_STARTUP;

@@ -14,6 +14,7 @@ void ls_drive_disable_(ls_drive *d, ls_cmd *cmd, uint32_t fault)
     ls_current_reset(&d->cur);
     ls_posctrl_reset(&d->pos);
     d->f_ref = LS_R(0.0);
+    d->w_ref = LS_R(0.0);
 }
 
 void ls_drive_disable_report_(ls_drive *d, ls_cmd *cmd, uint32_t fault)

@@ -99,10 +99,12 @@ LS_DRIVE_PART void ls_drive_residual_(ls_drive *d, const ls_meas *meas, const ls
 {
     LS_REAL v_err[2];
     if (d->dtres.cfg.forward) {
-        LS_REAL g[6], i_end[3], i_drop[3];
-        ls_dtres_phase_g(&d->dtres, io->c, io->s, g);
-        if (ls_mod_residual(&d->mod, meas->i_abc, meas->v_dc, g, d->dtres.cfg.r_s * d->dtres.k_r, v_err, i_end,
-                            i_drop) &&
+        /* the back-EMF at the trajectory's speed, not the estimate's: no loop from the estimate
+         * through the residual back into it (a hold's limit cycle otherwise, docs/firmware.md) */
+        LS_REAL li[3], g[6], ge[3], i_end[3], i_drop[3];
+        ls_dtres_phase_g(&d->dtres, io->c, io->s, d->w_ref * d->cfg.current.psi_pm, li, g, ge);
+        if (ls_mod_residual(&d->mod, meas->i_abc, meas->v_dc, g, ge, d->dtres.cfg.r_s * d->dtres.k_r, v_err,
+                            i_end, i_drop) &&
             d->dtres.cfg.adapt) {
             /* (k_r held while the angle is not the motor's: the start-up, the table off) */
             ls_dtres_adapt(&d->dtres, d->mod.i_prev, meas->i_abc, i_end, i_drop,
@@ -111,10 +113,11 @@ LS_DRIVE_PART void ls_drive_residual_(ls_drive *d, const ls_meas *meas, const ls
                 ls_drive_follow_r_(d);
             }
         }
+        ls_dtres_step(&d->dtres, v_err, io->c, io->s, li, i_res);
     } else {
         (void)ls_mod_residual_interp(&d->mod, meas->i_abc, meas->v_dc, d->dtres.k_rip, v_err);
+        ls_dtres_step(&d->dtres, v_err, io->c, io->s, NULL, i_res);
     }
-    ls_dtres_step(&d->dtres, v_err, io->c, io->s, i_res);
 }
 
 LS_DRIVE_PART void ls_drive_hf_(ls_drive *d, const ls_meas *meas, ls_drive_io *io)
@@ -162,6 +165,7 @@ LS_DRIVE_PART void ls_drive_force_(ls_drive *d, ls_drive_io *io)
 {
     LS_REAL v_ff, a_ff, x_err, f;
     ls_traj_step(&d->traj, &io->x_ref, &v_ff, &a_ff);
+    d->w_ref = v_ff * d->kx;
     x_err = ls_pos_diff(io->x_ref, io->pos) * d->inv_kx;
     a_ff += d->ff_load_k * d->obs.f_load; /* load_ff: the observer's load-force estimate, */
     d->pos.speed.integ *= d->integ_keep;   /* which is then the integral action */

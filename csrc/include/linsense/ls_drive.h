@@ -225,6 +225,9 @@ typedef struct {
     ls_dtres dtres;
     ls_protect prot;
     LS_REAL f_ref;       /* N, force reference of the last step */
+    LS_REAL w_ref;       /* rad/s, the trajectory's electrical speed at the sensorless modes' last
+                            step (0 in the others): the dead-time residual model's back-EMF
+                            (ls_drive_residual_) */
     LS_REAL ts;          /* s */
     LS_REAL kx;          /* rad/m, 2 pi / tau */
     LS_REAL inv_kx;      /* m/rad, tau / (2 pi) */

@@ -82,24 +82,26 @@ void ls_dtres_resistance_(ls_dtres *r);
 void ls_dtres_response_step_(ls_dtres *r);
 
 /* v_ab: the voltage error of the period that has just ended (V, alpha-beta); (c, s): cos and sin
- * of the estimated angle. Writes the modelled current at this sample into i_ab (A, alpha-beta).
- * Inline (called every PWM period). */
-static inline void ls_dtres_step(ls_dtres *r, const LS_REAL v_ab[2], LS_REAL c, LS_REAL s, LS_REAL i_ab[2])
+ * of the estimated angle; li: with cfg.forward, the model's inverse inductance k_l L_ab^-1 at that
+ * angle (1/H, [aa, bb, ab]: ls_dtres_phase_g, before this period's ls_dtres_adapt; not read
+ * without cfg.forward, may then be NULL).
+ * Writes the modelled current at this sample into i_ab (A, alpha-beta). Inline (called every PWM
+ * period). */
+static inline void ls_dtres_step(ls_dtres *r, const LS_REAL v_ab[2], LS_REAL c, LS_REAL s, const LS_REAL li[3],
+                                 LS_REAL i_ab[2])
 {
-    LS_REAL v_d = c * v_ab[0] + s * v_ab[1];
-    LS_REAL v_q = -s * v_ab[0] + c * v_ab[1];
+    LS_REAL v_d, v_q;
     if (r->cfg.forward) {
-        /* the input through the inverse of L_dq = [L_d + e1, e2; e2, L_q - e1] (the end effect's
-         * anisotropy turned into the frame: e1 = l_ea c2 + l_eb s2, e2 = l_eb c2 - l_ea s2), scaled
-         * per axis as b_d L_d and b_q L_q (the exact first-order step without the end effect), and
-         * by k_l: v_dq <- k_l diag(L_d, L_q) L_dq^-1 v_dq */
-        const LS_REAL c2 = c * c - s * s, s2 = LS_R(2.0) * c * s;
-        const LS_REAL e1 = r->cfg.l_ea * c2 + r->cfg.l_eb * s2, e2 = r->cfg.l_eb * c2 - r->cfg.l_ea * s2;
-        const LS_REAL ld = r->cfg.l_d + e1, lq = r->cfg.l_q - e1;
-        const LS_REAL k = r->k_l / (ld * lq - e2 * e2);
-        const LS_REAL u_d = (lq * v_d - e2 * v_q) * (k * r->cfg.l_d), u_q = (ld * v_q - e2 * v_d) * (k * r->cfg.l_q);
-        v_d = u_d;
-        v_q = u_q;
+        /* the input through the inverse inductance (the saliency and the end effect's anisotropy),
+         * turned into the frame and scaled per axis as b_d L_d and b_q L_q (the exact first-order
+         * step without the end effect): v_dq <- diag(L_d, L_q) R' k_l L_ab^-1 v_ab (R' L_ab^-1 R =
+         * L_dq^-1) */
+        const LS_REAL u0 = li[0] * v_ab[0] + li[2] * v_ab[1], u1 = li[2] * v_ab[0] + li[1] * v_ab[1];
+        v_d = (c * u0 + s * u1) * r->cfg.l_d;
+        v_q = (c * u1 - s * u0) * r->cfg.l_q;
+    } else {
+        v_d = c * v_ab[0] + s * v_ab[1];
+        v_q = -s * v_ab[0] + c * v_ab[1];
     }
     r->i_d = r->a_d * r->i_d + r->b_d * v_d;
     r->i_q = r->a_q * r->i_q + r->b_q * v_q;
@@ -107,11 +109,15 @@ static inline void ls_dtres_step(ls_dtres *r, const LS_REAL v_ab[2], LS_REAL c, 
     i_ab[1] = s * r->i_d + c * r->i_q;
 }
 
-/* The phase inverse-inductance matrix of the model at the angle (c, s) = (cos, sin) of its d-axis,
- * times k_l: G_kj = k_l r_k' L_ab^-1 r_j (1/H; r_k the unit vector of phase k in alpha-beta, L_ab
- * as in ls_dtres_cfg, the saliency and the end effect), written [aa, bb, cc, ab, ac, bc] for
- * ls_mod_residual. Its rows sum to 0 (r_a + r_b + r_c = 0). */
-static inline void ls_dtres_phase_g(const ls_dtres *r, LS_REAL c, LS_REAL s, LS_REAL g[6])
+/* The model's inverse inductance at the angle (c, s) = (cos, sin) of its d-axis, times k_l: li =
+ * k_l L_ab^-1 (1/H, [aa, bb, ab]; L_ab as in ls_dtres_cfg, the saliency and the end effect; for
+ * ls_dtres_step), and as the phase matrix G_kj = r_k' li r_j (r_k the unit vector of phase k in
+ * alpha-beta), written [aa, bb, cc, ab, ac, bc] for ls_mod_residual (its rows sum to 0: r_a + r_b
+ * + r_c = 0). And the rate at which a back-EMF of emf (V, omega psi_pm, on the q-axis: e_ab =
+ * emf (-s, c)) changes each phase current, taken as a drop: ge_k = r_k' li e_ab (A/s; ge_a + ge_b
+ * + ge_c = 0). */
+static inline void ls_dtres_phase_g(const ls_dtres *r, LS_REAL c, LS_REAL s, LS_REAL emf, LS_REAL li[3],
+                                    LS_REAL g[6], LS_REAL ge[3])
 {
     const LS_REAL hs = LS_R(0.5) * (r->cfg.l_d + r->cfg.l_q), hd = LS_R(0.5) * (r->cfg.l_d - r->cfg.l_q);
     const LS_REAL c2 = c * c - s * s, s2 = LS_R(2.0) * c * s;
@@ -124,12 +130,21 @@ static inline void ls_dtres_phase_g(const ls_dtres *r, LS_REAL c, LS_REAL s, LS_
     const LS_REAL q0 = LS_R(0.25) * x00 + LS_R(0.75) * x11;
     const LS_REAL q1 = h3 * x01;
     const LS_REAL k = r->k_l;
-    g[0] = k * x00;
+    /* li e_ab, e_ab = emf (-s, c) */
+    const LS_REAL ke = k * emf;
+    const LS_REAL ua = ke * (x01 * c - x00 * s), ub = ke * (x11 * c - x01 * s);
+    li[0] = k * x00;
+    li[1] = k * x11;
+    li[2] = k * x01;
+    g[0] = li[0];
     g[1] = k * (q0 - q1);
     g[2] = k * (q0 + q1);
     g[3] = k * (LS_R(-0.5) * x00 + h3 * x01);
     g[4] = k * (LS_R(-0.5) * x00 - h3 * x01);
     g[5] = k * (LS_R(0.25) * x00 - LS_R(0.75) * x11);
+    ge[0] = ua;
+    ge[1] = LS_R(-0.5) * ua + h3 * ub;
+    ge[2] = LS_R(-0.5) * ua - h3 * ub;
 }
 
 /* The inverse-inductance scale k_l and (cfg.adapt_r) the resistance scale k_r from one period
@@ -142,8 +157,8 @@ static inline void ls_dtres_phase_g(const ls_dtres *r, LS_REAL c, LS_REAL s, LS_
  * as x a - y b by least squares (k_r = y / x) on the products in alpha-beta, low-passed over
  * 1 / LS_DTRES_KR_RATE periods, after each of m, a and b has lost its slow part (a first-order
  * high-pass at LS_DTRES_HP_RATE per period): the fit reads the injection's changes, not the
- * fundamental's, whose back-EMF the model does not know and which would read as a resistance
- * while the mover moves under load; solved every LS_DTRES_SOLVE_EVERY periods, moving by at most
+ * fundamental's, whose back-EMF the model knows only as well as the speed estimate and psi_pm
+ * (the rest would read as a resistance while the mover moves under load); solved every LS_DTRES_SOLVE_EVERY periods, moving by at most
  * LS_DTRES_KR_STEP each time; once it has moved by LS_DTRES_KR_RESP, the response (a, b) follows
  * over the next four periods (ls_dtres_response_step_). Each within its bounds. fit_r false holds
  * k_r (the drive's start-up, whose angle is not known yet: the model's drop is then read on the

@@ -177,7 +177,10 @@ static inline void ls_mod_error_ab_(const ls_mod_hist *h, LS_REAL e0, LS_REAL e1
  * sorted by duty; centre-aligned: turn-on from the largest duty down, turn-off back up), the phase
  * currents advanced between them by the poles' voltage through g, the phase inverse-inductance
  * matrix G_kj = r_k' L^-1 r_j (1/H, [aa, bb, cc, ab, ac, bc]: ls_dtres_phase_g; its rows sum to 0),
- * less the resistive drop (2/3) R_s G i with the current taken as linear between the two samples.
+ * less the resistive drop (2/3) R_s G i with the current taken as linear between the two samples
+ * and less the back-EMF's share ge (A/s, phases: r_k' L^-1 e, ls_dtres_phase_g; constant over the
+ * period: without it the model's currents drift from the measured ones by e T / L per period at
+ * speed and mispredict the edges where a current is small).
  * At each edge both switches of the leg are off for the dead time and the diode the current picks
  * holds the pole: a turn-on loses the dead time when the leg's current flows out (i > 0), a
  * turn-off gains it when the current flows in; the volt-seconds act on all three currents from
@@ -186,11 +189,12 @@ static inline void ls_mod_error_ab_(const ls_mod_hist *h, LS_REAL e0, LS_REAL e1
  * The leg's duty error is c - t_dead f_pwm (L_on + L_off - 1), L = 1 where the current at the edge
  * flows out (c: the compensation it carried); a leg that does not switch (d = 0 or 1) has none.
  * Writes the alpha-beta voltage error (V), the end currents the model predicts and the resistive
- * drop within that prediction (A, phases; for ls_dtres_adapt) and returns true, or writes 0 and
- * returns false without the previous step's currents. i_abc, v_dc and g must be finite. (Used by ls_drive with hf_dtres; see
- * linsense/ls_dtres.h.) */
+ * drop within that prediction (A, phases; for ls_dtres_adapt; the back-EMF's share is in i_end, not
+ * in i_drop) and returns true, or writes 0 and returns false without the previous step's currents.
+ * i_abc, v_dc, g and ge must be finite. (Used by ls_drive with hf_dtres; see linsense/ls_dtres.h.) */
 static inline bool ls_mod_residual(const ls_mod *m, const LS_REAL i_abc[3], LS_REAL v_dc, const LS_REAL g[6],
-                                   LS_REAL r_s, LS_REAL v_ab[2], LS_REAL i_end[3], LS_REAL i_drop[3])
+                                   const LS_REAL ge[3], LS_REAL r_s, LS_REAL v_ab[2], LS_REAL i_end[3],
+                                   LS_REAL i_drop[3])
 {
     const ls_mod_hist *h = &m->hist[m->newest ^ 1u];
     LS_REAL e[3];
@@ -228,6 +232,8 @@ static inline bool ls_mod_residual(const ls_mod *m, const LS_REAL i_abc[3], LS_R
         const LS_REAL kh = LS_R(0.5) * kr * m->cfg.f_pwm;
         const LS_REAL ra = kr * (gaa * ia + gab * ib + gac * ic), rb = kr * (gab * ia + gbb * ib + gbc * ic);
         const LS_REAL rc = kr * (gac * ia + gbc * ib + gcc * ic);
+        /* with the back-EMF's share (A/s) */
+        const LS_REAL qa = ra + ge[o0], qb = rb + ge[o1], qc = rc + ge[o2];
         const LS_REAL sa = kh * (gaa * ja + gab * jb + gac * jc), sb = kh * (gab * ja + gbb * jb + gbc * jc);
         const LS_REAL sc = kh * (gac * ja + gbc * jb + gcc * jc);
         const LS_REAL da = h->d[o0], db = h->d[o1], dc = h->d[o2];
@@ -240,31 +246,31 @@ static inline bool ls_mod_residual(const ls_mod *m, const LS_REAL i_abc[3], LS_R
         const LS_REAL ka = kv * u1, kb = -kv * u2;
         LS_REAL l1, l2, l3, l4, l5, l6, i3, la, lb, lc;
         /* a on (the others low): the dead time lost with its current flowing out */
-        l1 = ia - (ra + sa * t1) * t1 > LS_R(0.0) ? LS_R(1.0) : LS_R(0.0);
+        l1 = ia - (qa + sa * t1) * t1 > LS_R(0.0) ? LS_R(1.0) : LS_R(0.0);
         /* b on (a high), after a's loss */
-        l2 = ib - (rb + sb * t2) * t2 + gab * (ka - kd * l1) > LS_R(0.0) ? LS_R(1.0) : LS_R(0.0);
+        l2 = ib - (qb + sb * t2) * t2 + gab * (ka - kd * l1) > LS_R(0.0) ? LS_R(1.0) : LS_R(0.0);
         /* c on and off (a and b high); the turn-off after the turn-on's own loss (the turn-off keeps
          * the pole low with the current flowing out: l = 1, high for the dead time otherwise) */
-        i3 = ic - (rc + sc * t3) * t3 + gac * (ka - kd * l1) + gcc * kb - gbc * kd * l2;
+        i3 = ic - (qc + sc * t3) * t3 + gac * (ka - kd * l1) + gcc * kb - gbc * kd * l2;
         l3 = i3 > LS_R(0.0) ? LS_R(1.0) : LS_R(0.0);
-        l4 = i3 - (rc + sc * (LS_R(2.0) * t3 + u3)) * u3 - gcc * kd * l3 > LS_R(0.0) ? LS_R(1.0) : LS_R(0.0);
+        l4 = i3 - (qc + sc * (LS_R(2.0) * t3 + u3)) * u3 - gcc * kd * l3 > LS_R(0.0) ? LS_R(1.0) : LS_R(0.0);
         lc = l3 + l4 - LS_R(1.0); /* c's lost high time, in dead times (-1: gained) */
         /* b off (a high): two u2 segments, c's edges between */
-        l5 = ib - (rb + sb * t5) * t5 + gab * (ka - kd * l1) + LS_R(2.0) * kb * gbc - kd * (gbb * l2 + gbc * lc) >
+        l5 = ib - (qb + sb * t5) * t5 + gab * (ka - kd * l1) + LS_R(2.0) * kb * gbc - kd * (gbb * l2 + gbc * lc) >
                      LS_R(0.0)
                  ? LS_R(1.0)
                  : LS_R(0.0);
         lb = l2 + l5 - LS_R(1.0);
         /* a off (the others low) */
-        l6 = ia - (ra + sa * t6) * t6 + LS_R(2.0) * (ka * gaa + kb * gac) - kd * (gaa * l1 + gab * lb + gac * lc) >
+        l6 = ia - (qa + sa * t6) * t6 + LS_R(2.0) * (ka * gaa + kb * gac) - kd * (gaa * l1 + gab * lb + gac * lc) >
                      LS_R(0.0)
                  ? LS_R(1.0)
                  : LS_R(0.0);
         la = l1 + l6 - LS_R(1.0);
         /* the end currents the model predicts (ls_dtres_adapt) */
-        i_end[o0] = ia - (ra + sa * T) * T + LS_R(2.0) * (ka * gaa + kb * gac) - kd * (gaa * la + gab * lb + gac * lc);
-        i_end[o1] = ib - (rb + sb * T) * T + LS_R(2.0) * (ka * gab + kb * gbc) - kd * (gab * la + gbb * lb + gbc * lc);
-        i_end[o2] = ic - (rc + sc * T) * T + LS_R(2.0) * (ka * gac + kb * gcc) - kd * (gac * la + gbc * lb + gcc * lc);
+        i_end[o0] = ia - (qa + sa * T) * T + LS_R(2.0) * (ka * gaa + kb * gac) - kd * (gaa * la + gab * lb + gac * lc);
+        i_end[o1] = ib - (qb + sb * T) * T + LS_R(2.0) * (ka * gab + kb * gbc) - kd * (gab * la + gbb * lb + gbc * lc);
+        i_end[o2] = ic - (qc + sc * T) * T + LS_R(2.0) * (ka * gac + kb * gcc) - kd * (gac * la + gbc * lb + gcc * lc);
         i_drop[o0] = (ra + sa * T) * T;
         i_drop[o1] = (rb + sb * T) * T;
         i_drop[o2] = (rc + sc * T) * T;
