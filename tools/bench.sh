@@ -16,11 +16,11 @@ count() { # $1: dead-time compensation on (1) or off (0); $2: injection 0 pulsat
   awk '/^(summary|totals):/ {print $2; exit}' "$B/callgrind.$1${2:-0}${4:-0}.out"
 }
 per() { echo $(( ($1 + $2 / 2) / $2 )); }
-# the budget in every mode (issue 24: the steps are written with shared pieces, ls_drive_internal.h)
-BUDGET=1100
-verdict() { if [ "$1" -le $BUDGET ]; then echo "$1 (target <= 1,100) PASS"; else echo "$1 (target <= 1,100) FAIL"; fi; }
-misses=0 # (the instruction counts' misses: the exit status at the end, so that make bench names them)
-miss() { case "$1" in *FAIL*) misses=$((misses + 1)) ;; esac; echo "$1"; }
+# the x86-64 count is a reported proxy: the firmware's cost is judged on the Cortex-M4F, in cycles per
+# step against 25 % of the PWM period (tools/bench_pil.py; the former x86 budget of 1,100 is retired)
+verdict() { echo "$1 (x86-64 proxy; the budget is the M4F's, tools/bench_pil.py)"; }
+misses=0 # (what fails below: the exit status at the end, so that make bench names it)
+miss() { echo "$1"; }
 total_dtc=$(count 1)
 total_interp=$(count 1 0 "$N" 2)
 total=$(count 0)

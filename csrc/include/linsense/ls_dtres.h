@@ -82,9 +82,9 @@ void ls_dtres_resistance_(ls_dtres *r);
 void ls_dtres_response_step_(ls_dtres *r);
 
 /* v_ab: the voltage error of the period that has just ended (V, alpha-beta); (c, s): cos and sin
- * of the estimated angle; li: with cfg.forward, the model's inverse inductance k_l L_ab^-1 at that
- * angle (1/H, [aa, bb, ab]: ls_dtres_phase_g, before this period's ls_dtres_adapt; not read
- * without cfg.forward, may then be NULL).
+ * of the estimated angle; li: with cfg.forward, the model's inverse inductance L_ab^-1 at that
+ * angle (1/H, [aa, bb, ab]: ls_dtres_phase_g; scaled here by k_l as this period's ls_dtres_adapt
+ * left it; not read without cfg.forward, may then be NULL).
  * Writes the modelled current at this sample into i_ab (A, alpha-beta). Inline (called every PWM
  * period). */
 static inline void ls_dtres_step(ls_dtres *r, const LS_REAL v_ab[2], LS_REAL c, LS_REAL s, const LS_REAL li[3],
@@ -97,8 +97,8 @@ static inline void ls_dtres_step(ls_dtres *r, const LS_REAL v_ab[2], LS_REAL c, 
          * step without the end effect): v_dq <- diag(L_d, L_q) R' k_l L_ab^-1 v_ab (R' L_ab^-1 R =
          * L_dq^-1) */
         const LS_REAL u0 = li[0] * v_ab[0] + li[2] * v_ab[1], u1 = li[2] * v_ab[0] + li[1] * v_ab[1];
-        v_d = (c * u0 + s * u1) * r->cfg.l_d;
-        v_q = (c * u1 - s * u0) * r->cfg.l_q;
+        v_d = (c * u0 + s * u1) * (r->k_l * r->cfg.l_d); /* (k_l as this period's ls_dtres_adapt left it) */
+        v_q = (c * u1 - s * u0) * (r->k_l * r->cfg.l_q);
     } else {
         v_d = c * v_ab[0] + s * v_ab[1];
         v_q = -s * v_ab[0] + c * v_ab[1];
@@ -109,12 +109,12 @@ static inline void ls_dtres_step(ls_dtres *r, const LS_REAL v_ab[2], LS_REAL c, 
     i_ab[1] = s * r->i_d + c * r->i_q;
 }
 
-/* The model's inverse inductance at the angle (c, s) = (cos, sin) of its d-axis, times k_l: li =
- * k_l L_ab^-1 (1/H, [aa, bb, ab]; L_ab as in ls_dtres_cfg, the saliency and the end effect; for
- * ls_dtres_step), and as the phase matrix G_kj = r_k' li r_j (r_k the unit vector of phase k in
+/* The model's inverse inductance at the angle (c, s) = (cos, sin) of its d-axis: li = L_ab^-1
+ * (1/H, [aa, bb, ab]; L_ab as in ls_dtres_cfg, the saliency and the end effect; for ls_dtres_step,
+ * which scales it by k_l), and times k_l as the phase matrix G_kj = k_l r_k' li r_j (r_k the unit vector of phase k in
  * alpha-beta), written [aa, bb, cc, ab, ac, bc] for ls_mod_residual (its rows sum to 0: r_a + r_b
  * + r_c = 0). And the rate at which a back-EMF of emf (V, omega psi_pm, on the q-axis: e_ab =
- * emf (-s, c)) changes each phase current, taken as a drop: ge_k = r_k' li e_ab (A/s; ge_a + ge_b
+ * emf (-s, c)) changes each phase current, taken as a drop: ge_k = k_l r_k' li e_ab (A/s; ge_a + ge_b
  * + ge_c = 0). */
 static inline void ls_dtres_phase_g(const ls_dtres *r, LS_REAL c, LS_REAL s, LS_REAL emf, LS_REAL li[3],
                                     LS_REAL g[6], LS_REAL ge[3])
@@ -130,13 +130,13 @@ static inline void ls_dtres_phase_g(const ls_dtres *r, LS_REAL c, LS_REAL s, LS_
     const LS_REAL q0 = LS_R(0.25) * x00 + LS_R(0.75) * x11;
     const LS_REAL q1 = h3 * x01;
     const LS_REAL k = r->k_l;
-    /* li e_ab, e_ab = emf (-s, c) */
+    /* k_l li e_ab, e_ab = emf (-s, c) */
     const LS_REAL ke = k * emf;
     const LS_REAL ua = ke * (x01 * c - x00 * s), ub = ke * (x11 * c - x01 * s);
-    li[0] = k * x00;
-    li[1] = k * x11;
-    li[2] = k * x01;
-    g[0] = li[0];
+    li[0] = x00;
+    li[1] = x11;
+    li[2] = x01;
+    g[0] = k * x00;
     g[1] = k * (q0 - q1);
     g[2] = k * (q0 + q1);
     g[3] = k * (LS_R(-0.5) * x00 + h3 * x01);
