@@ -393,3 +393,15 @@ def test_the_numbers_of_the_docs(tmp_path, motor):
         bias[lut] = (max(b), float(np.mean(b)))
     assert (f"{bias['resistive'][0]:.1f}", f"{bias['resistive'][1]:.1f}") == ("6.5", "3.6"), bias
     assert (f"{bias['measured'][0]:.2f}", f"{bias['measured'][1]:.2f}") == ("0.11", "0.04"), bias
+
+
+def test_a_key_given_twice_is_refused(tmp_path, motor):
+    """json keeps the last of two equal keys silently: a table whose psi_lut is given twice is
+    refused naming the key."""
+    text = json.dumps(_doc(motor, 8))
+    twice = text[:-1] + ', "psi_lut": ' + json.dumps([0.1] * 8) + "}"
+    f = tmp_path / "twice.json"
+    f.write_text(twice)
+    with pytest.raises(InputError, match="given twice") as e:
+        read_measured_table(f, **_drive(motor, points=8))
+    assert e.value.key == "psi_lut"

@@ -319,13 +319,34 @@ def read_measured_table(path: str | os.PathLike, *, motor, injection: str, f_inj
 
 
 # ---------------------------------------------------------------------- the reader's checks
+class _Twice(Exception):
+    """A key given twice in one JSON object."""
+
+    def __init__(self, key: str) -> None:
+        super().__init__(key)
+        self.key = key
+
+
+def _once(pairs: list) -> dict:
+    """A JSON object's pairs as a dict, each key once (json's own keeps the last silently)."""
+    out = {}
+    for k, v in pairs:
+        if k in out:
+            raise _Twice(str(k))
+        out[k] = v
+    return out
+
+
 def _document(src: str, text: str) -> dict:
     """The parsed document, its format, unit and top-level keys checked."""
     if not text.strip():
         raise InputError(src, "", "empty file: expected a measured table (the stamped lut_measured.json "
                          "linsense calibrate writes)")
     try:
-        doc = json.loads(text.removeprefix("\ufeff"))  # (an editor's byte-order mark)
+        doc = json.loads(text.removeprefix("\ufeff"), object_pairs_hook=_once)  # (a BOM skipped)
+    except _Twice as exc:
+        why = "given twice (a key once per JSON object: which would count?)"
+        raise InputError(src, exc.key, why) from None
     except (ValueError, RecursionError) as exc:  # (JSONDecodeError is a ValueError)
         head = text.lstrip("\ufeff").lstrip()[:12].lower()
         csv = head.startswith("theta_deg")
