@@ -184,7 +184,9 @@ ls_status ls_drive_init(ls_drive *d, const ls_drive_cfg *cfg)
         cfg->i_max > LS_DRIVE_I_MAX || cfg->prot.i_max > LS_DRIVE_I_MAX || cfg->prot.v_dc_max > LS_DRIVE_V_DC_MAX ||
         cfg->bpf.type != (cfg->inject.shape == LS_INJ_SQUARE ? LS_BIQUAD_DIFF : LS_BIQUAD_BANDPASS) ||
         (cfg->sep.type != LS_BIQUAD_NOTCH && cfg->sep.type != LS_BIQUAD_LOWPASS) ||
-        (cfg->load_ff && (cfg->obs.type != LS_OBS_MECH || !(cfg->pos.mass > LS_R(0.0))))) {
+        (cfg->load_ff && (cfg->obs.type != LS_OBS_MECH || !(cfg->pos.mass > LS_R(0.0)))) ||
+        cfg->ripple_order < 0 || cfg->ripple_order > LS_DRIVE_RIPPLE_ORDER_MAX || !LS_ISFINITE2(cfg->ripple_c, cfg->ripple_s) ||
+        !(LS_FABS(cfg->ripple_c) + LS_FABS(cfg->ripple_s) <= LS_R(0.5))) {
         return LS_ERR_PARAM;
     }
     /* the demodulation that goes with the injection's shape; the square wave is separated from

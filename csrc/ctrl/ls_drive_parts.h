@@ -161,6 +161,32 @@ LS_DRIVE_PART bool ls_drive_observe_(ls_drive *d, ls_cmd *cmd, ls_drive_io *io, 
 }
 
 /* --------------------------------------------------------------------------- force and current */
+/* The force constant at theta with its ripple (cfg.ripple_order != 0), N/A. */
+static inline LS_REAL ripple_kf(const ls_drive *d, LS_REAL theta)
+{
+    const ls_drive_cfg *cfg = &d->cfg;
+    LS_REAL c, s;
+    ls_sincos_full((LS_REAL)cfg->ripple_order * theta, &c, &s); /* (out of line: the frictionless drives pay no code) */
+    return cfg->force_constant * (LS_R(1.0) + cfg->ripple_c * c + cfg->ripple_s * s);
+}
+
+/* The current reference of force f at theta, clamped to i_max, and the force it makes (d->f_ref,
+ * the observer's): f / K_f, or with cfg.ripple_order the force constant's ripple divided out. */
+static inline LS_REAL force_current(ls_drive *d, LS_REAL f, LS_REAL theta)
+{
+    const ls_drive_cfg *cfg = &d->cfg;
+    LS_REAL i_q;
+    if (cfg->ripple_order != 0) {
+        const LS_REAL kf = ripple_kf(d, theta);
+        i_q = ls_clamp(f / kf, -cfg->i_max, cfg->i_max);
+        d->f_ref = i_q * kf;
+        return i_q;
+    }
+    i_q = ls_clamp(f * d->inv_kf, -cfg->i_max, cfg->i_max);
+    d->f_ref = i_q * cfg->force_constant;
+    return i_q;
+}
+
 LS_DRIVE_PART void ls_drive_force_(ls_drive *d, ls_drive_io *io)
 {
     LS_REAL v_ff, a_ff, x_err, f;
@@ -170,23 +196,27 @@ LS_DRIVE_PART void ls_drive_force_(ls_drive *d, ls_drive_io *io)
     a_ff += d->ff_load_k * d->obs.f_load; /* load_ff: the observer's load-force estimate, */
     d->pos.speed.integ *= d->integ_keep;   /* which is then the integral action */
     f = ls_posctrl_step_finite(&d->pos, x_err, io->omega * d->inv_kx, v_ff, a_ff);
-    io->i_q_ref = ls_clamp(f * d->inv_kf, -d->cfg.i_max, d->cfg.i_max);
-    d->f_ref = io->i_q_ref * d->cfg.force_constant;
+    io->i_q_ref = force_current(d, f, io->pos.theta);
 }
 
 LS_DRIVE_PART void ls_drive_enc_force_(ls_drive *d, ls_drive_io *io, bool dithered, LS_REAL dither)
 {
-    LS_REAL v_ff, a_ff, x_err, f;
+    LS_REAL v_ff, a_ff, x_err, f, kf = d->cfg.force_constant;
     ls_traj_step(&d->traj, &io->x_ref, &v_ff, &a_ff);
     x_err = ls_pos_diff(io->x_ref, io->pos) * d->inv_kx;
     f = ls_posctrl_step_finite(&d->pos, x_err, io->omega * d->inv_kx, v_ff, a_ff);
-    io->i_q_ref = f * d->inv_kf;
+    if (d->cfg.ripple_order != 0) { /* (the force constant's ripple divided out) */
+        kf = ripple_kf(d, io->pos.theta);
+        io->i_q_ref = f / kf;
+    } else {
+        io->i_q_ref = f * d->inv_kf;
+    }
     d->obs.f_load = ls_clamp(d->pos.speed.integ, -d->cfg.obs.force_max, d->cfg.obs.force_max);
     if (dithered) {
         io->i_q_ref += dither;
     }
     io->i_q_ref = ls_clamp(io->i_q_ref, -d->cfg.i_max, d->cfg.i_max);
-    d->f_ref = io->i_q_ref * d->cfg.force_constant;
+    d->f_ref = io->i_q_ref * kf;
 }
 
 LS_DRIVE_PART void ls_drive_current_(ls_drive *d, LS_REAL v_dc, ls_drive_io *io)

@@ -146,3 +146,9 @@ void ls_sincos_full(float x, float *c, float *s)
 }
 
 #endif /* LS_REAL_DOUBLE */
+
+bool ls_friction_slope(LS_REAL c, LS_REAL b, LS_REAL band, LS_REAL *k)
+{
+    *k = c > LS_R(0.0) ? c / band : LS_R(0.0);
+    return c >= LS_R(0.0) && b >= LS_R(0.0) && LS_ISFINITE3(c, b, *k) && *k >= LS_R(0.0);
+}

@@ -100,6 +100,7 @@ static void test_posctrl(void)
     cfg.mass = LS_R(1.5); cfg.force_max = LS_R(40.0);
     cfg.speed.kp = LS_R(100.0); cfg.speed.ki = LS_R(1000.0); cfg.speed.out_min = LS_R(-1.0);
     cfg.speed.out_max = LS_R(1.0); cfg.speed.fs = LS_R(16000.0);
+    cfg.fric_c = LS_R(0.0); cfg.fric_v = LS_R(0.0); cfg.fric_band = LS_R(0.0);
     LS_CHECK(ls_posctrl_init(&p, &cfg) == LS_OK);
     f = ls_posctrl_step(&p, LS_R(0.01), LS_R(0.1), LS_R(0.2), LS_R(2.0));
     LS_CHECK_NEAR(f, 1000.0 * 0.01 + 50.0 * 0.1 + 1.5 * 2.0, 1e-4);
@@ -113,7 +114,19 @@ static void test_posctrl(void)
     f = ls_posctrl_step(&p, LS_R(1.0), LS_R(0.0), LS_R(0.0), LS_R(0.0));
     LS_CHECK_NEAR(p.v_ref, 1.0, 1e-6); /* speed reference limited to v_max */
     LS_CHECK_NEAR(f, 40.0, 1e-6);      /* force limited to force_max */
-    cfg.force_max = LS_R(0.0);
+    /* friction fed forward at the speed reference: Coulomb linear below the band, plus viscous */
+    cfg.force_max = LS_R(40.0); cfg.fric_c = LS_R(1.5); cfg.fric_v = LS_R(4.0); cfg.fric_band = LS_R(0.002);
+    LS_CHECK(ls_posctrl_init(&p, &cfg) == LS_OK);
+    f = ls_posctrl_step(&p, LS_R(0.0), LS_R(0.0), LS_R(0.001), LS_R(0.0));
+    LS_CHECK_NEAR(f, 100.0 * 0.001 + 1000.0 * 0.001 / 16000.0 + 1.5 * 0.5 + 4.0 * 0.001, 1e-4);
+    ls_posctrl_reset(&p);
+    f = ls_posctrl_step(&p, LS_R(0.0), LS_R(0.1), LS_R(0.1), LS_R(0.0));
+    LS_CHECK_NEAR(f, 1.5 + 4.0 * 0.1, 1e-4); /* saturated Coulomb beyond the band */
+    cfg.fric_band = LS_R(0.0);
+    LS_CHECK(ls_posctrl_init(&p, &cfg) == LS_ERR_PARAM); /* Coulomb friction needs a band */
+    cfg.fric_band = LS_R(0.002); cfg.fric_v = LS_R(-1.0);
+    LS_CHECK(ls_posctrl_init(&p, &cfg) == LS_ERR_PARAM);
+    cfg.fric_v = LS_R(0.0); cfg.force_max = LS_R(0.0);
     LS_CHECK(ls_posctrl_init(&p, &cfg) == LS_ERR_PARAM);
 }
 

@@ -40,6 +40,7 @@ static void test_long_travel(void)
      * corrected by the loop) */
     cfg.type = LS_OBS_PLL; cfg.fs = LS_R(16000.0); cfg.pole_pitch = (LS_REAL)TAU; cfg.mass = LS_R(1.5);
     cfg.omega_max = LS_R(300.0); cfg.force_max = LS_R(100.0);
+    cfg.fric_c = LS_R(0.0); cfg.fric_v = LS_R(0.0); cfg.fric_band = LS_R(0.0);
     ls_observer_gains(&cfg, LS_R(50.0));
     LS_CHECK(ls_observer_init(&o, &cfg) == LS_OK);
     ls_observer_reset(&o, from_m(-1.0));
@@ -91,6 +92,7 @@ static void test_pll_ramp(void)
     LS_REAL eps = LS_R(0.0);
     cfg.type = LS_OBS_PLL; cfg.fs = LS_R(16000.0); cfg.pole_pitch = (LS_REAL)TAU; cfg.mass = LS_R(1.5);
     cfg.omega_max = LS_R(300.0); cfg.force_max = LS_R(100.0);
+    cfg.fric_c = LS_R(0.0); cfg.fric_v = LS_R(0.0); cfg.fric_band = LS_R(0.0);
     ls_observer_gains(&cfg, LS_R(20.0));
     LS_CHECK_NEAR(cfg.k1, 2 * 2 * PI * 20, 1e-3);
     LS_CHECK_NEAR(cfg.k2, pow(2 * PI * 20, 2), 1e-1);
@@ -122,6 +124,7 @@ static void test_mech_load(void)
     long k;
     cfg.type = LS_OBS_MECH; cfg.fs = LS_R(16000.0); cfg.pole_pitch = (LS_REAL)TAU; cfg.mass = (LS_REAL)m;
     cfg.omega_max = LS_R(300.0); cfg.force_max = LS_R(100.0);
+    cfg.fric_c = LS_R(0.0); cfg.fric_v = LS_R(0.0); cfg.fric_band = LS_R(0.0);
     ls_observer_gains(&cfg, LS_R(10.0));
     LS_CHECK(ls_observer_init(&o, &cfg) == LS_OK);
     for (k = 0; k < 8000; ++k) { /* 0.5 s */

@@ -70,6 +70,7 @@
 #define LS_DRIVE_V_DC_MAX LS_R(1.0e5)  /* V, largest bus-voltage limit (prot.v_dc_max) */
 #define LS_DRIVE_ENC_JUMP_MAX LS_R(1.0e9) /* -, largest enc_v_max in counts per step */
 #define LS_DRIVE_POLE_PITCH_MAX LS_R(10.0) /* m, largest pole pitch (a speed in m/s stays finite) */
+#define LS_DRIVE_RIPPLE_ORDER_MAX 64 /* -, highest ripple_order (ripple_order theta stays in ls_sincos's fast range) */
 
 typedef enum {
     LS_MODE_OFF = 0,
@@ -161,6 +162,14 @@ typedef struct {
                                such schedule (i_d_inj everywhere) */
     ls_startup_cfg startup; /* start-up with the magnet polarity (startup.pairs = 0: none, and
                                LS_MODE_STARTUP refused); startup.fs = fs */
+    int32_t ripple_order;   /**< unit: -, the order n (per electrical period) of the force constant's
+                                 ripple the current reference divides out: i_q = F / (force_constant
+                                 (1 + ripple_c cos(n theta) + ripple_s sin(n theta))) at the position
+                                 the controllers use (a PM flux's 5th and 7th harmonics: n = 6;
+                                 docs/tuning.md, "Friction and thrust ripple"), in [0, 64]; 0: none
+                                 (and not a cycle spent) */
+    LS_REAL ripple_c;       /**< unit: -, its cosine share of force_constant, |ripple_c| + |ripple_s| <= 0.5 */
+    LS_REAL ripple_s;       /**< unit: -, its sine share of force_constant */
 } ls_drive_cfg;
 
 typedef struct {

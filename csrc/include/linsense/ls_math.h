@@ -51,6 +51,10 @@ extern const float ls_sin_tab[LS_SIN_TAB_N];
 /* cos and sin of any x (rad), out of line; NaN for a non-finite x. */
 void ls_sincos_full(LS_REAL x, LS_REAL *c, LS_REAL *s);
 
+/* A friction model's parameters checked (ls_friction: Coulomb c >= 0 N, viscous b >= 0 N s/m, both
+ * finite, and with c > 0 a finite band > 0 m/s): true, with *k = c / band N s/m (0 for c = 0). */
+bool ls_friction_slope(LS_REAL c, LS_REAL b, LS_REAL band, LS_REAL *k);
+
 
 /* Turn the unit phasor (c, s) by the step (dc, ds) = (cos, sin) of a fixed angle and pull it back
  * onto the unit circle (first-order Newton step for 1/|z|, exact to O(err^2) per step, so the error

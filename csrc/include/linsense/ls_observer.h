@@ -5,7 +5,10 @@
  *   omega += k2 eps Ts;   theta_est += (omega + k1 eps) Ts
  * LS_OBS_MECH (mechanical model: mass, motor force from the current reference, load force):
  *   theta_est += (omega + k1 eps) Ts
- *   omega     += (kx (F_motor - F_load) / m + k2 eps) Ts,   kx = 2 pi / tau
+ *   omega     += (kx (F_motor - F_load - F_fric) / m + k2 eps) Ts,   kx = 2 pi / tau
+ *   F_fric = clamp(fric_c v / fric_band, -fric_c, fric_c) + fric_v v at the estimated speed v (the
+ *            friction the motor file gives, its Coulomb part averaged over the injection's dither:
+ *            docs/tuning.md, "Friction and thrust ripple"; 0 without)
  *   F_load    -= k3 eps (m / kx) Ts
  * Error dynamics: s^2 + k1 s + k2 (PLL) and s^3 + k1 s^2 + k2 s + k3 (MECH).
  * ls_observer_gains() places all poles at -2 pi f_bw (critically damped); the gains stay
@@ -43,6 +46,10 @@ typedef struct {
     LS_REAL omega_max;      /* rad/s, electrical speed clamp of the estimate, > 0, omega_max Ts <= pi
                                (at most half a period per step: beyond, the angle aliases) */
     LS_REAL force_max;      /* N, clamp of the load-force estimate (MECH), > 0 */
+    LS_REAL fric_c;         /**< unit: N, Coulomb friction of the model (MECH), >= 0 (0: none) */
+    LS_REAL fric_v;         /**< unit: N s/m, viscous friction of the model (MECH), >= 0 (0: none) */
+    LS_REAL fric_band;      /**< unit: m/s, the speed below which the model's Coulomb force is linear
+                                 (MECH), > 0 with fric_c > 0 */
 } ls_observer_cfg;
 
 typedef struct {
@@ -57,6 +64,9 @@ typedef struct {
     LS_REAL k2_ts;       /* 1/s, k2 ts */
     LS_REAL acc_ts;      /* rad/(s N), kx ts / mass (MECH; 0 for PLL) */
     LS_REAL k3_ts;       /* N/rad, k3 (mass / kx) ts (MECH; 0 for PLL) */
+    LS_REAL fric_kw;     /* N s/rad, fric_c / fric_band / kx (MECH with Coulomb friction; else 0) */
+    LS_REAL fric_vw;     /* N s/rad, fric_v / kx (MECH; else 0) */
+    bool fric_on;        /* MECH with fric_c or fric_v > 0 (else the friction costs no cycle) */
 } ls_observer;
 
 /* Fill k1, k2, k3 for critically damped poles at -2 pi f_bw (f_bw in Hz). */
@@ -71,7 +81,11 @@ static inline void ls_observer_step_finite(ls_observer *o, LS_REAL eps, LS_REAL 
     const ls_observer_cfg *c = &o->cfg;
     const LS_REAL dtheta = o->omega * o->ts + o->k1_ts * eps;
     if (c->type == LS_OBS_MECH) {
-        o->omega += o->acc_ts * (f_motor - o->f_load) + o->k2_ts * eps;
+        LS_REAL f_net = f_motor - o->f_load;
+        if (o->fric_on) {
+            f_net -= ls_friction(o->omega, o->fric_kw, c->fric_c, o->fric_vw);
+        }
+        o->omega += o->acc_ts * f_net + o->k2_ts * eps;
         o->f_load = ls_clamp(o->f_load - o->k3_ts * eps, -c->force_max, c->force_max);
     } else {
         o->omega += o->k2_ts * eps;

@@ -1,7 +1,11 @@
 /* linsense firmware library: position controller.
  *
  * ls_posctrl  position P (-> speed PI -> force) or PD (-> force), with speed and acceleration
- *             feed-forward.
+ *             feed-forward, and (P) the friction fed forward at the speed PI's reference v_ref:
+ *             viscous fric_v v plus Coulomb
+ *             clamp(fric_c v / fric_band, -fric_c, fric_c), the Coulomb force linear below fric_band
+ *             (the dither of an injection averages the relay into that slope: docs/tuning.md,
+ *             "Friction and thrust ripple").
  */
 #ifndef LINSENSE_LS_POSCTRL_H
 #define LINSENSE_LS_POSCTRL_H
@@ -22,12 +26,18 @@ typedef struct {
     ls_pi_cfg speed;      /* speed PI (P type): N per m/s, N per m; limits in N */
     LS_REAL mass;         /* kg, for the acceleration feed-forward, >= 0 */
     LS_REAL force_max;    /* N, force limit, > 0 */
+    LS_REAL fric_c;       /**< unit: N, Coulomb friction fed forward (P type), >= 0 (0: none) */
+    LS_REAL fric_v;       /**< unit: N s/m, viscous friction fed forward (P type), >= 0 (0: none) */
+    LS_REAL fric_band;    /**< unit: m/s, the speed below which the Coulomb force is linear (its slope
+                               fric_c / fric_band), > 0 with fric_c > 0 */
 } ls_posctrl_cfg;
 
 typedef struct {
     ls_posctrl_cfg cfg; /* copy of the configuration */
     ls_pi speed;        /* speed PI (P type) */
     LS_REAL v_ref;      /* m/s, speed reference at the last step (P type) */
+    LS_REAL fric_k;     /* N s/m, fric_c / fric_band (0 without Coulomb friction) */
+    bool fric_on;       /* fric_c or fric_v > 0 (else the friction costs no cycle) */
 } ls_posctrl;
 
 ls_status ls_posctrl_init(ls_posctrl *p, const ls_posctrl_cfg *cfg);
@@ -37,9 +47,12 @@ static inline LS_REAL ls_posctrl_step_finite(ls_posctrl *p, LS_REAL x_err, LS_RE
                                              LS_REAL a_ff)
 {
     const ls_posctrl_cfg *k = &p->cfg;
-    const LS_REAL f_ff = k->mass * a_ff;
+    LS_REAL f_ff = k->mass * a_ff;
     if (k->type == LS_POSCTRL_P) {
         p->v_ref = ls_clamp(k->kp_x * x_err + v_ff, -k->v_max, k->v_max);
+        if (p->fric_on) {
+            f_ff += ls_friction(p->v_ref, p->fric_k, k->fric_c, k->fric_v);
+        }
         return ls_pi_step_finite(&p->speed, p->v_ref - v, f_ff);
     }
     return ls_clamp(k->kp_x * x_err + k->kd_x * (v_ff - v) + f_ff, -k->force_max, k->force_max);
@@ -50,12 +63,15 @@ static inline LS_REAL ls_posctrl_step_finite(ls_posctrl *p, LS_REAL x_err, LS_RE
 static inline LS_REAL ls_posctrl_step(ls_posctrl *p, LS_REAL x_err, LS_REAL v, LS_REAL v_ff, LS_REAL a_ff)
 {
     const ls_posctrl_cfg *k = &p->cfg;
-    const LS_REAL f_ff = k->mass * a_ff;
+    LS_REAL f_ff = k->mass * a_ff;
     if (!LS_ISFINITE4(x_err, v, v_ff, f_ff)) {
         return LS_R(0.0);
     }
     if (k->type == LS_POSCTRL_P) {
         p->v_ref = ls_clamp(k->kp_x * x_err + v_ff, -k->v_max, k->v_max);
+        if (p->fric_on) {
+            f_ff += ls_friction(p->v_ref, p->fric_k, k->fric_c, k->fric_v);
+        }
         return ls_pi_step(&p->speed, p->v_ref - v, f_ff); /* v_ref - v may still overflow */
     }
     return ls_clamp(k->kp_x * x_err + k->kd_x * (v_ff - v) + f_ff, -k->force_max, k->force_max);

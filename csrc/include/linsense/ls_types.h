@@ -80,4 +80,12 @@ static inline LS_REAL ls_clamp(LS_REAL x, LS_REAL lo, LS_REAL hi)
     return lo > t ? lo : t;
 }
 
+/* A friction force (N) at speed v: Coulomb c linear below c / k (its slope k) plus viscous b v;
+ * with k = c = b = 0 an exact 0 (ls_posctrl, ls_observer: docs/tuning.md, "Friction and thrust
+ * ripple"). */
+static inline LS_REAL ls_friction(LS_REAL v, LS_REAL k, LS_REAL c, LS_REAL b)
+{
+    return ls_clamp(k * v, -c, c) + b * v;
+}
+
 #endif /* LINSENSE_LS_TYPES_H */

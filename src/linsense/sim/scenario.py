@@ -374,6 +374,29 @@ class ControllerSection(BaseModel):
     decouple: bool = Field(True, description="dq decoupling and back-EMF feed-forward")
     i_max: Positive = Field(_c(_C.i_max), description="current-reference limit; force limit = K_f i_max",
                             json_schema_extra={"unit": "A"})
+    friction_coulomb: NonNegative = Field(
+        0.0, description="Coulomb friction fed forward at the speed reference and in the mech observer's "
+        "model, linear below `friction_band` (docs/tuning.md, \"Friction and thrust ripple\")",
+        json_schema_extra={"unit": "N", "default_note": "designed: the motor file's `[friction] coulomb`"})
+    friction_viscous: NonNegative = Field(
+        0.0, description="viscous friction fed forward at the speed reference and in the mech observer's model",
+        json_schema_extra={"unit": "N s/m", "default_note": "designed: the motor file's `[friction] viscous`"})
+    friction_band: Positive = Field(
+        1.0e-3, description="the speed below which the Coulomb friction is linear (the injection's dither "
+        "averages the relay into that slope)",
+        json_schema_extra={"unit": "m/s", "default_note": "designed: pi/2 times the q-current dither's "
+                           "velocity amplitude"})
+    ripple_order: int = Field(
+        0, ge=0, le=64, description="order n of the force constant's ripple the current reference divides "
+        "out, K_f (1 + `ripple_cos` cos(n theta) + `ripple_sin` sin(n theta)); 0: none",
+        json_schema_extra={"default_note": "designed: the largest of the motor file's `[pm_flux]` "
+                           "harmonics' (6 for the 5th and 7th)"})
+    ripple_cos: float = Field(
+        0.0, ge=-0.5, le=0.5, description="the ripple's cosine share of K_f (|`ripple_cos`| + |`ripple_sin`| "
+        "<= 0.5)", json_schema_extra={"default_note": "designed from `[pm_flux]`"})
+    ripple_sin: float = Field(
+        0.0, ge=-0.5, le=0.5, description="the ripple's sine share of K_f",
+        json_schema_extra={"default_note": "designed from `[pm_flux]`"})
     model: ModelOverride = Field(default_factory=ModelOverride)
 
 
@@ -748,6 +771,9 @@ class ScenarioFile(BaseModel):
             raise KeyProblem("observer.k2" if self.observer.k2 is None else "observer.k1",
                             "give k1 and k2 together (or only bandwidth_hz)")
         c = self.controller
+        if abs(c.ripple_cos) + abs(c.ripple_sin) > 0.5:
+            raise KeyProblem("controller.ripple_cos", f"|ripple_cos| + |ripple_sin| must be at most 0.5, got "
+                             f"{abs(c.ripple_cos) + abs(c.ripple_sin):g}")
         if c.position_type == "pd" and c.kp_x is None:
             raise KeyProblem("controller.kp_x", "missing required key for position_type = \"pd\" (N/m)")
         if c.position_type == "p" and c.kd_x != 0.0:

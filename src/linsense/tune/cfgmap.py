@@ -461,6 +461,14 @@ ROWS: tuple[Row, ...] = (
     Row("pos.speed.out_max", ("controller.i_max", "controller.model.force_constant"), "N",
         lambda v: v.field("pos.force_max"), scale=None, doc="K_f `i_max`"),
     _fs("pos.speed.fs"),
+    Row("pos.fric_c", ("controller.friction_coulomb",), "N"),
+    Row("pos.fric_v", ("controller.friction_viscous",), "N s/m"),
+    Row("pos.fric_band", ("controller.friction_band",), "m/s"),
+    Row("obs.fric_c", ("controller.friction_coulomb",), "N"),
+    Row("obs.fric_v", ("controller.friction_viscous",), "N s/m"),
+    Row("obs.fric_band", ("controller.friction_band",), "m/s"),
+    Row("ripple_c", ("controller.ripple_cos",), "-"),
+    Row("ripple_s", ("controller.ripple_sin",), "-"),
     _pitch("traj.pole_pitch"),
     _fs("traj.fs"),
     _fs("mod.f_pwm"),
@@ -510,6 +518,7 @@ ROWS: tuple[Row, ...] = (
     Row("startup.pairs", ("startup.pairs",), "-", kind="count", c="startup"),
     _startup("startup.i_min", "startup.i_min", "A"),
     _startup("startup.t_settle", "startup.t_settle", "s"),
+    Row("ripple_order", ("controller.ripple_order",), "-", kind="count"),  # (counts last: tune -c writes them after the reals)
 )
 
 #: field -> its row

@@ -90,6 +90,10 @@ DITHER_CURRENT = 0.16  # of i_max
 DITHER_FREQ = 0.055
 V_DC_MIN_FRACTION = 5.0 / 9.0  # under-voltage limit, of the bus (40 V at 72 V)
 V_DC_MAX_FRACTION = 5.0 / 4.0  # over-voltage limit (90 V at 72 V)
+#: the Coulomb friction's linear band (controller.friction_band) at most this share of ts / (m slope)
+#: per step in the mechanical observer (docs/tuning.md, "Friction and thrust ripple")
+FRICTION_STEP_SHARE = 0.5
+RIPPLE_MAX = 0.5  # the largest thrust ripple fed forward, |c| + |s| of K_f (ls_drive_init's limit)
 
 
 @dataclass
@@ -217,6 +221,14 @@ class Design:
         The mechanical observer's bandwidth (observer.type "mech"), Hz.
     force_max : float
         ``K_f i_max``: the clamp of the load estimate (observer.force_max), N.
+    friction_coulomb, friction_viscous : float
+        The motor file's friction (N, N s/m), fed forward and in the mechanical observer's model.
+    friction_band : float
+        The speed below which the Coulomb force is linear, m/s: ``pi/2`` times the velocity amplitude
+        of the injection's q-current dither (:func:`friction_band`).
+    ripple_order, ripple_cos, ripple_sin : int, float, float
+        The force constant's ripple from the PM-flux harmonics, ``K_f (1 + c cos(n theta) + s sin(n
+        theta))`` (:func:`thrust_ripple`), divided out of the current reference (0: none).
     limits : dict
         What limits each bandwidth (docs/tuning.md).
     tolerances : dict
@@ -261,6 +273,12 @@ class Design:
     observer_bw_pll: float = math.nan  # Hz, the PLL bandwidth by the rules (observer.type "pll")
     observer_bw_mech: float = math.nan  # Hz, the mechanical observer's (observer.type = "mech")
     force_max: float = math.nan  # N, K_f i_max: the clamp of the load estimate (observer.force_max)
+    friction_coulomb: float = 0.0  # N, the motor file's Coulomb friction (controller.friction_coulomb)
+    friction_viscous: float = 0.0  # N s/m, its viscous friction (controller.friction_viscous)
+    friction_band: float = 1.0e-3  # m/s, the Coulomb force's linear band (controller.friction_band)
+    ripple_order: int = 0  # -, the force constant's ripple order fed forward (controller.ripple_order)
+    ripple_cos: float = 0.0  # -, its cosine share of K_f (controller.ripple_cos)
+    ripple_sin: float = 0.0  # -, its sine share (controller.ripple_sin)
     limits: dict = field(default_factory=dict)  # what limits each bandwidth (docs/tuning.md)
     tolerances: dict = field(default_factory=dict)  # per tolerance: predicted hold error, gain range
     warnings: list = field(default_factory=list)
@@ -612,6 +630,7 @@ def design(
         s_min=s_min,
     )
     _limits(dz, motor, d, warnings, source)
+    _friction_ripple(dz, motor, d, L_q, warnings)
     if not analyse:
         return dz
     from linsense.tune.margins import TOLERANCE_ERR_DEG, TOLERANCES, tolerance_costs
@@ -646,6 +665,90 @@ def design(
             warnings.append(f"a motor off by {name} {held} with this drive's nominal LUT (model; bound "
                             f"{TOLERANCE_ERR_DEG:g} deg): identify or calibrate the motor")
     return dz
+
+
+def friction_band(motor: Motor, d: DriveData, v_inj: float, f_inj: float, quad: float, L_q: float) -> float:
+    """The speed below which the dither-averaged Coulomb friction is linear, m/s.
+
+    The injection's q current ``i_q = kappa V_inj / |R_s + j w L_q|`` (``kappa`` 1 for the rotating and
+    square shapes) shakes the mover at ``v_d = K_f i_q / (m w)``; averaged over it the relay
+    ``F_c sign(v)`` becomes ``F_c (2/pi) asin(v / v_d)``, whose slope at 0 the linear band
+    ``pi/2 v_d`` keeps. Without a dither the band is the narrowest the mechanical observer steps
+    through (its friction's slope ``ts / m`` at most :data:`FRICTION_STEP_SHARE`).
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+    d : DriveData
+        The drive.
+    v_inj, f_inj, quad : float
+        The injection (V, Hz, elliptical share).
+    L_q : float
+        The mean q inductance, H.
+
+    Returns
+    -------
+    float
+        m/s.
+    """
+    w = 2.0 * math.pi * f_inj
+    kappa = quad if d.shape == "pulsating" else 1.0
+    i_q = kappa * v_inj / abs(complex(motor.R_s, w * L_q))
+    v_d = motor.force_constant * i_q / (motor.mass * w)
+    floor = motor.friction.coulomb / (FRICTION_STEP_SHARE * motor.mass * d.f_pwm)
+    return max(0.5 * math.pi * v_d, floor)
+
+
+def thrust_ripple(motor: Motor) -> dict[int, tuple[float, float]]:
+    """The force constant's ripple from the PM-flux harmonics, by order: ``{n: (c, s)}``.
+
+    A harmonic ``a cos(k theta + phi)`` of the flux (k = 6j -+ 1; triplen orders make no force) gives
+    the q current's force ``K_f i_q (1 -+ k a cos((k +- 1) theta + phi))`` (the simulator's plant,
+    ``ls_sim_pm_flux``); the 5th and 7th add up at order 6.
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+
+    Returns
+    -------
+    dict
+        Order -> (cosine share, sine share) of ``K_f``.
+    """
+    out: dict[int, tuple[float, float]] = {}
+    for h in motor.pm_harmonics:
+        k = int(h.order)
+        if k % 3 == 0 or k < 2:
+            continue
+        n, sg = (k - 1, 1.0) if k % 3 == 1 else (k + 1, -1.0)
+        c, s = out.get(n, (0.0, 0.0))
+        out[n] = (c + sg * k * h.amplitude * math.cos(h.phase), s - sg * k * h.amplitude * math.sin(h.phase))
+    return out
+
+
+def _friction_ripple(dz: Design, motor: Motor, d: DriveData, L_q: float, warnings: list) -> None:
+    """The friction and thrust ripple the controller feeds forward (docs/tuning.md, "Friction and
+    thrust ripple"). Fills ``dz`` in place."""
+    f = motor.friction
+    dz.friction_coulomb = float(f.coulomb)
+    dz.friction_viscous = float(f.viscous)
+    if f.coulomb > 0.0:
+        dz.friction_band = friction_band(motor, d, dz.v_inj, dz.f_inj, dz.quad, L_q)
+    ripple = thrust_ripple(motor)
+    if ripple:
+        n = max(ripple, key=lambda k: math.hypot(*ripple[k]))
+        c, s = ripple[n]
+        if abs(c) + abs(s) > RIPPLE_MAX:
+            warnings.append(f"the PM-flux harmonics' thrust ripple of order {n} ({math.hypot(c, s):.3g} of K_f) is "
+                            f"beyond what the drive divides out ({RIPPLE_MAX:g}): not fed forward")
+        else:
+            dz.ripple_order, dz.ripple_cos, dz.ripple_sin = n, c, s
+        rest = [k for k in ripple if k != dz.ripple_order and math.hypot(*ripple[k]) > 0.0]
+        if rest:
+            warnings.append("the thrust ripple of order " + ", ".join(str(k) for k in sorted(rest))
+                            + " is not fed forward (the drive divides out one order)")
 
 
 def injection_frequency(f_pwm: float) -> float:

@@ -132,6 +132,17 @@ def scenario_dict(dz: Design, drive: DriveData, motor_ref: str, base: dict | Non
     )
     if con.get("position_type", "p") == "p":
         con["kp_x"] = _r(dz.kp_x)
+    # the motor file's friction and thrust ripple, fed forward (only where it has them: the keys'
+    # defaults are none)
+    for k in ("friction_coulomb", "friction_viscous", "friction_band", "ripple_order", "ripple_cos",
+              "ripple_sin"):
+        con.pop(k, None)
+    if dz.friction_coulomb > 0.0 or dz.friction_viscous > 0.0:
+        con.update({"friction_coulomb": dz.friction_coulomb, "friction_viscous": dz.friction_viscous,
+                    "friction_band": _r(dz.friction_band)})
+    if dz.ripple_order:
+        con.update({"ripple_order": dz.ripple_order, "ripple_cos": _r(dz.ripple_cos),
+                    "ripple_sin": _r(dz.ripple_sin)})
     sc.setdefault("calibration", {}).update({"dither_a": _r(dz.dither_a), "dither_hz": _r(dz.dither_hz)})
     # limits the scenario gives are kept (they are not gains); otherwise they follow the bus
     prot = sc.setdefault("protection", {})
@@ -305,6 +316,9 @@ def design_values(dz: Design, drive: DriveData, motor: Motor, startup=None) -> V
         "protection.v_dc_min": drive.v_dc * V_DC_MIN_FRACTION,
         "protection.v_dc_max": drive.v_dc * V_DC_MAX_FRACTION,
         "calibration.dither_a": dz.dither_a, "calibration.dither_hz": dz.dither_hz,
+        "controller.friction_coulomb": dz.friction_coulomb, "controller.friction_viscous": dz.friction_viscous,
+        "controller.friction_band": dz.friction_band, "controller.ripple_order": dz.ripple_order,
+        "controller.ripple_cos": dz.ripple_cos, "controller.ripple_sin": dz.ripple_sin,
     }
     derived = {"model.end_anisotropy": lambda v: end_anisotropy(motor)}
     fields = {}
