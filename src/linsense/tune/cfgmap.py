@@ -518,7 +518,8 @@ ROWS: tuple[Row, ...] = (
     Row("startup.pairs", ("startup.pairs",), "-", kind="count", c="startup"),
     _startup("startup.i_min", "startup.i_min", "A"),
     _startup("startup.t_settle", "startup.t_settle", "s"),
-    Row("ripple_order", ("controller.ripple_order",), "-", kind="count"),  # (counts last: tune -c writes them after the reals)
+    # (counts last: tune -c writes them after the reals)
+    Row("ripple_order", ("controller.ripple_order",), "-", kind="count"),
 )
 
 #: field -> its row

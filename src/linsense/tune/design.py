@@ -741,8 +741,8 @@ def _friction_ripple(dz: Design, motor: Motor, d: DriveData, L_q: float, warning
         n = max(ripple, key=lambda k: math.hypot(*ripple[k]))
         c, s = ripple[n]
         if abs(c) + abs(s) > RIPPLE_MAX:
-            warnings.append(f"the PM-flux harmonics' thrust ripple of order {n} ({math.hypot(c, s):.3g} of K_f) is "
-                            f"beyond what the drive divides out ({RIPPLE_MAX:g}): not fed forward")
+            warnings.append(f"the PM-flux harmonics' thrust ripple of order {n} ({math.hypot(c, s):.3g} of "
+                            f"K_f) is beyond what the drive divides out ({RIPPLE_MAX:g}): not fed forward")
         else:
             dz.ripple_order, dz.ripple_cos, dz.ripple_sin = n, c, s
         rest = [k for k in ripple if k != dz.ripple_order and math.hypot(*ripple[k]) > 0.0]

@@ -316,7 +316,8 @@ def design_values(dz: Design, drive: DriveData, motor: Motor, startup=None) -> V
         "protection.v_dc_min": drive.v_dc * V_DC_MIN_FRACTION,
         "protection.v_dc_max": drive.v_dc * V_DC_MAX_FRACTION,
         "calibration.dither_a": dz.dither_a, "calibration.dither_hz": dz.dither_hz,
-        "controller.friction_coulomb": dz.friction_coulomb, "controller.friction_viscous": dz.friction_viscous,
+        "controller.friction_coulomb": dz.friction_coulomb,
+        "controller.friction_viscous": dz.friction_viscous,
         "controller.friction_band": dz.friction_band, "controller.ripple_order": dz.ripple_order,
         "controller.ripple_cos": dz.ripple_cos, "controller.ripple_sin": dz.ripple_sin,
     }
