@@ -221,14 +221,21 @@ class Design:
         The mechanical observer's bandwidth (observer.type "mech"), Hz.
     force_max : float
         ``K_f i_max``: the clamp of the load estimate (observer.force_max), N.
-    friction_coulomb, friction_viscous : float
-        The motor file's friction (N, N s/m), fed forward and in the mechanical observer's model.
+    friction_coulomb : float
+        The motor file's Coulomb friction, N, fed forward and in the mechanical observer's model.
+    friction_viscous : float
+        The motor file's viscous friction, N s/m, likewise.
     friction_band : float
         The speed below which the Coulomb force is linear, m/s: ``pi/2`` times the velocity amplitude
         of the injection's q-current dither (:func:`friction_band`).
-    ripple_order, ripple_cos, ripple_sin : int, float, float
-        The force constant's ripple from the PM-flux harmonics, ``K_f (1 + c cos(n theta) + s sin(n
-        theta))`` (:func:`thrust_ripple`), divided out of the current reference (0: none).
+    ripple_order : int
+        The order ``n`` of the force constant's ripple from the PM-flux harmonics, ``K_f (1 + c cos(n
+        theta) + s sin(n theta))`` (:func:`thrust_ripple`), divided out of the current reference (0:
+        none).
+    ripple_cos : float
+        Its ``c``, a share of K_f.
+    ripple_sin : float
+        Its ``s``, a share of K_f.
     limits : dict
         What limits each bandwidth (docs/tuning.md).
     tolerances : dict
