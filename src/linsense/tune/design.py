@@ -555,7 +555,6 @@ def design(
     if i_hf > d.i_max:
         warnings.append(f"the HF current ({i_hf:.2f} A) exceeds i_max ({d.i_max:g} A): lower v_inj")
     # the fundamental beside the injection: R i + (omega L i, back-EMF) at i_max
-    w_e = 2.0 * math.pi / motor.pole_pitch
     v_avail = v_lin - v_inj
     v_r = motor.R_s * d.i_max
     if v_avail <= v_r:
@@ -567,7 +566,7 @@ def design(
         )
     # a speed beyond what the bus allows (before the move's time, which would blame the acceleration)
     need = rated_load(motor, d) + motor.mass * d.a_max
-    v_bus = bus_speed(motor, d.v_dc, need / motor.force_constant)
+    v_bus = fundamental_speed(motor, v_lin, need / motor.force_constant, L_q)
     if d.v_max > v_bus and need <= motor.force_constant * d.i_max:  # (else the force is refused first)
         raise InputError(source, "v_max", f"{d.v_max:g} m/s is beyond what the {d.v_dc:g} V bus allows: "
                          f"{v_bus:.3g} m/s, where the back-EMF, R_s i and omega L_q i at the current the "
@@ -580,9 +579,7 @@ def design(
         key = "v_max" if 2.0 * motor.pole_pitch / d.v_max >= d.v_max / d.a_max else "a_max"
         raise InputError(source, key, f"a move over two pole pitches at v_max = {d.v_max:g} m/s, a_max = "
                          f"{d.a_max:g} m/s^2 lasts {t_move:.3g} s, beyond {MOVE_TIME_MAX:g} s")
-    # |V| = |R i + j w (L_q i + psi_pm)| at speed v: solve for the speed where it reaches v_avail
-    lq_i = L_q * d.i_max + motor.psi_pm
-    headroom = w_e**-1 * math.sqrt(max(v_avail**2 - v_r**2, 0.0)) / lq_i
+    headroom = fundamental_speed(motor, v_avail, d.i_max, L_q)
     if headroom < d.v_max:
         warnings.append(
             f"the bus leaves room for the fundamental up to {headroom:.3g} m/s at i_max, below "
@@ -860,11 +857,31 @@ def bus_speed(motor: Motor, v_dc: float, i_q: float) -> float:
     float
         m/s (0 where ``R_s i_q`` alone takes the range).
     """
-    _, L_q = mean_dq(motor)
-    v_lin = v_dc / math.sqrt(3.0)
-    v_r = motor.R_s * i_q
-    w = math.sqrt(max(v_lin**2 - v_r**2, 0.0)) / (L_q * i_q + motor.psi_pm)
-    return w * motor.pole_pitch / (2.0 * math.pi)
+    return fundamental_speed(motor, v_dc / math.sqrt(3.0), i_q, mean_dq(motor)[1])
+
+
+def fundamental_speed(motor: Motor, v_avail: float, i_q: float, L_q: float) -> float:
+    """The speed at which ``|R_s i + j w (L_q i + psi_pm)|`` reaches ``v_avail``: up to it the
+    voltage drives ``i_q`` (the bus's linear range, or what the injection leaves of it).
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+    v_avail : float
+        The voltage amplitude available, V.
+    i_q : float
+        The q current, A.
+    L_q : float
+        The mean q inductance, H.
+
+    Returns
+    -------
+    float
+        m/s (0 where ``R_s i_q`` alone takes ``v_avail``).
+    """
+    w_per_v = 2.0 * math.pi / motor.pole_pitch  # electrical rad/s per m/s
+    return w_per_v**-1 * math.sqrt(max(v_avail**2 - (motor.R_s * i_q) ** 2, 0.0)) / (L_q * i_q + motor.psi_pm)
 
 
 def _limits(dz: Design, motor: Motor, d: DriveData, warnings: list, source: str) -> None:
