@@ -550,13 +550,35 @@ def end_effect_fit(motor, values: np.ndarray, injection: str, f_inj: float, quad
         The end-effect scale.
     rms : float
         The fitted table's root-mean-square difference from ``values``, rad.
+
+    Notes
+    -----
+    Each fit (about 0.4 s) is kept by its inputs' content, the last :data:`FITS_KEPT`: a table
+    that ``tune`` reports, writes into a header and verifies with is fitted once.
     """
+    values = np.asarray(values, dtype=float)
+    key = (data_digest(motor=motor), values.tobytes(), injection, float(f_inj), float(quad))
+    hit = _FITS.get(key)
+    if hit is None:
+        hit = _fit(motor, values, injection, f_inj, quad)
+        while len(_FITS) >= FITS_KEPT:
+            _FITS.pop(next(iter(_FITS)))
+        _FITS[key] = hit
+    return hit
+
+
+#: how many end-effect fits :func:`end_effect_fit` keeps
+FITS_KEPT = 16
+_FITS: dict = {}
+
+
+def _fit(motor, values: np.ndarray, injection: str, f_inj: float, quad: float) -> tuple:
+    """:func:`end_effect_fit`'s minimisation."""
     from scipy.optimize import minimize_scalar
 
     from linsense.compensation.lut import build_lut
     from linsense.model.tolerance import perturbed
 
-    values = np.asarray(values, dtype=float)
     n = values.size
     shape_quad = quad if injection == "pulsating" else 0.0
 

@@ -256,8 +256,7 @@ def measured_model(sc: Scenario, model_motor: Motor) -> Motor:
     values = measured_values(sc, model_motor, f_run, quad)
     R_s = sc.spec.controller.model.R_s
     lut_motor = model_motor if R_s is None else dataclasses.replace(model_motor, R_s=R_s)
-    key = ("measured_fit",) + _measured_key(sc, model_motor, f_run, quad) + (motor_key(lut_motor),)
-    fitted = memo(key, lambda: end_effect_fit(lut_motor, values, shape, f_run, quad))[0]
+    fitted = end_effect_fit(lut_motor, values, shape, f_run, quad)[0]  # (kept by its inputs)
     return fitted if R_s is None else dataclasses.replace(fitted, R_s=model_motor.R_s)
 
 
@@ -276,10 +275,9 @@ def _shape_tables(sc: Scenario, lut_motor, key: tuple, v: Values, r_slopes: bool
     rot_r = None
     if compensation_of(ctl.mode, obs.compensation) == "lut":
         f_lut = f_inj if obs.lut_model in ("resistive", "measured") else None
-        if obs.lut_model == "measured":
-            # (the frequency the drive runs: the square wave's f_pwm / 2, as the calibration stamps it)
-            f_run = fs / 2.0 if shape == "square" else inj.frequency
-            t.comp = measured_comp(sc, model_motor, f_run, inj.quadrature)
+        if obs.lut_model == "measured":  # (f_inj: the frequency the drive runs, f_pwm / 2 for the square
+            # wave, as the calibration stamps it)
+            t.comp = measured_comp(sc, model_motor, f_inj, inj.quadrature)
         else:
             t.comp = memo(("lut", shape, model_key, R_s, points, f_lut),
                           lambda: make_lut(shape_tables(f_lut)[0]))
