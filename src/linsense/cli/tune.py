@@ -105,13 +105,14 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
     if table_path is not None:
         from linsense.compensation.measured import fit_report, read_measured_table
 
+        # (the frequency and kappa the drive runs: the square wave's f_pwm / 2, kappa the elliptical's)
         f_table = dd.f_pwm / 2.0 if dd.shape == "square" else dz.f_inj
-        table = read_measured_table(table_path, motor=motor, injection=dd.shape, f_inj=f_table,
-                                    quad=dz.quad if dd.shape == "pulsating" else 0.0, points=256)
+        q_table = dz.quad if dd.shape == "pulsating" else 0.0
+        table = read_measured_table(table_path, motor=motor, injection=dd.shape, f_inj=f_table, quad=q_table,
+                                    points=256)
         if table.note:
             say(f"  table          {table.note}")
-        fit_line, fit_warning = fit_report(motor, table.values, dd.shape, f_table,
-                                           dz.quad if dd.shape == "pulsating" else 0.0)
+        fit_line, fit_warning = fit_report(motor, table.values, dd.shape, f_table, q_table)
         say(f"  table          {fit_line}")
     table_abs = None if table_path is None else str(Path(table_path).resolve())
     sc_dict = scenario_dict(dz, dd, motor_spec, base, startup=su, k_est=k_est, pole_pitch=motor.pole_pitch,
