@@ -94,7 +94,7 @@ cmake-tool:
 # (it builds again when an input is newer). pytest then checks the site in headless Chromium.
 # The equations are typeset by KaTeX, which the site serves itself (no CDN): Debian's libjs-katex
 # (KATEX_DIR), copied into the site by docs/hooks/katex.py; docs-tools installs it when missing.
-DOCS_ENV  := NO_MKDOCS_2_WARNING=1
+DOCS_ENV  = NO_MKDOCS_2_WARNING=1 KATEX_DIR=$(KATEX_DIR)
 KATEX_DIR ?= /usr/share/javascript/katex
 docs-tools:
 	$(call apt_need,test -f $(KATEX_DIR)/katex.min.js,libjs-katex)
