@@ -438,6 +438,8 @@ def output_error(path: str | os.PathLike, exc: OSError):
     """
     from linsense.errors import OutputError
 
+    if str(path) == "-":  # (standard output: a broken pipe)
+        return OutputError("<stdout>", f"cannot write: {os_reason(exc)}")
     shown = _shown(path)
     reason = os_reason(exc)
     if exc.errno in (errno.EACCES, errno.EPERM):
@@ -542,10 +544,59 @@ def _umask() -> int:
 FILE_MODE = 0o666 & ~_umask()
 
 
+def write_all(f, data: bytes) -> int:
+    """Write the whole of ``data`` to the binary file ``f``.
+
+    A raw file's ``write`` may write part of it and say so only in its count (standard output
+    unbuffered, ``PYTHONUNBUFFERED=1``, into a pipe whose reader went away: ``--out -`` exited 0
+    with its output cut); the rest is written again, so a failure raises.
+
+    Parameters
+    ----------
+    f : binary file
+        Where to write.
+    data : bytes-like
+        What to write.
+
+    Returns
+    -------
+    int
+        ``len(data)``.
+
+    Raises
+    ------
+    OSError
+        The write failed (a broken pipe: :class:`BrokenPipeError`).
+    """
+    view = memoryview(data).cast("B")
+    while view:
+        n = f.write(view)
+        if n is None:
+            raise BlockingIOError(errno.EAGAIN, "standard output is non-blocking and full")
+        if n <= 0:
+            raise OSError(errno.EIO, "nothing written")
+        view = view[n:]
+    return len(data)
+
+
+class _Whole:
+    """A binary file whose ``write`` writes everything (:func:`write_all`)."""
+
+    def __init__(self, f) -> None:
+        self._f = f
+
+    def write(self, data) -> int:
+        return write_all(self._f, data)
+
+    def __getattr__(self, name: str):
+        return getattr(self._f, name)
+
+
 def _write_atomic_with(path: str | os.PathLike, writer: Callable) -> Path:
     if str(path) == "-":
-        writer(sys.stdout.buffer)
         sys.stdout.flush()
+        writer(_Whole(sys.stdout.buffer))
+        sys.stdout.buffer.flush()
         return Path("-")
     if str(path).endswith(("/", os.sep)) or os.path.isdir(path):
         # (`model --out newdir/` wrote a file named newdir)

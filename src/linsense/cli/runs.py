@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import json
 import math
-import sys
 from pathlib import Path
 
 import click
@@ -21,18 +20,9 @@ def _scenario(spec: str):
     from linsense.sim.scenario import load_scenario, scenario_from_dict
 
     if spec == "-":
-        from linsense.io import parse_toml
-        from linsense.limits import MAX_TEXT_FILE_BYTES
+        from linsense.io import decode_text, parse_toml
 
-        data = sys.stdin.buffer.read(MAX_TEXT_FILE_BYTES + 1) if hasattr(sys.stdin, "buffer") else \
-            sys.stdin.read().encode()
-        if len(data) > MAX_TEXT_FILE_BYTES:
-            raise InputError("<stdin>", "", f"larger than the limit of {MAX_TEXT_FILE_BYTES:,} bytes of a "
-                                            f"scenario ({docs('limits')})")
-        try:
-            text = data.decode("utf-8")
-        except UnicodeDecodeError as exc:
-            raise InputError("<stdin>", "", f"cannot read: {exc}") from None
+        text = decode_text(c.read_stdin(), "<stdin>", "scenario")
         return scenario_from_dict(parse_toml(text, "<stdin>"), "<stdin>", Path.cwd())
     return load_scenario(c.example("scenarios", spec, "SCENARIO"))
 
