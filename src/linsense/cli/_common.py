@@ -301,6 +301,71 @@ def example(kind: str, spec: str, key: str, extra: tuple[str, ...] = ()) -> str:
     return path
 
 
+#: the help of an ``--out`` that has a default (:func:`default_out`)
+OUT_HELP = "(default: NAME-{command}{ext} in the working folder, NAME the {what}'s)"
+
+
+def out_option(command: str, what: str, *, folder: bool, ext: str = "", dash: bool = False):
+    """``--out`` with the default of :func:`default_out` (it was required by every command).
+
+    Parameters
+    ----------
+    command : str
+        The command, in the default's name.
+    what : str
+        What the default is named after ("scenario", "motor"), for the help.
+    folder : bool
+        An output folder (else a file).
+    ext : str, optional
+        The file's extension in the help (``.csv``; a command whose extension follows its format
+        gives it in words).
+    dash : bool, optional
+        ``-`` writes to standard output.
+    """
+    kind = "output folder" if folder else "output file" + (" (- for standard output)" if dash else "")
+    path = click.Path(file_okay=False) if folder else click.Path(dir_okay=False, allow_dash=dash)
+    default = OUT_HELP.format(command=command, ext=ext or ("/" if folder else ""), what=what)
+    return click.option("--out", default=None, type=path, help=f"{kind} {default}")
+
+
+def default_out(out: str | None, name: str, command: str, ext: str = "") -> str:
+    """The ``--out`` of a command, ``NAME-COMMAND[EXT]`` in the working folder when none is given.
+
+    One rule for every command that writes an output (docs/cli.md, "Outputs"): ``NAME`` is what the
+    command runs on, as given (a file's stem, a preset's or example's name; a scenario from standard
+    input: its ``[scenario] name``), made safe for a file name (:func:`linsense.io.safe_name`);
+    ``EXT`` the file's extension (none for a folder). The report says where it writes.
+
+    Parameters
+    ----------
+    out : str or None
+        The ``--out`` given.
+    name : str
+        The argument the command runs on (``step3_lut``, ``motors/m.toml``).
+    command : str
+        The command (``simulate``).
+    ext : str, optional
+        The file's extension with its dot; "" for an output folder.
+
+    Returns
+    -------
+    str
+        ``out``, or the default.
+    """
+    if out is not None:
+        return out
+    from pathlib import PurePath
+
+    from linsense.io import safe_name
+
+    stem = PurePath(name.rstrip("/\\")).name
+    if PurePath(stem).suffix in (".toml", ".csv", ".json"):
+        stem = PurePath(stem).stem
+    path = f"{safe_name(stem)}-{command}{ext}"
+    say(f"no --out given: writing {path}{'' if ext else '/'} (docs/cli.md, \"Outputs\")")
+    return path
+
+
 def show(v: float | None, unit: str, fmt: str = ".2f") -> str:
     """A metric for a person: 'n/a' where it is not defined."""
     return "n/a" if v is None else f"{v:{fmt}} {unit}"

@@ -51,6 +51,10 @@ def export(folder: str, motor_spec: str, scenario_path: str | None, name: str | 
 
     if as_json:
         c.data_on_stdout()
+    if name is not None:  # (checked before anything is designed, never rewritten)
+        from linsense.tune.export import c_config_name
+
+        c_config_name(name, "", "--name")
     dd, src = DriveData(), motor_spec
     if scenario_path is not None:
         from linsense.sim.build import drive_data
