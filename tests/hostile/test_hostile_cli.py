@@ -51,7 +51,8 @@ def test_a_c_keyword_symbol_is_refused_and_a_valid_one_compiles_as_given(run_cli
     assert not out.exists()
     run_cli("lut", "--motor", "ecce2010", "--format", "c", "--symbol", "LutAxis2", "--out", str(out))
     src = tmp_path / "u.c"
-    src.write_text('#include "l.h"\nint main(void) { return (int)(LutAxis2[0] * 0.0f) + LUTAXIS2_LEN * 0; }\n')
+    src.write_text('#include "l.h"\n'
+                   "int main(void) { return (int)(LutAxis2[0] * 0.0f) + LUTAXIS2_LEN * 0; }\n")
     cc = subprocess.run(["cc", "-std=c99", "-Wall", "-Werror", "-I", str(tmp_path), str(src), "-o",
                          str(tmp_path / "u")], capture_output=True, text=True)
     assert cc.returncode == 0, cc.stderr

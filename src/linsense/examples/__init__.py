@@ -12,6 +12,7 @@ listing the names. The examples refer to each other by relative paths (a sweep's
 from __future__ import annotations
 
 import functools
+import os
 import shutil
 from pathlib import Path
 
@@ -242,7 +243,6 @@ def copy_to(dest: str | Path, force: bool = False) -> list[Path]:
     linsense.errors.OutputError
         A file or folder could not be written (nothing copied).
     """
-    import os
     import secrets
 
     dest = Path(dest)
@@ -298,8 +298,6 @@ def copy_to(dest: str | Path, force: bool = False) -> list[Path]:
 def _undo(moved: list[tuple[Path, Path | None]], made: list[Path], stage: Path) -> None:
     """Undo an unfinished :func:`copy_to`: each file placed removed (the one it replaced put back),
     the temporary folder removed, then the folders it made, deepest first."""
-    import os
-
     for t, aside in reversed(moved):
         try:
             if aside is not None:
