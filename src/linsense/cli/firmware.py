@@ -51,10 +51,6 @@ def export(folder: str, motor_spec: str, scenario_path: str | None, name: str | 
 
     if as_json:
         c.data_on_stdout()
-    if name is not None:  # (checked before anything is designed, never rewritten)
-        from linsense.tune.export import c_config_name
-
-        c_config_name(name, "", "--name")
     dd, src = DriveData(), motor_spec
     if scenario_path is not None:
         from linsense.sim.build import drive_data
@@ -67,6 +63,9 @@ def export(folder: str, motor_spec: str, scenario_path: str | None, name: str | 
             table_path = scenario_table(sc)
     apply_drive_data(dd, drive, quad, v_max, a_max, load, travel)
     motor = c.load(motor_spec)
+    from linsense.tune.export import c_config_name
+
+    c_config_name(name, motor.name, "--name")  # (checked before anything is designed, never rewritten)
     made = firmware_files(motor, dd, src, name, table=table_path)
     for line in made.lines:
         c.say(line)

@@ -80,6 +80,10 @@ def lut(motor_spec: str, points: int, fmt: str, symbol: str | None, f_inj: float
     motor = c.load(motor_spec)
     # (a motor the HF observer cannot hold is refused as tune and simulate refuse it: issue 23)
     observable_error_gain(motor, f_inj or float(firmware.inject.freq), quad if f_inj else 0.0, motor_spec)
+    if fmt == "c" and symbol is None:
+        from linsense.compensation.lut import default_lut_symbol
+
+        default_lut_symbol(motor.name, motor.source, "motor.name")
     out = c.default_out(out, motor_spec, "lut", {"csv": ".csv", "json": ".json", "c": ".h"}[fmt])
     write_atomic(out, export(build_lut(motor, points, f_inj, quad=quad, injection=injection), fmt, symbol))
     c.elapsed()

@@ -68,12 +68,8 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
     if unverified and fmt != "c":
         raise click.UsageError("--unverified is for --format c (a scenario is written whatever the "
                                "certificate says)")
-    if name is not None:  # (checked, never rewritten; and not ignored with a scenario)
-        if fmt != "c":
-            raise click.UsageError("--name names the C header's symbols: only with --format c")
-        from linsense.tune.export import c_config_name
-
-        c_config_name(name, "", "--name")
+    if name is not None and fmt != "c":  # (not ignored with a scenario)
+        raise click.UsageError("--name names the C header's symbols: only with --format c")
     if as_json or out == "-":
         c.data_on_stdout()  # (stdout carries the file itself, or the JSON summary)
     out = c.default_out(out, motor_spec, "tune", ".h" if fmt == "c" else ".toml")
@@ -97,6 +93,10 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
     if fmt == "c":
         check_c_header(dd)
     motor = c.load(motor_spec)
+    if fmt == "c":  # (the C name checked, never rewritten, before anything is designed or run)
+        from linsense.tune.export import c_config_name
+
+        c_config_name(name, motor.name, "--name")
     dz = design(motor, dd, src)
     from linsense.tune.startup import design_startup
     # (the start-up locks as the PLL would: startup.lock_gain, linsense.tune.design.startup_lock_gain)

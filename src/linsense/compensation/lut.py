@@ -430,6 +430,39 @@ def c_symbol(name: str, source: str, prefix: str = "", longest_suffix: int = 0) 
 LUT_SUFFIX_CHARS = len("_ANGLE_UNIT_RAD")
 
 
+def default_lut_symbol(motor_name: str, source: str, key: str = "") -> str:
+    """The LUT header's array when no symbol is given: ``ls_lut_<motor name>``, the name made a C
+    identifier (``ls_lut_motor`` when nothing of it is left), checked by :func:`c_name_problem`.
+
+    Parameters
+    ----------
+    motor_name : str
+        The motor's name.
+    source : str
+        Named in the message (the motor file).
+    key : str, optional
+        Its key (``motor.name``).
+
+    Returns
+    -------
+    str
+        The symbol.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        The name makes one C cannot take (a motor named ``step`` makes ``ls_lut_step``, the C
+        library's function): give the symbol.
+    """
+    sym = c_identifier(f"ls_lut_{motor_name}")
+    sym = "ls_lut_motor" if sym == "ls_lut" else sym
+    why = c_name_problem(sym, LUT_SUFFIX_CHARS)
+    if why is not None:
+        raise InputError(source, key, f"the C name made from the motor's name {motor_name!r}, {sym!r}, "
+                                      f"{why}: give the symbol (--symbol)")
+    return sym
+
+
 def c_comment_text(text: str) -> str:
     """``text`` safe inside a C comment.
 
@@ -483,14 +516,8 @@ def to_c_header(lut: Lut, symbol: str | None = None) -> str:
     linsense.errors.InputError
         A symbol (or the default made from the motor's name) C cannot take, naming the rule.
     """
-    if symbol is not None:
-        sym = c_symbol(symbol, "symbol", longest_suffix=LUT_SUFFIX_CHARS)
-    else:
-        sym = c_identifier(f"ls_lut_{lut.name}")
-        why = c_name_problem(sym, LUT_SUFFIX_CHARS)
-        if why is not None:
-            raise InputError(lut.name, "", f"the C name made from the motor's name, {sym!r}, {why}: give "
-                                           "the symbol")
+    sym = c_symbol(symbol, "symbol", longest_suffix=LUT_SUFFIX_CHARS) if symbol is not None else \
+        default_lut_symbol(lut.name, "symbol")
     up = sym.upper()
     # (a motor name is the user's text: "*/" in it ended the comment and the header did not compile,
     # "/*" in it is a -Wcomment warning)
