@@ -303,7 +303,7 @@ def decode_text(data: bytes, source: str, what: str) -> str:
     Raises
     ------
     linsense.errors.InputError
-        Naming ``source``: too large, or not UTF-8 (with the byte's offset).
+        Naming ``source``: too large, UTF-16, or not UTF-8 (with the byte's offset).
     """
     from linsense.errors import InputError
     from linsense.limits import MAX_TEXT_FILE_BYTES
@@ -311,6 +311,9 @@ def decode_text(data: bytes, source: str, what: str) -> str:
     if len(data) > MAX_TEXT_FILE_BYTES:
         raise InputError(source, "", f"larger than the limit of {MAX_TEXT_FILE_BYTES:,} bytes of a {what} "
                                      "(docs/limits.md)")
+    if data[:2] in (b"\xff\xfe", b"\xfe\xff"):  # (Windows' "Unicode": a BOM of UTF-16)
+        raise InputError(source, "", f"cannot read: UTF-16 text (a byte-order mark of UTF-16): save the "
+                                     f"{what} as UTF-8")
     try:
         return data.decode("utf-8-sig")
     except UnicodeDecodeError as exc:

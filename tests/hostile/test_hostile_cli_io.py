@@ -300,6 +300,15 @@ def test_a_scenario_with_a_bom_is_read(run_cli, tmp_path, crlf):
     assert p.returncode == 0, p.stderr
 
 
+def test_utf16_is_named(run_cli, tmp_path):
+    """A scenario saved as Windows' "Unicode" (UTF-16): "cannot read: 'utf-8' codec can't decode
+    byte 0xff in position 0: invalid start byte"."""
+    (tmp_path / "s.toml").write_bytes(scenario_text().encode("utf-16"))
+    line = run_cli("simulate", tmp_path / "s.toml", "--out", tmp_path / "o").refused("s.toml", "UTF-16",
+                                                                                     "as UTF-8")
+    assert "codec" not in line
+
+
 def test_every_toml_and_json_reader_reads_a_bom(run_cli, tmp_path):
     """Motor files, sweep files, FEA geometries and JSON tables: the same decoder."""
     from linsense.compensation.lut import build_lut, read_lut_json, to_json
