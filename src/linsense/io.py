@@ -237,7 +237,9 @@ def csv_rows(path: str | os.PathLike, what: str):
                 yield number, row
     except FileNotFoundError:
         raise InputError(src, "", f"no such {what}") from None
-    except (OSError, UnicodeDecodeError, csv.Error) as exc:
+    except OSError as exc:  # (the reason in words: no errno, the path once)
+        raise InputError(src, "", f"cannot read {what}: {os_reason(exc)}") from None
+    except (UnicodeDecodeError, csv.Error) as exc:
         raise InputError(src, "", f"cannot read {what}: {exc}") from None
 
 

@@ -309,6 +309,28 @@ def test_utf16_is_named(run_cli, tmp_path):
     assert "codec" not in line
 
 
+def test_a_table_that_cannot_be_read_says_why_in_words(run_cli, tmp_path, monkeypatch):
+    """A motor's table that cannot be read (permission denied): "[Errno 13] Permission denied:
+    '/.../t.csv'", the path twice."""
+    import builtins
+
+    import linsense.io as lio
+
+    text = (resources.files("linsense.examples") / "motors" / "tabulated.toml").read_text()
+    (tmp_path / "m.toml").write_text(text.replace("ecce2010_table.csv", "t.csv"))
+    (tmp_path / "t.csv").write_text("theta_deg\n")
+
+    def denied(path, *a, **kw):
+        if str(path).endswith("t.csv"):
+            raise PermissionError(errno.EACCES, os.strerror(errno.EACCES), str(path))
+        return builtins.open(path, *a, **kw)
+
+    monkeypatch.setattr(lio, "open", denied, raising=False)
+    line = run_cli("model", "--motor", tmp_path / "m.toml", "--out", tmp_path / "m.csv").refused(
+        "t.csv", "permission denied")
+    assert "Errno" not in line and line.count("t.csv") == 1, line
+
+
 def test_every_toml_and_json_reader_reads_a_bom(run_cli, tmp_path):
     """Motor files, sweep files, FEA geometries and JSON tables: the same decoder."""
     from linsense.compensation.lut import build_lut, read_lut_json, to_json

@@ -30,7 +30,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from linsense.errors import InputError
-from linsense.io import output_error, write_atomic, write_atomic_with
+from linsense.io import os_reason, output_error, write_atomic, write_atomic_with
 from linsense.sim.cluster import cluster_client
 from linsense.sweep.inputs import changed_on_disk, changes, code_identity, show, sweep_inputs, valid_record
 from linsense.sweep.inputs import digest as inputs_digest
@@ -107,7 +107,8 @@ def _check_out(out: Path, manifest: dict, restart: bool) -> bool:
     try:
         old = json.loads(m.read_text(encoding="utf-8"))
     except (OSError, ValueError) as exc:
-        raise _refuse(out, f"holds a sweep whose {MANIFEST} cannot be read ({exc}): {again}") from None
+        why = os_reason(exc) if isinstance(exc, OSError) else exc
+        raise _refuse(out, f"holds a sweep whose {MANIFEST} cannot be read ({why}): {again}") from None
     why = valid_record(old)
     if why is not None:
         raise _refuse(out, f"holds a sweep whose {MANIFEST} {why}: {again}")
