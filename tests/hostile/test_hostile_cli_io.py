@@ -386,6 +386,26 @@ def test_examples_into_a_full_disk_copy_nothing(run_cli, tmp_path, monkeypatch):
     assert {p: p.read_bytes() for p in (tmp_path / "ex").rglob("*") if p.is_file()} == before
 
 
+def test_examples_force_never_replaces_a_folder(run_cli, tmp_path):
+    """`examples DIR --force` where DIR holds a folder of the user's by an example's name: the
+    folder was moved into the temporary copy and deleted with it (before: a raw errno and half a
+    copy); refused now, nothing copied, the folder kept."""
+    mine = tmp_path / "ex" / "motors" / "small30.toml"
+    mine.mkdir(parents=True)
+    (mine / "notes.txt").write_text("mine\n")
+    run_cli("examples", tmp_path / "ex", "--force").refused(str(mine), "is a folder", "nothing copied")
+    assert sorted(str(p.relative_to(tmp_path)) for p in tmp_path.rglob("*")) == [
+        "ex", "ex/motors", "ex/motors/small30.toml", "ex/motors/small30.toml/notes.txt"]
+
+
+def test_a_folder_output_is_never_named_dash(run_cli, tmp_path, monkeypatch):
+    """`simulate --out -` made a folder named "-" (where `--out -` of a file is standard output)."""
+    monkeypatch.chdir(tmp_path)
+    run_cli("simulate", "step3_lut", "--trace", "none", "--out", "-").refused("--out", "standard output")
+    run_cli("examples", "-").refused("FOLDER", "standard output")
+    assert list(tmp_path.iterdir()) == []
+
+
 def _fail_at(n: int, real):
     count = [0]
 

@@ -325,7 +325,17 @@ def out_option(command: str, what: str, *, folder: bool, ext: str = "", dash: bo
     kind = "output folder" if folder else "output file" + (" (- for standard output)" if dash else "")
     path = click.Path(file_okay=False) if folder else click.Path(dir_okay=False, allow_dash=dash)
     default = OUT_HELP.format(command=command, ext=ext or ("/" if folder else ""), what=what)
-    return click.option("--out", default=None, type=path, help=f"{kind} {default}")
+    return click.option("--out", default=None, type=path, callback=folder_out if folder else None,
+                        help=f"{kind} {default}")
+
+
+def folder_out(ctx, param, value):
+    """Click callback of an output folder: ``-`` is refused (it made a folder named ``-`` where
+    ``--out -`` of a file means standard output)."""
+    if value == "-":
+        raise click.BadParameter("a folder is written here, not standard output: give the folder's name "
+                                 "(./- for a folder named -)")
+    return value
 
 
 def default_out(out: str | None, name: str, command: str, ext: str = "") -> str:

@@ -16,7 +16,7 @@ def firmware() -> None:
 
 @firmware.command(short_help="Write a self-contained firmware project for a motor.",
                   epilog=c.see("firmware"))
-@click.argument("folder", type=click.Path(file_okay=False))
+@click.argument("folder", type=click.Path(file_okay=False), callback=c.folder_out)
 @click.option("--motor", "motor_spec", required=True, help=c.MOTOR_HELP)
 @click.option("--scenario", "scenario_path", default=None,
               help="scenario (a file or a packaged example's name) whose drive data (bus, PWM, dead "

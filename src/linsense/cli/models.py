@@ -193,7 +193,7 @@ def identify(bench: str, out: str | None, harmonics: int, motor_spec: str | None
 
 @click.command(short_help="Copy the packaged examples into a folder.",
                epilog=c.see("cli"))
-@click.argument("folder", type=click.Path(file_okay=False), required=False)
+@click.argument("folder", type=click.Path(file_okay=False), required=False, callback=c.folder_out)
 @click.option("--force", is_flag=True, help="overwrite files that exist (else: refused, nothing copied)")
 @click.option("--list", "list_only", is_flag=True, help="only list the examples' names by kind, copy nothing")
 @c.json_option

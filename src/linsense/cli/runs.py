@@ -386,7 +386,8 @@ def failed_claims(metrics: dict) -> list[str]:
 @click.command(short_help="Reproduce the paper's Section V, claim by claim.",
                epilog=c.see("reproduce"))
 @click.option("--motor", "motor_spec", default="ecce2010", show_default=True, help=c.MOTOR_HELP)
-@click.option("--out", default="out", show_default=True, type=click.Path(file_okay=False))
+@click.option("--out", default="out", show_default=True, type=click.Path(file_okay=False),
+              callback=c.folder_out, help="output folder")
 @click.option("--quick", is_flag=True,
               help="fewer calibration points, hold positions and map cells (about 15 s)")
 @click.option("--model-only", is_flag=True, help="only the model's tables, LUT files and figures (no runs)")
@@ -468,7 +469,7 @@ def fea(geometry: str, out: str | None, positions: int, level: str, lut_points: 
 @click.command("sweep", short_help="Run a sweep of scenarios (threads or dask).",
                epilog=c.see("sweeps"))
 @click.argument("sweep_file")
-@click.option("--out", default=None, type=click.Path(file_okay=False),
+@click.option("--out", default=None, type=click.Path(file_okay=False), callback=c.folder_out,
               help="output folder, the same folder again resumes a killed sweep (default: NAME-sweep/ in "
                    "the working folder, NAME the sweep file's)")
 @click.option("--workers", type=click.IntRange(1, 1024), default=None,

@@ -239,7 +239,8 @@ def copy_to(dest: str | Path, force: bool = False) -> list[Path]:
     Raises
     ------
     InputError
-        ``dest`` is a file, or (without ``force``) holds one of the files already.
+        ``dest`` is a file, holds a folder where a file goes, or (without ``force``) holds one of
+        the files already.
     linsense.errors.OutputError
         A file or folder could not be written (nothing copied).
     """
@@ -250,6 +251,10 @@ def copy_to(dest: str | Path, force: bool = False) -> list[Path]:
         raise InputError(str(dest), "", "exists and is not a folder")
     targets = [(rel, dest / rel) for rel in files()]
     there = [t for _, t in targets if t.exists() or t.is_symlink()]
+    folder = next((t for t in there if t.is_dir() and not t.is_symlink()), None)
+    if folder is not None:  # (--force replaced it with the file and deleted the folder with its files)
+        raise InputError(str(folder), "", "exists and is a folder: not replaced, even with --force; nothing "
+                                          "copied (move it away)")
     if not force and there:
         more = f" and {len(there) - 1} more" if len(there) > 1 else ""
         raise InputError(str(there[0]), "", f"exists{more}: nothing copied (--force overwrites)")
