@@ -859,11 +859,18 @@ def recover(out: str | os.PathLike) -> None:
     the previous set during the swap: restored onto ``out`` when ``out`` is missing (the run died
     between the two renames; what it had carried over goes back), removed when the new set is in
     place. Temporaries of live processes are left alone. Every command writing an output set calls
-    this (under a lock on the parent folder) before it looks at ``out``.
+    this (under a lock on the parent folder) before it looks at ``out``. Leftovers are made writable
+    before they are removed (a set made read-only is removed too).
+
     Parameters
     ----------
     out : str or os.PathLike
         The output folder.
+
+    Raises
+    ------
+    linsense.errors.OutputError
+        A leftover that cannot be removed all the same, naming it and why.
     """
     target = _target(out)
     with _locked(target.parent):
