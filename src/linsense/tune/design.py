@@ -348,6 +348,45 @@ def speed_gains(bw_hz: float, mass: float) -> tuple[float, float]:
     return mass * w, mass * w * w / SPEED_KI_DIV
 
 
+def require_saliency(motor: Motor, source: str) -> tuple[float, float]:
+    """The motor's mean ``L_d``, ``L_q``, refused unless ``L_q > L_d``: the one rule of every command
+    that makes or runs a drive (``tune``, ``simulate``, ``calibrate``, ``lut``, ``firmware export``).
+
+    The drive's demodulator, its error gain and its tables are for the saliency of a PM motor, ``L_q``
+    above ``L_d``; a motor with reversed saliency (``L_q < L_d`` on average) was refused by ``tune``
+    and ``simulate`` as "i_max leaves no injection" while ``lut`` wrote a table for it.
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+    source : str
+        Named in the message.
+
+    Returns
+    -------
+    L_d : float
+        Mean over the period, H.
+    L_q : float
+        Mean over the period, H.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        No mean saliency, or reversed saliency (the values given).
+    """
+    L_d, L_q = mean_dq(motor)
+    if L_q == L_d:
+        raise InputError(source, "motor",
+                         "no mean saliency (L_q = L_d): HF injection cannot see the position")
+    if L_q < L_d:
+        raise InputError(source, "motor",
+                         f"reversed saliency: the mean L_q = {L_q * 1e3:.4g} mH is below the mean L_d = "
+                         f"{L_d * 1e3:.4g} mH; the drive (its demodulator, error gain and tables) is for "
+                         "L_q > L_d")
+    return L_d, L_q
+
+
 def observable_error_gain(motor: Motor, f_inj: float, quad: float, source: str) -> np.ndarray:
     """:func:`error_gain` with the nominal demodulator gain ``L_q / (L_q - L_d)``.
 
@@ -373,12 +412,10 @@ def observable_error_gain(motor: Motor, f_inj: float, quad: float, source: str) 
     Raises
     ------
     linsense.errors.InputError
-        No mean saliency, or the gain is not positive everywhere.
+        No or reversed mean saliency (:func:`require_saliency`), or the gain is not positive
+        everywhere.
     """
-    L_d, L_q = mean_dq(motor)
-    if L_q == L_d:
-        raise InputError(source, "motor",
-                         "no mean saliency (L_q = L_d): HF injection cannot see the position")
+    L_d, L_q = require_saliency(motor, source)
     k_e = error_gain(motor, f_inj, quad, L_q / (L_q - L_d))
     if np.any(k_e <= 0):
         raise InputError(
@@ -500,11 +537,7 @@ def design(
     if not (0.0 <= d.quad < 1.0):
         raise InputError(source, "quad", f"must be in [0, 1), got {d.quad!r}")
     warnings: list[str] = []
-    L_d, L_q = mean_dq(motor)
-    if L_q == L_d:
-        raise InputError(
-            source, "motor", "no mean saliency (L_q = L_d): HF injection cannot see the position"
-        )
+    L_d, L_q = require_saliency(motor, source)
     f_inj = d.f_inj if d.f_inj is not None else injection_frequency(d.f_pwm)
     if not (F_INJ_MIN / 8.0 <= f_inj and 4.0 * f_inj <= d.f_pwm):
         raise InputError(
