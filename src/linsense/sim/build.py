@@ -29,6 +29,8 @@ from linsense.model.motor import Motor, load_motor, motor_path, names_a_path, pr
 from linsense.model.saturation import Saturation
 from linsense.sim.cache import memo, motor_key
 from linsense.sim.checks import (
+    check_events,
+    check_final_window,
     check_initial_load,
     check_positions,
     check_run_size,
@@ -285,6 +287,8 @@ def validate(sc: Scenario, motor: Motor, known: dict, user_keys: set[str],
     check_initial_load(sc, initial_load(sc, motor))
     check_startup(sc)
     n_steps = run_steps(sc.source, s.scenario.duration, s.inverter.f_pwm)
+    check_events(sc, n_steps, reference_commands(sc)[1])
+    check_final_window(sc, motor.mass, user_keys)
     check_run_size(sc.source, n_steps, s.record.decimate, s.inverter.f_pwm, trace_in_memory)
     return sat, n_steps
 
