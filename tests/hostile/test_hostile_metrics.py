@@ -68,11 +68,16 @@ def test_an_end_window_shorter_than_the_loops_is_refused(run_cli, tmp_path):
 
 
 @pytest.mark.parametrize("keys, words", [
-    # a default window (0.3 s) too short for a slow loop: said to be the default
-    ("[controller]\nspeed_bandwidth_hz = 1.0", ["metrics.final_window_s", "0.3 s (the default)",
-                                                "the speed loop", "at least 0.5 s"]),
-    ("[observer]\ntype = \"pll\"\nbandwidth_hz = 1.0", ["metrics.final_window_s", "the observer",
-                                                        "observer.bandwidth_hz = 1 Hz", "at least 0.5 s"]),
+    # a default window (0.3 s) too short for a slow loop the file gives: the loop's key is named
+    ("[controller]\nspeed_bandwidth_hz = 1.0", ["controller.speed_bandwidth_hz", "1 Hz", "the speed loop",
+                                                "metrics.final_window_s is 0.3 s (the default)",
+                                                "at least 0.5 s"]),
+    ("[observer]\ntype = \"pll\"\nbandwidth_hz = 1.0", ["observer.bandwidth_hz", "1 Hz", "the observer",
+                                                        "(the default)", "at least 0.5 s"]),
+    # both given: the window is named
+    ("[controller]\nspeed_bandwidth_hz = 1.0\n[metrics]\nfinal_window_s = 0.4",
+     ["metrics.final_window_s", "0.4 s is too short", "controller.speed_bandwidth_hz = 1 Hz",
+      "at least 0.5 s"]),
 ])
 def test_a_default_window_too_short_for_a_slow_loop_is_refused(run_cli, tmp_path, keys, words):
     _refused(run_cli, tmp_path, scenario_with(BASE.replace("speed_bandwidth_hz = 3.0\n", ""), keys), *words)

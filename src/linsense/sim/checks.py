@@ -334,7 +334,7 @@ def run_events(sc: Scenario, moves) -> list[tuple[str, float, str, bool]]:
     return events
 
 
-def check_events(sc: Scenario, n_steps: int, moves) -> None:
+def check_events(sc: Scenario, n_steps: int, moves, user_keys: set[str]) -> None:
     """Refuse an event of :func:`run_events` that the run ends before: it would never act.
 
     The C loop acts on an event at the first period that starts at or after its time, so an event
@@ -349,6 +349,8 @@ def check_events(sc: Scenario, n_steps: int, moves) -> None:
         The run's PWM periods (:func:`run_steps`).
     moves : list of (float, float, float, float)
         Its planned moves.
+    user_keys : set of str
+        The dotted keys the file gives (an event at its default time is said to be the default).
 
     Raises
     ------
@@ -359,7 +361,8 @@ def check_events(sc: Scenario, n_steps: int, moves) -> None:
     t_last = (n_steps - 1) / s.inverter.f_pwm  # (s, the start of the last period)
     for key, t, what, own in run_events(sc, moves):
         if t > t_last:
-            when = f"{t!r} s: {what}" if own else f"{what} at {t:.6g} s and"
+            default = "" if key in user_keys or not own else " (the default)"
+            when = f"{t!r} s{default}: {what}" if own else f"{what} at {t:.6g} s and"
             raise InputError(sc.source, key, f"{when} would never act: the run ends at scenario.duration = "
                              f"{s.scenario.duration:g} s (its last period starts at {t_last:.9g} s); make it "
                              "earlier or the run longer")
@@ -429,9 +432,14 @@ def check_final_window(sc: Scenario, mass: float, user_keys: set[str]) -> None:
     loop, key, f = slowest_loop(sc, mass)
     least = 0.5 / f
     w = sc.spec.metrics.final_window_s
-    if w < least:
-        default = "" if "metrics.final_window_s" in user_keys else " (the default)"
-        raise InputError(sc.source, "metrics.final_window_s",
-                         f"{w!r} s{default} is too short to see a cycle of {loop} ({key} = {f:.4g} Hz, a "
-                         f"{1.0 / f:.3g} s period): the end window must hold half its period, at least "
-                         f"{least:.3g} s")
+    if w >= least:
+        return
+    window = "metrics.final_window_s"
+    if window not in user_keys and key in user_keys:  # (the file gives the loop, not the window)
+        raise InputError(sc.source, key, f"{f:.4g} Hz makes {loop} too slow for the end window: a cycle "
+                         f"of it ({1.0 / f:.3g} s period) needs half its period, at least {least:.3g} s, and "
+                         f"{window} is {w!r} s (the default): give {window} = {least:.3g} or more")
+    default = "" if window in user_keys else " (the default)"
+    raise InputError(sc.source, window, f"{w!r} s{default} is too short to see a cycle of {loop} ({key} = "
+                     f"{f:.4g} Hz, a {1.0 / f:.3g} s period): the end window must hold half its period, at "
+                     f"least {least:.3g} s")
