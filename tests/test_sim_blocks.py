@@ -126,6 +126,37 @@ def test_chunks_end_at_a_fault():
     assert a["x_min"][-1] == a["x_max"][-1] == a["x"][-1] > 0.0101  # the tripping state: its own block
 
 
+@pytest.mark.parametrize("extra, fault", [
+    ({}, ""), ({"travel": {"max_mm": 1.0}}, "travel"),  # the simulator's trip: a block of its own
+    ({"controller": {"kp_x": 5000.0}, "sensors": {"current_noise": 0.05}}, "overspeed"),  # the drive's
+])
+@pytest.mark.parametrize("dec", [1, 3, 16, 4801])
+def test_the_record_is_the_decimating_c_loops(extra, fault, dec):
+    """The record kept, made from every period in Python (issue 37: the C loop records every period
+    for the metrics), is bit for bit the C loop's own decimation: point samples, block statistics,
+    the tripping state's block, and the chunks a trace file is written in."""
+    d = {"motor": "ecce2010", "scenario": {"name": "r", "duration": 0.3, "seed": 1},
+         "reference": {"type": "step", "position_mm": 3.0, "at": 0.05}, "record": {"decimate": dec}, **extra}
+    sc = as_scenario(d)
+    b = build(sc)
+    blocks = tuple(core.BLOCKS) if dec > 1 else ()
+    c_chunks, keep = _collector()
+    core.run_closed_loop_chunks(b.cfg, b.drive.state, b.n_steps, b.commands, chunk=1000, blocks=blocks,
+                                on_chunk=keep)
+    from linsense.sim.stream import simulate_streamed
+
+    chunks, keep = _collector()
+    sr = simulate_streamed(build(sc, trace_in_memory=False), on_chunk=keep, chunk=1000)
+    assert sr.metrics["fault"] == (fault or "none")
+    assert [len(c["t"]) for c in chunks] == [len(c["t"]) for c in c_chunks]
+    got, want = _concat(chunks), _concat(c_chunks)
+    for k, v in want.items():
+        assert got[k].tobytes() == v.tobytes(), k
+    r = run.simulate(sc)
+    for k, v in want.items():
+        assert getattr(r, k).tobytes() == v.tobytes(), k
+
+
 def test_no_aliasing_of_the_hf_current():
     """The 1 kHz injection sampled every 16 periods at 16 kHz (exactly its period): the point samples
     see an almost constant current, the block min/max its whole envelope."""
