@@ -174,3 +174,19 @@ def test_an_approach_still_moving_is_not_a_limit_cycle(run_cli, tmp_path):
 def test_a_limit_cycle_is_still_one(run_cli, tmp_path):
     m = _metrics(run_cli, tmp_path, BASE.replace("kp_x = 10.0", "kp_x = 5000.0"), "--trace", "none")
     assert m["verdict"] == "limit cycle" and m["unstable_reason"].startswith("not settled (limit cycle)"), m
+
+
+# ------------------------------------------------------------ further settings that blinded a metric
+def test_a_sweeps_hf_current_does_not_depend_on_the_record():
+    """A sweep's hf_current_a from a record of every 16th period (the 1 kHz injection at 16 kHz,
+    sampled once per period) was 0.0 A, 0.476 A at every 3rd, against 0.507 A: it reads the
+    block envelopes of every period now."""
+    from linsense.sweep.runner import hf_current
+
+    d = {"motor": "ecce2010", "scenario": {"name": "h", "duration": 0.6, "seed": 1},
+         "reference": {"type": "hold"}}
+    full = hf_current(linsense.simulate(d))
+    assert full > 0.3
+    for dec in (3, 16, 50):
+        got = hf_current(linsense.simulate({**d, "record": {"decimate": dec}}))
+        assert got == pytest.approx(full, rel=0.01), (dec, got, full)
