@@ -190,3 +190,10 @@ def test_a_sweeps_hf_current_does_not_depend_on_the_record():
     for dec in (3, 16, 50):
         got = hf_current(linsense.simulate({**d, "record": {"decimate": dec}}))
         assert got == pytest.approx(full, rel=0.01), (dec, got, full)
+
+
+def test_a_load_step_of_nothing_is_refused(run_cli, tmp_path):
+    """`[load] type = "step", time = 0.2` without force_after stepped from 0 N to 0 N: a load that
+    never acts, "stable", exit 0."""
+    _refused(run_cli, tmp_path, scenario_with(BASE, '[load]\ntype = "step"\ntime = 0.2'), "load.force_after",
+             "0.0 N (the default)", "load.force = 0.0 N", "change nothing")

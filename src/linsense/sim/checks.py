@@ -339,7 +339,8 @@ def check_events(sc: Scenario, n_steps: int, moves, user_keys: set[str]) -> None
 
     The C loop acts on an event at the first period that starts at or after its time, so an event
     after the start of the last period (``(n_steps - 1) / f_pwm``) is never seen (issue 37: a load
-    step at 5 s in a 0.6 s run gave "stable").
+    step at 5 s in a 0.6 s run gave "stable"). A step load to the force it steps from never acts
+    either (``load.force_after`` left at its default 0 beside ``load.force = 0``).
 
     Parameters
     ----------
@@ -355,9 +356,16 @@ def check_events(sc: Scenario, n_steps: int, moves, user_keys: set[str]) -> None
     Raises
     ------
     InputError
-        Naming the event's key, its time and the run's duration.
+        Naming the event's key, its time and the run's duration (``load.force_after`` for a step of
+        nothing).
     """
     s = sc.spec
+    ld = s.load
+    if ld.type == "step" and ld.force_after == ld.force:  # (a step of nothing: it never acts either)
+        default = "" if "load.force_after" in user_keys else " (the default)"
+        raise InputError(sc.source, "load.force_after", f"{ld.force_after!r} N{default} equals load.force = "
+                         f"{ld.force!r} N: the load step at load.time would change nothing; give the force "
+                         "after the step")
     t_last = (n_steps - 1) / s.inverter.f_pwm  # (s, the start of the last period)
     for key, t, what, own in run_events(sc, moves):
         if t > t_last:
