@@ -108,8 +108,9 @@ class _Collector:
 
     def __init__(self, n: int, names) -> None:
         width = {**SIGNALS, **BLOCKS, "fault": 1}
-        self.a = {k: np.full((n, width[k]) if width[k] > 1 else n, np.nan) for k in names if k != "fault"}
-        self.a["fault"] = np.zeros(n, dtype=np.uint32)
+        # (every row up to n is written before the arrays are cut there: no fill)
+        self.a = {k: np.empty((n, width[k]) if width[k] > 1 else n) for k in names if k != "fault"}
+        self.a["fault"] = np.empty(n, dtype=np.uint32)
         self.n = 0
 
     def add(self, chunk: dict) -> None:

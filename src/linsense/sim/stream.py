@@ -263,11 +263,15 @@ class MetricSamples:
         Parameters
         ----------
         part : dict of str to ndarray
-            Output name to the batch's samples, in order.
+            Output name to the batch's samples, in order (views are fine: what is kept is copied).
         """
         if not np.isfinite(part["t"]).all():
             self.compact = False
-        self.tail = _concat(self.tail, part)
+        # (a copy: a part may view the reused buffers of the C run)
+        if self.tail is None:
+            self.tail = {k: np.array(v) for k, v in part.items()}
+        else:
+            self.tail = _concat(self.tail, part)
         t = self.tail["t"]
         if not self.compact or t.size < 3:
             return
@@ -797,6 +801,11 @@ def simulate_streamed(b: Built, *, on_chunk: Callable | None = None, plot: bool 
                          settling_band_deg=s.metrics.bounds_deg(pitch)["settling_band_deg"], pole_pitch=pitch,
                          x_target=b.commands[-1][1] if b.commands else b.setup.x0)
     mred = Reducer(k, spec, sink=keep.add)
+    n_in = [0]
+
+    def read(arrays: dict[str, np.ndarray]) -> None:  # (every period: the samples themselves, no copy)
+        n_in[0] += len(arrays["t"])
+        keep.add({name: arrays[name] for name in POINT_SPEC})
     f_inj = injection_hz(b)
     kp = plot_bin(n_rec, dec, s.inverter.f_pwm, f_inj)
     pred = Reducer(kp, PLOT_SPEC) if plot else None
@@ -819,8 +828,10 @@ def simulate_streamed(b: Built, *, on_chunk: Callable | None = None, plot: bool 
         sample = Decimator(dec, batches.add)
         c_chunk = min(chunk, METRICS_CHUNK)
 
+    metrics_add = mred.add if k > 1 else read
+
     def take(arrays: dict[str, np.ndarray]) -> None:
-        mred.add(arrays)
+        metrics_add(arrays)
         if sample is not None:
             sample.add(arrays)
         elif storing:
@@ -828,14 +839,15 @@ def simulate_streamed(b: Built, *, on_chunk: Callable | None = None, plot: bool 
 
     raw = run_closed_loop_chunks(full_rate(b.cfg), b.drive.state, b.n_steps, b.commands, on_chunk=take,
                                  chunk=c_chunk, signals=signals)
-    stored = int(mred.n_in)
+    n_read = int(mred.n_in) if k > 1 else n_in[0]
+    stored = n_read
     if sample is not None:
         batches.flush(sample.finish())
         stored = batches.handed
     mred.finish(split_last=bool(raw.fault))
     m = run_metrics(b, raw, keep.arrays(spec))
     finish_metrics(b, raw, m, k)
-    m["samples"] = int(mred.n_in)
+    m["samples"] = n_read
     if k > 1:
         w = s.metrics.final_window_s
         m["metrics_note"] = (f"the end window (metrics.final_window_s = {w:g} s) holds more than "
