@@ -197,3 +197,13 @@ def test_a_load_step_of_nothing_is_refused(run_cli, tmp_path):
     never acts, "stable", exit 0."""
     _refused(run_cli, tmp_path, scenario_with(BASE, '[load]\ntype = "step"\ntime = 0.2'), "load.force_after",
              "0.0 N (the default)", "load.force = 0.0 N", "change nothing")
+
+
+def test_a_sweep_map_does_not_colour_a_mover_as_a_cycle():
+    """The sweep's stability map coloured every "not settled" run as a limit cycle."""
+    from linsense.report.sweep_figures import OUTCOMES, outcome
+
+    row = {"stable": False, "error": None}
+    moving = outcome({**row, "unstable_reason": "not settled (still moving): x moves one way only"})
+    cycle = outcome({**row, "unstable_reason": "not settled (limit cycle): x varies by 2 deg"})
+    assert OUTCOMES[cycle][0] == "cycle" and OUTCOMES[moving][0] == "moving"
