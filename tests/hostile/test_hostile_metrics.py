@@ -207,3 +207,13 @@ def test_a_sweep_map_does_not_colour_a_mover_as_a_cycle():
     moving = outcome({**row, "unstable_reason": "not settled (still moving): x moves one way only"})
     cycle = outcome({**row, "unstable_reason": "not settled (limit cycle): x varies by 2 deg"})
     assert OUTCOMES[cycle][0] == "cycle" and OUTCOMES[moving][0] == "moving"
+
+
+def test_a_calibration_run_is_not_judged_as_a_hold():
+    """`linsense simulate` of a calibration scenario judged the drive moving through its points as
+    a hold: "not settled (limit cycle)"."""
+    d = {"motor": "ecce2010", "scenario": {"name": "cal", "duration": 1.0},
+         "control": {"mode": "calibration"}, "reference": {"type": "hold"}}
+    m = linsense.simulate(d, record="metrics").metrics
+    assert m["verdict"] == "calibration" and not m["stable"], m
+    assert "limit cycle" not in m["unstable_reason"] and "linsense calibrate" in m["unstable_reason"]

@@ -706,7 +706,8 @@ def run_metrics(b: Built, raw, arrays: dict | None = None) -> dict:
 def finish_metrics(b: Built, raw, m: dict, block: int) -> None:
     """Complete the metrics of a run in place.
 
-    Refuses a drive that trips at t = 0, adds the fidelity note, names and ``block_s``.
+    Refuses a drive that trips at t = 0; says a calibration run is one (verdict ``calibration``, not
+    judged as a hold); adds the fidelity note, names and ``block_s``.
 
     Parameters
     ----------
@@ -741,6 +742,13 @@ def finish_metrics(b: Built, raw, m: dict, block: int) -> None:
                              "(designed)")
         raise InputError(sc.source, _FAULT_KEYS.get(first, ""),
                          f"the drive trips at t = 0 ({m['fault']}): the configuration cannot run")
+    if s.control.mode == "calibration" and not raw.fault:
+        # (the drive moves itself through its points: a hold's verdict would judge a calibration)
+        done = "done" if raw.steps_done < b.n_steps else "not done by the run's end"
+        m.update(stable=False, accurate=False, verdict="calibration",
+                 unstable_reason=f"a calibration run (control.mode = \"calibration\", {done}): the drive "
+                 "moves itself through its points, which the metrics of a hold do not judge; linsense "
+                 "calibrate does")
     if s.inverter.fidelity == "average" and s.inverter.dead_time > 0:
         m["fidelity_note"] = AVERAGE_NOTE
     m["scenario"] = sc.name
