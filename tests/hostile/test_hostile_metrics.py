@@ -145,7 +145,9 @@ def test_a_start_up_longer_than_the_run_is_refused():
     d = base_scenario()
     d["scenario"] = {"name": "su", "duration": 0.05}
     d["reference"] = {"type": "step", "position_mm": 3.0, "at": 0.01}
-    with pytest.raises(InputError, match=r"startup: the start-up ends at the earliest .* would never act"):
+    with pytest.raises(InputError, match=r"startup: the start-up ends at 0.\d+ s at the earliest .*: the "
+                       r"position control after it would never act: the run ends at scenario.duration = "
+                       r"0.05 s"):
         linsense.simulate(d)
 
 

@@ -305,7 +305,8 @@ def run_events(sc: Scenario, moves) -> list[tuple[str, float, str, bool]]:
     -------
     list of (str, float, str, bool)
         ``(key, time in s, what acts then, whether the time is the key's own value)``, in the
-        scenario's order.
+        scenario's order; a time that is not a key's own is in the text, ``{t}``, with what it
+        means for the run.
     """
     s = sc.spec
     ref, ld = s.reference, s.load
@@ -316,15 +317,17 @@ def run_events(sc: Scenario, moves) -> list[tuple[str, float, str, bool]]:
         if i == 0:
             events.append(("reference.at", t0, "the first move", True))
         else:
-            events.append((f"reference.waypoints_mm[{i}]", t0, f"the move to it (after the moves before it "
-                           f"and reference.dwell = {ref.dwell:g} s) starts", False))
+            what = ("the move to it starts at {t} s (after the moves before it and reference.dwell = "
+                    f"{ref.dwell:g} s) and would never act")
+            events.append((f"reference.waypoints_mm[{i}]", t0, what, False))
     if ld.type == "step" and ld.time > 0.0:
         events.append(("load.time", ld.time, "the load step", True))
     if s.control.mode == "startup":
         su = s.startup
         end = su.t_lock + su.t_quiet + 2 * su.pairs * (su.t_rest + su.t_pulse) + su.t_settle
-        events.append(("startup", end, "the start-up ends at the earliest (t_lock + t_quiet + 2 pairs "
-                       "(t_rest + t_pulse) + t_settle)", False))
+        events.append(("startup", end, "the start-up ends at {t} s at the earliest (t_lock + t_quiet + 2 "
+                       "pairs (t_rest + t_pulse) + t_settle): the position control after it would never act",
+                       False))
     if "convergence_s" in s.metrics.model_fields_set:
         events.append(("metrics.convergence_s", s.metrics.convergence_s, "the start of the error windows",
                        True))
@@ -369,9 +372,9 @@ def check_events(sc: Scenario, n_steps: int, moves, user_keys: set[str]) -> None
     t_last = (n_steps - 1) / s.inverter.f_pwm  # (s, the start of the last period)
     for key, t, what, own in run_events(sc, moves):
         if t > t_last:
-            default = "" if key in user_keys or not own else " (the default)"
-            when = f"{t!r} s{default}: {what}" if own else f"{what} at {t:.6g} s and"
-            raise InputError(sc.source, key, f"{when} would never act: the run ends at scenario.duration = "
+            default = "" if key in user_keys else " (the default)"
+            what = f"{t!r} s{default}: {what} would never act" if own else what.format(t=f"{t:.6g}")
+            raise InputError(sc.source, key, f"{what}: the run ends at scenario.duration = "
                              f"{s.scenario.duration:g} s (its last period starts at {t_last:.9g} s); make it "
                              "earlier or the run longer")
 
