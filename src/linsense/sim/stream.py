@@ -28,7 +28,7 @@ from linsense._ctrl import ffi
 from linsense.errors import InputError
 from linsense.sim.build import Built
 from linsense.sim.checks import sensor_triples
-from linsense.sim.core import CHUNK, SIGNALS, run_closed_loop_chunks
+from linsense.sim.core import CHUNK, run_closed_loop_chunks
 from linsense.sim.metrics import block_views, compute_metrics, finite_positions, transient_mask
 
 #: PWM periods of the end window the metrics keep at most (beyond, consecutive periods are merged
@@ -72,30 +72,12 @@ def _nanmean(a: np.ndarray, axis: int) -> np.ndarray:
         return np.where(n > 0, np.where(ok, a, 0.0).sum(axis=axis) / np.maximum(n, 1), np.nan)
 
 
-def _c_extreme(g: np.ndarray, fn) -> np.ndarray:
-    """The C loop's block minimum or maximum (ls_sim_block_add: ``x < lo ? x : lo``): NaN where the
-    block's first value is, else the extreme of its values that are not NaN."""
-    out = fn.reduce(g, axis=1)
-    first = g[:, 0]
-    return np.where(np.isnan(first), first, out)
-
-
-def _c_mean(g: np.ndarray) -> np.ndarray:
-    """The C loop's block mean: the values summed in order (NaN spreads), over their count."""
-    total = np.cumsum(g, axis=1)[:, -1]
-    return total if g.shape[1] == 1 else total / float(g.shape[1])
-
-
 _OPS = {
     "first": lambda g: g[:, 0].copy(),  # (a copy: g views the reused buffers of the C run)
     "last": lambda g: g[:, -1].copy(),
     "min": lambda g: np.fmin.reduce(g, axis=1),  # NaN only where the whole group is NaN
     "max": lambda g: np.fmax.reduce(g, axis=1),
     "mean": lambda g: _nanmean(g, 1),
-    # the block statistics of the C loop's own decimation (ls_sim_record.c), bit for bit
-    "c_min": lambda g: _c_extreme(g, np.fmin),
-    "c_max": lambda g: _c_extreme(g, np.fmax),
-    "c_mean": _c_mean,
 }
 
 
@@ -509,15 +491,12 @@ _FAULT_KEYS = {"undervoltage": "inverter.v_dc", "overvoltage": "inverter.v_dc",
                "overcurrent": "protection.i_max", "encoder": "sensors.encoder_counts_per_period",
                "config": "control"}
 
-#: the stored samples of a decimated record: each block's first period (the point signals and the
-#: fault bits) and its block statistics, as the C loop records them (ls_sim.c, ls_sim_record.c)
-DECIMATED_SPEC: Spec = {
-    **{name: ("first", (name,)) for name in SIGNALS}, "fault": ("first", ("fault",)),
-    "x_min": ("c_min", ("x",)), "x_max": ("c_max", ("x",)), "x_mean": ("c_mean", ("x",)),
-    "err_min": ("c_min", ("theta_err",)), "err_max": ("c_max", ("theta_err",)),
-    "err_mean": ("c_mean", ("theta_err",)),
-    "i_abc_min": ("c_min", ("i_abc",)), "i_abc_max": ("c_max", ("i_abc",)),
-}
+#: the block statistics of a decimated record: name -> (the signal of every period they reduce,
+#: the reduction), as the C loop records them (ls_sim.c, ls_sim_record.c)
+DECIMATED_BLOCKS = {"x_min": ("x", "min"), "x_max": ("x", "max"), "x_mean": ("x", "mean"),
+                    "err_min": ("theta_err", "min"), "err_max": ("theta_err", "max"),
+                    "err_mean": ("theta_err", "mean"),
+                    "i_abc_min": ("i_abc", "min"), "i_abc_max": ("i_abc", "max")}
 
 
 def full_rate(cfg):
@@ -598,11 +577,48 @@ class Batcher:
         self.sink(batch)
 
 
+class _Block:
+    """A block of a decimated record in progress: its first period's values and the running block
+    statistics of its periods so far (the C loop's: ``x < lo ? x : lo``, NaN where the first value
+    is; the sum in period order), never the periods themselves."""
+
+    def __init__(self, rows: dict[str, np.ndarray]) -> None:
+        self.first = {k: np.array(v[:1]) for k, v in rows.items()}
+        self.n = 0
+        self.acc: dict[str, np.ndarray] = {}
+        self.add(rows)
+
+    def add(self, rows: dict[str, np.ndarray]) -> None:
+        m = len(rows["t"])
+        if not m:
+            return
+        for name, (src, op) in DECIMATED_BLOCKS.items():
+            v = rows[src]
+            if op == "mean":  # (the sum in period order from the first value, as the C loop adds)
+                seq = v if name not in self.acc else np.concatenate([self.acc[name], v])
+                self.acc[name] = np.cumsum(seq, axis=0)[-1:]
+                continue
+            fn = np.fmin if op == "min" else np.fmax
+            part = fn.reduce(v, axis=0, keepdims=True)
+            self.acc[name] = part if name not in self.acc else fn(self.acc[name], part)
+        self.n += m
+
+    def close(self) -> dict[str, np.ndarray]:
+        out = dict(self.first)
+        for name, (src, op) in DECIMATED_BLOCKS.items():
+            v = self.acc[name]
+            if op == "mean":
+                v = v if self.n == 1 else v / float(self.n)
+            out[name] = np.where(np.isnan(self.first[src]), self.first[src], v)  # (C: a NaN first stays)
+        return out
+
+
 class Decimator:
     """The record of a run with ``record.decimate = dec`` made from its samples of every period, bit
     for bit the C loop's own: every ``dec``-th period's point signals and the block statistics of
-    the ``dec`` periods it opens (:data:`DECIMATED_SPEC`), the state that tripped a fault a block of
-    its own (the one sample whose duties are NaN, the last of the run).
+    the ``dec`` periods it opens (:data:`DECIMATED_BLOCKS`), the state that tripped a fault a block
+    of its own (the one sample whose duties are NaN, the last of the run). Holds one block's
+    statistics at most, whatever ``dec``.
 
     Parameters
     ----------
@@ -613,8 +629,38 @@ class Decimator:
     """
 
     def __init__(self, dec: int, sink: Callable) -> None:
-        self.red = Reducer(dec, DECIMATED_SPEC, sink=sink)
+        self.dec, self.sink = int(dec), sink
+        self.block: _Block | None = None
         self.held: dict[str, np.ndarray] | None = None  # (the last sample so far: it may be the trip)
+
+    def _whole(self, a: dict[str, np.ndarray], m: int) -> dict[str, np.ndarray]:
+        """``m`` whole blocks of ``a`` (``m * dec`` periods), reduced at once."""
+        d = self.dec
+        out = {k: np.array(v[:m * d:d]) for k, v in a.items()}
+        for name, (src, op) in DECIMATED_BLOCKS.items():
+            g = a[src][:m * d].reshape(m, d, *a[src].shape[1:])
+            if op == "mean":
+                total = np.cumsum(g, axis=1)[:, -1]
+                v = total if d == 1 else total / float(d)
+            else:
+                v = (np.fmin if op == "min" else np.fmax).reduce(g, axis=1)
+            out[name] = np.where(np.isnan(g[:, 0]), g[:, 0], v)  # (C: a NaN first stays)
+        return out
+
+    def _feed(self, a: dict[str, np.ndarray]) -> None:
+        n, i = len(a["t"]), 0
+        if self.block is not None:
+            i = min(self.dec - self.block.n, n)
+            self.block.add({k: v[:i] for k, v in a.items()})
+            if self.block.n == self.dec:
+                self.sink(self.block.close())
+                self.block = None
+        m = (n - i) // self.dec
+        if m:
+            self.sink(self._whole({k: v[i:] for k, v in a.items()}, m))
+            i += m * self.dec
+        if i < n:
+            self.block = _Block({k: v[i:] for k, v in a.items()})
 
     def add(self, arrays: dict[str, np.ndarray]) -> None:
         """Take a chunk of samples of every period (views are fine).
@@ -627,8 +673,8 @@ class Decimator:
         if not len(arrays["t"]):
             return
         if self.held is not None:
-            self.red.add(self.held)
-        self.red.add({k: v[:-1] for k, v in arrays.items()})
+            self._feed(self.held)
+        self._feed({k: v[:-1] for k, v in arrays.items()})
         self.held = {k: np.array(v[-1:]) for k, v in arrays.items()}
 
     def finish(self) -> bool:
@@ -641,11 +687,13 @@ class Decimator:
         """
         held, self.held = self.held, None
         tripped = held is not None and bool(np.isnan(held["duty"][-1, 0]))  # (its duties are NaN)
+        if held is not None and not tripped:
+            self._feed(held)
+        if self.block is not None:
+            self.sink(self.block.close())
+            self.block = None
         if tripped:
-            self.red.finish()
-        if held is not None:
-            self.red.add(held)
-        self.red.finish()
+            self.sink(_Block(held).close())
         return tripped
 
 
