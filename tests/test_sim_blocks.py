@@ -205,3 +205,21 @@ def test_metrics_only_matches_the_full_trace(monkeypatch, scenario):
 def test_record_mode_checked():
     with pytest.raises(InputError, match="simulate: record: must be one of .trace., .metrics., got"):
         run.simulate(_hold(0.01), record="everything")
+
+
+def test_a_long_decimation_holds_one_block_at_most():
+    """The record of decimate = 10^6 made from every period holds one block's running statistics,
+    not its periods (a block of 10^6 periods of every signal is 140 MB)."""
+    import tracemalloc
+
+    from linsense.sim.stream import simulate_streamed
+
+    b = build(as_scenario(_hold(20.0, record={"decimate": 1_000_000})), trace_in_memory=False)
+    got = []
+    tracemalloc.start()
+    try:
+        simulate_streamed(b, on_chunk=lambda a: got.append(len(a["t"])))
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert got == [1] and peak < 15e6, (got, peak)
