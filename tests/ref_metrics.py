@@ -35,11 +35,16 @@ The documented definitions, as this module reads them (an electrical degree is
   ``settling_time_s``: from ``t0`` (0 and the target without moves), the time of
   the first sample after the last one whose block leaves ``x_to +- settling_band`` (0 if none
   does; None if the last one does).
-* Verdict, in this order: a fault; ``not reached`` (the last move starts at or after the run's end,
-  ``min(steps / f_pwm, t[-1])`` with a fault); ``too short`` (the run is shorter than the end
-  window, or the end window starts before the last move ends); a non-finite position anywhere;
-  the target never approached; the end window beyond ``bound_deg``; a limit cycle beyond
-  ``settle_band_deg``. ``accurate``: stable and ``final_error <= tolerance_deg``.
+* Verdict, in this order: a fault (``fault``, the reason naming it and the time of the last
+  sample); ``not reached`` (the last move starts at or after the run's end, ``steps / f_pwm``;
+  ``reached`` is false then, also with a fault, the end ``min(steps / f_pwm, t[-1])``); ``too
+  short`` (the run is shorter than the end window, or the end window starts before the last move
+  ends or before a step load); a non-finite position anywhere; the target never approached; the
+  end window beyond ``bound_deg``; beyond ``settle_band_deg`` of peak to peak there, ``still
+  moving`` (the position, ``x_mean``, never back by more than half ``settle_band`` from the
+  farthest it went one way, or rings down: its peak to peak over the window's second half within
+  ``settle_band`` and at most half the first half's) or else ``limit cycle``. ``accurate``: stable
+  and ``final_error <= tolerance_deg``.
 * ``final_position_mm``: the point ``x`` of the last recorded sample whose position is finite
   (the tripped one included: "x at the last recorded sample", and never NaN).
 * Every float is rounded (6 decimals, times 9, the realtime factor 2); non-finite -> None.
@@ -101,11 +106,35 @@ def _mean(values: list[float]) -> float | None:
     return float(np.mean(values)) if values else None
 
 
+def _motion(xs: list[float], back: float, band: float) -> tuple[str, str]:
+    """The end window's motion of a run not settled there, by the docs: "still moving" when the
+    position never comes back by more than ``back`` from the farthest it had gone in one direction
+    (or in the other), or when its peak to peak over the window's second half is within ``band``
+    and at most half the first half's; else "limit cycle"."""
+    one_way = "moves one way only (an approach or a drift),"
+    if len(xs) < 2:
+        return "still moving", one_way
+    up = down = True
+    hi = lo = xs[0]
+    for v in xs:
+        hi, lo = max(hi, v), min(lo, v)
+        up = up and hi - v <= back
+        down = down and v - lo <= back
+    if up or down:
+        return "still moving", one_way
+    h = len(xs) // 2
+    first, second = xs[:h], xs[h:]
+    p1, p2 = max(first) - min(first), max(second) - min(second)
+    if h > 1 and p2 <= band and p2 <= 0.5 * p1:
+        return "still moving", "rings down (within the tolerance over the window's second half),"
+    return "limit cycle", "varies"
+
+
 def compute_metrics_ref(arrays: dict, *, fault: int, steps_done: int, f_pwm: float, moves, wall_s: float,
                         observer_active: bool, convergence_s: float, settle_s: float, pole_pitch: float,
                         tolerance_deg: float, bound_deg: float, settle_band_deg: float,
                         settling_band_deg: float, final_window_s: float, x_target: float,
-                        x_start: float) -> dict:
+                        x_start: float, load_step_s: float | None = None) -> dict:
     """The metrics of a run by the definitions above (the arguments of ``compute_metrics``)."""
     deg = 360.0 / pole_pitch  # electrical degrees per metre
     to_deg = 180.0 / math.pi  # (radians -> degrees: the constant np.degrees multiplies by)
@@ -199,20 +228,28 @@ def compute_metrics_ref(arrays: dict, *, fault: int, steps_done: int, f_pwm: flo
     sim_s = steps_done / f_pwm
     t_run = min(sim_s, t[-1]) if (fault and n) else sim_s
     move_end = max([m[1] for m in moves], default=0.0)
+    event_end = max(move_end, load_step_s if load_step_s is not None else 0.0)
     all_finite = all(math.isfinite(float(a[i])) for a in (x_min, x_max, x_mean) for i in range(n))
     verdict, reason = "", None
     if moves and t_from >= t_run:
-        reached, verdict = False, "not reached"
+        reached = False
+    if fault:
+        verdict = "fault"
+    elif moves and t_from >= t_run:
+        verdict = "not reached"
         judged = (f"the run ends at {t_run:.6g} s, before the commanded move at {t_from:.6g} s "
                   f"(scenario.duration, reference.at)")
-    elif t_run < final_window_s or (moves and t_run - final_window_s < move_end):
+    elif t_run < final_window_s or t_run - final_window_s < event_end:
         verdict = "too short"
         judged = (f"the end window ({final_window_s:g} s, metrics.final_window_s) needs the run "
-                  f"({t_run:.6g} s) to last at least {move_end + final_window_s:.6g} s")
-        if moves:
-            judged += f" (the last move ends at {move_end:.6g} s)"
+                  f"({t_run:.6g} s) to last at least {event_end + final_window_s:.6g} s")
+        events = [f"the last move ends at {move_end:.6g} s"] if moves else []
+        if load_step_s is not None:
+            events.append(f"the load steps at {load_step_s:.6g} s (load.time)")
+        if events:
+            judged += f" ({', '.join(events)})"
     if fault:
-        reason = f"fault: {fault_text(fault)}"
+        reason = f"fault: {fault_text(fault)}" + (f" at {t[-1]:.6g} s" if n else "")
     elif verdict:
         reason = f"{verdict}: {judged}"
     elif not all_finite:
@@ -227,7 +264,8 @@ def compute_metrics_ref(arrays: dict, *, fault: int, steps_done: int, f_pwm: flo
         reason = (f"|x - target| reaches {final_error * deg:.3g} deg ({final_error * 1e3:.3g} mm) in the "
                   f"last {final_window_s:g} s (bound {bound_deg:g} deg)")
     elif limit_cycle * deg > settle_band_deg:
-        reason = (f"not settled (limit cycle): x varies by {limit_cycle * deg:.3g} deg "
+        verdict, how = _motion([p[2] for p in w], 0.5 * settle_band_deg / deg, settle_band_deg / deg)
+        reason = (f"not settled ({verdict}): x {how} by {limit_cycle * deg:.3g} deg "
                   f"({limit_cycle * 1e3:.3g} mm) in the last {final_window_s:g} s "
                   f"(tolerance {settle_band_deg:g} deg)")
     stable = reason is None

@@ -127,7 +127,7 @@ def test_drive_takes_what_it_should(drive):
 
 # ------------------------------------------------------------------ simulate, the firmware blocks (issue 23,
 # found by tests/properties/test_prop_api.py)
-SHORT = {"motor": "ecce2010", "scenario": {"duration": 0.005}, "reference": {"position_mm": 1.0}}
+SHORT = {"motor": "ecce2010", "scenario": {"duration": 0.005}, "reference": {"position_mm": 1.0, "at": 0.001}}
 
 
 def _with(section: str, key: str, value) -> dict:
@@ -167,7 +167,8 @@ def test_simulate_of_a_dict_takes_numpy_reals_as_numbers():
     import linsense
 
     doc = {**SHORT, "scenario": {"duration": np.float32(0.005), "seed": np.int64(3)},
-           "reference": {"position_mm": np.float64(1.0)}, "record": {"decimate": np.uint8(2)}}
+           "reference": {"position_mm": np.float64(1.0), "at": np.float64(0.001)},
+           "record": {"decimate": np.uint8(2)}}
     r = linsense.simulate(doc)
     sp = r.scenario.spec
     assert sp.scenario.seed == 3 and type(sp.scenario.seed) is int and sp.record.decimate == 2

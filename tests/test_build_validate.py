@@ -30,7 +30,7 @@ def no_work(monkeypatch):
 def _startup(**keys) -> dict:
     d = base_scenario(motor=M20)
     d["inverter"]["v_dc"] = 300.0
-    d["scenario"]["duration"] = 0.05
+    d["scenario"]["duration"] = 0.3  # (the start-up's end within the run: one after it is refused)
     for k, v in keys.items():
         d.setdefault(k, {}).update(v)
     return d

@@ -22,7 +22,7 @@ from linsense.io import FAIL_ENV, KILL_ENV, MANIFEST, STAGES, recover, safe_name
 from test_cli import BASE
 
 SCENARIO = ('motor = "ecce2010"\n[scenario]\nname = "k"\nduration = 0.05\n'
-            '[reference]\nposition_mm = {x}\n[record]\ndecimate = 8\n')
+            '[reference]\nposition_mm = {x}\nat = 0.01\n[record]\ndecimate = 8\n')
 
 
 

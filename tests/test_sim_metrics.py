@@ -297,7 +297,8 @@ def _random_run(rng: np.random.Generator, blocks: bool, n: int):
               wall_s=0.01, observer_active=bool(rng.random() < 0.85), convergence_s=when(0.2),
               settle_s=when(0.3), pole_pitch=float(rng.choice([0.02, 0.056, 0.1])), tolerance_deg=0.3,
               bound_deg=6.0, settle_band_deg=0.3, settling_band_deg=float(rng.choice([0.06, 0.6])),
-              final_window_s=when(0.4), x_target=x_to, x_start=x0)
+              final_window_s=when(0.4), x_target=x_to, x_start=x0,
+              load_step_s=when(0.5 * t[-1]) if rng.random() < 0.2 else None)
     return arrays, kw
 
 
@@ -321,8 +322,11 @@ def test_metrics_equal_the_reference_from_the_docs(blocks):
         unobserved += _unobserved_move(arrays, kw)
         kinds.add((got["verdict"], got["fault"] != "none", got["bias_deg"] is None))
     assert 0 < unobserved < 200, unobserved  # (runs with nothing recorded after their move: they agree too)
-    # (the runs reach every verdict, with and without a fault and an error statistic)
-    assert {v for v, _, _ in kinds} == {"stable", "unstable", "not reached", "too short"}, kinds
+    # (the runs reach every verdict, with and without a fault and an error statistic; "not reached"
+    # needs a move after the run's end without a fault, which a scenario cannot give, issue 37)
+    verdicts = {v for v, _, _ in kinds}
+    assert {"stable", "unstable", "fault", "too short", "limit cycle"} <= verdicts <= \
+        {"stable", "unstable", "fault", "too short", "limit cycle", "still moving"}, kinds
     assert {(f, b) for _, f, b in kinds} == {(False, False), (False, True), (True, False), (True, True)}
 
 
@@ -384,26 +388,31 @@ STEP = {"motor": "ecce2010", "control": {"mode": "sensored"},
 
 
 @pytest.mark.parametrize("duration, at, verdict, fragment", [
-    (0.6, 10.0, "not reached", "before the commanded move at 10 s"),  # the move after the run's end
-    (2.0 / 16000.0, 0.1, "not reached", "before the commanded move"),  # two PWM periods
+    (0.6, 10.0, None, "reference.at: 10.0 s: the step would never act"),  # the move after the run's end
+    (2.0 / 16000.0, 0.1, None, "reference.at: 0.1 s: the step would never act"),  # two PWM periods
     (0.3, 0.1, "too short", "to last at least 0.4 s"),  # the end window would hold the step itself
     (0.25, None, "too short", "needs the run (0.25 s)"),  # a hold shorter than its end window
 ])
 def test_verdicts_judged_on_nothing_are_their_own(duration, at, verdict, fragment, tmp_path, capsys):
     """A run that does not hold its commanded move, or an end window after it, is not judged stable
     (issue 23: a move at 10 s in a 0.6 s run, two PWM periods, and an end window longer than the
-    run were all "stable"; the last reported the step as a 2.9 mm limit cycle): its verdict says
-    which, and `linsense simulate --check` exits 1 naming the keys."""
+    run were all "stable"; the last reported the step as a 2.9 mm limit cycle): a step after the
+    run's end is refused (issue 37: it never acts), an end window over the step is "too short" and
+    `linsense simulate --check` exits 1 naming the keys."""
     sc = json.loads(json.dumps(STEP))
     sc["scenario"] = {"duration": duration}
     if at is None:
         sc["reference"] = {"type": "hold"}
     else:
         sc["reference"]["at"] = at
+    if verdict is None:
+        with pytest.raises(InputError, match=fragment):
+            linsense.simulate(sc, record="metrics")
+        return
     m = linsense.simulate(sc, record="metrics").metrics
     assert m["verdict"] == verdict and not m["stable"], m["unstable_reason"]
     assert fragment in m["unstable_reason"], m["unstable_reason"]
-    assert (m["reached"] is False) == (verdict == "not reached")
+    assert m["reached"] is True
     path = tmp_path / "s.toml"
     import tomli_w
 
@@ -416,12 +425,33 @@ def test_verdicts_judged_on_nothing_are_their_own(duration, at, verdict, fragmen
 
 
 def test_a_fault_before_the_step_is_not_reached():
-    """A drive that trips before its step never reached it (issue 23: it was `reached`)."""
+    """A drive that trips before its step never reached it (issue 23: it was `reached`); the
+    verdict is the fault, with its time (issue 37: it was "not reached")."""
     t = np.arange(50) / F_PWM  # (tripped at 49 ms, the step at 0.1 s)
     a = _arrays(np.zeros(t.size), None)
     m = compute_metrics(a, fault=0x01, steps_done=t.size, f_pwm=F_PWM, moves=[(0.1, 0.1, 0.0, 3e-3)],
                         wall_s=0.01, observer_active=True, x_target=3e-3, x_start=0.0, **DEFAULTS)
-    assert not m["reached"] and m["verdict"] == "not reached" and m["unstable_reason"].startswith("fault")
+    assert not m["reached"] and m["verdict"] == "fault"
+    assert m["unstable_reason"] == "fault: overcurrent at 0.049 s", m["unstable_reason"]
+
+
+@pytest.mark.parametrize("shape, want", [
+    ("approach", "still moving"), ("drift", "still moving"), ("approach from above", "still moving"),
+    ("ring down", "still moving"), ("cycle", "limit cycle"), ("growing cycle", "limit cycle"),
+])
+def test_an_end_window_moving_one_way_is_no_limit_cycle(shape, want):
+    """end_motion tells a mover still approaching (or drifting, or ringing down) from one that keeps
+    swinging (issue 37: a long approach was a "limit cycle"); the HF ripple below the hysteresis."""
+    from linsense.sim.metrics import end_motion
+
+    t = np.linspace(0.0, 0.3, 4801)
+    ripple = 1e-6 * np.sin(2 * np.pi * 1000 * t)
+    x = {"approach": 3e-3 - 5e-4 * np.exp(-t / 0.2), "drift": 1e-4 * t,
+         "approach from above": 3e-3 + 5e-4 * np.exp(-t / 0.05),
+         "ring down": 3e-3 + 2e-4 * np.exp(-t / 0.02) * np.cos(2 * np.pi * 30 * t),
+         "cycle": 3e-3 + 1e-4 * np.sin(2 * np.pi * 11 * t),
+         "growing cycle": 3e-3 + 1e-4 * (1 + t) * np.sin(2 * np.pi * 11 * t)}[shape] + ripple
+    assert end_motion(x, 11.7e-6, 23.3e-6)[0] == want
 
 
 def test_a_settled_step_is_stable():

@@ -33,8 +33,9 @@ def sc(duration=0.1, decimate=1, step=1.0, **sections):
 
 
 def _toml(path, duration=0.1, extra=""):
+    # (the step at 0.02 s: the default 0.1 s is the run's end, where a step never acts, issue 37)
     path.write_text(f'motor = "ecce2010"\n[scenario]\nname = "t"\nduration = {duration}\n'
-                    f'[reference]\nposition_mm = 1.0\n{extra}')
+                    f'[reference]\nposition_mm = 1.0\nat = 0.02\n{extra}')
     return path
 
 
@@ -84,7 +85,8 @@ def test_decimate_and_plot(run_cli, tmp_path):
     ref = linsense.simulate(load_scenario(p).replace(record={"decimate": 4}))
     assert (out / "trace.csv").read_text() == trace_csv(ref)
     m = json.loads((out / "metrics.json").read_text())
-    assert m["block_s"] == 4 / 16000 and m["samples"] == 400
+    # (the metrics read every period whatever the record keeps, issue 37)
+    assert m["block_s"] == 1 / 16000 and m["samples"] == 1600 and ref.t.size == 400
     assert m == {k: v for k, v in ref.metrics.items() if k not in WALL}
 
 

@@ -159,7 +159,7 @@ def test_designed_limits_follow_the_application():
     assert sc["protection"]["i_max"] == pytest.approx(dz.i_trip, rel=1e-5)
     assert sc["observer"]["omega_max"] == pytest.approx(dz.omega_obs, rel=1e-5)
     bare = {"motor": "ecce2010", "scenario": {"duration": 0.01},
-            "reference": {"type": "trajectory", "waypoints_mm": [5.0], "v_max": 0.4}}
+            "reference": {"type": "trajectory", "waypoints_mm": [5.0], "v_max": 0.4, "at": 0.0}}
     b = build(scenario_from_dict(bare))
     for got, want in ((b.drive.cfg.pos.v_max, dz.v_cap), (b.drive.cfg.prot.omega_max, dz.omega_trip),
                       (b.drive.cfg.prot.i_max, dz.i_trip), (b.drive.cfg.obs.omega_max, dz.omega_obs)):

@@ -94,7 +94,9 @@ RANGE = {
     "model mass tiny": ("[controller.model]\nmass = 1e-30",
                         ["controller.model.mass", "1e-30", "6.97545e-06"]),
     "trip current": ("[protection]\ni_max = 1e30", ["protection.i_max", "1e+30", "100000"]),
-    "trip time": ("[protection]\nerr_time = 1e30", ["protection.err_time", "1e+30", "250000"]),
+    # (a trip delay beyond the run's end: the run's events are checked first, issue 37)
+    "trip time": ("[protection]\nerr_time = 1e30", ["protection.err_time", "1e+30", "would never act",
+                                                     "scenario.duration = 0.2 s"]),
     "bus trip": ("[protection]\nv_dc_max = 1e30", ["protection.v_dc_max", "1e+30", "100000"]),
     "start-up pulse": ('[control]\nmode = "startup"\n[startup]\nv_pulse = 1e30',
                        ["startup.v_pulse", "1e+30", "100000"]),

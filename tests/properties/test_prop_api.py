@@ -176,7 +176,9 @@ def test_simulate_of_a_dict_runs_as_given_or_names_the_key(section, key, value, 
     import linsense
 
     # (found: simulate(42) was a TypeError and simulate(d, record="x") a ValueError, not InputError)
-    doc = {"motor": "ecce2010", "scenario": {"duration": 0.005}, "reference": {"position_mm": 1.0}}
+    # (the step within the run: one after its end is refused, issue 37)
+    doc = {"motor": "ecce2010", "scenario": {"duration": 0.005},
+           "reference": {"position_mm": 1.0, "at": 0.001}}
     doc[section] = {**doc.get(section, {}), key: value}
     status, res = attempt(linsense.simulate, doc if scenario is None else scenario, record=record)
     event(f"{status}")
@@ -188,7 +190,10 @@ def test_simulate_of_a_dict_runs_as_given_or_names_the_key(section, key, value, 
         return
     if status == "refused":
         assert isinstance(res, InputError) and res.source == "<dict>", repr(res)
-        assert res.key.startswith(f"{section}.{key}"), (section, key, value, str(res))
+        # (the key, or named in the message of a rule between keys: an event after the run's end names
+        # the event and scenario.duration, an end window too short the loop's key, issue 37)
+        assert res.key.startswith(f"{section}.{key}") or f"{section}.{key} " in str(res), \
+            (section, key, value, str(res))
         return
     # accepted: a value of the documented type (a finite real, an int for counts), and a run of it
     assert not isinstance(value, bool | np.bool_ | str | bytes | tuple | set | complex | np.ndarray) \

@@ -198,7 +198,8 @@ def test_a_scenario_loads_and_builds_within_the_limits_or_is_refused_in_one_line
     assert value.n_steps >= 1
 
 
-SHORT = {"motor": "ecce2010", "scenario": {"name": "s", "duration": 0.005}, "reference": {"position_mm": 1.0}}
+SHORT = {"motor": "ecce2010", "scenario": {"name": "s", "duration": 0.005},
+         "reference": {"position_mm": 1.0, "at": 0.001}}
 
 
 @prop_settings()
@@ -244,16 +245,17 @@ def test_simulate_writes_outputs_that_agree_with_the_file_or_refuses(run_cli, tm
     sc = load_scenario(path)
     duration, f_pwm = sc.spec.scenario.duration, sc.spec.inverter.f_pwm
     assert m["sim_s"] == timing["sim_s"]
-    dec = int(decimate) if decimate is not None else sc.spec.record.decimate
-    recorded = -(-m["steps"] // dec)
-    if m["fault"] == "none":  # the whole run, every dec-th period recorded
+    # the metrics read every period whatever the record keeps (issue 37): samples and block_s are the
+    # metrics' own, not the record's
+    assert m["block_s"] == round(1 / f_pwm, 9), m["block_s"]
+    if m["fault"] == "none":  # the whole run, every period read
         assert abs(m["steps"] - duration * f_pwm) <= 1, (m["steps"], duration * f_pwm)
-        assert m["samples"] == recorded, (m["samples"], m["steps"], dec)
+        assert m["samples"] == m["steps"], (m["samples"], m["steps"])
     else:  # a trip ends the run there (and records the period it tripped in); its time is known to
-        # the recorded period, block_s (docs/simulator.md, "Metrics")
+        # one period, block_s (docs/simulator.md, "Metrics")
         assert m["steps"] <= duration * f_pwm + 1
         assert abs(m["fault_time_s"] - m["sim_s"]) <= m["block_s"] * (1 + 1e-9), m
-        assert m["samples"] in (recorded, recorded + 1), (m["samples"], m["steps"], dec)
+        assert m["samples"] == m["steps"] + 1, (m["samples"], m["steps"])
     assert abs(m["sim_s"] - m["steps"] / f_pwm) <= 1e-9 + 1e-6 * m["sim_s"], (m["sim_s"], m["steps"])
     assert m["mode"] == sc.spec.control.mode and m["fidelity"] == sc.spec.inverter.fidelity
     assert m["scenario"] == sc.spec.scenario.name and m["motor"] == "ecce2010"

@@ -31,7 +31,8 @@ OUTCOMES = [("refused", "#bbbbbb", "refused by the checks"),
             ("fault", "#7a1c1c", "fault or never reached"),
             ("cycle", "#d9544d", "limit cycle"),
             ("offset", "#f0a742", "ends off the target (beyond the bound)"),
-            ("stable", "#3f9b5a", "stable")]
+            ("stable", "#3f9b5a", "stable"),
+            ("moving", "#8fb9d9", "still moving (an approach, a drift)")]
 
 
 def outcome(row) -> int:
@@ -52,6 +53,8 @@ def outcome(row) -> int:
     if bool(row.get("stable")):
         return 4
     reason = str(row.get("unstable_reason") or "")
+    if reason.startswith("not settled (still moving)"):  # (not a cycle, issue 37)
+        return 5
     if reason.startswith("not settled"):
         return 2
     if reason.startswith("|x - target|"):

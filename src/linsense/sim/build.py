@@ -29,6 +29,8 @@ from linsense.model.motor import Motor, load_motor, motor_path, names_a_path, pr
 from linsense.model.saturation import Saturation
 from linsense.sim.cache import memo, motor_key
 from linsense.sim.checks import (
+    check_events,
+    check_final_window,
     check_initial_load,
     check_positions,
     check_run_size,
@@ -52,7 +54,7 @@ from linsense.tune.design import DriveData, design, mean_dq, uncompensated_speed
 __all__ = ["Built", "build", "designed", "drive_data", "calibration_timing", "resolve_motor", "motor_key",
            "plant_saturation", "reference_commands", "trapezoid_time", "initial_load", "compensation_of",
            "check_positions", "check_initial_load", "check_sensors", "check_startup", "check_run_size",
-           "check_trace_file", "run_steps", "validate", "Tables"]
+           "check_trace_file", "check_events", "check_final_window", "run_steps", "validate", "Tables"]
 
 #: drive sub-configuration -> scenario section (for messages)
 _SECTION = {"inject": "injection", "bpf": "injection", "sep": "injection", "demod": "observer",
@@ -285,6 +287,8 @@ def validate(sc: Scenario, motor: Motor, known: dict, user_keys: set[str],
     check_initial_load(sc, initial_load(sc, motor))
     check_startup(sc)
     n_steps = run_steps(sc.source, s.scenario.duration, s.inverter.f_pwm)
+    check_events(sc, n_steps, reference_commands(sc)[1], user_keys)
+    check_final_window(sc, motor.mass, user_keys)
     check_run_size(sc.source, n_steps, s.record.decimate, s.inverter.f_pwm, trace_in_memory)
     return sat, n_steps
 

@@ -282,3 +282,175 @@ def check_initial_load(sc: Scenario, f_load: float) -> None:
     key = "load.force_after" if ld.type == "step" and ld.time <= 0.0 else "load.force"
     raise InputError(sc.source, key, f"{f_load:g} N at t = 0 (initial.load_balanced = true) is beyond the "
                      f"largest force the drive holds, {float(np.finfo(REAL).max):.6g} N (ls_drive_set_load)")
+
+
+def run_events(sc: Scenario, moves) -> list[tuple[str, float, str, bool]]:
+    """Every timed event of a scenario: what acts at a time of the run, with the key that sets it.
+
+    The one list the run's end is checked against (:func:`check_events`): the step (``reference.at``)
+    or the start of each move of a trajectory (``reference.at`` for the first, the waypoint's key for
+    the others: they follow the moves before them and ``reference.dwell``), a step load
+    (``load.time``, above 0), the end of a start-up at the earliest, and the timed keys the file
+    gives: the start of the error windows (``metrics.convergence_s``) and the observer-loss trip's
+    delay (``protection.err_time``).
+
+    Parameters
+    ----------
+    sc : Scenario
+        The designed scenario.
+    moves : list of (float, float, float, float)
+        Its planned moves ``(t0, t1, x0, x1)`` (:func:`linsense.sim.build.reference_commands`).
+
+    Returns
+    -------
+    list of (str, float, str, bool)
+        ``(key, time in s, what acts then, whether the time is the key's own value)``, in the
+        scenario's order; a time that is not a key's own is in the text, ``{t}``, with what it
+        means for the run.
+    """
+    s = sc.spec
+    ref, ld = s.reference, s.load
+    events = []
+    if ref.type == "step":
+        events.append(("reference.at", ref.at, "the step", True))
+    for i, (t0, *_rest) in enumerate(moves if ref.type == "trajectory" else ()):
+        if i == 0:
+            events.append(("reference.at", t0, "the first move", True))
+        else:
+            what = ("the move to it starts at {t} s (after the moves before it and reference.dwell = "
+                    f"{ref.dwell:g} s) and would never act")
+            events.append((f"reference.waypoints_mm[{i}]", t0, what, False))
+    if ld.type == "step" and ld.time > 0.0:
+        events.append(("load.time", ld.time, "the load step", True))
+    if s.control.mode == "startup":
+        su = s.startup
+        end = su.t_lock + su.t_quiet + 2 * su.pairs * (su.t_rest + su.t_pulse) + su.t_settle
+        events.append(("startup", end, "the start-up ends at {t} s at the earliest (t_lock + t_quiet + 2 "
+                       "pairs (t_rest + t_pulse) + t_settle): the position control after it would never act",
+                       False))
+    if "convergence_s" in s.metrics.model_fields_set:
+        events.append(("metrics.convergence_s", s.metrics.convergence_s, "the start of the error windows",
+                       True))
+    if "err_time" in s.protection.model_fields_set:
+        events.append(("protection.err_time", s.protection.err_time, "the observer-loss trip (the error "
+                       "beyond protection.err_max for this long)", True))
+    return events
+
+
+def check_events(sc: Scenario, n_steps: int, moves, user_keys: set[str]) -> None:
+    """Refuse an event of :func:`run_events` that the run ends before: it would never act.
+
+    The C loop acts on an event at the first period that starts at or after its time, so an event
+    after the start of the last period (``(n_steps - 1) / f_pwm``) is never seen (issue 37: a load
+    step at 5 s in a 0.6 s run gave "stable"). A step load to the force it steps from never acts
+    either (``load.force_after`` left at its default 0 beside ``load.force = 0``).
+
+    Parameters
+    ----------
+    sc : Scenario
+        The designed scenario.
+    n_steps : int
+        The run's PWM periods (:func:`run_steps`).
+    moves : list of (float, float, float, float)
+        Its planned moves.
+    user_keys : set of str
+        The dotted keys the file gives (an event at its default time is said to be the default).
+
+    Raises
+    ------
+    InputError
+        Naming the event's key, its time and the run's duration (``load.force_after`` for a step of
+        nothing).
+    """
+    s = sc.spec
+    ld = s.load
+    if ld.type == "step" and ld.force_after == ld.force:  # (a step of nothing: it never acts either)
+        default = "" if "load.force_after" in user_keys else " (the default)"
+        raise InputError(sc.source, "load.force_after", f"{ld.force_after!r} N{default} equals load.force = "
+                         f"{ld.force!r} N: the load step at load.time would change nothing; give the force "
+                         "after the step")
+    t_last = (n_steps - 1) / s.inverter.f_pwm  # (s, the start of the last period)
+    for key, t, what, own in run_events(sc, moves):
+        if t > t_last:
+            default = "" if key in user_keys else " (the default)"
+            what = f"{t!r} s{default}: {what} would never act" if own else what.format(t=f"{t:.6g}")
+            raise InputError(sc.source, key, f"{what}: the run ends at scenario.duration = "
+                             f"{s.scenario.duration:g} s (its last period starts at {t_last:.9g} s); make it "
+                             "earlier or the run longer")
+
+
+def slowest_loop(sc: Scenario, mass: float) -> tuple[str, str, float]:
+    """The slowest loop of a drive that can sustain a cycle, the key that sets it and its bandwidth.
+
+    The one derivation of the shortest end window (:func:`check_final_window`). The loops counted:
+    the speed loop (``speed_bandwidth_hz``, or ``speed_kp / (2 pi m)``) under a P position loop, the
+    PD position loop itself (``sqrt(kp_x / m) / (2 pi)``), and the HF observer in the sensorless
+    modes (``observer.bandwidth_hz``, or ``k1 / (2 pi)`` over 3 for ``mech``, 2 for ``pll``). A P
+    position loop is first order around the speed loop: a cycle of the cascade is at least as fast
+    as the speed loop's; the current loop is far faster than all of them.
+
+    Parameters
+    ----------
+    sc : Scenario
+        The designed scenario.
+    mass : float
+        kg, the plant's moving mass.
+
+    Returns
+    -------
+    tuple of (str, str, float)
+        ``(loop, key, bandwidth in Hz)``.
+    """
+    s = sc.spec
+    c, o = s.controller, s.observer
+    loops = []
+    if c.position_type == "pd":
+        loops.append(("the PD position loop", "controller.kp_x", math.sqrt(c.kp_x / mass) / (2.0 * math.pi)))
+    elif c.speed_kp is not None:
+        loops.append(("the speed loop", "controller.speed_kp", c.speed_kp / mass / (2.0 * math.pi)))
+    else:
+        loops.append(("the speed loop", "controller.speed_bandwidth_hz", c.speed_bandwidth_hz))
+    if s.control.mode != "sensored":
+        if o.k1 is not None:
+            per = 3.0 if o.type == "mech" else 2.0  # (ls_observer_gains: k1 = 3 w for mech, 2 w for pll)
+            loops.append(("the observer", "observer.k1", o.k1 / per / (2.0 * math.pi)))
+        else:
+            loops.append(("the observer", "observer.bandwidth_hz", o.bandwidth_hz))
+    return min(loops, key=lambda lp: lp[2])
+
+
+def check_final_window(sc: Scenario, mass: float, user_keys: set[str]) -> None:
+    """Refuse an end window too short to see a cycle of the drive's slowest loop (:func:`slowest_loop`).
+
+    The end window must hold half the loop's period at least (a peak and a trough of its cycle): a
+    shorter one sees a part of the cycle as a still mover (issue 37: ``final_window_s = 1e-9`` gave
+    "stable" and a limit cycle of 0 where the default window showed 17 deg).
+
+    Parameters
+    ----------
+    sc : Scenario
+        The designed scenario.
+    mass : float
+        kg, the plant's moving mass.
+    user_keys : set of str
+        The dotted keys the file gives (a default window is said to be the default).
+
+    Raises
+    ------
+    InputError
+        Naming ``metrics.final_window_s``, its value, the loop and the least window.
+    """
+    loop, key, f = slowest_loop(sc, mass)
+    least = 0.5 / f
+    w = sc.spec.metrics.final_window_s
+    if w >= least:
+        return
+    window = "metrics.final_window_s"
+    if window not in user_keys and key in user_keys:  # (the file gives the loop, not the window)
+        raise InputError(sc.source, key, f"{f:.4g} Hz makes {loop} too slow for the end window: a cycle "
+                         f"of it ({1.0 / f:.3g} s period) needs half its period, at least {least:.3g} s, and "
+                         f"{window} is {w!r} s (the default): give {window} = {least:.3g} or more")
+    default = "" if window in user_keys else " (the default)"
+    raise InputError(sc.source, window, f"{w!r} s{default} is too short to see a cycle of {loop} ({key} = "
+                     f"{f:.4g} Hz, a {1.0 / f:.3g} s period): the end window must hold half its period, at "
+                     f"least {least:.3g} s")

@@ -191,11 +191,47 @@ def settling_time(t: np.ndarray, x: np.ndarray, x_to: float, t0: float, band: fl
     return float(t[i0 + last_out[-1] + 1] - t0)
 
 
+def end_motion(x: np.ndarray, hysteresis: float, band: float) -> tuple[str, str]:
+    """How the mover moves over the end window of a run that did not settle there.
+
+    ``"still moving"`` when it goes one way only (never back by more than ``hysteresis`` from the
+    farthest it had gone: an approach or a drift), or rings down (its peak to peak over the
+    window's second half within ``band`` and at most half the first half's); else ``"limit
+    cycle"`` (it swings back and forth and keeps swinging).
+
+    Parameters
+    ----------
+    x : ndarray
+        The position over the end window, in time order (m), finite.
+    hysteresis : float
+        m, the backward motion still counted as one way (the HF ripple's).
+    band : float
+        m, the peak to peak of a settled mover (``settle_band``).
+
+    Returns
+    -------
+    tuple of (str, str)
+        ``("still moving" or "limit cycle", how x moves, in words)``.
+    """
+    one_way = "moves one way only (an approach or a drift),"
+    if x.size < 2:
+        return "still moving", one_way
+    back_down = (np.maximum.accumulate(x) - x).max()  # (the farthest back from a maximum so far)
+    back_up = (x - np.minimum.accumulate(x)).max()
+    if back_down <= hysteresis or back_up <= hysteresis:
+        return "still moving", one_way
+    h = x.size // 2
+    p1, p2 = float(np.ptp(x[:h])), float(np.ptp(x[h:]))
+    if h > 1 and p2 <= band and p2 <= 0.5 * p1:
+        return "still moving", "rings down (within the tolerance over the window's second half),"
+    return "limit cycle", "varies"
+
+
 def compute_metrics(arrays: dict, *, fault: int, steps_done: int, f_pwm: float, moves, wall_s: float,
                     observer_active: bool, convergence_s: float, settle_s: float, pole_pitch: float,
                     tolerance_deg: float, bound_deg: float, settle_band_deg: float,
                     settling_band_deg: float, final_window_s: float, x_target: float,
-                    x_start: float) -> dict:
+                    x_start: float, load_step_s: float | None = None) -> dict:
     """Metrics of one closed-loop run (definitions: docs/simulator.md, "Metrics").
 
     The samples' times ``t`` ascend, so every time window is a range of indices (found by
@@ -236,6 +272,9 @@ def compute_metrics(arrays: dict, *, fault: int, steps_done: int, f_pwm: float, 
         s, the end window.
     x_target, x_start : float
         m, the last commanded position and the initial one.
+    load_step_s : float or None, optional
+        s, the time of a step load (None: none): the end window must follow it as it follows the
+        last move.
 
     Returns
     -------
@@ -341,27 +380,38 @@ def compute_metrics(arrays: dict, *, fault: int, steps_done: int, f_pwm: float, 
     def mm(v: float | None) -> float | None:
         return None if v is None else v * 1e3
 
-    # the run must hold its commanded moves and an end window after them: a move that starts after
-    # the run ended (by its duration or a fault) was never reached; an end window longer than the
-    # run, or one that overlaps the last move, judges the move itself: too short
+    # the run must hold its commanded moves and an end window after them (and after a step load):
+    # a move that starts after the run ended (by its duration) was never reached; an end window
+    # longer than the run, or one that overlaps the last move or the load step, judges the event
+    # itself: too short. A fault is the verdict of the run it stopped, whatever else.
     verdict = ""
     t_run = min(sim_s, float(t[-1])) if fault and t.size else sim_s
     t_move = max(m[1] for m in moves) if moves else 0.0  # (s, the end of the last move)
+    t_event = max(t_move, load_step_s or 0.0)
     if moves and moves[-1][0] >= t_run:
         reached = False
+    if fault:
+        verdict = "fault"
+    elif moves and moves[-1][0] >= t_run:
         verdict = "not reached"
         why_short = (f"the run ends at {t_run:.6g} s, before the commanded move at {moves[-1][0]:.6g} s "
                      f"(scenario.duration, reference.at)")
-    elif t_run < final_window_s or (moves and t_run - final_window_s < t_move):
+    elif t_run < final_window_s or t_run - final_window_s < t_event:
         verdict = "too short"
+        last = [f"the last move ends at {t_move:.6g} s"] if moves else []
+        if load_step_s is not None:
+            last.append(f"the load steps at {load_step_s:.6g} s (load.time)")
         why_short = (f"the end window ({final_window_s:g} s, metrics.final_window_s) needs the run "
-                     f"({t_run:.6g} s) to last at least {t_move + final_window_s:.6g} s"
-                     + (f" (the last move ends at {t_move:.6g} s)" if moves else ""))
+                     f"({t_run:.6g} s) to last at least {t_event + final_window_s:.6g} s"
+                     + (f" ({', '.join(last)})" if last else ""))
     # stability: no fault; finite; reached the reference region; bounded (end window within
-    # bound_deg of the target) and settled (true position varies by at most settle_band_deg there)
+    # bound_deg of the target) and settled (true position varies by at most settle_band_deg there:
+    # beyond, a mover still approaching or drifting, or ringing down, is still moving, one that
+    # swings back and forth a limit cycle)
     reason = ""
     if fault:
-        reason = f"fault: {fault_reason(fault)}"
+        at = f" at {float(t[-1]):.6g} s" if t.size else ""
+        reason = f"fault: {fault_reason(fault)}{at}"
     elif verdict:
         reason = f"{verdict}: {why_short}"
     elif not x_all:
@@ -379,7 +429,8 @@ def compute_metrics(arrays: dict, *, fault: int, steps_done: int, f_pwm: float, 
         reason = (f"|x - target| reaches {deg(end_err):.3g} deg ({mm(end_err):.3g} mm) in the last "
                   f"{final_window_s:g} s (bound {bound_deg:g} deg)")
     elif deg(limit_cycle) > settle_band_deg:
-        reason = (f"not settled (limit cycle): x varies by {deg(limit_cycle):.3g} deg "
+        verdict, how = end_motion(xw, 0.5 * settle_band_deg / deg_per_m, settle_band_deg / deg_per_m)
+        reason = (f"not settled ({verdict}): x {how} by {deg(limit_cycle):.3g} deg "
                   f"({mm(limit_cycle):.3g} mm) in the last {final_window_s:g} s "
                   f"(tolerance {settle_band_deg:g} deg)")
     stable = reason == ""
@@ -388,9 +439,12 @@ def compute_metrics(arrays: dict, *, fault: int, steps_done: int, f_pwm: float, 
     rt = sim_s / wall_s if wall_s > 0 else None
     return {
         "stable": bool(stable),
-        # "stable", "unstable" (unstable_reason says why: a fault, the bound, a limit cycle, the
-        # target never approached), or, judged on nothing: "not reached" (the commanded move lies
-        # after the run's end) or "too short" (no end window after the last move)
+        # "stable"; "fault" (a fault stopped the run: unstable_reason names it and its time); "limit
+        # cycle" (the mover swings back and forth in the end window); "still moving" (it approaches
+        # or drifts in one direction, or rings down, in the end window); "unstable" (the bound, the
+        # target never approached, a non-finite position); or, judged on nothing: "not reached"
+        # (the commanded move lies after the run's end) or "too short" (no end window after the
+        # last move and the load step)
         "verdict": verdict,
         "max_abs_err_deg": _round(max_err),
         "transient_max_err_deg": _round(tr_err),

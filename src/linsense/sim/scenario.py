@@ -407,8 +407,8 @@ class ReferenceSection(BaseModel):
     type: Literal["step", "trajectory", "hold"] = Field("step", description="`step`, `trajectory` or `hold`")
     position_mm: float | None = Field(None, description="step target", json_schema_extra={
         "unit": "mm", "default_note": "required for step"})
-    at: NonNegative = Field(0.1, description="step time, or start of the first move",
-                            json_schema_extra={"unit": "s"})
+    at: NonNegative = Field(0.1, description="step time, or start of the first move; within the run "
+                            "(\"Events and the end window\")", json_schema_extra={"unit": "s"})
     waypoints_mm: list[float] | None = Field(default=None, max_length=10_000, description="targets in order",
                                              json_schema_extra={"unit": "mm", "default_note": "required for "
                                                                 "trajectory, non-empty"})
@@ -449,7 +449,8 @@ class LoadSection(BaseModel):
     force: float = Field(0.0, description="opposes positive motion when > 0 (step: before `time`)",
                          json_schema_extra={"unit": "N"})
     force_after: float = Field(0.0, description="step load: after `time`", json_schema_extra={"unit": "N"})
-    time: NonNegative = Field(0.0, description="step load: step time", json_schema_extra={"unit": "s"})
+    time: NonNegative = Field(0.0, description="step load: step time, within the run",
+                              json_schema_extra={"unit": "s"})
     incline_deg: float = Field(default=0.0, ge=-90.0, le=90.0, description="incline: adds m g sin",
                                json_schema_extra={"unit": "deg"})
 
@@ -512,7 +513,8 @@ class RecordSection(BaseModel):
     """The ``[record]`` section of a scenario file; its keys are in docs/simulator.md."""
     model_config = _STRICT
     decimate: int = Field(default=1, ge=1, le=1_000_000, description="record every n-th period (with `> 1`, "
-                          "also the block statistics of every period: see \"Block statistics\")")
+                          "also the block statistics of every period: see \"Block statistics\"); what is "
+                          "kept, not what the metrics read: every period")
 
 
 class SaturationSection(BaseModel):
@@ -586,7 +588,8 @@ class MetricsSection(BaseModel):
                                               "`tolerance_mm`)", json_schema_extra={"unit": "mm",
                                                                                     "default_note": "none"})
     final_window_s: Positive = Field(0.3, description="end window of `stable`, `bias_deg`, `limit_cycle_deg` "
-                                     "(clipped to the run)", json_schema_extra={"unit": "s"})
+                                     "(clipped to the run); at least half the period of the drive's slowest "
+                                     "loop (\"Events and the end window\")", json_schema_extra={"unit": "s"})
 
     @model_validator(mode="after")
     def _check(self) -> MetricsSection:

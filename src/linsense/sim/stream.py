@@ -1,19 +1,19 @@
-"""One run streamed in chunks: the trace handed on chunk by chunk, never whole in memory.
+"""One run in chunks: its metrics from every PWM period, its trace handed on chunk by chunk, never
+whole in memory.
 
-``linsense simulate`` runs this way (docs/simulator.md, "Single runs in chunks"): the C loop runs
-in chunks of reused buffers (:func:`linsense.sim.core.run_closed_loop_chunks`); each chunk goes to
-the trace writer and into two :class:`Reducer` objects, one keeping what the metrics need (the
-point values, and the block statistics when ``decimate > 1``; merged into blocks of several
-samples when the run has more than :data:`METRICS_CAP` samples), one the binned envelopes the
-figure draws (:data:`PLOT_BINS` bins at most). Memory does not grow with the duration.
-
-With up to :data:`METRICS_CAP` samples the metrics are exactly those of
-:func:`linsense.sim.run.simulate` on the same scenario; beyond, they are computed from the block
-envelopes as in a metrics-only run (times to one block, ``metrics["block_s"]``). Of those samples
-only the ones a metric can depend on are kept (:class:`MetricSamples`); a run without a trace and
-without a figure (``linsense simulate --trace none``) records only the signals the metrics read,
-in chunks of :data:`METRICS_CHUNK` periods: its memory stays flat at any duration, its metrics are
-those of the same run with a trace.
+Every run of the simulator goes this way (:func:`simulate_streamed`; ``linsense simulate``,
+:func:`linsense.sim.run.simulate` and :func:`~linsense.sim.run.metrics_only`; docs/simulator.md,
+"Single runs in chunks"): the C loop runs in chunks of reused buffers
+(:func:`linsense.sim.core.run_closed_loop_chunks`) at the full rate, one sample per PWM period,
+whatever the run keeps. The metrics are computed from those samples (:class:`MetricSamples` keeps
+only the ones a metric can depend on: memory does not grow with the duration), so that they do not
+depend on what is stored (issue 37: ``--decimate 2048 --trace none`` said "stable" and a settling
+time of 0 of a run that at the full rate was neither). What is stored, one sample every
+``record.decimate`` periods with its block statistics, is made from the same samples
+(:class:`Decimator`, bit for bit the C loop's own decimation) and handed to the trace writer and to
+the figure's bins (:data:`PLOT_BINS` at most). Only an end window of more than
+:data:`METRICS_CAP` periods is reduced to blocks of several periods, and the metrics say so
+(``metrics_note``, ``block_s``).
 """
 
 from __future__ import annotations
@@ -24,15 +24,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from linsense._ctrl import ffi
+from linsense.errors import InputError
 from linsense.sim.build import Built
-from linsense.sim.core import BLOCKS, CHUNK, run_closed_loop_chunks
-from linsense.sim.metrics import block_views, finite_positions, transient_mask
-from linsense.sim.run import METRICS_BLOCKS, METRICS_SIGNALS, finish_metrics, run_metrics
+from linsense.sim.checks import sensor_triples
+from linsense.sim.core import CHUNK, run_closed_loop_chunks
+from linsense.sim.metrics import block_views, compute_metrics, finite_positions, transient_mask
 
-#: samples the metrics keep at most (beyond, consecutive samples are merged into blocks): 2**19,
-#: 33 s at 16 kHz with ``decimate = 1``; at most 40 MB
+#: PWM periods of the end window the metrics keep at most (beyond, consecutive periods are merged
+#: into blocks, said in ``metrics_note``): 2**19, 33 s at 16 kHz; at most 13 MB
 METRICS_CAP = 2**19
-#: PWM periods per chunk of a run that hands no chunk on (metrics only): 2**15, 1 MB of buffers
+#: PWM periods per chunk of the C loop when it runs for the metrics alone or for a decimated trace
+#: (every period recorded): 2**15, 1 MB of buffers for the metrics' signals, 5 MB for all
 METRICS_CHUNK = 2**15
 #: bins of the figure at most (each at least one injection period)
 PLOT_BINS = 2000
@@ -40,10 +43,11 @@ PLOT_BINS = 2000
 #: (operation, sources in order of preference): the first source a chunk has is reduced
 Spec = dict[str, tuple[str, tuple[str, ...]]]
 
-#: the metrics of a run with point values only (decimate 1, no merging): the samples themselves
+#: the metrics of a run's every period (no merging): the samples themselves
 POINT_SPEC: Spec = {"t": ("first", ("t",)), "x": ("last", ("x",)), "theta_err": ("first", ("theta_err",))}
-#: the metrics from block envelopes (``decimate > 1`` or merged samples); ``x`` is the last point
-#: value of each block (``final_position_mm`` is the last sample's), ``t`` the block's start
+#: the metrics from block envelopes (an end window beyond METRICS_CAP periods: merged samples); ``x``
+#: is the last point value of each block (``final_position_mm`` is the last sample's), ``t`` the
+#: block's start
 BLOCK_SPEC: Spec = {
     **POINT_SPEC,
     "x_min": ("min", ("x_min", "x")), "x_max": ("max", ("x_max", "x")), "x_mean": ("mean", ("x_mean", "x")),
@@ -241,11 +245,15 @@ class MetricSamples:
         Parameters
         ----------
         part : dict of str to ndarray
-            Output name to the batch's samples, in order.
+            Output name to the batch's samples, in order (views are fine: what is kept is copied).
         """
         if not np.isfinite(part["t"]).all():
             self.compact = False
-        self.tail = _concat(self.tail, part)
+        # (a copy: a part may view the reused buffers of the C run)
+        if self.tail is None:
+            self.tail = {k: np.array(v) for k, v in part.items()}
+        else:
+            self.tail = _concat(self.tail, part)
         t = self.tail["t"]
         if not self.compact or t.size < 3:
             return
@@ -467,31 +475,371 @@ def injection_hz(b: Built) -> float | None:
     return float(inj.frequency) if inj.frequency and inj.amplitude else None
 
 
-def simulate_streamed(b: Built, *, on_chunk: Callable | None = None, plot: bool = False, chunk: int = CHUNK,
-                      metrics_cap: int = METRICS_CAP) -> StreamedRun:
-    """Run the built scenario in chunks, with its metrics accumulated as the run goes.
+#: what the metrics read: the point signals of every period (linsense.sim.metrics)
+METRICS_SIGNALS = ("t", "x", "theta_err")
+#: the block statistics of a decimated record (the C loop's names, linsense.sim.core.BLOCKS)
+METRICS_BLOCKS = ("x_min", "x_max", "x_mean", "err_min", "err_max", "err_mean")
 
-    ``b`` is built with :func:`linsense.sim.build.build` and ``trace_in_memory=False``; the
-    metrics are accumulated as the module's doc says, and with ``plot`` the figure's bins.
+#: what the average inverter model cannot be trusted for (docs/simulator.md, "Fidelity")
+AVERAGE_NOTE = ("average inverter: the dead time's effect on the HF estimate is approximated (edge "
+                "currents predicted linearly, with the PWM ripple's dead zone); its steady bias can "
+                "differ from the switching model's by up to about 1 deg and it can show or miss limit "
+                "cycles below about 0.2 mm: check bias and limit-cycle claims with fidelity = switching")
+
+#: fault at t = 0 -> the scenario key most likely responsible
+_FAULT_KEYS = {"undervoltage": "inverter.v_dc", "overvoltage": "inverter.v_dc",
+               "overcurrent": "protection.i_max", "encoder": "sensors.encoder_counts_per_period",
+               "config": "control"}
+
+#: the block statistics of a decimated record: name -> (the signal of every period they reduce,
+#: the reduction), as the C loop records them (ls_sim.c, ls_sim_record.c)
+DECIMATED_BLOCKS = {"x_min": ("x", "min"), "x_max": ("x", "max"), "x_mean": ("x", "mean"),
+                    "err_min": ("theta_err", "min"), "err_max": ("theta_err", "max"),
+                    "err_mean": ("theta_err", "mean"),
+                    "i_abc_min": ("i_abc", "min"), "i_abc_max": ("i_abc", "max")}
+
+
+def full_rate(cfg):
+    """A copy of the plant's ``ls_sim_cfg`` that records every PWM period (``decimate = 1``).
+
+    Parameters
+    ----------
+    cfg : cffi ``ls_sim_cfg *``
+        The plant's configuration (not changed).
+
+    Returns
+    -------
+    cffi ``ls_sim_cfg *``
+        The copy.
+    """
+    c = ffi.new("ls_sim_cfg *")
+    ffi.memmove(c, cfg, ffi.sizeof("ls_sim_cfg"))
+    c.decimate = 1
+    return c
+
+
+class Batcher:
+    """Batches of ``size`` samples handed on, the last at :meth:`flush` (with the tripping state).
+
+    The sizes of the C loop's own decimated chunks, so that a trace file written chunk by chunk
+    (Parquet: one row group per batch) is the one the decimating C loop wrote: whole chunks of
+    ``size`` samples, the last one shorter, or longer by the state that tripped a fault.
+
+    Parameters
+    ----------
+    size : int
+        Samples per batch, at least 1.
+    sink : callable
+        Gets each batch (``{name: array}``).
+    """
+
+    def __init__(self, size: int, sink: Callable) -> None:
+        self.size, self.sink = max(1, int(size)), sink
+        self.parts: list[dict[str, np.ndarray]] = []
+        self.n = 0
+        self.handed = 0
+
+    def add(self, part: dict[str, np.ndarray]) -> None:
+        """Take some samples (kept as they are: a Reducer's own arrays).
+
+        Parameters
+        ----------
+        part : dict of str to ndarray
+            Name to the samples.
+        """
+        self.parts.append(part)
+        self.n += len(part["t"])
+        while self.n > self.size + 1:  # (a whole batch, and more than a tripping state after it)
+            self._cut()
+
+    def flush(self, tripped: bool = False) -> None:
+        """Hand on what is left.
+
+        Parameters
+        ----------
+        tripped : bool, optional
+            The last sample is the state that tripped a fault (it goes with the last batch).
+        """
+        if self.n > self.size and not tripped:
+            self._cut()
+        if self.n:
+            self._hand({k: np.concatenate([p[k] for p in self.parts]) for k in self.parts[0]})
+        self.parts, self.n = [], 0
+
+    def _cut(self) -> None:
+        whole = {k: np.concatenate([p[k] for p in self.parts]) for k in self.parts[0]}
+        self._hand({k: v[:self.size] for k, v in whole.items()})
+        rest = {k: v[self.size:] for k, v in whole.items()}
+        self.parts, self.n = [rest], len(rest["t"])
+
+    def _hand(self, batch: dict[str, np.ndarray]) -> None:
+        self.handed += len(batch["t"])
+        self.sink(batch)
+
+
+class _Block:
+    """A block of a decimated record in progress: its first period's values and the running block
+    statistics of its periods so far (the C loop's: ``x < lo ? x : lo``, NaN where the first value
+    is; the sum in period order), never the periods themselves."""
+
+    def __init__(self, rows: dict[str, np.ndarray]) -> None:
+        self.first = {k: np.array(v[:1]) for k, v in rows.items()}
+        self.n = 0
+        self.acc: dict[str, np.ndarray] = {}
+        self.add(rows)
+
+    def add(self, rows: dict[str, np.ndarray]) -> None:
+        m = len(rows["t"])
+        if not m:
+            return
+        for name, (src, op) in DECIMATED_BLOCKS.items():
+            v = rows[src]
+            if op == "mean":  # (the sum in period order from the first value, as the C loop adds)
+                seq = v if name not in self.acc else np.concatenate([self.acc[name], v])
+                self.acc[name] = np.cumsum(seq, axis=0)[-1:]
+                continue
+            fn = np.fmin if op == "min" else np.fmax
+            part = fn.reduce(v, axis=0, keepdims=True)
+            self.acc[name] = part if name not in self.acc else fn(self.acc[name], part)
+        self.n += m
+
+    def close(self) -> dict[str, np.ndarray]:
+        out = dict(self.first)
+        for name, (src, op) in DECIMATED_BLOCKS.items():
+            v = self.acc[name]
+            if op == "mean":
+                v = v if self.n == 1 else v / float(self.n)
+            out[name] = np.where(np.isnan(self.first[src]), self.first[src], v)  # (C: a NaN first stays)
+        return out
+
+
+class Decimator:
+    """The record of a run with ``record.decimate = dec`` made from its samples of every period, bit
+    for bit the C loop's own: every ``dec``-th period's point signals and the block statistics of
+    the ``dec`` periods it opens (:data:`DECIMATED_BLOCKS`), the state that tripped a fault a block
+    of its own (the one sample whose duties are NaN, the last of the run). Holds one block's
+    statistics at most, whatever ``dec``.
+
+    Parameters
+    ----------
+    dec : int
+        PWM periods per stored sample.
+    sink : callable
+        Gets the stored samples, in batches (``{name: array}``).
+    """
+
+    def __init__(self, dec: int, sink: Callable) -> None:
+        self.dec, self.sink = int(dec), sink
+        self.block: _Block | None = None
+        self.held: dict[str, np.ndarray] | None = None  # (the last sample so far: it may be the trip)
+
+    def _whole(self, a: dict[str, np.ndarray], m: int) -> dict[str, np.ndarray]:
+        """``m`` whole blocks of ``a`` (``m * dec`` periods), reduced at once."""
+        d = self.dec
+        out = {k: np.array(v[:m * d:d]) for k, v in a.items()}
+        for name, (src, op) in DECIMATED_BLOCKS.items():
+            g = a[src][:m * d].reshape(m, d, *a[src].shape[1:])
+            if op == "mean":
+                total = np.cumsum(g, axis=1)[:, -1]
+                v = total if d == 1 else total / float(d)
+            else:
+                v = (np.fmin if op == "min" else np.fmax).reduce(g, axis=1)
+            out[name] = np.where(np.isnan(g[:, 0]), g[:, 0], v)  # (C: a NaN first stays)
+        return out
+
+    def _feed(self, a: dict[str, np.ndarray]) -> None:
+        n, i = len(a["t"]), 0
+        if self.block is not None:
+            i = min(self.dec - self.block.n, n)
+            self.block.add({k: v[:i] for k, v in a.items()})
+            if self.block.n == self.dec:
+                self.sink(self.block.close())
+                self.block = None
+        m = (n - i) // self.dec
+        if m:
+            self.sink(self._whole({k: v[i:] for k, v in a.items()}, m))
+            i += m * self.dec
+        if i < n:
+            self.block = _Block({k: v[i:] for k, v in a.items()})
+
+    def add(self, arrays: dict[str, np.ndarray]) -> None:
+        """Take a chunk of samples of every period (views are fine).
+
+        Parameters
+        ----------
+        arrays : dict of str to ndarray
+            Signal name to the chunk's samples.
+        """
+        if not len(arrays["t"]):
+            return
+        if self.held is not None:
+            self._feed(self.held)
+        self._feed({k: v[:-1] for k, v in arrays.items()})
+        self.held = {k: np.array(v[-1:]) for k, v in arrays.items()}
+
+    def finish(self) -> bool:
+        """Hand on the rest: the last block as it is, and the state that tripped on its own.
+
+        Returns
+        -------
+        bool
+            Whether the run ended on a tripping state (its last sample).
+        """
+        held, self.held = self.held, None
+        tripped = held is not None and bool(np.isnan(held["duty"][-1, 0]))  # (its duties are NaN)
+        if held is not None and not tripped:
+            self._feed(held)
+        if self.block is not None:
+            self.sink(self.block.close())
+            self.block = None
+        if tripped:
+            self.sink(_Block(held).close())
+        return tripped
+
+
+def metrics_block(spec, cap: int = METRICS_CAP) -> int:
+    """PWM periods per sample the metrics are computed on: 1 (every period), unless the end window
+    holds more than ``cap`` periods (then blocks of several, said in the metrics' ``metrics_note``).
+
+    Parameters
+    ----------
+    spec : ScenarioFile
+        The scenario.
+    cap : int, optional
+        Periods of the end window the metrics keep at most.
+
+    Returns
+    -------
+    int
+        Periods per block.
+    """
+    window = min(spec.metrics.final_window_s, spec.scenario.duration) * spec.inverter.f_pwm
+    return max(1, math.ceil(window / max(1, int(cap))))
+
+
+def run_metrics(b: Built, raw, arrays: dict | None = None) -> dict:
+    """The metrics of a run of a built scenario.
+
+    The bounds are in electrical degrees of the plant motor's pole pitch.
+
+    Parameters
+    ----------
+    b : Built
+        The built scenario.
+    raw : RawRun
+        Its run.
+    arrays : dict or None, optional
+        The samples (default the run's own; with block statistics among them, from those).
+
+    Returns
+    -------
+    dict
+        The metrics (:func:`linsense.sim.metrics.compute_metrics`).
+    """
+    s = b.scenario.spec
+    x_target = b.commands[-1][1] if b.commands else b.setup.x0
+    observer_active = s.control.mode != "sensored" or s.control.inject_sensored
+    pitch = b.motor.pole_pitch  # (the plant's: the controller's model has the same)
+    ld = s.load
+    return compute_metrics(
+        raw.arrays if arrays is None else arrays, fault=raw.fault, steps_done=raw.steps_done,
+        f_pwm=s.inverter.f_pwm, moves=b.moves, wall_s=raw.wall_s,  # the C run alone
+        observer_active=observer_active, convergence_s=s.metrics.convergence_s,
+        settle_s=s.metrics.settle_s, pole_pitch=pitch, **s.metrics.bounds_deg(pitch),
+        final_window_s=s.metrics.final_window_s, x_target=x_target, x_start=b.setup.x0,
+        load_step_s=ld.time if ld.type == "step" and ld.time > 0.0 else None,
+    )
+
+
+def finish_metrics(b: Built, raw, m: dict, block: int) -> None:
+    """Complete the metrics of a run in place.
+
+    Refuses a drive that trips at t = 0; says a calibration run is one (verdict ``calibration``, not
+    judged as a hold); adds the fidelity note, names and ``block_s``.
+
+    Parameters
+    ----------
+    b : Built
+        The built scenario.
+    raw : RawRun
+        Its run.
+    m : dict
+        The metrics, completed in place.
+    block : int
+        PWM periods per sample the metrics were computed on, the resolution of their times.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        The drive trips at its very first step (naming the key at fault).
+    """
+    sc = b.scenario
+    s = sc.spec
+    if raw.fault and raw.steps_done <= 1:
+        # a trip at the very first step is the configuration's doing, not the closed loop's
+        first = m["fault"].split("+")[0]  # the first fault named (several can trip together)
+        sens = s.sensors
+        offset = max(abs(o) for o in sensor_triples(sens)[1])
+        on_sensor = first == "overcurrent" and (sens.current_noise or offset)
+        if on_sensor and "protection.i_max" not in b.user_keys:
+            # (the file gives the sensor, not the trip: name what it gives, issue 23)
+            key = "sensors.current_noise" if sens.current_noise else "sensors.current_offset"
+            raise InputError(sc.source, key, f"the drive trips at t = 0 (overcurrent) on the current "
+                             f"sensor: {sens.current_noise:g} A rms of noise and {offset:g} A of offset "
+                             f"against the over-current trip protection.i_max = {s.protection.i_max:.3g} A "
+                             "(designed)")
+        raise InputError(sc.source, _FAULT_KEYS.get(first, ""),
+                         f"the drive trips at t = 0 ({m['fault']}): the configuration cannot run")
+    if s.control.mode == "calibration" and not raw.fault:
+        # (the drive moves itself through its points: a hold's verdict would judge a calibration)
+        done = "done" if raw.steps_done < b.n_steps else "not done by the run's end"
+        m.update(stable=False, accurate=False, verdict="calibration",
+                 unstable_reason=f"a calibration run (control.mode = \"calibration\", {done}): the drive "
+                 "moves itself through its points, which the metrics of a hold do not judge; linsense "
+                 "calibrate does")
+    if s.inverter.fidelity == "average" and s.inverter.dead_time > 0:
+        m["fidelity_note"] = AVERAGE_NOTE
+    m["scenario"] = sc.name
+    m["mode"] = s.control.mode
+    m["fidelity"] = s.inverter.fidelity
+    m["motor"] = b.motor.name
+    m["block_s"] = round(float(block / s.inverter.f_pwm), 9)
+
+
+def simulate_streamed(b: Built, *, on_chunk: Callable | None = None, plot: bool = False, chunk: int = CHUNK,
+                      metrics_cap: int = METRICS_CAP, decimate: int | None = None,
+                      blocks: bool | None = None) -> StreamedRun:
+    """Run the built scenario in chunks: its metrics from every period, its record handed on.
+
+    ``b`` is built with :func:`linsense.sim.build.build`. The C loop records every PWM period; the
+    metrics are accumulated from those samples as the module's doc says, whatever is stored; the
+    stored record (one sample every ``decimate`` periods with its block statistics, made from the
+    same samples as the decimating C loop makes it) goes to ``on_chunk`` and, with ``plot``, into
+    the figure's bins.
 
     Parameters
     ----------
     b : Built
         The built scenario.
     on_chunk : callable or None, optional
-        ``on_chunk(arrays)`` gets each chunk's samples (every point signal, and the block statistics
-        when ``decimate > 1``; views valid until it returns).
+        ``on_chunk(arrays)`` gets each chunk of the stored record (every point signal, and the block
+        statistics when ``decimate > 1``; views valid until it returns), in the chunks the C loop
+        records it in with ``chunk``.
     plot : bool, optional
         Also the figure's bins.
     chunk : int, optional
         PWM periods per chunk.
     metrics_cap : int, optional
-        Most samples the metrics are computed on (groups reduced beyond).
+        Most periods of the end window the metrics keep (blocks beyond, :func:`metrics_block`).
+    decimate : int or None, optional
+        PWM periods per stored sample (default the scenario's ``record.decimate``).
+    blocks : bool or None, optional
+        Store the block statistics (default: when ``decimate > 1``).
 
     Returns
     -------
     StreamedRun
-        Metrics, fault bits, samples and the figure's data.
+        Metrics, fault bits, samples stored and the figure's data.
 
     Raises
     ------
@@ -499,40 +847,71 @@ def simulate_streamed(b: Built, *, on_chunk: Callable | None = None, plot: bool 
         As :func:`linsense.sim.run.simulate` when the drive trips at t = 0.
     """
     s = b.scenario.spec
-    dec = int(b.cfg.decimate)
+    dec = int(b.setup.decimate if decimate is None else decimate)
     n_rec = -(-int(b.n_steps) // dec)
-    k = max(1, -(-n_rec // int(metrics_cap)))
-    spec = BLOCK_SPEC if (k > 1 or dec > 1) else POINT_SPEC
-    pitch = b.motor.pole_pitch  # (the metrics' parameters: linsense.sim.run.run_metrics)
+    k = metrics_block(s, metrics_cap)
+    spec = BLOCK_SPEC if k > 1 else POINT_SPEC
+    pitch = b.motor.pole_pitch  # (the metrics' parameters: run_metrics)
     keep = MetricSamples(moves=b.moves, convergence_s=s.metrics.convergence_s, settle_s=s.metrics.settle_s,
                          final_window_s=s.metrics.final_window_s,
                          settling_band_deg=s.metrics.bounds_deg(pitch)["settling_band_deg"], pole_pitch=pitch,
                          x_target=b.commands[-1][1] if b.commands else b.setup.x0)
     mred = Reducer(k, spec, sink=keep.add)
+    n_in = [0]
+
+    def read(arrays: dict[str, np.ndarray]) -> None:  # (every period: the samples themselves, no copy)
+        n_in[0] += len(arrays["t"])
+        keep.add({name: arrays[name] for name in POINT_SPEC})
     f_inj = injection_hz(b)
     kp = plot_bin(n_rec, dec, s.inverter.f_pwm, f_inj)
     pred = Reducer(kp, PLOT_SPEC) if plot else None
-    signals, blocks = None, (tuple(BLOCKS) if dec > 1 else ())
-    if on_chunk is None and not plot:  # (metrics only: what they read, in smaller chunks)
-        signals, blocks = METRICS_SIGNALS, (METRICS_BLOCKS if dec > 1 else ())
-        chunk = min(int(chunk), METRICS_CHUNK)
+    chunk = min(int(chunk), int(b.n_steps))  # (a short run needs no buffers of a whole chunk)
 
-    def take(arrays: dict[str, np.ndarray]) -> None:
+    def store(arrays: dict[str, np.ndarray]) -> None:
         if on_chunk is not None:
             on_chunk(arrays)
-        mred.add(arrays)
         if pred is not None:
             pred.add(arrays)
 
-    chunk = min(int(chunk), int(b.n_steps))  # (a short run needs no buffers of a whole chunk)
-    raw = run_closed_loop_chunks(b.cfg, b.drive.state, b.n_steps, b.commands, on_chunk=take, chunk=chunk,
-                                 signals=signals, blocks=blocks)
+    storing = on_chunk is not None or plot
+    signals, sample, batches = None, None, None
+    if not storing:  # (metrics only: what they read, in smaller chunks)
+        signals, c_chunk = METRICS_SIGNALS, min(chunk, METRICS_CHUNK)
+    elif dec == 1 and not blocks:
+        c_chunk = chunk
+    else:  # (every period from C, the stored record made here, in the C loop's decimated chunks)
+        batches = Batcher(max(1, -(-chunk // dec)), store)
+        sample = Decimator(dec, batches.add)
+        c_chunk = min(chunk, METRICS_CHUNK)
+
+    metrics_add = mred.add if k > 1 else read
+
+    def take(arrays: dict[str, np.ndarray]) -> None:
+        metrics_add(arrays)
+        if sample is not None:
+            sample.add(arrays)
+        elif storing:
+            store(arrays)
+
+    raw = run_closed_loop_chunks(full_rate(b.cfg), b.drive.state, b.n_steps, b.commands, on_chunk=take,
+                                 chunk=c_chunk, signals=signals)
+    n_read = int(mred.n_in) if k > 1 else n_in[0]
+    stored = n_read
+    if sample is not None:
+        batches.flush(sample.finish())
+        stored = batches.handed
     mred.finish(split_last=bool(raw.fault))
     m = run_metrics(b, raw, keep.arrays(spec))
-    finish_metrics(b, raw, m, k * dec)
-    m["samples"] = int(mred.n_in)
+    finish_metrics(b, raw, m, k)
+    m["samples"] = n_read
+    if k > 1:
+        w = s.metrics.final_window_s
+        m["metrics_note"] = (f"the end window (metrics.final_window_s = {w:g} s) holds more than "
+                             f"{int(metrics_cap):,} PWM periods: the metrics are computed on blocks of {k} "
+                             f"periods ({m['block_s']:g} s, their min, max and mean), their times to one "
+                             "block")
     pd_ = None
     if pred is not None:
         pd_ = PlotData(pred.finish(), m, b.scenario.name, s.inverter.f_pwm, dec, kp,
                        s.inverter.f_pwm / f_inj / dec if f_inj else None)
-    return StreamedRun(m, int(raw.fault), int(mred.n_in), pd_)
+    return StreamedRun(m, int(raw.fault), stored, pd_)

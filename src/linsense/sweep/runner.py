@@ -212,7 +212,10 @@ def scenario_for(ctx: SweepContext, point: dict, relative: dict) -> dict:
 def hf_current(result) -> float | None:
     """The HF current's amplitude: mean half peak-to-peak of phase a's current.
 
-    Over injection periods of the end window.
+    Over injection periods of the end window, from every PWM period whatever the record keeps: a
+    decimated record's block envelopes (``i_abc_min``, ``i_abc_max``), enough blocks together to
+    cover an injection period (issue 37: ``record.decimate = 16`` sampled the 1 kHz injection once
+    per period at 16 kHz and gave 0).
 
     Parameters
     ----------
@@ -231,15 +234,24 @@ def hf_current(result) -> float | None:
     s = result.scenario.spec
     if i is None or t is None or len(t) < 4 or s.injection.amplitude == 0:
         return None
-    n = max(1, round(s.inverter.f_pwm / s.injection.frequency / max(1, s.record.decimate)))
-    ia = np.asarray(i)[:, 0]
-    ok = np.isfinite(ia)
-    ia = ia[ok][-(len(ia[ok]) // n) * n:] if len(ia[ok]) >= n else ia[ok]
-    if ia.size < n:
+    dec = max(1, s.record.decimate)
+    lo, hi = getattr(result, "i_abc_min", None), getattr(result, "i_abc_max", None)
+    per_inj = s.inverter.f_pwm / s.injection.frequency / dec  # (samples per injection period)
+    if lo is None or hi is None:  # (every period: one injection period of samples)
+        lo = hi = np.asarray(i)
+        n = max(1, round(per_inj))
+    else:  # (blocks: as many as cover an injection period)
+        n = max(1, math.ceil(per_inj - 1e-9))
+    lo, hi = np.asarray(lo)[:, 0], np.asarray(hi)[:, 0]
+    ok = np.isfinite(lo) & np.isfinite(hi)
+    lo, hi = lo[ok], hi[ok]
+    if lo.size < n:
         return None
-    win = max(1, int(round(s.metrics.final_window_s * s.inverter.f_pwm / max(1, s.record.decimate))) // n)
-    blocks = ia.reshape(-1, n)[-win:]
-    return float(np.mean(0.5 * (blocks.max(axis=1) - blocks.min(axis=1))))
+    keep = (lo.size // n) * n
+    lo, hi = lo[lo.size - keep:], hi[hi.size - keep:]
+    win = max(1, int(round(s.metrics.final_window_s * s.inverter.f_pwm / dec)) // n)
+    amp = 0.5 * (hi.reshape(-1, n).max(axis=1) - lo.reshape(-1, n).min(axis=1))[-win:]
+    return float(np.mean(amp))
 
 
 def run_point(ctx: SweepContext, index: int, point: dict, relative: dict) -> dict:
