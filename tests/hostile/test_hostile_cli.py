@@ -77,20 +77,20 @@ def test_an_override_that_would_change_nothing_is_refused(run_cli, tmp_path):
 
 
 def test_lut_refuses_a_motor_the_drive_cannot_hold(run_cli, tmp_path):
-    """A table for a motor whose demodulated error changes sign with the injection it is for (the
-    firmware's elliptical one) is refused as tune, simulate and calibrate refuse the motor (issue 23:
-    lut wrote it); for the pulsating injection, which holds this motor, it is written."""
+    """A table for a motor with a reversed saliency (L_d > L_q on average) is refused as tune, simulate
+    and calibrate refuse the motor, naming the reversed saliency with its L_d and L_q (issue 23: lut
+    wrote it for the elliptical injection; issue 37: for the pulsating one, and the others blamed
+    controller.i_max)."""
     from importlib import resources
 
     text = (resources.files("linsense.model") / "presets" / "ecce2010.toml").read_text()
     text = text.replace("L2 = -0.317e-3", "L2 = 0.9e-3").replace("M2 = -0.317e-3", "M2 = 0.9e-3")
     mot = tmp_path / "rev.toml"
     mot.write_text(text)
-    run_cli("lut", "--motor", str(mot), "--f-inj", "1000", "--out", str(tmp_path / "a.csv")).refused(
-        "rev.toml", "motor", "changes sign")
-    assert not (tmp_path / "a.csv").exists()
-    assert run_cli("lut", "--motor", str(mot), "--f-inj", "1000", "--quad", "0",
-                   "--out", str(tmp_path / "b.csv")).code == 0
+    for quad in ("0.9", "0"):
+        run_cli("lut", "--motor", str(mot), "--f-inj", "1000", "--quad", quad, "--out",
+                str(tmp_path / "a.csv")).refused("rev.toml", "motor", "reversed saliency", "L_d = ", "L_q = ")
+        assert not (tmp_path / "a.csv").exists()
 
 
 def test_a_pm_harmonic_listed_twice_is_refused(run_cli, tmp_path):

@@ -278,6 +278,11 @@ def validate(sc: Scenario, motor: Motor, known: dict, user_keys: set[str],
     check_sensors(sc.source, gain, offs, s.sensors.current_noise, s.protection.i_max,
                   "protection.i_max" in user_keys)
     sat = plant_saturation(sc, motor)
+    if s.control.mode == "startup" and sat is not None and not sat.polarity > 0.0:
+        # (a polarity of 0 given in the scenario is refused there; this is the motor file's)
+        raise InputError(sc.source, "saturation.polarity", f"motor {motor.name!r} has no magnet-polarity "
+                         "signal ([saturation] polarity = 0) for the pulses of control.mode = \"startup\" to "
+                         "find: give saturation.polarity (1/A) here or in the motor file")
     if s.observer.load_feedforward and s.observer.type != "mech":
         raise InputError(sc.source, "observer.load_feedforward",
                          "needs observer.type = \"mech\" (the load estimate is the mechanical observer's)")
@@ -607,30 +612,18 @@ def initial_load(sc: Scenario, motor: Motor) -> float:
     return ld.force
 
 
-#: a key of the design's refusals -> the scenario keys its rule reads, the one to name first: the
-#: first the file gives is named (none given: the first, a default)
-_DESIGN_KEYS = {"v_dc": ("inverter.v_dc", "controller.i_max", "injection.amplitude"),
-                "f_pwm": ("inverter.f_pwm",), "i_max": ("controller.i_max",),
-                "v_max": ("reference.v_max", "reference.a_max"),
-                "a_max": ("reference.a_max", "reference.v_max"),
-                "v_inj": ("injection.amplitude", "inverter.v_dc"),
-                "f_inj": ("injection.frequency", "inverter.f_pwm"),
-                "quad": ("injection.quadrature",), "shape": ("injection.shape",),
-                "dead_time": ("inverter.dead_time", "inverter.f_pwm", "inverter.v_dc", "controller.i_max"),
-                "load": ("reference.a_max", "controller.i_max"), "motor": ("motor",)}
+#: an input of the design (DriveData's names, :func:`drive_data`) -> the scenario key it is read from;
+#: the design names the input at fault (linsense.tune.design.DRIVE_RULES), the refusal its key
+_DESIGN_KEYS = {"v_dc": "inverter.v_dc", "f_pwm": "inverter.f_pwm", "dead_time": "inverter.dead_time",
+                "i_max": "controller.i_max", "v_max": "reference.v_max", "a_max": "reference.a_max",
+                "v_inj": "injection.amplitude", "f_inj": "injection.frequency",
+                "quad": "injection.quadrature", "shape": "injection.shape", "motor": "motor"}
 
 
 def _design_refusal(sc: Scenario, exc: InputError) -> InputError:
-    """The design's refusal ``exc`` (keys of DriveData) as the scenario's: naming the key the file
-    gives that the rule reads, with its value."""
-    keys = _DESIGN_KEYS.get(exc.key, (exc.key,))
-    given = given_keys(sc.given())
-    key = next((k for k in keys if k in given), keys[0])
-    value = value_of(sc.spec, key)
-    shown = f"{value:g}" if isinstance(value, float) else repr(value)
-    if key == "motor" or (key == keys[0] and shown in exc.message):
-        return InputError(sc.source, key, exc.message)
-    return InputError(sc.source, key, f"{shown} refused by the design ({exc.key}: {exc.message})")
+    """The design's refusal ``exc`` (naming an input by its DriveData name) as the scenario's: the
+    same message at the scenario key the input is read from."""
+    return InputError(sc.source, _DESIGN_KEYS.get(exc.key, exc.key), exc.message)
 
 
 def drive_data(sc: Scenario) -> DriveData:
