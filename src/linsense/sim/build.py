@@ -51,8 +51,8 @@ from linsense.tune.design import DriveData, design, mean_dq, uncompensated_speed
 #: own modules: linsense.sim.checks, .cache, .tables, .drive_cfg)
 __all__ = ["Built", "build", "designed", "drive_data", "calibration_timing", "resolve_motor", "motor_key",
            "plant_saturation", "reference_commands", "trapezoid_time", "initial_load", "compensation_of",
-           "check_positions", "check_initial_load", "check_sensors", "check_startup", "check_run_size",
-           "check_trace_file", "run_steps", "validate", "Tables"]
+           "check_positions", "check_initial_load", "check_balanced_load", "check_sensors", "check_startup",
+           "check_run_size", "check_trace_file", "run_steps", "validate", "Tables"]
 
 #: drive sub-configuration -> scenario section (for messages)
 _SECTION = {"inject": "injection", "bpf": "injection", "sep": "injection", "demod": "observer",
@@ -288,10 +288,41 @@ def validate(sc: Scenario, motor: Motor, known: dict, user_keys: set[str],
                          "needs observer.type = \"mech\" (the load estimate is the mechanical observer's)")
     check_positions(sc, motor.pole_pitch)
     check_initial_load(sc, initial_load(sc, motor))
+    check_balanced_load(sc, motor)
     check_startup(sc)
     n_steps = run_steps(sc.source, s.scenario.duration, s.inverter.f_pwm)
     check_run_size(sc.source, n_steps, s.record.decimate, s.inverter.f_pwm, trace_in_memory)
     return sat, n_steps
+
+
+def check_balanced_load(sc: Scenario, motor: Motor) -> None:
+    """Refuse a start in equilibrium with a load beyond the force the drive can make.
+
+    ``initial.load_balanced`` with a load force at t = 0 beyond ``K_f controller.i_max``: the current
+    reference is clamped at ``i_max`` and the drive cannot balance it (a calibration under such a
+    ``--load`` ran and stopped on "fault encoder", blaming the encoder).
+
+    Parameters
+    ----------
+    sc : Scenario
+        The scenario.
+    motor : Motor
+        The plant's motor.
+
+    Raises
+    ------
+    InputError
+        Naming the load key that sets the force at t = 0, its value and the largest force.
+    """
+    s = sc.spec
+    f_load, f_max = initial_load(sc, motor), motor.force_constant * s.controller.i_max
+    if not s.initial.load_balanced or abs(f_load) <= f_max:
+        return
+    ld = s.load
+    key = "load.force_after" if ld.type == "step" and ld.time <= 0.0 else "load.force"
+    raise InputError(sc.source, key, f"{f_load:g} N at t = 0 (initial.load_balanced = true) is beyond the "
+                     f"force the drive can make to balance it, K_f controller.i_max = {f_max:.4g} N: at most "
+                     f"{f_max:.4g} N in magnitude, or raise controller.i_max")
 
 
 def plant(sc: Scenario, motor: Motor, sat: Saturation | None) -> tuple[PlantSetup, object]:

@@ -909,6 +909,12 @@ DRIVE_RULES: tuple[Rule, ...] = (
     # (2) pairs
     Rule(2, ("dead_time", "f_pwm"), lambda x: x.d.dead_time * x.d.f_pwm < DEAD_TIME_SHARE_MAX,
          _dead_time_share_says),
+    Rule(2, ("quad",), lambda x: x.d.shape == "pulsating" or x.d.quad == 0.0 or not x.given("quad"),
+         lambda x, k: f"{x.d.quad:g}: only with the pulsating injection (the {x.d.shape} injection has no "
+                      "q-axis share): leave it out"),
+    Rule(2, ("f_inj",), lambda x: x.d.shape != "square" or x.d.f_inj is None,
+         lambda x, k: f"{x.show('f_inj')}: the square wave runs at f_pwm / 2 = {x.d.f_pwm / 2.0:g} Hz: leave "
+                      "it out"),
     Rule(2, ("f_inj", "f_pwm"), lambda x: F_INJ_MIN / 8.0 <= x.f_inj <= x.d.f_pwm / 4.0, _f_inj_says),
     Rule(2, ("travel",), lambda x: x.d.travel is None or x.d.travel >= x.motor.pole_pitch, _travel_says),
     Rule(2, ("v_inj",), _v_inj_fits, _v_inj_says),
