@@ -89,7 +89,7 @@ CASES = {
     "v_dc 1e6": (tune("--v-dc", "1e6"), "v_dc", ["1e+06 V", "at most"], ["dead_time:", "saliency is too"]),
     "f_pwm 100 Hz": (tune("--f-pwm", "100"), "f_pwm", ["100 Hz", "at least 500 Hz"], ["f_inj:"]),
     "f_pwm 50 kHz": (tune("--f-pwm", "50000"), "f_pwm", ["50000 Hz", "at most 33"], ["dead_time:"]),
-    "f_pwm 1e9": (tune("--f-pwm", "1e9"), "f_pwm", ["10 % of the PWM period"], ["saliency"]),
+    "f_pwm 1e9": (tune("--f-pwm", "1e9"), "f_pwm", ["1e+09", "at most 1e+06 Hz"], ["saliency"]),
     "f_pwm 40 kHz, tabulated": (tune("--f-pwm", "40000", motor=str(EXAMPLE_MOTORS / "tabulated.toml")),
                                 "f_pwm", ["40000 Hz", "at most"], ["dead_time:"]),
     "dead time 1 s": (tune("--dead-time", "1"), "dead_time", ["10 % of the PWM period"], ["saliency"]),
@@ -202,7 +202,18 @@ API = {
     "a_max 1e300": (dict(a_max=1e300), "a_max"),
     "v_max and a_max 1e300": (dict(v_max=1e300, a_max=1e300), "a_max"),
     "i_max 1e300": (dict(i_max=1e300, load=1.0), "i_max"),
+    # (found by tests/properties/test_prop_design.py: the designed f_inj beyond 500 kHz, named as
+    # "linsense.analysis.hf: f_inj")
+    "f_pwm 8 MHz without dead time": (dict(f_pwm=8000001.0, dead_time=0.0), "f_pwm"),
 }
+
+
+def test_a_subnormal_injection_is_warned_not_divided_by():
+    """``v_inj = 5e-324`` (positive, as documented) was a ZeroDivisionError traceback: the dead-time
+    ratio is infinite, and said so."""
+    dz = design(load_motor("ecce2010"), DriveData(v_inj=5e-324), "api", analyse=False)
+    assert dz.dead_time_ratio == float("inf")
+    assert any("inf times the weakest HF error signal" in w for w in dz.warnings), dz.warnings
 
 
 @pytest.mark.parametrize("case", list(API))
@@ -222,3 +233,12 @@ def test_the_rules_are_in_stage_order():
 
     stages = [r.stage for r in DRIVE_RULES]
     assert stages == sorted(stages) and set(stages) == {1, 2, 3}
+
+
+def test_a_huge_current_noise_is_a_warning_not_a_traceback(run_cli, tmp_path, monkeypatch):
+    """``tune --current-noise 1e300`` (within its documented range, >= 0) was an OverflowError
+    traceback in the start-up's design (its square): the pulse pairs it needs are said, limited."""
+    monkeypatch.chdir(tmp_path)
+    res = run_cli(*tune("--current-noise", "1e300"))
+    assert res.code == 0, res.err
+    assert "needs inf pulse pairs" in res.err and "limited to 64" in res.err, res.err

@@ -470,6 +470,9 @@ def gain_r_slope(motor: Motor, f_inj: float, quad: float, n: int) -> np.ndarray:
 #: the dead time's largest share of the PWM period (docs/simulator.md, ``inverter.dead_time``): the
 #: design's rule and the scenario's alike
 DEAD_TIME_SHARE_MAX = 0.1
+#: Hz, the largest PWM rate: the controller library's (LS_DRIVE_FS_MAX, ls_drive.h), twice the largest
+#: injection frequency of a table (linsense.limits.MAX_F_INJ)
+F_PWM_MAX = 1.0e6
 _DEFAULT_DRIVE = DriveData()
 #: units of the drive data in messages
 _UNITS = {"v_dc": "V", "f_pwm": "Hz", "dead_time": "s", "i_max": "A", "v_max": "m/s", "a_max": "m/s^2",
@@ -496,6 +499,8 @@ def limit_text(value: float, up: bool) -> str:
         return f"{value:g}"
     exp = math.floor(math.log10(abs(value)))
     step = 10.0 ** (exp - 3)
+    if not (step > 0.0 and math.isfinite(value / step)):  # (a subnormal limit: shown as it is)
+        return f"{value:.4g}"
     q = (math.ceil if up else math.floor)(value / step) * step
     return f"{q:.{max(4, exp + 1)}g}" if -4 <= exp < 7 else f"{q:.4g}"
 
@@ -627,6 +632,13 @@ class DriveInputs:
         if self.d.v_inj is not None:
             return self.d.v_inj
         return min(max(self.dv_dt / (DEAD_TIME_RATIO * self.s_min), self.d.v_dc * INJ_BUS_MIN), self.v_top)
+
+    @property
+    def dead_time_ratio(self) -> float:
+        """The dead time's voltage error over the weakest error signal, ``T_d f_pwm V_dc / (V_inj
+        s_min)`` (inf where the signal underflows: a given injection of 5e-324 V divided by zero)."""
+        signal = self.v_inj * self.s_min
+        return self.dv_dt / signal if signal > 0.0 else math.inf
 
     @property
     def force_need(self) -> float:
@@ -817,7 +829,8 @@ def _injection_says(x: DriveInputs, key: str) -> str:
         return f"{x.show('i_max')}: {need}; {top}: i_max must be at least {limit_text(i_min, True)} A ({why})"
     if key == "f_inj":
         z_min = x.v_need / (INJ_CURRENT_MAX * d.i_max)
-        f_min = math.sqrt(max(z_min**2 - x.motor.R_s**2, 0.0)) / (2.0 * math.pi * 0.5 * sum(x.dq))
+        r_s = x.motor.R_s  # (|R_s + j w L| = z_min; products: a square of 1e155 overflowed)
+        f_min = math.sqrt(max(z_min - r_s, 0.0) * (z_min + r_s)) / (2.0 * math.pi * 0.5 * sum(x.dq))
         return (f"{x.show('f_inj')}: {need}; {top}: at least {limit_text(f_min, True)} Hz, or i_max at least "
                 f"{i_inj} A")
     if key == "v_dc":
@@ -864,9 +877,9 @@ def _move_says(x: DriveInputs, key: str) -> str:
     limit = ""
     if key == "a_max" and two / d.v_max < t:
         limit = f": at least {limit_text(d.v_max / (t - two / d.v_max), True)} m/s^2 at this v_max"
-    elif key == "v_max" and (t * d.a_max) ** 2 > 4.0 * two * d.a_max:
+    elif key == "v_max" and t * d.a_max * t * d.a_max > 4.0 * two * d.a_max:
         # (2 tau / v + v / a = T: v^2 - T a v + 2 tau a = 0)
-        root = math.sqrt((t * d.a_max) ** 2 - 4.0 * two * d.a_max)
+        root = math.sqrt(t * d.a_max * t * d.a_max - 4.0 * two * d.a_max)
         slow = two / d.v_max >= d.v_max / d.a_max
         v = (t * d.a_max + (-root if slow else root)) / 2.0
         limit = f": {'at least' if slow else 'at most'} {limit_text(v, slow)} m/s at this a_max"
@@ -895,6 +908,9 @@ def _v_inj_fits(x: DriveInputs) -> bool:
 DRIVE_RULES: tuple[Rule, ...] = (
     *(_own_range(k, _positive, "must be a positive number") for k in ("v_dc", "f_pwm", "i_max", "v_max",
                                                                       "a_max")),
+    Rule(1, ("f_pwm",), lambda x: x.d.f_pwm <= F_PWM_MAX,
+         lambda x, k: f"{x.show('f_pwm')} is beyond the largest rate of the controller library: at most "
+                      f"{F_PWM_MAX:g} Hz"),
     _own_range("dead_time", lambda v: math.isfinite(v) and v >= 0.0, "must be a number of seconds >= 0"),
     Rule(1, ("shape",), lambda x: x.d.shape in ("pulsating", "rotating", "square"),
          lambda x, k: f"must be pulsating, rotating or square, got {x.d.shape!r}"),
@@ -993,10 +1009,10 @@ def design(
     x = check_drive(motor, d, source)  # (every refusal: DRIVE_RULES, in order)
     warnings: list[str] = []
     L_d, L_q = x.dq
-    f_inj, s_min, dv_dt, v_inj = x.f_inj, x.s_min, x.dv_dt, x.v_inj
-    if d.v_inj is not None and dv_dt / (v_inj * s_min) > DEAD_TIME_RATIO_MAX:
+    f_inj, s_min, v_inj = x.f_inj, x.s_min, x.v_inj
+    if d.v_inj is not None and x.dead_time_ratio > DEAD_TIME_RATIO_MAX:
         warnings.append(f"the given injection leaves the dead time's voltage error "
-                        f"{dv_dt / (v_inj * s_min):.3g} times the weakest HF error signal (the design "
+                        f"{x.dead_time_ratio:.3g} times the weakest HF error signal (the design "
                         f"refuses above {DEAD_TIME_RATIO_MAX:g}): expect the holds to fail")
     i_hf = float(
         np.mean(hf_current_amplitude(motor, np.linspace(0, 2 * np.pi, 90, endpoint=False), v_inj, f_inj))
@@ -1054,7 +1070,7 @@ def design(
         k_e_max=float(k_e.max()),
         headroom_speed=headroom,
         warnings=warnings,
-        dead_time_ratio=dv_dt / (v_inj * s_min),
+        dead_time_ratio=x.dead_time_ratio,
         inj_ramp_rate=v_inj / INJ_RAMP_TIME,
         s_min=s_min,
     )
