@@ -123,6 +123,9 @@ CASES = {
     "scenario, dead time 3 us": (simulate(section("inverter", "dead_time = 3e-6")), "inverter.dead_time",
                                  ["at most 1.696e-06 s"],
                                  ["at this bus", "refused by the design (dead_time"]),
+    # (found by a random search of one or two drive keys of a scenario: the designed ramp was named)
+    "scenario, a subnormal injection": (simulate(section("injection", "amplitude = 5e-324")),
+                                        "injection.amplitude", ["5e-324 V", "float32"], ["ramp_rate"]),
     "start-up without a polarity signal": (
         simulate(STARTUP + "\n[saturation]\nenabled = true\npolarity = 0.0\n"), "saturation.polarity",
         ["control.mode = \"startup\"", "polarity"], []),

@@ -70,3 +70,32 @@ def test_a_refusal_names_an_input_given_on_the_test_motors(name, changes):
         assert exc.key in set(changes) | given, (name, changes, str(exc))
         return
     event("designed")
+
+
+#: the scenario keys the design reads (linsense.sim.build.drive_data), and the balanced load
+SCENARIO_KEYS = (("inverter", "v_dc"), ("inverter", "f_pwm"), ("inverter", "dead_time"),
+                 ("controller", "i_max"),
+                 ("reference", "v_max"), ("reference", "a_max"), ("injection", "amplitude"),
+                 ("injection", "frequency"), ("load", "force"))
+
+
+@prop_settings()
+@given(changes=st.dictionaries(st.sampled_from(SCENARIO_KEYS), VALUES, min_size=1, max_size=2))
+def test_a_scenario_refusal_names_a_key_it_gives(changes):
+    """A hold on ecce2010 with one or two of the drive's keys (and a balanced load) changed is built,
+    or refused naming one of them (found: a subnormal injection.amplitude was refused naming the
+    ramp_rate designed from it)."""
+    from linsense.sim.build import build
+    from linsense.sim.scenario import scenario_from_dict
+
+    doc = {"motor": "ecce2010", "scenario": {"duration": 0.01}, "reference": {"type": "hold"},
+           "initial": {"load_balanced": True}}
+    for (sec, key), value in changes.items():
+        doc.setdefault(sec, {})[key] = value
+    try:
+        build(scenario_from_dict(doc, "p.toml"))
+    except InputError as exc:
+        event(f"refused: {exc.key}")
+        assert exc.key.split(" ")[0] in {f"{s}.{k}" for s, k in changes}, (changes, str(exc))
+        return
+    event("built")

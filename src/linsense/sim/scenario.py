@@ -31,7 +31,7 @@ from typing import Annotated, Literal
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
-from linsense.ctrl import drive_default_cfg
+from linsense.ctrl import REAL, drive_default_cfg
 from linsense.errors import InputError
 from linsense.io import read_toml
 from linsense.tune.design import DEAD_TIME_SHARE_MAX, V_DC_MAX_FRACTION, V_DC_MIN_FRACTION, DriveData
@@ -839,7 +839,11 @@ class ScenarioFile(BaseModel):
                              "too large for the bus: amplitude * sqrt(3) must be below "
                              f"0.8 protection.v_dc_min = {0.8 * p.v_dc_min:g} V, "
                              f"got {self.injection.amplitude:g}")
-        if self.injection.amplitude == 0.0 and ctl.mode != "sensored":
+        amp = self.injection.amplitude
+        if amp != 0.0 and REAL.type(amp) == 0.0:  # (its designed ramp_rate was named, refused by the drive)
+            raise KeyProblem("injection.amplitude", f"{amp!r} V is 0 in the drive's {REAL} numbers: give 0 "
+                             f"(no injection) or at least {float(np.finfo(REAL).smallest_subnormal):g} V")
+        if amp == 0.0 and ctl.mode != "sensored":
             raise KeyProblem("injection.amplitude", "the sensorless modes need an HF injection, got 0")
         return self
 
