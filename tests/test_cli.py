@@ -226,7 +226,7 @@ def test_table_motor_errors(run_cli, tmp_path, case):
         (["model", "--motor", "ecce2010", "--points", "many", "--out", "o.csv"], ["--points", "many"]),
         (["lut", "--motor", "ecce2010", "--format", "xml", "--out", "o.csv"], ["--format", "xml"]),
         (["lut", "--motor", "missing.toml", "--out", "o.csv"], ["missing.toml", "no such motor file"]),
-        (["model", "--motor", "ecce2010"], ["--out"]),
+        (["model", "--motor", "ecce2010", "--out", "o/"], ["--out", "folder"]),
     ],
 )
 def test_bad_options(run_cli, tmp_path, args, words):

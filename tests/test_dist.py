@@ -136,7 +136,7 @@ def test_the_sdist_holds_what_the_build_and_the_tests_need():
               "tests/conftest.py", "tests/test_dist.py", "tools/wheeltest.sh"}
     assert not needed - names
     try:  # every tracked source of the build and of the tests (in a git checkout)
-        tracked = subprocess.run(["git", "ls-files", "csrc", "src", "tests", "examples"], cwd=ROOT,
+        tracked = subprocess.run(["git", "ls-files", "csrc", "src", "tests", "docs"], cwd=ROOT,
                                  capture_output=True, text=True, check=True).stdout.split()
     except (OSError, subprocess.CalledProcessError):
         pytest.skip("not a git checkout")

@@ -31,6 +31,7 @@ from urllib.parse import unquote, urldefrag, urlparse
 
 import pytest
 
+import doclinks
 from linsense.version import DOCS_URL
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -55,7 +56,7 @@ def _needed(what: str, hint: str):
 
 def _inputs() -> list[Path]:
     files = [ROOT / "mkdocs.yml"]
-    for d, pattern in ((ROOT / "docs", "*"), (ROOT / "src" / "linsense", "*"), (ROOT / "examples", "*")):
+    for d, pattern in ((ROOT / "docs", "*"), (ROOT / "src" / "linsense", "*")):
         if d.is_dir():
             files += [p for p in d.rglob(pattern) if p.is_file() and "__pycache__" not in p.parts]
     return files
@@ -83,11 +84,6 @@ def site() -> Path:
     if not _fresh():
         build_site()
     return SITE
-
-
-def _readme_links() -> list[str]:
-    text = (ROOT / "README.md").read_text()
-    return re.findall(r"https?://[^\s)<>\]\"'`]+", text)
 
 
 class _Ids(HTMLParser):
@@ -125,20 +121,22 @@ def test_site_url_is_the_packages_docs_url():
 
 
 def test_readme_links_into_the_site_resolve(site):
-    base = DOCS_URL.rstrip("/") + "/"
-    links = [u for u in _readme_links() if u.startswith(base) or u == base.rstrip("/")]
-    assert len(links) >= 10, links  # (the README's links to the guides are absolute: issue 25)
+    """The README links the guides as Markdown pages of the repository (``docs/NAME.md#anchor``:
+    they render where the repository is read, the site is not published; issue 37): each names a
+    page that the site built, and an anchor of it there, so that the same link holds in both."""
+    links = [u for u in doclinks.links((ROOT / "README.md").read_text())
+             if re.fullmatch(r"docs/[\w-]+\.md(#[\w-]+)?", u)]
+    assert len(links) >= 10, links
     missing = []
     for link in links:
-        url, frag = urldefrag(link)
-        f = site_file(site, url)
+        path, frag = urldefrag(link)
+        f = site / path.removeprefix("docs/").removesuffix(".md") / "index.html"
         if not f.is_file():
             missing.append(f"{link}: no {f.relative_to(site)}")
         elif frag and unquote(frag) not in _ids(f.read_text()):
             missing.append(f"{link}: no anchor #{frag} in {f.relative_to(site)}")
     assert not missing, missing
-    # no relative link to a page of docs/ is left (a pip user has no docs/ folder)
-    assert not re.findall(r"\]\(docs/[^)]*\.md[^)]*\)", (ROOT / "README.md").read_text())
+    assert not doclinks.placeholder_links((ROOT / "README.md").read_text())
 
 
 def test_help_texts_link_pages_of_the_site(site):
@@ -193,8 +191,14 @@ def test_generated_parts_are_in_the_site(site):
     for path in scenarios:
         page = (site / "gallery" / path.stem / "index.html").read_text()
         assert f'src="../{path.stem}.png"' in page, path.stem
-        assert (site / "gallery" / f"{path.stem}.png").stat().st_size > 10_000
+        figure = (site / "gallery" / f"{path.stem}.png").stat().st_size
+        assert figure > 10_000
         assert "max_abs_err_deg" in page and f"{path.stem}/" in index
+        # the index's thumbnail of the figure (issue 37: the index had none)
+        thumb = site / "gallery" / "thumbs" / f"{path.stem}.png"
+        assert f'src="thumbs/{path.stem}.png"' in index and 2_000 < thumb.stat().st_size < figure, path.stem
+    # the index's headers are the metrics' names, which wrap at an underscore only (docs/assets/linsense.css)
+    assert "<code>max_<wbr>abs_<wbr>err_<wbr>deg</code>" in index
     for name, figures in NOTEBOOKS.items():
         page = (site / "notebooks" / name / "index.html").read_text()
         assert page.count("data:image/png;base64,") >= figures, name  # (executed: its outputs are there)
@@ -202,6 +206,39 @@ def test_generated_parts_are_in_the_site(site):
     for pkg in PACKAGES:
         page = (site / "api" / pkg / "index.html").read_text()
         assert page.count('class="doc doc-heading"') >= 3, pkg  # (modules and members rendered)
+
+
+def _display_equations(page: Path) -> int:
+    """The ``$$ ... $$`` blocks of a Markdown page (outside its fenced code)."""
+    text = re.sub(r"^[ \t]*```.*?^[ \t]*```", "", page.read_text(), flags=re.M | re.S)
+    return len(re.findall(r"^[ \t]*\$\$[ \t]*$", text, re.M)) // 2
+
+
+def test_the_site_serves_its_equations_itself(site):
+    """The equations of docs/ (``$$...$$``, pymdownx.arithmatex) are in the pages as ``.arithmatex``
+    elements, none left as raw ``$$`` in the HTML, and KaTeX's script, style sheet and fonts are
+    files of the site (docs/hooks/katex.py): no page loads a script, style sheet or font from
+    another host (the browser check below sees them typeset)."""
+    pages = {p.stem: _display_equations(p) for p in (ROOT / "docs").glob("*.md")}
+    assert pages["theory"] >= 20 and pages["identify"] >= 3, pages
+    for name, n in pages.items():
+        if not n:
+            continue
+        html = (site / name / "index.html").read_text()
+        assert html.count('<div class="arithmatex">') == n, name
+        outside = re.sub(r'<(div|span) class="arithmatex">.*?</\1>|<pre.*?</pre>|<code.*?</code>', "", html,
+                         flags=re.S)
+        assert "$$" not in outside, name
+    katex = site / "assets" / "katex"
+    assert (katex / "katex.min.js").stat().st_size > 100_000 and (katex / "katex.min.css").is_file()
+    fonts = re.findall(r"url\(([^)]+)\)", (katex / "katex.min.css").read_text())
+    assert fonts and all((katex / f).is_file() for f in fonts)
+    for html_file in site.rglob("*.html"):
+        html = html_file.read_text()
+        remote = re.findall(r"""<(?:script|img|iframe)\b[^>]*\bsrc=["']((?:https?:)?//[^"']+)""", html)
+        remote += re.findall(r"""<link\b[^>]*\bhref=["']((?:https?:)?//[^"']+)["'][^>]*>""", html)
+        remote = [u for u in remote if not re.search(r"rel=.canonical", html.split(u)[0][-200:])]
+        assert not remote, (html_file.relative_to(site), remote)
 
 
 # -------------------------------------------------------------------------------- in the browser
@@ -264,12 +301,23 @@ def browser(tmp_path_factory):
     pw = sync_playwright().start()
     ctx = pw.chromium.launch_persistent_context(
         str(tmp_path_factory.mktemp("chromium-profile")), executable_path=exe, headless=True,
-        args=FLAGS[1:], viewport={"width": 1280, "height": 900})
+        args=FLAGS[1:], viewport={"width": WIDTH, "height": 900})
     try:
         yield ctx
     finally:
         ctx.close()
         pw.stop()
+
+
+#: the width at which the pages are checked for horizontal overflow (issue 37: code blocks were cut
+#: off at 1400 px)
+WIDTH = 1400
+
+#: run in each page once it has loaded (tests/site_layout.js): what overflows horizontally (the page,
+#: a code block, a table, an equation: scrollWidth beyond clientWidth), every word of a heading or
+#: table header that the layout broke across two lines, and the equations: typeset by KaTeX or raw
+LAYOUT_JS = "\n".join(ln for ln in (ROOT / "tests" / "site_layout.js").read_text().splitlines()
+                      if not ln.startswith("//"))
 
 
 class Visit:
@@ -281,6 +329,7 @@ class Visit:
         self.links: list[str] = []
         self.ids: set[str] = set()
         self.images: list[tuple[str, bool, int]] = []
+        self.layout: dict = {}
 
 
 def visit(ctx, url: str, screenshot: Path | None = None, full_page: bool = True) -> Visit:
@@ -307,6 +356,13 @@ def visit(ctx, url: str, screenshot: Path | None = None, full_page: bool = True)
             "img", "els => els.map(e => [e.currentSrc || e.src, e.complete, e.naturalWidth])")]
         v.problems += [f"image not rendered: {src[:100]}" for src, done, w in v.images
                        if not (done and w > 0)]
+        page.evaluate("() => window.scrollTo(0, 0)")
+        v.layout = page.evaluate(LAYOUT_JS)
+        v.problems += [f"overflows at {WIDTH} px: {x}" for x in v.layout["overflow"]]
+        v.problems += [f"a word broken across lines: {x}" for x in v.layout["broken"]]
+        v.problems += [f"equation not typeset: {x}" for x in v.layout["raw"]]
+        if v.layout["dollars"]:
+            v.problems.append(f"{v.layout['dollars']} raw equation delimiters ($$, \\[, \\() in the text")
         if screenshot is not None:
             page.evaluate("() => window.scrollTo(0, 0)")
             screenshot.parent.mkdir(parents=True, exist_ok=True)
@@ -361,6 +417,10 @@ def crawl(ctx, start: str, screenshot: Path | None = None) -> tuple[dict[str, Vi
 
 @pytest.mark.slow
 def test_every_page_of_the_site_in_chromium(site, browser, report_run):
+    """Every page at 1400 px (:data:`WIDTH`): no console error, failed request, broken link or
+    anchor, image not rendered; nothing overflowing horizontally (the page, a code block, a table,
+    an equation), no word of a heading or table header broken across two lines, every equation
+    typeset and no raw ``$$`` left (:data:`LAYOUT_JS`)."""
     with served(site) as base:
         visits, problems = crawl(browser, base, screenshot=SHOTS / "home.png")
     assert not problems, "\n".join(problems[:40])
@@ -372,8 +432,14 @@ def test_every_page_of_the_site_in_chromium(site, browser, report_run):
     built = {"/" + p.parent.relative_to(site).as_posix() + "/" for p in site.rglob("index.html")}
     assert {p.replace("/./", "/") for p in built} == pages
     figures = [src for v in visits.values() for src, _, w in v.images if "/gallery/" in src and w > 0]
-    assert len(set(figures)) == len(list((site / "gallery").glob("*.png")))
+    pngs = list((site / "gallery").glob("*.png")) + list((site / "gallery").glob("thumbs/*.png"))
+    assert len(set(figures)) == len(pngs)  # (every figure and thumbnail shown)
     assert (SHOTS / "home.png").stat().st_size > 20_000
+    # the equations typeset by KaTeX, every one (LAYOUT_JS; issue 37: plain text in code blocks)
+    for name in ("theory", "identify", "fea"):
+        layout = visits[f"{base}{name}/"].layout
+        blocks = _display_equations(ROOT / "docs" / f"{name}.md")
+        assert layout["typeset"] == layout["equations"] >= blocks > 0, (name, layout)
 
 
 @pytest.mark.slow

@@ -21,26 +21,30 @@ per() { echo $(( ($1 + $2 / 2) / $2 )); }
 verdict() { echo "$1 (x86-64 proxy; the budget is the M4F's, tools/bench_pil.py)"; }
 misses=0 # (what fails below: the exit status at the end, so that make bench names it)
 miss() { echo "$1"; }
-total_dtc=$(count 1)
-total_interp=$(count 1 0 "$N" 2)
-total=$(count 0)
-total_rot=$(count 1 1)
-total_sq=$(count 1 2)
-N_SU=2800 # the whole start-up (LS_MODE_STARTUP) and no more
-total_su=$(count 1 3 $N_SU)
-total_sens=$(count 1 4)
-total_cal=$(count 1 5)
-total_sens_sq=$(count 1 6)
-echo "ls_drive_step, sensorless with LUT, float, -O2, x86-64, $N steps during a move: $total instructions"
-echo "  with dead-time compensation off: $(per "$total" "$N") per step"
-miss "instructions per step (everything on: compensation, residual, elliptical injection, notch): $(verdict "$(per "$total_dtc" "$N")")"
-miss "  the same with the interpolating dead-time residual (observer.dead_time_model = \"interpolated\"): $(verdict "$(per "$total_interp" "$N")")"
-miss "instructions per step, rotating injection (compensation, residual, its table): $(verdict "$(per "$total_rot" "$N")")"
-miss "instructions per step, square wave at fs/2 (compensation, its table, d-current): $(verdict "$(per "$total_sq" "$N")")"
-miss "instructions per step in LS_MODE_STARTUP (lock, pulses, settle; $N_SU steps): $(verdict "$(per "$total_su" "$N_SU")")"
-miss "instructions per step in LS_MODE_SENSORED, the HF estimate beside the encoder: $(verdict "$(per "$total_sens" "$N")")"
-miss "instructions per step in LS_MODE_SENSORED with the square wave: $(verdict "$(per "$total_sens_sq" "$N")")"
-miss "instructions per step in LS_MODE_CALIBRATION (12 points, dither, residual): $(verdict "$(per "$total_cal" "$N")")"
+if command -v valgrind >/dev/null; then # (make bench-tools installs it as root)
+  total_dtc=$(count 1)
+  total_interp=$(count 1 0 "$N" 2)
+  total=$(count 0)
+  total_rot=$(count 1 1)
+  total_sq=$(count 1 2)
+  N_SU=2800 # the whole start-up (LS_MODE_STARTUP) and no more
+  total_su=$(count 1 3 $N_SU)
+  total_sens=$(count 1 4)
+  total_cal=$(count 1 5)
+  total_sens_sq=$(count 1 6)
+  echo "ls_drive_step, sensorless with LUT, float, -O2, x86-64, $N steps during a move: $total instructions"
+  echo "  with dead-time compensation off: $(per "$total" "$N") per step"
+  miss "instructions per step (everything on: compensation, residual, elliptical injection, notch): $(verdict "$(per "$total_dtc" "$N")")"
+  miss "  the same with the interpolating dead-time residual (observer.dead_time_model = \"interpolated\"): $(verdict "$(per "$total_interp" "$N")")"
+  miss "instructions per step, rotating injection (compensation, residual, its table): $(verdict "$(per "$total_rot" "$N")")"
+  miss "instructions per step, square wave at fs/2 (compensation, its table, d-current): $(verdict "$(per "$total_sq" "$N")")"
+  miss "instructions per step in LS_MODE_STARTUP (lock, pulses, settle; $N_SU steps): $(verdict "$(per "$total_su" "$N_SU")")"
+  miss "instructions per step in LS_MODE_SENSORED, the HF estimate beside the encoder: $(verdict "$(per "$total_sens" "$N")")"
+  miss "instructions per step in LS_MODE_SENSORED with the square wave: $(verdict "$(per "$total_sens_sq" "$N")")"
+  miss "instructions per step in LS_MODE_CALIBRATION (12 points, dither, residual): $(verdict "$(per "$total_cal" "$N")")"
+else
+  echo "instructions per ls_drive_step (callgrind): skipped, valgrind not installed (make bench installs it as root)"
+fi
 if command -v "${ARM_CC:-arm-none-eabi-gcc}" >/dev/null; then
   tools/check_mcu.sh build/arm | tail -1
 else

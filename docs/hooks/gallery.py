@@ -5,7 +5,8 @@ ships them, else ``examples/scenarios/``: whichever exists, resolved at build ti
 :func:`linsense.simulate`, draws the run with the project's own figure
 (:func:`linsense.report.sim_figures.sim_figure_png`, what ``linsense simulate --plot`` writes as
 ``sim.png``) and writes a page with the figure, the metrics (``metrics.json`` without the
-wall-clock keys) and the scenario file. Pages and PNGs exist only in the built site: nothing is
+wall-clock keys) and the scenario file; the index shows a thumbnail of each figure (its title and
+position panel, scaled down here: :func:`thumbnail`) beside its summary metrics. Pages and PNGs exist only in the built site: nothing is
 written into ``docs/`` and nothing is cached between builds.
 
 The navigation's ``Gallery`` entry (``gallery/index.md`` in ``mkdocs.yml``) is expanded here to the
@@ -100,14 +101,47 @@ def _description(text: str) -> str:
     return " ".join(x for x in lines if x)
 
 
-def render(path: Path, rel: str) -> tuple[str, bytes, dict]:
-    """Run the scenario at ``path``: its page (Markdown), its figure (PNG) and its metrics."""
+#: the thumbnails' width in pixels (shown at half of it, docs/assets/linsense.css: sharp on a
+#: high-density screen)
+THUMB_WIDTH = 400
+
+
+def thumbnail(png: bytes, top: float, width: int = THUMB_WIDTH) -> bytes:
+    """The index's thumbnail of a run's figure ``png``: its upper ``top`` fraction (the title and the
+    position panel: the five panels of the whole figure are unreadable that small), scaled down to
+    ``width`` pixels."""
+    from io import BytesIO
+
+    from PIL import Image
+
+    with Image.open(BytesIO(png)) as im:
+        im = im.convert("RGB")
+        im = im.crop((0, 0, im.width, max(1, round(im.height * min(1.0, top)))))
+        im.thumbnail((width, width), Image.Resampling.LANCZOS)
+        out = BytesIO()
+        im.save(out, format="PNG", optimize=True)
+    return out.getvalue()
+
+
+def _header(key: str) -> str:
+    """A metric's name as a column header: code, which may wrap after an underscore (never inside a
+    word: docs/assets/linsense.css keeps the words whole)."""
+    return "<code>" + html.escape(key).replace("_", "_<wbr>") + "</code>"
+
+
+def render(path: Path, rel: str) -> tuple[str, bytes, dict, bytes]:
+    """Run the scenario at ``path``: its page (Markdown), its figure (PNG), its metrics and the
+    figure's thumbnail (PNG)."""
     import linsense
     from linsense.io import split_timing
-    from linsense.report.sim_figures import sim_figure_png
+    from linsense.report.figures import png_bytes
+    from linsense.report.sim_figures import DPI, sim_figure
 
     result = linsense.simulate(str(path))
-    png = sim_figure_png(result)
+    fig = sim_figure(result)  # (what sim_figure_png draws: its panels' places are known here)
+    png = png_bytes(fig, DPI)
+    # the figure above the first panel's tick labels: the title and the position
+    thumb = thumbnail(png, 1.0 - fig.axes[0].get_position().y0 + 0.025)
     metrics, _timing = split_timing(result.metrics)
     name = path.stem
     text = path.read_text()
@@ -134,7 +168,7 @@ writes as `sim.png`. The metrics are defined in [the simulator's guide](../simul
 {text.rstrip()}
 ```
 """
-    return page, png, metrics
+    return page, png, metrics, thumb
 
 
 def on_files(files: Files, config) -> Files:
@@ -147,16 +181,18 @@ def on_files(files: Files, config) -> Files:
         # (the command a reader types: a scenario the package ships is named, a file of the clone is a path)
         packaged = "src/linsense/" in path.relative_to(root).as_posix()
         rel = path.stem if packaged else path.relative_to(root).as_posix()
-        page, png, metrics = render(path, rel)
+        page, png, metrics, thumb = render(path, rel)
         files.append(File.generated(config, f"gallery/{path.stem}.md", content=page))
         files.append(File.generated(config, f"gallery/{path.stem}.png", content=png))
+        files.append(File.generated(config, f"gallery/thumbs/{path.stem}.png", content=thumb))
         cells = " | ".join(_cell(metrics.get(k)) for k in SUMMARY_KEYS)
-        index_rows.append(f"| [{path.stem}]({path.stem}.md) | {cells} |")
-    head = " | ".join(f"`{k}`" for k in SUMMARY_KEYS)
+        img = f"![The position in the run of {path.stem}](thumbs/{path.stem}.png){{ .gallery-thumb }}"
+        index_rows.append(f"| [{img} {path.stem}]({path.stem}.md) | {cells} |")
+    head = " | ".join(_header(k) for k in SUMMARY_KEYS)
     index = f"""# Gallery
 
 Every example scenario (`{paths[0].parent.relative_to(root).as_posix()}/`), run by the simulator while
-this site was built, each with its figure and its metrics. Run one yourself with
+this site was built, each with its figure (click a thumbnail) and its metrics. Run one yourself with
 `linsense simulate FILE.toml --out DIR --plot` (the [simulator's guide](../simulator.md) describes the
 scenario keys, the outputs and the metrics).
 

@@ -237,7 +237,9 @@ def csv_rows(path: str | os.PathLike, what: str):
                 yield number, row
     except FileNotFoundError:
         raise InputError(src, "", f"no such {what}") from None
-    except (OSError, UnicodeDecodeError, csv.Error) as exc:
+    except OSError as exc:  # (the reason in words: no errno, the path once)
+        raise InputError(src, "", f"cannot read {what}: {os_reason(exc)}") from None
+    except (UnicodeDecodeError, csv.Error) as exc:
         raise InputError(src, "", f"cannot read {what}: {exc}") from None
 
 
@@ -274,19 +276,60 @@ def read_text_file(path: str | os.PathLike, what: str) -> str:
     try:
         with open(p, "rb") as f:
             data = f.read(MAX_TEXT_FILE_BYTES + 1)  # (bounded: no more is read)
-        if len(data) > MAX_TEXT_FILE_BYTES:
-            raise InputError(src, "", f"larger than the limit of {MAX_TEXT_FILE_BYTES:,} bytes of a {what} "
-                                      "(docs/limits.md)")
-        return data.decode("utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(src, "", f"cannot read: {exc}") from None
+    except OSError as exc:
+        raise InputError(src, "", f"cannot read: {exc.strerror or exc}") from None
+    return decode_text(data, src, what)
+
+
+def decode_text(data: bytes, source: str, what: str) -> str:
+    """The text of a user's file (or standard input) from its bytes.
+
+    The one decoder of every text a user gives (TOML, JSON): UTF-8, a leading byte-order mark
+    skipped (as the CSV readers skip it: a BOM was "Invalid statement at line 1, column 1"), at most
+    :data:`~linsense.limits.MAX_TEXT_FILE_BYTES` bytes.
+
+    Parameters
+    ----------
+    data : bytes
+        The bytes read (at most one more than the limit).
+    source : str
+        The file, or ``<stdin>``, for messages.
+    what : str
+        What was expected ("scenario file"...), for messages.
+
+    Returns
+    -------
+    str
+        The text, without a byte-order mark.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        Naming ``source``: too large, UTF-16, or not UTF-8 (with the byte's offset).
+    """
+    from linsense.errors import InputError
+    from linsense.limits import MAX_TEXT_FILE_BYTES
+
+    if len(data) > MAX_TEXT_FILE_BYTES:
+        raise InputError(source, "", f"larger than the limit of {MAX_TEXT_FILE_BYTES:,} bytes of a {what} "
+                                     "(docs/limits.md)")
+    if data[:2] in (b"\xff\xfe", b"\xfe\xff"):  # (Windows' "Unicode": a BOM of UTF-16)
+        raise InputError(source, "", f"cannot read: UTF-16 text (a byte-order mark of UTF-16): save the "
+                                     f"{what} as UTF-8")
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise InputError(source, "", f"cannot read: not UTF-8 text (byte {exc.start}: "
+                                     f"{data[exc.start:exc.start + 1]!r})") from None
 
 
 def parse_toml(text: str, source: str) -> dict:
     """The data of a TOML text.
 
-    Also refuses arrays and tables nested deeper than :data:`linsense.limits.MAX_TOML_DEPTH` (a
-    900-deep array was a RecursionError traceback in every reader).
+    The one TOML parser of every reader: a leading byte-order mark is skipped; an empty text (only
+    blanks and comments) is refused as empty; arrays and tables nested deeper than
+    :data:`linsense.limits.MAX_TOML_DEPTH` are refused (a 900-deep array was a RecursionError
+    traceback in every reader).
 
     Parameters
     ----------
@@ -312,7 +355,7 @@ def parse_toml(text: str, source: str) -> dict:
 
     deep = f"arrays or tables nested deeper than the limit of {MAX_TOML_DEPTH} (docs/limits.md)"
     try:
-        data = tomllib.loads(text)
+        data = tomllib.loads(text.removeprefix("\ufeff"))  # (a byte-order mark: see decode_text)
     except tomllib.TOMLDecodeError as exc:
         raise InputError(source, "", f"not valid TOML: {exc}") from None
     except RecursionError:
@@ -324,6 +367,8 @@ def parse_toml(text: str, source: str) -> dict:
             raise InputError(source, "", deep)
         children = obj.values() if isinstance(obj, dict) else obj
         stack.extend((c, depth + 1) for c in children if isinstance(c, (dict, list)))
+    if not data:  # (empty standard input was "reference.position_mm: missing required key")
+        raise InputError(source, "", "empty: no TOML keys in it (nothing, or only blanks and comments)")
     return data
 
 
@@ -362,6 +407,7 @@ _REASONS = {
     errno.ENAMETOOLONG: "file name too long",
     errno.ENOTDIR: "a folder on its path is a file",
     errno.EIO: "input/output error of the device",
+    errno.EPIPE: "broken pipe (its reader stopped reading)",
 }
 
 
@@ -397,17 +443,45 @@ def output_error(path: str | os.PathLike, exc: OSError):
     """
     from linsense.errors import OutputError
 
+    if str(path) == "-":  # (standard output: a broken pipe)
+        return OutputError("<stdout>", f"cannot write: {os_reason(exc)}")
     shown = _shown(path)
-    reason = _REASONS.get(exc.errno) or (exc.strerror or str(exc) or type(exc).__name__)
+    reason = os_reason(exc)
     if exc.errno in (errno.EACCES, errno.EPERM):
         folder = Path(os.path.abspath(shown)).parent
         while not folder.exists() and folder.parent != folder:
             folder = folder.parent
         if not os.access(folder, os.W_OK):
             reason += ": its folder is read-only"
-    if exc.errno is not None and exc.strerror and exc.strerror != os.strerror(exc.errno):
-        reason += f" ({exc.strerror})"  # (a message of its own, e.g. the test hooks')
     return OutputError(shown, f"cannot write: {reason}")
+
+
+def os_reason(exc: OSError) -> str:
+    """The reason of an OSError in words, for a one-line message.
+
+    "no space left on the device", not ``[Errno 28]`` and a file name (pyarrow's "Error writing
+    bytes to file. Detail: [errno 28] ..." included); a message of the error's own that says more
+    than its errno is kept in parentheses.
+
+    Parameters
+    ----------
+    exc : OSError
+        The error.
+
+    Returns
+    -------
+    str
+        The reason.
+    """
+    words = _REASONS.get(exc.errno)
+    own = exc.strerror or ""
+    if words is None:
+        return own or str(exc) or type(exc).__name__
+    if own and exc.errno is not None and os.strerror(exc.errno) not in own:
+        words += f" ({own})"  # (a message of its own, e.g. the test hooks')
+    elif own and "(injected at" in own:
+        words += f" ({own})"
+    return words
 
 
 def write_atomic(path: str | os.PathLike, data: str | bytes) -> Path:
@@ -464,10 +538,70 @@ def write_atomic_with(path: str | os.PathLike, writer: Callable) -> Path:
         raise output_error(path, exc) from None
 
 
+def _umask() -> int:
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+#: the mode of every file written: what ``open`` would give under the user's umask (0644 under the
+#: usual 022), never mkstemp's 0600 (read once, at import: a sweep's threads write files)
+FILE_MODE = 0o666 & ~_umask()
+
+
+def write_all(f, data: bytes) -> int:
+    """Write the whole of ``data`` to the binary file ``f``.
+
+    A raw file's ``write`` may write part of it and say so only in its count (standard output
+    unbuffered, ``PYTHONUNBUFFERED=1``, into a pipe whose reader went away: ``--out -`` exited 0
+    with its output cut); the rest is written again, so a failure raises.
+
+    Parameters
+    ----------
+    f : binary file
+        Where to write.
+    data : bytes-like
+        What to write.
+
+    Returns
+    -------
+    int
+        ``len(data)``.
+
+    Raises
+    ------
+    OSError
+        The write failed (a broken pipe: :class:`BrokenPipeError`).
+    """
+    view = memoryview(data).cast("B")
+    while view:
+        n = f.write(view)
+        if n is None:
+            raise BlockingIOError(errno.EAGAIN, "standard output is non-blocking and full")
+        if n <= 0:
+            raise OSError(errno.EIO, "nothing written")
+        view = view[n:]
+    return len(data)
+
+
+class _Whole:
+    """A binary file whose ``write`` writes everything (:func:`write_all`)."""
+
+    def __init__(self, f) -> None:
+        self._f = f
+
+    def write(self, data) -> int:
+        return write_all(self._f, data)
+
+    def __getattr__(self, name: str):
+        return getattr(self._f, name)
+
+
 def _write_atomic_with(path: str | os.PathLike, writer: Callable) -> Path:
     if str(path) == "-":
-        writer(sys.stdout.buffer)
         sys.stdout.flush()
+        writer(_Whole(sys.stdout.buffer))
+        sys.stdout.buffer.flush()
         return Path("-")
     if str(path).endswith(("/", os.sep)) or os.path.isdir(path):
         # (`model --out newdir/` wrote a file named newdir)
@@ -490,7 +624,7 @@ def _write_atomic_with(path: str | os.PathLike, writer: Callable) -> Path:
             writer(f)
             f.flush()
             os.fsync(f.fileno())
-        os.chmod(tmp, 0o644)
+        os.chmod(tmp, FILE_MODE)  # (mkstemp makes it 0600)
         os.replace(tmp, path)
     except BaseException:
         try:
@@ -641,11 +775,45 @@ def _alive(pid: int) -> bool:
         return False
 
 
-def _rmtree(p: Path) -> None:
-    if p.is_symlink() or not p.is_dir():
-        p.unlink(missing_ok=True)
-    else:
-        shutil.rmtree(p, ignore_errors=True)
+def _rmtree(p: Path, strict: bool = False) -> None:
+    """Remove ``p``, a leftover of linsense's own (a temporary or old set).
+
+    Its folders are made writable first (an old set whose folders were made read-only could not be
+    emptied: it stayed beside ``--out`` for good). With ``strict``, what still cannot be removed
+    raises its OSError; else it is left for the next run (:func:`recover`).
+    """
+    try:
+        if p.is_symlink() or not p.is_dir():
+            p.unlink(missing_ok=True)
+            return
+        _writable(p)
+        for root, dirs, _ in os.walk(p):
+            for d in dirs:
+                _writable(os.path.join(root, d))
+        shutil.rmtree(p)
+    except FileNotFoundError:
+        pass
+    except OSError:
+        if strict:
+            raise
+
+
+def _writable(d: str | os.PathLike) -> None:
+    """Add the owner's rwx to folder ``d`` (not through a symbolic link) where it lacks them."""
+    try:
+        mode = os.lstat(d).st_mode
+        if stat.S_ISDIR(mode) and mode & 0o700 != 0o700:
+            os.chmod(d, stat.S_IMODE(mode) | 0o700)
+    except OSError:  # (not ours: the removal says why)
+        pass
+
+
+def _leftover_error(path: Path, exc: OSError):
+    """The :class:`~linsense.errors.OutputError` of a leftover that cannot be removed."""
+    from linsense.errors import OutputError
+
+    return OutputError(path, f"a leftover of an earlier linsense run that cannot be removed "
+                             f"({os_reason(exc)}): remove it")
 
 
 def _listed_files(folder: Path) -> list[str]:
@@ -691,11 +859,18 @@ def recover(out: str | os.PathLike) -> None:
     the previous set during the swap: restored onto ``out`` when ``out`` is missing (the run died
     between the two renames; what it had carried over goes back), removed when the new set is in
     place. Temporaries of live processes are left alone. Every command writing an output set calls
-    this (under a lock on the parent folder) before it looks at ``out``.
+    this (under a lock on the parent folder) before it looks at ``out``. Leftovers are made writable
+    before they are removed (a set made read-only is removed too).
+
     Parameters
     ----------
     out : str or os.PathLike
         The output folder.
+
+    Raises
+    ------
+    linsense.errors.OutputError
+        A leftover that cannot be removed all the same, naming it and why.
     """
     target = _target(out)
     with _locked(target.parent):
@@ -716,14 +891,20 @@ def _recover(target: Path) -> None:
             tokens.add(f"{m.group(2)}-{m.group(3)}")
     for tok in sorted(tokens):
         old, tmp = _sibling(target, "old", tok), _sibling(target, "tmp", tok)
+        garbage = None
         if old.exists():
             if not os.path.lexists(target):
                 _restore(old, tmp, target)
             elif not tmp.exists():
-                _rmtree(old)  # the swap finished: the old set is garbage
+                garbage = old  # the swap finished: the old set is garbage
             # else: something else appeared at target meanwhile; touch nothing
         else:
-            _rmtree(tmp)
+            garbage = tmp
+        if garbage is not None:
+            try:
+                _rmtree(garbage, strict=True)
+            except OSError as exc:
+                raise _leftover_error(garbage, exc) from None
 
 
 def _sibling(target: Path, kind: str, token: str) -> Path:
@@ -791,7 +972,8 @@ def _check_existing(target: Path, shown: Path) -> list[str]:
     Accepted: a missing or empty folder, or a linsense output set (it has :data:`MANIFEST`). In a
     set, every file under a top-level entry the manifest names must be listed in it (else the user
     put something there: refused); top-level entries the manifest does not name are the user's
-    and are carried over unchanged into the new set.
+    and are carried over unchanged into the new set. Every folder the swap empties or moves must
+    be writable (else refused before anything is computed, not left half-replaced).
     """
     from linsense.errors import OutputError
 
@@ -799,6 +981,7 @@ def _check_existing(target: Path, shown: Path) -> list[str]:
         return []
     if not target.is_dir():
         raise OutputError(shown, "exists and is not a folder")
+    _check_writable(target, shown)
     entries = sorted(os.listdir(target))
     if not entries:
         return []
@@ -822,7 +1005,22 @@ def _check_existing(target: Path, shown: Path) -> list[str]:
                 if f not in listed_set:
                     raise OutputError(shown / f, f"not written by linsense (not in {MANIFEST}): refusing to "
                                                  "replace the folder; move it away")
+            if p.is_dir() and not p.is_symlink():
+                for d, _, _ in os.walk(p):
+                    _check_writable(Path(d), shown / Path(d).relative_to(target))
+        elif e != MANIFEST and (target / e).is_dir() and not (target / e).is_symlink():
+            _check_writable(target / e, shown / e, "cannot carry it over into the new set")  # (moved)
     return [e for e in entries if e not in owned and e != MANIFEST]
+
+
+def _check_writable(folder: Path, shown: Path, what: str = "cannot replace") -> None:
+    """Refuse a folder the swap must empty or move that is not writable (a read-only ``--out``: the
+    run said it was done and left ``.DIR.old-*`` beside it for good), before anything is computed."""
+    from linsense.errors import OutputError
+
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise OutputError(shown, f"{what}: permission denied: the folder is read-only (make it "
+                                 "writable, or choose another --out)")
 
 
 def _check_rel(rel: str) -> str:
@@ -1003,7 +1201,11 @@ class OutputSet:
                     _restore(old, tmp, target)
                     raise
                 _hook("after-swap", self.shown)
-                _rmtree(old)
+                try:
+                    _rmtree(old, strict=True)
+                except OSError as exc:  # (the new set is in place: said, not reported as done)
+                    raise OutputError(self.shown, f"written, but the previous set could not be removed "
+                                      f"({os_reason(exc)}): remove {old}") from None
             else:
                 os.rename(tmp, target)
             try:

@@ -39,15 +39,20 @@ CASES = {
 }
 
 
-def test_a_c_keyword_symbol_still_compiles(run_cli, tmp_path):
-    """`lut --symbol int` (a C keyword) writes a header whose array is not named int (issue 23: it
-    did not compile)."""
+def test_a_c_keyword_symbol_is_refused_and_a_valid_one_compiles_as_given(run_cli, tmp_path):
+    """`lut --symbol int` (a C keyword) wrote a header that did not compile (issue 23), then one with
+    the array renamed int_t without a word (issue 37): refused naming the rule; a valid name is used
+    as given (case kept) and compiles."""
     import subprocess
 
     out = tmp_path / "l.h"
-    run_cli("lut", "--motor", "ecce2010", "--format", "c", "--symbol", "int", "--out", str(out))
+    run_cli("lut", "--motor", "ecce2010", "--format", "c", "--symbol", "int", "--out", str(out)).refused(
+        "--symbol", "'int'", "keyword")
+    assert not out.exists()
+    run_cli("lut", "--motor", "ecce2010", "--format", "c", "--symbol", "LutAxis2", "--out", str(out))
     src = tmp_path / "u.c"
-    src.write_text('#include "l.h"\nint main(void) { return (int)(int_t[0] * 0.0f); }\n')
+    src.write_text('#include "l.h"\n'
+                   "int main(void) { return (int)(LutAxis2[0] * 0.0f) + LUTAXIS2_LEN * 0; }\n")
     cc = subprocess.run(["cc", "-std=c99", "-Wall", "-Werror", "-I", str(tmp_path), str(src), "-o",
                          str(tmp_path / "u")], capture_output=True, text=True)
     assert cc.returncode == 0, cc.stderr
@@ -77,19 +82,18 @@ def test_an_override_that_would_change_nothing_is_refused(run_cli, tmp_path):
 
 
 def test_lut_refuses_a_motor_the_drive_cannot_hold(run_cli, tmp_path):
-    """A table for a motor with a reversed saliency (L_d > L_q on average) is refused as tune, simulate
-    and calibrate refuse the motor, naming the reversed saliency with its L_d and L_q (issue 23: lut
-    wrote it for the elliptical injection; issue 37: for the pulsating one, and the others blamed
-    controller.i_max)."""
+    """A motor with reversed saliency (L_q < L_d on average) is refused by lut as tune, simulate and
+    calibrate refuse it, for every injection (issue 23: lut wrote it; issue 37: still for the
+    pulsating injection, and the others blamed i_max): one rule, linsense.tune.design.require_saliency."""
     from importlib import resources
 
     text = (resources.files("linsense.model") / "presets" / "ecce2010.toml").read_text()
     text = text.replace("L2 = -0.317e-3", "L2 = 0.9e-3").replace("M2 = -0.317e-3", "M2 = 0.9e-3")
     mot = tmp_path / "rev.toml"
     mot.write_text(text)
-    for quad in ("0.9", "0"):
-        run_cli("lut", "--motor", str(mot), "--f-inj", "1000", "--quad", quad, "--out",
-                str(tmp_path / "a.csv")).refused("rev.toml", "motor", "reversed saliency", "L_d = ", "L_q = ")
+    for extra in ([], ["--f-inj", "1000"], ["--f-inj", "1000", "--quad", "0"], ["--injection", "rotating"]):
+        run_cli("lut", "--motor", str(mot), *extra, "--out", str(tmp_path / "a.csv")).refused(
+            "rev.toml", "motor", "reversed saliency", "L_q", "L_d")
         assert not (tmp_path / "a.csv").exists()
 
 

@@ -72,32 +72,75 @@ for _cmd in models.COMMANDS + runs.COMMANDS + tune.COMMANDS + firmware.COMMANDS:
 
 
 def main(argv: list[str] | None = None) -> None:
-    """Entry point: run the CLI, mapping every expected failure to exit code 2 and one line."""
+    """Entry point: run the CLI, mapping every expected failure to exit code 2 and one line.
+
+    The one place that handles the standard streams (:func:`linsense.cli._common.std_streams`): a
+    closed standard output is refused before anything runs, and a standard output that fails on
+    the way (a broken pipe) ends with one line and exit code 2, never a traceback.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        The arguments (default: ``sys.argv[1:]``).
+    """
     _common.configure(False, False)  # (a fresh report for each call, also when parsing fails)
+    closed = _common.std_streams()
+    if closed is not None:
+        _fail(closed)
+    rc = _run(argv)
+    try:
+        sys.stdout.flush()  # (what is still buffered fails here, not in the interpreter's exit)
+    except (OSError, ValueError) as exc:
+        _common.discard_stdout()
+        if rc == 0:
+            from linsense.io import output_error
+
+            rc = _error(output_error("-", exc) if isinstance(exc, OSError) else
+                        "<stdout>: cannot write: standard output is closed")
+    sys.exit(rc)
+
+
+def _fail(message: str) -> None:
+    """One line on standard error and exit code 2."""
+    click.echo(f"linsense: error: {message}".replace("\n", " "), err=True)
+    sys.exit(2)
+
+
+def _error(message) -> int:
+    click.echo(f"linsense: error: {message}".replace("\n", " "), err=True)
+    return 2
+
+
+def _run(argv: list[str] | None) -> int:
+    """Run the command; its exit code (each failure said in one line)."""
     try:
         # in this mode click returns the code of a click.exceptions.Exit instead of exiting
         rc = cli.main(args=argv, prog_name="linsense", standalone_mode=False)
-        if isinstance(rc, int) and rc != 0:
-            sys.exit(rc)
+        return rc if isinstance(rc, int) else 0
     except click.exceptions.Exit as exc:
-        sys.exit(exc.exit_code)
+        return exc.exit_code
     except click.Abort as exc:
         if isinstance(exc.__cause__, KeyboardInterrupt):  # (click turns Ctrl-C into Abort)
             click.echo("linsense: interrupted", err=True)
-            sys.exit(130)
+            return 130
         click.echo("linsense: aborted", err=True)
-        sys.exit(1)
+        return 1
     except (KeyboardInterrupt, _Interrupted):  # Ctrl-C: the run stops within a second, no output written
         click.echo("linsense: interrupted", err=True)
-        sys.exit(130)
+        return 130
     except click.UsageError as exc:
         ctx = f"{exc.ctx.command_path}: " if exc.ctx else ""
-        click.echo(f"linsense: error: {ctx}{exc.format_message()}".replace("\n", " "), err=True)
-        sys.exit(2)
-    except (LinsenseError, OSError, ValueError) as exc:  # (InputError is a LinsenseError)
-        click.echo(f"linsense: error: {exc}".replace("\n", " "), err=True)
-        sys.exit(2)
-    sys.exit(0)
+        return _error(f"{ctx}{exc.format_message()}")
+    except LinsenseError as exc:  # (InputError is a LinsenseError)
+        return _error(exc)
+    except OSError as exc:  # (one not met by a writer: the path and the reason in words, no errno)
+        from linsense.io import os_reason
+
+        where = exc.filename if exc.filename is not None else \
+            "<stdout>" if isinstance(exc, BrokenPipeError) else None
+        return _error(f"{where}: {os_reason(exc)}" if where is not None else os_reason(exc))
+    except ValueError as exc:
+        return _error(exc)
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -34,15 +34,44 @@ class _Report(logging.Handler):
     to_stderr = False
 
     def emit(self, record: logging.LogRecord) -> None:
-        try:
-            msg = record.getMessage()
-            if record.levelno >= logging.WARNING:
-                msg = f"linsense: {record.levelname.lower()}: {msg}"
-            stream = sys.stderr if (record.levelno >= logging.WARNING or self.to_stderr) else sys.stdout
-            stream.write(msg + "\n")
+        msg = record.getMessage()
+        if record.levelno >= logging.WARNING:
+            msg = f"linsense: {record.levelname.lower()}: {msg}"
+        to_stdout = not (record.levelno >= logging.WARNING or self.to_stderr)
+        write_stream(sys.stdout if to_stdout else sys.stderr, msg + "\n", to_stdout)
+
+
+def write_stream(stream, text: str, is_stdout: bool = True) -> None:
+    """Write ``text`` to a standard stream and flush it.
+
+    A stream that fails (a reader that stopped reading: broken pipe) is an
+    :class:`~linsense.errors.OutputError` naming it, which the CLI's entry turns into one line and
+    exit code 2 (it was logging's "--- Logging error ---" traceback); standard error failing is
+    ignored (there is nowhere left to say it).
+    """
+    if stream is None and not is_stdout:
+        return
+    try:
+        buf = getattr(stream, "buffer", None)
+        if buf is None or not is_stdout:
+            stream.write(text)
             stream.flush()
-        except Exception:  # pragma: no cover (logging's own convention)
-            self.handleError(record)
+        else:  # (the whole of it: an unbuffered standard output may take a part and say nothing)
+            from linsense.io import write_all
+
+            stream.flush()
+            write_all(buf, text.encode(stream.encoding or "utf-8", stream.errors or "strict"))
+            buf.flush()
+    except (OSError, ValueError, AttributeError) as exc:
+        if not is_stdout:
+            return
+        from linsense.io import output_error
+
+        if isinstance(exc, OSError):
+            raise output_error("-", exc) from None
+        from linsense.errors import OutputError
+
+        raise OutputError("<stdout>", "cannot write: standard output is closed") from None
 
 
 _handler = _Report()
@@ -121,8 +150,91 @@ def emit_json(command: str, files, ok: bool | None, **fields) -> None:
     them): ``command``, ``files`` (written, in order), ``ok`` (what the command checks held), and
     the command's own ``fields``."""
     doc = {"command": command, "files": [os.fspath(f) for f in files], "ok": ok, **fields}
-    sys.stdout.write(json.dumps(_plain(doc), indent=1, sort_keys=True, allow_nan=False) + "\n")
-    sys.stdout.flush()
+    write_stream(sys.stdout, json.dumps(_plain(doc), indent=1, sort_keys=True, allow_nan=False) + "\n")
+
+
+# ------------------------------------------------------------------ the standard streams
+#: the one line for a command started with its standard output closed (``>&-``)
+STDOUT_CLOSED = ("standard output is closed (>&-): the report, --json and --out - are written there; "
+                 "redirect it to /dev/null to discard them")
+
+
+def std_streams() -> str | None:
+    """Check the standard streams at the command's start: the one place that handles closed ones.
+
+    A closed standard stream (``<&-``, ``>&-``, ``2>&-``: Python then sets ``sys.stdin`` and the
+    others to None, and the next file opened takes the free descriptor) gets ``os.devnull`` on its
+    descriptor, so that no output file is ever opened as descriptor 0, 1 or 2 (where a C library's
+    or a child's writes would land in it). A closed standard error is then written to
+    ``os.devnull`` (nowhere left to say anything; the exit code still tells); a closed standard
+    input is refused when read (:func:`read_stdin`); a closed standard output is the command's
+    refusal, returned here (it was an AttributeError traceback after the work was done).
+
+    Returns
+    -------
+    str or None
+        The message of the refusal (:data:`STDOUT_CLOSED`), or None.
+    """
+    for fd, stream, mode in ((0, sys.stdin, os.O_RDONLY), (1, sys.stdout, os.O_WRONLY),
+                             (2, sys.stderr, os.O_WRONLY)):
+        if stream is not None:
+            continue
+        try:
+            os.fstat(fd)  # (taken already by a file opened meanwhile: left alone)
+        except OSError:
+            null = os.open(os.devnull, mode)
+            if null != fd:
+                os.dup2(null, fd)
+                os.close(null)
+    if sys.stderr is None:
+        sys.stderr = open(os.devnull, "w", encoding="utf-8")  # noqa: SIM115 (for the process' life)
+    return STDOUT_CLOSED if sys.stdout is None else None
+
+
+def read_stdin() -> bytes:
+    """The bytes of standard input (``-`` as a file argument), at most one more than
+    :data:`~linsense.limits.MAX_TEXT_FILE_BYTES` (:func:`linsense.io.decode_text` refuses more).
+
+    Returns
+    -------
+    bytes
+        What was read.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        Standard input closed (``<&-``), unreadable, or empty.
+    """
+    from linsense.errors import InputError
+    from linsense.io import os_reason
+    from linsense.limits import MAX_TEXT_FILE_BYTES
+
+    stdin = sys.stdin
+    if stdin is None or getattr(stdin, "closed", False):
+        raise InputError("<stdin>", "", "standard input is closed (<&-): pipe the scenario in (< file.toml), "
+                                        "or give its file instead of -")
+    try:
+        buf = getattr(stdin, "buffer", None)
+        data = buf.read(MAX_TEXT_FILE_BYTES + 1) if buf is not None else \
+            stdin.read(MAX_TEXT_FILE_BYTES + 1).encode()
+    except OSError as exc:
+        raise InputError("<stdin>", "", f"cannot read standard input: {os_reason(exc)}") from None
+    if not data:
+        raise InputError("<stdin>", "", "empty: standard input holds nothing (pipe the scenario in: "
+                                        "< file.toml, or give its file instead of -)")
+    return data
+
+
+def discard_stdout() -> None:
+    """Point standard output's descriptor at ``os.devnull`` after it failed (a broken pipe), so that
+    the interpreter's last flush does not print "Exception ignored ... BrokenPipeError"."""
+    try:
+        fd = sys.stdout.fileno()
+        null = os.open(os.devnull, os.O_WRONLY)
+    except (AttributeError, OSError, ValueError):  # (a test's captured stream: nothing to do)
+        return
+    os.dup2(null, fd)
+    os.close(null)
 
 
 def json_option(f):
@@ -186,6 +298,81 @@ def example(kind: str, spec: str, key: str, extra: tuple[str, ...] = ()) -> str:
     path = examples.resolve(kind, spec, key, extra)
     if path != spec:
         detail(f"{spec}: the packaged example {path}")
+    return path
+
+
+#: the help of an ``--out`` that has a default (:func:`default_out`)
+OUT_HELP = "(default: NAME-{command}{ext} in the working folder, NAME the {what}'s)"
+
+
+def out_option(command: str, what: str, *, folder: bool, ext: str = "", dash: bool = False):
+    """``--out`` with the default of :func:`default_out` (it was required by every command).
+
+    Parameters
+    ----------
+    command : str
+        The command, in the default's name.
+    what : str
+        What the default is named after ("scenario", "motor"), for the help.
+    folder : bool
+        An output folder (else a file).
+    ext : str, optional
+        The file's extension in the help (``.csv``; a command whose extension follows its format
+        gives it in words).
+    dash : bool, optional
+        ``-`` writes to standard output.
+    """
+    kind = "output folder" if folder else "output file" + (" (- for standard output)" if dash else "")
+    path = click.Path(file_okay=False) if folder else click.Path(dir_okay=False, allow_dash=dash)
+    default = OUT_HELP.format(command=command, ext=ext or ("/" if folder else ""), what=what)
+    return click.option("--out", default=None, type=path, callback=folder_out if folder else None,
+                        help=f"{kind} {default}")
+
+
+def folder_out(ctx, param, value):
+    """Click callback of an output folder: ``-`` is refused (it made a folder named ``-`` where
+    ``--out -`` of a file means standard output)."""
+    if value == "-":
+        raise click.BadParameter("a folder is written here, not standard output: give the folder's name "
+                                 "(./- for a folder named -)")
+    return value
+
+
+def default_out(out: str | None, name: str, command: str, ext: str = "") -> str:
+    """The ``--out`` of a command, ``NAME-COMMAND[EXT]`` in the working folder when none is given.
+
+    One rule for every command that writes an output (docs/cli.md, "Outputs"): ``NAME`` is what the
+    command runs on, as given (a file's stem, a preset's or example's name; a scenario from standard
+    input: its ``[scenario] name``), made safe for a file name (:func:`linsense.io.safe_name`);
+    ``EXT`` the file's extension (none for a folder). The report says where it writes.
+
+    Parameters
+    ----------
+    out : str or None
+        The ``--out`` given.
+    name : str
+        The argument the command runs on (``step3_lut``, ``motors/m.toml``).
+    command : str
+        The command (``simulate``).
+    ext : str, optional
+        The file's extension with its dot; "" for an output folder.
+
+    Returns
+    -------
+    str
+        ``out``, or the default.
+    """
+    if out is not None:
+        return out
+    from pathlib import PurePath
+
+    from linsense.io import safe_name
+
+    stem = PurePath(name.rstrip("/\\")).name
+    if PurePath(stem).suffix in (".toml", ".csv", ".json"):
+        stem = PurePath(stem).stem
+    path = f"{safe_name(stem)}-{command}{ext}"
+    say(f"no --out given: writing {path}{'' if ext else '/'} (docs/cli.md, \"Outputs\")")
     return path
 
 

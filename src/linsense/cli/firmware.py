@@ -16,7 +16,7 @@ def firmware() -> None:
 
 @firmware.command(short_help="Write a self-contained firmware project for a motor.",
                   epilog=c.see("firmware"))
-@click.argument("folder", type=click.Path(file_okay=False))
+@click.argument("folder", type=click.Path(file_okay=False), callback=c.folder_out)
 @click.option("--motor", "motor_spec", required=True, help=c.MOTOR_HELP)
 @click.option("--scenario", "scenario_path", default=None,
               help="scenario (a file or a packaged example's name) whose drive data (bus, PWM, dead "
@@ -63,6 +63,9 @@ def export(folder: str, motor_spec: str, scenario_path: str | None, name: str | 
             table_path = scenario_table(sc)
     apply_drive_data(dd, drive, quad, v_max, a_max, load, travel)
     motor = c.load(motor_spec)
+    from linsense.tune.export import c_config_name
+
+    c_config_name(name, motor.name, "--name")  # (checked before anything is designed, never rewritten)
     made = firmware_files(motor, dd, src, name, table=table_path)
     for line in made.lines:
         c.say(line)

@@ -17,14 +17,14 @@ from linsense.version import docs
                epilog=c.see("cli"))
 @click.option("--motor", "motor_spec", required=True, help=c.MOTOR_HELP)
 @click.option("--points", default=360, show_default=True, callback=c.points, help="positions over one period")
-@click.option("--out", required=True, type=click.Path(dir_okay=False, allow_dash=True),
-              help="output CSV file (- for standard output)")
-def model(motor_spec: str, points: int, out: str) -> None:
+@c.out_option("model", "motor", folder=False, ext=".csv", dash=True)
+def model(motor_spec: str, points: int, out: str | None) -> None:
     """Tabulate the HF inductance model, Psi_LUT and the uncompensated observer (CSV, SI units)."""
     from linsense.analysis.tables import model_table, table_to_csv
     from linsense.io import write_atomic
 
     motor = c.load(motor_spec)
+    out = c.default_out(out, motor_spec, "model", ".csv")
     write_atomic(out, table_to_csv(model_table(motor, points)))
     c.elapsed()
 
@@ -44,10 +44,9 @@ def model(motor_spec: str, points: int, out: str) -> None:
 @click.option("--injection", type=click.Choice(["pulsating", "rotating", "square"]), default="pulsating",
               show_default=True, help="rotating: the table of the rotating-vector estimate; square: of the "
                                       f"square wave at --f-inj, e.g. f_pwm/2 ({docs('theory')})")
-@click.option("--out", required=True, type=click.Path(dir_okay=False, allow_dash=True),
-              help="output file (- for standard output)")
+@c.out_option("lut", "motor", folder=False, ext=".csv, .json or .h", dash=True)
 def lut(motor_spec: str, points: int, fmt: str, symbol: str | None, f_inj: float | None, quad: float | None,
-        injection: str, out: str) -> None:
+        injection: str, out: str | None) -> None:
     """Export the compensation LUT Psi_LUT(theta) = atan(-L_dq/L_q) as CSV, JSON or a C header."""
     from linsense.compensation.lut import build_lut, export
     from linsense.ctrl import drive_default_cfg
@@ -63,6 +62,12 @@ def lut(motor_spec: str, points: int, fmt: str, symbol: str | None, f_inj: float
     if f_inj is not None and f_inj > MAX_F_INJ:
         raise InputError("--f-inj", "", f"{f_inj:g} Hz is beyond the limit of {MAX_F_INJ:g} Hz (half of a "
                          f"1 MHz PWM; {docs('limits')})")
+    if symbol is not None:  # (checked, never rewritten: 'my lut!' was my_lut, int was int_t)
+        if fmt != "c":
+            raise InputError("--symbol", "", f"names the C header's array: only with --format c (not {fmt})")
+        from linsense.compensation.lut import LUT_SUFFIX_CHARS, c_symbol
+
+        c_symbol(symbol, "--symbol", longest_suffix=LUT_SUFFIX_CHARS)
     if quad is not None and f_inj is None:
         raise InputError("--quad", "", "only with --f-inj (eq. 12 neglects R_s, where kappa changes nothing)")
     if quad is not None and injection != "pulsating":
@@ -75,6 +80,11 @@ def lut(motor_spec: str, points: int, fmt: str, symbol: str | None, f_inj: float
     motor = c.load(motor_spec)
     # (a motor the HF observer cannot hold is refused as tune and simulate refuse it: issue 23)
     observable_error_gain(motor, f_inj or float(firmware.inject.freq), quad if f_inj else 0.0, motor_spec)
+    if fmt == "c" and symbol is None:
+        from linsense.compensation.lut import default_lut_symbol
+
+        default_lut_symbol(motor.name, motor.source, "motor.name")
+    out = c.default_out(out, motor_spec, "lut", {"csv": ".csv", "json": ".json", "c": ".h"}[fmt])
     write_atomic(out, export(build_lut(motor, points, f_inj, quad=quad, injection=injection), fmt, symbol))
     c.elapsed()
 
@@ -83,9 +93,9 @@ def lut(motor_spec: str, points: int, fmt: str, symbol: str | None, f_inj: float
                epilog=c.see("theory"))
 @click.option("--motor", "motor_spec", required=True, help=c.MOTOR_HELP)
 @click.option("--points", default=56, show_default=True, callback=c.points, help="LUT points drawn")
-@click.option("--out", required=True, type=click.Path(file_okay=False), help="output folder")
+@c.out_option("plot", "motor", folder=True)
 @c.json_option
-def plot(motor_spec: str, points: int, out: str, as_json: bool) -> None:
+def plot(motor_spec: str, points: int, out: str | None, as_json: bool) -> None:
     """Draw the paper's Figs. 5, 6, 8a, 8b, the LUT and the uncompensated-observer analysis (PNG)."""
     from linsense.compensation.lut import build_lut
     from linsense.io import output_set
@@ -94,6 +104,7 @@ def plot(motor_spec: str, points: int, out: str, as_json: bool) -> None:
     if as_json:
         c.data_on_stdout()
     motor = c.load(motor_spec)
+    out = c.default_out(out, motor_spec, "plot")
     with output_set(out, "plot") as s:
         write_model_figures(motor, build_lut(motor, points), s.root)
     c.files_report(s.files)
@@ -115,24 +126,23 @@ def plot(motor_spec: str, points: int, out: str, as_json: bool) -> None:
 @click.option("--current", default=1.0, show_default=True, type=float, callback=c.finite(0.0, True),
               help="nominal current amplitude, A peak (each row: random phase, 0.8..1.2 times this)")
 @click.option("--amplitude-only", is_flag=True, help="write magnitudes only (I, VA, VB, VC), as the paper")
-@click.option("--out", required=True, type=click.Path(dir_okay=False, allow_dash=True),
-              help="output bench CSV file (- for standard output)")
+@c.out_option("bench-emulate", "motor", folder=False, ext=".csv", dash=True)
 def bench_emulate(motor_spec: str, positions: int, noise: float, seed: int, freq_hz: float, current: float,
-                  amplitude_only: bool, out: str) -> None:
+                  amplitude_only: bool, out: str | None) -> None:
     """Emulate the bench test (each phase fed in turn at N positions) on a motor model (CSV)."""
     from linsense.identify.bench import bench_to_csv, emulate_bench
     from linsense.io import write_atomic
 
     motor = c.load(motor_spec)
     data = emulate_bench(motor, positions, noise, seed, freq_hz, current, amplitude_only)
-    write_atomic(out, bench_to_csv(data))
+    write_atomic(c.default_out(out, motor_spec, "bench-emulate", ".csv"), bench_to_csv(data))
     c.elapsed()
 
 
 @click.command(short_help="Identify the HF inductance model from a bench file.",
                epilog=c.see("identify"))
 @click.argument("bench", type=click.Path(dir_okay=False))
-@click.option("--out", required=True, type=click.Path(file_okay=False), help="output folder")
+@c.out_option("identify", "bench file", folder=True)
 @click.option("--harmonics", default=1, show_default=True, type=click.IntRange(1, 20),
               help="K: fit the even orders 2, 4, ..., 2K (1 = the five parameters of eq. 3)")
 @click.option("--motor", "motor_spec", default=None,
@@ -147,7 +157,7 @@ def bench_emulate(motor_spec: str, positions: int, noise: float, seed: int, freq
 @click.option("--name", default=None, help="motor name in motor.toml (default: the bench file name)")
 @click.option("--points", default=360, show_default=True, callback=c.points, help="length of lut_fit.csv")
 @c.json_option
-def identify(bench: str, out: str, harmonics: int, motor_spec: str | None, pole_pitch_mm: float | None,
+def identify(bench: str, out: str | None, harmonics: int, motor_spec: str | None, pole_pitch_mm: float | None,
              force_constant: float | None, mass: float | None, resistance: float | None, name: str | None,
              points: int, as_json: bool) -> None:
     """Identify the HF inductance model from a bench file (a file or a packaged example's name):
@@ -160,6 +170,7 @@ def identify(bench: str, out: str, harmonics: int, motor_spec: str | None, pole_
     if as_json:
         c.data_on_stdout()
     bench = c.example("bench", bench, "BENCH")
+    out = c.default_out(out, bench, "identify")
     base = c.load(motor_spec) if motor_spec is not None else None
     ident = run_identify(
         bench, base=base, harmonics=harmonics,
@@ -182,7 +193,7 @@ def identify(bench: str, out: str, harmonics: int, motor_spec: str | None, pole_
 
 @click.command(short_help="Copy the packaged examples into a folder.",
                epilog=c.see("cli"))
-@click.argument("folder", type=click.Path(file_okay=False), required=False)
+@click.argument("folder", type=click.Path(file_okay=False), required=False, callback=c.folder_out)
 @click.option("--force", is_flag=True, help="overwrite files that exist (else: refused, nothing copied)")
 @click.option("--list", "list_only", is_flag=True, help="only list the examples' names by kind, copy nothing")
 @c.json_option

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import json
 import math
-import sys
 from pathlib import Path
 
 import click
@@ -21,18 +20,9 @@ def _scenario(spec: str):
     from linsense.sim.scenario import load_scenario, scenario_from_dict
 
     if spec == "-":
-        from linsense.io import parse_toml
-        from linsense.limits import MAX_TEXT_FILE_BYTES
+        from linsense.io import decode_text, parse_toml
 
-        data = sys.stdin.buffer.read(MAX_TEXT_FILE_BYTES + 1) if hasattr(sys.stdin, "buffer") else \
-            sys.stdin.read().encode()
-        if len(data) > MAX_TEXT_FILE_BYTES:
-            raise InputError("<stdin>", "", f"larger than the limit of {MAX_TEXT_FILE_BYTES:,} bytes of a "
-                                            f"scenario ({docs('limits')})")
-        try:
-            text = data.decode("utf-8")
-        except UnicodeDecodeError as exc:
-            raise InputError("<stdin>", "", f"cannot read: {exc}") from None
+        text = decode_text(c.read_stdin(), "<stdin>", "scenario")
         return scenario_from_dict(parse_toml(text, "<stdin>"), "<stdin>", Path.cwd())
     return load_scenario(c.example("scenarios", spec, "SCENARIO"))
 
@@ -40,7 +30,7 @@ def _scenario(spec: str):
 @click.command(short_help="Run a closed-loop drive simulation.",
                epilog=c.see("simulator"))
 @click.argument("scenario")
-@click.option("--out", required=True, type=click.Path(file_okay=False), help="output folder")
+@c.out_option("simulate", "scenario", folder=True)
 @click.option("--fidelity", type=click.Choice(["average", "switching"]), default=None,
               help="override the scenario's inverter fidelity")
 @click.option("--trace", "trace_fmt", type=click.Choice(["parquet", "csv", "none"]), default=None,
@@ -58,8 +48,8 @@ def _scenario(spec: str):
                    "(a source tree with make tools run): metrics.json of that run, pil.json comparing it "
                    "with the host build's")
 @c.json_option
-def simulate(scenario: str, out: str, fidelity: str | None, trace_fmt: str | None, decimate: int | None,
-             mat: bool, plot: bool, check: bool, pil: bool, as_json: bool) -> None:
+def simulate(scenario: str, out: str | None, fidelity: str | None, trace_fmt: str | None,
+             decimate: int | None, mat: bool, plot: bool, check: bool, pil: bool, as_json: bool) -> None:
     """Run a closed-loop drive simulation of SCENARIO (a file, a packaged example's name such as
     step3_lut, or - for standard input): metrics.json, timing.json, trace.parquet (or .csv; and
     trace.mat), sim.png with --plot. With --pil the drive runs on the Cortex-M4F under QEMU.
@@ -86,6 +76,7 @@ def simulate(scenario: str, out: str, fidelity: str | None, trace_fmt: str | Non
             c.warn("trace.csv, not trace.parquet: the Parquet trace needs pyarrow "
                    "(pip install 'linsense[parquet]')")
     sc = _scenario(scenario)
+    out = c.default_out(out, sc.name if scenario == "-" else scenario, "simulate")
     if fidelity is not None:
         sc = sc.replace(inverter={"fidelity": fidelity})
     if decimate is not None:
@@ -173,7 +164,7 @@ def _say_metrics(m: dict) -> None:
     )
 
 
-def _simulate_pil(scenario: str, out: str, others: list[str], check: bool, as_json: bool) -> None:
+def _simulate_pil(scenario: str, out: str | None, others: list[str], check: bool, as_json: bool) -> None:
     """``simulate --pil``: the closed loop with the firmware under QEMU (:mod:`linsense.firmware.pil`);
     metrics.json of that run, timing.json, pil.json (both runs' metrics and how they differ)."""
     import tempfile
@@ -189,6 +180,7 @@ def _simulate_pil(scenario: str, out: str, others: list[str], check: bool, as_js
         c.data_on_stdout()
     path = c.example("scenarios", scenario, "SCENARIO")
     _scenario(path)  # (bad input refused before anything is built)
+    out = c.default_out(out, scenario, "simulate")
     with tempfile.TemporaryDirectory(prefix="linsense-pil-") as tmp:
         rec = closed_loop(path, tmp)
     metrics, timing = split_timing(rec.pop("metrics_pil"))
@@ -331,10 +323,10 @@ def apply_drive_data(dd, drive: dict, quad=None, v_max=None, a_max=None, load=No
 @drive_options
 @click.option("--saturated", is_flag=True, default=False,
               help=f"on the saturated plant (the motor file's [saturation], {docs('simulator')})")
-@click.option("--out", required=True, type=click.Path(file_okay=False), help="output folder")
+@c.out_option("calibrate", "scenario's or motor", folder=True)
 @c.json_option
 def calibrate(motor_spec: str | None, scenario_path: str | None, positions: int, load: float, fidelity: str,
-              quad: float | None, saturated: bool, out: str, as_json: bool, **drive) -> None:
+              quad: float | None, saturated: bool, out: str | None, as_json: bool, **drive) -> None:
     """Run the firmware's LUT calibration in the simulator (paper Fig. 9) on the drive that will use
     the table: a scenario's (--scenario), or the design for the motor (linsense tune's, with the
     drive data given): lut_measured.csv, lut_measured.json (stamped with the drive it is valid for,
@@ -351,6 +343,7 @@ def calibrate(motor_spec: str | None, scenario_path: str | None, positions: int,
         raise click.UsageError("give --motor or --scenario (the drive to calibrate)")
     sc = _scenario(scenario_path) if scenario_path is not None else None
     motor = c.load(motor_spec) if motor_spec is not None else None
+    out = c.default_out(out, scenario_path or motor_spec, "calibrate")
     extra = {"saturation": {"enabled": True}} if saturated else {}
     cal = run_calibration(motor_spec if sc is not None else motor, positions, load, fidelity, quad=quad,
                           source=motor_spec or "<calibrate>", scenario=sc, drive=drive, **extra)
@@ -393,7 +386,8 @@ def failed_claims(metrics: dict) -> list[str]:
 @click.command(short_help="Reproduce the paper's Section V, claim by claim.",
                epilog=c.see("reproduce"))
 @click.option("--motor", "motor_spec", default="ecce2010", show_default=True, help=c.MOTOR_HELP)
-@click.option("--out", default="out", show_default=True, type=click.Path(file_okay=False))
+@click.option("--out", default="out", show_default=True, type=click.Path(file_okay=False),
+              callback=c.folder_out, help="output folder")
 @click.option("--quick", is_flag=True,
               help="fewer calibration points, hold positions and map cells (about 15 s)")
 @click.option("--model-only", is_flag=True, help="only the model's tables, LUT files and figures (no runs)")
@@ -428,7 +422,7 @@ def reproduce(motor_spec: str, out: str, quick: bool, model_only: bool, check: b
 @click.command("fea", short_help="Axisymmetric FEA of a tubular motor.",
                epilog=c.see("fea"))
 @click.argument("geometry")
-@click.option("--out", required=True, type=click.Path(file_okay=False), help="output folder")
+@c.out_option("fea", "geometry", folder=True)
 @click.option("--positions", type=click.IntRange(12, 720), default=56, show_default=True,
               help="rod positions over one electrical period (12 .. 720)")
 @click.option("--mesh", "level", type=click.Choice(["coarse", "default", "fine"]), default="default",
@@ -445,7 +439,7 @@ def reproduce(motor_spec: str, out: str, quick: bool, model_only: bool, check: b
 @click.option("--polarity-positions", type=click.IntRange(3, 720), default=4, show_default=True,
               help="rod positions over one electrical period for --polarity")
 @c.json_option
-def fea(geometry: str, out: str, positions: int, level: str, lut_points: int, load_current: str,
+def fea(geometry: str, out: str | None, positions: int, level: str, lut_points: int, load_current: str,
         workers: int, polarity: str | None, polarity_positions: int, as_json: bool) -> None:
     """Axisymmetric FEA of a tubular motor (GEOMETRY: a .toml file, a preset such as tubular56 or a
     packaged example's name such as tubular56_bh): inductances.csv, motor.toml, lut.csv,
@@ -456,6 +450,7 @@ def fea(geometry: str, out: str, positions: int, level: str, lut_points: int, lo
     if as_json:
         c.data_on_stdout()
     geometry = c.example("fea", geometry, "GEOMETRY", tuple(preset_names()))
+    out = c.default_out(out, geometry, "fea")
     files, lines, warnings = run_fea(geometry, out, positions, level, lut_points,
                                      progress=c.progress(), load_current=load_current, workers=workers,
                                      polarity=polarity, polarity_positions=polarity_positions)
@@ -474,8 +469,9 @@ def fea(geometry: str, out: str, positions: int, level: str, lut_points: int, lo
 @click.command("sweep", short_help="Run a sweep of scenarios (threads or dask).",
                epilog=c.see("sweeps"))
 @click.argument("sweep_file")
-@click.option("--out", required=True, type=click.Path(file_okay=False),
-              help="output folder (the same folder again resumes a killed sweep)")
+@click.option("--out", default=None, type=click.Path(file_okay=False), callback=c.folder_out,
+              help="output folder, the same folder again resumes a killed sweep (default: NAME-sweep/ in "
+                   "the working folder, NAME the sweep file's)")
 @click.option("--workers", type=click.IntRange(1, 1024), default=None,
               help="local worker threads (or processes) (default: one per core)")
 @click.option("--scheduler", default=None, help="address of a running dask scheduler (tcp://host:8786)")
@@ -485,7 +481,7 @@ def fea(geometry: str, out: str, positions: int, level: str, lut_points: int, lo
               help="discard the rows already in --out (a sweep whose inputs changed) and start over")
 @click.option("--check", is_flag=True, help="exit with code 1 when a point is not stable or refused (for CI)")
 @c.json_option
-def sweep_cmd(sweep_file: str, out: str, workers: int | None, scheduler: str | None, processes: bool,
+def sweep_cmd(sweep_file: str, out: str | None, workers: int | None, scheduler: str | None, processes: bool,
               no_progress: bool, restart: bool, check: bool, as_json: bool) -> None:
     """Run a sweep (SWEEP_FILE: a file or a packaged example's name such as injection): a base
     scenario with keys varied, on local worker threads or a dask.distributed cluster."""
@@ -496,6 +492,7 @@ def sweep_cmd(sweep_file: str, out: str, workers: int | None, scheduler: str | N
     if as_json:
         c.data_on_stdout()
     sw = load_sweep(c.example("sweeps", sweep_file, "SWEEP_FILE"))
+    out = c.default_out(out, sweep_file, "sweep")
     df = sweep(sw, out, workers=workers, scheduler=scheduler, processes=processes,
                progress=not no_progress and c.progress(), restart=restart)
     out_dir = Path(out)

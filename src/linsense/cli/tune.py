@@ -44,12 +44,11 @@ from linsense.version import docs
               "header is written only for a verified drive, or with --unverified)")
 @click.option("--unverified", is_flag=True, help="--format c: write the header even if the certificate "
               "fails, with the reason in its comment and in the JSON")
-@click.option("--out", required=True, type=click.Path(dir_okay=False, allow_dash=True),
-              help="output file (- for standard output: the report goes to standard error)")
+@c.out_option("tune", "motor", folder=False, ext=".toml or .h", dash=True)
 @c.json_option
 def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: float | None,
          current_noise: float, name: str | None, v_max, a_max, load, travel, shape, table_path,
-         quick: bool, no_verify: bool, unverified: bool, out: str, as_json: bool, **drive) -> None:
+         quick: bool, no_verify: bool, unverified: bool, out: str | None, as_json: bool, **drive) -> None:
     """Design the drive for a motor: injection, current loop, demodulator, observer, speed and
     position loops, limits and trips; print the design and its margins; write a
     scenario or a C header; then verify it in the simulator (switching inverter with dead time) and
@@ -69,8 +68,11 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
     if unverified and fmt != "c":
         raise click.UsageError("--unverified is for --format c (a scenario is written whatever the "
                                "certificate says)")
+    if name is not None and fmt != "c":  # (not ignored with a scenario)
+        raise click.UsageError("--name names the C header's symbols: only with --format c")
     if as_json or out == "-":
         c.data_on_stdout()  # (stdout carries the file itself, or the JSON summary)
+    out = c.default_out(out, motor_spec, "tune", ".h" if fmt == "c" else ".toml")
     say = c.say
     base, base_dir, src = None, None, motor_spec
     dd = DriveData()
@@ -91,6 +93,10 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
     if fmt == "c":
         check_c_header(dd)
     motor = c.load(motor_spec)
+    if fmt == "c":  # (the C name checked, never rewritten, before anything is designed or run)
+        from linsense.tune.export import c_config_name
+
+        c_config_name(name, motor.name, "--name")
     dz = design(motor, dd, src)
     from linsense.tune.startup import design_startup
     # (the start-up locks as the PLL would: startup.lock_gain, linsense.tune.design.startup_lock_gain)

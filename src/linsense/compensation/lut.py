@@ -299,12 +299,34 @@ C_KEYWORDS = frozenset(
     "auto break case char const continue default do double else enum extern float for goto if "
     "inline int long register restrict return short signed sizeof static struct switch typedef "
     "union unsigned void volatile while".split())
+#: what a name a user gives for C (``lut --symbol``, ``tune --name``) may not be besides: C11's and
+#: C23's keywords, and C++'s (a header may be included from C++)
+C_RESERVED_WORDS = C_KEYWORDS | frozenset(
+    "alignas alignof bool constexpr false nullptr static_assert thread_local true typeof typeof_unqual "
+    "and and_eq asm bitand bitor catch char8_t char16_t char32_t class compl concept consteval "
+    "constinit const_cast co_await co_return co_yield decltype delete dynamic_cast explicit export "
+    "friend mutable namespace new noexcept not not_eq operator or or_eq private protected public "
+    "reinterpret_cast requires static_cast template this throw try typeid typename using virtual "
+    "wchar_t xor xor_eq".split())
+#: names of the C standard library a generated array or function may not take (a header that
+#: includes math.h or stdio.h would not compile)
+C_LIBRARY_NAMES = frozenset(
+    "sin cos tan asin acos atan atan2 sinh cosh tanh exp exp2 log log2 log10 pow sqrt cbrt hypot ceil "
+    "floor fabs fmod round trunc fmin fmax sinf cosf sqrtf fabsf NAN INFINITY HUGE_VAL M_PI abs labs "
+    "div malloc calloc realloc free exit abort atoi atof rand srand qsort bsearch memcpy memmove memset "
+    "memcmp strlen strcpy strcmp printf fprintf sprintf snprintf puts putchar getchar FILE stdin stdout "
+    "stderr EOF errno assert NULL offsetof main".split())
+#: initial characters of an identifier or macro name C99 compilers must tell apart (5.2.4.1)
+C_SIGNIFICANT_CHARS = 63
+_C_IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 
 
 def c_identifier(name: str) -> str:
-    """A valid lower-case C identifier derived from ``name``.
+    """A valid lower-case C identifier derived from ``name`` (a motor's name, for a default C name).
 
-    ``m_`` before a leading digit, ``_t`` after a C keyword; ``motor`` when nothing is left.
+    ``m_`` before a leading digit or a C keyword (``_t`` after it, as it was, is POSIX's); ``motor``
+    when nothing is left. A name a user gives for C is checked by :func:`c_symbol` instead, never
+    rewritten.
 
     Parameters
     ----------
@@ -317,8 +339,128 @@ def c_identifier(name: str) -> str:
         The identifier.
     """
     ident = re.sub(r"[^0-9a-zA-Z_]", "_", name).lower().strip("_") or "motor"
-    ident = ident if not ident[0].isdigit() else f"m_{ident}"
-    return f"{ident}_t" if ident in C_KEYWORDS else ident
+    return f"m_{ident}" if ident[0].isdigit() or ident in C_RESERVED_WORDS else ident
+
+
+def c_name_problem(full: str, longest_suffix: int = 0) -> str | None:
+    """What is wrong with ``full`` as the name of a generated C array or function, or None.
+
+    The one rule of every C name linsense writes from a user's text: a C identifier (``A-Z a-z
+    0-9 _``, not first a digit), not a keyword (C99 to C23, C++), not reserved (a name at file
+    scope starting with ``_``; POSIX's type names ending in ``_t``), not a name of the C standard
+    library or of linsense's C library (case aside: ``LS_LUT`` makes the guard ``LS_LUT_H`` of
+    ls_lut.h), and short enough that the header's longest name built on it stays within the
+    :data:`C_SIGNIFICANT_CHARS` characters C compilers must tell apart.
+
+    Parameters
+    ----------
+    full : str
+        The whole name (with any prefix the header puts before a user's part).
+    longest_suffix : int, optional
+        Characters the header's longest name adds to it (``_ANGLE_UNIT_RAD``: 15).
+
+    Returns
+    -------
+    str or None
+        Why it cannot be used, a phrase after the name ("is a C keyword"); None if it can.
+    """
+    if not _C_IDENTIFIER.fullmatch(full):
+        bad = next((ch for ch in full if not (ch.isascii() and (ch.isalnum() or ch == "_"))), None)
+        what = f"{bad!r} is not one of them" if bad is not None else \
+            "it must not start with a digit" if full else "it is empty"
+        return f"is not a C identifier (letters A-Z a-z, digits and _ only: {what})"
+    if full in C_RESERVED_WORDS:
+        return "is a keyword of C (or C++)"
+    if full.startswith("_"):
+        return "is reserved in C (a name at file scope starting with _)"
+    if full.endswith("_t"):
+        return "is reserved by POSIX for type names (a name ending in _t)"
+    if full in C_LIBRARY_NAMES:
+        return "is a name of the C standard library"
+    if full.lower() in _ls_names():
+        return "is a name of linsense's C library (ls_*.h)"
+    if len(full) + longest_suffix > C_SIGNIFICANT_CHARS:
+        return (f"is {len(full)} characters: with the {longest_suffix} the header adds, beyond the "
+                f"{C_SIGNIFICANT_CHARS} C compilers must tell apart")
+    return None
+
+
+def _ls_names() -> frozenset[str]:
+    """The names linsense's C library declares (functions, constants, types), lower-case."""
+    from linsense.ctrl import ffi, lib
+
+    return frozenset(n.lower() for n in [*dir(lib), *ffi.list_types()[0]])
+
+
+def c_symbol(name: str, source: str, prefix: str = "", longest_suffix: int = 0) -> str:
+    """A user's name for C (``lut --symbol``, ``tune --name``), checked: returned unchanged or refused.
+
+    Never rewritten (``'my lut!'`` became ``my_lut`` and ``int`` became ``int_t`` without a word):
+    the rule is :func:`c_name_problem`'s, on ``prefix + name``.
+
+    Parameters
+    ----------
+    name : str
+        The name given.
+    source : str
+        The option or argument it came from, for the message (``--symbol``).
+    prefix : str, optional
+        What the header puts before it (``ls_cfg_``).
+    longest_suffix : int, optional
+        Characters the header's longest name adds after it.
+
+    Returns
+    -------
+    str
+        ``name``.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        Naming ``source``, the name and the rule it breaks.
+    """
+    why = c_name_problem(prefix + str(name), longest_suffix)
+    if why is not None:
+        shown_name = f"{name!r}" if not prefix else f"{name!r} (the C name {prefix + str(name)!r})"
+        raise InputError(source, "", f"{shown_name} {why}: give another name")
+    return name
+
+
+#: characters the LUT header adds to its symbol in its longest name (``<SYMBOL>_ANGLE_UNIT_RAD``)
+LUT_SUFFIX_CHARS = len("_ANGLE_UNIT_RAD")
+
+
+def default_lut_symbol(motor_name: str, source: str, key: str = "") -> str:
+    """The LUT header's array when no symbol is given: ``ls_lut_<motor name>``, the name made a C
+    identifier (``ls_lut_motor`` when nothing of it is left), checked by :func:`c_name_problem`.
+
+    Parameters
+    ----------
+    motor_name : str
+        The motor's name.
+    source : str
+        Named in the message (the motor file).
+    key : str, optional
+        Its key (``motor.name``).
+
+    Returns
+    -------
+    str
+        The symbol.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        The name makes one C cannot take (a motor named ``step`` makes ``ls_lut_step``, the C
+        library's function): give the symbol.
+    """
+    sym = c_identifier(f"ls_lut_{motor_name}")
+    sym = "ls_lut_motor" if sym == "ls_lut" else sym
+    why = c_name_problem(sym, LUT_SUFFIX_CHARS)
+    if why is not None:
+        raise InputError(source, key, f"the C name made from the motor's name {motor_name!r}, {sym!r}, "
+                                      f"{why}: give the symbol (--symbol)")
+    return sym
 
 
 def c_comment_text(text: str) -> str:
@@ -361,14 +503,21 @@ def to_c_header(lut: Lut, symbol: str | None = None) -> str:
     lut : Lut
         The table.
     symbol : str or None, optional
-        The array's name (made a C identifier; default ``ls_lut_<motor name>``).
+        The array's name, used as given (:func:`c_symbol` refuses a name C cannot take); default
+        ``ls_lut_<motor name>`` (the motor name made a C identifier).
 
     Returns
     -------
     str
         The header's text.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        A symbol (or the default made from the motor's name) C cannot take, naming the rule.
     """
-    sym = c_identifier(symbol or f"ls_lut_{lut.name}")
+    sym = c_symbol(symbol, "symbol", longest_suffix=LUT_SUFFIX_CHARS) if symbol is not None else \
+        default_lut_symbol(lut.name, "symbol")
     up = sym.upper()
     # (a motor name is the user's text: "*/" in it ended the comment and the header did not compile,
     # "/*" in it is a -Wcomment warning)

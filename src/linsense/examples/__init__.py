@@ -12,6 +12,7 @@ listing the names. The examples refer to each other by relative paths (a sweep's
 from __future__ import annotations
 
 import functools
+import os
 import shutil
 from pathlib import Path
 
@@ -216,6 +217,12 @@ def listing(kind: str, extra: tuple[str, ...] = ()) -> str:
 def copy_to(dest: str | Path, force: bool = False) -> list[Path]:
     """Copy every packaged example into ``dest`` (created if needed), keeping the sub-folders.
 
+    All or nothing: the files are copied into a temporary folder inside ``dest`` first, then renamed
+    into place; a failure on the way (a full disk, a read-only folder) undoes every step (the files
+    ``--force`` replaced put back, the folders made removed) and says which of ``dest``'s files could
+    not be written and why (a full disk was a raw errno naming the package's own file, and left the
+    files copied so far).
+
     Parameters
     ----------
     dest : str or Path
@@ -232,20 +239,81 @@ def copy_to(dest: str | Path, force: bool = False) -> list[Path]:
     Raises
     ------
     InputError
-        ``dest`` is a file, or (without ``force``) holds one of the files already.
+        ``dest`` is a file, holds a folder where a file goes, or (without ``force``) holds one of
+        the files already.
+    linsense.errors.OutputError
+        A file or folder could not be written (nothing copied).
     """
+    import secrets
+
     dest = Path(dest)
     if dest.exists() and not dest.is_dir():
         raise InputError(str(dest), "", "exists and is not a folder")
-    targets = [(ROOT / rel, dest / rel) for rel in files()]
-    if not force:
-        there = [str(t) for _, t in targets if t.exists() or t.is_symlink()]
-        if there:
-            more = f" and {len(there) - 1} more" if len(there) > 1 else ""
-            raise InputError(there[0], "", f"exists{more}: nothing copied (--force overwrites)")
-    written = []
-    for src, t in targets:
-        t.parent.mkdir(parents=True, exist_ok=True)
-        shutil.copyfile(src, t)
-        written.append(t)
-    return written
+    targets = [(rel, dest / rel) for rel in files()]
+    there = [t for _, t in targets if t.exists() or t.is_symlink()]
+    folder = next((t for t in there if t.is_dir() and not t.is_symlink()), None)
+    if folder is not None:  # (--force replaced it with the file and deleted the folder with its files)
+        raise InputError(str(folder), "", "exists and is a folder: not replaced, even with --force; nothing "
+                                          "copied (move it away)")
+    if not force and there:
+        more = f" and {len(there) - 1} more" if len(there) > 1 else ""
+        raise InputError(str(there[0]), "", f"exists{more}: nothing copied (--force overwrites)")
+    folders = sorted({t.parent for _, t in targets} | {dest}, key=lambda d: len(d.parts))
+    up = dest.parent
+    while not up.exists() and up.parent != up:  # (the missing folders above dest too)
+        folders.insert(0, up)
+        up = up.parent
+    stage = dest / f".linsense-examples.tmp-{os.getpid()}-{secrets.token_hex(4)}"
+    made: list[Path] = []  # the folders made, parents first
+    moved: list[tuple[Path, Path | None]] = []  # (placed file, the file it replaced, set aside)
+    at = dest
+    try:
+        for d in folders:  # (every folder first: a read-only one refuses before a file is copied)
+            at = next(t for _, t in targets if d in t.parents)  # (named: "its folder is read-only")
+            if not d.is_dir():
+                d.mkdir()
+                made.append(d)
+            elif not os.access(d, os.W_OK | os.X_OK):
+                raise PermissionError(13, "Permission denied", str(d))
+        at = stage
+        stage.mkdir()
+        for rel, t in targets:
+            at = t
+            (stage / rel).parent.mkdir(parents=True, exist_ok=True)
+            shutil.copyfile(ROOT / rel, stage / rel)
+        for rel, t in targets:
+            at = t
+            aside = None
+            if t.exists() or t.is_symlink():
+                aside = stage / ".replaced" / rel
+                aside.parent.mkdir(parents=True, exist_ok=True)
+                os.replace(t, aside)
+            moved.append((t, aside))
+            os.replace(stage / rel, t)
+    except OSError as exc:
+        _undo(moved, made, stage)
+        from linsense.io import output_error
+
+        err = output_error(at if at != stage else dest, exc)
+        raise type(err)(err.source, f"{err.message}; nothing copied") from None
+    shutil.rmtree(stage, ignore_errors=True)
+    return [t for _, t in targets]
+
+
+def _undo(moved: list[tuple[Path, Path | None]], made: list[Path], stage: Path) -> None:
+    """Undo an unfinished :func:`copy_to`: each file placed removed (the one it replaced put back),
+    the temporary folder removed, then the folders it made, deepest first."""
+    for t, aside in reversed(moved):
+        try:
+            if aside is not None:
+                os.replace(aside, t)
+            else:
+                t.unlink(missing_ok=True)
+        except OSError:
+            pass
+    shutil.rmtree(stage, ignore_errors=True)
+    for d in reversed(made):
+        try:
+            d.rmdir()
+        except OSError:
+            pass

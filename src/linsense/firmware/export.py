@@ -32,9 +32,10 @@ from pathlib import Path
 
 import numpy as np
 
-from linsense.compensation.lut import c_comment_text, c_identifier
+from linsense.compensation.lut import c_comment_text
 from linsense.compensation.stamp import stamp_comment, stamp_macros
 from linsense.errors import InputError
+from linsense.tune.export import c_config_name
 from linsense.version import __version__, docs
 
 #: the C library's files (globs relative to :func:`library_root`) that the wheel ships and an export
@@ -217,7 +218,7 @@ def firmware_files(motor, drive=None, source: str = "<firmware export>", name: s
                                     points=points)
     su = design_startup(motor, v_dc=dd.v_dc, f_pwm=dd.f_pwm, i_max=dd.i_max, observer_bw=dz.observer_bw_pll,
                         v_inj=dz.v_inj, ramp_rate=dz.inj_ramp_rate, source=source)
-    sym = c_identifier(name or motor.name)
+    sym = c_config_name(name, motor.name)
     digest = design_digest(motor, dd, points, table)
     cfg_name = f"ls_cfg_{sym}.h"
     files: dict[str, bytes] = {}

@@ -30,6 +30,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from linsense.errors import InputError
+from linsense.io import os_reason, output_error, write_atomic, write_atomic_with
 from linsense.sim.cluster import cluster_client
 from linsense.sweep.inputs import changed_on_disk, changes, code_identity, show, sweep_inputs, valid_record
 from linsense.sweep.inputs import digest as inputs_digest
@@ -106,7 +107,8 @@ def _check_out(out: Path, manifest: dict, restart: bool) -> bool:
     try:
         old = json.loads(m.read_text(encoding="utf-8"))
     except (OSError, ValueError) as exc:
-        raise _refuse(out, f"holds a sweep whose {MANIFEST} cannot be read ({exc}): {again}") from None
+        why = os_reason(exc) if isinstance(exc, OSError) else exc
+        raise _refuse(out, f"holds a sweep whose {MANIFEST} cannot be read ({why}): {again}") from None
     why = valid_record(old)
     if why is not None:
         raise _refuse(out, f"holds a sweep whose {MANIFEST} {why}: {again}")
@@ -142,9 +144,7 @@ def _discard(out: Path) -> None:
 
 
 def _write_manifest(out: Path, manifest: dict) -> None:
-    tmp = out / f".{MANIFEST}.tmp"
-    tmp.write_text(json.dumps(manifest, indent=1) + "\n", encoding="utf-8")
-    os.replace(tmp, out / MANIFEST)
+    write_atomic(out / MANIFEST, json.dumps(manifest, indent=1) + "\n")
 
 
 def _unchanged_while_running(out: Path, inputs: list[dict]) -> None:
@@ -156,19 +156,14 @@ def _unchanged_while_running(out: Path, inputs: list[dict]) -> None:
 
 
 def _write_partition(parts: Path, b: int, rows: list[dict]) -> Path:
-    path = parts / f"part-{b:06d}.parquet"
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=parts)
-    os.close(fd)
-    try:
-        import pyarrow as pa
-        import pyarrow.parquet as pq
+    """One batch's partition, written as every other output is (:func:`linsense.io.write_atomic_with`:
+    a temporary file and a rename, mode 0644 under the usual umask, an OSError one line naming the
+    partition and the reason in words)."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
 
-        pq.write_table(pa.Table.from_pylist(rows), tmp)  # (no pandas on the way: it costs per batch)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return path
+    table = pa.Table.from_pylist(rows)  # (no pandas on the way: it costs per batch)
+    return write_atomic_with(parts / f"part-{b:06d}.parquet", lambda f: pq.write_table(table, f))
 
 
 def _done_batches(parts: Path) -> set[int]:
@@ -284,7 +279,7 @@ def sweep(spec, out: str | Path | None = None, *, workers: int | None = None, sc
             if discard or not (out_dir / MANIFEST).is_file():
                 _write_manifest(out_dir, manifest)
         except OSError as exc:
-            raise _refuse(out_dir, f"cannot be written: {exc.strerror or exc}") from None
+            raise output_error(exc.filename or out_dir, exc) from None
         done = _done_batches(parts)
         todo = [b for b in range(len(batches)) if b not in done]
         n_done = sum(len(batches[b]) for b in done)

@@ -350,6 +350,39 @@ def speed_gains(bw_hz: float, mass: float) -> tuple[float, float]:
     return mass * w, mass * w * w / SPEED_KI_DIV
 
 
+def require_saliency(motor: Motor, source: str) -> tuple[float, float]:
+    """The motor's mean ``L_d``, ``L_q``, refused unless ``L_q > L_d``: the one rule of every command
+    that makes or runs a drive (``tune``, ``simulate``, ``calibrate``, ``lut``, ``firmware export``).
+
+    The drive's demodulator, its error gain and its tables are for the saliency of a PM motor, ``L_q``
+    above ``L_d``; a motor with reversed saliency (``L_q < L_d`` on average) was refused by ``tune``
+    and ``simulate`` as "i_max leaves no injection" while ``lut`` wrote a table for it.
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+    source : str
+        Named in the message.
+
+    Returns
+    -------
+    L_d : float
+        Mean over the period, H.
+    L_q : float
+        Mean over the period, H.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        No mean saliency, or reversed saliency (the values given, :func:`saliency_problem`).
+    """
+    problem = saliency_problem(motor)  # (the message, with what to check; DRIVE_RULES asks it too)
+    if problem is not None:
+        raise InputError(source, "motor", problem)
+    return mean_dq(motor)
+
+
 def observable_error_gain(motor: Motor, f_inj: float, quad: float, source: str) -> np.ndarray:
     """:func:`error_gain` with the nominal demodulator gain ``L_q / (L_q - L_d)``.
 
@@ -375,13 +408,10 @@ def observable_error_gain(motor: Motor, f_inj: float, quad: float, source: str) 
     Raises
     ------
     linsense.errors.InputError
-        No mean saliency, a reversed one (:func:`saliency_problem`), or the gain is not positive
+        No or reversed mean saliency (:func:`require_saliency`), or the gain is not positive
         everywhere.
     """
-    problem = saliency_problem(motor)
-    if problem is not None:
-        raise InputError(source, "motor", problem)
-    L_d, L_q = mean_dq(motor)
+    L_d, L_q = require_saliency(motor, source)
     k_e = error_gain(motor, f_inj, quad, L_q / (L_q - L_d))
     if np.any(k_e <= 0):
         raise InputError(
@@ -511,7 +541,7 @@ def saliency_problem(motor: Motor) -> str | None:
     No mean saliency (``L_q = L_d``), or a reversed one (``L_d > L_q`` on average: the drive's
     demodulator takes the axis of lowest inductance as d, and would settle 90 electrical degrees off
     the magnet's axis). ``tune``, ``simulate``, ``calibrate``, ``firmware export`` and ``lut`` refuse
-    such a motor alike (:func:`check_drive`, :func:`observable_error_gain`).
+    such a motor alike (:func:`check_drive`, :func:`require_saliency`).
 
     Parameters
     ----------

@@ -9,8 +9,16 @@ import numpy as np
 import tomli_w
 
 from linsense.analysis.hf import end_anisotropy
-from linsense.compensation.lut import build_lut, c_comment_text, c_identifier, lut_r_slope
+from linsense.compensation.lut import (
+    build_lut,
+    c_comment_text,
+    c_identifier,
+    c_name_problem,
+    c_symbol,
+    lut_r_slope,
+)
 from linsense.compensation.stamp import data_digest, stamp_comment, stamp_macros
+from linsense.errors import InputError
 from linsense.model.motor import Motor, names_a_path
 from linsense.tune.cfgmap import Values, header_rows
 from linsense.tune.design import (
@@ -330,6 +338,48 @@ def design_values(dz: Design, drive: DriveData, motor: Motor, startup=None) -> V
     return Values(keys.__getitem__, derived, fields)
 
 
+#: the prefix of a drive configuration's C names (``ls_cfg_<name>``) and the characters its longest
+#: name adds after them (``LS_CFG_<NAME>_DATA_SHA256``)
+CFG_PREFIX = "ls_cfg_"
+CFG_SUFFIX_CHARS = len("_DATA_SHA256")
+
+
+def c_config_name(name: str | None, motor_name: str, source: str = "name") -> str:
+    """The ``<name>`` of ``ls_cfg_<name>.h`` and its symbols.
+
+    A name given is used as given or refused (:func:`linsense.compensation.lut.c_symbol`: it was
+    made lower-case and ``'my drive!'`` became ``my_drive`` without a word); without one, the
+    motor's name made a C identifier.
+
+    Parameters
+    ----------
+    name : str or None
+        The name given (``--name``).
+    motor_name : str
+        The motor's name, for the default.
+    source : str, optional
+        The option or argument the name came from, for the message.
+
+    Returns
+    -------
+    str
+        The name.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        A name C cannot take, naming the rule (for the default: give a name).
+    """
+    if name is not None:
+        return c_symbol(name, source, CFG_PREFIX, CFG_SUFFIX_CHARS)
+    sym = c_identifier(motor_name)
+    why = c_name_problem(CFG_PREFIX + sym, CFG_SUFFIX_CHARS)
+    if why is not None:
+        raise InputError(source, "", f"the C name made from the motor's name {motor_name!r}, "
+                                     f"{CFG_PREFIX + sym!r}, {why}: give a name")
+    return sym
+
+
 def c_header(dz: Design, drive: DriveData, motor: Motor, name: str | None = None, points: int = 256,
              startup=None, table=None, unverified: str = "", verified_by: str = "") -> str:
     """``ls_cfg_<name>.h``: the drive's configuration for the C library.
@@ -377,7 +427,7 @@ def c_header(dz: Design, drive: DriveData, motor: Motor, name: str | None = None
         For an injection other than the pulsating/elliptical one.
     """
     check_c_header(drive)
-    sym = c_identifier(name or motor.name)
+    sym = c_config_name(name, motor.name)
     fn = f"ls_cfg_{sym}"
     lut = build_lut(motor, points, f_inj=dz.f_inj, quad=dz.quad).values if table is None else table.values
     stamped = motor  # (the stamp's and the digest's motor: the file's)
