@@ -126,6 +126,9 @@ CASES = {
     # (found by a random search of one or two drive keys of a scenario: the designed ramp was named)
     "scenario, a subnormal injection": (simulate(section("injection", "amplitude = 5e-324")),
                                         "injection.amplitude", ["5e-324 V", "float32"], ["ramp_rate"]),
+    "calibration, t_max below one window": (
+        simulate(scenario_with(HOLD, '[control]\nmode = "calibration"\n[calibration]\nt_max = 0.002')),
+        "calibration.t_max", ["0.002 s", "t_hold = 0.272727 s", "at least 0.272727 s"], []),
     "start-up without a polarity signal": (
         simulate(STARTUP + "\n[saturation]\nenabled = true\npolarity = 0.0\n"), "saturation.polarity",
         ["control.mode = \"startup\"", "polarity"], []),

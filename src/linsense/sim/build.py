@@ -657,6 +657,23 @@ def _design_refusal(sc: Scenario, exc: InputError) -> InputError:
     return InputError(sc.source, _DESIGN_KEYS.get(exc.key, exc.key), exc.message)
 
 
+def _check_cal_window(sc: Scenario, t_max: float, t_hold: float, given: set) -> None:
+    """Refuse a calibration whose points trip before one acceptance window is over.
+
+    A point is accepted at the end of a window of ``t_hold``; one not accepted after ``t_max`` of
+    adapting trips (the observer fault, ls_drive_calibration.c): with ``t_max < t_hold`` none can be,
+    and the run stopped on "fault observer"."""
+    if t_max >= t_hold:
+        return
+    if "t_hold" in given and "t_max" not in given:
+        raise InputError(sc.source, "calibration.t_hold", f"{t_hold:g} s: one acceptance window is longer "
+                         f"than calibration.t_max = {t_max:g} s, after which a point trips: no point can be "
+                         f"accepted; at most {t_max:g} s")
+    raise InputError(sc.source, "calibration.t_max", f"{t_max:g} s is shorter than one acceptance window, "
+                     f"calibration.t_hold = {t_hold:g} s: every point trips (the observer fault) before it "
+                     f"can be accepted; at least {t_hold:g} s")
+
+
 def drive_data(sc: Scenario) -> DriveData:
     """The drive a scenario describes, as the design takes it.
 
@@ -844,6 +861,7 @@ def designed(sc: Scenario, motor: Motor) -> Scenario:
                                     cal.k_int if "k_int" in given["calibration"] else None,
                                     cal.t_hold if "t_hold" in given["calibration"] else None, sc.source)
         changes["calibration"].update({k: v for k, v in timing.items() if k not in given["calibration"]})
+        _check_cal_window(sc, run("calibration", "t_max"), run("calibration", "t_hold"), given["calibration"])
     # the designed values are valid by construction (the design keeps the injection within the bus
     # and f_pwm / 4): set them without validating the whole scenario again (a sweep builds thousands)
     update = {sec: getattr(s, sec).model_copy(update=vals) for sec, vals in changes.items() if vals}
