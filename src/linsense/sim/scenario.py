@@ -78,7 +78,8 @@ class CalibrationSection(BaseModel):
                            "demodulated error is below it",
                            json_schema_extra={"unit": "electrical deg"})
     t_max: Positive = Field(
-        _c(_C.cal.t_max), description="a point not accepted by then trips the observer fault",
+        _c(_C.cal.t_max), description="a point not accepted by then trips the observer fault; at least "
+        "`t_hold` (one acceptance window)",
         json_schema_extra={"unit": "s", "default_note": "follows the drive in calibration mode "
                            "({ecce2010} for ecce2010)"})
     dither_a: NonNegative = Field(
@@ -476,7 +477,8 @@ class InitialSection(BaseModel):
     load_balanced: bool = Field(
         False, description="start in equilibrium with the load acting at t = 0 (`ls_drive_set_load`: speed "
         "integrator and mechanical observer preset; position type `p`), so a loaded drive does not sag "
-        "before its integrators catch up")
+        "before its integrators catch up; a load beyond `K_f controller.i_max` has no equilibrium and is "
+        "refused")
 
 
 class TravelSection(BaseModel):
