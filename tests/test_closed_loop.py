@@ -111,11 +111,21 @@ def test_calibrate_cli(tmp_path, capsys):
         main(["calibrate", "--motor", "ecce2010", "--quad", "1.5", "--out", str(tmp_path / "d")])
     err = capsys.readouterr().err.strip()
     assert e.value.code == 2 and "--quad" in err and "1.5" in err and err.count("\n") == 0
-    # a load beyond the drive's force (K_f i_max = 50 N): no point is reached; exit 1 with one line,
-    # and the figure and metrics still written (no traceback on the empty table)
+    # a load beyond the drive's force (K_f i_max = 50 N): no equilibrium to calibrate in, refused in
+    # one line naming it (issue 37: it ran and stopped on "fault encoder")
     with pytest.raises(SystemExit) as e:
         main(["calibrate", "--motor", "ecce2010", "--positions", "4", "--load", "1000", "--fidelity",
               "average", "--out", str(tmp_path / "e")])
+    err = capsys.readouterr().err.strip()
+    assert e.value.code == 2 and "load.force: 1000 N" in err and "50 N" in err and err.count("\n") == 0, err
+    # a tolerance no window meets: no point is reached; exit 1 with one line, and the figure and
+    # metrics still written (no traceback on the empty table)
+    sc = tmp_path / "tight.toml"
+    sc.write_text('motor = "ecce2010"\n[scenario]\nduration = 1.0\n[reference]\ntype = "hold"\n'
+                  "[calibration]\ntol_deg = 1e-9\nt_max = 0.6\n")
+    with pytest.raises(SystemExit) as e:
+        main(["calibrate", "--scenario", str(sc), "--positions", "4", "--fidelity", "average", "--out",
+              str(tmp_path / "e")])
     out, err = capsys.readouterr()
     assert e.value.code == 1 and err.count("\n") == 1 and "did not complete (0 of 4 points" in err, err
     assert "n/a" in out

@@ -48,7 +48,8 @@ CASES = {
     "a start far beyond it": (BASE, "[travel]\nmin_mm = -1e308\n[initial]\nposition_mm = -1e300",
                               ["initial.position_mm", "-1e+300", "16,777,216"]),
     # (a one-line ls_pos message naming no key of the scenario)
-    "a start-up guess beyond it": (HOLD, '[control]\nmode = "startup"\n[startup]\nguess_mm = 1e12',
+    "a start-up guess beyond it": (HOLD, '[control]\nmode = "startup"\n[saturation]\nenabled = true\n'
+                                         '[startup]\nguess_mm = 1e12',
                                    ["startup.guess_mm", "1e+12", "16,777,216"]),
     # (ran, holding still with no fault: the drive's setter refused the target and the run went on)
     "a step target beyond it": (BASE.replace("position_mm = 3.0", "position_mm = 1e300"), "",

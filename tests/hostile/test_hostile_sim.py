@@ -98,7 +98,8 @@ RANGE = {
     "trip time": ("[protection]\nerr_time = 1e30", ["protection.err_time", "1e+30", "would never act",
                                                      "scenario.duration = 0.2 s"]),
     "bus trip": ("[protection]\nv_dc_max = 1e30", ["protection.v_dc_max", "1e+30", "100000"]),
-    "start-up pulse": ('[control]\nmode = "startup"\n[startup]\nv_pulse = 1e30',
+    "start-up pulse": ('[control]\nmode = "startup"\n[saturation]\nenabled = true\n'
+                       '[startup]\nv_pulse = 1e30',
                        ["startup.v_pulse", "1e+30", "100000"]),
     "calibration dither": ('[control]\nmode = "calibration"\n[calibration]\ndither_hz = 1e30',
                            ["calibration.dither_hz", "1e+30", "4000"]),
@@ -112,7 +113,7 @@ RANGE = {
                                ["inverter.f_pwm", "2e+06", "1e+06"]),
     "PWM too slow": ("[inverter]\nf_pwm = 100.0", ["inverter.f_pwm", "100", "f_pwm / 4"]),
     # the design's rules (before: "dead_time:", "a_max:", "load:", "inverter.v_dc" for i_max)
-    "bus huge": ("[inverter]\nv_dc = 1e30", ["inverter.v_dc", "1e+30", "limit 4"]),
+    "bus huge": ("[inverter]\nv_dc = 1e30", ["inverter.v_dc", "1e+30", "at most 338.3 V"]),
     "bus tiny": ("[inverter]\nv_dc = 1e-30", ["inverter.v_dc", "1e-30"]),
     "current limit huge": ("[controller]\ni_max = 1e30", ["controller.i_max", "1e+30", "R_s i_max"]),
     "trajectory speed huge": ("[reference]\nv_max = 1e30",

@@ -53,8 +53,9 @@ from linsense.tune.design import DriveData, design, mean_dq, uncompensated_speed
 #: own modules: linsense.sim.checks, .cache, .tables, .drive_cfg)
 __all__ = ["Built", "build", "designed", "drive_data", "calibration_timing", "resolve_motor", "motor_key",
            "plant_saturation", "reference_commands", "trapezoid_time", "initial_load", "compensation_of",
-           "check_positions", "check_initial_load", "check_sensors", "check_startup", "check_run_size",
-           "check_trace_file", "check_events", "check_final_window", "run_steps", "validate", "Tables"]
+           "check_positions", "check_initial_load", "check_balanced_load", "check_sensors", "check_startup",
+           "check_run_size", "check_trace_file", "check_events", "check_final_window", "run_steps",
+           "validate", "Tables"]
 
 #: drive sub-configuration -> scenario section (for messages)
 _SECTION = {"inject": "injection", "bpf": "injection", "sep": "injection", "demod": "observer",
@@ -280,17 +281,53 @@ def validate(sc: Scenario, motor: Motor, known: dict, user_keys: set[str],
     check_sensors(sc.source, gain, offs, s.sensors.current_noise, s.protection.i_max,
                   "protection.i_max" in user_keys)
     sat = plant_saturation(sc, motor)
+    if s.control.mode == "startup" and sat is not None and not sat.polarity > 0.0:
+        # (a polarity of 0 given in the scenario is refused there; this is the motor file's)
+        raise InputError(sc.source, "saturation.polarity", f"motor {motor.name!r} has no magnet-polarity "
+                         "signal ([saturation] polarity = 0) for the pulses of control.mode = \"startup\" to "
+                         "find: give saturation.polarity (1/A) here or in the motor file")
     if s.observer.load_feedforward and s.observer.type != "mech":
         raise InputError(sc.source, "observer.load_feedforward",
                          "needs observer.type = \"mech\" (the load estimate is the mechanical observer's)")
     check_positions(sc, motor.pole_pitch)
     check_initial_load(sc, initial_load(sc, motor))
+    check_balanced_load(sc, motor)
     check_startup(sc)
     n_steps = run_steps(sc.source, s.scenario.duration, s.inverter.f_pwm)
     check_events(sc, n_steps, reference_commands(sc)[1], user_keys)
     check_final_window(sc, motor.mass, user_keys)
     check_run_size(sc.source, n_steps, s.record.decimate, s.inverter.f_pwm, trace_in_memory)
     return sat, n_steps
+
+
+def check_balanced_load(sc: Scenario, motor: Motor) -> None:
+    """Refuse a start in equilibrium with a load beyond the force the drive can make.
+
+    ``initial.load_balanced`` with a load force at t = 0 beyond ``K_f controller.i_max``: the current
+    reference is clamped at ``i_max`` and the drive cannot balance it (a calibration under such a
+    ``--load`` ran and stopped on "fault encoder", blaming the encoder).
+
+    Parameters
+    ----------
+    sc : Scenario
+        The scenario.
+    motor : Motor
+        The plant's motor.
+
+    Raises
+    ------
+    InputError
+        Naming the load key that sets the force at t = 0, its value and the largest force.
+    """
+    s = sc.spec
+    f_load, f_max = initial_load(sc, motor), motor.force_constant * s.controller.i_max
+    if not s.initial.load_balanced or abs(f_load) <= f_max:
+        return
+    ld = s.load
+    key = "load.force_after" if ld.type == "step" and ld.time <= 0.0 else "load.force"
+    raise InputError(sc.source, key, f"{f_load:g} N at t = 0 (initial.load_balanced = true) is beyond the "
+                     f"force the drive can make to balance it, K_f controller.i_max = {f_max:.4g} N: at most "
+                     f"{f_max:.4g} N in magnitude, or raise controller.i_max")
 
 
 def plant(sc: Scenario, motor: Motor, sat: Saturation | None) -> tuple[PlantSetup, object]:
@@ -611,30 +648,35 @@ def initial_load(sc: Scenario, motor: Motor) -> float:
     return ld.force
 
 
-#: a key of the design's refusals -> the scenario keys its rule reads, the one to name first: the
-#: first the file gives is named (none given: the first, a default)
-_DESIGN_KEYS = {"v_dc": ("inverter.v_dc", "controller.i_max", "injection.amplitude"),
-                "f_pwm": ("inverter.f_pwm",), "i_max": ("controller.i_max",),
-                "v_max": ("reference.v_max", "reference.a_max"),
-                "a_max": ("reference.a_max", "reference.v_max"),
-                "v_inj": ("injection.amplitude", "inverter.v_dc"),
-                "f_inj": ("injection.frequency", "inverter.f_pwm"),
-                "quad": ("injection.quadrature",), "shape": ("injection.shape",),
-                "dead_time": ("inverter.dead_time", "inverter.f_pwm", "inverter.v_dc", "controller.i_max"),
-                "load": ("reference.a_max", "controller.i_max"), "motor": ("motor",)}
+#: an input of the design (DriveData's names, :func:`drive_data`) -> the scenario key it is read from;
+#: the design names the input at fault (linsense.tune.design.DRIVE_RULES), the refusal its key
+_DESIGN_KEYS = {"v_dc": "inverter.v_dc", "f_pwm": "inverter.f_pwm", "dead_time": "inverter.dead_time",
+                "i_max": "controller.i_max", "v_max": "reference.v_max", "a_max": "reference.a_max",
+                "v_inj": "injection.amplitude", "f_inj": "injection.frequency",
+                "quad": "injection.quadrature", "shape": "injection.shape", "motor": "motor"}
 
 
 def _design_refusal(sc: Scenario, exc: InputError) -> InputError:
-    """The design's refusal ``exc`` (keys of DriveData) as the scenario's: naming the key the file
-    gives that the rule reads, with its value."""
-    keys = _DESIGN_KEYS.get(exc.key, (exc.key,))
-    given = given_keys(sc.given())
-    key = next((k for k in keys if k in given), keys[0])
-    value = value_of(sc.spec, key)
-    shown = f"{value:g}" if isinstance(value, float) else repr(value)
-    if key == "motor" or (key == keys[0] and shown in exc.message):
-        return InputError(sc.source, key, exc.message)
-    return InputError(sc.source, key, f"{shown} refused by the design ({exc.key}: {exc.message})")
+    """The design's refusal ``exc`` (naming an input by its DriveData name) as the scenario's: the
+    same message at the scenario key the input is read from."""
+    return InputError(sc.source, _DESIGN_KEYS.get(exc.key, exc.key), exc.message)
+
+
+def _check_cal_window(sc: Scenario, t_max: float, t_hold: float, given: set) -> None:
+    """Refuse a calibration whose points trip before one acceptance window is over.
+
+    A point is accepted at the end of a window of ``t_hold``; one not accepted after ``t_max`` of
+    adapting trips (the observer fault, ls_drive_calibration.c): with ``t_max < t_hold`` none can be,
+    and the run stopped on "fault observer"."""
+    if t_max >= t_hold:
+        return
+    if "t_hold" in given and "t_max" not in given:
+        raise InputError(sc.source, "calibration.t_hold", f"{t_hold:g} s: one acceptance window is longer "
+                         f"than calibration.t_max = {t_max:g} s, after which a point trips: no point can be "
+                         f"accepted; at most {t_max:g} s")
+    raise InputError(sc.source, "calibration.t_max", f"{t_max:g} s is shorter than one acceptance window, "
+                     f"calibration.t_hold = {t_hold:g} s: every point trips (the observer fault) before it "
+                     f"can be accepted; at least {t_hold:g} s")
 
 
 def drive_data(sc: Scenario) -> DriveData:
@@ -824,6 +866,7 @@ def designed(sc: Scenario, motor: Motor) -> Scenario:
                                     cal.k_int if "k_int" in given["calibration"] else None,
                                     cal.t_hold if "t_hold" in given["calibration"] else None, sc.source)
         changes["calibration"].update({k: v for k, v in timing.items() if k not in given["calibration"]})
+        _check_cal_window(sc, run("calibration", "t_max"), run("calibration", "t_hold"), given["calibration"])
     # the designed values are valid by construction (the design keeps the injection within the bus
     # and f_pwm / 4): set them without validating the whole scenario again (a sweep builds thousands)
     update = {sec: getattr(s, sec).model_copy(update=vals) for sec, vals in changes.items() if vals}

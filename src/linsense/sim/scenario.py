@@ -31,10 +31,10 @@ from typing import Annotated, Literal
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
-from linsense.ctrl import drive_default_cfg
+from linsense.ctrl import REAL, drive_default_cfg
 from linsense.errors import InputError
 from linsense.io import read_toml
-from linsense.tune.design import V_DC_MAX_FRACTION, V_DC_MIN_FRACTION, DriveData
+from linsense.tune.design import DEAD_TIME_SHARE_MAX, V_DC_MAX_FRACTION, V_DC_MIN_FRACTION, DriveData
 from linsense.validation import KeyProblem, to_input_error
 
 _BRANCH = re.compile(r"^(float|int|bool|str|list\[.*\]|constrained-.*|function-.*)$")
@@ -78,7 +78,8 @@ class CalibrationSection(BaseModel):
                            "demodulated error is below it",
                            json_schema_extra={"unit": "electrical deg"})
     t_max: Positive = Field(
-        _c(_C.cal.t_max), description="a point not accepted by then trips the observer fault",
+        _c(_C.cal.t_max), description="a point not accepted by then trips the observer fault; at least "
+        "`t_hold` (one acceptance window)",
         json_schema_extra={"unit": "s", "default_note": "follows the drive in calibration mode "
                            "({ecce2010} for ecce2010)"})
     dither_a: NonNegative = Field(
@@ -477,7 +478,8 @@ class InitialSection(BaseModel):
     load_balanced: bool = Field(
         False, description="start in equilibrium with the load acting at t = 0 (`ls_drive_set_load`: speed "
         "integrator and mechanical observer preset; position type `p`), so a loaded drive does not sag "
-        "before its integrators catch up")
+        "before its integrators catch up; a load beyond `K_f controller.i_max` has no equilibrium and is "
+        "refused")
 
 
 class TravelSection(BaseModel):
@@ -692,13 +694,14 @@ class ScenarioFile(BaseModel):
             raise KeyProblem("control.fs", f"must equal inverter.f_pwm = {inv.f_pwm:g} Hz "
                             f"(the controller runs "
                             f"once per PWM period), got {ctl.fs:g}")
-        if inv.dead_time * inv.f_pwm >= 0.1:
-            if "dead_time" not in inv.model_fields_set:  # (the rate given, the dead time the default)
+        if inv.dead_time * inv.f_pwm >= DEAD_TIME_SHARE_MAX:
+            share = f"{DEAD_TIME_SHARE_MAX * 100:g} % of the PWM period"
+            if _named(inv, ("dead_time", "f_pwm")) == "f_pwm":  # (the rate given, the dead time the default)
                 raise KeyProblem("inverter.f_pwm", f"{inv.f_pwm:g} Hz makes the dead time "
-                                 f"({inv.dead_time:g} s) 10 % of the PWM period or more: at most "
-                                 f"{0.1 / inv.dead_time:g} Hz with this dead time")
-            raise KeyProblem("inverter.dead_time", f"must be below 10 % of the PWM period "
-                            f"({0.1 / inv.f_pwm:g} s), got {inv.dead_time!r}")
+                                 f"({inv.dead_time:g} s) {share} or more: at most "
+                                 f"{DEAD_TIME_SHARE_MAX / inv.dead_time:g} Hz with this dead time")
+            raise KeyProblem("inverter.dead_time", f"must be below {share} "
+                            f"({DEAD_TIME_SHARE_MAX / inv.f_pwm:g} s), got {inv.dead_time!r}")
         _check_overrides(self)
         if self.observer.lut_model == "measured" and self.observer.lut_file is None:
             raise KeyProblem("observer.lut_file", "missing: observer.lut_model = \"measured\" reads the "
@@ -764,6 +767,16 @@ class ScenarioFile(BaseModel):
                 if getattr(su, k) < t_ramp:
                     raise KeyProblem(f"startup.{k}", f"must cover the injection's ramp, amplitude / "
                                      f"ramp_rate = {t_ramp:g} s, got {getattr(su, k):g}")
+            # (the pulses find the magnet by the d-axis saturation: the linear plant has none, and the
+            # start-up tripped "observer" at 0.15 s)
+            if not self.saturation.enabled:
+                raise KeyProblem("control.mode", "\"startup\" needs the saturated plant (its pulses "
+                                 "find the magnet by the saturation of the d-axis, which the linear plant "
+                                 "has not): set saturation.enabled = true")
+            if self.saturation.polarity == 0.0:
+                raise KeyProblem("saturation.polarity", "0 leaves the pulses of control.mode = \"startup\" "
+                                 "no magnet-polarity signal to find: give a polarity > 0 (1/A), or leave the "
+                                 "key out for the motor file's")
         if ctl.mode not in ("sensorless_lut", "sensored", "startup") and comp == "lut":
             raise KeyProblem("observer.compensation", f"\"lut\" is only used by control.mode = "
                             f"\"sensorless_lut\" (or \"sensored\", for the HF observer beside the encoder), "
@@ -831,7 +844,11 @@ class ScenarioFile(BaseModel):
                              "too large for the bus: amplitude * sqrt(3) must be below "
                              f"0.8 protection.v_dc_min = {0.8 * p.v_dc_min:g} V, "
                              f"got {self.injection.amplitude:g}")
-        if self.injection.amplitude == 0.0 and ctl.mode != "sensored":
+        amp = self.injection.amplitude
+        if amp != 0.0 and REAL.type(amp) == 0.0:  # (its designed ramp_rate was named, refused by the drive)
+            raise KeyProblem("injection.amplitude", f"{amp!r} V is 0 in the drive's {REAL} numbers: give 0 "
+                             f"(no injection) or at least {float(np.finfo(REAL).smallest_subnormal):g} V")
+        if amp == 0.0 and ctl.mode != "sensored":
             raise KeyProblem("injection.amplitude", "the sensorless modes need an HF injection, got 0")
         return self
 
@@ -845,6 +862,16 @@ def _periods(t: float, fs: float) -> float:
 
 def _given(section: BaseModel, key: str) -> bool:
     return key in section.model_fields_set
+
+
+def _named(section: BaseModel, keys: tuple[str, ...]) -> str:
+    """Of the keys of ``section`` that a rule reads, the one its refusal names: the first the file
+    gives with a value other than the default, else the first it gives, else the first (the
+    design's rule alike, :func:`linsense.tune.design.check_drive`)."""
+    fields = type(section).model_fields
+    given = [k for k in keys if _given(section, k)]
+    changed = [k for k in given if getattr(section, k) != fields[k].default]
+    return (changed or given or list(keys))[0]
 
 
 def _check_overrides(f: ScenarioFile) -> None:

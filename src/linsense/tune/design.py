@@ -17,7 +17,9 @@ injection's amplitude from the dead-time voltage error and the lowest local sali
 
 from __future__ import annotations
 
+import functools
 import math
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
@@ -28,7 +30,7 @@ from linsense.analysis.hf import (
     mean_dq,
 )
 from linsense.compensation.lut import resistance_slope
-from linsense.errors import InputError
+from linsense.errors import InputError, shown
 from linsense.model.motor import Motor
 from linsense.tune.margins import error_gain
 
@@ -373,18 +375,12 @@ def require_saliency(motor: Motor, source: str) -> tuple[float, float]:
     Raises
     ------
     linsense.errors.InputError
-        No mean saliency, or reversed saliency (the values given).
+        No mean saliency, or reversed saliency (the values given, :func:`saliency_problem`).
     """
-    L_d, L_q = mean_dq(motor)
-    if L_q == L_d:
-        raise InputError(source, "motor",
-                         "no mean saliency (L_q = L_d): HF injection cannot see the position")
-    if L_q < L_d:
-        raise InputError(source, "motor",
-                         f"reversed saliency: the mean L_q = {L_q * 1e3:.4g} mH is below the mean L_d = "
-                         f"{L_d * 1e3:.4g} mH; the drive (its demodulator, error gain and tables) is for "
-                         "L_q > L_d")
-    return L_d, L_q
+    problem = saliency_problem(motor)  # (the message, with what to check; DRIVE_RULES asks it too)
+    if problem is not None:
+        raise InputError(source, "motor", problem)
+    return mean_dq(motor)
 
 
 def observable_error_gain(motor: Motor, f_inj: float, quad: float, source: str) -> np.ndarray:
@@ -500,6 +496,518 @@ def gain_r_slope(motor: Motor, f_inj: float, quad: float, n: int) -> np.ndarray:
     return resistance_slope(motor, lambda m: gain_schedule(m, f_inj, quad, n), n)
 
 
+# ------------------------------------------------------------------ the inputs, checked in order
+#: the dead time's largest share of the PWM period (docs/simulator.md, ``inverter.dead_time``): the
+#: design's rule and the scenario's alike
+DEAD_TIME_SHARE_MAX = 0.1
+#: Hz, the largest PWM rate: the controller library's (LS_DRIVE_FS_MAX, ls_drive.h), twice the largest
+#: injection frequency of a table (linsense.limits.MAX_F_INJ)
+F_PWM_MAX = 1.0e6
+_DEFAULT_DRIVE = DriveData()
+#: units of the drive data in messages
+_UNITS = {"v_dc": "V", "f_pwm": "Hz", "dead_time": "s", "i_max": "A", "v_max": "m/s", "a_max": "m/s^2",
+          "load": "N", "travel": "m", "v_inj": "V", "f_inj": "Hz", "quad": "", "shape": ""}
+
+
+def limit_text(value: float, up: bool) -> str:
+    """A limit for a message: 4 significant digits, rounded to the side that keeps it within the
+    limit (``up`` for a lower limit), so that the value typed back as shown is accepted.
+
+    Parameters
+    ----------
+    value : float
+        The limit.
+    up : bool
+        Round up (a lower limit, "at least") or down (an upper limit, "at most").
+
+    Returns
+    -------
+    str
+        E.g. ``"0.5317"``, ``"33910"``, ``"1.696e-06"``, ``"7.389e+27"``.
+    """
+    if not (math.isfinite(value) and value != 0.0):
+        return f"{value:g}"
+    exp = math.floor(math.log10(abs(value)))
+    step = 10.0 ** (exp - 3)
+    if not (step > 0.0 and math.isfinite(value / step)):  # (a subnormal limit: shown as it is)
+        return f"{value:.4g}"
+    q = (math.ceil if up else math.floor)(value / step) * step
+    return f"{q:.{max(4, exp + 1)}g}" if -4 <= exp < 7 else f"{q:.4g}"
+
+
+def saliency_problem(motor: Motor) -> str | None:
+    """What makes ``motor``'s saliency unusable for the HF observer, or None.
+
+    No mean saliency (``L_q = L_d``), or a reversed one (``L_d > L_q`` on average: the drive's
+    demodulator takes the axis of lowest inductance as d, and would settle 90 electrical degrees off
+    the magnet's axis). ``tune``, ``simulate``, ``calibrate``, ``firmware export`` and ``lut`` refuse
+    such a motor alike (:func:`check_drive`, :func:`require_saliency`).
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+
+    Returns
+    -------
+    str or None
+        The message (with the motor's mean ``L_d`` and ``L_q`` and what to check), or None.
+    """
+    L_d, L_q = mean_dq(motor)
+    if L_q == L_d:
+        return "no mean saliency (L_q = L_d): HF injection cannot see the position"
+    if L_q < L_d:
+        return (f"reversed saliency: the mean L_d = {L_d * 1e3:.3g} mH is above L_q = {L_q * 1e3:.3g} mH, "
+                "and the HF observer would settle 90 electrical degrees off the axis of the magnet (the "
+                "drive takes the axis of lowest inductance as d): check the signs of the saliency terms (in "
+                "eq. 3, L2 and M2 negative give L_q > L_d) and that position 0 is the d-axis of the magnet")
+    return None
+
+
+class DriveInputs:
+    """A design's inputs and the quantities derived from them, each computed when a rule of
+    :data:`DRIVE_RULES` first asks for it.
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+    d : DriveData
+        The drive and application.
+    """
+
+    def __init__(self, motor: Motor, d: DriveData) -> None:
+        self.motor, self.d = motor, d
+
+    def given(self, key: str) -> bool:
+        """Whether the drive data's ``key`` was given: it is not its default (``"motor"``: never).
+
+        Parameters
+        ----------
+        key : str
+            A :class:`DriveData` field.
+
+        Returns
+        -------
+        bool
+            ``True`` when the value differs from :class:`DriveData`'s default.
+        """
+        return key != "motor" and getattr(self.d, key) != getattr(_DEFAULT_DRIVE, key)
+
+    def show(self, key: str) -> str:
+        """The value of drive data ``key`` with its unit, for a message.
+
+        Parameters
+        ----------
+        key : str
+            A :class:`DriveData` field.
+
+        Returns
+        -------
+        str
+            E.g. ``"0.001 A"``.
+        """
+        v = getattr(self.d, key)
+        return f"{v:g} {_UNITS[key]}".strip() if isinstance(v, float) else repr(v)
+
+    @functools.cached_property
+    def dq(self) -> tuple[float, float]:
+        """Mean ``(L_d, L_q)``, H."""
+        return mean_dq(self.motor)
+
+    @functools.cached_property
+    def s_min(self) -> float:
+        """The lowest local saliency ratio over the period (:func:`saliency_min`)."""
+        return saliency_min(self.motor)
+
+    @property
+    def f_inj(self) -> float:
+        """The injection frequency, given or designed, Hz."""
+        return self.d.f_inj if self.d.f_inj is not None else injection_frequency(self.d.f_pwm)
+
+    @property
+    def z(self) -> float:
+        """``|R_s + j 2 pi f_inj (L_d + L_q) / 2|``, ohm."""
+        return abs(complex(self.motor.R_s, 2.0 * math.pi * self.f_inj * 0.5 * sum(self.dq)))
+
+    @property
+    def dv_dt(self) -> float:
+        """The dead time's voltage error ``T_d f_pwm V_dc``, V."""
+        return self.d.dead_time * self.d.f_pwm * self.d.v_dc
+
+    @property
+    def v_bus_top(self) -> float:
+        """The largest injection the bus allows, ``INJ_BUS_MAX V_dc``, V."""
+        return self.d.v_dc * INJ_BUS_MAX
+
+    @property
+    def v_current_top(self) -> float:
+        """The largest injection the current limit allows, ``INJ_CURRENT_MAX i_max |Z|``, V."""
+        return INJ_CURRENT_MAX * self.d.i_max * self.z
+
+    @property
+    def v_top(self) -> float:
+        """The largest injection allowed, V."""
+        return min(self.v_bus_top, self.v_current_top)
+
+    @property
+    def v_need(self) -> float:
+        """The smallest injection the dead time lets hold: its error at most ``DEAD_TIME_RATIO_MAX``
+        times the weakest error signal ``V_inj s_min``, V."""
+        return self.dv_dt / (DEAD_TIME_RATIO_MAX * self.s_min)
+
+    @property
+    def v_inj(self) -> float:
+        """The injection, given or designed, V."""
+        if self.d.v_inj is not None:
+            return self.d.v_inj
+        return min(max(self.dv_dt / (DEAD_TIME_RATIO * self.s_min), self.d.v_dc * INJ_BUS_MIN), self.v_top)
+
+    @property
+    def dead_time_ratio(self) -> float:
+        """The dead time's voltage error over the weakest error signal, ``T_d f_pwm V_dc / (V_inj
+        s_min)`` (inf where the signal underflows: a given injection of 5e-324 V divided by zero)."""
+        signal = self.v_inj * self.s_min
+        return self.dv_dt / signal if signal > 0.0 else math.inf
+
+    @property
+    def force_need(self) -> float:
+        """The rated load plus ``m a_max``, N."""
+        return rated_load(self.motor, self.d) + self.motor.mass * self.d.a_max
+
+    @property
+    def v_avail(self) -> float:
+        """What the bus's linear range leaves beside the injection, ``V_dc / sqrt(3) - V_inj``, V."""
+        return self.d.v_dc / math.sqrt(3.0) - self.v_inj
+
+    def i_max_min(self) -> tuple[float, str]:
+        """The smallest ``i_max`` the application and the injection need, A, and what sets it.
+
+        Returns
+        -------
+        i_min : float
+            A.
+        why : str
+            Each need with its current.
+        """
+        m, d = self.motor, self.d
+        if d.load is None:  # (the rated load then is a share of K_f i_max)
+            i_force = m.mass * d.a_max / ((1.0 - RATED_LOAD_FRACTION) * m.force_constant)
+        else:
+            i_force = (d.load + m.mass * d.a_max) / m.force_constant
+        why = [f"rated load and m a_max: {limit_text(i_force, True)} A"]
+        i_inj = 0.0
+        if d.v_inj is None and self.v_need <= self.v_bus_top:  # (beyond the bus share no i_max does)
+            i_inj = self.v_need / (INJ_CURRENT_MAX * self.z)
+            why.append(f"HF current of the injection the dead time needs: {limit_text(i_inj, True)} A")
+        return max(i_force, i_inj), "; ".join(why)
+
+    def v_dc_min(self) -> float:
+        """The smallest bus that drives ``i_max`` through ``R_s`` beside the injection, V.
+
+        The designed injection taken as its share of the bus, its current limit aside (which only
+        lowers it): a bound that the design accepts.
+
+        Returns
+        -------
+        float
+            V.
+        """
+        r_i = self.motor.R_s * self.d.i_max
+        if self.d.v_inj is not None:
+            return math.sqrt(3.0) * (r_i + self.d.v_inj)
+        share = self.d.dead_time * self.d.f_pwm / (DEAD_TIME_RATIO * self.s_min)
+        share = min(max(share, INJ_BUS_MIN), INJ_BUS_MAX)
+        return r_i / (1.0 / math.sqrt(3.0) - share)
+
+    @property
+    def v_bus_speed(self) -> float:
+        """The speed beyond which the bus cannot drive the current the application needs, m/s."""
+        return fundamental_speed(self.motor, self.d.v_dc / math.sqrt(3.0),
+                                 self.force_need / self.motor.force_constant, self.dq[1])
+
+    @functools.cached_property
+    def k_e(self) -> np.ndarray:
+        """The local error gain over the period with the nominal demodulator gain (:func:`error_gain`)."""
+        L_d, L_q = self.dq
+        return error_gain(self.motor, self.f_inj, self.d.quad, L_q / (L_q - L_d))
+
+
+@dataclass(frozen=True)
+class Rule:
+    """One check of a design's inputs (:data:`DRIVE_RULES`).
+
+    Attributes
+    ----------
+    stage : int
+        1: an input against its own range; 2: a pair of inputs (or an input and the motor);
+        3: a quantity derived from them.
+    keys : tuple of str or callable
+        The inputs it reads, in the order one is named: the first the user gave, else the first
+        (``keys(x)`` of the :class:`DriveInputs` where the order depends on them).
+    holds : callable
+        ``holds(x) -> bool``.
+    says : callable
+        ``says(x, key) -> str``: what is wrong, with the value of ``key`` and its limit.
+    """
+
+    stage: int
+    keys: tuple[str, ...] | Callable[[DriveInputs], tuple[str, ...]]
+    holds: Callable[[DriveInputs], bool]
+    says: Callable[[DriveInputs, str], str]
+
+
+def _own_range(key: str, ok: Callable[[float], bool], what: str) -> Rule:
+    """A stage-1 rule: drive data ``key`` (None: not given, accepted) within its own range."""
+    return Rule(1, (key,), lambda x: getattr(x.d, key) is None or ok(getattr(x.d, key)),
+                lambda x, k: f"{what}, got {shown(getattr(x.d, k))}")
+
+
+def _positive(v: float) -> bool:
+    return math.isfinite(v) and v > 0.0
+
+
+def _dead_time_share_says(x: DriveInputs, key: str) -> str:
+    d = x.d
+    share = f"{d.dead_time * d.f_pwm * 100:.3g} % of the PWM period"
+    rule = f"the dead time must be below {DEAD_TIME_SHARE_MAX * 100:g} % of the PWM period"
+    if key == "f_pwm":
+        top = limit_text(DEAD_TIME_SHARE_MAX / d.dead_time, False)
+        return (f"{x.show('f_pwm')} makes the dead time ({x.show('dead_time')}) {share}; {rule}: below {top} "
+                "Hz with this dead time")
+    top = limit_text(DEAD_TIME_SHARE_MAX / d.f_pwm, False)
+    return (f"{x.show('dead_time')} is {share} ({1.0 / d.f_pwm:.3g} s at f_pwm = {d.f_pwm:g} Hz); {rule}: "
+            f"below {top} s")
+
+
+def _f_inj_says(x: DriveInputs, key: str) -> str:
+    d = x.d
+    if key == "f_inj":
+        return f"{x.show('f_inj')} must be at most {limit_text(d.f_pwm / 4.0, False)} Hz (f_pwm / 4)"
+    return (f"{x.show('f_pwm')} leaves the injection at most f_pwm / 4 = {d.f_pwm / 4.0:.3g} Hz, below its "
+            f"lowest {F_INJ_MIN / 8.0:g} Hz (the bandwidths of the loops follow it): at least "
+            f"{limit_text(F_INJ_MIN / 2.0, True)} Hz")
+
+
+def _v_inj_says(x: DriveInputs, key: str) -> str:
+    v_uv = x.d.v_dc * V_DC_MIN_FRACTION  # (the under-voltage limit)
+    return (f"{x.show('v_inj')} leaves no voltage for the fundamental on a {x.d.v_dc:g} V bus (amplitude * "
+            f"sqrt(3) must be below 0.8 of the {v_uv:.3g} V under-voltage limit, {0.8 * v_uv:.3g} V): "
+            f"below {limit_text(0.8 * v_uv / math.sqrt(3.0), False)} V")
+
+
+def _force_says(x: DriveInputs, key: str) -> str:
+    m, d = x.motor, x.d
+    f_max, ma, load = m.force_constant * d.i_max, m.mass * d.a_max, rated_load(m, d)
+    share = f" = {RATED_LOAD_FRACTION:g} K_f i_max," if d.load is None else ""
+    need = (f"the {x.force_need:.3g} N the application needs (rated load {load:.3g} N{share} + m a_max "
+            f"{ma:.3g} N)")
+    if key == "i_max":
+        i_min, why = x.i_max_min()
+        return (f"{x.show('i_max')}: K_f i_max = {f_max:.3g} N is below {need}: i_max must be at least "
+                f"{limit_text(i_min, True)} A ({why})")
+    if key == "load":
+        return (f"{x.show('load')}: {need} is beyond K_f i_max = {f_max:.3g} N: at most "
+                f"{limit_text(f_max - ma, False)} N at this a_max, or raise i_max")
+    return (f"{x.show('a_max')}: {need} is beyond K_f i_max = {f_max:.3g} N: at most "
+            f"{limit_text((f_max - load) / m.mass, False)} m/s^2 with this load and i_max")
+
+
+def _bus_drives_i_max(x: DriveInputs) -> bool:
+    return x.motor.R_s * x.d.i_max < x.d.v_dc / math.sqrt(3.0)
+
+
+def _bus_says(x: DriveInputs, key: str) -> str:
+    """R_s i_max against the bus (stage 2) or against what the injection leaves of it (stage 3)."""
+    d, r_i, v_lin = x.d, x.motor.R_s * x.d.i_max, x.d.v_dc / math.sqrt(3.0)
+    if key == "i_max":
+        top = limit_text(max(x.v_avail, 0.0) / x.motor.R_s, False)
+        return (f"{x.show('i_max')}: R_s i_max = {r_i:.3g} V is beyond the {x.v_avail:.3g} V the "
+                f"{d.v_dc:g} V bus leaves beside the injection ({x.v_inj:.3g} V; V_dc / sqrt(3) - V_inj): "
+                f"at most {top} A")
+    if key == "v_inj":
+        return (f"{x.show('v_inj')}: after it there is {x.v_avail:.3g} V left of the {d.v_dc:g} V bus "
+                f"(V_dc / sqrt(3) - V_inj), below R_s i_max = {r_i:.3g} V: below "
+                f"{limit_text(v_lin - r_i, False)} V")
+    left = (f"after the injection ({x.v_inj:.3g} V) there is {x.v_avail:.3g} V left" if _bus_drives_i_max(x)
+            else f"its linear range V_dc / sqrt(3) is {v_lin:.3g} V")
+    return (f"{x.show('v_dc')}: {left}, below R_s i_max = {r_i:.3g} V: at least "
+            f"{limit_text(x.v_dc_min(), True)} V")
+
+
+def _injection_keys(x: DriveInputs) -> tuple[str, ...]:
+    if x.v_bus_top < x.v_need:  # (no i_max makes the share of the bus hold: the share of the dead time)
+        return ("dead_time", "f_pwm")
+    return ("i_max", "f_inj", "v_dc", "dead_time", "f_pwm")
+
+
+def _injection_holds(x: DriveInputs) -> bool:
+    return x.d.v_inj is not None or (x.v_top > 0.0 and x.v_need <= x.v_top)
+
+
+def _injection_says(x: DriveInputs, key: str) -> str:
+    d, k = x.d, DEAD_TIME_RATIO_MAX * x.s_min  # (the injection needed is dv_dt / k)
+    bus = x.v_bus_top <= x.v_current_top
+    top = f"the largest injection allowed is {x.v_top:.3g} V (" + (
+        f"{INJ_BUS_MAX:.3g} V_dc)" if bus else f"{INJ_CURRENT_MAX:g} i_max |Z(f_inj)|, |Z| = {x.z:.3g} ohm)")
+    need = (f"the dead-time voltage error T_d f_pwm V_dc = {x.dv_dt:.3g} V needs an injection of at least "
+            f"{x.v_need:.3g} V (the error at most {DEAD_TIME_RATIO_MAX:g} x the weakest HF error signal "
+            f"V_inj s_min, s_min = {x.s_min:.3g})")
+    i_inj = limit_text(x.v_need / (INJ_CURRENT_MAX * x.z), True)
+    if key == "i_max":
+        i_min, why = x.i_max_min()
+        return f"{x.show('i_max')}: {need}; {top}: i_max must be at least {limit_text(i_min, True)} A ({why})"
+    if key == "f_inj":
+        z_min = x.v_need / (INJ_CURRENT_MAX * d.i_max)
+        r_s = x.motor.R_s  # (|R_s + j w L| = z_min; products: a square of 1e155 overflowed)
+        f_min = math.sqrt(max(z_min - r_s, 0.0) * (z_min + r_s)) / (2.0 * math.pi * 0.5 * sum(x.dq))
+        return (f"{x.show('f_inj')}: {need}; {top}: at least {limit_text(f_min, True)} Hz, or i_max at least "
+                f"{i_inj} A")
+    if key == "v_dc":
+        top_v = limit_text(k * x.v_top / (d.dead_time * d.f_pwm), False)
+        return (f"{x.show('v_dc')}: {need}; {top}: at most {top_v} V with this i_max, or i_max at least "
+                f"{i_inj} A")
+    share = f"{d.dead_time * d.f_pwm * 100:.3g} % of the PWM period"
+    small = "the saliency is too small for this dead time"
+    if key == "f_pwm":
+        more = (f"at most {limit_text(k * x.v_top / (d.dead_time * d.v_dc), False)} Hz with this dead time"
+                if bus else f"lower it, or raise i_max to at least {i_inj} A")
+        return f"{x.show('f_pwm')} makes the dead time {share}: {need}; {top}: {small}: {more}"
+    more = "" if bus else f", or raise i_max to at least {i_inj} A"
+    top_t = limit_text(k * x.v_top / (d.f_pwm * d.v_dc), False)
+    return (f"{x.show('dead_time')} is {share}: {need}; {top}: {small}: at most {top_t} s at f_pwm = "
+            f"{d.f_pwm:g} Hz{more}")
+
+
+def _speed_says(x: DriveInputs, key: str) -> str:
+    m, d = x.motor, x.d
+    i_q = x.force_need / m.force_constant
+    why = (f"where the back-EMF, R_s i and omega L_q i at the current the application needs at speed "
+           f"({i_q:.3g} A: the load and m a_max) take the whole linear range V_dc / sqrt(3), injection aside")
+    if key == "v_dc":
+        w = 2.0 * math.pi * d.v_max / m.pole_pitch
+        v_min = math.sqrt(3.0) * math.hypot(m.R_s * i_q, w * (x.dq[1] * i_q + m.psi_pm))
+        return (f"{x.show('v_dc')} allows {x.v_bus_speed:.3g} m/s, below v_max = {d.v_max:g} m/s ({why}): at "
+                f"least {limit_text(v_min, True)} V")
+    return (f"{x.show('v_max')} is beyond what the {d.v_dc:g} V bus allows, {x.v_bus_speed:.3g} m/s ({why}): "
+            f"at most {limit_text(x.v_bus_speed, False)} m/s, or raise v_dc")
+
+
+def _move_keys(x: DriveInputs) -> tuple[str, ...]:
+    slow = 2.0 * x.motor.pole_pitch / x.d.v_max >= x.d.v_max / x.d.a_max
+    return ("v_max", "a_max") if slow else ("a_max", "v_max")
+
+
+def _move_holds(x: DriveInputs) -> bool:
+    return 2.0 * x.motor.pole_pitch / x.d.v_max + x.d.v_max / x.d.a_max <= MOVE_TIME_MAX
+
+
+def _move_says(x: DriveInputs, key: str) -> str:
+    d, two, t = x.d, 2.0 * x.motor.pole_pitch, MOVE_TIME_MAX
+    limit = ""
+    if key == "a_max" and two / d.v_max < t:
+        limit = f": at least {limit_text(d.v_max / (t - two / d.v_max), True)} m/s^2 at this v_max"
+    elif key == "v_max" and t * d.a_max * t * d.a_max > 4.0 * two * d.a_max:
+        # (2 tau / v + v / a = T: v^2 - T a v + 2 tau a = 0)
+        root = math.sqrt(t * d.a_max * t * d.a_max - 4.0 * two * d.a_max)
+        slow = two / d.v_max >= d.v_max / d.a_max
+        v = (t * d.a_max + (-root if slow else root)) / 2.0
+        limit = f": {'at least' if slow else 'at most'} {limit_text(v, slow)} m/s at this a_max"
+    return (f"{x.show(key)}: a move over two pole pitches at v_max = {d.v_max:g} m/s, a_max = {d.a_max:g} "
+            f"m/s^2 lasts {two / d.v_max + d.v_max / d.a_max:.3g} s, beyond {t:g} s{limit}")
+
+
+def _error_gain_says(x: DriveInputs, key: str) -> str:
+    return ("the demodulated error changes sign at some positions (saliency vanishes or reverses) with "
+            f"the injection at {x.f_inj:g} Hz, quad = {x.d.quad:g}: the HF observer cannot hold there")
+
+
+def _travel_says(x: DriveInputs, key: str) -> str:
+    return (f"{x.d.travel * 1e3:g} mm: the stroke must cover at least one pole pitch "
+            f"({x.motor.pole_pitch * 1e3:g} mm: the drive holds anywhere in the period)")
+
+
+def _v_inj_fits(x: DriveInputs) -> bool:
+    return x.d.v_inj is None or x.d.v_inj * math.sqrt(3.0) < 0.8 * x.d.v_dc * V_DC_MIN_FRACTION
+
+
+#: the design's checks of its inputs, in the order they run (docs/tuning.md): (1) each input against
+#: its own range, (2) pairs of inputs (and an input against the motor), (3) the quantities derived
+#: from them; so a message always names an input the user can change: the first of its rule's keys
+#: the user gave (a value that is not the default), with that input's limit
+DRIVE_RULES: tuple[Rule, ...] = (
+    *(_own_range(k, _positive, "must be a positive number") for k in ("v_dc", "f_pwm", "i_max", "v_max",
+                                                                      "a_max")),
+    Rule(1, ("f_pwm",), lambda x: x.d.f_pwm <= F_PWM_MAX,
+         lambda x, k: f"{x.show('f_pwm')} is beyond the largest rate of the controller library: at most "
+                      f"{F_PWM_MAX:g} Hz"),
+    _own_range("dead_time", lambda v: math.isfinite(v) and v >= 0.0, "must be a number of seconds >= 0"),
+    Rule(1, ("shape",), lambda x: x.d.shape in ("pulsating", "rotating", "square"),
+         lambda x, k: f"must be pulsating, rotating or square, got {x.d.shape!r}"),
+    _own_range("quad", lambda v: 0.0 <= v < 1.0, "must be in [0, 1)"),
+    _own_range("load", _positive, "the rated load must be a force > 0 N (the certificate's loads are "
+               "fractions of it)"),
+    _own_range("travel", _positive, "must be a stroke > 0 m"),
+    _own_range("v_inj", _positive, "must be positive"),
+    _own_range("f_inj", lambda v: math.isfinite(v) and v >= F_INJ_MIN / 8.0,
+               f"must be at least {F_INJ_MIN / 8.0:g} Hz (the bandwidths of the loops follow it)"),
+    Rule(1, ("motor",), lambda x: saliency_problem(x.motor) is None, lambda x, k: saliency_problem(x.motor)),
+    # (2) pairs
+    Rule(2, ("dead_time", "f_pwm"), lambda x: x.d.dead_time * x.d.f_pwm < DEAD_TIME_SHARE_MAX,
+         _dead_time_share_says),
+    Rule(2, ("quad",), lambda x: x.d.shape == "pulsating" or x.d.quad == 0.0 or not x.given("quad"),
+         lambda x, k: f"{x.d.quad:g}: only with the pulsating injection (the {x.d.shape} injection has no "
+                      "q-axis share): leave it out"),
+    Rule(2, ("f_inj",), lambda x: x.d.shape != "square" or x.d.f_inj is None,
+         lambda x, k: f"{x.show('f_inj')}: the square wave runs at f_pwm / 2 = {x.d.f_pwm / 2.0:g} Hz: leave "
+                      "it out"),
+    Rule(2, ("f_inj", "f_pwm"), lambda x: F_INJ_MIN / 8.0 <= x.f_inj <= x.d.f_pwm / 4.0, _f_inj_says),
+    Rule(2, ("travel",), lambda x: x.d.travel is None or x.d.travel >= x.motor.pole_pitch, _travel_says),
+    Rule(2, ("v_inj",), _v_inj_fits, _v_inj_says),
+    Rule(2, ("i_max", "load", "a_max"), lambda x: x.force_need <= x.motor.force_constant * x.d.i_max,
+         _force_says),
+    Rule(2, ("i_max", "v_dc"), _bus_drives_i_max, _bus_says),
+    # (3) derived quantities
+    Rule(3, _injection_keys, _injection_holds, _injection_says),
+    Rule(3, ("i_max", "v_dc", "v_inj"), lambda x: x.v_avail > x.motor.R_s * x.d.i_max, _bus_says),
+    Rule(3, ("v_max", "v_dc"), lambda x: x.d.v_max <= x.v_bus_speed, _speed_says),
+    Rule(3, _move_keys, _move_holds, _move_says),
+    Rule(3, ("motor",), lambda x: bool(np.all(x.k_e > 0.0)), _error_gain_says),
+)
+
+
+def check_drive(motor: Motor, d: DriveData, source: str = "<tune>") -> DriveInputs:
+    """Check a design's inputs against :data:`DRIVE_RULES`, in order.
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+    d : DriveData
+        The drive and application.
+    source : str, optional
+        Named in the message.
+
+    Returns
+    -------
+    DriveInputs
+        The inputs with what the rules derived from them.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        The first rule broken, naming ``source``, the input (the first of the rule's keys the user
+        gave, else its first), its value and its limit.
+    """
+    x = DriveInputs(motor, d)
+    for rule in DRIVE_RULES:
+        if not rule.holds(x):
+            keys = rule.keys(x) if callable(rule.keys) else rule.keys
+            key = next((k for k in keys if x.given(k)), keys[0])
+            raise InputError(source, key, rule.says(x, key))
+    return x
+
+
 def design(
     motor: Motor, drive: DriveData | None = None, source: str = "<tune>", analyse: bool = True
 ) -> Design:
@@ -524,95 +1032,25 @@ def design(
     Raises
     ------
     linsense.errors.InputError
-        Bad drive data (naming ``source`` and the key), a motor without mean saliency, or a drive
-        that leaves no room for the injection.
+        The first of :data:`DRIVE_RULES` the motor and drive break (:func:`check_drive`), naming
+        ``source``, the input at fault, its value and its limit.
     """
     d = drive or DriveData()
-    for key in ("v_dc", "f_pwm", "i_max", "v_max", "a_max"):
-        v = getattr(d, key)
-        if not (math.isfinite(v) and v > 0):
-            raise InputError(source, key, f"must be a positive number, got {v!r}")
-    if d.shape not in ("pulsating", "rotating", "square"):
-        raise InputError(source, "shape", f"must be pulsating, rotating or square, got {d.shape!r}")
-    if not (0.0 <= d.quad < 1.0):
-        raise InputError(source, "quad", f"must be in [0, 1), got {d.quad!r}")
+    x = check_drive(motor, d, source)  # (every refusal: DRIVE_RULES, in order)
     warnings: list[str] = []
-    L_d, L_q = require_saliency(motor, source)
-    f_inj = d.f_inj if d.f_inj is not None else injection_frequency(d.f_pwm)
-    if not (F_INJ_MIN / 8.0 <= f_inj and 4.0 * f_inj <= d.f_pwm):
-        raise InputError(
-            source, "f_inj", f"must be between {F_INJ_MIN / 8.0:g} Hz (the loops' bandwidths follow it) and "
-            f"f_pwm / 4 = {d.f_pwm / 4:g} Hz, got {f_inj:g}"
-        )
-    if d.travel is not None and not (math.isfinite(d.travel) and d.travel >= motor.pole_pitch):
-        raise InputError(source, "travel", f"{d.travel * 1e3:g} mm: the stroke must cover at least one pole "
-                         f"pitch ({motor.pole_pitch * 1e3:g} mm: the drive holds anywhere in the period)")
-    z = abs(complex(motor.R_s, 2.0 * math.pi * f_inj * 0.5 * (L_d + L_q)))
-    s_min = saliency_min(motor)
-    dv_dt = d.dead_time * d.f_pwm * d.v_dc
-    v_top = min(d.v_dc * INJ_BUS_MAX, INJ_CURRENT_MAX * d.i_max * z)
-    if d.v_inj is not None:
-        v_inj = d.v_inj
-        if v_inj > 0 and dv_dt / (v_inj * s_min) > DEAD_TIME_RATIO_MAX:
-            warnings.append(f"the given injection leaves the dead time's voltage error "
-                            f"{dv_dt / (v_inj * s_min):.3g} times the weakest HF error signal (the design "
-                            f"refuses above {DEAD_TIME_RATIO_MAX:g}): expect the holds to fail")
-    else:
-        if not v_top * s_min > 0.0:  # (i_max = 5e-324 A: a ZeroDivisionError traceback)
-            raise InputError(source, "i_max", f"{d.i_max!r} A leaves no injection: the largest allowed, "
-                             f"{INJ_CURRENT_MAX:g} i_max |Z(f_inj)|, is {v_top:.3g} V")
-        if dv_dt / (v_top * s_min) > DEAD_TIME_RATIO_MAX:
-            raise InputError(
-                source, "dead_time",
-                f"the dead time's voltage error T_d f_pwm V_dc = {dv_dt:.3g} V is "
-                f"{dv_dt / (v_top * s_min):.2g} times the weakest HF error signal (V_inj s_min = "
-                f"{v_top:.3g} V x {s_min:.3g}) at the largest injection allowed (limit "
-                f"{DEAD_TIME_RATIO_MAX:g}): the saliency is too small for this dead time at this bus; "
-                "lower the dead time or the PWM rate, or raise i_max")
-        v_inj = min(max(dv_dt / (DEAD_TIME_RATIO * s_min), d.v_dc * INJ_BUS_MIN), v_top)
-    if not (v_inj > 0):
-        raise InputError(source, "v_inj", f"must be positive, got {v_inj!r}")
-    v_lin = d.v_dc / math.sqrt(3.0)
-    # the drive refuses an injection above 0.8 of the under-voltage limit (ls_drive_init)
-    v_dc_min = d.v_dc * V_DC_MIN_FRACTION
-    if v_inj * math.sqrt(3.0) >= 0.8 * v_dc_min:
-        raise InputError(
-            source,
-            "v_inj",
-            f"{v_inj:g} V leaves no voltage for the fundamental on a {d.v_dc:g} V bus (amplitude * "
-            f"sqrt(3) must be below 0.8 of the {v_dc_min:.3g} V under-voltage limit, {0.8 * v_dc_min:.3g} V)",
-        )
+    L_d, L_q = x.dq
+    f_inj, s_min, v_inj = x.f_inj, x.s_min, x.v_inj
+    if d.v_inj is not None and x.dead_time_ratio > DEAD_TIME_RATIO_MAX:
+        warnings.append(f"the given injection leaves the dead time's voltage error "
+                        f"{x.dead_time_ratio:.3g} times the weakest HF error signal (the design "
+                        f"refuses above {DEAD_TIME_RATIO_MAX:g}): expect the holds to fail")
     i_hf = float(
         np.mean(hf_current_amplitude(motor, np.linspace(0, 2 * np.pi, 90, endpoint=False), v_inj, f_inj))
     )
     if i_hf > d.i_max:
         warnings.append(f"the HF current ({i_hf:.2f} A) exceeds i_max ({d.i_max:g} A): lower v_inj")
     # the fundamental beside the injection: R i + (omega L i, back-EMF) at i_max
-    v_avail = v_lin - v_inj
-    v_r = motor.R_s * d.i_max
-    if v_avail <= v_r:
-        raise InputError(
-            source,
-            "v_dc",
-            f"{d.v_dc:g} V: after the injection ({v_inj:.3g} V) there is "
-            f"{v_avail:.3g} V left, below R_s i_max = {v_r:.3g} V",
-        )
-    # a speed beyond what the bus allows (before the move's time, which would blame the acceleration)
-    need = rated_load(motor, d) + motor.mass * d.a_max
-    v_bus = fundamental_speed(motor, v_lin, need / motor.force_constant, L_q)
-    if d.v_max > v_bus and need <= motor.force_constant * d.i_max:  # (else the force is refused first)
-        raise InputError(source, "v_max", f"{d.v_max:g} m/s is beyond what the {d.v_dc:g} V bus allows: "
-                         f"{v_bus:.3g} m/s, where the back-EMF, R_s i and omega L_q i at the current the "
-                         f"application needs at speed ({need / motor.force_constant:.3g} A: the load and "
-                         f"m a_max) take the whole linear range V_dc / sqrt(3), injection aside: lower "
-                         f"--v-max or raise the bus")
-    # the application's move over two pole pitches (the certificate's trajectory) within a minute
-    t_move = 2.0 * motor.pole_pitch / d.v_max + d.v_max / d.a_max
-    if t_move > MOVE_TIME_MAX:
-        key = "v_max" if 2.0 * motor.pole_pitch / d.v_max >= d.v_max / d.a_max else "a_max"
-        raise InputError(source, key, f"a move over two pole pitches at v_max = {d.v_max:g} m/s, a_max = "
-                         f"{d.a_max:g} m/s^2 lasts {t_move:.3g} s, beyond {MOVE_TIME_MAX:g} s")
-    headroom = fundamental_speed(motor, v_avail, d.i_max, L_q)
+    headroom = fundamental_speed(motor, x.v_avail, d.i_max, L_q)
     if headroom < d.v_max:
         warnings.append(
             f"the bus leaves room for the fundamental up to {headroom:.3g} m/s at i_max, below "
@@ -629,7 +1067,7 @@ def design(
     kp_v, ki_v = speed_gains(f_v, motor.mass)  # (the PI's integral: the encoder modes' with load_ff)
     kp_x = 2.0 * math.pi * f_v / RATIO_SPEED_POS
     gain = L_q / (L_q - L_d)
-    k_e = observable_error_gain(motor, f_inj, d.quad, source)
+    k_e = x.k_e
     if k_e.min() < 0.3:
         warnings.append(
             f"the error gain drops to {k_e.min():.2f} of nominal at some positions "
@@ -662,11 +1100,11 @@ def design(
         k_e_max=float(k_e.max()),
         headroom_speed=headroom,
         warnings=warnings,
-        dead_time_ratio=dv_dt / (v_inj * s_min),
+        dead_time_ratio=x.dead_time_ratio,
         inj_ramp_rate=v_inj / INJ_RAMP_TIME,
         s_min=s_min,
     )
-    _limits(dz, motor, d, warnings, source)
+    _limits(dz, motor, d, warnings)
     _friction_ripple(dz, motor, d, L_q, warnings)
     if not analyse:
         return dz
@@ -914,24 +1352,22 @@ def fundamental_speed(motor: Motor, v_avail: float, i_q: float, L_q: float) -> f
         m/s (0 where ``R_s i_q`` alone takes ``v_avail``).
     """
     w_per_v = 2.0 * math.pi / motor.pole_pitch  # electrical rad/s per m/s
-    return w_per_v**-1 * math.sqrt(max(v_avail**2 - (motor.R_s * i_q) ** 2, 0.0)) / (L_q * i_q + motor.psi_pm)
+    v_r = motor.R_s * i_q
+    if max(abs(v_avail), abs(v_r)) < 1e150:
+        root = math.sqrt(max(v_avail**2 - v_r**2, 0.0))
+    else:  # (the squares overflow: an OverflowError traceback with a_max = 1e300)
+        root = math.sqrt(max(v_avail - v_r, 0.0)) * math.sqrt(max(v_avail + v_r, 0.0))
+    return w_per_v**-1 * root / (L_q * i_q + motor.psi_pm)
 
 
-def _limits(dz: Design, motor: Motor, d: DriveData, warnings: list, source: str) -> None:
+def _limits(dz: Design, motor: Motor, d: DriveData, warnings: list) -> None:
     """The speed cap, the trips and the observer's clamp with their margins over the application
     (docs/tuning.md, "The limits"); the rated load. Fills ``dz`` in place."""
     w_per_v = 2.0 * math.pi / motor.pole_pitch  # electrical rad/s per m/s
     f_max = motor.force_constant * d.i_max
     dz.load = rated_load(motor, d)
     dz.force_max = f_max
-    if not (math.isfinite(dz.load) and dz.load > 0.0):
-        raise InputError(source, "load", f"the rated load must be a force > 0 N (the certificate's loads "
-                         f"are fractions of it), got {dz.load!r}")
-    need = dz.load + motor.mass * d.a_max
-    if need > f_max:
-        raise InputError(source, "load", f"the application needs {need:.3g} N (load {dz.load:.3g} N + "
-                         f"m a_max {motor.mass * d.a_max:.3g} N), beyond K_f i_max = {f_max:.3g} N: raise "
-                         "i_max or lower a_max / the load")
+    need = dz.load + motor.mass * d.a_max  # (within K_f i_max: DRIVE_RULES)
     if need > FORCE_MARGIN * f_max:
         warnings.append(
             f"the application needs {need:.3g} N (load {dz.load:.3g} N + m a_max "

@@ -273,10 +273,12 @@ def design_startup(motor: Motor, *, v_dc: float, f_pwm: float, i_max: float, obs
     sp, sm = pulse_currents(float(np.max(L_d)), motor.R_s, i_m, a, v, n * ts)
     signal = sp + sm  # (sm < 0)
     lsb = 2.0 * adc_range / 2**adc_bits if adc_bits > 0 else 0.0
-    sigma_1 = math.sqrt(current_noise**2 + lsb**2 / 12.0)
-    pairs = max(1, math.ceil((Z_SIGMA * 2.0 * sigma_1 / signal) ** 2)) if signal > 0 else PAIRS_MAX
+    sigma_1 = math.hypot(current_noise, lsb / math.sqrt(12.0))  # (hypot: 1e300 A of noise overflowed)
+    q = Z_SIGMA * 2.0 * sigma_1 / signal if signal > 0 else 0.0
+    r2 = q * q  # (a product: q**2 raised OverflowError beyond 1e154)
+    pairs = (max(1, math.ceil(r2)) if math.isfinite(r2) else math.inf) if signal > 0 else PAIRS_MAX
     if pairs > PAIRS_MAX:
-        warnings.append(f"the saturation signal ({signal * 1e3:.3g} mA) needs {pairs} pulse pairs against "
+        warnings.append(f"the saturation signal ({signal * 1e3:.3g} mA) needs {pairs:g} pulse pairs against "
                         f"{sigma_1 * 1e3:.3g} mA of noise: limited to {PAIRS_MAX}, the decision is less sure")
         pairs = PAIRS_MAX
     sigma = 2.0 * sigma_1 / math.sqrt(pairs)
