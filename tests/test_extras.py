@@ -138,7 +138,7 @@ def test_core_outputs_are_written(core_session):
 def test_default_trace_without_pyarrow_is_csv_with_a_note(core_session):
     _, out = core_session
     err = out["simulate default"]["stderr"]
-    assert "trace.csv" in err and "pip install 'linsense[parquet]'" in err
+    assert "trace.csv" in err and "pip install -e '.[parquet]'" in err
     assert "note" not in out["simulate csv"]["stderr"]  # (asked for: no note)
 
 
@@ -149,7 +149,7 @@ def test_feature_of_an_extra_stops_in_one_line_naming_it(core_session, name, ext
     assert res["rc"] == 2, res
     lines = res["stderr"].splitlines()
     assert len(lines) == 1, res["stderr"]
-    assert lines[0].startswith("linsense: error: ") and f"pip install 'linsense[{extras}]'" in lines[0]
+    assert lines[0].startswith("linsense: error: ") and f"pip install -e '.[{extras}]'" in lines[0]
     assert "Traceback" not in res["stderr"]
 
 
@@ -184,13 +184,14 @@ def test_the_api_stops_in_one_line_too(tmp_path):
     r = subprocess.run([sys.executable, "-c", code, str(SCENARIO)], capture_output=True, text=True,
                        cwd=tmp_path, timeout=300)
     assert r.returncode == 0, r.stderr
+    src = "in linsense's source tree (make install installs every extra)"
     assert r.stdout.splitlines() == [
-        "Result.to_dataframe needs pandas, which is not installed: pip install 'linsense[parquet]'",
-        "the Parquet trace needs pyarrow, which is not installed: pip install 'linsense[parquet]'",
-        "the HTML report needs jinja2, which is not installed: pip install 'linsense[report]'",
-        "the FEA (linsense fea) needs skfem, which is not installed: pip install 'linsense[fea]'",
+        "Result.to_dataframe needs pandas, which is not installed: pip install -e '.[parquet]' " + src,
+        "the Parquet trace needs pyarrow, which is not installed: pip install -e '.[parquet]' " + src,
+        "the HTML report needs jinja2, which is not installed: pip install -e '.[report]' " + src,
+        "the FEA (linsense fea) needs skfem, which is not installed: pip install -e '.[fea]' " + src,
         "the sweep engine (linsense sweep) needs dask, distributed, pandas, pyarrow, rich, which are not "
-        "installed: pip install 'linsense[sweep]'",
+        "installed: pip install -e '.[sweep]' " + src,
     ]
 
 
@@ -210,7 +211,8 @@ def test_require_names_the_extra_and_the_feature():
     with pytest.raises(MissingExtraError) as e:
         require("linsense_no_such_module.sub", extra="parquet", feature="the thing")
     assert str(e.value) == ("the thing needs linsense_no_such_module, which is not installed: "
-                            "pip install 'linsense[parquet]'")
+                            "pip install -e '.[parquet]' in linsense's source tree (make install installs "
+                            "every extra)")
     assert isinstance(e.value, LinsenseError) and isinstance(e.value, ImportError)
     assert require("json", extra="report", feature="x") is sys.modules["json"]
     with pytest.raises(ValueError, match="unknown extra"):
@@ -232,8 +234,9 @@ def test_require_extras_names_every_missing_module_once(monkeypatch):
     monkeypatch.setattr(ex, "available", lambda m: m not in ("pandas", "jinja2"))
     with pytest.raises(MissingExtraError) as e:
         require_extras("report", "sweep", "parquet", feature="it")
-    assert str(e.value) == ("it needs jinja2, pandas, which are not installed: "
-                            "pip install 'linsense[report,sweep,parquet]'")
+    assert str(e.value) == ("it needs jinja2, pandas, which are not installed: pip install -e "
+                            "'.[report,sweep,parquet]' in linsense's source tree (make install installs "
+                            "every extra)")
     monkeypatch.setattr(ex, "available", lambda m: True)
     require_extras("report", "sweep", feature="it")
 

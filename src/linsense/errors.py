@@ -230,5 +230,8 @@ class MissingExtraError(LinsenseError, ImportError):
         names = ", ".join(self.modules)
         what = f"which fails to import ({bounded(reason, MAX_SHOWN_CHARS)})" if reason else \
             f"{'which is' if len(self.modules) == 1 else 'which are'} not installed"
-        message = f"{feature} needs {names}, {what}: pip install 'linsense[{','.join(self.extras)}]'"
+        extras = ",".join(self.extras)
+        # (linsense is not on PyPI yet: the extra is installed from the source tree, README "Set-up")
+        message = (f"{feature} needs {names}, {what}: pip install -e '.[{extras}]' in linsense's source "
+                   f"tree (make install installs every extra)")
         super().__init__(message.replace("\n", " "), name=self.modules[0] if self.modules else None)

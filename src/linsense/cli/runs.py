@@ -74,7 +74,7 @@ def simulate(scenario: str, out: str | None, fidelity: str | None, trace_fmt: st
         trace_fmt = "parquet" if have_parquet() else "csv"
         if trace_fmt == "csv":
             c.warn("trace.csv, not trace.parquet: the Parquet trace needs pyarrow "
-                   "(pip install 'linsense[parquet]')")
+                   "(pip install -e '.[parquet]' in linsense's source tree)")
     sc = _scenario(scenario)
     out = c.default_out(out, sc.name if scenario == "-" else scenario, "simulate")
     if fidelity is not None:

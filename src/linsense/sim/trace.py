@@ -20,7 +20,7 @@ import numpy as np
 from linsense._extras import available, require
 from linsense.io import write_atomic, write_atomic_with
 
-#: what needs pyarrow, in the message when it is missing (pip install 'linsense[parquet]')
+#: what needs pyarrow, in the message when it is missing (the parquet extra)
 _PARQUET = "the Parquet trace"
 
 #: (column, array name, component or None)
