@@ -60,7 +60,7 @@ def write_stream(stream, text: str, is_stdout: bool = True) -> None:
             from linsense.io import write_all
 
             stream.flush()
-            write_all(buf, text.encode(stream.encoding or "utf-8", stream.errors or "strict"))
+            write_all(buf, encoded(text, stream))
             buf.flush()
     except (OSError, ValueError, AttributeError) as exc:
         if not is_stdout:
@@ -72,6 +72,30 @@ def write_stream(stream, text: str, is_stdout: bool = True) -> None:
         from linsense.errors import OutputError
 
         raise OutputError("<stdout>", "cannot write: standard output is closed") from None
+
+
+def encoded(text: str, stream) -> bytes:
+    """``text`` in the encoding of ``stream``, what it cannot show escaped (``\\xe9``), as standard
+    error shows it: a folder named ``out é`` under ``PYTHONIOENCODING=ascii`` (or a Latin-1 locale)
+    was written, then "standard output is closed", exit 2.
+
+    Parameters
+    ----------
+    text : str
+        The text.
+    stream : text stream
+        Its ``encoding`` and ``errors`` are used (UTF-8 and strict when it has none).
+
+    Returns
+    -------
+    bytes
+        The bytes to write.
+    """
+    encoding = getattr(stream, "encoding", None) or "utf-8"
+    try:
+        return text.encode(encoding, getattr(stream, "errors", None) or "strict")
+    except UnicodeEncodeError:
+        return text.encode(encoding, "backslashreplace")
 
 
 _handler = _Report()
@@ -325,17 +349,28 @@ def out_option(command: str, what: str, *, folder: bool, ext: str = "", dash: bo
     kind = "output folder" if folder else "output file" + (" (- for standard output)" if dash else "")
     path = click.Path(file_okay=False) if folder else click.Path(dir_okay=False, allow_dash=dash)
     default = OUT_HELP.format(command=command, ext=ext or ("/" if folder else ""), what=what)
-    return click.option("--out", default=None, type=path, callback=folder_out if folder else None,
+    return click.option("--out", default=None, type=path, callback=folder_out if folder else file_out,
                         help=f"{kind} {default}")
+
+
+def file_out(ctx, param, value):
+    """Click callback of an output file (and, through :func:`folder_out`, of a folder): a loop of
+    symbolic links is refused before the work (:func:`linsense.io.out_target`, the one resolution
+    of every output; it was refused after a certificate's run, or never)."""
+    if value is not None and value != "-":
+        from linsense.io import out_target
+
+        out_target(value)
+    return value
 
 
 def folder_out(ctx, param, value):
     """Click callback of an output folder: ``-`` is refused (it made a folder named ``-`` where
-    ``--out -`` of a file means standard output)."""
+    ``--out -`` of a file means standard output); then :func:`file_out`."""
     if value == "-":
         raise click.BadParameter("a folder is written here, not standard output: give the folder's name "
                                  "(./- for a folder named -)")
-    return value
+    return file_out(ctx, param, value)
 
 
 def default_out(out: str | None, name: str, command: str, ext: str = "") -> str:
