@@ -544,7 +544,10 @@ def output_error(path: str | os.PathLike, exc: OSError):
         folder = Path(os.path.realpath(shown)).parent  # (links followed, as the write followed them)
         while not folder.exists() and folder.parent != folder:
             folder = folder.parent
-        if not os.access(folder, os.W_OK):
+        if _umask() & 0o300:  # (the folders this run made are read-only, or closed, to their owner)
+            reason += (f": the umask {_umask():04o} takes the owner's write permission away from the folders "
+                       "it makes (umask 022 or 077)")
+        elif not os.access(folder, os.W_OK):
             reason += ": its folder is read-only"
     return OutputError(shown, f"cannot write: {reason}")
 

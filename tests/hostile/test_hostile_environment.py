@@ -276,3 +276,40 @@ def test_fea_json_is_the_same_bytes_run_after_run(tmp_path):
     assert "times_s" not in doc and "solve_s" not in json.dumps(doc)
     timing = json.loads((tmp_path / "o" / "timing.json").read_text())
     assert timing["times_s"]["solve_s"] > 0
+
+
+def test_a_home_without_a_settings_folder_is_one_warning(tmp_path):
+    """A read-only (or missing) HOME: matplotlib's own two lines ("mkdir -p failed for path ...:
+    [Errno 20] Not a directory: ...", "Matplotlib created a temporary cache directory ...") at every
+    run with a figure, under `-q` too."""
+    (tmp_path / "home").write_text("")  # (a HOME that is a file: no folder can be made in it, even as root)
+    env = {"HOME": str(tmp_path / "home"), "MPLCONFIGDIR": "", "XDG_CONFIG_HOME": "", "XDG_CACHE_HOME": ""}
+    p = run(["-q", "plot", "--motor", "ecce2010", "--points", "36", "--out", "o"], tmp_path, env=env,
+            before="unset MPLCONFIGDIR XDG_CONFIG_HOME XDG_CACHE_HOME; ")
+    assert p.returncode == 0, p.stderr
+    lines = p.stderr.strip().splitlines()
+    assert len(lines) == 1, lines
+    assert lines[0].startswith("linsense: warning: matplotlib has no writable folder"), lines
+    assert "Errno" not in p.stderr and "MPLCONFIGDIR" in lines[0]
+
+
+def test_a_umask_that_closes_the_folders_is_named(tmp_path):
+    """`umask 0277`: the folders a run makes are read-only to their owner, the run's own files
+    cannot go in them: "um/trace.parquet: cannot write: permission denied", no cause named."""
+    prefix = _unprivileged()
+    if prefix is None:
+        pytest.skip("no way to run without root's override of file modes here")
+    p = run(["simulate", "step3_lut", "--out", "um"], tmp_path, before=f"umask 0277; {' '.join(prefix)} ")
+    one_line(p, "um/", "permission denied", "umask 0277")
+
+
+def _unprivileged() -> list[str] | None:
+    """A prefix that runs a command without root's override of file modes, or None."""
+    import shutil
+
+    if os.geteuid() != 0:
+        return []
+    if shutil.which("setpriv") is None:
+        return None
+    p = subprocess.run(["setpriv", "--bounding-set=-all", "--inh-caps=-all", "true"], capture_output=True)
+    return ["setpriv", "--bounding-set=-all", "--inh-caps=-all"] if p.returncode == 0 else None

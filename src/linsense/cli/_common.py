@@ -103,6 +103,27 @@ log.addHandler(_handler)
 log.propagate = False
 
 
+class _MatplotlibConfig(logging.Filter):
+    """matplotlib's own lines about a settings folder it cannot write (a read-only or missing HOME):
+    "mkdir -p failed for path ...: [Errno 13] ..." and "Matplotlib created a temporary cache
+    directory at ...", at every run and under ``-q`` too, become one linsense warning."""
+
+    NOISE = ("mkdir -p failed for path", "Matplotlib created a temporary cache directory",
+             "%s is not a writable")
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        msg = str(record.msg)
+        if not msg.startswith(self.NOISE):
+            return True
+        if msg.startswith("Matplotlib created") and isinstance(record.args, tuple) and len(record.args) == 2:
+            warn(f"matplotlib has no writable folder for its settings and font cache ({record.args[1]}): it "
+                 "uses a temporary one, rebuilt at every run (slower): set MPLCONFIGDIR to a writable folder")
+        return False
+
+
+logging.getLogger("matplotlib").addFilter(_MatplotlibConfig())
+
+
 def configure(quiet: bool, verbose: bool) -> None:
     """Set the report's level for one invocation: ``-q`` warnings and errors only, ``-v`` details
     too, else the report (INFO)."""

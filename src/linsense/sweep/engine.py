@@ -264,7 +264,9 @@ def sweep(spec, out: str | Path | None = None, *, workers: int | None = None, sc
     batches = [list(enumerate(pts))[i:i + batch] for i in range(0, len(pts), batch)]
     holder = tempfile.TemporaryDirectory(prefix="linsense-sweep-") if out is None else nullcontext(out)
     with holder as out_given:
-        out_dir = out_target(out_given)  # (a link followed, a dangling one made, a loop refused)
+        out_dir = Path(out_given)
+        if out_dir.is_symlink():  # (a link followed, a dangling one made, a loop refused)
+            out_dir = out_target(out_dir)
         made = not os.path.lexists(out_dir)
         try:
             with held(out_dir, BUSY):
