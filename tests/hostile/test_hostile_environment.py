@@ -16,7 +16,12 @@ fix; the rule that prevents its kind:
   naming it, before the work), and no output set replaces the folder the command runs in;
 * a sweep folder is locked while its rows are computed: a second sweep into it is refused at once;
 * the report never fails on a character the terminal's encoding lacks (escaped, as standard
-  error does); an unusable ``MPLBACKEND`` is named.
+  error does); an unusable ``MPLBACKEND`` is named, matplotlib's noise about its settings folder
+  is one linsense warning;
+* an empty path (an unset shell variable) is refused by the option's callback
+  (``linsense.cli._common.not_empty``); a umask that closes the folders a run makes is named in the
+  one write error (``linsense.io.output_error``);
+* wall-clock times live in ``timing.json`` only (``linsense.io.TIMING_KEYS``, fea.json's too).
 """
 
 from __future__ import annotations
@@ -313,3 +318,22 @@ def _unprivileged() -> list[str] | None:
         return None
     p = subprocess.run(["setpriv", "--bounding-set=-all", "--inh-caps=-all", "true"], capture_output=True)
     return ["setpriv", "--bounding-set=-all", "--inh-caps=-all"] if p.returncode == 0 else None
+
+
+@pytest.mark.parametrize("args, option", [
+    (["sweep", "SWEEP", "--no-progress", "--out", ""], "--out"),
+    (["examples", ""], "FOLDER"),
+    (["model", "--motor", "ecce2010", "--out", ""], "--out"),
+    (["simulate", "step3_lut", "--out", ""], "--out"),
+    (["tune", "--motor", "small30", "--no-verify", "--table", "", "--out", "t.toml"], "--table"),
+])
+def test_an_empty_path_is_refused(run_cli, tmp_path, monkeypatch, args, option):
+    """`--out "$DIR"` with DIR unset: `sweep` and `examples` wrote into the working folder (exit 0),
+    `model` said ".: cannot write: Is a directory", `--table ""` ".: is a folder"."""
+    real = tree(tmp_path)
+    here = tmp_path / "here"
+    here.mkdir()
+    monkeypatch.chdir(here)
+    args = [str(real / "sweeps" / "w.toml") if a == "SWEEP" else a for a in args]
+    run_cli(*args).refused(option, "empty")
+    assert os.listdir(here) == []

@@ -381,7 +381,16 @@ def file_out(ctx, param, value):
     if value is not None and value != "-":
         from linsense.io import out_target
 
+        not_empty(ctx, param, value)
         out_target(value)
+    return value
+
+
+def not_empty(ctx, param, value):
+    """Click callback of a path: an empty one is refused (``--out "$DIR"`` with ``DIR`` unset wrote a
+    sweep or the examples into the working folder, ``--table ""`` was ".: is a folder")."""
+    if value is not None and not str(value).strip():
+        raise click.BadParameter("empty: give a path (an unset shell variable?)")
     return value
 
 

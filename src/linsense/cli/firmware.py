@@ -27,7 +27,7 @@ def firmware() -> None:
 @click.option("--quad", type=float, default=None, callback=c.quad,
               help="elliptical share kappa on q (0: pulsating; default 0.9)")
 @click.option("--name", default=None, help="C name suffix of ls_cfg_<name>.h (default: the motor name)")
-@click.option("--table", "table_path", default=None, type=click.Path(dir_okay=False),
+@click.option("--table", "table_path", default=None, type=click.Path(dir_okay=False), callback=c.not_empty,
               help="a measured compensation table (lut_measured.json of linsense calibrate) in place of "
                    "the motor file's")
 @click.option("--unverified", is_flag=True,

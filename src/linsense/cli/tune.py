@@ -36,7 +36,7 @@ from linsense.version import docs
 @click.option("--injection", "shape", type=click.Choice(["pulsating", "rotating", "square"]), default=None,
               help="the injection: pulsating/elliptical (default; kappa --quad), rotating vector, or "
                    f"square wave at f_pwm / 2 with its dead-time measures ({docs('firmware')})")
-@click.option("--table", "table_path", default=None, type=click.Path(dir_okay=False),
+@click.option("--table", "table_path", default=None, type=click.Path(dir_okay=False), callback=c.not_empty,
               help="a measured compensation table (lut_measured.json of linsense calibrate) in place of "
                    "the motor file's: checked against the motor and the injection, resampled if its "
                    "grid differs")
