@@ -308,6 +308,22 @@ def test_a_umask_that_closes_the_folders_is_named(tmp_path):
     one_line(p, "um/", "permission denied", "umask 0277")
 
 
+def test_a_sweep_under_a_read_only_folder_is_a_write_error(tmp_path):
+    """(A guard of the sweep's lock, which makes the folder: a read-only parent is said as any write.)"""
+    prefix = _unprivileged()
+    if prefix is None:
+        pytest.skip("no way to run without root's override of file modes here")
+    real = tree(tmp_path)
+    (tmp_path / "ro").mkdir()
+    (tmp_path / "ro").chmod(0o555)
+    try:
+        p = run(["sweep", real / "sweeps" / "w.toml", "--no-progress", "--out", "ro/w"], tmp_path,
+                before=f"{' '.join(prefix)} ")
+        one_line(p, "ro/w", "cannot write: permission denied: its folder is read-only")
+    finally:
+        (tmp_path / "ro").chmod(0o755)
+
+
 def _unprivileged() -> list[str] | None:
     """A prefix that runs a command without root's override of file modes, or None."""
     import shutil

@@ -268,10 +268,17 @@ def sweep(spec, out: str | Path | None = None, *, workers: int | None = None, sc
         if out_dir.is_symlink():  # (a link followed, a dangling one made, a loop refused)
             out_dir = out_target(out_dir)
         made = not os.path.lexists(out_dir)
+        lock = held(out_dir, BUSY)
         try:
-            with held(out_dir, BUSY):
+            try:
+                lock.__enter__()  # (makes the folder: a read-only parent said as any write is)
+            except OSError as exc:
+                raise output_error(exc.filename or out_dir, exc) from None
+            try:
                 return _sweep_in(sw, pts, batches, relative, out_dir, workers, scheduler, processes, progress,
                                  restart)
+            finally:
+                lock.__exit__(None, None, None)
         except BaseException:
             if made:  # (a refused sweep leaves no folder it made)
                 try:
