@@ -121,6 +121,18 @@ def test_a_linked_scenario_file_reads_its_motor_beside_its_target(tmp_path):
     assert p.returncode == 0, p.stderr
 
 
+def test_a_linked_motor_file_reads_its_table_beside_its_target(tmp_path):
+    """`ln -s real/tabulated.toml m.toml`: its `table = "ecce2010_table.csv"` was looked for beside
+    the link."""
+    from linsense.model.motor import load_motor
+
+    (tmp_path / "real").mkdir()
+    for f in ("tabulated.toml", "ecce2010_table.csv"):
+        (tmp_path / "real" / f).write_bytes((resources.files("linsense.examples") / "motors" / f).read_bytes())
+    (tmp_path / "m.toml").symlink_to(tmp_path / "real" / "tabulated.toml")
+    assert load_motor(tmp_path / "m.toml").name == "tabulated_example"
+
+
 # ------------------------------------------------------------------ --out through symbolic links
 def test_a_link_to_a_file_as_out_writes_its_target(run_cli, tmp_path):
     """`model --out link.csv` (a link to a file) replaced the link with a file of its own and left its
