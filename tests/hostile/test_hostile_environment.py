@@ -127,8 +127,9 @@ def test_a_linked_motor_file_reads_its_table_beside_its_target(tmp_path):
     from linsense.model.motor import load_motor
 
     (tmp_path / "real").mkdir()
+    motors = resources.files("linsense.examples") / "motors"
     for f in ("tabulated.toml", "ecce2010_table.csv"):
-        (tmp_path / "real" / f).write_bytes((resources.files("linsense.examples") / "motors" / f).read_bytes())
+        (tmp_path / "real" / f).write_bytes((motors / f).read_bytes())
     (tmp_path / "m.toml").symlink_to(tmp_path / "real" / "tabulated.toml")
     assert load_motor(tmp_path / "m.toml").name == "tabulated_example"
 
