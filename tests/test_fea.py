@@ -153,8 +153,8 @@ def test_cli_writes_the_output_set(tmp_path):
     assert e.value.code == 0
     # a single --load-current: the output set of before the load sweep, no per-load files
     assert {f.name for f in out.iterdir() if not f.name.startswith(".")} == {
-        "inductances.csv", "motor.toml", "lut.csv", "geometry.json", "fea.json", "field_lines.png",
-        "inductances_fea.png", "inductances_model.png", "lut.png"}
+        "inductances.csv", "motor.toml", "lut.csv", "geometry.json", "fea.json", "timing.json",
+        "field_lines.png", "inductances_fea.png", "inductances_model.png", "lut.png"}
     load_motor(out / "motor.toml")
     doc = json.loads((out / "fea.json").read_text())
     assert doc["mesh"]["triangles"] > 0 and doc["positions"] == 14 and "lut_vs_load" not in doc

@@ -408,7 +408,100 @@ _REASONS = {
     errno.ENOTDIR: "a folder on its path is a file",
     errno.EIO: "input/output error of the device",
     errno.EPIPE: "broken pipe (its reader stopped reading)",
+    errno.ELOOP: "a loop of symbolic links on its path",
 }
+
+
+# ------------------------------------------------------------------ paths: never normalised by text
+#: the bytes of a file name on the usual file systems (ext4, XFS, btrfs, APFS, NTFS's 255 characters)
+NAME_MAX = 255
+
+
+def folder_of(path: str | os.PathLike) -> Path:
+    """The folder a file's relative paths are taken from: its own, or, for a symbolic link to the
+    file, the folder of the file it points to.
+
+    The one rule of every reader of a file that names others (a scenario its motor and table, a
+    motor file its tables, a sweep file its base scenario): ``ln -s real/scenarios/s.toml .`` then
+    ``simulate s.toml`` reads ``motor = "../motors/m.toml"`` beside ``real/scenarios/``, where it
+    was written, not beside the link. The path is never normalised by its text (``lk/..`` after a
+    linked folder ``lk`` is its target's parent: the operating system resolves it).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file.
+
+    Returns
+    -------
+    Path
+        Its folder.
+    """
+    p = Path(path)
+    return Path(os.path.realpath(p)).parent if p.is_symlink() else p.parent
+
+
+def out_target(out: str | os.PathLike) -> Path:
+    """The real path an output (``--out``, a file or a folder) names: symbolic links followed.
+
+    The one resolution of every output: a link to a file or a folder is followed (its target is
+    written or replaced, the link kept), a dangling link names the path to create, a loop of links
+    is refused naming it (it was "exists and is not a folder", "File exists" or "Too many levels of
+    symbolic links").
+
+    Parameters
+    ----------
+    out : str or os.PathLike
+        The output as given.
+
+    Returns
+    -------
+    Path
+        The absolute path with every symbolic link resolved.
+
+    Raises
+    ------
+    linsense.errors.OutputError
+        A loop of symbolic links on the way.
+    """
+    from linsense.errors import OutputError
+
+    try:
+        return Path(os.path.realpath(os.fspath(out), strict=True))
+    except FileNotFoundError:  # (a path to create, or a dangling link: resolved as far as it goes)
+        pass
+    except OSError as exc:
+        if exc.errno == errno.ELOOP:
+            raise OutputError(out, "a loop of symbolic links (a link that leads back to itself): fix or "
+                                   "remove the link, or choose another output") from None
+        # (another reason, a folder on the way not searchable: the write that follows names it)
+    return Path(os.path.realpath(os.fspath(out)))
+
+
+def working_folder() -> Path:
+    """The working folder, or a refusal naming it when it was deleted (or moved) meanwhile.
+
+    The one reader of the working folder (``Path.cwd()`` raised a bare FileNotFoundError: "No such
+    file or directory", naming nothing); the CLI calls it before any command runs.
+
+    Returns
+    -------
+    Path
+        The working folder.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        It no longer exists, named as the shell knows it (``$PWD``).
+    """
+    from linsense.errors import InputError
+
+    try:
+        return Path(os.getcwd())
+    except FileNotFoundError:
+        where = os.environ.get("PWD") or "the working folder"
+        raise InputError(where, "", "the working folder was deleted (or moved) while the shell was in it: "
+                                    "cd into an existing folder and run the command again") from None
 
 
 def _shown(path: str | os.PathLike) -> Path:
@@ -448,10 +541,13 @@ def output_error(path: str | os.PathLike, exc: OSError):
     shown = _shown(path)
     reason = os_reason(exc)
     if exc.errno in (errno.EACCES, errno.EPERM):
-        folder = Path(os.path.abspath(shown)).parent
+        folder = Path(os.path.realpath(shown)).parent  # (links followed, as the write followed them)
         while not folder.exists() and folder.parent != folder:
             folder = folder.parent
-        if not os.access(folder, os.W_OK):
+        if _umask() & 0o300:  # (the folders this run made are read-only, or closed, to their owner)
+            reason += (f": the umask {_umask():04o} takes the owner's write permission away from the folders "
+                       "it makes (umask 022 or 077)")
+        elif not os.access(folder, os.W_OK):
             reason += ": its folder is read-only"
     return OutputError(shown, f"cannot write: {reason}")
 
@@ -609,23 +705,25 @@ def _write_atomic_with(path: str | os.PathLike, writer: Callable) -> Path:
 
         raise InputError("--out", "", f"{str(path)!r} names a folder: give the file's name in it")
     path = Path(path)
+    real = out_target(path)  # (a link to a file: its target written, the link kept)
     try:
-        special = not stat.S_ISREG(os.stat(path).st_mode)
+        special = not stat.S_ISREG(os.stat(real).st_mode)
     except FileNotFoundError:
         special = False
     if special:
-        with open(path, "wb") as f:
+        with open(real, "wb") as f:
             writer(f)
         return path
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    real.parent.mkdir(parents=True, exist_ok=True)
+    # (the temporary's name bounded as the output sets' are: a 255-byte name was "file name too long")
+    fd, tmp = tempfile.mkstemp(prefix=f".{_stem(real)}.", suffix=".tmp", dir=real.parent)
     try:
         with os.fdopen(fd, "wb") as f:
             writer(f)
             f.flush()
             os.fsync(f.fileno())
         os.chmod(tmp, FILE_MODE)  # (mkstemp makes it 0600)
-        os.replace(tmp, path)
+        os.replace(tmp, real)
     except BaseException:
         try:
             os.unlink(tmp)
@@ -633,14 +731,15 @@ def _write_atomic_with(path: str | os.PathLike, writer: Callable) -> Path:
             pass
         raise
     if _ACTIVE:
-        _written(path)
+        _written(real)
     return path
 
 
 # ------------------------------------------------------------------ reproducible files
 #: metrics that depend on the machine and the moment (wall-clock time): written to ``timing.json``,
-#: kept out of ``metrics.json`` and ``trace.mat`` so that those are byte-reproducible
-TIMING_KEYS = ("wall_s", "realtime_factor")
+#: kept out of ``metrics.json``, ``trace.mat`` and ``fea.json`` so that those are byte-reproducible
+#: (the FEA's solve times made fea.json differ between two runs, and between --workers 1 and 2)
+TIMING_KEYS = ("wall_s", "realtime_factor", "times_s", "solve_s")
 
 
 def strip_timing(obj):
@@ -912,9 +1011,9 @@ def _sibling(target: Path, kind: str, token: str) -> Path:
 
 
 def _target(out: str | os.PathLike) -> Path:
-    """The real folder an ``--out`` names (symlinks resolved, so the swap replaces the folder the
-    link points to, not the link)."""
-    return Path(os.path.realpath(os.fspath(out)))
+    """The real folder an ``--out`` names (:func:`out_target`: the swap replaces the folder the link
+    points to, not the link)."""
+    return out_target(out)
 
 
 #: the lock file where a folder cannot be locked itself (Windows; filelock deletes it on release)
@@ -929,10 +1028,16 @@ class _Locked:
     #: False: always use filelock (what Windows runs; the tests check both on POSIX)
     use_flock = True
 
-    def __init__(self, folder: Path) -> None:
+    def __init__(self, folder: Path, busy: str | None = None) -> None:
         self.folder = folder
+        self.busy = busy  # (None: wait for the lock; else refuse at once with this message)
         self.fd: int | None = None
         self.filelock = None
+
+    def _refuse(self):
+        from linsense.errors import OutputError
+
+        return OutputError(_shown(self.folder), self.busy)
 
     def __enter__(self) -> int | None:
         self.folder.mkdir(parents=True, exist_ok=True)
@@ -943,15 +1048,21 @@ class _Locked:
         if fcntl is not None and self.use_flock:
             self.fd = os.open(self.folder, os.O_RDONLY)
             try:
-                fcntl.flock(self.fd, fcntl.LOCK_EX)
+                fcntl.flock(self.fd, fcntl.LOCK_EX | (fcntl.LOCK_NB if self.busy else 0))
+            except BlockingIOError:
+                os.close(self.fd)
+                raise self._refuse() from None
             except BaseException:
                 os.close(self.fd)
                 raise
             return self.fd  # (also what commit fsyncs)
-        from filelock import FileLock
+        from filelock import FileLock, Timeout
 
         self.filelock = FileLock(self.folder / LOCK_FILE)
-        self.filelock.acquire()
+        try:
+            self.filelock.acquire(timeout=0 if self.busy else -1)
+        except Timeout:
+            raise self._refuse() from None
         return None
 
     def __exit__(self, *exc) -> None:
@@ -964,6 +1075,34 @@ class _Locked:
 def _locked(folder: Path) -> _Locked:
     """An exclusive lock on ``folder`` (see :class:`_Locked`)."""
     return _Locked(folder)
+
+
+def held(folder: str | os.PathLike, busy: str) -> _Locked:
+    """An exclusive lock on ``folder`` (made if missing) for a long work in it, refused at once when
+    another process (or another call) holds it.
+
+    The lock of a folder written in place (a sweep's: two sweeps into one folder at once deleted
+    each other's partitions being written); output sets lock their parent folder for their swap
+    only, and wait.
+
+    Parameters
+    ----------
+    folder : str or os.PathLike
+        The folder.
+    busy : str
+        The refusal's message (the folder is named before it).
+
+    Returns
+    -------
+    context manager
+        Holds the lock while entered.
+
+    Raises
+    ------
+    linsense.errors.OutputError
+        On entering, when the lock is held elsewhere.
+    """
+    return _Locked(Path(folder), busy)
 
 
 def _check_existing(target: Path, shown: Path) -> list[str]:
@@ -1011,6 +1150,26 @@ def _check_existing(target: Path, shown: Path) -> list[str]:
         elif e != MANIFEST and (target / e).is_dir() and not (target / e).is_symlink():
             _check_writable(target / e, shown / e, "cannot carry it over into the new set")  # (moved)
     return [e for e in entries if e not in owned and e != MANIFEST]
+
+
+def _check_not_working(target: Path, shown: Path, kept: list[str]) -> None:
+    """Refuse an ``--out`` that is the working folder, or holds it in an entry the swap replaces
+    (``--out .``: the working folder was renamed aside and deleted, exit 0, and the shell left in a
+    deleted folder where ``ls`` shows nothing). A working folder inside an entry of the user's that
+    the set carries over (``kept``) stays where it is."""
+    from linsense.errors import OutputError
+
+    try:
+        here = Path(os.getcwd())
+    except FileNotFoundError:  # (the CLI refused it before; from Python: nothing to protect)
+        return
+    if here == target or target in here.parents:
+        inside = here.relative_to(target).parts
+        if not inside or inside[0] not in kept:
+            what = "is the working folder" + (" or holds it" if inside else "")
+            raise OutputError(shown, f"{what}: an output set replaces its folder as a whole, which "
+                                     "would leave you in a deleted folder; write into a sub-folder (--out "
+                                     "run1), or run from another folder")
 
 
 def _check_writable(folder: Path, shown: Path, what: str = "cannot replace") -> None:
@@ -1138,7 +1297,7 @@ class OutputSet:
         self._made = None if missing.exists() else missing  # the first folder this run creates
         with _locked(self.target.parent):
             _recover(self.target)
-            _check_existing(self.target, self.shown)
+            _check_not_working(self.target, self.shown, _check_existing(self.target, self.shown))
             while True:
                 self.token = f"{os.getpid()}-{secrets.token_hex(4)}"
                 tmp = _sibling(self.target, "tmp", self.token)

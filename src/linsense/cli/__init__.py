@@ -62,6 +62,9 @@ def cli(quiet: bool, verbose: bool) -> None:
     if quiet and verbose:
         raise click.UsageError("-q and -v contradict each other: give one")
     _common.configure(quiet, verbose)
+    from linsense.io import working_folder
+
+    working_folder()  # (a deleted one refused naming it, before the work: docs/cli.md, "Outputs")
     import numpy as np  # (every command computes with it: its warnings are judged by the commands)
 
     np.seterr(all="ignore")

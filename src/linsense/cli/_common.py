@@ -60,7 +60,7 @@ def write_stream(stream, text: str, is_stdout: bool = True) -> None:
             from linsense.io import write_all
 
             stream.flush()
-            write_all(buf, text.encode(stream.encoding or "utf-8", stream.errors or "strict"))
+            write_all(buf, encoded(text, stream))
             buf.flush()
     except (OSError, ValueError, AttributeError) as exc:
         if not is_stdout:
@@ -74,9 +74,54 @@ def write_stream(stream, text: str, is_stdout: bool = True) -> None:
         raise OutputError("<stdout>", "cannot write: standard output is closed") from None
 
 
+def encoded(text: str, stream) -> bytes:
+    """``text`` in the encoding of ``stream``, what it cannot show escaped (``\\xe9``), as standard
+    error shows it: a folder named ``out é`` under ``PYTHONIOENCODING=ascii`` (or a Latin-1 locale)
+    was written, then "standard output is closed", exit 2.
+
+    Parameters
+    ----------
+    text : str
+        The text.
+    stream : text stream
+        Its ``encoding`` and ``errors`` are used (UTF-8 and strict when it has none).
+
+    Returns
+    -------
+    bytes
+        The bytes to write.
+    """
+    encoding = getattr(stream, "encoding", None) or "utf-8"
+    try:
+        return text.encode(encoding, getattr(stream, "errors", None) or "strict")
+    except UnicodeEncodeError:
+        return text.encode(encoding, "backslashreplace")
+
+
 _handler = _Report()
 log.addHandler(_handler)
 log.propagate = False
+
+
+class _MatplotlibConfig(logging.Filter):
+    """matplotlib's own lines about a settings folder it cannot write (a read-only or missing HOME):
+    "mkdir -p failed for path ...: [Errno 13] ..." and "Matplotlib created a temporary cache
+    directory at ...", at every run and under ``-q`` too, become one linsense warning."""
+
+    NOISE = ("mkdir -p failed for path", "Matplotlib created a temporary cache directory",
+             "%s is not a writable")
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        msg = str(record.msg)
+        if not msg.startswith(self.NOISE):
+            return True
+        if msg.startswith("Matplotlib created") and isinstance(record.args, tuple) and len(record.args) == 2:
+            warn(f"matplotlib has no writable folder for its settings and font cache ({record.args[1]}): it "
+                 "uses a temporary one, rebuilt at every run (slower): set MPLCONFIGDIR to a writable folder")
+        return False
+
+
+logging.getLogger("matplotlib").addFilter(_MatplotlibConfig())
 
 
 def configure(quiet: bool, verbose: bool) -> None:
@@ -325,17 +370,37 @@ def out_option(command: str, what: str, *, folder: bool, ext: str = "", dash: bo
     kind = "output folder" if folder else "output file" + (" (- for standard output)" if dash else "")
     path = click.Path(file_okay=False) if folder else click.Path(dir_okay=False, allow_dash=dash)
     default = OUT_HELP.format(command=command, ext=ext or ("/" if folder else ""), what=what)
-    return click.option("--out", default=None, type=path, callback=folder_out if folder else None,
+    return click.option("--out", default=None, type=path, callback=folder_out if folder else file_out,
                         help=f"{kind} {default}")
+
+
+def file_out(ctx, param, value):
+    """Click callback of an output file (and, through :func:`folder_out`, of a folder): a loop of
+    symbolic links is refused before the work (:func:`linsense.io.out_target`, the one resolution
+    of every output; it was refused after a certificate's run, or never)."""
+    if value is not None and value != "-":
+        from linsense.io import out_target
+
+        not_empty(ctx, param, value)
+        out_target(value)
+    return value
+
+
+def not_empty(ctx, param, value):
+    """Click callback of a path: an empty one is refused (``--out "$DIR"`` with ``DIR`` unset wrote a
+    sweep or the examples into the working folder, ``--table ""`` was ".: is a folder")."""
+    if value is not None and not str(value).strip():
+        raise click.BadParameter("empty: give a path (an unset shell variable?)")
+    return value
 
 
 def folder_out(ctx, param, value):
     """Click callback of an output folder: ``-`` is refused (it made a folder named ``-`` where
-    ``--out -`` of a file means standard output)."""
+    ``--out -`` of a file means standard output); then :func:`file_out`."""
     if value == "-":
         raise click.BadParameter("a folder is written here, not standard output: give the folder's name "
                                  "(./- for a folder named -)")
-    return value
+    return file_out(ctx, param, value)
 
 
 def default_out(out: str | None, name: str, command: str, ext: str = "") -> str:

@@ -6,6 +6,7 @@ import click
 
 from linsense.cli import _common as c
 from linsense.cli.runs import application_options, apply_drive_data, drive_options, scenario_table
+from linsense.io import working_folder
 
 
 @click.group(short_help="The firmware: export a project that builds with CMake.",
@@ -26,7 +27,7 @@ def firmware() -> None:
 @click.option("--quad", type=float, default=None, callback=c.quad,
               help="elliptical share kappa on q (0: pulsating; default 0.9)")
 @click.option("--name", default=None, help="C name suffix of ls_cfg_<name>.h (default: the motor name)")
-@click.option("--table", "table_path", default=None, type=click.Path(dir_okay=False),
+@click.option("--table", "table_path", default=None, type=click.Path(dir_okay=False), callback=c.not_empty,
               help="a measured compensation table (lut_measured.json of linsense calibrate) in place of "
                    "the motor file's")
 @click.option("--unverified", is_flag=True,
@@ -103,8 +104,8 @@ def _quick_certificate(motor_spec: str, motor, dd, made, table_path: str | None)
     spec = motor_ref(motor_spec)
     table = None if table_path is None else str(Path(table_path).resolve())
     base = certificate_base(scenario_dict(made.design, dd, spec, pole_pitch=motor.pole_pitch, table=table))
-    return prepare(motor, spec, base, str(Path.cwd()), v_max=dd.v_max, a_max=dd.a_max, load=made.design.load,
-                   travel=dd.travel, quick=True)()
+    return prepare(motor, spec, base, str(working_folder()), v_max=dd.v_max, a_max=dd.a_max,
+                   load=made.design.load, travel=dd.travel, quick=True)()
 
 
 COMMANDS = [firmware]

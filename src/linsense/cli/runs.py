@@ -11,6 +11,7 @@ import click
 
 from linsense.cli import _common as c
 from linsense.errors import InputError
+from linsense.io import working_folder
 from linsense.version import docs
 
 
@@ -23,7 +24,7 @@ def _scenario(spec: str):
         from linsense.io import decode_text, parse_toml
 
         text = decode_text(c.read_stdin(), "<stdin>", "scenario")
-        return scenario_from_dict(parse_toml(text, "<stdin>"), "<stdin>", Path.cwd())
+        return scenario_from_dict(parse_toml(text, "<stdin>"), "<stdin>", working_folder())
     return load_scenario(c.example("scenarios", spec, "SCENARIO"))
 
 
@@ -406,7 +407,7 @@ def reproduce(motor_spec: str, out: str, quick: bool, model_only: bool, check: b
     c.files_report(files)
     for line in lines:
         c.say(line)
-    metrics = {} if model_only else json.loads((Path(out) / "metrics.json").read_text())
+    metrics = {} if model_only else json.loads((Path(out) / "metrics.json").read_text(encoding="utf-8"))
     failed = failed_claims(metrics)
     c.elapsed()
     if as_json:
@@ -462,8 +463,8 @@ def fea(geometry: str, out: str | None, positions: int, level: str, lut_points: 
     c.elapsed()
     if as_json:
         fea_json = Path(out) / "fea.json"
-        c.emit_json("fea", files, True, fea=json.loads(fea_json.read_text()) if fea_json.is_file() else None,
-                    warnings=list(warnings))
+        doc = json.loads(fea_json.read_text(encoding="utf-8")) if fea_json.is_file() else None
+        c.emit_json("fea", files, True, fea=doc, warnings=list(warnings))
 
 
 @click.command("sweep", short_help="Run a sweep of scenarios (threads or dask).",

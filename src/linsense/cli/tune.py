@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import click
 
 from linsense.cli import _common as c
 from linsense.cli.runs import application_options, apply_drive_data, drive_options, scenario_table
+from linsense.io import NAME_MAX, working_folder
 from linsense.version import docs
 
 
@@ -34,7 +36,7 @@ from linsense.version import docs
 @click.option("--injection", "shape", type=click.Choice(["pulsating", "rotating", "square"]), default=None,
               help="the injection: pulsating/elliptical (default; kappa --quad), rotating vector, or "
                    f"square wave at f_pwm / 2 with its dead-time measures ({docs('firmware')})")
-@click.option("--table", "table_path", default=None, type=click.Path(dir_okay=False),
+@click.option("--table", "table_path", default=None, type=click.Path(dir_okay=False), callback=c.not_empty,
               help="a measured compensation table (lut_measured.json of linsense calibrate) in place of "
                    "the motor file's: checked against the motor and the injection, resampled if its "
                    "grid differs")
@@ -73,6 +75,7 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
     if as_json or out == "-":
         c.data_on_stdout()  # (stdout carries the file itself, or the JSON summary)
     out = c.default_out(out, motor_spec, "tune", ".h" if fmt == "c" else ".toml")
+    json_path, png_path = _certificate_paths(out)  # (their names checked before the work)
     say = c.say
     base, base_dir, src = None, None, motor_spec
     dd = DriveData()
@@ -128,7 +131,7 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
         from linsense.verify.certificate import certificate_base, motor_ref, prepare
 
         cert_run = prepare(motor, motor_ref(motor_spec), certificate_base(sc_dict),
-                           str(base_dir or Path.cwd()), v_max=dd.v_max, a_max=dd.a_max, load=dz.load,
+                           str(base_dir or working_folder()), v_max=dd.v_max, a_max=dd.a_max, load=dz.load,
                            travel=dd.travel, quick=quick)
     for line in design_lines(dz, motor.name, dd):
         say(line)
@@ -149,7 +152,6 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
             f"{mode!r} of the scenario)")
     files: list = []
     cert = None
-    json_path, png_path = _certificate_paths(out)
     digest = design_digest(motor, dd, 256, table)
     reason = ""
     if fmt == "c":  # (the header waits for the verdict: written only for a drive that passed)
@@ -171,7 +173,7 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
         if cert is not None:
             _write_certificate(cert, motor, dd, dz, quick, json_path, png_path, files, digest)
     else:
-        text = scenario_toml(dz, dd, motor_spec, Path(out), base, Path.cwd(), startup=su, k_est=k_est,
+        text = scenario_toml(dz, dd, motor_spec, Path(out), base, working_folder(), startup=su, k_est=k_est,
                              pole_pitch=motor.pole_pitch, table=table_abs)
     files.insert(0, write_atomic(out, text))
     if out != "-":
@@ -202,9 +204,16 @@ def _certificate_paths(out: str) -> tuple[Path, Path]:
     for ``-`` or a device such as /dev/null)."""
     p = Path(out)
     if out == "-" or (p.exists() and not p.is_file()):
-        folder, stem = Path.cwd(), "tune"
+        folder, stem = working_folder(), "tune"
     else:
         folder, stem = p.resolve().parent, p.stem
+        name = f"{stem}.verification.json"
+        if len(os.fsencode(name)) > NAME_MAX:  # (its write failed after the work, the scenario written)
+            from linsense.errors import InputError
+
+            raise InputError("--out", "", f"{out!r}: the certificate written beside it, the name's stem and "
+                             f"'.verification.json', would be a file name of {len(os.fsencode(name))} bytes, "
+                             f"beyond the {NAME_MAX} bytes of a file name: give a shorter --out")
     return folder / f"{stem}.verification.json", folder / f"{stem}.verification.png"
 
 

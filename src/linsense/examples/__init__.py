@@ -246,7 +246,11 @@ def copy_to(dest: str | Path, force: bool = False) -> list[Path]:
     """
     import secrets
 
+    from linsense.io import out_target
+
     dest = Path(dest)
+    if dest.is_symlink():  # (a link followed, a dangling one made, a loop refused)
+        dest = out_target(dest)
     if dest.exists() and not dest.is_dir():
         raise InputError(str(dest), "", "exists and is not a folder")
     targets = [(rel, dest / rel) for rel in files()]

@@ -566,6 +566,6 @@ def load_geometry(spec: str | Path) -> Geometry:
         return geometry_from_toml(read_text_file(s, "geometry file"), s)
     if s not in preset_names():
         raise InputError(s, "", f"no such geometry file or preset (presets: {', '.join(preset_names())})")
-    text = (resources.files("linsense.fea") / "presets" / f"{s}.toml").read_text()
+    text = (resources.files("linsense.fea") / "presets" / f"{s}.toml").read_text(encoding="utf-8")
     return geometry_from_toml(text, f"preset {s}")
 

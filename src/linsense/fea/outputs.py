@@ -140,8 +140,10 @@ def eq3_fit(res: Result) -> dict:
     return {"values_H": f.values, "stderr_H": f.stderr, "residual_rms_H": f.residual_rms}
 
 
-def fea_json(res: Result, extra: dict) -> str:
-    """The text of ``fea.json``: mesh, timings, energy check, Newton iterations, theta's origin.
+def fea_json(res: Result, extra: dict) -> tuple[str, str]:
+    """The texts of ``fea.json`` (mesh, energy check, Newton iterations, theta's origin) and of
+    ``timing.json`` (the solve times: wall-clock, the one file of the set that is not
+    byte-reproducible, :func:`linsense.io.strip_timing`).
 
     Parameters
     ----------
@@ -152,9 +154,13 @@ def fea_json(res: Result, extra: dict) -> str:
 
     Returns
     -------
-    str
-        The JSON text.
+    fea : str
+        The JSON text of fea.json.
+    timing : str
+        The JSON text of timing.json.
     """
+    from linsense.io import strip_timing
+
     m = res.mesh
     s = res.keep["solver"]
     doc = {
@@ -176,7 +182,8 @@ def fea_json(res: Result, extra: dict) -> str:
                       if res.newton is not None else "linear (no saturation)"),
         **extra,
     }
-    return json.dumps(doc, indent=2) + "\n"
+    kept, timing = strip_timing(doc)
+    return json.dumps(kept, indent=2) + "\n", json.dumps(timing or {}, indent=2) + "\n"
 
 
 def dq_table(res: Result) -> tuple[np.ndarray, np.ndarray]:

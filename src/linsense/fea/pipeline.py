@@ -89,8 +89,8 @@ def _motor_of(res, folder: Path, tag: str = ""):
     from linsense.model.motor import load_motor
 
     table = f"inductances{tag}.csv"
-    (folder / table).write_text(outputs.inductances_csv(res))
-    (folder / f"motor{tag}.toml").write_text(outputs.motor_toml(res, table))
+    (folder / table).write_text(outputs.inductances_csv(res), encoding="utf-8")
+    (folder / f"motor{tag}.toml").write_text(outputs.motor_toml(res, table), encoding="utf-8")
     try:
         return load_motor(folder / f"motor{tag}.toml"), None
     except ModelError as exc:

@@ -85,7 +85,7 @@ def closed_loop(scenario: str | Path, out: str | Path, *, duration: float | None
         last = (r.stderr or r.stdout).strip().splitlines()[-1:] or ["no output"]
         raise InputError(str(scenario), "", f"the closed loop with the firmware under QEMU did not run "
                          f"(exit {r.returncode}): {last[0]}")
-    return json.loads(record.read_text())
+    return json.loads(record.read_text(encoding="utf-8"))
 
 
 __all__ = ["TOOLS", "closed_loop", "source_tree"]

@@ -16,7 +16,7 @@ import numpy as np
 
 from linsense import examples
 from linsense.errors import InputError, ModelError
-from linsense.io import parse_toml, read_csv_table, read_text_file
+from linsense.io import folder_of, parse_toml, read_csv_table, read_text_file
 from linsense.model.inductance import ENTRIES, InductanceModel
 from linsense.model.saturation import Saturation
 from linsense.model.schema import validate_motor_file
@@ -190,7 +190,7 @@ def preset_text(name: str) -> str:
     str
         The preset's motor file.
     """
-    return (resources.files("linsense.model") / "presets" / f"{name}.toml").read_text()
+    return (resources.files("linsense.model") / "presets" / f"{name}.toml").read_text(encoding="utf-8")
 
 
 def example_motor(spec: str, source: str = "--motor") -> Path:
@@ -335,7 +335,7 @@ def load_motor(spec: str | Path, check: bool = True) -> Motor:
             listing = examples.listing("motors", tuple(preset_names()))
             raise InputError(spec_s, "", f"no such motor file ({listing})")
         text = read_text_file(spec_s, "motor file")
-        motor = motor_from_toml(text, source=spec_s, base_dir=path.parent)
+        motor = motor_from_toml(text, source=spec_s, base_dir=folder_of(path))
     elif spec_s in preset_names():
         text = preset_text(spec_s)
         motor = motor_from_toml(text, source=f"preset {spec_s}", base_dir=None)

@@ -162,7 +162,9 @@ def run_fea(spec: str, out: str, positions: int = 56, level: str = "default", lu
             s.write("polarity.csv", polarity_csv(sig))
             extra["polarity"] = sig
         s.write("geometry.json", json.dumps(g.regions(), indent=2) + "\n")
-        s.write("fea.json", outputs.fea_json(res, extra))
+        fea_doc, timing = outputs.fea_json(res, extra)
+        s.write("fea.json", fea_doc)
+        s.write("timing.json", timing)
         s.write("field_lines.png", png_bytes(fig_field(res)))
         s.write("inductances_fea.png", png_bytes(fig_table(res)))
         if motor is not None:

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from linsense.io import read_csv_table
+from linsense.io import folder_of, read_csv_table
 from linsense.model.motor import load_motor
 from linsense.sim.calibrate import calibrate
 
@@ -174,7 +174,8 @@ def lut_vs_load(motor_file: str | Path, loads=(0.0, 20.0, 40.0), positions: int 
         iq.append(float(f) / m.force_constant)
     theta = 2.0 * np.pi * np.arange(positions) / positions
     cal_change = [t - tables[0] for t in tables]
-    fea_change = [fea_lut_change(path.parent, m.saturation.currents, i, theta) - fea_lut_change(
-        path.parent, m.saturation.currents, iq[0], theta) for i in iq]
+    folder = folder_of(path)  # (the FEA's LUT files beside the motor file, through a link too)
+    fea_change = [fea_lut_change(folder, m.saturation.currents, i, theta) - fea_lut_change(
+        folder, m.saturation.currents, iq[0], theta) for i in iq]
     return LutLoad(theta, tuple(float(f) for f in loads), tuple(iq), tables, cal_change, fea_change,
                    {"runs": metrics})

@@ -33,7 +33,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 
 from linsense.ctrl import REAL, drive_default_cfg
 from linsense.errors import InputError
-from linsense.io import read_toml
+from linsense.io import folder_of, read_toml, working_folder
 from linsense.tune.design import DEAD_TIME_SHARE_MAX, V_DC_MAX_FRACTION, V_DC_MIN_FRACTION, DriveData
 from linsense.validation import KeyProblem, to_input_error
 
@@ -1158,7 +1158,7 @@ def scenario_from_dict(data: dict, source: str = "<dict>", base_dir: str | Path 
         if section and not _has_path(data, section):
             message = f"{message} (the file has no [{section}] section)"
         raise InputError(source, key, message) from None
-    return Scenario(spec, source, Path(base_dir) if base_dir is not None else Path.cwd())
+    return Scenario(spec, source, Path(base_dir) if base_dir is not None else working_folder())
 
 
 def load_scenario(path: str | Path) -> Scenario:
@@ -1179,7 +1179,7 @@ def load_scenario(path: str | Path) -> Scenario:
     linsense.errors.InputError
         An unreadable file, bad TOML or an invalid key, naming the file and the key.
     """
-    return scenario_from_dict(read_toml(path, "scenario file"), str(path), Path(path).parent)
+    return scenario_from_dict(read_toml(path, "scenario file"), str(path), folder_of(path))
 
 
 def as_scenario(obj, caller: str = "simulate") -> Scenario:

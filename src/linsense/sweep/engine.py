@@ -30,7 +30,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from linsense.errors import InputError
-from linsense.io import os_reason, output_error, write_atomic, write_atomic_with
+from linsense.io import held, os_reason, out_target, output_error, write_atomic, write_atomic_with
 from linsense.sim.cluster import cluster_client
 from linsense.sweep.inputs import changed_on_disk, changes, code_identity, show, sweep_inputs, valid_record
 from linsense.sweep.inputs import digest as inputs_digest
@@ -263,47 +263,78 @@ def sweep(spec, out: str | Path | None = None, *, workers: int | None = None, sc
     relative = {a.key: a.relative for a in sw.spec.axis}
     batches = [list(enumerate(pts))[i:i + batch] for i in range(0, len(pts), batch)]
     holder = tempfile.TemporaryDirectory(prefix="linsense-sweep-") if out is None else nullcontext(out)
-    with holder as out_dir:
-        out_dir = Path(out_dir)
-        inputs = sweep_inputs(sw)
-        manifest = _manifest(sw, len(pts), inputs, code_identity())
-        discard = _check_out(out_dir, manifest, restart)
-        ctx = context(sw, out_dir / "motors")  # (reads the base: bad input refused before a discard)
-        _unchanged_while_running(out_dir, inputs)  # (the base read above is the one recorded)
-        parts = out_dir / "parts"
+    with holder as out_given:
+        out_dir = Path(out_given)
+        if out_dir.is_symlink():  # (a link followed, a dangling one made, a loop refused)
+            out_dir = out_target(out_dir)
+        made = not os.path.lexists(out_dir)
+        lock = held(out_dir, BUSY)
         try:
-            if discard:
-                _discard(out_dir)
-            parts.mkdir(parents=True, exist_ok=True)
-            (out_dir / "motors").mkdir(exist_ok=True)
-            if discard or not (out_dir / MANIFEST).is_file():
-                _write_manifest(out_dir, manifest)
-        except OSError as exc:
-            raise output_error(exc.filename or out_dir, exc) from None
-        done = _done_batches(parts)
-        todo = [b for b in range(len(batches)) if b not in done]
-        n_done = sum(len(batches[b]) for b in done)
-        if todo:
-            bar_ctx = _progress(len(pts), n_done, progress)
-            runs = _finished(ctx, batches, todo, relative, workers, scheduler, processes)
-            with closing(runs), bar_ctx as bar:
-                task = bar.add_task(sw.name, total=len(pts), completed=n_done) if bar else None
-                kill_after = int(os.environ.get("LINSENSE_TEST_KILL_AFTER_PARTS", "0"))  # (tests only)
-                for written, (b, rows) in enumerate(runs, start=1):
-                    _unchanged_while_running(out_dir, inputs)  # (rows of the recorded inputs only)
-                    _write_partition(parts, b, rows)
-                    if bar:
-                        bar.advance(task, len(batches[b]))
-                    if kill_after and written >= kill_after:
-                        os.kill(os.getpid(), signal.SIGKILL)
-        import pandas as pd
+            try:
+                lock.__enter__()  # (makes the folder: a read-only parent said as any write is)
+            except OSError as exc:
+                raise output_error(exc.filename or out_dir, exc) from None
+            try:
+                return _sweep_in(sw, pts, batches, relative, out_dir, workers, scheduler, processes, progress,
+                                 restart)
+            finally:
+                lock.__exit__(None, None, None)
+        except BaseException:
+            if made:  # (a refused sweep leaves no folder it made)
+                try:
+                    out_dir.rmdir()
+                except OSError:
+                    pass
+            raise
 
-        frames = [pd.read_parquet(p) for p in sorted(parts.glob("part-*.parquet"))]
-        df = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()
-        if not df.empty:
-            df = df.sort_values("run", kind="stable").reset_index(drop=True)
-        if len(df) != len(pts) or (not df.empty and df["run"].duplicated().any()):
-            raise InputError(str(out_dir), "parts", f"{len(df)} rows for {len(pts)} runs: the partitions "
-                             "do not belong to this sweep")
-        return df
+
+#: the refusal of a sweep into a folder another sweep is writing into
+BUSY = ("another linsense sweep is writing into this folder: wait for it to finish (the same command then "
+        "returns its rows), or choose another folder")
+
+
+def _sweep_in(sw: SweepSpec, pts: list, batches: list, relative: dict, out_dir: Path, workers: int | None,
+              scheduler: str | None, processes: bool, progress: bool, restart: bool) -> pd.DataFrame:
+    """The sweep's work in ``out_dir``, its lock held (:func:`sweep`)."""
+    inputs = sweep_inputs(sw)
+    manifest = _manifest(sw, len(pts), inputs, code_identity())
+    discard = _check_out(out_dir, manifest, restart)
+    ctx = context(sw, out_dir / "motors")  # (reads the base: bad input refused before a discard)
+    _unchanged_while_running(out_dir, inputs)  # (the base read above is the one recorded)
+    parts = out_dir / "parts"
+    try:
+        if discard:
+            _discard(out_dir)
+        parts.mkdir(parents=True, exist_ok=True)
+        (out_dir / "motors").mkdir(exist_ok=True)
+        if discard or not (out_dir / MANIFEST).is_file():
+            _write_manifest(out_dir, manifest)
+    except OSError as exc:
+        raise output_error(exc.filename or out_dir, exc) from None
+    done = _done_batches(parts)
+    todo = [b for b in range(len(batches)) if b not in done]
+    n_done = sum(len(batches[b]) for b in done)
+    if todo:
+        bar_ctx = _progress(len(pts), n_done, progress)
+        runs = _finished(ctx, batches, todo, relative, workers, scheduler, processes)
+        with closing(runs), bar_ctx as bar:
+            task = bar.add_task(sw.name, total=len(pts), completed=n_done) if bar else None
+            kill_after = int(os.environ.get("LINSENSE_TEST_KILL_AFTER_PARTS", "0"))  # (tests only)
+            for written, (b, rows) in enumerate(runs, start=1):
+                _unchanged_while_running(out_dir, inputs)  # (rows of the recorded inputs only)
+                _write_partition(parts, b, rows)
+                if bar:
+                    bar.advance(task, len(batches[b]))
+                if kill_after and written >= kill_after:
+                    os.kill(os.getpid(), signal.SIGKILL)
+    import pandas as pd
+
+    frames = [pd.read_parquet(p) for p in sorted(parts.glob("part-*.parquet"))]
+    df = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()
+    if not df.empty:
+        df = df.sort_values("run", kind="stable").reset_index(drop=True)
+    if len(df) != len(pts) or (not df.empty and df["run"].duplicated().any()):
+        raise InputError(str(out_dir), "parts", f"{len(df)} rows for {len(pts)} runs: the partitions "
+                         "do not belong to this sweep")
+    return df
 

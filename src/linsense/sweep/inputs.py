@@ -35,8 +35,12 @@ def _entry(what: str, path: str, sha: str | None) -> dict:
 
 
 def _file(what: str, path: Path) -> tuple[dict, bytes | None]:
-    """The entry of the file at ``path`` and its bytes (None when absent), read once."""
-    p = Path(os.path.abspath(path))
+    """The entry of the file at ``path`` and its bytes (None when absent), read once.
+
+    Recorded by its real path (symbolic links resolved, never normalised by its text: ``lk/..``
+    after a linked folder ``lk`` is its target's parent, where the runs read; the text's parent
+    was recorded as absent, and an edited base scenario resumed into the same rows)."""
+    p = Path(os.path.realpath(path))
     try:
         data = p.read_bytes()
     except (FileNotFoundError, NotADirectoryError, IsADirectoryError):
@@ -67,8 +71,9 @@ def _motor(what: str, spec: str, scenario_dir: Path) -> list[dict]:
     p = Path(spec) if Path(spec).is_absolute() else scenario_dir / spec
     entry, data = _file(what, p)
     out = [entry]
+    folder = Path(entry["path"]).parent  # (the real file's: as the motor's reader takes them)
     for kind, t in table_files(_toml(data, str(p))):
-        tp = Path(t) if Path(t).is_absolute() else p.parent / t
+        tp = Path(t) if Path(t).is_absolute() else folder / t
         out.append(_file(kind, tp)[0])
     return out
 
@@ -89,7 +94,7 @@ def sweep_inputs(sw: SweepSpec) -> list[dict]:
         ``{"what", "path", "sha256"}`` each.
     """
     if sw.text_sha256 is not None:
-        entries = [_entry(SWEEP_FILE, os.path.abspath(sw.source), sw.text_sha256)]
+        entries = [_entry(SWEEP_FILE, os.path.realpath(sw.source), sw.text_sha256)]
     else:  # a sweep given as a dict: its validated content
         text = json.dumps(sw.spec.model_dump(mode="json"), sort_keys=True)
         entries = [_entry(SWEEP_FILE, sw.source, bytes_sha256(text.encode("utf-8")))]
@@ -176,9 +181,11 @@ def show(path: str) -> str:
     str
         The path to show.
     """
+    from linsense.io import working_folder
+
     try:
-        return str(Path(path).relative_to(Path.cwd()))
-    except ValueError:
+        return str(Path(path).relative_to(working_folder()))
+    except (ValueError, LinsenseError):
         return path
 
 

@@ -15,7 +15,7 @@ from pathlib import Path
 import tomli_w
 
 from linsense.errors import InputError, LinsenseError
-from linsense.io import parse_toml, read_toml, write_atomic
+from linsense.io import folder_of, parse_toml, read_toml, write_atomic
 from linsense.model.motor import motor_path, names_a_path, preset_names, preset_text, table_files
 from linsense.sweep.spec import SweepSpec
 
@@ -72,17 +72,18 @@ def _motor_data(spec: str, scenario_dir: Path, source: str) -> tuple[dict, Path]
         return parse_toml(preset_text(spec), f"preset {spec}"), scenario_dir
     p = Path(spec) if Path(spec).is_absolute() else scenario_dir / spec
     data = read_toml(p, "motor file (the base scenario's motor)")
+    folder = folder_of(p)  # (its tables beside the file it is, through a link)
     # the tables' paths made absolute: an edited copy is written under DIR/motors/ (a saturated
     # motor's tables were relative to it there: every run of a motor.* axis was refused)
     def absolute(t):
-        return str((p.parent / t).resolve()) if isinstance(t, str) and t and not Path(t).is_absolute() else t
+        return str((folder / t).resolve()) if isinstance(t, str) and t and not Path(t).is_absolute() else t
 
     kinds = {kind for kind, _ in table_files(data)}
     if "inductance table" in kinds:
         data["inductance"]["table"] = absolute(data["inductance"]["table"])
     if "saturation table" in kinds:
         data["saturation"]["tables"] = [absolute(t) for t in data["saturation"]["tables"]]
-    return data, p.parent
+    return data, folder
 
 
 def context(sweep: SweepSpec, motors_out: Path) -> SweepContext:
@@ -112,8 +113,8 @@ def context(sweep: SweepSpec, motors_out: Path) -> SweepContext:
     motor_spec = data.get("motor")
     if not isinstance(motor_spec, str):
         raise InputError(str(p), "motor", "missing (a preset name or a motor file)")
-    motor_data, motor_dir = _motor_data(motor_spec, p.parent, str(p))
-    return SweepContext(sweep.source, data, str(p.parent), motor_data, str(motor_dir), str(motors_out),
+    motor_data, motor_dir = _motor_data(motor_spec, folder_of(p), str(p))
+    return SweepContext(sweep.source, data, str(folder_of(p)), motor_data, str(motor_dir), str(motors_out),
                         sweep.spec.sweep.trace, dict(sweep.spec.sweep.set))
 
 

@@ -43,7 +43,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 
 from linsense._digest import bytes_sha256
 from linsense.errors import InputError, KeyProblem
-from linsense.io import parse_toml, read_text_file
+from linsense.io import folder_of, parse_toml, read_text_file, working_folder
 from linsense.validation import to_input_error
 
 _STRICT = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
@@ -242,7 +242,7 @@ def sweep_from_dict(data: dict, source: str = "<dict>", base_dir: str | Path | N
         spec = SweepFile.model_validate(data)
     except ValidationError as exc:
         raise to_input_error(exc, source, SweepFile) from None
-    return SweepSpec(spec, source, Path(base_dir) if base_dir is not None else Path.cwd())
+    return SweepSpec(spec, source, Path(base_dir) if base_dir is not None else working_folder())
 
 
 def load_sweep(path: str | Path) -> SweepSpec:
@@ -266,7 +266,7 @@ def load_sweep(path: str | Path) -> SweepSpec:
         An unreadable file, bad TOML or an invalid key.
     """
     text = read_text_file(path, "sweep file")
-    sw = sweep_from_dict(parse_toml(text, str(path)), str(path), Path(path).parent)
+    sw = sweep_from_dict(parse_toml(text, str(path)), str(path), folder_of(path))
     sw.text_sha256 = bytes_sha256(text.encode("utf-8"))
     return sw
 

@@ -19,6 +19,7 @@ from linsense.compensation.lut import (
 )
 from linsense.compensation.stamp import data_digest, stamp_comment, stamp_macros
 from linsense.errors import InputError
+from linsense.io import working_folder
 from linsense.model.motor import Motor, names_a_path
 from linsense.tune.cfgmap import Values, header_rows
 from linsense.tune.design import (
@@ -216,7 +217,7 @@ def scenario_toml(
     def relative(path: str) -> str:
         p = Path(path)
         if not p.is_absolute():
-            p = (base_dir or Path.cwd()) / p
+            p = (base_dir or working_folder()) / p
         return os.path.relpath(p.resolve(), Path(out).resolve().parent)
 
     ref = relative(motor_spec) if names_a_path(motor_spec) else motor_spec

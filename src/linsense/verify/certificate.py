@@ -10,6 +10,7 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from linsense.io import working_folder
 from linsense.model.motor import Motor
 from linsense.verify import criteria as C
 from linsense.verify.cases import all_cases
@@ -809,6 +810,6 @@ def design_and_verify(motor_spec: str, drive, *, quick: bool = False, workers: i
     motor = load_motor(spec)
     dz = design(motor, drive, spec, analyse=False)
     base = scenario_dict(dz, drive, spec, pole_pitch=motor.pole_pitch)
-    cert = prepare(motor, spec, base, base_dir or str(Path.cwd()), v_max=drive.v_max, a_max=drive.a_max,
+    cert = prepare(motor, spec, base, base_dir or str(working_folder()), v_max=drive.v_max, a_max=drive.a_max,
                    load=dz.load, travel=drive.travel, quick=quick, workers=workers)()
     return dz, cert
