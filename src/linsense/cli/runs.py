@@ -82,6 +82,8 @@ def simulate(scenario: str, out: str | None, fidelity: str | None, trace_fmt: st
     if decimate is not None:
         sc = sc.replace(record={"decimate": decimate})
     b = build(sc, trace_in_memory=False)  # streamed: the trace is never whole in memory
+    for w in b.warnings:
+        c.warn(w)
     if trace_fmt != "none":
         check_trace_file(b)
     n_rec = -(-b.n_steps // int(b.cfg.decimate))
@@ -253,9 +255,9 @@ def application_options(f):
     return f
 
 
-def scenario_table(sc) -> str | None:
-    """The measured table a scenario's drive runs (``observer.lut_model = "measured"``), as an
-    absolute path, or None (the model's table).
+def scenario_table(sc) -> tuple[str, tuple[str, str, str]] | None:
+    """The measured table a scenario's drive runs (``observer.lut_model = "measured"``), or None (the
+    model's table).
 
     Parameters
     ----------
@@ -264,14 +266,15 @@ def scenario_table(sc) -> str | None:
 
     Returns
     -------
-    str or None
-        The table's file.
+    tuple or None
+        The table's file as an absolute path, and where the scenario names it (the reader's ``via``:
+        a refusal of the table names the scenario and ``observer.lut_file``, as ``simulate`` does).
     """
-    from linsense.sim.tables import lut_file_path
+    from linsense.sim.tables import lut_file_path, lut_file_via
 
     if sc.spec.observer.lut_model != "measured":
         return None
-    return str(lut_file_path(sc).resolve())
+    return str(lut_file_path(sc).resolve()), lut_file_via(sc)
 
 
 def apply_drive_data(dd, drive: dict, quad=None, v_max=None, a_max=None, load=None, travel=None,

@@ -74,7 +74,7 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
         c.data_on_stdout()  # (stdout carries the file itself, or the JSON summary)
     out = c.default_out(out, motor_spec, "tune", ".h" if fmt == "c" else ".toml")
     say = c.say
-    base, base_dir, src = None, None, motor_spec
+    base, base_dir, src, table_via = None, None, motor_spec, None
     dd = DriveData()
     if scenario_path is not None:
         sc = load_scenario(c.example("scenarios", scenario_path, "--scenario"))
@@ -87,8 +87,8 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
         for key in ("lut_model", "lut_file"):
             base.get("observer", {}).pop(key, None)
         if table_path is None and own_table is not None:
-            table_path = own_table
-            say(f"  table          the scenario's measured table {own_table}")
+            table_path, table_via = own_table
+            say(f"  table          the scenario's measured table {table_path}")
     apply_drive_data(dd, drive, quad, v_max, a_max, load, travel, shape)
     if fmt == "c":
         check_c_header(dd)
@@ -115,7 +115,7 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
         f_table = dd.f_pwm / 2.0 if dd.shape == "square" else dz.f_inj
         q_table = dz.quad if dd.shape == "pulsating" else 0.0
         table = read_measured_table(table_path, motor=motor, injection=dd.shape, f_inj=f_table, quad=q_table,
-                                    points=256)
+                                    points=256, via=table_via)
         if table.note:
             say(f"  table          {table.note}")
         fit_line, fit_warning = fit_report(motor, table.values, dd.shape, f_table, q_table)
@@ -141,7 +141,7 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
     warnings = dz.warnings + (su.warnings if su is not None else [])
     if table is not None:  # (the file's table's cost is moot: the drive runs the measured one)
         warnings = [w for w in warnings if not w.startswith("the motor file's table costs")]
-        warnings += [fit_warning] if fit_warning else []
+        warnings += [f"{table.source}: {fit_warning}"] if fit_warning else []
     for w in warnings:
         c.warn(w)
     if mode != "sensorless_lut" and not no_verify:

@@ -241,7 +241,7 @@ class MeasuredTable:
 
 
 def read_measured_table(path: str | os.PathLike, *, motor, injection: str, f_inj: float, quad: float,
-                        points: int) -> MeasuredTable:
+                        points: int, via: tuple[str, str, str] | None = None) -> MeasuredTable:
     """Read a stamped measured table for a drive, checking that it is this drive's.
 
     The checks, each refused in one :class:`~linsense.errors.InputError` naming the file and the key
@@ -274,6 +274,11 @@ def read_measured_table(path: str | os.PathLike, *, motor, injection: str, f_inj
         The drive's kappa.
     points : int
         The table length the drive wants.
+    via : tuple of str or None, optional
+        ``(file, key, value)`` where the table was named, when not on the command line: a scenario's
+        ``observer.lut_file`` and the value as written there. A refusal of the table is then said as
+        that key's (``s.toml: observer.lut_file: 't.json': t.json: stamp.motor_sha256: ...``), so that
+        the message names the file of the chain that brought the table, whichever command reads it.
 
     Returns
     -------
@@ -285,12 +290,23 @@ def read_measured_table(path: str | os.PathLike, *, motor, injection: str, f_inj
     linsense.errors.InputError
         As above; or a drive argument out of range (naming the function and the argument).
     """
-    from linsense.io import read_text_file
-    from linsense.limits import MAX_POINTS
-
     injection, f_inj, quad, points = _drive_args("linsense.compensation.measured.read_measured_table",
                                                  motor, injection, f_inj, quad, points)
     src = os.fspath(path) if isinstance(path, os.PathLike) else str(path)
+    if via is None:
+        return _read_measured(src, motor, injection, f_inj, quad, points)
+    try:
+        return _read_measured(src, motor, injection, f_inj, quad, points)
+    except InputError as exc:
+        where, key, value = via
+        raise InputError(where, key, f"{value!r}: {exc}") from None
+
+
+def _read_measured(src: str, motor, injection: str, f_inj: float, quad: float, points: int) -> MeasuredTable:
+    """:func:`read_measured_table` of the checked drive arguments."""
+    from linsense.io import read_text_file
+    from linsense.limits import MAX_POINTS
+
     doc = _document(src, read_text_file(Path(src), "measured table"))
     stamp = _stamp(src, doc.get("stamp"))
     theta = _numbers(src, doc, "theta")
@@ -350,9 +366,9 @@ def _document(src: str, text: str) -> dict:
     except (ValueError, RecursionError) as exc:  # (JSONDecodeError is a ValueError)
         head = text.lstrip("\ufeff").lstrip()[:12].lower()
         csv = head.startswith("theta_deg")
-        hint = (": this is a CSV table (theta_deg,psi_lut_deg), which has no stamp; give the stamped "
-                "lut_measured.json linsense calibrate writes beside it") if csv else \
-            " (expected the stamped lut_measured.json linsense calibrate writes)"
+        hint = (": a CSV table (theta_deg,psi_lut_deg) has no stamp (the drive it is valid for); give the "
+                "stamped lut_measured.json that linsense calibrate writes (beside its lut_measured.csv)"
+                if csv else " (expected the stamped lut_measured.json linsense calibrate writes)")
         what = "nested too deeply" if isinstance(exc, RecursionError) else str(exc)
         raise InputError(src, "", f"not JSON: {what}{hint}") from None
     if not isinstance(doc, dict):
@@ -360,8 +376,9 @@ def _document(src: str, text: str) -> dict:
                          f"with format {FORMAT!r}")
     fmt = doc.get("format")
     if fmt != FORMAT:
-        hint = (": a model table (linsense lut --format json) has no stamp; the simulator computes the "
-                "model's own table (observer.lut_model = \"resistive\")") if fmt == "linsense-lut" else \
+        hint = (": a model table (linsense lut --format json) has no stamp, and a drive computes the model's "
+                "table itself: give no measured table (no --table; in a scenario observer.lut_model = "
+                "\"resistive\")") if fmt == "linsense-lut" else \
             " (the stamped lut_measured.json linsense calibrate writes)"
         got = "missing" if "format" not in doc else shown(fmt)
         raise InputError(src, "format", f"not a linsense measured table: {got}, expected {FORMAT!r}{hint}")

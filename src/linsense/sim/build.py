@@ -45,7 +45,7 @@ from linsense.sim.drive_cfg import calibration_table, drive_values, fill, value_
 from linsense.sim.plant import fill_saturation, lab_fourier
 from linsense.sim.refusal import explain, given_keys
 from linsense.sim.scenario import Scenario, compensation_of
-from linsense.sim.tables import Tables, drive_tables, measured_model
+from linsense.sim.tables import Tables, drive_tables, measured_model, measured_warnings
 from linsense.tune.cfgmap import Values
 from linsense.tune.design import DriveData, design, mean_dq, uncompensated_speed_factor
 
@@ -92,6 +92,9 @@ class Built:
         cffi objects kept alive with the drive (the calibration table).
     user_keys : set of str
         The dotted keys the file gives (the design sets the others).
+    warnings : list of str
+        Doubts about the inputs the run was built from, for the command to say (a measured table
+        that does not look like the motor's, :func:`linsense.sim.tables.measured_warnings`).
     """
 
     scenario: Scenario
@@ -105,6 +108,7 @@ class Built:
     known: dict = field(default_factory=dict)  # motor values the controller uses
     extra: dict = field(default_factory=dict)  # cffi objects kept alive with the drive (calibration table)
     user_keys: set = field(default_factory=set)  # the dotted keys the file gives (the design sets the others)
+    warnings: list = field(default_factory=list)  # doubts about the inputs, for the command to say
 
 
 # ------------------------------------------------------------------ the path of a scenario
@@ -160,7 +164,8 @@ def build(sc: Scenario, motor: Motor | None = None, trace_in_memory: bool = True
     start_drive(sc, drive, motor, setup)
     cmds, moves = reference_commands(sc)
     return Built(sc, motor, setup, cfg, drive, cmds, n_steps, moves, known,
-                 extra={} if cal_table is None else {"cal_table": cal_table}, user_keys=user_keys)
+                 extra={} if cal_table is None else {"cal_table": cal_table}, user_keys=user_keys,
+                 warnings=measured_warnings(sc, stamp_motor))
 
 
 def motors(sc: Scenario, motor: Motor | None = None, model: Motor | None = None) -> tuple[Motor, Motor]:

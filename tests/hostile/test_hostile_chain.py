@@ -1,0 +1,250 @@
+"""One command's output fed into another (issue 37, the audit of chained outputs): a motor file, a
+bench file, a LUT, a measured table or a tuned scenario handed on, edited in between or paired with
+another motor's file. Each case was a wrong answer without a word, or a refusal that did not say
+which file of the chain is wrong.
+
+The rules behind them:
+
+* **an input is named where it came from**: a value a command took from a scenario is named by
+  the scenario and its key (``observer.lut_file``, ``injection.amplitude``), a value typed as an
+  option by the option (``--v-inj``), whichever command reads it (``simulate``, ``tune``,
+  ``firmware export``);
+* **an output holds what the next command needs and nothing it would read otherwise**: the
+  scenario ``tune`` writes keeps the application it was designed for (``reference.v_max``,
+  ``a_max``: a re-tune over it designs the same drive), and it believes in the motor it was
+  designed and certified for (a ``controller.model.motor`` of another motor is refused);
+* **a file is checked against the other files it is paired with**: the derived columns of a
+  ``linsense model`` table against its inductances, a bench file against the pole pitch it is read
+  with, a measured table against the motor (its end-effect fit said by every command that reads it).
+"""
+
+from __future__ import annotations
+
+import csv
+
+import pytest
+
+from linsense.compensation.lut import build_lut
+from linsense.compensation.measured import measured_table_json, table_stamp
+from linsense.model.motor import load_motor
+
+#: the scenario `linsense tune --motor small30` writes (its certificate passes)
+TUNED = """motor = "small30"
+
+[scenario]
+name = "tuned"
+duration = 0.2
+
+[reference]
+type = "hold"
+
+[inverter]
+v_dc = 72.0
+f_pwm = 16000.0
+dead_time = 8e-07
+
+[injection]
+amplitude = 12.0
+ramp_rate = 1200.0
+quadrature = 0.9
+frequency = 1000.0
+
+[observer]
+type = "mech"
+bandwidth_hz = 15.0
+demod_lpf_hz = 300.0
+gain_schedule = true
+omega_max = 104.72
+hf_delay_s = 0.001
+force_max = 25.0
+
+[controller]
+current_bandwidth_hz = 250.0
+speed_bandwidth_hz = 8.0
+i_max = 2.5
+v_max = 0.25
+step_a_max = 4.18879
+kp_x = 20.1062
+
+[calibration]
+dither_a = 0.4
+dither_hz = 55.0
+
+[protection]
+v_dc_min = 40.0
+v_dc_max = 90.0
+omega_max = 83.7758
+i_max = 5.13278
+"""
+
+def small30_text(dM0: str = "-0.25e-3") -> str:
+    return f"""[motor]
+name = "small30"
+R_s = 2.0
+pole_pitch = 0.030
+force_constant = 10.0
+mass = 0.8
+
+[inductance]
+L0 = 1.5e-3
+L2 = -0.17e-3
+M0 = -0.5e-3
+M2 = -0.17e-3
+dM0 = {dM0}
+"""
+
+
+def measured(scale: float = 1.0, shift: int = 0) -> str:
+    """A measured table of small30's drive (the model's resistive table, as a calibration measures
+    it to 0.1 deg), scaled or shifted to make it another motor's."""
+    m = load_motor("small30")
+    v = build_lut(m, 56, f_inj=1000.0, quad=0.9).values * scale
+    v = list(v[shift:]) + list(v[:shift])
+    return measured_table_json(v, table_stamp(m, "pulsating", 1000.0, 0.9, 56))
+
+
+def with_table(path: str) -> str:
+    return TUNED.replace("force_max = 25.0", f'force_max = 25.0\nlut_model = "measured"\nlut_file = "{path}"')
+
+
+@pytest.fixture
+def files(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+
+    def write(**texts: str):
+        for name, text in texts.items():
+            (tmp_path / name).write_text(text)
+        return tmp_path
+
+    return write
+
+
+# ---------------------------------------------------------------- a value named where it came from
+def test_a_scenario_s_table_of_another_motor_is_named_by_the_scenario_in_tune(files, run_cli):
+    """``tune --motor ecce2010 --scenario s.toml``: the scenario's measured table (small30's) was refused
+    naming only the table's absolute path, not the scenario key that brought it."""
+    files(**{"s.toml": with_table("t.json"), "t.json": measured()})
+    line = run_cli("tune", "--motor", "ecce2010", "--scenario", "s.toml", "--no-verify", "--out",
+                   "o.toml").refused("s.toml: observer.lut_file: 't.json':", "stamp.motor_sha256", "small30")
+    assert "ecce2010" in line
+
+
+def test_a_scenario_s_table_of_another_motor_is_named_by_the_scenario_in_firmware_export(files, run_cli):
+    files(**{"s.toml": with_table("t.json"), "t.json": measured()})
+    run_cli("firmware", "export", "fw", "--motor", "ecce2010", "--scenario", "s.toml").refused(
+        "s.toml: observer.lut_file: 't.json':", "stamp.motor_sha256")
+
+
+def test_an_option_s_value_is_not_blamed_on_the_scenario(files, run_cli):
+    """``tune --scenario s.toml --v-inj 40``: the 40 V typed as an option was blamed on s.toml."""
+    files(**{"s.toml": TUNED})
+    line = run_cli("tune", "--motor", "small30", "--scenario", "s.toml", "--v-inj", "40", "--no-verify",
+                   "--out", "o.toml").refused("--v-inj", "40 V")
+    assert "s.toml" not in line, line
+
+
+def test_a_scenario_s_value_is_named_by_its_key(files, run_cli):
+    """``tune --scenario tuned.toml --v-dc 36``: the tuned scenario's 12 V injection (designed for its
+    72 V bus) was named ``v_inj``, a key the file does not have."""
+    files(**{"s.toml": TUNED})
+    for cmd in (("tune", "--motor", "small30", "--no-verify", "--out", "o.toml"),
+                ("firmware", "export", "fw", "--motor", "small30")):
+        line = run_cli(*cmd, "--scenario", "s.toml", "--v-dc", "36").refused(
+            "s.toml: injection.amplitude: 12 V", "36 V bus")
+        assert ": v_inj:" not in line, line
+
+
+def test_a_relative_motor_path_says_where_it_was_looked_for(files, run_cli):
+    """A tuned scenario moved away from its motor file: the message did not say the path is taken
+    relative to the scenario's folder."""
+    (files() / "sub").mkdir()
+    files(**{"sub/s.toml": TUNED.replace('motor = "small30"', 'motor = "../m/small30.toml"')})
+    run_cli("simulate", "sub/s.toml", "--out", "o", "--trace", "none").refused(
+        "sub/s.toml: motor:", "'../m/small30.toml'", "relative to the scenario's folder")
+
+
+# ---------------------------------------------------------------- what an output holds
+def test_tune_refuses_a_scenario_whose_drive_believes_in_another_motor(files, run_cli):
+    """``tune --motor small30 --scenario s.toml`` with ``controller.model.motor`` another motor: tune
+    certified the drive believing in small30 (the certificate pins the model) and wrote the scenario
+    believing in the other one, exit 0."""
+    files(**{"s.toml": TUNED + '\n[controller.model]\nmotor = "other.toml"\n',
+             "other.toml": small30_text("-0.40e-3")})
+    run_cli("tune", "--motor", "small30", "--scenario", "s.toml", "--no-verify", "--out", "o.toml").refused(
+        "s.toml: controller.model.motor", "'other.toml'", "small30")
+    # the same motor's data under another file name is that motor
+    files(**{"other.toml": small30_text()})
+    assert run_cli("tune", "--motor", "small30", "--scenario", "s.toml", "--no-verify",
+                   "--out", "o.toml").code == 0
+
+
+def test_a_re_tune_over_the_tuned_scenario_designs_the_same_drive(files, run_cli):
+    """``tune --v-max 0.3`` then ``tune --scenario`` over its output: the application's speed was not in
+    the scenario, so the re-tune designed for the default 0.2 m/s (speed cap 0.375 -> 0.25 m/s, the
+    over-speed trip lowered) without a word."""
+    files()
+    assert run_cli("tune", "--motor", "small30", "--v-max", "0.3", "--a-max", "2", "--no-verify",
+                   "--out", "a.toml").code == 0
+    assert run_cli("tune", "--motor", "small30", "--scenario", "a.toml", "--no-verify",
+                   "--out", "b.toml").code == 0
+    import tomllib
+
+    a, b = (tomllib.loads(open(f).read()) for f in ("a.toml", "b.toml"))
+    assert a == b
+
+
+# ---------------------------------------------------------------- a file against its pair
+def test_an_edited_derived_column_of_a_model_table_is_refused(files, run_cli):
+    """``linsense model`` output used as a motor's inductance table, its ``psi_lut_deg`` and ``L_dq``
+    columns doubled: read past, the motor unchanged, without a word."""
+    root = files(**{"m.toml": small30_text().split("L0 =")[0] + 'table = "t.csv"\n'})
+    assert run_cli("model", "--motor", "small30", "--points", "72", "--out", "t.csv").code == 0
+    rows = list(csv.reader(open(root / "t.csv")))
+    assert run_cli("lut", "--motor", "m.toml", "--points", "8", "--out", "l.csv").code == 0  # (as written)
+    col = rows[0].index("L_dq")
+    rows[3][col] = repr(2.0 * float(rows[3][col]))
+    with open(root / "t.csv", "w", newline="") as f:
+        csv.writer(f).writerows(rows)
+    run_cli("lut", "--motor", "m.toml", "--points", "8", "--out", "l.csv").refused(
+        "t.csv", "row 4, column L_dq", "L_A .. M_CA")
+
+
+@pytest.mark.parametrize("motor", ["ecce2010", "ex/m45.toml"])
+def test_a_bench_file_of_another_pole_pitch_is_refused(files, run_cli, motor):
+    """A bench file of a 60 mm motor identified with ``--motor ecce2010`` (56 mm): a fitted motor file,
+    exit 0 (residual 6.5 times the right pitch's); read with 45 mm, refused blaming the fitted
+    model's saliency."""
+    from importlib import resources
+
+    m60 = resources.files("linsense.examples") / "motors" / "class"
+    root = files(**{"m60.toml": (m60 / "m60_pos20k.toml").read_text()})
+    (root / "ex").mkdir()
+    (root / "ex" / "m45.toml").write_text((m60 / "m45_24v.toml").read_text())
+    assert run_cli("bench-emulate", "--motor", "m60.toml", "--positions", "56", "--noise", "0.01", "--seed",
+                   "1", "--out", "b.csv").code == 0
+    line = run_cli("identify", "b.csv", "--motor", motor, "--out", "id").refused(
+        "b.csv", "pole pitch", "60 mm")
+    assert "saliency" not in line, line
+
+
+def test_an_implausible_measured_table_is_said_by_simulate(files, run_cli):
+    """A measured table whose values were turned over (another motor's, or edited): ``tune`` warned
+    that it does not look like the motor's, ``simulate`` ran it without a word."""
+    files(**{"s.toml": with_table("t.json"), "t.json": measured(scale=-1.0)})
+    r = run_cli("simulate", "s.toml", "--out", "o", "--trace", "none")
+    assert "does not look like this motor's" in r.err, r.err
+    assert "t.json" in r.err
+
+
+def test_table_hints_fit_the_command(files, run_cli):
+    """A CSV table given to ``--table`` was told to take the lut_measured.json "beside it" (identify's
+    lut.csv has none); a model table was told about a scenario key."""
+    files(**{"lut.csv": "theta_deg,psi_lut_deg\n0,1\n", "l.json": '{"format": "linsense-lut"}'})
+    line = run_cli("tune", "--motor", "small30", "--table", "lut.csv", "--no-verify",
+                   "--out", "o.toml").refused("lut.csv", "no stamp", "linsense calibrate",
+                                              "beside its lut_measured.csv")
+    assert "writes beside it" not in line
+    line = run_cli("tune", "--motor", "small30", "--table", "l.json", "--no-verify",
+                   "--out", "o.toml").refused("l.json", "format", "no stamp")
+    assert "--table" in line
+
