@@ -172,10 +172,26 @@ def test_tune_refuses_a_scenario_whose_drive_believes_in_another_motor(files, ru
              "other.toml": small30_text("-0.40e-3")})
     run_cli("tune", "--motor", "small30", "--scenario", "s.toml", "--no-verify", "--out", "o.toml").refused(
         "s.toml: controller.model.motor", "'other.toml'", "small30")
-    # the same motor's data under another file name is that motor
+    # the same motor's data under another file name is that motor; written elsewhere, its path is
+    # made relative to the output (it was copied as written, and named a file that is not there)
     files(**{"other.toml": small30_text()})
+    (files() / "out").mkdir()
     assert run_cli("tune", "--motor", "small30", "--scenario", "s.toml", "--no-verify",
-                   "--out", "o.toml").code == 0
+                   "--out", "out/o.toml").code == 0
+    assert 'motor = "../other.toml"' in (files() / "out" / "o.toml").read_text()
+    assert run_cli("simulate", "out/o.toml", "--out", "sim", "--trace", "none").code == 0
+
+
+def test_tune_never_writes_a_scenario_the_simulator_refuses(files, run_cli):
+    """``tune --scenario tuned.toml --v-dc 100``: the scenario's protection bus range (tuned for 72 V,
+    kept as the scenario's own limits) trips a 100 V drive at t = 0; ``--no-verify`` wrote it, exit 0,
+    and the certificate blamed "the certificate's hold run"."""
+    files(**{"s.toml": TUNED})
+    for more in (("--no-verify",), ("--quick",)):
+        line = run_cli("tune", "--motor", "small30", "--scenario", "s.toml", "--v-dc", "100", *more,
+                       "--out", "o.toml").refused("--v-dc", "[40, 90] V", "protection.v_dc_max", "got 100")
+        assert "certificate" not in line, line
+    assert not (files() / "o.toml").exists()
 
 
 def test_a_re_tune_over_the_tuned_scenario_designs_the_same_drive(files, run_cli):
@@ -223,7 +239,8 @@ def test_a_bench_file_of_another_pole_pitch_is_refused(files, run_cli, motor):
     assert run_cli("bench-emulate", "--motor", "m60.toml", "--positions", "56", "--noise", "0.01", "--seed",
                    "1", "--out", "b.csv").code == 0
     line = run_cli("identify", "b.csv", "--motor", motor, "--out", "id").refused(
-        "b.csv", "pole pitch", "60 mm")
+        "b.csv: column position_mm", "read with the pole pitch", f"({'--motor ' if '/' in motor else ''}",
+        "with a pole pitch of 60.0")
     assert "saliency" not in line, line
 
 

@@ -294,15 +294,54 @@ def apply_drive_data(dd, drive: dict, quad=None, v_max=None, a_max=None, load=No
 
     Returns
     -------
-    DriveData
-        ``dd``.
+    set of str
+        The names of the drive data given as options (:func:`drive_refusal`).
     """
     given = {**drive, "quad": quad, "v_max": v_max, "a_max": a_max, "load": load,
              "travel": None if travel is None else travel * 1e-3, "shape": shape}
     for key, val in given.items():
         if val is not None:
             setattr(dd, key, val)
-    return dd
+    return {key for key, val in given.items() if val is not None}
+
+
+#: drive data (DriveData's names) -> the option that gives it
+DRIVE_OPTIONS = {"v_dc": "--v-dc", "f_pwm": "--f-pwm", "dead_time": "--dead-time", "i_max": "--i-max",
+                 "v_inj": "--v-inj", "f_inj": "--f-inj", "quad": "--quad", "v_max": "--v-max",
+                 "a_max": "--a-max", "load": "--load", "travel": "--travel", "shape": "--injection"}
+
+
+def drive_refusal(exc: InputError, typed: set[str], sc, source: str) -> InputError:
+    """A refusal of drive data (named by its DriveData name, as the design does, or by its scenario
+    key) said where the input came from, when a command took its drive data from a scenario and
+    options over it: the option typed (``--v-inj: 40 V ...``), else the scenario's key (``s.toml:
+    injection.amplitude: 12 V ...``), never the scenario for a value typed, nor a key the file does
+    not have.
+
+    Parameters
+    ----------
+    exc : InputError
+        The refusal, naming the scenario and a DriveData name or scenario key.
+    typed : set of str
+        The drive data given as options (:func:`apply_drive_data`).
+    sc : linsense.sim.scenario.Scenario
+        The scenario the rest came from.
+    source : str
+        The name the design was given for it (the scenario as typed).
+
+    Returns
+    -------
+    InputError
+        The refusal at the input's origin (``exc`` itself for another key).
+    """
+    from linsense.sim.build import DESIGN_KEYS
+
+    name = next((k for k, v in DESIGN_KEYS.items() if v == exc.key), exc.key)
+    if exc.source not in (source, sc.source) or name not in DRIVE_OPTIONS:
+        return exc
+    if name in typed:
+        return InputError(DRIVE_OPTIONS[name], "", exc.message)
+    return InputError(sc.source, DESIGN_KEYS.get(name, name), exc.message)
 
 
 @click.command(short_help="Run the firmware's LUT calibration in the simulator.",

@@ -7,7 +7,14 @@ from pathlib import Path
 import click
 
 from linsense.cli import _common as c
-from linsense.cli.runs import application_options, apply_drive_data, drive_options, scenario_table
+from linsense.cli.runs import (
+    application_options,
+    apply_drive_data,
+    drive_options,
+    drive_refusal,
+    scenario_table,
+)
+from linsense.errors import InputError
 from linsense.version import docs
 
 
@@ -55,6 +62,7 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
     write verification.json and verification.png beside the output (exit 1 if a check fails). A C
     header is written only for a drive that passes (--unverified: anyway, saying why in it)."""
     from linsense.io import write_atomic
+    from linsense.model.motor import names_a_path
     from linsense.sim.build import compensation_of, drive_data
     from linsense.sim.scenario import load_scenario
     from linsense.tune.design import DriveData, design, uncompensated_speed_factor
@@ -74,12 +82,15 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
         c.data_on_stdout()  # (stdout carries the file itself, or the JSON summary)
     out = c.default_out(out, motor_spec, "tune", ".h" if fmt == "c" else ".toml")
     say = c.say
-    base, base_dir, src, table_via = None, None, motor_spec, None
+    base, base_dir, src, table_via, sc = None, None, motor_spec, None, None
     dd = DriveData()
     if scenario_path is not None:
         sc = load_scenario(c.example("scenarios", scenario_path, "--scenario"))
         base, base_dir, src = sc.given(), sc.base_dir, scenario_path
         base.pop("motor", None)
+        model = base.get("controller", {}).get("model", {})
+        if names_a_path(model.get("motor", "")):  # (absolute here, relative to the output when written)
+            model["motor"] = str((sc.base_dir / model["motor"]).resolve())
         dd = drive_data(sc)
         # the scenario's measured table is the drive's (--table over it): designed, verified and
         # written with it, its path made relative to the output again
@@ -89,15 +100,20 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
         if table_path is None and own_table is not None:
             table_path, table_via = own_table
             say(f"  table          the scenario's measured table {table_path}")
-    apply_drive_data(dd, drive, quad, v_max, a_max, load, travel, shape)
+    typed = apply_drive_data(dd, drive, quad, v_max, a_max, load, travel, shape)
     if fmt == "c":
         check_c_header(dd)
     motor = c.load(motor_spec)
+    if sc is not None:
+        _same_believed_motor(sc, motor, motor_spec)
     if fmt == "c":  # (the C name checked, never rewritten, before anything is designed or run)
         from linsense.tune.export import c_config_name
 
         c_config_name(name, motor.name, "--name")
-    dz = design(motor, dd, src)
+    try:
+        dz = design(motor, dd, src)
+    except InputError as exc:  # (with a scenario: the option typed, or the scenario's key)
+        raise exc if sc is None else drive_refusal(exc, typed, sc, src) from None
     from linsense.tune.startup import design_startup
     # (the start-up locks as the PLL would: startup.lock_gain, linsense.tune.design.startup_lock_gain)
     su = design_startup(motor, v_dc=dd.v_dc, f_pwm=dd.f_pwm, i_max=dd.i_max, observer_bw=dz.observer_bw_pll,
@@ -123,6 +139,7 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
     table_abs = None if table_path is None else str(Path(table_path).resolve())
     sc_dict = scenario_dict(dz, dd, motor_spec, base, startup=su, k_est=k_est, pole_pitch=motor.pole_pitch,
                             table=table_abs)
+    _read_back(sc_dict, src, typed, sc)
     cert_run = None
     if not no_verify:  # (its runs are built before anything is written: a refusal leaves no file)
         from linsense.verify.certificate import certificate_base, motor_ref, prepare
@@ -195,6 +212,39 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
         c.emit_json("tune", files, bool(cert.passed), verification=verification, **summary)
     if not cert.passed:
         raise click.exceptions.Exit(1)
+
+
+def _same_believed_motor(sc, motor, motor_spec: str) -> None:
+    """Refuse a scenario whose drive believes in another motor (``controller.model.motor``) than the
+    one tune designs it for: tune designs and certifies the drive believing in ``--motor`` (the
+    certificate's runs pin the model to it), so the scenario it wrote would run another drive than
+    the one certified."""
+    from linsense.sim.build import resolve_motor
+    from linsense.sim.cache import motor_key
+
+    spec = sc.spec.controller.model.motor
+    if spec is None:
+        return
+    believed = resolve_motor(sc, spec, "controller.model.motor", check=False)
+    if motor_key(believed) != motor_key(motor):
+        raise InputError(sc.source, "controller.model.motor",
+                         f"{spec!r} ({believed.name}): the scenario's drive believes in another motor than "
+                         f"the one tune designs and certifies it for, {motor_spec!r} ({motor.name}): remove "
+                         f"the key, or give --motor {spec}")
+
+
+def _read_back(sc_dict: dict, src: str, typed: set, sc) -> None:
+    """Read the scenario tune writes back as ``linsense simulate`` reads it (its checks and build),
+    before anything is designed further, run or written: tune never writes a scenario the simulator
+    refuses (the scenario's own keys kept over a changed drive, such as a protection's bus range
+    tuned for another bus). A refusal names the input as :func:`drive_refusal` does."""
+    from linsense.sim.build import build
+    from linsense.sim.scenario import scenario_from_dict
+
+    try:
+        build(scenario_from_dict(sc_dict, src, Path.cwd()))
+    except InputError as exc:
+        raise exc if sc is None else drive_refusal(exc, typed, sc, src) from None
 
 
 def _certificate_paths(out: str) -> tuple[Path, Path]:

@@ -555,10 +555,14 @@ def resolve_motor(sc: Scenario, spec: str | None = None, key: str = "motor", che
                              f"{', '.join(preset_names())}; examples: {', '.join(examples.names('motors'))}; "
                              "or a path to a .toml motor file, relative to the scenario)")
     p = Path(motor_path(spec))
+    where = ""
     if not p.is_absolute():
         p = sc.base_dir / p
+        folder = "the working folder" if sc.source == "<stdin>" else "the scenario's folder"
+        where = f" (a path is taken relative to {folder}, {str(sc.base_dir.resolve())!r})"
     if not p.is_file():
-        raise InputError(sc.source, key, f"no such motor file {str(p)!r} (value {spec!r})")
+        raise InputError(sc.source, key, f"no such motor file {spec!r}: {str(p.resolve())!r} does not "
+                         f"exist{where}")
     return _load_motor_file_cached(p, check)
 
 
@@ -655,7 +659,7 @@ def initial_load(sc: Scenario, motor: Motor) -> float:
 
 #: an input of the design (DriveData's names, :func:`drive_data`) -> the scenario key it is read from;
 #: the design names the input at fault (linsense.tune.design.DRIVE_RULES), the refusal its key
-_DESIGN_KEYS = {"v_dc": "inverter.v_dc", "f_pwm": "inverter.f_pwm", "dead_time": "inverter.dead_time",
+DESIGN_KEYS = {"v_dc": "inverter.v_dc", "f_pwm": "inverter.f_pwm", "dead_time": "inverter.dead_time",
                 "i_max": "controller.i_max", "v_max": "reference.v_max", "a_max": "reference.a_max",
                 "v_inj": "injection.amplitude", "f_inj": "injection.frequency",
                 "quad": "injection.quadrature", "shape": "injection.shape", "motor": "motor"}
@@ -664,7 +668,7 @@ _DESIGN_KEYS = {"v_dc": "inverter.v_dc", "f_pwm": "inverter.f_pwm", "dead_time":
 def _design_refusal(sc: Scenario, exc: InputError) -> InputError:
     """The design's refusal ``exc`` (naming an input by its DriveData name) as the scenario's: the
     same message at the scenario key the input is read from."""
-    return InputError(sc.source, _DESIGN_KEYS.get(exc.key, exc.key), exc.message)
+    return InputError(sc.source, DESIGN_KEYS.get(exc.key, exc.key), exc.message)
 
 
 def _check_cal_window(sc: Scenario, t_max: float, t_hold: float, given: set) -> None:
