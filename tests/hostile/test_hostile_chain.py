@@ -265,3 +265,52 @@ def test_table_hints_fit_the_command(files, run_cli):
                    "--out", "o.toml").refused("l.json", "format", "no stamp")
     assert "--table" in line
 
+
+
+def test_a_renamed_motor_s_table_says_it_is_the_same_data(files, run_cli):
+    """The motor file renamed (its data untouched): its table was refused as "valid for the motor data
+    it was calibrated for", as if the data differed."""
+    files(**{"m.toml": small30_text().replace('name = "small30"', 'name = "mine"'), "t.json": measured()})
+    run_cli("tune", "--motor", "m.toml", "--table", "t.json", "--no-verify", "--out", "o.toml").refused(
+        "t.json: stamp.motor_sha256", "the same motor data under another name", "'small30' again")
+
+
+def coarse(n: int) -> str:
+    m = load_motor("small30")
+    return measured_table_json(build_lut(m, n, f_inj=1000.0, quad=0.9).values,
+                               table_stamp(m, "pulsating", 1000.0, 0.9, n))
+
+
+def test_a_coarse_table_is_said_coarse_not_another_motor_s(files, run_cli):
+    """A 12-point measured table (``calibrate --positions 12``), each point right: read by the drive's
+    linear interpolation it is 3.5 deg off between its points; ``tune`` said the table "does not look
+    like this motor's: check the calibration and the motor file", ``simulate`` and ``calibrate``
+    nothing."""
+    files(**{"t.json": coarse(12), "s.toml": with_table("t.json")})
+    for r in (run_cli("tune", "--motor", "small30", "--table", "t.json", "--no-verify", "--out", "o.toml"),
+              run_cli("simulate", "s.toml", "--out", "o", "--trace", "none")):
+        assert r.code == 0, r.err
+        assert "t.json" in r.err and "a 12-point table" in r.err and "3.5 deg" in r.err, r.err
+        assert "does not look like this motor's" not in r.err, r.err
+    r = run_cli("calibrate", "--motor", "small30", "--positions", "12", "--fidelity", "average",
+                "--out", "cal")
+    assert "a 12-point table" in r.err, r.err
+    # the calibration's own 56 points: read closely enough, nothing said
+    files(**{"t.json": coarse(56)})
+    assert "warning" not in run_cli("simulate", "s.toml", "--out", "o", "--trace", "none").err
+
+
+def test_an_output_s_certificate_is_not_replaced_by_another_output_s(files, run_cli):
+    """``tune --format c --out a.h`` then ``tune --no-verify --out a.toml``: the header's certificate
+    (``a.verification.json``, the same stem) was deleted without a word (a verified ``--out a.toml``
+    replaced it)."""
+    root = files()
+    assert run_cli("tune", "--motor", "small30", "--format", "c", "--quick", "--out", "a.h").code == 0
+    cert = (root / "a.verification.json").read_text()
+    assert '"output": "a.h"' in cert
+    for more in (("--no-verify",), ("--quick",)):
+        run_cli("tune", "--motor", "small30", *more, "--out", "a.toml").refused(
+            "a.verification.json: output: 'a.h'", "the certificate of a.h", "--out a.toml")
+    assert (root / "a.verification.json").read_text() == cert and not (root / "a.toml").exists()
+    # the same output's certificate is its own: replaced by its next run
+    assert run_cli("tune", "--motor", "small30", "--format", "c", "--quick", "--out", "a.h").code == 0

@@ -10,6 +10,7 @@ from linsense.cli.runs import (
     apply_drive_data,
     drive_options,
     drive_refusal,
+    scenario_arg,
     scenario_table,
 )
 from linsense.errors import InputError
@@ -61,9 +62,8 @@ def export(folder: str, motor_spec: str, scenario_path: str | None, name: str | 
     dd, src, table_via, sc = DriveData(), motor_spec, None, None
     if scenario_path is not None:
         from linsense.sim.build import drive_data
-        from linsense.sim.scenario import load_scenario
 
-        sc = load_scenario(c.example("scenarios", scenario_path, "--scenario"))
+        sc = scenario_arg(scenario_path, "--scenario")
         dd = drive_data(sc)
         src = scenario_path
         own_table = scenario_table(sc)

@@ -14,9 +14,12 @@ from linsense.errors import InputError
 from linsense.version import docs
 
 
-def _scenario(spec: str):
+def scenario_arg(spec: str, option: str = "SCENARIO"):
     """The scenario a command argument names: ``-`` reads it from standard input (relative paths
-    in it from the working folder), else a file or a packaged example's name."""
+    in it from the working folder), else a file or a packaged example's name; the one path of every
+    command that takes a scenario (``simulate``, ``calibrate``, ``tune`` and ``firmware export``
+    ``--scenario``), so that ``linsense tune --out - | linsense tune --scenario -`` reads as
+    ``simulate -`` does."""
     from linsense.sim.scenario import load_scenario, scenario_from_dict
 
     if spec == "-":
@@ -24,7 +27,7 @@ def _scenario(spec: str):
 
         text = decode_text(c.read_stdin(), "<stdin>", "scenario")
         return scenario_from_dict(parse_toml(text, "<stdin>"), "<stdin>", Path.cwd())
-    return load_scenario(c.example("scenarios", spec, "SCENARIO"))
+    return load_scenario(c.example("scenarios", spec, option))
 
 
 @click.command(short_help="Run a closed-loop drive simulation.",
@@ -75,7 +78,7 @@ def simulate(scenario: str, out: str | None, fidelity: str | None, trace_fmt: st
         if trace_fmt == "csv":
             c.warn("trace.csv, not trace.parquet: the Parquet trace needs pyarrow "
                    "(pip install 'linsense[parquet]')")
-    sc = _scenario(scenario)
+    sc = scenario_arg(scenario)
     out = c.default_out(out, sc.name if scenario == "-" else scenario, "simulate")
     if fidelity is not None:
         sc = sc.replace(inverter={"fidelity": fidelity})
@@ -181,7 +184,7 @@ def _simulate_pil(scenario: str, out: str | None, others: list[str], check: bool
     if as_json:
         c.data_on_stdout()
     path = c.example("scenarios", scenario, "SCENARIO")
-    _scenario(path)  # (bad input refused before anything is built)
+    scenario_arg(path)  # (bad input refused before anything is built)
     out = c.default_out(out, scenario, "simulate")
     with tempfile.TemporaryDirectory(prefix="linsense-pil-") as tmp:
         rec = closed_loop(path, tmp)
@@ -383,13 +386,21 @@ def calibrate(motor_spec: str | None, scenario_path: str | None, positions: int,
         c.data_on_stdout()
     if motor_spec is None and scenario_path is None:
         raise click.UsageError("give --motor or --scenario (the drive to calibrate)")
-    sc = _scenario(scenario_path) if scenario_path is not None else None
+    sc = scenario_arg(scenario_path, "--scenario") if scenario_path is not None else None
     motor = c.load(motor_spec) if motor_spec is not None else None
     out = c.default_out(out, scenario_path or motor_spec, "calibrate")
     extra = {"saturation": {"enabled": True}} if saturated else {}
     cal = run_calibration(motor_spec if sc is not None else motor, positions, load, fidelity, quad=quad,
                           source=motor_spec or "<calibrate>", scenario=sc, drive=drive, **extra)
     metrics, timing = split_timing(cal.metrics)
+    if cal.completed and cal.stamp is not None:  # (a table too coarse for the drive that reads it)
+        from linsense.compensation.measured import resolution_warning
+
+        st = cal.stamp
+        w = resolution_warning(cal.motor, st.points, st.injection, st.f_inj, st.quad,
+                               sc.spec.observer.lut_points if sc is not None else 256)
+        if w:
+            c.warn(w)
     with output_set(out, "calibrate") as s:
         s.write("lut_measured.csv", lut_csv(cal))
         if cal.completed:  # (the stamped table a scenario reads: observer.lut_model = "measured")

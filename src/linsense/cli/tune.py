@@ -12,6 +12,7 @@ from linsense.cli.runs import (
     apply_drive_data,
     drive_options,
     drive_refusal,
+    scenario_arg,
     scenario_table,
 )
 from linsense.errors import InputError
@@ -64,7 +65,6 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
     from linsense.io import write_atomic
     from linsense.model.motor import names_a_path
     from linsense.sim.build import compensation_of, drive_data
-    from linsense.sim.scenario import load_scenario
     from linsense.tune.design import DriveData, design, uncompensated_speed_factor
     from linsense.tune.export import c_header, check_c_header, design_digest, scenario_dict, scenario_toml
 
@@ -81,11 +81,12 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
     if as_json or out == "-":
         c.data_on_stdout()  # (stdout carries the file itself, or the JSON summary)
     out = c.default_out(out, motor_spec, "tune", ".h" if fmt == "c" else ".toml")
+    _own_certificate(out)
     say = c.say
     base, base_dir, src, table_via, sc = None, None, motor_spec, None, None
     dd = DriveData()
     if scenario_path is not None:
-        sc = load_scenario(c.example("scenarios", scenario_path, "--scenario"))
+        sc = scenario_arg(scenario_path, "--scenario")
         base, base_dir, src = sc.given(), sc.base_dir, scenario_path
         base.pop("motor", None)
         model = base.get("controller", {}).get("model", {})
@@ -134,7 +135,7 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
                                     points=256, via=table_via)
         if table.note:
             say(f"  table          {table.note}")
-        fit_line, fit_warning = fit_report(motor, table.values, dd.shape, f_table, q_table)
+        fit_line, fit_warning = fit_report(motor, table.raw, dd.shape, f_table, q_table, 256)
         say(f"  table          {fit_line}")
     table_abs = None if table_path is None else str(Path(table_path).resolve())
     sc_dict = scenario_dict(dz, dd, motor_spec, base, startup=su, k_est=k_est, pole_pitch=motor.pole_pitch,
@@ -186,7 +187,7 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
         by = "" if reason else VERIFIED_BY[cert.quick]
         text = c_header(dz, dd, motor, name, startup=su, table=table, unverified=reason, verified_by=by)
         if cert is not None:
-            _write_certificate(cert, motor, dd, dz, quick, json_path, png_path, files, digest)
+            _write_certificate(cert, motor, dd, dz, quick, json_path, png_path, files, digest, out)
     else:
         text = scenario_toml(dz, dd, motor_spec, Path(out), base, Path.cwd(), startup=su, k_est=k_est,
                              pole_pitch=motor.pole_pitch, table=table_abs)
@@ -205,7 +206,7 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
         return
     if cert is None:
         cert = _run_certificate(cert_run)
-        _write_certificate(cert, motor, dd, dz, quick, json_path, png_path, files, digest)
+        _write_certificate(cert, motor, dd, dz, quick, json_path, png_path, files, digest, out)
     c.elapsed()
     if as_json:
         verification = {k: v for k, v in cert.as_dict().items() if k != "runs"}
@@ -258,6 +259,26 @@ def _certificate_paths(out: str) -> tuple[Path, Path]:
     return folder / f"{stem}.verification.json", folder / f"{stem}.verification.png"
 
 
+def _own_certificate(out: str) -> None:
+    """Refuse an output whose certificate files (``<stem>.verification.json``, ``.png``) are another
+    output's: ``tune --format c --out a.h`` then ``tune --no-verify --out a.toml`` deleted the
+    header's certificate, and a verified ``--out a.toml`` replaced it, without a word. A certificate
+    names the output it certifies (its ``output``); one of another output is left alone (exit 2,
+    before anything runs). One without the key (an earlier linsense's) is this output's."""
+    import json
+
+    json_path, _ = _certificate_paths(out)
+    try:
+        owner = json.loads(json_path.read_text(encoding="utf-8")).get("output")
+    except (OSError, ValueError, AttributeError):  # (none, or not a certificate: nothing to keep)
+        return
+    mine = Path(out).name if out != "-" else "-"
+    if isinstance(owner, str) and owner != mine:
+        raise InputError(str(json_path), "output", f"{owner!r}: this is the certificate of {owner}, which "
+                         f"--out {out} would replace (or delete, with --no-verify): give --out another name "
+                         f"than {owner}'s stem")
+
+
 def _run_certificate(cert_run):
     """Run the prepared certificate and print it."""
     cert = cert_run()
@@ -267,8 +288,9 @@ def _run_certificate(cert_run):
 
 
 def _write_certificate(cert, motor, dd, dz, quick: bool, json_path: Path, png_path: Path, files: list,
-                       digest: str = "") -> None:
-    """Write the certificate's JSON and figure (appended to ``files``)."""
+                       digest: str = "", output: str = "-") -> None:
+    """Write the certificate's JSON and figure (appended to ``files``); the JSON names the ``output``
+    it certifies (:func:`_own_certificate`)."""
     import json
 
     from linsense.io import write_atomic
@@ -276,7 +298,8 @@ def _write_certificate(cert, motor, dd, dz, quick: bool, json_path: Path, png_pa
     from linsense.report.verify_figures import certificate_figure
 
     doc = cert.as_dict()
-    doc.update(motor=motor.name, drive={k: v for k, v in vars(dd).items()}, data_sha256=digest,
+    doc.update(output=Path(output).name if output != "-" else "-", motor=motor.name,
+               drive={k: v for k, v in vars(dd).items()}, data_sha256=digest,
                design={k: v for k, v in dz.as_dict().items() if k not in ("margins", "warnings")})
     files.append(write_atomic(json_path, json.dumps(doc, indent=1, sort_keys=True) + "\n"))
     c.say(str(files[-1]))

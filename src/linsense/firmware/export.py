@@ -225,7 +225,7 @@ def firmware_files(motor, drive=None, source: str = "<firmware export>", name: s
 
         table = read_measured_table(table, motor=motor, injection=dd.shape, f_inj=dz.f_inj, quad=dz.quad,
                                     points=points, via=table_via)
-        doubt = fit_report(motor, table.values, dd.shape, dz.f_inj, dz.quad)[1]
+        doubt = fit_report(motor, table.raw, dd.shape, dz.f_inj, dz.quad, points)[1]
         warnings += [f"{table.source}: {doubt}"] if doubt else []
     su = design_startup(motor, v_dc=dd.v_dc, f_pwm=dd.f_pwm, i_max=dd.i_max, observer_bw=dz.observer_bw_pll,
                         v_inj=dz.v_inj, ramp_rate=dz.inj_ramp_rate, source=source)

@@ -206,11 +206,15 @@ def measured_values(sc: Scenario, model_motor: Motor, f_inj: float, quad: float)
     linsense.errors.InputError
         As :func:`measured_comp`.
     """
-    obs = sc.spec.observer
+    return _measured_table(sc, model_motor, f_inj, quad).values
+
+
+def _measured_table(sc: Scenario, model_motor: Motor, f_inj: float, quad: float):
+    """The scenario's measured table as read for this drive (cached; :func:`measured_values`)."""
     key = ("measured",) + _measured_key(sc, model_motor, f_inj, quad)
     return memo(key, lambda: read_measured_table(
         lut_file_path(sc), motor=model_motor, injection=sc.spec.injection.shape, f_inj=f_inj, quad=quad,
-        points=obs.lut_points, via=lut_file_via(sc)).values)
+        points=sc.spec.observer.lut_points, via=lut_file_via(sc)))
 
 
 def lut_file_via(sc: Scenario) -> tuple[str, str, str]:
@@ -299,10 +303,15 @@ def measured_warnings(sc: Scenario, model_motor: Motor) -> list[str]:
     Returns
     -------
     list of str
-        One warning, or none (no measured table, or one the fit explains).
+        One warning, or none (no measured table, or one the fit explains and the drive's table
+        length reads closely enough).
     """
     fit = _fit_args(sc, model_motor)
-    doubt = "" if fit is None else fit_report(*fit)[1]
+    if fit is None:
+        return []
+    lut_motor, _, shape, f_run, quad = fit
+    raw = _measured_table(sc, model_motor, f_run, quad).raw  # (judged at its own points)
+    doubt = fit_report(lut_motor, raw, shape, f_run, quad, sc.spec.observer.lut_points)[1]
     where, key, value = lut_file_via(sc)
     return [f"{where}: {key}: {value!r}: {doubt}"] if doubt else []
 
