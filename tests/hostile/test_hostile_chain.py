@@ -9,21 +9,32 @@ The rules behind them:
   the scenario and its key (``observer.lut_file``, ``injection.amplitude``), a value typed as an
   option by the option (``--v-inj``), whichever command reads it (``simulate``, ``tune``,
   ``firmware export``);
-* **an output holds what the next command needs and nothing it would read otherwise**: the
-  scenario ``tune`` writes keeps the application it was designed for (``reference.v_max``,
-  ``a_max``: a re-tune over it designs the same drive), and it believes in the motor it was
-  designed and certified for (a ``controller.model.motor`` of another motor is refused);
+* **an output is what the next command reads, read back before it is written**: the scenario
+  ``tune`` writes is read as ``simulate`` reads it (never one the simulator refuses), keeps the
+  application it was designed for (``reference.v_max``, ``a_max``: a re-tune over it designs the
+  same drive), believes in the motor it was designed and certified for (a ``controller.model.motor``
+  of another motor is refused), and its paths are relative to where it is written; a certificate
+  names the output it certifies (another output's is not replaced); every command reads a scenario
+  argument through one path (``-`` is standard input for ``tune`` and ``firmware export`` too);
 * **a file is checked against the other files it is paired with**: the derived columns of a
   ``linsense model`` table against its inductances, a bench file against the pole pitch it is read
-  with, a measured table against the motor (its end-effect fit said by every command that reads it).
+  with, a measured table against the motor (its end-effect fit at its own points, and its
+  resolution where the drive reads it, said by every command that reads or writes it).
 """
 
 from __future__ import annotations
 
 import csv
+import os
+import subprocess
+import sys
+import tomllib
+from importlib import resources
+from pathlib import Path
 
 import pytest
 
+import linsense
 from linsense.compensation.lut import build_lut
 from linsense.compensation.measured import measured_table_json, table_stamp
 from linsense.model.motor import load_motor
@@ -203,8 +214,6 @@ def test_a_re_tune_over_the_tuned_scenario_designs_the_same_drive(files, run_cli
                    "--out", "a.toml").code == 0
     assert run_cli("tune", "--motor", "small30", "--scenario", "a.toml", "--no-verify",
                    "--out", "b.toml").code == 0
-    import tomllib
-
     a, b = (tomllib.loads(open(f).read()) for f in ("a.toml", "b.toml"))
     assert a == b
 
@@ -230,8 +239,6 @@ def test_a_bench_file_of_another_pole_pitch_is_refused(files, run_cli, motor):
     """A bench file of a 60 mm motor identified with ``--motor ecce2010`` (56 mm): a fitted motor file,
     exit 0 (residual 6.5 times the right pitch's); read with 45 mm, refused blaming the fitted
     model's saliency."""
-    from importlib import resources
-
     m60 = resources.files("linsense.examples") / "motors" / "class"
     root = files(**{"m60.toml": (m60 / "m60_pos20k.toml").read_text()})
     (root / "ex").mkdir()
@@ -314,3 +321,22 @@ def test_an_output_s_certificate_is_not_replaced_by_another_output_s(files, run_
     assert (root / "a.verification.json").read_text() == cert and not (root / "a.toml").exists()
     # the same output's certificate is its own: replaced by its next run
     assert run_cli("tune", "--motor", "small30", "--format", "c", "--quick", "--out", "a.h").code == 0
+
+
+def test_tune_and_firmware_export_read_a_scenario_from_standard_input(tmp_path):
+    """``linsense tune --out - | linsense tune --scenario -``: ``simulate -`` and ``calibrate --scenario
+    -`` read standard input, ``tune`` and ``firmware export`` refused ``-`` as "unknown scenario"."""
+    env = {**os.environ, "PYTHONPATH": str(Path(linsense.__file__).resolve().parents[1])}
+
+    def run(*args: str, text: str = "") -> subprocess.CompletedProcess:
+        return subprocess.run([sys.executable, "-m", "linsense", *args], input=text, capture_output=True,
+                              text=True, cwd=tmp_path, env=env, timeout=300)
+
+    first = run("tune", "--motor", "small30", "--no-verify", "--out", "-")
+    assert first.returncode == 0, first.stderr
+    again = run("tune", "--motor", "small30", "--scenario", "-", "--no-verify", "--out", "-",
+                text=first.stdout)
+    assert again.returncode == 0, again.stderr
+    assert tomllib.loads(again.stdout) == tomllib.loads(first.stdout)
+    fw = run("firmware", "export", "fw", "--motor", "small30", "--scenario", "-", text=first.stdout)
+    assert fw.returncode == 0, fw.stderr
