@@ -5,14 +5,10 @@ from __future__ import annotations
 import numpy as np
 
 from linsense.analysis.hf import equilibrium_error, loop_gain_factor, psi_lut
-from linsense.model.inductance import ENTRIES
+from linsense.model.inductance import DERIVED_COLUMNS, ENTRIES
 
 #: Columns of the model table, in order (the first fourteen are fixed by the CLI contract).
-MODEL_COLUMNS = (
-    ("theta_deg",) + ENTRIES
-    + ("L_d", "L_q", "L_dq", "saliency", "psi_lut_deg", "err_nolut_deg", "gain_nolut")
-    + ("L_alpha", "L_beta", "L_alphabeta")
-)
+MODEL_COLUMNS = ("theta_deg",) + ENTRIES + DERIVED_COLUMNS
 
 
 def model_table(motor, points: int) -> dict[str, np.ndarray]:

@@ -5,7 +5,15 @@ from __future__ import annotations
 import click
 
 from linsense.cli import _common as c
-from linsense.cli.runs import application_options, apply_drive_data, drive_options, scenario_table
+from linsense.cli.runs import (
+    application_options,
+    apply_drive_data,
+    drive_options,
+    drive_refusal,
+    scenario_arg,
+    scenario_table,
+)
+from linsense.errors import InputError
 from linsense.io import working_folder
 
 
@@ -52,24 +60,30 @@ def export(folder: str, motor_spec: str, scenario_path: str | None, name: str | 
 
     if as_json:
         c.data_on_stdout()
-    dd, src = DriveData(), motor_spec
+    dd, src, table_via, sc = DriveData(), motor_spec, None, None
     if scenario_path is not None:
         from linsense.sim.build import drive_data
-        from linsense.sim.scenario import load_scenario
 
-        sc = load_scenario(c.example("scenarios", scenario_path, "--scenario"))
+        sc = scenario_arg(scenario_path, "--scenario")
         dd = drive_data(sc)
         src = scenario_path
-        if table_path is None:  # (the scenario's measured table is the drive's; --table over it)
-            table_path = scenario_table(sc)
-    apply_drive_data(dd, drive, quad, v_max, a_max, load, travel)
+        own_table = scenario_table(sc)
+        if table_path is None and own_table is not None:  # (the scenario's measured table is the
+            # drive's; --table over it)
+            table_path, table_via = own_table
+    typed = apply_drive_data(dd, drive, quad, v_max, a_max, load, travel)
     motor = c.load(motor_spec)
     from linsense.tune.export import c_config_name
 
     c_config_name(name, motor.name, "--name")  # (checked before anything is designed, never rewritten)
-    made = firmware_files(motor, dd, src, name, table=table_path)
+    try:
+        made = firmware_files(motor, dd, src, name, table=table_path, table_via=table_via)
+    except InputError as exc:  # (with a scenario: the option typed, or the scenario's key)
+        raise exc if sc is None else drive_refusal(exc, typed, sc, src) from None
     for line in made.lines:
         c.say(line)
+    for w in made.warnings:
+        c.warn(w)
     cert = _quick_certificate(motor_spec, motor, dd, made, table_path)
     lines = cert.lines()
     if cert.passed:  # (the export's own check: the quick certificate; tune --format c runs the full one)

@@ -15,9 +15,12 @@ from linsense.io import working_folder
 from linsense.version import docs
 
 
-def _scenario(spec: str):
+def scenario_arg(spec: str, option: str = "SCENARIO"):
     """The scenario a command argument names: ``-`` reads it from standard input (relative paths
-    in it from the working folder), else a file or a packaged example's name."""
+    in it from the working folder), else a file or a packaged example's name; the one path of every
+    command that takes a scenario (``simulate``, ``calibrate``, ``tune`` and ``firmware export``
+    ``--scenario``), so that ``linsense tune --out - | linsense tune --scenario -`` reads as
+    ``simulate -`` does."""
     from linsense.sim.scenario import load_scenario, scenario_from_dict
 
     if spec == "-":
@@ -25,7 +28,7 @@ def _scenario(spec: str):
 
         text = decode_text(c.read_stdin(), "<stdin>", "scenario")
         return scenario_from_dict(parse_toml(text, "<stdin>"), "<stdin>", working_folder())
-    return load_scenario(c.example("scenarios", spec, "SCENARIO"))
+    return load_scenario(c.example("scenarios", spec, option))
 
 
 @click.command(short_help="Run a closed-loop drive simulation.",
@@ -76,13 +79,15 @@ def simulate(scenario: str, out: str | None, fidelity: str | None, trace_fmt: st
         if trace_fmt == "csv":
             c.warn("trace.csv, not trace.parquet: the Parquet trace needs pyarrow "
                    "(pip install -e '.[parquet]' in linsense's source tree)")
-    sc = _scenario(scenario)
+    sc = scenario_arg(scenario)
     out = c.default_out(out, sc.name if scenario == "-" else scenario, "simulate")
     if fidelity is not None:
         sc = sc.replace(inverter={"fidelity": fidelity})
     if decimate is not None:
         sc = sc.replace(record={"decimate": decimate})
     b = build(sc, trace_in_memory=False)  # streamed: the trace is never whole in memory
+    for w in b.warnings:
+        c.warn(w)
     if trace_fmt != "none":
         check_trace_file(b)
     n_rec = -(-b.n_steps // int(b.cfg.decimate))
@@ -180,7 +185,7 @@ def _simulate_pil(scenario: str, out: str | None, others: list[str], check: bool
     if as_json:
         c.data_on_stdout()
     path = c.example("scenarios", scenario, "SCENARIO")
-    _scenario(path)  # (bad input refused before anything is built)
+    scenario_arg(path)  # (bad input refused before anything is built)
     out = c.default_out(out, scenario, "simulate")
     with tempfile.TemporaryDirectory(prefix="linsense-pil-") as tmp:
         rec = closed_loop(path, tmp)
@@ -254,9 +259,9 @@ def application_options(f):
     return f
 
 
-def scenario_table(sc) -> str | None:
-    """The measured table a scenario's drive runs (``observer.lut_model = "measured"``), as an
-    absolute path, or None (the model's table).
+def scenario_table(sc) -> tuple[str, tuple[str, str, str]] | None:
+    """The measured table a scenario's drive runs (``observer.lut_model = "measured"``), or None (the
+    model's table).
 
     Parameters
     ----------
@@ -265,14 +270,15 @@ def scenario_table(sc) -> str | None:
 
     Returns
     -------
-    str or None
-        The table's file.
+    tuple or None
+        The table's file as an absolute path, and where the scenario names it (the reader's ``via``:
+        a refusal of the table names the scenario and ``observer.lut_file``, as ``simulate`` does).
     """
-    from linsense.sim.tables import lut_file_path
+    from linsense.sim.tables import lut_file_path, lut_file_via
 
     if sc.spec.observer.lut_model != "measured":
         return None
-    return str(lut_file_path(sc).resolve())
+    return str(lut_file_path(sc).resolve()), lut_file_via(sc)
 
 
 def apply_drive_data(dd, drive: dict, quad=None, v_max=None, a_max=None, load=None, travel=None,
@@ -292,15 +298,54 @@ def apply_drive_data(dd, drive: dict, quad=None, v_max=None, a_max=None, load=No
 
     Returns
     -------
-    DriveData
-        ``dd``.
+    set of str
+        The names of the drive data given as options (:func:`drive_refusal`).
     """
     given = {**drive, "quad": quad, "v_max": v_max, "a_max": a_max, "load": load,
              "travel": None if travel is None else travel * 1e-3, "shape": shape}
     for key, val in given.items():
         if val is not None:
             setattr(dd, key, val)
-    return dd
+    return {key for key, val in given.items() if val is not None}
+
+
+#: drive data (DriveData's names) -> the option that gives it
+DRIVE_OPTIONS = {"v_dc": "--v-dc", "f_pwm": "--f-pwm", "dead_time": "--dead-time", "i_max": "--i-max",
+                 "v_inj": "--v-inj", "f_inj": "--f-inj", "quad": "--quad", "v_max": "--v-max",
+                 "a_max": "--a-max", "load": "--load", "travel": "--travel", "shape": "--injection"}
+
+
+def drive_refusal(exc: InputError, typed: set[str], sc, source: str) -> InputError:
+    """A refusal of drive data (named by its DriveData name, as the design does, or by its scenario
+    key) said where the input came from, when a command took its drive data from a scenario and
+    options over it: the option typed (``--v-inj: 40 V ...``), else the scenario's key (``s.toml:
+    injection.amplitude: 12 V ...``), never the scenario for a value typed, nor a key the file does
+    not have.
+
+    Parameters
+    ----------
+    exc : InputError
+        The refusal, naming the scenario and a DriveData name or scenario key.
+    typed : set of str
+        The drive data given as options (:func:`apply_drive_data`).
+    sc : linsense.sim.scenario.Scenario
+        The scenario the rest came from.
+    source : str
+        The name the design was given for it (the scenario as typed).
+
+    Returns
+    -------
+    InputError
+        The refusal at the input's origin (``exc`` itself for another key).
+    """
+    from linsense.sim.build import DESIGN_KEYS
+
+    name = next((k for k, v in DESIGN_KEYS.items() if v == exc.key), exc.key)
+    if exc.source not in (source, sc.source) or name not in DRIVE_OPTIONS:
+        return exc
+    if name in typed:
+        return InputError(DRIVE_OPTIONS[name], "", exc.message)
+    return InputError(sc.source, DESIGN_KEYS.get(name, name), exc.message)
 
 
 @click.command(short_help="Run the firmware's LUT calibration in the simulator.",
@@ -342,13 +387,21 @@ def calibrate(motor_spec: str | None, scenario_path: str | None, positions: int,
         c.data_on_stdout()
     if motor_spec is None and scenario_path is None:
         raise click.UsageError("give --motor or --scenario (the drive to calibrate)")
-    sc = _scenario(scenario_path) if scenario_path is not None else None
+    sc = scenario_arg(scenario_path, "--scenario") if scenario_path is not None else None
     motor = c.load(motor_spec) if motor_spec is not None else None
     out = c.default_out(out, scenario_path or motor_spec, "calibrate")
     extra = {"saturation": {"enabled": True}} if saturated else {}
     cal = run_calibration(motor_spec if sc is not None else motor, positions, load, fidelity, quad=quad,
                           source=motor_spec or "<calibrate>", scenario=sc, drive=drive, **extra)
     metrics, timing = split_timing(cal.metrics)
+    if cal.completed and cal.stamp is not None:  # (a table too coarse for the drive that reads it)
+        from linsense.compensation.measured import resolution_warning
+
+        st = cal.stamp
+        w = resolution_warning(cal.motor, st.points, st.injection, st.f_inj, st.quad,
+                               sc.spec.observer.lut_points if sc is not None else 256)
+        if w:
+            c.warn(w)
     with output_set(out, "calibrate") as s:
         s.write("lut_measured.csv", lut_csv(cal))
         if cal.completed:  # (the stamped table a scenario reads: observer.lut_model = "measured")

@@ -8,7 +8,15 @@ from pathlib import Path
 import click
 
 from linsense.cli import _common as c
-from linsense.cli.runs import application_options, apply_drive_data, drive_options, scenario_table
+from linsense.cli.runs import (
+    application_options,
+    apply_drive_data,
+    drive_options,
+    drive_refusal,
+    scenario_arg,
+    scenario_table,
+)
+from linsense.errors import InputError
 from linsense.io import NAME_MAX, working_folder
 from linsense.version import docs
 
@@ -57,8 +65,8 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
     write verification.json and verification.png beside the output (exit 1 if a check fails). A C
     header is written only for a drive that passes (--unverified: anyway, saying why in it)."""
     from linsense.io import write_atomic
+    from linsense.model.motor import names_a_path
     from linsense.sim.build import compensation_of, drive_data
-    from linsense.sim.scenario import load_scenario
     from linsense.tune.design import DriveData, design, uncompensated_speed_factor
     from linsense.tune.export import c_header, check_c_header, design_digest, scenario_dict, scenario_toml
 
@@ -76,13 +84,17 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
         c.data_on_stdout()  # (stdout carries the file itself, or the JSON summary)
     out = c.default_out(out, motor_spec, "tune", ".h" if fmt == "c" else ".toml")
     json_path, png_path = _certificate_paths(out)  # (their names checked before the work)
+    _own_certificate(out)
     say = c.say
-    base, base_dir, src = None, None, motor_spec
+    base, base_dir, src, table_via, sc = None, None, motor_spec, None, None
     dd = DriveData()
     if scenario_path is not None:
-        sc = load_scenario(c.example("scenarios", scenario_path, "--scenario"))
+        sc = scenario_arg(scenario_path, "--scenario")
         base, base_dir, src = sc.given(), sc.base_dir, scenario_path
         base.pop("motor", None)
+        model = base.get("controller", {}).get("model", {})
+        if names_a_path(model.get("motor", "")):  # (absolute here, relative to the output when written)
+            model["motor"] = str((sc.base_dir / model["motor"]).resolve())
         dd = drive_data(sc)
         # the scenario's measured table is the drive's (--table over it): designed, verified and
         # written with it, its path made relative to the output again
@@ -90,17 +102,22 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
         for key in ("lut_model", "lut_file"):
             base.get("observer", {}).pop(key, None)
         if table_path is None and own_table is not None:
-            table_path = own_table
-            say(f"  table          the scenario's measured table {own_table}")
-    apply_drive_data(dd, drive, quad, v_max, a_max, load, travel, shape)
+            table_path, table_via = own_table
+            say(f"  table          the scenario's measured table {table_path}")
+    typed = apply_drive_data(dd, drive, quad, v_max, a_max, load, travel, shape)
     if fmt == "c":
         check_c_header(dd)
     motor = c.load(motor_spec)
+    if sc is not None:
+        _same_believed_motor(sc, motor, motor_spec)
     if fmt == "c":  # (the C name checked, never rewritten, before anything is designed or run)
         from linsense.tune.export import c_config_name
 
         c_config_name(name, motor.name, "--name")
-    dz = design(motor, dd, src)
+    try:
+        dz = design(motor, dd, src)
+    except InputError as exc:  # (with a scenario: the option typed, or the scenario's key)
+        raise exc if sc is None else drive_refusal(exc, typed, sc, src) from None
     from linsense.tune.startup import design_startup
     # (the start-up locks as the PLL would: startup.lock_gain, linsense.tune.design.startup_lock_gain)
     su = design_startup(motor, v_dc=dd.v_dc, f_pwm=dd.f_pwm, i_max=dd.i_max, observer_bw=dz.observer_bw_pll,
@@ -118,14 +135,15 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
         f_table = dd.f_pwm / 2.0 if dd.shape == "square" else dz.f_inj
         q_table = dz.quad if dd.shape == "pulsating" else 0.0
         table = read_measured_table(table_path, motor=motor, injection=dd.shape, f_inj=f_table, quad=q_table,
-                                    points=256)
+                                    points=256, via=table_via)
         if table.note:
             say(f"  table          {table.note}")
-        fit_line, fit_warning = fit_report(motor, table.values, dd.shape, f_table, q_table)
+        fit_line, fit_warning = fit_report(motor, table.raw, dd.shape, f_table, q_table, 256)
         say(f"  table          {fit_line}")
     table_abs = None if table_path is None else str(Path(table_path).resolve())
     sc_dict = scenario_dict(dz, dd, motor_spec, base, startup=su, k_est=k_est, pole_pitch=motor.pole_pitch,
                             table=table_abs)
+    _read_back(sc_dict, src, typed, sc)
     cert_run = None
     if not no_verify:  # (its runs are built before anything is written: a refusal leaves no file)
         from linsense.verify.certificate import certificate_base, motor_ref, prepare
@@ -144,7 +162,7 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
     warnings = dz.warnings + (su.warnings if su is not None else [])
     if table is not None:  # (the file's table's cost is moot: the drive runs the measured one)
         warnings = [w for w in warnings if not w.startswith("the motor file's table costs")]
-        warnings += [fit_warning] if fit_warning else []
+        warnings += [f"{table.source}: {fit_warning}"] if fit_warning else []
     for w in warnings:
         c.warn(w)
     if mode != "sensorless_lut" and not no_verify:
@@ -171,7 +189,7 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
         by = "" if reason else VERIFIED_BY[cert.quick]
         text = c_header(dz, dd, motor, name, startup=su, table=table, unverified=reason, verified_by=by)
         if cert is not None:
-            _write_certificate(cert, motor, dd, dz, quick, json_path, png_path, files, digest)
+            _write_certificate(cert, motor, dd, dz, quick, json_path, png_path, files, digest, out)
     else:
         text = scenario_toml(dz, dd, motor_spec, Path(out), base, working_folder(), startup=su, k_est=k_est,
                              pole_pitch=motor.pole_pitch, table=table_abs)
@@ -190,13 +208,46 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
         return
     if cert is None:
         cert = _run_certificate(cert_run)
-        _write_certificate(cert, motor, dd, dz, quick, json_path, png_path, files, digest)
+        _write_certificate(cert, motor, dd, dz, quick, json_path, png_path, files, digest, out)
     c.elapsed()
     if as_json:
         verification = {k: v for k, v in cert.as_dict().items() if k != "runs"}
         c.emit_json("tune", files, bool(cert.passed), verification=verification, **summary)
     if not cert.passed:
         raise click.exceptions.Exit(1)
+
+
+def _same_believed_motor(sc, motor, motor_spec: str) -> None:
+    """Refuse a scenario whose drive believes in another motor (``controller.model.motor``) than the
+    one tune designs it for: tune designs and certifies the drive believing in ``--motor`` (the
+    certificate's runs pin the model to it), so the scenario it wrote would run another drive than
+    the one certified."""
+    from linsense.sim.build import resolve_motor
+    from linsense.sim.cache import motor_key
+
+    spec = sc.spec.controller.model.motor
+    if spec is None:
+        return
+    believed = resolve_motor(sc, spec, "controller.model.motor", check=False)
+    if motor_key(believed) != motor_key(motor):
+        raise InputError(sc.source, "controller.model.motor",
+                         f"{spec!r} ({believed.name}): the scenario's drive believes in another motor than "
+                         f"the one tune designs and certifies it for, {motor_spec!r} ({motor.name}): remove "
+                         f"the key, or give --motor {spec}")
+
+
+def _read_back(sc_dict: dict, src: str, typed: set, sc) -> None:
+    """Read the scenario tune writes back as ``linsense simulate`` reads it (its checks and build),
+    before anything is designed further, run or written: tune never writes a scenario the simulator
+    refuses (the scenario's own keys kept over a changed drive, such as a protection's bus range
+    tuned for another bus). A refusal names the input as :func:`drive_refusal` does."""
+    from linsense.sim.build import build
+    from linsense.sim.scenario import scenario_from_dict
+
+    try:
+        build(scenario_from_dict(sc_dict, src, working_folder()))
+    except InputError as exc:
+        raise exc if sc is None else drive_refusal(exc, typed, sc, src) from None
 
 
 def _certificate_paths(out: str) -> tuple[Path, Path]:
@@ -217,6 +268,26 @@ def _certificate_paths(out: str) -> tuple[Path, Path]:
     return folder / f"{stem}.verification.json", folder / f"{stem}.verification.png"
 
 
+def _own_certificate(out: str) -> None:
+    """Refuse an output whose certificate files (``<stem>.verification.json``, ``.png``) are another
+    output's: ``tune --format c --out a.h`` then ``tune --no-verify --out a.toml`` deleted the
+    header's certificate, and a verified ``--out a.toml`` replaced it, without a word. A certificate
+    names the output it certifies (its ``output``); one of another output is left alone (exit 2,
+    before anything runs). One without the key (an earlier linsense's) is this output's."""
+    import json
+
+    json_path, _ = _certificate_paths(out)
+    try:
+        owner = json.loads(json_path.read_text(encoding="utf-8")).get("output")
+    except (OSError, ValueError, AttributeError):  # (none, or not a certificate: nothing to keep)
+        return
+    mine = Path(out).name if out != "-" else "-"
+    if isinstance(owner, str) and owner != mine:
+        raise InputError(str(json_path), "output", f"{owner!r}: this is the certificate of {owner}, which "
+                         f"--out {out} would replace (or delete, with --no-verify): give --out another name "
+                         f"than {owner}'s stem")
+
+
 def _run_certificate(cert_run):
     """Run the prepared certificate and print it."""
     cert = cert_run()
@@ -226,8 +297,9 @@ def _run_certificate(cert_run):
 
 
 def _write_certificate(cert, motor, dd, dz, quick: bool, json_path: Path, png_path: Path, files: list,
-                       digest: str = "") -> None:
-    """Write the certificate's JSON and figure (appended to ``files``)."""
+                       digest: str = "", output: str = "-") -> None:
+    """Write the certificate's JSON and figure (appended to ``files``); the JSON names the ``output``
+    it certifies (:func:`_own_certificate`)."""
     import json
 
     from linsense.io import write_atomic
@@ -235,7 +307,8 @@ def _write_certificate(cert, motor, dd, dz, quick: bool, json_path: Path, png_pa
     from linsense.report.verify_figures import certificate_figure
 
     doc = cert.as_dict()
-    doc.update(motor=motor.name, drive={k: v for k, v in vars(dd).items()}, data_sha256=digest,
+    doc.update(output=Path(output).name if output != "-" else "-", motor=motor.name,
+               drive={k: v for k, v in vars(dd).items()}, data_sha256=digest,
                design={k: v for k, v in dz.as_dict().items() if k not in ("margins", "warnings")})
     files.append(write_atomic(json_path, json.dumps(doc, indent=1, sort_keys=True) + "\n"))
     c.say(str(files[-1]))

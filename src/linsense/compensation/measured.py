@@ -31,7 +31,7 @@ import json
 import math
 import numbers
 import os
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -41,7 +41,8 @@ from linsense.compensation.stamp import data_digest
 from linsense.errors import InputError, shown
 
 __all__ = ["FORMAT", "INFO_KEYS", "INJECTIONS", "PSI_MAX", "MeasuredTable", "TableStamp", "end_effect_fit",
-           "fit_report", "measured_table_json", "read_measured_table", "table_stamp"]
+           "fit_report", "interpolation_error", "measured_table_json", "read_measured_table",
+           "resolution_warning", "table_stamp"]
 
 #: the document's ``format``
 FORMAT = "linsense-measured-lut"
@@ -231,6 +232,9 @@ class MeasuredTable:
         One line saying what was done to the file's table ("" when it is used as it is).
     source : str
         The file's path.
+    raw : ndarray or None
+        The file's own table at its ``stamp.points`` positions, rad (read-only; what
+        :func:`fit_report` judges).
     """
 
     values: np.ndarray
@@ -238,10 +242,11 @@ class MeasuredTable:
     resampled: bool
     note: str
     source: str
+    raw: np.ndarray | None = None
 
 
 def read_measured_table(path: str | os.PathLike, *, motor, injection: str, f_inj: float, quad: float,
-                        points: int) -> MeasuredTable:
+                        points: int, via: tuple[str, str, str] | None = None) -> MeasuredTable:
     """Read a stamped measured table for a drive, checking that it is this drive's.
 
     The checks, each refused in one :class:`~linsense.errors.InputError` naming the file and the key
@@ -274,6 +279,11 @@ def read_measured_table(path: str | os.PathLike, *, motor, injection: str, f_inj
         The drive's kappa.
     points : int
         The table length the drive wants.
+    via : tuple of str or None, optional
+        ``(file, key, value)`` where the table was named, when not on the command line: a scenario's
+        ``observer.lut_file`` and the value as written there. A refusal of the table is then said as
+        that key's (``s.toml: observer.lut_file: 't.json': t.json: stamp.motor_sha256: ...``), so that
+        the message names the file of the chain that brought the table, whichever command reads it.
 
     Returns
     -------
@@ -285,12 +295,23 @@ def read_measured_table(path: str | os.PathLike, *, motor, injection: str, f_inj
     linsense.errors.InputError
         As above; or a drive argument out of range (naming the function and the argument).
     """
-    from linsense.io import read_text_file
-    from linsense.limits import MAX_POINTS
-
     injection, f_inj, quad, points = _drive_args("linsense.compensation.measured.read_measured_table",
                                                  motor, injection, f_inj, quad, points)
     src = os.fspath(path) if isinstance(path, os.PathLike) else str(path)
+    if via is None:
+        return _read_measured(src, motor, injection, f_inj, quad, points)
+    try:
+        return _read_measured(src, motor, injection, f_inj, quad, points)
+    except InputError as exc:
+        where, key, value = via
+        raise InputError(where, key, f"{value!r}: {exc}") from None
+
+
+def _read_measured(src: str, motor, injection: str, f_inj: float, quad: float, points: int) -> MeasuredTable:
+    """:func:`read_measured_table` of the checked drive arguments."""
+    from linsense.io import read_text_file
+    from linsense.limits import MAX_POINTS
+
     doc = _document(src, read_text_file(Path(src), "measured table"))
     stamp = _stamp(src, doc.get("stamp"))
     theta = _numbers(src, doc, "theta")
@@ -315,7 +336,8 @@ def read_measured_table(path: str | os.PathLike, *, motor, injection: str, f_inj
                 "interpolation")
     values = np.array(values, dtype=float)
     values.setflags(write=False)
-    return MeasuredTable(values, stamp, n != points, note, src)
+    psi.setflags(write=False)
+    return MeasuredTable(values, stamp, n != points, note, src, psi)
 
 
 # ---------------------------------------------------------------------- the reader's checks
@@ -350,9 +372,9 @@ def _document(src: str, text: str) -> dict:
     except (ValueError, RecursionError) as exc:  # (JSONDecodeError is a ValueError)
         head = text.lstrip("\ufeff").lstrip()[:12].lower()
         csv = head.startswith("theta_deg")
-        hint = (": this is a CSV table (theta_deg,psi_lut_deg), which has no stamp; give the stamped "
-                "lut_measured.json linsense calibrate writes beside it") if csv else \
-            " (expected the stamped lut_measured.json linsense calibrate writes)"
+        hint = (": a CSV table (theta_deg,psi_lut_deg) has no stamp (the drive it is valid for); give the "
+                "stamped lut_measured.json that linsense calibrate writes (beside its lut_measured.csv)"
+                if csv else " (expected the stamped lut_measured.json linsense calibrate writes)")
         what = "nested too deeply" if isinstance(exc, RecursionError) else str(exc)
         raise InputError(src, "", f"not JSON: {what}{hint}") from None
     if not isinstance(doc, dict):
@@ -360,8 +382,9 @@ def _document(src: str, text: str) -> dict:
                          f"with format {FORMAT!r}")
     fmt = doc.get("format")
     if fmt != FORMAT:
-        hint = (": a model table (linsense lut --format json) has no stamp; the simulator computes the "
-                "model's own table (observer.lut_model = \"resistive\")") if fmt == "linsense-lut" else \
+        hint = (": a model table (linsense lut --format json) has no stamp, and a drive computes the model's "
+                "table itself: give no measured table (no --table; in a scenario observer.lut_model = "
+                "\"resistive\")") if fmt == "linsense-lut" else \
             " (the stamped lut_measured.json linsense calibrate writes)"
         got = "missing" if "format" not in doc else shown(fmt)
         raise InputError(src, "format", f"not a linsense measured table: {got}, expected {FORMAT!r}{hint}")
@@ -498,6 +521,11 @@ def _check_stamp(src: str, stamp: TableStamp, motor, injection: str, f_inj: floa
     digest = data_digest(motor=motor)
     if stamp.motor_sha256 != digest:
         same = " (the same name, other data: an edited motor file?)" if stamp.motor == motor.name else ""
+        renamed = stamp.motor != motor.name and \
+            data_digest(motor=replace(motor, name=stamp.motor)) == stamp.motor_sha256
+        if renamed:
+            same = (f" (the same motor data under another name: the name is part of the stamp; name the "
+                    f"motor {stamp.motor!r} again, or calibrate it under its new name)")
         raise InputError(src, "stamp.motor_sha256",
                          f"the table was measured on a drive believing in motor {stamp.motor!r} (sha256 "
                          f"{stamp.motor_sha256[:_DIGEST_SHOWN]}), this drive believes in motor "
@@ -607,36 +635,120 @@ FIT_RMS_WARN_DEG = 0.5
 FIT_SCALE_WARN = 2.0
 
 
-def fit_report(motor, values: np.ndarray, injection: str, f_inj: float, quad: float) -> tuple[str, str]:
+def fit_report(motor, values: np.ndarray, injection: str, f_inj: float, quad: float,
+               points: int | None = None) -> tuple[str, str]:
     """What :func:`end_effect_fit` made of a measured table, as a person reads it.
+
+    The table is judged at its own points (a table resampled to the drive's length carries the
+    interpolation's error, which is no property of the motor); where the drive reads it at more
+    points, the firmware's linear interpolation between them is judged too
+    (:func:`interpolation_error`): a 12-point table of small30 is read 3.5 deg off the motor's own
+    table between its points, which the fit blamed on the motor file.
 
     Parameters
     ----------
     motor : Motor
         The motor the drive believes in.
     values : ndarray
-        The measured table, rad.
+        The measured table at its own points ``2 pi k / N``, rad.
     injection : str
         The injection's shape.
     f_inj : float
         The injection frequency the drive runs, Hz.
     quad : float
         Kappa.
+    points : int or None, optional
+        The table length the drive reads it at (None: not judged).
 
     Returns
     -------
     line : str
         The fit: the end effect's scale and the fit's rms.
     warning : str
-        "" for a table the fit explains; else why the table is doubtful.
+        "" for a table the fit explains, read at a resolution the drive can use; else why the table
+        is doubtful.
     """
+    values = np.asarray(values, dtype=float)
     _, k, rms = end_effect_fit(motor, values, injection, f_inj, quad)
     rms_deg = math.degrees(rms)
     line = (f"the end effect it says: {k:.3g} x the motor file's (the drive's model takes it; the fit "
             f"leaves {rms_deg:.2g} deg rms)")
     doubtful = rms_deg > FIT_RMS_WARN_DEG or not (1.0 / FIT_SCALE_WARN <= k <= FIT_SCALE_WARN)
-    warning = (f"the measured table does not look like this motor's: its end effect {k:.3g} x the file's, "
-               f"{rms_deg:.2g} deg rms left by the fit (a calibration: 0.1-0.4 deg; bounds "
-               f"{FIT_RMS_WARN_DEG:g} deg and a factor {FIT_SCALE_WARN:g}): check the calibration (its "
-               f"metrics.json) and the motor file" if doubtful else "")
-    return line, warning
+    warnings = [f"the measured table does not look like this motor's: its end effect {k:.3g} x the file's, "
+                f"{rms_deg:.2g} deg rms left by the fit (a calibration: 0.1-0.4 deg; bounds "
+                f"{FIT_RMS_WARN_DEG:g} deg and a factor {FIT_SCALE_WARN:g}): check the calibration (its "
+                f"metrics.json) and the motor file"] if doubtful else []
+    if points is not None:
+        warnings += [w for w in [resolution_warning(motor, values.size, injection, f_inj, quad, points)] if w]
+    return line, "; ".join(warnings)
+
+
+def resolution_warning(motor, n: int, injection: str, f_inj: float, quad: float, points: int) -> str:
+    """Why a table of ``n`` points is too coarse for a drive that reads it at ``points``, or "".
+
+    Its :func:`interpolation_error` beyond :data:`FIT_RMS_WARN_DEG` (a calibration's own accuracy);
+    said by ``linsense calibrate`` as it writes such a table and by every command that reads one
+    (:func:`fit_report`).
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor the drive believes in.
+    n : int
+        The table's points.
+    injection : str
+        The injection's shape.
+    f_inj : float
+        The injection frequency the drive runs, Hz.
+    quad : float
+        Kappa.
+    points : int
+        The length the drive reads it at.
+
+    Returns
+    -------
+    str
+        The warning, or "".
+    """
+    if n >= points:
+        return ""
+    err = math.degrees(interpolation_error(motor, n, injection, f_inj, quad, points))
+    if err <= FIT_RMS_WARN_DEG:
+        return ""
+    return (f"a {n}-point table: the firmware's linear interpolation between its points is off the motor's "
+            f"own table by up to {err:.2g} deg (the model's table at {n} points read at {points}; bound "
+            f"{FIT_RMS_WARN_DEG:g} deg): calibrate more positions (linsense calibrate --positions)")
+
+
+def interpolation_error(motor, n: int, injection: str, f_inj: float, quad: float, points: int) -> float:
+    """How far a table of ``n`` points is read off the motor's own table at ``points`` positions: the
+    largest difference between the model's table at ``n`` points, read with the firmware's periodic
+    linear interpolation (:func:`linsense.compensation.lut.interpolate`), and the model's table at
+    ``points``.
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor the drive believes in.
+    n : int
+        The table's points.
+    injection : str
+        The injection's shape.
+    f_inj : float
+        The injection frequency the drive runs, Hz.
+    quad : float
+        Kappa.
+    points : int
+        The length the drive reads it at.
+
+    Returns
+    -------
+    float
+        rad.
+    """
+    from linsense.compensation.lut import build_lut
+
+    q = quad if injection == "pulsating" else 0.0
+    fine = build_lut(motor, points, f_inj=f_inj, quad=q, injection=injection).values
+    coarse = build_lut(motor, n, f_inj=f_inj, quad=q, injection=injection).values
+    return float(np.max(np.abs(interpolate(coarse, 2.0 * np.pi * np.arange(points) / points) - fine)))

@@ -124,6 +124,9 @@ class FirmwareExport:
     header : callable
         ``header(unverified: str, verified_by: str) -> str``: the configuration header
         (:meth:`certified`).
+    warnings : list of str
+        What the design could not meet, or doubts a measured table's fit raises
+        (:func:`linsense.compensation.measured.fit_report`, as ``linsense tune`` says them).
     """
 
     files: dict[str, bytes]
@@ -133,6 +136,7 @@ class FirmwareExport:
     lines: list[str] = field(default_factory=list)
     design: object = None
     header: object = None
+    warnings: list[str] = field(default_factory=list)
 
     def certified(self, unverified: str = "", verified_by: str = "") -> FirmwareExport:
         """The same files with the configuration header saying what verified it, or why it is
@@ -156,7 +160,8 @@ class FirmwareExport:
 
 
 def firmware_files(motor, drive=None, source: str = "<firmware export>", name: str | None = None,
-                   points: int = 256, table=None) -> FirmwareExport:
+                   points: int = 256, table=None, table_via: tuple[str, str, str] | None = None
+                   ) -> FirmwareExport:
     """Design the drive for ``motor`` and make the exported folder's files.
 
     The design is ``linsense tune``'s (:func:`linsense.tune.design.design`, the start-up from the
@@ -178,6 +183,9 @@ def firmware_files(motor, drive=None, source: str = "<firmware export>", name: s
         A measured compensation table's file in place of the motor file's table
         (:func:`linsense.compensation.measured.read_measured_table`: checked against the motor and
         the designed injection, resampled to ``points``).
+    table_via : tuple of str or None, optional
+        Where ``table`` was named when a scenario named it (``(scenario, "observer.lut_file",
+        value)``: a refusal of the table names them).
 
     Returns
     -------
@@ -211,11 +219,14 @@ def firmware_files(motor, drive=None, source: str = "<firmware export>", name: s
         raise LinsenseError(f"the C library's files are incomplete under {library_root()}: "
                             f"{', '.join(missing)} missing (a broken installation: reinstall linsense)")
     dz = design(motor, dd, source, analyse=False)
+    warnings = []
     if table is not None:
-        from linsense.compensation.measured import read_measured_table
+        from linsense.compensation.measured import fit_report, read_measured_table
 
         table = read_measured_table(table, motor=motor, injection=dd.shape, f_inj=dz.f_inj, quad=dz.quad,
-                                    points=points)
+                                    points=points, via=table_via)
+        doubt = fit_report(motor, table.raw, dd.shape, dz.f_inj, dz.quad, points)[1]
+        warnings += [f"{table.source}: {doubt}"] if doubt else []
     su = design_startup(motor, v_dc=dd.v_dc, f_pwm=dd.f_pwm, i_max=dd.i_max, observer_bw=dz.observer_bw_pll,
                         v_inj=dz.v_inj, ramp_rate=dz.inj_ramp_rate, source=source)
     sym = c_config_name(name, motor.name)
@@ -241,7 +252,7 @@ def firmware_files(motor, drive=None, source: str = "<firmware export>", name: s
              f"start-up {'designed' if su is not None else 'not designed (no saturation data)'}",
              f"  linsense {__version__}, data sha256 {digest}"]
     return FirmwareExport(files=files, name=sym, motor=motor.name, digest=digest, lines=lines, design=dz,
-                          header=header)
+                          header=header, warnings=warnings)
 
 
 def example_header(motor, drive, sym: str, digest: str) -> str:

@@ -203,3 +203,59 @@ def fit_inductances(theta: np.ndarray, entries: np.ndarray, harmonics: int = 1,
         dof=dof,
         residuals=res.reshape(-1, 6),
     )
+
+
+#: the pole pitches :func:`best_pitch` tries, as factors of the one given: a geometric grid of
+#: PITCH_STEPS steps over PITCH_RANGE (0.5 % apart), then refined around the best
+PITCH_RANGE = (0.5, 2.0)
+PITCH_STEPS = 280
+#: the fit at another pole pitch leaves at most this share of the residual at the one given: the
+#: bench's positions are of another motor (a 60 mm motor read with 56 mm leaves 6.5 times the
+#: residual of its own pitch; a motor with harmonics fitted without them, at its own pitch, 1.002)
+PITCH_RESIDUAL_SHARE = 0.5
+
+
+def best_pitch(position: np.ndarray, entries: np.ndarray, pole_pitch: float, harmonics: int = 1) -> tuple:
+    """The pole pitch whose model fits the measured inductances best, near the one given.
+
+    Fits the model (:func:`fit_inductances`) with the positions converted by each pitch of a
+    geometric grid over :data:`PITCH_RANGE` times ``pole_pitch``, then refines around the best (a
+    bounded scalar search); a pitch whose positions the model cannot separate is skipped.
+
+    Parameters
+    ----------
+    position : ndarray, shape (N,)
+        The measured positions, m.
+    entries : ndarray, shape (N, 6)
+        ``L_A .. M_CA`` at those positions, H.
+    pole_pitch : float
+        The pole pitch the bench is read with, m.
+    harmonics : int, optional
+        ``K``, as :func:`fit_inductances`.
+
+    Returns
+    -------
+    pitch : float
+        The best pole pitch, m.
+    residual_rms : float
+        The fit's residual there, H.
+    """
+    from scipy.optimize import minimize_scalar
+
+    position = np.asarray(position, dtype=float)
+    y = np.asarray(entries, dtype=float).reshape(-1)
+    n_par = len(parameter_names(harmonics))
+
+    def rms(p: float) -> float:  # (fit_inductances' least squares, without its statistics)
+        A = design_matrix(2.0 * np.pi * position / p, harmonics)
+        coef, _, rank, _ = np.linalg.lstsq(A, y, rcond=None)
+        if rank < n_par:  # (positions the model cannot separate at this pitch)
+            return np.inf
+        return float(np.sqrt(np.mean((y - A @ coef) ** 2)))
+
+    grid = pole_pitch * np.geomspace(*PITCH_RANGE, PITCH_STEPS + 1)
+    values = np.array([rms(p) for p in grid])
+    i = int(np.argmin(values))
+    lo, hi = grid[max(i - 1, 0)], grid[min(i + 1, grid.size - 1)]
+    res = minimize_scalar(rms, bounds=(lo, hi), method="bounded", options={"xatol": 1e-6 * pole_pitch})
+    return (float(res.x), float(res.fun)) if res.fun < values[i] else (float(grid[i]), float(values[i]))

@@ -19,7 +19,7 @@ from linsense.analysis.tables import table_to_csv
 from linsense.compensation.lut import Lut, build_lut, export
 from linsense.errors import InputError
 from linsense.identify.bench import BenchData, read_bench_csv
-from linsense.identify.fit import T_SIGNIFICANT, FitResult, fit_inductances
+from linsense.identify.fit import PITCH_RESIDUAL_SHARE, T_SIGNIFICANT, FitResult, best_pitch, fit_inductances
 from linsense.identify.process import MeasuredTable, process_bench
 from linsense.identify.tables import measured_columns, measured_lut_csv
 from linsense.model.motor import Friction, Motor, check_motor, motor_to_toml
@@ -150,6 +150,7 @@ def identify(
     warnings = table.warnings + warnings
 
     fit = fit_inductances(table.theta, table.entries, harmonics, source=src)
+    _check_pitch(src, data, tau, harmonics, sources["pole_pitch"], r_used if data.amplitude_only else None)
     motor = Motor(
         name=_motor_name(name, src), R_s=R_s, pole_pitch=tau, force_constant=k_f, mass=m,
         inductance=fit.model(), friction=base.friction if base is not None else Friction(),
@@ -163,6 +164,25 @@ def identify(
         lut_fit=build_lut(motor, points), resistance_source=r_note, motor_sources=sources,
         warnings=warnings,
     )
+
+
+def _check_pitch(src: str, data: BenchData, tau: float, harmonics: int, given: str,
+                 resistance: float | None) -> None:
+    """Refuse a bench file read with a pole pitch that is not its motor's: another pitch explains
+    its inductances much better (:func:`~linsense.identify.fit.best_pitch`, on the physical positions
+    as measured). A bench of a 60 mm motor read with the 56 mm of ``--motor ecce2010`` gave a fitted
+    motor file without a word (its residual 6.5 times its own pitch's), and read with 30 mm, a
+    refusal blaming the fitted model's saliency."""
+    span = float(np.ptp(data.position))
+    table = process_bench(data, 4.0 * span + 8.0 * tau, resistance, cover=False)  # (no position wraps)
+    here = fit_inductances(2.0 * np.pi * table.position / tau, table.entries, harmonics).residual_rms
+    pitch, rms = best_pitch(table.position, table.entries, tau, harmonics)
+    if rms < PITCH_RESIDUAL_SHARE * here:
+        raise InputError(src, "column position_mm",
+                         f"read with the pole pitch {tau * 1e3:.4g} mm ({given}), the measured inductances "
+                         f"leave {here * 1e6:.3g} uH rms of the model's fit; with a pole pitch of "
+                         f"{pitch * 1e3:.4g} mm {rms * 1e6:.3g} uH: the bench of a motor of another pole "
+                         f"pitch? give that motor (--motor), or --pole-pitch {pitch * 1e3:.4g}")
 
 
 def fit_report(ident: Identification) -> dict:

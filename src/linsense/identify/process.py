@@ -128,7 +128,7 @@ def electrical_groups(data: BenchData, pole_pitch: float) -> tuple[np.ndarray, n
 
 
 def process_bench(data: BenchData, pole_pitch: float, resistance: float | None = None,
-                  resistance_source: str = "") -> MeasuredTable:
+                  resistance_source: str = "", cover: bool = True) -> MeasuredTable:
     """The measured table of ``data`` with positions converted by ``pole_pitch`` (m).
 
     Parameters
@@ -142,6 +142,9 @@ def process_bench(data: BenchData, pole_pitch: float, resistance: float | None =
         resistive drop, as the paper does). Not used with phasors.
     resistance_source : str
         Where ``resistance`` came from, for the warning.
+    cover : bool, optional
+        Refuse positions that do not cover one electrical period (False: a table of the physical
+        positions as they are, for :func:`linsense.identify.fit.best_pitch`).
 
     Returns
     -------
@@ -183,7 +186,7 @@ def process_bench(data: BenchData, pole_pitch: float, resistance: float | None =
                          f"need at least {MIN_POSITIONS} distinct electrical positions, got {n}")
     ts = theta_g[pos_order]
     gaps = np.diff(np.concatenate([ts, [ts[0] + 2.0 * np.pi]]))
-    if gaps.max() > MAX_GAP + 1e-9:
+    if cover and gaps.max() > MAX_GAP + 1e-9:
         g = int(np.argmax(gaps))
         i = first[pos_order[g]]
         raise InputError(

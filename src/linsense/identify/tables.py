@@ -5,32 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from linsense.analysis.hf import loop_gain_factor
-from linsense.model.frames import ab_to_dq_matrix, abc_to_ab_matrix
-from linsense.model.inductance import ENTRIES, InductanceModel
-
-_INDEX = ((0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (2, 0))
-
-
-def matrices(entries: np.ndarray) -> np.ndarray:
-    """Symmetric 3x3 matrices ``(N, 3, 3)`` from the six entries ``(N, 6)``.
-
-    Parameters
-    ----------
-    entries : ndarray, shape (N, 6)
-        ``L_A .. M_CA``, H.
-
-    Returns
-    -------
-    ndarray, shape (N, 3, 3)
-        H.
-    """
-    entries = np.asarray(entries, dtype=float)
-    L = np.empty(entries.shape[:-1] + (3, 3))
-    for j, (r, c) in enumerate(_INDEX):
-        L[..., r, c] = entries[..., j]
-        L[..., c, r] = entries[..., j]
-    return L
+from linsense.model.inductance import ENTRIES, derived_columns
 
 
 def measured_columns(theta: np.ndarray, entries: np.ndarray) -> dict[str, np.ndarray]:
@@ -41,8 +16,8 @@ def measured_columns(theta: np.ndarray, entries: np.ndarray) -> dict[str, np.nda
     ``atan(-L_dq/L_q)``) and ``err_nolut_deg`` (``tan 2e* = 2 L_dq / (L_d - L_q)``, the stable root;
     docs/theory.md section 6) come pointwise from the measured matrices. ``gain_nolut`` needs
     ``dL/dtheta``, which a table does not have: it is the derivative of the trigonometric series
-    through the table (:meth:`InductanceModel.from_table`, default order), so it is as noisy as
-    the measurement.
+    through the table (:func:`linsense.model.inductance.derived_columns`, as a motor file's table
+    with these columns is checked), so it is as noisy as the measurement.
 
     Parameters
     ----------
@@ -56,18 +31,9 @@ def measured_columns(theta: np.ndarray, entries: np.ndarray) -> dict[str, np.nda
         The columns, as ``linsense model`` writes them.
     """
     theta = np.asarray(theta, dtype=float)
-    L_ab = abc_to_ab_matrix(matrices(entries))
-    L_dq = ab_to_dq_matrix(L_ab, theta)
-    L_d, L_q, L_x = L_dq[:, 0, 0], L_dq[:, 1, 1], L_dq[:, 0, 1]
-    s = 1.0 if np.mean(L_q - L_d) >= 0 else -1.0
     cols = {"theta_deg": np.degrees(theta)}
     cols.update({name: np.asarray(entries)[:, j] for j, name in enumerate(ENTRIES)})
-    cols["L_d"], cols["L_q"], cols["L_dq"] = L_d, L_q, L_x
-    cols["saliency"] = L_q - L_d
-    cols["psi_lut_deg"] = np.degrees(psi_of_dq(L_q, L_x))
-    cols["err_nolut_deg"] = np.degrees(0.5 * np.arctan2(-2.0 * L_x * s, (L_q - L_d) * s))
-    cols["gain_nolut"] = loop_gain_factor(InductanceModel.from_table(theta, entries), theta)
-    cols["L_alpha"], cols["L_beta"], cols["L_alphabeta"] = L_ab[:, 0, 0], L_ab[:, 1, 1], L_ab[:, 0, 1]
+    cols.update(derived_columns(theta, entries))
     return cols
 
 

@@ -23,6 +23,10 @@ from linsense.model.frames import ab_to_dq_matrix, abc_to_ab_matrix
 ENTRIES = ("L_A", "L_B", "L_C", "M_AB", "M_BC", "M_CA")
 #: (row, column) of each entry in the 3x3 matrix.
 _INDEX = ((0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (2, 0))
+#: the columns ``linsense model`` writes after ``theta_deg`` and the six entries, each derived from
+#: the entries (docs/cli.md; :func:`derived_columns`)
+DERIVED_COLUMNS = ("L_d", "L_q", "L_dq", "saliency", "psi_lut_deg", "err_nolut_deg", "gain_nolut",
+                   "L_alpha", "L_beta", "L_alphabeta")
 #: positions above which a table is fitted through its normal equations in blocks of as many rows
 #: (a (N, 2K+1) design matrix of 100,000 positions took 5 s in ``lstsq``)
 _BLOCK = 4096
@@ -255,12 +259,7 @@ class InductanceModel:
         ndarray, shape theta.shape + (3, 3)
             The symmetric phase matrix, H (H/rad^derivative).
         """
-        e = self.entries(theta, derivative)
-        L = np.empty(e.shape[:-1] + (3, 3))
-        for j, (r, c) in enumerate(_INDEX):
-            L[..., r, c] = e[..., j]
-            L[..., c, r] = e[..., j]
-        return L
+        return entry_matrices(self.entries(theta, derivative))
 
     def L_ab(self, theta: np.ndarray | float, derivative: int = 0) -> np.ndarray:
         """Alpha-beta block ``(..., 2, 2)`` seen by currents with a floating star point.
@@ -336,3 +335,63 @@ class InductanceModel:
             int(k[1:]): (p[k], p[f"M{k[1:]}"]) for k in p if k.startswith("L") and k[1:] not in ("0", "2")
         }
         return InductanceModel.from_params(p["L0"], p["L2"], p["M0"], p["M2"], 0.0, harm)
+
+
+def entry_matrices(entries: np.ndarray) -> np.ndarray:
+    """Symmetric 3x3 matrices ``(..., 3, 3)`` from the six entries ``(..., 6)``.
+
+    Parameters
+    ----------
+    entries : ndarray, shape (..., 6)
+        ``L_A .. M_CA`` (:data:`ENTRIES`), H.
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        H.
+    """
+    e = np.asarray(entries, dtype=float)
+    L = np.empty(e.shape[:-1] + (3, 3))
+    for j, (r, c) in enumerate(_INDEX):
+        L[..., r, c] = e[..., j]
+        L[..., c, r] = e[..., j]
+    return L
+
+
+def derived_columns(theta: np.ndarray, entries: np.ndarray) -> dict[str, np.ndarray]:
+    """The :data:`DERIVED_COLUMNS` of a table of the six entries, as ``linsense model`` writes them.
+
+    Pointwise from each position's matrix: the alpha-beta and dq inductances, the saliency
+    ``L_q - L_d``, ``psi_lut_deg`` (eq. 12, ``atan(-L_dq/L_q)``) and ``err_nolut_deg`` (``tan 2e* =
+    2 L_dq / (L_d - L_q)``, the stable root; docs/theory.md section 6); ``gain_nolut`` (``1 +
+    de*/dtheta``) needs ``dL/dtheta``, which a table does not have: it is the derivative of the
+    trigonometric series through the table (:meth:`InductanceModel.from_table`, default order).
+
+    Parameters
+    ----------
+    theta : ndarray, shape (N,)
+        Electrical positions, rad.
+    entries : ndarray, shape (N, 6)
+        ``L_A .. M_CA`` at those positions, H.
+
+    Returns
+    -------
+    dict of str to ndarray
+        The columns by name (H, electrical degrees, dimensionless).
+    """
+    theta = np.asarray(theta, dtype=float)
+    L_ab = abc_to_ab_matrix(entry_matrices(entries))
+    L_dq = ab_to_dq_matrix(L_ab, theta)
+    L_d, L_q, L_x = L_dq[:, 0, 0], L_dq[:, 1, 1], L_dq[:, 0, 1]
+    s = 1.0 if np.mean(L_q - L_d) >= 0 else -1.0
+    series = InductanceModel.from_table(theta, entries)
+    L, dL = series.L_dq(theta), series.dL_dq(theta)
+    u, w = L[:, 1, 1] - L[:, 0, 0], -2.0 * L[:, 0, 1]
+    du, dw = dL[:, 1, 1] - dL[:, 0, 0], -2.0 * dL[:, 0, 1]
+    with np.errstate(divide="ignore", invalid="ignore"):  # (no saliency: refused by the motor's checks)
+        gain = 1.0 + 0.5 * (u * dw - w * du) / (u * u + w * w)
+    return {"L_d": L_d, "L_q": L_q, "L_dq": L_x, "saliency": L_q - L_d,
+            "psi_lut_deg": np.degrees(np.arctan2(-L_x, L_q)),
+            "err_nolut_deg": np.degrees(0.5 * np.arctan2(-2.0 * L_x * s, (L_q - L_d) * s)),
+            "gain_nolut": gain, "L_alpha": L_ab[:, 0, 0], "L_beta": L_ab[:, 1, 1],
+            "L_alphabeta": L_ab[:, 0, 1]}

@@ -16,8 +16,8 @@ import numpy as np
 
 from linsense import examples
 from linsense.errors import InputError, ModelError
-from linsense.io import folder_of, parse_toml, read_csv_table, read_text_file
-from linsense.model.inductance import ENTRIES, InductanceModel
+from linsense.io import csv_rows, folder_of, parse_toml, read_csv_table, read_text_file
+from linsense.model.inductance import DERIVED_COLUMNS, ENTRIES, InductanceModel, derived_columns
 from linsense.model.saturation import Saturation
 from linsense.model.schema import validate_motor_file
 
@@ -468,7 +468,43 @@ def read_inductance_table(path: Path) -> tuple[np.ndarray, np.ndarray]:
             f"positions do not cover one electrical period: gap of {gaps[g]:.1f} deg after "
             f"{ws[g]:.1f} deg (at most 45 deg allowed)",
         )
-    return np.radians(data[:, 0]), data[:, 1:]
+    theta = np.radians(data[:, 0])
+    _check_derived(src, path, theta, data[:, 1:], line)
+    return theta, data[:, 1:]
+
+
+#: tolerance of a derived column against what the entries give, relative to the column's largest
+#: magnitude (``linsense model`` writes 12 significant digits; a derivative of the series through
+#: them is good to about 1e-10 of it)
+DERIVED_RTOL = 1e-6
+
+
+def _check_derived(src: str, path: Path, theta: np.ndarray, entries: np.ndarray, line: np.ndarray) -> None:
+    """Refuse a table whose ``linsense model`` columns beside the entries (:data:`DERIVED_COLUMNS`)
+    do not agree with the entries: they are not read (the model is ``L_A .. M_CA``), so an edit of
+    ``L_dq`` or ``psi_lut_deg`` in a model table used as a motor's table changed nothing, without a
+    word. The first row and column that disagree are named. ``gain_nolut`` is a derivative, which a
+    table does not determine (``linsense model --points 8`` of a motor with ``L4`` writes the motor's,
+    not the 8 points' series'): it is not compared."""
+    rows = csv_rows(path, "inductance table")
+    header = next(rows)[1]
+    rows.close()
+    present = tuple(c for c in DERIVED_COLUMNS if c in header and c != "gain_nolut")
+    if not present:
+        return
+    given = read_csv_table(path, present, "inductance table")[0]
+    want = derived_columns(theta, entries)
+    for j, name in enumerate(present):
+        w = want[name]
+        scale = float(np.max(np.abs(w[np.isfinite(w)]), initial=0.0))
+        bad = np.nonzero(~(np.abs(given[:, j] - w) <= DERIVED_RTOL * scale + 1e-300))[0]
+        if bad.size:
+            i = int(bad[0])
+            raise InputError(src, f"row {line[i]}, column {name}",
+                             f"{float(given[i, j])!r}, but the row's L_A .. M_CA give {float(w[i]):.12g}: "
+                             f"the columns linsense model writes beside the entries ({', '.join(present)}) "
+                             "are derived from them, not read: edit L_A .. M_CA (or delete the derived "
+                             "columns)")
 
 
 # ---------------------------------------------------------------------- checks

@@ -45,7 +45,7 @@ from linsense.sim.drive_cfg import calibration_table, drive_values, fill, value_
 from linsense.sim.plant import fill_saturation, lab_fourier
 from linsense.sim.refusal import explain, given_keys
 from linsense.sim.scenario import Scenario, compensation_of
-from linsense.sim.tables import Tables, drive_tables, measured_model
+from linsense.sim.tables import Tables, drive_tables, measured_model, measured_warnings
 from linsense.tune.cfgmap import Values
 from linsense.tune.design import DriveData, design, mean_dq, uncompensated_speed_factor
 
@@ -92,6 +92,9 @@ class Built:
         cffi objects kept alive with the drive (the calibration table).
     user_keys : set of str
         The dotted keys the file gives (the design sets the others).
+    warnings : list of str
+        Doubts about the inputs the run was built from, for the command to say (a measured table
+        that does not look like the motor's, :func:`linsense.sim.tables.measured_warnings`).
     """
 
     scenario: Scenario
@@ -105,6 +108,7 @@ class Built:
     known: dict = field(default_factory=dict)  # motor values the controller uses
     extra: dict = field(default_factory=dict)  # cffi objects kept alive with the drive (calibration table)
     user_keys: set = field(default_factory=set)  # the dotted keys the file gives (the design sets the others)
+    warnings: list = field(default_factory=list)  # doubts about the inputs, for the command to say
 
 
 # ------------------------------------------------------------------ the path of a scenario
@@ -160,7 +164,8 @@ def build(sc: Scenario, motor: Motor | None = None, trace_in_memory: bool = True
     start_drive(sc, drive, motor, setup)
     cmds, moves = reference_commands(sc)
     return Built(sc, motor, setup, cfg, drive, cmds, n_steps, moves, known,
-                 extra={} if cal_table is None else {"cal_table": cal_table}, user_keys=user_keys)
+                 extra={} if cal_table is None else {"cal_table": cal_table}, user_keys=user_keys,
+                 warnings=measured_warnings(sc, stamp_motor))
 
 
 def motors(sc: Scenario, motor: Motor | None = None, model: Motor | None = None) -> tuple[Motor, Motor]:
@@ -550,10 +555,14 @@ def resolve_motor(sc: Scenario, spec: str | None = None, key: str = "motor", che
                              f"{', '.join(preset_names())}; examples: {', '.join(examples.names('motors'))}; "
                              "or a path to a .toml motor file, relative to the scenario)")
     p = Path(motor_path(spec))
+    where = ""
     if not p.is_absolute():
         p = sc.base_dir / p
+        folder = "the working folder" if sc.source == "<stdin>" else "the scenario's folder"
+        where = f" (a path is taken relative to {folder}, {str(sc.base_dir.resolve())!r})"
     if not p.is_file():
-        raise InputError(sc.source, key, f"no such motor file {str(p)!r} (value {spec!r})")
+        raise InputError(sc.source, key, f"no such motor file {spec!r}: {str(p.resolve())!r} does not "
+                         f"exist{where}")
     return _load_motor_file_cached(p, check)
 
 
@@ -650,7 +659,7 @@ def initial_load(sc: Scenario, motor: Motor) -> float:
 
 #: an input of the design (DriveData's names, :func:`drive_data`) -> the scenario key it is read from;
 #: the design names the input at fault (linsense.tune.design.DRIVE_RULES), the refusal its key
-_DESIGN_KEYS = {"v_dc": "inverter.v_dc", "f_pwm": "inverter.f_pwm", "dead_time": "inverter.dead_time",
+DESIGN_KEYS = {"v_dc": "inverter.v_dc", "f_pwm": "inverter.f_pwm", "dead_time": "inverter.dead_time",
                 "i_max": "controller.i_max", "v_max": "reference.v_max", "a_max": "reference.a_max",
                 "v_inj": "injection.amplitude", "f_inj": "injection.frequency",
                 "quad": "injection.quadrature", "shape": "injection.shape", "motor": "motor"}
@@ -659,7 +668,7 @@ _DESIGN_KEYS = {"v_dc": "inverter.v_dc", "f_pwm": "inverter.f_pwm", "dead_time":
 def _design_refusal(sc: Scenario, exc: InputError) -> InputError:
     """The design's refusal ``exc`` (naming an input by its DriveData name) as the scenario's: the
     same message at the scenario key the input is read from."""
-    return InputError(sc.source, _DESIGN_KEYS.get(exc.key, exc.key), exc.message)
+    return InputError(sc.source, DESIGN_KEYS.get(exc.key, exc.key), exc.message)
 
 
 def _check_cal_window(sc: Scenario, t_max: float, t_hold: float, given: set) -> None:

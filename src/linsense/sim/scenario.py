@@ -835,7 +835,8 @@ class ScenarioFile(BaseModel):
                             f"must be above v_dc_min = {p.v_dc_min:g}, got {p.v_dc_max:g}")
         if not p.v_dc_min <= inv.v_dc <= p.v_dc_max:
             raise KeyProblem("inverter.v_dc", f"outside the protection's bus range [{p.v_dc_min:g}, "
-                            f"{p.v_dc_max:g}] V (the drive would trip at t = 0), got {inv.v_dc:g}")
+                            f"{p.v_dc_max:g}] V (protection.v_dc_min, protection.v_dc_max; the drive would "
+                            f"trip at t = 0), got {inv.v_dc:g}")
 
         # (an amplitude the file does not give is designed for the bus, and checked there)
         if ("amplitude" in self.injection.model_fields_set and p.v_dc_min > 0

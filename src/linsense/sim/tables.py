@@ -12,9 +12,8 @@ from pathlib import Path
 import numpy as np
 
 from linsense.compensation.lut import build_lut, lut_r_slope
-from linsense.compensation.measured import end_effect_fit, read_measured_table
+from linsense.compensation.measured import end_effect_fit, fit_report, read_measured_table
 from linsense.ctrl import make_lut
-from linsense.errors import InputError
 from linsense.model.motor import Motor
 from linsense.sim.cache import memo, motor_key
 from linsense.sim.scenario import Scenario, compensation_of
@@ -207,14 +206,32 @@ def measured_values(sc: Scenario, model_motor: Motor, f_inj: float, quad: float)
     linsense.errors.InputError
         As :func:`measured_comp`.
     """
-    obs = sc.spec.observer
+    return _measured_table(sc, model_motor, f_inj, quad).values
+
+
+def _measured_table(sc: Scenario, model_motor: Motor, f_inj: float, quad: float):
+    """The scenario's measured table as read for this drive (cached; :func:`measured_values`)."""
     key = ("measured",) + _measured_key(sc, model_motor, f_inj, quad)
-    try:
-        return memo(key, lambda: read_measured_table(
-            lut_file_path(sc), motor=model_motor, injection=sc.spec.injection.shape, f_inj=f_inj, quad=quad,
-            points=obs.lut_points).values)
-    except InputError as exc:
-        raise InputError(sc.source, "observer.lut_file", f"{obs.lut_file!r}: {exc}") from None
+    return memo(key, lambda: read_measured_table(
+        lut_file_path(sc), motor=model_motor, injection=sc.spec.injection.shape, f_inj=f_inj, quad=quad,
+        points=sc.spec.observer.lut_points, via=lut_file_via(sc)))
+
+
+def lut_file_via(sc: Scenario) -> tuple[str, str, str]:
+    """Where a scenario names its measured table, for the reader's messages
+    (:func:`linsense.compensation.measured.read_measured_table`'s ``via``).
+
+    Parameters
+    ----------
+    sc : Scenario
+        The scenario (``observer.lut_file`` given).
+
+    Returns
+    -------
+    tuple of str
+        ``(scenario, "observer.lut_file", value as written)``.
+    """
+    return sc.source, "observer.lut_file", str(sc.spec.observer.lut_file)
 
 
 def measured_model(sc: Scenario, model_motor: Motor) -> Motor:
@@ -246,9 +263,21 @@ def measured_model(sc: Scenario, model_motor: Motor) -> Motor:
     linsense.errors.InputError
         As :func:`measured_comp`.
     """
+    fit = _fit_args(sc, model_motor)
+    if fit is None:
+        return model_motor
+    fitted = end_effect_fit(*fit)[0]  # (kept by its inputs)
+    R_s = sc.spec.controller.model.R_s
+    return fitted if R_s is None else dataclasses.replace(fitted, R_s=model_motor.R_s)
+
+
+def _fit_args(sc: Scenario, model_motor: Motor) -> tuple | None:
+    """The arguments of :func:`~linsense.compensation.measured.end_effect_fit` for a scenario's
+    measured table (the motor with the resistance the drive believes, the table, the injection), or
+    None when the drive runs no measured table."""
     obs = sc.spec.observer
     if obs.lut_model != "measured" or compensation_of(sc.spec.control.mode, obs.compensation) != "lut":
-        return model_motor
+        return None
     inj = sc.spec.injection
     shape = inj.shape
     f_run = sc.spec.inverter.f_pwm / 2.0 if shape == "square" else inj.frequency
@@ -256,8 +285,35 @@ def measured_model(sc: Scenario, model_motor: Motor) -> Motor:
     values = measured_values(sc, model_motor, f_run, quad)
     R_s = sc.spec.controller.model.R_s
     lut_motor = model_motor if R_s is None else dataclasses.replace(model_motor, R_s=R_s)
-    fitted = end_effect_fit(lut_motor, values, shape, f_run, quad)[0]  # (kept by its inputs)
-    return fitted if R_s is None else dataclasses.replace(fitted, R_s=model_motor.R_s)
+    return lut_motor, values, shape, f_run, quad
+
+
+def measured_warnings(sc: Scenario, model_motor: Motor) -> list[str]:
+    """What the end-effect fit of a scenario's measured table doubts, as ``linsense tune --table``
+    says it (:func:`linsense.compensation.measured.fit_report`): a table that does not look like the
+    motor's (edited, or another motor's with this one's stamp), named by the scenario and its key.
+
+    Parameters
+    ----------
+    sc : Scenario
+        The designed scenario.
+    model_motor : Motor
+        The motor the controller believes in, as loaded.
+
+    Returns
+    -------
+    list of str
+        One warning, or none (no measured table, or one the fit explains and the drive's table
+        length reads closely enough).
+    """
+    fit = _fit_args(sc, model_motor)
+    if fit is None:
+        return []
+    lut_motor, _, shape, f_run, quad = fit
+    raw = _measured_table(sc, model_motor, f_run, quad).raw  # (judged at its own points)
+    doubt = fit_report(lut_motor, raw, shape, f_run, quad, sc.spec.observer.lut_points)[1]
+    where, key, value = lut_file_via(sc)
+    return [f"{where}: {key}: {value!r}: {doubt}"] if doubt else []
 
 
 def _shape_tables(sc: Scenario, lut_motor, key: tuple, v: Values, r_slopes: bool,

@@ -158,9 +158,10 @@ def scenario_dict(dz: Design, drive: DriveData, motor_ref: str, base: dict | Non
     prot.setdefault("v_dc_min", _r(drive.v_dc * V_DC_MIN_FRACTION))
     prot.setdefault("v_dc_max", _r(drive.v_dc * V_DC_MAX_FRACTION))
     prot.update({"omega_max": _r(dz.omega_trip * k_est), "i_max": _r(dz.i_trip)})
-    ref = sc["reference"]
-    if ref.get("type") == "trajectory":  # (the application's: the limits above are designed from them)
-        ref.update({"v_max": drive.v_max, "a_max": drive.a_max})
+    # the application's speed and acceleration, which the limits above are designed from: written
+    # whatever the reference, so that the scenario holds the drive it was designed for (a re-tune or
+    # calibrate over it reads them back: without them it designed for the default 0.2 m/s)
+    sc["reference"] = {**sc["reference"], "v_max": drive.v_max, "a_max": drive.a_max}
     if drive.travel is not None and "travel" not in sc and pole_pitch is not None:
         sc["travel"] = end_stops(pole_pitch, drive.travel)
     if startup is not None and sc.get("control", {}).get("mode") == "startup":
@@ -183,7 +184,8 @@ def scenario_toml(
     """The scenario as TOML.
 
     A motor-file or table path (relative to ``base_dir``, default the working folder, as the command
-    line gives it) is made relative to the output file's folder.
+    line gives it) is made relative to the output file's folder, and so is an absolute
+    ``controller.model.motor`` of ``base``.
 
     Parameters
     ----------
@@ -222,12 +224,16 @@ def scenario_toml(
 
     ref = relative(motor_spec) if names_a_path(motor_spec) else motor_spec
     table = None if table is None else relative(table)
+    sc = scenario_dict(dz, drive, ref, base, startup, k_est, pole_pitch, table)
+    model = sc.get("controller", {}).get("model", {})
+    if names_a_path(model.get("motor", "")):  # (every path in the scenario relative to its own folder)
+        sc["controller"] = {**sc["controller"], "model": {**model, "motor": relative(model["motor"])}}
     head = (
         f"# Designed by `linsense tune` for motor {ref!r} (docs/tuning.md): {dz.v_inj:.3g} V / "
         f"{dz.f_inj:g} Hz injection, current loop {dz.current_bw:.3g} Hz, observer {dz.observer_bw:.3g} Hz, "
         f"speed loop {dz.speed_bw:.3g} Hz, position {dz.kp_x:.3g} 1/s.\n"
     )
-    return head + tomli_w.dumps(scenario_dict(dz, drive, ref, base, startup, k_est, pole_pitch, table))
+    return head + tomli_w.dumps(sc)
 
 
 def check_c_header(drive: DriveData) -> None:
