@@ -14,6 +14,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from linsense.analysis.hf import psi_lut
+from linsense.errors import InputError
 from linsense.compensation.lut import (
     Lut,
     build_lut,
@@ -85,7 +86,7 @@ def test_exports_are_byte_reproducible(ecce):
 
 
 def test_too_short_lut_refused():
-    with pytest.raises(ValueError):
+    with pytest.raises(InputError, match="at least 4"):
         Lut(np.zeros(3))
 
 

@@ -146,7 +146,7 @@ def table_stamp(motor, injection: str, f_inj: float, quad: float, points: int) -
 
 def _drive_args(src: str, motor, injection, f_inj, quad, points) -> tuple[str, float, float, int]:
     """The drive's values checked: (injection, f_inj, quad, points)."""
-    from linsense.analysis.hf import real_arg
+    from linsense._check import real as real_arg
     from linsense.limits import MAX_F_INJ, MAX_POINTS, MIN_F_INJ
     from linsense.model.motor import Motor
 
@@ -371,7 +371,7 @@ def _document(src: str, text: str) -> dict:
         raise InputError(src, "unit", f"must be 'rad' (the table's angles, electrical), got {got}")
     unknown = [k for k in doc if k not in CORE_KEYS and k not in INFO_KEYS]
     if unknown:
-        from linsense.validation import closest_key
+        from linsense._check import closest_key
 
         key = str(unknown[0])
         raise InputError(src, key, f"not a key of a measured table{closest_key(key, CORE_KEYS + INFO_KEYS)} "
@@ -387,7 +387,7 @@ def _stamp(src: str, raw) -> TableStamp:
                          "drive the table was measured on)")
     for k in raw:
         if k not in STAMP_KEYS:
-            from linsense.validation import closest_key
+            from linsense._check import closest_key
 
             raise InputError(src, f"stamp.{k}", f"not a stamp key{closest_key(str(k), STAMP_KEYS)} "
                              f"(known: {', '.join(STAMP_KEYS)})")
