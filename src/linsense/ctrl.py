@@ -556,6 +556,8 @@ def limit_rule(value: float, lim: float | None) -> tuple[float | None, str]:
     words : str
         ``"above the largest"`` or ``"below the smallest"`` with a limit; else the rule.
     """
+    if math.isnan(value):
+        return None, "it must be a finite number"
     if lim is not None and 0.0 < abs(lim) < float(np.finfo(REAL).tiny):
         return None, "it must be above 0"
     if lim is not None and abs(lim) > 0.5 * float(np.finfo(REAL).max):
