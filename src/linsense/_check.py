@@ -47,6 +47,23 @@ def brief(value) -> str:
     return r if len(r) <= _SHOWN_CHARS else r[:_SHOWN_CHARS - 3] + "..."
 
 
+def one_line(value) -> str:
+    """``repr`` of a user's value on one line (an array's has several), otherwise uncut.
+
+    Parameters
+    ----------
+    value : object
+        The value.
+
+    Returns
+    -------
+    str
+        ``repr(value)``, its runs of white space made one space when it holds a line break.
+    """
+    r = repr(value)
+    return " ".join(r.split()) if "\n" in r else r
+
+
 def closest_key(key: str, known) -> str:
     """A hint naming the known key (or name) closest to ``key``.
 
@@ -171,7 +188,7 @@ def integer(v, source: str, name: str, low: int, high: int | None = None, what: 
 
 
 def reals(v, source: str, name: str, what: str = "real numbers", *, ndim: int | None = None,
-          min_size: int = 0, finite: bool = True) -> np.ndarray:
+          min_size: int = 0, finite: bool = True, bound: float | None = None) -> np.ndarray:
     """``v`` as a float64 array if it is real numbers (a number, a sequence or an array of them).
 
     Refused: None, strings, booleans, complex numbers (their imaginary part was dropped without a
@@ -194,6 +211,8 @@ def reals(v, source: str, name: str, what: str = "real numbers", *, ndim: int | 
         The fewest values.
     finite : bool, optional
         Whether NaN and infinities are refused.
+    bound : float or None, optional
+        The largest magnitude allowed (None: any).
 
     Returns
     -------
@@ -226,6 +245,11 @@ def reals(v, source: str, name: str, what: str = "real numbers", *, ndim: int | 
         k = np.unravel_index(int(np.flatnonzero(~np.isfinite(a))[0]), a.shape)
         at = f"[{', '.join(map(str, k))}]" if a.ndim else ""
         raise InputError(source, f"{name}{at}", f"expected {expected}, got {float(a[k])!r}")
+    if bound is not None and a.size and float(np.max(np.abs(a))) > bound:
+        k = np.unravel_index(int(np.argmax(np.abs(a))), a.shape)
+        at = f"[{', '.join(map(str, k))}]" if a.ndim else ""
+        raise InputError(source, f"{name}{at}", f"{float(a[k])!r} is beyond the range of {what}, "
+                         f"+-{bound:.6g} (docs/limits.md)")
     return a
 
 

@@ -20,13 +20,14 @@ from __future__ import annotations
 
 import functools
 import math
+import numbers
 import warnings
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from linsense._check import brief
+from linsense._check import brief, closest_key
 from linsense._ctrl import ffi, lib
 from linsense._digest import source_digest
 from linsense.errors import ConfigError, InputError
@@ -238,8 +239,24 @@ def _enum(module: str, field: str, value: Any) -> int:
             return table[value.lower()]
         except KeyError:
             raise config_error(module, {field: value}, lib.LS_ERR_PARAM,
-                              f"one of {', '.join(table)}") from None
+                              f"one of {', '.join(table)}{closest_key(value.lower(), table)}") from None
+    table = _ENUMS[(module, field)]
+    integral = isinstance(value, numbers.Integral) and not isinstance(value, bool | np.bool_)
+    if not (integral and value in table.values()):
+        raise InputError(module, field, f"expected one of {', '.join(table)} (or its LS_ value, an int), "
+                         f"got {brief(value)} ({type(value).__name__})")
     return int(value)
+
+
+def _number(value: Any, source: str, name: str) -> float:
+    """``value`` as a float if it is a real number (NaN and infinities pass: the C library decides),
+    else InputError naming ``name`` (a string "1" was read as 1.0, None was a TypeError)."""
+    if isinstance(value, bool | np.bool_) or not isinstance(value, numbers.Real):
+        raise InputError(source, name, f"expected a real number, got {brief(value)} ({type(value).__name__})")
+    try:
+        return float(value)
+    except OverflowError:  # (an int beyond a double)
+        raise InputError(source, name, f"{brief(value)} is beyond the range of a double") from None
 
 
 def _enum_name(module: str, field: str, value: Any) -> Any:
@@ -277,11 +294,13 @@ def to_pos(theta: float):
 
     Raises
     ------
+    InputError
+        ``theta`` not a real number.
     ConfigError
         ``theta`` not finite or beyond the firmware's position range (``LS_POS_PERIOD_MAX``
         periods either side, docs/firmware.md).
     """
-    theta = float(theta)
+    theta = _number(theta, "to_pos", "theta")
     if not (np.isfinite(theta) and abs(theta) / _TWO_PI < lib.LS_POS_PERIOD_MAX):
         raise config_error("ls_pos", {"theta": theta}, lib.LS_ERR_PARAM,
                           f"a position is finite and within +-{lib.LS_POS_PERIOD_MAX} electrical periods",
@@ -800,8 +819,10 @@ class Drive:
 
         Raises
         ------
+        InputError
+            ``mode`` neither a name nor an int.
         ConfigError
-            If the mode needs a table or setting the configuration lacks.
+            If the mode needs a table or setting the configuration lacks, or an unknown name.
         """
         m = _enum("ls_drive", "mode", mode)
         status = lib.ls_drive_set_mode(self.state, m)
@@ -820,6 +841,8 @@ class Drive:
 
         Raises
         ------
+        InputError
+            ``theta`` not a real number.
         ConfigError
             When refused (:func:`to_pos`).
         """
@@ -837,10 +860,12 @@ class Drive:
 
         Raises
         ------
+        InputError
+            ``f_load`` not a real number.
         ConfigError
             When ``ls_drive_set_load`` refuses it (a force that is not finite in ``LS_REAL``).
         """
-        st = lib.ls_drive_set_load(self.state, float(f_load))
+        st = lib.ls_drive_set_load(self.state, _number(f_load, "Drive.set_load", "f_load"))
         if st != lib.LS_OK:
             raise config_error("ls_drive", {"f_load": f_load}, st, func="ls_drive_set_load")
 

@@ -14,7 +14,7 @@ import numpy as np
 
 from linsense._check import choice, integer, real, reals
 from linsense.errors import InputError
-from linsense.limits import MAX_F_INJ, MAX_POINTS
+from linsense.limits import MAX_F_INJ, MAX_POINTS, max_angle
 from linsense.model.frames import rot
 from linsense.model.inductance import InductanceModel
 from linsense.model.motor import Motor, as_motor
@@ -37,8 +37,9 @@ def _motor(m, src: str) -> Motor:
 
 
 def _theta(v, src: str, name: str = "theta") -> np.ndarray:
-    """A position argument: finite real numbers, rad (None, NaN, a complex number or a dict refused)."""
-    return reals(v, src, name, "positions in rad")
+    """A position argument: finite real numbers, rad, within the firmware's range of positions (None,
+    NaN, a complex number, a dict or 1e308 rad refused)."""
+    return reals(v, src, name, "positions in rad", bound=max_angle())
 
 
 def _together(src: str, theta: np.ndarray, theta_err: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -337,10 +338,20 @@ def demod_ratio(motor, theta, theta_err, v_inj: float, f_inj: float, psi_comp,
     ndarray
         Dimensionless, in [-1/2, 1/2].
     """
-    psi_comp = reals(psi_comp, f"{_SRC}.demod_ratio", "psi_comp", "angles in rad")
+    src = f"{_SRC}.demod_ratio"
+    psi_comp = reals(psi_comp, src, "psi_comp", "angles in rad")
     i = hf_current(motor, theta, v_inj, f_inj, theta_err, quad=quad)
-    c, s = np.cos(psi_comp), np.sin(psi_comp)
-    i_d = c * i[..., 0] + s * i[..., 1]
+    # (scaled: the ratio does not depend on the amplitude, and 1e300 V squared overflowed to NaN)
+    scale = np.max(np.abs(i), axis=-1, keepdims=True)
+    if not np.all(scale > 0.0):  # (5e-324 V: the currents underflow, the ratio 0 / 0)
+        raise InputError(src, "v_inj", f"{v_inj!r} V at {f_inj!r} Hz gives HF currents below floating point")
+    i = i / scale
+    try:
+        c, s = np.broadcast_arrays(np.cos(psi_comp), i[..., 0])[0], np.sin(psi_comp)
+        i_d = c * i[..., 0] + s * i[..., 1]
+    except ValueError:
+        raise InputError(src, "psi_comp", f"shape {psi_comp.shape} does not broadcast with the positions' "
+                         f"{i.shape[:-1]}") from None
     i_q = -s * i[..., 0] + c * i[..., 1]
     return np.real(i_d * np.conj(i_q)) / (np.abs(i_d) ** 2 + np.abs(i_q) ** 2)
 

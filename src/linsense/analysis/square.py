@@ -17,8 +17,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from linsense.analysis.hf import _amplitude, _frequency
+from linsense._check import integer, real
+from linsense.analysis.hf import _amplitude, _frequency, _motor, _theta, _together
+from linsense.errors import InputError
 from linsense.model.frames import rot
+
+#: the module, named in the messages of its functions' argument checks
+_SRC = "linsense.analysis.square"
+#: integration steps of :func:`delta_current_numeric` (steps x periods): about 10 s
+MAX_NUMERIC_STEPS = 10_000_000
 
 
 def _l_dq(motor, theta) -> np.ndarray:
@@ -59,8 +66,10 @@ def delta_current(motor, theta, f_inj: float, v_inj: float = 1.0, theta_err=0.0)
     linsense.errors.InputError
         A frequency or amplitude out of range.
     """
-    f_inj, v_inj = _frequency(f_inj, "f_inj"), _amplitude(v_inj)
-    theta, theta_err = np.broadcast_arrays(np.asarray(theta, float), np.asarray(theta_err, float))
+    src = f"{_SRC}.delta_current"
+    f_inj, v_inj = _frequency(f_inj, "f_inj", src), _amplitude(v_inj, src=src)
+    motor = _motor(motor, src)
+    theta, theta_err = _together(src, _theta(theta, src), _theta(theta_err, src, "theta_err"))
     T = 0.5 / f_inj
     L_inv = np.linalg.inv(_l_dq(motor, theta))
     v = _v_true(theta_err, v_inj)
@@ -101,9 +110,27 @@ def delta_current_numeric(motor, theta: float, f_inj: float, v_inj: float = 1.0,
     -------
     ndarray, shape (2,)
         The change over the last ``+V`` half period, A, true dq frame.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        An argument of the wrong kind or out of range (``steps`` x ``periods`` beyond
+        :data:`MAX_NUMERIC_STEPS`), naming it.
     """
     from scipy.linalg import expm
 
+    from linsense.limits import max_angle
+
+    src = f"{_SRC}.delta_current_numeric"
+    motor = _motor(motor, src)
+    theta = real(theta, src, "theta", -max_angle(), max_angle(), what="one position in rad")
+    theta_err = real(theta_err, src, "theta_err", -max_angle(), max_angle(), what="one angle in rad")
+    f_inj, v_inj = _frequency(f_inj, "f_inj", src), _amplitude(v_inj, src=src)
+    steps = integer(steps, src, "steps", 1, MAX_NUMERIC_STEPS, "a number of steps")
+    periods = integer(periods, src, "periods", 1, MAX_NUMERIC_STEPS, "a number of periods")
+    if steps * periods > MAX_NUMERIC_STEPS:
+        raise InputError(src, "periods", f"{steps:,} steps x {periods:,} periods is beyond the limit of "
+                         f"{MAX_NUMERIC_STEPS:,} steps")
     T = 0.5 / f_inj
     L = _l_dq(motor, theta)
     L_inv = np.linalg.inv(L)
@@ -142,6 +169,11 @@ def psi_square(motor, theta, f_inj: float) -> np.ndarray:
     -------
     ndarray
         rad.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        An argument of the wrong kind or out of range, naming it.
     """
     d = delta_current(motor, theta, f_inj)
     return np.arctan2(d[..., 1], d[..., 0])

@@ -18,7 +18,7 @@ import numpy as np
 
 from linsense._check import instance, integer, real, reals
 from linsense.errors import InputError
-from linsense.limits import max_harmonic_order
+from linsense.limits import max_angle, max_harmonic_order
 from linsense.model.frames import ab_to_dq_matrix, abc_to_ab_matrix
 
 #: Names of the six independent entries, in storage order.
@@ -274,7 +274,7 @@ class InductanceModel:
         linsense.errors.InputError
             ``theta`` not finite real numbers, ``derivative`` not an integer in 0 .. 8.
         """
-        theta = reals(theta, f"{_SRC}.entries", "theta", "positions in rad")
+        theta = reals(theta, f"{_SRC}.entries", "theta", "positions in rad", bound=max_angle())
         derivative = integer(derivative, f"{_SRC}.entries", "derivative", 0, 8, "a derivative's order")
         k = np.arange(self.max_order + 1)
         kt = theta[..., None] * k

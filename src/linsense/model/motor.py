@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from linsense import examples
-from linsense._check import brief, closest_key, instance, real
+from linsense._check import brief, closest_key, instance, real, reals
 from linsense.errors import InputError, ModelError
 from linsense.io import parse_toml, read_csv_table, read_text_file
 from linsense.model.inductance import ENTRIES, InductanceModel
@@ -159,8 +159,13 @@ class Motor:
         -------
         ndarray
             ``2 pi x / pole_pitch``, rad.
+
+        Raises
+        ------
+        InputError
+            ``x`` not finite real numbers.
         """
-        return 2.0 * np.pi * np.asarray(x) / self.pole_pitch
+        return 2.0 * np.pi * reals(x, "linsense.Motor.theta_of_x", "x", "positions in m") / self.pole_pitch
 
     def x_of_theta(self, theta: np.ndarray | float) -> np.ndarray:
         """Position (m) of an electrical angle (rad).
@@ -174,8 +179,14 @@ class Motor:
         -------
         ndarray
             ``theta pole_pitch / (2 pi)``, m.
+
+        Raises
+        ------
+        InputError
+            ``theta`` not finite real numbers.
         """
-        return np.asarray(theta) * self.pole_pitch / (2.0 * np.pi)
+        theta = reals(theta, "linsense.Motor.x_of_theta", "theta", "angles in rad")
+        return theta * self.pole_pitch / (2.0 * np.pi)
 
     def provenance(self) -> dict:
         """Parameters that identify this motor, for provenance comments and JSON exports.
@@ -366,6 +377,9 @@ def load_motor(spec: str | Path, check: bool = True) -> Motor:
     ModelError
         The model is not usable for HF sensorless control (see :func:`check_motor`).
     """
+    instance(spec, "linsense.load_motor", "spec", str | os.PathLike,
+             "a preset's or example's name or a motor file's path (a str or os.PathLike)")
+    instance(check, "linsense.load_motor", "check", bool, "True or False")
     spec_s = str(spec)
     if not spec_s.strip():
         raise InputError("--motor", "", "empty: give a preset name (" + ", ".join(preset_names())

@@ -15,7 +15,7 @@ import numpy as np
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationError, model_validator
 from pydantic_core import PydanticCustomError
 
-from linsense._check import closest_key
+from linsense._check import brief, closest_key
 from linsense.errors import InputError, KeyProblem
 from linsense.limits import max_harmonic_order
 from linsense.validation import to_input_error
@@ -343,8 +343,13 @@ def validate_section(section: type[BaseModel], data: dict, source: str, key: str
     InputError
         Naming ``source``, the dotted key and the value.
     """
-    # (numpy's numbers, as a fit gives them, are numbers; strict pydantic takes Python's only)
-    plain = {k: v.item() if isinstance(v, np.integer | np.floating) else v for k, v in data.items()}
+    # (numpy's integers and floats, as a fit gives them, are numbers; strict pydantic takes Python's
+    # only, and took numpy's booleans and complex numbers as floats, the imaginary part dropped)
+    plain = {}
+    for k, v in data.items():
+        if isinstance(v, np.generic) and not isinstance(v, np.integer | np.floating):
+            raise InputError(source, f"{key}.{k}", f"expected a number, got {brief(v)} ({type(v).__name__})")
+        plain[k] = v.item() if isinstance(v, np.generic) else v
     try:
         return section.model_validate(plain)
     except ValidationError as exc:

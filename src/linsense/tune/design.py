@@ -17,11 +17,14 @@ injection's amplitude from the dead-time voltage error and the lowest local sali
 
 from __future__ import annotations
 
+import dataclasses
 import math
+import numbers
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from linsense._check import brief, choice, instance
 from linsense.analysis.hf import (
     end_anisotropy,
     hf_current_amplitude,
@@ -29,7 +32,7 @@ from linsense.analysis.hf import (
 )
 from linsense.compensation.lut import resistance_slope
 from linsense.errors import InputError
-from linsense.model.motor import Motor
+from linsense.model.motor import Motor, as_motor
 from linsense.tune.margins import error_gain
 
 #: the stated ratios (docs/tuning.md)
@@ -103,6 +106,17 @@ OBSERVER_FORCE_SHARE = 0.9
 RIPPLE_MAX = 0.5  # the largest thrust ripple fed forward, |c| + |s| of K_f (ls_drive_init's limit)
 
 
+def _real_number(v) -> bool:
+    """A real number a float holds (NaN and infinities too: :func:`design` names their key)."""
+    if isinstance(v, bool | np.bool_) or not isinstance(v, numbers.Real):
+        return False
+    try:
+        float(v)
+    except OverflowError:  # (10**400)
+        return False
+    return True
+
+
 @dataclass
 class DriveData:
     """The drive around the motor (SI units).
@@ -134,6 +148,12 @@ class DriveData:
     shape : str
         Injection: ``"pulsating"`` (pulsating or elliptical), ``"rotating"`` or ``"square"`` (at
         f_pwm / 2).
+
+    Raises
+    ------
+    linsense.errors.InputError
+        A value of the wrong type (a number that is not a real number, None where a number is
+        required, another shape), naming the field; :func:`design` checks the ranges.
     """
 
     v_dc: float = 72.0  # V
@@ -148,6 +168,18 @@ class DriveData:
     f_inj: float | None = None  # Hz, injection frequency (None: designed)
     quad: float = QUAD  # -, elliptical share on q (0: the paper's pulsating injection)
     shape: str = "pulsating"  # injection: pulsating/elliptical, rotating or square (at f_pwm / 2)
+
+    def __post_init__(self) -> None:
+        # one validated constructor (issue 37): DriveData(v_dc="72") was built and design() ended in a
+        # TypeError; the ranges are design()'s (named with the option or key they came from)
+        src = "linsense.tune.DriveData"
+        for f in dataclasses.fields(self):
+            v = getattr(self, f.name)
+            if f.name == "shape":
+                choice(v, src, "shape", ("pulsating", "rotating", "square"), "injection")
+            elif not (v is None and "None" in str(f.type)) and not _real_number(v):
+                what = "None or a real number" if "None" in str(f.type) else "a real number"
+                raise InputError(src, f.name, f"expected {what}, got {brief(v)} ({type(v).__name__})")
 
 
 @dataclass
@@ -495,13 +527,22 @@ def design(
     ------
     linsense.errors.InputError
         Bad drive data (naming ``source`` and the key), a motor without mean saliency, or a drive
-        that leaves no room for the injection.
+        that leaves no room for the injection; an argument of the wrong type (``motor`` not a motor,
+        ``drive`` not a :class:`DriveData`), naming it.
     """
+    src = "linsense.tune.design"
+    motor = as_motor(motor, src)
+    if drive is not None:
+        instance(drive, src, "drive", DriveData, "None or a DriveData")
+    instance(source, src, "source", str, "a str (named in messages)")
+    instance(analyse, src, "analyse", bool, "True or False")
     d = drive or DriveData()
     for key in ("v_dc", "f_pwm", "i_max", "v_max", "a_max"):
         v = getattr(d, key)
         if not (math.isfinite(v) and v > 0):
             raise InputError(source, key, f"must be a positive number, got {v!r}")
+    if not (math.isfinite(d.dead_time) and d.dead_time >= 0.0):  # (-1 s was designed for; issue 37)
+        raise InputError(source, "dead_time", f"must be a finite number >= 0 s, got {d.dead_time!r}")
     if d.shape not in ("pulsating", "rotating", "square"):
         raise InputError(source, "shape", f"must be pulsating, rotating or square, got {d.shape!r}")
     if not (0.0 <= d.quad < 1.0):
@@ -573,8 +614,10 @@ def design(
         )
     # a speed beyond what the bus allows (before the move's time, which would blame the acceleration)
     need = rated_load(motor, d) + motor.mass * d.a_max
-    v_bus = fundamental_speed(motor, v_lin, need / motor.force_constant, L_q)
-    if d.v_max > v_bus and need <= motor.force_constant * d.i_max:  # (else the force is refused first)
+    # (a force beyond K_f i_max is refused first, by _limits; --load 1e300 overflowed here)
+    v_bus = fundamental_speed(motor, v_lin, need / motor.force_constant, L_q) \
+        if need <= motor.force_constant * d.i_max else math.inf
+    if d.v_max > v_bus:
         raise InputError(source, "v_max", f"{d.v_max:g} m/s is beyond what the {d.v_dc:g} V bus allows: "
                          f"{v_bus:.3g} m/s, where the back-EMF, R_s i and omega L_q i at the current the "
                          f"application needs at speed ({need / motor.force_constant:.3g} A: the load and "
