@@ -14,7 +14,6 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from linsense.analysis.hf import psi_lut
-from linsense.errors import InputError
 from linsense.compensation.lut import (
     Lut,
     build_lut,
@@ -24,6 +23,7 @@ from linsense.compensation.lut import (
     read_lut,
     to_c_header,
 )
+from linsense.errors import InputError
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -220,8 +220,19 @@ def controller_model(sc: Scenario, model_motor: Motor) -> dict:
     dict
         ``L_d``, ``L_q`` (H), ``R_s`` (ohm), ``psi_pm`` (Wb), ``mass`` (kg), ``force_constant``
         (N/A), ``demod_gain``.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        ``controller.model.R_s`` outside the range of real motors: the tables are made for the model
+        with it, a :class:`~linsense.model.motor.Motor`, held to the motor file's limits (issue 37).
     """
     ov = sc.spec.controller.model
+    if ov.R_s is not None:
+        try:
+            dataclasses.replace(model_motor, R_s=ov.R_s)
+        except InputError as exc:
+            raise InputError(sc.source, "controller.model.R_s", exc.message) from None
     L_d, L_q = memo(("mean_dq", motor_key(model_motor)), lambda: mean_dq(model_motor))
     known = {
         "L_d": ov.L_d if ov.L_d is not None else L_d,
