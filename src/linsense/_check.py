@@ -47,7 +47,7 @@ def brief(value) -> str:
     return r if len(r) <= _SHOWN_CHARS else r[:_SHOWN_CHARS - 3] + "..."
 
 
-def one_line(value) -> str:
+def repr_line(value) -> str:
     """``repr`` of a user's value on one line (an array's has several), otherwise uncut.
 
     Parameters

@@ -322,7 +322,14 @@ def from_pos(p) -> float:
     -------
     float
         rad.
+
+    Raises
+    ------
+    InputError
+        ``p`` not an ``ls_pos`` (:func:`to_pos`).
     """
+    if not (isinstance(p, ffi.CData) and ffi.typeof(p) is ffi.typeof("ls_pos")):
+        raise InputError("from_pos", "p", f"expected an ls_pos (to_pos), got {brief(p)} ({type(p).__name__})")
     return p.period * _TWO_PI + float(p.theta)
 
 

@@ -14,7 +14,7 @@ import typing
 
 from pydantic import BaseModel, ValidationError
 
-from linsense._check import closest_key, one_line
+from linsense._check import closest_key, repr_line
 from linsense.errors import InputError, KeyProblem
 
 
@@ -77,9 +77,9 @@ def to_input_error(exc: ValidationError, source: str, root: type[BaseModel]) -> 
     if kind == "extra_forbidden":
         section = _section_model(root, loc[:-1])
         hint = closest_key(names[-1], section.model_fields) if section is not None else ""
-        return InputError(source, key, f"unknown key (value {one_line(value)}){hint}")
+        return InputError(source, key, f"unknown key (value {repr_line(value)}){hint}")
     if kind == "finite_number":
-        return InputError(source, key, f"expected a finite number, got {one_line(value)}")
+        return InputError(source, key, f"expected a finite number, got {repr_line(value)}")
     msg = err["msg"]
     msg = msg[0].lower() + msg[1:] if msg else msg
-    return InputError(source, key, f"{msg}, got {one_line(value)}")
+    return InputError(source, key, f"{msg}, got {repr_line(value)}")

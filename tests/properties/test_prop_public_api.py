@@ -223,6 +223,11 @@ FUNCS = {
     "lut.to_csv": (_mod("linsense.compensation.lut", "to_csv"), {"lut": ("lut", "LUT")}),
     "lut.to_c_header": (_mod("linsense.compensation.lut", "to_c_header"), {"lut": ("lut", "LUT")}),
     "lut.read_lut": (_mod("linsense.compensation.lut", "read_lut"), {"path": ("path", "LUTFILE")}),
+    "measured.end_effect_fit": (_mod("linsense.compensation.measured", "end_effect_fit"), {
+        "motor": MOT, "values": ("table", "LUT16"), "injection": (choice("pulsating", "rotating", "square"),
+                                                                   "pulsating"),
+        "f_inj": F1K, "quad": ("real", 0.0)}),
+    "sim.load_scenario": (_mod("linsense.sim", "load_scenario"), {"path": ("path", "SCENARIO")}),
     # linsense.model
     "Motor": (_motor_ctor, {"R_s": ("real", 9.0), "pole_pitch": ("real", 0.056), "mass": ("real", 1.5),
                             "force_constant": ("real", 20.0), "name": ("str", "m")}),
@@ -251,6 +256,7 @@ FUNCS = {
     # linsense.ctrl
     "ctrl.Drive": (_mod("linsense.ctrl", "Drive"), {"cfg": ("cfg", None)}),
     "ctrl.to_pos": (_mod("linsense.ctrl", "to_pos"), {"theta": ("real", 3.0)}),
+    "ctrl.from_pos": (_mod("linsense.ctrl", "from_pos"), {"p": (lambda v: "ls_pos" in repr(v), "POS")}),
     "ctrl.Drive.set_mode": (_drive_method("set_mode"), {"mode": (lambda v: choice(
         "off", "sensored", "sensorless_nolut", "calibration", "startup", "sensorless_lut")(v)
         or (KINDS["count"](v) and 0 <= v <= 5), "sensored")}),
@@ -264,7 +270,10 @@ FUNCS = {
         "motor": MOT, "drive": ("drive", None), "source": ("str", "<tune>")}),
 }
 #: the valid values drawn instead of their placeholder
-SPECIAL = {M: _motor, "LUT": _lut, "LUTFILE": _lut_file}
+SPECIAL = {M: _motor, "LUT": _lut, "LUTFILE": _lut_file,
+           "LUT16": lambda: _mod("linsense.compensation.lut", "build_lut")(_motor(), 16, 1000.0).values,
+           "SCENARIO": lambda: str(_mod("linsense.examples", "path")("scenarios", "step3_lut")),
+           "POS": lambda: _mod("linsense.ctrl", "to_pos")(1.0)}
 
 #: values of every kind: the hostile ones and some valid ones
 HOSTILE = [None, math.nan, math.inf, -math.inf, 1 + 2j, np.complex128(0.5j), True, np.True_, "x", "", "0.3",
@@ -353,7 +362,12 @@ FOUND = [
     ("ctrl.Drive.set_load", "f_load", "1"), ("ctrl.Drive.set_mode", "mode", None),
     ("tune.DriveData", "v_dc", "72"), ("tune.DriveData", "shape", "sine"),
     ("tune.design", "motor", "nope"), ("tune.design", "drive", {"v_dc": 72.0}),
-    ("frames.rot", "theta", None), ("load_motor", "spec", None),
+    ("frames.rot", "theta", None), ("load_motor", "spec", None), ("sim.load_scenario", "path", None),
+    ("ctrl.from_pos", "p", 3.0), ("measured.end_effect_fit", "values", [1j, 0.0, 0.0, 0.0]),
+    # (the long profile's: NaN of a step's matrix exponential, an infinite current, a two-line refusal)
+    ("square.delta_current_numeric", "f_inj", 1.1192980226760248e-213),
+    ("rotating.negative_sequence", "v_inj", 2.8611174857570284e+304), ("ctrl.Drive.set_mode", "mode", "\n"),
+    ("lut.read_lut", "path", "0\n"),
 ]
 
 
@@ -362,6 +376,11 @@ def test_what_was_found_is_refused_naming_the_argument(name, arg, value):
     fn, args = FUNCS[name]
     kw = {a: (SPECIAL[v]() if isinstance(v, str) and v in SPECIAL else v) for a, (_, v) in args.items()}
     kw[arg] = value
-    with pytest.raises(InputError) as e:
+    with pytest.raises(LinsenseError) as e:
         fn(**kw)
-    assert arg in e.value.key and "\n" not in str(e.value), str(e.value)
+    err = e.value
+    assert "\n" not in str(err), str(err)
+    if isinstance(err, ConfigError):  # (the C binding's refusal: the field named)
+        assert any(arg in k for k in err.fields), str(err)
+    else:  # (or, for a path, the file it names)
+        assert isinstance(err, InputError) and (arg in err.key or err.source == repr(value)[1:-1]), str(err)

@@ -20,7 +20,15 @@ from __future__ import annotations
 import numpy as np
 
 from linsense._check import integer, real
-from linsense.analysis.hf import _amplitude, _frequency, _motor, _theta, dq_components, mean_dq
+from linsense.analysis.hf import (
+    _amplitude,
+    _finite_currents,
+    _frequency,
+    _motor,
+    _theta,
+    dq_components,
+    mean_dq,
+)
 from linsense.limits import MAX_POINTS
 
 #: the module, named in the messages of its functions' argument checks
@@ -68,7 +76,7 @@ def negative_sequence_numeric(motor, theta, v_inj: float, f_inj: float) -> np.nd
     Z = motor.R_s * np.eye(2) + 1j * w * motor.inductance.L_ab(theta)
     V = np.broadcast_to(np.array([v_inj, -1j * v_inj]), theta.shape + (2,))
     current = np.linalg.solve(Z, V[..., None])[..., 0]
-    return 0.5 * (np.conj(current[..., 0]) + 1j * np.conj(current[..., 1]))
+    return _finite_currents(0.5 * (np.conj(current[..., 0]) + 1j * np.conj(current[..., 1])), v_inj, f_inj)
 
 
 def _i_n(R_s: float, w: float, S, D, v_inj: float):
@@ -113,7 +121,8 @@ def negative_sequence(motor, theta, v_inj: float, f_inj: float) -> np.ndarray:
     L_d, L_q, L_dq = dq_components(motor, theta)
     S = 0.5 * (L_d + L_q)
     D = 0.5 * (L_d - L_q) + 1j * L_dq
-    return _i_n(motor.R_s, 2.0 * np.pi * f_inj, S, D, v_inj) * np.exp(2j * theta)
+    i_n = _i_n(motor.R_s, 2.0 * np.pi * f_inj, S, D, v_inj) * np.exp(2j * theta)
+    return _finite_currents(i_n, v_inj, f_inj)
 
 
 def reference_phase(motor, f_inj: float) -> float:

@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from linsense._check import integer, real
-from linsense.analysis.hf import _amplitude, _frequency, _motor, _theta, _together
+from linsense.analysis.hf import _amplitude, _finite_currents, _frequency, _motor, _theta, _together
 from linsense.errors import InputError
 from linsense.model.frames import rot
 
@@ -80,7 +80,7 @@ def delta_current(motor, theta, f_inj: float, v_inj: float = 1.0, theta_err=0.0)
     positive = w > 0.0  # (R_s = 0: w = 0, where tanh(w)/w -> 1)
     ratio = np.where(positive, np.tanh(w) / np.where(positive, w, 1.0), 1.0)  # tanh(w)/w
     f = U @ (ratio[..., :, None] * np.swapaxes(U, -1, -2))  # tanh(x) x^-1
-    return (T * (f @ L_inv) @ v[..., None])[..., 0]
+    return _finite_currents((T * (f @ L_inv) @ v[..., None])[..., 0], v_inj, f_inj)
 
 
 def delta_current_numeric(motor, theta: float, f_inj: float, v_inj: float = 1.0, theta_err: float = 0.0,
@@ -119,13 +119,15 @@ def delta_current_numeric(motor, theta: float, f_inj: float, v_inj: float = 1.0,
     """
     from scipy.linalg import expm
 
-    from linsense.limits import max_angle
+    from linsense.limits import MAX_F_INJ, MIN_F_INJ, max_angle
 
     src = f"{_SRC}.delta_current_numeric"
     motor = _motor(motor, src)
     theta = real(theta, src, "theta", -max_angle(), max_angle(), what="one position in rad")
     theta_err = real(theta_err, src, "theta_err", -max_angle(), max_angle(), what="one angle in rad")
-    f_inj, v_inj = _frequency(f_inj, "f_inj", src), _amplitude(v_inj, src=src)
+    # (at least a table's lowest injection, 1 Hz: at 1e-213 Hz the step's matrix exponential was NaN)
+    f_inj = real(f_inj, src, "f_inj", MIN_F_INJ, MAX_F_INJ, what="a frequency in Hz (docs/limits.md)")
+    v_inj = _amplitude(v_inj, src=src)
     steps = integer(steps, src, "steps", 1, MAX_NUMERIC_STEPS, "a number of steps")
     periods = integer(periods, src, "periods", 1, MAX_NUMERIC_STEPS, "a number of periods")
     if steps * periods > MAX_NUMERIC_STEPS:
@@ -148,7 +150,7 @@ def delta_current_numeric(motor, theta: float, f_inj: float, v_inj: float = 1.0,
         rise = i - start
         for _ in range(steps):
             i = Phi @ i - Gam @ v
-    return rise
+    return _finite_currents(rise, v_inj, f_inj)
 
 
 def psi_square(motor, theta, f_inj: float) -> np.ndarray:

@@ -36,17 +36,17 @@ from pathlib import Path
 
 import numpy as np
 
-from linsense.compensation.lut import interpolate
+from linsense._check import choice, real, reals
+from linsense.compensation.lut import INJECTIONS, interpolate
 from linsense.compensation.stamp import data_digest
 from linsense.errors import InputError, shown
+from linsense.model.motor import as_motor
 
 __all__ = ["FORMAT", "INFO_KEYS", "INJECTIONS", "PSI_MAX", "MeasuredTable", "TableStamp", "end_effect_fit",
            "fit_report", "measured_table_json", "read_measured_table", "table_stamp"]
 
 #: the document's ``format``
 FORMAT = "linsense-measured-lut"
-#: the injection shapes a table can be for
-INJECTIONS = ("pulsating", "rotating", "square")
 #: the keys every document holds
 CORE_KEYS = ("format", "unit", "stamp", "theta", "psi_lut")
 #: informational top-level keys, written by :func:`measured_table_json` through ``extra`` and read
@@ -555,8 +555,18 @@ def end_effect_fit(motor, values: np.ndarray, injection: str, f_inj: float, quad
     -----
     Each fit (about 0.4 s) is kept by its inputs' content, the last :data:`FITS_KEPT`: a table
     that ``tune`` reports, writes into a header and verifies with is fitted once.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        An argument of the wrong kind or out of range, naming it.
     """
-    values = np.asarray(values, dtype=float)
+    src = "linsense.compensation.measured.end_effect_fit"
+    motor = as_motor(motor, src)
+    values = reals(values, src, "values", "table values in rad", ndim=1, min_size=4)
+    injection = choice(injection, src, "injection", INJECTIONS)
+    real(f_inj, src, "f_inj", 0.0, low_open=True, what="a positive frequency in Hz")
+    real(quad, src, "quad", 0.0, 1.0, high_open=True)
     key = (data_digest(motor=motor), values.tobytes(), injection, float(f_inj), float(quad))
     hit = _FITS.get(key)
     if hit is None:

@@ -31,6 +31,7 @@ from typing import Annotated, Literal
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
+from linsense._check import path_arg
 from linsense.ctrl import drive_default_cfg
 from linsense.errors import InputError
 from linsense.io import read_toml
@@ -1147,8 +1148,10 @@ def load_scenario(path: str | Path) -> Scenario:
     Raises
     ------
     linsense.errors.InputError
-        An unreadable file, bad TOML or an invalid key, naming the file and the key.
+        An unreadable file, bad TOML or an invalid key, naming the file and the key; ``path`` not a
+        path (``load_scenario(None)`` was a TypeError).
     """
+    path = path_arg(path, "linsense.sim.load_scenario", "path", "a scenario file")
     return scenario_from_dict(read_toml(path, "scenario file"), str(path), Path(path).parent)
 
 
