@@ -67,7 +67,7 @@ def _drive(cfg):
 # name: (call on the ecce2010 motor, the key the error names, words its message contains)
 CASES = {
     "Motor R_s 1e6": (lambda m: linsense.Motor(**motor_kw(m, R_s=1e6)), "motor.R_s",
-                      ["1e+06", "[0, 100] ohm", "milliohm"]),
+                      ["linsense.Motor: motor.R_s", "1e+06", "[0, 100] ohm", "milliohm"]),
     "Motor pole_pitch -1": (lambda m: linsense.Motor(**motor_kw(m, pole_pitch=-1.0)), "motor.pole_pitch",
                             ["greater than 0", "-1"]),
     "Motor mass nan": (lambda m: linsense.Motor(**motor_kw(m, mass=float("nan"))), "motor.mass", ["finite"]),

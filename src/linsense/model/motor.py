@@ -31,6 +31,8 @@ from linsense.model.schema import (
 
 #: Saliency |L_q - L_d| below this fraction of (L_d + L_q)/2 counts as vanished.
 MIN_SALIENCY_RATIO = 0.01
+#: the source a motor built in Python (without one) is named by in messages
+_API = "linsense.Motor"
 #: Columns a tabulated inductance file must have (others, e.g. those of ``linsense model``, are allowed).
 TABLE_COLUMNS = ("theta_deg",) + ENTRIES
 
@@ -125,9 +127,8 @@ class Motor:
         # one validated path (issue 37): a Motor built in Python is held to the motor file's checks
         # and limits (its [motor] section's schema, then check_plausible), as load_motor's are; one
         # built with R_s = 1e6 and pole_pitch = -1 gave an all-zero table
-        src = "linsense.Motor"
-        instance(self.source, src, "source", str, "a str (where the motor came from)")
-        source = self.source or src
+        instance(self.source, _API, "source", str, "a str (where the motor came from)")
+        source = self.source or _API
         fields = ("name", "R_s", "pole_pitch", "force_constant", "mass")
         validate_section(MotorSection, {k: getattr(self, k) for k in fields}, source, "motor")
         instance(self.inductance, source, "inductance", InductanceModel,
@@ -663,7 +664,7 @@ def check_plausible(motor: Motor) -> None:
                        ("motor.force_constant", motor.force_constant), ("motor.mass", motor.mass)):
         msg = _implausible(key, value)
         if msg:
-            raise InputError(motor.source, key, msg)
+            raise InputError(motor.source or _API, key, msg)
     if motor.inductance.params:
         key, what, L_self = "inductance.L0", "L0", float(motor.inductance.params["L0"])
     else:
@@ -672,9 +673,9 @@ def check_plausible(motor: Motor) -> None:
         L_self = float(np.mean(motor.inductance.entries(theta)[..., :3]))
     msg = _implausible("inductance", L_self, what)
     if msg:
-        raise InputError(motor.source, key, msg)
+        raise InputError(motor.source or _API, key, msg)
     if L_self > MAX_TIME_CONSTANT * motor.R_s > 0.0:
-        raise InputError(motor.source, key, (
+        raise InputError(motor.source or _API, key, (
             f"{what} = {L_self:g} H with R_s = {motor.R_s:g} ohm is an electrical time constant of "
             f"{L_self / motor.R_s:.3g} s, beyond the {MAX_TIME_CONSTANT:g} s of real linear motors. "
             "Did you type mH? Motor files are in SI units (H)."))
@@ -704,7 +705,7 @@ def check_motor(motor: Motor) -> None:
     bad = ~(eig_min > 0)
     if bad.any():
         raise ModelError(
-            motor.source, "inductance",
+            motor.source or _API, "inductance",
             f"3x3 phase inductance matrix not positive definite at theta = {_intervals_deg(theta, bad)} "
             f"(smallest eigenvalue {eig_min.min():.3g} H): no real winding has it",
         )
@@ -715,7 +716,7 @@ def check_motor(motor: Motor) -> None:
     bad = sign * sal <= MIN_SALIENCY_RATIO * L_mean
     if bad.any():
         raise ModelError(
-            motor.source, "inductance",
+            motor.source or _API, "inductance",
             f"saliency L_q - L_d vanishes or changes sign at theta = {_intervals_deg(theta, bad)} "
             f"(range {sal.min():.3g} .. {sal.max():.3g} H): HF sensorless control impossible there",
         )
