@@ -23,6 +23,7 @@ from linsense.compensation.lut import (
     read_lut,
     to_c_header,
 )
+from linsense.errors import InputError
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -85,7 +86,7 @@ def test_exports_are_byte_reproducible(ecce):
 
 
 def test_too_short_lut_refused():
-    with pytest.raises(ValueError):
+    with pytest.raises(InputError, match="at least 4"):
         Lut(np.zeros(3))
 
 

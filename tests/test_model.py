@@ -9,6 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from conftest import ECCE, salient_params, theta_grid
+from linsense.errors import InputError
 from linsense.model.frames import T_CLARKE, T_CLARKE_INV, ab_to_abc, abc_to_ab
 from linsense.model.inductance import InductanceModel
 
@@ -122,7 +123,7 @@ def test_three_phase_symmetry_of_harmonics(harm):
 
 
 def test_harmonic_orders_validated():
-    with pytest.raises(ValueError):
+    with pytest.raises(InputError, match="even"):
         InductanceModel.from_params(**ECCE, harmonics={3: (1e-4, 0.0)})
 
 

@@ -18,12 +18,16 @@ Example
 
 from __future__ import annotations
 
+import functools
+import math
+import numbers
 import warnings
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from linsense._check import brief, closest_key
 from linsense._ctrl import ffi, lib
 from linsense._digest import source_digest
 from linsense.errors import ConfigError, InputError
@@ -39,6 +43,11 @@ __all__ = [
     "drive_default_cfg",
     "to_pos",
     "from_pos",
+    "cfg_fields",
+    "refused_group",
+    "c_limit",
+    "explain_drive_refusal",
+    "EQUAL_FIELDS",
 ]
 
 
@@ -230,8 +239,24 @@ def _enum(module: str, field: str, value: Any) -> int:
             return table[value.lower()]
         except KeyError:
             raise config_error(module, {field: value}, lib.LS_ERR_PARAM,
-                              f"one of {', '.join(table)}") from None
+                              f"one of {', '.join(table)}{closest_key(value.lower(), table)}") from None
+    table = _ENUMS[(module, field)]
+    integral = isinstance(value, numbers.Integral) and not isinstance(value, bool | np.bool_)
+    if not (integral and value in table.values()):
+        raise InputError(module, field, f"expected one of {', '.join(table)} (or its LS_ value, an int), "
+                         f"got {brief(value)} ({type(value).__name__})")
     return int(value)
+
+
+def _number(value: Any, source: str, name: str) -> float:
+    """``value`` as a float if it is a real number (NaN and infinities pass: the C library decides),
+    else InputError naming ``name`` (a string "1" was read as 1.0, None was a TypeError)."""
+    if isinstance(value, bool | np.bool_) or not isinstance(value, numbers.Real):
+        raise InputError(source, name, f"expected a real number, got {brief(value)} ({type(value).__name__})")
+    try:
+        return float(value)
+    except OverflowError:  # (an int beyond a double)
+        raise InputError(source, name, f"{brief(value)} is beyond the range of a double") from None
 
 
 def _enum_name(module: str, field: str, value: Any) -> Any:
@@ -269,11 +294,13 @@ def to_pos(theta: float):
 
     Raises
     ------
+    InputError
+        ``theta`` not a real number.
     ConfigError
         ``theta`` not finite or beyond the firmware's position range (``LS_POS_PERIOD_MAX``
         periods either side, docs/firmware.md).
     """
-    theta = float(theta)
+    theta = _number(theta, "to_pos", "theta")
     if not (np.isfinite(theta) and abs(theta) / _TWO_PI < lib.LS_POS_PERIOD_MAX):
         raise config_error("ls_pos", {"theta": theta}, lib.LS_ERR_PARAM,
                           f"a position is finite and within +-{lib.LS_POS_PERIOD_MAX} electrical periods",
@@ -295,8 +322,320 @@ def from_pos(p) -> float:
     -------
     float
         rad.
+
+    Raises
+    ------
+    InputError
+        ``p`` not an ``ls_pos`` (:func:`to_pos`).
     """
+    if not (isinstance(p, ffi.CData) and ffi.typeof(p) is ffi.typeof("ls_pos")):
+        raise InputError("from_pos", "p", f"expected an ls_pos (to_pos), got {brief(p)} ({type(p).__name__})")
     return p.period * _TWO_PI + float(p.theta)
+
+
+# ------------------------------------------------------------------------------ refusals
+# ``ls_drive_init`` answers a configuration with one status. Which field broke which rule is found
+# by asking the C library itself (no C limit restated in Python): each field in turn is put back to
+# the firmware's default (``ls_drive_default_cfg``) in a copy of the refused configuration, and the
+# field whose default makes ``ls_drive_init`` accept it is the one at fault; its limit is then read
+# by bisection between the default (accepted) and the value given (refused). :class:`Drive` names
+# the C field; the simulator (:mod:`linsense.sim.refusal`) runs the same search over the scenario
+# keys that fill the fields (:mod:`linsense.tune.cfgmap`) and names the key.
+
+
+@functools.cache
+def cfg_fields(ctype: str = "ls_drive_cfg") -> tuple[str, ...]:
+    """The struct paths of every number, boolean and enum of a C configuration (pointers left out).
+
+    Parameters
+    ----------
+    ctype : str, optional
+        The C struct, e.g. ``"ls_drive_cfg"``.
+
+    Returns
+    -------
+    tuple of str
+        Dotted paths (``"obs.mass"``), in declaration order.
+    """
+    def walk(t, prefix: str) -> list[str]:
+        out = []
+        for name, f in t.fields:
+            if f.type.kind == "struct":
+                out += walk(f.type, f"{prefix}{name}.")
+            elif f.type.kind in ("primitive", "enum"):
+                out.append(prefix + name)
+        return out
+
+    return tuple(walk(ffi.typeof(ctype), ""))
+
+
+#: fields ``ls_drive_init`` requires to hold one value (its rule: every module at the drive's ``fs``,
+#: one pole pitch), searched together: the name of each family -> its fields
+EQUAL_FIELDS = {
+    "fs": tuple(p for p in cfg_fields() if p.rsplit(".", 1)[-1] in ("fs", "f_pwm")),
+    "pole_pitch": tuple(p for p in cfg_fields() if p.rsplit(".", 1)[-1] == "pole_pitch"),
+}
+
+
+def cfg_get(cfg, path: str):
+    """The field ``path`` (dotted) of a cffi struct pointer.
+
+    Parameters
+    ----------
+    cfg : cdata
+        The configuration.
+    path : str
+        Dotted field path.
+
+    Returns
+    -------
+    object
+        Its value.
+    """
+    obj = cfg
+    for part in path.split("."):
+        obj = getattr(obj, part)
+    return obj
+
+
+def cfg_set(cfg, path: str, value) -> None:
+    """Set the field ``path`` (dotted) of a cffi struct pointer.
+
+    Parameters
+    ----------
+    cfg : cdata
+        The configuration.
+    path : str
+        Dotted field path.
+    value : object
+        The value.
+    """
+    *head, last = path.split(".")
+    obj = cfg
+    for part in head:
+        obj = getattr(obj, part)
+    setattr(obj, last, value)
+
+
+def cfg_copy(cfg):
+    """A copy of an ``ls_drive_cfg``.
+
+    Parameters
+    ----------
+    cfg : cdata ``ls_drive_cfg *``
+        The configuration.
+
+    Returns
+    -------
+    cdata ``ls_drive_cfg *``
+        A fresh copy (the tables it points to are shared).
+    """
+    c = ffi.new("ls_drive_cfg *")
+    ffi.memmove(c, cfg, ffi.sizeof("ls_drive_cfg"))
+    return c
+
+
+def drive_accepts(cfg) -> bool:
+    """Whether ``ls_drive_init`` accepts ``cfg``.
+
+    Parameters
+    ----------
+    cfg : cdata ``ls_drive_cfg *``
+        The configuration.
+
+    Returns
+    -------
+    bool
+        True for ``LS_OK``.
+    """
+    return lib.ls_drive_init(ffi.new("ls_drive *"), cfg) == lib.LS_OK
+
+
+def refused_group(cfg, groups: dict[str, tuple[str, ...]], fields: tuple[str, ...],
+                  together: frozenset[str] = frozenset()):
+    """The group of fields a refused ``cfg`` is refused for, the field at fault and a configuration
+    in which it alone is refused; None when no single group explains the refusal.
+
+    First the group whose fields, put back together to the firmware's default, make ``ls_drive_init``
+    accept the configuration (in the order of ``groups``); then, in the field of it refused by itself
+    (the group's others at their defaults). Else a group refused by itself whatever the rest: its
+    fields in the configuration accepted without them (a rule of its own field alone, such as the
+    largest sampling rate). A group of ``together`` (the sampling rates, one value) is only ever set
+    as a whole.
+
+    Parameters
+    ----------
+    cfg : cdata ``ls_drive_cfg *``
+        The refused configuration.
+    groups : dict
+        Name -> the struct paths of its fields that differ from the default, in the order to try.
+    fields : tuple of str
+        Every field searched (the configuration accepted without a group is built from them).
+    together : frozenset of str, optional
+        Names of groups whose fields are set together.
+
+    Returns
+    -------
+    tuple of (str, tuple of str, cdata) or None
+        ``(name, paths, base)``: the group, the field(s) at fault, the configuration to find its
+        limit in.
+    """
+    default = drive_default_cfg()
+
+    def reset(c, paths):
+        for path in paths:
+            cfg_set(c, path, cfg_get(default, path))
+        return c
+
+    for name, paths in groups.items():
+        if name in together or not drive_accepts(reset(cfg_copy(cfg), paths)):
+            continue
+        for path in paths:
+            base = reset(cfg_copy(cfg), [p for p in paths if p != path])
+            if not drive_accepts(base):
+                return name, (path,), base
+        return name, paths[:1], cfg_copy(cfg)
+    for name, paths in groups.items():  # (a field refused by itself, whatever the rest)
+        near = cfg_copy(default)  # (the configuration as far as it is accepted without this group)
+        for other in fields:
+            if other not in paths and cfg_get(near, other) != cfg_get(cfg, other):
+                trial = cfg_copy(near)
+                cfg_set(trial, other, cfg_get(cfg, other))
+                if drive_accepts(trial):
+                    near = trial
+        for one in ((paths,) if name in together else tuple((p,) for p in paths)):
+            base = cfg_copy(near)
+            for path in one:
+                cfg_set(base, path, cfg_get(cfg, path))
+            if not drive_accepts(base):
+                return name, one, base
+    return None
+
+
+def c_limit(cfg, paths: tuple[str, ...]) -> float | None:
+    """The value of the fields ``paths`` nearest to the refused one that ``ls_drive_init`` accepts.
+
+    With the rest of ``cfg`` as it is (the fields set together): a bisection between the default and
+    the refused value, in logarithmic steps across decades.
+
+    Parameters
+    ----------
+    cfg : cffi ``ls_drive_cfg *``
+        The refused configuration.
+    paths : tuple of str
+        The fields' struct paths.
+
+    Returns
+    -------
+    float or None
+        The limit, in the field's unit; None if the default is refused.
+    """
+    c = cfg_copy(cfg)
+    good = float(cfg_get(drive_default_cfg(), paths[0]))
+    bad = float(cfg_get(c, paths[0]))
+    integer = isinstance(cfg_get(c, paths[0]), int)
+    if not math.isfinite(good) or math.isnan(bad):
+        return None
+    if math.isinf(bad):  # (an overflow: from the largest finite value the field holds)
+        bad = math.copysign(float(np.finfo(REAL).max), bad)
+
+    def put(v: float) -> float:
+        for p in paths:
+            cfg_set(c, p, int(v) if integer else v)
+        return float(cfg_get(c, paths[0]))  # (as the C field holds it: LS_REAL may be a float)
+
+    put(good)
+    if not drive_accepts(c):
+        return None
+    for _ in range(200):
+        if good > 0 and bad > 0 and max(good, bad) > 4.0 * min(good, bad):
+            mid = math.sqrt(good * bad)
+        else:
+            mid = 0.5 * (good + bad)
+        if integer:
+            mid = math.floor(mid) if bad > good else math.ceil(mid)
+        mid = put(mid)
+        if mid in (good, bad):
+            break
+        if drive_accepts(c):
+            good = mid
+        else:
+            bad = mid
+    return good
+
+
+def limit_rule(value: float, lim: float | None) -> tuple[float | None, str]:
+    """The words for a refused ``value`` and the limit :func:`c_limit` found.
+
+    Parameters
+    ----------
+    value : float
+        The refused value, in the field's unit.
+    lim : float or None
+        The nearest value accepted.
+
+    Returns
+    -------
+    lim : float or None
+        The limit to name, None where the rule is "above 0" or "finite" (the smallest or largest
+        number the field holds) or unknown.
+    words : str
+        ``"above the largest"`` or ``"below the smallest"`` with a limit; else the rule.
+    """
+    if math.isnan(value):
+        return None, "it must be a finite number"
+    if lim is not None and 0.0 < abs(lim) < float(np.finfo(REAL).tiny):
+        return None, "it must be above 0"
+    if lim is not None and abs(lim) > 0.5 * float(np.finfo(REAL).max):
+        return None, "it must be finite"
+    if lim is None:
+        return None, "refused"
+    return lim, "above the largest" if value > lim else "below the smallest"
+
+
+def explain_drive_refusal(cfg) -> tuple[dict, str] | None:
+    """The field(s) of a configuration ``ls_drive_init`` refuses, their value and the limit.
+
+    :func:`refused_group` over every field of ``ls_drive_cfg`` that differs from the default (the
+    sampling rates together), then :func:`c_limit`.
+
+    Parameters
+    ----------
+    cfg : cdata ``ls_drive_cfg *``
+        The refused configuration.
+
+    Returns
+    -------
+    tuple of (dict, str) or None
+        ``({field: value}, words)`` naming the limit, or None when no single field explains the
+        refusal.
+    """
+    default = drive_default_cfg()
+    families = {p for paths in EQUAL_FIELDS.values() for p in paths}
+    singles = tuple(p for p in cfg_fields() if p not in families)
+    groups = {p: (p,) for p in singles if cfg_get(cfg, p) != cfg_get(default, p)}
+    for name, paths in EQUAL_FIELDS.items():
+        if any(cfg_get(cfg, p) != cfg_get(default, p) for p in paths):
+            groups[name] = paths
+    found = refused_group(cfg, groups, cfg_fields(), frozenset(EQUAL_FIELDS))
+    if found is None:
+        return None
+    name, paths, base = found
+    value = cfg_get(base, paths[0])
+    others = {p: cfg_get(base, p) for p in paths[1:] if cfg_get(base, p) != value}
+    if others:  # (a family of one value that holds several)
+        (p, v), more = next(iter(others.items())), len(others) - 1
+        also = f" (and {more} more field{'s' if more > 1 else ''})" if more else ""
+        return {paths[0]: value}, (f"but {p} = {_show(float(v))}{also}: ls_drive_init takes one value for "
+                                   f"{', '.join(paths[:2])} ... {paths[-1]} ({len(paths)} fields)")
+    lim, words = limit_rule(float(value), c_limit(base, paths))
+    if lim is None:
+        text = words
+    else:
+        text = f"{words} value ls_drive_init accepts with the rest of this configuration, {lim:.6g}"
+    if len(paths) > 1:
+        text += f" (set together: {', '.join(paths)})"
+    return {paths[0]: value}, text
 
 
 # ------------------------------------------------------------------------------ LUT
@@ -405,13 +744,21 @@ class Drive:
 
     Raises
     ------
+    InputError
+        ``cfg`` not an ``ls_drive_cfg *`` (:func:`drive_default_cfg`), a table not one dimension of
+        real numbers.
     ConfigError
-        If ``ls_drive_init`` refuses; the message names the sub-configurations whose own init
-        refuses them, or the drive-level rule.
+        If ``ls_drive_init`` refuses: the message names the C field at fault, its value and the
+        limit ``ls_drive_init`` sets with the rest of the configuration (:func:`explain_drive_refusal`;
+        a scenario's refusal names its key: :mod:`linsense.sim.refusal`), else the sections refused.
     """
 
     def __init__(self, cfg: Any = None, *, comp: Any = None, gain_table: Any = None,
                  comp_r: Any = None, gain_r: Any = None) -> None:
+        if cfg is not None and not (isinstance(cfg, ffi.CData)
+                                    and ffi.typeof(cfg) is ffi.typeof("ls_drive_cfg *")):
+            raise InputError("Drive", "cfg", f"expected None or an ls_drive_cfg * (ctrl.drive_default_cfg(), "
+                             f"edited field by field), got {brief(cfg)} ({type(cfg).__name__})")
         self.cfg = drive_default_cfg() if cfg is None else cfg
         self.comp = None if comp is None else make_lut(comp)
         self.gain_table = None if gain_table is None else make_lut(gain_table)
@@ -427,7 +774,14 @@ class Drive:
             self.cfg.demod.gain_table = self.gain_table.ptr
         self.state = ffi.new("ls_drive *")
         status = lib.ls_drive_init(self.state, self.cfg)
+        if status == lib.LS_ERR_VERSION:
+            raise config_error("ls_drive", {"lib_version": int(self.cfg.lib_version)}, status,
+                               f"the configuration was made for another version of the library (this "
+                               f"one's is {int(drive_default_cfg().lib_version)}): regenerate it")
         if status != lib.LS_OK:
+            told = explain_drive_refusal(self.cfg)
+            if told is not None:
+                raise config_error("ls_drive", *told[:1], status, told[1])
             raise config_error("ls_drive", self._blame(), status, self._detail())
 
     _SECTIONS = (("inject", "ls_inject"), ("bpf", "ls_biquad"), ("sep", "ls_biquad"),
@@ -472,8 +826,10 @@ class Drive:
 
         Raises
         ------
+        InputError
+            ``mode`` neither a name nor an int.
         ConfigError
-            If the mode needs a table or setting the configuration lacks.
+            If the mode needs a table or setting the configuration lacks, or an unknown name.
         """
         m = _enum("ls_drive", "mode", mode)
         status = lib.ls_drive_set_mode(self.state, m)
@@ -492,6 +848,8 @@ class Drive:
 
         Raises
         ------
+        InputError
+            ``theta`` not a real number.
         ConfigError
             When refused (:func:`to_pos`).
         """
@@ -509,10 +867,12 @@ class Drive:
 
         Raises
         ------
+        InputError
+            ``f_load`` not a real number.
         ConfigError
             When ``ls_drive_set_load`` refuses it (a force that is not finite in ``LS_REAL``).
         """
-        st = lib.ls_drive_set_load(self.state, float(f_load))
+        st = lib.ls_drive_set_load(self.state, _number(f_load, "Drive.set_load", "f_load"))
         if st != lib.LS_OK:
             raise config_error("ls_drive", {"f_load": f_load}, st, func="ls_drive_set_load")
 

@@ -47,6 +47,23 @@ def shown(value) -> str:
     return repr(item() if callable(item) and getattr(value, "ndim", None) == 0 else value)
 
 
+def one_line(text: str) -> str:
+    """``text`` with its line breaks written as ``\\n`` and ``\\r``: a message is one line, whatever
+    the value in it (a file named ``"0\\n"`` made a refusal of two lines).
+
+    Parameters
+    ----------
+    text : str
+        The text.
+
+    Returns
+    -------
+    str
+        The text on one line.
+    """
+    return text.replace("\r", "\\r").replace("\n", "\\n")
+
+
 def bounded(text: str, limit: int = MAX_MESSAGE_CHARS) -> str:
     """``text`` with every user value in it bounded, for a one-line message (docs/limits.md).
 
@@ -68,7 +85,7 @@ def bounded(text: str, limit: int = MAX_MESSAGE_CHARS) -> str:
     str
         The bounded text.
     """
-    text = str(text)
+    text = one_line(str(text))
     if len(text) > MAX_WORD_CHARS:
         text = _LONG_QUOTED.sub(_cut_quoted, text)
         text = _LONG_WORD.sub(lambda m: _cut(m.group(), MAX_SHOWN_CHARS), text)
@@ -93,7 +110,7 @@ class InputError(LinsenseError):
     """
 
     def __init__(self, source: str, key: str, message: str) -> None:
-        self.source = str(source)
+        self.source = one_line(str(source))
         self.key = key = bounded(key, MAX_KEY_CHARS) if key else key
         self.message = message = bounded(message)
         where = f"{self.source}: {key}" if key else self.source
@@ -114,7 +131,7 @@ class ModelError(LinsenseError):
     """
 
     def __init__(self, source: str, key: str, message: str) -> None:
-        self.source = str(source)
+        self.source = one_line(str(source))
         self.key = key = bounded(key, MAX_KEY_CHARS) if key else key
         message = bounded(message)
         where = f"{self.source}: {key}" if key else self.source
@@ -164,7 +181,7 @@ class ConfigError(LinsenseError):
         self.module = module
         self.fields = dict(fields)
         self.status = int(status)
-        super().__init__(message)
+        super().__init__(bounded(message))  # (one line: a mode named "\n" made two)
 
 
 class SaturationRangeError(LinsenseError, ValueError):

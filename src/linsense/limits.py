@@ -32,6 +32,25 @@ def max_harmonic_order() -> int:
     return int(lib.LS_SIM_MAX_ORDER) - 1
 
 
+@functools.cache
+def max_angle() -> float:
+    """The largest electrical angle (rad, either sign) a position argument of the API takes:
+    ``LS_POS_PERIOD_MAX`` (2^24) periods, the firmware's range of positions (docs/limits.md), read
+    from the C library on first use. Beyond it an angle is no position of a drive, and the
+    harmonics of the models overflow (``cos(k theta)`` of 1e308 rad gave NaN).
+
+    Returns
+    -------
+    float
+        ``2 pi LS_POS_PERIOD_MAX``, rad.
+    """
+    import math
+
+    from linsense._ctrl import lib
+
+    return 2.0 * math.pi * float(lib.LS_POS_PERIOD_MAX)
+
+
 def __getattr__(name: str) -> int:
     # MAX_HARMONIC_ORDER and MAX_TABLE_ORDER come from the C library: read when first asked for
     if name in ("MAX_HARMONIC_ORDER", "MAX_TABLE_ORDER"):

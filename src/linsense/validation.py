@@ -9,38 +9,13 @@ key usually also causes.
 
 from __future__ import annotations
 
-import difflib
 import types
 import typing
 
 from pydantic import BaseModel, ValidationError
 
+from linsense._check import closest_key, repr_line
 from linsense.errors import InputError, KeyProblem
-
-
-def closest_key(key: str, known) -> str:
-    """A hint naming the known key closest to ``key``.
-
-    Parameters
-    ----------
-    key : str
-        The unknown key.
-    known : iterable of str
-        The known keys.
-
-    Returns
-    -------
-    str
-        `` (did you mean 'x'?)``, or an empty string when none is close.
-    """
-    known = list(known)
-    if len(key) > 3 * max(map(len, known), default=0):
-        return ""  # (no match can reach the cutoff 0.6; difflib took 6 s on a 50 MB key)
-    match = difflib.get_close_matches(key, list(known), n=1, cutoff=0.6)
-    if not match:
-        lowered = {k.lower(): k for k in known}
-        match = [lowered[key.lower()]] if key.lower() in lowered else []
-    return f" (did you mean '{match[0]}'?)" if match else ""
 
 
 def _section_model(root: type[BaseModel], loc: list) -> type[BaseModel] | None:
@@ -102,9 +77,9 @@ def to_input_error(exc: ValidationError, source: str, root: type[BaseModel]) -> 
     if kind == "extra_forbidden":
         section = _section_model(root, loc[:-1])
         hint = closest_key(names[-1], section.model_fields) if section is not None else ""
-        return InputError(source, key, f"unknown key (value {value!r}){hint}")
+        return InputError(source, key, f"unknown key (value {repr_line(value)}){hint}")
     if kind == "finite_number":
-        return InputError(source, key, f"expected a finite number, got {value!r}")
+        return InputError(source, key, f"expected a finite number, got {repr_line(value)}")
     msg = err["msg"]
     msg = msg[0].lower() + msg[1:] if msg else msg
-    return InputError(source, key, f"{msg}, got {value!r}")
+    return InputError(source, key, f"{msg}, got {repr_line(value)}")

@@ -89,8 +89,9 @@ RANGE = {
                         ["controller.speed_bandwidth_hz", "1e+30", "finite"]),
     "model psi_pm": ("[controller.model]\npsi_pm = 1e30", ["controller.model.psi_pm", "1e+30", "100"]),
     "model L_d tiny": ("[controller.model]\nL_d = 1e-30", ["controller.model.L_d", "1e-30", "0.000313333"]),
+    # (the tables' motor, a Motor held to the motor file's limits: issue 37)
     "model R_s": ("[controller.model]\nR_s = 1e30",
-                  ["controller.model.R_s", "1e+30", "current.ki", "1.6e+10"]),
+                  ["controller.model.R_s", "1e+30", "[0, 100] ohm"]),
     "model mass tiny": ("[controller.model]\nmass = 1e-30",
                         ["controller.model.mass", "1e-30", "6.97545e-06"]),
     "trip current": ("[protection]\ni_max = 1e30", ["protection.i_max", "1e+30", "100000"]),

@@ -12,13 +12,43 @@ import math
 
 import numpy as np
 
+from linsense._check import choice, integer, real, reals
+from linsense.errors import InputError
+from linsense.limits import MAX_F_INJ, MAX_POINTS, max_angle
 from linsense.model.frames import rot
 from linsense.model.inductance import InductanceModel
+from linsense.model.motor import Motor, as_motor
+
+#: the functions' module, named in the messages of their arguments' checks
+_SRC = "linsense.analysis.hf"
 
 
-def _model(m) -> InductanceModel:
-    """Accept a :class:`~linsense.model.motor.Motor` or an :class:`InductanceModel`."""
+def _model(m, src: str, name: str = "model") -> InductanceModel:
+    """The inductance model of a motor argument: a :class:`~linsense.model.motor.Motor`, a preset's
+    or example's name or a motor file (:func:`~linsense.model.motor.as_motor`), or an
+    :class:`InductanceModel`."""
+    m = as_motor(m, src, name, inductance=True)
     return m if isinstance(m, InductanceModel) else m.inductance
+
+
+def _motor(m, src: str) -> Motor:
+    """A motor argument that must be a motor (its R_s counts): :func:`~linsense.model.motor.as_motor`."""
+    return as_motor(m, src, "motor")
+
+
+def _theta(v, src: str, name: str = "theta") -> np.ndarray:
+    """A position argument: finite real numbers, rad, within the firmware's range of positions (None,
+    NaN, a complex number, a dict or 1e308 rad refused)."""
+    return reals(v, src, name, "positions in rad", bound=max_angle())
+
+
+def _together(src: str, theta: np.ndarray, theta_err: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``theta`` and ``theta_err`` broadcast together, else InputError naming ``theta_err``."""
+    try:
+        return np.broadcast_arrays(theta, theta_err)
+    except ValueError:
+        raise InputError(src, "theta_err", f"shape {theta_err.shape} does not broadcast with theta's "
+                         f"{theta.shape}") from None
 
 
 #: the frequency at which a table without R_s is evaluated (any: without R_s it does not depend on it)
@@ -45,9 +75,10 @@ def table_model(motor, f_inj: float | None):
     """
     import dataclasses
 
+    motor = _motor(motor, f"{_SRC}.table_model")
     if f_inj is None:
         return dataclasses.replace(motor, R_s=0.0), F_NO_R
-    return motor, f_inj
+    return motor, _frequency(f_inj, "f_inj", f"{_SRC}.table_model")
 
 
 def dq_components(model, theta: np.ndarray | float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -69,7 +100,8 @@ def dq_components(model, theta: np.ndarray | float) -> tuple[np.ndarray, np.ndar
     L_dq : ndarray
         H.
     """
-    L = _model(model).L_dq(theta)
+    src = f"{_SRC}.dq_components"
+    L = _model(model, src).L_dq(_theta(theta, src))
     return L[..., 0, 0], L[..., 1, 1], L[..., 0, 1]
 
 
@@ -90,8 +122,9 @@ def mean_dq(motor, n: int = 720) -> tuple[float, float]:
     L_q : float
         H.
     """
+    n = integer(n, f"{_SRC}.mean_dq", "n", 1, MAX_POINTS, "a number of positions")
     th = np.linspace(0.0, 2.0 * np.pi, n, endpoint=False)
-    L_d, L_q, _ = dq_components(motor, th)
+    L_d, L_q, _ = dq_components(_model(motor, f"{_SRC}.mean_dq", "motor"), th)
     return float(np.mean(L_d)), float(np.mean(L_q))
 
 
@@ -115,8 +148,10 @@ def end_anisotropy(motor, n: int = 720) -> tuple[float, float]:
     l_eb : float
         H.
     """
+    src = f"{_SRC}.end_anisotropy"
+    n = integer(n, src, "n", 1, MAX_POINTS, "a number of positions")
     th = np.linspace(0.0, 2.0 * np.pi, n, endpoint=False)
-    L = np.asarray(motor.inductance.L_ab(th)).mean(axis=0)
+    L = np.asarray(_model(motor, src, "motor").L_ab(th)).mean(axis=0)
     return float(0.5 * (L[0, 0] - L[1, 1])), float(0.5 * (L[0, 1] + L[1, 0]))
 
 
@@ -135,7 +170,8 @@ def saliency(model, theta: np.ndarray | float) -> np.ndarray:
     ndarray
         H.
     """
-    L_d, L_q, _ = dq_components(model, theta)
+    src = f"{_SRC}.saliency"
+    L_d, L_q, _ = dq_components(_model(model, src), _theta(theta, src))
     return L_q - L_d
 
 
@@ -159,8 +195,9 @@ def hf_current_est(model, theta, theta_err) -> np.ndarray:
     ndarray, shape broadcast(theta, theta_err).shape + (2,)
         ``(i_d_est, i_q_est)`` in A per Wb (1/H).
     """
-    theta, theta_err = np.broadcast_arrays(np.asarray(theta, float), np.asarray(theta_err, float))
-    Gamma = np.linalg.inv(_model(model).L_dq(theta))
+    src = f"{_SRC}.hf_current_est"
+    theta, theta_err = _together(src, _theta(theta, src), _theta(theta_err, src, "theta_err"))
+    Gamma = np.linalg.inv(_model(model, src).L_dq(theta))
     lam_dq = rot(theta_err)[..., :, 0]  # lambda_est = (1, 0) seen in the true frame
     i_dq = np.einsum("...ij,...j->...i", Gamma, lam_dq)
     return np.einsum("...ji,...j->...i", rot(theta_err), i_dq)  # rotate by -theta_err
@@ -183,7 +220,8 @@ def psi(model, theta, theta_err) -> np.ndarray:
     ndarray
         rad.
     """
-    i = hf_current_est(model, theta, theta_err)
+    src = f"{_SRC}.psi"
+    i = hf_current_est(_model(model, src), _theta(theta, src), _theta(theta_err, src, "theta_err"))
     return np.arctan2(i[..., 1], i[..., 0])
 
 
@@ -202,78 +240,31 @@ def psi_lut(model, theta) -> np.ndarray:
     ndarray
         rad.
     """
-    _, L_q, L_dq = dq_components(model, theta)
+    src = f"{_SRC}.psi_lut"
+    _, L_q, L_dq = dq_components(_model(model, src), _theta(theta, src))
     return np.arctan2(-L_dq, L_q)
 
 
-def real_arg(v, source: str, name: str, low: float = -math.inf, high: float = math.inf, *,
-             low_open: bool = False, high_open: bool = False, what: str = "a finite real number") -> float:
-    """``v`` as a float if it is a real, finite number within ``low`` .. ``high``.
-
-    Not a boolean, complex, string, None or array; open ends where asked. The API refuses what the
-    CLI refuses (issue 23: a NaN amplitude, a string or a complex number gave tables of NaN or a
-    numpy traceback).
-
-    Parameters
-    ----------
-    v : object
-        The argument.
-    source : str
-        Where it was given (the function), for the message.
-    name : str
-        The argument's name, for the message.
-    low, high : float, optional
-        The range (infinite by default).
-    low_open, high_open : bool, optional
-        Whether ``low`` / ``high`` themselves are refused.
-    what : str, optional
-        What the argument must be, for the message.
-
-    Returns
-    -------
-    float
-        ``float(v)``.
-
-    Raises
-    ------
-    linsense.errors.InputError
-        Naming ``source``, ``name``, the range and the value.
-    """
-    import numbers
-
-    from linsense.errors import InputError, shown
-
-    ok = isinstance(v, numbers.Real) and not isinstance(v, bool | np.bool_) and math.isfinite(v)
-    if ok:
-        ok = (v > low if low_open else v >= low) and (v < high if high_open else v <= high)
-    if not ok:
-        lo = "" if low == -math.inf else f"{'(' if low_open else '['}{low:g}"
-        hi = "" if high == math.inf else f"{high:g}{')' if high_open else ']'}"
-        rng = f" in {lo or '(-inf'}, {hi or 'inf)'}" if lo or hi else ""
-        raise InputError(source, name, f"must be {what}{rng}, got {shown(v)}")
-    return float(v)
-
-
-def _frequency(f, name: str) -> float:
+def _frequency(f, name: str, src: str = _SRC) -> float:
     """``f`` as a float if it is a real, finite, positive frequency (Hz) up to the injection's limit
     (:data:`linsense.limits.MAX_F_INJ`, docs/limits.md), else InputError naming ``name`` (the API
     refuses what the CLI refuses: a negative, complex or None frequency was accepted and gave a table
     of nonsense; 1e308 Hz gave NaN angles, 1e300 Hz all-zero currents)."""
-    from linsense.limits import MAX_F_INJ
-
-    f = real_arg(f, "linsense.analysis.hf", name, 0.0, MAX_F_INJ, low_open=True,
-                 what="a positive finite frequency in Hz (docs/limits.md)")
+    f = real(f, src, name, 0.0, MAX_F_INJ, low_open=True,
+             what="a positive finite frequency in Hz (docs/limits.md)")
     if not math.isfinite(1.0 / f):  # (5e-324 Hz: its period is infinite, the square wave's table NaN)
-        from linsense.errors import InputError
-
-        raise InputError("linsense.analysis.hf", name, f"{f!r} Hz is too small: its period overflows")
+        raise InputError(src, name, f"{f!r} Hz is too small: its period overflows")
     return f
 
 
-def _amplitude(v, name: str = "v_inj") -> float:
+def _amplitude(v, name: str = "v_inj", src: str = _SRC) -> float:
     """``v`` as a float if it is a real, finite, positive voltage (V), else InputError naming ``name``."""
-    return real_arg(v, "linsense.analysis.hf", name, 0.0, low_open=True,
-                    what="a positive finite amplitude in V")
+    return real(v, src, name, 0.0, low_open=True, what="a positive finite amplitude in V")
+
+
+def _quad(v, src: str = _SRC) -> float:
+    """The elliptical injection's share ``kappa`` in [0, 1), else InputError naming ``quad``."""
+    return real(v, src, "quad", 0.0, 1.0, high_open=True)
 
 
 def psi_lut_resistive(motor, theta, f_inj: float, quad: float = 0.0) -> np.ndarray:
@@ -347,9 +338,20 @@ def demod_ratio(motor, theta, theta_err, v_inj: float, f_inj: float, psi_comp,
     ndarray
         Dimensionless, in [-1/2, 1/2].
     """
+    src = f"{_SRC}.demod_ratio"
+    psi_comp = reals(psi_comp, src, "psi_comp", "angles in rad")
     i = hf_current(motor, theta, v_inj, f_inj, theta_err, quad=quad)
-    c, s = np.cos(psi_comp), np.sin(psi_comp)
-    i_d = c * i[..., 0] + s * i[..., 1]
+    # (scaled: the ratio does not depend on the amplitude, and 1e300 V squared overflowed to NaN)
+    scale = np.max(np.abs(i), axis=-1, keepdims=True)
+    if not np.all(scale > 0.0):  # (5e-324 V: the currents underflow, the ratio 0 / 0)
+        raise InputError(src, "v_inj", f"{v_inj!r} V at {f_inj!r} Hz gives HF currents below floating point")
+    i = i / scale
+    try:
+        c, s = np.broadcast_arrays(np.cos(psi_comp), i[..., 0])[0], np.sin(psi_comp)
+        i_d = c * i[..., 0] + s * i[..., 1]
+    except ValueError:
+        raise InputError(src, "psi_comp", f"shape {psi_comp.shape} does not broadcast with the positions' "
+                         f"{i.shape[:-1]}") from None
     i_q = -s * i[..., 0] + c * i[..., 1]
     return np.real(i_d * np.conj(i_q)) / (np.abs(i_d) ** 2 + np.abs(i_q) ** 2)
 
@@ -376,12 +378,14 @@ def psi_compensated(model, theta, theta_err, lut_at: str = "estimated") -> np.nd
 
     Raises
     ------
-    ValueError
-        Another ``lut_at``.
+    linsense.errors.InputError
+        Another ``lut_at``, or an argument of another type (the closest named).
     """
-    if lut_at not in ("estimated", "actual"):
-        raise ValueError("lut_at must be 'estimated' or 'actual'")
-    theta_lut = np.asarray(theta) + (np.asarray(theta_err) if lut_at == "estimated" else 0.0)
+    src = f"{_SRC}.psi_compensated"
+    lut_at = choice(lut_at, src, "lut_at", ("estimated", "actual"))
+    model = _model(model, src)
+    theta, theta_err = _together(src, _theta(theta, src), _theta(theta_err, src, "theta_err"))
+    theta_lut = theta + (theta_err if lut_at == "estimated" else 0.0)
     d = psi(model, theta, theta_err) - psi_lut(model, theta_lut)
     return np.angle(np.exp(1j * d))
 
@@ -408,7 +412,8 @@ def equilibrium_error(model, theta) -> np.ndarray:
     ndarray
         ``e*``, rad.
     """
-    L_d, L_q, L_dq = dq_components(model, theta)
+    src = f"{_SRC}.equilibrium_error"
+    L_d, L_q, L_dq = dq_components(_model(model, src), _theta(theta, src))
     s = _sal_sign(L_d, L_q)
     return 0.5 * np.arctan2(-2.0 * L_dq * s, (L_q - L_d) * s)
 
@@ -431,7 +436,8 @@ def loop_gain_factor(model, theta) -> np.ndarray:
     ndarray
         Dimensionless.
     """
-    model = _model(model)
+    src = f"{_SRC}.loop_gain_factor"
+    model, theta = _model(model, src), _theta(theta, src)
     L = model.L_dq(theta)
     dL = model.dL_dq(theta)
     u = L[..., 1, 1] - L[..., 0, 0]
@@ -478,8 +484,9 @@ def hf_current(
     """
     f_inj = _frequency(f_inj, "f_inj")
     v_inj = _amplitude(v_inj)
-    quad = real_arg(quad, "linsense.analysis.hf", "quad", 0.0, 1.0, high_open=True)
-    theta, theta_err = np.broadcast_arrays(np.asarray(theta, float), np.asarray(theta_err, float))
+    quad = _quad(quad)
+    motor = _motor(motor, _SRC)
+    theta, theta_err = _together(_SRC, _theta(theta, _SRC), _theta(theta_err, _SRC, "theta_err"))
     w = 2.0 * np.pi * f_inj
     Z = motor.R_s * np.eye(2) + 1j * w * motor.inductance.L_dq(theta)
     R = rot(theta_err)
@@ -491,8 +498,6 @@ def hf_current(
 def _finite_currents(i: np.ndarray, v_inj: float, f_inj: float) -> np.ndarray:
     """``i``, or InputError naming ``v_inj`` when the currents overflow (1e308 V gave inf amperes)."""
     if not np.all(np.isfinite(i)):
-        from linsense.errors import InputError
-
         raise InputError("linsense.analysis.hf", "v_inj", f"{v_inj!r} V at {f_inj:g} Hz gives HF currents "
                          "beyond floating point")
     return i

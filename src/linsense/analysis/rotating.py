@@ -19,7 +19,27 @@ from __future__ import annotations
 
 import numpy as np
 
-from linsense.analysis.hf import _amplitude, _frequency, dq_components, mean_dq
+from linsense._check import integer, real
+from linsense.analysis.hf import (
+    _amplitude,
+    _finite_currents,
+    _frequency,
+    _motor,
+    _theta,
+    dq_components,
+    mean_dq,
+)
+from linsense.limits import MAX_POINTS
+
+#: the module, named in the messages of its functions' argument checks
+_SRC = "linsense.analysis.rotating"
+
+
+def _pwm(f_pwm, f_inj: float, src: str) -> float:
+    """A PWM rate, Hz: a finite real number above twice the injection's frequency (the sampled model
+    of the injection), else InputError naming ``f_pwm``."""
+    return real(f_pwm, src, "f_pwm", 2.0 * f_inj, low_open=True,
+                what=f"a finite PWM rate in Hz above twice f_inj ({f_inj:g} Hz)")
 
 
 def negative_sequence_numeric(motor, theta, v_inj: float, f_inj: float) -> np.ndarray:
@@ -43,13 +63,20 @@ def negative_sequence_numeric(motor, theta, v_inj: float, f_inj: float) -> np.nd
     -------
     ndarray
         Complex, A.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        An argument of the wrong kind or out of range, naming it.
     """
-    theta = np.asarray(theta, dtype=float)
+    src = f"{_SRC}.negative_sequence_numeric"
+    motor, theta = _motor(motor, src), _theta(theta, src)
+    f_inj, v_inj = _frequency(f_inj, "f_inj", src), _amplitude(v_inj, src=src)
     w = 2.0 * np.pi * f_inj
     Z = motor.R_s * np.eye(2) + 1j * w * motor.inductance.L_ab(theta)
     V = np.broadcast_to(np.array([v_inj, -1j * v_inj]), theta.shape + (2,))
     current = np.linalg.solve(Z, V[..., None])[..., 0]
-    return 0.5 * (np.conj(current[..., 0]) + 1j * np.conj(current[..., 1]))
+    return _finite_currents(0.5 * (np.conj(current[..., 0]) + 1j * np.conj(current[..., 1])), v_inj, f_inj)
 
 
 def _i_n(R_s: float, w: float, S, D, v_inj: float):
@@ -88,12 +115,14 @@ def negative_sequence(motor, theta, v_inj: float, f_inj: float) -> np.ndarray:
     linsense.errors.InputError
         A frequency or amplitude out of range.
     """
-    f_inj, v_inj = _frequency(f_inj, "f_inj"), _amplitude(v_inj)
-    theta = np.asarray(theta, dtype=float)
+    src = f"{_SRC}.negative_sequence"
+    f_inj, v_inj = _frequency(f_inj, "f_inj", src), _amplitude(v_inj, src=src)
+    motor, theta = _motor(motor, src), _theta(theta, src)
     L_d, L_q, L_dq = dq_components(motor, theta)
     S = 0.5 * (L_d + L_q)
     D = 0.5 * (L_d - L_q) + 1j * L_dq
-    return _i_n(motor.R_s, 2.0 * np.pi * f_inj, S, D, v_inj) * np.exp(2j * theta)
+    i_n = _i_n(motor.R_s, 2.0 * np.pi * f_inj, S, D, v_inj) * np.exp(2j * theta)
+    return _finite_currents(i_n, v_inj, f_inj)
 
 
 def reference_phase(motor, f_inj: float) -> float:
@@ -114,7 +143,14 @@ def reference_phase(motor, f_inj: float) -> float:
     -------
     float
         rad.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        An argument of the wrong kind or out of range, naming it.
     """
+    src = f"{_SRC}.reference_phase"
+    motor, f_inj = _motor(motor, src), _frequency(f_inj, "f_inj", src)
     L_d, L_q = mean_dq(motor)
     S, D = 0.5 * (L_d + L_q), 0.5 * (L_d - L_q)
     return float(np.angle(_i_n(motor.R_s, 2.0 * np.pi * f_inj, S, D, 1.0)))
@@ -140,8 +176,9 @@ def psi_rotating(motor, theta, f_inj: float) -> np.ndarray:
     ndarray
         rad.
     """
-    f_inj = _frequency(f_inj, "f_inj")
-    theta = np.asarray(theta, dtype=float)
+    src = f"{_SRC}.psi_rotating"
+    f_inj = _frequency(f_inj, "f_inj", src)
+    motor, theta = _motor(motor, src), _theta(theta, src)
     i_n = negative_sequence(motor, theta, 1.0, f_inj)
     return 0.5 * np.angle(i_n * np.exp(-1j * (2.0 * theta + reference_phase(motor, f_inj))))
 
@@ -175,17 +212,25 @@ def rotating_lut(motor, theta_est, f_inj: float | None, n: int = 7200) -> np.nda
 
     Raises
     ------
-    ValueError
+    linsense.errors.InputError
+        An argument of the wrong kind or out of range, naming it.
+    linsense.errors.ModelError
         When the estimate is not monotone in the position.
     """
     from linsense.analysis.hf import equilibrium_error
+    from linsense.errors import ModelError
 
+    src = f"{_SRC}.rotating_lut"
+    motor, theta_est = _motor(motor, src), _theta(theta_est, src, "theta_est")
+    if f_inj is not None:
+        f_inj = _frequency(f_inj, "f_inj", src)
+    n = integer(n, src, "n", 4, MAX_POINTS, "a number of points")
     th = 2.0 * np.pi * np.arange(n + 1) / n
     err = equilibrium_error(motor, th) if f_inj is None else psi_rotating(motor, th, f_inj)
     est = th + err
     if np.any(np.diff(est) <= 0.0):
-        raise ValueError("the rotating-vector estimate is not monotone in the position: no table inverts it")
-    theta_est = np.asarray(theta_est, dtype=float)
+        raise ModelError(motor.source, "inductance", "the rotating-vector estimate is not monotone in the "
+                         "position: no table inverts it")
     # the estimate over one period starts at est[0]: wrap the queries into [est[0], est[0] + 2 pi)
     q = est[0] + np.mod(theta_est - est[0], 2.0 * np.pi)
     return theta_est - (np.interp(q, est, th) + (theta_est - q))
@@ -237,7 +282,16 @@ def reference_phase_sampled(motor, f_inj: float, f_pwm: float, delay: float = 1.
     -------
     float
         rad.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        An argument of the wrong kind or out of range, naming it.
     """
+    src = f"{_SRC}.reference_phase_sampled"
+    motor, f_inj = _motor(motor, src), _frequency(f_inj, "f_inj", src)
+    f_pwm = _pwm(f_pwm, f_inj, src)
+    delay = real(delay, src, "delay", 0.0, 16.0, what="a delay in PWM periods")
     L = np.diag(mean_dq(motor))  # at theta = 0 the alpha-beta matrix is the dq one
     return float(np.angle(_sampled_i_n(L, motor.R_s, 1.0, f_inj, f_pwm, delay)))
 
@@ -263,7 +317,15 @@ def psi_rotating_sampled(motor, theta, f_inj: float, f_pwm: float) -> np.ndarray
     -------
     ndarray
         rad.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        An argument of the wrong kind or out of range, naming it.
     """
-    theta = np.asarray(theta, dtype=float)
+    src = f"{_SRC}.psi_rotating_sampled"
+    motor, theta = _motor(motor, src), _theta(theta, src)
+    f_inj = _frequency(f_inj, "f_inj", src)
+    f_pwm = _pwm(f_pwm, f_inj, src)
     i_n = _sampled_i_n(motor.inductance.L_ab(theta), motor.R_s, 1.0, f_inj, f_pwm)
     return 0.5 * np.angle(i_n * np.exp(-1j * (2.0 * theta + reference_phase_sampled(motor, f_inj, f_pwm))))

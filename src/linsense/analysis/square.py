@@ -17,8 +17,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from linsense.analysis.hf import _amplitude, _frequency
+from linsense._check import integer, real
+from linsense.analysis.hf import _amplitude, _finite_currents, _frequency, _motor, _theta, _together
+from linsense.errors import InputError
 from linsense.model.frames import rot
+
+#: the module, named in the messages of its functions' argument checks
+_SRC = "linsense.analysis.square"
+#: integration steps of :func:`delta_current_numeric` (steps x periods): about 10 s
+MAX_NUMERIC_STEPS = 10_000_000
 
 
 def _l_dq(motor, theta) -> np.ndarray:
@@ -59,8 +66,10 @@ def delta_current(motor, theta, f_inj: float, v_inj: float = 1.0, theta_err=0.0)
     linsense.errors.InputError
         A frequency or amplitude out of range.
     """
-    f_inj, v_inj = _frequency(f_inj, "f_inj"), _amplitude(v_inj)
-    theta, theta_err = np.broadcast_arrays(np.asarray(theta, float), np.asarray(theta_err, float))
+    src = f"{_SRC}.delta_current"
+    f_inj, v_inj = _frequency(f_inj, "f_inj", src), _amplitude(v_inj, src=src)
+    motor = _motor(motor, src)
+    theta, theta_err = _together(src, _theta(theta, src), _theta(theta_err, src, "theta_err"))
     T = 0.5 / f_inj
     L_inv = np.linalg.inv(_l_dq(motor, theta))
     v = _v_true(theta_err, v_inj)
@@ -71,7 +80,7 @@ def delta_current(motor, theta, f_inj: float, v_inj: float = 1.0, theta_err=0.0)
     positive = w > 0.0  # (R_s = 0: w = 0, where tanh(w)/w -> 1)
     ratio = np.where(positive, np.tanh(w) / np.where(positive, w, 1.0), 1.0)  # tanh(w)/w
     f = U @ (ratio[..., :, None] * np.swapaxes(U, -1, -2))  # tanh(x) x^-1
-    return (T * (f @ L_inv) @ v[..., None])[..., 0]
+    return _finite_currents((T * (f @ L_inv) @ v[..., None])[..., 0], v_inj, f_inj)
 
 
 def delta_current_numeric(motor, theta: float, f_inj: float, v_inj: float = 1.0, theta_err: float = 0.0,
@@ -101,9 +110,29 @@ def delta_current_numeric(motor, theta: float, f_inj: float, v_inj: float = 1.0,
     -------
     ndarray, shape (2,)
         The change over the last ``+V`` half period, A, true dq frame.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        An argument of the wrong kind or out of range (``steps`` x ``periods`` beyond
+        :data:`MAX_NUMERIC_STEPS`), naming it.
     """
     from scipy.linalg import expm
 
+    from linsense.limits import MAX_F_INJ, MIN_F_INJ, max_angle
+
+    src = f"{_SRC}.delta_current_numeric"
+    motor = _motor(motor, src)
+    theta = real(theta, src, "theta", -max_angle(), max_angle(), what="one position in rad")
+    theta_err = real(theta_err, src, "theta_err", -max_angle(), max_angle(), what="one angle in rad")
+    # (at least a table's lowest injection, 1 Hz: at 1e-213 Hz the step's matrix exponential was NaN)
+    f_inj = real(f_inj, src, "f_inj", MIN_F_INJ, MAX_F_INJ, what="a frequency in Hz (docs/limits.md)")
+    v_inj = _amplitude(v_inj, src=src)
+    steps = integer(steps, src, "steps", 1, MAX_NUMERIC_STEPS, "a number of steps")
+    periods = integer(periods, src, "periods", 1, MAX_NUMERIC_STEPS, "a number of periods")
+    if steps * periods > MAX_NUMERIC_STEPS:
+        raise InputError(src, "periods", f"{steps:,} steps x {periods:,} periods is beyond the limit of "
+                         f"{MAX_NUMERIC_STEPS:,} steps")
     T = 0.5 / f_inj
     L = _l_dq(motor, theta)
     L_inv = np.linalg.inv(L)
@@ -121,7 +150,7 @@ def delta_current_numeric(motor, theta: float, f_inj: float, v_inj: float = 1.0,
         rise = i - start
         for _ in range(steps):
             i = Phi @ i - Gam @ v
-    return rise
+    return _finite_currents(rise, v_inj, f_inj)
 
 
 def psi_square(motor, theta, f_inj: float) -> np.ndarray:
@@ -142,6 +171,11 @@ def psi_square(motor, theta, f_inj: float) -> np.ndarray:
     -------
     ndarray
         rad.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        An argument of the wrong kind or out of range, naming it.
     """
     d = delta_current(motor, theta, f_inj)
     return np.arctan2(d[..., 1], d[..., 0])

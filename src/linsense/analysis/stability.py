@@ -15,7 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from linsense.analysis.hf import demod_ratio, equilibrium_error, mean_dq
+from linsense._check import real
+from linsense.analysis.hf import _motor, _theta, demod_ratio, equilibrium_error, mean_dq
 
 
 @dataclass
@@ -97,8 +98,15 @@ def nolut_error_gain(motor, theta, f_inj: float, quad: float = 0.0, h: float = 1
     -------
     ndarray
         Dimensionless (1 = nominal).
+
+    Raises
+    ------
+    linsense.errors.InputError
+        An argument of the wrong kind or out of range, naming it.
     """
-    theta = np.asarray(theta, dtype=float)
+    src = "linsense.analysis.stability.nolut_error_gain"
+    motor, theta = _motor(motor, src), _theta(theta, src)
+    h = real(h, src, "h", 0.0, 0.1, low_open=True, what="a difference step in rad")
     L_d, L_q = mean_dq(motor)
     g0 = L_q / (L_q - L_d)
     e = equilibrium_error(motor, theta)

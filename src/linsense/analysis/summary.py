@@ -11,7 +11,7 @@ from linsense.analysis.hf import (
     loop_gain_factor,
     psi_lut,
 )
-from linsense.model.motor import check_grid
+from linsense.model.motor import as_motor, check_grid
 
 
 def _local_minima_deg(theta: np.ndarray, y: np.ndarray, tol: float) -> list[float]:
@@ -36,7 +36,13 @@ def summarize(motor, v_inj: float = 12.0, f_inj: float = 1000.0) -> dict:
     -------
     dict
         ``psi_lut_peak_deg``, ``L_d_range_H``... (SI units and degrees, as the keys say).
+
+    Raises
+    ------
+    linsense.errors.InputError
+        ``motor`` not a motor, ``v_inj`` or ``f_inj`` out of range (:func:`~linsense.analysis.hf.hf_current`).
     """
+    motor = as_motor(motor, "linsense.analysis.summary.summarize")
     theta = check_grid(motor.inductance, 3600)
     L_d, L_q, L_dq = dq_components(motor, theta)
     sal = L_q - L_d

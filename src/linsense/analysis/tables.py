@@ -4,8 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from linsense._check import instance, integer, reals
 from linsense.analysis.hf import equilibrium_error, loop_gain_factor, psi_lut
+from linsense.errors import InputError
 from linsense.model.inductance import DERIVED_COLUMNS, ENTRIES
+from linsense.model.motor import as_motor
 
 #: Columns of the model table, in order (the first fourteen are fixed by the CLI contract).
 MODEL_COLUMNS = ("theta_deg",) + ENTRIES + DERIVED_COLUMNS
@@ -32,19 +35,15 @@ def model_table(motor, points: int) -> dict[str, np.ndarray]:
     Raises
     ------
     linsense.errors.InputError
-        ``points`` not an integer in range.
+        ``motor`` not a motor, ``points`` not an integer in range.
     """
-    import numbers
-
-    from linsense.errors import InputError
     from linsense.limits import MAX_POINTS
 
+    src = "linsense.analysis.tables.model_table"
     # (the API refuses what `linsense model --points` refuses: 3 was a ValueError, 4.5 a TypeError and
     # 10**9 ran the machine out of memory)
-    if isinstance(points, bool) or not isinstance(points, numbers.Integral) or not 4 <= points <= MAX_POINTS:
-        raise InputError("linsense.analysis.tables.model_table", "points",
-                         f"must be an integer in 4 .. {MAX_POINTS:,} (docs/limits.md), got {points!r}")
-    points = int(points)
+    motor = as_motor(motor, src)
+    points = integer(points, src, "points", 4, MAX_POINTS)
     theta = np.linspace(0.0, 2.0 * np.pi, points, endpoint=False)
     ind = motor.inductance
     e = ind.entries(theta)
@@ -77,9 +76,19 @@ def table_to_csv(cols: dict[str, np.ndarray]) -> str:
     -------
     str
         The CSV text.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        ``cols`` not a dict of columns of one length of real numbers.
     """
+    src = "linsense.analysis.tables.table_to_csv"
+    instance(cols, src, "cols", dict, "a dict of columns (model_table)")
     names = list(cols)
-    data = np.column_stack([cols[n] for n in names])
+    data = [reals(cols[n], src, f"cols[{n!r}]", "values", ndim=1, finite=False) for n in names]
+    if len({c.size for c in data}) > 1:
+        raise InputError(src, "cols", f"columns of different lengths: {[c.size for c in data]}")
+    data = np.column_stack(data) if data else np.zeros((0, 0))
     lines = [",".join(names)]
     lines += [",".join(f"{v:.12g}" for v in row) for row in data]
     return "\n".join(lines) + "\n"

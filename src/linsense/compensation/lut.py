@@ -22,13 +22,20 @@ from pathlib import Path
 
 import numpy as np
 
-from linsense.analysis.hf import psi_lut, psi_lut_resistive, real_arg
+from linsense._check import choice, instance, integer, path_arg, reals
+from linsense._check import real as real_arg
+from linsense.analysis.hf import psi_lut, psi_lut_resistive
 from linsense.compensation.stamp import data_digest, stamp_comment, stamp_macros
 from linsense.errors import InputError, shown
 from linsense.io import check_width, csv_rows, read_text_file
+from linsense.model.motor import as_motor
 from linsense.version import __version__
 
 FORMATS = ("csv", "json", "c")
+#: the injections a table is made for (:func:`build_lut`)
+INJECTIONS = ("pulsating", "rotating", "square")
+#: the module, named in the messages of its functions' argument checks
+_SRC = "linsense.compensation.lut"
 
 
 @dataclass(frozen=True)
@@ -46,6 +53,12 @@ class Lut:
     digest : str
         SHA-256 of the motor data and table settings it was computed from (:func:`build_lut`;
         :mod:`linsense.compensation.stamp`), "" for a table read from a file.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        ``values`` not one dimension of at least 4 finite real numbers, or another argument of the
+        wrong type.
     """
 
     values: np.ndarray
@@ -54,9 +67,12 @@ class Lut:
     digest: str = field(default="", compare=False)
 
     def __post_init__(self) -> None:
-        v = np.array(self.values, dtype=float)
-        if v.ndim != 1 or v.size < 4:
-            raise ValueError("a LUT needs at least 4 points")
+        # one validated path (issue 37): a NaN, complex or 2-D table was taken
+        src = f"{_SRC}.Lut"
+        v = np.array(reals(self.values, src, "values", "table values in rad", ndim=1, min_size=4))
+        instance(self.name, src, "name", str, "a str")
+        instance(self.provenance, src, "provenance", dict, "a dict")
+        instance(self.digest, src, "digest", str, "a str")
         v.setflags(write=False)
         object.__setattr__(self, "values", v)
 
@@ -89,13 +105,34 @@ def interpolate(table: np.ndarray, theta: np.ndarray | float) -> np.ndarray:
     -------
     ndarray
         Interpolated values, unit of ``table``.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        ``table`` not one dimension of at least one finite real number, ``theta`` not finite real
+        numbers (an empty table was an IndexError, a string theta was read as a number).
     """
-    table = np.asarray(table, dtype=float)
+    src = f"{_SRC}.interpolate"
+    table = reals(table, src, "table", "table values", ndim=1, min_size=1)
     n = table.size
-    u = np.mod(np.asarray(theta, dtype=float) / (2.0 * np.pi) * n, n)
+    u = np.mod(reals(theta, src, "theta", "positions in rad") / (2.0 * np.pi) * n, n)
     k = np.floor(u).astype(int) % n  # u may round up to n exactly
     f = u - np.floor(u)
     return (1.0 - f) * table[k] + f * table[(k + 1) % n]
+
+
+def _table_args(src: str, points, f_inj, quad, needs_f: bool = False) -> int:
+    """A table's ``points`` (returned as an int), ``f_inj`` (None allowed unless ``needs_f``) and
+    ``quad`` checked (the API refuses what the CLI refuses: 4.5 points, 10**9 points, a complex or
+    negative frequency were accepted, the second until memory ran out)."""
+    from linsense.limits import MAX_F_INJ, MAX_POINTS, MIN_F_INJ
+
+    points = integer(points, src, "points", 4, MAX_POINTS)
+    if f_inj is not None or needs_f:
+        what = "a frequency in Hz (docs/limits.md)"
+        real_arg(f_inj, src, "f_inj", MIN_F_INJ, MAX_F_INJ, what=what if needs_f else f"None or {what}")
+    real_arg(quad, src, "quad", 0.0, 1.0, high_open=True, what="a number")
+    return points
 
 
 def build_lut(motor, points: int, f_inj: float | None = None, quad: float = 0.0,
@@ -132,25 +169,13 @@ def build_lut(motor, points: int, f_inj: float | None = None, quad: float = 0.0,
     Raises
     ------
     linsense.errors.InputError
-        ``points``, ``injection``, ``f_inj`` or ``quad`` out of range.
+        ``motor`` not a motor (:func:`~linsense.model.motor.as_motor`), ``points``, ``injection``,
+        ``f_inj`` or ``quad`` out of range.
     """
-    import numbers
-
-    from linsense.limits import MAX_F_INJ, MAX_POINTS, MIN_F_INJ
-
     src = "linsense.compensation.build_lut"
-    # (the API refuses what the CLI refuses: 4.5 points, 10**9 points, a complex or negative
-    # frequency were accepted, the second until memory ran out)
-    if isinstance(points, bool) or not isinstance(points, numbers.Integral) or not 4 <= points <= MAX_POINTS:
-        raise InputError(src, "points", f"must be an integer in 4 .. {MAX_POINTS:,} (docs/limits.md), "
-                         f"got {shown(points)}")
-    if injection not in ("pulsating", "rotating", "square"):
-        raise InputError(src, "injection",
-                         f"must be 'pulsating', 'rotating' or 'square', got {shown(injection)}")
-    if f_inj is not None:
-        real_arg(f_inj, src, "f_inj", MIN_F_INJ, MAX_F_INJ, what="None or a frequency in Hz (docs/limits.md)")
-    real_arg(quad, src, "quad", 0.0, 1.0, high_open=True, what="a number")
-    points = int(points)
+    motor = as_motor(motor, src)
+    points = _table_args(src, points, f_inj, quad)
+    injection = choice(injection, src, "injection", INJECTIONS)
     theta = 2.0 * np.pi * np.arange(points) / points
     prov = motor.provenance()
     digest = data_digest(motor=motor, table={"points": points, "f_inj": f_inj, "quad": quad,
@@ -207,7 +232,19 @@ def resistance_slope(motor, table, n: int) -> np.ndarray:
     -------
     ndarray, shape (n,)
         Unit of the table per unit of ``k_r``.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        ``motor`` not a motor, ``table`` not callable, ``n`` not a number of points.
     """
+    from linsense.limits import MAX_POINTS
+
+    src = f"{_SRC}.resistance_slope"
+    motor = as_motor(motor, src)
+    if not callable(table):
+        raise InputError(src, "table", f"expected a function of the motor, got {shown(table)}")
+    n = integer(n, src, "n", 1, MAX_POINTS, "a number of points")
     if not motor.R_s > 0:
         return np.zeros(n)
     h = R_SLOPE_STEP
@@ -238,11 +275,24 @@ def lut_r_slope(motor, points: int, f_inj: float, quad: float = 0.0) -> np.ndarr
     -------
     ndarray, shape (points,)
         rad per unit of ``k_r``.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        As :func:`build_lut`.
     """
+    src = f"{_SRC}.lut_r_slope"
+    motor = as_motor(motor, src)
+    points = _table_args(src, points, f_inj, quad, needs_f=True)
     return resistance_slope(motor, lambda m: build_lut(m, points, f_inj=f_inj, quad=quad).values, points)
 
 
 # ---------------------------------------------------------------------- exports
+def _lut(lut, src: str) -> Lut:
+    """``lut`` if it is a :class:`Lut`, else InputError naming the argument."""
+    return instance(lut, src, "lut", Lut, "a Lut (build_lut, read_lut)")
+
+
 def to_csv(lut: Lut) -> str:
     """``theta_deg,psi_lut_deg`` rows (electrical degrees, 12 significant digits).
 
@@ -255,7 +305,13 @@ def to_csv(lut: Lut) -> str:
     -------
     str
         The CSV text.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        ``lut`` not a :class:`Lut`.
     """
+    lut = _lut(lut, f"{_SRC}.to_csv")
     lines = ["theta_deg,psi_lut_deg"]
     pairs = zip(np.degrees(lut.theta), np.degrees(lut.values), strict=True)
     lines += [f"{t:.12g},{p:.12g}" for t, p in pairs]
@@ -274,7 +330,13 @@ def to_json(lut: Lut) -> str:
     -------
     str
         The JSON text (format ``linsense-lut``, version 1).
+
+    Raises
+    ------
+    linsense.errors.InputError
+        ``lut`` not a :class:`Lut`.
     """
+    lut = _lut(lut, f"{_SRC}.to_json")
     doc = {
         "format": "linsense-lut",
         "version": 1,
@@ -514,8 +576,12 @@ def to_c_header(lut: Lut, symbol: str | None = None) -> str:
     Raises
     ------
     linsense.errors.InputError
-        A symbol (or the default made from the motor's name) C cannot take, naming the rule.
+        A symbol (or the default made from the motor's name) C cannot take, naming the rule;
+        ``lut`` not a :class:`Lut`, ``symbol`` neither None nor a str.
     """
+    lut = _lut(lut, f"{_SRC}.to_c_header")
+    if symbol is not None:
+        instance(symbol, f"{_SRC}.to_c_header", "symbol", str, "None or a str")
     sym = c_symbol(symbol, "symbol", longest_suffix=LUT_SUFFIX_CHARS) if symbol is not None else \
         default_lut_symbol(lut.name, "symbol")
     up = sym.upper()
@@ -576,16 +642,15 @@ def export(lut: Lut, fmt: str, symbol: str | None = None) -> str:
 
     Raises
     ------
-    ValueError
-        An unknown ``fmt``.
+    linsense.errors.InputError
+        An unknown ``fmt`` (the closest named), ``lut`` not a :class:`Lut`.
     """
+    fmt = choice(fmt, f"{_SRC}.export", "fmt", FORMATS, "format")
     if fmt == "csv":
         return to_csv(lut)
     if fmt == "json":
         return to_json(lut)
-    if fmt == "c":
-        return to_c_header(lut, symbol)
-    raise ValueError(f"unknown format {fmt!r} (one of {', '.join(FORMATS)})")
+    return to_c_header(lut, symbol)
 
 
 # ---------------------------------------------------------------------- readers
@@ -617,7 +682,7 @@ def read_lut_csv(path: str | Path) -> Lut:
     linsense.errors.InputError
         A bad header, row or grid, naming the row.
     """
-    src = str(path)
+    src = str(path_arg(path, f"{_SRC}.read_lut_csv", "path", "a LUT's CSV file"))
     rows = csv_rows(path, "LUT")  # (bounded, BOM skipped: docs/limits.md)
     header = next(rows)[1]
     if header[:2] != ["theta_deg", "psi_lut_deg"]:
@@ -655,7 +720,7 @@ def read_lut_json(path: str | Path) -> Lut:
     linsense.errors.InputError
         Not a linsense LUT, missing or non-finite arrays, a bad grid.
     """
-    src = str(path)
+    src = str(path_arg(path, f"{_SRC}.read_lut_json", "path", "a LUT's JSON file"))
     try:
         doc = json.loads(read_text_file(path, "LUT"))
     except ValueError as exc:  # (JSONDecodeError is a ValueError)
@@ -699,6 +764,7 @@ def read_c_header(text: str) -> np.ndarray:
     InputError
         When ``text`` holds no ``static const float NAME[LEN] = { ... };`` table of numbers.
     """
+    instance(text, f"{_SRC}.read_c_header", "text", str, "the header's text (a str)")
     # (the table's own braces: a motor name with "{" in the provenance comment was read as the table)
     m = re.search(r"static const float \w+\[\w+\] = \{([^}]*)\};", text)
     try:
@@ -727,7 +793,7 @@ def read_lut(path: str | Path) -> Lut:
     linsense.errors.InputError
         As the reader.
     """
-    p = Path(path)
+    p = path_arg(path, f"{_SRC}.read_lut", "path", "a LUT's CSV or JSON file")
     if p.suffix.lower() == ".json":
         return read_lut_json(p)
     return read_lut_csv(p)

@@ -36,9 +36,11 @@ from pathlib import Path
 
 import numpy as np
 
-from linsense.compensation.lut import interpolate
+from linsense._check import choice, real, reals
+from linsense.compensation.lut import INJECTIONS, interpolate
 from linsense.compensation.stamp import data_digest
 from linsense.errors import InputError, shown
+from linsense.model.motor import as_motor
 
 __all__ = ["FORMAT", "INFO_KEYS", "INJECTIONS", "PSI_MAX", "MeasuredTable", "TableStamp", "end_effect_fit",
            "fit_report", "interpolation_error", "measured_table_json", "read_measured_table",
@@ -46,8 +48,6 @@ __all__ = ["FORMAT", "INFO_KEYS", "INJECTIONS", "PSI_MAX", "MeasuredTable", "Tab
 
 #: the document's ``format``
 FORMAT = "linsense-measured-lut"
-#: the injection shapes a table can be for
-INJECTIONS = ("pulsating", "rotating", "square")
 #: the keys every document holds
 CORE_KEYS = ("format", "unit", "stamp", "theta", "psi_lut")
 #: informational top-level keys, written by :func:`measured_table_json` through ``extra`` and read
@@ -147,7 +147,7 @@ def table_stamp(motor, injection: str, f_inj: float, quad: float, points: int) -
 
 def _drive_args(src: str, motor, injection, f_inj, quad, points) -> tuple[str, float, float, int]:
     """The drive's values checked: (injection, f_inj, quad, points)."""
-    from linsense.analysis.hf import real_arg
+    from linsense._check import real as real_arg
     from linsense.limits import MAX_F_INJ, MAX_POINTS, MIN_F_INJ
     from linsense.model.motor import Motor
 
@@ -394,7 +394,7 @@ def _document(src: str, text: str) -> dict:
         raise InputError(src, "unit", f"must be 'rad' (the table's angles, electrical), got {got}")
     unknown = [k for k in doc if k not in CORE_KEYS and k not in INFO_KEYS]
     if unknown:
-        from linsense.validation import closest_key
+        from linsense._check import closest_key
 
         key = str(unknown[0])
         raise InputError(src, key, f"not a key of a measured table{closest_key(key, CORE_KEYS + INFO_KEYS)} "
@@ -410,7 +410,7 @@ def _stamp(src: str, raw) -> TableStamp:
                          "drive the table was measured on)")
     for k in raw:
         if k not in STAMP_KEYS:
-            from linsense.validation import closest_key
+            from linsense._check import closest_key
 
             raise InputError(src, f"stamp.{k}", f"not a stamp key{closest_key(str(k), STAMP_KEYS)} "
                              f"(known: {', '.join(STAMP_KEYS)})")
@@ -583,8 +583,18 @@ def end_effect_fit(motor, values: np.ndarray, injection: str, f_inj: float, quad
     -----
     Each fit (about 0.4 s) is kept by its inputs' content, the last :data:`FITS_KEPT`: a table
     that ``tune`` reports, writes into a header and verifies with is fitted once.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        An argument of the wrong kind or out of range, naming it.
     """
-    values = np.asarray(values, dtype=float)
+    src = "linsense.compensation.measured.end_effect_fit"
+    motor = as_motor(motor, src)
+    values = reals(values, src, "values", "table values in rad", ndim=1, min_size=4)
+    injection = choice(injection, src, "injection", INJECTIONS)
+    real(f_inj, src, "f_inj", 0.0, low_open=True, what="a positive frequency in Hz")
+    real(quad, src, "quad", 0.0, 1.0, high_open=True)
     key = (data_digest(motor=motor), values.tobytes(), injection, float(f_inj), float(quad))
     hit = _FITS.get(key)
     if hit is None:

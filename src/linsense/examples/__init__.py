@@ -16,6 +16,7 @@ import os
 import shutil
 from pathlib import Path
 
+from linsense._check import choice, instance
 from linsense.errors import InputError
 
 #: the folder of the examples (the package's own: the wheel installs it unzipped)
@@ -28,6 +29,12 @@ KINDS = {"motors": ".toml", "scenarios": ".toml", "sweeps": ".toml", "fea": ".to
 #: what a name of each kind is, for messages
 WHAT = {"motors": "motor", "scenarios": "scenario", "sweeps": "sweep", "fea": "geometry",
         "bench": "bench", "firmware": "firmware"}
+
+
+def _kind(kind, func: str) -> str:
+    """``kind`` if it is one of :data:`KINDS`, else InputError naming the closest (``names("nope")``
+    was a bare KeyError)."""
+    return choice(kind, f"linsense.examples.{func}", "kind", KINDS, "kind of example")
 
 
 def files() -> list[str]:
@@ -95,8 +102,13 @@ def names(kind: str) -> list[str]:
     -------
     list of str
         The names.
+
+    Raises
+    ------
+    InputError
+        ``kind`` not one of :data:`KINDS` (the closest named).
     """
-    return sorted(_index(kind))
+    return sorted(_index(_kind(kind, "names")))
 
 
 def path(kind: str, name: str) -> Path | None:
@@ -113,7 +125,14 @@ def path(kind: str, name: str) -> Path | None:
     -------
     Path or None
         Its file.
+
+    Raises
+    ------
+    InputError
+        ``kind`` not one of :data:`KINDS`, ``name`` not a str.
     """
+    kind = _kind(kind, "path")
+    instance(name, "linsense.examples.path", "name", str, "an example's name (a str)")
     return _index(kind).get(name)
 
 
@@ -135,7 +154,13 @@ def named(kind: str, spec):
     -------
     object
         ``spec`` or the example's Path.
+
+    Raises
+    ------
+    InputError
+        ``kind`` not one of :data:`KINDS`.
     """
+    kind = _kind(kind, "named")
     if isinstance(spec, str) and not Path(spec).exists():
         p = path(kind, spec)
         if p is not None:
@@ -162,7 +187,15 @@ def resolve(kind: str, spec: str | Path, key: str = "", extra: tuple[str, ...] =
     -------
     str
         The path to read.
+
+    Raises
+    ------
+    InputError
+        ``kind`` not one of :data:`KINDS`, ``spec`` neither a file nor an example's name (the names
+        listed).
     """
+    kind = _kind(kind, "resolve")
+    instance(spec, "linsense.examples.resolve", "spec", str | os.PathLike, "a path or an example's name")
     s = str(spec)
     # (a file: a folder of the same name as an example, e.g. a sweep's --out, does not hide it)
     if Path(s).is_file() or s in extra:
@@ -191,8 +224,13 @@ def unknown(kind: str, spec: str, extra: tuple[str, ...] = ()) -> str:
     -------
     str
         The message.
+
+    Raises
+    ------
+    InputError
+        ``kind`` not one of :data:`KINDS`.
     """
-    what = WHAT[kind]
+    what = WHAT[_kind(kind, "unknown")]
     return f"unknown {what} {spec!r}: no such file, nor a packaged {what} ({listing(kind, extra)})"
 
 
@@ -210,7 +248,13 @@ def listing(kind: str, extra: tuple[str, ...] = ()) -> str:
     -------
     str
         ``names: a, b, ...; `linsense examples DIR` copies the examples out``.
+
+    Raises
+    ------
+    InputError
+        ``kind`` not one of :data:`KINDS`.
     """
+    kind = _kind(kind, "listing")
     return f"names: {', '.join([*extra, *names(kind)])}; `linsense examples DIR` copies the examples out"
 
 

@@ -288,7 +288,7 @@ def emulate_bench(
     """
     import numbers
 
-    from linsense.analysis.hf import real_arg
+    from linsense._check import real as real_arg
     from linsense.limits import MAX_POSITIONS
 
     # (the API refuses what `linsense bench-emulate` refuses, in one InputError naming the argument:

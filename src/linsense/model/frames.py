@@ -15,12 +15,28 @@ from __future__ import annotations
 
 import numpy as np
 
+from linsense._check import reals
+from linsense.errors import InputError
+
 _S3 = np.sqrt(3.0) / 2.0
 
 #: Amplitude-invariant Clarke transform, abc -> alpha-beta (2 x 3).
 T_CLARKE = (2.0 / 3.0) * np.array([[1.0, -0.5, -0.5], [0.0, _S3, -_S3]])
 #: Inverse Clarke for zero-sequence-free quantities, alpha-beta -> abc (3 x 2).
 T_CLARKE_INV = np.array([[1.0, 0.0], [-0.5, _S3], [-0.5, -_S3]])
+
+
+#: the module, named in the messages of its functions' argument checks
+_SRC = "linsense.model.frames"
+
+
+def _last(x, func: str, name: str, shape: tuple[int, ...]) -> np.ndarray:
+    """``x`` as real numbers whose last dimensions are ``shape`` (NaN allowed: a measurement's)."""
+    a = reals(x, f"{_SRC}.{func}", name, "real numbers", finite=False)
+    if a.shape[a.ndim - len(shape):] != shape or a.ndim < len(shape):
+        raise InputError(f"{_SRC}.{func}", name, f"expected shape (..., {', '.join(map(str, shape))}), "
+                         f"got {a.shape}")
+    return a
 
 
 def rot(theta: np.ndarray | float) -> np.ndarray:
@@ -35,8 +51,13 @@ def rot(theta: np.ndarray | float) -> np.ndarray:
     -------
     ndarray, shape theta.shape + (2, 2)
         The rotation matrices.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        ``theta`` not finite real numbers.
     """
-    theta = np.asarray(theta, dtype=float)
+    theta = reals(theta, f"{_SRC}.rot", "theta", "angles in rad")
     c, s = np.cos(theta), np.sin(theta)
     return np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)
 
@@ -53,8 +74,13 @@ def abc_to_ab_matrix(L_abc: np.ndarray) -> np.ndarray:
     -------
     ndarray, shape (..., 2, 2)
         ``T_CLARKE @ L_abc @ T_CLARKE_INV``, in the unit of ``L_abc``.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        ``L_abc`` not real numbers of shape ``(..., 3, 3)``.
     """
-    return T_CLARKE @ L_abc @ T_CLARKE_INV
+    return T_CLARKE @ _last(L_abc, "abc_to_ab_matrix", "L_abc", (3, 3)) @ T_CLARKE_INV
 
 
 def ab_to_dq_matrix(L_ab: np.ndarray, theta: np.ndarray | float) -> np.ndarray:
@@ -71,7 +97,13 @@ def ab_to_dq_matrix(L_ab: np.ndarray, theta: np.ndarray | float) -> np.ndarray:
     -------
     ndarray, shape (..., 2, 2)
         ``R(theta)' L_ab R(theta)``.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        ``L_ab`` not real numbers of shape ``(..., 2, 2)``, ``theta`` not finite real numbers.
     """
+    L_ab = _last(L_ab, "ab_to_dq_matrix", "L_ab", (2, 2))
     R = rot(theta)
     return np.swapaxes(R, -1, -2) @ L_ab @ R
 
@@ -88,8 +120,13 @@ def abc_to_ab(x_abc: np.ndarray) -> np.ndarray:
     -------
     ndarray, shape (..., 2)
         The alpha-beta components, same unit.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        ``x_abc`` not real numbers of shape ``(..., 3)``.
     """
-    return np.asarray(x_abc) @ T_CLARKE.T
+    return _last(x_abc, "abc_to_ab", "x_abc", (3,)) @ T_CLARKE.T
 
 
 def ab_to_abc(x_ab: np.ndarray) -> np.ndarray:
@@ -104,5 +141,10 @@ def ab_to_abc(x_ab: np.ndarray) -> np.ndarray:
     -------
     ndarray, shape (..., 3)
         The phase components, same unit, without zero sequence.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        ``x_ab`` not real numbers of shape ``(..., 2)``.
     """
-    return np.asarray(x_ab) @ T_CLARKE_INV.T
+    return _last(x_ab, "ab_to_abc", "x_ab", (2,)) @ T_CLARKE_INV.T

@@ -16,7 +16,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from linsense.limits import max_harmonic_order
+from linsense._check import instance, integer, real, reals
+from linsense.errors import InputError
+from linsense.limits import max_angle, max_harmonic_order
 from linsense.model.frames import ab_to_dq_matrix, abc_to_ab_matrix
 
 #: Names of the six independent entries, in storage order.
@@ -27,6 +29,9 @@ _INDEX = ((0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (2, 0))
 #: the entries (docs/cli.md; :func:`derived_columns`)
 DERIVED_COLUMNS = ("L_d", "L_q", "L_dq", "saliency", "psi_lut_deg", "err_nolut_deg", "gain_nolut",
                    "L_alpha", "L_beta", "L_alphabeta")
+
+#: named in the messages of the model's checks
+_SRC = "linsense.model.inductance.InductanceModel"
 #: positions above which a table is fitted through its normal equations in blocks of as many rows
 #: (a (N, 2K+1) design matrix of 100,000 positions took 5 s in ``lstsq``)
 _BLOCK = 4096
@@ -38,6 +43,14 @@ def _design(theta: np.ndarray, K: int, nyquist: bool = False) -> np.ndarray:
     k = np.arange(K + 1)
     ks = k[1:K] if nyquist else k[1:]
     return np.concatenate([np.cos(np.outer(theta, k)), np.sin(np.outer(theta, ks))], axis=1)
+
+
+def _pair(src: str, n: int, pair) -> tuple[float, float]:
+    """``(L_n, M_n)`` of a harmonic as two finite floats, else InputError naming ``harmonics[n]``."""
+    v = reals(pair, src, f"harmonics[{n}]", "inductances (L_n, M_n) in H", ndim=1)
+    if v.size != 2:
+        raise InputError(src, f"harmonics[{n}]", f"expected two inductances (L_n, M_n) in H, got {v.size}")
+    return float(v[0]), float(v[1])
 
 
 def _fit(theta: np.ndarray, y: np.ndarray, K: int, nyquist: bool = False) -> np.ndarray:
@@ -79,8 +92,9 @@ class InductanceModel:
 
     Raises
     ------
-    ValueError
-        When ``a`` and ``b`` are not both of shape ``(6, K + 1)``.
+    linsense.errors.InputError
+        When ``a`` and ``b`` are not both finite real numbers of shape ``(6, K + 1)``, ``K`` up to
+        :data:`~linsense.limits.MAX_HARMONIC_ORDER`.
     """
 
     a: np.ndarray
@@ -89,10 +103,15 @@ class InductanceModel:
     params: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        a = np.array(self.a, dtype=float)
-        b = np.array(self.b, dtype=float)
-        if a.ndim != 2 or a.shape[0] != 6 or a.shape != b.shape:
-            raise ValueError(f"coefficient arrays must be (6, K+1), got {a.shape} and {b.shape}")
+        # one validated path (issue 37): NaN, complex or string coefficients gave a model of NaN or
+        # numpy's own traceback
+        a = np.array(reals(self.a, _SRC, "a", "coefficients in H", ndim=2, min_size=6))
+        b = np.array(reals(self.b, _SRC, "b", "coefficients in H", ndim=2, min_size=6))
+        if a.shape[0] != 6 or a.shape != b.shape or a.shape[1] > max_harmonic_order() + 1:
+            raise InputError(_SRC, "a, b", f"coefficient arrays must both be (6, K + 1) with K <= "
+                             f"{max_harmonic_order()}, got {a.shape} and {b.shape}")
+        instance(self.description, _SRC, "description", str, "a str")
+        instance(self.params, _SRC, "params", dict, "a dict")
         b[:, 0] = 0.0
         a.setflags(write=False)
         b.setflags(write=False)
@@ -134,14 +153,22 @@ class InductanceModel:
 
         Raises
         ------
-        ValueError
-            When a harmonic order is odd or below 4.
+        linsense.errors.InputError
+            A parameter that is not a finite real number, a harmonic order that is odd, below 4 or
+            beyond :data:`~linsense.limits.MAX_HARMONIC_ORDER`.
         """
+        src = f"{_SRC}.from_params"
+        L0, L2, M0, M2, dM0 = (real(v, src, k, what="a finite inductance in H")
+                               for k, v in zip(("L0", "L2", "M0", "M2", "dM0"), (L0, L2, M0, M2, dM0),
+                                               strict=True))
         orders = {2: (L2, M2)}
-        for n, (Ln, Mn) in (harmonics or {}).items():
-            if n < 4 or n % 2:
-                raise ValueError(f"harmonic order must be even and >= 4, got {n}")
-            orders[int(n)] = (Ln, Mn)
+        instance(harmonics if harmonics is not None else {}, src, "harmonics", dict, "a dict {n: (L_n, M_n)}")
+        for n, pair in (harmonics or {}).items():
+            n = integer(n, src, "harmonics", 4, max_harmonic_order(), "an even harmonic order")
+            if n % 2:
+                raise InputError(src, "harmonics", f"harmonic order must be even and >= 4, got {n}")
+            Ln, Mn = _pair(src, n, pair)
+            orders[n] = (Ln, Mn)
         K = max(orders)
         a = np.zeros((6, K + 1))
         b = np.zeros((6, K + 1))
@@ -200,12 +227,24 @@ class InductanceModel:
         -------
         InductanceModel
             The fitted series; ``b[:, N / 2]`` is zero when the Nyquist cosine is fitted.
+
+        Raises
+        ------
+        linsense.errors.InputError
+            ``theta`` not one dimension of finite real numbers, ``entries`` not of shape ``(N, 6)``,
+            ``max_order`` not an order up to :data:`~linsense.limits.MAX_TABLE_ORDER`.
         """
-        theta = np.asarray(theta, dtype=float)
-        entries = np.asarray(entries, dtype=float)
+        src = f"{_SRC}.from_table"
+        theta = reals(theta, src, "theta", "positions in rad", ndim=1, min_size=1)
+        entries = reals(entries, src, "entries", "inductances in H", ndim=2)
         N = theta.size
+        if entries.shape != (N, 6):
+            raise InputError(src, "entries", f"expected shape ({N}, 6) (L_A .. M_CA at each of the {N} "
+                             f"positions), got {entries.shape}")
         k_max = max_harmonic_order()  # MAX_TABLE_ORDER, the simulator's limit (read from the C library)
-        K = min(N // 2, k_max if max_order is None else int(max_order), k_max)
+        if max_order is not None:
+            max_order = integer(max_order, src, "max_order", 0, k_max, "a harmonic order")
+        K = min(N // 2, k_max if max_order is None else max_order, k_max)
         # (with 2K positions the order K has one degree of freedom: its cosine; N columns for N rows)
         nyquist = 2 * K == N
         coef = _fit(theta, entries, K, nyquist)
@@ -234,8 +273,14 @@ class InductanceModel:
         -------
         ndarray, shape theta.shape + (6,)
             ``L_A, L_B, L_C, M_AB, M_BC, M_CA``, H (H/rad^derivative).
+
+        Raises
+        ------
+        linsense.errors.InputError
+            ``theta`` not finite real numbers, ``derivative`` not an integer in 0 .. 8.
         """
-        theta = np.asarray(theta, dtype=float)
+        theta = reals(theta, f"{_SRC}.entries", "theta", "positions in rad", bound=max_angle())
+        derivative = integer(derivative, f"{_SRC}.entries", "derivative", 0, 8, "a derivative's order")
         k = np.arange(self.max_order + 1)
         kt = theta[..., None] * k
         c, s = np.cos(kt), np.sin(kt)

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import functools
 import math
+import os
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
@@ -15,14 +16,23 @@ from pathlib import Path
 import numpy as np
 
 from linsense import examples
+from linsense._check import brief, closest_key, instance, real, reals
 from linsense.errors import InputError, ModelError
 from linsense.io import csv_rows, folder_of, parse_toml, read_csv_table, read_text_file
 from linsense.model.inductance import DERIVED_COLUMNS, ENTRIES, InductanceModel, derived_columns
 from linsense.model.saturation import Saturation
-from linsense.model.schema import validate_motor_file
+from linsense.model.schema import (
+    FrictionSection,
+    MotorSection,
+    PmHarmonicEntry,
+    validate_motor_file,
+    validate_section,
+)
 
 #: Saliency |L_q - L_d| below this fraction of (L_d + L_q)/2 counts as vanished.
 MIN_SALIENCY_RATIO = 0.01
+#: the source a motor built in Python (without one) is named by in messages
+_API = "linsense.Motor"
 #: Columns a tabulated inductance file must have (others, e.g. those of ``linsense model``, are allowed).
 TABLE_COLUMNS = ("theta_deg",) + ENTRIES
 
@@ -42,6 +52,11 @@ class Friction:
     viscous: float = 0.0  # N s/m
     coulomb: float = 0.0  # N
 
+    def __post_init__(self) -> None:
+        # the motor file's [friction] rules (finite, >= 0): one validated path (issue 37)
+        validate_section(FrictionSection, {"viscous": self.viscous, "coulomb": self.coulomb},
+                         "linsense.model.motor.Friction", "friction")
+
 
 @dataclass(frozen=True)
 class PmHarmonic:
@@ -60,6 +75,13 @@ class PmHarmonic:
     order: int  # harmonic order in theta
     amplitude: float  # relative to psi_pm
     phase: float  # rad (electrical)
+
+    def __post_init__(self) -> None:
+        # the motor file's [pm_flux] harmonics' rules (an order 2 .. MAX_HARMONIC_ORDER, finite numbers)
+        src = "linsense.model.motor.PmHarmonic"
+        phase = real(self.phase, src, "pm_flux.harmonics.phase", what="a finite phase in rad")
+        validate_section(PmHarmonicEntry, {"order": self.order, "amplitude": self.amplitude,
+                                           "phase_deg": math.degrees(phase)}, src, "pm_flux.harmonics")
 
 
 @dataclass(frozen=True)
@@ -101,6 +123,26 @@ class Motor:
     source: str = ""
     saturation: Saturation | None = None  # for the simulator's saturated plant (None: none given)
 
+    def __post_init__(self) -> None:
+        # one validated path (issue 37): a Motor built in Python is held to the motor file's checks
+        # and limits (its [motor] section's schema, then check_plausible), as load_motor's are; one
+        # built with R_s = 1e6 and pole_pitch = -1 gave an all-zero table
+        instance(self.source, _API, "source", str, "a str (where the motor came from)")
+        source = self.source or _API
+        fields = ("name", "R_s", "pole_pitch", "force_constant", "mass")
+        validate_section(MotorSection, {k: getattr(self, k) for k in fields}, source, "motor")
+        instance(self.inductance, source, "inductance", InductanceModel,
+                 "an InductanceModel (linsense.model.inductance: from_params or from_table)")
+        instance(self.friction, source, "friction", Friction, "a Friction")
+        instance(self.pm_harmonics, source, "pm_harmonics", tuple, "a tuple of PmHarmonic")
+        for k, h in enumerate(self.pm_harmonics):
+            instance(h, source, f"pm_harmonics[{k}]", PmHarmonic, "a PmHarmonic")
+        if len({h.order for h in self.pm_harmonics}) != len(self.pm_harmonics):
+            raise InputError(source, "pm_flux.harmonics", "an order is listed twice: give each order once")
+        if self.saturation is not None:
+            instance(self.saturation, source, "saturation", Saturation, "a Saturation or None")
+        check_plausible(self)
+
     @property
     def psi_pm(self) -> float:
         """PM flux-linkage amplitude, Wb: ``F = (3/2) (2 pi / tau) psi_pm i_q`` (amplitude-invariant)."""
@@ -118,8 +160,13 @@ class Motor:
         -------
         ndarray
             ``2 pi x / pole_pitch``, rad.
+
+        Raises
+        ------
+        InputError
+            ``x`` not finite real numbers.
         """
-        return 2.0 * np.pi * np.asarray(x) / self.pole_pitch
+        return 2.0 * np.pi * reals(x, "linsense.Motor.theta_of_x", "x", "positions in m") / self.pole_pitch
 
     def x_of_theta(self, theta: np.ndarray | float) -> np.ndarray:
         """Position (m) of an electrical angle (rad).
@@ -133,8 +180,14 @@ class Motor:
         -------
         ndarray
             ``theta pole_pitch / (2 pi)``, m.
+
+        Raises
+        ------
+        InputError
+            ``theta`` not finite real numbers.
         """
-        return np.asarray(theta) * self.pole_pitch / (2.0 * np.pi)
+        theta = reals(theta, "linsense.Motor.x_of_theta", "theta", "angles in rad")
+        return theta * self.pole_pitch / (2.0 * np.pi)
 
     def provenance(self) -> dict:
         """Parameters that identify this motor, for provenance comments and JSON exports.
@@ -316,7 +369,7 @@ def load_motor(spec: str | Path, check: bool = True) -> Motor:
     Returns
     -------
     Motor
-        The motor, checked for plausible values (:func:`check_plausible`).
+        The motor, checked for plausible values (:func:`check_plausible`, by its constructor).
 
     Raises
     ------
@@ -325,6 +378,9 @@ def load_motor(spec: str | Path, check: bool = True) -> Motor:
     ModelError
         The model is not usable for HF sensorless control (see :func:`check_motor`).
     """
+    instance(spec, "linsense.load_motor", "spec", str | os.PathLike,
+             "a preset's or example's name or a motor file's path (a str or os.PathLike)")
+    instance(check, "linsense.load_motor", "check", bool, "True or False")
     spec_s = str(spec)
     if not spec_s.strip():
         raise InputError("--motor", "", "empty: give a preset name (" + ", ".join(preset_names())
@@ -343,10 +399,57 @@ def load_motor(spec: str | Path, check: bool = True) -> Motor:
         p = example_motor(spec_s)  # (a name: tables relative to the packaged file)
         text = read_text_file(p, "motor file")
         motor = motor_from_toml(text, source=f"example {spec_s}", base_dir=p.parent)
-    check_plausible(motor)
     if check:
         check_motor(motor)
     return motor
+
+
+def as_motor(value, source: str, name: str = "motor", inductance: bool = False) -> Motor | InductanceModel:
+    """A motor argument of the public API, checked and resolved the same way everywhere (issue 37).
+
+    A :class:`Motor` as it is; a preset's or packaged example's name or a motor file's path loaded
+    as :func:`load_motor` loads it; an :class:`InductanceModel` where ``inductance`` allows it.
+    Anything else, or a name that is none of them, is refused naming the argument (``psi_lut(42,
+    x)`` was an AttributeError, ``psi_lut("ecce2010", x)`` too).
+
+    Parameters
+    ----------
+    value : object
+        The argument.
+    source : str
+        The function it was given to, named in messages.
+    name : str, optional
+        The argument's name.
+    inductance : bool, optional
+        Whether an :class:`InductanceModel` is accepted too.
+
+    Returns
+    -------
+    Motor or InductanceModel
+        The motor (or the model).
+
+    Raises
+    ------
+    InputError
+        Naming ``source`` and ``name``: not a motor, or an unknown name (the closest named); a
+        motor file's own errors name the file.
+    ModelError
+        A loaded motor unusable for HF sensorless control (:func:`check_motor`).
+    """
+    if isinstance(value, Motor) or (inductance and isinstance(value, InductanceModel)):
+        return value
+    what = "a Motor" + (" or an InductanceModel" if inductance else "")
+    if isinstance(value, os.PathLike):
+        value = os.fspath(value)
+    if not isinstance(value, str) or not value.strip():
+        raise InputError(source, name, f"expected {what}, a preset or example name "
+                         f"({', '.join(preset_names())} ...) or a motor file's path, got {brief(value)} "
+                         f"({type(value).__name__})")
+    if names_a_file(value) or value in preset_names() or examples.path("motors", value) is not None:
+        return load_motor(value)
+    known = tuple(preset_names()) + tuple(examples.names("motors"))
+    raise InputError(source, name, f"unknown motor {value!r}{closest_key(value, known)}: no preset, "
+                     f"packaged example or motor file of that name ({', '.join(known)})")
 
 
 def motor_from_toml(text: str, source: str, base_dir: Path | None = None) -> Motor:
@@ -364,12 +467,13 @@ def motor_from_toml(text: str, source: str, base_dir: Path | None = None) -> Mot
     Returns
     -------
     Motor
-        The motor, not checked (:func:`load_motor` checks).
+        The motor, its values checked for plausibility by its constructor; not for HF sensorless
+        control (:func:`load_motor` runs :func:`check_motor`).
 
     Raises
     ------
     InputError
-        Bad TOML, schema violations, a missing or bad table file.
+        Bad TOML, schema violations, a missing or bad table file, implausible values.
     """
     doc = validate_motor_file(parse_toml(text, source), source)
     ind = doc.inductance
@@ -596,7 +700,7 @@ def check_plausible(motor: Motor) -> None:
                        ("motor.force_constant", motor.force_constant), ("motor.mass", motor.mass)):
         msg = _implausible(key, value)
         if msg:
-            raise InputError(motor.source, key, msg)
+            raise InputError(motor.source or _API, key, msg)
     if motor.inductance.params:
         key, what, L_self = "inductance.L0", "L0", float(motor.inductance.params["L0"])
     else:
@@ -605,9 +709,9 @@ def check_plausible(motor: Motor) -> None:
         L_self = float(np.mean(motor.inductance.entries(theta)[..., :3]))
     msg = _implausible("inductance", L_self, what)
     if msg:
-        raise InputError(motor.source, key, msg)
+        raise InputError(motor.source or _API, key, msg)
     if L_self > MAX_TIME_CONSTANT * motor.R_s > 0.0:
-        raise InputError(motor.source, key, (
+        raise InputError(motor.source or _API, key, (
             f"{what} = {L_self:g} H with R_s = {motor.R_s:g} ohm is an electrical time constant of "
             f"{L_self / motor.R_s:.3g} s, beyond the {MAX_TIME_CONSTANT:g} s of real linear motors. "
             "Did you type mH? Motor files are in SI units (H)."))
@@ -637,7 +741,7 @@ def check_motor(motor: Motor) -> None:
     bad = ~(eig_min > 0)
     if bad.any():
         raise ModelError(
-            motor.source, "inductance",
+            motor.source or _API, "inductance",
             f"3x3 phase inductance matrix not positive definite at theta = {_intervals_deg(theta, bad)} "
             f"(smallest eigenvalue {eig_min.min():.3g} H): no real winding has it",
         )
@@ -648,7 +752,7 @@ def check_motor(motor: Motor) -> None:
     bad = sign * sal <= MIN_SALIENCY_RATIO * L_mean
     if bad.any():
         raise ModelError(
-            motor.source, "inductance",
+            motor.source or _API, "inductance",
             f"saliency L_q - L_d vanishes or changes sign at theta = {_intervals_deg(theta, bad)} "
             f"(range {sal.min():.3g} .. {sal.max():.3g} H): HF sensorless control impossible there",
         )

@@ -25,8 +25,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from linsense._check import instance
 from linsense.errors import SaturationRangeError
 from linsense.model.inductance import InductanceModel
+from linsense.model.schema import SaturationSection, validate_section
 
 #: Powers 0..SAT_POW-1 of i_q the C plant takes (LS_SIM_SAT_POW).
 SAT_POW = 4
@@ -55,6 +57,12 @@ class Saturation:
         Incremental ``L_abc(theta)`` at ``currents`` (``i_d = 0``).
     source : str
         Where the data came from (the motor file's ``[saturation]``), for messages.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        A value the motor file's ``[saturation]`` section refuses (its schema), or tables that are
+        not :class:`~linsense.model.inductance.InductanceModel`.
     """
 
     polarity: float = 0.0
@@ -64,6 +72,22 @@ class Saturation:
     currents: tuple[float, ...] = ()
     tables: tuple[InductanceModel, ...] = ()
     source: str = ""
+
+    def __post_init__(self) -> None:
+        # one validated path (issue 37): the motor file's [saturation] rules (SaturationSection)
+        src = "linsense.model.saturation.Saturation"
+        instance(self.source, src, "source", str, "a str")
+        source = self.source or src
+        instance(self.currents, source, "saturation.currents", tuple, "a tuple of currents in A")
+        instance(self.tables, source, "saturation.tables", tuple, "a tuple of InductanceModel")
+        for k, t in enumerate(self.tables):
+            instance(t, source, f"saturation.tables[{k}]", InductanceModel, "an InductanceModel")
+        given = bool(self.currents or self.tables)
+        validate_section(SaturationSection, {
+            "polarity": self.polarity, "magnet_current": self.magnet_current, "q_drop": self.q_drop,
+            "q_current": self.q_current, "currents": list(self.currents) if given else None,
+            "tables": [t.description or f"table {k}" for k, t in enumerate(self.tables)] if given else None},
+            source, "saturation")
 
     def describe(self) -> str:
         """One line describing the saturation data, for reports.

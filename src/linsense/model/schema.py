@@ -11,12 +11,14 @@ import math
 import re
 from typing import Annotated
 
+import numpy as np
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationError, model_validator
 from pydantic_core import PydanticCustomError
 
-from linsense.errors import KeyProblem
+from linsense._check import brief, closest_key
+from linsense.errors import InputError, KeyProblem
 from linsense.limits import max_harmonic_order
-from linsense.validation import closest_key, to_input_error
+from linsense.validation import to_input_error
 
 _STRICT = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
 
@@ -312,3 +314,44 @@ def validate_motor_file(data: dict, source: str) -> MotorFile:
         return MotorFile.model_validate(data)
     except ValidationError as exc:
         raise to_input_error(exc, source, MotorFile) from None
+
+
+def validate_section(section: type[BaseModel], data: dict, source: str, key: str) -> BaseModel:
+    """Validate one section of a motor file (``[motor]``, ``[friction]``, a ``[pm_flux]`` harmonic,
+    ``[saturation]``) with the reader's rules: the constructors of :class:`~linsense.model.motor.Motor`
+    and its parts check their values through it, so that a motor built in Python is held to the
+    motor file's checks and limits (one validated path; issue 37).
+
+    Parameters
+    ----------
+    section : type
+        The section's pydantic model (:class:`MotorSection` ...).
+    data : dict
+        Its values (numpy's integers and floats are taken as Python's).
+    source : str
+        Named in messages (the motor file, or the class built from Python).
+    key : str
+        The section's dotted key, prefixed to the key at fault.
+
+    Returns
+    -------
+    pydantic.BaseModel
+        The validated section.
+
+    Raises
+    ------
+    InputError
+        Naming ``source``, the dotted key and the value.
+    """
+    # (numpy's integers and floats, as a fit gives them, are numbers; strict pydantic takes Python's
+    # only, and took numpy's booleans and complex numbers as floats, the imaginary part dropped)
+    plain = {}
+    for k, v in data.items():
+        if isinstance(v, np.generic) and not isinstance(v, np.integer | np.floating):
+            raise InputError(source, f"{key}.{k}", f"expected a number, got {brief(v)} ({type(v).__name__})")
+        plain[k] = v.item() if isinstance(v, np.generic) else v
+    try:
+        return section.model_validate(plain)
+    except ValidationError as exc:
+        err = to_input_error(exc, source, section)
+        raise InputError(source, f"{key}.{err.key}" if err.key else key, err.message) from None

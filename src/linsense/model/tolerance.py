@@ -11,8 +11,9 @@ import dataclasses
 
 import numpy as np
 
+from linsense._check import instance, real
 from linsense.model.inductance import InductanceModel
-from linsense.model.motor import Motor
+from linsense.model.motor import Motor, as_motor
 
 
 def perturbed(motor: Motor, k_inductance: float = 1.0, k_resistance: float = 1.0, k_end_effect: float = 1.0,
@@ -40,7 +41,19 @@ def perturbed(motor: Motor, k_inductance: float = 1.0, k_resistance: float = 1.0
     -------
     Motor
         A copy of ``motor`` with the perturbed values.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        An argument of the wrong kind or out of range, naming it; a perturbed motor outside the
+        range of real motors (its constructor's checks).
     """
+    src = "linsense.model.tolerance.perturbed"
+    motor = as_motor(motor, src)
+    k_inductance = real(k_inductance, src, "k_inductance", 0.0, low_open=True, what="a positive factor")
+    k_resistance = real(k_resistance, src, "k_resistance", 0.0, what="a factor >= 0")
+    k_end_effect = real(k_end_effect, src, "k_end_effect", what="a finite factor")
+    instance(label, src, "label", str, "a str")
     ind = motor.inductance
     a, b = np.array(ind.a) * k_inductance, np.array(ind.b) * k_inductance
     d_m0 = 0.5 * (a[4, 0] + a[5, 0]) - a[3, 0]

@@ -31,6 +31,7 @@ from typing import Annotated, Literal
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
+from linsense._check import path_arg
 from linsense.ctrl import REAL, drive_default_cfg
 from linsense.errors import InputError
 from linsense.io import folder_of, read_toml, working_folder
@@ -591,7 +592,8 @@ class MetricsSection(BaseModel):
                                                                                     "default_note": "none"})
     final_window_s: Positive = Field(0.3, description="end window of `stable`, `bias_deg`, `limit_cycle_deg` "
                                      "(clipped to the run); at least half the period of the drive's slowest "
-                                     "loop (\"Events and the end window\")", json_schema_extra={"unit": "s"})
+                                     "loop (\"Events and the end window\"): one the file gives shorter is "
+                                     "refused, the default widened to it", json_schema_extra={"unit": "s"})
 
     @model_validator(mode="after")
     def _check(self) -> MetricsSection:
@@ -1178,8 +1180,10 @@ def load_scenario(path: str | Path) -> Scenario:
     Raises
     ------
     linsense.errors.InputError
-        An unreadable file, bad TOML or an invalid key, naming the file and the key.
+        An unreadable file, bad TOML or an invalid key, naming the file and the key; ``path`` not a
+        path (``load_scenario(None)`` was a TypeError).
     """
+    path = path_arg(path, "linsense.sim.load_scenario", "path", "a scenario file")
     return scenario_from_dict(read_toml(path, "scenario file"), str(path), folder_of(path))
 
 

@@ -29,6 +29,7 @@ from contextlib import closing, nullcontext
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from linsense._check import instance, integer, path_arg
 from linsense.errors import InputError
 from linsense.io import held, os_reason, out_target, output_error, write_atomic, write_atomic_with
 from linsense.sim.cluster import cluster_client
@@ -218,6 +219,23 @@ def _finished(ctx, batches: list, todo: list[int], relative: dict, workers: int 
                 fut.cancel()
 
 
+#: local workers of a sweep (the command line's --workers)
+MAX_WORKERS = 1024
+
+
+def _check_args(out, workers, scheduler, **flags: bool) -> None:
+    """:func:`sweep`'s arguments besides the sweep, before anything is read or written."""
+    src = "linsense.sweep.sweep"
+    if out is not None:
+        path_arg(out, src, "out", "a folder")
+    if workers is not None:
+        integer(workers, src, "workers", 1, MAX_WORKERS, "a number of workers")
+    if scheduler is not None:
+        instance(scheduler, src, "scheduler", str, "a dask scheduler's address such as 'tcp://host:8786'")
+    for name, flag in flags.items():
+        instance(flag, src, name, bool, "True or False")
+
+
 def sweep(spec, out: str | Path | None = None, *, workers: int | None = None, scheduler: str | None = None,
           processes: bool = False, progress: bool = False, restart: bool = False) -> pd.DataFrame:
     """Run a sweep and return its rows (docs/sweeps.md).
@@ -255,8 +273,10 @@ def sweep(spec, out: str | Path | None = None, *, workers: int | None = None, sc
     ------
     linsense.errors.InputError
         An invalid sweep, an ``out`` that is not this sweep's or whose inputs changed, or an input
-        file changed while the sweep runs.
+        file changed while the sweep runs; an argument of the wrong type (``out=123`` was a
+        TypeError).
     """
+    _check_args(out, workers, scheduler, processes=processes, progress=progress, restart=restart)
     sw = as_sweep(spec)
     pts = points(sw)
     batch = batch_size(sw, len(pts))

@@ -41,6 +41,7 @@ from typing import Annotated, Literal, get_args
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
+from linsense._check import brief, instance, path_arg
 from linsense._digest import bytes_sha256
 from linsense.errors import InputError, KeyProblem
 from linsense.io import folder_of, parse_toml, read_text_file, working_folder
@@ -236,6 +237,10 @@ def sweep_from_dict(data: dict, source: str = "<dict>", base_dir: str | Path | N
     linsense.errors.InputError
         Naming ``source``, the key and the value.
     """
+    src = "linsense.sweep.sweep_from_dict"
+    instance(source, src, "source", str, "a str (named in messages)")
+    if base_dir is not None:
+        base_dir = path_arg(base_dir, src, "base_dir", "a folder")
     if not isinstance(data, dict):
         raise InputError(source, "", f"a sweep is a table of sections, got {type(data).__name__}")
     try:
@@ -265,6 +270,7 @@ def load_sweep(path: str | Path) -> SweepSpec:
     linsense.errors.InputError
         An unreadable file, bad TOML or an invalid key.
     """
+    path = path_arg(path, "linsense.sweep.load_sweep", "path", "a sweep file")
     text = read_text_file(path, "sweep file")
     sw = sweep_from_dict(parse_toml(text, str(path)), str(path), folder_of(path))
     sw.text_sha256 = bytes_sha256(text.encode("utf-8"))
@@ -286,10 +292,8 @@ def as_sweep(obj) -> SweepSpec:
 
     Raises
     ------
-    TypeError
-        ``obj`` is none of these.
     linsense.errors.InputError
-        An invalid sweep.
+        An invalid sweep, or ``obj`` none of these.
     """
     if isinstance(obj, SweepSpec):
         return obj
@@ -299,4 +303,5 @@ def as_sweep(obj) -> SweepSpec:
         from linsense import examples
 
         return load_sweep(examples.named("sweeps", obj))  # (a packaged example's name: its file)
-    raise TypeError(f"expected a SweepSpec, a path or a dict, got {type(obj).__name__}")
+    raise InputError("linsense.sweep.sweep", "spec", f"expected a SweepSpec, a sweep file's path, a packaged "
+                     f"sweep's name or a dict, got {brief(obj)} ({type(obj).__name__})")

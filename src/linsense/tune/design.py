@@ -17,13 +17,16 @@ injection's amplitude from the dead-time voltage error and the lowest local sali
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
+import numbers
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from linsense._check import brief, choice, instance
 from linsense.analysis.hf import (
     end_anisotropy,
     hf_current_amplitude,
@@ -31,7 +34,7 @@ from linsense.analysis.hf import (
 )
 from linsense.compensation.lut import resistance_slope
 from linsense.errors import InputError, shown
-from linsense.model.motor import Motor
+from linsense.model.motor import Motor, as_motor
 from linsense.tune.margins import error_gain
 
 #: the stated ratios (docs/tuning.md)
@@ -92,10 +95,28 @@ DITHER_CURRENT = 0.16  # of i_max
 DITHER_FREQ = 0.055
 V_DC_MIN_FRACTION = 5.0 / 9.0  # under-voltage limit, of the bus (40 V at 72 V)
 V_DC_MAX_FRACTION = 5.0 / 4.0  # over-voltage limit (90 V at 72 V)
-#: the Coulomb friction's linear band (controller.friction_band) at most this share of ts / (m slope)
-#: per step in the mechanical observer (docs/tuning.md, "Friction and thrust ripple")
+#: the friction model's slope (the Coulomb force over its linear band, plus the viscous coefficient)
+#: at most this share of m / ts: the mechanical observer steps its friction forward within one PWM
+#: period (ls_observer_init refuses a slope of m / ts or more; docs/tuning.md, "Friction and thrust
+#: ripple"). A light mover with viscous friction (1 g, 20 N s/m at 16 kHz: 1.25 m / ts) has its
+#: viscous coefficient fed forward up to the share left by the Coulomb part's
 FRICTION_STEP_SHARE = 0.5
+#: the observer's load clamp (observer.force_max) at most this share of the largest load estimate
+#: ls_observer_init takes, force_max (2 pi / tau) ts^2 / m <= pi (a load that moves the estimate half
+#: a period per step): K_f i_max on a light mover (1 g) was beyond it and the drive refused
+OBSERVER_FORCE_SHARE = 0.9
 RIPPLE_MAX = 0.5  # the largest thrust ripple fed forward, |c| + |s| of K_f (ls_drive_init's limit)
+
+
+def _real_number(v) -> bool:
+    """A real number a float holds (NaN and infinities too: :func:`design` names their key)."""
+    if isinstance(v, bool | np.bool_) or not isinstance(v, numbers.Real):
+        return False
+    try:
+        float(v)
+    except OverflowError:  # (10**400)
+        return False
+    return True
 
 
 @dataclass
@@ -129,6 +150,12 @@ class DriveData:
     shape : str
         Injection: ``"pulsating"`` (pulsating or elliptical), ``"rotating"`` or ``"square"`` (at
         f_pwm / 2).
+
+    Raises
+    ------
+    linsense.errors.InputError
+        A value of the wrong type (a number that is not a real number, None where a number is
+        required, another shape), naming the field; :func:`design` checks the ranges.
     """
 
     v_dc: float = 72.0  # V
@@ -143,6 +170,18 @@ class DriveData:
     f_inj: float | None = None  # Hz, injection frequency (None: designed)
     quad: float = QUAD  # -, elliptical share on q (0: the paper's pulsating injection)
     shape: str = "pulsating"  # injection: pulsating/elliptical, rotating or square (at f_pwm / 2)
+
+    def __post_init__(self) -> None:
+        # one validated constructor (issue 37): DriveData(v_dc="72") was built and design() ended in a
+        # TypeError; the ranges are design()'s (named with the option or key they came from)
+        src = "linsense.tune.DriveData"
+        for f in dataclasses.fields(self):
+            v = getattr(self, f.name)
+            if f.name == "shape":
+                choice(v, src, "shape", ("pulsating", "rotating", "square"), "injection")
+            elif not (v is None and "None" in str(f.type)) and not _real_number(v):
+                what = "None or a real number" if "None" in str(f.type) else "a real number"
+                raise InputError(src, f.name, f"expected {what}, got {brief(v)} ({type(v).__name__})")
 
 
 @dataclass
@@ -1034,7 +1073,15 @@ def design(
     linsense.errors.InputError
         The first of :data:`DRIVE_RULES` the motor and drive break (:func:`check_drive`), naming
         ``source``, the input at fault, its value and its limit.
+        An argument of the wrong type (``motor`` not a motor, ``drive`` not a :class:`DriveData`),
+        naming it.
     """
+    src = "linsense.tune.design"
+    motor = as_motor(motor, src)
+    if drive is not None:
+        instance(drive, src, "drive", DriveData, "None or a DriveData")
+    instance(source, src, "source", str, "a str (named in messages)")
+    instance(analyse, src, "analyse", bool, "True or False")
     d = drive or DriveData()
     x = check_drive(motor, d, source)  # (every refusal: DRIVE_RULES, in order)
     warnings: list[str] = []
@@ -1142,6 +1189,50 @@ def design(
     return dz
 
 
+def friction_steps(motor: Motor, f_pwm: float) -> float:
+    """The viscous coefficient the controller feeds forward, N s/m.
+
+    The motor's, up to the share of :data:`FRICTION_STEP_SHARE` ``m f_pwm`` the mechanical observer
+    steps through (half of it when there is Coulomb friction too: the other half is its linear
+    band's, :func:`friction_band`).
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+    f_pwm : float
+        The drive's rate, Hz.
+
+    Returns
+    -------
+    float
+        N s/m.
+    """
+    budget = FRICTION_STEP_SHARE * motor.mass * f_pwm
+    return min(float(motor.friction.viscous), 0.5 * budget if motor.friction.coulomb > 0.0 else budget)
+
+
+def observer_force_max(motor: Motor, f_pwm: float) -> float:
+    """The largest load clamp of the mechanical observer the design sets, N.
+
+    :data:`OBSERVER_FORCE_SHARE` of ``pi m / ((2 pi / tau) ts^2)``, the load estimate that moves the
+    observer's position estimate half a period per PWM period (ls_observer_init's bound).
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+    f_pwm : float
+        The drive's rate, Hz.
+
+    Returns
+    -------
+    float
+        N.
+    """
+    return OBSERVER_FORCE_SHARE * 0.5 * motor.mass * f_pwm**2 * motor.pole_pitch
+
+
 def friction_band(motor: Motor, d: DriveData, v_inj: float, f_inj: float, quad: float, L_q: float) -> float:
     """The speed below which the dither-averaged Coulomb friction is linear, m/s.
 
@@ -1149,7 +1240,8 @@ def friction_band(motor: Motor, d: DriveData, v_inj: float, f_inj: float, quad: 
     square shapes) shakes the mover at ``v_d = K_f i_q / (m w)``; averaged over it the relay
     ``F_c sign(v)`` becomes ``F_c (2/pi) asin(v / v_d)``, whose slope at 0 the linear band
     ``pi/2 v_d`` keeps. Without a dither the band is the narrowest the mechanical observer steps
-    through (its friction's slope ``ts / m`` at most :data:`FRICTION_STEP_SHARE`).
+    through (its friction's slope, with the viscous coefficient fed forward
+    (:func:`friction_steps`), ``ts / m`` at most :data:`FRICTION_STEP_SHARE`).
 
     Parameters
     ----------
@@ -1171,7 +1263,8 @@ def friction_band(motor: Motor, d: DriveData, v_inj: float, f_inj: float, quad: 
     kappa = quad if d.shape == "pulsating" else 1.0
     i_q = kappa * v_inj / abs(complex(motor.R_s, w * L_q))
     v_d = motor.force_constant * i_q / (motor.mass * w)
-    floor = motor.friction.coulomb / (FRICTION_STEP_SHARE * motor.mass * d.f_pwm)
+    slope = FRICTION_STEP_SHARE * motor.mass * d.f_pwm - friction_steps(motor, d.f_pwm)
+    floor = motor.friction.coulomb / slope
     return max(0.5 * math.pi * v_d, floor)
 
 
@@ -1208,7 +1301,13 @@ def _friction_ripple(dz: Design, motor: Motor, d: DriveData, L_q: float, warning
     thrust ripple"). Fills ``dz`` in place."""
     f = motor.friction
     dz.friction_coulomb = float(f.coulomb)
-    dz.friction_viscous = float(f.viscous)
+    dz.friction_viscous = friction_steps(motor, d.f_pwm)
+    if dz.friction_viscous < f.viscous:  # (a light mover: issue 37)
+        warnings.append(
+            f"the viscous friction {f.viscous:.3g} N s/m is fed forward as {dz.friction_viscous:.3g} N s/m: "
+            f"the mechanical observer steps a friction slope up to {FRICTION_STEP_SHARE:g} m f_pwm "
+            f"({FRICTION_STEP_SHARE * motor.mass * d.f_pwm:.3g} N s/m for {motor.mass:g} kg at "
+            f"{d.f_pwm:g} Hz; ls_observer_init)")
     if f.coulomb > 0.0:
         dz.friction_band = friction_band(motor, d, dz.v_inj, dz.f_inj, dz.quad, L_q)
     ripple = thrust_ripple(motor)
@@ -1366,7 +1465,12 @@ def _limits(dz: Design, motor: Motor, d: DriveData, warnings: list) -> None:
     w_per_v = 2.0 * math.pi / motor.pole_pitch  # electrical rad/s per m/s
     f_max = motor.force_constant * d.i_max
     dz.load = rated_load(motor, d)
-    dz.force_max = f_max
+    dz.force_max = min(f_max, observer_force_max(motor, d.f_pwm))
+    if dz.force_max < f_max:  # (a light mover)
+        warnings.append(
+            f"the observer's load clamp is {dz.force_max:.3g} N, below K_f i_max = {f_max:.3g} N: a larger "
+            f"load estimate would move the estimate of this {motor.mass:g} kg mover more than "
+            f"{OBSERVER_FORCE_SHARE / 2:g} period per PWM period (ls_observer_init)")
     need = dz.load + motor.mass * d.a_max  # (within K_f i_max: DRIVE_RULES)
     if need > FORCE_MARGIN * f_max:
         warnings.append(
