@@ -207,7 +207,8 @@ def psi_lut(model, theta) -> np.ndarray:
 
 
 def real_arg(v, source: str, name: str, low: float = -math.inf, high: float = math.inf, *,
-             low_open: bool = False, high_open: bool = False, what: str = "a finite real number") -> float:
+             low_open: bool = False, high_open: bool = False, what: str = "a finite real number",
+             kind: str | None = None) -> float:
     """``v`` as a float if it is a real, finite number within ``low`` .. ``high``.
 
     Not a boolean, complex, string, None or array; open ends where asked. The API refuses what the
@@ -228,6 +229,9 @@ def real_arg(v, source: str, name: str, low: float = -math.inf, high: float = ma
         Whether ``low`` / ``high`` themselves are refused.
     what : str, optional
         What the argument must be, for the message.
+    kind : str or None, optional
+        Its kind of quantity (:data:`linsense.plausible.KINDS`): a refused number gets the slip of
+        unit that brings it within the range ("did you type kHz?").
 
     Returns
     -------
@@ -250,7 +254,15 @@ def real_arg(v, source: str, name: str, low: float = -math.inf, high: float = ma
         lo = "" if low == -math.inf else f"{'(' if low_open else '['}{low:g}"
         hi = "" if high == math.inf else f"{high:g}{')' if high_open else ']'}"
         rng = f" in {lo or '(-inf'}, {hi or 'inf)'}" if lo or hi else ""
-        raise InputError(source, name, f"must be {what}{rng}, got {shown(v)}")
+        hint = ""
+        if kind is not None and isinstance(v, numbers.Real) and not isinstance(v, bool | np.bool_):
+            from linsense.plausible import slip
+
+            def inside(x: float) -> bool:
+                return (x > low if low_open else x >= low) and (x < high if high_open else x <= high)
+
+            hint = slip(kind, float(v), ok=inside)
+        raise InputError(source, name, f"must be {what}{rng}, got {shown(v)}" + (f"; {hint}" if hint else ""))
     return float(v)
 
 

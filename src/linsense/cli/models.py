@@ -52,16 +52,18 @@ def lut(motor_spec: str, points: int, fmt: str, symbol: str | None, f_inj: float
     from linsense.ctrl import drive_default_cfg
     from linsense.io import write_atomic
     from linsense.limits import MAX_F_INJ, MIN_F_INJ
+    from linsense.plausible import slip
     from linsense.tune.design import observable_error_gain
 
     if f_inj is not None and not (f_inj > 0 and math.isfinite(f_inj)):
         raise InputError("--f-inj", "", f"must be a positive frequency in Hz, got {f_inj!r}")
-    if f_inj is not None and f_inj < MIN_F_INJ:
-        raise InputError("--f-inj", "", f"{f_inj:g} Hz is below the lower limit of {MIN_F_INJ:g} Hz (an HF "
-                         f"injection: below it the resistance is all of the HF impedance; {docs('limits')})")
-    if f_inj is not None and f_inj > MAX_F_INJ:
-        raise InputError("--f-inj", "", f"{f_inj:g} Hz is beyond the limit of {MAX_F_INJ:g} Hz (half of a "
-                         f"1 MHz PWM; {docs('limits')})")
+    if f_inj is not None and not MIN_F_INJ <= f_inj <= MAX_F_INJ:
+        slipped = slip("injection_frequency", f_inj)  # (kHz typed for Hz: 1 was a table at 1 Hz, issue 37)
+        why = (f"is below the lower limit of {MIN_F_INJ:g} Hz (an HF injection: the design's lowest, "
+               "f_pwm / 4 of a 500 Hz PWM" if f_inj < MIN_F_INJ else
+               f"is beyond the limit of {MAX_F_INJ:g} Hz (half of a 1 MHz PWM")
+        raise InputError("--f-inj", "", f"{f_inj:g} Hz {why}; {docs('limits')})"
+                         + (f"; {slipped}" if slipped else ""))
     if symbol is not None:  # (checked, never rewritten: 'my lut!' was my_lut, int was int_t)
         if fmt != "c":
             raise InputError("--symbol", "", f"names the C header's array: only with --format c (not {fmt})")
@@ -118,7 +120,7 @@ def plot(motor_spec: str, points: int, out: str | None, as_json: bool) -> None:
 @click.option("--motor", "motor_spec", required=True, help=c.MOTOR_HELP)
 @click.option("--positions", default=56, show_default=True, type=click.IntRange(8, MAX_POSITIONS),
               help="equally spaced positions over one pole pitch")
-@click.option("--noise", default=0.0, show_default=True, type=float, callback=c.finite(0.0, False),
+@click.option("--noise", default=0.0, show_default=True, type=float, callback=c.plausible("relative_noise"),
               help="relative complex Gaussian noise on every phasor (0.01 = 1 %)")
 @click.option("--seed", default=0, show_default=True, type=click.IntRange(min=0), help="random seed")
 @click.option("--freq", "freq_hz", default=1000.0, show_default=True, type=float,

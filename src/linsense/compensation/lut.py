@@ -148,7 +148,8 @@ def build_lut(motor, points: int, f_inj: float | None = None, quad: float = 0.0,
         raise InputError(src, "injection",
                          f"must be 'pulsating', 'rotating' or 'square', got {shown(injection)}")
     if f_inj is not None:
-        real_arg(f_inj, src, "f_inj", MIN_F_INJ, MAX_F_INJ, what="None or a frequency in Hz (docs/limits.md)")
+        real_arg(f_inj, src, "f_inj", MIN_F_INJ, MAX_F_INJ, what="None or a frequency in Hz (docs/limits.md)",
+                 kind="injection_frequency")
     real_arg(quad, src, "quad", 0.0, 1.0, high_open=True, what="a number")
     points = int(points)
     theta = 2.0 * np.pi * np.arange(points) / points

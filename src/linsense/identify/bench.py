@@ -22,6 +22,7 @@ import numpy as np
 
 from linsense.errors import InputError
 from linsense.io import check_width, csv_rows, finite_cell
+from linsense.plausible import KINDS
 
 #: Phases in storage order (index 0, 1, 2).
 PHASES = ("A", "B", "C")
@@ -301,7 +302,8 @@ def emulate_bench(
     if isinstance(seed, bool) or not isinstance(seed, numbers.Integral) or seed < 0:
         raise InputError(src, "seed", f"must be an integer >= 0, got {seed!r}")
     positions, seed = int(positions), int(seed)
-    noise = real_arg(noise, src, "noise", 0.0, what="a finite fraction")
+    noise = real_arg(noise, src, "noise", 0.0, KINDS["relative_noise"].high, what="a fraction (0.01 = 1 %)",
+                     kind="relative_noise")
     freq = real_arg(freq, src, "freq", 0.0, low_open=True, what="a positive finite frequency in Hz")
     current = real_arg(current, src, "current", 0.0, low_open=True, what="a positive finite current in A")
     rng = np.random.default_rng(seed)
