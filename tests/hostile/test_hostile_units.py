@@ -179,7 +179,8 @@ def _scale(cols, k):
 
 BENCH = {
     # before: exit 0, motor.toml with L0 = 2.75 uH and R_s = 9 milliohm (a motor 1000 times off)
-    "current in mA": (_scale((3, 4), 1000.0), ["bench", "L0", "mA"]),
+    "current in mA": (_scale((3, 4), 1000.0), ["column I_re, I_im", "A and V peak", "did you type mA?"]),
+    "voltages in mV": (_scale(tuple(range(5, 11)), 1000.0), ["VA_re", "did you type mV?"]),
     # before: exit 0, motor.toml with L0 = 2.75 H (a file linsense then refuses to load)
     "frequency in kHz": (_scale((2,), 1e-3), ["bench", "L0", "kHz"]),
     # before: "positions do not cover one electrical period" (0.055 of a 56 mm pitch)
@@ -197,11 +198,22 @@ def test_a_bench_file_in_other_units_is_refused_naming_them(run_cli, tmp_path, n
     assert not (tmp_path / "id").exists()
 
 
+def test_a_bench_file_in_ma_within_the_current_range_is_a_warning(run_cli, tmp_path):
+    """Currents in mA of 0.5 A (400 to 600 "A", within the range of currents): the fitted motor,
+    500 times below --motor ecce2010 in L and R_s, was written without a word; now a warning names
+    the fitted values, the motor's and the slip."""
+    bench = _bench(tmp_path, "b.csv", _scale((3, 4), 500.0))
+    res = run_cli("identify", bench, "--motor", "ecce2010", "--out", str(tmp_path / "id"))
+    assert res.code == 0, res.err
+    warning = next(line for line in res.err.splitlines() if "warning" in line and "L0" in line)
+    assert "ecce2010" in warning and "mA" in warning, warning
+
+
 def test_an_inductance_table_in_radians_says_so(run_cli, tmp_path):
     """Before: "positions do not cover one electrical period: gap of 353.8 deg after 6.2 deg"."""
-    from linsense import examples
+    from importlib import resources
 
-    rows = list(csv.reader(examples.path("motors", "ecce2010_table.csv").open()))
+    rows = list(csv.reader((resources.files("linsense.examples") / "motors" / "ecce2010_table.csv").open()))
     with (tmp_path / "t.csv").open("w", newline="") as fh:
         w = csv.writer(fh)
         w.writerow(rows[0][:7])
@@ -234,8 +246,8 @@ def test_a_motor_axis_with_a_relative_out_runs(run_cli, tmp_path, monkeypatch):
     (tmp_path / "scen" / "s.toml").write_text(BASE)
     (tmp_path / "w.toml").write_text('[sweep]\nname = "w"\nscenario = "scen/s.toml"\n[[axis]]\n'
                                      'key = "lut_motor.inductance.dM0"\nrelative = true\nvalues = [1.0]\n')
-    res = run_cli("sweep", "w.toml", "--out", "o", "--check", "--workers", "1", "--no-progress")
-    assert res.code == 0, res.out + res.err
+    res = run_cli("sweep", "w.toml", "--out", "o", "--workers", "1", "--no-progress")
+    assert res.code == 0 and "1 runs:" in res.out and "0 refused" in res.out, res.out + res.err
 
 
 # ------------------------------------------------------------------ the Python API
@@ -243,7 +255,7 @@ def test_the_api_holds_the_same_table():
     import linsense
     from linsense.compensation.lut import build_lut
     from linsense.errors import InputError
-    from linsense.identify import emulate_bench
+    from linsense.identify.bench import emulate_bench
     from linsense.identify.pipeline import identify
     from linsense.model.motor import load_motor
 

@@ -149,12 +149,13 @@ def bench_emulate(motor_spec: str, positions: int, noise: float, seed: int, freq
               help="K: fit the even orders 2, 4, ..., 2K (1 = the five parameters of eq. 3)")
 @click.option("--motor", "motor_spec", default=None,
               help="motor giving pole pitch, force constant, mass (and R_s for amplitude-only data)")
-@click.option("--pole-pitch", "pole_pitch_mm", type=float, callback=c.finite(0.0, True), default=None,
+@click.option("--pole-pitch", "pole_pitch_mm", type=float, callback=c.plausible("pole_pitch", "mm"),
+              default=None,
               help="one electrical period, mm (overrides --motor)")
-@click.option("--force-constant", type=float, callback=c.finite(0.0, True), default=None,
+@click.option("--force-constant", type=float, callback=c.plausible("force_constant"), default=None,
               help="N/A per peak phase current (overrides --motor)")
-@click.option("--mass", type=float, callback=c.finite(0.0, True), default=None, help="kg (overrides --motor)")
-@click.option("--resistance", type=float, callback=c.finite(0.0, False), default=None,
+@click.option("--mass", type=float, callback=c.plausible("mass"), default=None, help="kg (overrides --motor)")
+@click.option("--resistance", type=float, callback=c.plausible("resistance"), default=None,
               help="phase resistance, ohm, for amplitude-only data (0 neglects it as the paper does)")
 @click.option("--name", default=None, help="motor name in motor.toml (default: the bench file name)")
 @click.option("--points", default=360, show_default=True, callback=c.points, help="length of lut_fit.csv")

@@ -20,7 +20,7 @@ from linsense.io import parse_toml, read_csv_table, read_text_file
 from linsense.model.inductance import ENTRIES, InductanceModel
 from linsense.model.saturation import Saturation
 from linsense.model.schema import validate_motor_file
-from linsense.plausible import KINDS
+from linsense.plausible import KINDS, slip
 
 #: Saliency |L_q - L_d| below this fraction of (L_d + L_q)/2 counts as vanished.
 MIN_SALIENCY_RATIO = 0.01
@@ -464,10 +464,13 @@ def read_inductance_table(path: Path) -> tuple[np.ndarray, np.ndarray]:
     gaps = np.diff(np.concatenate([ws, [ws[0] + 360.0]]))
     if gaps.max() > 45.0:
         g = int(np.argmax(gaps))
+        span = float(ws[-1] - ws[0])  # (radians typed: 0 .. 6.2, issue 37)
+        hint = slip("angle", span, ok=lambda v: 360.0 - 45.0 <= v <= 360.0)
         raise InputError(
             src, "column theta_deg",
             f"positions do not cover one electrical period: gap of {gaps[g]:.1f} deg after "
-            f"{ws[g]:.1f} deg (at most 45 deg allowed)",
+            f"{ws[g]:.1f} deg (at most 45 deg allowed)"
+            + (f"; the positions span {span:.4g} deg: {hint}" if hint else ""),
         )
     return np.radians(data[:, 0]), data[:, 1:]
 

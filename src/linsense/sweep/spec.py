@@ -44,6 +44,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 from linsense._digest import bytes_sha256
 from linsense.errors import InputError, KeyProblem
 from linsense.io import parse_toml, read_text_file
+from linsense.plausible import implausible
 from linsense.validation import to_input_error
 
 _STRICT = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
@@ -104,6 +105,13 @@ class Axis(BaseModel):
         if self.relative and self.values is not None and not all(
                 isinstance(v, int | float) and not isinstance(v, bool) for v in self.values):
             raise KeyProblem("values", "relative values must be numbers (factors of the base value)")
+        if self.relative:  # (a factor in percent: values = [80, 100] made every run 80 times off, issue 37)
+            given = [("values", v) for v in self.values or ()]
+            given += [(k, getattr(self, k)) for k in ("min", "max") if getattr(self, k) is not None]
+            for key, v in given:
+                msg = implausible("factor", float(v))
+                if msg is not None:
+                    raise KeyProblem(key, f"relative = true makes it a factor of the base value: {msg}")
         return self
 
 
