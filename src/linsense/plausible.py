@@ -27,8 +27,10 @@ class Kind:
     ----------
     unit : str
         The unit the range is in (SI; ``""`` for a ratio).
-    low, high : float
-        The plausible range, ends included.
+    low : float
+        The lowest plausible value, in :attr:`unit`.
+    high : float
+        The highest plausible value (the range's ends included).
     slips : tuple of (str, float)
         Units a value of this kind is typed in by mistake, each with its size in ``unit``
         (``("mH", 1e-3)``: 1 mH is 1e-3 H).

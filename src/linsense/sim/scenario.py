@@ -1108,7 +1108,8 @@ def _slip_of(key: str, data: dict) -> str:
     path, _, name = key.rpartition(".")
     model = next(m for p, m in _SECTIONS.values() if p == path)
     field = model.model_fields[name]
-    adapter = TypeAdapter(Annotated[field.annotation, *field.metadata])
+    ann = Annotated[field.annotation, *field.metadata] if field.metadata else field.annotation
+    adapter = TypeAdapter(ann)
 
     def accepted(v: float) -> bool:
         try:
