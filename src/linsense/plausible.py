@@ -88,6 +88,7 @@ KINDS: dict[str, Kind] = {
     "inductance": Kind("H", 1e-6, 0.5, (("mH", 1e-3), ("uH", 1e-6), ("nH", 1e-9)), "real linear motors"),
     "stroke": Kind("m", 1e-3, 100.0, (("mm", 1e-3), ("um", 1e-6)), "linear-motor axes"),
     "dead_time": Kind("s", 0.0, 2e-5, (("us", 1e-6), ("ns", 1e-9)), "PWM inverters"),
+    "time": Kind("s", 0.0, 3600.0, (("ms", 1e-3), ("us", 1e-6)), "simulated runs"),
     "pwm_frequency": Kind("Hz", 500.0, 1e6, (("kHz", 1e3),), "the controller library"),
     "injection_frequency": Kind("Hz", 125.0, 5e5, (("kHz", 1e3),), "HF injections"),
     "bandwidth": Kind("Hz", 0.0, 1e5, (("rad/s", 1.0 / (2.0 * math.pi)), ("kHz", 1e3)), "control loops"),

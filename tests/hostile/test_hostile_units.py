@@ -82,6 +82,20 @@ SCENARIO = {
                                               ["observer.bandwidth_hz", "observer.demod_lpf_hz"]),
     "current loop in rad/s": ("[controller]\ncurrent_bandwidth_hz = 6283.0",
                               ["controller.current_bandwidth_hz", "f_pwm / 10", "did you type rad/s?"]),
+    # before: accepted, "stable" with a band of 50 A (bias 0.85 deg), an HF delay of 50 ms ("overspeed")
+    "compensation band in mA": ("[inverter]\ndtc_current_band = 50.0",
+                                ["inverter.dtc_current_band", "controller.i_max", "did you type mA?"]),
+    "HF delay in ms": ("[observer]\nhf_delay_s = 0.05", ["observer.hf_delay_s", "did you type ms?"]),
+    "HF delay in ms, beyond its bound": ("[observer]\nhf_delay_s = 1.0",
+                                         ["observer.hf_delay_s", "did you type ms? (1 ms is 0.001 s)"]),
+    # before: accepted, a calibration whose 100 A dither the current limit clamps
+    "calibration dither in mA": ('[control]\nmode = "calibration"\n[calibration]\ndither_a = 100.0',
+                                 ["calibration.dither_a", "did you type mA?"]),
+    # before: accepted, 20 kV pulses on a 72 V bus
+    "start-up pulse in mV": ('[control]\nmode = "startup"\n[saturation]\nenabled = true\n[startup]\n'
+                             "v_pulse = 20000.0", ["startup.v_pulse", "did you type mV?"]),
+    "start-up lock in ms": ('[control]\nmode = "startup"\n[saturation]\nenabled = true\n[startup]\n'
+                            "t_lock = 200.0", ["startup.t_lock", "did you type ms? (200 ms is 0.2 s)"]),
 }
 
 TRAJ_CASES = {

@@ -525,6 +525,7 @@ def check_units(sc: Scenario, tau: float, user_keys: set[str], believed: dict[st
     f_inj = f_pwm / 2.0 if s.injection.shape == "square" else s.injection.frequency
     lpf, v_max = s.observer.demod_lpf_hz, s.controller.v_max
     w_top = 2.0 * math.pi * v_max / tau
+    v_lin, i_max = s.inverter.v_dc / math.sqrt(3.0), s.controller.i_max
     speed = (f"the electrical speed of controller.v_max = {v_max:g} m/s, 2 pi v_max / pole pitch = "
              f"{w_top:.4g} rad/s")
     relations = [  # (key, must hold, what it must be and why)
@@ -540,11 +541,21 @@ def check_units(sc: Scenario, tau: float, user_keys: set[str], believed: dict[st
          f"above {speed} (the estimate would be clamped below the speeds the drive commands)"),
         ("protection.omega_max", lambda v: v > w_top,
          f"above {speed} (the over-speed trip would fire at speeds the drive commands)"),
+        ("startup.v_pulse", lambda v: v < v_lin,
+         f"below the bus's linear range V_dc / sqrt(3) = {v_lin:.4g} V (a larger pulse is clipped by the "
+         "modulator)"),
+        ("calibration.dither_a", lambda v: v < i_max,
+         f"below controller.i_max = {i_max:g} A (the dither rides on the current reference, clamped there)"),
+        ("inverter.dtc_current_band", lambda v: v < i_max,
+         f"below controller.i_max = {i_max:g} A (a band beyond the current reference leaves the "
+         "compensation a slope, no sign)"),
+        ("observer.hf_delay_s", lambda v: v * f_inj <= 10.0,
+         f"at most ten injection periods, {10.0 / f_inj:g} s (the HF path's delay is about one)"),
     ]
     for key, holds, rule in relations:
         value = _value_at(s, key)
         if key in user_keys and not holds(value):
             hint = slip(kinds[key], value, ok=holds)
-            unit = "rad/s" if kinds[key] == "angular_speed" else "Hz"
+            unit = KINDS[kinds[key]].unit
             raise InputError(sc.source, key,
                              f"{value:g} {unit} must be {rule}" + (f"; {hint}" if hint else ""))

@@ -85,7 +85,8 @@ class CalibrationSection(BaseModel):
                            "({ecce2010} for ecce2010)"})
     dither_a: NonNegative = Field(
         _c(_C.cal.dither_amp), description="q-current dither while adapting (0: none)",
-        json_schema_extra={"unit": "A", "default_note": "designed ({ecce2010} for ecce2010)"})
+        json_schema_extra={"kind": "current", "unit": "A",
+                           "default_note": "designed ({ecce2010} for ecce2010)"})
     dither_hz: Positive = Field(
         _c(_C.cal.dither_freq), description="frequency of the dither",
         json_schema_extra={"unit": "Hz", "default_note": "designed ({ecce2010} for ecce2010)"})
@@ -107,7 +108,7 @@ class StartupSection(BaseModel):
                                  "pulses (at least the injection's ramp, at most 60)",
                                  json_schema_extra={"unit": "s"})
     v_pulse: Positive = Field(_c(_C.startup.v_pulse), description="pulse amplitude on the estimated d-axis",
-                              json_schema_extra={"unit": "V"})
+                              json_schema_extra={"kind": "voltage", "unit": "V"})
     t_pulse: Positive = Field(_c(_C.startup.t_pulse), description="pulse length (at least 2 PWM periods, "
                               "at most 60)", json_schema_extra={"unit": "s"})
     t_rest: Positive = Field(_c(_C.startup.t_rest), description="zero voltage before each pulse (at least "
@@ -142,7 +143,7 @@ class InverterSection(BaseModel):
     dead_time_compensation: bool = Field(bool(_C.mod.dtc), description="the modulator's compensation")
     dtc_current_band: Positive = Field(
         _c(_C.mod.i_band), description="smooth-sign band of the compensation (a trade-off under dead "
-        "time: see \"Dead time and the closed loop\")", json_schema_extra={"unit": "A"})
+        "time: see \"Dead time and the closed loop\")", json_schema_extra={"kind": "current", "unit": "A"})
 
 
 class ControlSection(BaseModel):
@@ -266,8 +267,8 @@ class ObserverSection(BaseModel):
         default=_c(_C.hf_delay), ge=0.0, le=0.1,
         description="the HF path's delay: the pulsating and elliptical estimate's demodulated "
         "error is advanced by the speed times it (docs/tuning.md, \"The HF path's delay\")",
-        json_schema_extra={"unit": "s", "default_note": "designed (`1 / f_inj`; 0 for the rotating vector "
-                           "and the square wave)"})
+        json_schema_extra={"kind": "time", "unit": "s", "default_note": "designed (`1 / f_inj`; 0 for the "
+                           "rotating vector and the square wave)"})
     demod_notch: bool = Field(bool(_C.demod.f_notch > 0), description="the low-pass's zeros at twice the "
                               "injection frequency (the products' ripple)")
     min_level: NonNegative = Field(_c(_C.demod.min_level), description="HF level below which the error is "
@@ -770,7 +771,9 @@ class ScenarioFile(BaseModel):
         if ctl.mode == "startup":
             for k in ("t_lock", "t_quiet", "t_pulse", "t_rest", "t_settle"):  # (before the periods)
                 if getattr(su, k) > 60.0:
-                    raise KeyProblem(f"startup.{k}", f"at most 60 s, got {getattr(su, k):g}")
+                    hint = slip("time", getattr(su, k), ok=lambda v: v <= 60.0)
+                    raise KeyProblem(f"startup.{k}", f"at most 60 s, got {getattr(su, k):g}"
+                                     + (f"; {hint}" if hint else ""))
             if _periods(su.t_pulse, inv.f_pwm) < 2:
                 raise KeyProblem("startup.t_pulse", f"must be at least 2 PWM periods ({2 / inv.f_pwm:g} s), "
                                  f"got {su.t_pulse:g}")
