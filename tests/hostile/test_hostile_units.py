@@ -239,6 +239,17 @@ def test_an_inductance_table_in_radians_says_so(run_cli, tmp_path):
         "theta_deg", "did you type rad?")
 
 
+def test_an_fea_geometry_in_mm_names_the_pole_pitch(run_cli, tmp_path):
+    """A geometry file's pole pitch in mm: before, "armature: outer radius 0.0255 m or pole pitch
+    beyond 10 m: check the units (m)", naming [armature]."""
+    from importlib import resources
+
+    text = (resources.files("linsense.examples") / "fea" / "fig4_three_coils.toml").read_text()
+    (tmp_path / "g.toml").write_text(text.replace("pole_pitch = 0.056", "pole_pitch = 56.0"))
+    run_cli("fea", str(tmp_path / "g.toml"), "--out", str(tmp_path / "o")).refused(
+        "motor.pole_pitch", "56 m", "did you type mm?")
+
+
 # ------------------------------------------------------------------ sweeps
 def test_relative_factors_in_percent_are_refused(run_cli, tmp_path):
     """``relative = true`` with values [80, 100]: before, exit 0, every run refused blaming the
