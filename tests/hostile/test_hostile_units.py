@@ -250,6 +250,15 @@ def test_an_fea_geometry_in_mm_names_the_pole_pitch(run_cli, tmp_path):
         "motor.pole_pitch", "56 m", "did you type mm?")
 
 
+def test_fea_load_currents_in_ma_are_refused():
+    """``fea --load-current 0,2000`` (mA typed): before, an FEA at 2 kA (|I| <= 1e6 A accepted)."""
+    from linsense.errors import InputError
+    from linsense.fea.pipeline import parse_currents
+
+    with pytest.raises(InputError, match=r"--load-current.*2000 A.*did you type mA\?"):
+        parse_currents("0,2000")
+
+
 # ------------------------------------------------------------------ sweeps
 def test_relative_factors_in_percent_are_refused(run_cli, tmp_path):
     """``relative = true`` with values [80, 100]: before, exit 0, every run refused blaming the
