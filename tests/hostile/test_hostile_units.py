@@ -88,6 +88,9 @@ SCENARIO = {
     "HF delay in ms": ("[observer]\nhf_delay_s = 0.05", ["observer.hf_delay_s", "did you type ms?"]),
     "HF delay in ms, beyond its bound": ("[observer]\nhf_delay_s = 1.0",
                                          ["observer.hf_delay_s", "did you type ms? (1 ms is 0.001 s)"]),
+    # before: "fault travel" at 0.06 s (a stroke of 0.2 mm)
+    "travel in m": ("[travel]\nmin_mm = -0.1\nmax_mm = 0.1",
+                    ["travel.max_mm", "one pole pitch", "did you type m? (0.2 m is 200 mm)"]),
     # before: accepted, a calibration whose 100 A dither the current limit clamps
     "calibration dither in mA": ('[control]\nmode = "calibration"\n[calibration]\ndither_a = 100.0',
                                  ["calibration.dither_a", "did you type mA?"]),

@@ -521,6 +521,14 @@ def check_units(sc: Scenario, tau: float, user_keys: set[str], believed: dict[st
             raise InputError(sc.source, key, f"{value:g} {unit} is more than {MODEL_FACTOR_MAX:g} times off "
                              f"the motor's {own:.4g} {unit} (what the controller believes is off by tens of "
                              "% in a parameter mismatch)" + (f"; {hint}" if hint else ""))
+    tr, tau_mm = s.travel, tau * 1e3
+    given = [k for k in ("travel.max_mm", "travel.min_mm") if k in user_keys]
+    if given and tr.max_mm - tr.min_mm < tau_mm:  # (the design's rule for --travel, linsense.tune.design)
+        span = tr.max_mm - tr.min_mm
+        hint = slip("stroke", span, "mm", ok=lambda v: v >= tau_mm)
+        raise InputError(sc.source, given[0], f"the travel [{tr.min_mm:g}, {tr.max_mm:g}] mm spans {span:g} "
+                         f"mm, less than one pole pitch ({tau_mm:g} mm: the drive holds anywhere in the "
+                         "period)" + (f"; {hint}" if hint else ""))
     f_pwm = s.inverter.f_pwm
     f_inj = f_pwm / 2.0 if s.injection.shape == "square" else s.injection.frequency
     lpf, v_max = s.observer.demod_lpf_hz, s.controller.v_max
