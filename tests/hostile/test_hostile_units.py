@@ -91,6 +91,9 @@ SCENARIO = {
     # before: "fault travel" at 0.06 s (a stroke of 0.2 mm)
     "travel in m": ("[travel]\nmin_mm = -0.1\nmax_mm = 0.1",
                     ["travel.max_mm", "one pole pitch", "did you type m? (0.2 m is 200 mm)"]),
+    # before: "saturation.polarity: ... beyond what a magnet current of 16000 A can give"
+    "magnet current in mA": ("[saturation]\nenabled = true\nmagnet_current = 16000.0",
+                             ["saturation.magnet_current", "did you type mA?"]),
     # before: accepted, a calibration whose 100 A dither the current limit clamps
     "calibration dither in mA": ('[control]\nmode = "calibration"\n[calibration]\ndither_a = 100.0',
                                  ["calibration.dither_a", "did you type mA?"]),

@@ -34,7 +34,7 @@ from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, ValidationError,
 from linsense.ctrl import REAL, drive_default_cfg
 from linsense.errors import InputError
 from linsense.io import read_toml
-from linsense.plausible import slip
+from linsense.plausible import implausible, slip
 from linsense.tune.design import DEAD_TIME_SHARE_MAX, V_DC_MAX_FRACTION, V_DC_MIN_FRACTION, DriveData
 from linsense.validation import KeyProblem, to_input_error
 
@@ -559,6 +559,10 @@ class SaturationSection(BaseModel):
         given = [k for k in keys if getattr(self, k) is not None]
         if given and not self.enabled:
             raise KeyProblem(given[0], "only used by the saturated plant: set saturation.enabled = true")
+        for k in ("magnet_current", "q_current"):  # (16000 for 16 A was blamed on saturation.polarity)
+            msg = None if getattr(self, k) is None else implausible("current", getattr(self, k))
+            if msg is not None:
+                raise KeyProblem(k, msg)
         return self
 
 
