@@ -90,7 +90,7 @@ SCENARIO = {
                                          ["observer.hf_delay_s", "did you type ms? (1 ms is 0.001 s)"]),
     # before: "fault travel" at 0.06 s (a stroke of 0.2 mm)
     "travel in m": ("[travel]\nmin_mm = -0.1\nmax_mm = 0.1",
-                    ["travel.max_mm", "one pole pitch", "did you type m? (0.2 m is 200 mm)"]),
+                    ["travel.max_mm", "0.2 mm is outside", "did you type m? (0.2 m is 200 mm)"]),
     # before: "saturation.polarity: ... beyond what a magnet current of 16000 A can give"
     "magnet current in mA": ("[saturation]\nenabled = true\nmagnet_current = 16000.0",
                              ["saturation.magnet_current", "did you type mA?"]),

@@ -476,7 +476,8 @@ def check_units(sc: Scenario, tau: float, user_keys: set[str], believed: dict[st
     rad/s breaks: the demodulator's low-pass below the injection it demodulates, the observer below
     that low-pass, the current loop at most f_pwm / 10, the speed clamp and trip above the drive's top
     speed; what the controller believes (``[controller.model]``) within :data:`MODEL_FACTOR_MAX` of
-    the motor's own value. Each refusal names the slip of unit that brings the value in.
+    the motor's own value; the travel's span a plausible stroke (1 mm at least). Each refusal names
+    the slip of unit that brings the value in.
 
     Only the keys the file gives are checked (the designed ones are the design's); after the C
     library's own limits (a value beyond what it takes at all is refused there, naming its limit).
@@ -498,7 +499,7 @@ def check_units(sc: Scenario, tau: float, user_keys: set[str], believed: dict[st
     InputError
         Naming the key, its value, the range or the relation, and the likely slip of unit.
     """
-    from linsense.plausible import KINDS, check, slip
+    from linsense.plausible import KINDS, check, implausible, slip
     from linsense.sim.scenario import unit_kinds
 
     s = sc.spec
@@ -521,14 +522,12 @@ def check_units(sc: Scenario, tau: float, user_keys: set[str], believed: dict[st
             raise InputError(sc.source, key, f"{value:g} {unit} is more than {MODEL_FACTOR_MAX:g} times off "
                              f"the motor's {own:.4g} {unit} (what the controller believes is off by tens of "
                              "% in a parameter mismatch)" + (f"; {hint}" if hint else ""))
-    tr, tau_mm = s.travel, tau * 1e3
+    tr = s.travel
     given = [k for k in ("travel.max_mm", "travel.min_mm") if k in user_keys]
-    if given and tr.max_mm - tr.min_mm < tau_mm:  # (the design's rule for --travel, linsense.tune.design)
-        span = tr.max_mm - tr.min_mm
-        hint = slip("stroke", span, "mm", ok=lambda v: v >= tau_mm)
-        raise InputError(sc.source, given[0], f"the travel [{tr.min_mm:g}, {tr.max_mm:g}] mm spans {span:g} "
-                         f"mm, less than one pole pitch ({tau_mm:g} mm: the drive holds anywhere in the "
-                         "period)" + (f"; {hint}" if hint else ""))
+    stroke = implausible("stroke", tr.max_mm - tr.min_mm, "mm") if given else None
+    if stroke is not None:  # (0.1 typed for 100 mm: "fault travel" at 0.06 s)
+        raise InputError(sc.source, given[0],
+                         f"the travel [{tr.min_mm:g}, {tr.max_mm:g}] mm: its span {stroke}")
     f_pwm = s.inverter.f_pwm
     f_inj = f_pwm / 2.0 if s.injection.shape == "square" else s.injection.frequency
     lpf, v_max = s.observer.demod_lpf_hz, s.controller.v_max
