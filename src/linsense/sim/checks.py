@@ -524,8 +524,10 @@ def check_units(sc: Scenario, tau: float, user_keys: set[str], believed: dict[st
                              "% in a parameter mismatch)" + (f"; {hint}" if hint else ""))
     tr = s.travel
     given = [k for k in ("travel.max_mm", "travel.min_mm") if k in user_keys]
-    stroke = implausible("stroke", tr.max_mm - tr.min_mm, "mm") if given else None
-    if stroke is not None:  # (0.1 typed for 100 mm: "fault travel" at 0.06 s)
+    # (0.1 typed for 100 mm: "fault travel" at 0.06 s; a travel beyond any stroke is "unbounded")
+    short = given and tr.max_mm - tr.min_mm < KINDS["stroke"].low * 1e3
+    stroke = implausible("stroke", tr.max_mm - tr.min_mm, "mm") if short else None
+    if stroke is not None:
         raise InputError(sc.source, given[0],
                          f"the travel [{tr.min_mm:g}, {tr.max_mm:g}] mm: its span {stroke}")
     f_pwm = s.inverter.f_pwm

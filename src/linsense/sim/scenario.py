@@ -522,7 +522,7 @@ class ProtectionSection(BaseModel):
         "kind": "angular_speed", "unit": "rad/s electrical", "default_note": "designed: the limits' margins "
         "({ecce2010} for ecce2010 with its table)"})
     i_abort: Positive = Field(20.0, description="the simulator stops the run as `diverged` beyond this",
-                              json_schema_extra={"kind": "current", "unit": "A"})
+                              json_schema_extra={"unit": "A"})
 
 
 class RecordSection(BaseModel):
