@@ -111,7 +111,8 @@ def is_real(v) -> bool:
 
 
 def real(v, source: str, name: str, low: float = -math.inf, high: float = math.inf, *,
-         low_open: bool = False, high_open: bool = False, what: str = "a finite real number") -> float:
+         low_open: bool = False, high_open: bool = False, what: str = "a finite real number",
+         kind: str | None = None) -> float:
     """``v`` as a float if it is a real, finite number within ``low`` .. ``high``.
 
     Not a boolean, complex, string, None or array; open ends where asked.
@@ -130,6 +131,9 @@ def real(v, source: str, name: str, low: float = -math.inf, high: float = math.i
         Whether ``low`` / ``high`` themselves are refused.
     what : str, optional
         What the argument must be, for the message.
+    kind : str or None, optional
+        Its kind of quantity (:data:`linsense.plausible.KINDS`): a refused number gets the slip of
+        unit that brings it within the range ("did you type kHz?").
 
     Returns
     -------
@@ -148,7 +152,15 @@ def real(v, source: str, name: str, low: float = -math.inf, high: float = math.i
         lo = "" if low == -math.inf else f"{'(' if low_open else '['}{low:g}"
         hi = "" if high == math.inf else f"{high:g}{')' if high_open else ']'}"
         rng = f" in {lo or '(-inf'}, {hi or 'inf)'}" if lo or hi else ""
-        raise InputError(source, name, f"must be {what}{rng}, got {brief(v)}")
+        hint = ""
+        if kind is not None and is_real(v):
+            from linsense.plausible import slip
+
+            def inside(x: float) -> bool:
+                return (x > low if low_open else x >= low) and (x < high if high_open else x <= high)
+
+            hint = slip(kind, float(v), ok=inside)
+        raise InputError(source, name, f"must be {what}{rng}, got {brief(v)}" + (f"; {hint}" if hint else ""))
     return float(v)
 
 

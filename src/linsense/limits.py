@@ -12,6 +12,7 @@ from __future__ import annotations
 import functools
 
 from linsense.errors import InputError
+from linsense.plausible import KINDS
 
 
 @functools.cache
@@ -76,13 +77,15 @@ MAX_TOML_DEPTH = 32
 #: whole before it was refused)
 MAX_TEXT_FILE_BYTES = 16 * 1024**2
 #: Hz, highest injection frequency of a table (``lut --f-inj``): half of a 1 MHz PWM; above it the
-#: resistance's share is nil and the HF currents underflow (1e300 Hz gave an all-zero table)
-MAX_F_INJ = 500_000.0
+#: resistance's share is nil and the HF currents underflow (1e300 Hz gave an all-zero table). The
+#: range of the kind ``injection_frequency`` in the one table of plausible values
+#: (:data:`linsense.plausible.KINDS`)
+MAX_F_INJ = KINDS["injection_frequency"].high
 #: Hz, lowest injection frequency of a table (``lut --f-inj``): an HF injection runs at hundreds of
-#: Hz to tens of kHz; below 1 Hz the resistance is all of the HF impedance (the saliency's share
-#: falls as 2 pi f L / R_s: 1e-10 Hz left it under rounding and the motor's saliency was blamed, and
-#: 5e-324 Hz has an infinite period)
-MIN_F_INJ = 1.0
+#: Hz to tens of kHz, and the design refuses below f_pwm / 4 = 125 Hz (its bandwidths follow the
+#: injection); 1 Hz, the limit before, made a table of the resistance alone without a word (``lut
+#: --f-inj 1``, kHz typed for Hz: issue 37), 1e-10 Hz left the saliency's share under rounding
+MIN_F_INJ = KINDS["injection_frequency"].low
 #: PWM periods of one simulated run (duration x f_pwm): about an hour of computing
 MAX_STEPS = 10_000_000_000
 #: bytes of the trace one run keeps in memory (recorded samples x about 140 B)

@@ -305,10 +305,36 @@ def points(ctx, param, value: int) -> int:
 
 
 def quad(ctx, param, value):
-    """Click callback: the injection's q-axis share kappa, in [0, 1), or None."""
-    if value is not None and not (math.isfinite(value) and 0.0 <= value < 1.0):
-        raise click.BadParameter(f"must be in [0, 1), got {value!r}")
+    """Click callback: the injection's q-axis share kappa, in [0, 1), or None (90 for 0.9: "did you
+    type %?")."""
+    from linsense.plausible import slip
+
+    def ok(v: float) -> bool:
+        return math.isfinite(v) and 0.0 <= v < 1.0
+
+    if value is not None and not ok(value):
+        hint = slip("share", value, ok=ok)
+        raise click.BadParameter(f"must be in [0, 1), got {value!r}" + (f"; {hint}" if hint else ""))
     return value
+
+
+def plausible(kind: str, unit: str | None = None):
+    """Click callback: a finite number within the plausible range of ``kind``
+    (:data:`linsense.plausible.KINDS`; in ``unit``, default the kind's), or None; a value outside
+    is refused with the slip of unit that brings it in."""
+    from linsense.plausible import implausible
+
+    def check(ctx, param, value):
+        if value is None:
+            return value
+        msg = implausible(kind, value, unit)
+        if not math.isfinite(value):
+            msg = f"must be a finite number, got {value!r}"
+        if msg is not None:
+            raise click.BadParameter(msg)
+        return value
+
+    return check
 
 
 def finite(minimum: float, strict: bool):

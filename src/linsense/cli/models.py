@@ -52,16 +52,18 @@ def lut(motor_spec: str, points: int, fmt: str, symbol: str | None, f_inj: float
     from linsense.ctrl import drive_default_cfg
     from linsense.io import write_atomic
     from linsense.limits import MAX_F_INJ, MIN_F_INJ
+    from linsense.plausible import slip
     from linsense.tune.design import observable_error_gain
 
     if f_inj is not None and not (f_inj > 0 and math.isfinite(f_inj)):
         raise InputError("--f-inj", "", f"must be a positive frequency in Hz, got {f_inj!r}")
-    if f_inj is not None and f_inj < MIN_F_INJ:
-        raise InputError("--f-inj", "", f"{f_inj:g} Hz is below the lower limit of {MIN_F_INJ:g} Hz (an HF "
-                         f"injection: below it the resistance is all of the HF impedance; {docs('limits')})")
-    if f_inj is not None and f_inj > MAX_F_INJ:
-        raise InputError("--f-inj", "", f"{f_inj:g} Hz is beyond the limit of {MAX_F_INJ:g} Hz (half of a "
-                         f"1 MHz PWM; {docs('limits')})")
+    if f_inj is not None and not MIN_F_INJ <= f_inj <= MAX_F_INJ:
+        slipped = slip("injection_frequency", f_inj)  # (kHz typed for Hz: 1 was a table at 1 Hz, issue 37)
+        why = (f"is below the lower limit of {MIN_F_INJ:g} Hz (an HF injection: the design's lowest, "
+               "f_pwm / 4 of a 500 Hz PWM" if f_inj < MIN_F_INJ else
+               f"is beyond the limit of {MAX_F_INJ:g} Hz (half of a 1 MHz PWM")
+        raise InputError("--f-inj", "", f"{f_inj:g} Hz {why}; {docs('limits')})"
+                         + (f"; {slipped}" if slipped else ""))
     if symbol is not None:  # (checked, never rewritten: 'my lut!' was my_lut, int was int_t)
         if fmt != "c":
             raise InputError("--symbol", "", f"names the C header's array: only with --format c (not {fmt})")
@@ -118,7 +120,7 @@ def plot(motor_spec: str, points: int, out: str | None, as_json: bool) -> None:
 @click.option("--motor", "motor_spec", required=True, help=c.MOTOR_HELP)
 @click.option("--positions", default=56, show_default=True, type=click.IntRange(8, MAX_POSITIONS),
               help="equally spaced positions over one pole pitch")
-@click.option("--noise", default=0.0, show_default=True, type=float, callback=c.finite(0.0, False),
+@click.option("--noise", default=0.0, show_default=True, type=float, callback=c.plausible("relative_noise"),
               help="relative complex Gaussian noise on every phasor (0.01 = 1 %)")
 @click.option("--seed", default=0, show_default=True, type=click.IntRange(min=0), help="random seed")
 @click.option("--freq", "freq_hz", default=1000.0, show_default=True, type=float,
@@ -147,12 +149,13 @@ def bench_emulate(motor_spec: str, positions: int, noise: float, seed: int, freq
               help="K: fit the even orders 2, 4, ..., 2K (1 = the five parameters of eq. 3)")
 @click.option("--motor", "motor_spec", default=None,
               help="motor giving pole pitch, force constant, mass (and R_s for amplitude-only data)")
-@click.option("--pole-pitch", "pole_pitch_mm", type=float, callback=c.finite(0.0, True), default=None,
+@click.option("--pole-pitch", "pole_pitch_mm", type=float, callback=c.plausible("pole_pitch", "mm"),
+              default=None,
               help="one electrical period, mm (overrides --motor)")
-@click.option("--force-constant", type=float, callback=c.finite(0.0, True), default=None,
+@click.option("--force-constant", type=float, callback=c.plausible("force_constant"), default=None,
               help="N/A per peak phase current (overrides --motor)")
-@click.option("--mass", type=float, callback=c.finite(0.0, True), default=None, help="kg (overrides --motor)")
-@click.option("--resistance", type=float, callback=c.finite(0.0, False), default=None,
+@click.option("--mass", type=float, callback=c.plausible("mass"), default=None, help="kg (overrides --motor)")
+@click.option("--resistance", type=float, callback=c.plausible("resistance"), default=None,
               help="phase resistance, ohm, for amplitude-only data (0 neglects it as the paper does)")
 @click.option("--name", default=None, help="motor name in motor.toml (default: the bench file name)")
 @click.option("--points", default=360, show_default=True, callback=c.points, help="length of lut_fit.csv")

@@ -130,7 +130,8 @@ def _table_args(src: str, points, f_inj, quad, needs_f: bool = False) -> int:
     points = integer(points, src, "points", 4, MAX_POINTS)
     if f_inj is not None or needs_f:
         what = "a frequency in Hz (docs/limits.md)"
-        real_arg(f_inj, src, "f_inj", MIN_F_INJ, MAX_F_INJ, what=what if needs_f else f"None or {what}")
+        real_arg(f_inj, src, "f_inj", MIN_F_INJ, MAX_F_INJ, what=what if needs_f else f"None or {what}",
+                 kind="injection_frequency")
     real_arg(quad, src, "quad", 0.0, 1.0, high_open=True, what="a number")
     return points
 

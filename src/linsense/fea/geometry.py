@@ -18,6 +18,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 
 from linsense.errors import InputError, KeyProblem
 from linsense.io import parse_toml, read_text_file
+from linsense.plausible import implausible, slip
 from linsense.validation import to_input_error
 
 _STRICT = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
@@ -286,15 +287,22 @@ class GeometryFile(BaseModel):
 
     @model_validator(mode="after")
     def _check(self) -> GeometryFile:
+        # (the table of plausible values: a pole pitch of 56 was "outer radius or pole pitch beyond
+        # 10 m" naming [armature], issue 37)
+        pitch = implausible("pole_pitch", self.motor.pole_pitch)
+        if pitch is not None:
+            raise KeyProblem("motor.pole_pitch", f"{pitch}; a geometry file is in m")
         half = self.motor.pole_pitch / 2
         if self.rod.magnet_length > half:
             raise KeyProblem("rod.magnet_length", f"{self.rod.magnet_length!r} m exceeds half the pole pitch "
                              f"({half:g} m): magnets and spacers alternate within pole_pitch / 2")
         outer = self.rod.radius + self.rod.tube_thickness + self.armature.air_gap
         outer += self.armature.coil_depth + self.armature.back_iron
-        if outer > 10.0 or self.motor.pole_pitch > 10.0:
-            raise KeyProblem("armature", f"outer radius {outer:g} m or pole pitch beyond 10 m: "
-                             "check the units (m)")
+        if outer > 10.0:
+            hint = slip("pole_pitch", outer, ok=lambda v: v <= 10.0)
+            raise KeyProblem("armature", f"the outer radius (rod.radius + rod.tube_thickness + air_gap + "
+                             f"coil_depth + back_iron) {outer:g} m is beyond 10 m: check the units (m)"
+                             + (f"; {hint}" if hint else ""))
         if outer / self.armature.air_gap > 1e4:
             raise KeyProblem("armature.air_gap", f"{self.armature.air_gap!r} m is below 1e-4 of the outer "
                              "radius: not meshable")

@@ -37,9 +37,12 @@ def parse_currents(value, option: str = LOAD_OPTION, what: str = "q-axis current
     Raises
     ------
     linsense.errors.InputError
-        Empty, not a number, not finite or beyond 1e6 A, not positive where asked, or given twice.
+        Empty, not a number, not finite or beyond the range of currents of
+        :data:`linsense.plausible.KINDS` (1 kA; "did you type mA?"), not positive where asked, or
+        given twice.
     """
     from linsense.errors import InputError
+    from linsense.plausible import implausible
 
     if isinstance(value, (int, float)):
         items = [value]
@@ -57,8 +60,11 @@ def parse_currents(value, option: str = LOAD_OPTION, what: str = "q-axis current
         except (TypeError, ValueError):
             raise InputError(option, "", f"{v!r} is not a number ({what}, comma-separated, "
                              f"e.g. {example})") from None
-        if not math.isfinite(c) or abs(c) > 1e6:
-            raise InputError(option, "", f"must be finite currents in A (|I| <= 1e6), got {v!r}")
+        if not math.isfinite(c):
+            raise InputError(option, "", f"must be finite currents in A, got {v!r}")
+        beyond = implausible("current", abs(c))  # (the table of plausible values: 2000 for 2 A, issue 37)
+        if beyond is not None:
+            raise InputError(option, "", f"{what}: {beyond}")
         if positive and c <= 0:
             raise InputError(option, "", f"must be positive amplitudes in A, got {v!r}")
         if c in currents:

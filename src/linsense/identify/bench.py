@@ -22,6 +22,7 @@ import numpy as np
 
 from linsense.errors import InputError
 from linsense.io import check_width, csv_rows, finite_cell
+from linsense.plausible import KINDS, implausible
 
 #: Phases in storage order (index 0, 1, 2).
 PHASES = ("A", "B", "C")
@@ -159,7 +160,7 @@ def read_bench_csv(path: str | Path) -> BenchData:
     if form == "phasor":
         current = col["I_re"] + 1j * col["I_im"]
         voltage = np.stack([col[f"V{p}_re"] + 1j * col[f"V{p}_im"] for p in PHASES], axis=1)
-        i_cols = "I_re, I_im"
+        i_cols, v_cols = "I_re, I_im", "VA_re .. VC_im"
     else:
         for c in ("I", "VA", "VB", "VC"):
             bad = np.nonzero(col[c] < 0)[0]
@@ -169,8 +170,16 @@ def read_bench_csv(path: str | Path) -> BenchData:
                                  f"a magnitude cannot be negative, got {col[c][i]:.12g}")
         current = col["I"].astype(complex)
         voltage = np.stack([col[f"V{p}"] for p in PHASES], axis=1).astype(complex)
-        i_cols = "I"
+        i_cols, v_cols = "I", "VA, VB, VC"
     mag = np.abs(current)
+    # (the table of plausible values: a current in mA, a voltage in mV, issue 37)
+    for kind, values, what in (("current", mag, i_cols), ("voltage", np.abs(voltage), v_cols)):
+        bad = np.nonzero((values.max(axis=1) if values.ndim > 1 else values) > KINDS[kind].high)[0]
+        if bad.size:
+            i = int(bad[0])
+            raise InputError(src, f"row {rows[i]}, column {what}",
+                             f"{implausible(kind, float(np.max(values[i])))} (a bench file is in A and V "
+                             "peak)")
     bad = np.nonzero(~(mag > ZERO_CURRENT_RATIO * mag.max()))[0]
     if bad.size:
         i = bad[0]
@@ -301,7 +310,8 @@ def emulate_bench(
     if isinstance(seed, bool) or not isinstance(seed, numbers.Integral) or seed < 0:
         raise InputError(src, "seed", f"must be an integer >= 0, got {seed!r}")
     positions, seed = int(positions), int(seed)
-    noise = real_arg(noise, src, "noise", 0.0, what="a finite fraction")
+    noise = real_arg(noise, src, "noise", 0.0, KINDS["relative_noise"].high, what="a fraction (0.01 = 1 %)",
+                     kind="relative_noise")
     freq = real_arg(freq, src, "freq", 0.0, low_open=True, what="a positive finite frequency in Hz")
     current = real_arg(current, src, "current", 0.0, low_open=True, what="a positive finite current in A")
     rng = np.random.default_rng(seed)

@@ -22,7 +22,9 @@ from linsense.identify.bench import BenchData, read_bench_csv
 from linsense.identify.fit import PITCH_RESIDUAL_SHARE, T_SIGNIFICANT, FitResult, best_pitch, fit_inductances
 from linsense.identify.process import MeasuredTable, process_bench
 from linsense.identify.tables import measured_columns, measured_lut_csv
-from linsense.model.motor import Friction, Motor, check_motor, motor_to_toml
+from linsense.model.inductance import InductanceModel
+from linsense.model.motor import Friction, Motor, check_motor, check_plausible, motor_to_toml
+from linsense.plausible import KINDS, check
 from linsense.version import __version__
 
 
@@ -129,6 +131,13 @@ def identify(
     tau = pick(pole_pitch, "pole_pitch", "--pole-pitch", "the pole pitch converts position_mm to theta")
     k_f = pick(force_constant, "force_constant", "--force-constant", "motor.toml needs the force constant")
     m = pick(mass, "mass", "--mass", "motor.toml needs the moving mass")
+    # (the motor file's table of plausible values, before the bench is read: a pole pitch in mm
+    # was refused as "need at least 8 distinct electrical positions", issue 37)
+    for arg, value, kind in (("pole_pitch", pole_pitch, "pole_pitch"), ("force_constant", force_constant,
+                                                                         "force_constant"),
+                             ("mass", mass, "mass"), ("resistance", resistance, "resistance")):
+        if value is not None:
+            check("linsense.identify.identify", arg, float(value), kind)
 
     data = read_bench_csv(bench)
     warnings: list[str] = []
@@ -151,11 +160,16 @@ def identify(
 
     fit = fit_inductances(table.theta, table.entries, harmonics, source=src)
     _check_pitch(src, data, tau, harmonics, sources["pole_pitch"], r_used if data.amplitude_only else None)
+    model = fit.model()
+    _check_fitted(model, src)  # (before the Motor's own range check, which cannot name the bench's units)
     motor = Motor(
         name=_motor_name(name, src), R_s=R_s, pole_pitch=tau, force_constant=k_f, mass=m,
-        inductance=fit.model(), friction=base.friction if base is not None else Friction(),
+        inductance=model, friction=base.friction if base is not None else Friction(),
         pm_harmonics=base.pm_harmonics if base is not None else (), source=f"{src} (fitted model)",
     )
+    check_plausible(motor)  # (the rest of the table, as the written motor.toml is loaded)
+    if base is not None:
+        warnings += _against_base(motor, base)
     check_motor(motor)
     measured = measured_columns(table.theta, table.entries)
     psi_meas = np.radians(measured["psi_lut_deg"])
@@ -183,6 +197,51 @@ def _check_pitch(src: str, data: BenchData, tau: float, harmonics: int, given: s
                          f"leave {here * 1e6:.3g} uH rms of the model's fit; with a pole pitch of "
                          f"{pitch * 1e3:.4g} mm {rms * 1e6:.3g} uH: the bench of a motor of another pole "
                          f"pitch? give that motor (--motor), or --pole-pitch {pitch * 1e3:.4g}")
+
+
+#: the fitted inductance this factor off the --motor's is said: a bench file in other units
+BASE_FACTOR_MAX = 10.0
+
+
+def _mean_self(model: InductanceModel) -> float:
+    """An inductance model's mean phase self-inductance, H (``L0``, or the mean of its table)."""
+    if model.params:
+        return float(model.params["L0"])
+    theta = np.linspace(0.0, 2.0 * np.pi, 360, endpoint=False)
+    return float(np.mean(model.entries(theta)[..., :3]))
+
+
+def _bench_units(high: bool) -> str:
+    """The bench file's slips of unit that make the fitted inductance ``high`` (else low)."""
+    return ("column freq_hz in kHz (1 for 1000 Hz), or the voltages in mV" if high else
+            "the current (I_re, I_im, or I) in mA, or the voltages in kV")
+
+
+def _against_base(motor: Motor, base: Motor) -> list[str]:
+    """A warning when the fitted mean self-inductance is more than :data:`BASE_FACTOR_MAX` times
+    off the one of the ``--motor`` that gives the mechanics (a bench file in mA within the range of
+    currents was identified as a motor 500 times below it without a word, issue 37)."""
+    L_fit, L_base = _mean_self(motor.inductance), _mean_self(base.inductance)
+    if not L_base > 0.0 or 1.0 / BASE_FACTOR_MAX <= L_fit / L_base <= BASE_FACTOR_MAX:
+        return []
+    high = L_fit > L_base
+    return [f"the fitted L0 = {L_fit:.4g} H is {max(L_fit / L_base, L_base / L_fit):.3g} times "
+            f"{'above' if high else 'below'} the L0 = {L_base:.4g} H of --motor {base.name}: is "
+            f"{_bench_units(high)}? A bench file is in Hz, A and V peak (docs/identify.md)"]
+
+
+def _check_fitted(model: InductanceModel, src: str) -> None:
+    """Refuse a fitted model outside the range of real linear motors, naming the bench file's units
+    that explain it: its mean self-inductance 1000 times off is a frequency in kHz or voltages in mV
+    (above), currents in mA or voltages in kV (below). A bench file in mA was identified as a 2.75 uH
+    motor, one in kHz written as a motor file that linsense then refused to load (issue 37)."""
+    k = KINDS["inductance"]
+    L0 = _mean_self(model)
+    if not k.holds(L0):
+        units = _bench_units(L0 > k.high)
+        raise InputError(src, "", f"the fitted mean self-inductance L0 = {L0:.4g} H is outside the range of "
+                         f"{k.of} [{k.low:g}, {k.high:g}] H: is {units}? A bench file is in Hz, A and V "
+                         "peak (docs/identify.md)")
 
 
 def fit_report(ident: Identification) -> dict:

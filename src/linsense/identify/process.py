@@ -127,6 +127,25 @@ def electrical_groups(data: BenchData, pole_pitch: float) -> tuple[np.ndarray, n
     return theta, inverse.reshape(-1)
 
 
+#: the span of a bench's positions, in pole pitches: one period (less the largest gap) to a few
+SPAN_PITCHES = (1.0 - MAX_GAP / (2.0 * np.pi), 10.0)
+
+
+def _position_units(data: BenchData, pole_pitch: float) -> str:
+    """The slip of unit of column ``position_mm`` (metres or micrometres typed), for a message:
+    ``"; the positions span 0.055 mm: did you type m? (0.055 m is 55 mm)"``, or ``""``."""
+    from linsense.plausible import slip
+
+    span = float(np.ptp(np.asarray(data.position))) * 1e3  # mm
+    tau = pole_pitch * 1e3
+
+    def covers(v: float) -> bool:
+        return SPAN_PITCHES[0] * tau <= v <= SPAN_PITCHES[1] * tau
+
+    hint = "" if covers(span) else slip("stroke", span, "mm", ok=covers)
+    return f"; the positions span {span:.6g} mm of a {tau:.6g} mm pole pitch: {hint}" if hint else ""
+
+
 def process_bench(data: BenchData, pole_pitch: float, resistance: float | None = None,
                   resistance_source: str = "", cover: bool = True) -> MeasuredTable:
     """The measured table of ``data`` with positions converted by ``pole_pitch`` (m).
@@ -183,7 +202,8 @@ def process_bench(data: BenchData, pole_pitch: float, resistance: float | None =
     pos_order = np.argsort(theta_g)
     if n < MIN_POSITIONS:
         raise InputError(src, "column position_mm",
-                         f"need at least {MIN_POSITIONS} distinct electrical positions, got {n}")
+                         f"need at least {MIN_POSITIONS} distinct electrical positions, got {n}"
+                         + _position_units(data, pole_pitch))
     ts = theta_g[pos_order]
     gaps = np.diff(np.concatenate([ts, [ts[0] + 2.0 * np.pi]]))
     if cover and gaps.max() > MAX_GAP + 1e-9:
@@ -193,7 +213,8 @@ def process_bench(data: BenchData, pole_pitch: float, resistance: float | None =
             src, f"row {rows[i]}, column position_mm",
             f"positions do not cover one electrical period: gap of {np.degrees(gaps[g]):.1f} deg after "
             f"{data.position[i] * 1e3:.6g} mm ({np.degrees(ts[g]):.1f} deg) with pole pitch "
-            f"{pole_pitch * 1e3:.6g} mm (at most {np.degrees(MAX_GAP):.0f} deg allowed)",
+            f"{pole_pitch * 1e3:.6g} mm (at most {np.degrees(MAX_GAP):.0f} deg allowed)"
+            + _position_units(data, pole_pitch),
         )
 
     w = 2.0 * np.pi * np.asarray(data.freq)

@@ -28,6 +28,7 @@ from linsense.model.schema import (
     validate_motor_file,
     validate_section,
 )
+from linsense.plausible import KINDS, slip
 
 #: Saliency |L_q - L_d| below this fraction of (L_d + L_q)/2 counts as vanished.
 MIN_SALIENCY_RATIO = 0.01
@@ -567,10 +568,13 @@ def read_inductance_table(path: Path) -> tuple[np.ndarray, np.ndarray]:
     gaps = np.diff(np.concatenate([ws, [ws[0] + 360.0]]))
     if gaps.max() > 45.0:
         g = int(np.argmax(gaps))
+        span = float(ws[-1] - ws[0])  # (radians typed: 0 .. 6.2, issue 37)
+        hint = slip("angle", span, ok=lambda v: 360.0 - 45.0 <= v <= 360.0)
         raise InputError(
             src, "column theta_deg",
             f"positions do not cover one electrical period: gap of {gaps[g]:.1f} deg after "
-            f"{ws[g]:.1f} deg (at most 45 deg allowed)",
+            f"{ws[g]:.1f} deg (at most 45 deg allowed)"
+            + (f"; the positions span {span:.4g} deg: {hint}" if hint else ""),
         )
     theta = np.radians(data[:, 0])
     _check_derived(src, path, theta, data[:, 1:], line)
@@ -660,12 +664,14 @@ def _intervals_deg(theta: np.ndarray, bad: np.ndarray) -> str:
 #: HF current of any injection the drive can make (V_dc/6 at 500 Hz or more) is below 30 mA, under
 #: the resolution of its current sensors; below 1 uH the PWM ripple is hundreds of amperes; a phase
 #: of 100 ohm passes at most 3 A at 300 V.
+#: The ranges are the rows of the one table of plausible values, :data:`linsense.plausible.KINDS`.
 PLAUSIBLE = {
-    "motor.pole_pitch": (1e-3, 1.0, "m", "mm", None),
-    "motor.R_s": (0.0, 100.0, "ohm", "milliohm", None),
-    "motor.force_constant": (1e-2, 1e4, "N/A", None, None),
-    "motor.mass": (1e-3, 1e4, "kg", "g", None),
-    "inductance": (1e-6, 0.5, "H", "mH", "uH or nH"),
+    key: (KINDS[kind].low, KINDS[kind].high, KINDS[kind].unit, above, below)
+    for key, kind, above, below in (("motor.pole_pitch", "pole_pitch", "mm", None),
+                                    ("motor.R_s", "resistance", "milliohm", None),
+                                    ("motor.force_constant", "force_constant", None, None),
+                                    ("motor.mass", "mass", "g", None),
+                                    ("inductance", "inductance", "mH", "uH or nH"))
 }
 #: s, the longest electrical time constant L0 / R_s of a real linear motor (large iron-core motors
 #: reach 20-30 ms): an inductance typed in mH that the range above lets through (0.1 to 0.5) ends here

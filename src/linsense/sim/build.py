@@ -37,6 +37,7 @@ from linsense.sim.checks import (
     check_sensors,
     check_startup,
     check_trace_file,
+    check_units,
     run_steps,
     sensor_triples,
     slowest_loop,
@@ -55,7 +56,8 @@ from linsense.tune.design import DriveData, design, mean_dq, uncompensated_speed
 __all__ = ["Built", "build", "designed", "drive_data", "calibration_timing", "resolve_motor", "motor_key",
            "plant_saturation", "reference_commands", "trapezoid_time", "initial_load", "compensation_of",
            "check_positions", "check_initial_load", "check_balanced_load", "check_sensors", "check_startup",
-           "check_run_size", "check_trace_file", "check_events", "check_final_window", "run_steps",
+           "check_run_size", "check_trace_file", "check_events", "check_final_window", "check_units",
+           "run_steps",
            "validate", "Tables"]
 
 #: drive sub-configuration -> scenario section (for messages)
@@ -162,6 +164,7 @@ def build(sc: Scenario, motor: Motor | None = None, trace_in_memory: bool = True
     calibrating = sc.spec.control.mode == "calibration"
     cal_table = calibration_table(d, sc.spec.calibration.points) if calibrating else None
     drive = make_drive(sc, model_motor, known, v, d, user_keys, stamp_motor)
+    check_units(sc, motor.pole_pitch, user_keys, believed(model_motor))  # (after the C library's limits)
     start_drive(sc, drive, motor, setup)
     cmds, moves = reference_commands(sc)
     return Built(sc, motor, setup, cfg, drive, cmds, n_steps, moves, known,
@@ -209,6 +212,27 @@ def motors(sc: Scenario, motor: Motor | None = None, model: Motor | None = None)
                          f"pole pitch {model_motor.pole_pitch:g} m differs from the motor's "
                          f"{motor.pole_pitch:g} m: a controller cannot believe in another pole pitch")
     return motor, model_motor
+
+
+def believed(model_motor: Motor) -> dict[str, float]:
+    """The motor's own value of each key of ``[controller.model]`` that overrides one
+    (:func:`linsense.sim.checks.check_units` holds the overrides near them).
+
+    Parameters
+    ----------
+    model_motor : Motor
+        The motor the controller believes in.
+
+    Returns
+    -------
+    dict
+        ``controller.model.L_d`` and ``L_q`` (the means over a period, H), ``R_s`` (ohm), ``psi_pm``
+        (Wb), ``mass`` (kg), ``force_constant`` (N/A).
+    """
+    L_d, L_q = memo(("mean_dq", motor_key(model_motor)), lambda: mean_dq(model_motor))
+    own = {"L_d": L_d, "L_q": L_q, "R_s": model_motor.R_s, "psi_pm": model_motor.psi_pm,
+           "mass": model_motor.mass, "force_constant": model_motor.force_constant}
+    return {f"controller.model.{k}": float(v) for k, v in own.items()}
 
 
 def controller_model(sc: Scenario, model_motor: Motor) -> dict:

@@ -454,3 +454,117 @@ def check_final_window(sc: Scenario, mass: float, user_keys: set[str]) -> None:
     raise InputError(sc.source, window, f"{w!r} s{default} is too short to see a cycle of {loop} ({key} = "
                      f"{f:.4g} Hz, a {1.0 / f:.3g} s period): the end window must hold half its period, at "
                      f"least {least:.3g} s")
+
+
+def _value_at(spec, key: str):
+    node = spec
+    for part in key.split("."):
+        node = getattr(node, part)
+    return node
+
+
+#: what the controller believes (``[controller.model]``) at most this factor off the motor's own value:
+#: a parameter mismatch is tens of %; a value 1000 times off is another unit (mH typed as H, g as kg)
+MODEL_FACTOR_MAX = 10.0
+
+
+def check_units(sc: Scenario, tau: float, user_keys: set[str], believed: dict[str, float]) -> None:
+    """Refuse a value the file gives in another unit than its key's (issue 37): a key of a kind of
+    the table of plausible values (:func:`linsense.sim.scenario.unit_kinds`) outside its range
+    (``controller.model.L_d = 10`` H, ``protection.err_max = 30`` rad, ``controller.v_max = 200``
+    m/s), or a frequency or electrical speed that breaks the relation a slip of 2 pi between Hz and
+    rad/s breaks: the demodulator's low-pass below the injection it demodulates, the observer below
+    that low-pass, the current loop at most f_pwm / 10, the speed clamp and trip above the drive's top
+    speed; what the controller believes (``[controller.model]``) within :data:`MODEL_FACTOR_MAX` of
+    the motor's own value; the travel's span a plausible stroke (1 mm at least). Each refusal names
+    the slip of unit that brings the value in.
+
+    Only the keys the file gives are checked (the designed ones are the design's); after the C
+    library's own limits (a value beyond what it takes at all is refused there, naming its limit).
+
+    Parameters
+    ----------
+    sc : Scenario
+        The designed scenario.
+    tau : float
+        m, the motor's pole pitch.
+    user_keys : set of str
+        The dotted keys the file gives.
+    believed : dict
+        The motor's own value of each ``controller.model`` key (``controller.model.L_d``: its mean
+        L_d, H; ``R_s``, ``mass``, ``force_constant``, ``psi_pm``).
+
+    Raises
+    ------
+    InputError
+        Naming the key, its value, the range or the relation, and the likely slip of unit.
+    """
+    from linsense.plausible import KINDS, check, implausible, slip
+    from linsense.sim.scenario import unit_kinds
+
+    s = sc.spec
+    kinds = unit_kinds()
+    for key, kind in kinds.items():
+        value = _value_at(s, key) if key in user_keys else None
+        if isinstance(value, int | float) and not isinstance(value, bool):
+            check(sc.source, key, value, kind)
+    for key, own in believed.items():
+        value = _value_at(s, key)
+        if key not in user_keys or value is None or not own > 0.0:
+            continue
+
+        def near(v: float, own: float = own) -> bool:
+            return own / MODEL_FACTOR_MAX <= v <= own * MODEL_FACTOR_MAX
+
+        if not near(value):
+            hint = slip(kinds[key], value, ok=near) if key in kinds else ""
+            unit = KINDS[kinds[key]].unit if key in kinds else "Wb"
+            raise InputError(sc.source, key, f"{value:g} {unit} is more than {MODEL_FACTOR_MAX:g} times off "
+                             f"the motor's {own:.4g} {unit} (what the controller believes is off by tens of "
+                             "% in a parameter mismatch)" + (f"; {hint}" if hint else ""))
+    tr = s.travel
+    given = [k for k in ("travel.max_mm", "travel.min_mm") if k in user_keys]
+    # (0.1 typed for 100 mm: "fault travel" at 0.06 s; a travel beyond any stroke is "unbounded")
+    short = given and tr.max_mm - tr.min_mm < KINDS["stroke"].low * 1e3
+    stroke = implausible("stroke", tr.max_mm - tr.min_mm, "mm") if short else None
+    if stroke is not None:
+        raise InputError(sc.source, given[0],
+                         f"the travel [{tr.min_mm:g}, {tr.max_mm:g}] mm: its span {stroke}")
+    f_pwm = s.inverter.f_pwm
+    f_inj = f_pwm / 2.0 if s.injection.shape == "square" else s.injection.frequency
+    lpf, v_max = s.observer.demod_lpf_hz, s.controller.v_max
+    w_top = 2.0 * math.pi * v_max / tau
+    v_lin, i_max = s.inverter.v_dc / math.sqrt(3.0), s.controller.i_max
+    speed = (f"the electrical speed of controller.v_max = {v_max:g} m/s, 2 pi v_max / pole pitch = "
+             f"{w_top:.4g} rad/s")
+    relations = [  # (key, must hold, what it must be and why)
+        ("observer.demod_lpf_hz", lambda v: v < f_inj,
+         f"below the injection frequency, {f_inj:g} Hz (the low-pass keeps the demodulated error and removes "
+         "the products' ripple at twice the injection)"),
+        ("observer.bandwidth_hz", lambda v: v < lpf,
+         f"below the demodulator's low-pass observer.demod_lpf_hz = {lpf:g} Hz, whose output it follows"),
+        ("controller.current_bandwidth_hz", lambda v: v <= f_pwm / 10.0,
+         f"at most f_pwm / 10 = {f_pwm / 10.0:g} Hz (a current loop sampled once per PWM period, with a "
+         "period's delay, has no phase margin left far beyond)"),
+        ("observer.omega_max", lambda v: v > w_top,
+         f"above {speed} (the estimate would be clamped below the speeds the drive commands)"),
+        ("protection.omega_max", lambda v: v > w_top,
+         f"above {speed} (the over-speed trip would fire at speeds the drive commands)"),
+        ("startup.v_pulse", lambda v: v < v_lin,
+         f"below the bus's linear range V_dc / sqrt(3) = {v_lin:.4g} V (a larger pulse is clipped by the "
+         "modulator)"),
+        ("calibration.dither_a", lambda v: v < i_max,
+         f"below controller.i_max = {i_max:g} A (the dither rides on the current reference, clamped there)"),
+        ("inverter.dtc_current_band", lambda v: v < i_max,
+         f"below controller.i_max = {i_max:g} A (a band beyond the current reference leaves the "
+         "compensation a slope, no sign)"),
+        ("observer.hf_delay_s", lambda v: v * f_inj <= 10.0,
+         f"at most ten injection periods, {10.0 / f_inj:g} s (the HF path's delay is about one)"),
+    ]
+    for key, holds, rule in relations:
+        value = _value_at(s, key)
+        if key in user_keys and not holds(value):
+            hint = slip(kinds[key], value, ok=holds)
+            unit = KINDS[kinds[key]].unit
+            raise InputError(sc.source, key,
+                             f"{value:g} {unit} must be {rule}" + (f"; {hint}" if hint else ""))

@@ -29,12 +29,13 @@ from pathlib import Path
 from typing import Annotated, Literal
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, ValidationError, model_validator
 
 from linsense._check import path_arg
 from linsense.ctrl import REAL, drive_default_cfg
 from linsense.errors import InputError
 from linsense.io import folder_of, read_toml, working_folder
+from linsense.plausible import implausible, slip
 from linsense.tune.design import DEAD_TIME_SHARE_MAX, V_DC_MAX_FRACTION, V_DC_MIN_FRACTION, DriveData
 from linsense.validation import KeyProblem, to_input_error
 
@@ -85,7 +86,8 @@ class CalibrationSection(BaseModel):
                            "({ecce2010} for ecce2010)"})
     dither_a: NonNegative = Field(
         _c(_C.cal.dither_amp), description="q-current dither while adapting (0: none)",
-        json_schema_extra={"unit": "A", "default_note": "designed ({ecce2010} for ecce2010)"})
+        json_schema_extra={"kind": "current", "unit": "A",
+                           "default_note": "designed ({ecce2010} for ecce2010)"})
     dither_hz: Positive = Field(
         _c(_C.cal.dither_freq), description="frequency of the dither",
         json_schema_extra={"unit": "Hz", "default_note": "designed ({ecce2010} for ecce2010)"})
@@ -107,7 +109,7 @@ class StartupSection(BaseModel):
                                  "pulses (at least the injection's ramp, at most 60)",
                                  json_schema_extra={"unit": "s"})
     v_pulse: Positive = Field(_c(_C.startup.v_pulse), description="pulse amplitude on the estimated d-axis",
-                              json_schema_extra={"unit": "V"})
+                              json_schema_extra={"kind": "voltage", "unit": "V"})
     t_pulse: Positive = Field(_c(_C.startup.t_pulse), description="pulse length (at least 2 PWM periods, "
                               "at most 60)", json_schema_extra={"unit": "s"})
     t_rest: Positive = Field(_c(_C.startup.t_rest), description="zero voltage before each pulse (at least "
@@ -133,15 +135,16 @@ class InverterSection(BaseModel):
     fidelity: Literal["average", "switching"] = Field("average", description="`average` or `switching` "
                                                       "(see \"Fidelity\")")
     # (the design's default drive; the C library has no bus)
-    v_dc: Positive = Field(_c(DriveData().v_dc), description="DC bus", json_schema_extra={"unit": "V"})
+    v_dc: Positive = Field(_c(DriveData().v_dc), description="DC bus",
+                           json_schema_extra={"kind": "voltage", "unit": "V"})
     f_pwm: Positive = Field(_c(_C.fs), description="PWM frequency = control rate",
-                            json_schema_extra={"unit": "Hz"})
+                            json_schema_extra={"kind": "pwm_frequency", "unit": "Hz"})
     dead_time: NonNegative = Field(_c(_C.mod.dead_time), description="< 10 % of the PWM period",
-                                   json_schema_extra={"unit": "s"})
+                                   json_schema_extra={"kind": "dead_time", "unit": "s"})
     dead_time_compensation: bool = Field(bool(_C.mod.dtc), description="the modulator's compensation")
     dtc_current_band: Positive = Field(
         _c(_C.mod.i_band), description="smooth-sign band of the compensation (a trade-off under dead "
-        "time: see \"Dead time and the closed loop\")", json_schema_extra={"unit": "A"})
+        "time: see \"Dead time and the closed loop\")", json_schema_extra={"kind": "current", "unit": "A"})
 
 
 class ControlSection(BaseModel):
@@ -169,14 +172,15 @@ class InjectionSection(BaseModel):
         "protection.v_dc_min`", json_schema_extra={"unit": "V", "default_note": "designed ({ecce2010} for "
                                                    "ecce2010)"})
     frequency: Positive = Field(_c(_C.inject.freq), description="<= f_pwm / 4",
-                                json_schema_extra={"unit": "Hz", "default_note": "designed (f_pwm / 16)"})
+                                json_schema_extra={"kind": "injection_frequency",
+                                                   "unit": "Hz", "default_note": "designed (f_pwm / 16)"})
     ramp_rate: Positive = Field(_c(_C.inject.ramp_rate), description="the injection's ramp",
                                 json_schema_extra={"unit": "V/s", "default_note": "designed ({ecce2010} for "
                                                    "ecce2010)"})
     quadrature: float = Field(
         default=_c(_C.inject.quad), ge=0.0, lt=1.0, description="kappa: `kappa amplitude sin` on the "
         "estimated q-axis (elliptical injection, docs/theory.md); 0: the paper's pulsating injection",
-        json_schema_extra={"doc_after": "frequency"})
+        json_schema_extra={"kind": "share", "doc_after": "frequency"})
     # quality factor of the HF band-pass and the fundamental notch
     filter_q: Positive = Field(_c(_C.bpf.q), description="Q of the HF band-pass and of the fundamental notch")
     # pulsating (the paper's, on the estimated d-axis), rotating (stationary frame, negative-sequence
@@ -233,7 +237,8 @@ class ObserverSection(BaseModel):
     bandwidth_hz: Positive = Field(
         _c(_C.obs.k1 / (2.0 * math.pi * (3.0 if _C.obs.type == 1 else 2.0))),
         description="k1..k3 from `ls_observer_gains` (all poles at -2 pi f)",
-        json_schema_extra={"unit": "Hz", "default_note": "designed: `mech` `f_lpf / 20`, `pll` `f_lpf / 7.5` "
+        json_schema_extra={"kind": "bandwidth",
+                           "unit": "Hz", "default_note": "designed: `mech` `f_lpf / 20`, `pll` `f_lpf / 7.5` "
                            "({ecce2010} for ecce2010, `mech`)"})
     # the mechanical observer's load estimate fed forward into the force reference (ls_drive_cfg.load_ff;
     # the speed loop's designed integral gain is then 0); default: on with type = "mech"
@@ -255,15 +260,16 @@ class ObserverSection(BaseModel):
     demod_method: Literal["product", "heterodyne"] = Field("product",
                                                            description="`product` (paper) or `heterodyne`")
     demod_lpf_hz: Positive = Field(_c(_C.demod.f_lpf), description="demodulator low-pass",
-                                   json_schema_extra={"unit": "Hz", "default_note": "designed ({ecce2010} "
+                                   json_schema_extra={"kind": "bandwidth",
+                                                      "unit": "Hz", "default_note": "designed ({ecce2010} "
                                                       "for ecce2010)"})
     # s, the HF path's delay: the pulsating/elliptical estimate is advanced by omega times it (designed)
     hf_delay_s: float = Field(
         default=_c(_C.hf_delay), ge=0.0, le=0.1,
         description="the HF path's delay: the pulsating and elliptical estimate's demodulated "
         "error is advanced by the speed times it (docs/tuning.md, \"The HF path's delay\")",
-        json_schema_extra={"unit": "s", "default_note": "designed (`1 / f_inj`; 0 for the rotating vector "
-                           "and the square wave)"})
+        json_schema_extra={"kind": "time", "unit": "s", "default_note": "designed (`1 / f_inj`; 0 for the "
+                           "rotating vector and the square wave)"})
     demod_notch: bool = Field(bool(_C.demod.f_notch > 0), description="the low-pass's zeros at twice the "
                               "injection frequency (the products' ripple)")
     min_level: NonNegative = Field(_c(_C.demod.min_level), description="HF level below which the error is "
@@ -293,7 +299,8 @@ class ObserverSection(BaseModel):
         "schedule follow (`ls_demod_cfg.comp_r`, `gain_r`; docs/tuning.md, \"The hot winding\")")
     omega_max: Positive = Field(
         _c(_C.obs.omega_max), description="clamp of the observer's speed estimate",
-        json_schema_extra={"unit": "rad/s electrical", "default_note": "designed: the limits' margins "
+        json_schema_extra={"kind": "angular_speed",
+                           "unit": "rad/s electrical", "default_note": "designed: the limits' margins "
                            "({ecce2010} for ecce2010 with its table)"})
     force_max: Positive = Field(
         _c(_C.obs.force_max), description="clamp of the observer's load estimate (mech)",
@@ -310,19 +317,22 @@ class ModelOverride(BaseModel):
         json_schema_extra={"default_note": "the scenario's `motor`"})
     L_d: Positive | None = Field(
         None, description="what the controller believes (parameter mismatch studies): decoupling",
-        json_schema_extra={"unit": "H", "default_note": "the motor's mean L_d over a period"})
+        json_schema_extra={"kind": "inductance",
+                           "unit": "H", "default_note": "the motor's mean L_d over a period"})
     L_q: Positive | None = Field(None, description="what the controller believes", json_schema_extra={
-        "unit": "H", "default_note": "the motor's mean L_q over a period"})
+        "kind": "inductance", "unit": "H", "default_note": "the motor's mean L_q over a period"})
     R_s: NonNegative | None = Field(None, description="what the controller believes: current-loop integral "
-                                    "gain", json_schema_extra={"unit": "ohm", "default_note": "the motor's"})
+                                    "gain", json_schema_extra={"kind": "resistance",
+                                                               "unit": "ohm", "default_note": "the motor's"})
     psi_pm: NonNegative | None = Field(None, description="what the controller believes: back-EMF "
                                        "feed-forward", json_schema_extra={"unit": "Wb",
                                                                           "default_note": "`K_f tau/(3 pi)`"})
     mass: Positive | None = Field(None, description="what the controller believes: feed-forward, speed-loop "
-                                  "gains, mech observer", json_schema_extra={"unit": "kg",
+                                  "gains, mech observer", json_schema_extra={"kind": "mass", "unit": "kg",
                                                                              "default_note": "the motor's"})
     force_constant: Positive | None = Field(None, description="what the controller believes: force -> i_q",
-                                            json_schema_extra={"unit": "N/A", "default_note": "the motor's"})
+                                            json_schema_extra={"kind": "force_constant",
+                                                               "unit": "N/A", "default_note": "the motor's"})
     demod_gain: float | None = Field(
         None, description="what the controller believes: the demodulator's gain; refused with "
         "`observer.gain_schedule = true`, whose table replaces it",
@@ -346,7 +356,8 @@ class ControllerSection(BaseModel):
     kd_x: NonNegative = Field(0.0, description="pd only", json_schema_extra={"unit": "N s/m"})
     v_max: Positive = Field(
         _c(_C.pos.v_max), description="speed-reference limit (p), and a step command's speed",
-        json_schema_extra={"unit": "m/s", "default_note": "designed (1.25 times the application's, "
+        json_schema_extra={"kind": "speed",
+                           "unit": "m/s", "default_note": "designed (1.25 times the application's, "
                            "`reference.v_max`: {ecce2010} for ecce2010)"})
     # m/s^2, a step command's acceleration (a minimum-time move at v_max); 0: the reference jumps
     step_a_max: float = Field(
@@ -360,7 +371,8 @@ class ControllerSection(BaseModel):
     speed_bandwidth_hz: Positive = Field(
         _c(_C.pos.speed.kp / _C.pos.mass / (2.0 * math.pi)), description="kp = m w, ki = m w^2 / 4 (held at "
         "0 in the sensorless modes with `load_feedforward`)",
-        json_schema_extra={"unit": "Hz", "default_note": "designed ({ecce2010} for ecce2010)"})
+        json_schema_extra={"kind": "bandwidth",
+                           "unit": "Hz", "default_note": "designed ({ecce2010} for ecce2010)"})
     speed_kp: Positive | None = Field(None, description="explicit, with `speed_ki`; overrides the bandwidth",
                                       json_schema_extra={"unit": "N s/m"})
     speed_ki: NonNegative | None = Field(None, description="explicit, with `speed_kp`",
@@ -368,14 +380,15 @@ class ControllerSection(BaseModel):
     # Hz: ki = w R_s
     current_bandwidth_hz: Positive = Field(
         _c(_C.current.ki / _C.dtres.r_s / (2.0 * math.pi)), description="kp = w (L_d + L_q)/2, ki = w R_s",
-        json_schema_extra={"unit": "Hz", "default_note": "designed ({ecce2010} for ecce2010)"})
+        json_schema_extra={"kind": "bandwidth",
+                           "unit": "Hz", "default_note": "designed ({ecce2010} for ecce2010)"})
     current_kp: Positive | None = Field(None, description="explicit, with `current_ki`; overrides the "
                                         "bandwidth", json_schema_extra={"unit": "V/A"})
     current_ki: NonNegative | None = Field(None, description="explicit, with `current_kp`",
                                            json_schema_extra={"unit": "V/(A s)"})
     decouple: bool = Field(True, description="dq decoupling and back-EMF feed-forward")
     i_max: Positive = Field(_c(_C.i_max), description="current-reference limit; force limit = K_f i_max",
-                            json_schema_extra={"unit": "A"})
+                            json_schema_extra={"kind": "current", "unit": "A"})
     friction_coulomb: NonNegative = Field(
         0.0, description="Coulomb friction fed forward at the speed reference and in the mech observer's "
         "model, linear below `friction_band` (docs/tuning.md, \"Friction and thrust ripple\")",
@@ -387,7 +400,8 @@ class ControllerSection(BaseModel):
     friction_band: Positive = Field(
         1.0e-3, description="the speed below which the Coulomb friction is linear (the injection's dither "
         "averages the relay into that slope)",
-        json_schema_extra={"unit": "m/s", "default_note": "designed: pi/2 times the q-current dither's "
+        json_schema_extra={"kind": "speed",
+                           "unit": "m/s", "default_note": "designed: pi/2 times the q-current dither's "
                            "velocity amplitude"})
     ripple_order: int = Field(
         0, ge=0, le=64, description="order n of the force constant's ripple the current reference divides "
@@ -415,7 +429,7 @@ class ReferenceSection(BaseModel):
                                              json_schema_extra={"unit": "mm", "default_note": "required for "
                                                                 "trajectory, non-empty"})
     v_max: Positive = Field(_c(_C.traj.v_max), description="trajectory speed limit (the firmware's "
-                            "`ls_traj`)", json_schema_extra={"unit": "m/s"})
+                            "`ls_traj`)", json_schema_extra={"kind": "speed", "unit": "m/s"})
     a_max: Positive = Field(_c(_C.traj.a_max), description="trajectory acceleration limit (the firmware's "
                             "`ls_traj`)", json_schema_extra={"unit": "m/s^2"})
     dwell: float = Field(0.2, description="pause after each move, >= 0", json_schema_extra={"unit": "s"})
@@ -466,7 +480,7 @@ class SensorsSection(BaseModel):
     current_noise: NonNegative = Field(0.0, description="Gaussian", json_schema_extra={"unit": "A rms"})
     adc_bits: int = Field(default=0, ge=0, le=24, description="quantisation over +- `adc_range`; 0: ideal")
     adc_range: Positive = Field(10.0, description="+- full scale of the quantisation",
-                                json_schema_extra={"unit": "A"})
+                                json_schema_extra={"kind": "current", "unit": "A"})
     encoder_counts_per_period: int = Field(default=int(_C.enc_counts), ge=1, lt=2**31,
                                            description="sensored mode")
 
@@ -496,18 +510,18 @@ class ProtectionSection(BaseModel):
     """The ``[protection]`` section of a scenario file; its keys are in docs/simulator.md."""
     model_config = _STRICT
     i_max: Positive = Field(_c(_C.prot.i_max), description="phase over-current trip", json_schema_extra={
-        "unit": "A", "default_note": "designed ({ecce2010} for ecce2010)"})
+        "kind": "current", "unit": "A", "default_note": "designed ({ecce2010} for ecce2010)"})
     v_dc_min: NonNegative = Field(_c(_C.prot.v_dc_min), description="under-voltage trip", json_schema_extra={
         "unit": "V", "default_note": "5/9 `v_dc` ({ecce2010} at the default bus)"})
     v_dc_max: Positive = Field(_c(_C.prot.v_dc_max), description="over-voltage trip", json_schema_extra={
         "unit": "V", "default_note": "5/4 `v_dc` ({ecce2010} at the default bus)"})
     err_max: Positive = Field(_c(_C.prot.err_max), description="observer-loss trip: error-signal limit",
-                              json_schema_extra={"unit": "rad"})
+                              json_schema_extra={"kind": "angle_error", "unit": "rad"})
     err_time: Positive = Field(_c(_C.prot.err_time), description="observer-loss trip: time over `err_max`",
                                json_schema_extra={"unit": "s"})
     omega_max: Positive = Field(_c(_C.prot.omega_max), description="over-speed trip", json_schema_extra={
-        "unit": "rad/s electrical", "default_note": "designed: the limits' margins ({ecce2010} for ecce2010 "
-        "with its table)"})
+        "kind": "angular_speed", "unit": "rad/s electrical", "default_note": "designed: the limits' margins "
+        "({ecce2010} for ecce2010 with its table)"})
     i_abort: Positive = Field(20.0, description="the simulator stops the run as `diverged` beyond this",
                               json_schema_extra={"unit": "A"})
 
@@ -546,6 +560,10 @@ class SaturationSection(BaseModel):
         given = [k for k in keys if getattr(self, k) is not None]
         if given and not self.enabled:
             raise KeyProblem(given[0], "only used by the saturated plant: set saturation.enabled = true")
+        for k in ("magnet_current", "q_current"):  # (16000 for 16 A was blamed on saturation.polarity)
+            msg = None if getattr(self, k) is None else implausible("current", getattr(self, k))
+            if msg is not None:
+                raise KeyProblem(k, msg)
         return self
 
 
@@ -699,11 +717,15 @@ class ScenarioFile(BaseModel):
         if inv.dead_time * inv.f_pwm >= DEAD_TIME_SHARE_MAX:
             share = f"{DEAD_TIME_SHARE_MAX * 100:g} % of the PWM period"
             if _named(inv, ("dead_time", "f_pwm")) == "f_pwm":  # (the rate given, the dead time the default)
+                hint = slip("pwm_frequency", inv.f_pwm, ok=lambda v: inv.dead_time * v < DEAD_TIME_SHARE_MAX)
                 raise KeyProblem("inverter.f_pwm", f"{inv.f_pwm:g} Hz makes the dead time "
                                  f"({inv.dead_time:g} s) {share} or more: at most "
-                                 f"{DEAD_TIME_SHARE_MAX / inv.dead_time:g} Hz with this dead time")
+                                 f"{DEAD_TIME_SHARE_MAX / inv.dead_time:g} Hz with this dead time"
+                                 + (f"; {hint}" if hint else ""))
+            hint = slip("dead_time", inv.dead_time, ok=lambda v: v * inv.f_pwm < DEAD_TIME_SHARE_MAX)
             raise KeyProblem("inverter.dead_time", f"must be below {share} "
-                            f"({DEAD_TIME_SHARE_MAX / inv.f_pwm:g} s), got {inv.dead_time!r}")
+                            f"({DEAD_TIME_SHARE_MAX / inv.f_pwm:g} s), got {inv.dead_time!r}"
+                            + (f"; {hint}" if hint else ""))
         _check_overrides(self)
         if self.observer.lut_model == "measured" and self.observer.lut_file is None:
             raise KeyProblem("observer.lut_file", "missing: observer.lut_model = \"measured\" reads the "
@@ -755,7 +777,9 @@ class ScenarioFile(BaseModel):
         if ctl.mode == "startup":
             for k in ("t_lock", "t_quiet", "t_pulse", "t_rest", "t_settle"):  # (before the periods)
                 if getattr(su, k) > 60.0:
-                    raise KeyProblem(f"startup.{k}", f"at most 60 s, got {getattr(su, k):g}")
+                    hint = slip("time", getattr(su, k), ok=lambda v: v <= 60.0)
+                    raise KeyProblem(f"startup.{k}", f"at most 60 s, got {getattr(su, k):g}"
+                                     + (f"; {hint}" if hint else ""))
             if _periods(su.t_pulse, inv.f_pwm) < 2:
                 raise KeyProblem("startup.t_pulse", f"must be at least 2 PWM periods ({2 / inv.f_pwm:g} s), "
                                  f"got {su.t_pulse:g}")
@@ -843,10 +867,12 @@ class ScenarioFile(BaseModel):
         # (an amplitude the file does not give is designed for the bus, and checked there)
         if ("amplitude" in self.injection.model_fields_set and p.v_dc_min > 0
                 and self.injection.amplitude * math.sqrt(3.0) >= 0.8 * p.v_dc_min):
+            hint = slip("voltage", self.injection.amplitude,
+                        ok=lambda v: v * math.sqrt(3.0) < 0.8 * p.v_dc_min)
             raise KeyProblem("injection.amplitude",
                              "too large for the bus: amplitude * sqrt(3) must be below "
                              f"0.8 protection.v_dc_min = {0.8 * p.v_dc_min:g} V, "
-                             f"got {self.injection.amplitude:g}")
+                             f"got {self.injection.amplitude:g}" + (f"; {hint}" if hint else ""))
         amp = self.injection.amplitude
         if amp != 0.0 and REAL.type(amp) == 0.0:  # (its designed ramp_rate was named, refused by the drive)
             raise KeyProblem("injection.amplitude", f"{amp!r} V is 0 in the drive's {REAL} numbers: give 0 "
@@ -1057,6 +1083,54 @@ def _sections(model: type[BaseModel], prefix: str = "") -> dict[str, tuple[str, 
 _SECTIONS = _sections(ScenarioFile)
 
 
+def unit_kinds() -> dict[str, str]:
+    """The scenario keys that hold a quantity of a kind of the table of plausible values
+    (:data:`linsense.plausible.KINDS`), each with its kind: the fields whose ``json_schema_extra``
+    names one (``{"inverter.dead_time": "dead_time", "controller.model.L_d": "inductance", ...}``).
+
+    Returns
+    -------
+    dict
+        Dotted key to kind, in the file's order of sections.
+    """
+    out = {}
+    for path, model in _SECTIONS.values():
+        for name, field in model.model_fields.items():
+            extra = field.json_schema_extra if isinstance(field.json_schema_extra, dict) else {}
+            if "kind" in extra:
+                out[f"{path}.{name}"] = extra["kind"]
+    return out
+
+
+#: pydantic's errors of a value beyond its field's bounds
+_RANGE_ERRORS = ("greater_than", "greater_than_equal", "less_than", "less_than_equal")
+
+
+def _slip_of(key: str, data: dict) -> str:
+    """The slip of unit that makes the value ``data`` gives at ``key`` one its field accepts
+    (``injection.quadrature = 90``: "did you type %? (90 % is 0.9)"), or ``""``."""
+    kind = unit_kinds().get(key)
+    value = data
+    for part in key.split("."):
+        value = value.get(part) if isinstance(value, dict) else None
+    if kind is None or isinstance(value, bool) or not isinstance(value, int | float):
+        return ""
+    path, _, name = key.rpartition(".")
+    model = next(m for p, m in _SECTIONS.values() if p == path)
+    field = model.model_fields[name]
+    ann = Annotated[field.annotation, *field.metadata] if field.metadata else field.annotation
+    adapter = TypeAdapter(ann)
+
+    def accepted(v: float) -> bool:
+        try:
+            adapter.validate_python(v, strict=True)
+        except ValidationError:
+            return False
+        return True
+
+    return slip(kind, float(value), ok=accepted)
+
+
 def _has_path(data: dict, dotted: str) -> bool:
     """Whether ``data`` has the (dotted) section ``dotted``."""
     for part in dotted.split("."):
@@ -1160,7 +1234,11 @@ def scenario_from_dict(data: dict, source: str = "<dict>", base_dir: str | Path 
             key += "." + next(k for k, f in missing[1].model_fields.items() if f.is_required())
         if section and not _has_path(data, section):
             message = f"{message} (the file has no [{section}] section)"
-        raise InputError(source, key, message) from None
+        # (a value out of its field's range: the slip of unit that brings it in, e.g. a kappa of 90)
+        errors = exc.errors(include_url=False)
+        first = next((e for e in errors if e["type"] == "extra_forbidden"), errors[0])
+        hint = _slip_of(key, data) if first["type"] in _RANGE_ERRORS else ""
+        raise InputError(source, key, message + (f"; {hint}" if hint else "")) from None
     return Scenario(spec, source, Path(base_dir) if base_dir is not None else working_folder())
 
 

@@ -163,7 +163,9 @@ def _motor_file(ctx: SweepContext, motor: dict) -> str:
     path = Path(ctx.motors_out) / f"motor-{digest}.toml"
     if not path.exists():
         write_atomic(path, text)
-    return str(path)
+    # (absolute: the scenario reads a relative motor path from its own folder, and a relative --out
+    # made every run of a motor axis "no such motor file", issue 37)
+    return str(path.absolute())
 
 
 def scenario_for(ctx: SweepContext, point: dict, relative: dict) -> dict:

@@ -45,6 +45,7 @@ from linsense._check import brief, instance, path_arg
 from linsense._digest import bytes_sha256
 from linsense.errors import InputError, KeyProblem
 from linsense.io import folder_of, parse_toml, read_text_file, working_folder
+from linsense.plausible import implausible
 from linsense.validation import to_input_error
 
 _STRICT = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
@@ -105,6 +106,13 @@ class Axis(BaseModel):
         if self.relative and self.values is not None and not all(
                 isinstance(v, int | float) and not isinstance(v, bool) for v in self.values):
             raise KeyProblem("values", "relative values must be numbers (factors of the base value)")
+        if self.relative:  # (a factor in percent: values = [80, 100] made every run 80 times off, issue 37)
+            given = [("values", v) for v in self.values or ()]
+            given += [(k, getattr(self, k)) for k in ("min", "max") if getattr(self, k) is not None]
+            for key, v in given:
+                msg = implausible("factor", float(v))
+                if msg is not None:
+                    raise KeyProblem(key, f"relative = true makes it a factor of the base value: {msg}")
         return self
 
 

@@ -35,6 +35,7 @@ from linsense.analysis.hf import (
 from linsense.compensation.lut import resistance_slope
 from linsense.errors import InputError, shown
 from linsense.model.motor import Motor, as_motor
+from linsense.plausible import KINDS, slip
 from linsense.tune.margins import error_gain
 
 #: the stated ratios (docs/tuning.md)
@@ -987,6 +988,9 @@ DRIVE_RULES: tuple[Rule, ...] = (
     _own_range("load", _positive, "the rated load must be a force > 0 N (the certificate's loads are "
                "fractions of it)"),
     _own_range("travel", _positive, "must be a stroke > 0 m"),
+    Rule(1, ("travel",), lambda x: x.d.travel is None or x.d.travel <= KINDS["stroke"].high,
+         lambda x, k: f"{x.d.travel * 1e3:g} mm is beyond the strokes of linear-motor axes: at most "
+                      f"{KINDS['stroke'].high * 1e3:g} mm"),
     _own_range("v_inj", _positive, "must be positive"),
     _own_range("f_inj", lambda v: math.isfinite(v) and v >= F_INJ_MIN / 8.0,
                f"must be at least {F_INJ_MIN / 8.0:g} Hz (the bandwidths of the loops follow it)"),
@@ -1039,12 +1043,35 @@ def check_drive(motor: Motor, d: DriveData, source: str = "<tune>") -> DriveInpu
         gave, else its first), its value and its limit.
     """
     x = DriveInputs(motor, d)
-    for rule in DRIVE_RULES:
+    for i, rule in enumerate(DRIVE_RULES):
         if not rule.holds(x):
             keys = rule.keys(x) if callable(rule.keys) else rule.keys
             key = next((k for k in keys if x.given(k)), keys[0])
-            raise InputError(source, key, rule.says(x, key))
+            hint = _slip(x, key, DRIVE_RULES[:i + 1])
+            raise InputError(source, key, rule.says(x, key) + (f"; {hint}" if hint else ""))
     return x
+
+
+#: the kind of quantity of each drive input (:data:`linsense.plausible.KINDS`), for the slip of unit
+#: a refusal suggests; ``travel`` is typed in mm (``--travel``), as its messages show it
+_KIND = {"v_dc": ("voltage", None), "f_pwm": ("pwm_frequency", None), "dead_time": ("dead_time", None),
+         "i_max": ("current", None), "v_max": ("speed", None), "travel": ("stroke", "mm"),
+         "v_inj": ("voltage", None), "f_inj": ("injection_frequency", None), "quad": ("share", None)}
+
+
+def _slip(x: DriveInputs, key: str, rules: tuple[Rule, ...]) -> str:
+    """The slip of unit of drive input ``key`` under which ``rules`` (those up to the one it broke)
+    hold: ``"did you type us? (0.8 us is 8e-07 s)"``, or ``""``."""
+    if key not in _KIND or not isinstance(getattr(x.d, key), float | int):
+        return ""
+    kind, unit = _KIND[key]
+    to_si = KINDS[kind].sizes()[unit] if unit else 1.0
+
+    def ok(v: float) -> bool:
+        y = DriveInputs(x.motor, dataclasses.replace(x.d, **{key: v * to_si}))
+        return all(r.holds(y) for r in rules)
+
+    return slip(kind, getattr(x.d, key) / to_si, unit, ok=ok)
 
 
 def design(
