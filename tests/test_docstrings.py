@@ -456,3 +456,20 @@ def test_checker_wants_yields_for_a_generator():
         yield from range(n)
     '''
     assert any("without a Yields section" in p for p in _problems_of(code))
+
+
+def test_every_package_says_what_it_is_for():
+    """A package's docstring says what the package is for, not only its name (issue 38: four were
+    ``\"\"\"linsense.fea.\"\"\"``): its first sentence holds more than the dotted name."""
+    import ast
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1] / "src" / "linsense"
+    bare = []
+    for init in sorted(root.rglob("__init__.py")):
+        doc = ast.get_docstring(ast.parse(init.read_text(encoding="utf-8"))) or ""
+        name = ".".join(("linsense",) + init.parent.relative_to(root).parts)
+        words = doc.split("\n\n")[0].replace(name, "").replace(":", "").strip(" .\n")
+        if len(words.split()) < 4:
+            bare.append(f"{init.relative_to(root.parent)}: {doc.splitlines()[0] if doc else '(none)'}")
+    assert not bare, bare

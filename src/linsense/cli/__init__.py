@@ -1,4 +1,4 @@
-"""The ``linsense`` command.
+"""The ``linsense`` command (click): each command reads its options and files and runs the package.
 
 Bad input (a :class:`~linsense.errors.LinsenseError` or a usage error) ends with exit code 2 and a
 single line on stderr naming the file, key and value; no traceback, and no output file: every

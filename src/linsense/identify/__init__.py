@@ -1,1 +1,10 @@
-"""linsense.identify."""
+"""Identification from bench data: a bench file's phasors (or amplitudes) per position become the
+inductance table, a fitted motor model and the measured compensation table (``linsense identify``,
+``linsense bench-emulate``; docs/identify.md).
+
+Modules: :mod:`~linsense.identify.bench` (the bench file: read, emulate, write),
+:mod:`~linsense.identify.process` (phasors -> inductance matrix per position),
+:mod:`~linsense.identify.fit` (the model of docs/theory.md section 2 fitted to them),
+:mod:`~linsense.identify.tables` and :mod:`~linsense.identify.pipeline` (the whole job and its
+outputs).
+"""

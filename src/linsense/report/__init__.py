@@ -1,4 +1,5 @@
-"""linsense.report.
+"""Figures and reports: the paper's figures, the simulator's and the certificate's plots, the sweep
+maps, the FEA's pictures and the HTML report of ``linsense reproduce``.
 
 Every figure is a :class:`matplotlib.figure.Figure` rendered without a backend; matplotlib is
 imported here first, so that an ``MPLBACKEND`` it refuses is named (it was matplotlib's "Key
