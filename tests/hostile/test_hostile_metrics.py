@@ -153,6 +153,9 @@ def test_the_api_metrics_do_not_depend_on_the_record():
     ("", ["reference.at", "0.6 s", "the step", "scenario.duration = 0.6 s"]),
     ("[metrics]\nconvergence_s = 2.0", ["metrics.convergence_s", "2.0 s", "error windows", "0.6 s"]),
     ("[protection]\nerr_time = 1.0", ["protection.err_time", "1.0 s", "observer-loss trip", "0.6 s"]),
+    # the step at 0.1 s + a 0.6 s transient window: no steady sample (before: n/a metrics, exit 0)
+    ("[metrics]\nsettle_s = 0.6", ["metrics.settle_s", "transient window", "0.7 s", "steady metrics",
+                                    "scenario.duration = 0.6 s"]),
 ])
 def test_an_event_after_the_end_is_refused(run_cli, tmp_path, keys, words):
     """A step load at 5 s in a 0.6 s run said "stable", exit 0 (the step at 0.6 s: "not reached")."""

@@ -291,8 +291,9 @@ def run_events(sc: Scenario, moves) -> list[tuple[str, float, str, bool]]:
     or the start of each move of a trajectory (``reference.at`` for the first, the waypoint's key for
     the others: they follow the moves before them and ``reference.dwell``), a step load
     (``load.time``, above 0), the end of a start-up at the earliest, and the timed keys the file
-    gives: the start of the error windows (``metrics.convergence_s``) and the observer-loss trip's
-    delay (``protection.err_time``).
+    gives: the end of the transient window after the last step or move (``metrics.settle_s``), the
+    start of the error windows (``metrics.convergence_s``) and the observer-loss trip's delay
+    (``protection.err_time``).
 
     Parameters
     ----------
@@ -328,6 +329,13 @@ def run_events(sc: Scenario, moves) -> list[tuple[str, float, str, bool]]:
         events.append(("startup", end, "the start-up ends at {t} s at the earliest (t_lock + t_quiet + 2 "
                        "pairs (t_rest + t_pulse) + t_settle): the position control after it would never act",
                        False))
+    if "settle_s" in s.metrics.model_fields_set:  # (given long enough, no steady sample is left)
+        ends = [ref.at] if ref.type == "step" else [t1 for _t0, t1, *_x in moves] if ref.type == "trajectory" \
+            else []
+        if ends:
+            events.append(("metrics.settle_s", max(ends) + s.metrics.settle_s, "the transient window after "
+                           "the last step or move ends at {t} s: the steady metrics after it would read "
+                           "nothing", False))
     if "convergence_s" in s.metrics.model_fields_set:
         events.append(("metrics.convergence_s", s.metrics.convergence_s, "the start of the error windows",
                        True))
