@@ -107,6 +107,7 @@ def test_calibrate_cli(tmp_path, capsys):
     rows = (tmp_path / "c" / "lut_measured.csv").read_text().splitlines()
     assert rows[0] == "theta_deg,psi_lut_deg" and len(rows) == 17
     assert (tmp_path / "c" / "calibration.png").stat().st_size > 10000
+    assert "a 16-point table" in capsys.readouterr().err  # (the firmware's interpolation between points)
     with pytest.raises(SystemExit) as e:
         main(["calibrate", "--motor", "ecce2010", "--quad", "1.5", "--out", str(tmp_path / "d")])
     err = capsys.readouterr().err.strip()

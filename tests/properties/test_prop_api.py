@@ -23,7 +23,9 @@ from linsense.analysis.tables import model_table
 from linsense.compensation.lut import build_lut
 from linsense.errors import InputError
 from linsense.identify.bench import emulate_bench
+from linsense.limits import MAX_F_INJ, MIN_F_INJ
 from linsense.model.motor import load_motor
+from linsense.plausible import KINDS
 
 #: odd values an API caller can pass where a number belongs
 ODD = st.one_of(HOSTILE, st.none(), st.complex_numbers(max_magnitude=1e6), st.just(np.float64("nan")),
@@ -46,7 +48,7 @@ ARGS = {
     "quad": (st.floats(0.0, 0.99), lambda v: real(v) and 0 <= v < 1),
     "v_inj": (st.floats(0.1, 100.0), lambda v: real(v) and v > 0),
     "positions": (st.integers(8, 100), lambda v: integral(v) and 8 <= v <= 10_000),
-    "noise": (st.floats(0.0, 0.1), lambda v: real(v) and v >= 0),
+    "noise": (st.floats(0.0, 0.1), lambda v: real(v) and 0 <= v <= KINDS["relative_noise"].high),
     "seed": (st.integers(0, 2**32), lambda v: integral(v) and v >= 0),
     "freq": (st.floats(1.0, 1e5), lambda v: real(v) and v > 0),
     "current": (st.floats(0.01, 10.0), lambda v: real(v) and v > 0),
@@ -73,8 +75,9 @@ def _finite(obj) -> bool:
 CALLS = {
     "build_lut": (lambda m, a: build_lut(m, a["points"], a["f_inj"], quad=a["quad"]),
                   ("points", "f_inj", "quad"), lambda r, a: r.values.shape == (a["points"],),
-                  {"f_inj": lambda v: v is None or (ARGS["f_inj"][1](v) and v >= 1.0)}),  # (None: eq. 12;
-                  # a table's injection at least 1 Hz, MIN_F_INJ: 1e-300 Hz gave an all-zero table)
+                  {"f_inj": lambda v: v is None or (ARGS["f_inj"][1](v) and MIN_F_INJ <= v <= MAX_F_INJ)}),
+                  # (None: eq. 12; a table's injection within MIN_F_INJ .. MAX_F_INJ: 1e-300 Hz gave an
+                  # all-zero table)
     "psi_lut_resistive": (lambda m, a: psi_lut_resistive(m, THETA, a["f_inj"], a["quad"]),
                           ("f_inj", "quad"), lambda r, a: r.shape == THETA.shape),
     "hf_current": (lambda m, a: hf_current(m, THETA, a["v_inj"], a["f_inj"], 0.0, a["quad"]),
