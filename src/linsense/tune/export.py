@@ -217,8 +217,8 @@ def scenario_dict(dz: Design | DriveDesign, drive: DriveData | None = None, moto
 
 
 def scenario_toml(
-    dz: Design,
-    drive: DriveData,
+    dz: Design | DriveDesign,
+    drive: DriveData | None,
     motor_spec: str,
     out: Path,
     base: dict | None = None,
@@ -236,10 +236,10 @@ def scenario_toml(
 
     Parameters
     ----------
-    dz : Design
-        The design.
-    drive : DriveData
-        The drive.
+    dz : DriveDesign or Design
+        The drive's design (or a Design with ``drive``, ``startup`` and ``k_est``).
+    drive : DriveData or None
+        The drive (with a Design).
     motor_spec : str
         The motor as given (preset name or path).
     out : Path
@@ -249,11 +249,11 @@ def scenario_toml(
     base_dir : Path or None, optional
         The folder a relative motor path is relative to.
     startup : StartupDesign or None, optional
-        The start-up design.
+        The start-up design (with a Design).
     k_est : float, optional
-        Widening of the trips and clamp on the estimate.
+        Widening of the trips and clamp on the estimate (with a Design).
     pole_pitch : float or None, optional
-        Pole pitch, m.
+        Pole pitch, m (a DriveDesign's motor's).
     table : str or None, optional
         A measured table's file (:func:`scenario_dict`).
 
@@ -271,7 +271,9 @@ def scenario_toml(
 
     ref = relative(motor_spec) if names_a_path(motor_spec) else motor_spec
     table = None if table is None else relative(table)
-    sc = scenario_dict(dz, drive, ref, base, startup, k_est, pole_pitch, table)
+    dd = as_drive_design(dz, drive, startup=startup, k_est=k_est)
+    sc = scenario_dict(dd, None, ref, base, pole_pitch=pole_pitch, table=table)
+    dz = dd.design
     model = sc.get("controller", {}).get("model", {})
     if names_a_path(model.get("motor", "")):  # (every path in the scenario relative to its own folder)
         sc["controller"] = {**sc["controller"], "model": {**model, "motor": relative(model["motor"])}}
