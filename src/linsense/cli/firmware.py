@@ -117,7 +117,7 @@ def _quick_certificate(motor_spec: str, motor, dd, made, table_path: str | None)
 
     spec = motor_ref(motor_spec)
     table = None if table_path is None else str(Path(table_path).resolve())
-    base = certificate_base(scenario_dict(made.design, dd, spec, pole_pitch=motor.pole_pitch, table=table))
+    base = certificate_base(scenario_dict(made.drive_design, motor_ref=spec, table=table))
     return prepare(motor, spec, base, str(working_folder()), v_max=dd.v_max, a_max=dd.a_max,
                    load=made.design.load, travel=dd.travel, quick=True)()
 

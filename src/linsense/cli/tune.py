@@ -67,7 +67,8 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
     from linsense.io import write_atomic
     from linsense.model.motor import names_a_path
     from linsense.sim.build import compensation_of, drive_data
-    from linsense.tune.design import DriveData, design, uncompensated_speed_factor
+    from linsense.tune.design import DriveData
+    from linsense.tune.drive_design import design_drive
     from linsense.tune.export import c_header, check_c_header, design_digest, scenario_dict, scenario_toml
 
     if as_json and out == "-":
@@ -114,35 +115,21 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
         from linsense.tune.export import c_config_name
 
         c_config_name(name, motor.name, "--name")
-    try:
-        dz = design(motor, dd, src)
-    except InputError as exc:  # (with a scenario: the option typed, or the scenario's key)
-        raise exc if sc is None else drive_refusal(exc, typed, sc, src) from None
-    from linsense.tune.startup import design_startup
-    # (the start-up locks as the PLL would: startup.lock_gain, linsense.tune.design.startup_lock_gain)
-    su = design_startup(motor, v_dc=dd.v_dc, f_pwm=dd.f_pwm, i_max=dd.i_max, observer_bw=dz.observer_bw_pll,
-                        v_inj=dz.v_inj, polarity=polarity, current_noise=current_noise,
-                        ramp_rate=dz.inj_ramp_rate, source=src)
     # a drive run without its table (sensorless_nolut) gets its trips on the estimate wider
     mode = (base or {}).get("control", {}).get("mode", "sensorless_lut")
     no_table = compensation_of(mode, (base or {}).get("observer", {}).get("compensation")) == "none"
-    k_est = uncompensated_speed_factor(motor) if no_table else 1.0
-    table = None
-    if table_path is not None:
-        from linsense.compensation.measured import fit_report, read_measured_table
-
-        # (the frequency and kappa the drive runs: the square wave's f_pwm / 2, kappa the elliptical's)
-        f_table = dd.f_pwm / 2.0 if dd.shape == "square" else dz.f_inj
-        q_table = dz.quad if dd.shape == "pulsating" else 0.0
-        table = read_measured_table(table_path, motor=motor, injection=dd.shape, f_inj=f_table, quad=q_table,
-                                    points=256, via=table_via)
+    try:
+        made = design_drive(motor, dd, source=src, polarity=polarity, current_noise=current_noise,
+                            uncompensated=no_table, table=table_path, table_via=table_via)
+    except InputError as exc:  # (with a scenario: the option typed, or the scenario's key)
+        raise exc if sc is None else drive_refusal(exc, typed, sc, src) from None
+    dz, su, table = made.design, made.startup, made.table
+    if table is not None:
         if table.note:
             say(f"  table          {table.note}")
-        fit_line, fit_warning = fit_report(motor, table.raw, dd.shape, f_table, q_table, 256)
-        say(f"  table          {fit_line}")
+        say(f"  table          {made.table_fit[0]}")
     table_abs = None if table_path is None else str(Path(table_path).resolve())
-    sc_dict = scenario_dict(dz, dd, motor_spec, base, startup=su, k_est=k_est, pole_pitch=motor.pole_pitch,
-                            table=table_abs)
+    sc_dict = scenario_dict(made, motor_ref=motor_spec, base=base, table=table_abs)
     _read_back(sc_dict, src, typed, sc)
     cert_run = None
     if not no_verify:  # (its runs are built before anything is written: a refusal leaves no file)
@@ -159,10 +146,7 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
     else:
         say("  start-up       not designed: no saturation data (--polarity, or [saturation] polarity "
             "in the motor file)")
-    warnings = dz.warnings + (su.warnings if su is not None else [])
-    if table is not None:  # (the file's table's cost is moot: the drive runs the measured one)
-        warnings = [w for w in warnings if not w.startswith("the motor file's table costs")]
-        warnings += [f"{table.source}: {fit_warning}"] if fit_warning else []
+    warnings = made.warnings
     for w in warnings:
         c.warn(w)
     if mode != "sensorless_lut" and not no_verify:
@@ -187,12 +171,11 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
             c.warn(f"{out} not written: {reason} (--unverified writes it anyway)")
             raise click.exceptions.Exit(1)
         by = "" if reason else VERIFIED_BY[cert.quick]
-        text = c_header(dz, dd, motor, name, startup=su, table=table, unverified=reason, verified_by=by)
+        text = c_header(made, name=name, unverified=reason, verified_by=by)
         if cert is not None:
             _write_certificate(cert, motor, dd, dz, quick, json_path, png_path, files, digest, out)
     else:
-        text = scenario_toml(dz, dd, motor_spec, Path(out), base, working_folder(), startup=su, k_est=k_est,
-                             pole_pitch=motor.pole_pitch, table=table_abs)
+        text = scenario_toml(made, dd, motor_spec, Path(out), base, working_folder(), table=table_abs)
     files.insert(0, write_atomic(out, text))
     if out != "-":
         say(str(files[0]))

@@ -127,6 +127,9 @@ class FirmwareExport:
     warnings : list of str
         What the design could not meet, or doubts a measured table's fit raises
         (:func:`linsense.compensation.measured.fit_report`, as ``linsense tune`` says them).
+    drive_design : DriveDesign
+        The drive's design (:func:`linsense.tune.drive_design.design_drive`), for its certificate's
+        scenario.
     """
 
     files: dict[str, bytes]
@@ -137,6 +140,7 @@ class FirmwareExport:
     design: object = None
     header: object = None
     warnings: list[str] = field(default_factory=list)
+    drive_design: object = None
 
     def certified(self, unverified: str = "", verified_by: str = "") -> FirmwareExport:
         """The same files with the configuration header saying what verified it, or why it is
@@ -200,9 +204,9 @@ def firmware_files(motor, drive=None, source: str = "<firmware export>", name: s
     linsense.errors.LinsenseError
         The library's files not found (:func:`linsense.get_include`).
     """
-    from linsense.tune.design import DriveData, design
+    from linsense.tune.design import DriveData
+    from linsense.tune.drive_design import design_drive
     from linsense.tune.export import c_header, design_digest
-    from linsense.tune.startup import design_startup
 
     dd = drive if drive is not None else DriveData()
     if dd.shape != "pulsating":
@@ -218,17 +222,10 @@ def firmware_files(motor, drive=None, source: str = "<firmware export>", name: s
 
         raise LinsenseError(f"the C library's files are incomplete under {library_root()}: "
                             f"{', '.join(missing)} missing (a broken installation: reinstall linsense)")
-    dz = design(motor, dd, source, analyse=False)
-    warnings = []
-    if table is not None:
-        from linsense.compensation.measured import fit_report, read_measured_table
-
-        table = read_measured_table(table, motor=motor, injection=dd.shape, f_inj=dz.f_inj, quad=dz.quad,
-                                    points=points, via=table_via)
-        doubt = fit_report(motor, table.raw, dd.shape, dz.f_inj, dz.quad, points)[1]
-        warnings += [f"{table.source}: {doubt}"] if doubt else []
-    su = design_startup(motor, v_dc=dd.v_dc, f_pwm=dd.f_pwm, i_max=dd.i_max, observer_bw=dz.observer_bw_pll,
-                        v_inj=dz.v_inj, ramp_rate=dz.inj_ramp_rate, source=source)
+    made = design_drive(motor, dd, source=source, analyse=False, table=table, table_via=table_via,
+                        points=points)
+    dz, su, table = made.design, made.startup, made.table
+    warnings = [f"{table.source}: {made.table_fit[1]}"] if table is not None and made.table_fit[1] else []
     sym = c_config_name(name, motor.name)
     digest = design_digest(motor, dd, points, table)
     cfg_name = f"ls_cfg_{sym}.h"
@@ -239,8 +236,7 @@ def firmware_files(motor, drive=None, source: str = "<firmware export>", name: s
     files[toolchain] = lib[toolchain].read_bytes() if toolchain in lib else b""
 
     def header(unverified: str = "", verified_by: str = "") -> str:
-        return c_header(dz, dd, motor, name, points=points, startup=su, table=table, unverified=unverified,
-                        verified_by=verified_by)
+        return c_header(made, name=name, points=points, unverified=unverified, verified_by=verified_by)
 
     files[cfg_name] = header().encode()
     files["ls_example.h"] = example_header(motor, dd, sym, digest).encode()
@@ -252,7 +248,7 @@ def firmware_files(motor, drive=None, source: str = "<firmware export>", name: s
              f"start-up {'designed' if su is not None else 'not designed (no saturation data)'}",
              f"  linsense {__version__}, data sha256 {digest}"]
     return FirmwareExport(files=files, name=sym, motor=motor.name, digest=digest, lines=lines, design=dz,
-                          header=header, warnings=warnings)
+                          header=header, warnings=warnings, drive_design=made)
 
 
 def example_header(motor, drive, sym: str, digest: str) -> str:

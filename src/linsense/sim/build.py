@@ -49,7 +49,8 @@ from linsense.sim.refusal import explain, given_keys
 from linsense.sim.scenario import Scenario, compensation_of
 from linsense.sim.tables import Tables, drive_tables, measured_model, measured_warnings
 from linsense.tune.cfgmap import Values
-from linsense.tune.design import DriveData, design, mean_dq, uncompensated_speed_factor
+from linsense.tune.design import DriveData, mean_dq
+from linsense.tune.drive_design import design_drive
 
 #: the names other modules import from here (the checks, the cache and the tables live in their
 #: own modules: linsense.sim.checks, .cache, .tables, .drive_cfg)
@@ -833,10 +834,32 @@ def calibration_timing(f_inj: float, dither_a: float, dither_hz: float, demod_lp
             "t_max": CAL_MAX_WINDOWS * t_hold}
 
 
+#: the keys :func:`designed` sets where the scenario leaves them unset, by section
+#: (:meth:`linsense.tune.drive_design.DriveDesign.scenario_keys`); the observer's load-estimate clamp
+#: at the force the drive can make
+DESIGNED = {
+    "injection": ("amplitude", "frequency", "ramp_rate"),
+    "observer": ("demod_lpf_hz", "gain_schedule", "hf_delay_s", "omega_max", "type", "bandwidth_hz",
+                 "force_max"),
+    "controller": ("speed_bandwidth_hz", "current_bandwidth_hz", "friction_coulomb", "friction_viscous",
+                   "friction_band", "ripple_order", "ripple_cos", "ripple_sin", "v_max", "step_a_max",
+                   "kp_x"),
+    "calibration": ("dither_a", "dither_hz"),
+    "protection": ("omega_max", "i_max"),
+}
+
+
+def _drive_design(motor: Motor, dd: DriveData, source: str, no_table: bool) -> tuple:
+    """The drive's design for a scenario (no start-up: the scenario's or the C library's) and its keys."""
+    made = design_drive(motor, dd, source=source, analyse=False, startup=False, uncompensated=no_table)
+    return made, made.scenario_keys()
+
+
 def designed(sc: Scenario, motor: Motor) -> Scenario:
     """``sc`` with every gain it leaves unset taken from the design for its motor and drive.
 
-    :func:`linsense.tune.design`, docs/tuning.md; what the file gives is kept.
+    :func:`linsense.tune.drive_design.design_drive` and its scenario keys, docs/tuning.md; what the
+    file gives is kept.
 
     Parameters
     ----------
@@ -863,36 +886,21 @@ def designed(sc: Scenario, motor: Motor) -> Scenario:
         dd = drive_data(sc)
         if dd.v_inj == 0.0:  # an explicit 0, sensored without injection: the other gains still designed
             dd.v_inj = None
-        dz = memo(("design", motor_key(motor), tuple(vars(dd).values())),
-                   lambda: design(motor, dd, sc.source, analyse=False))
-    except InputError as exc:  # the design's drive-data names -> the scenario's keys
-        raise _design_refusal(sc, exc) from None
-    no_table = compensation_of(s.control.mode, s.observer.compensation) == "none"
-    k_est = memo(("k_est", motor_key(motor)), lambda: uncompensated_speed_factor(motor)) if no_table else 1.0
-    want = {
-        "injection": {"amplitude": dz.v_inj, "frequency": dz.f_inj, "ramp_rate": dz.inj_ramp_rate},
-        "observer": {"demod_lpf_hz": dz.demod_lpf, "gain_schedule": True, "hf_delay_s": dz.hf_delay},
-        "controller": {"speed_bandwidth_hz": dz.speed_bw, "current_bandwidth_hz": dz.current_bw},
-        "calibration": {"dither_a": dz.dither_a, "dither_hz": dz.dither_hz},
         # the limits with their margins over the application (reference.v_max, a_max); the trips act
         # on the estimate, which without a table moves up to max(1 + de*/dtheta) times the mover
-        "protection": {"omega_max": dz.omega_trip * k_est, "i_max": dz.i_trip},
-    }
-    want["observer"]["omega_max"] = dz.omega_obs * k_est
-    # the observer's type (mech for the pulsating and elliptical injections) and its bandwidth; the
-    # load estimate's clamp at the force the drive can make
-    want["observer"]["type"] = dz.observer_type
+        no_table = compensation_of(s.control.mode, s.observer.compensation) == "none"
+        made, keys = memo(("drive_design", motor_key(motor), tuple(vars(dd).values()), no_table),
+                          lambda: _drive_design(motor, dd, sc.source, no_table))
+    except InputError as exc:  # the design's drive-data names -> the scenario's keys
+        raise _design_refusal(sc, exc) from None
+    dz = made.design
+    want = {sec: {k: keys[f"{sec}.{k}"] for k in names} for sec, names in DESIGNED.items()}
+    # the observer's bandwidth for its type (designed: mech for the pulsating and elliptical
+    # injections)
     obs_type = s.observer.type if "type" in given["observer"] else dz.observer_type
-    want["observer"]["bandwidth_hz"] = dz.observer_bw_mech if obs_type == "mech" else dz.observer_bw_pll
-    want["observer"]["force_max"] = dz.force_max
-    want["controller"].update({"friction_coulomb": dz.friction_coulomb,
-                               "friction_viscous": dz.friction_viscous,
-                               "friction_band": dz.friction_band, "ripple_order": dz.ripple_order,
-                               "ripple_cos": dz.ripple_cos, "ripple_sin": dz.ripple_sin})
-    want["controller"]["v_max"] = dz.v_cap
-    want["controller"]["step_a_max"] = dz.a_step
-    if con.position_type == "p":
-        want["controller"]["kp_x"] = dz.kp_x
+    want["observer"]["bandwidth_hz"] = made.observer_bw(obs_type)
+    if con.position_type != "p":
+        want["controller"].pop("kp_x")
     if "k1" in given["observer"]:
         want["observer"].pop("bandwidth_hz")
     for k in ("speed_kp", "current_kp"):

@@ -23,14 +23,12 @@ from linsense.io import working_folder
 from linsense.model.motor import Motor, names_a_path
 from linsense.tune.cfgmap import Values, header_rows
 from linsense.tune.design import (
-    V_DC_MAX_FRACTION,
-    V_DC_MIN_FRACTION,
     Design,
     DriveData,
     gain_r_slope,
     gain_schedule,
-    mean_dq,
 )
+from linsense.tune.drive_design import GIVEN_KEYS, DriveDesign
 
 
 def end_stops(pole_pitch: float, travel: float) -> dict:
@@ -54,31 +52,91 @@ def end_stops(pole_pitch: float, travel: float) -> dict:
     return {"min_mm": _r(-0.05 * pole_pitch * 1e3), "max_mm": _r((travel + 0.05 * pole_pitch) * 1e3)}
 
 
-def scenario_dict(dz: Design, drive: DriveData, motor_ref: str, base: dict | None = None,
-                  startup=None, k_est: float = 1.0, pole_pitch: float | None = None,
-                  table: str | None = None) -> dict:
-    """A complete scenario with the design's drive data and gains written out.
+def as_drive_design(dz: Design | DriveDesign, drive: DriveData | None = None, motor: Motor | None = None,
+                    startup=None, k_est: float = 1.0, table=None) -> DriveDesign:
+    """``dz`` if a :class:`~linsense.tune.drive_design.DriveDesign`, else one of the parts given.
 
-    ``base`` (a scenario's given keys, or a 2 s hold) with the design written over it;
-    ``startup`` fills ``[startup]`` when the scenario's mode is "startup".
+    The writers below take the drive's design (:func:`~linsense.tune.drive_design.design_drive`);
+    a :class:`~linsense.tune.design.Design` with its drive, start-up and widening is taken too.
 
     Parameters
     ----------
-    dz : Design
+    dz : Design or DriveDesign
         The design.
-    drive : DriveData
-        The drive.
+    drive : DriveData or None, optional
+        The drive (with a Design).
+    motor : Motor or None, optional
+        The motor (with a Design; None: no ``controller.model`` keys).
+    startup : StartupDesign or None, optional
+        The start-up design (with a Design).
+    k_est : float, optional
+        The widening of the trips on the estimate (with a Design).
+    table : MeasuredTable or None, optional
+        A measured table (with a Design).
+
+    Returns
+    -------
+    DriveDesign
+        The drive's design.
+    """
+    if isinstance(dz, DriveDesign):
+        return dz
+    return DriveDesign(motor, drive, dz, startup, k_est != 1.0, k_est, table)
+
+
+#: the keys that are counts (written as integers)
+COUNT_KEYS = frozenset({"controller.ripple_order", "startup.pairs"})
+
+
+def written(keys: dict, key: str):
+    """A design's value as a scenario holds it: a given input as given, a computed real to 6 digits.
+
+    Parameters
+    ----------
+    keys : dict
+        :meth:`DriveDesign.scenario_keys`.
+    key : str
+        The dotted key.
+
+    Returns
+    -------
+    object
+        The value.
+    """
+    v = keys[key]
+    if key in GIVEN_KEYS or key in COUNT_KEYS or isinstance(v, (bool, str)):
+        return v
+    return _r(v)
+
+
+def scenario_dict(dz: Design | DriveDesign, drive: DriveData | None = None, motor_ref: str = "",
+                  base: dict | None = None, startup=None, k_est: float = 1.0, pole_pitch: float | None = None,
+                  table: str | None = None) -> dict:
+    """A complete scenario with the design's drive data and gains written out.
+
+    ``base`` (a scenario's given keys, or a 2 s hold) with the design's keys
+    (:meth:`~linsense.tune.drive_design.DriveDesign.scenario_keys`) written over it; the start-up
+    fills ``[startup]`` when the scenario's mode is "startup".
+
+    Parameters
+    ----------
+    dz : DriveDesign or Design
+        The drive's design (:func:`~linsense.tune.drive_design.design_drive`; or a Design with
+        ``drive``, ``startup`` and ``k_est``).
+    drive : DriveData or None, optional
+        The drive (with a Design).
     motor_ref : str
         The scenario's ``motor`` value (preset or path).
     base : dict or None, optional
         The scenario's given keys (None: a 2 s hold).
     startup : StartupDesign or None, optional
-        The start-up design (:class:`linsense.tune.startup.StartupDesign`).
+        The start-up design (with a Design).
     k_est : float, optional
-        The trips and clamp on the estimate widened by it (a drive without its table:
-        ``uncompensated_speed_factor``).
+        The trips and clamp on the estimate widened by it (with a Design: a drive without its
+        table, ``uncompensated_speed_factor``).
     pole_pitch : float or None, optional
-        Pole pitch, m, for the ``[travel]`` end stops when the drive has a travel.
+        Pole pitch, m, for the ``[travel]`` end stops when the drive has a travel (a DriveDesign's
+        motor's).
     table : str or None, optional
         A measured table's file (``linsense calibrate``'s ``lut_measured.json``): the drive's
         compensation table (``observer.lut_model = "measured"``, ``observer.lut_file``); None: the
@@ -89,89 +147,78 @@ def scenario_dict(dz: Design, drive: DriveData, motor_ref: str, base: dict | Non
     dict
         The scenario, as nested dicts of its TOML.
     """
+    dd = as_drive_design(dz, drive, startup=startup, k_est=k_est)
+    if dd.motor is not None:
+        pole_pitch = dd.motor.pole_pitch
+    keys = dd.scenario_keys()
+
+    def put(section: dict, *names: str) -> dict:
+        section.update({n.rsplit(".", 1)[1]: written(keys, n) for n in names})
+        return section
+
     sc = {k: (dict(v) if isinstance(v, dict) else v) for k, v in (base or {}).items()}
     sc["motor"] = motor_ref
     sc.setdefault("scenario", {"name": "tuned", "duration": 2.0})
     sc.setdefault("reference", {"type": "hold"})
-    sc.setdefault("inverter", {}).update(
-        {"v_dc": drive.v_dc, "f_pwm": drive.f_pwm, "dead_time": drive.dead_time}
-    )
-    inj = sc.setdefault("injection", {})
-    inj.update({"amplitude": _r(dz.v_inj), "ramp_rate": _r(dz.inj_ramp_rate)})
-    if drive.shape != "pulsating":
-        inj["shape"] = drive.shape
+    put(sc.setdefault("inverter", {}), "inverter.v_dc", "inverter.f_pwm", "inverter.dead_time")
+    inj = put(sc.setdefault("injection", {}), "injection.amplitude", "injection.ramp_rate")
+    if keys["injection.shape"] != "pulsating":
+        put(inj, "injection.shape")
     shape = inj.get("shape", "pulsating")
     if shape == "pulsating":  # (kappa is the pulsating/elliptical injection's own)
-        inj["quadrature"] = _r(dz.quad)
+        put(inj, "injection.quadrature")
     else:
         inj.pop("quadrature", None)
     if shape == "square":  # (at f_pwm / 2, not a design choice)
         inj.pop("frequency", None)
     else:
-        inj["frequency"] = _r(dz.f_inj)
-    sc.setdefault("observer", {}).update(
-        {
-            "type": dz.observer_type,
-            "bandwidth_hz": _r(dz.observer_bw),
-            "demod_lpf_hz": _r(dz.demod_lpf),
-            "gain_schedule": True,
-            "omega_max": _r(dz.omega_obs * k_est),
-            "hf_delay_s": _r(dz.hf_delay),
-        }
-    )
+        put(inj, "injection.frequency")
+    obs = put(sc.setdefault("observer", {}), "observer.type", "observer.bandwidth_hz",
+              "observer.demod_lpf_hz", "observer.gain_schedule", "observer.omega_max", "observer.hf_delay_s")
     for k in ("k1", "k2", "k3"):
-        sc["observer"].pop(k, None)
+        obs.pop(k, None)
     if table is not None:
-        sc["observer"].update({"lut_model": "measured", "lut_file": table})
-    if dz.observer_type == "mech":  # (the clamp of its load estimate; the PLL has none)
-        sc["observer"]["force_max"] = _r(dz.force_max)
+        obs.update({"lut_model": "measured", "lut_file": table})
+    if keys["observer.type"] == "mech":  # (the clamp of its load estimate; the PLL has none)
+        put(obs, "observer.force_max")
     else:
-        sc["observer"].pop("force_max", None)
+        obs.pop("force_max", None)
     con = sc.setdefault("controller", {})
     for k in ("speed_kp", "speed_ki", "current_kp", "current_ki"):
         con.pop(k, None)
-    con.update(
-        {
-            "current_bandwidth_hz": _r(dz.current_bw),
-            "speed_bandwidth_hz": _r(dz.speed_bw),
-            "i_max": drive.i_max,
-            "v_max": _r(dz.v_cap),
-            "step_a_max": _r(dz.a_step),
-        }
-    )
+    put(con, "controller.current_bandwidth_hz", "controller.speed_bandwidth_hz", "controller.i_max",
+        "controller.v_max", "controller.step_a_max")
     if con.get("position_type", "p") == "p":
-        con["kp_x"] = _r(dz.kp_x)
+        put(con, "controller.kp_x")
     # the motor file's friction and thrust ripple, fed forward (only where it has them: the keys'
     # defaults are none)
     for k in ("friction_coulomb", "friction_viscous", "friction_band", "ripple_order", "ripple_cos",
               "ripple_sin"):
         con.pop(k, None)
-    if dz.friction_coulomb > 0.0 or dz.friction_viscous > 0.0:
-        con.update({"friction_coulomb": dz.friction_coulomb, "friction_viscous": dz.friction_viscous,
-                    "friction_band": _r(dz.friction_band)})
-    if dz.ripple_order:
-        con.update({"ripple_order": dz.ripple_order, "ripple_cos": _r(dz.ripple_cos),
-                    "ripple_sin": _r(dz.ripple_sin)})
-    sc.setdefault("calibration", {}).update({"dither_a": _r(dz.dither_a), "dither_hz": _r(dz.dither_hz)})
+    if keys["controller.friction_coulomb"] > 0.0 or keys["controller.friction_viscous"] > 0.0:
+        put(con, "controller.friction_coulomb", "controller.friction_viscous", "controller.friction_band")
+    if keys["controller.ripple_order"]:
+        put(con, "controller.ripple_order", "controller.ripple_cos", "controller.ripple_sin")
+    put(sc.setdefault("calibration", {}), "calibration.dither_a", "calibration.dither_hz")
     # limits the scenario gives are kept (they are not gains); otherwise they follow the bus
     prot = sc.setdefault("protection", {})
-    prot.setdefault("v_dc_min", _r(drive.v_dc * V_DC_MIN_FRACTION))
-    prot.setdefault("v_dc_max", _r(drive.v_dc * V_DC_MAX_FRACTION))
-    prot.update({"omega_max": _r(dz.omega_trip * k_est), "i_max": _r(dz.i_trip)})
+    for k in ("protection.v_dc_min", "protection.v_dc_max"):
+        prot.setdefault(k.rsplit(".", 1)[1], written(keys, k))
+    put(prot, "protection.omega_max", "protection.i_max")
     # the application's speed and acceleration, which the limits above are designed from: written
     # whatever the reference, so that the scenario holds the drive it was designed for (a re-tune or
     # calibrate over it reads them back: without them it designed for the default 0.2 m/s)
-    sc["reference"] = {**sc["reference"], "v_max": drive.v_max, "a_max": drive.a_max}
-    if drive.travel is not None and "travel" not in sc and pole_pitch is not None:
-        sc["travel"] = end_stops(pole_pitch, drive.travel)
-    if startup is not None and sc.get("control", {}).get("mode") == "startup":
-        sc.setdefault("startup", {}).update(startup.scenario_keys())
+    sc["reference"] = put(dict(sc["reference"]), "reference.v_max", "reference.a_max")
+    if dd.drive.travel is not None and "travel" not in sc and pole_pitch is not None:
+        sc["travel"] = end_stops(pole_pitch, dd.drive.travel)
+    if dd.startup is not None and sc.get("control", {}).get("mode") == "startup":
+        put(sc.setdefault("startup", {}), *(k for k in keys if k.startswith("startup.")))
     return sc
 
 
 def scenario_toml(
-    dz: Design,
-    drive: DriveData,
+    dz: Design | DriveDesign,
+    drive: DriveData | None,
     motor_spec: str,
     out: Path,
     base: dict | None = None,
@@ -189,10 +236,10 @@ def scenario_toml(
 
     Parameters
     ----------
-    dz : Design
-        The design.
-    drive : DriveData
-        The drive.
+    dz : DriveDesign or Design
+        The drive's design (or a Design with ``drive``, ``startup`` and ``k_est``).
+    drive : DriveData or None
+        The drive (with a Design).
     motor_spec : str
         The motor as given (preset name or path).
     out : Path
@@ -202,11 +249,11 @@ def scenario_toml(
     base_dir : Path or None, optional
         The folder a relative motor path is relative to.
     startup : StartupDesign or None, optional
-        The start-up design.
+        The start-up design (with a Design).
     k_est : float, optional
-        Widening of the trips and clamp on the estimate.
+        Widening of the trips and clamp on the estimate (with a Design).
     pole_pitch : float or None, optional
-        Pole pitch, m.
+        Pole pitch, m (a DriveDesign's motor's).
     table : str or None, optional
         A measured table's file (:func:`scenario_dict`).
 
@@ -224,7 +271,9 @@ def scenario_toml(
 
     ref = relative(motor_spec) if names_a_path(motor_spec) else motor_spec
     table = None if table is None else relative(table)
-    sc = scenario_dict(dz, drive, ref, base, startup, k_est, pole_pitch, table)
+    dd = as_drive_design(dz, drive, startup=startup, k_est=k_est)
+    sc = scenario_dict(dd, None, ref, base, pole_pitch=pole_pitch, table=table)
+    dz = dd.design
     model = sc.get("controller", {}).get("model", {})
     if names_a_path(model.get("motor", "")):  # (every path in the scenario relative to its own folder)
         sc["controller"] = {**sc["controller"], "model": {**model, "motor": relative(model["motor"])}}
@@ -286,62 +335,26 @@ def _r(v: float) -> float:
     return float(f"{v:.6g}")
 
 
-def design_values(dz: Design, drive: DriveData, motor: Motor, startup=None) -> Values:
-    """The design as the scenario keys of the mapping (:mod:`linsense.tune.cfgmap`), unrounded.
+def design_values(dd: DriveDesign) -> Values:
+    """The drive's design as the scenario keys of the mapping (:mod:`linsense.tune.cfgmap`), unrounded.
 
-    What ``tune --format c`` writes. The pulsating/elliptical injection, the forward dead-time
-    model, the motor's own parameters (the controller believes the motor); the start-up design's SI
-    values.
+    What ``tune --format c`` writes: :meth:`~linsense.tune.drive_design.DriveDesign.scenario_keys`
+    of the drive running its table (the controller believes the motor, with the end effect of a
+    measured table); the start-up's lock error in radians as designed.
 
     Parameters
     ----------
-    dz : Design
-        The design.
-    drive : DriveData
-        The drive.
-    motor : Motor
-        The motor.
-    startup : StartupDesign or None, optional
-        The start-up design.
+    dd : DriveDesign
+        The drive's design.
 
     Returns
     -------
     Values
         The keys, derived values and fields.
     """
-    L_d, L_q = mean_dq(motor)
-    keys = {
-        "inverter.f_pwm": drive.f_pwm, "inverter.dead_time": drive.dead_time,
-        "motor.pole_pitch": motor.pole_pitch,
-        "controller.i_max": drive.i_max, "controller.model.force_constant": motor.force_constant,
-        "controller.model.mass": motor.mass, "controller.model.L_d": L_d, "controller.model.L_q": L_q,
-        "controller.model.R_s": motor.R_s, "controller.model.psi_pm": motor.psi_pm,
-        "controller.model.demod_gain": dz.demod_gain,
-        "injection.shape": "pulsating", "injection.amplitude": dz.v_inj, "injection.frequency": dz.f_inj,
-        "injection.quadrature": dz.quad, "injection.ramp_rate": dz.inj_ramp_rate,
-        "observer.type": dz.observer_type, "observer.bandwidth_hz": dz.observer_bw,
-        "observer.load_feedforward": dz.load_ff, "observer.demod_lpf_hz": dz.demod_lpf,
-        "observer.demod_notch": True, "observer.force_max": dz.force_max, "observer.omega_max": dz.omega_obs,
-        "observer.hf_delay_s": dz.hf_delay, "observer.dead_time_model": "forward",
-        "controller.current_kp": dz.current_kp, "controller.current_ki": dz.current_ki,
-        "controller.speed_kp": dz.speed_kp, "controller.speed_ki": dz.speed_ki, "controller.kp_x": dz.kp_x,
-        "controller.v_max": dz.v_cap, "controller.step_a_max": dz.a_step,
-        "reference.v_max": drive.v_max, "reference.a_max": drive.a_max,
-        "protection.omega_max": dz.omega_trip, "protection.i_max": dz.i_trip,
-        "protection.v_dc_min": drive.v_dc * V_DC_MIN_FRACTION,
-        "protection.v_dc_max": drive.v_dc * V_DC_MAX_FRACTION,
-        "calibration.dither_a": dz.dither_a, "calibration.dither_hz": dz.dither_hz,
-        "controller.friction_coulomb": dz.friction_coulomb,
-        "controller.friction_viscous": dz.friction_viscous,
-        "controller.friction_band": dz.friction_band, "controller.ripple_order": dz.ripple_order,
-        "controller.ripple_cos": dz.ripple_cos, "controller.ripple_sin": dz.ripple_sin,
-    }
-    derived = {"model.end_anisotropy": lambda v: end_anisotropy(motor)}
-    fields = {}
-    if startup is not None:
-        keys.update({f"startup.{k}": getattr(startup, k) for k in
-                     ("t_lock", "t_quiet", "v_pulse", "t_pulse", "t_rest", "pairs", "i_min", "t_settle")})
-        fields["startup.err_lock"] = startup.err_lock  # (the design's, in rad)
+    keys = dd.scenario_keys(uncompensated=False)
+    derived = {"model.end_anisotropy": lambda v: end_anisotropy(dd.model)}
+    fields = {} if dd.startup is None else {"startup.err_lock": dd.startup.err_lock}  # (rad: no round trip)
     return Values(keys.__getitem__, derived, fields)
 
 
@@ -387,8 +400,9 @@ def c_config_name(name: str | None, motor_name: str, source: str = "name") -> st
     return sym
 
 
-def c_header(dz: Design, drive: DriveData, motor: Motor, name: str | None = None, points: int = 256,
-             startup=None, table=None, unverified: str = "", verified_by: str = "") -> str:
+def c_header(dz: Design | DriveDesign, drive: DriveData | None = None, motor: Motor | None = None,
+             name: str | None = None, points: int = 256, startup=None, table=None, unverified: str = "",
+             verified_by: str = "") -> str:
     """``ls_cfg_<name>.h``: the drive's configuration for the C library.
 
     The compensation and gain tables, their slopes in the resistance's scale, and
@@ -401,20 +415,21 @@ def c_header(dz: Design, drive: DriveData, motor: Motor, name: str | None = None
 
     Parameters
     ----------
-    dz : Design
-        The design.
-    drive : DriveData
-        The drive.
-    motor : Motor
-        The motor.
+    dz : DriveDesign or Design
+        The drive's design (:func:`~linsense.tune.drive_design.design_drive`: its keys,
+        :func:`design_values`); or a Design with ``drive``, ``motor``, ``startup`` and ``table``.
+    drive : DriveData or None, optional
+        The drive (with a Design).
+    motor : Motor or None, optional
+        The motor (with a Design).
     name : str or None, optional
         The name in the symbols (default the motor's).
     points : int, optional
         Table points.
     startup : StartupDesign or None, optional
-        The start-up design.
+        The start-up design (with a Design).
     table : MeasuredTable or None, optional
-        A measured compensation table at ``points`` points
+        With a Design: a measured compensation table at ``points`` points
         (:func:`linsense.compensation.measured.read_measured_table`) in place of the motor file's;
         its values are in the data's digest.
     unverified : str, optional
@@ -433,16 +448,16 @@ def c_header(dz: Design, drive: DriveData, motor: Motor, name: str | None = None
     linsense.errors.InputError
         For an injection other than the pulsating/elliptical one.
     """
+    dd = as_drive_design(dz, drive, motor, startup, table=table)
+    dz, drive, table, startup = dd.design, dd.drive, dd.table, dd.startup
     check_c_header(drive)
-    sym = c_config_name(name, motor.name)
+    stamped = dd.motor  # (the stamp's and the digest's motor: the file's)
+    sym = c_config_name(name, stamped.name)
     fn = f"ls_cfg_{sym}"
-    lut = build_lut(motor, points, f_inj=dz.f_inj, quad=dz.quad).values if table is None else table.values
-    stamped = motor  # (the stamp's and the digest's motor: the file's)
-    if table is not None:  # (the rest of the drive's model takes the end effect the table says, as the
-        # simulator's does: linsense.sim.tables.measured_model)
-        from linsense.compensation.measured import end_effect_fit
-
-        motor = end_effect_fit(motor, table.values, "pulsating", dz.f_inj, dz.quad)[0]
+    lut = build_lut(stamped, points, f_inj=dz.f_inj, quad=dz.quad).values if table is None else table.values
+    # (the rest of the drive's model takes the end effect a measured table says, as the simulator's
+    # does: linsense.sim.tables.measured_model)
+    motor = dd.model
     lut_r = lut_r_slope(motor, points, dz.f_inj, dz.quad)
     gain = gain_schedule(motor, dz.f_inj, dz.quad, points)
     gain_r = gain_r_slope(motor, dz.f_inj, dz.quad, points)
@@ -454,7 +469,7 @@ def c_header(dz: Design, drive: DriveData, motor: Motor, name: str | None = None
         rows = [", ".join(f"{v:.9e}f" for v in vals[i : i + 4]) for i in range(0, len(vals), 4)]
         return ",\n    ".join(rows)
 
-    v = design_values(dz, drive, motor, startup)
+    v = design_values(dd)
     rows = header_rows(startup is not None)
     body = "\n".join(f"    cfg->{r.field} = {f(v.field(r.field))};" for r in rows if r.kind != "count")
     bw = v["observer.bandwidth_hz"]

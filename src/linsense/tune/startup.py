@@ -116,15 +116,20 @@ class StartupDesign:
         """
         return asdict(self)
 
-    def scenario_keys(self) -> dict:
+    def scenario_keys(self, digits: int | None = 6) -> dict:
         """The scenario's ``[startup]`` section.
+
+        Parameters
+        ----------
+        digits : int or None, optional
+            Significant digits of the reals (None: unrounded).
 
         Returns
         -------
         dict
-            Key to value (``err_lock_deg`` in degrees), 6 significant digits.
+            Key to value (``err_lock_deg`` in degrees).
         """
-        r = lambda v: float(f"{v:.6g}")  # noqa: E731
+        r = (lambda v: v) if digits is None else (lambda v: float(f"{v:.{digits}g}"))  # noqa: E731
         return {"t_lock": r(self.t_lock), "err_lock_deg": r(math.degrees(self.err_lock)),
                 "t_quiet": r(self.t_quiet), "v_pulse": r(self.v_pulse), "t_pulse": r(self.t_pulse),
                 "t_rest": r(self.t_rest), "pairs": int(self.pairs), "i_min": r(self.i_min),

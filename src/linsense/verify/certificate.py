@@ -803,13 +803,14 @@ def design_and_verify(motor_spec: str, drive, *, quick: bool = False, workers: i
 
 
     from linsense.model.motor import load_motor
-    from linsense.tune.design import design
+    from linsense.tune.drive_design import design_drive
     from linsense.tune.export import scenario_dict
 
     spec = motor_ref(motor_spec)
     motor = load_motor(spec)
-    dz = design(motor, drive, spec, analyse=False)
-    base = scenario_dict(dz, drive, spec, pole_pitch=motor.pole_pitch)
+    made = design_drive(motor, drive, source=spec, analyse=False, startup=False)
+    dz = made.design
+    base = scenario_dict(made, motor_ref=spec)
     cert = prepare(motor, spec, base, base_dir or str(working_folder()), v_max=drive.v_max, a_max=drive.a_max,
                    load=dz.load, travel=drive.travel, quick=quick, workers=workers)()
     return dz, cert
