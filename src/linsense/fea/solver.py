@@ -817,20 +817,26 @@ def run_loads(g: Geometry, currents, positions: int = 56, level: str = "default"
                       dq_currents(direction * raw[k] - offset, i_d, cur), starts[k], keep_first and k == 0)
                      for k, x in enumerate(xs)]
             sols, starts = _solve_positions(items, pool, progress, n_load)
-            t_solve = time.perf_counter() - t2
-            its = [q.newton for q in sols]
-            times = {"setup_s": t_setup, "origin_s": t_origin, "solve_s": t_solve,
-                     "per_position_s": t_solve / positions}
-            newton = {"max": int(max(its)), "mean": float(np.mean(its))}
-            results.append(Result(g, s.m, xs, theta, np.array([q.L for q in sols]),
-                                  np.array([q.psi_pm for q in sols]), amp, offset, direction, times,
-                                  energy_error=None, newton=newton, load_current=cur,
-                                  keep={"solver": s, "first": sols[0]}, d_current=i_d))
+            times = {"setup_s": t_setup, "origin_s": t_origin, "solve_s": time.perf_counter() - t2}
+            results.append(_newton_result(g, s, xs, theta, origin, sols, times, i_d, cur))
     finally:
         if pool is not None:
             pool.shutdown(cancel_futures=True)
         _SHARED = None
     return results
+
+
+def _newton_result(g: Geometry, s: Solver, xs: np.ndarray, theta: np.ndarray, origin: tuple, sols: list,
+                   times: dict, i_d: float, i_q: float) -> Result:
+    """One load's :class:`Result` from its Newton solutions (``times``: setup, origin and solve, s;
+    the time per position added)."""
+    amp, offset, direction = origin
+    its = [q.newton for q in sols]
+    times = {**times, "per_position_s": times["solve_s"] / xs.size}
+    newton = {"max": int(max(its)), "mean": float(np.mean(its))}
+    return Result(g, s.m, xs, theta, np.array([q.L for q in sols]), np.array([q.psi_pm for q in sols]),
+                  amp, offset, direction, times, energy_error=None, newton=newton, load_current=i_q,
+                  keep={"solver": s, "first": sols[0]}, d_current=i_d)
 
 
 def _run_linear(g: Geometry, s: Solver, xs: np.ndarray, raw: np.ndarray, keep_first: bool, progress,
