@@ -311,13 +311,14 @@ def compute_metrics(arrays: dict, *, fault: int, steps_done: int, f_pwm: float, 
                          pole_pitch=pole_pitch)
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class _Samples:
     """A run's samples as its metrics read them: the views of :func:`block_views` and the samples
     the statistics use, ``[0, n_ok)``."""
 
     t: np.ndarray  # every sample's time, s
     n_ok: int  # all but the state that tripped, up to a non-finite time
+    ts: np.ndarray  # the times of the samples the statistics use, s (t[:n_ok])
     x: np.ndarray
     x_lo: np.ndarray
     x_hi: np.ndarray
@@ -326,11 +327,6 @@ class _Samples:
     e_mean: np.ndarray
     x_fin: np.ndarray  # the samples with a finite position
     x_all: bool  # every position finite
-
-    @property
-    def ts(self) -> np.ndarray:
-        """The times of the samples the statistics use, s."""
-        return self.t[:self.n_ok]
 
     def finite(self, a: np.ndarray, i0: int) -> np.ndarray:
         """``a`` over the samples [i0, n_ok) with a finite position."""
@@ -348,7 +344,7 @@ def _samples(arrays: dict, fault: int) -> _Samples:
     if bad_t.size:
         n_ok = int(bad_t[0])
     x_fin = finite_positions(x, x_lo, x_hi)
-    return _Samples(t, n_ok, x, x_lo, x_hi, e_lo, e_hi, arrays.get("err_mean", e_pt), x_fin,
+    return _Samples(t, n_ok, t[:n_ok], x, x_lo, x_hi, e_lo, e_hi, arrays.get("err_mean", e_pt), x_fin,
                     bool(x_fin.all()))
 
 
