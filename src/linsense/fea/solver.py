@@ -800,47 +800,15 @@ def run_loads(g: Geometry, currents, positions: int = 56, level: str = "default"
         raise ValueError("a load current needs a B-H curve: with linear iron the incremental inductances "
                          "do not depend on it")
     if not (s.nonlinear or force_newton):
-        t1 = time.perf_counter()
-        sols = []
-        for k, x in enumerate(xs):
-            sols.append(s.solve(float(x), keep=keep_first and k == 0))
-            if progress is not None:
-                progress(0, k + 1, positions)
-        amp, offset, direction = 0.0, 0.0, 1
-        pm = np.array([q.psi_pm for q in sols])
-        if g.remanence > 0 and positions >= 3:
-            amp, offset, direction = _theta_origin(raw, pm)
-        err = max(float(abs(q.energy - q.energy_li).max() / q.energy_li.max()) for q in sols)
-        t_solve = time.perf_counter() - t1
-        times = {"setup_s": t_setup, "solve_s": t_solve, "per_position_s": t_solve / positions}
-        theta = np.mod(direction * raw - offset, 2 * np.pi)
-        return [Result(g, s.m, xs, theta, np.array([q.L for q in sols]), pm, amp, offset, direction, times,
-                       energy_error=err, newton=None, load_current=0.0, keep={"solver": s, "first": sols[0]})]
+        return [_run_linear(g, s, xs, raw, keep_first, progress, t_setup)]
     t1 = time.perf_counter()
-    origin = (0.0, 0.0, 1)
-    if g.remanence > 0:
-        # theta's origin from a linear pass (mu_r 1000) at every position: by the rod's mirror symmetry
-        # the phase of the PM flux fundamental does not depend on the iron, and every load of a
-        # geometry then shares one theta grid
-        pm0 = []
-        for k, x in enumerate(xs):
-            pm0.append(s.solve(float(x), energy=False).psi_pm)
-            if progress is not None:
-                progress("origin", k + 1, positions)
-        origin = _theta_origin(raw, np.array(pm0))
+    origin = _origin_pass(g, s, xs, raw, progress) if g.remanence > 0 else (0.0, 0.0, 1)
     t_origin = time.perf_counter() - t1
     amp, offset, direction = origin
     theta = np.mod(direction * raw - offset, 2 * np.pi)
     token = (id(s), time.time_ns())
     _SHARED = (token, s)
-    pool = None
-    if workers > 1 and positions > 2:
-        import multiprocessing
-        from concurrent.futures import ProcessPoolExecutor
-
-        methods = multiprocessing.get_all_start_methods()
-        ctx = multiprocessing.get_context("fork" if "fork" in methods else "spawn")
-        pool = ProcessPoolExecutor(max_workers=workers, mp_context=ctx)
+    pool = _process_pool(workers) if workers > 1 and positions > 2 else None
     results, starts = [], [None] * positions
     try:
         for n_load, (i_d, cur) in enumerate(points):
@@ -848,33 +816,90 @@ def run_loads(g: Geometry, currents, positions: int = 56, level: str = "default"
             items = [(token, g, level, positions, float(x),
                       dq_currents(direction * raw[k] - offset, i_d, cur), starts[k], keep_first and k == 0)
                      for k, x in enumerate(xs)]
-            out: dict[int, tuple] = {}
-            if pool is not None:
-                from concurrent.futures import as_completed
-
-                futs = {pool.submit(_solve_position, it): k for k, it in enumerate(items)}
-                for f in as_completed(futs):
-                    out[futs[f]] = f.result()
-                    if progress is not None:
-                        progress(n_load, len(out), positions)
-            else:
-                for k, it in enumerate(items):
-                    out[k] = _solve_position(it)
-                    if progress is not None:
-                        progress(n_load, k + 1, positions)
-            sols = [out[k][0] for k in range(positions)]
-            starts = [out[k][1] for k in range(positions)]
-            t_solve = time.perf_counter() - t2
-            its = [q.newton for q in sols]
-            times = {"setup_s": t_setup, "origin_s": t_origin, "solve_s": t_solve,
-                     "per_position_s": t_solve / positions}
-            newton = {"max": int(max(its)), "mean": float(np.mean(its))}
-            results.append(Result(g, s.m, xs, theta, np.array([q.L for q in sols]),
-                                  np.array([q.psi_pm for q in sols]), amp, offset, direction, times,
-                                  energy_error=None, newton=newton, load_current=cur,
-                                  keep={"solver": s, "first": sols[0]}, d_current=i_d))
+            sols, starts = _solve_positions(items, pool, progress, n_load)
+            times = {"setup_s": t_setup, "origin_s": t_origin, "solve_s": time.perf_counter() - t2}
+            results.append(_newton_result(g, s, xs, theta, origin, sols, times, i_d, cur))
     finally:
         if pool is not None:
             pool.shutdown(cancel_futures=True)
         _SHARED = None
     return results
+
+
+def _newton_result(g: Geometry, s: Solver, xs: np.ndarray, theta: np.ndarray, origin: tuple, sols: list,
+                   times: dict, i_d: float, i_q: float) -> Result:
+    """One load's :class:`Result` from its Newton solutions (``times``: setup, origin and solve, s;
+    the time per position added)."""
+    amp, offset, direction = origin
+    its = [q.newton for q in sols]
+    times = {**times, "per_position_s": times["solve_s"] / xs.size}
+    newton = {"max": int(max(its)), "mean": float(np.mean(its))}
+    return Result(g, s.m, xs, theta, np.array([q.L for q in sols]), np.array([q.psi_pm for q in sols]),
+                  amp, offset, direction, times, energy_error=None, newton=newton, load_current=i_q,
+                  keep={"solver": s, "first": sols[0]}, d_current=i_d)
+
+
+def _run_linear(g: Geometry, s: Solver, xs: np.ndarray, raw: np.ndarray, keep_first: bool, progress,
+                t_setup: float) -> Result:
+    """Linear iron: one solve per position (``xs``, m; ``raw``, their angles), theta's origin from
+    the PM flux; the energy check of the inductances."""
+    positions = xs.size
+    t1 = time.perf_counter()
+    sols = []
+    for k, x in enumerate(xs):
+        sols.append(s.solve(float(x), keep=keep_first and k == 0))
+        if progress is not None:
+            progress(0, k + 1, positions)
+    amp, offset, direction = 0.0, 0.0, 1
+    pm = np.array([q.psi_pm for q in sols])
+    if g.remanence > 0 and positions >= 3:
+        amp, offset, direction = _theta_origin(raw, pm)
+    err = max(float(abs(q.energy - q.energy_li).max() / q.energy_li.max()) for q in sols)
+    t_solve = time.perf_counter() - t1
+    times = {"setup_s": t_setup, "solve_s": t_solve, "per_position_s": t_solve / positions}
+    theta = np.mod(direction * raw - offset, 2 * np.pi)
+    return Result(g, s.m, xs, theta, np.array([q.L for q in sols]), pm, amp, offset, direction, times,
+                  energy_error=err, newton=None, load_current=0.0, keep={"solver": s, "first": sols[0]})
+
+
+def _origin_pass(g: Geometry, s: Solver, xs: np.ndarray, raw: np.ndarray, progress) -> tuple:
+    """theta's origin from a linear pass (mu_r 1000) at every position: by the rod's mirror symmetry
+    the phase of the PM flux fundamental does not depend on the iron, and every load of a geometry
+    then shares one theta grid (:func:`_theta_origin`'s ``(amp, offset, direction)``)."""
+    pm0 = []
+    for k, x in enumerate(xs):
+        pm0.append(s.solve(float(x), energy=False).psi_pm)
+        if progress is not None:
+            progress("origin", k + 1, xs.size)
+    return _theta_origin(raw, np.array(pm0))
+
+
+def _process_pool(workers: int):
+    """A pool of ``workers`` processes, forked where possible."""
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    methods = multiprocessing.get_all_start_methods()
+    ctx = multiprocessing.get_context("fork" if "fork" in methods else "spawn")
+    return ProcessPoolExecutor(max_workers=workers, mp_context=ctx)
+
+
+def _solve_positions(items: list, pool, progress, n_load: int) -> tuple[list, list]:
+    """One load's Newton solves (:func:`_solve_position` of each item, in ``pool`` if any):
+    ``(solutions, converged states)`` in the order of the positions."""
+    positions = len(items)
+    out: dict[int, tuple] = {}
+    if pool is not None:
+        from concurrent.futures import as_completed
+
+        futs = {pool.submit(_solve_position, it): k for k, it in enumerate(items)}
+        for f in as_completed(futs):
+            out[futs[f]] = f.result()
+            if progress is not None:
+                progress(n_load, len(out), positions)
+    else:
+        for k, it in enumerate(items):
+            out[k] = _solve_position(it)
+            if progress is not None:
+                progress(n_load, k + 1, positions)
+    return [out[k][0] for k in range(positions)], [out[k][1] for k in range(positions)]

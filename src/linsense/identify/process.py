@@ -181,78 +181,14 @@ def process_bench(data: BenchData, pole_pitch: float, resistance: float | None =
     n = int(grp.max()) + 1
     rows = np.asarray(data.row)
     k = np.asarray(data.phase)
-
-    # every distinct position needs every phase fed
-    count = np.zeros((n, 3))
+    count = np.zeros((n, 3))  # rows per (position, fed phase)
     np.add.at(count, (grp, k), 1.0)
-    first = np.full(n, -1)
-    order = np.argsort(rows, kind="stable")
-    for i in order[::-1]:  # the first (lowest) file row of each group wins
-        first[grp[i]] = i
-    missing = np.argwhere(count == 0)
-    if missing.size:
-        g, p = missing[0]
-        i = first[g]
-        raise InputError(
-            src, f"row {rows[i]}, column phase",
-            f"position {data.position[i] * 1e3:.6g} mm ({np.degrees(theta_row[i]):.1f} deg) has no row "
-            f"with phase {PHASES[p]} fed: every position needs all three excitations",
-        )
+    first = _first_rows(rows, grp, n)
+    _check_phases(data, theta_row, count, first)
     theta_g = theta_row[first]
     pos_order = np.argsort(theta_g)
-    if n < MIN_POSITIONS:
-        raise InputError(src, "column position_mm",
-                         f"need at least {MIN_POSITIONS} distinct electrical positions, got {n}"
-                         + _position_units(data, pole_pitch))
-    ts = theta_g[pos_order]
-    gaps = np.diff(np.concatenate([ts, [ts[0] + 2.0 * np.pi]]))
-    if cover and gaps.max() > MAX_GAP + 1e-9:
-        g = int(np.argmax(gaps))
-        i = first[pos_order[g]]
-        raise InputError(
-            src, f"row {rows[i]}, column position_mm",
-            f"positions do not cover one electrical period: gap of {np.degrees(gaps[g]):.1f} deg after "
-            f"{data.position[i] * 1e3:.6g} mm ({np.degrees(ts[g]):.1f} deg) with pole pitch "
-            f"{pole_pitch * 1e3:.6g} mm (at most {np.degrees(MAX_GAP):.0f} deg allowed)"
-            + _position_units(data, pole_pitch),
-        )
-
-    w = 2.0 * np.pi * np.asarray(data.freq)
-    I = np.asarray(data.current)
-    V = np.asarray(data.voltage)
-    R = np.arange(data.rows)
-    warnings: list[str] = []
-    if data.amplitude_only:
-        if resistance is None:
-            raise InputError(src, "", "amplitude-only data carry no resistance: give --resistance "
-                             "(0 neglects the resistive drop, as the paper does) or --motor")
-        z = np.abs(V) / np.abs(I)[:, None]
-        z_fed = z[R, k]
-        bad = np.nonzero(z_fed < resistance)[0]
-        if bad.size:
-            i = bad[0]
-            raise InputError(
-                src, f"row {rows[i]}, column V{PHASES[k[i]]}",
-                f"|V|/|I| = {z_fed[i]:.6g} ohm is below the resistance {resistance:.6g} ohm "
-                f"({resistance_source or 'given'}): no inductance left",
-            )
-        col = -z / w[:, None]  # mutuals assumed negative
-        col[R, k] = np.sqrt(z_fed**2 - resistance**2) / w
-        r_row = None
-        warnings.append("amplitude-only data: the signs of the mutual inductances are not measured; "
-                        "all mutuals taken as negative")
-        if resistance > 0:
-            warnings.append(
-                f"amplitude-only data: self inductances from sqrt((|V|/|I|)^2 - R^2)/omega with "
-                f"R = {resistance:.6g} ohm ({resistance_source or 'given'}), not measured in this file"
-            )
-        else:
-            warnings.append("amplitude-only data: resistive drop neglected (R = 0, as the paper's eq. 2): "
-                            "self inductances are overestimated")
-    else:
-        z = V / I[:, None]
-        col = z.imag / w[:, None]
-        r_row = z[R, k].real
+    _check_cover(data, pole_pitch, theta_g, pos_order, first, cover)
+    col, r_row, warnings = _columns(data, resistance, resistance_source)
 
     # average per (position, fed phase): matrix[g, :, p] = mean of column rows
     acc = np.zeros((n, 3, 3))
@@ -265,17 +201,109 @@ def process_bench(data: BenchData, pole_pitch: float, resistance: float | None =
     recip = np.stack(
         [(mat[:, r, c] - mat[:, c, r]) / np.abs(sym[:, r, c]) for r, c in pair], axis=1
     )
-    if r_row is not None:
-        res, res_std = float(np.mean(r_row)), float(np.std(r_row))
-        if res < 0:
-            raise InputError(src, "columns I_re, I_im, V*_re, V*_im",
-                             f"identified resistance Re(V/I) = {res:.6g} ohm is negative: "
-                             "are current and voltages on one time reference?")
-    else:
-        res, res_std = None, None
+    res, res_std = _resistance(src, r_row)
     return MeasuredTable(
         theta=theta_g[pos_order], position=np.asarray(data.position)[first[pos_order]], entries=entries,
         matrix=mat, first_row=rows[first[pos_order]], resistance=res, resistance_std=res_std,
         frequency=float(np.mean(data.freq)), reciprocity=recip, rows=data.rows,
         amplitude_only=data.amplitude_only, warnings=warnings,
     )
+
+
+def _first_rows(rows: np.ndarray, grp: np.ndarray, n: int) -> np.ndarray:
+    """Each of the ``n`` position groups' first (lowest) file row, as an index into the rows."""
+    first = np.full(n, -1)
+    order = np.argsort(rows, kind="stable")
+    for i in order[::-1]:  # the first (lowest) file row of each group wins
+        first[grp[i]] = i
+    return first
+
+
+def _check_phases(data: BenchData, theta_row: np.ndarray, count: np.ndarray, first: np.ndarray) -> None:
+    """Every distinct position needs every phase fed (``count``: rows per position and phase)."""
+    missing = np.argwhere(count == 0)
+    if missing.size:
+        g, p = missing[0]
+        i = first[g]
+        raise InputError(
+            data.source, f"row {np.asarray(data.row)[i]}, column phase",
+            f"position {data.position[i] * 1e3:.6g} mm ({np.degrees(theta_row[i]):.1f} deg) has no row "
+            f"with phase {PHASES[p]} fed: every position needs all three excitations",
+        )
+
+
+def _check_cover(data: BenchData, pole_pitch: float, theta_g: np.ndarray, pos_order: np.ndarray,
+                 first: np.ndarray, cover: bool) -> None:
+    """Enough distinct positions, and (with ``cover``) no gap over :data:`MAX_GAP` in the period."""
+    n = theta_g.size
+    if n < MIN_POSITIONS:
+        raise InputError(data.source, "column position_mm",
+                         f"need at least {MIN_POSITIONS} distinct electrical positions, got {n}"
+                         + _position_units(data, pole_pitch))
+    ts = theta_g[pos_order]
+    gaps = np.diff(np.concatenate([ts, [ts[0] + 2.0 * np.pi]]))
+    if cover and gaps.max() > MAX_GAP + 1e-9:
+        g = int(np.argmax(gaps))
+        i = first[pos_order[g]]
+        raise InputError(
+            data.source, f"row {np.asarray(data.row)[i]}, column position_mm",
+            f"positions do not cover one electrical period: gap of {np.degrees(gaps[g]):.1f} deg after "
+            f"{data.position[i] * 1e3:.6g} mm ({np.degrees(ts[g]):.1f} deg) with pole pitch "
+            f"{pole_pitch * 1e3:.6g} mm (at most {np.degrees(MAX_GAP):.0f} deg allowed)"
+            + _position_units(data, pole_pitch),
+        )
+
+
+def _columns(data: BenchData, resistance: float | None,
+             resistance_source: str) -> tuple[np.ndarray, np.ndarray | None, list[str]]:
+    """Each row's inductance column (H; the fed phase's self inductance and the mutuals), the
+    row's resistance ``Re(V/I)`` (None for amplitude-only data) and the warnings."""
+    src = data.source
+    rows = np.asarray(data.row)
+    k = np.asarray(data.phase)
+    w = 2.0 * np.pi * np.asarray(data.freq)
+    I = np.asarray(data.current)
+    V = np.asarray(data.voltage)
+    R = np.arange(data.rows)
+    if not data.amplitude_only:
+        z = V / I[:, None]
+        return z.imag / w[:, None], z[R, k].real, []
+    if resistance is None:
+        raise InputError(src, "", "amplitude-only data carry no resistance: give --resistance "
+                         "(0 neglects the resistive drop, as the paper does) or --motor")
+    z = np.abs(V) / np.abs(I)[:, None]
+    z_fed = z[R, k]
+    bad = np.nonzero(z_fed < resistance)[0]
+    if bad.size:
+        i = bad[0]
+        raise InputError(
+            src, f"row {rows[i]}, column V{PHASES[k[i]]}",
+            f"|V|/|I| = {z_fed[i]:.6g} ohm is below the resistance {resistance:.6g} ohm "
+            f"({resistance_source or 'given'}): no inductance left",
+        )
+    col = -z / w[:, None]  # mutuals assumed negative
+    col[R, k] = np.sqrt(z_fed**2 - resistance**2) / w
+    warnings = ["amplitude-only data: the signs of the mutual inductances are not measured; "
+                "all mutuals taken as negative"]
+    if resistance > 0:
+        warnings.append(
+            f"amplitude-only data: self inductances from sqrt((|V|/|I|)^2 - R^2)/omega with "
+            f"R = {resistance:.6g} ohm ({resistance_source or 'given'}), not measured in this file"
+        )
+    else:
+        warnings.append("amplitude-only data: resistive drop neglected (R = 0, as the paper's eq. 2): "
+                        "self inductances are overestimated")
+    return col, None, warnings
+
+
+def _resistance(src: str, r_row: np.ndarray | None) -> tuple[float | None, float | None]:
+    """The phase resistance identified from the rows' ``Re(V/I)`` and its spread, ohm (None, None
+    for amplitude-only data)."""
+    if r_row is None:
+        return None, None
+    res, res_std = float(np.mean(r_row)), float(np.std(r_row))
+    if res < 0:
+        raise InputError(src, "columns I_re, I_im, V*_re, V*_im",
+                         f"identified resistance Re(V/I) = {res:.6g} ohm is negative: "
+                         "are current and voltages on one time reference?")
+    return res, res_std

@@ -118,63 +118,98 @@ def run_fea(spec: str, out: str, positions: int = 56, level: str = "default", lu
     currents = parse_currents(load_current)
     pulses = (None if polarity is None else
               parse_currents(polarity, "--polarity", "d-axis pulse amplitudes in A", positive=True))
-    if any(currents) and g.bh_rod is None and g.bh_arm is None:
-        raise InputError(LOAD_OPTION, "", f"{g.source} has linear iron: the incremental inductances do "
-                         "not depend on the load (give rod.bh or armature.bh, a B-H curve)")
+    _check_loads(g, currents)
     sweep = len(currents) > 1
-    warnings: list[str] = []
     bar = _Bar(currents, g.name) if progress else contextlib.nullcontext(None)
     with output_set(out, "fea") as s:
         with bar as cb:
             results = run_loads(g, currents, positions, level, progress=cb, workers=workers)
         res = results[0]
-        s.write("inductances.csv", outputs.inductances_csv(res))
-        s.write("motor.toml", outputs.motor_toml(res))
-        fit = outputs.eq3_fit(res)
-        motor, problem = load_written(s.path("motor.toml"), Path(out) / "motor.toml")
-        if motor is None:  # a valid table, but no HF sensorless control with it
-            warnings.append(f"{problem}; motor.toml is written but does not pass load_motor's checks, "
-                            "no lut.csv")
-        summ = summarize(motor) if motor is not None else None
+        fit, motor, summ, problem = _first_load_outputs(s, res, out)
+        warnings = [problem] if problem else []
         hf = {"ok": motor is not None, "problem": None if motor is not None else warnings[0]}
         extra = {"eq3_fit": fit, "hf_sensorless": hf, "summary": summ}
         lut = build_lut(motor, lut_points) if motor is not None else None
-        vs_load = None
+        luts, vs_load = [], None
         if sweep:
-            luts = []
-            for r in results:
-                tag = "_" + load_tag(r.load_current)
-                s.write(f"inductances{tag}.csv", outputs.inductances_csv(r))
-                s.write(f"motor{tag}.toml", outputs.motor_toml(r, f"inductances{tag}.csv"))
-                m, _ = load_written(s.path(f"motor{tag}.toml"), Path(out) / f"motor{tag}.toml")
-                luts.append(build_lut(m, lut_points) if m is not None else None)
-                if luts[-1] is not None:
-                    s.write(f"lut{tag}.csv", to_csv(luts[-1]))
-            vs_load = load_sweep(results, luts)
+            luts, vs_load = _load_sweep_outputs(s, results, out, lut_points)
             extra["lut_vs_load"] = vs_load
         sig = None
         if pulses is not None:
-            points = [-p for p in sorted(pulses, reverse=True)] + sorted(pulses)
-            pbar = _Bar(points, g.name, "polarity i_d") if progress else contextlib.nullcontext(None)
-            with pbar as cb:
-                sig = polarity_signal(g, pulses, polarity_positions, level, workers=workers,
-                                      progress=cb)
-            s.write("polarity.csv", polarity_csv(sig))
+            sig = _polarity_outputs(s, g, pulses, polarity_positions, level, workers, progress)
             extra["polarity"] = sig
         s.write("geometry.json", json.dumps(g.regions(), indent=2) + "\n")
         fea_doc, timing = outputs.fea_json(res, extra)
         s.write("fea.json", fea_doc)
         s.write("timing.json", timing)
-        s.write("field_lines.png", png_bytes(fig_field(res)))
-        s.write("inductances_fea.png", png_bytes(fig_table(res)))
-        if motor is not None:
-            s.write("lut.csv", to_csv(lut))
-            fig = fig_inductances(motor, f"{g.name}: table model (ABC, dq)")
-            s.write("inductances_model.png", png_bytes(fig))
-            s.write("lut.png", png_bytes(fig_lut(motor, lut)))
-        if sweep and any(v is not None for v in luts):
-            s.write("lut_vs_load.png", png_bytes(fig_lut_vs_load(g.name, vs_load, luts,
-                                                                          g.pole_pitch)))
+        _figures(s, g, res, motor, lut, vs_load, luts)
+    return s.files, _summary_lines(g, res, fit, summ, positions, vs_load, sig), warnings
+
+
+def _check_loads(g, currents: list) -> None:
+    """Refuse a load current on linear iron (its incremental inductances do not depend on it)."""
+    if any(currents) and g.bh_rod is None and g.bh_arm is None:
+        raise InputError(LOAD_OPTION, "", f"{g.source} has linear iron: the incremental inductances do "
+                         "not depend on the load (give rod.bh or armature.bh, a B-H curve)")
+
+
+def _first_load_outputs(s, res, out: str) -> tuple:
+    """The first load's table and motor file into the output set ``s``; ``(the eq. 3 fit, the
+    motor as loaded back or None, its summary or None, why it is None or "")``."""
+    s.write("inductances.csv", outputs.inductances_csv(res))
+    s.write("motor.toml", outputs.motor_toml(res))
+    fit = outputs.eq3_fit(res)
+    motor, problem = load_written(s.path("motor.toml"), Path(out) / "motor.toml")
+    if motor is None:  # a valid table, but no HF sensorless control with it
+        return fit, None, None, (f"{problem}; motor.toml is written but does not pass load_motor's "
+                                 "checks, no lut.csv")
+    return fit, motor, summarize(motor), ""
+
+
+def _figures(s, g, res, motor, lut, vs_load: dict | None, luts: list) -> None:
+    """The FEA's figures into the output set ``s`` (and the LUT of a usable motor file)."""
+    s.write("field_lines.png", png_bytes(fig_field(res)))
+    s.write("inductances_fea.png", png_bytes(fig_table(res)))
+    if motor is not None:
+        s.write("lut.csv", to_csv(lut))
+        fig = fig_inductances(motor, f"{g.name}: table model (ABC, dq)")
+        s.write("inductances_model.png", png_bytes(fig))
+        s.write("lut.png", png_bytes(fig_lut(motor, lut)))
+    if vs_load is not None and any(v is not None for v in luts):
+        s.write("lut_vs_load.png", png_bytes(fig_lut_vs_load(g.name, vs_load, luts, g.pole_pitch)))
+
+
+def _load_sweep_outputs(s, results: list, out: str, lut_points: int) -> tuple[list, dict]:
+    """Per load: its table, motor file and LUT into the output set ``s`` (a LUT where the motor
+    file passes); ``(the LUTs, or None, by load; fea.json's lut_vs_load)``."""
+    luts = []
+    for r in results:
+        tag = "_" + load_tag(r.load_current)
+        s.write(f"inductances{tag}.csv", outputs.inductances_csv(r))
+        s.write(f"motor{tag}.toml", outputs.motor_toml(r, f"inductances{tag}.csv"))
+        m, _ = load_written(s.path(f"motor{tag}.toml"), Path(out) / f"motor{tag}.toml")
+        luts.append(build_lut(m, lut_points) if m is not None else None)
+        if luts[-1] is not None:
+            s.write(f"lut{tag}.csv", to_csv(luts[-1]))
+    return luts, load_sweep(results, luts)
+
+
+def _polarity_outputs(s, g, pulses: list, polarity_positions: int, level: str, workers: int,
+                      progress: bool):
+    """The saturation signal for polarity detection at ``pulses`` (A), into polarity.csv of the
+    output set ``s``; the signal."""
+    points = [-p for p in sorted(pulses, reverse=True)] + sorted(pulses)
+    pbar = _Bar(points, g.name, "polarity i_d") if progress else contextlib.nullcontext(None)
+    with pbar as cb:
+        sig = polarity_signal(g, pulses, polarity_positions, level, workers=workers, progress=cb)
+    s.write("polarity.csv", polarity_csv(sig))
+    return sig
+
+
+def _summary_lines(g, res, fit: dict, summ: dict | None, positions: int, vs_load: dict | None,
+                   sig) -> list[str]:
+    """The FEA's summary: mesh and solve, the eq. 3 fit, the PM flux and force constant (and the
+    saliency and LUT peak of a usable table), the load sweep, the polarity signal."""
     v = fit["values_H"]
     names = ("L0", "L2", "M0", "M2", "dM0")
     lines = [
@@ -193,7 +228,7 @@ def run_fea(spec: str, out: str, positions: int = 56, level: str = "default", lu
         lines.append(load_sweep_line(vs_load))
     if sig is not None:
         lines.append(polarity_line(sig))
-    return s.files, lines, warnings
+    return lines
 
 
 def fig_field(res, excitation: int = 0) -> Figure:

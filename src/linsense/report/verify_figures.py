@@ -14,31 +14,8 @@ def _legend(a) -> None:
         a.legend(fontsize=7)
 
 
-def certificate_figure(rows: list[dict], title: str, quick: bool = False,
-                       calibrations: dict | None = None) -> Figure:
-    """Six panels from the certificate's judged runs.
-
-    Parameters
-    ----------
-    rows : list of dict
-        Rows of :func:`linsense.verify.run.judge`.
-    title : str
-        The figure's title.
-    quick : bool, optional
-        The off-nominal panels were not run.
-    calibrations : dict or None, optional
-        The tables measured on the off-nominal plants
-        (:func:`linsense.verify.certificate.calibration_summary` by plant).
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        The figure.
-    """
-    fig = Figure(figsize=(11, 11.5), layout="constrained")
-    ax = fig.subplots(3, 2)
-    fig.suptitle(title)
-    a = ax[0, 0]
+def _holds_panel(a, rows: list[dict]) -> None:
+    """The holds on the nominal plant: ``|x - target|`` and peak to peak against position, per load."""
     for lf in C.HOLD_LOADS:
         rs = [
             r
@@ -71,7 +48,11 @@ def certificate_figure(rows: list[dict], title: str, quick: bool = False,
         yscale="log",
     )
     _legend(a)
-    a = ax[0, 1]
+
+
+def _off_nominal_panel(a, rows: list[dict]) -> None:
+    """The holds at no load on the off-nominal plants, with the file's table and the one measured on
+    each."""
     for plant in C.OFF_NOMINAL:
         for table, style in (("design", ".-"), ("measured", "s-")):
             rs = [
@@ -93,7 +74,10 @@ def certificate_figure(rows: list[dict], title: str, quick: bool = False,
         yscale="log",
     )
     _legend(a)
-    a = ax[1, 0]
+
+
+def _steps_panel(a, rows: list[dict]) -> None:
+    """The steps and the load step: ``x - target`` against time."""
     for r in rows:
         if r["kind"] in ("step", "load_step") and "trace" in r:
             tr = r["trace"]
@@ -104,7 +88,11 @@ def certificate_figure(rows: list[dict], title: str, quick: bool = False,
     lim = min(max(20.0, 1.05 * peak), 400.0)
     a.set(title="steps and load step: x - target", xlabel="t (s)", ylabel="electrical deg", ylim=(-lim, lim))
     _legend(a)
-    a = ax[1, 1]
+
+
+def _moves_panel(a, rows: list[dict]) -> None:
+    """The moves at v_max: the estimation error against time (the worst out-and-back, the no-load
+    one, the reversal and the hold after a move)."""
     shown = [r for r in rows if r["kind"] in ("trajectory", "reversal", "move_hold")
              and r["plant"] == "nominal" and r.get("trace")]
     trajs = [r for r in shown if r["kind"] == "trajectory"]
@@ -121,7 +109,10 @@ def certificate_figure(rows: list[dict], title: str, quick: bool = False,
     a.axhspan(-C.TRAJ_REST_ERR_DEG, C.TRAJ_REST_ERR_DEG, color="0.8")
     a.set(title="moves at v_max: estimation error", xlabel="t (s)", ylabel="electrical deg")
     _legend(a)
-    a = ax[2, 0]
+
+
+def _move_errors_panel(a, rows: list[dict]) -> None:
+    """The moves at v_max: the peak estimation error moving and at rest, against load."""
     mv = [r for r in rows if r["kind"] in ("trajectory", "reversal", "move_hold") and r["plant"] == "nominal"
           and "peak_err_deg" in r]
     for kind, mark in (("trajectory", "o"), ("reversal", "^"), ("move_hold", "s")):
@@ -138,7 +129,11 @@ def certificate_figure(rows: list[dict], title: str, quick: bool = False,
     a.set(title=f"moves at v_max (reached {top:.3g} m/s): |estimation error| against load",
           xlabel="load opposing + motion (N)", ylabel="electrical deg")
     _legend(a)
-    a = ax[2, 1]
+
+
+def _tables_panel(a, calibrations: dict | None) -> None:
+    """The compensation tables measured on the off-nominal plants, beside the plants' own and the
+    motor file's."""
     for i, (plant, cal) in enumerate((calibrations or {}).items()):
         th = cal["theta_deg"]
         color = f"C{i}"
@@ -152,11 +147,47 @@ def certificate_figure(rows: list[dict], title: str, quick: bool = False,
     a.set(title="compensation table: measured on the off-nominal plants", xlabel="position (electrical deg)",
           ylabel="Psi_LUT (electrical deg)")
     _legend(a)
+
+
+def certificate_figure(rows: list[dict], title: str, quick: bool = False,
+                       calibrations: dict | None = None) -> Figure:
+    """Six panels from the certificate's judged runs.
+
+    Parameters
+    ----------
+    rows : list of dict
+        Rows of :func:`linsense.verify.run.judge`.
+    title : str
+        The figure's title.
+    quick : bool, optional
+        The off-nominal panels were not run.
+    calibrations : dict or None, optional
+        The tables measured on the off-nominal plants
+        (:func:`linsense.verify.certificate.calibration_summary` by plant).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
+    fig = Figure(figsize=(11, 11.5), layout="constrained")
+    ax = fig.subplots(3, 2)
+    fig.suptitle(title)
+    for a, panel in ((ax[0, 0], _holds_panel), (ax[0, 1], _off_nominal_panel), (ax[1, 0], _steps_panel),
+                     (ax[1, 1], _moves_panel), (ax[2, 0], _move_errors_panel)):
+        panel(a, rows)
+    _tables_panel(ax[2, 1], calibrations)
+    _blank_empty(ax, rows, quick)
+    return fig
+
+
+def _blank_empty(ax, rows: list[dict], quick: bool) -> None:
+    """A panel with no labelled line says why: not run (a quick certificate runs neither the
+    off-nominal plants nor the trajectory), or no trace, with the faults."""
     faulted = "\n".join(f"{r['case']}: {r['why']}" for r in rows if r["fault"] != "none")
-    for a in ax.flat:  # (a quick certificate runs neither the off-nominal plants nor the trajectory)
+    for a in ax.flat:
         if not any(not ln.get_label().startswith("_") for ln in a.lines):
             a.cla()
             a.set_axis_off()
             note = "not run (--quick)" if quick else f"no trace to show\n{faulted}"
             a.text(0.5, 0.5, note, ha="center", va="center", transform=a.transAxes, fontsize=8, wrap=True)
-    return fig

@@ -194,19 +194,13 @@ def _map_robustness(df, lut_scenario) -> dict:
     return {"tuned_bandwidth_hz": bw, "modes": out}
 
 
-def _closed_loop(st, bars, motor, scen_motor, summ: dict, quick: bool, figs: dict, t_start: float) -> dict:
-    """The stages after the model (Figs. 9, 11-13, beyond the paper) into the output set ``st``:
-    the figures, metrics.json and report.html; returns the metrics."""
+def _fig9(st, bars, motor, scen_motor, quick: bool, figs: dict) -> dict:
+    """Fig. 9: the calibration at three loads (the measured tables into ``st``); its metrics."""
     from linsense.analysis.hf import psi_lut, psi_lut_resistive
-    from linsense.io import strip_timing
     from linsense.report import paper_figures as pf
     from linsense.report.figures import png_bytes
-    from linsense.report.html import render_report
-    from linsense.report.sweep_figures import stability_map as fig_stability_map
     from linsense.sim.calibrate import lut_csv
-    from linsense.sim.stability import margins_along
 
-    # --- Fig. 9: the calibration at three loads
     n_cal = CAL_POSITIONS[quick]
     stage = _Stage(bars, f"Fig. 9: calibration, {n_cal} points", len(runs.LOADS_N))
     cals = runs.calibrations(scen_motor or "ecce2010", n_cal, stage.tick)
@@ -226,8 +220,15 @@ def _closed_loop(st, bars, motor, scen_motor, summ: dict, quick: bool, figs: dic
         "calibrations": {f"{load:g}N": cal.metrics for load, cal in cals.items()},
     }
     figs["figures/fig9_calibrated_luts.png"] = png_bytes(pf.fig9_luts(motor, cals, f_inj))
+    return fig9
 
-    # --- Figs. 11, 12, 13
+
+def _figure_runs(st, bars, motor, scen_motor, figs: dict) -> tuple[dict, dict, int]:
+    """Figs. 11, 12, 13: the closed-loop runs (their scenarios into ``st``) and their figures;
+    ``(results, scenarios, runs per set)``."""
+    from linsense.report import paper_figures as pf
+    from linsense.report.figures import png_bytes
+
     n_runs = sum(len(v) for v in runs.FIGURES.values()) + 1
     stage = _Stage(bars, "Figs. 11-13: closed-loop runs", n_runs)
     results, scenarios = runs.figure_runs(scen_motor, stage.tick)
@@ -242,6 +243,17 @@ def _closed_loop(st, bars, motor, scen_motor, summ: dict, quick: bool, figs: dic
         {"a) with the LUT": results["fig12"]["lut"], "b) without the LUT": results["fig12"]["nolut"],
          "c) without the LUT, no dead time": results["fig12"]["nolut_no_dead_time"]},
         tau, _step_title("fig12", scenarios["fig12"]["lut"], motor)))
+    return results, scenarios, n_runs
+
+
+def _fig12_analysis(bars, motor, results: dict, scenarios: dict, quick: bool, figs: dict) -> dict:
+    """Fig. 12 analysed: the onset of the run without the LUT and the linearised motion loop along
+    the position (with their figures); then Fig. 13's figure."""
+    from linsense.report import paper_figures as pf
+    from linsense.report.figures import png_bytes
+    from linsense.sim.stability import margins_along
+
+    tau = motor.pole_pitch
     onset = _onset(motor, results["fig12"]["nolut"], results["fig11"]["nolut"])
     step = 6.0 if quick else 2.0  # (deg between the angles of the linearised loop)
     angles = np.arange(0.0, 360.0, step)
@@ -263,8 +275,16 @@ def _closed_loop(st, bars, motor, scen_motor, summ: dict, quick: bool, figs: dic
     figs["figures/fig13_trajectory.png"] = png_bytes(pf.fig_runs(
         {"a) with the LUT": results["fig13"]["lut"], "b) without the LUT": results["fig13"]["nolut"]},
         tau, _trajectory_title(scenarios["fig13"]["lut"])))
+    return {"onset": onset, "linearised": linearised}
 
-    # --- the rotating vector: Figs. 11-13 again, beside the pulsating runs
+
+def _rotating(st, bars, motor, scen_motor, n_runs: int, results: dict, scenarios: dict,
+              figs: dict) -> dict:
+    """The rotating vector: Figs. 11-13 again, beside the pulsating runs (their scenarios into
+    ``st`` and ``scenarios``); its metrics."""
+    from linsense.report import paper_figures as pf
+    from linsense.report.figures import png_bytes
+
     stage = _Stage(bars, "rotating vector: Figs. 11-13", n_runs)
     rot, rot_sc = runs.rotating_runs(scen_motor, stage.tick)
     for fig, variants in rot_sc.items():
@@ -279,11 +299,20 @@ def _closed_loop(st, bars, motor, scen_motor, summ: dict, quick: bool, figs: dic
              "b) rotating vector, with its table": rot[fig]["lut"],
              "c) pulsating, without the LUT": results[fig]["nolut"],
              "d) rotating vector, without its table": rot[fig]["nolut"]},
-            tau, title.replace(f"Fig. {fig[3:]}:",
-                               f"Fig. {fig[3:]}, pulsating (the paper's) and rotating-vector injection:", 1)))
+            motor.pole_pitch,
+            title.replace(f"Fig. {fig[3:]}:",
+                          f"Fig. {fig[3:]}, pulsating (the paper's) and rotating-vector injection:", 1)))
     rot_analysis = _rotating_analysis(motor, rot, scenarios["fig11"]["lut"].spec.injection.frequency)
+    return {**{fig: {k: r.metrics for k, r in v.items()} for fig, v in rot.items()},
+            "analysis": rot_analysis}
 
-    # --- the magnet polarity at start-up (saturated plant)
+
+def _startup(st, bars, scen_motor, quick: bool, scenarios: dict, figs: dict) -> dict:
+    """The magnet polarity at start-up (saturated plant): the worst start's scenario into ``st``
+    and ``scenarios``, the figure; its metrics."""
+    from linsense.report import paper_figures as pf
+    from linsense.report.figures import png_bytes
+
     n_su = STARTUP_STARTS[quick]
     stage = _Stage(bars, f"start-up: polarity, {n_su} starts", n_su)
     su = runs.startup_study(scen_motor, n_su, stage.tick)
@@ -298,8 +327,16 @@ def _closed_loop(st, bars, motor, scen_motor, summ: dict, quick: bool, figs: dic
         f"saturated plant ({su.polarity * 100:g} %/A), {su_spec.inverter.fidelity} inverter with "
         f"{su_spec.inverter.dead_time * 1e6:g} µs dead time, {su_spec.sensors.current_noise * 1e3:g} mA rms "
         f"current noise,\n{su_spec.sensors.adc_bits}-bit ADC, a free frictionless mover without load"))
+    return su_metrics
 
-    # --- beyond the paper
+
+def _beyond(st, bars, motor, scen_motor, quick: bool, lut_scenario, figs: dict) -> dict:
+    """Beyond the paper: the hold study and the stability map (a sweep into ``st``), their
+    figures; their metrics."""
+    from linsense.report import paper_figures as pf
+    from linsense.report.figures import png_bytes
+    from linsense.report.sweep_figures import stability_map as fig_stability_map
+
     n_hold = HOLD_POSITIONS[quick]
     stage = _Stage(bars, f"beyond: hold study, {n_hold} positions", 2 * len(runs.HOLD_VARIANTS))
     hold = runs.hold_study(scen_motor, n_hold, stage.tick)
@@ -313,31 +350,21 @@ def _closed_loop(st, bars, motor, scen_motor, summ: dict, quick: bool, figs: dic
     df, axes, map_line = runs.stability_map(scen_motor, quick, st.path("stability_map"))
     stage.tick()
     figs["figures/stability_map.png"] = png_bytes(fig_stability_map(df, axes))
-
-    lut6 = scenarios["fig12"]["lut"].spec
-    metrics = {
-        "motor": motor.name,
-        "quick": quick,
-        "setup": {"fidelity": runs.FIDELITY, "dead_time_s": runs.DEAD_TIME, "f_pwm_hz": lut6.inverter.f_pwm,
-                  "v_inj_v": lut6.injection.amplitude, "f_inj_hz": lut6.injection.frequency},
-        "lut": {"peak_deg": summ["psi_lut_peak_deg"]},
-        "fig9": fig9,
-        "fig11": {k: results["fig11"][k].metrics for k in ("lut", "nolut")},
-        "fig12": {k: results["fig12"][k].metrics for k in ("lut", "nolut", "nolut_no_dead_time")},
-        "fig12_analysis": {"onset": onset, "linearised": linearised},
-        "fig13": {k: results["fig13"][k].metrics for k in ("lut", "nolut")},
-        "rotating": {**{fig: {k: r.metrics for k, r in v.items()} for fig, v in rot.items()},
-                     "analysis": rot_analysis},
-        "startup": su_metrics,
-        "beyond": {
-            "hold": {"positions_deg": hold.positions_deg.tolist(),
-                     "true_deg": {k: [finite_or_none(v) for v in a] for k, a in hold.true_deg.items()},
-                     "bias_deg": {k: [finite_or_none(v) for v in a] for k, a in hold.bias_deg.items()},
-                     "limit_cycle_max_mm": hold.limit_cycle_mm},
-            "stability_map": {"summary": map_line, "runs": len(df),
-                              **_map_robustness(df, scenarios["fig12"]["lut"])},
-        },
+    return {
+        "hold": {"positions_deg": hold.positions_deg.tolist(),
+                 "true_deg": {k: [finite_or_none(v) for v in a] for k, a in hold.true_deg.items()},
+                 "bias_deg": {k: [finite_or_none(v) for v in a] for k, a in hold.bias_deg.items()},
+                 "limit_cycle_max_mm": hold.limit_cycle_mm},
+        "stability_map": {"summary": map_line, "runs": len(df), **_map_robustness(df, lut_scenario)},
     }
+
+
+def _write_results(st, metrics: dict, figs: dict, scenarios: dict, t_start: float) -> None:
+    """metrics.json (the claims added to ``metrics``), timing.json, the figures and report.html
+    into ``st``; the whole's wall-clock time into ``metrics``."""
+    from linsense.io import strip_timing
+    from linsense.report.html import render_report
+
     metrics["claims"] = claims(metrics)
     metrics["claims_beyond"] = claims_beyond(metrics)
     # (the wall-clock times, the runs' and the whole's, go to timing.json: metrics.json and the
@@ -351,6 +378,34 @@ def _closed_loop(st, bars, motor, scen_motor, summ: dict, quick: bool, figs: dic
             st.write(name, data)
     st.write("report.html", render_report(clean, figs, scenarios))
     metrics["wall_s"] = timing["wall_s"]
+
+
+def _closed_loop(st, bars, motor, scen_motor, summ: dict, quick: bool, figs: dict, t_start: float) -> dict:
+    """The stages after the model (Figs. 9, 11-13, beyond the paper) into the output set ``st``:
+    the figures, metrics.json and report.html; returns the metrics."""
+    fig9 = _fig9(st, bars, motor, scen_motor, quick, figs)
+    results, scenarios, n_runs = _figure_runs(st, bars, motor, scen_motor, figs)
+    fig12_analysis = _fig12_analysis(bars, motor, results, scenarios, quick, figs)
+    rotating = _rotating(st, bars, motor, scen_motor, n_runs, results, scenarios, figs)
+    startup = _startup(st, bars, scen_motor, quick, scenarios, figs)
+    beyond = _beyond(st, bars, motor, scen_motor, quick, scenarios["fig12"]["lut"], figs)
+    lut6 = scenarios["fig12"]["lut"].spec
+    metrics = {
+        "motor": motor.name,
+        "quick": quick,
+        "setup": {"fidelity": runs.FIDELITY, "dead_time_s": runs.DEAD_TIME, "f_pwm_hz": lut6.inverter.f_pwm,
+                  "v_inj_v": lut6.injection.amplitude, "f_inj_hz": lut6.injection.frequency},
+        "lut": {"peak_deg": summ["psi_lut_peak_deg"]},
+        "fig9": fig9,
+        "fig11": {k: results["fig11"][k].metrics for k in ("lut", "nolut")},
+        "fig12": {k: results["fig12"][k].metrics for k in ("lut", "nolut", "nolut_no_dead_time")},
+        "fig12_analysis": fig12_analysis,
+        "fig13": {k: results["fig13"][k].metrics for k in ("lut", "nolut")},
+        "rotating": rotating,
+        "startup": startup,
+        "beyond": beyond,
+    }
+    _write_results(st, metrics, figs, scenarios, t_start)
     return metrics
 
 

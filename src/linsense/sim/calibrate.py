@@ -155,40 +155,75 @@ def calibration_scenario(
         ``motor`` and the scenario's motor differ, an unknown drive key, or a scenario the
         changes make invalid (naming its file and key).
     """
+    drive = _drive_data(drive, quad, source)
+    explicit = set(drive)
+    spec = motor if isinstance(motor, str) else None
+    obj = motor if isinstance(motor, Motor) else None
+    if scenario is not None:
+        source, base_dir = scenario.source, scenario.base_dir
+        data = _drive_of_scenario(scenario)
+        if motor is not None:
+            _same_motor(scenario, spec, obj)
+            obj = obj if obj is not None else resolve_motor(scenario)
+    else:
+        base_dir = None
+        data, drive = _drive_of_design(spec, drive)
+    _set_drive(data, drive)
+    _set_run(data, scenario, fidelity, load, positions)
+    for sec, vals in sections.items():
+        data.setdefault(sec, {}).update(vals)
+    sc = _drive_scenario(data, source, base_dir, explicit)
+    # the run's budget: per point the settling and half the time after which a point trips, with
+    # the calibration's timings as the drive runs them (designed for the model the drive believes)
+    cal = designed(sc, drive_motor(sc, obj)).spec.calibration
+    return sc.replace(scenario={"duration": positions * (cal.t_settle + _BUDGET_OF_T_MAX * cal.t_max)}), obj
+
+
+def _drive_data(drive: dict | None, quad: float | None, source: str) -> dict:
+    """The drive data given (None values left out, ``quad`` over them), refusing an unknown key."""
     drive = {k: v for k, v in (drive or {}).items() if v is not None}
     unknown = sorted(set(drive) - set(DRIVE_KEYS))
     if unknown:
         raise InputError(source, unknown[0], f"not a drive-data key (known: {', '.join(DRIVE_KEYS)})")
     if quad is not None:
         drive["quad"] = float(quad)
-    explicit = set(drive)
-    spec = motor if isinstance(motor, str) else None
-    obj = motor if isinstance(motor, Motor) else None
-    if scenario is not None:
-        source, base_dir = scenario.source, scenario.base_dir
-        data = {k: v for k, v in scenario.given().items() if k not in _RUN_SECTIONS}
-        keep_ref = {k: v for k, v in scenario.given().get("reference", {}).items() if k in ("v_max", "a_max")}
-        data["reference"] = {"type": "hold", **keep_ref}
-        # the scenario's table, if any, is not used: the calibration measures one
-        for k in ("compensation", "lut_model", "lut_file"):
-            data.get("observer", {}).pop(k, None)
-        if motor is not None:
-            _same_motor(scenario, spec, obj)
-            obj = obj if obj is not None else resolve_motor(scenario)
-    else:
-        base_dir = None
-        # the design's drive (DriveData's defaults, read here, never restated)
-        dd = DriveData()
-        given = {f.name: getattr(dd, f.name) for f in fields(DriveData)
-                 if f.name in DRIVE_KEYS and getattr(dd, f.name) is not None}
-        drive = {**given, **drive}
-        # (a Motor object replaces the scenario's motor at the build: any preset names it here)
-        data = {"motor": spec or "ecce2010", "reference": {"type": "hold"}}
+    return drive
+
+
+def _drive_of_scenario(scenario: Scenario) -> dict:
+    """The keys a scenario gives about its drive: not its run sections (but the reference's speed
+    and acceleration limits), nor its table (the calibration measures one)."""
+    data = {k: v for k, v in scenario.given().items() if k not in _RUN_SECTIONS}
+    keep_ref = {k: v for k, v in scenario.given().get("reference", {}).items() if k in ("v_max", "a_max")}
+    data["reference"] = {"type": "hold", **keep_ref}
+    # the scenario's table, if any, is not used: the calibration measures one
+    for k in ("compensation", "lut_model", "lut_file"):
+        data.get("observer", {}).pop(k, None)
+    return data
+
+
+def _drive_of_design(spec: str | None, drive: dict) -> tuple[dict, dict]:
+    """Without a scenario: the scenario's keys naming the motor (a Motor object replaces it at the
+    build: any preset names it here) and the drive data over the design's (DriveData's defaults,
+    read here, never restated)."""
+    dd = DriveData()
+    given = {f.name: getattr(dd, f.name) for f in fields(DriveData)
+             if f.name in DRIVE_KEYS and getattr(dd, f.name) is not None}
+    return {"motor": spec or "ecce2010", "reference": {"type": "hold"}}, {**given, **drive}
+
+
+def _set_drive(data: dict, drive: dict) -> None:
+    """The drive data into the scenario's keys ``data`` (control.fs follows a PWM rate given)."""
     for key, val in drive.items():
         sec, k = DRIVE_KEYS[key]
         data.setdefault(sec, {})[k] = float(val)
-    if "f_pwm" in drive:  # (control.fs follows the PWM rate given)
+    if "f_pwm" in drive:
         data.get("control", {}).pop("fs", None)
+
+
+def _set_run(data: dict, scenario: Scenario | None, fidelity: str, load: float, positions: int) -> None:
+    """The calibration's run into the scenario's keys ``data``: its name, seed and mode, the
+    inverter model, the balanced constant load, the points and the recording."""
     data["scenario"] = {"name": "calibrate", "duration": 1.0,
                         **({"seed": scenario.spec.scenario.seed} if scenario is not None else {})}
     data.setdefault("inverter", {})["fidelity"] = fidelity
@@ -197,20 +232,17 @@ def calibration_scenario(
     data.setdefault("initial", {})["load_balanced"] = True
     data.setdefault("calibration", {})["points"] = int(positions)
     data["record"] = {"decimate": 16}
-    for sec, vals in sections.items():
-        data.setdefault(sec, {}).update(vals)
+
+
+def _drive_scenario(data: dict, source: str, base_dir, explicit: set) -> Scenario:
+    """The scenario of ``data``; a refusal of a value given as drive data says so."""
     try:
-        sc = scenario_from_dict(data, source, base_dir)
+        return scenario_from_dict(data, source, base_dir)
     except InputError as exc:  # a value given as drive data: say so
         given = {".".join(DRIVE_KEYS[k]): k for k in explicit}
         if exc.key not in given:
             raise
         raise InputError(exc.source, f"{exc.key} (drive data {given[exc.key]})", exc.message) from None
-    # the run's budget: per point the settling and half the time after which a point trips, with
-    # the calibration's timings as the drive runs them (designed for the model the drive believes)
-    cal = designed(sc, drive_motor(sc, obj)).spec.calibration
-    sc = sc.replace(scenario={"duration": positions * (cal.t_settle + _BUDGET_OF_T_MAX * cal.t_max)})
-    return sc, obj
 
 
 def drive_motor(sc: Scenario, obj: Motor | None = None) -> Motor:
@@ -309,17 +341,20 @@ def calibrate(
     """
     if motor is None and scenario is None:
         motor = "ecce2010"
-    if plant is not None and not isinstance(plant, Motor):
-        raise InputError(source if scenario is None else scenario.source, "plant",
-                         f"expected a Motor (the motor the drive runs on), got {type(plant).__name__}")
+    _check_plant(plant, source if scenario is None else scenario.source)
     sc, obj = calibration_scenario(motor, positions, load, fidelity, quad, source, scenario, drive,
                                    **sections)
     model = drive_motor(sc, obj)
     b = build(sc, obj) if plant is None else build(sc, plant, model=model)
     raw = run_closed_loop(b.cfg, b.drive.state, b.n_steps, b.commands)
-    done = int(b.drive.state.cal_index)
-    table = np.array([b.extra["cal_table"][k] for k in range(positions)], dtype=float)
-    table[done:] = np.nan
+    return _calibration(b, raw, model, positions, load)
+
+
+def _calibration(b, raw, model: Motor, positions: int, load: float) -> Calibration:
+    """A calibration's result from its build ``b`` and run ``raw``: the measured table, the
+    plant's model table for the injection the drive ran (its frequency and kappa after the
+    design), the metrics and the table's stamp (``model``: the motor the drive believes in)."""
+    table, done = _measured(b, positions)
     m = b.motor
     s = b.scenario.spec  # the scenario as it ran: the design's values filled in
     inj = s.injection
@@ -336,6 +371,34 @@ def calibrate(
         "max_diff_deg": _max_deg(table[ok] - psi_model[ok]),
         "max_diff_eq12_deg": _max_deg(table[ok] - eq12[ok]),
         "load_n": float(load),
+        **_run_metrics(s, f_inj, raw),
+        "motor": m.name,
+    }
+    stamp = table_stamp(model, inj.shape, f_inj, inj.quadrature, positions)
+    return Calibration(theta, table, psi_model, eq12, metrics, m, stamp)
+
+
+def _check_plant(plant, source: str) -> None:
+    """Refuse a plant that is not a Motor."""
+    if plant is not None and not isinstance(plant, Motor):
+        raise InputError(source, "plant",
+                         f"expected a Motor (the motor the drive runs on), got {type(plant).__name__}")
+
+
+def _measured(b, positions: int) -> tuple[np.ndarray, int]:
+    """The table a calibration's build ``b`` measured, rad (NaN from the first point not done),
+    and the points done."""
+    done = int(b.drive.state.cal_index)
+    table = np.array([b.extra["cal_table"][k] for k in range(positions)], dtype=float)
+    table[done:] = np.nan
+    return table, done
+
+
+def _run_metrics(s, f_inj: float, raw) -> dict:
+    """The drive a calibration ran (the scenario's spec ``s`` as it ran, the injection frequency
+    ``f_inj``, Hz) and the run ``raw``: its metrics after the points and the load."""
+    inj = s.injection
+    return {
         "fidelity": s.inverter.fidelity,
         "v_dc": float(s.inverter.v_dc),
         "f_pwm_hz": float(s.inverter.f_pwm),
@@ -355,10 +418,7 @@ def calibrate(
         "fault": fault_reason(raw.fault),
         "sim_s": round(raw.steps_done / s.inverter.f_pwm, 6),
         "wall_s": round(raw.wall_s, 6),
-        "motor": m.name,
     }
-    stamp = table_stamp(model, inj.shape, f_inj, inj.quadrature, positions)
-    return Calibration(theta, table, psi_model, eq12, metrics, m, stamp)
 
 
 def _max_deg(d: np.ndarray) -> float | None:

@@ -162,10 +162,7 @@ def judge(case: Case, a: dict, fault: int, t_done: float, duration: float, tau: 
     err = np.degrees(np.maximum(np.abs(e_lo), np.abs(e_hi)))  # |estimation error|, deg
     win = t >= duration - C.END_WINDOW_S
     if case.kind != "hold":  # for the certificate's figure: one point per block (up to a fault too)
-        x_mid = 0.5 * (lo + hi)
-        ok = np.isfinite(x_mid) & np.isfinite(e_mean)
-        row["trace"] = {"t": t[ok].tolist(), "x_deg": ((x_mid[ok] - case.target) * deg).tolist(),
-                        "err_deg": np.degrees(e_mean[ok]).tolist()}
+        row["trace"] = _trace(case, t, lo, hi, e_mean, deg)
     if fault or t_done < duration - 1e-9 or not win.any() or not np.all(np.isfinite(dev)):
         row["why"] = f"fault: {fault_reason(fault)} at {t_done:.3g} s" if fault else "did not finish"
         return row
@@ -179,75 +176,118 @@ def judge(case: Case, a: dict, fault: int, t_done: float, duration: float, tau: 
     )
     why = []
     if case.kind == "hold":
-        # the nominal plant's bound, and a plant whose table was measured on it; the others keep the
-        # drive's table and get the tolerance's
-        lim = C.HOLD_ERR_DEG if case.plant == "nominal" or case.table == "measured" else C.OFF_ERR_DEG
-        if row["err_deg"] > lim:
-            why.append(f"|x - target| {row['err_deg']:.3g} deg > {lim:g}")
+        why += _judge_hold(case, row)
     elif case.kind == "step":
-        row["settle_s"] = _settle(t, dev, case.t_event)
-        row["overshoot_deg"] = (
-            float(
-                max(
-                    0.0,
-                    np.max(
-                        np.sign(case.target - lo[0]) * ((hi if case.target > lo[0] else lo) - case.target)
-                    ),
-                )
-            )
-            * deg
-        )
-        if row["settle_s"] is None or row["settle_s"] > C.STEP_SETTLE_S:
-            why.append(
-                f"settles in {_s(row['settle_s'])} > {C.STEP_SETTLE_S:g} s (within {C.SETTLE_BAND_DEG:g} deg)"
-            )
+        why += _judge_step(case, row, t, lo, hi, dev, deg)
     elif case.kind in MOVES:
-        moving = (t >= case.t_event) & (t <= case.t_end_move)
-        row["peak_err_deg"] = float(err[moving].max()) if moving.any() else 0.0
-        row.update(speed_profile(t, lo, hi, err, tau))
-        if row["peak_err_deg"] > C.TRAJ_PEAK_ERR_DEG:
-            at = row.get("err_crosses_at_speed")
-            where = f" (it crosses {C.TRAJ_PEAK_ERR_DEG:g} deg at {at:.3g} m/s)" if at is not None else ""
-            peak = row["peak_err_deg"]
-            why.append(f"peak estimation error {peak:.3g} deg > {C.TRAJ_PEAK_ERR_DEG:g}{where}")
-        if row["est_err_deg"] > C.TRAJ_REST_ERR_DEG:
-            why.append(f"estimation error at rest {row['est_err_deg']:.3g} deg > {C.TRAJ_REST_ERR_DEG:g}")
-        if row["err_deg"] > C.HOLD_ERR_DEG:
-            why.append(f"|x - target| at rest {row['err_deg']:.3g} deg > {C.HOLD_ERR_DEG:g}")
+        why += _judge_move(case, row, t, lo, hi, err, tau)
     elif case.kind == "load_step":
-        after = t >= case.t_event
-        peak = float(dev[after].max())
-        rec = _settle(t, dev, case.t_event)
-        row.update(
-            peak_dev_deg=peak,
-            peak_dev_mm=peak / deg * 1e3,
-            recover_s=rec,
-            stiffness_n_per_mm=abs(case.load) / max(peak / deg * 1e3, 1e-9),
-        )
-        if rec is None or rec > C.LOAD_RECOVER_S:
-            why.append(f"back within {C.SETTLE_BAND_DEG:g} deg after {_s(rec)} > {C.LOAD_RECOVER_S:g} s")
+        why += _judge_load_step(case, row, t, dev, deg)
     if pp > C.HOLD_PP_DEG:
-        # a monotonic approach in the end window is still settling, not a limit cycle; nor is an
-        # oscillation that decays: below the threshold over the window's second half, and at most
-        # half its first half's (a cycle keeps its amplitude)
-        xm, tw = 0.5 * (lo[win] + hi[win]), t[win]
-        resid = xm - np.polyval(np.polyfit(tw - tw[0], xm, 1), tw - tw[0]) if xm.size > 2 else xm
-        h = xm.size // 2
-        p1, p2 = (float(np.ptp(xm[:h])), float(np.ptp(xm[h:]))) if h > 1 else (0.0, 0.0)
-        decays = h > 1 and p2 * deg <= C.HOLD_PP_DEG and p2 <= 0.5 * p1
-        what = "limit cycle" if float(np.ptp(resid)) * deg > 0.5 * pp and not decays else "still moving"
-        text = f"{what} {pp:.3g} deg p-p ({pp / deg * 1e3:.3g} mm) > {C.HOLD_PP_DEG:g} deg"
-        # holds, steps and the hold after a move must be still at their end; the load step and the
-        # out-and-back moves are bounded by their recovery and their errors (docs/tuning.md, "The
-        # certificate"): a mover still approaching within the band there passes, a limit cycle does not
-        if what == "limit cycle" or case.kind in ("hold", "step", "move_hold"):
-            why.append(text)
-        else:
-            row["note"] = (f"still settling: {pp:.3g} deg p-p ({pp / deg * 1e3:.3g} mm) at the end, "
-                           f"within {C.SETTLE_BAND_DEG:g} deg, decaying")
+        why += _judge_end_motion(case, row, t[win], 0.5 * (lo[win] + hi[win]), pp, deg)
     row["why"] = "; ".join(why)
     row["passed"] = not why
     return row
+
+
+def _trace(case: Case, t: np.ndarray, lo: np.ndarray, hi: np.ndarray, e_mean: np.ndarray,
+           deg: float) -> dict:
+    """For the certificate's figure: one point per block, ``x - target`` and the estimation error,
+    electrical deg."""
+    x_mid = 0.5 * (lo + hi)
+    ok = np.isfinite(x_mid) & np.isfinite(e_mean)
+    return {"t": t[ok].tolist(), "x_deg": ((x_mid[ok] - case.target) * deg).tolist(),
+            "err_deg": np.degrees(e_mean[ok]).tolist()}
+
+
+def _judge_hold(case: Case, row: dict) -> list[str]:
+    """A hold: the nominal plant's bound, and a plant whose table was measured on it; the others
+    keep the drive's table and get the tolerance's."""
+    lim = C.HOLD_ERR_DEG if case.plant == "nominal" or case.table == "measured" else C.OFF_ERR_DEG
+    if row["err_deg"] > lim:
+        return [f"|x - target| {row['err_deg']:.3g} deg > {lim:g}"]
+    return []
+
+
+def _judge_step(case: Case, row: dict, t: np.ndarray, lo: np.ndarray, hi: np.ndarray,
+                dev: np.ndarray, deg: float) -> list[str]:
+    """A step: its settling time and overshoot (into ``row``)."""
+    row["settle_s"] = _settle(t, dev, case.t_event)
+    row["overshoot_deg"] = (
+        float(
+            max(
+                0.0,
+                np.max(
+                    np.sign(case.target - lo[0]) * ((hi if case.target > lo[0] else lo) - case.target)
+                ),
+            )
+        )
+        * deg
+    )
+    if row["settle_s"] is None or row["settle_s"] > C.STEP_SETTLE_S:
+        return [f"settles in {_s(row['settle_s'])} > {C.STEP_SETTLE_S:g} s "
+                f"(within {C.SETTLE_BAND_DEG:g} deg)"]
+    return []
+
+
+def _judge_move(case: Case, row: dict, t: np.ndarray, lo: np.ndarray, hi: np.ndarray,
+                err: np.ndarray, tau: float) -> list[str]:
+    """A move at v_max: its peak estimation error moving, its speed profile (into ``row``), and its
+    errors at rest."""
+    why = []
+    moving = (t >= case.t_event) & (t <= case.t_end_move)
+    row["peak_err_deg"] = float(err[moving].max()) if moving.any() else 0.0
+    row.update(speed_profile(t, lo, hi, err, tau))
+    if row["peak_err_deg"] > C.TRAJ_PEAK_ERR_DEG:
+        at = row.get("err_crosses_at_speed")
+        where = f" (it crosses {C.TRAJ_PEAK_ERR_DEG:g} deg at {at:.3g} m/s)" if at is not None else ""
+        peak = row["peak_err_deg"]
+        why.append(f"peak estimation error {peak:.3g} deg > {C.TRAJ_PEAK_ERR_DEG:g}{where}")
+    if row["est_err_deg"] > C.TRAJ_REST_ERR_DEG:
+        why.append(f"estimation error at rest {row['est_err_deg']:.3g} deg > {C.TRAJ_REST_ERR_DEG:g}")
+    if row["err_deg"] > C.HOLD_ERR_DEG:
+        why.append(f"|x - target| at rest {row['err_deg']:.3g} deg > {C.HOLD_ERR_DEG:g}")
+    return why
+
+
+def _judge_load_step(case: Case, row: dict, t: np.ndarray, dev: np.ndarray, deg: float) -> list[str]:
+    """A load step: its peak deviation, recovery time and stiffness (into ``row``)."""
+    after = t >= case.t_event
+    peak = float(dev[after].max())
+    rec = _settle(t, dev, case.t_event)
+    row.update(
+        peak_dev_deg=peak,
+        peak_dev_mm=peak / deg * 1e3,
+        recover_s=rec,
+        stiffness_n_per_mm=abs(case.load) / max(peak / deg * 1e3, 1e-9),
+    )
+    if rec is None or rec > C.LOAD_RECOVER_S:
+        return [f"back within {C.SETTLE_BAND_DEG:g} deg after {_s(rec)} > {C.LOAD_RECOVER_S:g} s"]
+    return []
+
+
+def _judge_end_motion(case: Case, row: dict, tw: np.ndarray, xm: np.ndarray, pp: float,
+                      deg: float) -> list[str]:
+    """A run whose peak to peak over the end window (``tw``, block middles ``xm``) exceeds the hold's:
+    a limit cycle, or still moving.
+
+    A monotonic approach in the end window is still settling, not a limit cycle; nor is an
+    oscillation that decays: below the threshold over the window's second half, and at most half
+    its first half's (a cycle keeps its amplitude).
+    """
+    resid = xm - np.polyval(np.polyfit(tw - tw[0], xm, 1), tw - tw[0]) if xm.size > 2 else xm
+    h = xm.size // 2
+    p1, p2 = (float(np.ptp(xm[:h])), float(np.ptp(xm[h:]))) if h > 1 else (0.0, 0.0)
+    decays = h > 1 and p2 * deg <= C.HOLD_PP_DEG and p2 <= 0.5 * p1
+    what = "limit cycle" if float(np.ptp(resid)) * deg > 0.5 * pp and not decays else "still moving"
+    # holds, steps and the hold after a move must be still at their end; the load step and the
+    # out-and-back moves are bounded by their recovery and their errors (docs/tuning.md, "The
+    # certificate"): a mover still approaching within the band there passes, a limit cycle does not
+    if what == "limit cycle" or case.kind in ("hold", "step", "move_hold"):
+        return [f"{what} {pp:.3g} deg p-p ({pp / deg * 1e3:.3g} mm) > {C.HOLD_PP_DEG:g} deg"]
+    row["note"] = (f"still settling: {pp:.3g} deg p-p ({pp / deg * 1e3:.3g} mm) at the end, "
+                   f"within {C.SETTLE_BAND_DEG:g} deg, decaying")
+    return []
 
 
 def speed_profile(t: np.ndarray, lo: np.ndarray, hi: np.ndarray, err: np.ndarray, tau: float) -> dict:
