@@ -330,8 +330,9 @@ def run_events(sc: Scenario, moves) -> list[tuple[str, float, str, bool]]:
                        "pairs (t_rest + t_pulse) + t_settle): the position control after it would never act",
                        False))
     if "settle_s" in s.metrics.model_fields_set:  # (given long enough, no steady sample is left)
-        ends = [ref.at] if ref.type == "step" else [t1 for _t0, t1, *_x in moves] if ref.type == "trajectory" \
-            else []
+        ends = [ref.at] if ref.type == "step" else []
+        if ref.type == "trajectory":
+            ends = [t1 for _t0, t1, *_x in moves]
         if ends:
             events.append(("metrics.settle_s", max(ends) + s.metrics.settle_s, "the transient window after "
                            "the last step or move ends at {t} s: the steady metrics after it would read "
