@@ -473,3 +473,20 @@ def test_every_package_says_what_it_is_for():
         if len(words.split()) < 4:
             bare.append(f"{init.relative_to(root.parent)}: {doc.splitlines()[0] if doc else '(none)'}")
     assert not bare, bare
+
+
+def test_the_source_names_no_issue_numbers():
+    """The source explains itself without the tracker: no "issue N" in src/ or csrc/ (issue 38: 25,
+    then 53, comments and docstrings pointed at issues a reader of the code cannot see)."""
+    import re
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    found = []
+    for folder in ("src/linsense", "csrc"):
+        for f in sorted((root / folder).rglob("*")):
+            if f.suffix in (".py", ".c", ".h", ".toml", ".cmake") and f.is_file():
+                for n, line in enumerate(f.read_text(encoding="utf-8", errors="replace").splitlines(), 1):
+                    if re.search(r"\b[Ii]ssues? \d+", line):
+                        found.append(f"{f.relative_to(root)}:{n}: {line.strip()[:80]}")
+    assert not found, found

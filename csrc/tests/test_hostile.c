@@ -1,4 +1,4 @@
-/* Hostile inputs and configurations (issue 11): every class the fuzzer (fuzz_drive.c) explores,
+/* Hostile inputs and configurations: every class the fuzzer (fuzz_drive.c) explores,
  * as deterministic cases that name the documented result:
  *  - positions: ls_pos_check refuses, ls_pos_norm_full saturates, no float-to-int overflow;
  *  - the drive's setters refuse huge, non-finite and out-of-range targets (nothing changes) and

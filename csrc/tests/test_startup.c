@@ -243,7 +243,7 @@ static void test_closed_loop(void)
                                      friction (0.1 mm in 0.25 s from a known position), and the estimate's
                                      convergence from where the start-up left it: 0.41 mm with the PLL and
                                      the speed PI, 0.88 mm with the mechanical observer (15 Hz) and its load
-                                     estimate fed forward, the default since issue 22's fourth stage: its
+                                     estimate fed forward, the design's default: its
                                      slower convergence moves the free mover more (docs/tuning.md) */
 }
 

@@ -1,4 +1,4 @@
-"""The arguments of the public Python API, checked in one place (issue 37).
+"""The arguments of the public Python API, checked in one place.
 
 The command line refuses bad input with one line naming the file, the key and the value; the
 Python API does the same through these helpers: every public function (``linsense.__all__``, the

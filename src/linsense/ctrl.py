@@ -665,7 +665,7 @@ class Lut:
 
     def __init__(self, values: Any) -> None:
         values = getattr(values, "values", values)
-        # one dimension of real numbers (issue 23: a string was a ValueError, a 2-D array was flattened
+        # one dimension of real numbers (a string was a ValueError, a 2-D array was flattened
         # into one table, booleans were taken as 0 and 1)
         a = _real_array("Lut", "values", values, "a table of shape (N,)", ((None,),))
         big = np.abs(a) > np.finfo(np.float32).max

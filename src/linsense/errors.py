@@ -31,7 +31,7 @@ def _cut_quoted(m: re.Match) -> str:
 def shown(value) -> str:
     """``repr`` of a user's value for a message or a comment, a numpy scalar as the plain Python number.
 
-    ``360.0``, not ``np.float64(360.0)`` (issue 23).
+    ``360.0``, not ``np.float64(360.0)``.
 
     Parameters
     ----------

@@ -84,7 +84,7 @@ MAX_F_INJ = KINDS["injection_frequency"].high
 #: Hz, lowest injection frequency of a table (``lut --f-inj``): an HF injection runs at hundreds of
 #: Hz to tens of kHz, and the design refuses below f_pwm / 4 = 125 Hz (its bandwidths follow the
 #: injection); 1 Hz, the limit before, made a table of the resistance alone without a word (``lut
-#: --f-inj 1``, kHz typed for Hz: issue 37), 1e-10 Hz left the saliency's share under rounding
+#: --f-inj 1``, kHz typed for Hz), 1e-10 Hz left the saliency's share under rounding
 MIN_F_INJ = KINDS["injection_frequency"].low
 #: PWM periods of one simulated run (duration x f_pwm): about an hour of computing
 MAX_STEPS = 10_000_000_000

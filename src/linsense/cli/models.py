@@ -58,7 +58,7 @@ def lut(motor_spec: str, points: int, fmt: str, symbol: str | None, f_inj: float
     if f_inj is not None and not (f_inj > 0 and math.isfinite(f_inj)):
         raise InputError("--f-inj", "", f"must be a positive frequency in Hz, got {f_inj!r}")
     if f_inj is not None and not MIN_F_INJ <= f_inj <= MAX_F_INJ:
-        slipped = slip("injection_frequency", f_inj)  # (kHz typed for Hz: 1 was a table at 1 Hz, issue 37)
+        slipped = slip("injection_frequency", f_inj)  # (kHz typed for Hz: 1 was a table at 1 Hz)
         why = (f"is below the lower limit of {MIN_F_INJ:g} Hz (an HF injection: the design's lowest, "
                "f_pwm / 4 of a 500 Hz PWM" if f_inj < MIN_F_INJ else
                f"is beyond the limit of {MAX_F_INJ:g} Hz (half of a 1 MHz PWM")
@@ -80,7 +80,7 @@ def lut(motor_spec: str, points: int, fmt: str, symbol: str | None, f_inj: float
     if quad is None:
         quad = round(float(firmware.inject.quad), 6) if f_inj is not None else 0.0
     motor = c.load(motor_spec)
-    # (a motor the HF observer cannot hold is refused as tune and simulate refuse it: issue 23)
+    # (a motor the HF observer cannot hold is refused as tune and simulate refuse it)
     observable_error_gain(motor, f_inj or float(firmware.inject.freq), quad if f_inj else 0.0, motor_spec)
     if fmt == "c" and symbol is None:
         from linsense.compensation.lut import default_lut_symbol

@@ -67,7 +67,7 @@ class Lut:
     digest: str = field(default="", compare=False)
 
     def __post_init__(self) -> None:
-        # one validated path (issue 37): a NaN, complex or 2-D table was taken
+        # one validated path: a NaN, complex or 2-D table was taken
         src = f"{_SRC}.Lut"
         v = np.array(reals(self.values, src, "values", "table values in rad", ndim=1, min_size=4))
         instance(self.name, src, "name", str, "a str")

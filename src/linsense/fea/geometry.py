@@ -288,7 +288,7 @@ class GeometryFile(BaseModel):
     @model_validator(mode="after")
     def _check(self) -> GeometryFile:
         # (the table of plausible values: a pole pitch of 56 was "outer radius or pole pitch beyond
-        # 10 m" naming [armature], issue 37)
+        # 10 m" naming [armature])
         pitch = implausible("pole_pitch", self.motor.pole_pitch)
         if pitch is not None:
             raise KeyProblem("motor.pole_pitch", f"{pitch}; a geometry file is in m")

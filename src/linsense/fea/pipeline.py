@@ -62,7 +62,7 @@ def parse_currents(value, option: str = LOAD_OPTION, what: str = "q-axis current
                              f"e.g. {example})") from None
         if not math.isfinite(c):
             raise InputError(option, "", f"must be finite currents in A, got {v!r}")
-        beyond = implausible("current", abs(c))  # (the table of plausible values: 2000 for 2 A, issue 37)
+        beyond = implausible("current", abs(c))  # (the table of plausible values: 2000 for 2 A)
         if beyond is not None:
             raise InputError(option, "", f"{what}: {beyond}")
         if positive and c <= 0:

@@ -1,4 +1,4 @@
-"""Saturation data for magnet polarity detection at start-up (issue 14, item 4).
+"""Saturation data for magnet polarity detection at start-up.
 
 HF injection finds the d-axis but not its direction. A d-axis current pulse along the magnets'
 flux (+d) saturates the iron further and lowers the incremental d-axis inductance; a pulse against

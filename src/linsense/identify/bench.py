@@ -172,7 +172,7 @@ def read_bench_csv(path: str | Path) -> BenchData:
         voltage = np.stack([col[f"V{p}"] for p in PHASES], axis=1).astype(complex)
         i_cols, v_cols = "I", "VA, VB, VC"
     mag = np.abs(current)
-    # (the table of plausible values: a current in mA, a voltage in mV, issue 37)
+    # (the table of plausible values: a current in mA, a voltage in mV)
     for kind, values, what in (("current", mag, i_cols), ("voltage", np.abs(voltage), v_cols)):
         bad = np.nonzero((values.max(axis=1) if values.ndim > 1 else values) > KINDS[kind].high)[0]
         if bad.size:

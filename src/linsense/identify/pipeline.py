@@ -132,7 +132,7 @@ def identify(
     k_f = pick(force_constant, "force_constant", "--force-constant", "motor.toml needs the force constant")
     m = pick(mass, "mass", "--mass", "motor.toml needs the moving mass")
     # (the motor file's table of plausible values, before the bench is read: a pole pitch in mm
-    # was refused as "need at least 8 distinct electrical positions", issue 37)
+    # was refused as "need at least 8 distinct electrical positions")
     for arg, value, kind in (("pole_pitch", pole_pitch, "pole_pitch"), ("force_constant", force_constant,
                                                                          "force_constant"),
                              ("mass", mass, "mass"), ("resistance", resistance, "resistance")):
@@ -220,7 +220,7 @@ def _bench_units(high: bool) -> str:
 def _against_base(motor: Motor, base: Motor) -> list[str]:
     """A warning when the fitted mean self-inductance is more than :data:`BASE_FACTOR_MAX` times
     off the one of the ``--motor`` that gives the mechanics (a bench file in mA within the range of
-    currents was identified as a motor 500 times below it without a word, issue 37)."""
+    currents was identified as a motor 500 times below it without a word)."""
     L_fit, L_base = _mean_self(motor.inductance), _mean_self(base.inductance)
     if not L_base > 0.0 or 1.0 / BASE_FACTOR_MAX <= L_fit / L_base <= BASE_FACTOR_MAX:
         return []
@@ -234,7 +234,7 @@ def _check_fitted(model: InductanceModel, src: str) -> None:
     """Refuse a fitted model outside the range of real linear motors, naming the bench file's units
     that explain it: its mean self-inductance 1000 times off is a frequency in kHz or voltages in mV
     (above), currents in mA or voltages in kV (below). A bench file in mA was identified as a 2.75 uH
-    motor, one in kHz written as a motor file that linsense then refused to load (issue 37)."""
+    motor, one in kHz written as a motor file that linsense then refused to load."""
     k = KINDS["inductance"]
     L0 = _mean_self(model)
     if not k.holds(L0):

@@ -103,7 +103,7 @@ class InductanceModel:
     params: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        # one validated path (issue 37): NaN, complex or string coefficients gave a model of NaN or
+        # one validated path: NaN, complex or string coefficients gave a model of NaN or
         # numpy's own traceback
         a = np.array(reals(self.a, _SRC, "a", "coefficients in H", ndim=2, min_size=6))
         b = np.array(reals(self.b, _SRC, "b", "coefficients in H", ndim=2, min_size=6))
@@ -205,8 +205,8 @@ class InductanceModel:
         interpolates the table exactly, as a real DFT: for an odd ``N`` the orders up to
         ``(N - 1) / 2``; for an even ``N`` also the cosine of order ``N / 2`` (the Nyquist term,
         with its half weight ``sum_i y_i (-1)^i / N``; its sine is zero on the grid and is not
-        fitted). It was left out: 8 positions of a motor with ``L4`` missed ``L4`` at every point
-        (issue 23). A smaller ``max_order`` smooths the table (least squares). The order is at
+        fitted). It was left out: 8 positions of a motor with ``L4`` missed ``L4`` at every point.
+        A smaller ``max_order`` smooths the table (least squares). The order is at
         most :data:`~linsense.limits.MAX_TABLE_ORDER` (63, the simulator's limit): a table of
         more than 127 positions is fitted by least squares up to it (interpolated exactly, 8,000
         positions took minutes and 100,000 asked for 37 GiB; every use of the model costs in

@@ -54,7 +54,7 @@ class Friction:
     coulomb: float = 0.0  # N
 
     def __post_init__(self) -> None:
-        # the motor file's [friction] rules (finite, >= 0): one validated path (issue 37)
+        # the motor file's [friction] rules (finite, >= 0): one validated path
         validate_section(FrictionSection, {"viscous": self.viscous, "coulomb": self.coulomb},
                          "linsense.model.motor.Friction", "friction")
 
@@ -125,7 +125,7 @@ class Motor:
     saturation: Saturation | None = None  # for the simulator's saturated plant (None: none given)
 
     def __post_init__(self) -> None:
-        # one validated path (issue 37): a Motor built in Python is held to the motor file's checks
+        # one validated path: a Motor built in Python is held to the motor file's checks
         # and limits (its [motor] section's schema, then check_plausible), as load_motor's are; one
         # built with R_s = 1e6 and pole_pitch = -1 gave an all-zero table
         instance(self.source, _API, "source", str, "a str (where the motor came from)")
@@ -406,7 +406,7 @@ def load_motor(spec: str | Path, check: bool = True) -> Motor:
 
 
 def as_motor(value, source: str, name: str = "motor", inductance: bool = False) -> Motor | InductanceModel:
-    """A motor argument of the public API, checked and resolved the same way everywhere (issue 37).
+    """A motor argument of the public API, checked and resolved the same way everywhere.
 
     A :class:`Motor` as it is; a preset's or packaged example's name or a motor file's path loaded
     as :func:`load_motor` loads it; an :class:`InductanceModel` where ``inductance`` allows it.
@@ -561,14 +561,14 @@ def read_inductance_table(path: Path) -> tuple[np.ndarray, np.ndarray]:
     dup = np.nonzero(np.diff(ws) < 1e-9)[0]
     if dup.size:
         r, q = int(order[dup[0] + 1]), int(order[dup[0]])
-        # (plain numbers: the message showed np.float64(360.0); issue 23)
+        # (plain numbers: the message showed np.float64(360.0))
         raise InputError(src, f"row {line[r]}, column theta_deg",
                          f"duplicate position {float(data[r, 0])!r} deg (row {line[q]} has "
                          f"{float(data[q, 0])!r} deg: the same position modulo 360 deg)")
     gaps = np.diff(np.concatenate([ws, [ws[0] + 360.0]]))
     if gaps.max() > 45.0:
         g = int(np.argmax(gaps))
-        span = float(ws[-1] - ws[0])  # (radians typed: 0 .. 6.2, issue 37)
+        span = float(ws[-1] - ws[0])  # (radians typed: 0 .. 6.2)
         hint = slip("angle", span, ok=lambda v: 360.0 - 45.0 <= v <= 360.0)
         raise InputError(
             src, "column theta_deg",

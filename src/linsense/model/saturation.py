@@ -74,7 +74,7 @@ class Saturation:
     source: str = ""
 
     def __post_init__(self) -> None:
-        # one validated path (issue 37): the motor file's [saturation] rules (SaturationSection)
+        # one validated path: the motor file's [saturation] rules (SaturationSection)
         src = "linsense.model.saturation.Saturation"
         instance(self.source, src, "source", str, "a str")
         source = self.source or src

@@ -39,7 +39,7 @@ def _at_most_max_order(value: int) -> int:
 #: a Fourier order of L_abc(theta) or of the PM flux: at most MAX_HARMONIC_ORDER (docs/limits.md)
 Order = Annotated[int, AfterValidator(_at_most_max_order)]
 #: a harmonic key as documented (docs/motor-files.md): L4, M4, L6 ... (ASCII digits, no leading
-#: zero: L04 was accepted and its value dropped, the model got L4 = 0; issue 23)
+#: zero: L04 was accepted and its value dropped, the model got L4 = 0)
 _HARMONIC_KEY = re.compile(r"([LM])([1-9][0-9]*)")
 #: a harmonic key with leading zeros (L04, M006): refused, naming the key it stands for
 _ZERO_PADDED_KEY = re.compile(r"([LM])0+([0-9]+)")
@@ -202,7 +202,7 @@ class PmFluxSection(BaseModel):
 
     @model_validator(mode="after")
     def _one_entry_per_order(self) -> PmFluxSection:
-        # (issue 23: an order listed twice was accepted, one entry silently over the other)
+        # (an order listed twice was accepted, one entry silently over the other)
         seen = set()
         for k, h in enumerate(self.harmonics):
             if h.order in seen:
@@ -320,7 +320,7 @@ def validate_section(section: type[BaseModel], data: dict, source: str, key: str
     """Validate one section of a motor file (``[motor]``, ``[friction]``, a ``[pm_flux]`` harmonic,
     ``[saturation]``) with the reader's rules: the constructors of :class:`~linsense.model.motor.Motor`
     and its parts check their values through it, so that a motor built in Python is held to the
-    motor file's checks and limits (one validated path; issue 37).
+    motor file's checks and limits (one validated path).
 
     Parameters
     ----------

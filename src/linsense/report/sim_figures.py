@@ -46,7 +46,7 @@ def result_plot_data(result) -> PlotData:
     spec = getattr(result.scenario, "spec", None)
     f_pwm = float(spec.inverter.f_pwm) if spec is not None else 16000.0
     # (the record's: a metrics-only run's scenario carries its longer blocks; the metrics' block_s is
-    # their own resolution, every period, issue 37)
+    # their own resolution, every period)
     dec = int(spec.record.decimate) if spec is not None else 1
     inj = spec.injection if spec is not None else None
     f_inj = float(inj.frequency) if inj is not None and inj.frequency and inj.amplitude else None

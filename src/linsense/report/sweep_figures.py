@@ -53,7 +53,7 @@ def outcome(row) -> int:
     if bool(row.get("stable")):
         return 4
     reason = str(row.get("unstable_reason") or "")
-    if reason.startswith("not settled (still moving)"):  # (not a cycle, issue 37)
+    if reason.startswith("not settled (still moving)"):  # (not a cycle)
         return 5
     if reason.startswith("not settled"):
         return 2

@@ -259,7 +259,7 @@ def controller_model(sc: Scenario, model_motor: Motor) -> dict:
     ------
     linsense.errors.InputError
         ``controller.model.R_s`` outside the range of real motors: the tables are made for the model
-        with it, a :class:`~linsense.model.motor.Motor`, held to the motor file's limits (issue 37).
+        with it, a :class:`~linsense.model.motor.Motor`, held to the motor file's limits.
     """
     ov = sc.spec.controller.model
     if ov.R_s is not None:
@@ -807,7 +807,7 @@ def calibration_timing(f_inj: float, dither_a: float, dither_hz: float, demod_lp
     InputError
         Naming ``calibration.dither_hz`` or ``calibration.k_int`` (in ``source``) when the window
         they make is not a finite number of periods (a subnormal dither frequency or adaptation
-        rate was a ZeroDivisionError or an OverflowError traceback, issue 23).
+        rate was a ZeroDivisionError or an OverflowError traceback).
     """
     given_k = k_int is not None
     if k_int is None:

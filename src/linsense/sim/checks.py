@@ -20,7 +20,7 @@ def check_positions(sc: Scenario, tau: float) -> None:
 
     The start (``initial.position_mm``, and ``startup.guess_mm`` of a start-up) was an OverflowError
     traceback in the conversion, or a one-line ls_pos message naming no key; a reference there was
-    silently refused by the drive's setter (the run held still and reported no fault, issue 23).
+    silently refused by the drive's setter (the run held still and reported no fault).
 
     Parameters
     ----------
@@ -75,7 +75,7 @@ def check_sensors(source: str, gain: list, offset: list, noise: float, i_trip: f
 
     A gain of 0 or below (the current not measured, or a phase reversed), an offset or an rms noise
     at the over-current trip ``protection.i_max`` or beyond (the drive trips on the sensor alone, at
-    t = 0; issue 23: the message named protection.i_max where the file gave only the sensor).
+    t = 0; the message named protection.i_max where the file gave only the sensor).
 
     Parameters
     ----------
@@ -116,7 +116,7 @@ def check_sensors(source: str, gain: list, offset: list, noise: float, i_trip: f
 
 def run_steps(source: str, duration: float, fs: float) -> int:
     """The PWM periods of a run of ``duration`` s at ``fs`` Hz, range-checked before the conversion to
-    an integer (issue 23: a product beyond a float, ``scenario.duration = 1e308``, was an
+    an integer (a product beyond a float, ``scenario.duration = 1e308``, was an
     OverflowError traceback).
 
     Parameters
@@ -350,7 +350,7 @@ def check_events(sc: Scenario, n_steps: int, moves, user_keys: set[str]) -> None
     """Refuse an event of :func:`run_events` that the run ends before: it would never act.
 
     The C loop acts on an event at the first period that starts at or after its time, so an event
-    after the start of the last period (``(n_steps - 1) / f_pwm``) is never seen (issue 37: a load
+    after the start of the last period (``(n_steps - 1) / f_pwm``) is never seen (a load
     step at 5 s in a 0.6 s run gave "stable"). A step load to the force it steps from never acts
     either (``load.force_after`` left at its default 0 beside ``load.force = 0``).
 
@@ -432,7 +432,7 @@ def check_final_window(sc: Scenario, mass: float, user_keys: set[str]) -> None:
     """Refuse an end window too short to see a cycle of the drive's slowest loop (:func:`slowest_loop`).
 
     The end window must hold half the loop's period at least (a peak and a trough of its cycle): a
-    shorter one sees a part of the cycle as a still mover (issue 37: ``final_window_s = 1e-9`` gave
+    shorter one sees a part of the cycle as a still mover (``final_window_s = 1e-9`` gave
     "stable" and a limit cycle of 0 where the default window showed 17 deg).
 
     Parameters
@@ -478,7 +478,7 @@ MODEL_FACTOR_MAX = 10.0
 
 
 def check_units(sc: Scenario, tau: float, user_keys: set[str], believed: dict[str, float]) -> None:
-    """Refuse a value the file gives in another unit than its key's (issue 37): a key of a kind of
+    """Refuse a value the file gives in another unit than its key's: a key of a kind of
     the table of plausible values (:func:`linsense.sim.scenario.unit_kinds`) outside its range
     (``controller.model.L_d = 10`` H, ``protection.err_max = 30`` rad, ``controller.v_max = 200``
     m/s), or a frequency or electrical speed that breaks the relation a slip of 2 pi between Hz and

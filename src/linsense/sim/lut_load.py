@@ -1,5 +1,5 @@
 """The calibrated LUT against load on the saturated plant, compared with the FEA's LUT against load
-(issue 14: "with the saturated plant, the calibrated LUT at 0, 20 and 40 N ... agree with the FEA's
+("with the saturated plant, the calibrated LUT at 0, 20 and 40 N ... agree with the FEA's
 LUT-against-load within 0.3 deg").
 
 The drive's calibration mode (:func:`linsense.sim.calibrate.calibrate`, switching inverter with

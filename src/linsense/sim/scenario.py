@@ -870,7 +870,7 @@ def _check_controller(f: ScenarioFile) -> None:
     if g is not None and g == 0.0:
         raise KeyProblem("controller.model.demod_gain", "must be non-zero, got 0.0")
     if g is not None and f.observer.gain_schedule:
-        # (issue 23: it was accepted and changed nothing, the gain table replacing it)
+        # (it was accepted and changed nothing, the gain table replacing it)
         raise KeyProblem("controller.model.demod_gain", f"{g!r} has no effect with "
                          "observer.gain_schedule = true (the gain table replaces it): set "
                          "observer.gain_schedule = false to use it")
@@ -936,7 +936,7 @@ def _check_amplitude(f: ScenarioFile) -> None:
 
 def _periods(t: float, fs: float) -> float:
     """``round(t * fs)``, PWM periods of ``t`` s, or inf where the product overflows (``round(inf)``
-    was an OverflowError traceback, issue 23)."""
+    was an OverflowError traceback)."""
     n = t * fs
     return round(n) if math.isfinite(n) else math.inf
 
@@ -957,7 +957,7 @@ def _named(section: BaseModel, keys: tuple[str, ...]) -> str:
 
 def _check_overrides(f: ScenarioFile) -> None:
     """Refuse a key the file gives that another key (or the mode, the injection's shape, the
-    observer's type) makes meaningless: it would be silently ignored or overridden (issue 23).
+    observer's type) makes meaningless: it would be silently ignored or overridden.
     The message names both keys."""
     inj, obs, con, ref, ld, sens = f.injection, f.observer, f.controller, f.reference, f.load, f.sensors
     mode, shape = f.control.mode, inj.shape
@@ -1198,7 +1198,7 @@ _TOML_SCALARS = (str, bool, int, float, datetime.date, datetime.time)
 
 def toml_values(data, source: str, key: str = ""):
     """``data`` (a dict of sections from Python) with only the values a TOML file can hold, so that
-    a dict is validated as the same file would be (issue 23): a numpy scalar of a real or boolean
+    a dict is validated as the same file would be: a numpy scalar of a real or boolean
     dtype becomes the Python float, int or bool it stands for (``np.True_`` is a boolean, refused
     where a number belongs as ``true`` is in a file); ``None`` (TOML has no null: it set an optional
     key to None, a TypeError in the build) and any other object (a tuple, bytes, a set, a complex

@@ -1,4 +1,4 @@
-"""Start-up from an unknown position with the magnet polarity, in the simulator (issue 14, item 4).
+"""Start-up from an unknown position with the magnet polarity, in the simulator.
 
 :func:`startup_runs` starts the drive in ``control.mode = "startup"`` (``LS_MODE_STARTUP``,
 docs/firmware.md) from positions spread over two electrical periods, its estimate at 0, on the

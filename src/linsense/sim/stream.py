@@ -7,7 +7,7 @@ Every run of the simulator goes this way (:func:`simulate_streamed`; ``linsense 
 (:func:`linsense.sim.core.run_closed_loop_chunks`) at the full rate, one sample per PWM period,
 whatever the run keeps. The metrics are computed from those samples (:class:`MetricSamples` keeps
 only the ones a metric can depend on: memory does not grow with the duration), so that they do not
-depend on what is stored (issue 37: ``--decimate 2048 --trace none`` said "stable" and a settling
+depend on what is stored (``--decimate 2048 --trace none`` said "stable" and a settling
 time of 0 of a run that at the full rate was neither). What is stored, one sample every
 ``record.decimate`` periods with its block statistics, is made from the same samples
 (:class:`Decimator`, bit for bit the C loop's own decimation) and handed to the trace writer and to
@@ -782,7 +782,7 @@ def finish_metrics(b: Built, raw, m: dict, block: int) -> None:
         offset = max(abs(o) for o in sensor_triples(sens)[1])
         on_sensor = first == "overcurrent" and (sens.current_noise or offset)
         if on_sensor and "protection.i_max" not in b.user_keys:
-            # (the file gives the sensor, not the trip: name what it gives, issue 23)
+            # (the file gives the sensor, not the trip: name what it gives)
             key = "sensors.current_noise" if sens.current_noise else "sensors.current_offset"
             raise InputError(sc.source, key, f"the drive trips at t = 0 (overcurrent) on the current "
                              f"sensor: {sens.current_noise:g} A rms of noise and {offset:g} A of offset "

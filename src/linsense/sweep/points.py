@@ -34,7 +34,7 @@ def _checked(axis: Axis, v: np.ndarray, source: str) -> list[float]:
 def _convex(lo: float, hi: float, t: np.ndarray) -> np.ndarray:
     """``lo (1 - t) + hi t``: the points ``t`` in [0, 1] of the way from ``lo`` to ``hi`` for any
     finite ends. ``lo + (hi - lo) t`` overflows when ``hi - lo`` does (``min = -1.7e308, max =
-    1.7e308``: the grid and the samples held inf and nan; issue 23); it is kept where it does not,
+    1.7e308``: the grid and the samples held inf and nan); it is kept where it does not,
     so that the points of every sweep that ran before stay the same to the last bit (a resumed
     sweep asks for the same runs)."""
     return lo * (1.0 - t) + hi * t

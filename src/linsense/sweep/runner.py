@@ -164,7 +164,7 @@ def _motor_file(ctx: SweepContext, motor: dict) -> str:
     if not path.exists():
         write_atomic(path, text)
     # (absolute: the scenario reads a relative motor path from its own folder, and a relative --out
-    # made every run of a motor axis "no such motor file", issue 37)
+    # made every run of a motor axis "no such motor file")
     return str(path.absolute())
 
 
@@ -217,7 +217,7 @@ def hf_current(result) -> float | None:
 
     Over injection periods of the end window, from every PWM period whatever the record keeps: a
     decimated record's block envelopes (``i_abc_min``, ``i_abc_max``), enough blocks together to
-    cover an injection period (issue 37: ``record.decimate = 16`` sampled the 1 kHz injection once
+    cover an injection period (``record.decimate = 16`` sampled the 1 kHz injection once
     per period at 16 kHz and gave 0).
 
     Parameters

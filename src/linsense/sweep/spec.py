@@ -106,7 +106,7 @@ class Axis(BaseModel):
         if self.relative and self.values is not None and not all(
                 isinstance(v, int | float) and not isinstance(v, bool) for v in self.values):
             raise KeyProblem("values", "relative values must be numbers (factors of the base value)")
-        if self.relative:  # (a factor in percent: values = [80, 100] made every run 80 times off, issue 37)
+        if self.relative:  # (a factor in percent: values = [80, 100] made every run 80 times off)
             given = [("values", v) for v in self.values or ()]
             given += [(k, getattr(self, k)) for k in ("min", "max") if getattr(self, k) is not None]
             for key, v in given:

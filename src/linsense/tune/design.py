@@ -173,7 +173,7 @@ class DriveData:
     shape: str = "pulsating"  # injection: pulsating/elliptical, rotating or square (at f_pwm / 2)
 
     def __post_init__(self) -> None:
-        # one validated constructor (issue 37): DriveData(v_dc="72") was built and design() ended in a
+        # one validated constructor: DriveData(v_dc="72") was built and design() ended in a
         # TypeError; the ranges are design()'s (named with the option or key they came from)
         src = "linsense.tune.DriveData"
         for f in dataclasses.fields(self):
@@ -1329,7 +1329,7 @@ def _friction_ripple(dz: Design, motor: Motor, d: DriveData, L_q: float, warning
     f = motor.friction
     dz.friction_coulomb = float(f.coulomb)
     dz.friction_viscous = friction_steps(motor, d.f_pwm)
-    if dz.friction_viscous < f.viscous:  # (a light mover: issue 37)
+    if dz.friction_viscous < f.viscous:  # (a light mover)
         warnings.append(
             f"the viscous friction {f.viscous:.3g} N s/m is fed forward as {dz.friction_viscous:.3g} N s/m: "
             f"the mechanical observer steps a friction slope up to {FRICTION_STEP_SHARE:g} m f_pwm "

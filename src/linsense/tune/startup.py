@@ -1,4 +1,4 @@
-"""Design of the start-up pulses (issue 14, item 4; ``LS_MODE_STARTUP``, ``ls_startup_cfg``) from
+"""Design of the start-up pulses (``LS_MODE_STARTUP``, ``ls_startup_cfg``) from
 the motor's saturation data.
 
 The polarity signal of a d-axis pulse pair is the difference of the current changes that the same
@@ -46,7 +46,7 @@ PAIRS_MAX = 64
 LOCK_OBS = 2.8  # t_lock = LOCK_OBS / f_obs (2.8 / 40 Hz = 70 ms: the lock settled in the simulator)
 ERR_LOCK = 0.2  # rad
 LOCK_ACCURACY = math.radians(2.0)  # rad, axis error assumed during the pulses
-MOTION_BAR_MM = 0.1  # mm, the motion while detecting that the design warns beyond (issue 14)
+MOTION_BAR_MM = 0.1  # mm, the motion while detecting that the design warns beyond
 
 
 @dataclass
