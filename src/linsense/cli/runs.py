@@ -65,92 +65,33 @@ def simulate(scenario: str, out: str | None, fidelity: str | None, trace_fmt: st
         others = {"--fidelity": fidelity, "--trace": trace_fmt, "--decimate": decimate, "--mat": mat,
                   "--plot": plot}
         return _simulate_pil(scenario, out, [k for k, v in others.items() if v], check, as_json)
-    import numpy as np
-
-    from linsense.io import output_set, split_timing
-    from linsense.sim.build import build, check_trace_file
-    from linsense.sim.stream import simulate_streamed
-    from linsense.sim.trace import MAT_MAX_SAMPLES, TraceWriter, have_parquet, trace_columns, write_mat
+    from linsense.sim.to_folder import default_trace_format, simulate_to
 
     if as_json:
         c.data_on_stdout()
     if trace_fmt is None:  # (the core install has no pyarrow: its default trace is the CSV one)
-        trace_fmt = "parquet" if have_parquet() else "csv"
+        trace_fmt = default_trace_format()
         if trace_fmt == "csv":
             c.warn("trace.csv, not trace.parquet: the Parquet trace needs pyarrow "
                    "(pip install -e '.[parquet]' in linsense's source tree)")
     sc = scenario_arg(scenario)
     out = c.default_out(out, sc.name if scenario == "-" else scenario, "simulate")
-    if fidelity is not None:
-        sc = sc.replace(inverter={"fidelity": fidelity})
-    if decimate is not None:
-        sc = sc.replace(record={"decimate": decimate})
-    b = build(sc, trace_in_memory=False)  # streamed: the trace is never whole in memory
-    for w in b.warnings:
-        c.warn(w)
-    if trace_fmt != "none":
-        check_trace_file(b)
-    n_rec = -(-b.n_steps // int(b.cfg.decimate))
-    if mat and n_rec > MAT_MAX_SAMPLES:
-        need = -(-b.n_steps // MAT_MAX_SAMPLES)
-        raise InputError("--mat", "", f"trace.mat is written from the whole trace held in memory: {n_rec:,} "
-                         f"samples is beyond the limit of {MAT_MAX_SAMPLES:,} ({docs('limits')}); "
-                         f"record fewer (--decimate {need}) or use the Parquet trace")
-    mat_parts: list[dict] = []
-
-    def run(f=None):
-        writer = TraceWriter(f, trace_fmt) if f is not None else None
-
-        def on_chunk(arrays):
-            if writer is not None:
-                writer.write(arrays)
-            if mat:
-                mat_parts.append({k: np.array(v, dtype=float) for k, v in trace_columns(arrays).items()})
-
-        try:
-            sr = simulate_streamed(b, on_chunk=on_chunk if writer is not None or mat else None, plot=plot)
-        except BaseException:
-            if writer is not None:
-                writer.abort()
-            raise
-        if writer is not None:
-            writer.close()
-        return sr
-
-    with output_set(out, "simulate") as s:
-        if trace_fmt == "none":
-            sr = run()
-        else:
-            done = []
-            s.write_with(f"trace.{trace_fmt}", lambda f: done.append(run(f)))
-            sr = done[0]
-        metrics, timing = split_timing(sr.metrics)
-        _write_metrics(s, metrics, timing)
-        if mat:
-            cols = {k: np.concatenate([p[k] for p in mat_parts]) for k in mat_parts[0]}
-            mat_parts.clear()
-            write_mat(cols, s.path("trace.mat"), metrics=sr.metrics)
-        if plot:
-            from linsense.report.figures import save_png
-            from linsense.report.sim_figures import DPI, sim_figure
-
-            save_png(sim_figure(sr.plot), s.path("sim.png"), DPI)
-    c.files_report(s.files)
-    m = sr.metrics
+    figure = None
+    if plot:
+        from linsense.report.sim_figures import write_sim_figure as figure
+    done = simulate_to(out, sc, trace=trace_fmt, decimate=decimate, fidelity=fidelity, mat=mat, plot=figure,
+                       warn=c.warn)
+    metrics, timing = done.metrics, done.timing
+    c.files_report(done.files)
+    m = done.run.metrics
     _say_metrics(m)
     c.detail("timing: " + ", ".join(f"{k} {v}" for k, v in timing.items()))
     c.elapsed()
     if as_json:
-        c.emit_json("simulate", s.files, bool(m["stable"]), metrics=metrics, timing=timing)
+        c.emit_json("simulate", done.files, bool(m["stable"]), metrics=metrics, timing=timing)
     if check and not m["stable"]:
         click.echo(f"linsense: not stable: {m['unstable_reason']}", err=True)
         raise click.exceptions.Exit(1)
-
-
-def _write_metrics(s, metrics: dict, timing: dict) -> None:
-    """A run's ``metrics.json`` and ``timing.json`` into the output set ``s``."""
-    s.write("metrics.json", json.dumps(metrics, indent=1) + "\n")
-    s.write("timing.json", json.dumps(timing, indent=1) + "\n")
 
 
 def _say_metrics(m: dict) -> None:
@@ -177,6 +118,7 @@ def _simulate_pil(scenario: str, out: str | None, others: list[str], check: bool
 
     from linsense.firmware.pil import closed_loop
     from linsense.io import output_set, split_timing
+    from linsense.sim.to_folder import write_metrics
 
     if scenario == "-":
         raise InputError("--pil", "", "runs a scenario file or a packaged example's name, not standard input")
@@ -195,7 +137,7 @@ def _simulate_pil(scenario: str, out: str | None, others: list[str], check: bool
     timing["qemu_cpu_s"] = rec.pop("qemu_cpu_s")
     rec["metrics_host"] = host
     with output_set(out, "simulate") as s:
-        _write_metrics(s, metrics, timing)
+        write_metrics(s, metrics, timing)
         s.write("pil.json", json.dumps(rec, indent=1, sort_keys=True) + "\n")
     c.files_report(s.files)
     _say_metrics({**metrics, "wall_s": timing.get("wall_s"),
@@ -382,6 +324,7 @@ def calibrate(motor_spec: str | None, scenario_path: str | None, positions: int,
     from linsense.report.figures import fig_calibration, save_png
     from linsense.sim.calibrate import calibrate as run_calibration
     from linsense.sim.calibrate import lut_csv, measured_json
+    from linsense.sim.to_folder import write_metrics
 
     if as_json:
         c.data_on_stdout()
@@ -406,7 +349,7 @@ def calibrate(motor_spec: str | None, scenario_path: str | None, positions: int,
         s.write("lut_measured.csv", lut_csv(cal))
         if cal.completed:  # (the stamped table a scenario reads: observer.lut_model = "measured")
             s.write("lut_measured.json", measured_json(cal))
-        _write_metrics(s, metrics, timing)
+        write_metrics(s, metrics, timing)
         save_png(fig_calibration(cal, cal.motor), s.path("calibration.png"))
     c.files_report(s.files)
     m = cal.metrics

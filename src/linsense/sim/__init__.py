@@ -1,12 +1,15 @@
 """linsense.sim: the closed-loop drive simulator (plant, inverter and sensors in C around the
 firmware controller).
 
-``simulate(scenario) -> Result`` and ``simulate_many(scenarios, workers=N)``; scenario files are
+``simulate(scenario) -> Result`` and ``simulate_many(scenarios, workers=N)``;
+``simulate_to(out, scenario, trace=...)`` writes what ``linsense simulate`` writes; scenario files are
 described in docs/simulator.md. The low-level C access is :mod:`linsense.sim.core`.
 """
 
 from linsense.sim.result import Result
 from linsense.sim.run import simulate, simulate_many
 from linsense.sim.scenario import Scenario, load_scenario, scenario_from_dict
+from linsense.sim.to_folder import SimulateOutput, simulate_to
 
-__all__ = ["Result", "Scenario", "load_scenario", "scenario_from_dict", "simulate", "simulate_many"]
+__all__ = ["Result", "Scenario", "SimulateOutput", "load_scenario", "scenario_from_dict", "simulate",
+           "simulate_many", "simulate_to"]
