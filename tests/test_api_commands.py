@@ -41,3 +41,52 @@ def test_simulate_to_draws_with_the_figure_given(tmp_path):
     linsense.sim.simulate_to(tmp_path / "o", load_scenario(_toml(tmp_path / "s.toml")), trace="none",
                              plot=lambda data, path: drawn.append((data, path)))
     assert len(drawn) == 1 and drawn[0][0] is not None and drawn[0][1].name == "sim.png"
+
+
+def test_tune_makes_what_the_cli_writes(run_cli, tmp_path):
+    """tune() from Python makes the scenario and the C header ``linsense tune`` writes, byte for
+    byte, and says the same report."""
+    from linsense.verify import TuneResult, tune
+
+    r = run_cli("tune", "--motor", "small30", "--no-verify", "--out", tmp_path / "m.toml")
+    assert r.code == 0, r.err
+    said: list[str] = []
+    res = tune("small30", verify=False, out=tmp_path / "m.toml", say=said.append)
+    assert isinstance(res, TuneResult) and res.certificate is None and res.passed is None
+    assert res.text == (tmp_path / "m.toml").read_text()
+    assert said and all(line in r.err + r.out for line in said)
+    assert res.summary()["motor"] == res.motor.name and res.scenario["motor"] == "small30"
+    r = run_cli("tune", "--motor", "small30", "--format", "c", "--unverified", "--no-verify",
+                "--out", tmp_path / "m.h")
+    assert r.code == 0, r.err
+    res = tune("small30", fmt="c", verify=False, unverified=True)
+    assert res.unverified and not res.refused and res.text == (tmp_path / "m.h").read_text()
+    refused = tune("small30", fmt="c", verify=False)
+    assert refused.text is None and refused.refused == res.unverified
+
+
+def test_tune_refuses_a_drive_datum_it_does_not_know(tmp_path):
+    """No key silently ignored: a drive datum tune does not know is refused by name."""
+    from linsense.errors import InputError
+    from linsense.verify import tune
+
+    with pytest.raises(InputError, match="not a drive datum"):
+        tune("small30", verify=False, drive={"v_bus": 48.0})
+
+
+def test_tune_certificate_as_the_cli_writes_it(run_cli, tmp_path):
+    """The quick certificate's JSON from tune() is the one ``linsense tune --quick`` writes."""
+    import json
+
+    from linsense.verify import tune
+
+    r = run_cli("tune", "--motor", "small30", "--quick", "--out", tmp_path / "q.toml")
+    assert r.code in (0, 1), r.err
+    written: list = []
+    res = tune("small30", quick=True, out=tmp_path / "q.toml", ready=lambda x: written.append(x.certificate))
+    assert written == [None]  # (a scenario is made before its certificate runs)
+    doc = json.loads((tmp_path / "q.verification.json").read_text())
+    ours = res.certificate_doc(str(tmp_path / "q.toml"))
+    drop = ("wall_s", "runs")
+    assert {k: v for k, v in ours.items() if k not in drop} == {k: v for k, v in doc.items() if k not in drop}
+    assert res.passed == (r.code == 0)

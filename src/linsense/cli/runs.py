@@ -203,7 +203,7 @@ def application_options(f):
 
 def scenario_table(sc) -> tuple[str, tuple[str, str, str]] | None:
     """The measured table a scenario's drive runs (``observer.lut_model = "measured"``), or None (the
-    model's table).
+    model's table): :func:`linsense.verify.tuning.scenario_table`.
 
     Parameters
     ----------
@@ -216,11 +216,9 @@ def scenario_table(sc) -> tuple[str, tuple[str, str, str]] | None:
         The table's file as an absolute path, and where the scenario names it (the reader's ``via``:
         a refusal of the table names the scenario and ``observer.lut_file``, as ``simulate`` does).
     """
-    from linsense.sim.tables import lut_file_path, lut_file_via
+    from linsense.verify.tuning import scenario_table as table
 
-    if sc.spec.observer.lut_model != "measured":
-        return None
-    return str(lut_file_path(sc).resolve()), lut_file_via(sc)
+    return table(sc)
 
 
 def apply_drive_data(dd, drive: dict, quad=None, v_max=None, a_max=None, load=None, travel=None,

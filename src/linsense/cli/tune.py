@@ -14,7 +14,6 @@ from linsense.cli.runs import (
     drive_options,
     drive_refusal,
     scenario_arg,
-    scenario_table,
 )
 from linsense.errors import InputError
 from linsense.io import NAME_MAX, working_folder
@@ -65,11 +64,7 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
     write verification.json and verification.png beside the output (exit 1 if a check fails). A C
     header is written only for a drive that passes (--unverified: anyway, saying why in it)."""
     from linsense.io import write_atomic
-    from linsense.model.motor import names_a_path
-    from linsense.sim.build import compensation_of, drive_data
-    from linsense.tune.design import DriveData
-    from linsense.tune.drive_design import design_drive
-    from linsense.tune.export import c_header, check_c_header, design_digest, scenario_dict, scenario_toml
+    from linsense.verify.tuning import tune as run_tune
 
     if as_json and out == "-":
         raise click.UsageError("--json and --out - both write to standard output: give --out a file")
@@ -86,151 +81,45 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
     out = c.default_out(out, motor_spec, "tune", ".h" if fmt == "c" else ".toml")
     json_path, png_path = _certificate_paths(out)  # (their names checked before the work)
     _own_certificate(out)
-    say = c.say
-    base, base_dir, src, table_via, sc = None, None, motor_spec, None, None
-    dd = DriveData()
-    if scenario_path is not None:
-        sc = scenario_arg(scenario_path, "--scenario")
-        base, base_dir, src = sc.given(), sc.base_dir, scenario_path
-        base.pop("motor", None)
-        model = base.get("controller", {}).get("model", {})
-        if names_a_path(model.get("motor", "")):  # (absolute here, relative to the output when written)
-            model["motor"] = str((sc.base_dir / model["motor"]).resolve())
-        dd = drive_data(sc)
-        # the scenario's measured table is the drive's (--table over it): designed, verified and
-        # written with it, its path made relative to the output again
-        own_table = scenario_table(sc)
-        for key in ("lut_model", "lut_file"):
-            base.get("observer", {}).pop(key, None)
-        if table_path is None and own_table is not None:
-            table_path, table_via = own_table
-            say(f"  table          the scenario's measured table {table_path}")
-    typed = apply_drive_data(dd, drive, quad, v_max, a_max, load, travel, shape)
-    if fmt == "c":
-        check_c_header(dd)
-    motor = c.load(motor_spec)
-    if sc is not None:
-        _same_believed_motor(sc, motor, motor_spec)
-    if fmt == "c":  # (the C name checked, never rewritten, before anything is designed or run)
-        from linsense.tune.export import c_config_name
-
-        c_config_name(name, motor.name, "--name")
-    # a drive run without its table (sensorless_nolut) gets its trips on the estimate wider
-    mode = (base or {}).get("control", {}).get("mode", "sensorless_lut")
-    no_table = compensation_of(mode, (base or {}).get("observer", {}).get("compensation")) == "none"
-    try:
-        made = design_drive(motor, dd, source=src, polarity=polarity, current_noise=current_noise,
-                            uncompensated=no_table, table=table_path, table_via=table_via)
-    except InputError as exc:  # (with a scenario: the option typed, or the scenario's key)
-        raise exc if sc is None else drive_refusal(exc, typed, sc, src) from None
-    dz, su, table = made.design, made.startup, made.table
-    if table is not None:
-        if table.note:
-            say(f"  table          {table.note}")
-        say(f"  table          {made.table_fit[0]}")
-    table_abs = None if table_path is None else str(Path(table_path).resolve())
-    sc_dict = scenario_dict(made, motor_ref=motor_spec, base=base, table=table_abs)
-    _read_back(sc_dict, src, typed, sc)
-    cert_run = None
-    if not no_verify:  # (its runs are built before anything is written: a refusal leaves no file)
-        from linsense.verify.certificate import certificate_base, motor_ref, prepare
-
-        cert_run = prepare(motor, motor_ref(motor_spec), certificate_base(sc_dict),
-                           str(base_dir or working_folder()), v_max=dd.v_max, a_max=dd.a_max, load=dz.load,
-                           travel=dd.travel, quick=quick)
-    for line in design_lines(dz, motor.name, dd):
-        say(line)
-    if su is not None:
-        for line in su.lines():
-            say(line)
-    else:
-        say("  start-up       not designed: no saturation data (--polarity, or [saturation] polarity "
-            "in the motor file)")
-    warnings = made.warnings
-    for w in warnings:
-        c.warn(w)
-    if mode != "sensorless_lut" and not no_verify:
-        say(f"  (the certificate judges the designed sensorless drive with its table, not control.mode = "
-            f"{mode!r} of the scenario)")
+    sc = None if scenario_path is None else scenario_arg(scenario_path, "--scenario")
+    given = _Given()
+    typed = apply_drive_data(given, drive, quad, v_max, a_max, load, travel, shape)
     files: list = []
-    cert = None
-    digest = design_digest(motor, dd, 256, table)
-    reason = ""
-    if fmt == "c":  # (the header waits for the verdict: written only for a drive that passed)
-        from linsense.verify.certificate import VERIFIED_BY, failed_summary
 
-        if cert_run is not None:  # (its files written with the header only: a refusal leaves the
-            # earlier output set, header and certificate, as it was)
-            cert = _run_certificate(cert_run)
-        reason = "not verified (--no-verify)" if cert is None else "" if cert.passed else failed_summary(cert)
-        if reason and not unverified:
-            c.elapsed()
-            if as_json:
-                verification = {k: v for k, v in cert.as_dict().items() if k != "runs"}
-                c.emit_json("tune", files, False, verification=verification, refused=reason)
-            c.warn(f"{out} not written: {reason} (--unverified writes it anyway)")
-            raise click.exceptions.Exit(1)
-        by = "" if reason else VERIFIED_BY[cert.quick]
-        text = c_header(made, name=name, unverified=reason, verified_by=by)
-        if cert is not None:
-            _write_certificate(cert, motor, dd, dz, quick, json_path, png_path, files, digest, out)
-    else:
-        text = scenario_toml(made, dd, motor_spec, Path(out), base, working_folder(), table=table_abs)
-    files.insert(0, write_atomic(out, text))
-    if out != "-":
-        say(str(files[0]))
-    summary = {"motor": motor.name, "design": dz.as_dict(),
-               "startup": None if su is None else su.scenario_keys(),
-               "warnings": list(warnings), **({"unverified": reason} if reason else {})}
-    if cert_run is None:
-        for p in (json_path, png_path):  # (a certificate of an earlier design would be stale)
-            p.unlink(missing_ok=True)
+    def write(res) -> None:  # (a header after its certificate's files, a scenario before its runs)
+        if res.certificate is not None:
+            _write_certificate(res, quick, json_path, png_path, files, out)
+        files.insert(0, write_atomic(out, res.text))
+        if out != "-":
+            c.say(str(files[0]))
+
+    res = run_tune(motor_spec, scenario=sc, source=scenario_path, drive=vars(given), fmt=fmt, name=name,
+                   polarity=polarity, current_noise=current_noise, table=table_path, quick=quick,
+                   verify=not no_verify, unverified=unverified, out=out, say=c.say, warn=c.warn,
+                   detail=c.detail, ready=write,
+                   refusal=None if sc is None else lambda exc: drive_refusal(exc, typed, sc, scenario_path))
+    cert = res.certificate
+    verification = None if cert is None else {k: v for k, v in cert.as_dict().items() if k != "runs"}
+    if res.refused:
         c.elapsed()
         if as_json:
-            c.emit_json("tune", files, None, verification=None, **summary)
-        return
+            c.emit_json("tune", files, False, verification=verification, refused=res.refused)
+        c.warn(f"{out} not written: {res.refused} (--unverified writes it anyway)")
+        raise click.exceptions.Exit(1)
     if cert is None:
-        cert = _run_certificate(cert_run)
-        _write_certificate(cert, motor, dd, dz, quick, json_path, png_path, files, digest, out)
+        for p in (json_path, png_path):  # (a certificate of an earlier design would be stale)
+            p.unlink(missing_ok=True)
+    elif fmt == "toml":
+        _write_certificate(res, quick, json_path, png_path, files, out)
     c.elapsed()
     if as_json:
-        verification = {k: v for k, v in cert.as_dict().items() if k != "runs"}
-        c.emit_json("tune", files, bool(cert.passed), verification=verification, **summary)
-    if not cert.passed:
+        c.emit_json("tune", files, res.passed, verification=verification, **res.summary())
+    if cert is not None and not cert.passed:
         raise click.exceptions.Exit(1)
 
 
-def _same_believed_motor(sc, motor, motor_spec: str) -> None:
-    """Refuse a scenario whose drive believes in another motor (``controller.model.motor``) than the
-    one tune designs it for: tune designs and certifies the drive believing in ``--motor`` (the
-    certificate's runs pin the model to it), so the scenario it wrote would run another drive than
-    the one certified."""
-    from linsense.sim.build import resolve_motor
-    from linsense.sim.cache import motor_key
-
-    spec = sc.spec.controller.model.motor
-    if spec is None:
-        return
-    believed = resolve_motor(sc, spec, "controller.model.motor", check=False)
-    if motor_key(believed) != motor_key(motor):
-        raise InputError(sc.source, "controller.model.motor",
-                         f"{spec!r} ({believed.name}): the scenario's drive believes in another motor than "
-                         f"the one tune designs and certifies it for, {motor_spec!r} ({motor.name}): remove "
-                         f"the key, or give --motor {spec}")
-
-
-def _read_back(sc_dict: dict, src: str, typed: set, sc) -> None:
-    """Read the scenario tune writes back as ``linsense simulate`` reads it (its checks and build),
-    before anything is designed further, run or written: tune never writes a scenario the simulator
-    refuses (the scenario's own keys kept over a changed drive, such as a protection's bus range
-    tuned for another bus). A refusal names the input as :func:`drive_refusal` does."""
-    from linsense.sim.build import build
-    from linsense.sim.scenario import scenario_from_dict
-
-    try:
-        build(scenario_from_dict(sc_dict, src, working_folder()))
-    except InputError as exc:
-        raise exc if sc is None else drive_refusal(exc, typed, sc, src) from None
+class _Given:
+    """The drive data typed as options (:func:`apply_drive_data` sets them here)."""
 
 
 def _certificate_paths(out: str) -> tuple[Path, Path]:
@@ -271,16 +160,8 @@ def _own_certificate(out: str) -> None:
                          f"than {owner}'s stem")
 
 
-def _run_certificate(cert_run):
-    """Run the prepared certificate and print it."""
-    cert = cert_run()
-    for line in cert.lines():
-        c.say(line)
-    return cert
-
-
-def _write_certificate(cert, motor, dd, dz, quick: bool, json_path: Path, png_path: Path, files: list,
-                       digest: str = "", output: str = "-") -> None:
+def _write_certificate(res, quick: bool, json_path: Path, png_path: Path, files: list,
+                       output: str = "-") -> None:
     """Write the certificate's JSON and figure (appended to ``files``); the JSON names the ``output``
     it certifies (:func:`_own_certificate`)."""
     import json
@@ -289,77 +170,14 @@ def _write_certificate(cert, motor, dd, dz, quick: bool, json_path: Path, png_pa
     from linsense.report.figures import save_png
     from linsense.report.verify_figures import certificate_figure
 
-    doc = cert.as_dict()
-    doc.update(output=Path(output).name if output != "-" else "-", motor=motor.name,
-               drive={k: v for k, v in vars(dd).items()}, data_sha256=digest,
-               design={k: v for k, v in dz.as_dict().items() if k not in ("margins", "warnings")})
-    files.append(write_atomic(json_path, json.dumps(doc, indent=1, sort_keys=True) + "\n"))
+    cert = res.certificate
+    text = json.dumps(res.certificate_doc(output), indent=1, sort_keys=True) + "\n"
+    files.append(write_atomic(json_path, text))
     c.say(str(files[-1]))
-    fig = certificate_figure(cert.rows, f"{motor.name}: {cert.verdict()}", quick=quick,
+    fig = certificate_figure(cert.rows, f"{res.motor.name}: {cert.verdict()}", quick=quick,
                              calibrations=cert.extra.get("calibrations"))
     files.append(save_png(fig, png_path, 100))
     c.say(str(files[-1]))
-
-
-def motor_pitch(dd, dz) -> float:
-    """m/s per electrical rad/s of the design (from its speed cap and trip)."""
-    from linsense.tune.design import OVERSPEED_MARGIN
-
-    return dz.v_cap * OVERSPEED_MARGIN / dz.omega_trip if dz.omega_trip else float("nan")
-
-
-def design_lines(dz, motor_name: str, dd) -> list[str]:
-    """The design as a person reads it."""
-    from linsense.tune.design import (  # noqa: F401 (the printed ratios)
-        CURRENT_TRIP_MARGIN,
-        RATIO_INJ_CURRENT,
-        RATIO_LPF,
-        SPEED_CAP_MARGIN,
-    )
-    lines = [
-        f"design for {motor_name}: {dd.v_dc:g} V bus, {dd.f_pwm:g} Hz PWM, "
-        f"{dd.dead_time * 1e6:g} us dead time, "
-        f"i_max {dd.i_max:g} A",
-        (f"  injection      {dz.v_inj:.4g} V at {dz.f_inj:g} Hz on d, kappa {dz.quad:g} on q: HF current "
-         f"{dz.i_hf:.3g} A; fundamental fits up to {dz.headroom_speed:.3g} m/s at i_max"
-         if dd.shape == "pulsating" else
-         f"  injection      {dd.shape}, {dz.v_inj:.4g} V"
-         f"{' at f_pwm / 2' if dd.shape == 'square' else f' at {dz.f_inj:g} Hz'} (the loops below are "
-         f"designed as for {dz.f_inj:g} Hz); fundamental fits up to {dz.headroom_speed:.3g} m/s"),
-        f"  current loop   {dz.current_bw:.4g} Hz (f_inj / {RATIO_INJ_CURRENT:g}): "
-        f"kp {dz.current_kp:.4g} V/A, "
-        f"ki {dz.current_ki:.4g} V/(A s)",
-        f"  demodulator    low-pass {dz.demod_lpf:.4g} Hz ({RATIO_LPF:g} f_inj), "
-        f"zeros at {dz.demod_notch:g} Hz; gain "
-        f"{dz.demod_gain:.4g}, scheduled (local error gain {dz.k_e_min:.2f}..{dz.k_e_max:.2f} unscheduled)",
-        f"  observer       {dz.observer_bw:.4g} Hz "
-        + ("mechanical, its load estimate fed forward" if dz.load_ff else dz.observer_type.upper())
-        + f" (limited by {dz.limits.get('observer', '')})"
-        + (f"; the HF path's delay {dz.hf_delay * 1e3:.3g} ms compensated (1 / f_inj)"
-           if dz.hf_delay > 0 else ""),
-        f"  speed loop     {dz.speed_bw:.4g} Hz ({dz.limits.get('speed loop', '')}): "
-        f"kp {dz.speed_kp:.4g} N s/m, "
-        f"ki {dz.speed_ki:.4g} N/m"
-        + (" (the encoder modes'; 0 sensorless: the load estimate)" if dz.load_ff else ""),
-        f"  position loop  kp_x {dz.kp_x:.4g} 1/s ({dz.limits.get('position loop', '')})",
-        f"  steps          {dz.limits.get('steps', '')}",
-        f"  limits         speed cap {dz.v_cap:.3g} m/s ({SPEED_CAP_MARGIN:g} v_max), over-speed trip "
-        f"{dz.omega_trip:.4g} rad/s ({dz.omega_trip * motor_pitch(dd, dz) :.3g} m/s), observer clamp "
-        f"{dz.omega_obs:.4g} rad/s, over-current trip {dz.i_trip:.3g} A ({CURRENT_TRIP_MARGIN:g} x (i_max "
-        f"+ HF "
-        f"peak)); rated load {dz.load:.3g} N",
-        f"  injection rule {dz.limits.get('injection', '')}",
-        f"  calibration    dither {dz.dither_a:.3g} A at {dz.dither_hz:.4g} Hz",
-        "  margins (linearised model: phase margin, gain margin up / down, crossover):",
-    ]
-    for k, m in dz.margins.items():
-        lines.append(f"    {k:48s} {m['pm_deg']} deg, {m['gm_up_db']} dB / {m['gm_down_db']} dB, "
-                     f"{m['crossover_hz']} Hz")
-    if dz.tolerances:
-        lines.append("  tolerances (model: worst hold error with the nominal LUT; scheduled error gain):")
-        for k, t in dz.tolerances.items():
-            lines.append(f"    {k:48s} {t['error_deg']:.3g} deg, k_e {t['k_lo']:.2f}..{t['k_hi']:.2f}")
-    return lines
 
 
 

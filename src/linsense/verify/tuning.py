@@ -1,0 +1,430 @@
+"""``tune``: a drive designed for a motor, written as a scenario or a C header, and verified.
+
+What ``linsense tune`` does apart from reading its options and writing its files: the design
+(:func:`linsense.tune.design_drive`), the scenario the simulator reads back, the certificate's runs
+and the text of the scenario or of the C header, returned in a :class:`TuneResult`. It lives with
+the certificate, above the simulator, because it runs the simulator; the design alone is
+:mod:`linsense.tune`, below it.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from linsense.errors import InputError
+from linsense.io import working_folder
+from linsense.model.motor import Motor, load_motor, names_a_path
+from linsense.sim.build import build, compensation_of, drive_data, resolve_motor
+from linsense.sim.cache import motor_key
+from linsense.sim.scenario import Scenario, scenario_from_dict
+from linsense.sim.tables import lut_file_path, lut_file_via
+from linsense.tune.design import (
+    CURRENT_TRIP_MARGIN,
+    OVERSPEED_MARGIN,
+    RATIO_INJ_CURRENT,
+    RATIO_LPF,
+    SPEED_CAP_MARGIN,
+    DriveData,
+)
+from linsense.tune.drive_design import DriveDesign, design_drive
+from linsense.tune.export import (
+    c_config_name,
+    c_header,
+    check_c_header,
+    design_digest,
+    scenario_dict,
+    scenario_toml,
+)
+from linsense.verify.certificate import (
+    VERIFIED_BY,
+    Certificate,
+    certificate_base,
+    failed_summary,
+    motor_ref,
+    prepare,
+)
+
+__all__ = ["FORMATS", "TuneResult", "design_lines", "motor_pitch", "scenario_table", "tune"]
+
+#: what :func:`tune` writes: a complete scenario, or an ``ls_drive_cfg`` set-up header
+FORMATS = ("toml", "c")
+
+
+def _quiet(_: str) -> None:
+    """Say nothing."""
+
+
+@dataclass
+class TuneResult:
+    """What :func:`tune` designed, wrote and verified.
+
+    Attributes
+    ----------
+    made : DriveDesign
+        The design (gains, start-up, table).
+    motor : Motor
+        The motor designed for.
+    drive : DriveData
+        The drive data the design used.
+    fmt : str
+        ``toml`` or ``c``.
+    text : str or None
+        The scenario TOML or the C header; None for a header refused (:attr:`refused`).
+    scenario : dict
+        The tuned scenario as a dict (what the TOML says).
+    certificate : Certificate or None
+        The verification (None when not run).
+    digest : str
+        The SHA-256 of the drive's data (the certificate's ``data_sha256``).
+    unverified : str
+        Why a C header written is not verified ("" when it is, and for a scenario).
+    refused : str
+        Why a C header was not made ("" when it was).
+    warnings : list of str
+        The design's warnings.
+    """
+
+    made: DriveDesign
+    motor: Motor
+    drive: DriveData
+    fmt: str
+    text: str | None
+    scenario: dict
+    certificate: Certificate | None = None
+    digest: str = ""
+    unverified: str = ""
+    refused: str = ""
+    warnings: list[str] = field(default_factory=list)
+
+    @property
+    def passed(self) -> bool | None:
+        """Whether the certificate passed (None when it was not run)."""
+        return None if self.certificate is None else bool(self.certificate.passed)
+
+    def summary(self) -> dict:
+        """The design in a JSON-ready dict (``linsense tune --json``).
+
+        Returns
+        -------
+        dict
+            The motor, the design, the start-up keys, the warnings (and the reason a header is
+            unverified).
+        """
+        su = self.made.startup
+        return {"motor": self.motor.name, "design": self.made.design.as_dict(),
+                "startup": None if su is None else su.scenario_keys(),
+                "warnings": list(self.warnings),
+                **({"unverified": self.unverified} if self.unverified else {})}
+
+    def certificate_doc(self, output: str = "-") -> dict:
+        """The certificate's JSON (``<out>.verification.json``).
+
+        Parameters
+        ----------
+        output : str, optional
+            The output it certifies (its file name is recorded), ``-`` for standard output.
+
+        Returns
+        -------
+        dict
+            The certificate, the output, the motor, the drive data, the data's digest and the design.
+        """
+        if self.certificate is None:
+            raise ValueError("no certificate: tune(..., verify=False)")
+        doc = self.certificate.as_dict()
+        doc.update(output=Path(output).name if output != "-" else "-", motor=self.motor.name,
+                   drive={k: v for k, v in vars(self.drive).items()}, data_sha256=self.digest,
+                   design={k: v for k, v in self.made.design.as_dict().items()
+                           if k not in ("margins", "warnings")})
+        return doc
+
+
+def scenario_table(sc: Scenario) -> tuple[str, tuple[str, str, str]] | None:
+    """The measured table a scenario's drive runs (``observer.lut_model = "measured"``), or None (the
+    model's table).
+
+    Parameters
+    ----------
+    sc : linsense.sim.scenario.Scenario
+        The scenario.
+
+    Returns
+    -------
+    tuple or None
+        The table's file as an absolute path, and where the scenario names it (the reader's ``via``:
+        a refusal of the table names the scenario and ``observer.lut_file``, as ``simulate`` does).
+    """
+    if sc.spec.observer.lut_model != "measured":
+        return None
+    return str(lut_file_path(sc).resolve()), lut_file_via(sc)
+
+
+def _drive_of(scenario: Scenario | None, drive: dict | None) -> DriveData:
+    """The scenario's drive data (or the defaults) with ``drive``'s values over it."""
+    dd = DriveData() if scenario is None else drive_data(scenario)
+    names = [f.name for f in dataclasses.fields(DriveData)]
+    for key, val in (drive or {}).items():
+        if key not in names:
+            raise InputError("drive", key, f"{val!r}: not a drive datum (one of {', '.join(names)})")
+        setattr(dd, key, val)
+    return dd
+
+
+def _same_believed_motor(sc: Scenario, motor: Motor, motor_spec: str) -> None:
+    """Refuse a scenario whose drive believes in another motor (``controller.model.motor``) than the
+    one tune designs it for: tune designs and certifies the drive believing in ``motor`` (the
+    certificate's runs pin the model to it), so the scenario it wrote would run another drive than
+    the one certified."""
+    spec = sc.spec.controller.model.motor
+    if spec is None:
+        return
+    believed = resolve_motor(sc, spec, "controller.model.motor", check=False)
+    if motor_key(believed) != motor_key(motor):
+        raise InputError(sc.source, "controller.model.motor",
+                         f"{spec!r} ({believed.name}): the scenario's drive believes in another motor than "
+                         f"the one tune designs and certifies it for, {motor_spec!r} ({motor.name}): remove "
+                         f"the key, or give --motor {spec}")
+
+
+def tune(motor: str, *, scenario: Scenario | None = None, source: str | None = None,
+         drive: dict | None = None, fmt: str = "toml", name: str | None = None,
+         polarity: float | None = None, current_noise: float = 0.01,
+         table: str | None = None, quick: bool = False, verify: bool = True, unverified: bool = False,
+         out: str | Path = "-", say: Callable[[str], object] = _quiet, warn: Callable[[str], object] = _quiet,
+         detail: Callable[[str], object] = _quiet,
+         ready: Callable[[TuneResult], object] | None = None,
+         refusal: Callable[[InputError], InputError] | None = None) -> TuneResult:
+    """Design the drive for a motor, make its scenario or C header, and verify it in the simulator.
+
+    Nothing is written: the caller writes :attr:`TuneResult.text` (and the certificate,
+    :meth:`TuneResult.certificate_doc`). Every refusal comes before the certificate runs.
+
+    Parameters
+    ----------
+    motor : str
+        The motor: a file, a preset or a packaged example's name.
+    scenario : Scenario or None, optional
+        A scenario whose drive data, measured table and other keys are kept.
+    source : str or None, optional
+        The scenario as the user named it (default its file).
+    drive : dict or None, optional
+        Drive data over the scenario's (:class:`~linsense.tune.design.DriveData`'s names, SI units).
+    fmt : str, optional
+        ``toml`` (a complete scenario) or ``c`` (an ``ls_drive_cfg`` header).
+    name : str or None, optional
+        The C header's name suffix (default the motor's name).
+    polarity : float or None, optional
+        Saturation data for the start-up pulses, 1/A (default the motor file's).
+    current_noise : float, optional
+        Current-sensor noise, A rms per phase.
+    table : str or None, optional
+        A measured compensation table (``lut_measured.json``) in place of the motor's (default the
+        scenario's measured table, if any).
+    quick : bool, optional
+        The quick certificate (the nominal plant only).
+    verify : bool, optional
+        Run the certificate.
+    unverified : bool, optional
+        ``c``: make the header even if the certificate fails or is not run, saying why in it.
+    out : str or pathlib.Path, optional
+        Where the scenario will be written (its relative paths are made relative to it).
+    say, warn, detail : callable, optional
+        Called with each line of the report, each warning and each detail (the motor file read), as
+        the work goes.
+    ready : callable or None, optional
+        Called with the result once its text is made: for a scenario before the certificate runs,
+        for a header after it (a header waits for the verdict).
+    refusal : callable or None, optional
+        Maps a refusal of the drive data by the design or the simulator to the input the user typed.
+
+    Returns
+    -------
+    TuneResult
+        The design, the text, the certificate.
+
+    Raises
+    ------
+    InputError
+        Drive data, a table or a scenario the design, the header or the simulator refuses.
+    """
+    if fmt not in FORMATS:
+        raise InputError("format", "", f"{fmt!r}: one of {', '.join(FORMATS)}")
+    refusal = refusal or (lambda exc: exc)
+    base, base_dir, src, table_via = None, None, motor, None
+    if scenario is not None:
+        base, base_dir, src = scenario.given(), scenario.base_dir, source or scenario.source
+        base.pop("motor", None)
+        model = base.get("controller", {}).get("model", {})
+        if names_a_path(model.get("motor", "")):  # (absolute here, relative to the output when written)
+            model["motor"] = str((scenario.base_dir / model["motor"]).resolve())
+        # the scenario's measured table is the drive's (``table`` over it): designed, verified and
+        # written with it, its path made relative to the output again
+        own_table = scenario_table(scenario)
+        for key in ("lut_model", "lut_file"):
+            base.get("observer", {}).pop(key, None)
+        if table is None and own_table is not None:
+            table, table_via = own_table
+            say(f"  table          the scenario's measured table {table}")
+    dd = _drive_of(scenario, drive)
+    if fmt == "c":
+        check_c_header(dd)
+    m = load_motor(motor)
+    detail(f"motor {motor!r}: {m.source}")
+    if scenario is not None:
+        _same_believed_motor(scenario, m, motor)
+    if fmt == "c":  # (the C name checked, never rewritten, before anything is designed or run)
+        c_config_name(name, m.name, "--name")
+    # a drive run without its table (sensorless_nolut) gets its trips on the estimate wider
+    mode = (base or {}).get("control", {}).get("mode", "sensorless_lut")
+    no_table = compensation_of(mode, (base or {}).get("observer", {}).get("compensation")) == "none"
+    try:
+        made = design_drive(m, dd, source=src, polarity=polarity, current_noise=current_noise,
+                            uncompensated=no_table, table=table, table_via=table_via)
+    except InputError as exc:
+        raise refusal(exc) from None
+    if made.table is not None:
+        if made.table.note:
+            say(f"  table          {made.table.note}")
+        say(f"  table          {made.table_fit[0]}")
+    table_abs = None if table is None else str(Path(table).resolve())
+    sc_dict = scenario_dict(made, motor_ref=motor, base=base, table=table_abs)
+    try:  # (read back as simulate reads it: tune never writes a scenario the simulator refuses)
+        build(scenario_from_dict(sc_dict, src, working_folder()))
+    except InputError as exc:
+        raise refusal(exc) from None
+    cert_run = None
+    if verify:  # (its runs are built before anything is made: a refusal leaves no file)
+        cert_run = prepare(m, motor_ref(motor), certificate_base(sc_dict), str(base_dir or working_folder()),
+                           v_max=dd.v_max, a_max=dd.a_max, load=made.design.load, travel=dd.travel,
+                           quick=quick)
+    _report(made, m, dd, say, warn)
+    if mode != "sensorless_lut" and verify:
+        say(f"  (the certificate judges the designed sensorless drive with its table, not control.mode = "
+            f"{mode!r} of the scenario)")
+    res = TuneResult(made, m, dd, fmt, None, sc_dict, digest=design_digest(m, dd, 256, made.table),
+                     warnings=list(made.warnings))
+    if fmt == "c":  # (the header waits for the verdict: made only for a drive that passed)
+        res.certificate = None if cert_run is None else _certify(cert_run, say)
+        cert = res.certificate
+        reason = "not verified (--no-verify)" if cert is None else "" if cert.passed else failed_summary(cert)
+        if reason and not unverified:
+            res.refused = reason
+            return res
+        res.unverified = reason
+        by = "" if reason else VERIFIED_BY[cert.quick]
+        res.text = c_header(made, name=name, unverified=reason, verified_by=by)
+        if ready is not None:
+            ready(res)
+        return res
+    res.text = scenario_toml(made, dd, motor, Path(out), base, working_folder(), table=table_abs)
+    if ready is not None:
+        ready(res)
+    if cert_run is not None:
+        res.certificate = _certify(cert_run, say)
+    return res
+
+
+def _report(made: DriveDesign, m: Motor, dd: DriveData, say: Callable, warn: Callable) -> None:
+    """Say the design, its start-up and its warnings."""
+    for line in design_lines(made.design, m.name, dd):
+        say(line)
+    if made.startup is not None:
+        for line in made.startup.lines():
+            say(line)
+    else:
+        say("  start-up       not designed: no saturation data (--polarity, or [saturation] polarity "
+            "in the motor file)")
+    for w in made.warnings:
+        warn(w)
+
+
+def _certify(cert_run: Callable[[], Certificate], say: Callable) -> Certificate:
+    """Run the prepared certificate and say it."""
+    cert = cert_run()
+    for line in cert.lines():
+        say(line)
+    return cert
+
+
+def motor_pitch(dd: DriveData, dz) -> float:
+    """m/s per electrical rad/s of the design (from its speed cap and trip).
+
+    Parameters
+    ----------
+    dd : DriveData
+        The drive data.
+    dz : Design
+        The design.
+
+    Returns
+    -------
+    float
+        m/s per rad/s (NaN without a trip).
+    """
+    return dz.v_cap * OVERSPEED_MARGIN / dz.omega_trip if dz.omega_trip else float("nan")
+
+
+def design_lines(dz, motor_name: str, dd) -> list[str]:
+    """The design as a person reads it.
+
+    Parameters
+    ----------
+    dz : Design
+        The design.
+    motor_name : str
+        The motor's name.
+    dd : DriveData
+        The drive data.
+
+    Returns
+    -------
+    list of str
+        The report's lines.
+    """
+    lines = [
+        f"design for {motor_name}: {dd.v_dc:g} V bus, {dd.f_pwm:g} Hz PWM, "
+        f"{dd.dead_time * 1e6:g} us dead time, "
+        f"i_max {dd.i_max:g} A",
+        (f"  injection      {dz.v_inj:.4g} V at {dz.f_inj:g} Hz on d, kappa {dz.quad:g} on q: HF current "
+         f"{dz.i_hf:.3g} A; fundamental fits up to {dz.headroom_speed:.3g} m/s at i_max"
+         if dd.shape == "pulsating" else
+         f"  injection      {dd.shape}, {dz.v_inj:.4g} V"
+         f"{' at f_pwm / 2' if dd.shape == 'square' else f' at {dz.f_inj:g} Hz'} (the loops below are "
+         f"designed as for {dz.f_inj:g} Hz); fundamental fits up to {dz.headroom_speed:.3g} m/s"),
+        f"  current loop   {dz.current_bw:.4g} Hz (f_inj / {RATIO_INJ_CURRENT:g}): "
+        f"kp {dz.current_kp:.4g} V/A, "
+        f"ki {dz.current_ki:.4g} V/(A s)",
+        f"  demodulator    low-pass {dz.demod_lpf:.4g} Hz ({RATIO_LPF:g} f_inj), "
+        f"zeros at {dz.demod_notch:g} Hz; gain "
+        f"{dz.demod_gain:.4g}, scheduled (local error gain {dz.k_e_min:.2f}..{dz.k_e_max:.2f} unscheduled)",
+        f"  observer       {dz.observer_bw:.4g} Hz "
+        + ("mechanical, its load estimate fed forward" if dz.load_ff else dz.observer_type.upper())
+        + f" (limited by {dz.limits.get('observer', '')})"
+        + (f"; the HF path's delay {dz.hf_delay * 1e3:.3g} ms compensated (1 / f_inj)"
+           if dz.hf_delay > 0 else ""),
+        f"  speed loop     {dz.speed_bw:.4g} Hz ({dz.limits.get('speed loop', '')}): "
+        f"kp {dz.speed_kp:.4g} N s/m, "
+        f"ki {dz.speed_ki:.4g} N/m"
+        + (" (the encoder modes'; 0 sensorless: the load estimate)" if dz.load_ff else ""),
+        f"  position loop  kp_x {dz.kp_x:.4g} 1/s ({dz.limits.get('position loop', '')})",
+        f"  steps          {dz.limits.get('steps', '')}",
+        f"  limits         speed cap {dz.v_cap:.3g} m/s ({SPEED_CAP_MARGIN:g} v_max), over-speed trip "
+        f"{dz.omega_trip:.4g} rad/s ({dz.omega_trip * motor_pitch(dd, dz) :.3g} m/s), observer clamp "
+        f"{dz.omega_obs:.4g} rad/s, over-current trip {dz.i_trip:.3g} A ({CURRENT_TRIP_MARGIN:g} x (i_max "
+        f"+ HF "
+        f"peak)); rated load {dz.load:.3g} N",
+        f"  injection rule {dz.limits.get('injection', '')}",
+        f"  calibration    dither {dz.dither_a:.3g} A at {dz.dither_hz:.4g} Hz",
+        "  margins (linearised model: phase margin, gain margin up / down, crossover):",
+    ]
+    for k, m in dz.margins.items():
+        lines.append(f"    {k:48s} {m['pm_deg']} deg, {m['gm_up_db']} dB / {m['gm_down_db']} dB, "
+                     f"{m['crossover_hz']} Hz")
+    if dz.tolerances:
+        lines.append("  tolerances (model: worst hold error with the nominal LUT; scheduled error gain):")
+        for k, t in dz.tolerances.items():
+            lines.append(f"    {k:48s} {t['error_deg']:.3g} deg, k_e {t['k_lo']:.2f}..{t['k_hi']:.2f}")
+    return lines
