@@ -90,3 +90,17 @@ def test_tune_certificate_as_the_cli_writes_it(run_cli, tmp_path):
     drop = ("wall_s", "runs")
     assert {k: v for k, v in ours.items() if k not in drop} == {k: v for k, v in doc.items() if k not in drop}
     assert res.passed == (r.code == 0)
+
+
+@pytest.mark.parametrize(("module", "function", "most"), [
+    ("cli/tune.py", "tune", 70), ("cli/runs.py", "simulate", 45),
+    ("verify/tuning.py", "tune", 80), ("sim/to_folder.py", "simulate_to", 80)])
+def test_the_commands_are_thin_over_their_api(module, function, most):
+    """The commands parse, call the API and write; the API's functions stay readable (lines from
+    ``def`` to the last line, docstring included)."""
+    import ast
+
+    path = Path(linsense.sim.__file__).parents[1] / module
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    (node,) = [n for n in tree.body if isinstance(n, ast.FunctionDef) and n.name == function]
+    assert node.end_lineno - node.lineno + 1 <= most

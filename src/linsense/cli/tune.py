@@ -96,8 +96,7 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
     res = run_tune(motor_spec, scenario=sc, source=scenario_path, drive=vars(given), fmt=fmt, name=name,
                    polarity=polarity, current_noise=current_noise, table=table_path, quick=quick,
                    verify=not no_verify, unverified=unverified, out=out, say=c.say, warn=c.warn,
-                   detail=c.detail, ready=write,
-                   refusal=None if sc is None else lambda exc: drive_refusal(exc, typed, sc, scenario_path))
+                   detail=c.detail, ready=write, refusal=lambda exc: _refusal(exc, typed, sc, scenario_path))
     cert = res.certificate
     verification = None if cert is None else {k: v for k, v in cert.as_dict().items() if k != "runs"}
     if res.refused:
@@ -116,6 +115,11 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
         c.emit_json("tune", files, res.passed, verification=verification, **res.summary())
     if cert is not None and not cert.passed:
         raise click.exceptions.Exit(1)
+
+
+def _refusal(exc: InputError, typed: set[str], sc, source: str | None) -> InputError:
+    """A refusal of drive data at the option typed or the scenario's key (:func:`drive_refusal`)."""
+    return exc if sc is None else drive_refusal(exc, typed, sc, source)
 
 
 class _Given:

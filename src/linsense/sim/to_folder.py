@@ -16,7 +16,7 @@ import numpy as np
 
 from linsense.errors import InputError
 from linsense.io import output_set, split_timing
-from linsense.sim.build import build, check_trace_file
+from linsense.sim.build import Built, build, check_trace_file
 from linsense.sim.scenario import Scenario
 from linsense.sim.stream import PlotData, StreamedRun, simulate_streamed
 from linsense.sim.trace import MAT_MAX_SAMPLES, TraceWriter, have_parquet, trace_columns, write_mat
@@ -85,6 +85,31 @@ def write_metrics(s, metrics: dict, timing: dict) -> None:
     s.write("timing.json", json.dumps(timing, indent=1) + "\n")
 
 
+def _built(scenario: Scenario, trace: str, decimate: int | None, fidelity: str | None, mat: bool,
+           warn: Callable[[str], object] | None) -> Built:
+    """The scenario built for a streamed run (the options over it), its warnings said; refused
+    before anything runs: a trace format unknown, a trace file beyond its limits, ``mat`` beyond
+    the samples it holds."""
+    if trace not in TRACE_FORMATS:
+        raise InputError("trace", "", f"{trace!r}: one of {', '.join(TRACE_FORMATS)}")
+    if fidelity is not None:
+        scenario = scenario.replace(inverter={"fidelity": fidelity})
+    if decimate is not None:
+        scenario = scenario.replace(record={"decimate": decimate})
+    b = build(scenario, trace_in_memory=False)  # streamed: the trace is never whole in memory
+    for w in b.warnings if warn is not None else ():
+        warn(w)
+    if trace != "none":
+        check_trace_file(b)
+    n_rec = -(-b.n_steps // int(b.cfg.decimate))
+    if mat and n_rec > MAT_MAX_SAMPLES:
+        need = -(-b.n_steps // MAT_MAX_SAMPLES)
+        raise InputError("--mat", "", f"trace.mat is written from the whole trace held in memory: {n_rec:,} "
+                         f"samples is beyond the limit of {MAT_MAX_SAMPLES:,} ({docs('limits')}); "
+                         f"record fewer (--decimate {need}) or use the Parquet trace")
+    return b
+
+
 def simulate_to(out: str | Path, scenario: Scenario, *, trace: str | None = None, decimate: int | None = None,
                 fidelity: str | None = None, mat: bool = False,
                 plot: Callable[[PlotData, Path], object] | None = None,
@@ -125,23 +150,7 @@ def simulate_to(out: str | Path, scenario: Scenario, *, trace: str | None = None
         A scenario the simulator refuses, or ``mat`` beyond its sample limit (nothing written).
     """
     trace = default_trace_format() if trace is None else trace
-    if trace not in TRACE_FORMATS:
-        raise InputError("trace", "", f"{trace!r}: one of {', '.join(TRACE_FORMATS)}")
-    if fidelity is not None:
-        scenario = scenario.replace(inverter={"fidelity": fidelity})
-    if decimate is not None:
-        scenario = scenario.replace(record={"decimate": decimate})
-    b = build(scenario, trace_in_memory=False)  # streamed: the trace is never whole in memory
-    for w in b.warnings if warn is not None else ():
-        warn(w)
-    if trace != "none":
-        check_trace_file(b)
-    n_rec = -(-b.n_steps // int(b.cfg.decimate))
-    if mat and n_rec > MAT_MAX_SAMPLES:
-        need = -(-b.n_steps // MAT_MAX_SAMPLES)
-        raise InputError("--mat", "", f"trace.mat is written from the whole trace held in memory: {n_rec:,} "
-                         f"samples is beyond the limit of {MAT_MAX_SAMPLES:,} ({docs('limits')}); "
-                         f"record fewer (--decimate {need}) or use the Parquet trace")
+    b = _built(scenario, trace, decimate, fidelity, mat, warn)
     mat_parts: list[dict] = []
 
     def run(f=None) -> StreamedRun:

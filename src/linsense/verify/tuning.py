@@ -53,8 +53,17 @@ __all__ = ["FORMATS", "TuneResult", "design_lines", "motor_pitch", "scenario_tab
 FORMATS = ("toml", "c")
 
 
+#: what reports a line: the report, a warning, a detail
+Say = Callable[[str], object]
+
+
 def _quiet(_: str) -> None:
     """Say nothing."""
+
+
+def _as_given(exc: InputError) -> InputError:
+    """A refusal as it was made."""
+    return exc
 
 
 @dataclass
@@ -162,6 +171,76 @@ def scenario_table(sc: Scenario) -> tuple[str, tuple[str, str, str]] | None:
     return str(lut_file_path(sc).resolve()), lut_file_via(sc)
 
 
+def _motor_checked(motor: str, dd: DriveData, scenario: Scenario | None, fmt: str, name: str | None,
+                   detail: Callable) -> Motor:
+    """The motor loaded; the header's drive data and name, and the scenario's believed motor,
+    checked before anything is designed or run (the C name never rewritten)."""
+    if fmt == "c":
+        check_c_header(dd)
+    m = load_motor(motor)
+    detail(f"motor {motor!r}: {m.source}")
+    if scenario is not None:
+        _same_believed_motor(scenario, m, motor)
+    if fmt == "c":
+        c_config_name(name, m.name, "--name")
+    return m
+
+
+def _designed(m: Motor, dd: DriveData, motor: str, base: dict | None, src: str, given: dict,
+              say: Callable) -> tuple[DriveDesign, dict]:
+    """The design (:func:`~linsense.tune.design_drive` with ``given``) and its scenario as a dict,
+    read back as ``simulate`` reads it: tune never writes a scenario the simulator refuses."""
+    # a drive run without its table (sensorless_nolut) gets its trips on the estimate wider
+    mode = (base or {}).get("control", {}).get("mode", "sensorless_lut")
+    no_table = compensation_of(mode, (base or {}).get("observer", {}).get("compensation")) == "none"
+    made = design_drive(m, dd, source=src, uncompensated=no_table, **given)
+    if made.table is not None:
+        if made.table.note:
+            say(f"  table          {made.table.note}")
+        say(f"  table          {made.table_fit[0]}")
+    table = given["table"]
+    sc_dict = scenario_dict(made, motor_ref=motor, base=base,
+                            table=None if table is None else str(Path(table).resolve()))
+    build(scenario_from_dict(sc_dict, src, working_folder()))
+    return made, sc_dict
+
+
+def _scenario_base(scenario: Scenario, base: dict, table: str | None,
+                   say: Callable) -> tuple[str | None, tuple[str, str, str] | None]:
+    """The scenario's keys kept (``base``, edited in place) and the table the drive runs: ``table``,
+    else the scenario's measured table (its path and where the scenario names it)."""
+    base.pop("motor", None)
+    model = base.get("controller", {}).get("model", {})
+    if names_a_path(model.get("motor", "")):  # (absolute here, relative to the output when written)
+        model["motor"] = str((scenario.base_dir / model["motor"]).resolve())
+    # the scenario's measured table is the drive's (``table`` over it): designed, verified and
+    # written with it, its path made relative to the output again
+    own_table = scenario_table(scenario)
+    for key in ("lut_model", "lut_file"):
+        base.get("observer", {}).pop(key, None)
+    if table is None and own_table is not None:
+        say(f"  table          the scenario's measured table {own_table[0]}")
+        return own_table
+    return table, None
+
+
+def _header(res: TuneResult, cert_run: Callable[[], Certificate] | None, name: str | None, unverified: bool,
+            say: Callable, ready: Callable | None) -> TuneResult:
+    """The C header of ``res``, made once the certificate passed (or ``unverified``, saying why)."""
+    res.certificate = None if cert_run is None else _certify(cert_run, say)
+    cert = res.certificate
+    reason = "not verified (--no-verify)" if cert is None else "" if cert.passed else failed_summary(cert)
+    if reason and not unverified:
+        res.refused = reason
+        return res
+    res.unverified = reason
+    by = "" if reason else VERIFIED_BY[cert.quick]
+    res.text = c_header(res.made, name=name, unverified=reason, verified_by=by)
+    if ready is not None:
+        ready(res)
+    return res
+
+
 def _drive_of(scenario: Scenario | None, drive: dict | None) -> DriveData:
     """The scenario's drive data (or the defaults) with ``drive``'s values over it."""
     dd = DriveData() if scenario is None else drive_data(scenario)
@@ -190,13 +269,11 @@ def _same_believed_motor(sc: Scenario, motor: Motor, motor_spec: str) -> None:
 
 
 def tune(motor: str, *, scenario: Scenario | None = None, source: str | None = None,
-         drive: dict | None = None, fmt: str = "toml", name: str | None = None,
-         polarity: float | None = None, current_noise: float = 0.01,
-         table: str | None = None, quick: bool = False, verify: bool = True, unverified: bool = False,
-         out: str | Path = "-", say: Callable[[str], object] = _quiet, warn: Callable[[str], object] = _quiet,
-         detail: Callable[[str], object] = _quiet,
-         ready: Callable[[TuneResult], object] | None = None,
-         refusal: Callable[[InputError], InputError] | None = None) -> TuneResult:
+         drive: dict | None = None, fmt: str = "toml", name: str | None = None, polarity: float | None = None,
+         current_noise: float = 0.01, table: str | None = None, quick: bool = False, verify: bool = True,
+         unverified: bool = False, out: str | Path = "-", say: Say = _quiet, warn: Say = _quiet,
+         detail: Say = _quiet, ready: Callable[[TuneResult], object] | None = None,
+         refusal: Callable[[InputError], InputError] = _as_given) -> TuneResult:
     """Design the drive for a motor, make its scenario or C header, and verify it in the simulator.
 
     Nothing is written: the caller writes :attr:`TuneResult.text` (and the certificate,
@@ -206,39 +283,31 @@ def tune(motor: str, *, scenario: Scenario | None = None, source: str | None = N
     ----------
     motor : str
         The motor: a file, a preset or a packaged example's name.
-    scenario : Scenario or None, optional
-        A scenario whose drive data, measured table and other keys are kept.
-    source : str or None, optional
-        The scenario as the user named it (default its file).
+    scenario, source : Scenario or None, str or None, optional
+        A scenario whose drive data, measured table and other keys are kept; its name as the user
+        gave it (default its file).
     drive : dict or None, optional
         Drive data over the scenario's (:class:`~linsense.tune.design.DriveData`'s names, SI units).
-    fmt : str, optional
-        ``toml`` (a complete scenario) or ``c`` (an ``ls_drive_cfg`` header).
-    name : str or None, optional
-        The C header's name suffix (default the motor's name).
-    polarity : float or None, optional
-        Saturation data for the start-up pulses, 1/A (default the motor file's).
-    current_noise : float, optional
-        Current-sensor noise, A rms per phase.
+    fmt, name : str, str or None, optional
+        ``toml`` (a complete scenario) or ``c`` (an ``ls_drive_cfg`` header); the C header's name
+        suffix (default the motor's name).
+    polarity, current_noise : float or None, float, optional
+        Saturation data for the start-up pulses, 1/A (default the motor file's); current-sensor
+        noise, A rms per phase.
     table : str or None, optional
         A measured compensation table (``lut_measured.json``) in place of the motor's (default the
         scenario's measured table, if any).
-    quick : bool, optional
-        The quick certificate (the nominal plant only).
-    verify : bool, optional
-        Run the certificate.
-    unverified : bool, optional
-        ``c``: make the header even if the certificate fails or is not run, saying why in it.
+    quick, verify, unverified : bool, optional
+        The quick certificate (the nominal plant only); run the certificate; ``c``: make the header
+        even if the certificate fails or is not run, saying why in it.
     out : str or pathlib.Path, optional
         Where the scenario will be written (its relative paths are made relative to it).
     say, warn, detail : callable, optional
         Called with each line of the report, each warning and each detail (the motor file read), as
         the work goes.
-    ready : callable or None, optional
-        Called with the result once its text is made: for a scenario before the certificate runs,
-        for a header after it (a header waits for the verdict).
-    refusal : callable or None, optional
-        Maps a refusal of the drive data by the design or the simulator to the input the user typed.
+    ready, refusal : callable, optional
+        Called with the result once its text is made (a scenario before the certificate runs, a
+        header after it); maps a refusal of the drive data to the input the user typed.
 
     Returns
     -------
@@ -252,83 +321,38 @@ def tune(motor: str, *, scenario: Scenario | None = None, source: str | None = N
     """
     if fmt not in FORMATS:
         raise InputError("format", "", f"{fmt!r}: one of {', '.join(FORMATS)}")
-    refusal = refusal or (lambda exc: exc)
     base, base_dir, src, table_via = None, None, motor, None
     if scenario is not None:
         base, base_dir, src = scenario.given(), scenario.base_dir, source or scenario.source
-        base.pop("motor", None)
-        model = base.get("controller", {}).get("model", {})
-        if names_a_path(model.get("motor", "")):  # (absolute here, relative to the output when written)
-            model["motor"] = str((scenario.base_dir / model["motor"]).resolve())
-        # the scenario's measured table is the drive's (``table`` over it): designed, verified and
-        # written with it, its path made relative to the output again
-        own_table = scenario_table(scenario)
-        for key in ("lut_model", "lut_file"):
-            base.get("observer", {}).pop(key, None)
-        if table is None and own_table is not None:
-            table, table_via = own_table
-            say(f"  table          the scenario's measured table {table}")
+        table, table_via = _scenario_base(scenario, base, table, say)
     dd = _drive_of(scenario, drive)
-    if fmt == "c":
-        check_c_header(dd)
-    m = load_motor(motor)
-    detail(f"motor {motor!r}: {m.source}")
-    if scenario is not None:
-        _same_believed_motor(scenario, m, motor)
-    if fmt == "c":  # (the C name checked, never rewritten, before anything is designed or run)
-        c_config_name(name, m.name, "--name")
-    # a drive run without its table (sensorless_nolut) gets its trips on the estimate wider
-    mode = (base or {}).get("control", {}).get("mode", "sensorless_lut")
-    no_table = compensation_of(mode, (base or {}).get("observer", {}).get("compensation")) == "none"
-    try:
-        made = design_drive(m, dd, source=src, polarity=polarity, current_noise=current_noise,
-                            uncompensated=no_table, table=table, table_via=table_via)
-    except InputError as exc:
-        raise refusal(exc) from None
-    if made.table is not None:
-        if made.table.note:
-            say(f"  table          {made.table.note}")
-        say(f"  table          {made.table_fit[0]}")
+    m = _motor_checked(motor, dd, scenario, fmt, name, detail)
     table_abs = None if table is None else str(Path(table).resolve())
-    sc_dict = scenario_dict(made, motor_ref=motor, base=base, table=table_abs)
-    try:  # (read back as simulate reads it: tune never writes a scenario the simulator refuses)
-        build(scenario_from_dict(sc_dict, src, working_folder()))
-    except InputError as exc:
+    given = {"polarity": polarity, "current_noise": current_noise, "table": table, "table_via": table_via}
+    try:
+        made, sc_dict = _designed(m, dd, motor, base, src, given, say)
+    except InputError as exc:  # (the drive data refused: named at the input the user typed)
         raise refusal(exc) from None
     cert_run = None
     if verify:  # (its runs are built before anything is made: a refusal leaves no file)
         cert_run = prepare(m, motor_ref(motor), certificate_base(sc_dict), str(base_dir or working_folder()),
                            v_max=dd.v_max, a_max=dd.a_max, load=made.design.load, travel=dd.travel,
                            quick=quick)
-    _report(made, m, dd, say, warn)
-    if mode != "sensorless_lut" and verify:
-        say(f"  (the certificate judges the designed sensorless drive with its table, not control.mode = "
-            f"{mode!r} of the scenario)")
+    mode = (base or {}).get("control", {}).get("mode", "sensorless_lut")
+    _report(made, m, dd, say, warn, mode if verify else "")
     res = TuneResult(made, m, dd, fmt, None, sc_dict, digest=design_digest(m, dd, 256, made.table),
                      warnings=list(made.warnings))
     if fmt == "c":  # (the header waits for the verdict: made only for a drive that passed)
-        res.certificate = None if cert_run is None else _certify(cert_run, say)
-        cert = res.certificate
-        reason = "not verified (--no-verify)" if cert is None else "" if cert.passed else failed_summary(cert)
-        if reason and not unverified:
-            res.refused = reason
-            return res
-        res.unverified = reason
-        by = "" if reason else VERIFIED_BY[cert.quick]
-        res.text = c_header(made, name=name, unverified=reason, verified_by=by)
-        if ready is not None:
-            ready(res)
-        return res
+        return _header(res, cert_run, name, unverified, say, ready)
     res.text = scenario_toml(made, dd, motor, Path(out), base, working_folder(), table=table_abs)
-    if ready is not None:
-        ready(res)
-    if cert_run is not None:
-        res.certificate = _certify(cert_run, say)
+    (ready or _quiet)(res)
+    res.certificate = None if cert_run is None else _certify(cert_run, say)
     return res
 
 
-def _report(made: DriveDesign, m: Motor, dd: DriveData, say: Callable, warn: Callable) -> None:
-    """Say the design, its start-up and its warnings."""
+def _report(made: DriveDesign, m: Motor, dd: DriveData, say: Callable, warn: Callable, mode: str) -> None:
+    """Say the design, its start-up and its warnings (and that the certificate judges the sensorless
+    drive, not the scenario's control ``mode``, when it runs)."""
     for line in design_lines(made.design, m.name, dd):
         say(line)
     if made.startup is not None:
@@ -339,6 +363,9 @@ def _report(made: DriveDesign, m: Motor, dd: DriveData, say: Callable, warn: Cal
             "in the motor file)")
     for w in made.warnings:
         warn(w)
+    if mode not in ("", "sensorless_lut"):
+        say(f"  (the certificate judges the designed sensorless drive with its table, not control.mode = "
+            f"{mode!r} of the scenario)")
 
 
 def _certify(cert_run: Callable[[], Certificate], say: Callable) -> Certificate:
