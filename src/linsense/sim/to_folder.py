@@ -16,9 +16,10 @@ import numpy as np
 
 from linsense.errors import InputError
 from linsense.io import output_set, split_timing
+from linsense.sim import stream
 from linsense.sim.build import Built, build, check_trace_file
 from linsense.sim.scenario import Scenario
-from linsense.sim.stream import PlotData, StreamedRun, simulate_streamed
+from linsense.sim.stream import PlotData, StreamedRun
 from linsense.sim.trace import MAT_MAX_SAMPLES, TraceWriter, have_parquet, trace_columns, write_mat
 from linsense.version import docs
 
@@ -163,8 +164,8 @@ def simulate_to(out: str | Path, scenario: Scenario, *, trace: str | None = None
                 mat_parts.append({k: np.array(v, dtype=float) for k, v in trace_columns(arrays).items()})
 
         try:
-            sr = simulate_streamed(b, on_chunk=on_chunk if writer is not None or mat else None,
-                                   plot=plot is not None)
+            sr = stream.simulate_streamed(b, on_chunk=on_chunk if writer is not None or mat else None,
+                                          plot=plot is not None)
         except BaseException:
             if writer is not None:
                 writer.abort()
