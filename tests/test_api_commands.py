@@ -104,3 +104,37 @@ def test_the_commands_are_thin_over_their_api(module, function, most):
     tree = ast.parse(path.read_text(encoding="utf-8"))
     (node,) = [n for n in tree.body if isinstance(n, ast.FunctionDef) and n.name == function]
     assert node.end_lineno - node.lineno + 1 <= most
+
+
+def test_run_closed_loop_takes_a_runner(tmp_path):
+    """run_closed_loop's time loop can be given (the processor in the loop gives the firmware's
+    under QEMU): the same loop given gives the same run; a status refused names the runner."""
+    import numpy as np
+    from linsense._ctrl import lib
+
+    from linsense.errors import SimulationError
+    from linsense.sim.build import build
+    from linsense.sim.core import run_closed_loop
+
+    def fresh():
+        return build(load_scenario(_toml(tmp_path / "s.toml", duration=0.05)))
+
+    b = fresh()
+    ref = run_closed_loop(b.cfg, b.drive.state, b.n_steps, b.commands)
+    calls = []
+
+    def runner(*args):
+        calls.append(len(args))
+        return lib.ls_sim_run(*args)
+
+    b = fresh()
+    got = run_closed_loop(b.cfg, b.drive.state, b.n_steps, b.commands, runner=runner)
+    assert calls == [7] and got.steps_done == ref.steps_done
+    for k in ref.arrays:
+        assert np.array_equal(ref.arrays[k], got.arrays[k], equal_nan=True), k
+
+    def refusing(*args):
+        return lib.LS_OK + 1
+
+    with pytest.raises(SimulationError, match="refusing refused its inputs"):
+        run_closed_loop(b.cfg, b.drive.state, b.n_steps, b.commands, runner=refusing)

@@ -48,7 +48,7 @@ def main(argv=None) -> int:
     from pil_cgen import DriveWriter
 
     from linsense.sim.build import build
-    from linsense.sim.core import BLOCKS, _c_commands, _collect, _outputs
+    from linsense.sim.core import BLOCKS, run_closed_loop
     from linsense.sim.run import finish_metrics, run_metrics
 
     out = a.out.resolve()
@@ -72,32 +72,32 @@ def main(argv=None) -> int:
         return rffi.cast("void *", int(ffi.cast("uintptr_t", p)))
 
     def run(remote: bool):
-        """One closed loop (the scenario's drive copied): its RawRun and metrics."""
+        """One closed loop (the scenario's drive copied) through the package's loop, its time loop
+        the host recorder's or the firmware's under QEMU: its RawRun and metrics."""
         drive = ffi.new("ls_drive *")
         ffi.memmove(drive, b.drive.state, ffi.sizeof("ls_drive"))
-        c_cmds, n_cmds = _c_commands(b.commands)
-        blocks = tuple(BLOCKS) if b.cfg.decimate > 1 else ()
-        arrays, o = _outputs(int(math.ceil(b.n_steps / b.cfg.decimate)) + 2, None, blocks)
-        res = ffi.new("ls_sim_result *")
         tag = "pil" if remote else "host"
         paths = [str(out / f"closed.{tag}.in").encode(), str(out / f"closed.{tag}.steps").encode()]
-        t0 = time.perf_counter()
+
+        def runner(cfg, drv, cmds, n_cmds, n_steps, o, res):
+            ptrs = [addr(p) for p in (cfg, drv, cmds)]
+            if not remote:
+                return rlib.pil_record(*ptrs, n_cmds, n_steps, addr(o), addr(res), *paths)
+            q = subprocess.Popen(pil.qemu_cmd(elf), cwd=out, stdout=subprocess.DEVNULL)
+            st = rlib.pil_remote(*ptrs, n_cmds, n_steps, addr(o), addr(res), *paths,
+                                 str(out / "closed.in").encode(), str(out / "closed.m4f.out").encode())
+            q.wait(timeout=60)
+            return st
+
+        runner.__name__ = f"the {tag} run"
         if remote:
             for f in ("closed.in", "closed.m4f.out"):
                 (out / f).unlink(missing_ok=True)
                 os.mkfifo(out / f)
-            q = subprocess.Popen(pil.qemu_cmd(elf), cwd=out, stdout=subprocess.DEVNULL)
-            st = rlib.pil_remote(addr(b.cfg), addr(drive), addr(c_cmds), n_cmds, b.n_steps, addr(o),
-                                 addr(res), *paths, str(out / "closed.in").encode(),
-                                 str(out / "closed.m4f.out").encode())
-            q.wait(timeout=60)
-        else:
-            st = rlib.pil_record(addr(b.cfg), addr(drive), addr(c_cmds), n_cmds, b.n_steps, addr(o),
-                                 addr(res), *paths)
+        t0 = time.perf_counter()
+        raw = run_closed_loop(b.cfg, drive, b.n_steps, b.commands, blocks=tuple(BLOCKS) if b.cfg.decimate > 1
+                              else (), runner=runner)
         wall = time.perf_counter() - t0
-        if st != 0:
-            raise SystemExit(f"pil_closed: the {tag} run failed (status {st})")
-        raw = _collect(arrays, res, wall)
         m = run_metrics(b, raw)
         finish_metrics(b, raw, m, b.cfg.decimate)
         return raw, m, wall

@@ -12,6 +12,7 @@ import math
 import signal
 import threading
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -323,7 +324,8 @@ def _call_interruptible(call, stop) -> tuple[int, float]:
     return status[0], status[1]
 
 
-def run_closed_loop(cfg, drive, n_steps: int, commands=(), *, signals=None, blocks=()) -> RawRun:
+def run_closed_loop(cfg, drive, n_steps: int, commands=(), *, signals=None, blocks=(),
+                    runner: Callable | None = None) -> RawRun:
     """Run ``n_steps`` PWM periods of ``drive`` around the plant ``cfg``.
 
     Parameters
@@ -340,6 +342,10 @@ def run_closed_loop(cfg, drive, n_steps: int, commands=(), *, signals=None, bloc
         The point signals to record (names of :data:`SIGNALS`; None: all).
     blocks : iterable of str, optional
         The block statistics (names of :data:`BLOCKS`); ``fault`` is always recorded.
+    runner : callable or None, optional
+        The time loop: ``runner(cfg, drive, cmds, n_cmds, n_steps, out, res) -> status``, the
+        arguments and the status of ``ls_sim_run`` (the default). The processor in the loop gives
+        one whose drive runs on the Cortex-M4F under QEMU (``tools/pil_closed.py``).
 
     Returns
     -------
@@ -349,7 +355,7 @@ def run_closed_loop(cfg, drive, n_steps: int, commands=(), *, signals=None, bloc
     Raises
     ------
     linsense.errors.SimulationError
-        When ``ls_sim_run`` refuses its inputs.
+        When the loop refuses its inputs (a status other than ``LS_OK``).
     """
     c_cmds, n_cmds = _c_commands(commands)
     n_rec = int(math.ceil(n_steps / cfg.decimate)) + 2
@@ -357,10 +363,11 @@ def run_closed_loop(cfg, drive, n_steps: int, commands=(), *, signals=None, bloc
     res = ffi.new("ls_sim_result *")
     stop = ffi.new("int32_t *", 0)
     out.stop = stop
-    st, wall = _call_interruptible(
-        lambda: lib.ls_sim_run(cfg, drive, c_cmds, n_cmds, int(n_steps), out, res), stop)
+    loop = lib.ls_sim_run if runner is None else runner
+    st, wall = _call_interruptible(lambda: loop(cfg, drive, c_cmds, n_cmds, int(n_steps), out, res), stop)
     if st != lib.LS_OK:
-        raise SimulationError(f"ls_sim_run refused its inputs (status {st})")
+        name = "ls_sim_run" if runner is None else getattr(runner, "__name__", "the loop")
+        raise SimulationError(f"{name} refused its inputs (status {st})")
     return _collect(arrays, res, wall)
 
 
