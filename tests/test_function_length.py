@@ -26,6 +26,7 @@ HELD = [
     ("report/fea.py", "run_fea"),
     ("sim/calibrate.py", "calibration_scenario"),
     ("sim/calibrate.py", "calibrate"),
+    ("tune/export.py", "c_header"),
 ]
 
 
