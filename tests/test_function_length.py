@@ -27,6 +27,7 @@ HELD = [
     ("sim/calibrate.py", "calibration_scenario"),
     ("sim/calibrate.py", "calibrate"),
     ("tune/export.py", "c_header"),
+    ("tune/design.py", "design"),
 ]
 
 
