@@ -28,6 +28,7 @@ HELD = [
     ("sim/calibrate.py", "calibrate"),
     ("tune/export.py", "c_header"),
     ("tune/design.py", "design"),
+    ("tune/startup.py", "design_startup"),
 ]
 
 
