@@ -29,6 +29,7 @@ HELD = [
     ("tune/export.py", "c_header"),
     ("tune/design.py", "design"),
     ("tune/startup.py", "design_startup"),
+    ("identify/bench.py", "read_bench_csv"),
 ]
 
 

@@ -125,6 +125,27 @@ def read_bench_csv(path: str | Path) -> BenchData:
         The first problem found, naming the row and the column.
     """
     src = str(path)
+    form, rows, phase, col = _bench_cells(path, src)
+    freq = col["freq_hz"]
+    bad = np.nonzero(freq <= 0)[0]
+    if bad.size:
+        i = bad[0]
+        raise InputError(src, f"row {rows[i]}, column freq_hz",
+                         f"frequency must be positive, got {freq[i]:.12g}")
+    current, voltage, i_cols, v_cols = _bench_phasors(src, form, col, rows)
+    _check_magnitudes(src, rows, current, voltage, i_cols, v_cols)
+    pos_mm = col["position_mm"]
+    _check_bench_rows(src, rows, freq, pos_mm, phase)
+    return BenchData(
+        position=pos_mm * 1e-3, phase=phase, freq=freq, current=current, voltage=voltage,
+        amplitude_only=form == "amplitude", row=rows, source=src,
+    )
+
+
+def _bench_cells(path: str | Path,
+                 src: str) -> tuple[str, np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+    """The bench file's form (``"phasor"`` or ``"amplitude"``), its rows' numbers, the fed phase
+    of each (0, 1, 2) and its numeric columns by name; each cell checked (width, phase, finite)."""
     rows_in = csv_rows(path, "bench file")  # (bounded, BOM skipped: docs/limits.md)
     header = next(rows_in)[1]
     if any(";" in h for h in header) and not any(c in header for c in ("phase", "I_re", "I")):
@@ -150,13 +171,13 @@ def read_bench_csv(path: str | Path) -> BenchData:
         for j, c in enumerate(numeric):
             data[i, j] = finite_cell(src, r, c, row[idx[c]].strip() if idx[c] < len(row) else "")
     col = {c: data[:, j] for j, c in enumerate(numeric)}
+    return form, rows, phase, col
 
-    freq = col["freq_hz"]
-    bad = np.nonzero(freq <= 0)[0]
-    if bad.size:
-        i = bad[0]
-        raise InputError(src, f"row {rows[i]}, column freq_hz",
-                         f"frequency must be positive, got {freq[i]:.12g}")
+
+def _bench_phasors(src: str, form: str, col: dict[str, np.ndarray],
+                   rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, str, str]:
+    """The fed current and the three phase voltages of each row, complex (real for an
+    amplitude-only file, whose negative magnitudes are refused), and the columns they come from."""
     if form == "phasor":
         current = col["I_re"] + 1j * col["I_im"]
         voltage = np.stack([col[f"V{p}_re"] + 1j * col[f"V{p}_im"] for p in PHASES], axis=1)
@@ -171,6 +192,12 @@ def read_bench_csv(path: str | Path) -> BenchData:
         current = col["I"].astype(complex)
         voltage = np.stack([col[f"V{p}"] for p in PHASES], axis=1).astype(complex)
         i_cols, v_cols = "I", "VA, VB, VC"
+    return current, voltage, i_cols, v_cols
+
+
+def _check_magnitudes(src: str, rows: np.ndarray, current: np.ndarray, voltage: np.ndarray, i_cols: str,
+                      v_cols: str) -> None:
+    """Refuse an implausible current or voltage (one in mA or mV) and a row without current."""
     mag = np.abs(current)
     # (the table of plausible values: a current in mA, a voltage in mV)
     for kind, values, what in (("current", mag, i_cols), ("voltage", np.abs(voltage), v_cols)):
@@ -186,6 +213,11 @@ def read_bench_csv(path: str | Path) -> BenchData:
         raise InputError(src, f"row {rows[i]}, column {i_cols}",
                          f"zero current ({mag[i]:.12g} A): the fed phase carries no current")
 
+
+def _check_bench_rows(src: str, rows: np.ndarray, freq: np.ndarray, pos_mm: np.ndarray,
+                      phase: np.ndarray) -> None:
+    """Refuse rows at another frequency than the first's, duplicate rows (same position and fed
+    phase) and a phase that is never fed."""
     ref = freq[0]
     bad = np.nonzero(np.abs(freq - ref) > FREQ_TOLERANCE * ref)[0]
     if bad.size:
@@ -195,8 +227,6 @@ def read_bench_csv(path: str | Path) -> BenchData:
             f"inconsistent frequency {freq[i]:.12g} Hz: row {rows[0]} has {ref:.12g} Hz "
             f"(all rows must use one frequency within {100 * FREQ_TOLERANCE:g} %)",
         )
-
-    pos_mm = col["position_mm"]
     key = np.round(pos_mm / POSITION_TOLERANCE_MM).astype(np.int64) * 3 + phase
     _, first, inverse = np.unique(key, return_index=True, return_inverse=True)
     dup = np.nonzero(first[inverse] != np.arange(key.size))[0]
@@ -211,10 +241,6 @@ def read_bench_csv(path: str | Path) -> BenchData:
         if not np.any(phase == k):
             raise InputError(src, "column phase",
                              f"phase {name} is never fed: every phase must be fed in turn")
-    return BenchData(
-        position=pos_mm * 1e-3, phase=phase, freq=freq, current=current, voltage=voltage,
-        amplitude_only=form == "amplitude", row=rows, source=src,
-    )
 
 
 # ---------------------------------------------------------------------- writing
