@@ -30,6 +30,7 @@ HELD = [
     ("tune/design.py", "design"),
     ("tune/startup.py", "design_startup"),
     ("identify/bench.py", "read_bench_csv"),
+    ("verify/certificate.py", "prepare"),
 ]
 
 
