@@ -31,6 +31,7 @@ HELD = [
     ("tune/startup.py", "design_startup"),
     ("identify/bench.py", "read_bench_csv"),
     ("verify/certificate.py", "prepare"),
+    ("identify/pipeline.py", "identify"),
 ]
 
 
