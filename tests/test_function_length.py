@@ -32,6 +32,7 @@ HELD = [
     ("identify/bench.py", "read_bench_csv"),
     ("verify/certificate.py", "prepare"),
     ("identify/pipeline.py", "identify"),
+    ("tune/export.py", "scenario_dict"),
 ]
 
 

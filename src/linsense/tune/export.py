@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import os
 from pathlib import Path
 
@@ -151,54 +152,15 @@ def scenario_dict(dz: Design | DriveDesign, drive: DriveData | None = None, moto
     if dd.motor is not None:
         pole_pitch = dd.motor.pole_pitch
     keys = dd.scenario_keys()
-
-    def put(section: dict, *names: str) -> dict:
-        section.update({n.rsplit(".", 1)[1]: written(keys, n) for n in names})
-        return section
-
+    put = functools.partial(_put, keys)
     sc = {k: (dict(v) if isinstance(v, dict) else v) for k, v in (base or {}).items()}
     sc["motor"] = motor_ref
     sc.setdefault("scenario", {"name": "tuned", "duration": 2.0})
     sc.setdefault("reference", {"type": "hold"})
     put(sc.setdefault("inverter", {}), "inverter.v_dc", "inverter.f_pwm", "inverter.dead_time")
-    inj = put(sc.setdefault("injection", {}), "injection.amplitude", "injection.ramp_rate")
-    if keys["injection.shape"] != "pulsating":
-        put(inj, "injection.shape")
-    shape = inj.get("shape", "pulsating")
-    if shape == "pulsating":  # (kappa is the pulsating/elliptical injection's own)
-        put(inj, "injection.quadrature")
-    else:
-        inj.pop("quadrature", None)
-    if shape == "square":  # (at f_pwm / 2, not a design choice)
-        inj.pop("frequency", None)
-    else:
-        put(inj, "injection.frequency")
-    obs = put(sc.setdefault("observer", {}), "observer.type", "observer.bandwidth_hz",
-              "observer.demod_lpf_hz", "observer.gain_schedule", "observer.omega_max", "observer.hf_delay_s")
-    for k in ("k1", "k2", "k3"):
-        obs.pop(k, None)
-    if table is not None:
-        obs.update({"lut_model": "measured", "lut_file": table})
-    if keys["observer.type"] == "mech":  # (the clamp of its load estimate; the PLL has none)
-        put(obs, "observer.force_max")
-    else:
-        obs.pop("force_max", None)
-    con = sc.setdefault("controller", {})
-    for k in ("speed_kp", "speed_ki", "current_kp", "current_ki"):
-        con.pop(k, None)
-    put(con, "controller.current_bandwidth_hz", "controller.speed_bandwidth_hz", "controller.i_max",
-        "controller.v_max", "controller.step_a_max")
-    if con.get("position_type", "p") == "p":
-        put(con, "controller.kp_x")
-    # the motor file's friction and thrust ripple, fed forward (only where it has them: the keys'
-    # defaults are none)
-    for k in ("friction_coulomb", "friction_viscous", "friction_band", "ripple_order", "ripple_cos",
-              "ripple_sin"):
-        con.pop(k, None)
-    if keys["controller.friction_coulomb"] > 0.0 or keys["controller.friction_viscous"] > 0.0:
-        put(con, "controller.friction_coulomb", "controller.friction_viscous", "controller.friction_band")
-    if keys["controller.ripple_order"]:
-        put(con, "controller.ripple_order", "controller.ripple_cos", "controller.ripple_sin")
+    _put_injection(sc.setdefault("injection", {}), keys)
+    _put_observer(sc.setdefault("observer", {}), keys, table)
+    _put_controller(sc.setdefault("controller", {}), keys)
     put(sc.setdefault("calibration", {}), "calibration.dither_a", "calibration.dither_hz")
     # limits the scenario gives are kept (they are not gains); otherwise they follow the bus
     prot = sc.setdefault("protection", {})
@@ -214,6 +176,63 @@ def scenario_dict(dz: Design | DriveDesign, drive: DriveData | None = None, moto
     if dd.startup is not None and sc.get("control", {}).get("mode") == "startup":
         put(sc.setdefault("startup", {}), *(k for k in keys if k.startswith("startup.")))
     return sc
+
+
+def _put(keys: dict, section: dict, *names: str) -> dict:
+    """``section`` with the design's values of the scenario keys ``names`` written into it."""
+    section.update({n.rsplit(".", 1)[1]: written(keys, n) for n in names})
+    return section
+
+
+def _put_injection(inj: dict, keys: dict) -> None:
+    """The design's ``[injection]``: amplitude and ramp, shape, and the shape's own keys."""
+    _put(keys, inj, "injection.amplitude", "injection.ramp_rate")
+    if keys["injection.shape"] != "pulsating":
+        _put(keys, inj, "injection.shape")
+    shape = inj.get("shape", "pulsating")
+    if shape == "pulsating":  # (kappa is the pulsating/elliptical injection's own)
+        _put(keys, inj, "injection.quadrature")
+    else:
+        inj.pop("quadrature", None)
+    if shape == "square":  # (at f_pwm / 2, not a design choice)
+        inj.pop("frequency", None)
+    else:
+        _put(keys, inj, "injection.frequency")
+
+
+def _put_observer(obs: dict, keys: dict, table: str | None) -> None:
+    """The design's ``[observer]``, its gains left to the bandwidth, a measured ``table`` if any."""
+    _put(keys, obs, "observer.type", "observer.bandwidth_hz", "observer.demod_lpf_hz",
+         "observer.gain_schedule", "observer.omega_max", "observer.hf_delay_s")
+    for k in ("k1", "k2", "k3"):
+        obs.pop(k, None)
+    if table is not None:
+        obs.update({"lut_model": "measured", "lut_file": table})
+    if keys["observer.type"] == "mech":  # (the clamp of its load estimate; the PLL has none)
+        _put(keys, obs, "observer.force_max")
+    else:
+        obs.pop("force_max", None)
+
+
+def _put_controller(con: dict, keys: dict) -> None:
+    """The design's ``[controller]``: loop bandwidths, limits, position gain, and the motor
+    file's friction and thrust ripple fed forward."""
+    for k in ("speed_kp", "speed_ki", "current_kp", "current_ki"):
+        con.pop(k, None)
+    _put(keys, con, "controller.current_bandwidth_hz", "controller.speed_bandwidth_hz", "controller.i_max",
+         "controller.v_max", "controller.step_a_max")
+    if con.get("position_type", "p") == "p":
+        _put(keys, con, "controller.kp_x")
+    # the motor file's friction and thrust ripple, fed forward (only where it has them: the keys'
+    # defaults are none)
+    for k in ("friction_coulomb", "friction_viscous", "friction_band", "ripple_order", "ripple_cos",
+              "ripple_sin"):
+        con.pop(k, None)
+    if keys["controller.friction_coulomb"] > 0.0 or keys["controller.friction_viscous"] > 0.0:
+        _put(keys, con, "controller.friction_coulomb", "controller.friction_viscous",
+             "controller.friction_band")
+    if keys["controller.ripple_order"]:
+        _put(keys, con, "controller.ripple_order", "controller.ripple_cos", "controller.ripple_sin")
 
 
 def scenario_toml(
