@@ -33,6 +33,8 @@ HELD = [
     ("verify/certificate.py", "prepare"),
     ("identify/pipeline.py", "identify"),
     ("tune/export.py", "scenario_dict"),
+    ("tune/design.py", "loops"),
+    ("io.py", "csv_rows"),
 ]
 
 

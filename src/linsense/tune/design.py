@@ -1644,17 +1644,8 @@ def loops(*, mass: float, kp_x: float, speed_kp: float, speed_ki: float, observe
     kh = k_e * h_lpf * ct.tf(num, den)
     w_i = 2.0 * math.pi * current_bw
     if len(observer_k) == 3:
-        k1, k2, k3 = observer_k
-        g_o = k1 / s + k2 / s**2 + k3 / s**3
-        c_i = w_i / (s + w_i)
-        e_u = ct.minreal(kh * (c_i - 1) / (mass * s**2 * (1 + kh * g_o)), verbose=False)
-        x_u = 1 / (mass * s**2) + g_o * e_u
-        v_u = 1 / (mass * s) + (k2 / s + k3 / s**2) * e_u
-        c_v = speed_kp + speed_ki / s if speed_ki else speed_kp
-        l_mot = g * c_v * (kp_x * x_u + v_u)
-        if load_ff:
-            l_mot = l_mot + k3 * mass / s * e_u
-        return kh * g_o, ct.minreal(l_mot, verbose=False)
+        return _mech_loops(kh, observer_k, w_i, mass=mass, kp_x=kp_x, speed_kp=speed_kp, speed_ki=speed_ki,
+                           g=g, load_ff=load_ff)
     k1, k2 = observer_k
     g_o = (k1 * s + k2) / s**2
     t_pos = ct.minreal(kh * g_o / (1 + kh * g_o), verbose=False)
@@ -1662,6 +1653,26 @@ def loops(*, mass: float, kp_x: float, speed_kp: float, speed_ki: float, observe
     c_v = speed_kp + speed_ki / s
     l_mot = ct.minreal(g * c_v * (kp_x * t_pos + s_v) / (mass * s**2) * w_i / (s + w_i), verbose=False)
     return kh * g_o, l_mot
+
+
+def _mech_loops(kh, observer_k: tuple[float, ...], w_i: float, *, mass: float, kp_x: float, speed_kp: float,
+                speed_ki: float, g: float, load_ff: bool):
+    """:func:`loops` of the mechanical observer ``observer_k = (k1, k2, k3)``: ``kh`` the error
+    path (gain, low-pass, delay), ``w_i`` the current loop's bandwidth, rad/s."""
+    import control as ct
+
+    s = ct.tf("s")
+    k1, k2, k3 = observer_k
+    g_o = k1 / s + k2 / s**2 + k3 / s**3
+    c_i = w_i / (s + w_i)
+    e_u = ct.minreal(kh * (c_i - 1) / (mass * s**2 * (1 + kh * g_o)), verbose=False)
+    x_u = 1 / (mass * s**2) + g_o * e_u
+    v_u = 1 / (mass * s) + (k2 / s + k3 / s**2) * e_u
+    c_v = speed_kp + speed_ki / s if speed_ki else speed_kp
+    l_mot = g * c_v * (kp_x * x_u + v_u)
+    if load_ff:
+        l_mot = l_mot + k3 * mass / s * e_u
+    return kh * g_o, ct.minreal(l_mot, verbose=False)
 
 
 def margins(dz: Design, motor: Motor, drive: DriveData, k_lo: float = 1.0, k_hi: float = 1.0) -> dict:
