@@ -321,6 +321,33 @@ def emulate_bench(
     linsense.errors.InputError
         An argument out of range, naming it.
     """
+    positions, noise, seed, freq, current = _emulate_args(positions, noise, seed, freq, current)
+    rng = np.random.default_rng(seed)
+    x = np.arange(positions) * motor.pole_pitch / positions
+    pos = np.repeat(x, 3)
+    phase = np.tile(np.arange(3), positions)
+    R = pos.size
+    L = motor.inductance.L_abc(motor.theta_of_x(pos))  # (R, 3, 3)
+    w = 2.0 * np.pi * freq
+    amp = current * rng.uniform(0.8, 1.2, R)
+    I = amp * np.exp(1j * rng.uniform(0.0, 2.0 * np.pi, R))
+    Z = 1j * w * L[np.arange(R), :, phase]  # column k of j omega L
+    Z[np.arange(R), phase] += motor.R_s
+    V = Z * I[:, None]
+    I_m = _noisy(rng, noise, I)
+    V_m = _noisy(rng, noise, V)
+    if amplitude_only:
+        I_m = np.abs(I_m).astype(complex)
+        V_m = np.abs(V_m).astype(complex)
+    return BenchData(
+        position=pos, phase=phase, freq=np.full(R, float(freq)), current=I_m, voltage=V_m,
+        amplitude_only=amplitude_only, source=f"emulated {motor.name}",
+    )
+
+
+def _emulate_args(positions: int, noise: float, seed: int, freq: float,
+                  current: float) -> tuple[int, float, int, float, float]:
+    """:func:`emulate_bench`'s arguments checked (one InputError naming the one out of range)."""
     import numbers
 
     from linsense._check import real as real_arg
@@ -340,29 +367,10 @@ def emulate_bench(
                      kind="relative_noise")
     freq = real_arg(freq, src, "freq", 0.0, low_open=True, what="a positive finite frequency in Hz")
     current = real_arg(current, src, "current", 0.0, low_open=True, what="a positive finite current in A")
-    rng = np.random.default_rng(seed)
-    x = np.arange(positions) * motor.pole_pitch / positions
-    pos = np.repeat(x, 3)
-    phase = np.tile(np.arange(3), positions)
-    R = pos.size
-    L = motor.inductance.L_abc(motor.theta_of_x(pos))  # (R, 3, 3)
-    w = 2.0 * np.pi * freq
-    amp = current * rng.uniform(0.8, 1.2, R)
-    I = amp * np.exp(1j * rng.uniform(0.0, 2.0 * np.pi, R))
-    Z = 1j * w * L[np.arange(R), :, phase]  # column k of j omega L
-    Z[np.arange(R), phase] += motor.R_s
-    V = Z * I[:, None]
+    return positions, noise, seed, freq, current
 
-    def noisy(p: np.ndarray) -> np.ndarray:
-        s = noise * np.abs(p) / np.sqrt(2.0)
-        return p + s * (rng.standard_normal(p.shape) + 1j * rng.standard_normal(p.shape))
 
-    I_m = noisy(I)
-    V_m = noisy(V)
-    if amplitude_only:
-        I_m = np.abs(I_m).astype(complex)
-        V_m = np.abs(V_m).astype(complex)
-    return BenchData(
-        position=pos, phase=phase, freq=np.full(R, float(freq)), current=I_m, voltage=V_m,
-        amplitude_only=amplitude_only, source=f"emulated {motor.name}",
-    )
+def _noisy(rng: np.random.Generator, noise: float, p: np.ndarray) -> np.ndarray:
+    """``p`` with complex Gaussian noise of standard deviation ``noise * |p|`` added."""
+    s = noise * np.abs(p) / np.sqrt(2.0)
+    return p + s * (rng.standard_normal(p.shape) + 1j * rng.standard_normal(p.shape))
