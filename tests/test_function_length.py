@@ -36,6 +36,7 @@ HELD = [
     ("tune/design.py", "loops"),
     ("io.py", "csv_rows"),
     ("identify/bench.py", "emulate_bench"),
+    ("report/sim_figures.py", "sim_figure"),
 ]
 
 
