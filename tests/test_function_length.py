@@ -37,6 +37,7 @@ HELD = [
     ("io.py", "csv_rows"),
     ("identify/bench.py", "emulate_bench"),
     ("report/sim_figures.py", "sim_figure"),
+    ("reproduce/pipeline.py", "reproduce"),
 ]
 
 
