@@ -38,6 +38,7 @@ HELD = [
     ("identify/bench.py", "emulate_bench"),
     ("report/sim_figures.py", "sim_figure"),
     ("reproduce/pipeline.py", "reproduce"),
+    ("examples/__init__.py", "copy_to"),
 ]
 
 
