@@ -39,6 +39,7 @@ HELD = [
     ("report/sim_figures.py", "sim_figure"),
     ("reproduce/pipeline.py", "reproduce"),
     ("examples/__init__.py", "copy_to"),
+    ("reproduce/claims.py", "claims"),
 ]
 
 
