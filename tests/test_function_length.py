@@ -40,6 +40,7 @@ HELD = [
     ("reproduce/pipeline.py", "reproduce"),
     ("examples/__init__.py", "copy_to"),
     ("reproduce/claims.py", "claims"),
+    ("fea/solver.py", "solve_nonlinear"),
 ]
 
 
