@@ -26,6 +26,21 @@ HELD = [
     ("report/fea.py", "run_fea"),
     ("sim/calibrate.py", "calibration_scenario"),
     ("sim/calibrate.py", "calibrate"),
+    ("tune/export.py", "c_header"),
+    ("tune/design.py", "design"),
+    ("tune/startup.py", "design_startup"),
+    ("identify/bench.py", "read_bench_csv"),
+    ("verify/certificate.py", "prepare"),
+    ("identify/pipeline.py", "identify"),
+    ("tune/export.py", "scenario_dict"),
+    ("tune/design.py", "loops"),
+    ("io.py", "csv_rows"),
+    ("identify/bench.py", "emulate_bench"),
+    ("report/sim_figures.py", "sim_figure"),
+    ("reproduce/pipeline.py", "reproduce"),
+    ("examples/__init__.py", "copy_to"),
+    ("reproduce/claims.py", "claims"),
+    ("fea/solver.py", "solve_nonlinear"),
 ]
 
 

@@ -214,24 +214,16 @@ def csv_rows(path: str | os.PathLike, what: str):
                 raise InputError(src, f"row {number}", field_limit)
             yield line
 
-    def checked(row: list[str]) -> list[str]:
-        if len(row) > MAX_TABLE_COLUMNS:
-            raise InputError(src, f"row {number}", f"{len(row):,} columns: {col_limit}")
-        for j, cell in enumerate(row):
-            if len(cell) > MAX_TABLE_FIELD_CHARS:
-                raise InputError(src, f"row {number}, column {j + 1}",
-                                 f"{field_limit}: a field of {len(cell):,} characters")
-        return row
-
     try:
         with open(path, newline="", encoding="utf-8-sig") as f:
             reader = csv.reader(lines(f))
-            header = [h.strip() for h in checked(next(reader, []))]
+            first = next(reader, [])
+            header = [h.strip() for h in _checked_row(src, number, first)]
             if not header or header == [""]:
                 raise InputError(src, "", f"empty {what} (no header)")
             yield 1, header
             for row in reader:
-                row = checked(row)
+                row = _checked_row(src, number, row)
                 if not row or all(not c.strip() for c in row):
                     continue
                 yield number, row
@@ -241,6 +233,23 @@ def csv_rows(path: str | os.PathLike, what: str):
         raise InputError(src, "", f"cannot read {what}: {os_reason(exc)}") from None
     except (UnicodeDecodeError, csv.Error) as exc:
         raise InputError(src, "", f"cannot read {what}: {exc}") from None
+
+
+def _checked_row(src: str, number: int, row: list[str]) -> list[str]:
+    """``row`` (line ``number`` of ``src``), refused beyond the columns' or a field's limit."""
+    from linsense.errors import InputError
+    from linsense.limits import MAX_TABLE_COLUMNS, MAX_TABLE_FIELD_CHARS
+
+    if len(row) > MAX_TABLE_COLUMNS:
+        raise InputError(src, f"row {number}",
+                         f"{len(row):,} columns: beyond the limit of {MAX_TABLE_COLUMNS} columns "
+                         "(docs/limits.md)")
+    for j, cell in enumerate(row):
+        if len(cell) > MAX_TABLE_FIELD_CHARS:
+            raise InputError(src, f"row {number}, column {j + 1}",
+                             f"field larger than field limit of {MAX_TABLE_FIELD_CHARS} characters "
+                             f"(docs/limits.md): a field of {len(cell):,} characters")
+    return row
 
 
 def read_text_file(path: str | os.PathLike, what: str) -> str:

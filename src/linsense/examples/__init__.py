@@ -298,19 +298,8 @@ def copy_to(dest: str | Path, force: bool = False) -> list[Path]:
     if dest.exists() and not dest.is_dir():
         raise InputError(str(dest), "", "exists and is not a folder")
     targets = [(rel, dest / rel) for rel in files()]
-    there = [t for _, t in targets if t.exists() or t.is_symlink()]
-    folder = next((t for t in there if t.is_dir() and not t.is_symlink()), None)
-    if folder is not None:  # (--force replaced it with the file and deleted the folder with its files)
-        raise InputError(str(folder), "", "exists and is a folder: not replaced, even with --force; nothing "
-                                          "copied (move it away)")
-    if not force and there:
-        more = f" and {len(there) - 1} more" if len(there) > 1 else ""
-        raise InputError(str(there[0]), "", f"exists{more}: nothing copied (--force overwrites)")
-    folders = sorted({t.parent for _, t in targets} | {dest}, key=lambda d: len(d.parts))
-    up = dest.parent
-    while not up.exists() and up.parent != up:  # (the missing folders above dest too)
-        folders.insert(0, up)
-        up = up.parent
+    _refuse_existing(targets, force)
+    folders = _folders_to_make(dest, targets)
     stage = dest / f".linsense-examples.tmp-{os.getpid()}-{secrets.token_hex(4)}"
     made: list[Path] = []  # the folders made, parents first
     moved: list[tuple[Path, Path | None]] = []  # (placed file, the file it replaced, set aside)
@@ -346,6 +335,29 @@ def copy_to(dest: str | Path, force: bool = False) -> list[Path]:
         raise type(err)(err.source, f"{err.message}; nothing copied") from None
     shutil.rmtree(stage, ignore_errors=True)
     return [t for _, t in targets]
+
+
+def _refuse_existing(targets: list[tuple[str, Path]], force: bool) -> None:
+    """Refuse a folder where a file of ``targets`` goes, and (without ``force``) a file there."""
+    there = [t for _, t in targets if t.exists() or t.is_symlink()]
+    folder = next((t for t in there if t.is_dir() and not t.is_symlink()), None)
+    if folder is not None:  # (--force replaced it with the file and deleted the folder with its files)
+        raise InputError(str(folder), "", "exists and is a folder: not replaced, even with --force; nothing "
+                                          "copied (move it away)")
+    if not force and there:
+        more = f" and {len(there) - 1} more" if len(there) > 1 else ""
+        raise InputError(str(there[0]), "", f"exists{more}: nothing copied (--force overwrites)")
+
+
+def _folders_to_make(dest: Path, targets: list[tuple[str, Path]]) -> list[Path]:
+    """The folders the copy needs, parents first: ``dest``, the missing ones above it, and the
+    sub-folders of ``targets``."""
+    folders = sorted({t.parent for _, t in targets} | {dest}, key=lambda d: len(d.parts))
+    up = dest.parent
+    while not up.exists() and up.parent != up:  # (the missing folders above dest too)
+        folders.insert(0, up)
+        up = up.parent
+    return folders
 
 
 def _undo(moved: list[tuple[Path, Path | None]], made: list[Path], stage: Path) -> None:

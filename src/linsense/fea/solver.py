@@ -494,19 +494,7 @@ class Solver:
         RuntimeError
             No convergence in ``max_iter`` iterations.
         """
-        g = self.g
-        pat = self.rod_pattern(x)
-        nu_mag = 1.0 / (MU0 * g.mu_magnet)
-        nu_lin = self.nu_fixed.copy()
-        nu_lin[self.in_rod] = np.where(pat[self.in_rod] != 0, nu_mag, 1.0 / (MU0 * g.mu_rod_iron))
-        masks = []
-        if self.curve_rod is not None:
-            masks.append((self.in_rod & (pat == 0), self.curve_rod))
-        if self.curve_arm is not None:
-            masks.append((self.arm_iron, self.curve_arm))
-        rhs = self.F @ np.asarray(currents, float)
-        if g.remanence > 0:
-            rhs = rhs + asm(_magnet, self.basis, nubr=nu_mag * g.remanence * pat)
+        nu_lin, masks, rhs = self._nonlinear_problem(x, currents)
         I = self.I
 
         A = self.asm
@@ -520,14 +508,7 @@ class Solver:
             res = A.residual(nu, gr) - rhs
             return gr, nu, dnu, res[I], B
 
-        if psi0 is None:  # start from the linear solution with mu_r 1000 in the saturable iron
-            nu0 = nu_lin.copy()
-            for mask, _ in masks:
-                nu0[mask] = 1.0 / (MU0 * 1000.0)
-            psi = np.zeros(self.basis.N)
-            psi[I] = _lu(A.tangent(nu0)).solve(rhs[I])
-        else:
-            psi = np.array(psi0, float)
+        psi = self._nonlinear_start(nu_lin, masks, rhs) if psi0 is None else np.array(psi0, float)
         field, nu, dnu, res, B = state(psi)
         it = 0
         while True:
@@ -559,6 +540,34 @@ class Solver:
         self.last_state = psi
         half = 0.5 * np.diag(L)
         return Solution(x, L, link, half, half, fields=fields, newton=it)
+
+    def _nonlinear_problem(self, x: float, currents) -> tuple[np.ndarray, list, np.ndarray]:
+        """The reluctivity of the linear materials at rod position ``x``, the (mask, B-H curve)
+        pairs of the saturable iron, and the right-hand side of the magnets and ``currents``."""
+        g = self.g
+        pat = self.rod_pattern(x)
+        nu_mag = 1.0 / (MU0 * g.mu_magnet)
+        nu_lin = self.nu_fixed.copy()
+        nu_lin[self.in_rod] = np.where(pat[self.in_rod] != 0, nu_mag, 1.0 / (MU0 * g.mu_rod_iron))
+        masks = []
+        if self.curve_rod is not None:
+            masks.append((self.in_rod & (pat == 0), self.curve_rod))
+        if self.curve_arm is not None:
+            masks.append((self.arm_iron, self.curve_arm))
+        rhs = self.F @ np.asarray(currents, float)
+        if g.remanence > 0:
+            rhs = rhs + asm(_magnet, self.basis, nubr=nu_mag * g.remanence * pat)
+        return nu_lin, masks, rhs
+
+    def _nonlinear_start(self, nu_lin: np.ndarray, masks: list, rhs: np.ndarray) -> np.ndarray:
+        """Newton's start: the linear solution with mu_r 1000 in the saturable iron."""
+        A, I = self.asm, self.I
+        nu0 = nu_lin.copy()
+        for mask, _ in masks:
+            nu0[mask] = 1.0 / (MU0 * 1000.0)
+        psi = np.zeros(self.basis.N)
+        psi[I] = _lu(A.tangent(nu0)).solve(rhs[I])
+        return psi
 
     def solve(self, x: float, keep: bool = False, energy: bool = True) -> Solution:
         """Linear materials: the inductances (magnets off) and the PM flux linkages at rod position x.

@@ -125,6 +125,27 @@ def read_bench_csv(path: str | Path) -> BenchData:
         The first problem found, naming the row and the column.
     """
     src = str(path)
+    form, rows, phase, col = _bench_cells(path, src)
+    freq = col["freq_hz"]
+    bad = np.nonzero(freq <= 0)[0]
+    if bad.size:
+        i = bad[0]
+        raise InputError(src, f"row {rows[i]}, column freq_hz",
+                         f"frequency must be positive, got {freq[i]:.12g}")
+    current, voltage, i_cols, v_cols = _bench_phasors(src, form, col, rows)
+    _check_magnitudes(src, rows, current, voltage, i_cols, v_cols)
+    pos_mm = col["position_mm"]
+    _check_bench_rows(src, rows, freq, pos_mm, phase)
+    return BenchData(
+        position=pos_mm * 1e-3, phase=phase, freq=freq, current=current, voltage=voltage,
+        amplitude_only=form == "amplitude", row=rows, source=src,
+    )
+
+
+def _bench_cells(path: str | Path,
+                 src: str) -> tuple[str, np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+    """The bench file's form (``"phasor"`` or ``"amplitude"``), its rows' numbers, the fed phase
+    of each (0, 1, 2) and its numeric columns by name; each cell checked (width, phase, finite)."""
     rows_in = csv_rows(path, "bench file")  # (bounded, BOM skipped: docs/limits.md)
     header = next(rows_in)[1]
     if any(";" in h for h in header) and not any(c in header for c in ("phase", "I_re", "I")):
@@ -150,13 +171,13 @@ def read_bench_csv(path: str | Path) -> BenchData:
         for j, c in enumerate(numeric):
             data[i, j] = finite_cell(src, r, c, row[idx[c]].strip() if idx[c] < len(row) else "")
     col = {c: data[:, j] for j, c in enumerate(numeric)}
+    return form, rows, phase, col
 
-    freq = col["freq_hz"]
-    bad = np.nonzero(freq <= 0)[0]
-    if bad.size:
-        i = bad[0]
-        raise InputError(src, f"row {rows[i]}, column freq_hz",
-                         f"frequency must be positive, got {freq[i]:.12g}")
+
+def _bench_phasors(src: str, form: str, col: dict[str, np.ndarray],
+                   rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, str, str]:
+    """The fed current and the three phase voltages of each row, complex (real for an
+    amplitude-only file, whose negative magnitudes are refused), and the columns they come from."""
     if form == "phasor":
         current = col["I_re"] + 1j * col["I_im"]
         voltage = np.stack([col[f"V{p}_re"] + 1j * col[f"V{p}_im"] for p in PHASES], axis=1)
@@ -171,6 +192,12 @@ def read_bench_csv(path: str | Path) -> BenchData:
         current = col["I"].astype(complex)
         voltage = np.stack([col[f"V{p}"] for p in PHASES], axis=1).astype(complex)
         i_cols, v_cols = "I", "VA, VB, VC"
+    return current, voltage, i_cols, v_cols
+
+
+def _check_magnitudes(src: str, rows: np.ndarray, current: np.ndarray, voltage: np.ndarray, i_cols: str,
+                      v_cols: str) -> None:
+    """Refuse an implausible current or voltage (one in mA or mV) and a row without current."""
     mag = np.abs(current)
     # (the table of plausible values: a current in mA, a voltage in mV)
     for kind, values, what in (("current", mag, i_cols), ("voltage", np.abs(voltage), v_cols)):
@@ -186,6 +213,11 @@ def read_bench_csv(path: str | Path) -> BenchData:
         raise InputError(src, f"row {rows[i]}, column {i_cols}",
                          f"zero current ({mag[i]:.12g} A): the fed phase carries no current")
 
+
+def _check_bench_rows(src: str, rows: np.ndarray, freq: np.ndarray, pos_mm: np.ndarray,
+                      phase: np.ndarray) -> None:
+    """Refuse rows at another frequency than the first's, duplicate rows (same position and fed
+    phase) and a phase that is never fed."""
     ref = freq[0]
     bad = np.nonzero(np.abs(freq - ref) > FREQ_TOLERANCE * ref)[0]
     if bad.size:
@@ -195,8 +227,6 @@ def read_bench_csv(path: str | Path) -> BenchData:
             f"inconsistent frequency {freq[i]:.12g} Hz: row {rows[0]} has {ref:.12g} Hz "
             f"(all rows must use one frequency within {100 * FREQ_TOLERANCE:g} %)",
         )
-
-    pos_mm = col["position_mm"]
     key = np.round(pos_mm / POSITION_TOLERANCE_MM).astype(np.int64) * 3 + phase
     _, first, inverse = np.unique(key, return_index=True, return_inverse=True)
     dup = np.nonzero(first[inverse] != np.arange(key.size))[0]
@@ -211,10 +241,6 @@ def read_bench_csv(path: str | Path) -> BenchData:
         if not np.any(phase == k):
             raise InputError(src, "column phase",
                              f"phase {name} is never fed: every phase must be fed in turn")
-    return BenchData(
-        position=pos_mm * 1e-3, phase=phase, freq=freq, current=current, voltage=voltage,
-        amplitude_only=form == "amplitude", row=rows, source=src,
-    )
 
 
 # ---------------------------------------------------------------------- writing
@@ -295,6 +321,33 @@ def emulate_bench(
     linsense.errors.InputError
         An argument out of range, naming it.
     """
+    positions, noise, seed, freq, current = _emulate_args(positions, noise, seed, freq, current)
+    rng = np.random.default_rng(seed)
+    x = np.arange(positions) * motor.pole_pitch / positions
+    pos = np.repeat(x, 3)
+    phase = np.tile(np.arange(3), positions)
+    R = pos.size
+    L = motor.inductance.L_abc(motor.theta_of_x(pos))  # (R, 3, 3)
+    w = 2.0 * np.pi * freq
+    amp = current * rng.uniform(0.8, 1.2, R)
+    I = amp * np.exp(1j * rng.uniform(0.0, 2.0 * np.pi, R))
+    Z = 1j * w * L[np.arange(R), :, phase]  # column k of j omega L
+    Z[np.arange(R), phase] += motor.R_s
+    V = Z * I[:, None]
+    I_m = _noisy(rng, noise, I)
+    V_m = _noisy(rng, noise, V)
+    if amplitude_only:
+        I_m = np.abs(I_m).astype(complex)
+        V_m = np.abs(V_m).astype(complex)
+    return BenchData(
+        position=pos, phase=phase, freq=np.full(R, float(freq)), current=I_m, voltage=V_m,
+        amplitude_only=amplitude_only, source=f"emulated {motor.name}",
+    )
+
+
+def _emulate_args(positions: int, noise: float, seed: int, freq: float,
+                  current: float) -> tuple[int, float, int, float, float]:
+    """:func:`emulate_bench`'s arguments checked (one InputError naming the one out of range)."""
     import numbers
 
     from linsense._check import real as real_arg
@@ -314,29 +367,10 @@ def emulate_bench(
                      kind="relative_noise")
     freq = real_arg(freq, src, "freq", 0.0, low_open=True, what="a positive finite frequency in Hz")
     current = real_arg(current, src, "current", 0.0, low_open=True, what="a positive finite current in A")
-    rng = np.random.default_rng(seed)
-    x = np.arange(positions) * motor.pole_pitch / positions
-    pos = np.repeat(x, 3)
-    phase = np.tile(np.arange(3), positions)
-    R = pos.size
-    L = motor.inductance.L_abc(motor.theta_of_x(pos))  # (R, 3, 3)
-    w = 2.0 * np.pi * freq
-    amp = current * rng.uniform(0.8, 1.2, R)
-    I = amp * np.exp(1j * rng.uniform(0.0, 2.0 * np.pi, R))
-    Z = 1j * w * L[np.arange(R), :, phase]  # column k of j omega L
-    Z[np.arange(R), phase] += motor.R_s
-    V = Z * I[:, None]
+    return positions, noise, seed, freq, current
 
-    def noisy(p: np.ndarray) -> np.ndarray:
-        s = noise * np.abs(p) / np.sqrt(2.0)
-        return p + s * (rng.standard_normal(p.shape) + 1j * rng.standard_normal(p.shape))
 
-    I_m = noisy(I)
-    V_m = noisy(V)
-    if amplitude_only:
-        I_m = np.abs(I_m).astype(complex)
-        V_m = np.abs(V_m).astype(complex)
-    return BenchData(
-        position=pos, phase=phase, freq=np.full(R, float(freq)), current=I_m, voltage=V_m,
-        amplitude_only=amplitude_only, source=f"emulated {motor.name}",
-    )
+def _noisy(rng: np.random.Generator, noise: float, p: np.ndarray) -> np.ndarray:
+    """``p`` with complex Gaussian noise of standard deviation ``noise * |p|`` added."""
+    s = noise * np.abs(p) / np.sqrt(2.0)
+    return p + s * (rng.standard_normal(p.shape) + 1j * rng.standard_normal(p.shape))

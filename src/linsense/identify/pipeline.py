@@ -117,45 +117,9 @@ def identify(
         Bad options or data; a fitted model that :func:`check_motor` refuses.
     """
     src = str(bench)
-    sources: dict[str, str] = {}
-
-    def pick(opt_value, key: str, option: str, why: str):
-        if opt_value is not None:
-            sources[key] = option
-            return float(opt_value)
-        if base is not None:
-            sources[key] = f"--motor {base.source or base.name}"
-            return float(getattr(base, key))
-        raise InputError(option, "", f"missing: {why}; give {option} or --motor NAME|PATH")
-
-    tau = pick(pole_pitch, "pole_pitch", "--pole-pitch", "the pole pitch converts position_mm to theta")
-    k_f = pick(force_constant, "force_constant", "--force-constant", "motor.toml needs the force constant")
-    m = pick(mass, "mass", "--mass", "motor.toml needs the moving mass")
-    # (the motor file's table of plausible values, before the bench is read: a pole pitch in mm
-    # was refused as "need at least 8 distinct electrical positions")
-    for arg, value, kind in (("pole_pitch", pole_pitch, "pole_pitch"), ("force_constant", force_constant,
-                                                                         "force_constant"),
-                             ("mass", mass, "mass"), ("resistance", resistance, "resistance")):
-        if value is not None:
-            check("linsense.identify.identify", arg, float(value), kind)
-
+    tau, k_f, m, sources = _mechanics(base, pole_pitch, force_constant, mass, resistance)
     data = read_bench_csv(bench)
-    warnings: list[str] = []
-    if data.amplitude_only:
-        if resistance is not None:
-            r_used, r_src = float(resistance), "--resistance"
-        elif base is not None:
-            r_used, r_src = float(base.R_s), f"R_s of --motor {base.source or base.name}"
-        else:
-            r_used, r_src = None, ""
-        table = process_bench(data, tau, r_used, r_src)
-        R_s, r_note = float(r_used), r_src
-    else:
-        if resistance is not None:
-            warnings.append(f"--resistance {resistance:g} ignored: phasor data measure the resistance")
-        table = process_bench(data, tau)
-        R_s = table.resistance
-        r_note = f"identified: mean Re(V_fed/I) over {data.rows} rows"
+    table, R_s, r_note, r_used, warnings = _processed(data, tau, base, resistance)
     warnings = table.warnings + warnings
 
     fit = fit_inductances(table.theta, table.entries, harmonics, source=src)
@@ -178,6 +142,58 @@ def identify(
         lut_fit=build_lut(motor, points), resistance_source=r_note, motor_sources=sources,
         warnings=warnings,
     )
+
+
+def _mechanics(base: Motor | None, pole_pitch: float | None, force_constant: float | None,
+               mass: float | None, resistance: float | None) -> tuple[float, float, float, dict[str, str]]:
+    """The pole pitch, force constant and mass (the options', else ``base``'s), each checked
+    against the motor file's table of plausible values, and where each came from."""
+    sources: dict[str, str] = {}
+
+    def pick(opt_value, key: str, option: str, why: str):
+        if opt_value is not None:
+            sources[key] = option
+            return float(opt_value)
+        if base is not None:
+            sources[key] = f"--motor {base.source or base.name}"
+            return float(getattr(base, key))
+        raise InputError(option, "", f"missing: {why}; give {option} or --motor NAME|PATH")
+
+    tau = pick(pole_pitch, "pole_pitch", "--pole-pitch", "the pole pitch converts position_mm to theta")
+    k_f = pick(force_constant, "force_constant", "--force-constant", "motor.toml needs the force constant")
+    m = pick(mass, "mass", "--mass", "motor.toml needs the moving mass")
+    # (the motor file's table of plausible values, before the bench is read: a pole pitch in mm
+    # was refused as "need at least 8 distinct electrical positions")
+    for arg, value, kind in (("pole_pitch", pole_pitch, "pole_pitch"), ("force_constant", force_constant,
+                                                                         "force_constant"),
+                             ("mass", mass, "mass"), ("resistance", resistance, "resistance")):
+        if value is not None:
+            check("linsense.identify.identify", arg, float(value), kind)
+    return tau, k_f, m, sources
+
+
+def _processed(data: BenchData, tau: float, base: Motor | None,
+               resistance: float | None) -> tuple[MeasuredTable, float, str, float | None, list[str]]:
+    """The bench data processed (:func:`process_bench`), the resistance, where it came from, the
+    resistance given for amplitude-only data (None for phasor data) and the option warnings."""
+    r_used = None
+    warnings: list[str] = []
+    if data.amplitude_only:
+        if resistance is not None:
+            r_used, r_src = float(resistance), "--resistance"
+        elif base is not None:
+            r_used, r_src = float(base.R_s), f"R_s of --motor {base.source or base.name}"
+        else:
+            r_used, r_src = None, ""
+        table = process_bench(data, tau, r_used, r_src)
+        R_s, r_note = float(r_used), r_src
+    else:
+        if resistance is not None:
+            warnings.append(f"--resistance {resistance:g} ignored: phasor data measure the resistance")
+        table = process_bench(data, tau)
+        R_s = table.resistance
+        r_note = f"identified: mean Re(V_fed/I) over {data.rows} rows"
+    return table, R_s, r_note, r_used, warnings
 
 
 def _check_pitch(src: str, data: BenchData, tau: float, harmonics: int, given: str,

@@ -75,7 +75,7 @@ def sim_figure(data) -> Figure:
     """
     if not isinstance(data, PlotData):
         data = result_plot_data(data)
-    b, m = data.bins, data.metrics
+    b = data.bins
     t = b["t"]
     fig = Figure(figsize=(8.0, 11.0), layout="constrained")
     axes = fig.subplots(5, 1, sharex=True)
@@ -112,6 +112,19 @@ def sim_figure(data) -> Figure:
     ax.legend(loc="upper right", fontsize=7, ncol=3)
 
     ax = axes[4]
+    _force_panel(ax, data, t, b)
+    ax.set_ylabel("motor force (N)")
+    ax.set_xlabel("time (s)")
+    for a in axes:
+        a.grid(True, alpha=0.3)
+
+    fig.suptitle(_sim_title(data), fontsize=9)
+    return fig
+
+
+def _force_panel(ax, data, t: np.ndarray, b: dict) -> None:
+    """The run figure's force panel: the mean force over each bin, or why it is not drawn (a trace
+    too sparse to resolve the HF force)."""
     spi = data.samples_per_injection
     if spi is None or spi >= 4.0:
         ax.plot(t, b["force"], color="darkgreen", lw=1.2, label="mean over each bin")
@@ -123,11 +136,11 @@ def sim_figure(data) -> Figure:
                           f"(--decimate {fit} or less draws it)",
                 ha="center", va="center", transform=ax.transAxes, fontsize=8)
         ax.set_yticks([])
-    ax.set_ylabel("motor force (N)")
-    ax.set_xlabel("time (s)")
-    for a in axes:
-        a.grid(True, alpha=0.3)
 
+
+def _sim_title(data) -> str:
+    """The run figure's title: the run, its verdict and its metrics."""
+    m = data.metrics
     bin_ms = data.bin_s * 1e3
     reason = (m.get("unstable_reason") or "?").split(":")[0]
     verdict = "stable" if m.get("stable") else f"not stable: {reason}"
@@ -138,8 +151,7 @@ def sim_figure(data) -> Figure:
              f"limit cycle {_fmt(m.get('limit_cycle_mm'), 'mm')}, "
              f"overshoot {_fmt(m.get('overshoot_mm'), 'mm')}\n"
              f"bins of {bin_ms:.3g} ms; bands and envelopes over every PWM period")
-    fig.suptitle(title, fontsize=9)
-    return fig
+    return title
 
 
 def sim_figure_png(result) -> bytes:

@@ -73,6 +73,47 @@ def claims(m: dict) -> list[dict]:
     def add(claim: str, paper: str, ours: str, holds: bool, rule: str) -> None:
         out.append({"claim": claim, "paper": paper, "ours": ours, "holds": bool(holds), "rule": rule})
 
+    _fig9_claims(m, add)
+    for fig, step in (("fig11", 3), ("fig12", 6)):
+        for var, name in (("lut", "with the LUT"), ("nolut", "without the LUT")):
+            run = m[fig][var]
+            want = not (fig == "fig12" and var == "nolut")
+            ok = bool(run.get("stable")) if want else _unstable(run)
+            add(f"Fig. {fig[3:]}: a {step} mm step is {'stable' if want else 'unstable'} {name}",
+                "stable" if want else "unstable", _verdict(run), ok,
+                "the run's 'stable'" if want else "the run is not stable (and did not trip on its set-up)")
+    n6, nd = m["fig12"]["nolut"], m["fig12"]["nolut_no_dead_time"]
+    lc6, lcd = finite_or_none(n6.get("limit_cycle_mm")), finite_or_none(nd.get("limit_cycle_mm"))
+    add("Fig. 12: the uncompensated instability is the end-effect's, not the inverter's (it persists "
+        "with dead_time = 0)", "(implied)",
+        f"limit cycle {_fmt(lc6, 'mm')} with the dead time, {_fmt(lcd, 'mm')} without",
+        _unstable(n6) and _unstable(nd) and lc6 is not None and lcd is not None and lcd >= 0.5 * lc6,
+        "both unstable; without dead time at least half the limit cycle")
+    _fig12_evidence_claims(m, add)
+    f13 = m["fig13"]["lut"]
+    pk = finite_or_none(f13.get("transient_max_err_deg"))
+    ok = pk is not None and pk <= 9.0 and _valid(f13)
+    add("Fig. 13: peak estimation error in the transients about 9 electrical deg (< 1.4 mm), with the LUT",
+        "about 9 deg", _fmt(pk) + (", below the paper's" if ok else ""), ok, "<= 9 deg")
+    ss = finite_or_none(f13.get("steady_max_err_deg"))
+    ok = ss is not None and ss < 3.0 and _valid(f13)
+    add("Fig. 13: estimation error below 3 electrical deg (< 0.5 mm) at steady state, with the LUT",
+        "< 3 deg", _fmt(ss), ok, "< 3 deg")
+    return out
+
+
+#: mm, the largest motion allowed while the start-up detects (a free, frictionless mover:
+#: tests/test_startup.py's bound; docs/firmware.md measures up to 0.10 mm over 200 starts)
+STARTUP_MOTION_MM = 0.15
+
+
+def _err(run: dict) -> str:
+    return (f"{_fmt(finite_or_none(run.get('steady_max_err_deg')))} at rest, "
+            f"{_fmt(finite_or_none(run.get('transient_max_err_deg')))} in transients")
+
+
+def _fig9_claims(m: dict, add) -> None:
+    """Fig. 9's claims (the compensation table's peak and its calibrations), each given to ``add``."""
     peak = finite_or_none(m["lut"]["peak_deg"])
     add("Fig. 9: the compensation LUT peaks at about 4 electrical deg", "about 4 deg", _fmt(peak),
         peak is not None and abs(peak - 4.0) <= 1.0, "|peak - 4| <= 1 deg")
@@ -91,21 +132,12 @@ def claims(m: dict) -> list[dict]:
          "the FEA with saturating iron tests the physics, docs/fea.md)") if done else
         f"calibration incomplete ({incomplete})",
         done and dl is not None and dl <= 0.5, "every calibration completed; <= 0.5 deg")
-    for fig, step in (("fig11", 3), ("fig12", 6)):
-        for var, name in (("lut", "with the LUT"), ("nolut", "without the LUT")):
-            run = m[fig][var]
-            want = not (fig == "fig12" and var == "nolut")
-            ok = bool(run.get("stable")) if want else _unstable(run)
-            add(f"Fig. {fig[3:]}: a {step} mm step is {'stable' if want else 'unstable'} {name}",
-                "stable" if want else "unstable", _verdict(run), ok,
-                "the run's 'stable'" if want else "the run is not stable (and did not trip on its set-up)")
-    n6, nd = m["fig12"]["nolut"], m["fig12"]["nolut_no_dead_time"]
-    lc6, lcd = finite_or_none(n6.get("limit_cycle_mm")), finite_or_none(nd.get("limit_cycle_mm"))
-    add("Fig. 12: the uncompensated instability is the end-effect's, not the inverter's (it persists "
-        "with dead_time = 0)", "(implied)",
-        f"limit cycle {_fmt(lc6, 'mm')} with the dead time, {_fmt(lcd, 'mm')} without",
-        _unstable(n6) and _unstable(nd) and lc6 is not None and lcd is not None and lcd >= 0.5 * lc6,
-        "both unstable; without dead time at least half the limit cycle")
+
+
+def _fig12_evidence_claims(m: dict, add) -> None:
+    """The evidence of Fig. 12's instability (the onset angle, the loop-gain factor, the linearised
+    loop), each claim given to ``add``."""
+    n6 = m["fig12"]["nolut"]
     an = m.get("fig12_analysis", {})
     on = an.get("onset", {})
     a6, a3 = finite_or_none(on.get("reach6_deg")), finite_or_none(on.get("reach3_deg"))
@@ -136,26 +168,6 @@ def claims(m: dict) -> list[dict]:
         ours = "n/a"
     add("Fig. 12 (evidence): the linearised loop of the tuning command predicts the uncompensated "
         "instability", "(implied)", ours, unstable, "a negative margin or an unstable pole at some angle")
-    f13 = m["fig13"]["lut"]
-    pk = finite_or_none(f13.get("transient_max_err_deg"))
-    ok = pk is not None and pk <= 9.0 and _valid(f13)
-    add("Fig. 13: peak estimation error in the transients about 9 electrical deg (< 1.4 mm), with the LUT",
-        "about 9 deg", _fmt(pk) + (", below the paper's" if ok else ""), ok, "<= 9 deg")
-    ss = finite_or_none(f13.get("steady_max_err_deg"))
-    ok = ss is not None and ss < 3.0 and _valid(f13)
-    add("Fig. 13: estimation error below 3 electrical deg (< 0.5 mm) at steady state, with the LUT",
-        "< 3 deg", _fmt(ss), ok, "< 3 deg")
-    return out
-
-
-#: mm, the largest motion allowed while the start-up detects (a free, frictionless mover:
-#: tests/test_startup.py's bound; docs/firmware.md measures up to 0.10 mm over 200 starts)
-STARTUP_MOTION_MM = 0.15
-
-
-def _err(run: dict) -> str:
-    return (f"{_fmt(finite_or_none(run.get('steady_max_err_deg')))} at rest, "
-            f"{_fmt(finite_or_none(run.get('transient_max_err_deg')))} in transients")
 
 
 def claims_beyond(m: dict) -> list[dict]:

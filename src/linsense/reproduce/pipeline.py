@@ -148,8 +148,14 @@ def reproduce(out: str, motor_spec: str = "ecce2010", quick: bool = False, progr
                   f"{summ['gain_nolut_min']:.2f}..{summ['gain_nolut_max']:.2f}")
     if model_only:
         return st.files, [model_line]
+    return st.files, [model_line, *_claim_lines(motor.name, summ, metrics)]
+
+
+def _claim_lines(name: str, summ: dict, metrics: dict) -> list[str]:
+    """The summary's lines of the claims: how many of the paper's hold, each with its verdict, then
+    those beyond the paper."""
     held = sum(c["holds"] for c in metrics["claims"])
-    lines = [f"{motor.name}: {held} of {len(metrics['claims'])} claims of the paper hold "
+    lines = [f"{name}: {held} of {len(metrics['claims'])} claims of the paper hold "
              f"(report.html); Psi_LUT peak {summ['psi_lut_peak_deg']:.2f} deg; {metrics['wall_s']:.0f} s"]
     for c in metrics["claims"]:
         verdict = "holds" if c["holds"] else "FAILS"
@@ -160,7 +166,7 @@ def reproduce(out: str, motor_spec: str = "ecce2010", quick: bool = False, progr
     for c in metrics["claims_beyond"]:
         verdict = "holds" if c["holds"] else "FAILS"
         lines.append(f"  [{verdict}] {c['claim']}: {c['paper']}; ours {c['ours']}")
-    return st.files, [model_line, *lines]
+    return lines
 
 
 def _step_title(fig: str, sc, motor) -> str:

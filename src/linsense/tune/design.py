@@ -1112,8 +1112,22 @@ def design(
     d = drive or DriveData()
     x = check_drive(motor, d, source)  # (every refusal: DRIVE_RULES, in order)
     warnings: list[str] = []
-    L_d, L_q = x.dq
-    f_inj, s_min, v_inj = x.f_inj, x.s_min, x.v_inj
+    i_hf, headroom = _injection_and_bus(motor, d, x, warnings)
+    dz = _loops(motor, d, x, i_hf, headroom, warnings)
+    _limits(dz, motor, d, warnings)
+    _friction_ripple(dz, motor, d, x.dq[1], warnings)
+    if analyse:
+        _analyse(dz, motor, d, warnings)
+    return dz
+
+
+def _injection_and_bus(
+    motor: Motor, d: DriveData, x: DriveInputs, warnings: list[str]
+) -> tuple[float, float]:
+    """The HF current of the injection and the speed the bus leaves room for at ``i_max``; the
+    dead time's, HF current's, bus's and error gain's warnings appended to ``warnings``."""
+    L_q = x.dq[1]
+    f_inj, v_inj = x.f_inj, x.v_inj
     if d.v_inj is not None and x.dead_time_ratio > DEAD_TIME_RATIO_MAX:
         warnings.append(f"the given injection leaves the dead time's voltage error "
                         f"{x.dead_time_ratio:.3g} times the weakest HF error signal (the design "
@@ -1130,6 +1144,21 @@ def design(
             f"the bus leaves room for the fundamental up to {headroom:.3g} m/s at i_max, below "
             f"v_max = {d.v_max:g} m/s"
         )
+    if x.k_e.min() < 0.3:
+        warnings.append(
+            f"the error gain drops to {x.k_e.min():.2f} of nominal at some positions "
+            "(low saliency): consider observer.gain_schedule = true"
+        )
+    return i_hf, headroom
+
+
+def _loops(
+    motor: Motor, d: DriveData, x: DriveInputs, i_hf: float, headroom: float, warnings: list[str]
+) -> Design:
+    """The loops' design: the current loop, demodulator, observer, speed and position loops, the
+    dither and the ramp, from the injection ``x`` (:func:`check_drive`)."""
+    L_d, L_q = x.dq
+    f_inj, s_min, v_inj = x.f_inj, x.s_min, x.v_inj
     f_i = f_inj / RATIO_INJ_CURRENT
     kp_i, ki_i = current_gains(f_i, L_d, L_q, motor.R_s)
     f_lpf = RATIO_LPF * f_inj
@@ -1142,46 +1171,33 @@ def design(
     kp_x = 2.0 * math.pi * f_v / RATIO_SPEED_POS
     gain = L_q / (L_q - L_d)
     k_e = x.k_e
-    if k_e.min() < 0.3:
-        warnings.append(
-            f"the error gain drops to {k_e.min():.2f} of nominal at some positions "
-            "(low saliency): consider observer.gain_schedule = true"
-        )
     dz = Design(
-        f_inj=f_inj,
-        v_inj=v_inj,
-        quad=d.quad,
-        i_hf=i_hf,
-        current_bw=f_i,
-        current_kp=kp_i,
-        current_ki=ki_i,
+        f_inj=f_inj, v_inj=v_inj, quad=d.quad, i_hf=i_hf,
+        current_bw=f_i, current_kp=kp_i, current_ki=ki_i,
         demod_lpf=f_lpf,
         demod_notch=2.0 * f_inj if 4.0 * f_inj < d.f_pwm else 0.0,  # (below fs / 2 only)
         demod_gain=gain,
         observer_bw=f_obs,
         observer_type="mech" if mech else "pll",
         load_ff=mech,
-        observer_bw_pll=f_pll,
-        observer_bw_mech=f_mech,
-        speed_bw=f_v,
-        speed_kp=kp_v,
-        speed_ki=ki_v,
-        kp_x=kp_x,
+        observer_bw_pll=f_pll, observer_bw_mech=f_mech,
+        speed_bw=f_v, speed_kp=kp_v, speed_ki=ki_v, kp_x=kp_x,
         dither_a=DITHER_CURRENT * d.i_max,
         dither_hz=DITHER_FREQ * f_inj,
         hf_delay=HF_DELAY_PERIODS / f_inj if d.shape == "pulsating" else 0.0,
-        k_e_min=float(k_e.min()),
-        k_e_max=float(k_e.max()),
+        k_e_min=float(k_e.min()), k_e_max=float(k_e.max()),
         headroom_speed=headroom,
         warnings=warnings,
         dead_time_ratio=x.dead_time_ratio,
         inj_ramp_rate=v_inj / INJ_RAMP_TIME,
         s_min=s_min,
     )
-    _limits(dz, motor, d, warnings)
-    _friction_ripple(dz, motor, d, L_q, warnings)
-    if not analyse:
-        return dz
+    return dz
+
+
+def _analyse(dz: Design, motor: Motor, d: DriveData, warnings: list[str]) -> None:
+    """Fill ``dz.tolerances`` and ``dz.margins`` (the linearised model) and append to ``warnings``
+    the margins below their floors and the tolerances the drive does not hold."""
     from linsense.tune.margins import TOLERANCE_ERR_DEG, TOLERANCES, tolerance_costs
 
     # (the model of the tolerances is the pulsating/elliptical injection's; the other shapes have
@@ -1213,7 +1229,6 @@ def design(
                 continue
             warnings.append(f"a motor off by {name} {held} with this drive's nominal LUT (model; bound "
                             f"{TOLERANCE_ERR_DEG:g} deg): identify or calibrate the motor")
-    return dz
 
 
 def friction_steps(motor: Motor, f_pwm: float) -> float:
@@ -1629,17 +1644,8 @@ def loops(*, mass: float, kp_x: float, speed_kp: float, speed_ki: float, observe
     kh = k_e * h_lpf * ct.tf(num, den)
     w_i = 2.0 * math.pi * current_bw
     if len(observer_k) == 3:
-        k1, k2, k3 = observer_k
-        g_o = k1 / s + k2 / s**2 + k3 / s**3
-        c_i = w_i / (s + w_i)
-        e_u = ct.minreal(kh * (c_i - 1) / (mass * s**2 * (1 + kh * g_o)), verbose=False)
-        x_u = 1 / (mass * s**2) + g_o * e_u
-        v_u = 1 / (mass * s) + (k2 / s + k3 / s**2) * e_u
-        c_v = speed_kp + speed_ki / s if speed_ki else speed_kp
-        l_mot = g * c_v * (kp_x * x_u + v_u)
-        if load_ff:
-            l_mot = l_mot + k3 * mass / s * e_u
-        return kh * g_o, ct.minreal(l_mot, verbose=False)
+        return _mech_loops(kh, observer_k, w_i, mass=mass, kp_x=kp_x, speed_kp=speed_kp, speed_ki=speed_ki,
+                           g=g, load_ff=load_ff)
     k1, k2 = observer_k
     g_o = (k1 * s + k2) / s**2
     t_pos = ct.minreal(kh * g_o / (1 + kh * g_o), verbose=False)
@@ -1647,6 +1653,26 @@ def loops(*, mass: float, kp_x: float, speed_kp: float, speed_ki: float, observe
     c_v = speed_kp + speed_ki / s
     l_mot = ct.minreal(g * c_v * (kp_x * t_pos + s_v) / (mass * s**2) * w_i / (s + w_i), verbose=False)
     return kh * g_o, l_mot
+
+
+def _mech_loops(kh, observer_k: tuple[float, ...], w_i: float, *, mass: float, kp_x: float, speed_kp: float,
+                speed_ki: float, g: float, load_ff: bool):
+    """:func:`loops` of the mechanical observer ``observer_k = (k1, k2, k3)``: ``kh`` the error
+    path (gain, low-pass, delay), ``w_i`` the current loop's bandwidth, rad/s."""
+    import control as ct
+
+    s = ct.tf("s")
+    k1, k2, k3 = observer_k
+    g_o = k1 / s + k2 / s**2 + k3 / s**3
+    c_i = w_i / (s + w_i)
+    e_u = ct.minreal(kh * (c_i - 1) / (mass * s**2 * (1 + kh * g_o)), verbose=False)
+    x_u = 1 / (mass * s**2) + g_o * e_u
+    v_u = 1 / (mass * s) + (k2 / s + k3 / s**2) * e_u
+    c_v = speed_kp + speed_ki / s if speed_ki else speed_kp
+    l_mot = g * c_v * (kp_x * x_u + v_u)
+    if load_ff:
+        l_mot = l_mot + k3 * mass / s * e_u
+    return kh * g_o, ct.minreal(l_mot, verbose=False)
 
 
 def margins(dz: Design, motor: Motor, drive: DriveData, k_lo: float = 1.0, k_hi: float = 1.0) -> dict:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import os
 from pathlib import Path
 
@@ -151,54 +152,15 @@ def scenario_dict(dz: Design | DriveDesign, drive: DriveData | None = None, moto
     if dd.motor is not None:
         pole_pitch = dd.motor.pole_pitch
     keys = dd.scenario_keys()
-
-    def put(section: dict, *names: str) -> dict:
-        section.update({n.rsplit(".", 1)[1]: written(keys, n) for n in names})
-        return section
-
+    put = functools.partial(_put, keys)
     sc = {k: (dict(v) if isinstance(v, dict) else v) for k, v in (base or {}).items()}
     sc["motor"] = motor_ref
     sc.setdefault("scenario", {"name": "tuned", "duration": 2.0})
     sc.setdefault("reference", {"type": "hold"})
     put(sc.setdefault("inverter", {}), "inverter.v_dc", "inverter.f_pwm", "inverter.dead_time")
-    inj = put(sc.setdefault("injection", {}), "injection.amplitude", "injection.ramp_rate")
-    if keys["injection.shape"] != "pulsating":
-        put(inj, "injection.shape")
-    shape = inj.get("shape", "pulsating")
-    if shape == "pulsating":  # (kappa is the pulsating/elliptical injection's own)
-        put(inj, "injection.quadrature")
-    else:
-        inj.pop("quadrature", None)
-    if shape == "square":  # (at f_pwm / 2, not a design choice)
-        inj.pop("frequency", None)
-    else:
-        put(inj, "injection.frequency")
-    obs = put(sc.setdefault("observer", {}), "observer.type", "observer.bandwidth_hz",
-              "observer.demod_lpf_hz", "observer.gain_schedule", "observer.omega_max", "observer.hf_delay_s")
-    for k in ("k1", "k2", "k3"):
-        obs.pop(k, None)
-    if table is not None:
-        obs.update({"lut_model": "measured", "lut_file": table})
-    if keys["observer.type"] == "mech":  # (the clamp of its load estimate; the PLL has none)
-        put(obs, "observer.force_max")
-    else:
-        obs.pop("force_max", None)
-    con = sc.setdefault("controller", {})
-    for k in ("speed_kp", "speed_ki", "current_kp", "current_ki"):
-        con.pop(k, None)
-    put(con, "controller.current_bandwidth_hz", "controller.speed_bandwidth_hz", "controller.i_max",
-        "controller.v_max", "controller.step_a_max")
-    if con.get("position_type", "p") == "p":
-        put(con, "controller.kp_x")
-    # the motor file's friction and thrust ripple, fed forward (only where it has them: the keys'
-    # defaults are none)
-    for k in ("friction_coulomb", "friction_viscous", "friction_band", "ripple_order", "ripple_cos",
-              "ripple_sin"):
-        con.pop(k, None)
-    if keys["controller.friction_coulomb"] > 0.0 or keys["controller.friction_viscous"] > 0.0:
-        put(con, "controller.friction_coulomb", "controller.friction_viscous", "controller.friction_band")
-    if keys["controller.ripple_order"]:
-        put(con, "controller.ripple_order", "controller.ripple_cos", "controller.ripple_sin")
+    _put_injection(sc.setdefault("injection", {}), keys)
+    _put_observer(sc.setdefault("observer", {}), keys, table)
+    _put_controller(sc.setdefault("controller", {}), keys)
     put(sc.setdefault("calibration", {}), "calibration.dither_a", "calibration.dither_hz")
     # limits the scenario gives are kept (they are not gains); otherwise they follow the bus
     prot = sc.setdefault("protection", {})
@@ -214,6 +176,63 @@ def scenario_dict(dz: Design | DriveDesign, drive: DriveData | None = None, moto
     if dd.startup is not None and sc.get("control", {}).get("mode") == "startup":
         put(sc.setdefault("startup", {}), *(k for k in keys if k.startswith("startup.")))
     return sc
+
+
+def _put(keys: dict, section: dict, *names: str) -> dict:
+    """``section`` with the design's values of the scenario keys ``names`` written into it."""
+    section.update({n.rsplit(".", 1)[1]: written(keys, n) for n in names})
+    return section
+
+
+def _put_injection(inj: dict, keys: dict) -> None:
+    """The design's ``[injection]``: amplitude and ramp, shape, and the shape's own keys."""
+    _put(keys, inj, "injection.amplitude", "injection.ramp_rate")
+    if keys["injection.shape"] != "pulsating":
+        _put(keys, inj, "injection.shape")
+    shape = inj.get("shape", "pulsating")
+    if shape == "pulsating":  # (kappa is the pulsating/elliptical injection's own)
+        _put(keys, inj, "injection.quadrature")
+    else:
+        inj.pop("quadrature", None)
+    if shape == "square":  # (at f_pwm / 2, not a design choice)
+        inj.pop("frequency", None)
+    else:
+        _put(keys, inj, "injection.frequency")
+
+
+def _put_observer(obs: dict, keys: dict, table: str | None) -> None:
+    """The design's ``[observer]``, its gains left to the bandwidth, a measured ``table`` if any."""
+    _put(keys, obs, "observer.type", "observer.bandwidth_hz", "observer.demod_lpf_hz",
+         "observer.gain_schedule", "observer.omega_max", "observer.hf_delay_s")
+    for k in ("k1", "k2", "k3"):
+        obs.pop(k, None)
+    if table is not None:
+        obs.update({"lut_model": "measured", "lut_file": table})
+    if keys["observer.type"] == "mech":  # (the clamp of its load estimate; the PLL has none)
+        _put(keys, obs, "observer.force_max")
+    else:
+        obs.pop("force_max", None)
+
+
+def _put_controller(con: dict, keys: dict) -> None:
+    """The design's ``[controller]``: loop bandwidths, limits, position gain, and the motor
+    file's friction and thrust ripple fed forward."""
+    for k in ("speed_kp", "speed_ki", "current_kp", "current_ki"):
+        con.pop(k, None)
+    _put(keys, con, "controller.current_bandwidth_hz", "controller.speed_bandwidth_hz", "controller.i_max",
+         "controller.v_max", "controller.step_a_max")
+    if con.get("position_type", "p") == "p":
+        _put(keys, con, "controller.kp_x")
+    # the motor file's friction and thrust ripple, fed forward (only where it has them: the keys'
+    # defaults are none)
+    for k in ("friction_coulomb", "friction_viscous", "friction_band", "ripple_order", "ripple_cos",
+              "ripple_sin"):
+        con.pop(k, None)
+    if keys["controller.friction_coulomb"] > 0.0 or keys["controller.friction_viscous"] > 0.0:
+        _put(keys, con, "controller.friction_coulomb", "controller.friction_viscous",
+             "controller.friction_band")
+    if keys["controller.ripple_order"]:
+        _put(keys, con, "controller.ripple_order", "controller.ripple_cos", "controller.ripple_sin")
 
 
 def scenario_toml(
@@ -449,45 +468,39 @@ def c_header(dz: Design | DriveDesign, drive: DriveData | None = None, motor: Mo
         For an injection other than the pulsating/elliptical one.
     """
     dd = as_drive_design(dz, drive, motor, startup, table=table)
-    dz, drive, table, startup = dd.design, dd.drive, dd.table, dd.startup
-    check_c_header(drive)
-    stamped = dd.motor  # (the stamp's and the digest's motor: the file's)
-    sym = c_config_name(name, stamped.name)
-    fn = f"ls_cfg_{sym}"
-    lut = build_lut(stamped, points, f_inj=dz.f_inj, quad=dz.quad).values if table is None else table.values
-    # (the rest of the drive's model takes the end effect a measured table says, as the simulator's
-    # does: linsense.sim.tables.measured_model)
-    motor = dd.model
-    lut_r = lut_r_slope(motor, points, dz.f_inj, dz.quad)
-    gain = gain_schedule(motor, dz.f_inj, dz.quad, points)
-    gain_r = gain_r_slope(motor, dz.f_inj, dz.quad, points)
+    check_c_header(dd.drive)
+    sym = c_config_name(name, dd.motor.name)  # (the stamp's and the digest's motor: the file's)
+    digest = design_digest(dd.motor, dd.drive, points, dd.table)
+    return (_c_head_comment(dd, sym, digest, _c_status(unverified, verified_by))
+            + _c_tables_code(dd, sym, points, digest) + _c_function_code(dd, sym))
 
-    def f(v: float) -> str:
-        return f"LS_R({v:.9e})"
 
-    def array(vals: np.ndarray) -> str:
-        rows = [", ".join(f"{v:.9e}f" for v in vals[i : i + 4]) for i in range(0, len(vals), 4)]
-        return ",\n    ".join(rows)
+def _c_real(v: float) -> str:
+    """A real constant of the C header, in the library's real type."""
+    return f"LS_R({v:.9e})"
 
-    v = design_values(dd)
-    rows = header_rows(startup is not None)
-    body = "\n".join(f"    cfg->{r.field} = {f(v.field(r.field))};" for r in rows if r.kind != "count")
-    bw = v["observer.bandwidth_hz"]
-    body += "".join(f"\n    cfg->{r.field} = {int(v.field(r.field))}u;" for r in rows if r.kind == "count")
-    guard = f"LS_CFG_{sym.upper()}_H"
-    prefix = f"LS_CFG_{sym.upper()}"
-    shown = c_comment_text(stamped.name)
-    digest = design_digest(stamped, drive, points, table)
-    comp_what = ("with R_s" if table is None else
-                 f"measured ({c_comment_text(Path(table.source).name)}, {table.stamp.points} points"
-                 f"{', resampled' if table.resampled else ''})")
+
+def _c_array(vals: np.ndarray) -> str:
+    """The body of a C float array, four values a row."""
+    rows = [", ".join(f"{v:.9e}f" for v in vals[i : i + 4]) for i in range(0, len(vals), 4)]
+    return ",\n    ".join(rows)
+
+
+def _c_status(unverified: str, verified_by: str) -> str:
+    """The header comment's lines saying whether the drive passed its certificate."""
     import textwrap
 
     if unverified:
         said = textwrap.wrap("NOT VERIFIED: written with --unverified; " + c_comment_text(unverified), 96)
     else:
         said = textwrap.wrap("Verified: " + c_comment_text(verified_by), 96) if verified_by else []
-    status = "".join(f" * {ln}\n" for ln in said) + (" *\n" if said else "")
+    return "".join(f" * {ln}\n" for ln in said) + (" *\n" if said else "")
+
+
+def _c_head_comment(dd: DriveDesign, sym: str, digest: str, status: str) -> str:
+    """The header's opening comment: the drive, the design, how to use it, and the stamp."""
+    dz, drive = dd.design, dd.drive
+    fn, shown = f"ls_cfg_{sym}", c_comment_text(dd.motor.name)
     return f"""/* Drive configuration for motor {shown}, designed by `linsense tune` (docs/tuning.md).
 {status}
  * Drive: {drive.v_dc:g} V bus, {drive.f_pwm:g} Hz PWM, {drive.dead_time * 1e6:g} us dead time,
@@ -504,7 +517,25 @@ def c_header(dz: Design | DriveDesign, drive: DriveData | None = None, motor: Mo
  *
  * ls_drive_init refuses it (LS_ERR_VERSION) with a library of another version than linsense's below:
 {stamp_comment(digest)} */
-#ifndef {guard}
+"""
+
+
+def _c_tables_code(dd: DriveDesign, sym: str, points: int, digest: str) -> str:
+    """The header's guard, stamp macros and four tables: compensation, gain and their slopes in
+    the resistance's scale."""
+    dz, table = dd.design, dd.table
+    fn, guard, prefix = f"ls_cfg_{sym}", f"LS_CFG_{sym.upper()}_H", f"LS_CFG_{sym.upper()}"
+    lut = build_lut(dd.motor, points, f_inj=dz.f_inj, quad=dz.quad).values if table is None else table.values
+    # (the rest of the drive's model takes the end effect a measured table says, as the simulator's
+    # does: linsense.sim.tables.measured_model)
+    motor = dd.model
+    lut_r = lut_r_slope(motor, points, dz.f_inj, dz.quad)
+    gain = gain_schedule(motor, dz.f_inj, dz.quad, points)
+    gain_r = gain_r_slope(motor, dz.f_inj, dz.quad, points)
+    comp_what = ("with R_s" if table is None else
+                 f"measured ({c_comment_text(Path(table.source).name)}, {table.stamp.points} points"
+                 f"{', resampled' if table.resampled else ''})")
+    return f"""#ifndef {guard}
 #define {guard}
 
 #include "linsense/ls_drive.h"
@@ -513,25 +544,36 @@ def c_header(dz: Design | DriveDesign, drive: DriveData | None = None, motor: Mo
 {stamp_macros(prefix, digest)}
 /* Psi_LUT (rad) over one electrical period for this injection, {comp_what} */
 static const float {fn}_comp[{points}] = {{
-    {array(lut)}
+    {_c_array(lut)}
 }};
 
 /* dPsi_LUT/dk_r (rad per unit of the resistance's scale): the table follows the resistance the
  * drive measures (ls_dtres_adapt, ls_demod_cfg.comp_r) */
 static const float {fn}_comp_r[{points}] = {{
-    {array(lut_r)}
+    {_c_array(lut_r)}
 }};
 
 /* demodulator gain (-) that makes the local error gain 1 everywhere */
 static const float {fn}_gain[{points}] = {{
-    {array(gain)}
+    {_c_array(gain)}
 }};
 
 /* dg/dk_r (-): the gain follows the measured resistance too */
 static const float {fn}_gain_r[{points}] = {{
-    {array(gain_r)}
+    {_c_array(gain_r)}
 }};
+"""
 
+
+def _c_function_code(dd: DriveDesign, sym: str) -> str:
+    """The header's ``ls_cfg_<sym>`` function, which fills an ``ls_drive_cfg`` with the design."""
+    fn, guard, prefix = f"ls_cfg_{sym}", f"LS_CFG_{sym.upper()}_H", f"LS_CFG_{sym.upper()}"
+    v = design_values(dd)
+    rows = header_rows(dd.startup is not None)
+    body = "\n".join(f"    cfg->{r.field} = {_c_real(v.field(r.field))};" for r in rows if r.kind != "count")
+    body += "".join(f"\n    cfg->{r.field} = {int(v.field(r.field))}u;" for r in rows if r.kind == "count")
+    bw = _c_real(v["observer.bandwidth_hz"])
+    return f"""
 /* ls_drive_default_cfg, then the design; comp, gain, comp_r and gain_r: ls_lut objects over the
  * tables above (comp_r, gain_r NULL: the tables do not follow the measured resistance) */
 static inline void {fn}(ls_drive_cfg *cfg, const ls_lut *comp, const ls_lut *gain, const ls_lut *comp_r,
@@ -542,7 +584,7 @@ static inline void {fn}(ls_drive_cfg *cfg, const ls_lut *comp, const ls_lut *gai
 {body}
     cfg->obs.type = {v.field("obs.type")};
     cfg->load_ff = {"true" if v.field("load_ff") else "false"}; /* the observer's load estimate fed forward */
-    ls_observer_gains(&cfg->obs, {f(bw)}); /* the library's rule for the bandwidth (Hz) */
+    ls_observer_gains(&cfg->obs, {bw}); /* the library's rule for the bandwidth (Hz) */
     cfg->demod.comp = comp;
     cfg->demod.gain_table = gain;
     cfg->demod.comp_r = comp_r;

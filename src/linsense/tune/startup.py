@@ -245,6 +245,39 @@ def design_startup(motor: Motor, *, v_dc: float, f_pwm: float, i_max: float, obs
     c_def = drive_default_cfg()
     ramp_rate = float(c_def.inject.ramp_rate) if ramp_rate is None else ramp_rate
     i_trip = float(c_def.prot.i_max) if i_trip is None else i_trip
+    polarity = _polarity(motor, polarity, current_noise, source)
+    if polarity is None:
+        return None
+    warnings: list[str] = []
+    th = np.linspace(0.0, 2.0 * np.pi, 360, endpoint=False)
+    L_d, L_q, L_dq = dq_components(motor, th)
+    L_d0 = float(np.mean(L_d))
+    i_m, a = _saturation_currents(motor, polarity, L_d0, source)
+    ts, v = 1.0 / f_pwm, PULSE_BUS * v_dc / math.sqrt(3.0)  # (v: the pulses' voltage)
+    n, dp = _pulse_steps(L_d0, motor.R_s, i_m, a, v, ts, PULSE_CURRENT * i_max, warnings)
+    # the signal where it is smallest: at the largest L_d over the period (the least current)
+    sp, sm = pulse_currents(float(np.max(L_d)), motor.R_s, i_m, a, v, n * ts)
+    signal = sp + sm  # (sm < 0)
+    pairs, sigma = _pulse_pairs(signal, current_noise, adc_bits, adc_range, warnings)
+    i_min = I_MIN_SIGMA * sigma
+    n_rest = max(3, math.ceil(REST_TAU * L_d0 / motor.R_s / ts))
+    t_pulse, t_rest = n * ts, n_rest * ts
+    if dp >= 0.9 * i_trip:
+        warnings.append(f"the pulses reach {dp:.2f} A, within 10 % of the over-current trip at "
+                        f"{i_trip:.2f} A")
+    t_lock, t_quiet, t_settle, t_pulses = _detect_times(v_inj / ramp_rate, observer_bw, pairs, t_pulse,
+                                                        t_rest)
+    motion = _pulse_motion(motor, th, (L_d, L_q, L_dq), dp, 2 * pairs, (t_pulse, t_rest, t_pulses), warnings)
+    return StartupDesign(polarity=polarity, v_pulse=v, t_pulse=t_pulse, t_rest=t_rest, pairs=int(pairs),
+                         i_min=i_min, t_lock=t_lock, err_lock=ERR_LOCK, t_quiet=t_quiet, t_settle=t_settle,
+                         i_peak=dp, signal=signal, sigma=sigma,
+                         detect_s=t_lock + t_quiet + t_pulses + t_settle, motion_mm=motion * 1e3,
+                         warnings=warnings)
+
+
+def _polarity(motor: Motor, polarity: float | None, current_noise: float, source: str) -> float | None:
+    """The polarity signal, 1/A: ``polarity``, else the motor's saturation data, else None;
+    refused out of range, as a negative current noise is."""
     if polarity is None and motor.saturation is not None and motor.saturation.polarity > 0:
         polarity = motor.saturation.polarity
     if polarity is None:
@@ -253,30 +286,51 @@ def design_startup(motor: Motor, *, v_dc: float, f_pwm: float, i_max: float, obs
         raise InputError(source, "polarity", f"must be a positive number (1/A), got {polarity!r}")
     if not (math.isfinite(current_noise) and current_noise >= 0):
         raise InputError(source, "current_noise", f"must be >= 0 A, got {current_noise!r}")
-    warnings: list[str] = []
-    th = np.linspace(0.0, 2.0 * np.pi, 360, endpoint=False)
-    L_d, L_q, L_dq = dq_components(motor, th)
-    L_d0 = float(np.mean(L_d))
+    return polarity
+
+
+def _saturation_currents(motor: Motor, polarity: float, L_d0: float, source: str) -> tuple[float, float]:
+    """The magnet's equivalent d current and the saturation current (:func:`i_sat_d_of`) the
+    polarity signal says, A; a polarity no saturation explains refused."""
     sat = motor.saturation
     i_m = sat.magnet_current if sat is not None and sat.magnet_current is not None else motor.psi_pm / L_d0
     try:
         a = i_sat_d_of(polarity, i_m)
     except ValueError as exc:
         raise InputError(source, "polarity", str(exc)) from None
-    ts = 1.0 / f_pwm
-    v = PULSE_BUS * v_dc / math.sqrt(3.0)
-    i_target = PULSE_CURRENT * i_max
+    return i_m, a
+
+
+def _detect_times(t_ramp: float, observer_bw: float, pairs: float, t_pulse: float,
+                  t_rest: float) -> tuple[float, float, float, float]:
+    """The detection's phases, s: the observer's lock, the quiet wait, the settling after the
+    injection's ramp ``t_ramp``, and the pulse pairs'."""
+    t_lock = LOCK_OBS / observer_bw
+    t_quiet = t_ramp + 2e-3
+    t_settle = t_ramp + 20e-3
+    t_pulses = (2 * pairs + 1) * (t_pulse + t_rest)
+    return t_lock, t_quiet, t_settle, t_pulses
+
+
+def _pulse_steps(L_d0: float, R_s: float, i_m: float, a: float, v: float, ts: float, i_target: float,
+                 warnings: list[str]) -> tuple[int, float]:
+    """The PWM periods of one pulse (the fewest that reach ``i_target``, at most 400) and the
+    positive pulse's peak current, A; a warning if the bus is too low to reach it."""
     n = 2
     while True:
-        dp, dm = pulse_currents(L_d0, motor.R_s, i_m, a, v, n * ts)
+        dp, dm = pulse_currents(L_d0, R_s, i_m, a, v, n * ts)
         if dp >= i_target or n >= 400:
             break
         n += 1
     if dp < i_target:
         warnings.append(f"the pulses reach {dp:.2f} A only (target {i_target:.2f} A): the bus is too low")
-    # the signal where it is smallest: at the largest L_d over the period (the least current)
-    sp, sm = pulse_currents(float(np.max(L_d)), motor.R_s, i_m, a, v, n * ts)
-    signal = sp + sm  # (sm < 0)
+    return n, dp
+
+
+def _pulse_pairs(signal: float, current_noise: float, adc_bits: int, adc_range: float,
+                 warnings: list[str]) -> tuple[float, float]:
+    """The pulse pairs that decide the polarity against the noise (at most ``PAIRS_MAX``, with a
+    warning) and the noise of their mean difference, A rms."""
     lsb = 2.0 * adc_range / 2**adc_bits if adc_bits > 0 else 0.0
     sigma_1 = math.hypot(current_noise, lsb / math.sqrt(12.0))  # (hypot: 1e300 A of noise overflowed)
     q = Z_SIGMA * 2.0 * sigma_1 / signal if signal > 0 else 0.0
@@ -286,24 +340,23 @@ def design_startup(motor: Motor, *, v_dc: float, f_pwm: float, i_max: float, obs
         warnings.append(f"the saturation signal ({signal * 1e3:.3g} mA) needs {pairs:g} pulse pairs against "
                         f"{sigma_1 * 1e3:.3g} mA of noise: limited to {PAIRS_MAX}, the decision is less sure")
         pairs = PAIRS_MAX
-    sigma = 2.0 * sigma_1 / math.sqrt(pairs)
-    i_min = I_MIN_SIGMA * sigma
-    n_rest = max(3, math.ceil(REST_TAU * L_d0 / motor.R_s / ts))
-    t_pulse, t_rest = n * ts, n_rest * ts
-    if dp >= 0.9 * i_trip:
-        warnings.append(f"the pulses reach {dp:.2f} A, within 10 % of the over-current trip at "
-                        f"{i_trip:.2f} A")
-    t_ramp = v_inj / ramp_rate
-    t_lock = LOCK_OBS / observer_bw
-    t_quiet = t_ramp + 2e-3
-    t_settle = t_ramp + 20e-3
-    t_pulses = (2 * pairs + 1) * (t_pulse + t_rest)
-    # motion: the one-signed reluctance force's drift over the pulses, and one pulse's q-force impulse
+    return pairs, 2.0 * sigma_1 / math.sqrt(pairs)
+
+
+def _pulse_motion(motor: Motor, th: np.ndarray, dq: tuple, dp: float, pulses: int, times: tuple,
+                  warnings: list[str]) -> float:
+    """How far a free, frictionless mover may move while detecting, m: the one-signed reluctance
+    force's drift over the pulses and one pulse's q-force impulse; a warning above
+    ``MOTION_BAR_MM``. ``dq``: (L_d, L_q, L_dq) over ``th``; ``times``: (pulse, rest, all
+    pulses), s."""
+    L_d, L_q, L_dq = dq
+    t_pulse, t_rest, t_pulses = times
+    L_d0 = float(np.mean(L_d))
     kx = 2.0 * math.pi / motor.pole_pitch
     dld = float(np.max(np.abs(np.gradient(L_d, th))))
     t_eff = t_pulse / 3.0 + 0.5 * L_d0 / motor.R_s  # s, i^2 over a pulse and its decay, in peak units
     f_rel = 0.75 * kx * dld * dp**2
-    v_rel = 2 * pairs * f_rel * t_eff / motor.mass
+    v_rel = pulses * f_rel * t_eff / motor.mass
     cross = float(np.max(np.abs(L_dq / L_q))) + math.sin(LOCK_ACCURACY)
     j_q = motor.force_constant * dp * cross * (t_pulse / 2.0 + L_d0 / motor.R_s)
     motion = 0.5 * v_rel * t_pulses + j_q / motor.mass * (t_pulse + t_rest)
@@ -311,8 +364,4 @@ def design_startup(motor: Motor, *, v_dc: float, f_pwm: float, i_max: float, obs
         warnings.append(f"a free, frictionless mover may move {motion * 1e3:.3f} mm while detecting (more "
                         f"than {MOTION_BAR_MM:g} mm): the pulses' reluctance force drifts it; guide friction "
                         f"or a brake holds it (docs/firmware.md)")
-    return StartupDesign(polarity=polarity, v_pulse=v, t_pulse=t_pulse, t_rest=t_rest, pairs=int(pairs),
-                         i_min=i_min, t_lock=t_lock, err_lock=ERR_LOCK, t_quiet=t_quiet, t_settle=t_settle,
-                         i_peak=dp, signal=signal, sigma=sigma,
-                         detect_s=t_lock + t_quiet + t_pulses + t_settle, motion_mm=motion * 1e3,
-                         warnings=warnings)
+    return motion

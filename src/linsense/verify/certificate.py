@@ -530,12 +530,6 @@ def prepare(motor: Motor, motor_spec: str, base: dict, base_dir: str, *, v_max: 
     linsense.errors.InputError
         A run's configuration refused.
     """
-    from linsense.sim.build import build
-    from linsense.sim.calibrate import calibration_scenario
-    from linsense.sim.scenario import scenario_from_dict
-    from linsense.verify.cases import off_nominal_motor
-    from linsense.verify.run import case_scenario
-
     cases = all_cases(motor.pole_pitch, v_max, a_max, load, quick, travel=travel)
     # the tolerances scale the linear model, not a saturated plant's data: those runs would judge the
     # nominal motor again, so they are not run and the certificate says so
@@ -543,6 +537,41 @@ def prepare(motor: Motor, motor_spec: str, base: dict, base_dir: str, *, v_max: 
     if saturated:
         cases = [c for c in cases if c.plant == "nominal"]
     calibrated = sorted({c.plant for c in cases if c.table == "measured"})
+    _build_each_kind(cases, calibrated, motor, motor_spec, base, base_dir, travel)
+
+    def run() -> Certificate:
+        import tempfile
+
+        from linsense.sim.cluster import thread_map
+
+        t0 = time.perf_counter()
+        cals = dict(zip(calibrated, thread_map(
+            lambda p: calibrate_plant(motor, motor_spec, base, base_dir, p, travel), calibrated, workers,
+            "linsense-calibrate"), strict=True))
+        summaries = {p: calibration_summary(cal, motor) for p, cal in cals.items()}
+        with tempfile.TemporaryDirectory(prefix="linsense-cert-") as tmp:
+            rows = run_cases(_with_tables(cases, cals, tmp), base, motor_spec, motor, base_dir, workers)
+        cks = checks(rows, summaries)
+        if saturated and not quick:
+            cks.append(Check("holds, off-nominal plants", False, "not run: the tolerances scale the linear "
+                             "inductance model, not the saturation data", "run", "verify the linear plant "
+                             "(a scenario without [saturation]) for the tolerances", 0, 0))
+        return Certificate(cks, rows, time.perf_counter() - t0, quick,
+                           extra={"calibrations": summaries}, notes=_file_table_notes(rows, summaries))
+
+    return run
+
+
+def _build_each_kind(cases: list, calibrated: list[str], motor: Motor, motor_spec: str, base: dict,
+                     base_dir: str, travel: float | None) -> None:
+    """Build one run of each kind and plant of ``cases`` (and the calibration's, if any plant is
+    ``calibrated``), so that a configuration any of them refuses raises before anything runs."""
+    from linsense.sim.build import build
+    from linsense.sim.calibrate import calibration_scenario
+    from linsense.sim.scenario import scenario_from_dict
+    from linsense.verify.cases import off_nominal_motor
+    from linsense.verify.run import case_scenario
+
     seen = set()
     for c in cases:
         if (c.kind, c.plant) in seen:
@@ -556,41 +585,26 @@ def prepare(motor: Motor, motor_spec: str, base: dict, base_dir: str, *, v_max: 
                                 source="the certificate's calibration", base_dir=base_dir)
         calibration_scenario(scenario=sc, positions=C.CAL_POSITIONS)
 
-    def run() -> Certificate:
-        import tempfile
 
-        from linsense.io import write_atomic
-        from linsense.sim.calibrate import measured_json
-        from linsense.sim.cluster import thread_map
+def _with_tables(cases: list, cals: dict, tmp: str) -> list:
+    """``cases`` whose measured-table runs read the table measured on their plant (written, stamped,
+    in ``tmp``); the runs of a plant whose calibration did not complete are left out."""
+    from linsense.io import write_atomic
+    from linsense.sim.calibrate import measured_json
 
-        t0 = time.perf_counter()
-        cals = dict(zip(calibrated, thread_map(
-            lambda p: calibrate_plant(motor, motor_spec, base, base_dir, p, travel), calibrated, workers,
-            "linsense-calibrate"), strict=True))
-        summaries = {p: calibration_summary(cal, motor) for p, cal in cals.items()}
-        with tempfile.TemporaryDirectory(prefix="linsense-cert-") as tmp:
-            files = {}
-            for i, (p, cal) in enumerate(cals.items()):
-                if cal.completed:
-                    files[p] = str(write_atomic(Path(tmp) / f"table{i}.json", measured_json(cal)))
-            todo = []
-            for c in cases:
-                if c.table == "measured":
-                    if c.plant not in files:  # (no table measured: those runs are not run)
-                        continue
-                    obs = {"lut_model": "measured", "lut_file": files[c.plant]}
-                    c = dataclasses.replace(c, sections={**c.sections, "observer": obs})
-                todo.append(c)
-            rows = run_cases(todo, base, motor_spec, motor, base_dir, workers)
-        cks = checks(rows, summaries)
-        if saturated and not quick:
-            cks.append(Check("holds, off-nominal plants", False, "not run: the tolerances scale the linear "
-                             "inductance model, not the saturation data", "run", "verify the linear plant "
-                             "(a scenario without [saturation]) for the tolerances", 0, 0))
-        return Certificate(cks, rows, time.perf_counter() - t0, quick,
-                           extra={"calibrations": summaries}, notes=_file_table_notes(rows, summaries))
-
-    return run
+    files = {}
+    for i, (p, cal) in enumerate(cals.items()):
+        if cal.completed:
+            files[p] = str(write_atomic(Path(tmp) / f"table{i}.json", measured_json(cal)))
+    todo = []
+    for c in cases:
+        if c.table == "measured":
+            if c.plant not in files:  # (no table measured: those runs are not run)
+                continue
+            obs = {"lut_model": "measured", "lut_file": files[c.plant]}
+            c = dataclasses.replace(c, sections={**c.sections, "observer": obs})
+        todo.append(c)
+    return todo
 
 
 #: what a firmware header says of the certificate its drive passed (tune --format c, firmware export)
