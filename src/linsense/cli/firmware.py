@@ -11,7 +11,6 @@ from linsense.cli.runs import (
     drive_options,
     drive_refusal,
     scenario_arg,
-    scenario_table,
 )
 from linsense.errors import InputError
 from linsense.io import working_folder
@@ -63,6 +62,7 @@ def export(folder: str, motor_spec: str, scenario_path: str | None, name: str | 
     dd, src, table_via, sc = DriveData(), motor_spec, None, None
     if scenario_path is not None:
         from linsense.sim.build import drive_data
+        from linsense.verify.tuning import scenario_table
 
         sc = scenario_arg(scenario_path, "--scenario")
         dd = drive_data(sc)

@@ -201,26 +201,6 @@ def application_options(f):
     return f
 
 
-def scenario_table(sc) -> tuple[str, tuple[str, str, str]] | None:
-    """The measured table a scenario's drive runs (``observer.lut_model = "measured"``), or None (the
-    model's table): :func:`linsense.verify.tuning.scenario_table`.
-
-    Parameters
-    ----------
-    sc : linsense.sim.scenario.Scenario
-        The scenario.
-
-    Returns
-    -------
-    tuple or None
-        The table's file as an absolute path, and where the scenario names it (the reader's ``via``:
-        a refusal of the table names the scenario and ``observer.lut_file``, as ``simulate`` does).
-    """
-    from linsense.verify.tuning import scenario_table as table
-
-    return table(sc)
-
-
 def apply_drive_data(dd, drive: dict, quad=None, v_max=None, a_max=None, load=None, travel=None,
                      shape=None):
     """Set the options given (not None) on a :class:`~linsense.tune.design.DriveData`.
