@@ -136,8 +136,6 @@ def _certificate_paths(out: str) -> tuple[Path, Path]:
         folder, stem = p.resolve().parent, p.stem
         name = f"{stem}.verification.json"
         if len(os.fsencode(name)) > NAME_MAX:  # (its write failed after the work, the scenario written)
-            from linsense.errors import InputError
-
             raise InputError("--out", "", f"{out!r}: the certificate written beside it, the name's stem and "
                              f"'.verification.json', would be a file name of {len(os.fsencode(name))} bytes, "
                              f"beyond the {NAME_MAX} bytes of a file name: give a shorter --out")
