@@ -34,7 +34,7 @@ from setuptools.command.build_ext import build_ext
 from setuptools.command.build_py import build_py
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-#: the C library's files shipped in the wheel, relative to csrc/ (linsense.firmware.export.LIBRARY_FILES;
+#: the C library's files shipped in the wheel, relative to csrc/ (linsense.firmware.project.LIBRARY_FILES;
 #: tests/test_dist.py checks the wheel holds exactly these)
 C_LIBRARY = ("CMakeLists.txt", "cmake/*.cmake", "cmake/*.cmake.in", "include/linsense/*.h",
              "ctrl/*.c", "ctrl/*.h")

@@ -12,7 +12,7 @@ import linsense.sim.build as sim_build
 from linsense.errors import InputError
 from linsense.sim.build import build
 from linsense.sim.scenario import scenario_from_dict
-from linsense.sim.startup import base_scenario
+from linsense.studies.startup_runs import base_scenario
 
 ROOT = Path(__file__).resolve().parent.parent
 M20 = str(ROOT / "src/linsense/examples" / "motors" / "class" / "m20_hv.toml")  # (its design injects 49 V)

@@ -19,7 +19,7 @@ from linsense.compensation.lut import build_lut
 from linsense.errors import InputError
 from linsense.model.motor import load_motor
 from linsense.sim.build import calibration_timing, designed, resolve_motor
-from linsense.sim.calibrate import DRIVE_KEYS, calibrate, calibration_scenario
+from linsense.studies.calibrate import DRIVE_KEYS, calibrate, calibration_scenario
 from linsense.tune.design import DriveData, design
 
 ROOT = Path(__file__).parents[1]

@@ -275,14 +275,14 @@ def test_full_reproduction_numbers():
     |i_diff| 24.2 mA against 12.6 mA, 178 ms, at most 0.091 mm while detecting, 0.93 mm after);
     README.md's "24/24 right, at most 0.09 mm of motion"; the hold study's biases (0.15 deg of the
     dead time with the LUT with R_s, 0.004 without; eq. 12's 2.06 and 1.98 deg; cycles of 3.7 mm)."""
-    from linsense.reproduce import pipeline, runs
+    from linsense.reproduce import paper_runs, pipeline
 
-    cals = runs.calibrations("ecce2010", pipeline.CAL_POSITIONS[False])
+    cals = paper_runs.calibrations("ecce2010", pipeline.CAL_POSITIONS[False])
     assert all(c.completed and c.metrics["points_done"] == 56 for c in cals.values())
     assert shown(cals[0.0].metrics["max_diff_deg"], "0.03")
     base = cals[0.0].psi_measured
     assert shown(max(np.degrees(np.nanmax(np.abs(c.psi_measured - base))) for c in cals.values()), "0.03")
-    study = runs.startup_study(None, pipeline.STARTUP_STARTS[False])
+    study = paper_runs.startup_study(None, pipeline.STARTUP_STARTS[False])
     rs = study.runs
     counts = (len(rs), sum(r.right for r in rs), sum(r.flip for r in rs), sum(r.fault != 0 for r in rs))
     assert counts == (24, 24, 11, 0), counts
@@ -293,7 +293,7 @@ def test_full_reproduction_numbers():
     assert shown(motion, "0.091") and shown(motion, "0.09")
     assert shown(max(r.motion_after_mm for r in rs), "0.93")
     # the hold study (16 positions): the dead time's bias with the LUT with R_s, eq. 12's bias
-    hold = runs.hold_study(None, pipeline.HOLD_POSITIONS[False])
+    hold = paper_runs.hold_study(None, pipeline.HOLD_POSITIONS[False])
     worst = {k: max(abs(v) for v in b) for k, b in hold.bias_deg.items()}
     assert shown(worst["LUT with R_s, dead time"], "0.15")
     assert shown(worst["LUT with R_s, no dead time"], "0.004")
@@ -387,7 +387,7 @@ def test_built_in_studies():
     threads, about 8 s); with the LUT the stability map's cycles stay within 0.02 mm."""
     from linsense.sweep import load_sweep
     from linsense.sweep.engine import sweep
-    from linsense.sweep.studies import summary_line
+    from linsense.sweep.study_summary import summary_line
 
     docs = " ".join((ROOT / "docs" / "sweeps.md").read_text().split())
     for name, want in STUDY_LINES.items():

@@ -10,7 +10,7 @@ import pytest
 
 import linsense
 from linsense.cli import main
-from linsense.sim.calibrate import calibrate
+from linsense.studies.calibrate import calibrate
 
 POSITIONS_MM = [56.0 * k / 8 for k in range(8)]
 

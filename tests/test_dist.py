@@ -88,7 +88,7 @@ def test_the_rule_names_every_kind_of_forbidden_file():
 def test_the_shipped_c_library_is_the_exporters():
     """The rule's C files are what linsense firmware export copies (LIBRARY_FILES over csrc/), and
     setup.py copies the same globs (its C_LIBRARY)."""
-    from linsense.firmware.export import LIBRARY_FILES, library_files
+    from linsense.firmware.project import LIBRARY_FILES, library_files
 
     expected = library_files(ROOT / "csrc")
     assert {"ctrl/ls_drive.c", "include/linsense/ls_drive.h", "CMakeLists.txt",
@@ -117,7 +117,7 @@ def test_the_wheel_is_abi3_manylinux_and_holds_the_package_only():
     assert forbidden(names) == []
     assert not [n for n in REQUIRED if n not in names], "package data missing from the wheel"
     # the C library, whole: every file the exporter copies from a source tree, nothing more
-    from linsense.firmware.export import library_files
+    from linsense.firmware.project import library_files
 
     shipped = {n.removeprefix("linsense/csrc/") for n in names
                if n.startswith("linsense/csrc/") and not n.endswith("/")}

@@ -348,7 +348,7 @@ def test_load_current_list_refused_in_one_line(run_cli, tmp_path, option, value,
 
 
 def test_load_current_list_parsed():
-    from linsense.fea.pipeline import parse_currents
+    from linsense.fea.per_load import parse_currents
 
     assert parse_currents("0, 1,2.5") == [0.0, 1.0, 2.5]
     assert parse_currents(2.0) == [2.0] and parse_currents("-0") == [0.0]

@@ -21,7 +21,7 @@ import pytest
 import linsense
 from linsense.compensation.lut import build_lut, to_c_header
 from linsense.compensation.stamp import data_digest, version_number
-from linsense.firmware.export import LIBRARY_DIR, firmware_files, library_files, library_root
+from linsense.firmware.project import LIBRARY_DIR, firmware_files, library_files, library_root
 
 ROOT = Path(__file__).resolve().parents[1]
 HAVE_HOST = shutil.which("cmake") is not None and shutil.which("cc") is not None
@@ -175,7 +175,7 @@ def _cmake(*args, cwd: Path) -> subprocess.CompletedProcess:
 
 @pytest.fixture(scope="module")
 def exported(tmp_path_factory):
-    from linsense.firmware.export import write_firmware
+    from linsense.firmware.project import write_firmware
     from linsense.model.motor import load_motor
 
     out = tmp_path_factory.mktemp("export") / "fw"

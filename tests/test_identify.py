@@ -13,12 +13,12 @@ import numpy as np
 import pytest
 
 from linsense.analysis.hf import psi_lut
-from linsense.analysis.tables import MODEL_COLUMNS, model_table
+from linsense.analysis.model_table import MODEL_COLUMNS, model_table
 from linsense.compensation.lut import read_lut
 from linsense.errors import InputError, ModelError
 from linsense.identify.bench import PHASOR_COLUMNS, bench_to_csv, emulate_bench, read_bench_csv
 from linsense.identify.fit import design_matrix, fit_inductances, parameter_names
-from linsense.identify.pipeline import identify
+from linsense.identify.identification import identify
 from linsense.identify.process import process_bench
 from linsense.model.inductance import InductanceModel
 from linsense.model.motor import load_motor
@@ -70,7 +70,7 @@ def rel_errors(fit, motor) -> dict[str, float]:
 def lut_errors_deg(table, fit, motor) -> tuple[float, float]:
     """(max |LUT from the fit - true| on 360 points, max |LUT from the table - true| at the
     measured positions), electrical degrees."""
-    from linsense.identify.tables import measured_columns
+    from linsense.identify.measured_outputs import measured_columns
 
     th = 2 * np.pi * np.arange(360) / 360
     e_fit = np.abs(psi_lut(fit.model(), th) - psi_lut(motor, th)).max()

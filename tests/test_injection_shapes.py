@@ -185,7 +185,7 @@ def test_startup_with_each_shape(shape):
     and square-wave injections too, on the saturated plant, switching inverter with dead time: the
     polarity right at 12 random positions over two periods, the mover within 0.1 mm while detecting
     (measured: 12/12 each, worst 0.088 mm rotating, 0.073 mm square)."""
-    from linsense.sim.startup import base_scenario, startup_run
+    from linsense.studies.startup_runs import base_scenario, startup_run
 
     base = base_scenario()
     base["injection"] = {"shape": shape}

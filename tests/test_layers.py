@@ -115,7 +115,7 @@ def test_cycle_finder_finds_a_cycle():
 
 def test_no_import_cycle():
     graph = {m: _targets(m) for m in MODULES}
-    assert graph["linsense.sim.run"], "the graph sees no import: the walker is broken"
+    assert graph["linsense.sim.simulation"], "the graph sees no import: the walker is broken"
     assert _cycles(graph) == []
 
 
@@ -156,10 +156,10 @@ def test_no_private_name_imported_across_packages():
 
 
 # each below sim (importing a module imports what it imports: these cover the lower layers' modules)
-LIGHT = ("linsense", "linsense.model.motor", "linsense.model.tolerance", "linsense.analysis.tables",
+LIGHT = ("linsense", "linsense.model.motor", "linsense.model.tolerance", "linsense.analysis.model_table",
          "linsense.analysis.summary", "linsense.analysis.rotating", "linsense.analysis.square",
          "linsense.analysis.stability", "linsense.compensation.lut", "linsense.tune",
-         "linsense.tune.injection", "linsense.identify.pipeline", "linsense.fea.pipeline")
+         "linsense.tune.injection", "linsense.identify.identification", "linsense.fea.per_load")
 
 
 @pytest.mark.parametrize("module", LIGHT)
@@ -201,3 +201,29 @@ def test_every_module_of_the_package_sits_in_a_layer():
                | {p.name for p in pkg.iterdir() if (p / "__init__.py").is_file()})
     assert present - named == set(), f"modules in no layer of .importlinter: {sorted(present - named)}"
     assert named - present == set(), f".importlinter names what does not exist: {sorted(named - present)}"
+
+
+def _name_clashes(paths: list[Path]) -> list[str]:
+    """Modules that share a basename, and ``X.py`` beside ``Xs.py`` (packages' ``__init__`` and
+    ``__main__`` apart): a name says which module it is without its package."""
+    by_stem: dict[str, list[str]] = {}
+    for p in paths:
+        if p.stem not in ("__init__", "__main__"):
+            by_stem.setdefault(p.stem, []).append(str(p.relative_to(SRC)))
+    clashes = [f"{stem}: {sorted(where)}" for stem, where in sorted(by_stem.items()) if len(where) > 1]
+    clashes += [f"{stem} and {stem}s: {sorted(by_stem[stem] + by_stem[stem + 's'])}"
+                for stem in sorted(by_stem) if stem + "s" in by_stem]
+    return clashes
+
+
+def test_name_clash_rule_catches_both_kinds():
+    # the rule itself: a second tables.py, and a runs.py beside a run.py
+    paths = [PKG / "a" / "tables.py", PKG / "b" / "tables.py", PKG / "a" / "run.py", PKG / "b" / "runs.py",
+             PKG / "a" / "__init__.py", PKG / "b" / "__init__.py"]
+    assert _name_clashes(paths) == ["tables: ['linsense/a/tables.py', 'linsense/b/tables.py']",
+                                    "run and runs: ['linsense/a/run.py', 'linsense/b/runs.py']"]
+
+
+def test_every_module_name_is_unique():
+    """No two modules of linsense share a basename, nor are ``X.py`` and ``Xs.py``."""
+    assert _name_clashes(list(MODULES.values())) == []

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from conftest import ECCE, theta_grid
-from linsense.analysis.tables import model_table, table_to_csv
+from linsense.analysis.model_table import model_table, table_to_csv
 from linsense.errors import InputError, ModelError
 from linsense.model.motor import check_motor, load_motor, motor_to_toml, preset_names
 

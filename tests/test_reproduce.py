@@ -325,15 +325,15 @@ def test_report_renders_in_headless_chromium(rep, tmp_path):
 
 
 def test_paper_scenario_refuses_another_inverter(tmp_path, monkeypatch):
-    from linsense.reproduce import runs
+    from linsense.reproduce import paper_runs
 
     (tmp_path / "scenarios").mkdir()
     (tmp_path / "scenarios" / "x.toml").write_text(
         'motor = "ecce2010"\n[scenario]\nname = "x"\nduration = 1.0\n[inverter]\nfidelity = "average"\n'
         '[reference]\ntype = "hold"\n')
-    monkeypatch.setattr(runs, "data_path", lambda *parts: Path(tmp_path).joinpath(*parts))
+    monkeypatch.setattr(paper_runs, "data_path", lambda *parts: Path(tmp_path).joinpath(*parts))
     with pytest.raises(InputError, match="switching inverter with 0.8 us dead time"):
-        runs.paper_scenario("x.toml")
+        paper_runs.paper_scenario("x.toml")
 
 
 @pytest.mark.slow

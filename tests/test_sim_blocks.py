@@ -11,7 +11,7 @@ import pytest
 from linsense import ctrl
 from linsense.errors import InputError
 from linsense.model.motor import load_motor
-from linsense.sim import core, run
+from linsense.sim import core, simulation
 from linsense.sim.build import build
 from linsense.sim.scenario import as_scenario
 
@@ -68,7 +68,7 @@ def test_decimate_1_metrics_unchanged_by_blocks(name):
     b = _built(name)
     raw = core.run_closed_loop(b.cfg, b.drive.state, b.n_steps, b.commands, blocks=tuple(core.BLOCKS))
     points = {k: v for k, v in raw.arrays.items() if k not in core.BLOCKS}
-    assert run.run_metrics(b, raw) == run.run_metrics(b, raw, points)
+    assert simulation.run_metrics(b, raw) == simulation.run_metrics(b, raw, points)
 
 
 def _collector():
@@ -152,7 +152,7 @@ def test_the_record_is_the_decimating_c_loops(extra, fault, dec):
     got, want = _concat(chunks), _concat(c_chunks)
     for k, v in want.items():
         assert got[k].tobytes() == v.tobytes(), k
-    r = run.simulate(sc)
+    r = simulation.simulate(sc)
     for k, v in want.items():
         assert getattr(r, k).tobytes() == v.tobytes(), k
 
@@ -176,12 +176,12 @@ def test_metrics_only_memory_does_not_grow(monkeypatch):
     # (on the switching inverter: the average model's dead-time approximation cycles by 0.6 deg at
     # this position with the default 8 Hz speed loop; the switching model holds within 0.002 deg)
     sw = {"inverter": {"fidelity": "switching"}}
-    short = run.simulate(_hold(10.0, **sw), record="metrics")
-    long = run.simulate(_hold(100.0, **sw), record="metrics")
-    assert short.t.size == long.t.size <= run.METRICS_SAMPLES
+    short = simulation.simulate(_hold(10.0, **sw), record="metrics")
+    long = simulation.simulate(_hold(100.0, **sw), record="metrics")
+    assert short.t.size == long.t.size <= simulation.METRICS_SAMPLES
     assert long.metrics["steps"] == 1_600_000
     # the record's blocks (its scenario says them); the metrics read every period (issue 37)
-    assert long.scenario.spec.record.decimate == -(-1_600_000 // run.METRICS_SAMPLES)
+    assert long.scenario.spec.record.decimate == -(-1_600_000 // simulation.METRICS_SAMPLES)
     assert long.metrics["block_s"] == 1 / 16000 and long.metrics["samples"] == 1_600_000
     assert long.stable and long.x_min is not None and long.i_abc_max.shape == (long.t.size, 3)
 
@@ -191,20 +191,20 @@ def test_metrics_only_matches_the_full_trace(monkeypatch, scenario):
     """Metrics-only (a record of blocks of 64 periods, 4 ms) against the full trace: the same metrics,
     bit for bit (issue 37: they were within a block, and a settling time of 0 within the first)."""
     sc = _hold(2.0) if scenario == "hold" else EXAMPLES / scenario
-    full = run.simulate(sc).metrics
-    monkeypatch.setattr(run, "METRICS_SAMPLES", 500)
-    mo = run.simulate(sc, record="metrics")
+    full = simulation.simulate(sc).metrics
+    monkeypatch.setattr(simulation, "METRICS_SAMPLES", 500)
+    mo = simulation.simulate(sc, record="metrics")
     assert mo.scenario.spec.record.decimate == 64 and mo.t.size == 500
     wall = ("wall_s", "realtime_factor")
     assert {k: v for k, v in mo.metrics.items() if k not in wall} == \
            {k: v for k, v in full.items() if k not in wall}
-    assert {k: v for k, v in run.metrics_only(sc).items() if k not in wall} == \
+    assert {k: v for k, v in simulation.metrics_only(sc).items() if k not in wall} == \
            {k: v for k, v in full.items() if k not in wall}
 
 
 def test_record_mode_checked():
     with pytest.raises(InputError, match="simulate: record: must be one of .trace., .metrics., got"):
-        run.simulate(_hold(0.01), record="everything")
+        simulation.simulate(_hold(0.01), record="everything")
 
 
 def test_a_long_decimation_holds_one_block_at_most():

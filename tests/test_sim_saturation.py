@@ -438,7 +438,7 @@ def test_calibrated_lut_against_load_agrees_with_fea():
     docs/simulator.md's table) and the mean change within 25 % of the FEA's (measured about 7 %
     below: the calibration measures the resistance-aware LUT, which moves less with load than
     eq. 12)."""
-    from linsense.sim.lut_load import lut_vs_load
+    from linsense.studies.lut_load import lut_vs_load
 
     t0 = time.perf_counter()
     r = lut_vs_load(THIN, loads=(0.0, 20.0, 40.0), positions=14, fidelity="switching")

@@ -9,7 +9,7 @@ import pytest
 
 from linsense.errors import InputError
 from linsense.sim.scenario import scenario_from_dict
-from linsense.sim.startup import base_scenario, startup_runs, summary
+from linsense.studies.startup_runs import base_scenario, startup_runs, summary
 
 
 @pytest.fixture(scope="module")

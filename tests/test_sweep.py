@@ -217,7 +217,7 @@ def test_simulate_many_from_a_script_without_a_main_guard(tmp_path):
 
 def test_metrics_only_equals_simulate_metrics(tmp_path):
     """A sweep's lean run (only what the metrics read) gives simulate(record="metrics")'s metrics."""
-    from linsense.sim.run import metrics_only, simulate
+    from linsense.sim.simulation import metrics_only, simulate
 
     (tmp_path / "base.toml").write_text(SCENARIO)
     lean = metrics_only(tmp_path / "base.toml")

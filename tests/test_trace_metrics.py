@@ -44,7 +44,7 @@ def every_sample(b, metrics_cap: int) -> dict:
     samples of every PWM period whatever the record's decimate (issue 37), merged into blocks only
     when the end window holds more than the cap."""
     from linsense.sim.core import run_closed_loop_chunks
-    from linsense.sim.run import finish_metrics, run_metrics
+    from linsense.sim.simulation import finish_metrics, run_metrics
     from linsense.sim.stream import full_rate, metrics_block
 
     k = metrics_block(b.scenario.spec, metrics_cap)

@@ -25,8 +25,8 @@ from linsense.tune.design import (
 )
 from linsense.tune.export import scenario_dict
 from linsense.verify import criteria as C
+from linsense.verify.case_runs import judge
 from linsense.verify.cases import Case, all_cases, off_nominal_motor
-from linsense.verify.run import judge
 
 ROOT = Path(__file__).parents[1]
 CLASS = ROOT / "src/linsense/examples" / "motors" / "class"
@@ -353,8 +353,8 @@ def _full_off_nominal(name: str):
     dd = _drive(name)
     dz = design(m, dd)
     spec = str(CLASS / f"{name}.toml")
+    from linsense.verify.case_runs import run_cases
     from linsense.verify.cases import hold_cases
-    from linsense.verify.run import run_cases
 
     cases = []
     for plant in C.OFF_NOMINAL:
@@ -430,7 +430,7 @@ def test_a_trajectory_of_fractional_periods_is_judged_to_its_end():
     """A trajectory's run lasts its motion time and margins, not a whole number of PWM periods: the
     simulator runs round(duration f_pwm) periods, and the judge compares with what was run (it
     said "did not finish" for m100_edge's, one third of a period short, before)."""
-    from linsense.verify.run import run_case
+    from linsense.verify.case_runs import run_case
 
     spec, motor, d, _, base, case = _tuned_trajectory("m100_edge")
     periods = case.sections["scenario"]["duration"] * d.f_pwm
@@ -447,7 +447,7 @@ def test_the_hf_delay_compensation_removes_the_speed_lag():
     m30_low's trajectory (0.3 m/s on a 30 mm pitch, 63 rad/s): the speed-proportional part of the
     estimation error, fitted, drops from 0.055 deg per rad/s to below a fifth of it (measured
     0.008), and the peak error from 6.0 to 3.7 deg."""
-    from linsense.verify.run import run_case
+    from linsense.verify.case_runs import run_case
 
     spec, motor, _, dz, base, case = _tuned_trajectory("m30_low")
     assert dz.hf_delay == pytest.approx(1.0 / dz.f_inj)
@@ -507,7 +507,7 @@ def test_the_drive_measures_a_hot_winding(adapt):
     from linsense.model.tolerance import perturbed
     from linsense.sim.core import run_closed_loop
     from linsense.tune.margins import hold_error
-    from linsense.verify.run import _BLOCKS, _SIGNALS, case_scenario
+    from linsense.verify.case_runs import _BLOCKS, _SIGNALS, case_scenario
 
     m = load_motor("ecce2010")
     dd = DriveData(v_dc=72.0, f_pwm=16000.0, dead_time=0.8e-6, i_max=2.5, v_max=0.2, a_max=1.0, load=40.0)
@@ -556,7 +556,7 @@ def test_the_rotating_injection_follows_a_hot_winding(adapt):
     from linsense.model.tolerance import perturbed
     from linsense.sim.core import run_closed_loop
     from linsense.tune.injection import rotating_r_slopes
-    from linsense.verify.run import _BLOCKS, _SIGNALS, case_scenario
+    from linsense.verify.case_runs import _BLOCKS, _SIGNALS, case_scenario
 
     m = load_motor("ecce2010")
     dd = DriveData(v_dc=72.0, f_pwm=16000.0, dead_time=0.8e-6, i_max=2.5, v_max=0.2, a_max=1.0, load=40.0,

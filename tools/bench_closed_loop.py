@@ -39,7 +39,7 @@ def hold(args):
 
 
 def cal(load):
-    from linsense.sim.calibrate import calibrate
+    from linsense.studies.calibrate import calibrate
 
     c = calibrate("ecce2010", 56, load, "switching")
     return load, c.metrics

@@ -48,7 +48,7 @@ def main() -> None:
 
 def _lut_diff_deg(a, b, points: int = 360) -> float:
     """Largest |Psi_LUT_b - Psi_LUT_a| (electrical deg) of the tables' motor models."""
-    from linsense.fea.pipeline import lut_of
+    from linsense.fea.per_load import lut_of
 
     return float(np.degrees(np.abs(lut_of(b, points) - lut_of(a, points)).max()))
 

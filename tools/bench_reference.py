@@ -8,12 +8,12 @@ from __future__ import annotations
 import numpy as np
 
 from linsense.model.motor import load_motor
-from linsense.reproduce.runs import paper_scenario
+from linsense.reproduce.paper_runs import paper_scenario
 from linsense.sim import simulate_many
 from linsense.tune.design import DriveData, design
 from linsense.tune.export import scenario_dict
+from linsense.verify.case_runs import run_cases
 from linsense.verify.cases import hold_cases
-from linsense.verify.run import run_cases
 
 PP_BAR, BIAS_BAR = 0.15, 0.5  # deg
 

@@ -22,9 +22,9 @@ from pathlib import Path
 
 import numpy as np
 
-from linsense.sim.lut_load import lut_vs_load
-from linsense.sim.run import simulate
 from linsense.sim.scenario import scenario_from_dict
+from linsense.sim.simulation import simulate
+from linsense.studies.lut_load import lut_vs_load
 
 MOTOR = (Path(__file__).resolve().parent.parent / "src/linsense/examples" / "motors" / "tubular56_thin_sat"
          / "motor.toml")

@@ -128,7 +128,7 @@ def memory_bench(seconds: float, cli_timeout: float) -> None:
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "hold_long.toml"
         path.write_text(LONG_SCENARIO.format(seconds=seconds), encoding="utf-8")
-        code = ("import sys; from linsense.sim.run import simulate; "
+        code = ("import sys; from linsense.sim.simulation import simulate; "
                 "r = simulate(sys.argv[1], record='metrics'); "
                 "assert r.metrics['stable'], r.metrics['unstable_reason']")
         runs = {

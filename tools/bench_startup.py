@@ -16,7 +16,7 @@ from __future__ import annotations
 import argparse
 import time
 
-from linsense.sim.startup import base_scenario, startup_runs, summary
+from linsense.studies.startup_runs import base_scenario, startup_runs, summary
 
 
 def main() -> None:

@@ -16,7 +16,7 @@ import threading
 import time
 from pathlib import Path
 
-import linsense.sim.run as run_mod
+import linsense.sim.simulation as simulation
 from linsense.sweep import sweep
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -39,7 +39,7 @@ values = {list(range(n))}
 
 C_LOOP = [0.0]  # s, the C loop's time of the runs in this process (worker threads)
 _LOCK = threading.Lock()
-_metrics_only = run_mod.metrics_only
+_metrics_only = simulation.metrics_only
 
 
 def _timed(scenario):
@@ -49,7 +49,7 @@ def _timed(scenario):
     return m
 
 
-run_mod.metrics_only = _timed  # (what each run of the sweep calls, looked up at the call)
+simulation.metrics_only = _timed  # (what each run of the sweep calls, looked up at the call)
 
 
 def run(f: Path, **kw) -> tuple[float, float, int]:

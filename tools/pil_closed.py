@@ -49,7 +49,7 @@ def main(argv=None) -> int:
 
     from linsense.sim.build import build
     from linsense.sim.core import BLOCKS, run_closed_loop
-    from linsense.sim.run import finish_metrics, run_metrics
+    from linsense.sim.simulation import finish_metrics, run_metrics
 
     out = a.out.resolve()
     out.mkdir(parents=True, exist_ok=True)

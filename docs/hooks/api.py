@@ -16,8 +16,8 @@ from mkdocs.structure.files import File, Files
 
 INDEX = "api/index.md"
 #: the public packages of linsense, in their layer order (bottom first: docs/architecture.md)
-PACKAGES = ("model", "analysis", "compensation", "tune", "sim", "identify", "fea", "sweep", "firmware",
-            "report", "reproduce")
+PACKAGES = ("model", "analysis", "compensation", "tune", "sim", "studies", "identify", "fea", "sweep",
+            "firmware", "report", "reproduce")
 
 
 #: the shared modules under the layers (docs/architecture.md), on one page of their own
@@ -62,7 +62,7 @@ def page(src: Path, package: str) -> str:
     return "\n".join(parts)
 
 
-#: a Sphinx role of a docstring as the page renders it, ``:func:<code>~linsense.sim.run.simulate</code>``
+#: a Sphinx role of a docstring as the page renders it, ``:func:<code>~linsense.sim.simulate</code>``
 _ROLE = re.compile(r":(?:py:)?(?:class|func|meth|mod|attr|data|exc|obj|const):<code>(~?)([^<]*)</code>")
 
 

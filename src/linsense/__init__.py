@@ -54,7 +54,7 @@ def __getattr__(name: str):
 
         return getattr(motor, name)
     if name in ("simulate", "simulate_many"):
-        from linsense.sim import run
+        from linsense.sim import simulation
 
-        return getattr(run, name)
+        return getattr(simulation, name)
     raise AttributeError(f"module 'linsense' has no attribute {name!r}")

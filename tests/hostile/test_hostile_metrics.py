@@ -18,8 +18,8 @@ import pytest
 import linsense
 from conftest import scenario_with
 from linsense.errors import InputError
-from linsense.sim.run import metrics_only
 from linsense.sim.scenario import scenario_from_dict
+from linsense.sim.simulation import metrics_only
 
 WALL = ("wall_s", "realtime_factor")
 
@@ -171,7 +171,7 @@ def test_a_trajectory_move_after_the_end_is_refused(run_cli, tmp_path):
 
 
 def test_a_start_up_longer_than_the_run_is_refused():
-    from linsense.sim.startup import base_scenario
+    from linsense.studies.startup_runs import base_scenario
 
     d = base_scenario()
     d["scenario"] = {"name": "su", "duration": 0.05}

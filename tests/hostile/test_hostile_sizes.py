@@ -55,7 +55,7 @@ def open_preset() -> str:
 
 def test_ctrl_c_stops_a_long_run_within_a_second(tmp_path):
     """An interrupt (as Ctrl-C delivers it to the main thread) stops the C loop at its next poll."""
-    from linsense.sim.run import simulate
+    from linsense.sim.simulation import simulate
 
     (tmp_path / "s.toml").write_text(LONG)
     sent = []

@@ -259,7 +259,7 @@ def test_an_fea_geometry_in_mm_names_the_pole_pitch(run_cli, tmp_path):
 def test_fea_load_currents_in_ma_are_refused():
     """``fea --load-current 0,2000`` (mA typed): before, an FEA at 2 kA (|I| <= 1e6 A accepted)."""
     from linsense.errors import InputError
-    from linsense.fea.pipeline import parse_currents
+    from linsense.fea.per_load import parse_currents
 
     with pytest.raises(InputError, match=r"--load-current.*2000 A.*did you type mA\?"):
         parse_currents("0,2000")
@@ -296,7 +296,7 @@ def test_the_api_holds_the_same_table():
     from linsense.compensation.lut import build_lut
     from linsense.errors import InputError
     from linsense.identify.bench import emulate_bench
-    from linsense.identify.pipeline import identify
+    from linsense.identify.identification import identify
     from linsense.model.motor import load_motor
 
     m = load_motor("ecce2010")

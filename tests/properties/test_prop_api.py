@@ -16,10 +16,10 @@ from hypothesis import strategies as st
 from prop_strategies import HOSTILE, attempt, mostly, prop_settings
 
 from linsense.analysis.hf import hf_current, hf_current_amplitude, psi_lut_resistive
+from linsense.analysis.model_table import model_table
 from linsense.analysis.rotating import psi_rotating
 from linsense.analysis.square import psi_square
 from linsense.analysis.summary import summarize
-from linsense.analysis.tables import model_table
 from linsense.compensation.lut import build_lut
 from linsense.errors import InputError
 from linsense.identify.bench import emulate_bench

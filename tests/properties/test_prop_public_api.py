@@ -206,7 +206,7 @@ FUNCS = {
         "h": ("real", 1e-4)}),
     "summary.summarize": (_mod("linsense.analysis.summary", "summarize"), {
         "motor": MOT, "v_inj": V12, "f_inj": F1K}),
-    "tables.model_table": (_mod("linsense.analysis.tables", "model_table"), {
+    "tables.model_table": (_mod("linsense.analysis.model_table", "model_table"), {
         "motor": MOT, "points": ("count", 16)}),
     # linsense.compensation.lut
     "lut.interpolate": (_mod("linsense.compensation.lut", "interpolate"), {

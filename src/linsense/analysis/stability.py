@@ -4,7 +4,7 @@ Without the LUT the observer reports ``theta + e*(theta)`` (the equilibrium erro
 uncompensated observer, brief section 4 in the notes, docs/theory.md), so the motion loop sees the
 true position scaled by the loop-gain factor ``g = 1 + de*/dtheta``, and the observer's own error
 gain is the local slope of the uncompensated demodulated error at ``e*``. Both change with the
-position; :func:`linsense.sim.stability.margins_along` evaluates the linearised loops of
+position; :func:`linsense.studies.position_margins.margins_along` evaluates the linearised loops of
 :func:`linsense.tune.design.loops` (the tuning command's model) with them at each angle, for the drive
 a scenario builds.
 """

@@ -53,7 +53,7 @@ def export(folder: str, motor_spec: str, scenario_path: str | None, name: str | 
     (files it did not write, such as a build folder, are kept). The drive is verified first (the
     quick certificate of linsense tune --quick, switching inverter with dead time): a drive that
     fails is not written (exit 1, naming the failed checks) unless --unverified."""
-    from linsense.firmware.export import firmware_files, write_firmware
+    from linsense.firmware.project import firmware_files, write_firmware
     from linsense.tune.design import DriveData
     from linsense.verify.certificate import VERIFIED_BY, failed_summary
 

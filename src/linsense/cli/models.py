@@ -20,7 +20,7 @@ from linsense.version import docs
 @c.out_option("model", "motor", folder=False, ext=".csv", dash=True)
 def model(motor_spec: str, points: int, out: str | None) -> None:
     """Tabulate the HF inductance model, Psi_LUT and the uncompensated observer (CSV, SI units)."""
-    from linsense.analysis.tables import model_table, table_to_csv
+    from linsense.analysis.model_table import model_table, table_to_csv
     from linsense.io import write_atomic
 
     motor = c.load(motor_spec)
@@ -165,8 +165,8 @@ def identify(bench: str, out: str | None, harmonics: int, motor_spec: str | None
              points: int, as_json: bool) -> None:
     """Identify the HF inductance model from a bench file (a file or a packaged example's name):
     motor.toml, tables, LUTs, fit.json and figures."""
-    from linsense.identify.pipeline import fit_report, render_outputs, summary_lines
-    from linsense.identify.pipeline import identify as run_identify
+    from linsense.identify.identification import fit_report, render_outputs, summary_lines
+    from linsense.identify.identification import identify as run_identify
     from linsense.io import output_set
     from linsense.report.identify_figures import identify_figure_files
 

@@ -300,9 +300,9 @@ def calibrate(motor_spec: str | None, scenario_path: str | None, positions: int,
     calibration.png. Exit code 1 if it does not complete."""
     from linsense.io import output_set, split_timing
     from linsense.report.figures import fig_calibration, save_png
-    from linsense.sim.calibrate import calibrate as run_calibration
-    from linsense.sim.calibrate import lut_csv, measured_json
     from linsense.sim.to_folder import write_metrics
+    from linsense.studies.calibrate import calibrate as run_calibration
+    from linsense.studies.calibrate import lut_csv, measured_json
 
     if as_json:
         c.data_on_stdout()
@@ -462,7 +462,7 @@ def sweep_cmd(sweep_file: str, out: str | None, workers: int | None, scheduler: 
     scenario with keys varied, on local worker threads or a dask.distributed cluster."""
     from linsense.io import write_atomic, write_atomic_with
     from linsense.sweep import load_sweep, sweep
-    from linsense.sweep.studies import summary_line
+    from linsense.sweep.study_summary import summary_line
 
     if as_json:
         c.data_on_stdout()

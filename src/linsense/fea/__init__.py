@@ -2,5 +2,5 @@
 a geometry file (:mod:`~linsense.fea.geometry`) meshed and solved for the phase flux linkages over
 the stroke (:mod:`~linsense.fea.solver`), the inductance table and the magnets' polarity
 (:mod:`~linsense.fea.polarity`) written as a motor file (:mod:`~linsense.fea.outputs`,
-:mod:`~linsense.fea.pipeline`; ``linsense fea``, docs/fea.md).
+:mod:`~linsense.fea.per_load`; ``linsense fea``, docs/fea.md).
 """

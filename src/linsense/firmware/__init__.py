@@ -1,6 +1,6 @@
 """linsense.firmware: the C controller library as a firmware project takes it.
 
-:func:`linsense.firmware.export.firmware_files` (``linsense firmware export``) writes a folder that
+:func:`linsense.firmware.project.firmware_files` (``linsense firmware export``) writes a folder that
 builds with CMake alone, on the host and for a Cortex-M4F: the library's sources and headers (those
 the wheel ships, :func:`linsense.get_include`), the drive's configuration designed for a motor
 (``ls_cfg_<name>.h``, what ``linsense tune --format c`` writes), an example ``main.c`` with a

@@ -5,6 +5,6 @@ inductance table, a fitted motor model and the measured compensation table (``li
 Modules: :mod:`~linsense.identify.bench` (the bench file: read, emulate, write),
 :mod:`~linsense.identify.process` (phasors -> inductance matrix per position),
 :mod:`~linsense.identify.fit` (the model of docs/theory.md section 2 fitted to them),
-:mod:`~linsense.identify.tables` and :mod:`~linsense.identify.pipeline` (the whole job and its
+:mod:`~linsense.identify.measured_outputs` and :mod:`~linsense.identify.identification` (the whole job and its
 outputs).
 """

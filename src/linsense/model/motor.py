@@ -1,7 +1,7 @@
 """Motors: parameters, loading from presets or TOML files, and the physical checks.
 
 A motor file (TOML, SI units) has the sections ``[motor]`` and ``[inductance]`` (required) and
-``[friction]``, ``[pm_flux]`` (optional); see :mod:`linsense.model.schema` and docs/motor-files.md.
+``[friction]``, ``[pm_flux]`` (optional); see :mod:`linsense.model.motor_schema` and docs/motor-files.md.
 """
 
 from __future__ import annotations
@@ -20,14 +20,14 @@ from linsense._check import brief, closest_key, instance, real, reals
 from linsense.errors import InputError, ModelError
 from linsense.io import csv_rows, folder_of, parse_toml, read_csv_table, read_text_file
 from linsense.model.inductance import DERIVED_COLUMNS, ENTRIES, InductanceModel, derived_columns
-from linsense.model.saturation import Saturation
-from linsense.model.schema import (
+from linsense.model.motor_schema import (
     FrictionSection,
     MotorSection,
     PmHarmonicEntry,
     validate_motor_file,
     validate_section,
 )
+from linsense.model.saturation import Saturation
 from linsense.plausible import KINDS, slip
 
 #: Saliency |L_q - L_d| below this fraction of (L_d + L_q)/2 counts as vanished.

@@ -28,7 +28,7 @@ import numpy as np
 from linsense._check import instance
 from linsense.errors import SaturationRangeError
 from linsense.model.inductance import InductanceModel
-from linsense.model.schema import SaturationSection, validate_section
+from linsense.model.motor_schema import SaturationSection, validate_section
 
 #: Powers 0..SAT_POW-1 of i_q the C plant takes (LS_SIM_SAT_POW).
 SAT_POW = 4

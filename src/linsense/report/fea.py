@@ -21,7 +21,7 @@ from linsense.compensation.lut import build_lut, to_csv
 from linsense.errors import InputError
 from linsense.fea import outputs
 from linsense.fea.geometry import load_geometry
-from linsense.fea.pipeline import (
+from linsense.fea.per_load import (
     LOAD_OPTION,
     load_sweep,
     load_sweep_line,
@@ -331,7 +331,7 @@ def fig_lut_vs_load(name: str, vs_load: dict, luts: list, pole_pitch: float) -> 
     name : str
         Motor name, in the title.
     vs_load : dict
-        :func:`linsense.fea.pipeline.load_sweep`'s result.
+        :func:`linsense.fea.per_load.load_sweep`'s result.
     luts : list of Lut or None
         Each load's LUT.
     pole_pitch : float

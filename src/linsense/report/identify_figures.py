@@ -31,7 +31,7 @@ def fig_identified_inductances(motor, measured: dict[str, np.ndarray], title: st
         The fitted motor (its model draws the lines; its pole pitch the mm axis).
     measured : dict
         The ``linsense model`` columns at the measured positions
-        (:func:`linsense.identify.tables.measured_columns`).
+        (:func:`linsense.identify.measured_outputs.measured_columns`).
     title : str
         The figure's title.
 
@@ -121,7 +121,7 @@ def identify_figure_files(ident) -> dict[str, bytes]:
     Parameters
     ----------
     ident : Identification
-        An :class:`~linsense.identify.pipeline.Identification`.
+        An :class:`~linsense.identify.identification.Identification`.
 
     Returns
     -------

@@ -200,7 +200,7 @@ def fig_startup(runs: list, pole_pitch_mm: float, i_min: float, bound_mm: float,
     Parameters
     ----------
     runs : list of StartupRun
-        The start-ups (:class:`~linsense.sim.startup.StartupRun`).
+        The start-ups (:class:`~linsense.studies.startup_runs.StartupRun`).
     pole_pitch_mm : float
         mm.
     i_min : float

@@ -156,7 +156,7 @@ def certificate_figure(rows: list[dict], title: str, quick: bool = False,
     Parameters
     ----------
     rows : list of dict
-        Rows of :func:`linsense.verify.run.judge`.
+        Rows of :func:`linsense.verify.case_runs.judge`.
     title : str
         The figure's title.
     quick : bool, optional

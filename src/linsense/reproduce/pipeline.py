@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from linsense._extras import available, require_extras
-from linsense.reproduce import runs
+from linsense.reproduce import paper_runs
 from linsense.reproduce.claims import STARTUP_MOTION_MM, claims, claims_beyond, finite_or_none
 
 #: positions of the calibration and of the hold study, full and --quick
@@ -110,8 +110,8 @@ def reproduce(out: str, motor_spec: str = "ecce2010", quick: bool = False, progr
     linsense.errors.InputError
         A bad motor or output folder.
     """
+    from linsense.analysis.model_table import model_table, table_to_csv
     from linsense.analysis.summary import summarize
-    from linsense.analysis.tables import model_table, table_to_csv
     from linsense.compensation.lut import build_lut, export
     from linsense.io import output_set, safe_name
     from linsense.model.motor import load_motor, names_a_file
@@ -205,15 +205,15 @@ def _fig9(st, bars, motor, scen_motor, quick: bool, figs: dict) -> dict:
     from linsense.analysis.hf import psi_lut, psi_lut_resistive
     from linsense.report import paper_figures as pf
     from linsense.report.figures import png_bytes
-    from linsense.sim.calibrate import lut_csv
+    from linsense.studies.calibrate import lut_csv
 
     n_cal = CAL_POSITIONS[quick]
-    stage = _Stage(bars, f"Fig. 9: calibration, {n_cal} points", len(runs.LOADS_N))
-    cals = runs.calibrations(scen_motor or "ecce2010", n_cal, stage.tick)
+    stage = _Stage(bars, f"Fig. 9: calibration, {n_cal} points", len(paper_runs.LOADS_N))
+    cals = paper_runs.calibrations(scen_motor or "ecce2010", n_cal, stage.tick)
     f_inj = next(iter(cals.values())).metrics["f_inj_hz"]
     for load, cal in cals.items():
         st.write(f"calibration/lut_{load:g}N.csv", lut_csv(cal))
-    base = cals[runs.LOADS_N[0]].psi_measured
+    base = cals[paper_runs.LOADS_N[0]].psi_measured
     load_diff = [float(np.degrees(np.nanmax(np.abs(c.psi_measured - base)))) for c in cals.values()
                  if np.isfinite(c.psi_measured - base).any()]
     th = np.linspace(0.0, 2.0 * np.pi, 3601)
@@ -235,9 +235,9 @@ def _figure_runs(st, bars, motor, scen_motor, figs: dict) -> tuple[dict, dict, i
     from linsense.report import paper_figures as pf
     from linsense.report.figures import png_bytes
 
-    n_runs = sum(len(v) for v in runs.FIGURES.values()) + 1
+    n_runs = sum(len(v) for v in paper_runs.FIGURES.values()) + 1
     stage = _Stage(bars, "Figs. 11-13: closed-loop runs", n_runs)
-    results, scenarios = runs.figure_runs(scen_motor, stage.tick)
+    results, scenarios = paper_runs.figure_runs(scen_motor, stage.tick)
     for fig, variants in scenarios.items():
         for var, sc in variants.items():
             st.write(f"scenarios/{fig}_{var}.toml", _scenario_toml(sc))
@@ -257,7 +257,7 @@ def _fig12_analysis(bars, motor, results: dict, scenarios: dict, quick: bool, fi
     the position (with their figures); then Fig. 13's figure."""
     from linsense.report import paper_figures as pf
     from linsense.report.figures import png_bytes
-    from linsense.sim.stability import margins_along
+    from linsense.studies.position_margins import margins_along
 
     tau = motor.pole_pitch
     onset = _onset(motor, results["fig12"]["nolut"], results["fig11"]["nolut"])
@@ -292,7 +292,7 @@ def _rotating(st, bars, motor, scen_motor, n_runs: int, results: dict, scenarios
     from linsense.report.figures import png_bytes
 
     stage = _Stage(bars, "rotating vector: Figs. 11-13", n_runs)
-    rot, rot_sc = runs.rotating_runs(scen_motor, stage.tick)
+    rot, rot_sc = paper_runs.rotating_runs(scen_motor, stage.tick)
     for fig, variants in rot_sc.items():
         scenarios[f"rotating_{fig}"] = variants
         for var, sc in variants.items():
@@ -321,7 +321,7 @@ def _startup(st, bars, scen_motor, quick: bool, scenarios: dict, figs: dict) -> 
 
     n_su = STARTUP_STARTS[quick]
     stage = _Stage(bars, f"start-up: polarity, {n_su} starts", n_su)
-    su = runs.startup_study(scen_motor, n_su, stage.tick)
+    su = paper_runs.startup_study(scen_motor, n_su, stage.tick)
     scenarios["startup"] = {"worst": su.scenario}
     st.write("scenarios/startup_worst.toml", _scenario_toml(su.scenario))
     su_spec = su.scenario.spec
@@ -344,16 +344,16 @@ def _beyond(st, bars, motor, scen_motor, quick: bool, lut_scenario, figs: dict) 
     from linsense.report.sweep_figures import stability_map as fig_stability_map
 
     n_hold = HOLD_POSITIONS[quick]
-    stage = _Stage(bars, f"beyond: hold study, {n_hold} positions", 2 * len(runs.HOLD_VARIANTS))
-    hold = runs.hold_study(scen_motor, n_hold, stage.tick)
-    dt_us = runs.DEAD_TIME * 1e6
+    stage = _Stage(bars, f"beyond: hold study, {n_hold} positions", 2 * len(paper_runs.HOLD_VARIANTS))
+    hold = paper_runs.hold_study(scen_motor, n_hold, stage.tick)
+    dt_us = paper_runs.DEAD_TIME * 1e6
     figs["figures/hold_bias.png"] = png_bytes(pf.fig_bias(
         hold.true_deg, hold.bias_deg,
         "Steady estimation error at rest, switching inverter: the LUT of eq. (12) against the LUT\n"
         f"with R_s, and the dead time ({dt_us:g} µs; solid) against none (dashed); pulsating injection",
         motor))
     stage = _Stage(bars, "beyond: stability map (sweep)", 1)
-    df, axes, map_line = runs.stability_map(scen_motor, quick, st.path("stability_map"))
+    df, axes, map_line = paper_runs.stability_map(scen_motor, quick, st.path("stability_map"))
     stage.tick()
     figs["figures/stability_map.png"] = png_bytes(fig_stability_map(df, axes))
     return {
@@ -399,8 +399,9 @@ def _closed_loop(st, bars, motor, scen_motor, summ: dict, quick: bool, figs: dic
     metrics = {
         "motor": motor.name,
         "quick": quick,
-        "setup": {"fidelity": runs.FIDELITY, "dead_time_s": runs.DEAD_TIME, "f_pwm_hz": lut6.inverter.f_pwm,
-                  "v_inj_v": lut6.injection.amplitude, "f_inj_hz": lut6.injection.frequency},
+        "setup": {"fidelity": paper_runs.FIDELITY, "dead_time_s": paper_runs.DEAD_TIME,
+                  "f_pwm_hz": lut6.inverter.f_pwm, "v_inj_v": lut6.injection.amplitude,
+                  "f_inj_hz": lut6.injection.frequency},
         "lut": {"peak_deg": summ["psi_lut_peak_deg"]},
         "fig9": fig9,
         "fig11": {k: results["fig11"][k].metrics for k in ("lut", "nolut")},

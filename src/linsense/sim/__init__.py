@@ -7,8 +7,8 @@ described in docs/simulator.md. The low-level C access is :mod:`linsense.sim.cor
 """
 
 from linsense.sim.result import Result
-from linsense.sim.run import simulate, simulate_many
 from linsense.sim.scenario import Scenario, load_scenario, scenario_from_dict
+from linsense.sim.simulation import simulate, simulate_many
 from linsense.sim.to_folder import SimulateOutput, simulate_to
 
 __all__ = ["Result", "Scenario", "SimulateOutput", "load_scenario", "scenario_from_dict", "simulate",

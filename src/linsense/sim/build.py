@@ -8,7 +8,7 @@ them); every check of the scenario, before any C object is made (:func:`validate
 :mod:`linsense.sim.checks`); the plant (:func:`plant`); the drive's configuration, filled from
 ``ls_drive_default_cfg`` by the one scenario -> ``ls_drive_cfg`` mapping
 (:mod:`linsense.tune.cfgmap`, :mod:`linsense.sim.drive_cfg`); its tables
-(:mod:`linsense.sim.tables`: :class:`linsense.ctrl.Lut` objects kept alive by the :class:`Built`
+(:mod:`linsense.sim.drive_tables`: :class:`linsense.ctrl.Lut` objects kept alive by the :class:`Built`
 that owns the drive); the drive (:func:`make_drive`, :func:`start_drive`). The C library keeps its
 own checks as the last line (:mod:`linsense.sim.refusal` names the key a refusal comes from).
 """
@@ -44,10 +44,10 @@ from linsense.sim.checks import (
 )
 from linsense.sim.core import PlantSetup, SimulationError, plant_template, sim_cfg
 from linsense.sim.drive_cfg import calibration_table, drive_values, fill, value_of
+from linsense.sim.drive_tables import Tables, drive_tables, measured_model, measured_warnings
 from linsense.sim.plant import fill_saturation, lab_fourier
 from linsense.sim.refusal import explain, given_keys
 from linsense.sim.scenario import Scenario, compensation_of
-from linsense.sim.tables import Tables, drive_tables, measured_model, measured_warnings
 from linsense.tune.cfgmap import Values
 from linsense.tune.design import DriveData, mean_dq
 from linsense.tune.drive_design import design_drive
@@ -98,7 +98,7 @@ class Built:
         The dotted keys the file gives (the design sets the others).
     warnings : list of str
         Doubts about the inputs the run was built from, for the command to say (a measured table
-        that does not look like the motor's, :func:`linsense.sim.tables.measured_warnings`).
+        that does not look like the motor's, :func:`linsense.sim.drive_tables.measured_warnings`).
     """
 
     scenario: Scenario
@@ -428,7 +428,7 @@ def plant(sc: Scenario, motor: Motor, sat: Saturation | None) -> tuple[PlantSetu
 
 def make_drive(sc: Scenario, model_motor: Motor, known: dict, v: Values, d, user_keys: set[str],
                stamp_motor: Motor | None = None) -> Drive:
-    """The drive over a configuration, with its tables (:func:`linsense.sim.tables.drive_tables`).
+    """The drive over a configuration, with its tables (:func:`linsense.sim.drive_tables.drive_tables`).
 
     A refusal of ``ls_drive_init`` (the C library's own checks, the last line) names the one field
     at fault, its scenario key, the value and the limit.

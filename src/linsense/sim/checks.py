@@ -176,7 +176,7 @@ def check_run_size(source: str, n_steps: int, decimate: int, fs: float, trace_in
     """
     if not trace_in_memory:
         return
-    # with decimate > 1 every sample also keeps its block statistics (linsense.sim.run.simulate)
+    # with decimate > 1 every sample also keeps its block statistics (linsense.sim.simulation.simulate)
     with_blocks = 8 * (sum(SIGNALS.values()) + sum(BLOCKS.values())) + 4
     per_sample = with_blocks if decimate > 1 else 8 * sum(SIGNALS.values()) + 4
     n_rec = math.ceil(n_steps / decimate) + 2

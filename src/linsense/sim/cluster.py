@@ -2,7 +2,7 @@
 
 A dask client for a dask cluster (the ``sweep`` extra): the sweep engine
 (:mod:`linsense.sweep.engine`) with ``--scheduler`` or ``--processes``, and
-:func:`linsense.sim.run.simulate_many` with a scheduler's address. Local runs otherwise go on a
+:func:`linsense.sim.simulation.simulate_many` with a scheduler's address. Local runs otherwise go on a
 pool of worker threads of the standard library (:func:`thread_map`; the sweep engine keeps its own,
 which yields batches as they finish and stops them when told).
 """

@@ -2,7 +2,7 @@
 
 Everything per step happens in C; Python only fills the configuration structs, allocates the
 numpy output arrays and hands pointers over. Higher layers (scenario files, metrics, the CLI)
-are in :mod:`linsense.sim.scenario`, :mod:`linsense.sim.run` and friends.
+are in :mod:`linsense.sim.scenario`, :mod:`linsense.sim.simulation` and friends.
 """
 
 from __future__ import annotations

@@ -2,7 +2,7 @@
 whole in memory.
 
 Every run of the simulator goes this way (:func:`simulate_streamed`; ``linsense simulate``,
-:func:`linsense.sim.run.simulate` and :func:`~linsense.sim.run.metrics_only`; docs/simulator.md,
+:func:`linsense.sim.simulation.simulate` and :func:`~linsense.sim.simulation.metrics_only`; docs/simulator.md,
 "Single runs in chunks"): the C loop runs in chunks of reused buffers
 (:func:`linsense.sim.core.run_closed_loop_chunks`) at the full rate, one sample per PWM period,
 whatever the run keeps. The metrics are computed from those samples (:class:`MetricSamples` keeps
@@ -844,7 +844,7 @@ def simulate_streamed(b: Built, *, on_chunk: Callable | None = None, plot: bool 
     Raises
     ------
     linsense.errors.InputError
-        As :func:`linsense.sim.run.simulate` when the drive trips at t = 0.
+        As :func:`linsense.sim.simulation.simulate` when the drive trips at t = 0.
     """
     s = b.scenario.spec
     dec = int(b.setup.decimate if decimate is None else decimate)

@@ -277,8 +277,8 @@ def run_point(ctx: SweepContext, index: int, point: dict, relative: dict) -> dic
         The row: ``run``, the swept values, the metrics of :data:`ROW_METRICS` and ``error`` (the
         message when the run was refused, its metrics None).
     """
-    from linsense.sim.run import metrics_only, simulate
     from linsense.sim.scenario import scenario_from_dict
+    from linsense.sim.simulation import metrics_only, simulate
 
     row: dict = {"run": index, **point}
     try:

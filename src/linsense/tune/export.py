@@ -527,7 +527,7 @@ def _c_tables_code(dd: DriveDesign, sym: str, points: int, digest: str) -> str:
     fn, guard, prefix = f"ls_cfg_{sym}", f"LS_CFG_{sym.upper()}_H", f"LS_CFG_{sym.upper()}"
     lut = build_lut(dd.motor, points, f_inj=dz.f_inj, quad=dz.quad).values if table is None else table.values
     # (the rest of the drive's model takes the end effect a measured table says, as the simulator's
-    # does: linsense.sim.tables.measured_model)
+    # does: linsense.sim.drive_tables.measured_model)
     motor = dd.model
     lut_r = lut_r_slope(motor, points, dz.f_inj, dz.quad)
     gain = gain_schedule(motor, dz.f_inj, dz.quad, points)

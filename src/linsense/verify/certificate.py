@@ -13,9 +13,9 @@ from pathlib import Path
 from linsense.io import working_folder
 from linsense.model.motor import Motor
 from linsense.verify import criteria as C
+from linsense.verify.case_runs import MOVES as C_MOVES
+from linsense.verify.case_runs import run_cases
 from linsense.verify.cases import all_cases
-from linsense.verify.run import MOVES as C_MOVES
-from linsense.verify.run import run_cases
 
 #: the likely cause of a failed check and what to change
 REMEDY = {
@@ -101,7 +101,7 @@ class Certificate:
     checks : list of Check
         The checks.
     rows : list of dict
-        The judged runs (:func:`linsense.verify.run.judge`).
+        The judged runs (:func:`linsense.verify.case_runs.judge`).
     wall_s : float
         Wall time, s.
     quick : bool
@@ -411,11 +411,11 @@ def calibrate_plant(motor: Motor, motor_spec: str, base: dict, base_dir: str, pl
 
     Returns
     -------
-    linsense.sim.calibrate.Calibration
+    linsense.studies.calibrate.Calibration
         The measured table; its ``psi_model`` is the plant's own.
     """
-    from linsense.sim.calibrate import calibrate
     from linsense.sim.scenario import scenario_from_dict
+    from linsense.studies.calibrate import calibrate
     from linsense.verify.cases import off_nominal_motor
 
     sc = scenario_from_dict(_calibration_base(base, motor_spec, travel, motor.pole_pitch),
@@ -430,7 +430,7 @@ def calibration_summary(cal, motor: Motor) -> dict:
 
     Parameters
     ----------
-    cal : linsense.sim.calibrate.Calibration
+    cal : linsense.studies.calibrate.Calibration
         The calibration on the plant.
     motor : Motor
         The nominal motor (the file's table is its model's, for the injection the drive runs).
@@ -567,10 +567,10 @@ def _build_each_kind(cases: list, calibrated: list[str], motor: Motor, motor_spe
     """Build one run of each kind and plant of ``cases`` (and the calibration's, if any plant is
     ``calibrated``), so that a configuration any of them refuses raises before anything runs."""
     from linsense.sim.build import build
-    from linsense.sim.calibrate import calibration_scenario
     from linsense.sim.scenario import scenario_from_dict
+    from linsense.studies.calibrate import calibration_scenario
+    from linsense.verify.case_runs import case_scenario
     from linsense.verify.cases import off_nominal_motor
-    from linsense.verify.run import case_scenario
 
     seen = set()
     for c in cases:
@@ -590,7 +590,7 @@ def _with_tables(cases: list, cals: dict, tmp: str) -> list:
     """``cases`` whose measured-table runs read the table measured on their plant (written, stamped,
     in ``tmp``); the runs of a plant whose calibration did not complete are left out."""
     from linsense.io import write_atomic
-    from linsense.sim.calibrate import measured_json
+    from linsense.studies.calibrate import measured_json
 
     files = {}
     for i, (p, cal) in enumerate(cals.items()):

@@ -19,8 +19,8 @@ from linsense.io import working_folder
 from linsense.model.motor import Motor, load_motor, names_a_path
 from linsense.sim.build import build, compensation_of, drive_data, resolve_motor
 from linsense.sim.cache import motor_key
+from linsense.sim.drive_tables import lut_file_path, lut_file_via
 from linsense.sim.scenario import Scenario, scenario_from_dict
-from linsense.sim.tables import lut_file_path, lut_file_via
 from linsense.tune.design import (
     CURRENT_TRIP_MARGIN,
     OVERSPEED_MARGIN,

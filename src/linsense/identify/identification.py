@@ -15,13 +15,13 @@ from pathlib import Path
 import numpy as np
 
 from linsense.analysis.hf import psi_lut
-from linsense.analysis.tables import table_to_csv
+from linsense.analysis.model_table import table_to_csv
 from linsense.compensation.lut import Lut, build_lut, export
 from linsense.errors import InputError
 from linsense.identify.bench import BenchData, read_bench_csv
 from linsense.identify.fit import PITCH_RESIDUAL_SHARE, T_SIGNIFICANT, FitResult, best_pitch, fit_inductances
+from linsense.identify.measured_outputs import measured_columns, measured_lut_csv
 from linsense.identify.process import MeasuredTable, process_bench
-from linsense.identify.tables import measured_columns, measured_lut_csv
 from linsense.model.inductance import InductanceModel
 from linsense.model.motor import Friction, Motor, check_motor, check_plausible, motor_to_toml
 from linsense.plausible import KINDS, check
@@ -44,7 +44,7 @@ class Identification:
         The identified motor.
     measured : dict of str to ndarray
         The ``linsense model`` columns at the measured positions
-        (:func:`~linsense.identify.tables.measured_columns`).
+        (:func:`~linsense.identify.measured_outputs.measured_columns`).
     psi_measured : ndarray
         The compensation angle at the measured positions, rad.
     lut_fit : Lut

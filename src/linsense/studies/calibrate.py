@@ -469,7 +469,7 @@ def measured_json(cal: Calibration) -> str:
     """
     from linsense.io import split_timing
 
-    src = "linsense.sim.calibrate.measured_json"
+    src = "linsense.studies.calibrate.measured_json"
     m = cal.metrics
     if not cal.completed:
         raise InputError(src, "completed", f"the calibration did not complete ({m.get('points_done')} of "

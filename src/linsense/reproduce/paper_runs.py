@@ -146,7 +146,7 @@ def figure_runs(motor: str | None, tick=lambda: None, changes: dict | None = Non
     scenarios : dict
         Figure to variant to Scenario.
     """
-    from linsense.sim.run import simulate
+    from linsense.sim.simulation import simulate
 
     results: dict = {}
     scenarios: dict = {}
@@ -205,9 +205,9 @@ def calibrations(motor, positions: int, tick=lambda: None) -> dict:
     Returns
     -------
     dict
-        Load (N) to :class:`~linsense.sim.calibrate.Calibration`.
+        Load (N) to :class:`~linsense.studies.calibrate.Calibration`.
     """
-    from linsense.sim.calibrate import calibrate
+    from linsense.studies.calibrate import calibrate
 
     out = {}
     for load in LOADS_N:
@@ -261,7 +261,7 @@ def hold_study(motor: str | None, n_positions: int, tick=lambda: None) -> HoldSt
         The biases and limit cycles.
     """
     from linsense.sim.build import resolve_motor
-    from linsense.sim.run import metrics_only
+    from linsense.sim.simulation import metrics_only
 
     base = paper_scenario("paper_hold.toml", motor)
     tau_mm = resolve_motor(base).pole_pitch * 1e3
@@ -311,7 +311,7 @@ def stability_map(motor: str | None, quick: bool, out: Path):
     """
     from linsense.io import read_toml
     from linsense.sweep import sweep, sweep_from_dict
-    from linsense.sweep.studies import summary_line
+    from linsense.sweep.study_summary import summary_line
 
     path = data_path("sweeps", "stability_map.toml")
     data = read_toml(path, "sweep file")
@@ -346,7 +346,7 @@ class StartupStudy:
     Attributes
     ----------
     runs : list of StartupRun
-        One per start (:class:`linsense.sim.startup.StartupRun`).
+        One per start (:class:`linsense.studies.startup_runs.StartupRun`).
     pole_pitch_mm : float
         mm.
     scenario : Scenario
@@ -355,7 +355,7 @@ class StartupStudy:
         The saturated plant's polarity signal, 1/A.
     """
 
-    runs: list  # linsense.sim.startup.StartupRun, one per start
+    runs: list  # linsense.studies.startup_runs.StartupRun, one per start
     pole_pitch_mm: float
     scenario: object  # the Scenario of the start with the largest motion while detecting
     polarity: float  # 1/A, the saturated plant's
@@ -371,7 +371,7 @@ def startup_study(motor: str | None, n: int, tick=lambda: None) -> StartupStudy:
 
     docs/firmware.md, ``LS_MODE_STARTUP``: the drive's estimate at 0, on the saturated plant, the
     switching inverter with the paper's dead time, a free frictionless mover without load
-    (:mod:`linsense.sim.startup`).
+    (:mod:`linsense.studies.startup_runs`).
 
     Parameters
     ----------
@@ -389,7 +389,7 @@ def startup_study(motor: str | None, n: int, tick=lambda: None) -> StartupStudy:
     """
     from linsense.sim.build import resolve_motor
     from linsense.sim.scenario import scenario_from_dict
-    from linsense.sim.startup import AFTER_S, base_scenario, start_positions, startup_run
+    from linsense.studies.startup_runs import AFTER_S, base_scenario, start_positions, startup_run
 
     base = base_scenario(motor=motor or "ecce2010", polarity=STARTUP_POLARITY, fidelity=FIDELITY)
     base["inverter"]["dead_time"] = DEAD_TIME

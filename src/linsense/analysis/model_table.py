@@ -39,7 +39,7 @@ def model_table(motor, points: int) -> dict[str, np.ndarray]:
     """
     from linsense.limits import MAX_POINTS
 
-    src = "linsense.analysis.tables.model_table"
+    src = "linsense.analysis.model_table.model_table"
     # (the API refuses what `linsense model --points` refuses: 3 was a ValueError, 4.5 a TypeError and
     # 10**9 ran the machine out of memory)
     motor = as_motor(motor, src)
@@ -82,7 +82,7 @@ def table_to_csv(cols: dict[str, np.ndarray]) -> str:
     linsense.errors.InputError
         ``cols`` not a dict of columns of one length of real numbers.
     """
-    src = "linsense.analysis.tables.table_to_csv"
+    src = "linsense.analysis.model_table.table_to_csv"
     instance(cols, src, "cols", dict, "a dict of columns (model_table)")
     names = list(cols)
     data = [reals(cols[n], src, f"cols[{n!r}]", "values", ndim=1, finite=False) for n in names]

@@ -9,7 +9,7 @@ from linsense.model.inductance import ENTRIES, derived_columns
 
 
 def measured_columns(theta: np.ndarray, entries: np.ndarray) -> dict[str, np.ndarray]:
-    """The ``linsense model`` columns (``linsense.analysis.tables.MODEL_COLUMNS``) at the
+    """The ``linsense model`` columns (``linsense.analysis.model_table.MODEL_COLUMNS``) at the
     measured positions.
 
     Inductances, the alpha-beta and dq matrices, the saliency, ``psi_lut_deg`` (eq. 12,

@@ -2,7 +2,7 @@
 ("with the saturated plant, the calibrated LUT at 0, 20 and 40 N ... agree with the FEA's
 LUT-against-load within 0.3 deg").
 
-The drive's calibration mode (:func:`linsense.sim.calibrate.calibrate`, switching inverter with
+The drive's calibration mode (:func:`linsense.studies.calibrate.calibrate`, switching inverter with
 the dead time, the paper's pulsating injection) runs on the saturated plant of a motor file whose
 ``[saturation]`` holds the FEA's incremental inductance tables at several q currents, under each
 load force; its table's change
@@ -20,7 +20,7 @@ import numpy as np
 
 from linsense.io import folder_of, read_csv_table
 from linsense.model.motor import load_motor
-from linsense.sim.calibrate import calibrate
+from linsense.studies.calibrate import calibrate
 
 
 def read_lut_csv(path: Path) -> tuple[np.ndarray, np.ndarray]:
