@@ -2,8 +2,9 @@
 
 ``make lint`` checks the layers contract; these tests add: no import cycle between linsense's
 modules (lazy imports inside functions count, as for import-linter), no private name (``_x``)
-imported from outside the package that holds it, and ``import linsense`` (and its lower layers)
-loads neither the C extension nor matplotlib.
+imported from outside the package that holds it, ``import linsense`` (and its lower layers)
+loads neither the C extension nor matplotlib, and no two modules share a basename (nor are ``x.py``
+and ``xs.py``).
 """
 
 from __future__ import annotations
