@@ -266,7 +266,7 @@ tools:
 # every benchmark runs; make bench fails at the end if any did (naming them)
 BENCHES := tools/bench_sim.py tools/bench_closed_loop.py tools/bench_sweep.py tools/bench_fea.py \
            tools/bench_reproduce.py tools/bench_saturation.py tools/bench_tune.py tools/bench_reference.py \
-           tools/bench_start.py tools/bench_pil.py
+           tools/bench_start.py tools/bench_pil.py tools/bench_speed.py
 # valgrind: callgrind's instruction counts of make bench (tools/bench.sh skips them without it)
 bench-tools: tools
 	$(call apt_want,command -v valgrind >/dev/null,valgrind,make bench skips the instruction counts)
