@@ -56,6 +56,8 @@ HOMES = (
          r"k\d Ts(?:\^\d)? <= 1\b|k\d_ts[^\n]{0,30}<= LS_R\("),
     Home("schema's designed ratios", "src/linsense/tune/design.py", "SPEED_CAP_MARGIN = ",
          r"1\.25 times|f_pwm / 16\b|f_lpf / 20\b|f_lpf / 7\.5\b", "src/"),
+    Home("start-up pairs limit", "csrc/include/linsense/ls_startup.h", "#define LS_STARTUP_PAIRS_MAX",
+         r"le=1024\b", "src/"),
     Home("square wave's d current", "src/linsense/tune/injection.py", "SQUARE_D_FRACTION = ",
          r"0\.4 `controller\.i_max`", "src/"),
 )

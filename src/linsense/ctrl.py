@@ -50,6 +50,7 @@ __all__ = [
     "EQUAL_FIELDS",
     "V_INJ_SHARE_MAX",
     "RIPPLE_MAX",
+    "STARTUP_PAIRS_MAX",
     "injection_fits",
     "observer_gains",
 ]
@@ -175,6 +176,8 @@ _RULES = {
 V_INJ_SHARE_MAX = float(lib.LS_DRIVE_V_INJ_SHARE_MAX)
 #: the largest ``|ripple_c| + |ripple_s|`` ls_drive_init accepts
 RIPPLE_MAX = float(lib.LS_DRIVE_RIPPLE_MAX)
+#: the most start-up pulse pairs ls_startup_init accepts
+STARTUP_PAIRS_MAX = int(lib.LS_STARTUP_PAIRS_MAX)
 
 
 def injection_fits(amplitude: float, v_dc_min: float) -> bool:

@@ -32,7 +32,15 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, ValidationError, model_validator
 
 from linsense._check import path_arg
-from linsense.ctrl import REAL, RIPPLE_MAX, V_INJ_SHARE_MAX, drive_default_cfg, injection_fits, observer_gains
+from linsense.ctrl import (
+    REAL,
+    RIPPLE_MAX,
+    STARTUP_PAIRS_MAX,
+    V_INJ_SHARE_MAX,
+    drive_default_cfg,
+    injection_fits,
+    observer_gains,
+)
 from linsense.errors import InputError
 from linsense.io import folder_of, read_toml, working_folder
 from linsense.plausible import implausible, slip
@@ -124,7 +132,8 @@ class StartupSection(BaseModel):
                               "at most 60)", json_schema_extra={"unit": "s"})
     t_rest: Positive = Field(_c(_C.startup.t_rest), description="zero voltage before each pulse (at least "
                              "3 PWM periods, at most 60)", json_schema_extra={"unit": "s"})
-    pairs: int = Field(default=int(_C.startup.pairs), ge=1, le=1024, description="(+, -) pulse pairs")
+    pairs: int = Field(default=int(_C.startup.pairs), ge=1, le=STARTUP_PAIRS_MAX,
+                       description="(+, -) pulse pairs")
     i_min: Positive = Field(_c(_C.startup.i_min), description="smallest `|i_diff|` accepted as a decision",
                             json_schema_extra={"unit": "A"})
     t_settle: NonNegative = Field(_c(_C.startup.t_settle), description="HF relock after the pulses (at "
