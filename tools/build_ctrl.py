@@ -10,7 +10,9 @@ header (``csrc/include/linsense/*.h``), the simulator's and the helpers' (``csrc
 through the C preprocessor (``-DLS_CFFI``, which a header may test to hide what the binding must
 not see; ``<...>`` system headers replaced by empty files) and pycparser; ``static inline``
 functions become prototypes (cffi's wrappers call the inline code), names ending in ``_`` (the
-library's internals) are left out, integer macros become ``#define NAME ...`` and ``LS_REAL``
+library's internals) are left out, integer macros become ``#define NAME ...``, real ones
+(``#define NAME LS_R(1.0e3)``: the library's limits, read in Python as ``lib.NAME``, the value C
+compares with) ``static const double NAME;``, and ``LS_REAL``
 ``float...``: cffi takes the values and the real type (float, or double with ``-DLS_REAL_DOUBLE``
 in ``CFLAGS``) from the headers when it compiles, and checks every struct layout and signature
 there. A header change needs no edit here; a mismatch fails the build.
@@ -62,6 +64,8 @@ PLANT_ARGS = {"gcc": ["-ffp-contract=fast"], "msvc": []}
 KNOWN_TYPES = sorted(n for n in COMMON_TYPES if n.isidentifier())
 #: an integer constant expression (a macro cffi can read as ``#define NAME ...``)
 INT_EXPR = re.compile(r"(?:\s|0[xX][0-9a-fA-F]+[uUlL]*|[0-9]+[uUlL]*|<<|>>|[-+*/%()|&^~])+")
+#: a real constant of the library, ``LS_R(<decimal literal>)``
+REAL_EXPR = re.compile(r"LS_R\([0-9.]+(?:[eE][-+]?[0-9]+)?\)")
 
 
 def _load_digest_module():
@@ -104,9 +108,10 @@ def cdef() -> str:
             node.storage, node.funcspec = [], []
         if hasattr(node, "name") and node.name not in KNOWN_TYPES and not (node.name or "").endswith("_"):
             decls.append(gen.visit(node) + ";")
-    macros = [f"#define {name} ..." for name, body in
-              sorted(re.findall(r"^#define ([A-Za-z]\w*) (.*)$", preprocess("-dM"), re.M))
+    defines = sorted(re.findall(r"^#define ([A-Za-z]\w*) (.*)$", preprocess("-dM"), re.M))
+    macros = [f"#define {name} ..." for name, body in defines
               if name != "LS_CFFI" and re.search(r"[0-9]", body) and INT_EXPR.fullmatch(body)]
+    macros += [f"static const double {name};" for name, body in defines if REAL_EXPR.fullmatch(body)]
     text = "\n".join(macros + decls) + "\n"
     return re.sub(r"\btypedef (?:float|double) LS_REAL;", "typedef float... LS_REAL;", text)
 

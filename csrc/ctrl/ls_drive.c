@@ -15,7 +15,6 @@ void ls_drive_default_cfg(ls_drive_cfg *c)
     const LS_REAL fs = LS_DEF_FS;
     const LS_REAL l_d = LS_DEF_L_D, l_q = LS_DEF_L_Q;
     const LS_REAL tau = LS_DEF_TAU, kf = LS_DEF_KF, mass = LS_DEF_MASS, r_s = LS_DEF_R_S;
-    const LS_REAL w_i = LS_TWO_PI * LS_DEF_CURRENT_BW; /* current-loop bandwidth, rad/s */
     memset(c, 0, sizeof *c);
     c->lib_version = LS_VERSION;
     c->fs = fs;
@@ -61,8 +60,8 @@ void ls_drive_default_cfg(ls_drive_cfg *c)
     c->enc_obs = c->obs;
     c->enc_obs.type = LS_OBS_PLL;
     ls_observer_gains(&c->enc_obs, LS_R(200.0));
-    c->current.kp = w_i * LS_R(0.5) * (l_d + l_q);
-    c->current.ki = w_i * r_s;
+    c->current.kp = LS_DEF_CURRENT_KP;
+    c->current.ki = LS_DEF_CURRENT_KI;
     c->current.l_d = l_d;
     c->current.l_q = l_q;
     c->current.psi_pm = kf * tau / (LS_R(3.0) * LS_PI);
@@ -118,19 +117,20 @@ void ls_drive_default_cfg(ls_drive_cfg *c)
     c->cal.period = 0;
     c->cal.dither_amp = LS_DEF_DITHER_AMP;
     c->cal.dither_freq = LS_DEF_DITHER_FREQ; /* not a submultiple of the injection (50 Hz would be) */
-    /* start-up (ls_startup.h): `linsense tune --polarity 0.0131` for ecce2010 (the FEA's 1.31 %/A of
-     * a thin back iron) and this drive, 10 mA rms of current noise and a 12-bit ADC: 2.8 A at the
-     * end of a 37.4 V, 7-period pulse, 16 pairs for a decision 6 sigma clear (docs/tuning.md) */
+    /* start-up (ls_startup.h): the design of linsense.tune.startup for ecce2010 with the FEA's
+     * 1.31 %/A of a thin back iron and this drive, 10 mA rms of current noise and a 12-bit ADC: 2.8 A
+     * at the end of a 7-period pulse, pairs for a decision 6 sigma clear (docs/tuning.md); the lock's
+     * time is the library's own (a 40 Hz observer's) */
     c->startup.fs = fs;
     c->startup.t_lock = LS_R(0.07);
-    c->startup.err_lock = LS_R(0.2);
-    c->startup.t_quiet = LS_R(0.012); /* the injection's 10 ms ramp (12 V at 1200 V/s), and 2 ms */
-    c->startup.v_pulse = LS_R(37.4);
-    c->startup.t_pulse = LS_R(0.4375e-3);
-    c->startup.t_rest = LS_R(1.5625e-3);
-    c->startup.pairs = 16u;
-    c->startup.i_min = LS_R(0.0126);
-    c->startup.t_settle = LS_R(0.03);
+    c->startup.err_lock = LS_DEF_STARTUP_ERR_LOCK;
+    c->startup.t_quiet = LS_DEF_STARTUP_T_QUIET; /* the injection's 10 ms ramp (12 V at 1200 V/s), and 2 ms */
+    c->startup.v_pulse = LS_DEF_STARTUP_V_PULSE;
+    c->startup.t_pulse = LS_DEF_STARTUP_T_PULSE;
+    c->startup.t_rest = LS_DEF_STARTUP_T_REST;
+    c->startup.pairs = (uint32_t)LS_DEF_STARTUP_PAIRS;
+    c->startup.i_min = LS_DEF_STARTUP_I_MIN;
+    c->startup.t_settle = LS_DEF_STARTUP_T_SETTLE;
     c->startup.lock_gain = LS_DEF_STARTUP_LOCK_GAIN;
 }
 
@@ -162,66 +162,66 @@ static uint32_t steps_of(LS_REAL t, LS_REAL ts, bool strict)
 
 static bool step_table_complete(void);
 
-ls_status ls_drive_init(ls_drive *d, const ls_drive_cfg *cfg)
+/* The drive's own fields (each module checks its own in its init). */
+static bool drive_fields_ok(const ls_drive_cfg *cfg)
 {
-    ls_pos zero = {0, LS_R(0.0)};
-    ls_status st = LS_OK;
-    LS_REAL v_inj_frac, enc_jump;
-    if (d == NULL || cfg == NULL) {
-        return LS_ERR_NULL;
-    }
-    memset(d, 0, sizeof *d);
-    if (cfg->lib_version != LS_VERSION) {
-        return LS_ERR_VERSION; /* made for another library version: its fields may mean other things */
-    }
-    if (!pos_finite(cfg->fs) || !pos_finite(cfg->pole_pitch) || !pos_finite(cfg->force_constant) ||
-        !pos_finite(cfg->i_max) || !LS_ISFINITE(cfg->i_d_inj) || !(LS_FABS(cfg->i_d_inj) < cfg->i_max) ||
-        !LS_ISFINITE(cfg->i_d_near) || !(LS_FABS(cfg->i_d_near) < cfg->i_max) || !(cfg->near_in >= LS_R(0.0)) ||
-        !(cfg->near_out >= cfg->near_in) || !(cfg->near_out < LS_PI / LS_R(6.0)) ||
-        !LS_ISFINITE(cfg->delay_comp) || cfg->delay_comp < LS_R(0.0) || !LS_ISFINITE(cfg->hf_delay) ||
-        cfg->hf_delay < LS_R(0.0) || cfg->hf_delay > LS_R(0.1) ||
-        cfg->enc_counts <= 0 || !pos_finite(cfg->enc_v_max) || cfg->fs > LS_DRIVE_FS_MAX ||
-        cfg->i_max > LS_DRIVE_I_MAX || cfg->prot.i_max > LS_DRIVE_I_MAX || cfg->prot.v_dc_max > LS_DRIVE_V_DC_MAX ||
-        cfg->bpf.type != (cfg->inject.shape == LS_INJ_SQUARE ? LS_BIQUAD_DIFF : LS_BIQUAD_BANDPASS) ||
-        (cfg->sep.type != LS_BIQUAD_NOTCH && cfg->sep.type != LS_BIQUAD_LOWPASS) ||
-        (cfg->load_ff && (cfg->obs.type != LS_OBS_MECH || !(cfg->pos.mass > LS_R(0.0)))) ||
-        cfg->ripple_order < 0 || cfg->ripple_order > LS_DRIVE_RIPPLE_ORDER_MAX || !LS_ISFINITE2(cfg->ripple_c, cfg->ripple_s) ||
-        !(LS_FABS(cfg->ripple_c) + LS_FABS(cfg->ripple_s) <= LS_R(0.5))) {
-        return LS_ERR_PARAM;
-    }
-    /* the demodulation that goes with the injection's shape; the square wave is separated from
-     * the fundamental by a low-pass (zeros at fs/2), not a notch, and has no residual model (its
-     * current change is not a band-passed current: i_d_inj keeps the phase currents off zero) */
+    return pos_finite(cfg->fs) && pos_finite(cfg->pole_pitch) && pos_finite(cfg->force_constant) &&
+           pos_finite(cfg->i_max) && LS_ISFINITE(cfg->i_d_inj) && LS_FABS(cfg->i_d_inj) < cfg->i_max &&
+           LS_ISFINITE(cfg->i_d_near) && LS_FABS(cfg->i_d_near) < cfg->i_max && cfg->near_in >= LS_R(0.0) &&
+           cfg->near_out >= cfg->near_in && cfg->near_out < LS_PI / LS_R(6.0) &&
+           LS_ISFINITE(cfg->delay_comp) && !(cfg->delay_comp < LS_R(0.0)) && LS_ISFINITE(cfg->hf_delay) &&
+           !(cfg->hf_delay < LS_R(0.0)) && !(cfg->hf_delay > LS_R(0.1)) &&
+           cfg->enc_counts > 0 && pos_finite(cfg->enc_v_max) && !(cfg->fs > LS_DRIVE_FS_MAX) &&
+           !(cfg->i_max > LS_DRIVE_I_MAX) && !(cfg->prot.i_max > LS_DRIVE_I_MAX) &&
+           !(cfg->prot.v_dc_max > LS_DRIVE_V_DC_MAX) &&
+           cfg->bpf.type == (cfg->inject.shape == LS_INJ_SQUARE ? LS_BIQUAD_DIFF : LS_BIQUAD_BANDPASS) &&
+           (cfg->sep.type == LS_BIQUAD_NOTCH || cfg->sep.type == LS_BIQUAD_LOWPASS) &&
+           !(cfg->load_ff && (cfg->obs.type != LS_OBS_MECH || !(cfg->pos.mass > LS_R(0.0)))) &&
+           cfg->ripple_order >= 0 && cfg->ripple_order <= LS_DRIVE_RIPPLE_ORDER_MAX &&
+           LS_ISFINITE2(cfg->ripple_c, cfg->ripple_s) &&
+           LS_FABS(cfg->ripple_c) + LS_FABS(cfg->ripple_s) <= LS_DRIVE_RIPPLE_MAX;
+}
+
+/* The modules agree with the drive and with each other: the demodulation that goes with the
+ * injection's shape, one pole pitch, one sampling rate. */
+static bool modules_agree(const ls_drive_cfg *cfg)
+{
+    /* the square wave is separated from the fundamental by a low-pass (zeros at fs/2), not a notch,
+     * and has no residual model (its current change is not a band-passed current: i_d_inj keeps the
+     * phase currents off zero) */
     if ((cfg->inject.shape == LS_INJ_ROTATING) != (cfg->demod.method == LS_DEMOD_ROTATING) ||
         (cfg->inject.shape == LS_INJ_SQUARE && (cfg->sep.type != LS_BIQUAD_LOWPASS || cfg->hf_dtres))) {
-        return LS_ERR_PARAM;
+        return false;
     }
     /* every module counts in the drive's pole pitch (an observer's speed in m/s, the controllers'
      * speed, the trajectory's), which is bounded: a pitch of 1e38 m made the speed inf (fuzzed) */
     if (cfg->pole_pitch > LS_DRIVE_POLE_PITCH_MAX || cfg->obs.pole_pitch != cfg->pole_pitch ||
         cfg->enc_obs.pole_pitch != cfg->pole_pitch || cfg->traj.pole_pitch != cfg->pole_pitch) {
-        return LS_ERR_PARAM;
+        return false;
     }
     /* every module samples at the drive rate */
-    if (cfg->inject.fs != cfg->fs || cfg->bpf.fs != cfg->fs || cfg->sep.fs != cfg->fs ||
-        cfg->demod.fs != cfg->fs || cfg->obs.fs != cfg->fs || cfg->enc_obs.fs != cfg->fs ||
-        cfg->current.fs != cfg->fs || cfg->traj.fs != cfg->fs || cfg->prot.fs != cfg->fs ||
-        cfg->pos.speed.fs != cfg->fs) {
-        return LS_ERR_PARAM;
-    }
-    /* the encoder's plausible count change per step (checked before its conversion) */
-    enc_jump = cfg->enc_v_max / cfg->fs * ((LS_REAL)cfg->enc_counts / cfg->pole_pitch);
-    if (!(enc_jump <= LS_DRIVE_ENC_JUMP_MAX)) {
-        return LS_ERR_PARAM;
-    }
-    if (cfg->cal.table != NULL &&
-        (cfg->cal.points < 4u || cfg->cal.period > LS_POS_PERIOD_MAX || cfg->cal.period < -LS_POS_PERIOD_MAX || !pos_finite(cfg->cal.k_int) || !LS_ISFINITE(cfg->cal.t_settle) ||
-         cfg->cal.t_settle < LS_R(0.0) || !pos_finite(cfg->cal.t_hold) || !pos_finite(cfg->cal.tol) ||
-         !pos_finite(cfg->cal.t_max) || !LS_ISFINITE(cfg->cal.dither_amp) || cfg->cal.dither_amp < LS_R(0.0) ||
-         (cfg->cal.dither_amp > LS_R(0.0) &&
-          (!pos_finite(cfg->cal.dither_freq) || cfg->cal.dither_freq >= LS_R(0.25) * cfg->fs)))) {
-        return LS_ERR_PARAM;
-    }
+    return cfg->inject.fs == cfg->fs && cfg->bpf.fs == cfg->fs && cfg->sep.fs == cfg->fs &&
+           cfg->demod.fs == cfg->fs && cfg->obs.fs == cfg->fs && cfg->enc_obs.fs == cfg->fs &&
+           cfg->current.fs == cfg->fs && cfg->traj.fs == cfg->fs && cfg->prot.fs == cfg->fs &&
+           cfg->pos.speed.fs == cfg->fs;
+}
+
+/* The calibration's fields, when it has a table to fill. */
+static bool calibration_ok(const ls_cal_cfg *cal, LS_REAL fs)
+{
+    return cal->table == NULL ||
+           !(cal->points < 4u || cal->period > LS_POS_PERIOD_MAX || cal->period < -LS_POS_PERIOD_MAX ||
+             !pos_finite(cal->k_int) || !LS_ISFINITE(cal->t_settle) || cal->t_settle < LS_R(0.0) ||
+             !pos_finite(cal->t_hold) || !pos_finite(cal->tol) || !pos_finite(cal->t_max) ||
+             !LS_ISFINITE(cal->dither_amp) || cal->dither_amp < LS_R(0.0) ||
+             (cal->dither_amp > LS_R(0.0) && (!pos_finite(cal->dither_freq) || cal->dither_freq >= LS_R(0.25) * fs)));
+}
+
+/* Each block's init (each refuses its own fields); the start-up and the residual model only when
+ * configured. */
+static ls_status init_blocks(ls_drive *d, const ls_drive_cfg *cfg)
+{
+    ls_status st = LS_OK;
     st |= ls_inject_init(&d->inj, &cfg->inject);
     st |= ls_biquad_init(&d->bpf[0], &cfg->bpf);
     st |= ls_biquad_init(&d->bpf[1], &cfg->bpf);
@@ -243,16 +243,12 @@ ls_status ls_drive_init(ls_drive *d, const ls_drive_cfg *cfg)
                   : LS_ERR_PARAM;
     }
     st |= ls_protect_init(&d->prot, &cfg->prot);
-    if (st != LS_OK) {
-        memset(d, 0, sizeof *d);
-        return LS_ERR_PARAM;
-    }
-    /* the fundamental gets what the injection leaves of the linear modulation range */
-    v_inj_frac = cfg->inject.amplitude * LS_SQRT3 / cfg->prot.v_dc_min;
-    if (v_inj_frac >= LS_R(0.8)) {
-        memset(d, 0, sizeof *d);
-        return LS_ERR_PARAM;
-    }
+    return st;
+}
+
+/* The drive's derived values (cfg copied in); false when one overflows (every input was finite). */
+static bool derive(ls_drive *d, const ls_drive_cfg *cfg, LS_REAL enc_jump)
+{
     d->cfg = *cfg;
     d->ts = LS_R(1.0) / cfg->fs;
     d->kx = LS_TWO_PI / cfg->pole_pitch;
@@ -263,20 +259,20 @@ ls_status ls_drive_init(ls_drive *d, const ls_drive_cfg *cfg)
     d->delay_ts = cfg->delay_comp * d->ts;
     d->enc_jump_max = enc_jump >= LS_R(1.0) ? (int64_t)(int32_t)enc_jump : 1; /* a one-count change is always plausible */
     d->enc_k = LS_TWO_PI / (LS_REAL)cfg->enc_counts;
-    /* derived gains that a tiny or huge value could overflow (every input was finite) */
-    if (!LS_ISFINITE4(d->kx, d->inv_kx, d->inv_kf, d->delay_ts) || !LS_ISFINITE(d->ff_load_k) ||
-        !(d->inv_kx > LS_R(0.0)) ||
-        !(d->inv_kf > LS_R(0.0)) || !LS_ISFINITE(cfg->i_max * cfg->force_constant)) {
-        memset(d, 0, sizeof *d);
-        return LS_ERR_PARAM;
-    }
+    return LS_ISFINITE4(d->kx, d->inv_kx, d->inv_kf, d->delay_ts) && LS_ISFINITE(d->ff_load_k) &&
+           d->inv_kx > LS_R(0.0) && d->inv_kf > LS_R(0.0) && LS_ISFINITE(cfg->i_max * cfg->force_constant);
+}
+
+/* The calibration's step counts and dither increment, the near-axis schedule's thresholds. */
+static void derive_schedules(ls_drive *d, const ls_drive_cfg *cfg)
+{
     if (cfg->cal.table != NULL) {
         d->cal_n_settle = steps_of(cfg->cal.t_settle, d->ts, false);
         d->cal_n_hold = steps_of(cfg->cal.t_hold, d->ts, false);
         d->cal_n_max = steps_of(cfg->cal.t_max, d->ts, true);
     }
     if (cfg->cal.table != NULL && cfg->cal.dither_amp > LS_R(0.0)) { /* < 2^30 (dither_freq < fs / 4,
-                                                                       checked above with the table) */
+                                                                       checked with the table) */
         d->cal_inc = (uint32_t)(cfg->cal.dither_freq * d->ts * LS_R(4294967296.0));
     }
     if (cfg->near_out > LS_R(0.0)) { /* |cos(3 theta)| = |sin(3 e)|, e the distance to pi/6 + k pi/3 */
@@ -284,6 +280,36 @@ ls_status ls_drive_init(ls_drive *d, const ls_drive_cfg *cfg)
         ls_sincos_full(LS_R(3.0) * cfg->near_in, &c_unused, &d->near_c3_in);
         ls_sincos_full(LS_R(3.0) * cfg->near_out, &c_unused, &d->near_c3_out);
     }
+}
+
+/* Checks, by group, then the blocks, the injection within the bus, the derived values (each helper
+ * above is static and called once: inlined at -Os, the code no larger than one function's). */
+ls_status ls_drive_init(ls_drive *d, const ls_drive_cfg *cfg)
+{
+    ls_pos zero = {0, LS_R(0.0)};
+    LS_REAL enc_jump;
+    if (d == NULL || cfg == NULL) {
+        return LS_ERR_NULL;
+    }
+    memset(d, 0, sizeof *d);
+    if (cfg->lib_version != LS_VERSION) {
+        return LS_ERR_VERSION; /* made for another library version: its fields may mean other things */
+    }
+    if (!drive_fields_ok(cfg) || !modules_agree(cfg)) {
+        return LS_ERR_PARAM;
+    }
+    /* the encoder's plausible count change per step (checked before its conversion) */
+    enc_jump = cfg->enc_v_max / cfg->fs * ((LS_REAL)cfg->enc_counts / cfg->pole_pitch);
+    if (!(enc_jump <= LS_DRIVE_ENC_JUMP_MAX) || !calibration_ok(&cfg->cal, cfg->fs)) {
+        return LS_ERR_PARAM;
+    }
+    /* the fundamental gets what the injection leaves of the linear modulation range */
+    if (init_blocks(d, cfg) != LS_OK || !ls_drive_inject_fits(cfg->inject.amplitude, cfg->prot.v_dc_min) ||
+        !derive(d, cfg, enc_jump)) {
+        memset(d, 0, sizeof *d);
+        return LS_ERR_PARAM;
+    }
+    derive_schedules(d, cfg);
     if (!step_table_complete()) { /* (a mode or shape added without its step: never run a NULL) */
         return LS_ERR_PARAM;
     }

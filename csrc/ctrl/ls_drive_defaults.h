@@ -14,7 +14,8 @@
 #define LS_DEF_KF LS_R(20.0) /* N/A, force constant */
 #define LS_DEF_MASS LS_R(1.5) /* kg, moving mass */
 #define LS_DEF_R_S LS_R(9.0) /* ohm, phase resistance */
-#define LS_DEF_CURRENT_BW LS_R(250.0) /* Hz, current-loop bandwidth */
+#define LS_DEF_CURRENT_KP LS_R(6.25700537) /* V/A, current-loop kp (linsense.tune.design.current_gains) */
+#define LS_DEF_CURRENT_KI LS_R(14137.1669) /* V/(A s), current-loop ki (linsense.tune.design.current_gains) */
 #define LS_DEF_SPEED_KP LS_R(75.3982237) /* N s/m, speed-loop gain (m w_v) */
 #define LS_DEF_SPEED_KI LS_R(947.482023) /* N/m, speed-loop ki (m w_v^2 / 4; 0 sensorless with load_ff) */
 #define LS_DEF_KP_X LS_R(20.106193) /* 1/s, position-loop gain */
@@ -38,5 +39,13 @@
 #define LS_DEF_TRAJ_A_STEP LS_R(4.1887902) /* m/s^2, a step command's acceleration */
 #define LS_DEF_DITHER_AMP LS_R(0.4) /* A, calibration dither */
 #define LS_DEF_DITHER_FREQ LS_R(55.0) /* Hz, calibration dither frequency */
+#define LS_DEF_STARTUP_ERR_LOCK LS_R(0.2) /* rad, the lock is accepted within it */
+#define LS_DEF_STARTUP_T_QUIET LS_R(0.012) /* s, the injection ramp-down before the pulses, with a margin */
+#define LS_DEF_STARTUP_V_PULSE LS_R(37.4) /* V, pulse amplitude (to 0.1 V) */
+#define LS_DEF_STARTUP_T_PULSE LS_R(0.0004375) /* s, pulse length */
+#define LS_DEF_STARTUP_T_REST LS_R(0.0015625) /* s, zero voltage before each pulse */
+#define LS_DEF_STARTUP_PAIRS LS_R(16.0) /* -, (+, -) pulse pairs for a decision 6 sigma clear */
+#define LS_DEF_STARTUP_I_MIN LS_R(0.0126) /* A, smallest |i_diff| for a decision (to 0.1 mA) */
+#define LS_DEF_STARTUP_T_SETTLE LS_R(0.03) /* s, HF relock after the pulses */
 
 #endif /* LS_DRIVE_DEFAULTS_H */

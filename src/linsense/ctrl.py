@@ -48,6 +48,11 @@ __all__ = [
     "c_limit",
     "explain_drive_refusal",
     "EQUAL_FIELDS",
+    "V_INJ_SHARE_MAX",
+    "RIPPLE_MAX",
+    "STARTUP_PAIRS_MAX",
+    "injection_fits",
+    "observer_gains",
 ]
 
 
@@ -124,14 +129,19 @@ _TWO_PI = 2.0 * np.pi
 _STATUS = {lib.LS_OK: "LS_OK", lib.LS_ERR_NULL: "LS_ERR_NULL", lib.LS_ERR_PARAM: "LS_ERR_PARAM",
            lib.LS_ERR_VERSION: "LS_ERR_VERSION"}
 
+def _lim(value: float) -> str:
+    """A limit of the C library (a ``LS_R(...)`` macro read through the binding) for a message."""
+    return f"{value:g}"
+
+
 # Allowed ranges of the configuration fields, as documented in the C headers (for messages only:
-# the C init functions decide what is refused).
+# the C init functions decide what is refused); the limits are the headers' macros (lib.LS_...).
 _RULES = {
     "ls_lut": {"len": "number of points over one electrical period, >= 4", "table": "finite values"},
     "ls_biquad": {
         "type": "lowpass, bandpass or notch",
         "f0": "Hz, > 0 and < fs/2",
-        "q": "quality factor, 1e-3 .. 1e3",
+        "q": f"quality factor, {_lim(lib.LS_BIQUAD_Q_MIN)} .. {_lim(lib.LS_BIQUAD_Q_MAX)}",
         "fs": "Hz, sampling rate, > 0 and > 2 f0",
     },
     "ls_inject": {
@@ -144,7 +154,7 @@ _RULES = {
         "method": "product or heterodyne",
         "f_lpf": "Hz, low-pass corner, > 0 and < fs/2",
         "fs": "Hz, sampling rate, > 2 f_lpf",
-        "gain": "L_q/(L_q - L_d), finite, non-zero, |gain| <= 1e4",
+        "gain": f"L_q/(L_q - L_d), finite, non-zero, |gain| <= {_lim(lib.LS_DEMOD_GAIN_MAX)}",
         "comp": "ls_lut with >= 4 points",
         "gain_table": "ls_lut with >= 4 points",
         "min_level": "A^2, >= 0",
@@ -152,15 +162,65 @@ _RULES = {
     "ls_observer": {
         "type": "pll or mech",
         "fs": "Hz, > 0",
-        "k1": "1/s, > 0, k1 Ts <= 1 (beyond, the discrete observer is unstable)",
-        "k2": "1/s^2, > 0, k2 Ts^2 <= 1",
-        "k3": "1/s^3, > 0 for mech, k3 Ts^3 <= 1",
+        "k1": f"1/s, > 0, k1 Ts <= {_lim(lib.LS_OBS_K1_TS_MAX)} (beyond, the discrete observer is unstable)",
+        "k2": f"1/s^2, > 0, k2 Ts^2 <= {_lim(lib.LS_OBS_K2_TS2_MAX)}",
+        "k3": f"1/s^3, > 0 for mech, k3 Ts^3 <= {_lim(lib.LS_OBS_K3_TS3_MAX)}",
         "pole_pitch": "m, > 0",
         "mass": "kg, > 0 for mech",
         "omega_max": "rad/s, > 0, omega_max Ts <= pi (half a period per step)",
         "force_max": "N, > 0 for mech; it may move the estimate at most pi per step",
     },
 }
+
+#: the injection's largest share of the linear range at the under-voltage limit (ls_drive_init's)
+V_INJ_SHARE_MAX = float(lib.LS_DRIVE_V_INJ_SHARE_MAX)
+#: the largest ``|ripple_c| + |ripple_s|`` ls_drive_init accepts
+RIPPLE_MAX = float(lib.LS_DRIVE_RIPPLE_MAX)
+#: the most start-up pulse pairs ls_startup_init accepts
+STARTUP_PAIRS_MAX = int(lib.LS_STARTUP_PAIRS_MAX)
+
+
+def injection_fits(amplitude: float, v_dc_min: float) -> bool:
+    """Whether an injection leaves the fundamental its share of the bus (the C library's rule).
+
+    ``ls_drive_inject_fits``: ``amplitude sqrt(3) / v_dc_min`` below :data:`V_INJ_SHARE_MAX`, as
+    ``ls_drive_init`` decides it (in the library's real type).
+
+    Parameters
+    ----------
+    amplitude : float
+        The injection's amplitude, V (peak).
+    v_dc_min : float
+        The under-voltage limit, V.
+
+    Returns
+    -------
+    bool
+        True when ``ls_drive_init`` accepts the pair.
+    """
+    return bool(lib.ls_drive_inject_fits(amplitude, v_dc_min))
+
+
+def observer_gains(f_bw: float, mech: bool) -> tuple[float, ...]:
+    """The observer's gains for a bandwidth, by the C library's rule (``ls_observer_gains``).
+
+    Parameters
+    ----------
+    f_bw : float
+        Bandwidth, Hz (all poles at ``-2 pi f_bw``).
+    mech : bool
+        The mechanical observer (k1, k2, k3), else the PLL (k1, k2).
+
+    Returns
+    -------
+    tuple of float
+        ``(k1, k2, k3)`` (1/s, 1/s^2, 1/s^3) or ``(k1, k2)``, as the library computes them.
+    """
+    cfg = ffi.new("ls_observer_cfg *")
+    cfg.type = lib.LS_OBS_MECH if mech else lib.LS_OBS_PLL
+    lib.ls_observer_gains(cfg, f_bw)
+    return (float(cfg.k1), float(cfg.k2), float(cfg.k3)) if mech else (float(cfg.k1), float(cfg.k2))
+
 
 _ENUMS = {
     ("ls_biquad", "type"): {"lowpass": lib.LS_BIQUAD_LOWPASS, "bandpass": lib.LS_BIQUAD_BANDPASS,
@@ -814,7 +874,7 @@ class Drive:
             return "see the named sections"
         return ("a drive-level rule: every module at the drive's fs, bpf a band-pass, sep a notch or "
                 "low-pass, positive fs/pole_pitch/force_constant/i_max/enc_counts, delay_comp >= 0, "
-                "injection amplitude * sqrt(3) < 0.8 prot.v_dc_min, valid cal settings")
+                f"injection amplitude * sqrt(3) < {V_INJ_SHARE_MAX:g} prot.v_dc_min, valid cal settings")
 
     def set_mode(self, mode: str | int) -> None:
         """``ls_drive_set_mode``.

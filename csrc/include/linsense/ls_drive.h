@@ -71,6 +71,18 @@
 #define LS_DRIVE_ENC_JUMP_MAX LS_R(1.0e9) /* -, largest enc_v_max in counts per step */
 #define LS_DRIVE_POLE_PITCH_MAX LS_R(10.0) /* m, largest pole pitch (a speed in m/s stays finite) */
 #define LS_DRIVE_RIPPLE_ORDER_MAX 64 /* -, highest ripple_order (ripple_order theta stays in ls_sincos's fast range) */
+#define LS_DRIVE_RIPPLE_MAX LS_R(0.5)  /* -, largest |ripple_c| + |ripple_s| */
+/* -, the injection's largest share of the linear modulation range at the under-voltage limit,
+ * inject.amplitude sqrt(3) / prot.v_dc_min (below it: the fundamental gets the rest) */
+#define LS_DRIVE_V_INJ_SHARE_MAX LS_R(0.8)
+
+/* Whether an injection of `amplitude` (V, peak) leaves the fundamental its share of the linear range
+ * at the under-voltage limit `v_dc_min` (V): ls_drive_init refuses a configuration where it does not
+ * (and linsense's design and scenario checks ask this function, through the binding). */
+static inline bool ls_drive_inject_fits(LS_REAL amplitude, LS_REAL v_dc_min)
+{
+    return !(amplitude * LS_SQRT3 / v_dc_min >= LS_DRIVE_V_INJ_SHARE_MAX);
+}
 
 typedef enum {
     LS_MODE_OFF = 0,
@@ -168,7 +180,8 @@ typedef struct {
                                  the controllers use (a PM flux's 5th and 7th harmonics: n = 6;
                                  docs/tuning.md, "Friction and thrust ripple"), in [0, 64]; 0: none
                                  (and not a cycle spent) */
-    LS_REAL ripple_c;       /**< unit: -, its cosine share of force_constant, |ripple_c| + |ripple_s| <= 0.5 */
+    LS_REAL ripple_c;       /**< unit: -, its cosine share of force_constant, |ripple_c| + |ripple_s| <=
+                                 LS_DRIVE_RIPPLE_MAX */
     LS_REAL ripple_s;       /**< unit: -, its sine share of force_constant */
 } ls_drive_cfg;
 

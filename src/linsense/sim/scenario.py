@@ -32,11 +32,29 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, ValidationError, model_validator
 
 from linsense._check import path_arg
-from linsense.ctrl import REAL, drive_default_cfg
+from linsense.ctrl import (
+    REAL,
+    RIPPLE_MAX,
+    STARTUP_PAIRS_MAX,
+    V_INJ_SHARE_MAX,
+    drive_default_cfg,
+    injection_fits,
+    observer_gains,
+)
 from linsense.errors import InputError
 from linsense.io import folder_of, read_toml, working_folder
 from linsense.plausible import implausible, slip
-from linsense.tune.design import DEAD_TIME_SHARE_MAX, V_DC_MAX_FRACTION, V_DC_MIN_FRACTION, DriveData
+from linsense.tune.design import (
+    DEAD_TIME_SHARE_MAX,
+    RATIO_LPF_MECH,
+    RATIO_LPF_OBS,
+    RATIO_PWM_INJ,
+    SPEED_CAP_MARGIN,
+    V_DC_MAX_FRACTION,
+    V_DC_MIN_FRACTION,
+    DriveData,
+)
+from linsense.tune.injection import SQUARE_D_FRACTION
 from linsense.validation import KeyProblem, to_input_error
 
 _BRANCH = re.compile(r"^(float|int|bool|str|list\[.*\]|constrained-.*|function-.*)$")
@@ -114,7 +132,8 @@ class StartupSection(BaseModel):
                               "at most 60)", json_schema_extra={"unit": "s"})
     t_rest: Positive = Field(_c(_C.startup.t_rest), description="zero voltage before each pulse (at least "
                              "3 PWM periods, at most 60)", json_schema_extra={"unit": "s"})
-    pairs: int = Field(default=int(_C.startup.pairs), ge=1, le=1024, description="(+, -) pulse pairs")
+    pairs: int = Field(default=int(_C.startup.pairs), ge=1, le=STARTUP_PAIRS_MAX,
+                       description="(+, -) pulse pairs")
     i_min: Positive = Field(_c(_C.startup.i_min), description="smallest `|i_diff|` accepted as a decision",
                             json_schema_extra={"unit": "A"})
     t_settle: NonNegative = Field(_c(_C.startup.t_settle), description="HF relock after the pulses (at "
@@ -168,12 +187,13 @@ class InjectionSection(BaseModel):
     """The ``[injection]`` section of a scenario file; its keys are in docs/simulator.md."""
     model_config = _STRICT
     amplitude: NonNegative = Field(
-        _c(_C.inject.amplitude), description="peak, on the estimated d-axis; `amplitude * sqrt(3) < 0.8 "
-        "protection.v_dc_min`", json_schema_extra={"unit": "V", "default_note": "designed ({ecce2010} for "
-                                                   "ecce2010)"})
+        _c(_C.inject.amplitude), description="peak, on the estimated d-axis; `amplitude * sqrt(3) < "
+        f"{V_INJ_SHARE_MAX:g} protection.v_dc_min`",
+        json_schema_extra={"unit": "V", "default_note": "designed ({ecce2010} for ecce2010)"})
     frequency: Positive = Field(_c(_C.inject.freq), description="<= f_pwm / 4",
                                 json_schema_extra={"kind": "injection_frequency",
-                                                   "unit": "Hz", "default_note": "designed (f_pwm / 16)"})
+                                                   "unit": "Hz",
+                                                   "default_note": f"designed (f_pwm / {RATIO_PWM_INJ:g})"})
     ramp_rate: Positive = Field(_c(_C.inject.ramp_rate), description="the injection's ramp",
                                 json_schema_extra={"unit": "V/s", "default_note": "designed ({ecce2010} for "
                                                    "ecce2010)"})
@@ -196,7 +216,8 @@ class InjectionSection(BaseModel):
     d_current: float | None = Field(
         None, description="d-current reference while injecting (keeps the phase currents off zero, where the "
         "dead time acts on the square wave); `|d_current| < i_max`",
-        json_schema_extra={"unit": "A", "default_note": "0; `square`: 0.4 `controller.i_max`"})
+        json_schema_extra={"unit": "A",
+                           "default_note": f"0; `square`: {SQUARE_D_FRACTION:g} `controller.i_max`"})
     # the square wave's measures against the dead time where a phase current is small: the
     # compensation with the edges' PWM ripple and the d-current schedule near the positions where
     # the d-axis is normal to a phase axis (docs/theory.md, "The dead time and the square wave")
@@ -233,12 +254,14 @@ class ObserverSection(BaseModel):
         "type-2 tracking loop (the paper's; `linsense reproduce` pins it). docs/tuning.md, \"The observer\"",
         json_schema_extra={"default_note": "designed: `\"mech\"` (the pulsating and elliptical injections), "
                            "`\"pll\"` (rotating, square)"})
-    # Hz, all poles at -2 pi f (ls_observer_gains: k1 = 3 w for mech, 2 w for pll)
+    # Hz, all poles at -2 pi f (ls_observer_gains)
     bandwidth_hz: Positive = Field(
-        _c(_C.obs.k1 / (2.0 * math.pi * (3.0 if _C.obs.type == 1 else 2.0))),
+        _c(_C.obs.k1 / observer_gains(1.0, _C.obs.type == 1)[0]),  # (k1 grows with the bandwidth)
         description="k1..k3 from `ls_observer_gains` (all poles at -2 pi f)",
         json_schema_extra={"kind": "bandwidth",
-                           "unit": "Hz", "default_note": "designed: `mech` `f_lpf / 20`, `pll` `f_lpf / 7.5` "
+                           "unit": "Hz",
+                           "default_note": f"designed: `mech` `f_lpf / {RATIO_LPF_MECH:g}`, `pll` "
+                           f"`f_lpf / {RATIO_LPF_OBS:g}` "
                            "({ecce2010} for ecce2010, `mech`)"})
     # the mechanical observer's load estimate fed forward into the force reference (ls_drive_cfg.load_ff;
     # the speed loop's designed integral gain is then 0); default: on with type = "mech"
@@ -357,7 +380,8 @@ class ControllerSection(BaseModel):
     v_max: Positive = Field(
         _c(_C.pos.v_max), description="speed-reference limit (p), and a step command's speed",
         json_schema_extra={"kind": "speed",
-                           "unit": "m/s", "default_note": "designed (1.25 times the application's, "
+                           "unit": "m/s",
+                           "default_note": f"designed ({SPEED_CAP_MARGIN:g} times the application's, "
                            "`reference.v_max`: {ecce2010} for ecce2010)"})
     # m/s^2, a step command's acceleration (a minimum-time move at v_max); 0: the reference jumps
     step_a_max: float = Field(
@@ -853,8 +877,9 @@ def _check_observer_gains(f: ScenarioFile) -> None:
 def _check_controller(f: ScenarioFile) -> None:
     """The controller's ripple feed-forward, position loop, explicit gains and demodulator gain."""
     c = f.controller
-    if abs(c.ripple_cos) + abs(c.ripple_sin) > 0.5:
-        raise KeyProblem("controller.ripple_cos", f"|ripple_cos| + |ripple_sin| must be at most 0.5, got "
+    if abs(c.ripple_cos) + abs(c.ripple_sin) > RIPPLE_MAX:
+        raise KeyProblem("controller.ripple_cos", "|ripple_cos| + |ripple_sin| must be at most "
+                         f"{RIPPLE_MAX:g}, got "
                          f"{abs(c.ripple_cos) + abs(c.ripple_sin):g}")
     if c.position_type == "pd" and c.kp_x is None:
         raise KeyProblem("controller.kp_x", "missing required key for position_type = \"pd\" (N/m)")
@@ -919,12 +944,11 @@ def _check_amplitude(f: ScenarioFile) -> None:
     ctl, p = f.control, f.protection
     # (an amplitude the file does not give is designed for the bus, and checked there)
     if ("amplitude" in f.injection.model_fields_set and p.v_dc_min > 0
-            and f.injection.amplitude * math.sqrt(3.0) >= 0.8 * p.v_dc_min):
-        hint = slip("voltage", f.injection.amplitude,
-                    ok=lambda v: v * math.sqrt(3.0) < 0.8 * p.v_dc_min)
+            and not injection_fits(f.injection.amplitude, p.v_dc_min)):
+        hint = slip("voltage", f.injection.amplitude, ok=lambda v: injection_fits(v, p.v_dc_min))
         raise KeyProblem("injection.amplitude",
                          "too large for the bus: amplitude * sqrt(3) must be below "
-                         f"0.8 protection.v_dc_min = {0.8 * p.v_dc_min:g} V, "
+                         f"{V_INJ_SHARE_MAX:g} protection.v_dc_min = {V_INJ_SHARE_MAX * p.v_dc_min:g} V, "
                          f"got {f.injection.amplitude:g}" + (f"; {hint}" if hint else ""))
     amp = f.injection.amplitude
     if amp != 0.0 and REAL.type(amp) == 0.0:  # (its designed ramp_rate was named, refused by the drive)

@@ -18,9 +18,12 @@ import sys
 from linsense.analysis.hf import end_anisotropy, mean_dq
 from linsense.model.motor import load_motor
 from linsense.tune.design import V_DC_MAX_FRACTION, V_DC_MIN_FRACTION, DriveData, design, startup_lock_gain
+from linsense.tune.startup import design_startup
 
 #: the reference motor whose design the C defaults are
 REFERENCE_MOTOR = "ecce2010"
+#: 1/A, the start-up's saturation data: the FEA's 1.31 %/A of a thin back iron (linsense fea --polarity)
+REFERENCE_POLARITY = 0.0131
 
 
 def default_values() -> list[tuple[str, float, str]]:
@@ -36,6 +39,11 @@ def default_values() -> list[tuple[str, float, str]]:
     dz = design(m, d, analyse=False)
     l_d, l_q = mean_dq(m)
     l_ea, l_eb = end_anisotropy(m)
+    return _drive_values(m, d, dz, l_d, l_q, l_ea, l_eb) + _startup_values(m, d, dz)
+
+
+def _drive_values(m, d: DriveData, dz, l_d: float, l_q: float, l_ea: float, l_eb: float) -> list:
+    """The drive's and its blocks' defaults (all but the start-up's)."""
     return [
         ("LS_DEF_FS", d.f_pwm, "Hz, PWM and control rate"),
         ("LS_DEF_I_MAX", d.i_max, "A, current-reference limit"),
@@ -47,7 +55,8 @@ def default_values() -> list[tuple[str, float, str]]:
         ("LS_DEF_KF", m.force_constant, "N/A, force constant"),
         ("LS_DEF_MASS", m.mass, "kg, moving mass"),
         ("LS_DEF_R_S", m.R_s, "ohm, phase resistance"),
-        ("LS_DEF_CURRENT_BW", dz.current_bw, "Hz, current-loop bandwidth"),
+        ("LS_DEF_CURRENT_KP", dz.current_kp, "V/A, current-loop kp (linsense.tune.design.current_gains)"),
+        ("LS_DEF_CURRENT_KI", dz.current_ki, "V/(A s), current-loop ki (linsense.tune.design.current_gains)"),
         ("LS_DEF_SPEED_KP", dz.speed_kp, "N s/m, speed-loop gain (m w_v)"),
         ("LS_DEF_SPEED_KI", dz.speed_ki, "N/m, speed-loop ki (m w_v^2 / 4; 0 sensorless with load_ff)"),
         ("LS_DEF_KP_X", dz.kp_x, "1/s, position-loop gain"),
@@ -73,6 +82,24 @@ def default_values() -> list[tuple[str, float, str]]:
         ("LS_DEF_TRAJ_A_STEP", dz.a_step, "m/s^2, a step command's acceleration"),
         ("LS_DEF_DITHER_AMP", dz.dither_a, "A, calibration dither"),
         ("LS_DEF_DITHER_FREQ", dz.dither_hz, "Hz, calibration dither frequency"),
+    ]
+
+
+def _startup_values(m, d: DriveData, dz) -> list:
+    """The start-up's defaults: :func:`~linsense.tune.startup.design_startup` for the reference
+    motor with :data:`REFERENCE_POLARITY` (10 mA rms of current noise, a 12-bit ADC); the pulse's
+    amplitude to 0.1 V and the decision's threshold to 0.1 mA, as the library has always had them."""
+    su = design_startup(m, v_dc=d.v_dc, f_pwm=d.f_pwm, i_max=d.i_max, observer_bw=dz.observer_bw,
+                        v_inj=dz.v_inj, polarity=REFERENCE_POLARITY, ramp_rate=dz.inj_ramp_rate)
+    return [
+        ("LS_DEF_STARTUP_ERR_LOCK", su.err_lock, "rad, the lock is accepted within it"),
+        ("LS_DEF_STARTUP_T_QUIET", su.t_quiet, "s, the injection ramp-down before the pulses, with a margin"),
+        ("LS_DEF_STARTUP_V_PULSE", round(su.v_pulse, 1), "V, pulse amplitude (to 0.1 V)"),
+        ("LS_DEF_STARTUP_T_PULSE", su.t_pulse, "s, pulse length"),
+        ("LS_DEF_STARTUP_T_REST", su.t_rest, "s, zero voltage before each pulse"),
+        ("LS_DEF_STARTUP_PAIRS", float(su.pairs), "-, (+, -) pulse pairs for a decision 6 sigma clear"),
+        ("LS_DEF_STARTUP_I_MIN", round(su.i_min, 4), "A, smallest |i_diff| for a decision (to 0.1 mA)"),
+        ("LS_DEF_STARTUP_T_SETTLE", su.t_settle, "s, HF relock after the pulses"),
     ]
 
 

@@ -830,10 +830,12 @@ def _f_inj_says(x: DriveInputs, key: str) -> str:
 
 
 def _v_inj_says(x: DriveInputs, key: str) -> str:
+    from linsense.ctrl import V_INJ_SHARE_MAX as share  # (the C library's limit)
+
     v_uv = x.d.v_dc * V_DC_MIN_FRACTION  # (the under-voltage limit)
     return (f"{x.show('v_inj')} leaves no voltage for the fundamental on a {x.d.v_dc:g} V bus (amplitude * "
-            f"sqrt(3) must be below 0.8 of the {v_uv:.3g} V under-voltage limit, {0.8 * v_uv:.3g} V): "
-            f"below {limit_text(0.8 * v_uv / math.sqrt(3.0), False)} V")
+            f"sqrt(3) must be below {share:g} of the {v_uv:.3g} V under-voltage limit, {share * v_uv:.3g} "
+            f"V): below {limit_text(share * v_uv / math.sqrt(3.0), False)} V")
 
 
 def _force_says(x: DriveInputs, key: str) -> str:
@@ -968,7 +970,9 @@ def _travel_says(x: DriveInputs, key: str) -> str:
 
 
 def _v_inj_fits(x: DriveInputs) -> bool:
-    return x.d.v_inj is None or x.d.v_inj * math.sqrt(3.0) < 0.8 * x.d.v_dc * V_DC_MIN_FRACTION
+    from linsense.ctrl import injection_fits  # (the C library's rule: ls_drive_inject_fits)
+
+    return x.d.v_inj is None or injection_fits(x.d.v_inj, x.d.v_dc * V_DC_MIN_FRACTION)
 
 
 #: the design's checks of its inputs, in the order they run (docs/tuning.md): (1) each input against
@@ -1574,9 +1578,10 @@ def startup_lock_gain(observer_type: str, f_obs: float, f_lpf: float) -> float:
 
 def _observer_gains(f_bw: float, mech: bool = False) -> tuple[float, ...]:
     """k1, k2 of the PLL with both poles at -2 pi f, or k1, k2, k3 of the mechanical observer with its
-    three (ls_observer_gains)."""
-    w = 2.0 * math.pi * f_bw
-    return (3.0 * w, 3.0 * w * w, w**3) if mech else (2.0 * w, w * w)
+    three: the C library's rule (ls_observer_gains), as the drive computes them."""
+    from linsense.ctrl import observer_gains
+
+    return observer_gains(f_bw, mech)
 
 
 def loops(*, mass: float, kp_x: float, speed_kp: float, speed_ki: float, observer_k: tuple[float, ...],
