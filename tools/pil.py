@@ -97,6 +97,16 @@ def _scenario(spec):
     return as_scenario(spec)
 
 
+def extension_flags() -> tuple[list[str], list[str]]:
+    """The extension's gcc flags from their one home, tools/build_ctrl.py (``COMPILE_ARGS``: -O3,
+    C99, the library without contraction; ``PLANT_ARGS``: the plant with it), as the Makefile's venv
+    builds it (``LINSENSE_NATIVE=1``: -march=native): the library's flags and what the plant adds."""
+    os.environ["LINSENSE_NATIVE"] = "1"  # (read when build_ctrl is first imported)
+    import build_ctrl
+
+    return list(build_ctrl.COMPILE_ARGS["gcc"]), list(build_ctrl.PLANT_ARGS["gcc"])
+
+
 def build_recorder(out: Path) -> Path:
     """The host recorder as a shared object, with the extension's flags (tools/build_ctrl.py)."""
     lib = out / "pil_record.so"
@@ -106,17 +116,16 @@ def build_recorder(out: Path) -> Path:
     if lib.exists() and lib.stat().st_mtime > max(p.stat().st_mtime for p in deps):
         return lib
     cc = os.environ.get("CC", "cc")
-    # the extension's: -O3, C99, the library without contraction, the plant with it; -march=native
-    # as the Makefile's venv builds it (LINSENSE_NATIVE=1)
-    base = ["-std=c99", "-O3", "-march=native", "-fPIC", "-fvisibility=hidden", f"-I{ROOT / 'csrc/include'}"]
+    compile_args, plant_args = extension_flags()
+    base = [*compile_args, "-fPIC", "-fvisibility=hidden", f"-I{ROOT / 'csrc/include'}"]
     objs = []
     for s in srcs:
         o = out / "rec" / (s.stem + ".o")
         o.parent.mkdir(parents=True, exist_ok=True)
-        subprocess.run([cc, *base, "-ffp-contract=off", "-c", str(s), "-o", str(o)], check=True)
+        subprocess.run([cc, *base, "-c", str(s), "-o", str(o)], check=True)
         objs.append(str(o))
     o = out / "rec" / "pil_record.o"
-    subprocess.run([cc, *base, "-ffp-contract=fast", f"-I{ROOT / 'csrc/sim'}", f"-I{PIL}", "-c",
+    subprocess.run([cc, *base, *plant_args, f"-I{ROOT / 'csrc/sim'}", f"-I{PIL}", "-c",
                     str(PIL / "pil_record.c"), "-o", str(o)], check=True)
     subprocess.run([cc, "-shared", "-Wl,-Bsymbolic", str(o), *objs, "-lm", "-o", str(lib)], check=True)
     return lib
@@ -165,7 +174,8 @@ def record(out: Path, quick: bool) -> list[tuple[str, int]]:
         if mine != theirs:
             raise SystemExit(f"pil: {name}: the recorder's closed loop {mine} is not the extension's "
                              f"{theirs} (the recorder is built as the Makefile's venv builds the extension, "
-                             "-O3 -march=native: another build fuses the plant's multiply-adds differently)")
+                             "tools/build_ctrl.py's flags with LINSENSE_NATIVE=1: another build fuses the "
+                             "plant's multiply-adds differently)")
         done.append((name, int(res.steps_done)))
     header.append("static const pil_case pil_cases[] = {")
     header += [f'    {{"{n}", &pil_{n}_drive}},' for n in names]

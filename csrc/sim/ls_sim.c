@@ -137,28 +137,39 @@ ls_status ls_sim_begin(const ls_sim_cfg *c, ls_sim_state *s)
     return LS_OK;
 }
 
-/* Block statistics of the samples being recorded (ls_sim_out x_min ... i_abc_max) */
+/* ------------------------------------------------------------------------------ the time loop
+ * continue_impl runs the periods; each concern of a period is a helper below, always inlined into
+ * it (LS_SIM_INLINE), so that the compiler still sees one loop: the run's state (sim_loop) and the
+ * recording (sim_rec) are locals it keeps in registers, and the unity build's arithmetic (with
+ * -ffp-contract=fast, fused across the inlined calls) is that of one function. */
 
-LS_SIM_INLINE ls_status continue_impl(const ls_sim_cfg *c, ls_drive *drive, const ls_sim_cmd *cmds, int32_t n_cmds,
-                                      ls_sim_state *s, int64_t n_more, const ls_sim_out *out, ls_sim_result *res,
-                                      const bool sat)
+/* the run's state between periods: ls_sim_state's running fields, in a local during a call */
+typedef struct {
+    double x, v;                 /* m, m/s: position and speed */
+    double i[2];                 /* A, alpha-beta currents */
+    double duty[3];              /* -, the duties acting this period (the controller's, one period back) */
+    double x_lag, v_lag, v_lag2; /* m, m/s: x and v one period back, v two back */
+    uint64_t rng;                /* -, the sensors' noise generator */
+    int32_t next;                /* -, the next command */
+    int32_t rec_count;           /* -, periods before the next recorded sample */
+    uint32_t fault;              /* -, LS_SIM_FAULT_* and the drive's fault bits */
+    angle_track ang;             /* rad, -: cos and sin of the mid-period angle */
+    ls_sim_carry carry;          /* the inverter's carry into the next period */
+} sim_loop;
+
+/* the recording of one call: its samples and the block statistics of the one being recorded */
+typedef struct {
+    ls_sim_block acc; /* the open block */
+    int64_t r;        /* -, samples recorded in this call */
+    bool blk;         /* -, block statistics asked (some of ls_sim_out x_min ... i_abc_max) */
+    bool blk_err;     /* -, their theta_err among them */
+} sim_rec;
+
+/* the call's arguments checked; the recording opened (rc) and the result set from the state */
+LS_SIM_INLINE ls_status call_begin(const ls_sim_cfg *c, const ls_drive *drive, const ls_sim_cmd *cmds,
+                                   int32_t n_cmds, const ls_sim_state *s, int64_t n_more, const ls_sim_out *out,
+                                   ls_sim_result *res, sim_rec *rc)
 {
-    const double h = 1.0 / c->f_pwm, tau = c->pole_pitch, kx = 2.0 * LS_SIM_PI / tau;
-    double x, v, i[2], duty[3], x_lag, v_lag, v_lag2; /* m, m/s: x and v one period back, v two back */
-    uint64_t rng;
-    int64_t k, k_end, r = 0;
-    int32_t next, rec_count, j;
-    uint32_t fault;
-    bool blk, blk_err;
-    ls_meas meas;
-    ls_cmd cmd;
-    ls_sim_maps pm;
-    ls_sim_coef q;
-    angle_track ang;
-    ls_sim_carry carry;
-    ls_sim_block acc;
-    ls_sim_frozen fz;
-    ls_sim_sat_frame sf;
     if (c == NULL || drive == NULL || s == NULL || out == NULL || res == NULL || (n_cmds > 0 && cmds == NULL) ||
         n_more < 0) {
         return LS_ERR_NULL;
@@ -166,10 +177,10 @@ LS_SIM_INLINE ls_status continue_impl(const ls_sim_cfg *c, ls_drive *drive, cons
     if (ls_sim_check(c) != LS_OK) {
         return LS_ERR_PARAM;
     }
-    blk_err = out->err_min != NULL || out->err_max != NULL || out->err_mean != NULL;
-    blk = blk_err || out->x_min != NULL || out->x_max != NULL || out->x_mean != NULL || out->i_abc_min != NULL ||
-          out->i_abc_max != NULL;
-    if (blk && !s->ended && s->rec_count != 1) { /* a block begun in the previous call */
+    rc->blk_err = out->err_min != NULL || out->err_max != NULL || out->err_mean != NULL;
+    rc->blk = rc->blk_err || out->x_min != NULL || out->x_max != NULL || out->x_mean != NULL ||
+              out->i_abc_min != NULL || out->i_abc_max != NULL;
+    if (rc->blk && !s->ended && s->rec_count != 1) { /* a block begun in the previous call */
         return LS_ERR_PARAM;
     }
     memset(res, 0, sizeof *res);
@@ -177,194 +188,290 @@ LS_SIM_INLINE ls_status continue_impl(const ls_sim_cfg *c, ls_drive *drive, cons
     res->fault = s->fault;
     res->x_end = s->x;
     res->v_end = s->v;
-    if (s->ended) {
-        return LS_OK;
-    }
-    /* the state in locals for the time loop (registers), written back at the end */
-    x = s->x;
-    v = s->v;
-    i[0] = s->i[0];
-    i[1] = s->i[1];
-    x_lag = s->x_lag;
-    v_lag = s->v_lag;
-    v_lag2 = s->v_lag2;
-    rng = s->rng;
-    next = s->next;
-    rec_count = s->rec_count;
-    fault = s->fault;
+    rc->acc.r = -1;
+    rc->acc.n = 0;
+    rc->r = 0;
+    return LS_OK;
+}
+
+/* the state in locals for the time loop (registers) */
+LS_SIM_INLINE void loop_load(const ls_sim_state *s, sim_loop *L)
+{
+    int32_t j;
+    L->x = s->x;
+    L->v = s->v;
+    L->i[0] = s->i[0];
+    L->i[1] = s->i[1];
+    L->x_lag = s->x_lag;
+    L->v_lag = s->v_lag;
+    L->v_lag2 = s->v_lag2;
+    L->rng = s->rng;
+    L->next = s->next;
+    L->rec_count = s->rec_count;
+    L->fault = s->fault;
     for (j = 0; j < 3; ++j) {
-        duty[j] = s->duty[j];
-        carry.t[j] = s->carry_t[j];
-        carry.on[j] = s->carry_on[j];
-        carry.excess[j] = s->carry_excess[j];
+        L->duty[j] = s->duty[j];
+        L->carry.t[j] = s->carry_t[j];
+        L->carry.on[j] = s->carry_on[j];
+        L->carry.excess[j] = s->carry_excess[j];
     }
-    carry.any_excess = s->carry_any != 0;
-    ang.th = s->ang_th;
-    ang.c = s->ang_c;
-    ang.s = s->ang_s;
-    ang.left = s->ang_left;
-    acc.r = -1;
-    acc.n = 0;
+    L->carry.any_excess = s->carry_any != 0;
+    L->ang.th = s->ang_th;
+    L->ang.c = s->ang_c;
+    L->ang.s = s->ang_s;
+    L->ang.left = s->ang_left;
+}
+
+/* the locals written back at the end of a call after step k, r samples recorded; the result */
+LS_SIM_INLINE void loop_store(const sim_loop *L, int64_t k, int64_t r, ls_sim_state *s, ls_sim_result *res)
+{
+    int32_t j;
+    s->k = k;
+    s->n_rec += r;
+    s->fault = L->fault;
+    s->x = L->x;
+    s->v = L->v;
+    s->i[0] = L->i[0];
+    s->i[1] = L->i[1];
+    s->x_lag = L->x_lag;
+    s->v_lag = L->v_lag;
+    s->v_lag2 = L->v_lag2;
+    s->rng = L->rng;
+    s->next = L->next;
+    s->rec_count = L->rec_count;
+    for (j = 0; j < 3; ++j) {
+        s->duty[j] = L->duty[j];
+        s->carry_t[j] = L->carry.t[j];
+        s->carry_on[j] = L->carry.on[j];
+        s->carry_excess[j] = L->carry.excess[j];
+    }
+    s->carry_any = L->carry.any_excess ? 1 : 0;
+    s->ang_th = L->ang.th;
+    s->ang_c = L->ang.c;
+    s->ang_s = L->ang.s;
+    s->ang_left = L->ang.left;
+    res->steps_done = k;
+    res->n_rec = r;
+    res->fault = L->fault;
+    res->x_end = L->x;
+    res->v_end = L->v;
+}
+
+/* the commands due at time t (s) given to the drive; next: the first not yet given */
+LS_SIM_INLINE void give_commands(ls_drive *drive, const ls_sim_cmd *cmds, int32_t n_cmds, int32_t *next, double t,
+                                 double tau)
+{
+    while (*next < n_cmds && cmds[*next].t <= t) {
+        if (cmds[*next].move) {
+            ls_drive_move_to(drive, ls_sim_pos_of_m(cmds[*next].x, tau));
+        } else {
+            ls_drive_step_to(drive, ls_sim_pos_of_m(cmds[*next].x, tau));
+        }
+        (*next)++;
+    }
+}
+
+/* The plant frozen over this period at the mid-period angle th_mid and electrical speed om (its
+ * maps pm, its system fz; on the saturated plant its frame sf, the system linearised at the
+ * period-start currents: L = d lambda/d i, the EMF omega d lambda/d theta frozen); returns the
+ * force at the period start. */
+LS_SIM_INLINE double plant_freeze(const ls_sim_cfg *c, const ls_sim_coef *q, const bool sat, sim_loop *L,
+                                  double th_mid, double om, ls_sim_maps *pm, ls_sim_frozen *fz, ls_sim_sat_frame *sf)
+{
+    double f_start;
+    if (!sat) {
+        ls_sim_maps_cs(c, q, th_mid, L->ang.c, L->ang.s, pm);
+        if (!ls_sim_freeze(c, pm, om, fz)) {
+            L->fault |= LS_SIM_FAULT_DIVERGED;
+        }
+        f_start = ls_sim_force_of(q, pm, L->i);
+    } else {
+        ls_sim_sat_point sp;
+        ls_sim_sat_frame_at(c, th_mid, sf);
+        ls_sim_sat_at(c, sf, L->i, &sp);
+        memcpy(pm->l, sp.l, sizeof pm->l);
+        pm->dl[0] = pm->dl[1] = pm->dl[2] = 0.0;
+        memcpy(pm->lpm, sp.lam, sizeof pm->lpm);
+        memcpy(pm->dlpm, sp.dlam, sizeof pm->dlpm);
+        if (!ls_sim_freeze(c, pm, om, fz)) {
+            L->fault |= LS_SIM_FAULT_DIVERGED;
+        }
+        f_start = sp.force;
+    }
+    return f_start;
+}
+
+/* the block being recorded written; the next opened at the sample (x, i) */
+LS_SIM_INLINE void block_next(const ls_sim_out *out, sim_rec *rc, const ls_cmd *cmd, double x, const double i[2],
+                              double tau, double kx)
+{
+    ls_sim_block_write(out, &rc->acc);
+    ls_sim_block_open(&rc->acc, rc->r, x, rc->blk_err ? ls_sim_est_err(cmd, x, tau, kx) : 0.0, i);
+}
+
+/* The period-start state recorded every c->decimate periods (a sample at time t, its angle the
+ * mid-period one's turned back by a small rotation, |dl| < 1e-2 rad, series exact to 1e-13, with
+ * the duties u and the force f_start), and added to the block statistics every period. */
+LS_SIM_INLINE void record_period(const ls_sim_cfg *c, const ls_sim_out *out, sim_rec *rc, sim_loop *L,
+                                 const ls_cmd *cmd, double t, double x_mid, const double u[3], double f_start,
+                                 double tau, double kx)
+{
+    if (--L->rec_count == 0) {
+        const double cm = L->ang.c, sm = L->ang.s;
+        double dl, cd, sd;
+        L->rec_count = c->decimate;
+        dl = kx * (L->x - x_mid);
+        cd = 1.0 - 0.5 * dl * dl * (1.0 - dl * dl * (1.0 / 12.0));
+        sd = dl * (1.0 - dl * dl * (1.0 / 6.0) * (1.0 - dl * dl * (1.0 / 20.0)));
+        if (rc->blk) { /* the previous sample's block is complete; this sample opens the next */
+            block_next(out, rc, cmd, L->x, L->i, tau, kx);
+        }
+        ls_sim_record(out, rc->r++, t, L->x, L->v, L->i, cm * cd - sm * sd, sm * cd + cm * sd, u, f_start, cmd, tau,
+                      kx, L->fault);
+    } else if (rc->blk) {
+        ls_sim_block_add(&rc->acc, L->x, rc->blk_err ? ls_sim_est_err(cmd, L->x, tau, kx) : 0.0, L->i);
+    }
+}
+
+/* The currents over one period of h with the duties u (the inverter's model, the plant frozen:
+ * pm, fz, sf, om); returns the motor force's average over the period (f_start at its start). */
+LS_SIM_INLINE double propagate(const ls_sim_cfg *c, const ls_sim_coef *q, const bool sat, sim_loop *L,
+                               const ls_sim_maps *pm, const ls_sim_frozen *fz, const ls_sim_sat_frame *sf, double om,
+                               const double u[3], double h, double f_start)
+{
+    double f_avg;
+    bool bad = false;
+    if (c->fidelity == LS_SIM_SWITCHING) {
+        double f_int;
+        if (sat) {
+            ls_sim_period_switching_sat(c, q, fz, u, h, L->i, &f_int, &L->carry, sf, om, &bad);
+        } else {
+            ls_sim_period_switching(c, q, fz, pm, u, h, L->i, &f_int, &L->carry);
+        }
+        f_avg = f_int / h;
+    } else if (sat) {
+        double f_end;
+        bad = !ls_sim_period_average_sat(c, q, fz, sf, om, u, h, L->i, &L->carry, &f_end);
+        f_avg = 0.5 * (f_start + f_end);
+    } else {
+        ls_sim_period_average(c, q, fz, u, h, L->i, &L->carry);
+        f_avg = 0.5 * (f_start + ls_sim_force_of(q, pm, L->i));
+    }
+    if (bad) {
+        L->fault |= LS_SIM_FAULT_DIVERGED;
+    }
+    return f_avg;
+}
+
+/* the controller's duties for the next period (0.5 each, no voltage, when it disables the bridge) */
+LS_SIM_INLINE void next_duties(const ls_cmd *cmd, double duty[3])
+{
+    if (cmd->enable) {
+        duty[0] = (double)cmd->duty[0];
+        duty[1] = (double)cmd->duty[1];
+        duty[2] = (double)cmd->duty[2];
+    } else {
+        duty[0] = duty[1] = duty[2] = 0.5;
+    }
+}
+
+/* The plant's state at the period end checked (finite, below the abort current, within the travel);
+ * false when that adds a fault */
+LS_SIM_INLINE bool plant_checked(const ls_sim_cfg *c, sim_loop *L)
+{
+    if (!plant_ok(c, L->i, L->x, L->v)) {
+        L->fault |= LS_SIM_FAULT_DIVERGED;
+    } else if (L->x < c->x_min || L->x > c->x_max) {
+        L->fault |= LS_SIM_FAULT_TRAVEL;
+    }
+    return L->fault == 0u;
+}
+
+/* the state that tripped recorded at time t (a block of its own) */
+LS_SIM_INLINE void record_trip(const ls_sim_cfg *c, const ls_sim_coef *q, const ls_sim_out *out, sim_rec *rc,
+                               const sim_loop *L, const ls_cmd *cmd, double t, double tau, double kx)
+{
+    double nan3[3] = {NAN, NAN, NAN}, f_end = NAN;
+    if (LS_ISFINITE(L->i[0]) && LS_ISFINITE(L->i[1]) && LS_ISFINITE(L->x)) {
+        f_end = ls_sim_force_at(c, q, kx * L->x, L->i);
+    }
+    if (rc->blk) {
+        block_next(out, rc, cmd, L->x, L->i, tau, kx);
+    }
+    ls_sim_record(out, rc->r++, t, L->x, L->v, L->i, cos(kx * L->x), sin(kx * L->x), nan3, f_end, cmd, tau, kx,
+                  L->fault);
+}
+
+LS_SIM_INLINE ls_status continue_impl(const ls_sim_cfg *c, ls_drive *drive, const ls_sim_cmd *cmds, int32_t n_cmds,
+                                      ls_sim_state *s, int64_t n_more, const ls_sim_out *out, ls_sim_result *res,
+                                      const bool sat)
+{
+    const double h = 1.0 / c->f_pwm, tau = c->pole_pitch, kx = 2.0 * LS_SIM_PI / tau;
+    int64_t k, k_end;
+    ls_meas meas;
+    ls_cmd cmd;
+    ls_sim_maps pm;
+    ls_sim_coef q;
+    ls_sim_frozen fz;
+    ls_sim_sat_frame sf;
+    sim_loop L;
+    sim_rec rc;
+    ls_status st = call_begin(c, drive, cmds, n_cmds, s, n_more, out, res, &rc);
+    if (st != LS_OK || s->ended) {
+        return st;
+    }
+    loop_load(s, &L);
     ls_sim_coef_init(c, &q);
     memset(&cmd, 0, sizeof cmd);
     k_end = s->k + n_more;
     for (k = s->k; k < k_end; ++k) {
-        double t = (double)k * h, x_mid, f_start, f_avg, u[3], th_mid, cm, sm, dl, cd, sd, om;
-        bool bad = false;
+        double t = (double)k * h, x_mid, f_start, f_avg, u[3], th_mid, om;
         if (k % LS_SIM_STOP_POLL == 0 && out->stop != NULL && *out->stop != 0) {
-            fault |= LS_SIM_FAULT_STOPPED;
+            L.fault |= LS_SIM_FAULT_STOPPED;
             break;
         }
-        while (next < n_cmds && cmds[next].t <= t) {
-            if (cmds[next].move) {
-                ls_drive_move_to(drive, ls_sim_pos_of_m(cmds[next].x, tau));
-            } else {
-                ls_drive_step_to(drive, ls_sim_pos_of_m(cmds[next].x, tau));
-            }
-            next++;
-        }
+        give_commands(drive, cmds, n_cmds, &L.next, t, tau);
         /* sample at the carrier peak, run the controller; its duties act next period */
-        ls_sim_measure(c, &q, i, x, drive->mode == LS_MODE_SENSORED || drive->mode == LS_MODE_CALIBRATION, &rng, &meas);
+        ls_sim_measure(c, &q, L.i, L.x, drive->mode == LS_MODE_SENSORED || drive->mode == LS_MODE_CALIBRATION, &L.rng,
+                       &meas);
         ls_drive_step(drive, &meas, &cmd);
-        fault |= cmd.fault;
-        u[0] = duty[0]; u[1] = duty[1]; u[2] = duty[2];
+        L.fault |= cmd.fault;
+        u[0] = L.duty[0]; u[1] = L.duty[1]; u[2] = L.duty[2];
         /* the plant over this period with the duties computed one period earlier, frozen at the
          * mid-period position predicted from the state one period back (exact for a constant
          * acceleration; see ls_sim.h), so that this period's matrices do not wait for the last
-         * period's force; cos and sin tracked from the previous period; the start angle for
-         * recording follows by a small rotation, |dl| < 1e-2 rad, series exact to 1e-13 */
-        x_mid = k == 0 ? x + 0.5 * h * v : x_lag + h * (2.5 * v_lag - v_lag2);
+         * period's force; cos and sin tracked from the previous period; the speed at mid-period
+         * likewise (exact for a constant acceleration) */
+        x_mid = k == 0 ? L.x + 0.5 * h * L.v : L.x_lag + h * (2.5 * L.v_lag - L.v_lag2);
         th_mid = kx * x_mid;
-        angle_to(&ang, th_mid);
-        cm = ang.c;
-        sm = ang.s;
-        /* the speed at mid-period likewise (exact for a constant acceleration) */
-        om = kx * (1.5 * v - 0.5 * v_lag);
-        if (!sat) {
-            ls_sim_maps_cs(c, &q, th_mid, cm, sm, &pm);
-            if (!ls_sim_freeze(c, &pm, om, &fz)) {
-                fault |= LS_SIM_FAULT_DIVERGED;
-            }
-            f_start = ls_sim_force_of(&q, &pm, i);
-        } else {
-            /* the saturated plant: its values at the mid-period angle, and for the inverter's
-             * predictions the system linearised at the period-start currents (L = d lambda/d i,
-             * the EMF omega d lambda/d theta frozen) */
-            ls_sim_sat_point sp;
-            ls_sim_sat_frame_at(c, th_mid, &sf);
-            ls_sim_sat_at(c, &sf, i, &sp);
-            memcpy(pm.l, sp.l, sizeof pm.l);
-            pm.dl[0] = pm.dl[1] = pm.dl[2] = 0.0;
-            memcpy(pm.lpm, sp.lam, sizeof pm.lpm);
-            memcpy(pm.dlpm, sp.dlam, sizeof pm.dlpm);
-            if (!ls_sim_freeze(c, &pm, om, &fz)) {
-                fault |= LS_SIM_FAULT_DIVERGED;
-            }
-            f_start = sp.force;
-        }
-        if (--rec_count == 0) {
-            rec_count = c->decimate;
-            dl = kx * (x - x_mid);
-            cd = 1.0 - 0.5 * dl * dl * (1.0 - dl * dl * (1.0 / 12.0));
-            sd = dl * (1.0 - dl * dl * (1.0 / 6.0) * (1.0 - dl * dl * (1.0 / 20.0)));
-            if (blk) { /* the previous sample's block is complete; this sample opens the next */
-                ls_sim_block_write(out, &acc);
-                ls_sim_block_open(&acc, r, x, blk_err ? ls_sim_est_err(&cmd, x, tau, kx) : 0.0, i);
-            }
-            ls_sim_record(out, r++, t, x, v, i, cm * cd - sm * sd, sm * cd + cm * sd, u, f_start, &cmd, tau, kx, fault);
-        } else if (blk) {
-            ls_sim_block_add(&acc, x, blk_err ? ls_sim_est_err(&cmd, x, tau, kx) : 0.0, i);
-        }
-        if (fault != 0u || cmd.cal_done) { /* a calibration run ends with the calibration */
+        angle_to(&L.ang, th_mid);
+        om = kx * (1.5 * L.v - 0.5 * L.v_lag);
+        f_start = plant_freeze(c, &q, sat, &L, th_mid, om, &pm, &fz, &sf);
+        record_period(c, out, &rc, &L, &cmd, t, x_mid, u, f_start, tau, kx);
+        if (L.fault != 0u || cmd.cal_done) { /* a calibration run ends with the calibration */
             s->ended = 1;
             break;
         }
-        if (c->fidelity == LS_SIM_SWITCHING) {
-            double f_int;
-            if (sat) {
-                ls_sim_period_switching_sat(c, &q, &fz, u, h, i, &f_int, &carry, &sf, om, &bad);
-            } else {
-                ls_sim_period_switching(c, &q, &fz, &pm, u, h, i, &f_int, &carry);
-            }
-            f_avg = f_int / h;
-        } else if (sat) {
-            double f_end;
-            bad = !ls_sim_period_average_sat(c, &q, &fz, &sf, om, u, h, i, &carry, &f_end);
-            f_avg = 0.5 * (f_start + f_end);
-        } else {
-            ls_sim_period_average(c, &q, &fz, u, h, i, &carry);
-            f_avg = 0.5 * (f_start + ls_sim_force_of(&q, &pm, i));
-        }
-        if (bad) {
-            fault |= LS_SIM_FAULT_DIVERGED;
-        }
-        x_lag = x;
-        v_lag2 = v_lag;
-        v_lag = v;
-        ls_sim_mechanics(c, &q, t, h, f_avg, &x, &v);
-        if (cmd.enable) {
-            duty[0] = (double)cmd.duty[0];
-            duty[1] = (double)cmd.duty[1];
-            duty[2] = (double)cmd.duty[2];
-        } else {
-            duty[0] = duty[1] = duty[2] = 0.5;
-        }
-        if (!plant_ok(c, i, x, v)) {
-            fault |= LS_SIM_FAULT_DIVERGED;
-        } else if (x < c->x_min || x > c->x_max) {
-            fault |= LS_SIM_FAULT_TRAVEL;
-        }
-        if (fault != 0u) {
-            /* record the state that tripped (a block of its own), then stop */
-            double nan3[3] = {NAN, NAN, NAN}, f_end = NAN;
-            if (LS_ISFINITE(i[0]) && LS_ISFINITE(i[1]) && LS_ISFINITE(x)) {
-                f_end = ls_sim_force_at(c, &q, kx * x, i);
-            }
-            if (blk) {
-                ls_sim_block_write(out, &acc);
-                ls_sim_block_open(&acc, r, x, blk_err ? ls_sim_est_err(&cmd, x, tau, kx) : 0.0, i);
-            }
-            ls_sim_record(out, r++, t + h, x, v, i, cos(kx * x), sin(kx * x), nan3, f_end, &cmd, tau, kx, fault);
+        f_avg = propagate(c, &q, sat, &L, &pm, &fz, &sf, om, u, h, f_start);
+        L.x_lag = L.x;
+        L.v_lag2 = L.v_lag;
+        L.v_lag = L.v;
+        ls_sim_mechanics(c, &q, t, h, f_avg, &L.x, &L.v);
+        next_duties(&cmd, L.duty);
+        if (!plant_checked(c, &L)) { /* record the state that tripped, then stop */
+            record_trip(c, &q, out, &rc, &L, &cmd, t + h, tau, kx);
             k++;
             s->ended = 1;
             break;
         }
     }
-    if (fault & LS_SIM_FAULT_STOPPED) {
+    if (L.fault & LS_SIM_FAULT_STOPPED) {
         s->ended = 1;
     }
-    if (blk) {
-        ls_sim_block_write(out, &acc); /* complete when the call ends where a block does, or the run ends */
+    if (rc.blk) {
+        ls_sim_block_write(out, &rc.acc); /* complete when the call ends where a block does, or the run ends */
     }
-    s->k = k;
-    s->n_rec += r;
-    s->fault = fault;
-    s->x = x;
-    s->v = v;
-    s->i[0] = i[0];
-    s->i[1] = i[1];
-    s->x_lag = x_lag;
-    s->v_lag = v_lag;
-    s->v_lag2 = v_lag2;
-    s->rng = rng;
-    s->next = next;
-    s->rec_count = rec_count;
-    for (j = 0; j < 3; ++j) {
-        s->duty[j] = duty[j];
-        s->carry_t[j] = carry.t[j];
-        s->carry_on[j] = carry.on[j];
-        s->carry_excess[j] = carry.excess[j];
-    }
-    s->carry_any = carry.any_excess ? 1 : 0;
-    s->ang_th = ang.th;
-    s->ang_c = ang.c;
-    s->ang_s = ang.s;
-    s->ang_left = ang.left;
-    res->steps_done = k;
-    res->n_rec = r;
-    res->fault = fault;
-    res->x_end = x;
-    res->v_end = v;
+    loop_store(&L, k, rc.r, s, res);
     return LS_OK;
 }
 

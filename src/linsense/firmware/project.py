@@ -214,14 +214,7 @@ def firmware_files(motor, drive=None, source: str = "<firmware export>", name: s
                          f"the firmware export configures the pulsating/elliptical injection (ls_cfg_*.h), "
                          f"not the {dd.shape} one: its C configuration is the simulator's "
                          f"(linsense.sim.drive_cfg; {docs('firmware')})")
-    lib = library_files()
-    missing = [p for p in ("CMakeLists.txt", "include/linsense/ls_drive.h", "ctrl/ls_drive.c")
-               if p not in lib]
-    if missing:
-        from linsense.errors import LinsenseError
-
-        raise LinsenseError(f"the C library's files are incomplete under {library_root()}: "
-                            f"{', '.join(missing)} missing (a broken installation: reinstall linsense)")
+    lib = _complete_library()
     made = design_drive(motor, dd, source=source, analyse=False, table=table, table_via=table_via,
                         points=points)
     dz, su, table = made.design, made.startup, made.table
@@ -229,15 +222,11 @@ def firmware_files(motor, drive=None, source: str = "<firmware export>", name: s
     sym = c_config_name(name, motor.name)
     digest = design_digest(motor, dd, points, table)
     cfg_name = f"ls_cfg_{sym}.h"
-    files: dict[str, bytes] = {}
-    for rel, path in lib.items():
-        files[f"{LIBRARY_DIR}/{rel}"] = path.read_bytes()
-    toolchain = "cmake/arm-none-eabi-m4f.cmake"
-    files[toolchain] = lib[toolchain].read_bytes() if toolchain in lib else b""
 
     def header(unverified: str = "", verified_by: str = "") -> str:
         return c_header(made, name=name, points=points, unverified=unverified, verified_by=verified_by)
 
+    files = _library_copy(lib)
     files[cfg_name] = header().encode()
     files["ls_example.h"] = example_header(motor, dd, sym, digest).encode()
     files["main.c"] = example_main().encode()
@@ -249,6 +238,34 @@ def firmware_files(motor, drive=None, source: str = "<firmware export>", name: s
              f"  linsense {__version__}, data sha256 {digest}"]
     return FirmwareExport(files=files, name=sym, motor=motor.name, digest=digest, lines=lines, design=dz,
                           header=header, warnings=warnings, drive_design=made)
+
+
+def _complete_library() -> dict[str, Path]:
+    """The C library's files (:func:`library_files`), refused when the ones every build needs are missing.
+
+    Raises
+    ------
+    linsense.errors.LinsenseError
+        A file every build needs is missing (a broken installation).
+    """
+    lib = library_files()
+    missing = [p for p in ("CMakeLists.txt", "include/linsense/ls_drive.h", "ctrl/ls_drive.c")
+               if p not in lib]
+    if missing:
+        from linsense.errors import LinsenseError
+
+        raise LinsenseError(f"the C library's files are incomplete under {library_root()}: "
+                            f"{', '.join(missing)} missing (a broken installation: reinstall linsense)")
+    return lib
+
+
+def _library_copy(lib: dict[str, Path]) -> dict[str, bytes]:
+    """The exported folder's copy of the C library: each file under :data:`LIBRARY_DIR`, and the
+    Cortex-M4F toolchain file at the folder's top as well (empty when the library has none)."""
+    files = {f"{LIBRARY_DIR}/{rel}": path.read_bytes() for rel, path in lib.items()}
+    toolchain = "cmake/arm-none-eabi-m4f.cmake"
+    files[toolchain] = lib[toolchain].read_bytes() if toolchain in lib else b""
+    return files
 
 
 def example_header(motor, drive, sym: str, digest: str) -> str:

@@ -4,6 +4,7 @@ each refusal names the scenario key, its value and the limit."""
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 
@@ -508,7 +509,7 @@ def check_units(sc: Scenario, tau: float, user_keys: set[str], believed: dict[st
     InputError
         Naming the key, its value, the range or the relation, and the likely slip of unit.
     """
-    from linsense.plausible import KINDS, check, implausible, slip
+    from linsense.plausible import check
     from linsense.sim.scenario import unit_kinds
 
     s = sc.spec
@@ -517,8 +518,19 @@ def check_units(sc: Scenario, tau: float, user_keys: set[str], believed: dict[st
         value = _value_at(s, key) if key in user_keys else None
         if isinstance(value, int | float) and not isinstance(value, bool):
             check(sc.source, key, value, kind)
+    _check_believed(sc, kinds, user_keys, believed)
+    _check_stroke(sc, user_keys)
+    _check_relations(sc, kinds, tau, user_keys)
+
+
+def _check_believed(sc: Scenario, kinds: dict[str, str], user_keys: set[str],
+                    believed: dict[str, float]) -> None:
+    """Refuse a ``controller.model`` value the file gives more than :data:`MODEL_FACTOR_MAX` times off
+    the motor's own (``believed``), naming the likely slip of unit (:func:`check_units`)."""
+    from linsense.plausible import KINDS, slip
+
     for key, own in believed.items():
-        value = _value_at(s, key)
+        value = _value_at(sc.spec, key)
         if key not in user_keys or value is None or not own > 0.0:
             continue
 
@@ -531,7 +543,13 @@ def check_units(sc: Scenario, tau: float, user_keys: set[str], believed: dict[st
             raise InputError(sc.source, key, f"{value:g} {unit} is more than {MODEL_FACTOR_MAX:g} times off "
                              f"the motor's {own:.4g} {unit} (what the controller believes is off by tens of "
                              "% in a parameter mismatch)" + (f"; {hint}" if hint else ""))
-    tr = s.travel
+
+
+def _check_stroke(sc: Scenario, user_keys: set[str]) -> None:
+    """Refuse a travel the file gives whose span is no plausible stroke (:func:`check_units`)."""
+    from linsense.plausible import KINDS, implausible
+
+    tr = sc.spec.travel
     given = [k for k in ("travel.max_mm", "travel.min_mm") if k in user_keys]
     # (0.1 typed for 100 mm: "fault travel" at 0.06 s; a travel beyond any stroke is "unbounded")
     short = given and tr.max_mm - tr.min_mm < KINDS["stroke"].low * 1e3
@@ -539,6 +557,26 @@ def check_units(sc: Scenario, tau: float, user_keys: set[str], believed: dict[st
     if stroke is not None:
         raise InputError(sc.source, given[0],
                          f"the travel [{tr.min_mm:g}, {tr.max_mm:g}] mm: its span {stroke}")
+
+
+def _check_relations(sc: Scenario, kinds: dict[str, str], tau: float, user_keys: set[str]) -> None:
+    """Refuse a frequency or electrical speed the file gives that breaks its relation to another
+    (:func:`check_units`), naming the likely slip of unit."""
+    from linsense.plausible import KINDS, slip
+
+    s = sc.spec
+    for key, holds, rule in _relations(s, tau):
+        value = _value_at(s, key)
+        if key in user_keys and not holds(value):
+            hint = slip(kinds[key], value, ok=holds)
+            unit = KINDS[kinds[key]].unit
+            raise InputError(sc.source, key,
+                             f"{value:g} {unit} must be {rule}" + (f"; {hint}" if hint else ""))
+
+
+def _relations(s, tau: float) -> list[tuple[str, Callable[[float], bool], str]]:
+    """The relations :func:`check_units` holds the file's values to: (key, must hold, what it must be
+    and why), from the scenario's values ``s`` (its spec) and the pole pitch ``tau`` (m)."""
     f_pwm = s.inverter.f_pwm
     f_inj = f_pwm / 2.0 if s.injection.shape == "square" else s.injection.frequency
     lpf, v_max = s.observer.demod_lpf_hz, s.controller.v_max
@@ -546,7 +584,7 @@ def check_units(sc: Scenario, tau: float, user_keys: set[str], believed: dict[st
     v_lin, i_max = s.inverter.v_dc / math.sqrt(3.0), s.controller.i_max
     speed = (f"the electrical speed of controller.v_max = {v_max:g} m/s, 2 pi v_max / pole pitch = "
              f"{w_top:.4g} rad/s")
-    relations = [  # (key, must hold, what it must be and why)
+    return [
         ("observer.demod_lpf_hz", lambda v: v < f_inj,
          f"below the injection frequency, {f_inj:g} Hz (the low-pass keeps the demodulated error and removes "
          "the products' ripple at twice the injection)"),
@@ -570,10 +608,3 @@ def check_units(sc: Scenario, tau: float, user_keys: set[str], believed: dict[st
         ("observer.hf_delay_s", lambda v: v * f_inj <= 10.0,
          f"at most ten injection periods, {10.0 / f_inj:g} s (the HF path's delay is about one)"),
     ]
-    for key, holds, rule in relations:
-        value = _value_at(s, key)
-        if key in user_keys and not holds(value):
-            hint = slip(kinds[key], value, ok=holds)
-            unit = KINDS[kinds[key]].unit
-            raise InputError(sc.source, key,
-                             f"{value:g} {unit} must be {rule}" + (f"; {hint}" if hint else ""))

@@ -848,14 +848,9 @@ def simulate_streamed(b: Built, *, on_chunk: Callable | None = None, plot: bool 
     """
     s = b.scenario.spec
     dec = int(b.setup.decimate if decimate is None else decimate)
-    n_rec = -(-int(b.n_steps) // dec)
     k = metrics_block(s, metrics_cap)
     spec = BLOCK_SPEC if k > 1 else POINT_SPEC
-    pitch = b.motor.pole_pitch  # (the metrics' parameters: run_metrics)
-    keep = MetricSamples(moves=b.moves, convergence_s=s.metrics.convergence_s, settle_s=s.metrics.settle_s,
-                         final_window_s=s.metrics.final_window_s,
-                         settling_band_deg=s.metrics.bounds_deg(pitch)["settling_band_deg"], pole_pitch=pitch,
-                         x_target=b.commands[-1][1] if b.commands else b.setup.x0)
+    keep = _metric_samples(b)
     mred = Reducer(k, spec, sink=keep.add)
     n_in = [0]
 
@@ -863,55 +858,96 @@ def simulate_streamed(b: Built, *, on_chunk: Callable | None = None, plot: bool 
         n_in[0] += len(arrays["t"])
         keep.add({name: arrays[name] for name in POINT_SPEC})
     f_inj = injection_hz(b)
-    kp = plot_bin(n_rec, dec, s.inverter.f_pwm, f_inj)
+    kp = plot_bin(-(-int(b.n_steps) // dec), dec, s.inverter.f_pwm, f_inj)
     pred = Reducer(kp, PLOT_SPEC) if plot else None
     chunk = min(int(chunk), int(b.n_steps))  # (a short run needs no buffers of a whole chunk)
+    route = _Route(_store_to(on_chunk, pred), dec, chunk, blocks)
+    metrics_add = mred.add if k > 1 else read
+
+    def take(arrays: dict[str, np.ndarray]) -> None:
+        metrics_add(arrays)
+        route.add(arrays)
+
+    raw = run_closed_loop_chunks(full_rate(b.cfg), b.drive.state, b.n_steps, b.commands, on_chunk=take,
+                                 chunk=route.c_chunk, signals=route.signals)
+    n_read = int(mred.n_in) if k > 1 else n_in[0]
+    stored = route.finish(n_read)
+    mred.finish(split_last=bool(raw.fault))
+    m = run_metrics(b, raw, keep.arrays(spec))
+    finish_metrics(b, raw, m, k)
+    m["samples"] = n_read
+    if k > 1:
+        m["metrics_note"] = _block_note(s.metrics.final_window_s, metrics_cap, k, m["block_s"])
+    pd_ = None
+    if pred is not None:
+        pd_ = PlotData(pred.finish(), m, b.scenario.name, s.inverter.f_pwm, dec, kp,
+                       s.inverter.f_pwm / f_inj / dec if f_inj else None)
+    return StreamedRun(m, int(raw.fault), stored, pd_)
+
+
+def _block_note(window_s: float, cap: int, k: int, block_s: float) -> str:
+    """The metrics' note when they are computed on blocks of ``k`` periods (``block_s`` s): the end
+    window (``window_s`` s) holds more than ``cap`` PWM periods."""
+    return (f"the end window (metrics.final_window_s = {window_s:g} s) holds more than "
+            f"{int(cap):,} PWM periods: the metrics are computed on blocks of {k} "
+            f"periods ({block_s:g} s, their min, max and mean), their times to one "
+            "block")
+
+
+def _metric_samples(b: Built) -> MetricSamples:
+    """The metrics' samples of the built scenario, with the parameters :func:`run_metrics` takes."""
+    s, pitch = b.scenario.spec, b.motor.pole_pitch
+    return MetricSamples(moves=b.moves, convergence_s=s.metrics.convergence_s, settle_s=s.metrics.settle_s,
+                         final_window_s=s.metrics.final_window_s,
+                         settling_band_deg=s.metrics.bounds_deg(pitch)["settling_band_deg"], pole_pitch=pitch,
+                         x_target=b.commands[-1][1] if b.commands else b.setup.x0)
+
+
+def _store_to(on_chunk: Callable | None, pred: Reducer | None) -> Callable | None:
+    """Where a chunk of the stored record goes: ``on_chunk``, then the figure's bins (None: nowhere)."""
+    if on_chunk is None and pred is None:
+        return None
 
     def store(arrays: dict[str, np.ndarray]) -> None:
         if on_chunk is not None:
             on_chunk(arrays)
         if pred is not None:
             pred.add(arrays)
+    return store
 
-    storing = on_chunk is not None or plot
-    signals, sample, batches = None, None, None
-    if not storing:  # (metrics only: what they read, in smaller chunks)
-        signals, c_chunk = METRICS_SIGNALS, min(chunk, METRICS_CHUNK)
-    elif dec == 1 and not blocks:
-        c_chunk = chunk
-    else:  # (every period from C, the stored record made here, in the C loop's decimated chunks)
-        batches = Batcher(max(1, -(-chunk // dec)), store)
-        sample = Decimator(dec, batches.add)
-        c_chunk = min(chunk, METRICS_CHUNK)
 
-    metrics_add = mred.add if k > 1 else read
+class _Route:
+    """The stored record's path from the C loop's chunks to ``store``.
 
-    def take(arrays: dict[str, np.ndarray]) -> None:
-        metrics_add(arrays)
-        if sample is not None:
-            sample.add(arrays)
-        elif storing:
-            store(arrays)
+    Three paths: none (``store`` None, metrics only: the C loop records the signals they read, in
+    smaller chunks); as recorded (every period stored, no block statistics: the chunks themselves);
+    or made here (every period from C, one sample every ``dec`` with its block statistics, handed on
+    in the C loop's decimated chunks).
+    """
 
-    raw = run_closed_loop_chunks(full_rate(b.cfg), b.drive.state, b.n_steps, b.commands, on_chunk=take,
-                                 chunk=c_chunk, signals=signals)
-    n_read = int(mred.n_in) if k > 1 else n_in[0]
-    stored = n_read
-    if sample is not None:
-        batches.flush(sample.finish())
-        stored = batches.handed
-    mred.finish(split_last=bool(raw.fault))
-    m = run_metrics(b, raw, keep.arrays(spec))
-    finish_metrics(b, raw, m, k)
-    m["samples"] = n_read
-    if k > 1:
-        w = s.metrics.final_window_s
-        m["metrics_note"] = (f"the end window (metrics.final_window_s = {w:g} s) holds more than "
-                             f"{int(metrics_cap):,} PWM periods: the metrics are computed on blocks of {k} "
-                             f"periods ({m['block_s']:g} s, their min, max and mean), their times to one "
-                             "block")
-    pd_ = None
-    if pred is not None:
-        pd_ = PlotData(pred.finish(), m, b.scenario.name, s.inverter.f_pwm, dec, kp,
-                       s.inverter.f_pwm / f_inj / dec if f_inj else None)
-    return StreamedRun(m, int(raw.fault), stored, pd_)
+    def __init__(self, store: Callable | None, dec: int, chunk: int, blocks: bool | None) -> None:
+        self.store, self.signals = store, None
+        self.sample: Decimator | None = None
+        self.batches: Batcher | None = None
+        if store is None:
+            self.signals, self.c_chunk = METRICS_SIGNALS, min(chunk, METRICS_CHUNK)
+        elif dec == 1 and not blocks:
+            self.c_chunk = chunk
+        else:
+            self.batches = Batcher(max(1, -(-chunk // dec)), store)
+            self.sample = Decimator(dec, self.batches.add)
+            self.c_chunk = min(chunk, METRICS_CHUNK)
+
+    def add(self, arrays: dict[str, np.ndarray]) -> None:
+        """Hand on a chunk of the C loop's record."""
+        if self.sample is not None:
+            self.sample.add(arrays)
+        elif self.store is not None:
+            self.store(arrays)
+
+    def finish(self, n_read: int) -> int:
+        """Hand on what is left; the samples stored (``n_read``, every period read, when not made here)."""
+        if self.sample is None:
+            return n_read
+        self.batches.flush(self.sample.finish())
+        return self.batches.handed
