@@ -74,7 +74,8 @@ def settle(motor, theta, theta_err, method="product", comp=None, gain=1.0, gain_
 
 
 def nominal_gain() -> float:
-    return float(ctrl.drive_default_cfg().demod.gain)
+    cfg = ctrl.drive_default_cfg()  # (kept: cfg.demod does not own it)
+    return float(cfg.demod.gain)
 
 
 def test_extension_built_from_these_sources():

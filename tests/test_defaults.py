@@ -77,7 +77,8 @@ def test_compiled_startup_defaults_are_the_startup_design():
     from linsense.tune.defaults import REFERENCE_POLARITY
     from linsense.tune.startup import design_startup
 
-    c, d = drive_default_cfg().startup, DriveData()
+    cfg, d = drive_default_cfg(), DriveData()  # (cfg kept: .startup is a view into it)
+    c = cfg.startup
     dz = design(load_motor("ecce2010"), d, analyse=False)
     su = design_startup(load_motor("ecce2010"), v_dc=d.v_dc, f_pwm=d.f_pwm, i_max=d.i_max,
                         observer_bw=dz.observer_bw, v_inj=dz.v_inj, polarity=REFERENCE_POLARITY,

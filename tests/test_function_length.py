@@ -43,7 +43,7 @@ HELD = [
     ("fea/solver.py", "solve_nonlinear"),
     ("sim/stream.py", "simulate_streamed"),
     ("sim/checks.py", "check_units"),
-    ("firmware/export.py", "firmware_files"),
+    ("firmware/project.py", "firmware_files"),
 ]
 
 #: The most lines of any function of the package, on the main path or not.

@@ -137,7 +137,14 @@ def test_c_force_equals_abc_coenergy(name):
 ECCE = motor("ecce2010")
 TAU = ECCE.pole_pitch
 # the table for the firmware's default injection (elliptical, kappa from ls_drive_default_cfg)
-LUT_R = build_lut(ECCE, 360, f_inj=1000.0, quad=float(ctrl.drive_default_cfg().inject.quad))
+def _default_quad() -> float:
+    """The firmware's default elliptical share (the configuration kept alive while its nested
+    struct is read: a field of ``cfg.inject`` does not own ``cfg``)."""
+    cfg = ctrl.drive_default_cfg()
+    return float(cfg.inject.quad)
+
+
+LUT_R = build_lut(ECCE, 360, f_inj=1000.0, quad=_default_quad())
 
 
 def _drive(comp=None, **mod):

@@ -27,7 +27,8 @@ def test_scenario_without_gains_gets_the_design_for_its_motor():
     b = build(sc)
     dz = design(b.motor, DriveData(), analyse=False)
     assert float(b.drive.cfg.inject.amplitude) == pytest.approx(dz.v_inj, rel=1e-6)
-    assert dz.current_kp != pytest.approx(drive_default_cfg().current.kp, rel=0.05)  # not ecce2010's
+    c_default = drive_default_cfg()  # (kept: c_default.current does not own it)
+    assert dz.current_kp != pytest.approx(c_default.current.kp, rel=0.05)  # not ecce2010's
     assert float(b.drive.cfg.current.kp) == pytest.approx(dz.current_kp, rel=1e-5)
     assert float(b.drive.cfg.pos.speed.kp) == pytest.approx(dz.speed_kp, rel=1e-5)
     # what the file gives is kept, also across replace()

@@ -70,6 +70,13 @@ type = "hold"
 """
 
 
+
+def _default_quad() -> float:
+    """The firmware's default elliptical share (the configuration kept alive while its nested
+    struct is read: a field of ``cfg.inject`` does not own ``cfg``)."""
+    cfg = ctrl.drive_default_cfg()
+    return float(cfg.inject.quad)
+
 def peak_rss(argv: list[str], timeout: float) -> tuple[float | None, float, str]:
     """Peak RSS (MB) of the process ``argv`` (measured by a wrapper process of its own, so that no
     earlier child counts), its wall time (s) and a note (exit status, timeout)."""
@@ -211,7 +218,7 @@ def _main() -> None:
             pass
     motor = load_motor("ecce2010")
     # the table of the firmware's default injection (kappa from ls_drive_default_cfg)
-    lut = build_lut(motor, 360, f_inj=1000.0, quad=float(ctrl.drive_default_cfg().inject.quad))
+    lut = build_lut(motor, 360, f_inj=1000.0, quad=_default_quad())
     print(f"simulator benchmark: ecce2010, sensorless with LUT, {args.seconds:g} s moves 0 -> 20 mm -> 0 "
           f"(0.2 m/s, 1 m/s^2), 16 kHz, every period recorded, best/median of {args.repeat}, one core")
     for fidelity in ("average", "switching"):

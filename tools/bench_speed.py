@@ -38,9 +38,9 @@ from linsense.tune.design import V_DC_MIN_FRACTION, DriveData, DriveInputs, bus_
 from linsense.tune.drive_design import design_drive
 from linsense.tune.export import scenario_dict
 from linsense.verify import criteria as C
+from linsense.verify.case_runs import run_cases
 from linsense.verify.cases import move_distance, trajectory_case
 from linsense.verify.certificate import motor_ref
-from linsense.verify.case_runs import run_cases
 
 ROOT = Path(__file__).parents[1]
 PITCHES = 10.0  # each move covers at least this many pole pitches (issue 39)
