@@ -28,10 +28,10 @@ from linsense.errors import InputError
 from linsense.io import split_timing
 from linsense.model.motor import load_motor, motor_to_toml
 from linsense.model.tolerance import perturbed
+from linsense.scenario.load import scenario_from_dict
 from linsense.sim.build import designed
 from linsense.sim.calibrate import Calibration, calibrate, measured_json
 from linsense.sim.run import simulate
-from linsense.sim.scenario import scenario_from_dict
 
 F_INJ, QUAD = 1000.0, 0.9  # (the ecce2010 design's pulsating-elliptical injection)
 

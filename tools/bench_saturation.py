@@ -22,9 +22,9 @@ from pathlib import Path
 
 import numpy as np
 
+from linsense.scenario.load import scenario_from_dict
 from linsense.sim.lut_load import lut_vs_load
 from linsense.sim.run import simulate
-from linsense.sim.scenario import scenario_from_dict
 
 MOTOR = (Path(__file__).resolve().parent.parent / "src/linsense/examples" / "motors" / "tubular56_thin_sat"
          / "motor.toml")

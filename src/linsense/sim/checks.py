@@ -10,8 +10,8 @@ import numpy as np
 from linsense.ctrl import REAL, ffi, lib
 from linsense.errors import InputError
 from linsense.limits import MAX_STEPS, MAX_TRACE_BYTES, MAX_TRACE_FILE_BYTES
+from linsense.scenario.load import Scenario
 from linsense.sim.core import BLOCKS, SIGNALS
-from linsense.sim.scenario import Scenario
 
 
 def check_positions(sc: Scenario, tau: float) -> None:
@@ -479,7 +479,7 @@ MODEL_FACTOR_MAX = 10.0
 
 def check_units(sc: Scenario, tau: float, user_keys: set[str], believed: dict[str, float]) -> None:
     """Refuse a value the file gives in another unit than its key's: a key of a kind of
-    the table of plausible values (:func:`linsense.sim.scenario.unit_kinds`) outside its range
+    the table of plausible values (:func:`linsense.scenario.keys.unit_kinds`) outside its range
     (``controller.model.L_d = 10`` H, ``protection.err_max = 30`` rad, ``controller.v_max = 200``
     m/s), or a frequency or electrical speed that breaks the relation a slip of 2 pi between Hz and
     rad/s breaks: the demodulator's low-pass below the injection it demodulates, the observer below
@@ -509,7 +509,7 @@ def check_units(sc: Scenario, tau: float, user_keys: set[str], believed: dict[st
         Naming the key, its value, the range or the relation, and the likely slip of unit.
     """
     from linsense.plausible import KINDS, check, implausible, slip
-    from linsense.sim.scenario import unit_kinds
+    from linsense.scenario.keys import unit_kinds
 
     s = sc.spec
     kinds = unit_kinds()

@@ -15,14 +15,8 @@ from dataclasses import dataclass, field
 
 from linsense.analysis.hf import mean_dq
 from linsense.model.motor import Motor
-from linsense.tune.design import (
-    V_DC_MAX_FRACTION,
-    V_DC_MIN_FRACTION,
-    Design,
-    DriveData,
-    design,
-    uncompensated_speed_factor,
-)
+from linsense.scenario.bounds import V_DC_MAX_FRACTION, V_DC_MIN_FRACTION
+from linsense.tune.design import Design, DriveData, design, uncompensated_speed_factor
 from linsense.tune.startup import StartupDesign, design_startup
 
 #: the keys whose values are the inputs as given (the drive data, the application, the motor

@@ -414,8 +414,8 @@ def calibrate_plant(motor: Motor, motor_spec: str, base: dict, base_dir: str, pl
     linsense.sim.calibrate.Calibration
         The measured table; its ``psi_model`` is the plant's own.
     """
+    from linsense.scenario.load import scenario_from_dict
     from linsense.sim.calibrate import calibrate
-    from linsense.sim.scenario import scenario_from_dict
     from linsense.verify.cases import off_nominal_motor
 
     sc = scenario_from_dict(_calibration_base(base, motor_spec, travel, motor.pole_pitch),
@@ -566,9 +566,9 @@ def _build_each_kind(cases: list, calibrated: list[str], motor: Motor, motor_spe
                      base_dir: str, travel: float | None) -> None:
     """Build one run of each kind and plant of ``cases`` (and the calibration's, if any plant is
     ``calibrated``), so that a configuration any of them refuses raises before anything runs."""
+    from linsense.scenario.load import scenario_from_dict
     from linsense.sim.build import build
     from linsense.sim.calibrate import calibration_scenario
-    from linsense.sim.scenario import scenario_from_dict
     from linsense.verify.cases import off_nominal_motor
     from linsense.verify.run import case_scenario
 
