@@ -143,7 +143,7 @@ def test_metric_bounds_in_mm():
     as README.md and docs/simulator.md write them; the bound above the uncompensated observer's
     worst equilibrium error (20.6 deg)."""
     from linsense.analysis.hf import equilibrium_error
-    from linsense.scenario.schema import MetricsSection
+    from linsense.scenario.sections import MetricsSection
 
     b = MetricsSection().bounds_deg(0.056)
     mm = {k: v * 56.0 / 360.0 for k, v in b.items()}

@@ -12,7 +12,7 @@ import linsense
 from linsense.cli import main
 from linsense.errors import InputError
 from linsense.scenario.load import scenario_from_dict
-from linsense.scenario.schema import MetricsSection
+from linsense.scenario.sections import MetricsSection
 from linsense.sim.metrics import REQUIRED_KEYS, compute_metrics, settling_time
 
 F_PWM = 1000.0

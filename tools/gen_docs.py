@@ -3,7 +3,7 @@
 docs/simulator.md holds two, each between its own BEGIN marker (below) and ``<!-- END generated -->``:
 
 - "Scenario files": the table of every scenario key (:func:`keys_table`), from the pydantic models of
-  :mod:`linsense.scenario.schema`, the one home of each key: its meaning (the field's ``description``),
+  :mod:`linsense.scenario.sections`, the one home of each key: its meaning (the field's ``description``),
   unit, default (the field's default, or its ``default_note``; the convention is described in
   that module's docstring) and the values it accepts (its type and bounds);
 - "The scenario keys in the drive's configuration": the table of the one scenario ->

@@ -2,7 +2,7 @@
 
 What a scenario may say and how it is read, below the design (``tune``) that writes scenario keys
 and the simulator (``sim``) that runs them: the keys, their types, ranges, units and defaults
-(:mod:`~linsense.scenario.schema`, also the source of docs/simulator.md's key table); the rules
+(:mod:`~linsense.scenario.sections`, also the source of docs/simulator.md's key table); the rules
 between keys, one function per section or concern run in one ordered table
 (:mod:`~linsense.scenario.rules`); the dotted keys and :func:`key`, how code spells a key
 (:mod:`~linsense.scenario.keys`); the loader, ``load_scenario(path) -> Scenario``
@@ -19,7 +19,7 @@ import importlib
 _HOMES = {
     "Scenario": "load", "ScenarioFile": "load", "as_scenario": "load", "load_scenario": "load",
     "scenario_from_dict": "load", "toml_values": "load",
-    "ScenarioSchema": "schema", "MetricsSection": "schema", "METRIC_BOUNDS": "schema",
+    "ScenarioSchema": "sections", "MetricsSection": "sections", "METRIC_BOUNDS": "sections",
     "CHECKS": "rules", "compensation_of": "rules",
     "key": "keys", "unit_kinds": "keys",
 }

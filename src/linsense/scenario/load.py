@@ -1,6 +1,6 @@
 """Reading a scenario: a file or a dict validated into a :class:`Scenario` (the loader).
 
-Validation is pydantic in strict mode (:mod:`linsense.scenario.schema`, then the rules between keys
+Validation is pydantic in strict mode (:mod:`linsense.scenario.sections`, then the rules between keys
 of :mod:`linsense.scenario.rules`): unknown or missing keys, wrong types, non-finite numbers and
 out-of-range values end in :class:`~linsense.errors.InputError` naming the file, the dotted key and
 the value.
@@ -20,16 +20,16 @@ from linsense._check import path_arg
 from linsense.errors import InputError
 from linsense.io import folder_of, read_toml, working_folder
 from linsense.plausible import slip
-from linsense.scenario.keys import SECTIONS, unit_kinds
+from linsense.scenario.keys import sections, unit_kinds
 from linsense.scenario.rules import CHECKS
-from linsense.scenario.schema import ScenarioSchema
+from linsense.scenario.sections import ScenarioSchema
 from linsense.validation import to_input_error
 
 _BRANCH = re.compile(r"^(float|int|bool|str|list\[.*\]|constrained-.*|function-.*)$")
 
 
 class ScenarioFile(ScenarioSchema):
-    """A whole scenario file, validated: its keys (:class:`~linsense.scenario.schema.ScenarioSchema`),
+    """A whole scenario file, validated: its keys (:class:`~linsense.scenario.sections.ScenarioSchema`),
     then the rules between them (:data:`linsense.scenario.rules.CHECKS`, in order)."""
 
     @model_validator(mode="after")
@@ -133,7 +133,7 @@ def _slip_of(key: str, data: dict) -> str:
     if kind is None or isinstance(value, bool) or not isinstance(value, int | float):
         return ""
     path, _, name = key.rpartition(".")
-    model = next(m for p, m in SECTIONS.values() if p == path)
+    model = next(m for p, m in sections().values() if p == path)
     field = model.model_fields[name]
     ann = Annotated[field.annotation, *field.metadata] if field.metadata else field.annotation
     adapter = TypeAdapter(ann)
@@ -238,14 +238,14 @@ def scenario_from_dict(data: dict, source: str = "<dict>", base_dir: str | Path 
     except ValidationError as exc:
         # a section the data leaves out is built from its defaults, which its own rule can refuse
         # (pydantic then raises the section's error, located in the section)
-        section, root = SECTIONS.get(exc.title, ("", ScenarioFile))
+        section, root = sections().get(exc.title, ("", ScenarioFile))
         err = to_input_error(exc, source, root)
         # drop the union-branch names pydantic puts into the location ("current_gain.float")
         key = ".".join(p for p in err.key.split(".") if not _BRANCH.match(p))
         key = f"{section}.{key}" if section and key else section or key
         message = err.message
         # a whole section missing ("scenario"): named by its first required key
-        missing = next((v for v in SECTIONS.values() if v[0] == key), None)
+        missing = next((v for v in sections().values() if v[0] == key), None)
         if missing is not None and message == "missing required key":
             section = key
             key += "." + next(k for k, f in missing[1].model_fields.items() if f.is_required())

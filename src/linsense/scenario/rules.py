@@ -1,6 +1,6 @@
 """The rules between the keys of a scenario file, one function per section or concern.
 
-Each takes the whole file (:class:`~linsense.scenario.schema.ScenarioSchema`, its keys validated one by
+Each takes the whole file (:class:`~linsense.scenario.sections.ScenarioSchema`, its keys validated one by
 one) and raises :class:`~linsense.validation.KeyProblem` naming the key it refuses; some fill in a key
 the file leaves to another (the bus limits follow the bus). :data:`CHECKS` is their order, the order
 their refusals take: :class:`linsense.scenario.load.ScenarioFile` runs it after the keys.
@@ -17,7 +17,7 @@ from pydantic import BaseModel
 from linsense.ctrl import REAL
 from linsense.plausible import slip
 from linsense.scenario.bounds import DEAD_TIME_SHARE_MAX, V_DC_MAX_FRACTION, V_DC_MIN_FRACTION
-from linsense.scenario.schema import ScenarioSchema
+from linsense.scenario.sections import ScenarioSchema
 from linsense.validation import KeyProblem
 
 
