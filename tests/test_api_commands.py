@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 import linsense.sim
-from linsense.sim.scenario import load_scenario
+from linsense.scenario.load import load_scenario
 
 
 def _toml(path: Path, duration: float = 0.4) -> Path:

@@ -10,10 +10,11 @@ from pathlib import Path
 
 import pytest
 
+from linsense.scenario.keys import _sections
+from linsense.scenario.load import ScenarioFile, scenario_from_dict
 from linsense.sim.build import build
 from linsense.sim.drive_cfg import value_of
 from linsense.sim.refusal import FIELDS, FS_FIELDS
-from linsense.sim.scenario import ScenarioFile, _sections, scenario_from_dict
 from linsense.tune.cfgmap import ROW, ROWS, header_rows
 from linsense.tune.design import DriveData, design
 from linsense.tune.export import c_header, scenario_dict

@@ -10,8 +10,8 @@ import pytest
 import linsense
 import linsense.sim.build as sim_build
 from linsense.errors import InputError
+from linsense.scenario.load import scenario_from_dict
 from linsense.sim.build import build
-from linsense.sim.scenario import scenario_from_dict
 from linsense.studies.startup_runs import base_scenario
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -145,7 +145,7 @@ def test_metric_bounds_in_mm():
     as README.md and docs/simulator.md write them; the bound above the uncompensated observer's
     worst equilibrium error (20.6 deg)."""
     from linsense.analysis.hf import equilibrium_error
-    from linsense.sim.scenario import MetricsSection
+    from linsense.scenario.sections import MetricsSection
 
     b = MetricsSection().bounds_deg(0.056)
     mm = {k: v * 56.0 / 360.0 for k, v in b.items()}
@@ -306,7 +306,7 @@ def test_full_reproduction_numbers():
 
 def _example_row(name: str, fidelity: str) -> str:
     """docs/simulator.md's row of the example scenario ``name`` on ``fidelity``."""
-    from linsense.sim.scenario import load_scenario
+    from linsense.scenario.load import load_scenario
 
     sc = load_scenario(ROOT / "src/linsense/examples" / "scenarios" / f"{name}.toml")
     sc = sc.replace(inverter={"fidelity": fidelity})
@@ -341,7 +341,7 @@ def test_simulator_text_numbers():
     a 0.21 mm cycle 2.2 mm beside; the pulsating and elliptical tables of ecce2010 differ by up to
     17 deg."""
     from linsense.compensation.lut import build_lut
-    from linsense.sim.scenario import load_scenario
+    from linsense.scenario.load import load_scenario
 
     sc = load_scenario(ROOT / "src/linsense/examples" / "scenarios" / "fig13_trajectory.toml")
     assert sc.spec.initial.load_balanced

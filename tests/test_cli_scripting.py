@@ -279,7 +279,7 @@ def test_every_example_resolves_by_name(tmp_path):
     from linsense.fea.geometry import load_geometry
     from linsense.identify.bench import read_bench_csv
     from linsense.model.motor import load_motor
-    from linsense.sim.scenario import load_scenario
+    from linsense.scenario.load import load_scenario
     from linsense.sweep import load_sweep
 
     assert examples.names("motors") == ["harmonic", "m100_edge", "m20_hv", "m30_low", "m45_24v", "m60_pos20k",
@@ -307,8 +307,8 @@ def test_every_example_resolves_by_name(tmp_path):
 def test_a_scenario_names_an_example_motor(run_cli, tmp_path):
     """`motor = "tubular56_thin_sat"` in a scenario anywhere: the packaged motor with its tables."""
     from linsense.errors import InputError
+    from linsense.scenario.load import scenario_from_dict
     from linsense.sim.build import resolve_motor
-    from linsense.sim.scenario import scenario_from_dict
 
     data = tomllib.loads(examples.path("scenarios", "step3_lut").read_text())
     sc = scenario_from_dict({**data, "motor": "tubular56_thin_sat"}, "t.toml", tmp_path)

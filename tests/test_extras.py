@@ -166,7 +166,7 @@ def test_the_api_stops_in_one_line_too(tmp_path):
         from linsense.errors import MissingExtraError
         from linsense.report.html import render_report
         from linsense.sim.simulation import simulate
-        from linsense.sim.scenario import load_scenario
+        from linsense.scenario.load import load_scenario
         from linsense.sim.trace import write_trace
         r = simulate(load_scenario(sys.argv[1]).replace(scenario={"duration": 0.05}, reference={"at": 0.01}))
         got = []

@@ -28,8 +28,8 @@ from linsense.errors import InputError
 from linsense.io import split_timing
 from linsense.model.motor import load_motor, motor_to_toml
 from linsense.model.tolerance import perturbed
+from linsense.scenario.load import scenario_from_dict
 from linsense.sim.build import designed
-from linsense.sim.scenario import scenario_from_dict
 from linsense.sim.simulation import simulate
 from linsense.studies.calibrate import Calibration, calibrate, measured_json
 

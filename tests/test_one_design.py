@@ -11,8 +11,8 @@ from pathlib import Path
 import pytest
 
 from linsense.model.motor import load_motor
+from linsense.scenario.load import scenario_from_dict
 from linsense.sim.build import DESIGNED, designed, drive_data
-from linsense.sim.scenario import scenario_from_dict
 from linsense.tune import DriveDesign, design_drive
 from linsense.tune.cfgmap import ROW
 from linsense.tune.export import c_header, scenario_dict, written

@@ -20,8 +20,6 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 #: generated from a home (tests/test_defaults.py checks they are what the generator writes)
 GENERATED = {"csrc/ctrl/ls_drive_defaults.h"}
-#: copies another part of the work owns, to be removed there (file: the homes' names it copies)
-PENDING = {"src/linsense/sim/checks.py": {"observer pole rule"}}
 
 
 @dataclass(frozen=True)
@@ -75,8 +73,7 @@ def copies(home: Home) -> list[str]:
     found = []
     for path in _sources():
         rel = path.relative_to(ROOT).as_posix()
-        if (rel == home.home or rel in GENERATED or home.name in PENDING.get(rel, ())
-                or not rel.startswith(home.scope)):
+        if rel == home.home or rel in GENERATED or not rel.startswith(home.scope):
             continue
         for n, line in enumerate(path.read_text(encoding="utf-8", errors="replace").splitlines(), 1):
             if re.search(home.pattern, line):
@@ -88,14 +85,6 @@ def copies(home: Home) -> list[str]:
 def test_each_rule_has_one_home(home):
     assert home.marker in (ROOT / home.home).read_text(encoding="utf-8"), f"{home.name}: not in {home.home}"
     assert copies(home) == [], f"{home.name}: a second copy (its home: {home.home})"
-
-
-def test_pending_copies_are_still_there():
-    """A pending copy removed: drop it from PENDING, so that the scan covers that file again."""
-    for rel, names in PENDING.items():
-        text = (ROOT / rel).read_text(encoding="utf-8")
-        for home in (h for h in HOMES if h.name in names):
-            assert re.search(home.pattern, text), f"{rel}: no longer copies {home.name}: drop it from PENDING"
 
 
 def test_the_limits_reach_python_from_the_c_macros():

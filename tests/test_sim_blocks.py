@@ -11,9 +11,9 @@ import pytest
 from linsense import ctrl
 from linsense.errors import InputError
 from linsense.model.motor import load_motor
+from linsense.scenario.load import as_scenario
 from linsense.sim import core, simulation
 from linsense.sim.build import build
-from linsense.sim.scenario import as_scenario
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "src/linsense/examples" / "scenarios"
 

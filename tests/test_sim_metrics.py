@@ -11,8 +11,9 @@ import pytest
 import linsense
 from linsense.cli import main
 from linsense.errors import InputError
+from linsense.scenario.load import scenario_from_dict
+from linsense.scenario.sections import MetricsSection
 from linsense.sim.metrics import REQUIRED_KEYS, compute_metrics, settling_time
-from linsense.sim.scenario import MetricsSection, scenario_from_dict
 
 F_PWM = 1000.0
 PITCH = 0.056  # m, ecce2010

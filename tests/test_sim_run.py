@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 import linsense
+from linsense.scenario.load import load_scenario, scenario_from_dict
 from linsense.sim.metrics import REQUIRED_KEYS
-from linsense.sim.scenario import load_scenario, scenario_from_dict
 from linsense.sim.trace import read_trace_csv
 
 

@@ -27,9 +27,9 @@ from scipy.integrate import solve_ivp
 from linsense.errors import InputError
 from linsense.model.motor import Motor, load_motor, motor_from_toml, motor_to_toml
 from linsense.model.saturation import Saturation
+from linsense.scenario.load import scenario_from_dict
 from linsense.sim import core
 from linsense.sim.plant import fill_saturation
-from linsense.sim.scenario import scenario_from_dict
 from test_sim_accuracy import F_PWM, average_segments, duties, switching_segments
 
 ROOT = Path(__file__).resolve().parents[1]

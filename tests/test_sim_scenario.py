@@ -8,8 +8,8 @@ from pathlib import Path
 import pytest
 
 from linsense.errors import InputError
+from linsense.scenario.load import load_scenario, scenario_from_dict
 from linsense.sim.build import reference_commands, trapezoid_time
-from linsense.sim.scenario import load_scenario, scenario_from_dict
 
 EXAMPLES = sorted((Path(__file__).parents[1] / "src/linsense/examples" / "scenarios").glob("*.toml"))
 

@@ -14,8 +14,8 @@ import pandas as pd
 import pytest
 
 import linsense
+from linsense.scenario.load import load_scenario, scenario_from_dict
 from linsense.sim.build import build
-from linsense.sim.scenario import load_scenario, scenario_from_dict
 from linsense.sim.stream import Reducer, simulate_streamed
 from linsense.sim.trace import COLUMNS, TraceWriter, trace_csv
 

@@ -39,8 +39,8 @@ SITE = ROOT / "build" / "site"
 #: written after a strict build succeeded (by ``make docs-build`` and by the ``site`` fixture)
 STAMP = SITE / ".strict-ok"
 SHOTS = ROOT / "build" / "site-screenshots"
-PACKAGES = ("model", "analysis", "compensation", "tune", "sim", "studies", "identify", "fea", "sweep",
-            "report", "reproduce")
+PACKAGES = ("model", "analysis", "compensation", "scenario", "tune", "sim", "studies", "identify", "fea",
+            "sweep", "report", "reproduce")
 #: the notebooks and the figures each draws (their outputs exist only in the built site)
 NOTEBOOKS = {"lut_to_firmware": 2, "your_motor": 1, "identify_bench": 2}
 FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",

@@ -8,7 +8,7 @@ from __future__ import annotations
 import pytest
 
 from linsense.errors import InputError
-from linsense.sim.scenario import scenario_from_dict
+from linsense.scenario.load import scenario_from_dict
 from linsense.studies.startup_runs import base_scenario, startup_runs, summary
 
 

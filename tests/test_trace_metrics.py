@@ -15,9 +15,9 @@ import pyarrow.parquet as pq
 import pytest
 
 import linsense
+from linsense.scenario.load import scenario_from_dict
 from linsense.sim.build import build
 from linsense.sim.metrics import compute_metrics
-from linsense.sim.scenario import scenario_from_dict
 from linsense.sim.stream import BLOCK_SPEC, POINT_SPEC, MetricSamples, Reducer, simulate_streamed
 from linsense.sim.trace import TraceWriter, write_trace
 

@@ -12,8 +12,8 @@ import pytest
 import linsense
 from linsense.cli import main
 from linsense.ctrl import drive_default_cfg
+from linsense.scenario.load import load_scenario, scenario_from_dict
 from linsense.sim.build import build
-from linsense.sim.scenario import load_scenario, scenario_from_dict
 from linsense.tune import DriveData, design
 
 ROOT = Path(__file__).parents[1]

@@ -14,8 +14,8 @@ import pytest
 
 from linsense.cli import main
 from linsense.model.motor import load_motor
+from linsense.scenario.load import scenario_from_dict
 from linsense.sim.build import build
-from linsense.sim.scenario import scenario_from_dict
 from linsense.tune.design import (
     CURRENT_TRIP_MARGIN,
     OVERSPEED_MARGIN,
@@ -316,7 +316,7 @@ def test_tune_scenario_options_reach_the_file(tmp_path, capsys, monkeypatch):
 
     k = uncompensated_speed_factor(load_motor(tmp_path / "m.toml"))
     assert doc["protection"]["omega_max"] == pytest.approx(k * dz.omega_trip, rel=1e-4) and k > 1.5
-    from linsense.sim.scenario import load_scenario
+    from linsense.scenario.load import load_scenario
 
     build(load_scenario(tmp_path / "o" / "x.toml"))  # (it runs as written)
     capsys.readouterr()
@@ -401,7 +401,7 @@ def test_tune_square_wave(tmp_path, capsys):
     assert e.value.code in (0, None)
     inj = tomllib.loads(out.read_text())["injection"]
     assert inj["shape"] == "square" and "quadrature" not in inj and "frequency" not in inj
-    from linsense.sim.scenario import load_scenario
+    from linsense.scenario.load import load_scenario
 
     assert build(load_scenario(out)).drive.cfg.inject.shape == 2  # LS_INJ_SQUARE
     capsys.readouterr()

@@ -47,7 +47,7 @@ def cal(load):
 
 def fig13(fid):
     import linsense
-    from linsense.sim.scenario import load_scenario
+    from linsense.scenario.load import load_scenario
 
     path = ROOT / "src/linsense/examples" / "scenarios" / "fig13_trajectory.toml"
     sc = load_scenario(path).replace(inverter={"fidelity": fid})

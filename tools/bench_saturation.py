@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from linsense.sim.scenario import scenario_from_dict
+from linsense.scenario.load import scenario_from_dict
 from linsense.sim.simulation import simulate
 from linsense.studies.lut_load import lut_vs_load
 

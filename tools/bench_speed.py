@@ -5,7 +5,7 @@ at each V of a grid up to the bus-limited speed (and at it; then bisected where 
 crossed), moved out and back at V over at least ten pole pitches on the switching inverter with
 dead time, the rated load opposing one way and aiding the other (+- rated, the certificate's quick
 loads; linsense.verify.cases.trajectory_case, judged as the certificate's moves at v_max,
-linsense.verify.run). Per motor and V: the peak estimation error while moving and once at rest
+linsense.verify.case_runs). Per motor and V: the peak estimation error while moving and once at rest
 (electrical deg), a fault, the speed reached; per motor the usable speed (the highest V up to which
 every V run has peak <= 3 deg and no fault) against the bus-limited speed, and the errors at 0.8
 of it.

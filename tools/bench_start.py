@@ -92,8 +92,8 @@ def parquet_cpu(tmp: Path, seconds: float = 20.0) -> tuple[float, float]:
     """(writer CPU, C loop wall) per simulated second: a run of ``seconds`` streamed into a Parquet
     trace in this process, the writer's calls timed with the process clock (the C loop is not
     running meanwhile: the chunks are handed on between its calls)."""
+    from linsense.scenario.load import load_scenario
     from linsense.sim.build import build
-    from linsense.sim.scenario import load_scenario
     from linsense.sim.stream import simulate_streamed
     from linsense.sim.trace import TraceWriter
 

@@ -89,7 +89,7 @@ def cases(quick: bool = False) -> list[tuple[str, object]]:
 
 
 def _scenario(spec):
-    from linsense.sim.scenario import as_scenario
+    from linsense.scenario.load import as_scenario
 
     if isinstance(spec, dict) and "file" in spec:
         sc = as_scenario(spec["file"])

@@ -3,7 +3,7 @@ value outside it ("did you type mH?"), in one table (:data:`KINDS`; docs/limits.
 
 Every input of a kind is held to the same row, wherever it is typed: a motor file
 (:func:`linsense.model.motor.check_plausible`), a scenario or sweep file (the keys whose field names
-its kind, :mod:`linsense.sim.scenario`), an option of the command, a bench or table file, the Python
+its kind, :mod:`linsense.scenario.sections`), an option of the command, a bench or table file, the Python
 API. A value outside the range is refused naming the key, the value, the range and the slip of unit
 that would bring it in (:func:`check`); a value a rule of its own refuses (a dead time longer than
 a tenth of the PWM period, a kappa of 1 or more) gets the slip that would make the rule hold

@@ -1,6 +1,6 @@
 """Turning pydantic's validation errors into the project's one-line :class:`InputError`.
 
-Motor files (:mod:`linsense.model.motor_schema`) and scenario files (:mod:`linsense.sim.scenario`) are
+Motor files (:mod:`linsense.model.motor_schema`) and scenario files (:mod:`linsense.scenario.sections`) are
 validated by pydantic models in strict mode. The first problem becomes an ``InputError`` naming the
 file, the dotted key and the value; an unknown key is answered with the closest known key of its
 section ("did you mean 'pole_pitch'?"), and it is reported before a missing key, which a misspelled

@@ -18,7 +18,7 @@ import pytest
 import linsense
 from conftest import scenario_with
 from linsense.errors import InputError
-from linsense.sim.scenario import scenario_from_dict
+from linsense.scenario.load import scenario_from_dict
 from linsense.sim.simulation import metrics_only
 
 WALL = ("wall_s", "realtime_factor")
@@ -99,8 +99,8 @@ def test_a_window_the_file_gives_too_short_for_a_slow_loop_is_refused(run_cli, t
 def designed_scenario(path):
     """The scenario at ``path`` (BASE's motor, ecce2010) with the design's values."""
     from linsense.model.motor import load_motor
+    from linsense.scenario.load import load_scenario
     from linsense.sim.build import designed
-    from linsense.sim.scenario import load_scenario
 
     return designed(load_scenario(path), load_motor("ecce2010"))
 

@@ -31,7 +31,7 @@ CASES = {
     # (an OverflowError traceback at the step count, sim/build.py)
     "duration overflows the step count": (BASE.replace("duration = 0.05", "duration = 1e308"), "",
                                           ["scenario.duration", "1e+308", "16000 Hz", "1e+10"]),
-    # (round(t_pulse x f_pwm) overflowed before the 60 s limit was checked, sim/scenario.py)
+    # (round(t_pulse x f_pwm) overflowed before the 60 s limit was checked, scenario/rules.py)
     "a start-up pulse overflows its periods": (
         HOLD, '[control]\nmode = "startup"\n[startup]\nt_pulse = 1e308',
         ["startup.t_pulse", "1e+308", "60 s"]),

@@ -201,7 +201,7 @@ def test_the_base_builds():
     """The base and the keys of each case taken one at a time are the only thing wrong: the base
     itself builds (so each refusal is its case's)."""
     from linsense.io import parse_toml
+    from linsense.scenario.load import scenario_from_dict
     from linsense.sim.build import build
-    from linsense.sim.scenario import scenario_from_dict
 
     build(scenario_from_dict(parse_toml(BASE, "base.toml"), "base.toml"))

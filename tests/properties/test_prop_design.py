@@ -85,8 +85,8 @@ def test_a_scenario_refusal_names_a_key_it_gives(changes):
     """A hold on ecce2010 with one or two of the drive's keys (and a balanced load) changed is built,
     or refused naming one of them (found: a subnormal injection.amplitude was refused naming the
     ramp_rate designed from it)."""
+    from linsense.scenario.load import scenario_from_dict
     from linsense.sim.build import build
-    from linsense.sim.scenario import scenario_from_dict
 
     doc = {"motor": "ecce2010", "scenario": {"duration": 0.01}, "reference": {"type": "hold"},
            "initial": {"load_balanced": True}}

@@ -27,8 +27,8 @@ from prop_strategies import (
     toml_text,
 )
 
+from linsense.scenario.load import load_scenario
 from linsense.sim.build import build
-from linsense.sim.scenario import load_scenario
 
 
 def pos(v, doc) -> bool:

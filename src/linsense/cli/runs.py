@@ -21,7 +21,7 @@ def scenario_arg(spec: str, option: str = "SCENARIO"):
     command that takes a scenario (``simulate``, ``calibrate``, ``tune`` and ``firmware export``
     ``--scenario``), so that ``linsense tune --out - | linsense tune --scenario -`` reads as
     ``simulate -`` does."""
-    from linsense.sim.scenario import load_scenario, scenario_from_dict
+    from linsense.scenario.load import load_scenario, scenario_from_dict
 
     if spec == "-":
         from linsense.io import decode_text, parse_toml
@@ -248,7 +248,7 @@ def drive_refusal(exc: InputError, typed: set[str], sc, source: str) -> InputErr
         The refusal, naming the scenario and a DriveData name or scenario key.
     typed : set of str
         The drive data given as options (:func:`apply_drive_data`).
-    sc : linsense.sim.scenario.Scenario
+    sc : linsense.scenario.load.Scenario
         The scenario the rest came from.
     source : str
         The name the design was given for it (the scenario as typed).

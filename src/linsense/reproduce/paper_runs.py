@@ -80,7 +80,7 @@ def paper_scenario(name: str, motor: str | None = None):
     linsense.errors.InputError
         A scenario that is not on the paper's inverter.
     """
-    from linsense.sim.scenario import load_scenario, scenario_from_dict
+    from linsense.scenario.load import load_scenario, scenario_from_dict
 
     sc = load_scenario(data_path("scenarios", name))
     inv = sc.spec.inverter
@@ -109,7 +109,7 @@ def with_changes(sc, changes: dict):
     Scenario
         The new scenario.
     """
-    from linsense.sim.scenario import scenario_from_dict
+    from linsense.scenario.load import scenario_from_dict
 
     data = sc.given()
     for sec, vals in changes.items():
@@ -387,8 +387,8 @@ def startup_study(motor: str | None, n: int, tick=lambda: None) -> StartupStudy:
     StartupStudy
         The runs.
     """
+    from linsense.scenario.load import scenario_from_dict
     from linsense.sim.build import resolve_motor
-    from linsense.sim.scenario import scenario_from_dict
     from linsense.studies.startup_runs import AFTER_S, base_scenario, start_positions, startup_run
 
     base = base_scenario(motor=motor or "ecce2010", polarity=STARTUP_POLARITY, fidelity=FIDELITY)

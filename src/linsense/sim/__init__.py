@@ -6,8 +6,8 @@ firmware controller).
 described in docs/simulator.md. The low-level C access is :mod:`linsense.sim.core`.
 """
 
+from linsense.scenario.load import Scenario, load_scenario, scenario_from_dict
 from linsense.sim.result import Result
-from linsense.sim.scenario import Scenario, load_scenario, scenario_from_dict
 from linsense.sim.simulation import simulate, simulate_many
 from linsense.sim.to_folder import SimulateOutput, simulate_to
 

@@ -27,6 +27,8 @@ from linsense.ctrl import ConfigError, Drive, ffi
 from linsense.errors import InputError, LinsenseError, ModelError
 from linsense.model.motor import Motor, load_motor, motor_path, names_a_path, preset_names
 from linsense.model.saturation import Saturation
+from linsense.scenario.load import Scenario
+from linsense.scenario.rules import compensation_of
 from linsense.sim.cache import memo, motor_key
 from linsense.sim.checks import (
     check_events,
@@ -47,7 +49,6 @@ from linsense.sim.drive_cfg import calibration_table, drive_values, fill, value_
 from linsense.sim.drive_tables import Tables, drive_tables, measured_model, measured_warnings
 from linsense.sim.plant import fill_saturation, lab_fourier
 from linsense.sim.refusal import explain, given_keys
-from linsense.sim.scenario import Scenario, compensation_of
 from linsense.tune.cfgmap import Values
 from linsense.tune.design import DriveData, mean_dq
 from linsense.tune.drive_design import design_drive

@@ -8,11 +8,11 @@ from collections.abc import Callable
 
 import numpy as np
 
-from linsense.ctrl import REAL, ffi, lib
+from linsense.ctrl import REAL, ffi, lib, observer_gains
 from linsense.errors import InputError
 from linsense.limits import MAX_STEPS, MAX_TRACE_BYTES, MAX_TRACE_FILE_BYTES
+from linsense.scenario.load import Scenario
 from linsense.sim.core import BLOCKS, SIGNALS
-from linsense.sim.scenario import Scenario
 
 
 def check_positions(sc: Scenario, tau: float) -> None:
@@ -422,8 +422,8 @@ def slowest_loop(sc: Scenario, mass: float) -> tuple[str, str, float]:
         loops.append(("the speed loop", "controller.speed_bandwidth_hz", c.speed_bandwidth_hz))
     if s.control.mode != "sensored":
         if o.k1 is not None:
-            per = 3.0 if o.type == "mech" else 2.0  # (ls_observer_gains: k1 = 3 w for mech, 2 w for pll)
-            loops.append(("the observer", "observer.k1", o.k1 / per / (2.0 * math.pi)))
+            k1_per_hz = observer_gains(1.0, o.type == "mech")[0]  # (k1 grows with the bandwidth)
+            loops.append(("the observer", "observer.k1", o.k1 / k1_per_hz))
         else:
             loops.append(("the observer", "observer.bandwidth_hz", o.bandwidth_hz))
     return min(loops, key=lambda lp: lp[2])
@@ -480,7 +480,7 @@ MODEL_FACTOR_MAX = 10.0
 
 def check_units(sc: Scenario, tau: float, user_keys: set[str], believed: dict[str, float]) -> None:
     """Refuse a value the file gives in another unit than its key's: a key of a kind of
-    the table of plausible values (:func:`linsense.sim.scenario.unit_kinds`) outside its range
+    the table of plausible values (:func:`linsense.scenario.keys.unit_kinds`) outside its range
     (``controller.model.L_d = 10`` H, ``protection.err_max = 30`` rad, ``controller.v_max = 200``
     m/s), or a frequency or electrical speed that breaks the relation a slip of 2 pi between Hz and
     rad/s breaks: the demodulator's low-pass below the injection it demodulates, the observer below
@@ -510,7 +510,7 @@ def check_units(sc: Scenario, tau: float, user_keys: set[str], believed: dict[st
         Naming the key, its value, the range or the relation, and the likely slip of unit.
     """
     from linsense.plausible import check
-    from linsense.sim.scenario import unit_kinds
+    from linsense.scenario.keys import unit_kinds
 
     s = sc.spec
     kinds = unit_kinds()

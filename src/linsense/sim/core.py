@@ -2,7 +2,7 @@
 
 Everything per step happens in C; Python only fills the configuration structs, allocates the
 numpy output arrays and hands pointers over. Higher layers (scenario files, metrics, the CLI)
-are in :mod:`linsense.sim.scenario`, :mod:`linsense.sim.simulation` and friends.
+are in :mod:`linsense.scenario`, :mod:`linsense.sim.simulation` and friends.
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ import numpy as np
 
 from linsense._ctrl import ffi, lib
 from linsense.errors import SimulationError
-from linsense.sim import scenario as _sc
+from linsense.scenario import sections as _sc
 from linsense.sim.plant import fill_plant
 
 FIDELITIES = {"average": lib.LS_SIM_AVERAGE, "switching": lib.LS_SIM_SWITCHING}
@@ -57,7 +57,7 @@ SIM_FAULT_STOPPED = int(lib.LS_SIM_FAULT_STOPPED)
 
 
 def _default(section, key: str):
-    """The scenario file's default of ``[section] key`` (one source: linsense.sim.scenario, which
+    """The scenario file's default of ``[section] key`` (one source: linsense.scenario.sections, which
     reads the controller library's defaults from C)."""
     return section.model_fields[key].default
 

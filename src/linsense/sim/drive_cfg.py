@@ -8,8 +8,8 @@ from operator import attrgetter
 from linsense.analysis.hf import end_anisotropy
 from linsense.ctrl import drive_default_cfg, ffi, lib
 from linsense.model.motor import Motor
+from linsense.scenario.load import Scenario
 from linsense.sim.cache import memo, motor_key
-from linsense.sim.scenario import Scenario
 from linsense.tune.cfgmap import ROWS, Values, square_schedule
 from linsense.tune.injection import rotating_design
 

@@ -15,8 +15,9 @@ from linsense.compensation.lut import build_lut, lut_r_slope
 from linsense.compensation.measured import end_effect_fit, fit_report, read_measured_table
 from linsense.ctrl import make_lut
 from linsense.model.motor import Motor
+from linsense.scenario.load import Scenario
+from linsense.scenario.rules import compensation_of
 from linsense.sim.cache import memo, motor_key
-from linsense.sim.scenario import Scenario, compensation_of
 from linsense.tune.cfgmap import Values
 from linsense.tune.design import gain_r_slope, gain_schedule
 from linsense.tune.injection import injection_tables, rotating_r_slopes

@@ -15,10 +15,10 @@ import numpy as np
 
 from linsense.errors import InputError
 from linsense.limits import MAX_STEPS
+from linsense.scenario.load import Scenario, as_scenario
 from linsense.sim.build import build
 from linsense.sim.core import BLOCKS, SIGNALS
 from linsense.sim.result import Result
-from linsense.sim.scenario import Scenario, as_scenario
 from linsense.sim.stream import (
     AVERAGE_NOTE,
     METRICS_BLOCKS,

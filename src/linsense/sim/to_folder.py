@@ -16,9 +16,9 @@ import numpy as np
 
 from linsense.errors import InputError
 from linsense.io import output_set, split_timing
+from linsense.scenario.load import Scenario
 from linsense.sim import stream
 from linsense.sim.build import Built, build, check_trace_file
-from linsense.sim.scenario import Scenario
 from linsense.sim.stream import PlotData, StreamedRun
 from linsense.sim.trace import MAT_MAX_SAMPLES, TraceWriter, have_parquet, trace_columns, write_mat
 from linsense.version import docs

@@ -33,10 +33,10 @@ from linsense.compensation.lut import build_lut
 from linsense.compensation.measured import TableStamp, measured_table_json, table_stamp
 from linsense.errors import InputError
 from linsense.model.motor import Motor
+from linsense.scenario.load import Scenario, scenario_from_dict
 from linsense.sim.build import build, designed, motor_key, resolve_motor
 from linsense.sim.core import run_closed_loop
 from linsense.sim.metrics import fault_reason
-from linsense.sim.scenario import Scenario, scenario_from_dict
 from linsense.tune.design import DriveData
 
 #: simulated-time budget per point beyond the settling, of the time t_max after which the drive

@@ -17,9 +17,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from linsense.scenario.load import scenario_from_dict
 from linsense.sim.build import build
 from linsense.sim.core import run_closed_loop
-from linsense.sim.scenario import scenario_from_dict
 
 #: s, simulated after the start-up ends (position control at the estimate)
 AFTER_S = 0.1

@@ -146,7 +146,7 @@ def _relative(base, factor: float, key: str, source: str) -> float:
 
 def _scenario_default(data: dict, keys: list[str], source: str):
     """The value of a scenario key as the validated base scenario has it (defaults included)."""
-    from linsense.sim.scenario import scenario_from_dict
+    from linsense.scenario.load import scenario_from_dict
 
     sc = scenario_from_dict(copy.deepcopy(data), source)
     node = sc.spec
@@ -277,7 +277,7 @@ def run_point(ctx: SweepContext, index: int, point: dict, relative: dict) -> dic
         The row: ``run``, the swept values, the metrics of :data:`ROW_METRICS` and ``error`` (the
         message when the run was refused, its metrics None).
     """
-    from linsense.sim.scenario import scenario_from_dict
+    from linsense.scenario.load import scenario_from_dict
     from linsense.sim.simulation import metrics_only, simulate
 
     row: dict = {"run": index, **point}

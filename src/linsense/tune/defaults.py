@@ -17,7 +17,8 @@ import sys
 
 from linsense.analysis.hf import end_anisotropy, mean_dq
 from linsense.model.motor import load_motor
-from linsense.tune.design import V_DC_MAX_FRACTION, V_DC_MIN_FRACTION, DriveData, design, startup_lock_gain
+from linsense.scenario.bounds import V_DC_MAX_FRACTION, V_DC_MIN_FRACTION
+from linsense.tune.design import DriveData, design, startup_lock_gain
 from linsense.tune.startup import design_startup
 
 #: the reference motor whose design the C defaults are

@@ -36,6 +36,7 @@ from linsense.compensation.lut import resistance_slope
 from linsense.errors import InputError, shown
 from linsense.model.motor import Motor, as_motor
 from linsense.plausible import KINDS, slip
+from linsense.scenario.bounds import DEAD_TIME_SHARE_MAX, V_DC_MIN_FRACTION
 from linsense.tune.margins import error_gain
 
 #: the stated ratios (docs/tuning.md)
@@ -94,8 +95,6 @@ QUAD = 0.9
 DITHER_CURRENT = 0.16  # of i_max
 # of f_inj: low against the HF band-pass (it leaks less), above the speed loop, not a submultiple
 DITHER_FREQ = 0.055
-V_DC_MIN_FRACTION = 5.0 / 9.0  # under-voltage limit, of the bus (40 V at 72 V)
-V_DC_MAX_FRACTION = 5.0 / 4.0  # over-voltage limit (90 V at 72 V)
 #: the friction model's slope (the Coulomb force over its linear band, plus the viscous coefficient)
 #: at most this share of m / ts: the mechanical observer steps its friction forward within one PWM
 #: period (ls_observer_init refuses a slope of m / ts or more; docs/tuning.md, "Friction and thrust
@@ -537,9 +536,6 @@ def gain_r_slope(motor: Motor, f_inj: float, quad: float, n: int) -> np.ndarray:
 
 
 # ------------------------------------------------------------------ the inputs, checked in order
-#: the dead time's largest share of the PWM period (docs/simulator.md, ``inverter.dead_time``): the
-#: design's rule and the scenario's alike
-DEAD_TIME_SHARE_MAX = 0.1
 #: Hz, the largest PWM rate: the controller library's (LS_DRIVE_FS_MAX, ls_drive.h), twice the largest
 #: injection frequency of a table (linsense.limits.MAX_F_INJ)
 F_PWM_MAX = 1.0e6

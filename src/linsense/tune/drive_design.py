@@ -15,14 +15,9 @@ from dataclasses import dataclass, field
 
 from linsense.analysis.hf import mean_dq
 from linsense.model.motor import Motor
-from linsense.tune.design import (
-    V_DC_MAX_FRACTION,
-    V_DC_MIN_FRACTION,
-    Design,
-    DriveData,
-    design,
-    uncompensated_speed_factor,
-)
+from linsense.scenario.bounds import V_DC_MAX_FRACTION, V_DC_MIN_FRACTION
+from linsense.scenario.keys import checked
+from linsense.tune.design import Design, DriveData, design, uncompensated_speed_factor
 from linsense.tune.startup import StartupDesign, design_startup
 
 #: the keys whose values are the inputs as given (the drive data, the application, the motor
@@ -171,7 +166,7 @@ class DriveDesign:
                          "controller.model.R_s": m.R_s, "controller.model.psi_pm": m.psi_pm})
         if self.startup is not None:
             keys.update({f"startup.{k}": v for k, v in self.startup.scenario_keys(digits=None).items()})
-        return keys
+        return dict(checked(keys))
 
     @property
     def warnings(self) -> list[str]:

@@ -36,6 +36,7 @@ from linsense.analysis.hf import dq_components
 from linsense.errors import InputError
 from linsense.model.motor import Motor
 from linsense.model.saturation import d_factor, i_sat_d_of
+from linsense.scenario.keys import checked
 
 Z_SIGMA = 6.0  # expected signal (at the largest L_d) over its standard deviation
 I_MIN_SIGMA = 2.5  # i_min in standard deviations
@@ -130,10 +131,10 @@ class StartupDesign:
             Key to value (``err_lock_deg`` in degrees).
         """
         r = (lambda v: v) if digits is None else (lambda v: float(f"{v:.{digits}g}"))  # noqa: E731
-        return {"t_lock": r(self.t_lock), "err_lock_deg": r(math.degrees(self.err_lock)),
-                "t_quiet": r(self.t_quiet), "v_pulse": r(self.v_pulse), "t_pulse": r(self.t_pulse),
-                "t_rest": r(self.t_rest), "pairs": int(self.pairs), "i_min": r(self.i_min),
-                "t_settle": r(self.t_settle)}
+        return dict(checked({"t_lock": r(self.t_lock), "err_lock_deg": r(math.degrees(self.err_lock)),
+                             "t_quiet": r(self.t_quiet), "v_pulse": r(self.v_pulse),
+                             "t_pulse": r(self.t_pulse), "t_rest": r(self.t_rest), "pairs": int(self.pairs),
+                             "i_min": r(self.i_min), "t_settle": r(self.t_settle)}, "startup"))
 
     def lines(self) -> list[str]:
         """The report's lines on the start-up.

@@ -14,10 +14,10 @@ import copy
 import numpy as np
 
 from linsense.model.motor import Motor
+from linsense.scenario.load import scenario_from_dict
 from linsense.sim.build import build
 from linsense.sim.core import run_closed_loop
 from linsense.sim.metrics import fault_reason
-from linsense.sim.scenario import scenario_from_dict
 from linsense.verify import criteria as C
 from linsense.verify.cases import Case, off_nominal_motor
 

@@ -414,7 +414,7 @@ def calibrate_plant(motor: Motor, motor_spec: str, base: dict, base_dir: str, pl
     linsense.studies.calibrate.Calibration
         The measured table; its ``psi_model`` is the plant's own.
     """
-    from linsense.sim.scenario import scenario_from_dict
+    from linsense.scenario.load import scenario_from_dict
     from linsense.studies.calibrate import calibrate
     from linsense.verify.cases import off_nominal_motor
 
@@ -566,8 +566,8 @@ def _build_each_kind(cases: list, calibrated: list[str], motor: Motor, motor_spe
                      base_dir: str, travel: float | None) -> None:
     """Build one run of each kind and plant of ``cases`` (and the calibration's, if any plant is
     ``calibrated``), so that a configuration any of them refuses raises before anything runs."""
+    from linsense.scenario.load import scenario_from_dict
     from linsense.sim.build import build
-    from linsense.sim.scenario import scenario_from_dict
     from linsense.studies.calibrate import calibration_scenario
     from linsense.verify.case_runs import case_scenario
     from linsense.verify.cases import off_nominal_motor

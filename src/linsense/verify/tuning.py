@@ -17,10 +17,10 @@ from pathlib import Path
 from linsense.errors import InputError
 from linsense.io import working_folder
 from linsense.model.motor import Motor, load_motor, names_a_path
+from linsense.scenario.load import Scenario, scenario_from_dict
 from linsense.sim.build import build, compensation_of, drive_data, resolve_motor
 from linsense.sim.cache import motor_key
 from linsense.sim.drive_tables import lut_file_path, lut_file_via
-from linsense.sim.scenario import Scenario, scenario_from_dict
 from linsense.tune.design import (
     CURRENT_TRIP_MARGIN,
     OVERSPEED_MARGIN,
@@ -157,7 +157,7 @@ def scenario_table(sc: Scenario) -> tuple[str, tuple[str, str, str]] | None:
 
     Parameters
     ----------
-    sc : linsense.sim.scenario.Scenario
+    sc : linsense.scenario.load.Scenario
         The scenario.
 
     Returns
