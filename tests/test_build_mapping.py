@@ -15,8 +15,8 @@ from linsense.scenario.load import ScenarioFile, scenario_from_dict
 from linsense.sim.build import build
 from linsense.sim.drive_cfg import value_of
 from linsense.sim.refusal import FIELDS, FS_FIELDS
+from linsense.tune import DriveData, design_drive
 from linsense.tune.cfgmap import ROW, ROWS, header_rows
-from linsense.tune.design import DriveData, design
 from linsense.tune.export import c_header, scenario_dict
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -138,23 +138,19 @@ def tuned():
     from linsense.model.motor import load_motor
 
     motor = load_motor("ecce2010")
-    dd = DriveData()
-    dz = design(motor, dd, analyse=False)
-    return motor, dd, dz
+    return design_drive(motor, DriveData(), analyse=False, startup=False)
 
 
 def test_header_writes_the_mapping_rows_in_order(tuned):
-    motor, dd, dz = tuned
-    got = [f for f, _ in _header_values(c_header(dz, dd, motor))]
+    got = [f for f, _ in _header_values(c_header(tuned))]
     assert got == [r.field for r in header_rows(False)]
 
 
 def test_header_and_simulator_set_the_same_values(tuned):
     """The design's scenario (tune --format toml's keys, rounded to 6 digits) built by the simulator
     gives every field the header writes the header's value (to the rounding)."""
-    motor, dd, dz = tuned
-    text = c_header(dz, dd, motor)
-    sc = scenario_from_dict(scenario_dict(dz, dd, "ecce2010"), "tuned.toml")
+    text = c_header(tuned)
+    sc = scenario_from_dict(scenario_dict(tuned, motor_ref="ecce2010"), "tuned.toml")
     b = build(sc)
     compared = 0
     for path, want in _header_values(text):
@@ -165,7 +161,7 @@ def test_header_and_simulator_set_the_same_values(tuned):
         assert math.isclose(got, want, rel_tol=2e-5, abs_tol=1e-12), (path, got, want)
         compared += 1
     assert compared > 50
-    assert value_of(b.scenario.spec, "inverter.f_pwm") == dd.f_pwm
+    assert value_of(b.scenario.spec, "inverter.f_pwm") == tuned.drive.f_pwm
 
 
 def test_build_fills_every_row_it_owns():

@@ -116,7 +116,7 @@ def test_the_design_is_tunes(run_cli, tmp_path):
 # ---------------------------------------------------------------------------------- the stamps
 def test_generated_headers_state_the_version_and_the_datas_digest(ecce, tmp_path):
     from linsense.model.motor import load_motor, motor_to_toml
-    from linsense.tune.design import DriveData, design
+    from linsense.tune import DriveData, design_drive
     from linsense.tune.export import c_header
 
     text = to_c_header(build_lut(ecce, 64, f_inj=1000.0))
@@ -136,9 +136,9 @@ def test_generated_headers_state_the_version_and_the_datas_digest(ecce, tmp_path
     assert build_lut(ecce, 64, f_inj=1200.0).digest != d and build_lut(ecce, 65, f_inj=1000.0).digest != d
     # the configuration header: the motor and the drive data
     dd = DriveData()
-    h1 = c_header(design(ecce, dd, analyse=False), dd, ecce)
+    h1 = c_header(design_drive(ecce, dd, analyse=False, startup=False))
     dd2 = DriveData(v_dc=80.0)
-    h2 = c_header(design(ecce, dd2, analyse=False), dd2, ecce)
+    h2 = c_header(design_drive(ecce, dd2, analyse=False, startup=False))
     d1, d2 = data_digest(motor=ecce, drive=dd, points=256), data_digest(motor=ecce, drive=dd2, points=256)
     assert d1 != d2 and d1 in h1 and d2 in h2 and f"linsense {linsense.__version__}" in h1
 

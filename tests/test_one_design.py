@@ -4,18 +4,21 @@ writes and the C header all read."""
 
 from __future__ import annotations
 
+import inspect
 import math
 import re
 from pathlib import Path
 
 import pytest
 
+from linsense.errors import InputError
 from linsense.model.motor import load_motor
 from linsense.scenario.load import scenario_from_dict
 from linsense.sim.build import DESIGNED, designed, drive_data
 from linsense.tune import DriveDesign, design_drive
 from linsense.tune.cfgmap import ROW
-from linsense.tune.export import c_header, scenario_dict, written
+from linsense.tune.design import DriveData, design
+from linsense.tune.export import c_header, scenario_dict, scenario_toml, written
 
 SRC = Path(__file__).resolve().parent.parent / "src" / "linsense"
 
@@ -125,3 +128,32 @@ def test_widened_trips_without_the_table():
     for key in ("observer.omega_max", "protection.omega_max"):
         assert nolut.scenario_keys()[key] == pytest.approx(nolut.k_est * lut.scenario_keys()[key])
         assert nolut.scenario_keys(uncompensated=False)[key] == lut.scenario_keys()[key]
+
+
+#: the writers of a designed drive: they take what design_drive composed, and nothing else
+_WRITERS = {"scenario_dict": lambda x: scenario_dict(x, motor_ref="ecce2010"),
+            "scenario_toml": lambda x: scenario_toml(x, "ecce2010", Path("t.toml")),
+            "c_header": c_header}
+
+
+@pytest.mark.parametrize("name", list(_WRITERS))
+def test_the_writers_refuse_a_plain_design(name):
+    """scenario_dict, scenario_toml and c_header refuse a Design (a second way to put the drive's
+    design together, with its drive, start-up and table given beside it): call design_drive."""
+    dz = design(load_motor("ecce2010"), DriveData(), analyse=False)
+    with pytest.raises(InputError) as e:
+        _WRITERS[name](dz)
+    assert f"linsense.tune.export.{name}" in str(e.value) and "design_drive" in str(e.value)
+
+
+@pytest.mark.parametrize("name", list(_WRITERS))
+def test_the_writers_take_no_loose_parts(name, made):
+    """The writers take the DriveDesign alone: no drive, motor, start-up, widening or pole pitch
+    beside it (the DriveDesign holds them), and they write it."""
+    import linsense.tune.export as ex
+
+    params = inspect.signature(getattr(ex, name)).parameters
+    assert list(params)[0] == "made"
+    assert not {"drive", "motor", "startup", "k_est", "pole_pitch", "dz"} & set(params), list(params)
+    assert not hasattr(ex, "as_drive_design")
+    assert _WRITERS[name](made)

@@ -23,6 +23,7 @@ from linsense.tune.design import (
     DriveData,
     design,
 )
+from linsense.tune.drive_design import design_drive
 from linsense.tune.export import scenario_dict
 from linsense.verify import criteria as C
 from linsense.verify.case_runs import judge
@@ -147,13 +148,14 @@ def test_moves_reach_the_speed_asked_for():
 
 def test_designed_limits_follow_the_application():
     m = load_motor("ecce2010")
-    dz = design(m, DriveData(v_max=0.4, load=20.0), analyse=False)
+    made = design_drive(m, DriveData(v_max=0.4, load=20.0), analyse=False, startup=False)
+    dz = made.design
     assert dz.v_cap == pytest.approx(SPEED_CAP_MARGIN * 0.4)
     assert dz.omega_trip == pytest.approx(OVERSPEED_MARGIN * dz.v_cap * 2 * math.pi / m.pole_pitch)
     assert dz.omega_obs > dz.omega_trip  # the trip must see the speed the observer reports
     assert dz.i_trip > CURRENT_TRIP_MARGIN * 2.5
     # what tune writes carries them, and a scenario that gives only motor and drive data gets them
-    sc = scenario_dict(dz, DriveData(v_max=0.4, load=20.0), "ecce2010")
+    sc = scenario_dict(made, motor_ref="ecce2010")
     assert sc["controller"]["v_max"] == pytest.approx(dz.v_cap, rel=1e-5)
     assert sc["protection"]["omega_max"] == pytest.approx(dz.omega_trip, rel=1e-5)
     assert sc["protection"]["i_max"] == pytest.approx(dz.i_trip, rel=1e-5)
@@ -351,7 +353,8 @@ def test_tune_no_verify_and_refusal(tmp_path, capsys):
 def _full_off_nominal(name: str):
     m = load_motor(CLASS / f"{name}.toml")
     dd = _drive(name)
-    dz = design(m, dd)
+    made = design_drive(m, dd, startup=False)
+    dz = made.design
     spec = str(CLASS / f"{name}.toml")
     from linsense.verify.case_runs import run_cases
     from linsense.verify.cases import hold_cases
@@ -359,7 +362,7 @@ def _full_off_nominal(name: str):
     cases = []
     for plant in C.OFF_NOMINAL:
         cases += hold_cases(m.pole_pitch, dz.load, C.POSITIONS, plant=plant, loads=(0.0,))
-    rows = run_cases(cases, scenario_dict(dz, dd, spec), spec, m, str(ROOT), workers=1)
+    rows = run_cases(cases, scenario_dict(made, motor_ref=spec), spec, m, str(ROOT), workers=1)
     return dz, rows
 
 
@@ -421,8 +424,9 @@ def _tuned_trajectory(name: str):
     spec = motor_ref(str(CLASS / f"{name}.toml"))
     motor = load_motor(spec)
     d = _drive(name)
-    dz = design(motor, d, spec, analyse=False)
-    base = scenario_dict(dz, d, spec, pole_pitch=motor.pole_pitch)
+    made = design_drive(motor, d, source=spec, analyse=False, startup=False)
+    dz = made.design
+    base = scenario_dict(made, motor_ref=spec)
     return spec, motor, d, dz, base, trajectory_case(motor.pole_pitch, d.v_max, d.a_max, dz.load)
 
 
@@ -511,7 +515,8 @@ def test_the_drive_measures_a_hot_winding(adapt):
 
     m = load_motor("ecce2010")
     dd = DriveData(v_dc=72.0, f_pwm=16000.0, dead_time=0.8e-6, i_max=2.5, v_max=0.2, a_max=1.0, load=40.0)
-    dz = design(m, dd, analyse=False)
+    made = design_drive(m, dd, analyse=False, startup=False)
+    dz = made.design
     hot = perturbed(m, 1.0, 1.3, 1.0, label="hot")
     e = hold_error(m, hot, dz.f_inj, dz.quad, 72)  # the nominal table's error, target = k 5 deg
     deg = 5.0 * float(np.argmax(np.abs(e)))
@@ -520,7 +525,7 @@ def test_the_drive_measures_a_hot_winding(adapt):
                 sections={"scenario": {"duration": 0.6}, "reference": {"type": "hold"},
                           "initial": {"position_mm": m.pole_pitch * deg / 360.0 * 1e3, "load_balanced": True},
                           "observer": {"resistance_adapt": adapt}})
-    base = scenario_dict(dz, dd, "ecce2010")
+    base = scenario_dict(made, motor_ref="ecce2010")
     sc = scenario_from_dict(case_scenario(case, base, "ecce2010"), source="<test>", base_dir=str(ROOT))
     b = build(sc, motor=hot)
     raw = run_closed_loop(b.cfg, b.drive.state, b.n_steps, b.commands, signals=_SIGNALS, blocks=_BLOCKS)
@@ -561,8 +566,9 @@ def test_the_rotating_injection_follows_a_hot_winding(adapt):
     m = load_motor("ecce2010")
     dd = DriveData(v_dc=72.0, f_pwm=16000.0, dead_time=0.8e-6, i_max=2.5, v_max=0.2, a_max=1.0, load=40.0,
                    shape="rotating")
-    dz = design(m, dd, analyse=False)
-    base = scenario_dict(dz, dd, "ecce2010")
+    made = design_drive(m, dd, analyse=False, startup=False)
+    dz = made.design
+    base = scenario_dict(made, motor_ref="ecce2010")
     slope, _ = rotating_r_slopes(m, 72, dz.f_inj, dd.f_pwm, 1.5, dz.v_inj)
     deg = 5.0 * float(np.argmax(np.abs(slope)))
     x0 = m.pole_pitch * deg / 360.0

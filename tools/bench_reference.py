@@ -10,7 +10,7 @@ import numpy as np
 from linsense.model.motor import load_motor
 from linsense.reproduce.paper_runs import paper_scenario
 from linsense.sim import simulate_many
-from linsense.tune.design import DriveData, design
+from linsense.tune import DriveData, design_drive
 from linsense.tune.export import scenario_dict
 from linsense.verify.case_runs import run_cases
 from linsense.verify.cases import hold_cases
@@ -23,8 +23,7 @@ def step6() -> bool:
     paper = paper_scenario("paper_step6_lut.toml")
     m = load_motor("ecce2010")
     ok = True
-    dz = design(m, DriveData(), analyse=False)
-    designed = scenario_dict(dz, DriveData(), "ecce2010")
+    designed = scenario_dict(design_drive(m, DriveData(), analyse=False, startup=False), motor_ref="ecce2010")
     designed.update(scenario={"name": "step6", "duration": 2.0}, inverter={**designed["inverter"],
                     "fidelity": "switching"}, control={"mode": "sensorless_lut"})
     for label, make in (("paper's gains", lambda x: paper.replace(reference={"position_mm": float(x)})),
@@ -43,8 +42,8 @@ def holds() -> bool:
     m = load_motor("ecce2010")
     all_ok = True
     for shape in ("pulsating", "rotating", "square"):
-        dz = design(m, DriveData(shape=shape), analyse=False)
-        base = scenario_dict(dz, DriveData(shape=shape), "ecce2010")
+        made = design_drive(m, DriveData(shape=shape), analyse=False, startup=False)
+        base = scenario_dict(made, motor_ref="ecce2010")
         cases = hold_cases(m.pole_pitch, 1.0, 96, loads=(0.0, 20.0))
         rows = run_cases(cases, base, "ecce2010", m, ".")
         for f in (0.0, 20.0):

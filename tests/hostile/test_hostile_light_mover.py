@@ -48,16 +48,18 @@ CASES = {
 def test_a_light_mover_is_designed_into_a_configuration_the_c_library_accepts(tmp_path, name):
     from linsense.sim import scenario_from_dict
     from linsense.sim.build import build
-    from linsense.tune import DriveData, design
+    from linsense.tune import DriveData, design_drive
     from linsense.tune.export import scenario_dict
 
     edits, drive, words = CASES[name]
     path = motor_file(tmp_path, **dict(edits))
     m = load_motor(path)
     d = DriveData(**drive)
-    dz = design(m, d, analyse=False)
+    made = design_drive(m, d, analyse=False, startup=False)
+    dz = made.design
     base = {"reference": {"v_max": d.v_max, "position_mm": 1.0, "at": 0.0}, "scenario": {"duration": 0.01}}
-    sc = scenario_from_dict(scenario_dict(dz, d, path, base=base), source="hold", base_dir=str(tmp_path))
+    sc = scenario_from_dict(scenario_dict(made, motor_ref=path, base=base), source="hold",
+                            base_dir=str(tmp_path))
     build(sc)  # (refused by ls_drive_init naming obs.mass before)
     for w in words:
         assert any(w in line for line in dz.warnings), (w, dz.warnings)

@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import tomli_w
 
+from linsense._check import instance
 from linsense.analysis.hf import end_anisotropy
 from linsense.compensation.lut import (
     build_lut,
@@ -24,7 +25,6 @@ from linsense.io import working_folder
 from linsense.model.motor import Motor, names_a_path
 from linsense.tune.cfgmap import Values, header_rows
 from linsense.tune.design import (
-    Design,
     DriveData,
     gain_r_slope,
     gain_schedule,
@@ -53,36 +53,19 @@ def end_stops(pole_pitch: float, travel: float) -> dict:
     return {"min_mm": _r(-0.05 * pole_pitch * 1e3), "max_mm": _r((travel + 0.05 * pole_pitch) * 1e3)}
 
 
-def as_drive_design(dz: Design | DriveDesign, drive: DriveData | None = None, motor: Motor | None = None,
-                    startup=None, k_est: float = 1.0, table=None) -> DriveDesign:
-    """``dz`` if a :class:`~linsense.tune.drive_design.DriveDesign`, else one of the parts given.
+#: where the writers below are (named in a refusal)
+_SRC = "linsense.tune.export"
 
-    The writers below take the drive's design (:func:`~linsense.tune.drive_design.design_drive`);
-    a :class:`~linsense.tune.design.Design` with its drive, start-up and widening is taken too.
 
-    Parameters
-    ----------
-    dz : Design or DriveDesign
-        The design.
-    drive : DriveData or None, optional
-        The drive (with a Design).
-    motor : Motor or None, optional
-        The motor (with a Design; None: no ``controller.model`` keys).
-    startup : StartupDesign or None, optional
-        The start-up design (with a Design).
-    k_est : float, optional
-        The widening of the trips on the estimate (with a Design).
-    table : MeasuredTable or None, optional
-        A measured table (with a Design).
+def _drive_design(made, fn: str) -> DriveDesign:
+    """``made`` if a :class:`~linsense.tune.drive_design.DriveDesign`, else InputError naming ``fn``.
 
-    Returns
-    -------
-    DriveDesign
-        The drive's design.
+    The writers take the drive's design as :func:`~linsense.tune.drive_design.design_drive` composed
+    it, and nothing else: a :class:`~linsense.tune.design.Design` with its drive, start-up and
+    table given beside it was a second way to put a design together.
     """
-    if isinstance(dz, DriveDesign):
-        return dz
-    return DriveDesign(motor, drive, dz, startup, k_est != 1.0, k_est, table)
+    return instance(made, f"{_SRC}.{fn}", "made", DriveDesign,
+                    "a DriveDesign: call linsense.tune.design_drive(motor, drive, ...) and pass its result")
 
 
 #: the keys that are counts (written as integers)
@@ -110,8 +93,7 @@ def written(keys: dict, key: str):
     return _r(v)
 
 
-def scenario_dict(dz: Design | DriveDesign, drive: DriveData | None = None, motor_ref: str = "",
-                  base: dict | None = None, startup=None, k_est: float = 1.0, pole_pitch: float | None = None,
+def scenario_dict(made: DriveDesign, *, motor_ref: str = "", base: dict | None = None,
                   table: str | None = None) -> dict:
     """A complete scenario with the design's drive data and gains written out.
 
@@ -121,23 +103,14 @@ def scenario_dict(dz: Design | DriveDesign, drive: DriveData | None = None, moto
 
     Parameters
     ----------
-    dz : DriveDesign or Design
-        The drive's design (:func:`~linsense.tune.drive_design.design_drive`; or a Design with
-        ``drive``, ``startup`` and ``k_est``).
-    drive : DriveData or None, optional
-        The drive (with a Design).
-    motor_ref : str
+    made : DriveDesign
+        The drive's design (:func:`~linsense.tune.drive_design.design_drive`: its drive, start-up,
+        widening of the trips on the estimate, and its motor's pole pitch for the ``[travel]`` end
+        stops when the drive has a travel).
+    motor_ref : str, optional
         The scenario's ``motor`` value (preset or path).
     base : dict or None, optional
         The scenario's given keys (None: a 2 s hold).
-    startup : StartupDesign or None, optional
-        The start-up design (with a Design).
-    k_est : float, optional
-        The trips and clamp on the estimate widened by it (with a Design: a drive without its
-        table, ``uncompensated_speed_factor``).
-    pole_pitch : float or None, optional
-        Pole pitch, m, for the ``[travel]`` end stops when the drive has a travel (a DriveDesign's
-        motor's).
     table : str or None, optional
         A measured table's file (``linsense calibrate``'s ``lut_measured.json``): the drive's
         compensation table (``observer.lut_model = "measured"``, ``observer.lut_file``); None: the
@@ -147,10 +120,14 @@ def scenario_dict(dz: Design | DriveDesign, drive: DriveData | None = None, moto
     -------
     dict
         The scenario, as nested dicts of its TOML.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        For a ``made`` other than a DriveDesign (a plain Design: call ``design_drive``).
     """
-    dd = as_drive_design(dz, drive, startup=startup, k_est=k_est)
-    if dd.motor is not None:
-        pole_pitch = dd.motor.pole_pitch
+    dd = _drive_design(made, "scenario_dict")
+    pole_pitch = None if dd.motor is None else dd.motor.pole_pitch
     keys = dd.scenario_keys()
     put = functools.partial(_put, keys)
     sc = {k: (dict(v) if isinstance(v, dict) else v) for k, v in (base or {}).items()}
@@ -235,18 +212,8 @@ def _put_controller(con: dict, keys: dict) -> None:
         _put(keys, con, "controller.ripple_order", "controller.ripple_cos", "controller.ripple_sin")
 
 
-def scenario_toml(
-    dz: Design | DriveDesign,
-    drive: DriveData | None,
-    motor_spec: str,
-    out: Path,
-    base: dict | None = None,
-    base_dir: Path | None = None,
-    startup=None,
-    k_est: float = 1.0,
-    pole_pitch: float | None = None,
-    table: str | None = None,
-) -> str:
+def scenario_toml(made: DriveDesign, motor_spec: str, out: Path, base: dict | None = None,
+                  base_dir: Path | None = None, table: str | None = None) -> str:
     """The scenario as TOML.
 
     A motor-file or table path (relative to ``base_dir``, default the working folder, as the command
@@ -255,10 +222,8 @@ def scenario_toml(
 
     Parameters
     ----------
-    dz : DriveDesign or Design
-        The drive's design (or a Design with ``drive``, ``startup`` and ``k_est``).
-    drive : DriveData or None
-        The drive (with a Design).
+    made : DriveDesign
+        The drive's design (:func:`~linsense.tune.drive_design.design_drive`).
     motor_spec : str
         The motor as given (preset name or path).
     out : Path
@@ -267,12 +232,6 @@ def scenario_toml(
         The scenario's given keys.
     base_dir : Path or None, optional
         The folder a relative motor path is relative to.
-    startup : StartupDesign or None, optional
-        The start-up design (with a Design).
-    k_est : float, optional
-        Widening of the trips and clamp on the estimate (with a Design).
-    pole_pitch : float or None, optional
-        Pole pitch, m (a DriveDesign's motor's).
     table : str or None, optional
         A measured table's file (:func:`scenario_dict`).
 
@@ -280,6 +239,11 @@ def scenario_toml(
     -------
     str
         The TOML text, with a comment line summarising the design.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        For a ``made`` other than a DriveDesign (a plain Design: call ``design_drive``).
     """
 
     def relative(path: str) -> str:
@@ -290,8 +254,8 @@ def scenario_toml(
 
     ref = relative(motor_spec) if names_a_path(motor_spec) else motor_spec
     table = None if table is None else relative(table)
-    dd = as_drive_design(dz, drive, startup=startup, k_est=k_est)
-    sc = scenario_dict(dd, None, ref, base, pole_pitch=pole_pitch, table=table)
+    dd = _drive_design(made, "scenario_toml")
+    sc = scenario_dict(dd, motor_ref=ref, base=base, table=table)
     dz = dd.design
     model = sc.get("controller", {}).get("model", {})
     if names_a_path(model.get("motor", "")):  # (every path in the scenario relative to its own folder)
@@ -419,8 +383,7 @@ def c_config_name(name: str | None, motor_name: str, source: str = "name") -> st
     return sym
 
 
-def c_header(dz: Design | DriveDesign, drive: DriveData | None = None, motor: Motor | None = None,
-             name: str | None = None, points: int = 256, startup=None, table=None, unverified: str = "",
+def c_header(made: DriveDesign, *, name: str | None = None, points: int = 256, unverified: str = "",
              verified_by: str = "") -> str:
     """``ls_cfg_<name>.h``: the drive's configuration for the C library.
 
@@ -434,23 +397,14 @@ def c_header(dz: Design | DriveDesign, drive: DriveData | None = None, motor: Mo
 
     Parameters
     ----------
-    dz : DriveDesign or Design
+    made : DriveDesign
         The drive's design (:func:`~linsense.tune.drive_design.design_drive`: its keys,
-        :func:`design_values`); or a Design with ``drive``, ``motor``, ``startup`` and ``table``.
-    drive : DriveData or None, optional
-        The drive (with a Design).
-    motor : Motor or None, optional
-        The motor (with a Design).
+        :func:`design_values`; its motor, start-up and measured table, whose values are in the
+        data's digest).
     name : str or None, optional
         The name in the symbols (default the motor's).
     points : int, optional
-        Table points.
-    startup : StartupDesign or None, optional
-        The start-up design (with a Design).
-    table : MeasuredTable or None, optional
-        With a Design: a measured compensation table at ``points`` points
-        (:func:`linsense.compensation.measured.read_measured_table`) in place of the motor file's;
-        its values are in the data's digest.
+        Table points (a measured table's: as ``design_drive`` read it).
     unverified : str, optional
         Why the drive is written without a passed certificate (``--unverified``): said in the
         header's comment; "" for a verified drive.
@@ -465,9 +419,13 @@ def c_header(dz: Design | DriveDesign, drive: DriveData | None = None, motor: Mo
     Raises
     ------
     linsense.errors.InputError
-        For an injection other than the pulsating/elliptical one.
+        For a ``made`` other than a DriveDesign (a plain Design: call ``design_drive``), a design
+        without its motor, or an injection other than the pulsating/elliptical one.
     """
-    dd = as_drive_design(dz, drive, motor, startup, table=table)
+    dd = _drive_design(made, "c_header")
+    if dd.motor is None:
+        raise InputError(f"{_SRC}.c_header", "made", "the design has no motor (the header holds the "
+                                                      "motor's tables): call design_drive with the motor")
     check_c_header(dd.drive)
     sym = c_config_name(name, dd.motor.name)  # (the stamp's and the digest's motor: the file's)
     digest = design_digest(dd.motor, dd.drive, points, dd.table)

@@ -344,7 +344,7 @@ def tune(motor: str, *, scenario: Scenario | None = None, source: str | None = N
                      warnings=list(made.warnings))
     if fmt == "c":  # (the header waits for the verdict: made only for a drive that passed)
         return _header(res, cert_run, name, unverified, say, ready)
-    res.text = scenario_toml(made, dd, motor, Path(out), base, working_folder(), table=table_abs)
+    res.text = scenario_toml(made, motor, Path(out), base, working_folder(), table=table_abs)
     (ready or _quiet)(res)
     res.certificate = None if cert_run is None else _certify(cert_run, say)
     return res
