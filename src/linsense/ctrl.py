@@ -93,7 +93,8 @@ def built_digest() -> str:
 
 
 def source_tree_digest() -> str | None:
-    """Digest of ``csrc/`` and ``tools/build_ctrl.py`` in the source tree.
+    """Digest of ``csrc/`` and the build's Python inputs (``tools/build_ctrl.py``, its flag tables
+    ``tools/build_flags.py``, ``setup.py``) in the source tree.
 
     Returns
     -------
@@ -101,11 +102,9 @@ def source_tree_digest() -> str | None:
         Hex digest; None outside a source tree (a wheel).
     """
     root = Path(__file__).resolve().parents[2]
-    csrc = root / "csrc"
-    script = root / "tools" / "build_ctrl.py"
-    if not (csrc / "ctrl").is_dir() or not script.is_file():
+    if not (root / "csrc" / "ctrl").is_dir() or not (root / "tools" / "build_ctrl.py").is_file():
         return None
-    return source_digest(csrc, script)
+    return source_digest(root)
 
 
 def _check_stale() -> None:
