@@ -51,6 +51,8 @@ __all__ = [
     "V_INJ_SHARE_MAX",
     "RIPPLE_MAX",
     "STARTUP_PAIRS_MAX",
+    "STARTUP_PULSE_STEPS_MIN",
+    "STARTUP_REST_STEPS_MIN",
     "injection_fits",
     "observer_gains",
 ]
@@ -177,6 +179,10 @@ V_INJ_SHARE_MAX = float(lib.LS_DRIVE_V_INJ_SHARE_MAX)
 RIPPLE_MAX = float(lib.LS_DRIVE_RIPPLE_MAX)
 #: the most start-up pulse pairs ls_startup_init accepts
 STARTUP_PAIRS_MAX = int(lib.LS_STARTUP_PAIRS_MAX)
+#: the shortest start-up pulse ls_startup_init accepts, PWM periods (t_pulse rounded)
+STARTUP_PULSE_STEPS_MIN = int(lib.LS_STARTUP_PULSE_STEPS_MIN)
+#: the shortest rest before a start-up pulse ls_startup_init accepts, PWM periods (t_rest rounded)
+STARTUP_REST_STEPS_MIN = int(lib.LS_STARTUP_REST_STEPS_MIN)
 
 
 def injection_fits(amplitude: float, v_dc_min: float) -> bool:
