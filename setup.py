@@ -5,7 +5,8 @@ compiles the C99 firmware library (``csrc/``) into the extension ``linsense._ctr
 time, editable or not, with declarations generated from its headers.
 
 The flags depend on the compiler setuptools actually runs (``build_ext``'s
-``compiler.compiler_type``), from ``tools/build_ctrl.py``'s ``COMPILE_ARGS`` and ``PLANT_ARGS``:
+``compiler.compiler_type``), from ``tools/build_flags.py``'s ``COMPILE_ARGS`` and ``PLANT_ARGS`` (their
+one home, a table without side effects, which ``tools/build_ctrl.py`` reads too):
 gcc and clang (``unix``, ``mingw32``, ``cygwin``) compile as the firmware is, with ISO C's
 floating-point contraction off (``-ffp-contract=off``, what ``-std=c99`` means for gcc on the MCU and
 in the C tests): the controller, its inline blocks and the binding's helpers compute bit for bit as
@@ -40,20 +41,23 @@ C_LIBRARY = ("CMakeLists.txt", "cmake/*.cmake", "cmake/*.cmake.in", "include/lin
              "ctrl/*.c", "ctrl/*.h")
 
 
-def _flags():
-    """``COMPILE_ARGS`` and ``PLANT_ARGS`` of ``tools/build_ctrl.py`` (loaded by path)."""
-    path = os.path.join(HERE, "tools", "build_ctrl.py")
-    spec = importlib.util.spec_from_file_location("_linsense_build_ctrl", path)
+def _load_flags():
+    """``tools/build_flags.py``, the compiler flags' one home (loaded by path: ``tools/`` is no package)."""
+    path = os.path.join(HERE, "tools", "build_flags.py")
+    spec = importlib.util.spec_from_file_location("_linsense_build_flags", path)
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
-    return mod.COMPILE_ARGS, mod.PLANT_ARGS
+    return mod
+
+
+FLAGS = _load_flags()
 
 
 class BuildExt(build_ext):
     """``build_ext`` with the flags of the compiler it runs; the plant alone with contraction on."""
 
     def build_extension(self, ext):
-        compile_args, plant_args = _flags()
+        compile_args, plant_args = FLAGS.COMPILE_ARGS, FLAGS.PLANT_ARGS
         family = "msvc" if self.compiler.compiler_type == "msvc" else "gcc"
         ext.extra_compile_args = list(compile_args[family])
         plant = [s for s in ext.sources if s.replace(os.sep, "/").endswith("csrc/sim/ls_sim_all.c")]

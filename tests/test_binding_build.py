@@ -40,6 +40,7 @@ def test_a_header_change_reaches_the_binding_without_a_python_edit(tmp_path):
     shutil.copytree(ROOT / "csrc", tmp_path / "csrc", ignore=shutil.ignore_patterns("tests"))
     (tmp_path / "tools").mkdir()
     shutil.copy(SCRIPT, tmp_path / "tools")
+    shutil.copy(SCRIPT.with_name("build_flags.py"), tmp_path / "tools")  # (the flags it reads)
     (tmp_path / "src" / "linsense").mkdir(parents=True)
     shutil.copy(ROOT / "src" / "linsense" / "_digest.py", tmp_path / "src" / "linsense")
     header = tmp_path / "csrc" / "include" / "linsense" / "ls_added.h"

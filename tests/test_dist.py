@@ -36,15 +36,14 @@ SHIPPED_C = (r"CMakeLists\.txt", r"cmake/[\w.-]+\.cmake(\.in)?", r"include/linse
 
 
 def forbidden(names: list[str]) -> list[str]:
-    """The entries of a wheel that have no place in it: anything outside ``linsense/`` and its
-    ``.dist-info``; a build script (``build_ctrl.py``, ``_build_ctrl.py``), a test (``tests/``,
-    ``test_*.py``, ``conftest.py``), a C source or header but the controller library's, a tool;
-    a compiled module other than the abi3 extension; grafted libraries (``linsense.libs/``: the
-    extension needs none). The controller library ships as package data under ``linsense/csrc/``
-    (:data:`SHIPPED_C`: ``ctrl/``, ``include/linsense/``, its CMake files), never the simulator
-    (``csrc/sim``), the C tests or the binding's helpers (``csrc/py``). The packaged firmware
-    example (``linsense/examples/firmware/*.c``, what ``linsense examples`` copies out) is an
-    example, not a source of the build."""
+    """The entries of a wheel that have no place in it: anything outside ``linsense/`` and its ``.dist-info``;
+    a build script (``build_ctrl.py``, ``_build_ctrl.py``, ``build_flags.py``), a test (``tests/``,
+    ``test_*.py``, ``conftest.py``), a C source or header but the controller library's, a tool; a compiled
+    module other than the abi3 extension; grafted libraries (``linsense.libs/``: the extension needs none).
+    The controller library ships as package data under ``linsense/csrc/`` (:data:`SHIPPED_C`: ``ctrl/``,
+    ``include/linsense/``, its CMake files), never the simulator (``csrc/sim``), the C tests or the binding's
+    helpers (``csrc/py``). The packaged firmware example (``linsense/examples/firmware/*.c``, what ``linsense
+    examples`` copies out) is an example, not a source of the build."""
     bad = []
     for n in names:
         p = PurePosixPath(n)
@@ -55,7 +54,7 @@ def forbidden(names: list[str]) -> list[str]:
             or (n.endswith("/") and rel in ("", "cmake", "ctrl", "include", "include/linsense")))  # (folders)
         if not (top == "linsense" or re.fullmatch(r"linsense-[^/]+\.dist-info", top)):
             bad.append(n)
-        elif (re.search(r"build_ctrl", p.name) or {"tests", "tools"} & set(p.parts)
+        elif (re.search(r"build_(ctrl|flags)", p.name) or {"tests", "tools"} & set(p.parts)
               or ("csrc" in p.parts and not shipped_c)
               or re.fullmatch(r"test_.*\.py|conftest\.py", p.name)
               or (p.suffix in (".c", ".h", ".o") and not shipped_c
@@ -76,6 +75,7 @@ def test_the_rule_names_every_kind_of_forbidden_file():
              "linsense/csrc/include/linsense/"]
     assert forbidden(clean) == []
     bad = ["linsense/_build_ctrl.py", "tools/build_ctrl.py", "linsense/tools/build_ctrl.py",
+           "linsense/build_flags.py",
            "tests/test_io.py", "linsense/tests/conftest.py", "linsense/test_x.py", "csrc/ctrl/ls_pi.c",
            "linsense/ls_drive.h", "linsense/csrc/sim/ls_sim.c", "linsense/csrc/sim/ls_sim.h",
            "linsense/csrc/tests/test_drive.c", "linsense/csrc/tests/ls_test.h", "linsense/csrc/py/ls_py.c",
@@ -133,6 +133,7 @@ def test_the_sdist_holds_what_the_build_and_the_tests_need():
     with tarfile.open(sdist) as tar:
         names = {n.split("/", 1)[1] for n in tar.getnames() if "/" in n}
     needed = {"setup.py", "pyproject.toml", "MANIFEST.in", "LICENSE", "README.md", "tools/build_ctrl.py",
+              "tools/build_flags.py",
               "tests/conftest.py", "tests/test_dist.py", "tools/wheeltest.sh"}
     assert not needed - names
     try:  # every tracked source of the build and of the tests (in a git checkout)

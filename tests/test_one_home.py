@@ -56,6 +56,11 @@ HOMES = (
          r"1\.25 times|f_pwm / 16\b|f_lpf / 20\b|f_lpf / 7\.5\b", "src/"),
     Home("start-up pairs limit", "csrc/include/linsense/ls_startup.h", "#define LS_STARTUP_PAIRS_MAX",
          r"le=1024\b", "src/"),
+    Home("start-up pulse limit", "csrc/include/linsense/ls_startup.h", "#define LS_STARTUP_PULSE_STEPS_MIN",
+         r"at least 2 PWM periods|\b2 / \w+\.f_pwm|_periods\(su\.t_pulse[^\n]*<\s*2\b|t_pulse, cfg->fs, 2u"),
+    Home("start-up rest limit", "csrc/include/linsense/ls_startup.h", "#define LS_STARTUP_REST_STEPS_MIN",
+         r"(?:at least |\")3 PWM periods|\b3 / \w+\.f_pwm|_periods\(su\.t_rest[^\n]*<\s*3\b|"
+         r"t_rest, cfg->fs, 3u"),
     Home("square wave's d current", "src/linsense/tune/injection.py", "SQUARE_D_FRACTION = ",
          r"0\.4 `controller\.i_max`", "src/"),
 )

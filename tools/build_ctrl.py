@@ -52,14 +52,6 @@ UMBRELLA = "".join(f'#include "{next(h.relative_to(d) for d in INCLUDE_DIRS if d
 SOURCES = sorted((CSRC / "ctrl").glob("*.c")) + [CSRC / "sim" / "ls_sim_all.c"] + sorted(PY.glob("*.c"))
 if not (CSRC / "ctrl").is_dir() or not SIM_HEADER.is_file():
     raise RuntimeError(f"linsense C sources not found under {CSRC} (expected csrc/ctrl/*.c, {SIM_HEADER})")
-#: compiler flags by family (setup.py picks them by the compiler setuptools runs): gcc and clang
-#: (Linux, macOS, MinGW) -O3, C99, ISO C's contraction off as the firmware is compiled (every
-#: controller operation rounds as written), the plant (csrc/sim/ls_sim_all.c) with it on (fused
-#: multiply-adds: a fifth shorter dependency chains); MSVC /O2 /fp:precise (no contraction). A direct
-#: run takes the platform's default. LINSENSE_NATIVE=1 (the Makefile's venv) adds -march=native.
-_NATIVE = ["-march=native"] if os.environ.get("LINSENSE_NATIVE") == "1" else []  # (never in wheels)
-COMPILE_ARGS = {"gcc": ["-std=c99", "-O3", "-ffp-contract=off", *_NATIVE], "msvc": ["/O2", "/fp:precise"]}
-PLANT_ARGS = {"gcc": ["-ffp-contract=fast"], "msvc": []}
 #: the type names cffi knows by itself (int32_t, bool, size_t ...): declared for pycparser only
 KNOWN_TYPES = sorted(n for n in COMMON_TYPES if n.isidentifier())
 #: an integer constant expression (a macro cffi can read as ``#define NAME ...``)
@@ -68,16 +60,18 @@ INT_EXPR = re.compile(r"(?:\s|0[xX][0-9a-fA-F]+[uUlL]*|[0-9]+[uUlL]*|<<|>>|[-+*/
 REAL_EXPR = re.compile(r"LS_R\([0-9.]+(?:[eE][-+]?[0-9]+)?\)")
 
 
-def _load_digest_module():
-    """Load ``src/linsense/_digest.py`` by path (the package is not importable at build time)."""
-    path = ROOT / "src" / "linsense" / "_digest.py"
-    spec = importlib.util.spec_from_file_location("_linsense_digest", path)
+def _load(rel: str):
+    """Load a module of the source tree by path, ``rel`` from the root (the package is not
+    importable at build time, and cffi runs this file without ``tools/`` on ``sys.path``)."""
+    spec = importlib.util.spec_from_file_location(f"_linsense_{Path(rel).stem}", ROOT / rel)
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     return mod
 
 
-DIGEST = _load_digest_module().source_digest(CSRC, Path(__file__).resolve())
+#: the compiler flags by family, from their one home (a direct run takes the platform's default)
+COMPILE_ARGS = _load("tools/build_flags.py").COMPILE_ARGS
+DIGEST = _load("src/linsense/_digest.py").source_digest(ROOT)
 
 
 def preprocess(*flags: str) -> str:

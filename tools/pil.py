@@ -98,17 +98,18 @@ def _scenario(spec):
 
 
 def extension_flags() -> tuple[list[str], list[str]]:
-    """The extension's gcc flags from their one home, tools/build_ctrl.py (``COMPILE_ARGS``: -O3,
+    """The extension's gcc flags from their one home, tools/build_flags.py (``COMPILE_ARGS``: -O3,
     C99, the library without contraction; ``PLANT_ARGS``: the plant with it), as the Makefile's venv
-    builds it (``LINSENSE_NATIVE=1``: -march=native): the library's flags and what the plant adds."""
-    os.environ["LINSENSE_NATIVE"] = "1"  # (read when build_ctrl is first imported)
-    import build_ctrl
+    builds it (with ``NATIVE_ARGS``, its ``LINSENSE_NATIVE=1``): the library's flags and what the
+    plant adds."""
+    from build_flags import COMPILE_ARGS, NATIVE_ARGS, PLANT_ARGS
 
-    return list(build_ctrl.COMPILE_ARGS["gcc"]), list(build_ctrl.PLANT_ARGS["gcc"])
+    gcc = COMPILE_ARGS["gcc"]
+    return [*gcc, *(f for f in NATIVE_ARGS if f not in gcc)], list(PLANT_ARGS["gcc"])
 
 
 def build_recorder(out: Path) -> Path:
-    """The host recorder as a shared object, with the extension's flags (tools/build_ctrl.py)."""
+    """The host recorder as a shared object, with the extension's flags (tools/build_flags.py)."""
     lib = out / "pil_record.so"
     srcs = sorted((ROOT / "csrc" / "ctrl").glob("*.c"))
     deps = srcs + list(PIL.glob("*")) + list((ROOT / "csrc" / "sim").glob("*")) + \
@@ -174,7 +175,7 @@ def record(out: Path, quick: bool) -> list[tuple[str, int]]:
         if mine != theirs:
             raise SystemExit(f"pil: {name}: the recorder's closed loop {mine} is not the extension's "
                              f"{theirs} (the recorder is built as the Makefile's venv builds the extension, "
-                             "tools/build_ctrl.py's flags with LINSENSE_NATIVE=1: another build fuses the "
+                             "tools/build_flags.py's flags with LINSENSE_NATIVE=1: another build fuses the "
                              "plant's multiply-adds differently)")
         done.append((name, int(res.steps_done)))
     header.append("static const pil_case pil_cases[] = {")

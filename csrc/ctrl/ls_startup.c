@@ -32,8 +32,10 @@ ls_status ls_startup_init(ls_startup *s, const ls_startup_cfg *cfg)
         !(cfg->lock_gain > LS_R(0.0)) || !(cfg->lock_gain <= LS_R(100.0)) ||
         !(cfg->t_lock * cfg->fs <= LS_R(0.25) * (LS_REAL)LS_STARTUP_STEPS_MAX) ||
         cfg->pairs > LS_STARTUP_PAIRS_MAX || !steps_of(cfg->t_lock, cfg->fs, 1u, &s->n_lock) ||
-        !steps_of(cfg->t_quiet, cfg->fs, 0u, &s->n_quiet) || !steps_of(cfg->t_pulse, cfg->fs, 2u, &s->n_pulse) ||
-        !steps_of(cfg->t_rest, cfg->fs, 3u, &n_rest) || !steps_of(cfg->t_settle, cfg->fs, 0u, &s->n_settle) ||
+        !steps_of(cfg->t_quiet, cfg->fs, 0u, &s->n_quiet) ||
+        !steps_of(cfg->t_pulse, cfg->fs, LS_STARTUP_PULSE_STEPS_MIN, &s->n_pulse) ||
+        !steps_of(cfg->t_rest, cfg->fs, LS_STARTUP_REST_STEPS_MIN, &n_rest) ||
+        !steps_of(cfg->t_settle, cfg->fs, 0u, &s->n_settle) ||
         s->n_pulse > LS_STARTUP_STEPS_MAX - n_rest) {
         memset(s, 0, sizeof *s);
         return LS_ERR_PARAM;

@@ -11,9 +11,16 @@ from __future__ import annotations
 import hashlib
 from pathlib import Path
 
+#: the build's Python inputs beside the C sources, relative to the source tree's root: the cffi build
+#: script, its flag tables and setup.py (which picks the flags); those absent (an installed wheel's
+#: tree, a copy of the build files) are left out
+BUILD_INPUTS = ("tools/build_ctrl.py", "tools/build_flags.py", "setup.py")
 
-def source_digest(csrc: Path, build_script: Path) -> str:
-    """SHA-256 over the C sources, the library's headers, the build script and setup.py."""
+
+def source_digest(root: Path) -> str:
+    """SHA-256 over the C sources under ``root/csrc``, the library's headers and the build's Python
+    inputs (:data:`BUILD_INPUTS`)."""
+    csrc = root / "csrc"
     h = hashlib.sha256()
     files = (
         sorted((csrc / "ctrl").glob("*.c"))
@@ -23,8 +30,7 @@ def source_digest(csrc: Path, build_script: Path) -> str:
         + sorted((csrc / "include" / "linsense").glob("*.h"))
         + sorted((csrc / "py").glob("*.[ch]"))  # (the binding's C helpers)
     )
-    setup = csrc.parent / "setup.py"  # (its compiler flags; absent from an installed wheel's tree)
-    for f in [*files, build_script, *([setup] if setup.is_file() else [])]:
+    for f in [*files, *(p for p in (root / n for n in BUILD_INPUTS) if p.is_file())]:
         h.update(f.name.encode())
         h.update(f.read_bytes())
     return h.hexdigest()

@@ -51,6 +51,8 @@ __all__ = [
     "V_INJ_SHARE_MAX",
     "RIPPLE_MAX",
     "STARTUP_PAIRS_MAX",
+    "STARTUP_PULSE_STEPS_MIN",
+    "STARTUP_REST_STEPS_MIN",
     "injection_fits",
     "observer_gains",
 ]
@@ -93,7 +95,8 @@ def built_digest() -> str:
 
 
 def source_tree_digest() -> str | None:
-    """Digest of ``csrc/`` and ``tools/build_ctrl.py`` in the source tree.
+    """Digest of ``csrc/`` and the build's Python inputs (``tools/build_ctrl.py``, its flag tables
+    ``tools/build_flags.py``, ``setup.py``) in the source tree.
 
     Returns
     -------
@@ -101,11 +104,9 @@ def source_tree_digest() -> str | None:
         Hex digest; None outside a source tree (a wheel).
     """
     root = Path(__file__).resolve().parents[2]
-    csrc = root / "csrc"
-    script = root / "tools" / "build_ctrl.py"
-    if not (csrc / "ctrl").is_dir() or not script.is_file():
+    if not (root / "csrc" / "ctrl").is_dir() or not (root / "tools" / "build_ctrl.py").is_file():
         return None
-    return source_digest(csrc, script)
+    return source_digest(root)
 
 
 def _check_stale() -> None:
@@ -178,6 +179,10 @@ V_INJ_SHARE_MAX = float(lib.LS_DRIVE_V_INJ_SHARE_MAX)
 RIPPLE_MAX = float(lib.LS_DRIVE_RIPPLE_MAX)
 #: the most start-up pulse pairs ls_startup_init accepts
 STARTUP_PAIRS_MAX = int(lib.LS_STARTUP_PAIRS_MAX)
+#: the shortest start-up pulse ls_startup_init accepts, PWM periods (t_pulse rounded)
+STARTUP_PULSE_STEPS_MIN = int(lib.LS_STARTUP_PULSE_STEPS_MIN)
+#: the shortest rest before a start-up pulse ls_startup_init accepts, PWM periods (t_rest rounded)
+STARTUP_REST_STEPS_MIN = int(lib.LS_STARTUP_REST_STEPS_MIN)
 
 
 def injection_fits(amplitude: float, v_dc_min: float) -> bool:

@@ -41,6 +41,9 @@
 #define LS_STARTUP_PAIRS_MAX 1024u      /* -, largest number of pulse pairs */
 #define LS_STARTUP_STEPS_MAX 100000000u /* -, largest length of a phase in sampling periods (t_lock:
                                            a quarter of it) */
+#define LS_STARTUP_PULSE_STEPS_MIN 2u  /* -, shortest pulse in sampling periods (t_pulse rounded) */
+#define LS_STARTUP_REST_STEPS_MIN 3u   /* -, shortest rest in sampling periods (t_rest rounded: a pulse's
+                                          end is sampled on the second) */
 
 typedef enum {
     LS_SU_LOCK = 0,   /* HF lock on the axis (modulo pi), zero currents */
@@ -59,9 +62,10 @@ typedef struct {
                          a few L/R), >= 0 */
     LS_REAL v_pulse;  /* V, pulse amplitude on the estimated d-axis, > 0 (the drive also bounds it by
                          the bus: v_pulse <= v_dc_min / sqrt(3)) */
-    LS_REAL t_pulse;  /* s, length of one pulse, rounded to whole sampling periods (>= 2) */
-    LS_REAL t_rest;   /* s, zero voltage before each pulse and after the last, >= 3 sampling periods
-                         after rounding (a pulse's end is sampled on the second) */
+    LS_REAL t_pulse;  /* s, length of one pulse, rounded to whole sampling periods
+                         (>= LS_STARTUP_PULSE_STEPS_MIN) */
+    LS_REAL t_rest;   /* s, zero voltage before each pulse and after the last, rounded to whole
+                         sampling periods (>= LS_STARTUP_REST_STEPS_MIN) */
     uint32_t pairs;   /* -, (+, -) pulse pairs, 1 .. LS_STARTUP_PAIRS_MAX */
     LS_REAL i_min;    /* A, smallest |i_diff| accepted as a decision, > 0 (0 would never leave a
                          start undecided) */

@@ -14,7 +14,14 @@ from collections.abc import Callable
 import numpy as np
 from pydantic import BaseModel
 
-from linsense.ctrl import REAL, RIPPLE_MAX, V_INJ_SHARE_MAX, injection_fits
+from linsense.ctrl import (
+    REAL,
+    RIPPLE_MAX,
+    STARTUP_PULSE_STEPS_MIN,
+    STARTUP_REST_STEPS_MIN,
+    V_INJ_SHARE_MAX,
+    injection_fits,
+)
 from linsense.plausible import slip
 from linsense.scenario.bounds import DEAD_TIME_SHARE_MAX, V_DC_MAX_FRACTION, V_DC_MIN_FRACTION
 from linsense.scenario.sections import ScenarioSchema
@@ -99,12 +106,10 @@ def _check_startup(f: ScenarioSchema) -> None:
             hint = slip("time", getattr(su, k), ok=lambda v: v <= 60.0)
             raise KeyProblem(f"startup.{k}", f"at most 60 s, got {getattr(su, k):g}"
                              + (f"; {hint}" if hint else ""))
-    if _periods(su.t_pulse, inv.f_pwm) < 2:
-        raise KeyProblem("startup.t_pulse", f"must be at least 2 PWM periods ({2 / inv.f_pwm:g} s), "
-                         f"got {su.t_pulse:g}")
-    if _periods(su.t_rest, inv.f_pwm) < 3:
-        raise KeyProblem("startup.t_rest", f"must be at least 3 PWM periods ({3 / inv.f_pwm:g} s), "
-                         f"got {su.t_rest:g}")
+    for k, least in (("t_pulse", STARTUP_PULSE_STEPS_MIN), ("t_rest", STARTUP_REST_STEPS_MIN)):
+        if _periods(getattr(su, k), inv.f_pwm) < least:  # (ls_startup_init's limits)
+            raise KeyProblem(f"startup.{k}", f"must be at least {least} PWM periods "
+                             f"({least / inv.f_pwm:g} s), got {getattr(su, k):g}")
     if su.err_lock_deg > 90.0:
         raise KeyProblem("startup.err_lock_deg", f"at most 90 deg, got {su.err_lock_deg:g}")
     t_ramp = f.injection.amplitude / f.injection.ramp_rate

@@ -29,7 +29,14 @@ from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
-from linsense.ctrl import STARTUP_PAIRS_MAX, V_INJ_SHARE_MAX, drive_default_cfg, observer_gains
+from linsense.ctrl import (
+    STARTUP_PAIRS_MAX,
+    STARTUP_PULSE_STEPS_MIN,
+    STARTUP_REST_STEPS_MIN,
+    V_INJ_SHARE_MAX,
+    drive_default_cfg,
+    observer_gains,
+)
 from linsense.plausible import implausible
 from linsense.scenario.bounds import V_DC_MIN_FRACTION
 from linsense.validation import KeyProblem
@@ -104,10 +111,12 @@ class StartupSection(BaseModel):
                                  json_schema_extra={"unit": "s"})
     v_pulse: Positive = Field(_c(_C.startup.v_pulse), description="pulse amplitude on the estimated d-axis",
                               json_schema_extra={"kind": "voltage", "unit": "V"})
-    t_pulse: Positive = Field(_c(_C.startup.t_pulse), description="pulse length (at least 2 PWM periods, "
-                              "at most 60)", json_schema_extra={"unit": "s"})
+    t_pulse: Positive = Field(_c(_C.startup.t_pulse), description="pulse length (at least "
+                              f"{STARTUP_PULSE_STEPS_MIN} PWM periods, at most 60)",
+                              json_schema_extra={"unit": "s"})
     t_rest: Positive = Field(_c(_C.startup.t_rest), description="zero voltage before each pulse (at least "
-                             "3 PWM periods, at most 60)", json_schema_extra={"unit": "s"})
+                             f"{STARTUP_REST_STEPS_MIN} PWM periods, at most 60)",
+                             json_schema_extra={"unit": "s"})
     pairs: int = Field(default=int(_C.startup.pairs), ge=1, le=STARTUP_PAIRS_MAX,
                        description="(+, -) pulse pairs")
     i_min: Positive = Field(_c(_C.startup.i_min), description="smallest `|i_diff|` accepted as a decision",
