@@ -12,7 +12,7 @@ not see; ``<...>`` system headers replaced by empty files) and pycparser; ``stat
 functions become prototypes (cffi's wrappers call the inline code), names ending in ``_`` (the
 library's internals) are left out, integer macros become ``#define NAME ...``, real ones
 (``#define NAME LS_R(1.0e3)``: the library's limits, read in Python as ``lib.NAME``, the value C
-compares with) ``static const double NAME;``, and ``LS_REAL``
+compares with) ``static const double NAME;``, and ``LS_REAL`` becomes
 ``float...``: cffi takes the values and the real type (float, or double with ``-DLS_REAL_DOUBLE``
 in ``CFLAGS``) from the headers when it compiles, and checks every struct layout and signature
 there. A header change needs no edit here; a mismatch fails the build.
