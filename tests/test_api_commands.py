@@ -1,4 +1,5 @@
-"""The Python API of the commands: ``linsense.sim.simulate_to`` and ``linsense.verify.tune`` write
+"""The Python API of the commands: ``linsense.sim.simulate_to``, ``linsense.verify.tune`` and
+``linsense.firmware.verified_export.export_firmware`` write
 and return what ``linsense simulate`` and ``linsense tune`` write, byte for byte (timing aside); the
 command line is a thin layer over them."""
 
@@ -138,3 +139,22 @@ def test_run_closed_loop_takes_a_runner(tmp_path):
 
     with pytest.raises(SimulationError, match="refusing refused its inputs"):
         run_closed_loop(b.cfg, b.drive.state, b.n_steps, b.commands, runner=refusing)
+
+
+def test_export_firmware_writes_only_a_verified_drive(tmp_path):
+    """``linsense.firmware.verified_export.export_firmware`` (what ``linsense firmware export``
+    runs): a drive the quick certificate fails is not written, its failed checks returned; with
+    ``unverified`` the same files are written and the configuration header says why."""
+    from linsense.firmware.verified_export import export_firmware
+    from linsense.model.motor import load_motor
+    from linsense.tune.design import DriveData
+
+    m, dd = load_motor("ecce2010"), DriveData(v_max=0.01)  # (0.4 s steps at 1 cm/s: not met)
+    said: list[str] = []
+    res = export_firmware(tmp_path / "fw", m, dd, motor_spec="ecce2010", say=said.append)
+    assert not res.written and not (tmp_path / "fw").exists()
+    assert res.reason.startswith("NOT verified") and "step" in res.reason
+    assert res.certificate.passed is False and any("quick" in s for s in said)
+    res = export_firmware(tmp_path / "fw", m, dd, motor_spec="ecce2010", unverified=True)
+    header = (tmp_path / "fw" / "ls_cfg_ecce2010.h").read_text()
+    assert res.written and "NOT VERIFIED" in header and (tmp_path / "fw" / "CMakeLists.txt").exists()

@@ -12,8 +12,6 @@ from linsense.cli.runs import (
     drive_refusal,
     scenario_arg,
 )
-from linsense.errors import InputError
-from linsense.io import working_folder
 
 
 @click.group(short_help="The firmware: export a project that builds with CMake.",
@@ -53,9 +51,8 @@ def export(folder: str, motor_spec: str, scenario_path: str | None, name: str | 
     (files it did not write, such as a build folder, are kept). The drive is verified first (the
     quick certificate of linsense tune --quick, switching inverter with dead time): a drive that
     fails is not written (exit 1, naming the failed checks) unless --unverified."""
-    from linsense.firmware.project import firmware_files, write_firmware
+    from linsense.firmware.verified_export import export_firmware
     from linsense.tune.design import DriveData
-    from linsense.verify.certificate import VERIFIED_BY, failed_summary
 
     if as_json:
         c.data_on_stdout()
@@ -72,54 +69,23 @@ def export(folder: str, motor_spec: str, scenario_path: str | None, name: str | 
             # drive's; --table over it)
             table_path, table_via = own_table
     typed = apply_drive_data(dd, drive, quad, v_max, a_max, load, travel)
-    motor = c.load(motor_spec)
-    from linsense.tune.export import c_config_name
+    def refusal(exc):  # (with a scenario: the option typed, or the scenario's key)
+        return exc if sc is None else drive_refusal(exc, typed, sc, src)
 
-    c_config_name(name, motor.name, "--name")  # (checked before anything is designed, never rewritten)
-    try:
-        made = firmware_files(motor, dd, src, name, table=table_path, table_via=table_via)
-    except InputError as exc:  # (with a scenario: the option typed, or the scenario's key)
-        raise exc if sc is None else drive_refusal(exc, typed, sc, src) from None
-    for line in made.lines:
-        c.say(line)
-    for w in made.warnings:
-        c.warn(w)
-    cert = _quick_certificate(motor_spec, motor, dd, made, table_path)
-    lines = cert.lines()
-    if cert.passed:  # (the export's own check: the quick certificate; tune --format c runs the full one)
-        lines[-1] = ("quick certificate passed: written (linsense tune --format c runs the full "
-                     "certificate of the same drive)")
-    for line in lines:
-        c.say(line)
-    reason = "" if cert.passed else failed_summary(cert)
-    if reason and not unverified:
-        c.elapsed()
-        if as_json:
-            c.emit_json("firmware export", [], False, motor=made.motor, name=made.name, digest=made.digest,
-                        certificate="quick", refused=reason)
-        c.warn(f"{folder} not written: {reason} (--unverified writes it anyway)")
-        raise click.exceptions.Exit(1)
-    made = made.certified(reason, "" if reason else VERIFIED_BY[True])
-    files = write_firmware(folder, made)
-    c.files_report(files)
+    res = export_firmware(folder, c.load(motor_spec), dd, motor_spec=motor_spec, source=src, name=name,
+                          table=table_path, table_via=table_via, unverified=unverified, say=c.say,
+                          warn=c.warn, refusal=refusal)
+    made, reason = res.export, res.reason
+    if res.written:
+        c.files_report(res.files)
     c.elapsed()
     if as_json:
-        c.emit_json("firmware export", files, not reason, motor=made.motor, name=made.name,
-                    digest=made.digest, certificate="quick", **({"unverified": reason} if reason else {}))
-
-
-def _quick_certificate(motor_spec: str, motor, dd, made, table_path: str | None):
-    """The quick certificate of the exported drive (the design ``made`` holds, with its table)."""
-    from pathlib import Path
-
-    from linsense.tune.export import scenario_dict
-    from linsense.verify.certificate import certificate_base, motor_ref, prepare
-
-    spec = motor_ref(motor_spec)
-    table = None if table_path is None else str(Path(table_path).resolve())
-    base = certificate_base(scenario_dict(made.drive_design, motor_ref=spec, table=table))
-    return prepare(motor, spec, base, str(working_folder()), v_max=dd.v_max, a_max=dd.a_max,
-                   load=made.design.load, travel=dd.travel, quick=True)()
+        outcome = ({"refused": reason} if not res.written else {"unverified": reason} if reason else {})
+        c.emit_json("firmware export", res.files, res.written and not reason, motor=made.motor,
+                    name=made.name, digest=made.digest, certificate="quick", **outcome)
+    if not res.written:
+        c.warn(f"{folder} not written: {reason} (--unverified writes it anyway)")
+        raise click.exceptions.Exit(1)
 
 
 COMMANDS = [firmware]
