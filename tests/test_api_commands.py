@@ -158,3 +158,22 @@ def test_export_firmware_writes_only_a_verified_drive(tmp_path):
     res = export_firmware(tmp_path / "fw", m, dd, motor_spec="ecce2010", unverified=True)
     header = (tmp_path / "fw" / "ls_cfg_ecce2010.h").read_text()
     assert res.written and "NOT VERIFIED" in header and (tmp_path / "fw" / "CMakeLists.txt").exists()
+
+
+def test_calibrate_to_writes_what_the_cli_writes(run_cli, tmp_path):
+    """``linsense.studies.calibration_folder.calibrate_to`` and ``linsense calibrate`` give the same
+    files (timing.json aside), the figure drawn by the function given."""
+    from linsense.report.figures import fig_calibration, save_png
+    from linsense.studies.calibration_folder import calibrate_to
+
+    r = run_cli("calibrate", "--motor", "ecce2010", "--positions", 8, "--fidelity", "average",
+                "--out", tmp_path / "cli")
+    assert r.code == 0, r.err
+    done = calibrate_to(tmp_path / "api", "ecce2010", positions=8, fidelity="average",
+                        figure=lambda cal, path: save_png(fig_calibration(cal, cal.motor), path))
+    names = sorted(f.name for f in (tmp_path / "cli").iterdir())
+    assert names == sorted(f.name for f in (tmp_path / "api").iterdir())
+    assert {f.name for f in done.files} == set(names) - {".linsense-set.json"}
+    for name in set(names) - {"timing.json", ".linsense-set.json"}:
+        assert (tmp_path / "cli" / name).read_bytes() == (tmp_path / "api" / name).read_bytes(), name
+    assert done.completed and done.metrics["points_done"] == 8 and "wall_s" in done.timing

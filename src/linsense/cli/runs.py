@@ -298,11 +298,8 @@ def calibrate(motor_spec: str | None, scenario_path: str | None, positions: int,
     drive data given): lut_measured.csv, lut_measured.json (stamped with the drive it is valid for,
     for a scenario's observer.lut_model = "measured"; when the calibration completed), metrics.json,
     calibration.png. Exit code 1 if it does not complete."""
-    from linsense.io import output_set, split_timing
     from linsense.report.figures import fig_calibration, save_png
-    from linsense.sim.to_folder import write_metrics
-    from linsense.studies.calibrate import calibrate as run_calibration
-    from linsense.studies.calibrate import lut_csv, measured_json
+    from linsense.studies.calibration_folder import calibrate_to
 
     if as_json:
         c.data_on_stdout()
@@ -311,25 +308,14 @@ def calibrate(motor_spec: str | None, scenario_path: str | None, positions: int,
     sc = scenario_arg(scenario_path, "--scenario") if scenario_path is not None else None
     motor = c.load(motor_spec) if motor_spec is not None else None
     out = c.default_out(out, scenario_path or motor_spec, "calibrate")
-    extra = {"saturation": {"enabled": True}} if saturated else {}
-    cal = run_calibration(motor_spec if sc is not None else motor, positions, load, fidelity, quad=quad,
-                          source=motor_spec or "<calibrate>", scenario=sc, drive=drive, **extra)
-    metrics, timing = split_timing(cal.metrics)
-    if cal.completed and cal.stamp is not None:  # (a table too coarse for the drive that reads it)
-        from linsense.compensation.measured import resolution_warning
-
-        st = cal.stamp
-        w = resolution_warning(cal.motor, st.points, st.injection, st.f_inj, st.quad,
-                               sc.spec.observer.lut_points if sc is not None else 256)
-        if w:
-            c.warn(w)
-    with output_set(out, "calibrate") as s:
-        s.write("lut_measured.csv", lut_csv(cal))
-        if cal.completed:  # (the stamped table a scenario reads: observer.lut_model = "measured")
-            s.write("lut_measured.json", measured_json(cal))
-        write_metrics(s, metrics, timing)
-        save_png(fig_calibration(cal, cal.motor), s.path("calibration.png"))
-    c.files_report(s.files)
+    done = calibrate_to(out, motor_spec if sc is not None else motor, positions=positions, load=load,
+                        fidelity=fidelity, quad=quad, source=motor_spec or "<calibrate>", scenario=sc,
+                        drive=drive, saturated=saturated,
+                        figure=lambda cal, path: save_png(fig_calibration(cal, cal.motor), path))
+    for w in done.warnings:
+        c.warn(w)
+    cal, metrics, timing = done.calibration, done.metrics, done.timing
+    c.files_report(done.files)
     m = cal.metrics
     show = c.show
     c.say(f"{m['motor']}: {m['points_done']}/{m['points']} points, load {m['load_n']:g} N, "
@@ -340,7 +326,7 @@ def calibrate(motor_spec: str | None, scenario_path: str | None, positions: int,
           f"{show(m['max_diff_eq12_deg'], 'deg', '.3g')}; {m['sim_s']} s simulated in {m['wall_s']} s")
     c.elapsed()
     if as_json:
-        c.emit_json("calibrate", s.files, bool(cal.completed), metrics=metrics, timing=timing)
+        c.emit_json("calibrate", done.files, done.completed, metrics=metrics, timing=timing)
     if not cal.completed:
         click.echo(f"linsense: calibration did not complete ({m['points_done']} of {m['points']} points, "
                    f"fault {m['fault']})", err=True)
