@@ -61,6 +61,8 @@ HOMES = (
     Home("start-up rest limit", "csrc/include/linsense/ls_startup.h", "#define LS_STARTUP_REST_STEPS_MIN",
          r"(?:at least |\")3 PWM periods|\b3 / \w+\.f_pwm|_periods\(su\.t_rest[^\n]*<\s*3\b|"
          r"t_rest, cfg->fs, 3u"),
+    Home("bus limits' fractions", "src/linsense/scenario/bounds.py", "V_DC_MIN_FRACTION = ",
+         r"\b5(?:\.0)?/9 `v_dc`|\b5(?:\.0)?/4 `v_dc`|\b5\.0 / [49]\.0\b", "src/"),
     Home("square wave's d current", "src/linsense/tune/injection.py", "SQUARE_D_FRACTION = ",
          r"0\.4 `controller\.i_max`", "src/"),
 )

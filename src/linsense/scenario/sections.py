@@ -25,6 +25,7 @@ names). None of them affects validation.
 from __future__ import annotations
 
 import math
+from fractions import Fraction
 from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
@@ -38,7 +39,7 @@ from linsense.ctrl import (
     observer_gains,
 )
 from linsense.plausible import implausible
-from linsense.scenario.bounds import V_DC_MIN_FRACTION
+from linsense.scenario.bounds import V_DC_MAX_FRACTION, V_DC_MIN_FRACTION
 from linsense.validation import KeyProblem
 
 _STRICT = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
@@ -50,6 +51,11 @@ _C = drive_default_cfg()
 def _c(value) -> float:
     """A C default as a Python float, rounded to the 7 digits a float holds (0.01, not 0.009999999776)."""
     return float(f"{float(value):.7g}")
+
+
+def _ratio(x: float) -> str:
+    """A bound's fraction of the bus as the docs write it (5/9), read from its home."""
+    return str(Fraction(x).limit_denominator(16))
 
 
 Positive = Annotated[float, Field(gt=0)]
@@ -527,9 +533,9 @@ class ProtectionSection(BaseModel):
     i_max: Positive = Field(_c(_C.prot.i_max), description="phase over-current trip", json_schema_extra={
         "kind": "current", "unit": "A", "default_note": "designed ({ecce2010} for ecce2010)"})
     v_dc_min: NonNegative = Field(_c(_C.prot.v_dc_min), description="under-voltage trip", json_schema_extra={
-        "unit": "V", "default_note": "5/9 `v_dc` ({ecce2010} at the default bus)"})
+        "unit": "V", "default_note": f"{_ratio(V_DC_MIN_FRACTION)} `v_dc` ({{ecce2010}} at the default bus)"})
     v_dc_max: Positive = Field(_c(_C.prot.v_dc_max), description="over-voltage trip", json_schema_extra={
-        "unit": "V", "default_note": "5/4 `v_dc` ({ecce2010} at the default bus)"})
+        "unit": "V", "default_note": f"{_ratio(V_DC_MAX_FRACTION)} `v_dc` ({{ecce2010}} at the default bus)"})
     err_max: Positive = Field(_c(_C.prot.err_max), description="observer-loss trip: error-signal limit",
                               json_schema_extra={"kind": "angle_error", "unit": "rad"})
     err_time: Positive = Field(_c(_C.prot.err_time), description="observer-loss trip: time over `err_max`",
