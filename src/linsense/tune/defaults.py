@@ -18,8 +18,9 @@ import sys
 from linsense.analysis.hf import end_anisotropy, mean_dq
 from linsense.model.motor import load_motor
 from linsense.scenario.bounds import V_DC_MAX_FRACTION, V_DC_MIN_FRACTION
-from linsense.tune.design import DriveData, design, startup_lock_gain
-from linsense.tune.startup import design_startup
+from linsense.tune.design import DriveData, startup_lock_gain
+from linsense.tune.drive_design import design_drive
+from linsense.tune.startup import StartupDesign
 
 #: the reference motor whose design the C defaults are
 REFERENCE_MOTOR = "ecce2010"
@@ -36,11 +37,11 @@ def default_values() -> list[tuple[str, float, str]]:
         Macro name, value and its unit and meaning.
     """
     m = load_motor(REFERENCE_MOTOR)
-    d = DriveData()
-    dz = design(m, d, analyse=False)
+    made = design_drive(m, DriveData(), source=REFERENCE_MOTOR, analyse=False, polarity=REFERENCE_POLARITY)
+    d, dz = made.drive, made.design
     l_d, l_q = mean_dq(m)
     l_ea, l_eb = end_anisotropy(m)
-    return _drive_values(m, d, dz, l_d, l_q, l_ea, l_eb) + _startup_values(m, d, dz)
+    return _drive_values(m, d, dz, l_d, l_q, l_ea, l_eb) + _startup_values(made.startup)
 
 
 def _drive_values(m, d: DriveData, dz, l_d: float, l_q: float, l_ea: float, l_eb: float) -> list:
@@ -86,12 +87,11 @@ def _drive_values(m, d: DriveData, dz, l_d: float, l_q: float, l_ea: float, l_eb
     ]
 
 
-def _startup_values(m, d: DriveData, dz) -> list:
-    """The start-up's defaults: :func:`~linsense.tune.startup.design_startup` for the reference
-    motor with :data:`REFERENCE_POLARITY` (10 mA rms of current noise, a 12-bit ADC); the pulse's
-    amplitude to 0.1 V and the decision's threshold to 0.1 mA, as the library has always had them."""
-    su = design_startup(m, v_dc=d.v_dc, f_pwm=d.f_pwm, i_max=d.i_max, observer_bw=dz.observer_bw,
-                        v_inj=dz.v_inj, polarity=REFERENCE_POLARITY, ramp_rate=dz.inj_ramp_rate)
+def _startup_values(su: StartupDesign) -> list:
+    """The start-up's defaults: the start-up of :func:`~linsense.tune.drive_design.design_drive` for
+    the reference motor with :data:`REFERENCE_POLARITY` (10 mA rms of current noise, a 12-bit ADC);
+    the pulse's amplitude to 0.1 V and the decision's threshold to 0.1 mA, as the library has always
+    had them. (``t_lock``, which the lock's bandwidth sets, is not a generated default.)"""
     return [
         ("LS_DEF_STARTUP_ERR_LOCK", su.err_lock, "rad, the lock is accepted within it"),
         ("LS_DEF_STARTUP_T_QUIET", su.t_quiet, "s, the injection ramp-down before the pulses, with a margin"),
