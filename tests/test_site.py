@@ -40,7 +40,7 @@ SITE = ROOT / "build" / "site"
 STAMP = SITE / ".strict-ok"
 SHOTS = ROOT / "build" / "site-screenshots"
 PACKAGES = ("model", "analysis", "compensation", "scenario", "tune", "sim", "studies", "identify", "fea",
-            "sweep", "report", "reproduce")
+            "verify", "sweep", "firmware", "report", "reproduce")
 #: the notebooks and the figures each draws (their outputs exist only in the built site)
 NOTEBOOKS = {"lut_to_firmware": 2, "your_motor": 1, "identify_bench": 2}
 FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
@@ -111,6 +111,20 @@ def site_file(site: Path, url: str) -> Path:
 
 
 # ------------------------------------------------------------------------------- the site's build
+
+
+def test_api_reference_has_every_package():
+    """The API reference has a page for each package of the layers (docs/hooks/api.py's PACKAGES):
+    linsense.verify, which holds ``tune(motor, ...) -> TuneResult``, had none."""
+    sys.path.insert(0, str(ROOT / "docs" / "hooks"))
+    try:
+        import api
+    finally:
+        sys.path.pop(0)
+    src = ROOT / "src" / "linsense"
+    packages = {p.name for p in src.iterdir() if (p / "__init__.py").is_file()} - {"cli", "examples"}
+    assert set(api.PACKAGES) == packages and set(PACKAGES) == packages
+    assert len(api.PACKAGES) == len(packages)
 
 
 def test_site_url_is_the_packages_docs_url():

@@ -17,7 +17,7 @@ from mkdocs.structure.files import File, Files
 INDEX = "api/index.md"
 #: the public packages of linsense, in their layer order (bottom first: docs/architecture.md)
 PACKAGES = ("model", "analysis", "compensation", "scenario", "tune", "sim", "studies", "identify", "fea",
-            "sweep", "firmware", "report", "reproduce")
+            "verify", "sweep", "firmware", "report", "reproduce")
 
 
 #: the shared modules under the layers (docs/architecture.md), on one page of their own
