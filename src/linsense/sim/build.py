@@ -54,7 +54,7 @@ from linsense.tune.design import DriveData, mean_dq
 from linsense.tune.drive_design import design_drive
 
 #: the names other modules import from here (the checks, the cache and the tables live in their
-#: own modules: linsense.sim.checks, .cache, .tables, .drive_cfg)
+#: own modules: linsense.sim.checks, .cache, .drive_tables, .drive_cfg)
 __all__ = ["Built", "build", "designed", "drive_data", "calibration_timing", "resolve_motor", "motor_key",
            "plant_saturation", "reference_commands", "trapezoid_time", "initial_load", "compensation_of",
            "check_positions", "check_initial_load", "check_balanced_load", "check_sensors", "check_startup",
