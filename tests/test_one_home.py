@@ -63,6 +63,9 @@ HOMES = (
          r"t_rest, cfg->fs, 3u"),
     Home("bus limits' fractions", "src/linsense/scenario/bounds.py", "V_DC_MIN_FRACTION = ",
          r"\b5(?:\.0)?/9 `v_dc`|\b5(?:\.0)?/4 `v_dc`|\b5\.0 / [49]\.0\b", "src/"),
+    Home("injection's highest frequency", "src/linsense/scenario/bounds.py", "F_INJ_PWM_DIV = ",
+         r"f_pwm / 4\.0\b|\bfrequency \* 4 >|\"<= f_pwm / 4\"|<= f_pwm / 4 = |at most f_pwm / 4 = |"
+         r"\(f_pwm / 4\)", "src/"),
     Home("square wave's d current", "src/linsense/tune/injection.py", "SQUARE_D_FRACTION = ",
          r"0\.4 `controller\.i_max`", "src/"),
 )

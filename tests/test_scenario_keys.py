@@ -89,7 +89,7 @@ def test_the_designs_keys_are_keys_of_the_schema():
 
 
 #: the bounds the design shares with the scenario's rules: assigned in linsense.scenario.bounds only
-SHARED = ("DEAD_TIME_SHARE_MAX", "V_DC_MIN_FRACTION", "V_DC_MAX_FRACTION")
+SHARED = ("DEAD_TIME_SHARE_MAX", "F_INJ_PWM_DIV", "V_DC_MIN_FRACTION", "V_DC_MAX_FRACTION")
 
 
 def _assigned(name: str) -> list[str]:

@@ -23,7 +23,7 @@ from linsense.ctrl import (
     injection_fits,
 )
 from linsense.plausible import slip
-from linsense.scenario.bounds import DEAD_TIME_SHARE_MAX, V_DC_MAX_FRACTION, V_DC_MIN_FRACTION
+from linsense.scenario.bounds import DEAD_TIME_SHARE_MAX, F_INJ_PWM_DIV, V_DC_MAX_FRACTION, V_DC_MIN_FRACTION
 from linsense.scenario.sections import ScenarioSchema
 from linsense.validation import KeyProblem
 
@@ -92,9 +92,9 @@ def _check_injection(f: ScenarioSchema) -> None:
     elif "dead_time_measures" in inj.model_fields_set:
         raise KeyProblem("injection.dead_time_measures", f"only with shape = \"square\", got shape = "
                         f"{inj.shape!r}")
-    elif "frequency" in f.injection.model_fields_set and f.injection.frequency * 4 > inv.f_pwm:
-        raise KeyProblem("injection.frequency", f"must be <= f_pwm / 4 = {inv.f_pwm / 4:g} Hz, "
-                        f"got {f.injection.frequency:g}")
+    elif "frequency" in f.injection.model_fields_set and f.injection.frequency > inv.f_pwm / F_INJ_PWM_DIV:
+        raise KeyProblem("injection.frequency", f"must be <= f_pwm / {F_INJ_PWM_DIV:g} = "
+                        f"{inv.f_pwm / F_INJ_PWM_DIV:g} Hz, got {f.injection.frequency:g}")
 
 
 def _check_startup(f: ScenarioSchema) -> None:

@@ -39,7 +39,7 @@ from linsense.ctrl import (
     observer_gains,
 )
 from linsense.plausible import implausible
-from linsense.scenario.bounds import V_DC_MAX_FRACTION, V_DC_MIN_FRACTION
+from linsense.scenario.bounds import F_INJ_PWM_DIV, V_DC_MAX_FRACTION, V_DC_MIN_FRACTION
 from linsense.validation import KeyProblem
 
 _STRICT = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
@@ -182,7 +182,7 @@ class InjectionSection(BaseModel):
         _c(_C.inject.amplitude), description="peak, on the estimated d-axis; `amplitude * sqrt(3) < "
         f"{V_INJ_SHARE_MAX:g} protection.v_dc_min`",
         json_schema_extra={"unit": "V", "default_note": "designed ({ecce2010} for ecce2010)"})
-    frequency: Positive = Field(_c(_C.inject.freq), description="<= f_pwm / 4",
+    frequency: Positive = Field(_c(_C.inject.freq), description=f"<= f_pwm / {F_INJ_PWM_DIV:g}",
                                 json_schema_extra={"kind": "injection_frequency",
                                                    "unit": "Hz",
                                                    "default_note": "designed (f_pwm / "

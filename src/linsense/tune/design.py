@@ -36,7 +36,7 @@ from linsense.compensation.lut import resistance_slope
 from linsense.errors import InputError, shown
 from linsense.model.motor import Motor, as_motor
 from linsense.plausible import KINDS, slip
-from linsense.scenario.bounds import DEAD_TIME_SHARE_MAX, V_DC_MIN_FRACTION
+from linsense.scenario.bounds import DEAD_TIME_SHARE_MAX, F_INJ_PWM_DIV, V_DC_MIN_FRACTION
 from linsense.tune.margins import error_gain
 
 #: the stated ratios (docs/tuning.md)
@@ -819,8 +819,10 @@ def _dead_time_share_says(x: DriveInputs, key: str) -> str:
 def _f_inj_says(x: DriveInputs, key: str) -> str:
     d = x.d
     if key == "f_inj":
-        return f"{x.show('f_inj')} must be at most {limit_text(d.f_pwm / 4.0, False)} Hz (f_pwm / 4)"
-    return (f"{x.show('f_pwm')} leaves the injection at most f_pwm / 4 = {d.f_pwm / 4.0:.3g} Hz, below its "
+        return (f"{x.show('f_inj')} must be at most {limit_text(d.f_pwm / F_INJ_PWM_DIV, False)} Hz "
+                f"(f_pwm / {F_INJ_PWM_DIV:g})")
+    return (f"{x.show('f_pwm')} leaves the injection at most f_pwm / {F_INJ_PWM_DIV:g} = "
+            f"{d.f_pwm / F_INJ_PWM_DIV:.3g} Hz, below its "
             f"lowest {F_INJ_MIN / 8.0:g} Hz (the bandwidths of the loops follow it): at least "
             f"{limit_text(F_INJ_MIN / 2.0, True)} Hz")
 
@@ -1004,7 +1006,8 @@ DRIVE_RULES: tuple[Rule, ...] = (
     Rule(2, ("f_inj",), lambda x: x.d.shape != "square" or x.d.f_inj is None,
          lambda x, k: f"{x.show('f_inj')}: the square wave runs at f_pwm / 2 = {x.d.f_pwm / 2.0:g} Hz: leave "
                       "it out"),
-    Rule(2, ("f_inj", "f_pwm"), lambda x: F_INJ_MIN / 8.0 <= x.f_inj <= x.d.f_pwm / 4.0, _f_inj_says),
+    Rule(2, ("f_inj", "f_pwm"), lambda x: F_INJ_MIN / 8.0 <= x.f_inj <= x.d.f_pwm / F_INJ_PWM_DIV,
+         _f_inj_says),
     Rule(2, ("travel",), lambda x: x.d.travel is None or x.d.travel >= x.motor.pole_pitch, _travel_says),
     Rule(2, ("v_inj",), _v_inj_fits, _v_inj_says),
     Rule(2, ("i_max", "load", "a_max"), lambda x: x.force_need <= x.motor.force_constant * x.d.i_max,
