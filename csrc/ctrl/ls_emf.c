@@ -29,9 +29,12 @@ ls_status ls_emf_init(ls_emf *e, const ls_emf_cfg *cfg)
     e->alpha = a;
     e->l_fs = cfg->l_d * cfg->fs;
     e->half_ts = LS_R(0.5) * ts;
+    e->w_c = LS_TWO_PI * cfg->f_lpf;
+    e->w_rip = LS_R(0.5) * LS_R(1.41421356237) * e->w_c;
     e->b_noise = LS_R(3.0) * cfg->i_noise *
                  (e->l_fs * a * LS_SQRT(LS_R(1.0) + q) + cfg->r_s * LS_SQRT(LS_R(0.5) * q));
-    if (!LS_ISFINITE4(e->alpha, e->l_fs, e->half_ts, e->b_noise) || !(a > LS_R(0.0))) {
+    if (!LS_ISFINITE4(e->alpha, e->l_fs, e->half_ts, e->b_noise) || !LS_ISFINITE2(e->w_c, e->w_rip) ||
+        !(a > LS_R(0.0))) {
         return LS_ERR_PARAM; /* (an inductance or a noise so large that the products overflow) */
     }
     ls_emf_reset(e);
@@ -52,48 +55,50 @@ void ls_emf_reset(ls_emf *e)
     e->bound = LS_R(0.5) * LS_PI;
 }
 
-LS_REAL ls_emf_bound(LS_REAL x)
-{
-    /* tan(asin x) >= asin x: the largest angle a perpendicular error of x |e| turns the vector by,
-     * rounded up; not finite or beyond LS_EMF_X_MAX: no trust */
-    if (!(x < LS_EMF_X_MAX)) {
-        return LS_R(0.5) * LS_PI;
-    }
-    x = x > LS_R(0.0) ? x : LS_R(0.0);
-    return ls_clamp(x / LS_SQRT(LS_R(1.0) - x * x), LS_R(0.0), LS_R(0.5) * LS_PI);
-}
-
-LS_REAL ls_emf_error_v(const ls_emf *e, LS_REAL i_mag, LS_REAL omega, LS_REAL k_r)
+LS_REAL ls_emf_bound(const ls_emf *e, LS_REAL mag, LS_REAL i_par, LS_REAL i_perp, LS_REAL omega, LS_REAL k_r)
 {
     const ls_emf_cfg *c = &e->cfg;
-    return (c->err_r * k_r * c->r_s + c->err_l * c->l_q * LS_FABS(omega)) * LS_FABS(i_mag) + c->u_err + e->b_noise;
+    const LS_REAL ra = c->err_r * k_r * c->r_s, xb = c->err_l * c->l_q * LS_FABS(omega);
+    const LS_REAL i_mag = LS_SQRT(i_par * i_par + i_perp * i_perp);
+    /* the inverter's error follows the current (all of it across e without a current) */
+    const LS_REAL share = i_mag > LS_R(1e-9) ? i_perp / i_mag : LS_R(1.0);
+    const LS_REAL rip = e->w_rip / (e->w_c + LS_R(6.0) * LS_FABS(omega));
+    const LS_REAL par = ra * i_par + xb * i_perp + c->u_err + e->b_noise;
+    const LS_REAL perp = ra * i_perp + xb * i_par + c->u_err * (share + rip) + e->b_noise;
+    const LS_REAL y = perp / (mag - par);
+    /* atan(y) <= y: rounded up; |e| <= par, or not finite: no trust */
+    return (mag > par && y < LS_R(0.5) * LS_PI) ? y : LS_R(0.5) * LS_PI;
 }
 
 LS_REAL ls_emf_omega_min(const ls_emf *e, LS_REAL i_mag, LS_REAL psi, LS_REAL eps_max, LS_REAL k_r)
 {
-    const ls_emf_cfg *c = &e->cfg;
-    LS_REAL x_max, den, w;
+    LS_REAL lo = LS_R(0.0), hi = e->cfg.omega_max;
+    int k;
     if (!LS_ISFINITE4(i_mag, psi, eps_max, k_r) || !(eps_max > LS_R(0.0)) || !(eps_max < LS_R(0.5) * LS_PI) ||
-        !(psi > LS_R(0.0)) || !(k_r > LS_R(0.0))) {
+        !(psi > LS_R(0.0)) || !(k_r > LS_R(0.0)) || i_mag < LS_R(0.0)) {
         return LS_REAL_MAX;
     }
-    x_max = eps_max / LS_SQRT(LS_R(1.0) + eps_max * eps_max);
-    if (!(x_max < LS_EMF_X_MAX)) {
-        x_max = LS_EMF_X_MAX; /* (the bound is pi / 2 from there on) */
-    }
-    den = psi * x_max - c->err_l * c->l_q * LS_FABS(i_mag);
-    if (!(den > LS_R(0.0))) {
+    if (!(ls_emf_bound(e, hi * psi, i_mag, LS_R(0.0), hi, k_r) <= eps_max)) {
         return LS_REAL_MAX;
     }
-    w = ls_emf_error_v(e, i_mag, LS_R(0.0), k_r) / den;
-    return LS_ISFINITE(w) ? w : LS_REAL_MAX;
+    /* the bound falls with the speed (its numerator's speed term over psi is less than the
+     * denominator's slope): bisection on [0, omega_max] to 1e-4 relative */
+    for (k = 0; k < 60 && hi - lo > LS_R(1e-4) * hi; ++k) {
+        const LS_REAL mid = LS_R(0.5) * (lo + hi);
+        if (ls_emf_bound(e, mid * psi, i_mag, LS_R(0.0), mid, k_r) <= eps_max) {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    return hi;
 }
 
 LS_REAL ls_emf_step(ls_emf *e, const LS_REAL v_ab[2], const LS_REAL i_ab[2], LS_REAL c, LS_REAL s,
                     LS_REAL omega, LS_REAL k_r)
 {
     const ls_emf_cfg *g = &e->cfg;
-    LS_REAL w, r, ima, imb, ea, eb, d, cd, sd, cm, sm, ed, eq, id, iq, sg, x;
+    LS_REAL w, r, ima, imb, ea, eb, d, cd, sd, cm, sm, ed, eq, id, iq, sg, ipar, iperp;
     if (!LS_ISFINITE4(v_ab[0], v_ab[1], i_ab[0], i_ab[1]) || !LS_ISFINITE4(c, s, omega, k_r)) {
         e->primed = false;
         return e->eps;
@@ -134,7 +139,14 @@ LS_REAL ls_emf_step(ls_emf *e, const LS_REAL v_ab[2], const LS_REAL i_ab[2], LS_
     e->mag = LS_SQRT(e->e_d * e->e_d + e->e_q * e->e_q);
     sg = w < LS_R(0.0) ? LS_R(-1.0) : LS_R(1.0);
     e->eps = e->mag > LS_R(0.0) ? LS_ATAN2(-sg * e->e_d, sg * e->e_q) : LS_R(0.0);
-    x = ls_emf_error_v(e, LS_SQRT(e->i_d * e->i_d + e->i_q * e->i_q), w, k_r);
-    e->bound = e->mag > LS_R(0.0) ? ls_emf_bound(x / e->mag) : LS_R(0.5) * LS_PI;
+    if (e->mag > LS_R(0.0)) {
+        /* the current's parts along and across the EMF */
+        const LS_REAL um = LS_R(1.0) / e->mag;
+        ipar = LS_FABS(e->i_d * e->e_d + e->i_q * e->e_q) * um;
+        iperp = LS_FABS(e->i_q * e->e_d - e->i_d * e->e_q) * um;
+        e->bound = ls_emf_bound(e, e->mag, ipar, iperp, w, k_r);
+    } else {
+        e->bound = LS_R(0.5) * LS_PI;
+    }
     return e->eps;
 }

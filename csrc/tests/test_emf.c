@@ -130,9 +130,18 @@ static void test_low_speed(void)
         prev = e.bound;
         LS_CHECK((w < w_min) == (e.bound > eps_max * (1.0 + 1e-3)) || fabs(w / w_min - 1.0) < 1e-2);
     }
-    LS_CHECK_NEAR(ls_emf_bound((LS_REAL)0.0), 0.0, 0.0);
-    LS_CHECK_NEAR(ls_emf_bound((LS_REAL)1.0), 0.5 * PI, 1e-6);
-    LS_CHECK_NEAR(ls_emf_bound((LS_REAL)NAN), 0.5 * PI, 1e-6);
+    /* no error at all: no bound; an EMF below the along-current error or not finite: no trust */
+    {
+        ls_emf_cfg z = cfg;
+        ls_emf ez;
+        z.err_r = z.err_l = z.u_err = z.i_noise = 0;
+        LS_CHECK(ls_emf_init(&ez, &z) == LS_OK);
+        LS_CHECK_NEAR(ls_emf_bound(&ez, 10, 2, 1, 100, 1), 0.0, 0.0);
+    }
+    LS_CHECK_NEAR(ls_emf_bound(&e, (LS_REAL)0.5, 2, 0, 100, 1), 0.5 * PI, 1e-6);
+    LS_CHECK_NEAR(ls_emf_bound(&e, (LS_REAL)NAN, 2, 0, 100, 1), 0.5 * PI, 1e-6);
+    /* a current across the EMF turns the along-current errors into angle */
+    LS_CHECK(ls_emf_bound(&e, 20, 0, 2, 100, 1) > 2.0 * ls_emf_bound(&e, 20, 2, 0, 100, 1));
     /* at w_min exactly: bound = eps_max */
     p.omega = w_min;
     ls_emf_reset(&e);

@@ -15,11 +15,17 @@
  * error, the observer's eps = theta - theta_est, is
  *   eps = atan2(-sg e_d, sg e_q),  sg = the sign of the estimated speed (E_ex follows omega).
  * A trust measure for the speed-scheduled fusion: the bound on |eps| that the model's uncertainty
- * allows, from the voltage error bound b (V) against the EMF's magnitude |e|:
- *   b = err_r k_r r_s |i| + err_l l_q |omega| |i| + u_err + b_noise,   x = b / |e|,
- *   bound = x / sqrt(1 - x^2) (= tan(asin x) >= asin x) for x < LS_EMF_X_MAX, else pi / 2
- * (|i|: the low-passed current's magnitude; b_noise: three standard deviations of the low-passed
- * EMF from a white current noise of i_noise per sample). psi_pm enters neither eps nor the bound.
+ * allows. The estimate is e = e_true + de, de = a i + b J i + n with |a| <= err_r k_r r_s (a
+ * resistance error, and the inverter's error, which follows the current: u_err), |b| <= err_l l_q
+ * |omega| (an inductance error) and n the rest (current noise, b_noise; the inverter error's ripple
+ * across the current, u_err / 2 turning at 6 omega, through the low-pass). With i_par and i_perp the
+ * current's parts along and across e, de's parts along and across e are at most
+ *   par  = err_r k_r r_s i_par + err_l l_q |omega| i_perp + u_err + b_noise,
+ *   perp = err_r k_r r_s i_perp + err_l l_q |omega| i_par + u_err (i_perp / |i| + rip) + b_noise,
+ *   rip  = sqrt 2 w_c / (2 (w_c + 6 |omega|))   (>= half the low-pass's gain at 6 omega),
+ * and the true EMF's angle differs from e's by at most atan(perp / (|e| - par)) <= perp / (|e| -
+ * par): the bound (pi / 2 when |e| <= par or beyond). psi_pm enters neither eps nor the bound.
+ * ls_emf_omega_min inverts it for the design: the speed above which the bound holds (the hand-over).
  */
 #ifndef LINSENSE_LS_EMF_H
 #define LINSENSE_LS_EMF_H
@@ -36,8 +42,6 @@
 /* The largest relative uncertainty of r_s and l_q (err_r, err_l): below 1 (at 1 the model is
  * nothing). */
 #define LS_EMF_ERR_REL_MAX LS_R(0.9)
-/* The largest error ratio x = b / |e| with a finite bound: beyond, the bound is pi / 2 (no trust). */
-#define LS_EMF_X_MAX LS_R(0.99)
 
 typedef struct {
     LS_REAL fs;        /**< unit: Hz, sampling rate (one step per PWM period), > 0 */
@@ -62,6 +66,8 @@ typedef struct {
     LS_REAL l_fs;        /**< unit: ohm, l_d fs (the inductive drop per ampere of change) */
     LS_REAL half_ts;     /**< unit: s, Ts / 2 (the period's middle) */
     LS_REAL b_noise;     /**< unit: V, 3 sigma of the low-passed EMF from i_noise */
+    LS_REAL w_rip;       /**< unit: rad/s, sqrt 2 w_c / 2 (the ripple's attenuation: w_rip / (w_c + 6 |omega|)) */
+    LS_REAL w_c;         /**< unit: rad/s, 2 pi f_lpf */
     LS_REAL i0[2];       /**< unit: A, the currents at the start of the period (alpha-beta) */
     bool primed;         /**< unit: -, i0 holds a sample (false: the first step only stores it) */
     LS_REAL e_d, e_q;    /**< unit: V, the low-passed EMF in the estimated frame */
@@ -76,16 +82,15 @@ typedef struct {
 ls_status ls_emf_init(ls_emf *e, const ls_emf_cfg *cfg);
 /* The filters and the stored current back to zero, no trust (bound pi / 2). */
 void ls_emf_reset(ls_emf *e);
-/* The bound on |eps| for the error ratio x = b / |e| >= 0 (rad; pi / 2 from LS_EMF_X_MAX on). */
-LS_REAL ls_emf_bound(LS_REAL x);
-/* The voltage error bound b (V) at the current magnitude i_mag (A), the electrical speed omega
- * (rad/s) and the resistance scale k_r. */
-LS_REAL ls_emf_error_v(const ls_emf *e, LS_REAL i_mag, LS_REAL omega, LS_REAL k_r);
-/* The lowest electrical speed (rad/s) at which the bound is at most eps_max (rad, in (0, pi/2)) for a
- * current i_mag (A) and an EMF of omega psi (psi: Wb, the magnets' flux linkage; i_d = 0), the
- * resistance scale k_r: omega_min = (err_r k_r r_s i + u_err + b_noise) / (psi x_max - err_l l_q i),
- * x_max = eps_max / sqrt(1 + eps_max^2) (the inverse of ls_emf_bound); LS_REAL_MAX when no speed
- * reaches it (psi x_max <= err_l l_q i) or an argument is out of range. */
+/* The bound on |eps| (rad, in [0, pi/2]) for an EMF of magnitude mag (V) and a current with parts
+ * i_par along it and i_perp across it (A, >= 0), at the electrical speed omega (rad/s) and the
+ * resistance scale k_r (the header's formula; pi / 2 for |e| <= par or a non-finite argument). */
+LS_REAL ls_emf_bound(const ls_emf *e, LS_REAL mag, LS_REAL i_par, LS_REAL i_perp, LS_REAL omega, LS_REAL k_r);
+/* The lowest electrical speed (rad/s) from which the bound is at most eps_max (rad, in (0, pi/2)) in
+ * the steady state of a current i_mag (A) on the q-axis and an EMF of omega psi (psi: Wb, the
+ * magnets' flux linkage), the resistance scale k_r: ls_emf_bound falls with the speed and is found
+ * by bisection (to 1e-4 relative); LS_REAL_MAX when omega_max does not reach it or an argument is
+ * out of range. */
 LS_REAL ls_emf_omega_min(const ls_emf *e, LS_REAL i_mag, LS_REAL psi, LS_REAL eps_max, LS_REAL k_r);
 
 /* One PWM period: v_ab, the mean voltage applied over the period that has just ended (V, alpha-beta:
