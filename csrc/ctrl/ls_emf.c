@@ -1,5 +1,6 @@
 /* The extended-EMF position error in the estimated frame (see linsense/ls_emf.h). */
 #include "linsense/ls_emf.h"
+#include "linsense/ls_dtres.h"
 #include "linsense/ls_math.h"
 
 ls_status ls_emf_init(ls_emf *e, const ls_emf_cfg *cfg)
@@ -58,7 +59,8 @@ void ls_emf_reset(ls_emf *e)
 LS_REAL ls_emf_bound(const ls_emf *e, LS_REAL mag, LS_REAL i_par, LS_REAL i_perp, LS_REAL omega, LS_REAL k_r)
 {
     const ls_emf_cfg *c = &e->cfg;
-    const LS_REAL ra = c->err_r * k_r * c->r_s, xb = c->err_l * c->l_q * LS_FABS(omega);
+    /* (k_r within ls_dtres's range: a negative scale would make the bound negative) */
+    const LS_REAL ra = c->err_r * ls_clamp(k_r, LS_DTRES_KR_MIN, LS_DTRES_KR_MAX) * c->r_s, xb = c->err_l * c->l_q * LS_FABS(omega);
     const LS_REAL i_mag = LS_SQRT(i_par * i_par + i_perp * i_perp);
     /* the inverter's error follows the current (all of it across e without a current) */
     const LS_REAL share = i_mag > LS_R(1e-9) ? i_perp / i_mag : LS_R(1.0);
@@ -110,6 +112,7 @@ LS_REAL ls_emf_step(ls_emf *e, const LS_REAL v_ab[2], const LS_REAL i_ab[2], LS_
         return e->eps;
     }
     w = ls_clamp(omega, -g->omega_max, g->omega_max);
+    k_r = ls_clamp(k_r, LS_DTRES_KR_MIN, LS_DTRES_KR_MAX);
     r = k_r * g->r_s;
     ima = LS_R(0.5) * (e->i0[0] + i_ab[0]);
     imb = LS_R(0.5) * (e->i0[1] + i_ab[1]);
@@ -125,7 +128,7 @@ LS_REAL ls_emf_step(ls_emf *e, const LS_REAL v_ab[2], const LS_REAL i_ab[2], LS_
      * LS_EMF_OMEGA_TS_MAX / 2: cos and sin by their series to d^4) */
     d = w * e->half_ts;
     cd = LS_R(1.0) - LS_R(0.5) * d * d;
-    sd = d * (LS_R(1.0) - d * d / LS_R(6.0));
+    sd = d * (LS_R(1.0) - d * d * LS_R(0.166666667));
     cm = c * cd + s * sd;
     sm = s * cd - c * sd;
     ed = cm * ea + sm * eb;

@@ -96,7 +96,8 @@ LS_REAL ls_emf_omega_min(const ls_emf *e, LS_REAL i_mag, LS_REAL psi, LS_REAL ep
 /* One PWM period: v_ab, the mean voltage applied over the period that has just ended (V, alpha-beta:
  * the command of the step before, one-period PWM update); i_ab, the currents sampled now at its end
  * (A, alpha-beta); (c, s), cos and sin of the estimated angle now; omega, the estimated electrical
- * speed (rad/s, clamped to +-omega_max); k_r, the online resistance scale (ls_dtres's k_r; 1 without).
+ * speed (rad/s, clamped to +-omega_max); k_r, the online resistance scale (ls_dtres's k_r; 1
+ * without; clamped to [LS_DTRES_KR_MIN, LS_DTRES_KR_MAX] here and in ls_emf_bound).
  * Updates e_d, e_q, i_d, i_q, mag, eps and bound; returns eps (rad). A non-finite input leaves the
  * filters as they were and drops the stored current (the next step only stores its sample). */
 LS_REAL ls_emf_step(ls_emf *e, const LS_REAL v_ab[2], const LS_REAL i_ab[2], LS_REAL c, LS_REAL s,
