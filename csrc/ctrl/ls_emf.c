@@ -141,15 +141,19 @@ LS_REAL ls_emf_step(ls_emf *e, const LS_REAL v_ab[2], const LS_REAL i_ab[2], LS_
     e->i_q += e->alpha * (iq - e->i_q);
     e->mag = LS_SQRT(e->e_d * e->e_d + e->e_q * e->e_q);
     sg = w < LS_R(0.0) ? LS_R(-1.0) : LS_R(1.0);
-    e->eps = e->mag > LS_R(0.0) ? LS_ATAN2(-sg * e->e_d, sg * e->e_q) : LS_R(0.0);
-    if (e->mag > LS_R(0.0)) {
+    /* (no EMF, or filters overflowed by hostile inputs until the caller resets: no angle, no trust) */
+    if (!(e->mag > LS_R(0.0) && e->mag <= LS_REAL_MAX)) {
+        e->eps = LS_R(0.0);
+        e->bound = LS_R(0.5) * LS_PI;
+        return e->eps;
+    }
+    e->eps = ls_atan2(-sg * e->e_d, sg * e->e_q);
+    {
         /* the current's parts along and across the EMF */
         const LS_REAL um = LS_R(1.0) / e->mag;
         ipar = LS_FABS(e->i_d * e->e_d + e->i_q * e->e_q) * um;
         iperp = LS_FABS(e->i_q * e->e_d - e->i_d * e->e_q) * um;
         e->bound = ls_emf_bound(e, e->mag, ipar, iperp, w, k_r);
-    } else {
-        e->bound = LS_R(0.5) * LS_PI;
     }
     return e->eps;
 }

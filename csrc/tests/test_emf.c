@@ -6,6 +6,7 @@
 #include <math.h>
 
 #include "linsense/ls_emf.h"
+#include "linsense/ls_math.h"
 #include "ls_test.h"
 
 #define PI 3.14159265358979323846
@@ -311,8 +312,28 @@ static void test_refusals(void)
     LS_CHECK(ls_emf_init(&e, &c) == LS_OK); /* the limits themselves are allowed */
 }
 
+/* ls_atan2 (ls_math.h) against double atan2 around the circle, at several radii, and its edges. */
+static void test_atan2(void)
+{
+    int k;
+    double worst = 0.0;
+    for (k = 0; k < 100000; ++k) {
+        const double a = -PI + 2.0 * PI * (k + 0.5) / 100000.0, r = k % 3 == 0 ? 1e-3 : (k % 3 == 1 ? 1.0 : 1e4);
+        const LS_REAL y = (LS_REAL)(r * sin(a)), x = (LS_REAL)(r * cos(a));
+        worst = fmax(worst, fabs((double)ls_atan2(y, x) - atan2((double)y, (double)x)));
+    }
+    printf("ls_atan2: worst error %.3g rad\n", worst);
+    LS_CHECK(worst <= 4e-7); /* (a float's step at pi is 2.4e-7) */
+    LS_CHECK_NEAR(ls_atan2(0, 0), 0.0, 0.0);
+    LS_CHECK_NEAR(ls_atan2(0, -1), PI, 3e-7);
+    LS_CHECK_NEAR(ls_atan2(-1, 0), -0.5 * PI, 3e-7);
+    LS_CHECK_NEAR(ls_atan2((LS_REAL)INFINITY, 1), 0.5 * PI, 3e-7);
+    LS_CHECK(ls_atan2((LS_REAL)NAN, 1) != ls_atan2((LS_REAL)NAN, 1));
+}
+
 int main(void)
 {
+    test_atan2();
     test_steady_state();
     test_low_speed();
     test_step();
