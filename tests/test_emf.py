@@ -11,6 +11,7 @@ limit of :mod:`linsense.analysis.emf` is the speed at which the running block's 
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -21,6 +22,7 @@ from linsense.errors import ConfigError
 from linsense.model.motor import load_motor
 
 FS = 16000.0
+CLASS = Path(__file__).resolve().parents[1] / "src" / "linsense" / "examples" / "motors" / "class"
 GL_X, GL_W = np.polynomial.legendre.leggauss(8)
 
 
@@ -74,7 +76,7 @@ def _run(motor, model, omega: float, err: float, i_dq: tuple[float, float], n: i
 @pytest.mark.parametrize("name", ["ecce2010", "m30_low", "m90_heavy"])
 @pytest.mark.parametrize("speed, err", [(0.8, 0.2), (-0.5, -0.1), (2.0, -0.3)])
 def test_recovers_the_error_on_the_model_without_end_effect(name, speed, err):
-    motor = load_motor(name if name == "ecce2010" else f"src/linsense/examples/motors/class/{name}.toml")
+    motor = load_motor(name if name == "ecce2010" else str(CLASS / f"{name}.toml"))
     model = motor.inductance.without_end_effect()
     omega = 2.0 * np.pi * speed / motor.pole_pitch
     state, eps, _ = _run(motor, model, omega, err, (0.0, 2.0))
