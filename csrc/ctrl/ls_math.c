@@ -152,3 +152,33 @@ bool ls_friction_slope(LS_REAL c, LS_REAL b, LS_REAL band, LS_REAL *k)
     *k = c > LS_R(0.0) ? c / band : LS_R(0.0);
     return c >= LS_R(0.0) && b >= LS_R(0.0) && LS_ISFINITE3(c, b, *k) && *k >= LS_R(0.0);
 }
+
+#ifdef LS_REAL_DOUBLE
+LS_REAL ls_atan2(LS_REAL y, LS_REAL x)
+{
+    return atan2(y, x);
+}
+#else
+float ls_atan2(float y, float x)
+{
+    /* |z| <= 1 in the octant's frame: atan(y / x) where |y| <= |x|, else pi/2 - atan(x / y) */
+    const float ax = fabsf(x), ay = fabsf(y);
+    const int steep = ay > ax;
+    float z, z2, a;
+    if (ax == 0.0f && ay == 0.0f) {
+        return 0.0f;
+    }
+    z = steep ? ax / ay : ay / ax;
+    z2 = z * z;
+    /* Abramowitz and Stegun 4.4.49 (|error| <= 2e-8 on [-1, 1]) */
+    a = z * (1.0f + z2 * (-0.3333314528f + z2 * (0.1999355085f + z2 * (-0.1420889944f + z2 * (0.1065626393f +
+        z2 * (-0.0752896400f + z2 * (0.0429096138f + z2 * (-0.0161657367f + z2 * 0.0028662257f))))))));
+    if (steep) {
+        a = 1.57079632679f - a;
+    }
+    if (x < 0.0f) {
+        a = 3.14159265359f - a;
+    }
+    return y < 0.0f ? -a : a;
+}
+#endif

@@ -55,6 +55,8 @@ __all__ = [
     "STARTUP_REST_STEPS_MIN",
     "injection_fits",
     "observer_gains",
+    "emf_init",
+    "emf_omega_min",
 ]
 
 
@@ -171,6 +173,18 @@ _RULES = {
         "omega_max": "rad/s, > 0, omega_max Ts <= pi (half a period per step)",
         "force_max": "N, > 0 for mech; it may move the estimate at most pi per step",
     },
+    "ls_emf": {
+        "fs": "Hz, sampling rate, > 0",
+        "r_s": "ohm, >= 0",
+        "l_d": "H, > 0",
+        "l_q": "H, > 0",
+        "f_lpf": f"Hz, > 0, f_lpf <= {_lim(lib.LS_EMF_FLPF_FS_MAX)} fs",
+        "omega_max": f"rad/s, > 0, omega_max / fs <= {_lim(lib.LS_EMF_OMEGA_TS_MAX)}",
+        "err_r": f"relative uncertainty of the resistance, 0 .. {_lim(lib.LS_EMF_ERR_REL_MAX)}",
+        "err_l": f"relative uncertainty of l_q, 0 .. {_lim(lib.LS_EMF_ERR_REL_MAX)}",
+        "u_err": "V, the inverter's voltage error bound, >= 0",
+        "i_noise": "A rms per sample, >= 0",
+    },
 }
 
 #: the injection's largest share of the linear range at the under-voltage limit (ls_drive_init's)
@@ -225,6 +239,84 @@ def observer_gains(f_bw: float, mech: bool) -> tuple[float, ...]:
     cfg.type = lib.LS_OBS_MECH if mech else lib.LS_OBS_PLL
     lib.ls_observer_gains(cfg, f_bw)
     return (float(cfg.k1), float(cfg.k2), float(cfg.k3)) if mech else (float(cfg.k1), float(cfg.k2))
+
+
+#: the fields of ``ls_emf_cfg``, in declaration order
+EMF_FIELDS = tuple(name for name, _ in ffi.typeof("ls_emf_cfg").fields)
+
+
+def emf_init(values: dict):
+    """An ``ls_emf`` (the extended-EMF position error, ``linsense/ls_emf.h``) initialised by the C
+    library, or :class:`ConfigError` naming each field ``ls_emf_init`` refuses.
+
+    A field is named when it alone, put into a configuration the library accepts (the given
+    sampling rate, unit inductances, no uncertainty), is refused; else every field is named.
+
+    Parameters
+    ----------
+    values : dict
+        Every field of ``ls_emf_cfg`` (:data:`EMF_FIELDS`), SI units.
+
+    Returns
+    -------
+    tuple of (cdata ``ls_emf *``, cdata ``ls_emf_cfg *``)
+        The state and its configuration.
+
+    Raises
+    ------
+    InputError
+        A field missing, unknown or not a real number.
+    ConfigError
+        ``ls_emf_init`` refuses the configuration.
+    """
+    missing = [k for k in EMF_FIELDS if k not in values]
+    unknown = [k for k in values if k not in EMF_FIELDS]
+    if missing or unknown:
+        raise InputError("emf_init", (missing or unknown)[0],
+                         f"{'missing' if missing else 'unknown'}: the fields are {', '.join(EMF_FIELDS)}")
+    vals = {k: _number(v, "emf_init", k) for k, v in values.items()}
+    state = ffi.new("ls_emf *")
+    cfg = ffi.new("ls_emf_cfg *", vals)
+    status = lib.ls_emf_init(state, cfg)
+    if status == lib.LS_OK:
+        return state, cfg
+    fs = vals["fs"] if math.isfinite(vals["fs"]) and vals["fs"] > 0 else 16000.0
+    good = dict.fromkeys(EMF_FIELDS, 0.0) | {"fs": fs, "l_d": 1.0e-3, "l_q": 1.0e-3, "f_lpf": 0.01 * fs,
+                                              "omega_max": 0.01 * fs}
+    blamed = {k: v for k, v in vals.items()
+              if lib.ls_emf_init(ffi.new("ls_emf *"), ffi.new("ls_emf_cfg *", good | {k: v})) != lib.LS_OK}
+    raise config_error("ls_emf", blamed or vals, status)
+
+
+def emf_omega_min(values: dict, i_mag: float, psi: float, eps_max: float, k_r: float = 1.0) -> float:
+    """The lowest electrical speed from which the EMF estimate's bound holds (``ls_emf_omega_min``).
+
+    Parameters
+    ----------
+    values : dict
+        The ``ls_emf_cfg`` fields (:func:`emf_init`).
+    i_mag : float
+        The current's magnitude, A (on the q-axis).
+    psi : float
+        The magnets' flux linkage, Wb.
+    eps_max : float
+        The bound on the position error, rad, in (0, pi/2).
+    k_r : float, optional
+        The resistance's scale (a warm winding).
+
+    Returns
+    -------
+    float
+        rad/s; ``inf`` when no speed up to ``omega_max`` reaches the bound.
+
+    Raises
+    ------
+    ConfigError
+        ``ls_emf_init`` refuses ``values``.
+    """
+    state, _ = emf_init(values)
+    w = float(lib.ls_emf_omega_min(state, i_mag, psi, eps_max, k_r))
+    return math.inf if w >= float(np.finfo(REAL).max) else w
 
 
 _ENUMS = {

@@ -4,6 +4,7 @@
  *   ls_sincos_full(x, &c, &s)   the same, out of line (for init code: no inline copy)
  *   ls_phasor_advance(p, dc, ds)   the unit phasor p = (c, s) turned by the step (dc, ds)
  *   ls_exp(x)                   e^x; inline
+ *   ls_atan2(y, x)              the angle of (x, y), rad in [-pi, pi]; out of line
  *
  * Float build: no libm call. Where the drive works, |x| <= LS_SINCOS_TAB_MAX (25 rad: the
  * position within the period, a compensation angle), x = k 2 pi / N + r with |r| <= pi / N
@@ -27,7 +28,14 @@
  * csrc/tests/test_math.c checks <= 1e-7 on a grid of a million points); 0 below LS_EXP_MIN, +Inf
  * above LS_EXP_MAX, NaN for NaN. -ffp-contract=off keeps it the same on every target.
  *
- * Double build (-DLS_REAL_DOUBLE): libm sin, cos and exp.
+ * ls_atan2, float build: no libm call (newlib's atan2f and atanf would add about 1 kB to the
+ * library for the one caller, ls_emf): the octant reduced to |z| <= 1 with one division, then
+ * Abramowitz and Stegun's 4.4.49 polynomial of degree 17 (error 2e-8 rad before rounding;
+ * csrc/tests/test_emf.c checks <= 4e-7 rad against double atan2 on a grid of the circle, about a
+ * float's step at pi). 0 for
+ * (0, 0); NaN for a NaN argument.
+ *
+ * Double build (-DLS_REAL_DOUBLE): libm sin, cos, exp and atan2.
  */
 #ifndef LINSENSE_LS_MATH_H
 #define LINSENSE_LS_MATH_H
@@ -50,6 +58,9 @@ extern const float ls_sin_tab[LS_SIN_TAB_N];
 
 /* cos and sin of any x (rad), out of line; NaN for a non-finite x. */
 void ls_sincos_full(LS_REAL x, LS_REAL *c, LS_REAL *s);
+
+/* The angle of the vector (x, y), rad in [-pi, pi] (atan2(y, x)); out of line. */
+LS_REAL ls_atan2(LS_REAL y, LS_REAL x);
 
 /* A friction model's parameters checked (ls_friction: Coulomb c >= 0 N, viscous b >= 0 N s/m, both
  * finite, and with c > 0 a finite band > 0 m/s): true, with *k = c / band N s/m (0 for c = 0). */

@@ -1,0 +1,159 @@
+/* The extended-EMF position error in the estimated frame (see linsense/ls_emf.h). */
+#include "linsense/ls_emf.h"
+#include "linsense/ls_dtres.h"
+#include "linsense/ls_math.h"
+
+ls_status ls_emf_init(ls_emf *e, const ls_emf_cfg *cfg)
+{
+    LS_REAL ts, a, q;
+    if (e == NULL || cfg == NULL) {
+        return LS_ERR_NULL;
+    }
+    if (!LS_ISFINITE4(cfg->fs, cfg->r_s, cfg->l_d, cfg->l_q) ||
+        !LS_ISFINITE3(cfg->f_lpf, cfg->omega_max, cfg->err_r) ||
+        !LS_ISFINITE3(cfg->err_l, cfg->u_err, cfg->i_noise) || !(cfg->fs > LS_R(0.0)) ||
+        cfg->r_s < LS_R(0.0) || !(cfg->l_d > LS_R(0.0)) || !(cfg->l_q > LS_R(0.0)) ||
+        !(cfg->f_lpf > LS_R(0.0)) || !(cfg->f_lpf <= LS_EMF_FLPF_FS_MAX * cfg->fs) ||
+        !(cfg->omega_max > LS_R(0.0)) || !(cfg->omega_max <= LS_EMF_OMEGA_TS_MAX * cfg->fs) ||
+        cfg->err_r < LS_R(0.0) || cfg->err_r > LS_EMF_ERR_REL_MAX || cfg->err_l < LS_R(0.0) ||
+        cfg->err_l > LS_EMF_ERR_REL_MAX || cfg->u_err < LS_R(0.0) || cfg->i_noise < LS_R(0.0)) {
+        return LS_ERR_PARAM;
+    }
+    ts = LS_R(1.0) / cfg->fs;
+    a = LS_R(1.0) - ls_exp(-(LS_TWO_PI * cfg->f_lpf * ts));
+    /* the low-passed EMF's noise from a white current noise sigma per sample and axis: the
+     * inductive drop l_d fs (i1 - i0) through the low-pass, sum of its squared impulse response
+     * a^2 + a^3 / (2 - a), and the resistive drop r_s (i0 + i1) / 2, sum a / (2 - a) / 2 (the sums'
+     * square roots added: a bound) */
+    q = a / (LS_R(2.0) - a);
+    e->cfg = *cfg;
+    e->alpha = a;
+    e->l_fs = cfg->l_d * cfg->fs;
+    e->half_ts = LS_R(0.5) * ts;
+    e->w_c = LS_TWO_PI * cfg->f_lpf;
+    e->w_rip = LS_R(0.5) * LS_R(1.41421356237) * e->w_c;
+    e->b_noise = LS_R(3.0) * cfg->i_noise *
+                 (e->l_fs * a * LS_SQRT(LS_R(1.0) + q) + cfg->r_s * LS_SQRT(LS_R(0.5) * q));
+    if (!LS_ISFINITE4(e->alpha, e->l_fs, e->half_ts, e->b_noise) || !LS_ISFINITE2(e->w_c, e->w_rip) ||
+        !(a > LS_R(0.0))) {
+        return LS_ERR_PARAM; /* (an inductance or a noise so large that the products overflow) */
+    }
+    ls_emf_reset(e);
+    return LS_OK;
+}
+
+void ls_emf_reset(ls_emf *e)
+{
+    e->i0[0] = LS_R(0.0);
+    e->i0[1] = LS_R(0.0);
+    e->primed = false;
+    e->e_d = LS_R(0.0);
+    e->e_q = LS_R(0.0);
+    e->i_d = LS_R(0.0);
+    e->i_q = LS_R(0.0);
+    e->mag = LS_R(0.0);
+    e->eps = LS_R(0.0);
+    e->bound = LS_R(0.5) * LS_PI;
+}
+
+LS_REAL ls_emf_bound(const ls_emf *e, LS_REAL mag, LS_REAL i_par, LS_REAL i_perp, LS_REAL omega, LS_REAL k_r)
+{
+    const ls_emf_cfg *c = &e->cfg;
+    /* (k_r within ls_dtres's range: a negative scale would make the bound negative) */
+    const LS_REAL ra = c->err_r * ls_clamp(k_r, LS_DTRES_KR_MIN, LS_DTRES_KR_MAX) * c->r_s, xb = c->err_l * c->l_q * LS_FABS(omega);
+    const LS_REAL i_mag = LS_SQRT(i_par * i_par + i_perp * i_perp);
+    /* the inverter's error follows the current (all of it across e without a current) */
+    const LS_REAL share = i_mag > LS_R(1e-9) ? i_perp / i_mag : LS_R(1.0);
+    const LS_REAL rip = e->w_rip / (e->w_c + LS_R(6.0) * LS_FABS(omega));
+    const LS_REAL par = ra * i_par + xb * i_perp + c->u_err + e->b_noise;
+    const LS_REAL perp = ra * i_perp + xb * i_par + c->u_err * (share + rip) + e->b_noise;
+    const LS_REAL y = perp / (mag - par);
+    /* atan(y) <= y: rounded up; |e| <= par, or not finite: no trust */
+    return (mag > par && y < LS_R(0.5) * LS_PI) ? y : LS_R(0.5) * LS_PI;
+}
+
+LS_REAL ls_emf_omega_min(const ls_emf *e, LS_REAL i_mag, LS_REAL psi, LS_REAL eps_max, LS_REAL k_r)
+{
+    LS_REAL lo = LS_R(0.0), hi = e->cfg.omega_max;
+    int k;
+    if (!LS_ISFINITE4(i_mag, psi, eps_max, k_r) || !(eps_max > LS_R(0.0)) || !(eps_max < LS_R(0.5) * LS_PI) ||
+        !(psi > LS_R(0.0)) || !(k_r > LS_R(0.0)) || i_mag < LS_R(0.0)) {
+        return LS_REAL_MAX;
+    }
+    if (!(ls_emf_bound(e, hi * psi, i_mag, LS_R(0.0), hi, k_r) <= eps_max)) {
+        return LS_REAL_MAX;
+    }
+    /* the bound falls with the speed (its numerator's speed term over psi is less than the
+     * denominator's slope): bisection on [0, omega_max] to 1e-4 relative */
+    for (k = 0; k < 60 && hi - lo > LS_R(1e-4) * hi; ++k) {
+        const LS_REAL mid = LS_R(0.5) * (lo + hi);
+        if (ls_emf_bound(e, mid * psi, i_mag, LS_R(0.0), mid, k_r) <= eps_max) {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    return hi;
+}
+
+LS_REAL ls_emf_step(ls_emf *e, const LS_REAL v_ab[2], const LS_REAL i_ab[2], LS_REAL c, LS_REAL s,
+                    LS_REAL omega, LS_REAL k_r)
+{
+    const ls_emf_cfg *g = &e->cfg;
+    LS_REAL w, r, ima, imb, ea, eb, d, cd, sd, cm, sm, ed, eq, id, iq, sg, ipar, iperp;
+    if (!LS_ISFINITE4(v_ab[0], v_ab[1], i_ab[0], i_ab[1]) || !LS_ISFINITE4(c, s, omega, k_r)) {
+        e->primed = false;
+        return e->eps;
+    }
+    if (!e->primed) {
+        e->i0[0] = i_ab[0];
+        e->i0[1] = i_ab[1];
+        e->primed = true;
+        return e->eps;
+    }
+    w = ls_clamp(omega, -g->omega_max, g->omega_max);
+    k_r = ls_clamp(k_r, LS_DTRES_KR_MIN, LS_DTRES_KR_MAX);
+    r = k_r * g->r_s;
+    ima = LS_R(0.5) * (e->i0[0] + i_ab[0]);
+    imb = LS_R(0.5) * (e->i0[1] + i_ab[1]);
+    /* e_ab = v - R i_m - l_d (i1 - i0) fs - omega (l_q - l_d) J i_m,  J i = (-i_b, i_a) */
+    {
+        const LS_REAL wl = w * (g->l_q - g->l_d);
+        ea = v_ab[0] - r * ima - e->l_fs * (i_ab[0] - e->i0[0]) + wl * imb;
+        eb = v_ab[1] - r * imb - e->l_fs * (i_ab[1] - e->i0[1]) - wl * ima;
+    }
+    e->i0[0] = i_ab[0];
+    e->i0[1] = i_ab[1];
+    /* the estimated frame at the period's middle, theta_est - d, d = omega Ts / 2 (|d| <=
+     * LS_EMF_OMEGA_TS_MAX / 2: cos and sin by their series to d^4) */
+    d = w * e->half_ts;
+    cd = LS_R(1.0) - LS_R(0.5) * d * d;
+    sd = d * (LS_R(1.0) - d * d * LS_R(0.166666667));
+    cm = c * cd + s * sd;
+    sm = s * cd - c * sd;
+    ed = cm * ea + sm * eb;
+    eq = cm * eb - sm * ea;
+    id = cm * ima + sm * imb;
+    iq = cm * imb - sm * ima;
+    e->e_d += e->alpha * (ed - e->e_d);
+    e->e_q += e->alpha * (eq - e->e_q);
+    e->i_d += e->alpha * (id - e->i_d);
+    e->i_q += e->alpha * (iq - e->i_q);
+    e->mag = LS_SQRT(e->e_d * e->e_d + e->e_q * e->e_q);
+    sg = w < LS_R(0.0) ? LS_R(-1.0) : LS_R(1.0);
+    /* (no EMF, or filters overflowed by hostile inputs until the caller resets: no angle, no trust) */
+    if (!(e->mag > LS_R(0.0) && e->mag <= LS_REAL_MAX)) {
+        e->eps = LS_R(0.0);
+        e->bound = LS_R(0.5) * LS_PI;
+        return e->eps;
+    }
+    e->eps = ls_atan2(-sg * e->e_d, sg * e->e_q);
+    {
+        /* the current's parts along and across the EMF */
+        const LS_REAL um = LS_R(1.0) / e->mag;
+        ipar = LS_FABS(e->i_d * e->e_d + e->i_q * e->e_q) * um;
+        iperp = LS_FABS(e->i_q * e->e_d - e->i_d * e->e_q) * um;
+        e->bound = ls_emf_bound(e, e->mag, ipar, iperp, w, k_r);
+    }
+    return e->eps;
+}

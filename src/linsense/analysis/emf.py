@@ -1,0 +1,155 @@
+"""The EMF observer's low-speed limit: the speed above which its position error is bounded
+(docs/theory.md, "The EMF observer at speed"; the C block ``ls_emf``, ``linsense/ls_emf.h``).
+
+The bound is the C library's (``ls_emf_bound``, inverted by ``ls_emf_omega_min`` through the
+binding): the model's uncertainties (resistance, q inductance, the inverter's voltage error, the
+current noise) against the EMF ``omega psi_pm`` at a current on the q-axis. The later design of the
+hand-over band starts from it.
+
+Example
+-------
+>>> from linsense.analysis.emf import emf_speed_limit
+>>> lim = emf_speed_limit(motor, v_dc=72.0, f_pwm=16000.0, dead_time=0.8e-6, i_mag=2.0,
+...                       f_lpf=200.0)                         # doctest: +SKIP
+>>> lim.v_min                                                  # m/s  # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from linsense._check import real
+from linsense.model.motor import Motor, as_motor
+
+__all__ = ["EmfSpeedLimit", "emf_speed_limit", "inverter_voltage_error", "ERR_R", "ERR_L", "DT_RESIDUAL",
+           "I_NOISE", "EPS_MAX"]
+
+#: relative uncertainty of the winding's resistance after the online estimate (ls_dtres's k_r)
+ERR_R = 0.05
+#: relative uncertainty of the q inductance (a tolerance, the fundamental's saturation)
+ERR_L = 0.1
+#: the share of the dead time's voltage error the modulator's compensation leaves (1: none)
+DT_RESIDUAL = 1.0
+#: rms current noise per sample, A (10 mA rms: the start-up's reference, a 12-bit ADC)
+I_NOISE = 0.01
+#: the position-error bound the EMF estimate is trusted within, rad (3 electrical degrees)
+EPS_MAX = math.radians(3.0)
+
+
+@dataclass(frozen=True)
+class EmfSpeedLimit:
+    """The EMF estimate's low-speed limit for one motor and drive.
+
+    Attributes
+    ----------
+    omega_min : float
+        Electrical speed, rad/s, from which the bound holds (``inf``: never up to ``omega_max``).
+    v_min : float
+        The same in m/s.
+    l_d : float
+        The d inductance the block models, H: the mean over a period (the end effect's
+        position-dependent part is left to the EMF's error, docs/theory.md).
+    l_q : float
+        The q inductance the block models, H (the mean, likewise).
+    psi_pm : float
+        The magnets' flux linkage, Wb.
+    u_err : float
+        The inverter's voltage error bound, V.
+    """
+
+    omega_min: float
+    v_min: float
+    l_d: float
+    l_q: float
+    psi_pm: float
+    u_err: float
+
+
+def inverter_voltage_error(v_dc: float, f_pwm: float, dead_time: float,
+                           residual: float = DT_RESIDUAL) -> float:
+    """The bound of the inverter's voltage error vector (V, amplitude-invariant alpha-beta).
+
+    Each leg loses ``dead_time f_pwm v_dc`` with the sign of its current (docs/theory.md, "The EMF
+    observer at speed"); the three signs make a vector of ``4/3`` of it at most, of which the
+    compensation leaves ``residual``.
+
+    Parameters
+    ----------
+    v_dc : float
+        Bus voltage, V.
+    f_pwm : float
+        PWM frequency, Hz.
+    dead_time : float
+        Dead time, s.
+    residual : float, optional
+        The share left after compensation, in [0, 1].
+
+    Returns
+    -------
+    float
+        V.
+    """
+    for name, v in (("v_dc", v_dc), ("f_pwm", f_pwm), ("dead_time", dead_time), ("residual", residual)):
+        real(v, "inverter_voltage_error", name, 0.0)
+    return 4.0 / 3.0 * residual * dead_time * f_pwm * v_dc
+
+
+def emf_speed_limit(motor: Motor | str, *, v_dc: float, f_pwm: float, dead_time: float, i_mag: float,
+                    f_lpf: float, err_r: float = ERR_R, err_l: float = ERR_L,
+                    dt_residual: float = DT_RESIDUAL, i_noise: float = I_NOISE, eps_max: float = EPS_MAX,
+                    k_r: float = 1.0) -> EmfSpeedLimit:
+    """The speed above which the EMF estimate's position error is within ``eps_max``.
+
+    The C library's bound (``ls_emf_omega_min``) for the motor's mean inductances and magnet flux,
+    sampled at ``f_pwm``, at a current ``i_mag`` on the q-axis (docs/theory.md, "The EMF observer at
+    speed", the low-speed limit).
+
+    Parameters
+    ----------
+    motor : Motor or str
+        The motor (or a preset name or file).
+    v_dc, f_pwm, dead_time : float
+        Bus voltage (V), PWM and sampling frequency (Hz), dead time (s).
+    i_mag : float
+        The current, A (the rated one: the error grows with it).
+    f_lpf : float
+        The EMF's low-pass corner, Hz.
+    err_r, err_l : float, optional
+        Relative uncertainties of the resistance and of L_q.
+    dt_residual : float, optional
+        The dead time's share left by the compensation.
+    i_noise : float, optional
+        Current noise, A rms per sample.
+    eps_max : float, optional
+        The bound, rad.
+    k_r : float, optional
+        The resistance's scale (a warm winding).
+
+    Returns
+    -------
+    EmfSpeedLimit
+        The speed and what it was computed from.
+
+    Raises
+    ------
+    ConfigError
+        The C library refuses the block's configuration (naming the field).
+    """
+    from linsense import ctrl  # (the binding: its import loads the extension)
+
+    m = as_motor(motor, "emf_speed_limit")
+    for name, v in (("v_dc", v_dc), ("i_mag", i_mag), ("k_r", k_r)):
+        real(v, "emf_speed_limit", name, 0.0, low_open=name == "k_r")
+    theta = np.linspace(0.0, 2.0 * np.pi, 360, endpoint=False)
+    ldq = m.inductance.L_dq(theta)  # (the means: the end effect's constant part included)
+    l_d, l_q = float(np.mean(ldq[:, 0, 0])), float(np.mean(ldq[:, 1, 1]))
+    u_err = inverter_voltage_error(v_dc, f_pwm, dead_time, dt_residual)
+    values = {"fs": f_pwm, "r_s": m.R_s, "l_d": l_d, "l_q": l_q, "f_lpf": f_lpf,
+              "omega_max": float(ctrl.lib.LS_EMF_OMEGA_TS_MAX) * f_pwm, "err_r": err_r, "err_l": err_l,
+              "u_err": u_err, "i_noise": i_noise}
+    w = ctrl.emf_omega_min(values, i_mag, m.psi_pm, eps_max, k_r)
+    return EmfSpeedLimit(omega_min=w, v_min=w * m.pole_pitch / (2.0 * np.pi), l_d=l_d, l_q=l_q,
+                         psi_pm=m.psi_pm, u_err=u_err)

@@ -1,0 +1,140 @@
+"""The EMF observer block (``ls_emf``, ``linsense/ls_emf.h``) through the binding, against the Python
+motor model's equations (docs/theory.md, "The EMF observer at speed").
+
+The plant is the continuous model ``v_ab = R i_ab + d(L_ab(theta) i_ab)/dt + omega psi_pm (-sin,
+cos)`` with ``L_ab`` from :mod:`linsense.model.inductance`, the period's mean voltage by Gauss-Legendre
+quadrature; the block must recover the estimate's error within the period model's bound (no end
+effect) and within the end effect's own bound (with it); its refusals name the field; the low-speed
+limit of :mod:`linsense.analysis.emf` is the speed at which the running block's bound is the design's.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from linsense import ctrl
+from linsense.analysis.emf import emf_speed_limit
+from linsense.errors import ConfigError
+from linsense.model.motor import load_motor
+
+FS = 16000.0
+CLASS = Path(__file__).resolve().parents[1] / "src" / "linsense" / "examples" / "motors" / "class"
+GL_X, GL_W = np.polynomial.legendre.leggauss(8)
+
+
+def _cfg(l_d: float, l_q: float, r_s: float, **kw) -> dict:
+    return {"fs": FS, "r_s": r_s, "l_d": l_d, "l_q": l_q, "f_lpf": 200.0, "omega_max": 2000.0, "err_r": 0.05,
+            "err_l": 0.1, "u_err": 0.3, "i_noise": 0.01} | kw
+
+
+def _means(model) -> tuple[float, float]:
+    th = np.linspace(0.0, 2.0 * np.pi, 360, endpoint=False)
+    ldq = model.L_dq(th)
+    return float(ldq[:, 0, 0].mean()), float(ldq[:, 1, 1].mean())
+
+
+def _run(motor, model, omega: float, err: float, i_dq: tuple[float, float], n: int = 1600):
+    """The block on the model's steady state (a constant rotor-frame current) with the estimate
+    leading by ``err``; returns the state."""
+    l_d, l_q = _means(model)
+    state, _ = ctrl.emf_init(_cfg(l_d, l_q, motor.R_s))
+    psi, T = motor.psi_pm, 1.0 / FS
+    i_rot = np.array(i_dq)
+
+    def i_ab(th):
+        c, s = np.cos(th), np.sin(th)
+        return np.stack([c * i_rot[0] - s * i_rot[1], s * i_rot[0] + c * i_rot[1]], axis=-1)
+
+    def v_ab(th):
+        # R i + dL/dtheta omega i + L di/dt + omega psi (-sin, cos); di/dt = omega J i
+        i = i_ab(th)
+        di = omega * np.stack([-i[..., 1], i[..., 0]], axis=-1)
+        L, dL = model.L_ab(th), model.L_ab(th, derivative=1)
+        mv = "...ij,...j->...i"
+        return (motor.R_s * i + omega * np.einsum(mv, dL, i) + np.einsum(mv, L, di)
+                + omega * psi * np.stack([-np.sin(th), np.cos(th)], axis=-1))
+
+    v, i2, e2 = ctrl.ffi.new("LS_REAL[2]"), ctrl.ffi.new("LS_REAL[2]"), []
+    k = np.arange(n)
+    th_end = 1.0 + omega * T * k
+    # the period's mean voltage: Gauss-Legendre over [t_k - T, t_k]
+    th_q = th_end[:, None] - 0.5 * omega * T * (1.0 - GL_X[None, :])
+    vm = np.einsum("kqj,q->kj", v_ab(th_q), 0.5 * GL_W)
+    im = i_ab(th_end)
+    for j in range(n):
+        v[0], v[1] = vm[j]
+        i2[0], i2[1] = im[j]
+        ctrl.lib.ls_emf_step(state, v, i2, math.cos(th_end[j] + err), math.sin(th_end[j] + err), omega, 1.0)
+        e2.append(float(state.eps))
+    return state, np.array(e2), th_end
+
+
+@pytest.mark.parametrize("name", ["ecce2010", "m30_low", "m90_heavy"])
+@pytest.mark.parametrize("speed, err", [(0.8, 0.2), (-0.5, -0.1), (2.0, -0.3)])
+def test_recovers_the_error_on_the_model_without_end_effect(name, speed, err):
+    motor = load_motor(name if name == "ecce2010" else str(CLASS / f"{name}.toml"))
+    model = motor.inductance.without_end_effect()
+    omega = 2.0 * np.pi * speed / motor.pole_pitch
+    state, eps, _ = _run(motor, model, omega, err, (0.0, 2.0))
+    # the period model's error (docs/theory.md): (w T)^2 / 6 of the impedance drop against the EMF,
+    # and the float arithmetic's floor
+    wt = omega / FS
+    l_d, l_q = _means(model)
+    tol = wt**2 / 6.0 * (motor.R_s + abs(omega) * l_q) * 2.0 / abs(omega * motor.psi_pm) + 3e-4
+    assert abs(eps[-1] + err) < tol
+    assert abs(float(state.mag) - abs(omega) * motor.psi_pm) < 1e-3 * abs(omega) * motor.psi_pm
+
+
+def test_the_end_effect_costs_its_anisotropy():
+    """With the end effect, the inductance's stationary anisotropy (docs/theory.md: |L_e| i / psi at
+    most, turning at 2 theta) is the error left; measured and bounded."""
+    motor = load_motor("ecce2010")
+    model = motor.inductance
+    omega = 2.0 * np.pi * 1.0 / motor.pole_pitch
+    th = np.linspace(0.0, 2.0 * np.pi, 360, endpoint=False)
+    # the stationary part: the anisotropy of L_ab's mean over the period (the saliency averages out)
+    mean = model.L_ab(th).mean(axis=0)
+    l_e = float(np.hypot(0.5 * (mean[0, 0] - mean[1, 1]), mean[0, 1]))
+    _, eps, _ = _run(motor, model, omega, 0.0, (0.0, 2.0), n=2400)
+    peak = float(np.max(np.abs(eps[800:])))
+    bound = l_e * 2.0 / motor.psi_pm
+    print(f"ecce2010 at 1 m/s, 2 A: end-effect error peak {np.degrees(peak):.3f} deg, "
+          f"bound {np.degrees(bound):.3f}")
+    assert 0.2 * bound < peak <= bound * 1.05
+
+
+@pytest.mark.parametrize("field, value", [("fs", 0.0), ("r_s", -1.0), ("l_d", 0.0), ("l_q", float("nan")),
+                                          ("f_lpf", 1000.0), ("omega_max", 5000.0), ("err_r", 0.95),
+                                          ("err_l", -0.1), ("u_err", -1.0), ("i_noise", float("inf"))])
+def test_init_refuses_each_bad_field(field, value):
+    with pytest.raises(ConfigError, match=rf"ls_emf: {field} = .*allowed: ") as exc:
+        ctrl.emf_init(_cfg(3e-3, 4e-3, 9.0) | {field: value})
+    assert exc.value.status == ctrl.lib.LS_ERR_PARAM
+    if field == "f_lpf":
+        assert f"{float(ctrl.lib.LS_EMF_FLPF_FS_MAX):g} fs" in str(exc.value)
+
+
+def test_speed_limit_is_the_running_blocks_bound():
+    """At the design's speed the block's bound, run on the model, is the design's eps_max; above
+    it lower, below higher; and more dead time raises the speed."""
+    motor = load_motor("ecce2010")
+    kw = {"v_dc": 72.0, "f_pwm": FS, "dead_time": 0.8e-6, "i_mag": 2.0, "f_lpf": 200.0, "dt_residual": 0.25}
+    lim = emf_speed_limit(motor, **kw)
+    assert 0.1 < lim.v_min < 2.0
+    assert emf_speed_limit(motor, **(kw | {"dt_residual": 1.0})).v_min > lim.v_min
+    model = motor.inductance.without_end_effect()
+    bounds = []
+    for k in (0.8, 1.0, 1.25):
+        state, _ = ctrl.emf_init({"fs": FS, "r_s": motor.R_s, "l_d": lim.l_d, "l_q": lim.l_q, "f_lpf": 200.0,
+                                  "omega_max": float(ctrl.lib.LS_EMF_OMEGA_TS_MAX) * FS, "err_r": 0.05,
+                                  "err_l": 0.1, "u_err": lim.u_err, "i_noise": 0.01})
+        st, _, _ = _run(motor, model, k * lim.omega_min, 0.0, (0.0, 2.0))
+        # the running block's bound at the design's (mean) inductances: its own state's bound recomputed
+        b = ctrl.lib.ls_emf_bound(state, st.mag, math.hypot(st.i_d, st.i_q), 0.0, k * lim.omega_min, 1.0)
+        bounds.append(float(b))
+    assert bounds[0] > math.radians(3.0) > bounds[2]
+    assert bounds[1] == pytest.approx(math.radians(3.0), rel=2e-3)
