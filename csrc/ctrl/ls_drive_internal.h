@@ -101,8 +101,13 @@ static inline void ls_drive_cal_window_reset_(ls_drive *d)
  * 3 kB of Cortex-M4F code, and six steps use it; tools/check_mcu.sh). Either build computes the
  * same numbers bit for bit under ISO C's floating-point semantics (-std=c99: no contraction of a
  * multiply and an add into an FMA); with -ffp-contract=fast on a target with FMA the compiler
- * fuses differently in each layout of the code, and the results differ in their last bits. */
-#if defined(__OPTIMIZE_SIZE__)
+ * fuses differently in each layout of the code, and the results differ in their last bits.
+ * -DLS_DRIVE_SHARED_PARTS asks for the shared layout at any optimisation (a build attribute only:
+ * tools/bench_builds.py measures it; docs/firmware.md, "The cost on the target"). */
+#if defined(__OPTIMIZE_SIZE__) && !defined(LS_DRIVE_SHARED_PARTS)
+#define LS_DRIVE_SHARED_PARTS
+#endif
+#if defined(LS_DRIVE_SHARED_PARTS)
 #define LS_DRIVE_PART
 #else
 #define LS_DRIVE_PART static inline
@@ -237,7 +242,7 @@ LS_DRIVE_PART void ls_drive_cmd_out_(ls_cmd *cmd, ls_drive *d, const ls_drive_io
 /* The end of the steps that modulate with ls_mod_step_finite: the modulator, then the command. */
 LS_DRIVE_PART void ls_drive_close_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd, ls_drive_io *io, bool cal_done);
 
-#if !defined(__OPTIMIZE_SIZE__)
+#if !defined(LS_DRIVE_SHARED_PARTS)
 #include "ls_drive_parts.h"
 #endif
 

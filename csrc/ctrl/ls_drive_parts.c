@@ -25,6 +25,6 @@ void ls_drive_disable_report_(ls_drive *d, ls_cmd *cmd, uint32_t fault)
     cmd->pos_ref = d->traj.target;
 }
 
-#if defined(__OPTIMIZE_SIZE__) /* (else every step has them inline: ls_drive_internal.h) */
+#if defined(LS_DRIVE_SHARED_PARTS) /* (-Os, or asked for; else every step has them inline: ls_drive_internal.h) */
 #include "ls_drive_parts.h"
 #endif
