@@ -1,5 +1,4 @@
-"""Every public definition of linsense has a numpydoc docstring that the API reference renders cleanly
-(issue 25, point 5).
+"""Every public definition of linsense has a numpydoc docstring that the API reference renders cleanly.
 
 Public, precisely
 -----------------
@@ -459,8 +458,8 @@ def test_checker_wants_yields_for_a_generator():
 
 
 def test_every_package_says_what_it_is_for():
-    """A package's docstring says what the package is for, not only its name (issue 38: four were
-    ``\"\"\"linsense.fea.\"\"\"``): its first sentence holds more than the dotted name."""
+    """A package's docstring says what the package is for, not only its name (four were
+    ``\"\"\"linsense.fea.\"\"\"`` before this check): its first sentence holds more than the dotted name."""
     import ast
     from pathlib import Path
 
@@ -476,8 +475,8 @@ def test_every_package_says_what_it_is_for():
 
 
 def test_the_source_names_no_issue_numbers():
-    """The source explains itself without the tracker: no "issue N" in src/ or csrc/ (issue 38: 25,
-    then 53, comments and docstrings pointed at issues a reader of the code cannot see)."""
+    """The source explains itself without the tracker: no "issue N" in src/ or csrc/ (before this check
+    53 comments and docstrings pointed at issues a reader of the code cannot see)."""
     import re
     from pathlib import Path
 
