@@ -1,5 +1,5 @@
-"""The firmware's blocks one by one from Python, for the tests (moved out of :mod:`linsense.ctrl`,
-issue 24: nothing in the package uses them; the docs present only the drive).
+"""The firmware's blocks one by one from Python, for the tests (moved out of :mod:`linsense.ctrl`:
+nothing in the package uses them; the docs present only the drive).
 
 Each class creates a module state of the C library (``ls_biquad``, ``ls_inject``, ``ls_demod``,
 ``ls_observer``) from keyword arguments in SI units, refuses a bad configuration with
@@ -106,7 +106,7 @@ def _real(source: str, key: str, value: Any, optional: bool = False) -> float | 
     """``value`` as a Python float: a real number (int, float or a numpy scalar of a real dtype; NaN
     and inf are left to the C init, which refuses them by field), else :class:`InputError` naming
     ``key``, what was given and what is expected (None, a bool, a string, a complex number or an
-    array was a TypeError or was taken as 1.0, issue 23). ``optional``: None is returned as None."""
+    array was a TypeError or was taken as 1.0 before this check). ``optional``: None is returned as None."""
     if value is None and optional:
         return None
     ok = isinstance(value, numbers.Real) and not isinstance(value, bool | np.bool_)

@@ -1,4 +1,4 @@
-"""The Python API refuses what the command line refuses (issue 23): one error of the project's
+"""The Python API refuses what the command line refuses: one error of the project's
 hierarchy naming the argument and the value, instead of a silent table of nonsense or a run out of
 memory."""
 
@@ -125,8 +125,8 @@ def test_drive_takes_what_it_should(drive):
     assert cmd.fault & ctrl.lib.LS_FAULT_NONFINITE
 
 
-# ------------------------------------------------------------------ simulate, the firmware blocks (issue 23,
-# found by tests/properties/test_prop_api.py)
+# ------------------------------------------------------------------ simulate, the firmware blocks (found
+# by tests/properties/test_prop_api.py)
 SHORT = {"motor": "ecce2010", "scenario": {"duration": 0.005}, "reference": {"position_mm": 1.0, "at": 0.001}}
 
 

@@ -1,4 +1,4 @@
-"""The binding's build (tools/build_ctrl.py, issue 24): declarations generated from the headers, a
+"""The binding's build (tools/build_ctrl.py): declarations generated from the headers, a
 short script outside the package, and no C helper for Python that nothing calls."""
 
 from __future__ import annotations

@@ -99,7 +99,7 @@ def test_balanced_load_beyond_the_drive_refused_before_the_drive(no_work, load, 
 
 def test_balanced_load_within_the_drive_builds():
     """Up to the force the drive makes, K_f controller.i_max (50 N for ecce2010 at 2.5 A); beyond it
-    there is no equilibrium to start in (issue 37: a calibration under 1e6 N stopped on "fault
+    there is no equilibrium to start in (a calibration under 1e6 N once stopped on "fault
     encoder")."""
     for force, ok in ((50.0, True), (-50.0, True), (50.001, False), (3e38, False)):
         sc = scenario_from_dict({"motor": "ecce2010", "scenario": {"duration": 0.01},
@@ -115,7 +115,7 @@ def test_balanced_load_within_the_drive_builds():
 def test_a_trip_at_t0_on_the_sensor_names_the_sensor():
     """A current sensor noisy enough to trip the designed over-current trip at the first step (4 A rms
     against 4.2 A, under check_sensors' refusal at the trip itself) is refused naming the sensor key
-    the file gives, not protection.i_max, which it does not give (issue 23's rule); with
+    the file gives, not protection.i_max, which it does not give (a refusal names a key the file gives); with
     protection.i_max given, that key is named."""
     base = {"motor": "ecce2010", "scenario": {"name": "noise", "duration": 0.01},
             "reference": {"type": "hold"}, "sensors": {"current_noise": 4.0}}

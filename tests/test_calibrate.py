@@ -1,4 +1,4 @@
-"""linsense calibrate on the drive that will run the table (issue 22 item 6): the scenario's or the
+"""linsense calibrate on the drive that will run the table: the scenario's or the
 design's drive, the model of the injection the drive actually runs (after the design), the
 calibration's own timings following the design, and the bar of 0.3 deg against that model for
 ecce2010 and the test motors of src/linsense/examples/motors/class (switching inverter with the
@@ -40,7 +40,7 @@ def _table(name: str, load: float, column: int) -> str:
     return TABLE[name if load == 0.0 else f"{name} {load:g} N"][column]
 
 #: measured above the bar at the time of writing, for reasons outside the calibration (its timings
-#: follow the design; see the report of issue 22 item 6 and docs/simulator.md, "Calibration"):
+#: follow the design; see docs/simulator.md, "Calibration"):
 #: xfail, not strict, so that a design that brings them within the bar shows as XPASS
 ABOVE_BAR_ELLIPTICAL: dict = {}
 # (m20_hv, 1.5 us of dead time at 8 kHz, was 0.62 deg with the interpolating dead-time residual;

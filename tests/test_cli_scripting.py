@@ -1,4 +1,4 @@
-"""The CLI for scripts and the packaged examples (issue 25, points 4 and 8).
+"""The CLI for scripts and the packaged examples.
 
 Data on standard output, the report on standard error when it does (``--out -``, ``--json``);
 ``--json`` summaries with the keys docs/cli.md lists; a scenario from standard input; ``--check``
@@ -54,7 +54,7 @@ def summary(r, command: str) -> dict:
 
 # ---------------------------------------------------------------------------------- --out -
 def test_tune_out_dash_is_valid_toml_and_the_report_goes_to_stderr(run_cli, tmp_path):
-    """`tune --out -` (the issue's case: the TOML was mixed with the report): stdout parses as
+    """`tune --out -` (the reported case: the TOML was mixed with the report): stdout parses as
     TOML and is the scenario `--out FILE` writes; the design and the certificate are on stderr."""
     os.chdir(tmp_path)
     r = run_cli("tune", "--motor", "small30", "--quick", "--out", "-")

@@ -1,4 +1,4 @@
-"""The closed loop under the inverter's dead time (issue "closed loop", docs/simulator.md):
+"""The closed loop under the inverter's dead time (docs/simulator.md):
 sensorless hold anywhere in the period and the LUT calibration, on the switching inverter."""
 
 from __future__ import annotations
@@ -113,7 +113,7 @@ def test_calibrate_cli(tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert e.value.code == 2 and "--quad" in err and "1.5" in err and err.count("\n") == 0
     # a load beyond the drive's force (K_f i_max = 50 N): no equilibrium to calibrate in, refused in
-    # one line naming it (issue 37: it ran and stopped on "fault encoder")
+    # one line naming it (it once ran and stopped on "fault encoder")
     with pytest.raises(SystemExit) as e:
         main(["calibrate", "--motor", "ecce2010", "--positions", "4", "--load", "1000", "--fidelity",
               "average", "--out", str(tmp_path / "e")])

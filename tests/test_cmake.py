@@ -1,4 +1,4 @@
-"""The C library as a CMake package (issue 26, point 1): ``csrc/CMakeLists.txt``'s target
+"""The C library as a CMake package: ``csrc/CMakeLists.txt``'s target
 ``linsense::ctrl`` used by ``add_subdirectory`` and by ``find_package(linsense)`` after ``cmake
 --install`` (the exported targets, the config and version files, the version from ls_types.h), the
 double option carried to its users, the C tests registered with CTest in three variants.

@@ -170,7 +170,7 @@ def test_demod_scheduled_gain_normalises_error(motor, lut_r):
             worst_table = max(worst_table, abs(err + e) / abs(e))
             _, err_n, _ = settle(motor, th, e, "product", comp, gain=nominal_gain())
             worst_nominal = max(worst_nominal, abs(err_n + e) / abs(e))
-    assert worst_table < 0.05, worst_table  # the issue asks for 15 %
+    assert worst_table < 0.05, worst_table  # the bar is 15 %
     assert worst_nominal > 2 * worst_table  # the table, not the nominal gain, did it
 
 

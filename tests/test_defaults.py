@@ -1,4 +1,4 @@
-"""One home for each default (issue 22): the C library's design defaults are generated from the
+"""One home for each default: the C library's design defaults are generated from the
 design (linsense.tune.defaults), ls_drive.c sets those fields from the generated macros only, and
 the compiled defaults are that design."""
 

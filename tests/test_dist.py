@@ -1,6 +1,6 @@
-"""What `make dist` puts in dist/ (issue 25): a cp311-abi3 manylinux wheel holding the package and
+"""What `make dist` puts in dist/: a cp311-abi3 manylinux wheel holding the package and
 nothing of the build (no build script, test, or C source but the controller library's, which ships as
-package data for `linsense firmware export`: issue 26), and an sdist holding what the build and the
+package data for `linsense firmware export`), and an sdist holding what the build and the
 tests need.
 
 The distributions are built by `make dist` (tools/wheeltest.sh runs this file first, with

@@ -1,5 +1,4 @@
-"""Every public definition of linsense has a numpydoc docstring that the API reference renders cleanly
-(issue 25, point 5).
+"""Every public definition of linsense has a numpydoc docstring that the API reference renders cleanly.
 
 Public, precisely
 -----------------
@@ -459,8 +458,8 @@ def test_checker_wants_yields_for_a_generator():
 
 
 def test_every_package_says_what_it_is_for():
-    """A package's docstring says what the package is for, not only its name (issue 38: four were
-    ``\"\"\"linsense.fea.\"\"\"``): its first sentence holds more than the dotted name."""
+    """A package's docstring says what the package is for, not only its name (four were
+    ``\"\"\"linsense.fea.\"\"\"`` before this check): its first sentence holds more than the dotted name."""
     import ast
     from pathlib import Path
 
@@ -476,8 +475,8 @@ def test_every_package_says_what_it_is_for():
 
 
 def test_the_source_names_no_issue_numbers():
-    """The source explains itself without the tracker: no "issue N" in src/ or csrc/ (issue 38: 25,
-    then 53, comments and docstrings pointed at issues a reader of the code cannot see)."""
+    """The source explains itself without the tracker: no "issue N" in src/ or csrc/ (before this check
+    53 comments and docstrings pointed at issues a reader of the code cannot see)."""
     import re
     from pathlib import Path
 
@@ -490,3 +489,45 @@ def test_the_source_names_no_issue_numbers():
                     if re.search(r"\b[Ii]ssues? \d+", line):
                         found.append(f"{f.relative_to(root)}:{n}: {line.strip()[:80]}")
     assert not found, found
+
+
+#: where a reader meets the project's text without the tracker: the docs (the site and the
+#: repository's pages), the README, the tools and the tests
+READER_TEXT = ("README.md", ".importlinter", "docs", "tools", "tests")
+#: the kinds of file read there
+READER_SUFFIXES = (".md", ".py", ".ipynb", ".sh", ".c", ".js", ".css", "")
+#: files that still name tracker numbers while they are being rewritten on other branches; an entry
+#: that no longer names one fails the test, so that the list only shrinks
+READER_PENDING = frozenset({
+    "docs/firmware.md", "docs/motor-files.md", "docs/tuning.md", "tests/test_model.py",
+    "tests/test_motor.py", "tests/test_pil_cli.py", "tools/bench_pil.py",
+})
+
+
+def test_the_docs_tools_and_tests_name_no_issue_numbers():
+    """A reader of the docs, the tools and the tests cannot see the tracker either: no "issue N" (or
+    "issues N", "issue #N", also across a line break) in README.md, .importlinter, docs/, tools/ or
+    tests/; a sentence says what it means (the rule, or "before this check" where the history
+    explains it)."""
+    import re
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    number = re.compile(r"\b[Ii]ssues?\s+#?\d+")
+    files = []
+    for name in READER_TEXT:
+        path = root / name
+        files += sorted(path.rglob("*")) if path.is_dir() else [path] if path.is_file() else []
+    found, pending = [], set()
+    for f in files:
+        rel = f.relative_to(root).as_posix()
+        if not f.is_file() or f.suffix not in READER_SUFFIXES or "__pycache__" in f.parts:
+            continue
+        text = f.read_text(encoding="utf-8", errors="replace")
+        hits = [text.count("\n", 0, m.start()) + 1 for m in number.finditer(text)]
+        if hits and rel in READER_PENDING:
+            pending.add(rel)
+        elif hits:
+            found.append(f"{rel}:{hits}")
+    assert not found, found
+    assert pending == READER_PENDING, f"clean now, drop: {sorted(READER_PENDING - pending)}"

@@ -1,4 +1,4 @@
-"""Lean by default (issue 25, point 3): the core install runs without the extras' packages.
+"""Lean by default: the core install runs without the extras' packages.
 
 A subprocess hides the extras' modules (pyarrow, pandas, dask, distributed, skfem, jinja2,
 markupsafe, rich) behind a ``sys.meta_path`` finder that refuses them, as in a venv made by a bare

@@ -1,4 +1,4 @@
-"""``linsense firmware export`` (issue 26, point 2): a folder that builds the firmware with CMake
+"""``linsense firmware export``: a folder that builds the firmware with CMake
 alone, on the host and for the Cortex-M4F; the C library's files from the package
 (``linsense.get_include()``); every generated header stamped with the linsense version and the
 SHA-256 of its motor and drive data; ``ls_drive_init`` refusing a configuration of another version.

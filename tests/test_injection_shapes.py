@@ -1,4 +1,4 @@
-"""Rotating-vector and square-wave injection in the closed loop (issue 14; docs/firmware.md,
+"""Rotating-vector and square-wave injection in the closed loop (docs/firmware.md,
 docs/theory.md): sensorless hold at 16 positions over the period on the switching inverter with
 the 0.8 us dead time, with the compensation table (steady error <= 1.0 deg) and without it (the
 error the model predicts, where the uncompensated loop holds at all)."""

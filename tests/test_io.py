@@ -46,7 +46,7 @@ def test_dash_is_stdout(capfdbinary):
     assert capfdbinary.readouterr().out == b"to stdout\n"
 
 
-# ------------------------------------------------------------------ issue 23: tables and outputs
+# ------------------------------------------------------------------ tables and outputs
 def test_read_csv_table_reads_spreadsheet_exports(tmp_path):
     """A BOM, CRLF, empty lines and other columns are read; each row keeps its line number."""
     from linsense.io import read_csv_table

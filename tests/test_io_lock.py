@@ -1,4 +1,4 @@
-"""The output lock and the liveness probe of :mod:`linsense.io`, portable (issue 25).
+"""The output lock and the liveness probe of :mod:`linsense.io`, portable.
 
 Two real processes contend for one output folder, with each lock backend: ``flock`` on the folder
 (POSIX) and :mod:`filelock`'s lock file (what Windows runs, forced here with

@@ -1,4 +1,4 @@
-"""Output sets (issue 11): every multi-file command replaces its --out folder as a whole.
+"""Output sets: every multi-file command replaces its --out folder as a whole.
 
 Real CLI processes are killed (SIGKILL, through the ``LINSENSE_TEST_KILL_AT`` hook of
 :func:`linsense.io.output_set`) at every stage of a run; the folder then holds the complete old

@@ -1,4 +1,4 @@
-"""The layers of the package (issue 24, point 5): what ``lint-imports`` (.importlinter) cannot say.
+"""The layers of the package: what ``lint-imports`` (.importlinter) cannot say.
 
 ``make lint`` checks the layers contract; these tests add: no import cycle between linsense's
 modules (lazy imports inside functions count, as for import-linter), no private name (``_x``)

@@ -1,6 +1,6 @@
 """``linsense reproduce``: the paper's Section V claim by claim (docs/reproduce.md).
 
-One ``--quick`` run (module fixture) is checked for the issue's output contract: metrics.json's
+One ``--quick`` run (module fixture) is checked for the output contract: metrics.json's
 structure with the simulator's metrics per run, the claims computed from those metrics, every
 closed-loop run on the switching inverter with the paper's dead time, the rotating-vector variant
 of Figs. 11-13 and the magnet-polarity start-up beside them, and a self-contained report.html that

@@ -1,4 +1,4 @@
-"""Block statistics, runs in chunks and the metrics-only mode (issue 10: memory per run does not
+"""Block statistics, runs in chunks and the metrics-only mode (memory per run does not
 grow with the duration; decimated records cannot alias). docs/simulator.md, "Block statistics"."""
 
 from __future__ import annotations
@@ -82,7 +82,7 @@ def _concat(chunks):
 
 @pytest.mark.parametrize("fidelity,dec", [("average", 1), ("switching", 8)])
 def test_chunks_are_bit_identical(fidelity, dec):
-    # (1 s: the trajectory's second move starts at 0.9 s; a move after the end is refused, issue 37)
+    # (1 s: the trajectory's second move starts at 0.9 s; a move after the end is refused)
     sec = dict(scenario={"duration": 1.0}, inverter={"fidelity": fidelity}, record={"decimate": dec})
     b1 = _built("fig13_trajectory.toml", **sec)
     blocks = tuple(core.BLOCKS) if dec > 1 else ()
@@ -132,7 +132,7 @@ def test_chunks_end_at_a_fault():
 ])
 @pytest.mark.parametrize("dec", [1, 3, 16, 4801])
 def test_the_record_is_the_decimating_c_loops(extra, fault, dec):
-    """The record kept, made from every period in Python (issue 37: the C loop records every period
+    """The record kept, made from every period in Python (the C loop records every period
     for the metrics), is bit for bit the C loop's own decimation: point samples, block statistics,
     the tripping state's block, and the chunks a trace file is written in."""
     d = {"motor": "ecce2010", "scenario": {"name": "r", "duration": 0.3, "seed": 1},
@@ -180,7 +180,7 @@ def test_metrics_only_memory_does_not_grow(monkeypatch):
     long = simulation.simulate(_hold(100.0, **sw), record="metrics")
     assert short.t.size == long.t.size <= simulation.METRICS_SAMPLES
     assert long.metrics["steps"] == 1_600_000
-    # the record's blocks (its scenario says them); the metrics read every period (issue 37)
+    # the record's blocks (its scenario says them); the metrics read every period
     assert long.scenario.spec.record.decimate == -(-1_600_000 // simulation.METRICS_SAMPLES)
     assert long.metrics["block_s"] == 1 / 16000 and long.metrics["samples"] == 1_600_000
     assert long.stable and long.x_min is not None and long.i_abc_max.shape == (long.t.size, 3)
@@ -189,7 +189,7 @@ def test_metrics_only_memory_does_not_grow(monkeypatch):
 @pytest.mark.parametrize("scenario", ["step3_lut.toml", "hold"])
 def test_metrics_only_matches_the_full_trace(monkeypatch, scenario):
     """Metrics-only (a record of blocks of 64 periods, 4 ms) against the full trace: the same metrics,
-    bit for bit (issue 37: they were within a block, and a settling time of 0 within the first)."""
+    bit for bit (earlier versions read them within a block: a settling time of 0 within the first)."""
     sc = _hold(2.0) if scenario == "hold" else EXAMPLES / scenario
     full = simulation.simulate(sc).metrics
     monkeypatch.setattr(simulation, "METRICS_SAMPLES", 500)

@@ -111,7 +111,7 @@ def test_settling_time_none_when_outside_at_the_end():
     assert settling_time(t, np.zeros(101), 0.0, 0.0, 0.1) == 0.0
 
 
-# ------------------------------------------------------- bounds in electrical degrees (issue 22)
+# ------------------------------------------------------- bounds in electrical degrees
 DEG_KEYS = ("limit_cycle_deg", "final_error_deg", "final_offset_deg", "overshoot_deg")
 
 
@@ -324,7 +324,7 @@ def test_metrics_equal_the_reference_from_the_docs(blocks):
         kinds.add((got["verdict"], got["fault"] != "none", got["bias_deg"] is None))
     assert 0 < unobserved < 200, unobserved  # (runs with nothing recorded after their move: they agree too)
     # (the runs reach every verdict, with and without a fault and an error statistic; "not reached"
-    # needs a move after the run's end without a fault, which a scenario cannot give, issue 37)
+    # needs a move after the run's end without a fault, which a scenario cannot give)
     verdicts = {v for v, _, _ in kinds}
     assert {"stable", "unstable", "fault", "too short", "limit cycle"} <= verdicts <= \
         {"stable", "unstable", "fault", "too short", "limit cycle", "still moving"}, kinds
@@ -396,9 +396,9 @@ STEP = {"motor": "ecce2010", "control": {"mode": "sensored"},
 ])
 def test_verdicts_judged_on_nothing_are_their_own(duration, at, verdict, fragment, tmp_path, capsys):
     """A run that does not hold its commanded move, or an end window after it, is not judged stable
-    (issue 23: a move at 10 s in a 0.6 s run, two PWM periods, and an end window longer than the
+    (before these checks a move at 10 s in a 0.6 s run, two PWM periods, and an end window longer than the
     run were all "stable"; the last reported the step as a 2.9 mm limit cycle): a step after the
-    run's end is refused (issue 37: it never acts), an end window over the step is "too short" and
+    run's end is refused (it never acts), an end window over the step is "too short" and
     `linsense simulate --check` exits 1 naming the keys."""
     sc = json.loads(json.dumps(STEP))
     sc["scenario"] = {"duration": duration}
@@ -426,8 +426,8 @@ def test_verdicts_judged_on_nothing_are_their_own(duration, at, verdict, fragmen
 
 
 def test_a_fault_before_the_step_is_not_reached():
-    """A drive that trips before its step never reached it (issue 23: it was `reached`); the
-    verdict is the fault, with its time (issue 37: it was "not reached")."""
+    """A drive that trips before its step never reached it (it was once `reached`); the
+    verdict is the fault, with its time (it was then "not reached")."""
     t = np.arange(50) / F_PWM  # (tripped at 49 ms, the step at 0.1 s)
     a = _arrays(np.zeros(t.size), None)
     m = compute_metrics(a, fault=0x01, steps_done=t.size, f_pwm=F_PWM, moves=[(0.1, 0.1, 0.0, 3e-3)],
@@ -442,7 +442,7 @@ def test_a_fault_before_the_step_is_not_reached():
 ])
 def test_an_end_window_moving_one_way_is_no_limit_cycle(shape, want):
     """end_motion tells a mover still approaching (or drifting, or ringing down) from one that keeps
-    swinging (issue 37: a long approach was a "limit cycle"); the HF ripple below the hysteresis."""
+    swinging (a long approach was once called a "limit cycle"); the HF ripple below the hysteresis."""
     from linsense.sim.metrics import end_motion
 
     t = np.linspace(0.0, 0.3, 4801)

@@ -1,5 +1,5 @@
 """The saturated plant (``ls_sim_sat``, docs/simulator.md "Saturation") against an independent
-reference, its keys, and the calibrated LUT against load versus the FEA (issue 14).
+reference, its keys, and the calibrated LUT against load versus the FEA.
 
 The reference is written here from the definition of the model only (docs/theory.md, "The
 saturated plant"), not from :mod:`linsense.model.saturation`'s series: at each angle the tables'
@@ -426,15 +426,15 @@ def test_calibrate_cli_saturated(tmp_path, run_cli):
 # ---------------------------------------------------------------------- the bar
 @pytest.mark.slow
 def test_calibrated_lut_against_load_agrees_with_fea():
-    """Issue 14: on the saturated plant of the tubular motor with a thin back iron (FEA tables at
+    """On the saturated plant of the tubular motor with a thin back iron (FEA tables at
     0..2 A of i_q), the firmware's calibration at 0, 20 and 40 N (0, 0.73, 1.47 A) on the
     switching inverter with 0.8 us dead time; the table's change with load agrees with the change
     of the FEA's LUT at the same q current within 0.3 electrical deg (14 of the 56 positions, to
     keep the test to a few seconds; tools/bench_saturation.py runs all 56). The FEA's LUT is eq. 12
     of the same tables the plant is built from: the test shows that the closed-loop calibration
     measures the plant's load-dependent inductances (changes are compared, so an offset common to
-    every load cancels). The FEA's change at 40 N is itself about 0.3 deg, so beyond the issue's
-    0.3 deg the test holds README.md's 0.05 deg (measured 0.030 here, 0.043 over the 56 positions of
+    every load cancels). The FEA's change at 40 N is itself about 0.3 deg, so beyond the
+    required 0.3 deg the test holds README.md's 0.05 deg (measured 0.030 here, 0.043 over the 56 positions of
     docs/simulator.md's table) and the mean change within 25 % of the FEA's (measured about 7 %
     below: the calibration measures the resistance-aware LUT, which moves less with load than
     eq. 12)."""
@@ -451,5 +451,5 @@ def test_calibrated_lut_against_load_agrees_with_fea():
     assert r.max_diff_deg <= 0.05  # README.md (measured 0.030)
     for k in (1, 2):  # 20 and 40 N: the mean change, not only its bound
         cal, fea = np.mean(r.cal_change[k]), np.mean(r.fea_change[k])
-        # (20.2 % at 40 N since the injection amplitude follows the dead time and s_min, issue 22: was < 20 %)
+        # (20.2 % at 40 N since the injection amplitude follows the dead time and s_min; it was < 20 % before)
         assert abs(cal - fea) <= 0.25 * abs(fea), (k, np.degrees(cal), np.degrees(fea))

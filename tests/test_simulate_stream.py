@@ -1,4 +1,4 @@
-"""`linsense simulate` streamed in chunks (issue 10, point 4): its defaults (a Parquet trace, no
+"""`linsense simulate` streamed in chunks: its defaults (a Parquet trace, no
 plot, no matplotlib), --decimate, the chunked trace equal to the in-memory one, metrics while the
 run goes, the figure's envelopes that cannot alias, Result.to_dataframe, figures without pyplot."""
 
@@ -33,7 +33,7 @@ def sc(duration=0.1, decimate=1, step=1.0, **sections):
 
 
 def _toml(path, duration=0.1, extra=""):
-    # (the step at 0.02 s: the default 0.1 s is the run's end, where a step never acts, issue 37)
+    # (the step at 0.02 s: the default 0.1 s is the run's end, where a step never acts)
     path.write_text(f'motor = "ecce2010"\n[scenario]\nname = "t"\nduration = {duration}\n'
                     f'[reference]\nposition_mm = 1.0\nat = 0.02\n{extra}')
     return path
@@ -85,7 +85,7 @@ def test_decimate_and_plot(run_cli, tmp_path):
     ref = linsense.simulate(load_scenario(p).replace(record={"decimate": 4}))
     assert (out / "trace.csv").read_text() == trace_csv(ref)
     m = json.loads((out / "metrics.json").read_text())
-    # (the metrics read every period whatever the record keeps, issue 37)
+    # (the metrics read every period whatever the record keeps)
     assert m["block_s"] == 1 / 16000 and m["samples"] == 1600 and ref.t.size == 400
     assert m == {k: v for k, v in ref.metrics.items() if k not in WALL}
 

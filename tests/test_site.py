@@ -1,4 +1,4 @@
-"""The docs site (mkdocs.yml; issue 25, points 5 and 6).
+"""The docs site (mkdocs.yml).
 
 The site is built strictly (warnings are errors) by ``make docs-build``, which ``make test`` runs
 before pytest; the ``site`` fixture reuses that build when it is newer than every input (docs/,
@@ -136,7 +136,7 @@ def test_site_url_is_the_packages_docs_url():
 
 def test_readme_links_into_the_site_resolve(site):
     """The README links the guides as Markdown pages of the repository (``docs/NAME.md#anchor``:
-    they render where the repository is read, the site is not published; issue 37): each names a
+    they render where the repository is read, the site is not published): each names a
     page that the site built, and an anchor of it there, so that the same link holds in both."""
     links = [u for u in doclinks.links((ROOT / "README.md").read_text())
              if re.fullmatch(r"docs/[\w-]+\.md(#[\w-]+)?", u)]
@@ -208,7 +208,7 @@ def test_generated_parts_are_in_the_site(site):
         figure = (site / "gallery" / f"{path.stem}.png").stat().st_size
         assert figure > 10_000
         assert "max_abs_err_deg" in page and f"{path.stem}/" in index
-        # the index's thumbnail of the figure (issue 37: the index had none)
+        # the index's thumbnail of the figure (the index had none before this check)
         thumb = site / "gallery" / "thumbs" / f"{path.stem}.png"
         assert f'src="thumbs/{path.stem}.png"' in index and 2_000 < thumb.stat().st_size < figure, path.stem
     # the index's headers are the metrics' names, which wrap at an underscore only (docs/assets/linsense.css)
@@ -323,8 +323,8 @@ def browser(tmp_path_factory):
         pw.stop()
 
 
-#: the width at which the pages are checked for horizontal overflow (issue 37: code blocks were cut
-#: off at 1400 px)
+#: the width at which the pages are checked for horizontal overflow (code blocks were cut
+#: off at 1400 px before this check)
 WIDTH = 1400
 
 #: run in each page once it has loaded (tests/site_layout.js): what overflows horizontally (the page,
@@ -449,7 +449,7 @@ def test_every_page_of_the_site_in_chromium(site, browser, report_run):
     pngs = list((site / "gallery").glob("*.png")) + list((site / "gallery").glob("thumbs/*.png"))
     assert len(set(figures)) == len(pngs)  # (every figure and thumbnail shown)
     assert (SHOTS / "home.png").stat().st_size > 20_000
-    # the equations typeset by KaTeX, every one (LAYOUT_JS; issue 37: plain text in code blocks)
+    # the equations typeset by KaTeX, every one (LAYOUT_JS; before this check, plain text in code blocks)
     for name in ("theory", "identify", "fea"):
         layout = visits[f"{base}{name}/"].layout
         blocks = _display_equations(ROOT / "docs" / f"{name}.md")

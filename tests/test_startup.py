@@ -1,4 +1,4 @@
-"""Start-up from an unknown position with the magnet polarity (issue 14, item 4; ls_startup.h,
+"""Start-up from an unknown position with the magnet polarity (ls_startup.h,
 control.mode = "startup"), on the simulator's saturated plant (ecce2010, polarity 1.31 %/A: the
 FEA's thin-back-iron figure), every run on the switching inverter with 0.8 us dead time, 10 mA rms
 current noise and a 12-bit ADC. About 25 s."""

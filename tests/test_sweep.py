@@ -163,7 +163,7 @@ def test_another_sweep_in_the_same_folder_is_refused(run_cli, tmp_path):
     out = tmp_path / "out"
     assert run_cli("sweep", f, "--out", out, "--workers", 1, "--no-progress").code == 0
     (tmp_path / "sweep.toml").write_text(f.read_text().replace("50.0", "60.0"))
-    # (issue 23: the line names what changed, and --restart)
+    # (the line names what changed, and --restart)
     run_cli("sweep", f, "--out", out, "--no-progress").refused("--out", "sweep file", "sweep.toml", "changed",
                                                                "--restart")
     (tmp_path / "mine").mkdir()
@@ -227,7 +227,7 @@ def test_metrics_only_equals_simulate_metrics(tmp_path):
         {k: v for k, v in full.items() if k not in drop}
 
 
-# ------------------------------------------------------------------- issue 23: an axis whose span overflows
+# ------------------------------------------------------------------- an axis whose span overflows
 HUGE = 1.7976931348623157e308  # (the largest float)
 
 

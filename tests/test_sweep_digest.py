@@ -1,4 +1,4 @@
-"""A sweep's record of what its rows depend on (issue 23, "data mixed"; docs/sweeps.md, "What a
+"""A sweep's record of what its rows depend on (docs/sweeps.md, "What a
 sweep depends on"): ``DIR/sweep.json`` holds the SHA-256 of the sweep file, the base scenario, its
 motor files and their tables, and the code; a resume or a reuse of the folder with anything changed
 is refused naming it, ``--restart`` starts over, and unchanged inputs give the same bytes.

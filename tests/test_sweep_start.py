@@ -1,4 +1,4 @@
-"""A sweep's fixed cost (issue 25, point 7): local runs on a pool of worker threads (no dask, no
+"""A sweep's fixed cost: local runs on a pool of worker threads (no dask, no
 cluster to start), nothing heavy imported that the sweep does not use, a batch that stops when the
 engine lets go of it, and rows identical to those of a dask cluster."""
 

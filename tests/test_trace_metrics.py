@@ -1,4 +1,4 @@
-"""A run's metrics without its trace (issue 25, point 7): ``linsense simulate --trace none`` keeps
+"""A run's metrics without its trace: ``linsense simulate --trace none`` keeps
 only the samples that decide a metric (:class:`linsense.sim.stream.MetricSamples`), so its memory
 does not grow with the duration, and its metrics are those of the same run with a trace; the
 Parquet trace written without dictionaries reads back with every column and value."""
@@ -41,7 +41,7 @@ def no_wall(m: dict) -> dict:
 
 def every_sample(b, metrics_cap: int) -> dict:
     """The metrics of the streamed run from every reduced sample (the way before MetricSamples): the
-    samples of every PWM period whatever the record's decimate (issue 37), merged into blocks only
+    samples of every PWM period whatever the record's decimate, merged into blocks only
     when the end window holds more than the cap."""
     from linsense.sim.core import run_closed_loop_chunks
     from linsense.sim.simulation import finish_metrics, run_metrics

@@ -473,8 +473,8 @@ def test_the_hf_delay_compensation_removes_the_speed_lag():
 
 
 def test_judge_load_step_still_approaching_passes_a_limit_cycle_fails():
-    """The load step is bounded by its recovery (back within 1 deg within 0.3 s, as the issue and
-    docs/tuning.md say): a mover still approaching within the band at the end passes, with a note,
+    """The load step is bounded by its recovery (back within 1 deg within 0.3 s, as
+    docs/tuning.md says): a mover still approaching within the band at the end passes, with a note,
     and so does a decaying oscillation; one cycling by more than 0.15 deg p-p fails. A hold or a
     step must be still at its end."""
     t = np.arange(0, 0.9, 5e-4)

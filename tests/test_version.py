@@ -1,4 +1,4 @@
-"""One version, shown with the C library's (issue 25, point 2): ``src/linsense/version.py`` is the
+"""One version, shown with the C library's: ``src/linsense/version.py`` is the
 one source (pyproject reads it), the C library's ``LS_VERSION_*`` carry the same number, and
 ``linsense --version`` shows both with the build's LS_REAL."""
 

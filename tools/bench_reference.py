@@ -1,4 +1,4 @@
-"""make bench: the reference point (issue 22, item 7) on the switching inverter with 0.8 us dead
+"""make bench: the reference point on the switching inverter with 0.8 us dead
 time: the paper's 6 mm step with the LUT over 41 targets from 5.98 to 6.02 mm, with the paper's
 under-damped gains and with the designed drive; and holds at 96 positions for each injection shape
 at 0 and 20 N with the designed drive (cycles above 0.15 deg p-p, bias)."""

@@ -1,4 +1,4 @@
-"""Benchmark of the saturated plant (issue 14): the calibrated LUT against load versus the FEA, and
+"""Benchmark of the saturated plant: the calibrated LUT against load versus the FEA, and
 the cost of the saturated plant.
 
 Run by ``make bench`` (never by the tests). The motor is src/linsense/examples/motors/tubular56_thin_sat (the

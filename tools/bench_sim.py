@@ -8,13 +8,13 @@ and the best and median realtime factor (simulated seconds / wall seconds of the
 are reported with the time per PWM period. Each target line says PASS or FAIL; the exit status is
 1 when any says FAIL, so that ``make bench`` names this benchmark among its misses.
 
-Then the memory of a long run (issue 10): a 600 s hold (ecce2010, sensorless with the LUT, average
+Then the memory of a long run: a 600 s hold (ecce2010, sensorless with the LUT, average
 inverter) in metrics-only mode (``simulate(..., record="metrics")``) in a subprocess, its peak RSS
 against 150 MB, and ``linsense simulate`` of the same scenario with the default outputs
 (metrics.json, timing.json, trace.parquet written chunk by chunk, no plot) against 400 MB
 (``--rss-seconds 0`` skips both; the CLI run gets ``--cli-timeout`` s).
 
-And the cost of a short single run (issue 10): ``linsense simulate`` of a 2 s scenario
+And the cost of a short single run: ``linsense simulate`` of a 2 s scenario
 (the example step3_lut.toml) with its default outputs, the whole process's CPU time (user +
 sys of the child, imports included) against 0.6 s: the best and the median of ``--cli-repeat``
 runs after one warm-up run (which lets Python cache the bytecode, as an installed package has it:
@@ -41,9 +41,9 @@ from linsense.compensation.lut import build_lut
 from linsense.model.motor import load_motor
 from linsense.sim import core
 
-TARGETS = {"average": 500.0, "switching": 100.0}  # realtime factor, the issue's targets
-RSS_TARGETS = {"metrics": 150.0, "cli": 400.0}  # MB, peak RSS of a 600 s run (issue 10)
-CPU_TARGET = 0.6  # s, CPU (user + sys) of linsense simulate of a 2 s scenario, default outputs (issue 10)
+TARGETS = {"average": 500.0, "switching": 100.0}  # realtime factor, the targets
+RSS_TARGETS = {"metrics": 150.0, "cli": 400.0}  # MB, peak RSS of a 600 s run
+CPU_TARGET = 0.6  # s, CPU (user + sys) of linsense simulate of a 2 s scenario, default outputs
 CPU_SCENARIO = Path(__file__).resolve().parent.parent / "src/linsense/examples/scenarios/step3_lut.toml"
 
 #: runs argv[1:] and prints the peak RSS (kB on Linux) of that child alone, then its exit code

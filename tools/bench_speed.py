@@ -1,4 +1,4 @@
-"""make bench: the usable speed per motor (issue 39, "Numbers"): every shipped motor (ecce2010,
+"""make bench: the usable speed per motor: every shipped motor (ecce2010,
 small30, harmonic and the test motors of src/linsense/examples/motors/class with their drive data)
 designed by `linsense tune` for `v_max = V` (linsense.tune.drive_design.design_drive, as tune does)
 at each V of a grid up to the bus-limited speed (and at it; then bisected where the 3 deg bound is
@@ -16,7 +16,7 @@ where the back-EMF, R_s i and omega L_q i take the linear range V_dc,min / sqrt(
 
 The targets (peak <= 3 deg, <= 1 deg at rest at 0.8 of the bus-limited speed) are printed beside
 the numbers; missing them is not a failure here (the HF estimate alone carries the position today:
-this is the "before" of issue 39). Exit 1 only when a run errors.
+these are the numbers before the EMF observer's fusion, not built yet). Exit 1 only when a run errors.
 
     .venv/bin/python tools/bench_speed.py                       # every motor, the whole grid
     .venv/bin/python tools/bench_speed.py --quick               # ecce2010 and small30, five speeds
@@ -43,8 +43,8 @@ from linsense.verify.cases import move_distance, trajectory_case
 from linsense.verify.certificate import motor_ref
 
 ROOT = Path(__file__).parents[1]
-PITCHES = 10.0  # each move covers at least this many pole pitches (issue 39)
-TARGET_SHARE = 0.8  # the issue's speed, of the bus-limited speed
+PITCHES = 10.0  # each move covers at least this many pole pitches
+TARGET_SHARE = 0.8  # the speed the targets are judged at, a share of the bus-limited speed
 GRID = (0.25, 0.5, 0.75, 1.0, 1.25, 1.5, 1.75, 2.0, 2.5, 3.0, 3.5, 4.0, 5.0, 6.0, 8.0, 10.0, 12.0, 15.0)
 BISECT = 3  # halvings of the step between the last speed that passes and the next (0.25 -> 0.03 m/s)
 QUICK_MOTORS, QUICK_GRID = ("ecce2010", "small30"), (0.25, 0.5, 0.75, 1.0)

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Quick to start, light to run (issue 25, point 7; make bench): every figure side by side, in one run.
+"""Quick to start, light to run (make bench): every figure side by side, in one run.
 
 Each figure is taken on a whole child process (``os.wait4`` gives that child's own CPU time and
 peak RSS), except the Parquet trace's CPU, which is the writer's own time inside a run:

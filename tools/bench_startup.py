@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Start-up from an unknown position with the magnet polarity (issue 14, item 4; make bench).
+"""Start-up from an unknown position with the magnet polarity (make bench).
 
 200 random start positions over two electrical periods, the drive's estimate at 0, ecce2010 with
 the saturated plant (polarity 1.31 %/A, the FEA's thin-back-iron figure), the switching inverter

@@ -1,9 +1,9 @@
 """Sweep benchmark (make bench): throughput of the sweep engine on 1 and 2 workers and its overhead
-above the C loop's own time (issue 10's targets: 2 workers >= 1.8x one worker, overhead <= 10 %).
+above the C loop's own time (the targets: 2 workers >= 1.8x one worker, overhead <= 10 %).
 
 Runs N copies (seeds) of the paper's 2 s, 3 mm step (step3_lut) on the switching inverter, metrics only, with
 1 worker thread, 2 worker threads and 2 worker processes (the processes' start-up counted apart).
-Prints each figure. Usage: python tools/bench_sweep.py [N] (default 2,000 runs, as the issue's example).
+Prints each figure. Usage: python tools/bench_sweep.py [N] (default 2,000 runs).
 The C loop's time is the runs' own ``wall_s``, summed as they finish (a sweep's rows carry no wall
 time: its tables are byte-reproducible).
 """
@@ -60,7 +60,7 @@ def run(f: Path, **kw) -> tuple[float, float, int]:
 
 
 def main() -> int:
-    n = int(sys.argv[1]) if len(sys.argv) > 1 else 2000  # (the issue's example size)
+    n = int(sys.argv[1]) if len(sys.argv) > 1 else 2000  # (the default size)
     with tempfile.TemporaryDirectory() as tmp:
         f = spec(n, Path(tmp))
         run(spec(8, Path(tmp) / "warm"), workers=1)  # imports and caches

@@ -1,4 +1,4 @@
-"""The Python API without the command line's checks (issue 37): each case a call a new user made,
+"""The Python API without the command line's checks: each case a call a new user made,
 the error of the project's hierarchy it must end in, the argument it must name and words its one
 line must contain.
 

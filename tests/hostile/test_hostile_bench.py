@@ -1,4 +1,4 @@
-"""Hostile bench files and identify options (issue 11, class "bench"): exit 2 and one line naming
+"""Hostile bench files and identify options: exit 2 and one line naming
 the file, the row and column (or the option) and the value; the output folder is not created."""
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
-"""Messages that blamed another cause than the input that is wrong (issue 37, "Messages that
-mislead"): each case an input of ``linsense tune``, ``calibrate``, ``firmware export`` or
-``simulate``, the key its one line must name (the input the user can change), words it must
-contain (the value, the limit) and words it must not (the cause it blamed before).
+"""Messages that blamed another cause than the input that is wrong: each case an input of
+``linsense tune``, ``calibrate``, ``firmware export`` or ``simulate``, the key its one line must
+name (the input the user can change), words it must contain (the value, the limit) and words it must
+not (the cause it blamed before).
 
 The rule behind them (:data:`linsense.tune.design.DRIVE_RULES`): the design checks its inputs in
 one ordered table, (1) each input against its own range, (2) pairs of inputs (the dead time against
@@ -63,7 +63,7 @@ def section(sec: str, keys: str) -> str:
 
 # name: (command, the key named, words the line must contain, words it must not)
 CASES = {
-    # ---- the issue's cases
+    # ---- the reported cases
     "reversed saliency, tune": (tune(motor="rev.toml"), "motor",
                                 ["reversed saliency", "L_d = 4.46 mH", "L_q = 3.51 mH", "L2 and M2"],
                                 ["i_max", "no injection"]),

@@ -1,4 +1,4 @@
-"""One command's output fed into another (issue 37, the audit of chained outputs): a motor file, a
+"""One command's output fed into another: a motor file, a
 bench file, a LUT, a measured table or a tuned scenario handed on, edited in between or paired with
 another motor's file. Each case was a wrong answer without a word, or a refusal that did not say
 which file of the chain is wrong.

@@ -1,4 +1,4 @@
-"""Hostile command lines (issue 11, class "CLI"): exit 2 and one line naming the option and the
+"""Hostile command lines: exit 2 and one line naming the option and the
 value; nothing written."""
 
 from __future__ import annotations
@@ -31,7 +31,7 @@ CASES = {
     "noise nan": (["bench-emulate", "--motor", "ecce2010", "--noise", "nan", "--out", "b.csv"],
                   ["--noise", "nan"]),
     "unknown command": (["simulat", "x.toml"], ["simulat"]),
-    # (issue 23: these were accepted and wrote something wrong)
+    # (these were once accepted and wrote something wrong)
     "f-inj 1e300": (["lut", "--motor", "ecce2010", "--f-inj", "1e300", "--out", "l.csv"],
                     ["--f-inj", "1e+300", "limit"]),
     "out names a folder": (["model", "--motor", "ecce2010", "--out", "newdir/"],
@@ -40,8 +40,8 @@ CASES = {
 
 
 def test_a_c_keyword_symbol_is_refused_and_a_valid_one_compiles_as_given(run_cli, tmp_path):
-    """`lut --symbol int` (a C keyword) wrote a header that did not compile (issue 23), then one with
-    the array renamed int_t without a word (issue 37): refused naming the rule; a valid name is used
+    """`lut --symbol int` (a C keyword) wrote a header that did not compile, then one with
+    the array renamed int_t without a word: refused naming the rule; a valid name is used
     as given (case kept) and compiles."""
     import subprocess
 
@@ -67,8 +67,8 @@ def test_hostile_command_line(run_cli, tmp_path, monkeypatch, case):
 
 
 def test_an_override_that_would_change_nothing_is_refused(run_cli, tmp_path):
-    """`controller.model.demod_gain` with the gain schedule on changed nothing, byte for byte (issue
-    23): it is refused in one line naming both keys; with the schedule off it takes effect."""
+    """`controller.model.demod_gain` with the gain schedule on changed nothing, byte for byte (before
+    this check): it is refused in one line naming both keys; with the schedule off it takes effect."""
     sc = tmp_path / "s.toml"
     body = ('motor = "ecce2010"\n[scenario]\nduration = 0.4\n[reference]\ntype = "hold"\n'
             "[controller.model]\ndemod_gain = -3.0\n")
@@ -83,7 +83,7 @@ def test_an_override_that_would_change_nothing_is_refused(run_cli, tmp_path):
 
 def test_lut_refuses_a_motor_the_drive_cannot_hold(run_cli, tmp_path):
     """A motor with reversed saliency (L_q < L_d on average) is refused by lut as tune, simulate and
-    calibrate refuse it, for every injection (issue 23: lut wrote it; issue 37: still for the
+    calibrate refuse it, for every injection (lut once wrote it, then still for the
     pulsating injection, and the others blamed i_max): one rule, linsense.tune.design.require_saliency."""
     from importlib import resources
 
@@ -98,7 +98,7 @@ def test_lut_refuses_a_motor_the_drive_cannot_hold(run_cli, tmp_path):
 
 
 def test_a_pm_harmonic_listed_twice_is_refused(run_cli, tmp_path):
-    """Two [pm_flux] entries of one order were accepted (issue 23): refused naming the entry."""
+    """Two [pm_flux] entries of one order, once accepted, are refused naming the entry."""
     from importlib import resources
 
     text = (resources.files("linsense.model") / "presets" / "ecce2010.toml").read_text()
@@ -111,8 +111,8 @@ def test_a_pm_harmonic_listed_twice_is_refused(run_cli, tmp_path):
 
 @pytest.mark.parametrize("command", ["simulate", "model"])
 def test_a_deeply_nested_toml_is_one_line(run_cli, tmp_path, command):
-    """A 1.8 kB file with a 900-deep array was a RecursionError traceback in every reader (issue 23):
-    one line naming the file and the limit (docs/limits.md), for a scenario and a motor file."""
+    """A 1.8 kB file with a 900-deep array was a RecursionError traceback in every reader:
+    now one line naming the file and the limit (docs/limits.md), for a scenario and a motor file."""
     from linsense.limits import MAX_TOML_DEPTH
 
     f = tmp_path / "deep.toml"

@@ -1,4 +1,4 @@
-"""Hostile command lines and file systems (issue 37, the CLI and I/O families).
+"""Hostile command lines and file systems.
 
 Each case failed before its fix; the rule that prevents its kind:
 
@@ -189,7 +189,7 @@ def _unprivileged() -> list[str] | None:
 
 
 def test_a_read_only_out_for_real(tmp_path):
-    """The issue's case with real file modes (as an ordinary user: root without its capabilities)."""
+    """The reported case with real file modes (as an ordinary user: root without its capabilities)."""
     prefix = _unprivileged()
     if prefix is None:
         pytest.skip("no way to run without root's override of file modes here")

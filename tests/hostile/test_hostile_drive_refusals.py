@@ -1,4 +1,4 @@
-"""``ctrl.Drive`` refusals name the C field, its value and the limit (issue 37).
+"""``ctrl.Drive`` refusals name the C field, its value and the limit.
 
 ``ls_drive_init`` answers with one status. The binding named only the sections whose own init
 refused ("obs = refused by ls_observer_init ... see the named sections") or, for a rule of the drive

@@ -1,4 +1,4 @@
-"""Hostile environments (issue 37, the family of the environment the commands run in).
+"""Hostile environments: the environment the commands run in.
 
 Locales, paths with spaces, unicode, quotes and dashes, long names, symbolic links, a working folder
 that is read-only or deleted, temporary folders, terminals, encodings, thread and hash-seed

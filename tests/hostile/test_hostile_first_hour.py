@@ -1,4 +1,4 @@
-"""The first hour (issue 37): a new user with a fresh clone, then the wheel, following the README as
+"""The first hour: a new user with a fresh clone, then the wheel, following the README as
 written. Each family has one rule, checked here on every instance:
 
 * install commands: every ``pip install`` of the README and the home page installs from the clone

@@ -1,5 +1,5 @@
 """A 1 g mover, inside the documented range of motors (1 g .. 10 t, docs/limits.md), is designed into a
-configuration the C library accepts (issue 37).
+configuration the C library accepts.
 
 ``linsense tune`` ended with "the certificate's hold run: motor: m.toml makes the controller's
 obs.mass = 0.001, below the smallest value the controller library accepts here" for two bounds of

@@ -1,4 +1,4 @@
-"""Hostile metrics and events (issue 37): settings that blinded the metrics, events after the run's
+"""Hostile metrics and events: settings that blinded the metrics, events after the run's
 end, the verdict of a run a fault stopped, and an approach called a limit cycle. Each case: the
 scenario, the exit code and the words of its one line, or the verdict of metrics.json.
 

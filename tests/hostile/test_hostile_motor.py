@@ -1,4 +1,4 @@
-"""Hostile motor files (issue 11, class "motor"): each is refused with exit 2 and one line naming the
+"""Hostile motor files: each is refused with exit 2 and one line naming the
 file, the key and the value (and, for a slip of unit, the likely mistake); nothing is written."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Hostile files through every reader (issue 23): the bench files and LUTs read through the one
+"""Hostile files through every reader: the bench files and LUTs read through the one
 bounded CSV reader (``linsense.io.csv_rows``: a byte-order mark skipped, semicolons and decimal
 commas named, rows and fields bounded), and every text file a user gives (motor, scenario, sweep,
 JSON LUT) read no further than ``MAX_TEXT_FILE_BYTES``. Each case: the input, the exit code (or the

@@ -1,5 +1,5 @@
 """Hostile inputs of the motor model, its tables and the LUT's injection frequency that the property
-suite (tests/properties/) found giving a wrong answer without a word (issue 23): each case the
+suite (tests/properties/) found giving a wrong answer without a word: each case the
 files it needs, a command line and the words its one line must contain (and must not).
 
 * a harmonic key with a leading zero (``L04 = 0.3e-3``) was accepted and its value dropped (the model
@@ -97,7 +97,7 @@ def test_hostile_routed_model(run_cli, tmp_path, monkeypatch, case):
 
 
 def test_the_lower_limit_of_f_inj_is_accepted(run_cli, tmp_path):
-    """125 Hz (the documented lower limit, issue 37: 1 Hz before) writes a finite table: the limit refuses
+    """125 Hz (the documented lower limit; it was 1 Hz before) writes a finite table: the limit refuses
     only what is below."""
     out = tmp_path / "l.csv"
     res = run_cli("lut", "--motor", "ecce2010", "--f-inj", repr(MIN_F_INJ), "--out", out)

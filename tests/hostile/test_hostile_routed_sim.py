@@ -1,4 +1,4 @@
-"""Hostile simulator inputs found by the property suite (issue 23, tests/properties/): a conversion
+"""Hostile simulator inputs found by the property suite (tests/properties/): a conversion
 of a float to an integer that overflowed (a traceback), a missing section named without its key,
 a position the drive cannot hold (a traceback, or a reference silently refused by the drive: the run
 held still and reported no fault). Each case: the input through ``linsense simulate``, exit code 2
@@ -77,7 +77,7 @@ def test_hostile_routed_sim(run_cli, tmp_path, case):
 
 
 # (one waypoint: from 9e8 mm the move to the first lasts beyond the run, and a move that would start
-# after the end is refused, issue 37)
+# after the end is refused)
 @pytest.mark.parametrize("base", [BASE, HOLD, TRAJECTORY.replace("2.0, 1e300", "4.0")])
 def test_the_bases_run(run_cli, tmp_path, base):
     """Each base is valid (so each refusal is its case's), and a position within the drive's range

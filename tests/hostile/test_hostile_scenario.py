@@ -1,4 +1,4 @@
-"""Hostile scenario files (issue 11, class "scenario"): refused before the run with exit 2 and one
+"""Hostile scenario files: refused before the run with exit 2 and one
 line naming the file, the key and the value (a misspelled key with the closest known one); the
 output folder is not created."""
 

@@ -1,4 +1,4 @@
-"""Hostile simulator inputs (issue 23): scenario keys out of the range the controller library
+"""Hostile simulator inputs: scenario keys out of the range the controller library
 accepts, keys another key makes meaningless, and Ctrl-C at start-up. Each case: the input, the exit
 code and the words of its one line (the key the user wrote, the value, the limit)."""
 
@@ -89,13 +89,13 @@ RANGE = {
                         ["controller.speed_bandwidth_hz", "1e+30", "finite"]),
     "model psi_pm": ("[controller.model]\npsi_pm = 1e30", ["controller.model.psi_pm", "1e+30", "100"]),
     "model L_d tiny": ("[controller.model]\nL_d = 1e-30", ["controller.model.L_d", "1e-30", "0.000313333"]),
-    # (the tables' motor, a Motor held to the motor file's limits: issue 37)
+    # (the tables' motor, a Motor held to the motor file's limits)
     "model R_s": ("[controller.model]\nR_s = 1e30",
                   ["controller.model.R_s", "1e+30", "[0, 100] ohm"]),
     "model mass tiny": ("[controller.model]\nmass = 1e-30",
                         ["controller.model.mass", "1e-30", "6.97545e-06"]),
     "trip current": ("[protection]\ni_max = 1e30", ["protection.i_max", "1e+30", "100000"]),
-    # (a trip delay beyond the run's end: the run's events are checked first, issue 37)
+    # (a trip delay beyond the run's end: the run's events are checked first)
     "trip time": ("[protection]\nerr_time = 1e30", ["protection.err_time", "1e+30", "would never act",
                                                      "scenario.duration = 0.2 s"]),
     "bus trip": ("[protection]\nv_dc_max = 1e30", ["protection.v_dc_max", "1e+30", "100000"]),

@@ -1,4 +1,4 @@
-"""Sizes (issue 11, class "sizes"): every size a user types is checked against its limit before
+"""Sizes: every size a user types is checked against its limit before
 anything is allocated, and Ctrl-C ends a long run within a second with nothing written."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Hostile sweep folders (issue 23, family "data mixed"): a sweep folder reused after something its
+"""Hostile sweep folders: a sweep folder reused after something its
 rows depend on changed (the sweep file, the base scenario, its motor file or the motor's table, the
 linsense version, the C library), a manifest that is corrupt or edited, an --out that is not a
 sweep's folder. Each is refused with exit 2 and one line naming the folder and what changed, and the

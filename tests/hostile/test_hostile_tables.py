@@ -1,5 +1,5 @@
-"""Hostile tables, motor values and outputs (issue 23, families "Crashes" and "Messages that
-mislead"): each case an input, its exit code and the words its one line must contain.
+"""Hostile tables, motor values and outputs (crashes and messages that mislead): each case an input,
+its exit code and the words its one line must contain.
 
 * tables: rows, columns and field size bounded while reading (docs/limits.md), a UTF-8 BOM read,
   decimal commas and semicolon separators refused by name (they said "missing column theta_deg");

@@ -1,4 +1,4 @@
-"""Slips of unit outside the motor file (issue 37, the audit's family "units and scales"): mm for m,
+"""Slips of unit outside the motor file: mm for m,
 degrees for radians, kHz for Hz, rad/s for Hz, percent for a fraction, mH for H, mA for A, in the
 scenario and sweep files, the command's options, the bench and table files and the Python API.
 

@@ -122,7 +122,7 @@ def test_an_api_call_gives_a_finite_result_or_names_the_argument(ecce, name, dat
     assert check(value, args) or huge, name
 
 
-#: what the properties found (issue 23), each now one InputError naming the argument: a subnormal
+#: what the properties found, each now one InputError naming the argument: a subnormal
 #: frequency (the square wave's table all NaN), NaN, None or a string amplitude (NaN currents or a numpy
 #: traceback), model_table's and emulate_bench's arguments (ValueError,
 #: TypeError, numpy tracebacks)
@@ -158,7 +158,7 @@ def test_the_amplitude_of_huge_currents_is_finite(ecce):
 
 
 #: Python values a dict can carry and a TOML file cannot (tuples, numpy scalars, bytes, sets, None).
-#: Found (issue 23): None for an optional key (controller.kp_x = None) was a TypeError traceback in
+#: Found by these properties: None for an optional key (controller.kp_x = None) was a TypeError traceback in
 #: build, np.True_ was accepted as the number 1.0
 PY_ODD = st.one_of(ODD, st.tuples(st.floats(), st.floats()), st.binary(max_size=4), st.just({1.0}),
                    st.just(np.int64(7)), st.just(np.float64(0.02)), st.just(np.True_), st.just(np.False_))
@@ -179,7 +179,7 @@ def test_simulate_of_a_dict_runs_as_given_or_names_the_key(section, key, value, 
     import linsense
 
     # (found: simulate(42) was a TypeError and simulate(d, record="x") a ValueError, not InputError)
-    # (the step within the run: one after its end is refused, issue 37)
+    # (the step within the run: one after its end is refused)
     doc = {"motor": "ecce2010", "scenario": {"duration": 0.005},
            "reference": {"position_mm": 1.0, "at": 0.001}}
     doc[section] = {**doc.get(section, {}), key: value}
@@ -194,7 +194,7 @@ def test_simulate_of_a_dict_runs_as_given_or_names_the_key(section, key, value, 
     if status == "refused":
         assert isinstance(res, InputError) and res.source == "<dict>", repr(res)
         # (the key, or named in the message of a rule between keys: an event after the run's end names
-        # the event and scenario.duration, an end window too short the loop's key, issue 37)
+        # the event and scenario.duration, an end window too short the loop's key)
         assert res.key.startswith(f"{section}.{key}") or f"{section}.{key} " in str(res), \
             (section, key, value, str(res))
         return
@@ -221,7 +221,7 @@ CTRL = {
                  lambda o: o.run(np.full(16, 0.01)).theta),
 }
 #: real numbers (NaN, inf, huge, negative, zero included), and what is not one: None, a string, a
-#: boolean, a complex number, an array, a huge int (found, issue 23: Biquad(f0=None),
+#: boolean, a complex number, an array, a huge int (found by these properties: Biquad(f0=None),
 #: Injection(amplitude="x"), Observer(None, ...) were TypeErrors, Lut("abcd") a ValueError, a 2-D
 #: Lut flattened into one table; now one InputError naming the argument)
 REALS = st.one_of(st.floats(), st.sampled_from([0.0, -1.0, 1e308, 5e-324, 1e-300]), st.integers(-10, 10**6))

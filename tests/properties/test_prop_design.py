@@ -1,4 +1,4 @@
-"""Properties of the design's refusals (issue 37, "Messages that mislead"): the drive data of the
+"""Properties of the design's refusals: the drive data of the
 reference drive with one or two inputs changed to any float (NaN, inf, negative, subnormal, tiny,
 huge, or anywhere over 24 decades) is either designed or refused naming one of the inputs that were
 changed, with a limit the design accepts when it gives one: never another input (the dead time for

@@ -1,4 +1,4 @@
-"""Every public function with a hostile argument (issue 37): the exported functions of linsense, its
+"""Every public function with a hostile argument: the exported functions of linsense, its
 analysis, compensation, model, examples, tune and the C binding, each argument in turn given None,
 NaN, an infinity, a complex number, a boolean, a string, a dict, an empty or ragged array, a huge
 int or an object, the others valid. The oracle: a value that is not of the argument's kind (a motor,

@@ -245,7 +245,7 @@ def test_simulate_writes_outputs_that_agree_with_the_file_or_refuses(run_cli, tm
     sc = load_scenario(path)
     duration, f_pwm = sc.spec.scenario.duration, sc.spec.inverter.f_pwm
     assert m["sim_s"] == timing["sim_s"]
-    # the metrics read every period whatever the record keeps (issue 37): samples and block_s are the
+    # the metrics read every period whatever the record keeps: samples and block_s are the
     # metrics' own, not the record's
     assert m["block_s"] == round(1 / f_pwm, 9), m["block_s"]
     if m["fault"] == "none":  # the whole run, every period read
