@@ -37,6 +37,11 @@ ls_status ls_sim_check(const ls_sim_cfg *c)
             }
         }
     }
+    for (k = 0; k < 3; ++k) { /* (a phase's PM flux at least reverses no sign: scale > 0) */
+        if (!(LS_ISFINITE(c->pm_dscale[k]) && c->pm_dscale[k] > -1.0) || !LS_ISFINITE(c->pm_shift[k])) {
+            return LS_ERR_PARAM;
+        }
+    }
     for (k = 0; k < c->n_pm; ++k) {
         if (!LS_ISFINITE(c->pm_amp[k]) || !LS_ISFINITE(c->pm_phase[k]) || c->pm_order[k] < 1) {
             return LS_ERR_PARAM;

@@ -26,11 +26,39 @@ LS_SIM_INTERNAL void ls_sim_coef_init(const ls_sim_cfg *c, ls_sim_coef *q)
     }
 }
 
+/* the end effect on the magnets' flux (ls_sim.h, lambda_pm): each phase's PM flux and its theta
+ * derivative computed on its own (scaled, shifted; every harmonic, triplen ones included: they no
+ * longer cancel), then the amplitude-invariant Clarke transform */
+static void pm_flux_unbalanced(const ls_sim_cfg *c, double theta, double lpm[2], double dlpm[2])
+{
+    double p[3], dp[3];
+    int32_t k, j;
+    for (k = 0; k < 3; ++k) {
+        const double u = theta - (double)k * (2.0 * LS_SIM_PI / 3.0) + c->pm_shift[k];
+        const double g = c->psi_pm * (1.0 + c->pm_dscale[k]);
+        double f = cos(u), df = -sin(u);
+        for (j = 0; j < c->n_pm; ++j) {
+            const double n = (double)c->pm_order[j], arg = n * u + c->pm_phase[j];
+            f += c->pm_amp[j] * cos(arg);
+            df -= n * c->pm_amp[j] * sin(arg);
+        }
+        p[k] = g * f;
+        dp[k] = g * df;
+    }
+    ls_sim_poles_to_ab(p, lpm);
+    ls_sim_poles_to_ab(dp, dlpm);
+}
+
 /* PM flux linkage (alpha-beta, Wb) and its theta derivative (Wb/rad) at theta (c1, s1: cos, sin) */
 LS_SIM_HOT void ls_sim_pm_flux(const ls_sim_cfg *c, double theta, double c1, double s1, double lpm[2],
                                double dlpm[2])
 {
     int32_t j;
+    if (c->pm_dscale[0] != 0.0 || c->pm_dscale[1] != 0.0 || c->pm_dscale[2] != 0.0 || c->pm_shift[0] != 0.0 ||
+        c->pm_shift[1] != 0.0 || c->pm_shift[2] != 0.0) {
+        pm_flux_unbalanced(c, theta, lpm, dlpm);
+        return;
+    }
     lpm[0] = c->psi_pm * c1;
     lpm[1] = c->psi_pm * s1;
     dlpm[0] = -c->psi_pm * s1;
