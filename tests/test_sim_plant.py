@@ -139,6 +139,23 @@ def test_pm_phases_matter():
         assert (d3 > 1e-3 * m.psi_pm) if present else (d3 < 1e-15 * m.psi_pm), (phases, d3)
 
 
+def test_pm_phases_enter_the_cache_key():
+    """Motors that differ only by the end effect on the magnets' flux are different motors to the
+    build cache; a balanced one keeps the key it had before the per-phase flux existed."""
+    import hashlib
+
+    from linsense.sim.cache import motor_key
+
+    m = MOTOR_SET["harmonic"]
+    u = dataclasses.replace(m, pm_phases=UNBALANCED)
+    assert motor_key(u) != motor_key(m)
+    h = hashlib.sha256(repr((m.name, m.R_s, m.pole_pitch, m.force_constant, m.mass, m.friction,
+                             m.pm_harmonics)).encode())
+    h.update(np.ascontiguousarray(m.inductance.a).tobytes())
+    h.update(np.ascontiguousarray(m.inductance.b).tobytes())
+    assert motor_key(m) == h.hexdigest()
+
+
 def test_model_pm_flux_and_force_equal_reference():
     """The model's own per-phase PM flux (``Motor.psi_pm_abc``, the back-EMF per phase per rad of
     electrical speed) and force (``Motor.force_abc``) equal the independent ABC reference of

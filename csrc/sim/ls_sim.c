@@ -292,7 +292,7 @@ LS_SIM_INLINE double plant_freeze(const ls_sim_cfg *c, const ls_sim_coef *q, con
         f_start = ls_sim_force_of(q, pm, L->i);
     } else {
         ls_sim_sat_point sp;
-        ls_sim_sat_frame_at(c, th_mid, sf);
+        ls_sim_sat_frame_at(c, q, th_mid, sf);
         ls_sim_sat_at(c, sf, L->i, &sp);
         memcpy(pm->l, sp.l, sizeof pm->l);
         pm->dl[0] = pm->dl[1] = pm->dl[2] = 0.0;
@@ -540,7 +540,7 @@ ls_status ls_sim_open_loop(const ls_sim_cfg *c, const double *seg_t, const doubl
                 if (c->sat.on) { /* the saturated plant: frozen at the sub-step's mid angle */
                     ls_sim_sat_frame sf;
                     ls_sim_sat_point sp;
-                    ls_sim_sat_frame_at(c, kx * (x + 0.5 * hs * v), &sf);
+                    ls_sim_sat_frame_at(c, &pc, kx * (x + 0.5 * hs * v), &sf);
                     ls_sim_sat_at(c, &sf, i, &sp);
                     fa = sp.force;
                     if (!ls_sim_sat_step(c, &sf, v_ab, hs, -0.5 * kx * v * hs, kx * v, i, &sp)) {
