@@ -1,4 +1,4 @@
-"""The end effect on the magnets' flux from an open-circuit back-EMF measurement (issue 39).
+"""The end effect on the magnets' flux from an open-circuit back-EMF measurement.
 
 The mover is driven at a known speed with the winding open; the three voltages are recorded with
 the positions. Each phase's back-EMF is ``omega d psi_k / d theta`` (docs/theory.md section 9), so
