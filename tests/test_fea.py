@@ -6,6 +6,7 @@ Coarse meshes throughout; docs/fea.md gives the figures of the default and fine 
 from __future__ import annotations
 
 import copy
+import dataclasses
 import json
 import math
 import tomllib
@@ -132,6 +133,19 @@ def test_short_armature_end_effect_and_model_file(tmp_path):
     m = load_motor(tmp_path / "motor.toml")  # plausibility: 3x3 PD, saliency sign
     assert m.pole_pitch == pytest.approx(0.056)
     assert res.energy_error < 1e-9
+    # the end effect on the magnets' flux: each phase's fundamental, relative to phase A's
+    # (theta = 0 at its peak); the end phases differ by a fraction of a percent and about a degree
+    assert m.pm_phases.scale[0] == 1.0 and m.pm_phases.shift[0] == 0.0 and not m.pm_phases.balanced
+    assert max(abs(math.degrees(d)) for d in m.pm_phases.shift) > 0.3
+    # the motor file's per-phase flux is the FEA's, up to its harmonics (a few % of the amplitude)
+    theta, _, pm = outputs.table(res)
+    fit = m.psi_pm_abc(theta)
+    assert np.abs(fit - pm).max() < 0.05 * res.psi_pm_amplitude
+    # and its fundamental exactly: the DFT of the difference has no first harmonic left
+    diff = (pm - fit) * np.exp(-1j * theta)[:, None]
+    assert np.abs(diff.mean(axis=0)).max() < 2e-6 * res.psi_pm_amplitude
+    # a motor without magnets has no per-phase flux to write
+    assert outputs.pm_phases(dataclasses.replace(res, psi_pm_amplitude=0.0)) is None
 
 
 def test_fig4_three_coils_middle_coil_couples_equally():

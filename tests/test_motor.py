@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from pathlib import Path
 
@@ -69,6 +70,74 @@ harmonics = [ { order = 5, amplitude = 0.03, phase_deg = 10.0 } ]
     m2 = load_motor(back)
     np.testing.assert_allclose(m2.inductance.a, m.inductance.a)
     assert m2.friction == m.friction and m2.pm_harmonics == m.pm_harmonics
+
+
+# ---------------------------------------------------------------------- issue 39: the magnets' flux per phase
+_IND = "\n[inductance]\nL0 = 2.75e-3\nL2 = -0.317e-3\nM0 = -0.92e-3\nM2 = -0.317e-3\ndM0 = -0.47e-3\n"
+
+
+def test_pm_flux_per_phase_loads_writes_and_defaults_to_balanced(tmp_path):
+    """``[pm_flux] scale_abc`` and ``shift_deg_abc`` (the end effect on the magnets' flux): read in
+    degrees, held in rad, written back; absent, the motor is balanced (exactly 1 and 0)."""
+    from linsense.model.motor import PmPhases
+
+    f = tmp_path / "u.toml"
+    f.write_text(BASE + _IND + "\n[pm_flux]\nscale_abc = [1, 0.96, 1.02]\nshift_deg_abc = [0.0, 1.5, -2]\n"
+                 "harmonics = [ { order = 5, amplitude = 0.03, phase_deg = 10.0 } ]\n")
+    m = load_motor(f)
+    assert m.pm_phases.scale == (1.0, 0.96, 1.02) and not m.pm_phases.balanced
+    assert m.pm_phases.shift == pytest.approx((0.0, math.radians(1.5), math.radians(-2.0)), abs=1e-15)
+    back = tmp_path / "back.toml"
+    back.write_text(motor_to_toml(m))
+    m2 = load_motor(back)
+    assert m2.pm_phases.scale == m.pm_phases.scale and m2.pm_harmonics == m.pm_harmonics
+    np.testing.assert_allclose(m2.pm_phases.shift, m.pm_phases.shift, rtol=1e-14)
+    # the per-phase fundamental: phase B's peak flux is 0.96 psi_pm, reached 1.5 deg early
+    th = np.radians(np.arange(0.0, 360.0, 0.01))
+    one = dataclasses.replace(m, pm_harmonics=())
+    b = one.psi_pm_abc(th)[:, 1]
+    assert b.max() == pytest.approx(0.96 * m.psi_pm, rel=1e-8)
+    assert math.degrees(th[np.argmax(b)]) == pytest.approx(120.0 - 1.5, abs=0.01)
+    # absent: balanced, and written as before (no per-phase keys)
+    plain = tmp_path / "p.toml"
+    plain.write_text(BASE + _IND)
+    p = load_motor(plain)
+    assert p.pm_phases == PmPhases() and p.pm_phases.balanced
+    assert "scale_abc" not in motor_to_toml(p) and "[pm_flux]" not in motor_to_toml(p)
+
+
+@pytest.mark.parametrize("section, key, words", [
+    ("scale_abc = [1, 96, 1]", "pm_flux.scale_abc[1]", ["phase B", "96", "[0.5, 1.5]", "did you type %?"]),
+    ("scale_abc = [0.3, 1, 1]", "pm_flux.scale_abc[0]", ["phase A", "0.3", "[0.5, 1.5]"]),
+    ("shift_deg_abc = [0, 0, 45]", "pm_flux.shift_deg_abc[2]", ["phase C", "45 deg", "[-30, 30] deg"]),
+    ("scale_abc = [1, 0.96]", "pm_flux.scale_abc", ["at least 3"]),
+    ("shift_deg_abc = [0, 0, 0, 1]", "pm_flux.shift_deg_abc", ["at most 3"]),
+    # (the schema's own refusals name the item as pydantic does)
+    ("scale_abc = [1, \"0.9\", 1]", "pm_flux.scale_abc.1", ["number"]),
+    ("scale_abc = [1, nan, 1]", "pm_flux.scale_abc.1", ["finite"]),
+])
+def test_pm_flux_per_phase_refusals(tmp_path, section, key, words):
+    f = tmp_path / "u.toml"
+    f.write_text(BASE + _IND + f"\n[pm_flux]\n{section}\n")
+    with pytest.raises(InputError) as exc:
+        load_motor(f)
+    assert exc.value.key == key, str(exc.value)
+    assert str(f) in str(exc.value)
+    for w in words:
+        assert w in str(exc.value), (w, str(exc.value))
+
+
+def test_pm_phases_from_python_are_held_to_the_file_rules(ecce):
+    from linsense.model.motor import PmPhases
+
+    with pytest.raises(InputError, match="shift"):
+        PmPhases((1.0, 1.0, 1.0), (0.0, float("nan"), 0.0))
+    with pytest.raises(InputError, match="scale"):
+        PmPhases((1.0, 1.0))
+    with pytest.raises(InputError, match=r"pm_flux.scale_abc\[2\]"):
+        dataclasses.replace(ecce, pm_phases=PmPhases((1.0, 1.0, 2.0)))
+    with pytest.raises(InputError, match="pm_phases"):
+        dataclasses.replace(ecce, pm_phases=(1.0, 1.0, 1.0))
 
 
 def test_table_motor_from_model_csv(ecce, tmp_path):

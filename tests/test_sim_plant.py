@@ -4,6 +4,9 @@
   flux and its derivative) equal the Python model (``InductanceModel.L_ab``, the Clarke transform
   of the ABC PM flux with its harmonics) to 1e-12, and the derivatives agree with numerical ones;
 * the C force (``ls_sim_force``, alpha-beta with 3/2) equals the ABC co-energy force;
+* the end effect on the magnets' flux (per-phase PM flux amplitude and phase) reaches the C plant,
+  harmonics included, and the model's own ``Motor.psi_pm_abc`` and ``Motor.force_abc`` equal the
+  reference;
 * the drive of the firmware library closed around the plant: a sensored 3 mm step, sensorless
   hold with the resistance-aware LUT in both inverter fidelities;
 * absurd settings stop the run cleanly with the right fault bit and finite recorded data.
@@ -20,10 +23,10 @@ import pytest
 from linsense import ctrl
 from linsense.compensation.lut import build_lut
 from linsense.model.frames import T_CLARKE, T_CLARKE_INV
-from linsense.model.motor import PmHarmonic
+from linsense.model.motor import PmHarmonic, PmPhases
 from linsense.sim import core
 from linsense.sim.plant import fill_plant
-from test_sim_accuracy import MOTORS, force_abc, motor, pm_abc
+from test_sim_accuracy import MOTORS, UNBALANCED, force_abc, motor, pm_abc
 
 DEG = math.pi / 180.0
 FS = 16000.0
@@ -35,6 +38,8 @@ def motors():
     rich = (PmHarmonic(3, 0.05, 0.3), PmHarmonic(5, 0.02, -0.7), PmHarmonic(7, 0.01, 1.1),
             PmHarmonic(9, 0.004, 0.2), PmHarmonic(11, 0.003, 2.0), PmHarmonic(13, 0.002, -2.5))
     out["pm_rich"] = dataclasses.replace(motor("harmonic"), pm_harmonics=rich)
+    # and the same with the end effect on the magnets' flux: the triplen harmonics no longer cancel
+    out["pm_rich_unbalanced"] = dataclasses.replace(out["pm_rich"], pm_phases=UNBALANCED)
     return out
 
 
@@ -111,6 +116,71 @@ def test_pm_harmonics_matter():
     assert d > 0.01 * MOTOR_SET["pm_rich"].psi_pm
 
 
+def test_pm_phases_matter():
+    """The end effect on the magnets' flux reaches the C plant, in both the fundamental and the
+    harmonics: against the balanced motor the alpha-beta PM flux differs by about the imbalance
+    (8 %, 5 % and degrees of phase), and the triplen harmonics, which cancel in a balanced set, show."""
+    m = MOTOR_SET["pm_rich_unbalanced"]
+    bal = core.sim_cfg(dataclasses.replace(m, pm_phases=PmPhases()), core.PlantSetup())
+    unb = core.sim_cfg(m, core.PlantSetup())
+    assert list(unb.pm_dscale) == pytest.approx([0.0, -0.08, 0.05], abs=1e-15)
+    assert list(bal.pm_dscale) == [0.0] * 3 and list(bal.pm_shift) == [0.0] * 3
+    d = max(np.abs(core.plant_eval(unb, th)["lambda_pm"] - core.plant_eval(bal, th)["lambda_pm"]).max()
+            for th in THETAS)
+    assert d > 0.03 * m.psi_pm
+    # the triplen harmonic (order 3, 5 %) alone: nothing in alpha-beta when balanced, some when not
+    only3 = (PmHarmonic(3, 0.05, 0.3),)
+    for phases, present in ((PmPhases(), False), (UNBALANCED, True)):
+        m3 = dataclasses.replace(m, pm_harmonics=only3, pm_phases=phases)
+        m1 = dataclasses.replace(m, pm_harmonics=(), pm_phases=phases)
+        c3, c1 = core.sim_cfg(m3, core.PlantSetup()), core.sim_cfg(m1, core.PlantSetup())
+        d3 = max(np.abs(core.plant_eval(c3, th)["lambda_pm"] - core.plant_eval(c1, th)["lambda_pm"]).max()
+                 for th in THETAS)
+        assert (d3 > 1e-3 * m.psi_pm) if present else (d3 < 1e-15 * m.psi_pm), (phases, d3)
+
+
+def test_pm_phases_enter_the_cache_key():
+    """Motors that differ only by the end effect on the magnets' flux are different motors to the
+    build cache; a balanced one keeps the key it had before the per-phase flux existed."""
+    import hashlib
+
+    from linsense.sim.cache import motor_key
+
+    m = MOTOR_SET["harmonic"]
+    u = dataclasses.replace(m, pm_phases=UNBALANCED)
+    assert motor_key(u) != motor_key(m)
+    h = hashlib.sha256(repr((m.name, m.R_s, m.pole_pitch, m.force_constant, m.mass, m.friction,
+                             m.pm_harmonics)).encode())
+    h.update(np.ascontiguousarray(m.inductance.a).tobytes())
+    h.update(np.ascontiguousarray(m.inductance.b).tobytes())
+    assert motor_key(m) == h.hexdigest()
+
+
+def test_model_pm_flux_and_force_equal_reference():
+    """The model's own per-phase PM flux (``Motor.psi_pm_abc``, the back-EMF per phase per rad of
+    electrical speed) and force (``Motor.force_abc``) equal the independent ABC reference of
+    test_sim_accuracy, balanced or not; the line-to-line back-EMF (what a bench measures without the
+    star point) is what the C plant's alpha-beta flux derivative gives."""
+    rng = np.random.default_rng(3)
+    for name in ("harmonic", "unbalanced"):
+        m = MOTOR_SET[name]
+        for d in (0, 1):
+            got = m.psi_pm_abc(THETAS, d)
+            ref = np.array([pm_abc(m, th, d) for th in THETAS])
+            assert np.abs(got - ref).max() < 1e-14 * np.abs(ref).max(), (name, d)
+        th = rng.uniform(-10, 10, 50)
+        i_abc = rng.normal(0.0, 2.0, (50, 2)) @ T_CLARKE_INV.T
+        ref = np.array([force_abc(m, t, i) for t, i in zip(th, i_abc, strict=True)])
+        assert np.abs(m.force_abc(th, i_abc) - ref).max() < 1e-12 * np.abs(ref).max()
+        cfg = full_cfg(m)
+        e_ab = np.array([core.plant_eval(cfg, t)["dlambda_pm"] for t in THETAS])  # Wb/rad
+        line = T_CLARKE_INV @ e_ab.T  # zero-sequence-free phase values: their differences are exact
+        want = m.psi_pm_abc(THETAS, 1).T
+        for j, k in ((0, 1), (1, 2), (2, 0)):
+            np.testing.assert_allclose(line[j] - line[k], want[j] - want[k], rtol=0,
+                                       atol=1e-12 * np.abs(want).max())
+
+
 @pytest.mark.parametrize("name", list(MOTOR_SET))
 def test_c_force_equals_abc_coenergy(name):
     m = MOTOR_SET[name]
@@ -124,8 +194,9 @@ def test_c_force_equals_abc_coenergy(name):
     f_c, f_ref = np.array(f_c), np.array(f_ref)
     err = np.abs(f_c - f_ref).max() / np.abs(f_ref).max()
     assert err < 1e-12, f"{name}: force relative error {err:.2e}"
-    # the force constant: without PM harmonics, 1 A on q gives force_constant plus the reluctance part
-    cfg0 = full_cfg(dataclasses.replace(m, pm_harmonics=()))
+    # the force constant: without PM harmonics (and balanced), 1 A on q gives force_constant plus
+    # the reluctance part
+    cfg0 = full_cfg(dataclasses.replace(m, pm_harmonics=(), pm_phases=PmPhases()))
     kx = 2 * np.pi / m.pole_pitch
     for th in (0.0, 1.0, 2.5):
         i_q = np.array([-math.sin(th), math.cos(th)])

@@ -1,4 +1,4 @@
-"""Candidate single builds of the firmware against both budgets (issue 39; docs/firmware.md, "The cost
+"""Candidate single builds of the firmware against both budgets (docs/firmware.md, "The cost
 on the target", its table of builds).
 
 For each candidate (:data:`CANDIDATES`: the optimisation options of every file of csrc/ctrl/, or of

@@ -37,6 +37,11 @@ ls_status ls_sim_check(const ls_sim_cfg *c)
             }
         }
     }
+    for (k = 0; k < 3; ++k) { /* (a phase's PM flux at least reverses no sign: scale > 0) */
+        if (!(LS_ISFINITE(c->pm_dscale[k]) && c->pm_dscale[k] > -1.0) || !LS_ISFINITE(c->pm_shift[k])) {
+            return LS_ERR_PARAM;
+        }
+    }
     for (k = 0; k < c->n_pm; ++k) {
         if (!LS_ISFINITE(c->pm_amp[k]) || !LS_ISFINITE(c->pm_phase[k]) || c->pm_order[k] < 1) {
             return LS_ERR_PARAM;
@@ -287,7 +292,7 @@ LS_SIM_INLINE double plant_freeze(const ls_sim_cfg *c, const ls_sim_coef *q, con
         f_start = ls_sim_force_of(q, pm, L->i);
     } else {
         ls_sim_sat_point sp;
-        ls_sim_sat_frame_at(c, th_mid, sf);
+        ls_sim_sat_frame_at(c, q, th_mid, sf);
         ls_sim_sat_at(c, sf, L->i, &sp);
         memcpy(pm->l, sp.l, sizeof pm->l);
         pm->dl[0] = pm->dl[1] = pm->dl[2] = 0.0;
@@ -535,7 +540,7 @@ ls_status ls_sim_open_loop(const ls_sim_cfg *c, const double *seg_t, const doubl
                 if (c->sat.on) { /* the saturated plant: frozen at the sub-step's mid angle */
                     ls_sim_sat_frame sf;
                     ls_sim_sat_point sp;
-                    ls_sim_sat_frame_at(c, kx * (x + 0.5 * hs * v), &sf);
+                    ls_sim_sat_frame_at(c, &pc, kx * (x + 0.5 * hs * v), &sf);
                     ls_sim_sat_at(c, &sf, i, &sp);
                     fa = sp.force;
                     if (!ls_sim_sat_step(c, &sf, v_ab, hs, -0.5 * kx * v * hs, kx * v, i, &sp)) {

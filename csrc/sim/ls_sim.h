@@ -11,7 +11,12 @@
  *                linsense from the motor's inductance model (eq. 3, harmonics or a table);
  *   lambda_pm:   psi_pm (cos theta, sin theta) plus relative harmonics of order n with phase
  *                phi_n: psi_pm a_n (cos(n theta + phi_n) ... ) as (alpha, beta) of the
- *                three-phase set (see ls_sim_plant_eval);
+ *                three-phase set (see ls_sim_plant_eval); with the end effect on the magnets'
+ *                flux (pm_dscale, pm_shift not all 0) phase k's whole PM flux waveform is scaled
+ *                by 1 + pm_dscale[k] and advanced by pm_shift[k], psi_k = (1 + ds_k) psi_pm
+ *                f(theta - 2 pi k/3 + shift_k) with f(u) = cos u + sum_n a_n cos(n u + phi_n),
+ *                and lambda_pm is the amplitude-invariant Clarke transform of (psi_a, psi_b,
+ *                psi_c) (its zero sequence drives no current with the floating star point);
  *   voltage:     v = R i + d lambda/dt   (amplitude-invariant alpha-beta)
  *   force:       co-energy, F = (3/2) (2 pi/tau) [ i' d lambda_pm/d theta + 1/2 i' dL_ab/d theta i ]
  *   mechanics:   m dv/dt = F - F_load(t, x) - b v - F_c sign(v) (stiction: v held at 0 while
@@ -110,6 +115,9 @@ typedef struct {
     int32_t pm_order[LS_SIM_MAX_PM];     /* -, harmonic order (odd, >= 3 in practice) */
     double pm_amp[LS_SIM_MAX_PM];        /* -, amplitude relative to psi_pm */
     double pm_phase[LS_SIM_MAX_PM];      /* rad, phase */
+    double pm_dscale[3];                 /* -, per-phase PM flux amplitude (phases a, b, c) relative to
+                                            psi_pm, minus one (0: balanced; the end effect on the magnets' flux) */
+    double pm_shift[3];                  /* rad, per-phase PM flux phase advance (a, b, c; 0: balanced) */
     double mass;                         /* kg, moving mass */
     double visc;                         /* N s/m, viscous friction */
     double coulomb;                      /* N, Coulomb friction */

@@ -73,6 +73,11 @@ typedef struct {
     double inv_mass;                /* 1/kg */
     double d_dead;                  /* -, dead time / PWM period */
     double lsb;                     /* A, current ADC step (0: ideal) */
+    /* the end effect on the magnets' flux (ls_sim.h, lambda_pm), phase k's rotation
+     * rho_k = pm_shift[k] - 2 pi k/3 and amplitude g_k = psi_pm (1 + pm_dscale[k]) folded in: */
+    int32_t pm_unbal;                           /* -, 1: some pm_dscale or pm_shift nonzero */
+    double pm_rot[3][2];                        /* Wb, g_k (cos, sin) rho_k */
+    double pm_hrot[LS_SIM_MAX_PM][3][2];        /* Wb, g_k a_j (cos, sin)(n_j rho_k + phi_j) */
 } ls_sim_coef;
 
 /* the plant's maps at one angle */
@@ -99,8 +104,8 @@ typedef struct {
 
 LS_SIM_INTERNAL void ls_sim_coef_init(const ls_sim_cfg *c, ls_sim_coef *q);
 /* PM flux linkage (alpha-beta, Wb) and its theta derivative (Wb/rad) at theta (c1, s1: cos, sin) */
-LS_SIM_HOT void ls_sim_pm_flux(const ls_sim_cfg *c, double theta, double c1, double s1, double lpm[2],
-                               double dlpm[2]);
+LS_SIM_HOT void ls_sim_pm_flux(const ls_sim_cfg *c, const ls_sim_coef *q, double theta, double c1, double s1,
+                               double lpm[2], double dlpm[2]);
 /* the maps at theta, given its cos c1 and sin s1 (ls_sim_maps_at: computed here) */
 LS_SIM_HOT void ls_sim_maps_cs(const ls_sim_cfg *c, const ls_sim_coef *q, double theta, double c1, double s1,
                                ls_sim_maps *m);
@@ -135,7 +140,8 @@ typedef struct {
     double force;   /* N */
 } ls_sim_sat_point;
 
-LS_SIM_INTERNAL void ls_sim_sat_frame_at(const ls_sim_cfg *c, double theta, ls_sim_sat_frame *f);
+LS_SIM_INTERNAL void ls_sim_sat_frame_at(const ls_sim_cfg *c, const ls_sim_coef *q, double theta,
+                                         ls_sim_sat_frame *f);
 /* the saturated plant at alpha-beta currents i and the frame's angle */
 LS_SIM_INTERNAL void ls_sim_sat_at(const ls_sim_cfg *c, const ls_sim_sat_frame *f, const double i[2],
                                    ls_sim_sat_point *pt);

@@ -24,13 +24,55 @@ LS_SIM_INTERNAL void ls_sim_coef_init(const ls_sim_cfg *c, ls_sim_coef *q)
             q->db[k][e] = -(double)k * c->lab_cos[e][k];
         }
     }
+    q->pm_unbal = 0;
+    for (e = 0; e < 3; ++e) {
+        const double rho = c->pm_shift[e] - (double)e * (2.0 * LS_SIM_PI / 3.0);
+        const double g = c->psi_pm * (1.0 + c->pm_dscale[e]);
+        q->pm_unbal |= (c->pm_dscale[e] != 0.0 || c->pm_shift[e] != 0.0) ? 1 : 0;
+        q->pm_rot[e][0] = g * cos(rho);
+        q->pm_rot[e][1] = g * sin(rho);
+        for (k = 0; k < c->n_pm && k < LS_SIM_MAX_PM; ++k) {
+            const double arg = (double)c->pm_order[k] * rho + c->pm_phase[k];
+            q->pm_hrot[k][e][0] = g * c->pm_amp[k] * cos(arg);
+            q->pm_hrot[k][e][1] = g * c->pm_amp[k] * sin(arg);
+        }
+    }
+}
+
+/* the end effect on the magnets' flux (ls_sim.h, lambda_pm): each phase's PM flux and its theta
+ * derivative, phase k's fundamental Re(R_k e^(j theta)) and harmonic j Re(H_jk e^(j n_j theta)) with
+ * the rotations of ls_sim_coef (every harmonic, triplen ones included: they no longer cancel), then
+ * the amplitude-invariant Clarke transform */
+static void pm_flux_unbalanced(const ls_sim_cfg *c, const ls_sim_coef *q, double theta, double c1, double s1,
+                               double lpm[2], double dlpm[2])
+{
+    double p[3], dp[3];
+    int32_t k, j;
+    for (k = 0; k < 3; ++k) {
+        p[k] = q->pm_rot[k][0] * c1 - q->pm_rot[k][1] * s1;
+        dp[k] = -(q->pm_rot[k][0] * s1 + q->pm_rot[k][1] * c1);
+    }
+    for (j = 0; j < c->n_pm; ++j) {
+        const double n = (double)c->pm_order[j], cn = cos(n * theta), sn = sin(n * theta);
+        for (k = 0; k < 3; ++k) {
+            const double hr = q->pm_hrot[j][k][0], hi = q->pm_hrot[j][k][1];
+            p[k] += hr * cn - hi * sn;
+            dp[k] -= n * (hr * sn + hi * cn);
+        }
+    }
+    ls_sim_poles_to_ab(p, lpm);
+    ls_sim_poles_to_ab(dp, dlpm);
 }
 
 /* PM flux linkage (alpha-beta, Wb) and its theta derivative (Wb/rad) at theta (c1, s1: cos, sin) */
-LS_SIM_HOT void ls_sim_pm_flux(const ls_sim_cfg *c, double theta, double c1, double s1, double lpm[2],
-                               double dlpm[2])
+LS_SIM_HOT void ls_sim_pm_flux(const ls_sim_cfg *c, const ls_sim_coef *q, double theta, double c1, double s1,
+                               double lpm[2], double dlpm[2])
 {
     int32_t j;
+    if (q->pm_unbal) {
+        pm_flux_unbalanced(c, q, theta, c1, s1, lpm, dlpm);
+        return;
+    }
     lpm[0] = c->psi_pm * c1;
     lpm[1] = c->psi_pm * s1;
     dlpm[0] = -c->psi_pm * s1;
@@ -76,7 +118,7 @@ LS_SIM_HOT void ls_sim_maps_cs(const ls_sim_cfg *c, const ls_sim_coef *q, double
     m->dl[0] = d0;
     m->dl[1] = d1;
     m->dl[2] = d2;
-    ls_sim_pm_flux(c, theta, c1, s1, m->lpm, m->dlpm);
+    ls_sim_pm_flux(c, q, theta, c1, s1, m->lpm, m->dlpm);
 }
 
 LS_SIM_INTERNAL void ls_sim_maps_at(const ls_sim_cfg *c, const ls_sim_coef *q, double theta, ls_sim_maps *m)
@@ -126,7 +168,7 @@ LS_SIM_INTERNAL double ls_sim_force_at(const ls_sim_cfg *c, const ls_sim_coef *q
     if (c->sat.on) {
         ls_sim_sat_frame f;
         ls_sim_sat_point pt;
-        ls_sim_sat_frame_at(c, theta, &f);
+        ls_sim_sat_frame_at(c, q, theta, &f);
         ls_sim_sat_at(c, &f, i, &pt);
         return pt.force;
     }

@@ -8,7 +8,8 @@
  * order, lambda(i, th + dth) = lambda(i, th) + dth d lambda/d theta (the error, dth^2 d2 lambda/d
  * theta2 with |dth| <= omega h/2, is ~1e-9 Wb at 0.2 m/s), like the linear plant's mid-period
  * freeze. */
-LS_SIM_INTERNAL void ls_sim_sat_frame_at(const ls_sim_cfg *c, double theta, ls_sim_sat_frame *f)
+LS_SIM_INTERNAL void ls_sim_sat_frame_at(const ls_sim_cfg *c, const ls_sim_coef *q, double theta,
+                                         ls_sim_sat_frame *f)
 {
     const ls_sim_sat *s = &c->sat;
     const double c1 = cos(theta), s1 = sin(theta);
@@ -36,7 +37,7 @@ LS_SIM_INTERNAL void ls_sim_sat_frame_at(const ls_sim_cfg *c, double theta, ls_s
         sk = sk * c1 + ck * s1;
         ck = cn;
     }
-    ls_sim_pm_flux(c, theta, c1, s1, f->lpm, f->dlpm);
+    ls_sim_pm_flux(c, q, theta, c1, s1, f->lpm, f->dlpm);
 }
 
 /* The d-axis saturation S(i_d) (A^2), S' = K (A) and S'' = k (-) (ls_sim.h). In u = (i_m + i_d)/a,
@@ -224,7 +225,9 @@ void ls_sim_sat_eval(const ls_sim_cfg *cfg, double theta, const double i_ab[2], 
 {
     ls_sim_sat_frame f;
     ls_sim_sat_point pt;
-    ls_sim_sat_frame_at(cfg, theta, &f);
+    ls_sim_coef q;
+    ls_sim_coef_init(cfg, &q);
+    ls_sim_sat_frame_at(cfg, &q, theta, &f);
     ls_sim_sat_at(cfg, &f, i_ab, &pt);
     memcpy(lam, pt.lam, sizeof pt.lam);
     memcpy(l_inc, pt.l, sizeof pt.l);

@@ -1,6 +1,7 @@
 /* The simulator core under the sanitizers: a closed-loop sensorless run on the ecce2010 plant
  * (alpha-beta Fourier coefficients obtained here by a DFT of the closed-form L_ab of the test
- * plant), the open-loop path, the travel-limit fault and configuration refusals. The physics
+ * plant), the open-loop path, the travel-limit fault and configuration refusals, the end effect
+ * on the magnets' flux (per-phase PM flux). The physics
  * (accuracy against a 3x3 ABC reference, agreement with the Python model) is tested in Python:
  * tests/test_sim_accuracy.py, tests/test_sim_plant.py. */
 #include <math.h>
@@ -343,6 +344,76 @@ static void saturated(void)
     LS_CHECK(ls_sim_check(&c) == LS_ERR_PARAM);
 }
 
+/* the end effect on the magnets' flux (pm_dscale, pm_shift): the maps against the per-phase
+ * fluxes written out here, the force from them, and the refusals */
+static void unbalanced_pm(void)
+{
+    ls_sim_cfg c;
+    const double ds[3] = {0.0, -0.08, 0.05}, sh[3] = {0.0, 0.05, -0.03};
+    double lab[3], dlab[3], lpm[2], dlpm[2], ref[3] = {0.0, 0.0, 0.0};
+    int k, j;
+    make_cfg(&c, LS_SIM_AVERAGE);
+    c.n_pm = 1; /* a 3rd harmonic: it cancels in a balanced set only */
+    c.pm_order[0] = 3;
+    c.pm_amp[0] = 0.05;
+    c.pm_phase[0] = 0.4;
+    for (k = 0; k < 3; ++k) {
+        c.pm_dscale[k] = ds[k];
+        c.pm_shift[k] = sh[k];
+    }
+    LS_CHECK(ls_sim_check(&c) == LS_OK);
+    for (j = 0; j < 3; ++j) {
+        const double th = -1.0 + 1.7 * j;
+        double p[3], dp[3], a, b, da, db, i_ab[2] = {0.7, -1.3}, i3[3], f = 0.0;
+        for (k = 0; k < 3; ++k) {
+            const double u = th - 2.0 * TP_PI * k / 3.0 + sh[k], g = c.psi_pm * (1.0 + ds[k]);
+            p[k] = g * (cos(u) + 0.05 * cos(3.0 * u + 0.4));
+            dp[k] = g * (-sin(u) - 0.15 * sin(3.0 * u + 0.4));
+        }
+        a = (2.0 * p[0] - p[1] - p[2]) / 3.0;
+        b = (p[1] - p[2]) / sqrt(3.0);
+        da = (2.0 * dp[0] - dp[1] - dp[2]) / 3.0;
+        db = (dp[1] - dp[2]) / sqrt(3.0);
+        ls_sim_plant_eval(&c, th, lab, dlab, lpm, dlpm);
+        LS_CHECK_NEAR(lpm[0], a, 1e-14);
+        LS_CHECK_NEAR(lpm[1], b, 1e-14);
+        LS_CHECK_NEAR(dlpm[0], da, 1e-14);
+        LS_CHECK_NEAR(dlpm[1], db, 1e-14);
+        ref[j] = lpm[0];
+        /* the force: (2 pi / tau) (i_abc' dpsi_abc + 1/2 i_ab' dL_ab i_ab (3/2)) */
+        i3[0] = i_ab[0];
+        i3[1] = -0.5 * i_ab[0] + 0.5 * sqrt(3.0) * i_ab[1];
+        i3[2] = -0.5 * i_ab[0] - 0.5 * sqrt(3.0) * i_ab[1];
+        for (k = 0; k < 3; ++k) {
+            f += i3[k] * dp[k];
+        }
+        f += 0.75 * (dlab[0] * i_ab[0] * i_ab[0] + dlab[1] * i_ab[1] * i_ab[1] + 2.0 * dlab[2] * i_ab[0] * i_ab[1]);
+        f *= 2.0 * TP_PI / c.pole_pitch;
+        LS_CHECK_NEAR(ls_sim_force(&c, th, i_ab), f, 1e-9 * fabs(f) + 1e-12);
+    }
+    /* balanced (all zero): the harmonic of order 3 drops out of alpha-beta */
+    for (k = 0; k < 3; ++k) {
+        c.pm_dscale[k] = 0.0;
+        c.pm_shift[k] = 0.0;
+    }
+    for (j = 0; j < 3; ++j) {
+        const double th = -1.0 + 1.7 * j;
+        ls_sim_plant_eval(&c, th, lab, dlab, lpm, dlpm);
+        LS_CHECK_NEAR(lpm[0], c.psi_pm * cos(th), 1e-15);
+        LS_CHECK(fabs(lpm[0] - ref[j]) > 1e-3 * c.psi_pm);
+    }
+    /* refusals: a phase's flux vanishing or reversed, a non-finite shift */
+    c.pm_dscale[1] = -1.0;
+    LS_CHECK(ls_sim_check(&c) == LS_ERR_PARAM);
+    c.pm_dscale[1] = NAN;
+    LS_CHECK(ls_sim_check(&c) == LS_ERR_PARAM);
+    c.pm_dscale[1] = 0.0;
+    c.pm_shift[2] = INFINITY;
+    LS_CHECK(ls_sim_check(&c) == LS_ERR_PARAM);
+    c.pm_shift[2] = 0.0;
+    LS_CHECK(ls_sim_check(&c) == LS_OK);
+}
+
 int main(void)
 {
     closed_loop(LS_SIM_AVERAGE);
@@ -351,5 +422,6 @@ int main(void)
     chunks_and_blocks(LS_SIM_SWITCHING);
     open_loop_and_faults();
     saturated();
+    unbalanced_pm();
     return ls_test_report("test_sim");
 }

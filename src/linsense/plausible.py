@@ -79,7 +79,9 @@ _DEG = math.pi / 180.0
 #: currents to 1 kA, speeds to 20 m/s, strokes to 100 m; bandwidths to 100 kHz and electrical speeds
 #: (rad/s) are held by the drive's own relations (a loop below the one it follows, a clamp above the
 #: top speed), the slip of 2 pi between Hz and rad/s their hint; an angle error is at most pi; a noise
-#: or a share is a fraction, a factor of a base value at most 10 (a percentage typed for it is 100)
+#: or a share is a fraction, a factor of a base value at most 10 (a percentage typed for it is 100);
+#: the end effect on the magnets' flux: a phase linking 0.5 .. 1.5 times the nominal flux (measured
+#: end phases lose a few to 15 %), its flux axis displaced by at most 30 electrical degrees (a few)
 KINDS: dict[str, Kind] = {
     "pole_pitch": Kind("m", 1e-3, 1.0, (("mm", 1e-3), ("um", 1e-6)), "real linear motors"),
     "resistance": Kind("ohm", 0.0, 100.0, (("milliohm", 1e-3),), "real linear motors"),
@@ -101,6 +103,9 @@ KINDS: dict[str, Kind] = {
     "share": Kind("", 0.0, 1.0, (("%", 1e-2),), "shares"),
     "relative_noise": Kind("", 0.0, 0.5, (("%", 1e-2),), "measurement noise"),
     "factor": Kind("", -10.0, 10.0, (("%", 1e-2),), "factors of a base value"),
+    "flux_scale": Kind("", 0.5, 1.5, (("%", 1e-2),), "a phase's magnet flux in real linear motors"),
+    "flux_shift": Kind("deg", -30.0, 30.0, (("rad", 1.0 / _DEG),),
+                       "a phase's magnet-flux phase in real linear motors"),
 }
 
 

@@ -81,6 +81,46 @@ def force_constant(res: Result) -> float | None:
     return None
 
 
+#: rad, the phases' electrical angles relative to A (B lags, C leads: linsense.model.frames)
+_PHASE_ANGLE = np.array([0.0, -2.0 * np.pi / 3.0, 2.0 * np.pi / 3.0])
+#: digits the per-phase magnet flux is written with: 1e-6 of the amplitude, 1e-4 electrical degrees
+#: (the FEA's own error is far larger: a coarse and a default mesh differ by about 1e-3)
+_SCALE_DIGITS, _SHIFT_DIGITS = 6, 4
+
+
+def pm_phases(res: Result) -> tuple[tuple[float, ...], tuple[float, ...]] | None:
+    """The end effect on the magnets' flux from the FEA: each phase's PM flux fundamental.
+
+    Least squares of ``psi_pm_k(theta) = A_k cos(theta - 2 pi k/3 + delta_k)`` over the positions
+    (an exact DFT on the FEA's even grid), relative to phase A's amplitude (the FEA's
+    ``psi_pm_amplitude``, whose peak fixes theta = 0): the motor file's ``[pm_flux] scale_abc`` and
+    ``shift_deg_abc`` (docs/motor-files.md, docs/theory.md section 10). Phase A is ``(1, 0)`` by
+    construction; the others carry the end effect.
+
+    Parameters
+    ----------
+    res : Result
+        The FEA result.
+
+    Returns
+    -------
+    tuple or None
+        ``(scale_abc, shift_deg_abc)`` (dimensionless; electrical degrees), rounded to
+        :data:`_SCALE_DIGITS` and :data:`_SHIFT_DIGITS` decimals; None without magnets or with fewer
+        than 3 positions.
+    """
+    theta, _, pm = table(res)
+    if not res.psi_pm_amplitude > 0 or theta.size < 3:
+        return None
+    scale, shift = [], []
+    for k in range(3):
+        u = theta + _PHASE_ANGLE[k]
+        (a, b), *_ = np.linalg.lstsq(np.column_stack([np.cos(u), -np.sin(u)]), pm[:, k], rcond=None)
+        scale.append(round(float(math.hypot(a, b) / res.psi_pm_amplitude), _SCALE_DIGITS))
+        shift.append(round(math.degrees(math.atan2(b, a)), _SHIFT_DIGITS) + 0.0)  # (no -0.0)
+    return tuple(scale), tuple(shift)
+
+
 def motor_toml(res: Result, table_file: str = "inductances.csv") -> str:
     """The motor file of the FEA's table.
 
@@ -113,10 +153,15 @@ def motor_toml(res: Result, table_file: str = "inductances.csv") -> str:
                   "mass": g.mass},
         "inductance": {"table": table_file},
     }
-    how = "from the geometry file" if g.force_constant else "= 3 pi psi_pm / pole_pitch"
+    phases = pm_phases(res)
+    if phases is not None:
+        doc["pm_flux"] = {"scale_abc": list(phases[0]), "shift_deg_abc": list(phases[1])}
+    how = "from the geometry file" if g.force_constant else "= 3 pi psi_pm / pole_pitch (phase A's)"
     iron = f"B-H curve, load {res.load_current:g} A q-axis" if res.newton is not None else "linear iron"
     head = (f"# written by linsense fea from {g.source} (axisymmetric FEA, {iron})\n"
-            f"# force_constant {how}\n")
+            f"# force_constant {how}\n"
+            + ("# pm_flux: each phase's PM flux fundamental relative to phase A's (the end effect on "
+               "the magnets' flux)\n" if phases is not None else ""))
     return head + tomli_w.dumps(doc)
 
 
@@ -175,6 +220,8 @@ def fea_json(res: Result, extra: dict) -> tuple[str, str]:
         "newton_iterations": res.newton,
         "load_current_q_A": res.load_current,
         "psi_pm_amplitude_Wb": res.psi_pm_amplitude,
+        "pm_phases": (None if (ph := pm_phases(res)) is None
+                      else {"scale_abc": list(ph[0]), "shift_deg_abc": list(ph[1])}),
         "theta": {"direction": res.direction, "offset_deg": math.degrees(res.theta_offset),
                   "rule": "theta = direction * 2 pi x / pole_pitch - offset: 0 where phase A's PM flux "
                           "linkage peaks (raw position when there are no magnets)"},

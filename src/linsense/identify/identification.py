@@ -23,7 +23,7 @@ from linsense.identify.fit import PITCH_RESIDUAL_SHARE, T_SIGNIFICANT, FitResult
 from linsense.identify.measured_outputs import measured_columns, measured_lut_csv
 from linsense.identify.process import MeasuredTable, process_bench
 from linsense.model.inductance import InductanceModel
-from linsense.model.motor import Friction, Motor, check_motor, check_plausible, motor_to_toml
+from linsense.model.motor import Friction, Motor, PmPhases, check_motor, check_plausible, motor_to_toml
 from linsense.plausible import KINDS, check
 from linsense.version import __version__
 
@@ -130,6 +130,7 @@ def identify(
         name=_motor_name(name, src), R_s=R_s, pole_pitch=tau, force_constant=k_f, mass=m,
         inductance=model, friction=base.friction if base is not None else Friction(),
         pm_harmonics=base.pm_harmonics if base is not None else (), source=f"{src} (fitted model)",
+        pm_phases=base.pm_phases if base is not None else PmPhases(),
     )
     check_plausible(motor)  # (the rest of the table, as the written motor.toml is loaded)
     if base is not None:

@@ -21,17 +21,21 @@ from linsense.errors import InputError, ModelError
 from linsense.io import csv_rows, folder_of, parse_toml, read_csv_table, read_text_file
 from linsense.model.inductance import DERIVED_COLUMNS, ENTRIES, InductanceModel, derived_columns
 from linsense.model.motor_schema import (
+    PHASES,
     FrictionSection,
     MotorSection,
+    PmFluxSection,
     PmHarmonicEntry,
     validate_motor_file,
     validate_section,
 )
 from linsense.model.saturation import Saturation
-from linsense.plausible import KINDS, slip
+from linsense.plausible import KINDS, implausible, slip
 
 #: Saliency |L_q - L_d| below this fraction of (L_d + L_q)/2 counts as vanished.
 MIN_SALIENCY_RATIO = 0.01
+#: rad, the phases' electrical angles relative to A: B lags, C leads (linsense.model.frames)
+_PHASE_ANGLE = np.array([0.0, -2.0 * np.pi / 3.0, 2.0 * np.pi / 3.0])
 #: the source a motor built in Python (without one) is named by in messages
 _API = "linsense.Motor"
 #: Columns a tabulated inductance file must have (others, e.g. those of ``linsense model``, are allowed).
@@ -86,6 +90,44 @@ class PmHarmonic:
 
 
 @dataclass(frozen=True)
+class PmPhases:
+    """The end effect on the magnets' flux: each phase's PM flux-linkage amplitude and phase.
+
+    The end phases of a linear motor link less magnet flux than the middle one (an unbalanced
+    back-EMF). Phase ``k`` (A, B, C) links ``scale[k] psi_pm f(theta - 2 pi k/3 + shift[k])``,
+    ``f(u) = cos u + sum_n a_n cos(n u + phi_n)`` (the harmonics of :class:`PmHarmonic`): its whole
+    waveform scaled and advanced, so that ``scale[k]`` and ``shift[k]`` are the amplitude and phase
+    of its fundamental (docs/theory.md, "The end effect on the magnets' flux"; docs/motor-files.md).
+
+    Parameters
+    ----------
+    scale : tuple of float
+        Amplitude relative to ``psi_pm``, phases A, B, C, dimensionless (balanced: 1, 1, 1).
+    shift : tuple of float
+        Phase advance, phases A, B, C, electrical rad (balanced: 0, 0, 0).
+    """
+
+    scale: tuple[float, float, float] = (1.0, 1.0, 1.0)  # -, relative to psi_pm
+    shift: tuple[float, float, float] = (0.0, 0.0, 0.0)  # rad (electrical)
+
+    def __post_init__(self) -> None:
+        # the motor file's [pm_flux] scale_abc / shift_deg_abc rules (three finite numbers each):
+        # one validated path; the plausible ranges are check_plausible's (the motor's source named)
+        src = "linsense.model.motor.PmPhases"
+        for name, v in (("scale", self.scale), ("shift", self.shift)):
+            instance(v, src, name, tuple, "a tuple of three numbers (phases A, B, C)")
+        scale = reals(self.scale, src, "scale", "amplitudes relative to psi_pm", ndim=1)
+        shift = reals(self.shift, src, "shift", "phase advances in rad", ndim=1)
+        validate_section(PmFluxSection, {"scale_abc": scale.tolist(),
+                                         "shift_deg_abc": np.degrees(shift).tolist()}, src, "pm_flux")
+
+    @property
+    def balanced(self) -> bool:
+        """Whether every phase links the nominal flux at the nominal phase (exactly)."""
+        return all(float(g) == 1.0 for g in self.scale) and all(float(d) == 0.0 for d in self.shift)
+
+
+@dataclass(frozen=True)
 class Motor:
     """A linear PM motor as linsense sees it (SI units, electrical radians).
 
@@ -111,6 +153,8 @@ class Motor:
         Where the motor came from (file path or ``preset <name>``), named in messages.
     saturation : Saturation or None
         Saturation data for the simulator's saturated plant (None: none given).
+    pm_phases : PmPhases
+        The end effect on the magnets' flux, per phase (balanced by default).
     """
 
     name: str
@@ -123,6 +167,7 @@ class Motor:
     pm_harmonics: tuple[PmHarmonic, ...] = ()
     source: str = ""
     saturation: Saturation | None = None  # for the simulator's saturated plant (None: none given)
+    pm_phases: PmPhases = field(default_factory=PmPhases)  # the end effect on the magnets' flux
 
     def __post_init__(self) -> None:
         # one validated path: a Motor built in Python is held to the motor file's checks
@@ -142,12 +187,88 @@ class Motor:
             raise InputError(source, "pm_flux.harmonics", "an order is listed twice: give each order once")
         if self.saturation is not None:
             instance(self.saturation, source, "saturation", Saturation, "a Saturation or None")
+        instance(self.pm_phases, source, "pm_phases", PmPhases, "a PmPhases")
         check_plausible(self)
 
     @property
     def psi_pm(self) -> float:
         """PM flux-linkage amplitude, Wb: ``F = (3/2) (2 pi / tau) psi_pm i_q`` (amplitude-invariant)."""
         return self.force_constant * self.pole_pitch / (3.0 * math.pi)
+
+    def psi_pm_abc(self, theta: np.ndarray | float, derivative: int = 0) -> np.ndarray:
+        """PM flux linkage of the phases A, B, C (Wb) or its theta derivative (Wb/rad).
+
+        Phase ``k``: ``scale_k psi_pm [cos u_k + sum_n a_n cos(n u_k + phi_n)]``,
+        ``u_k = theta - 2 pi k/3 + shift_k`` (:class:`PmPhases`; B lags A, docs/theory.md,
+        "The end effect on the magnets' flux"). The derivative times the electrical speed is the
+        open-circuit back-EMF of each phase.
+
+        Parameters
+        ----------
+        theta : float or ndarray
+            Electrical angle(s), rad.
+        derivative : int, optional
+            0: the flux linkage; 1: its derivative in theta.
+
+        Returns
+        -------
+        ndarray, shape (..., 3)
+            Wb (or Wb/rad), phases A, B, C on the last axis.
+
+        Raises
+        ------
+        InputError
+            ``theta`` not finite real numbers, or ``derivative`` not 0 or 1.
+        """
+        src = "linsense.Motor.psi_pm_abc"
+        th = reals(theta, src, "theta", "angles in rad")
+        if isinstance(derivative, bool) or derivative not in (0, 1):
+            raise InputError(src, "derivative", f"expected 0 or 1, got {brief(derivative)}")
+        p = self.pm_phases
+        u = th[..., None] + _PHASE_ANGLE + np.asarray(p.shift, dtype=float)
+        if derivative == 0:
+            out = np.cos(u)
+            for h in self.pm_harmonics:
+                out = out + h.amplitude * np.cos(h.order * u + h.phase)
+        else:
+            out = -np.sin(u)
+            for h in self.pm_harmonics:
+                out = out - h.order * h.amplitude * np.sin(h.order * u + h.phase)
+        return self.psi_pm * np.asarray(p.scale, dtype=float) * out
+
+    def force_abc(self, theta: np.ndarray | float, i_abc: np.ndarray) -> np.ndarray:
+        """The motor force of phase currents: the co-energy's derivative in the position.
+
+        ``F = (2 pi / tau) [i' d psi_pm_abc/d theta + 1/2 i' dL_abc/d theta i]`` (docs/theory.md,
+        "The end effect on the magnets' flux"): with the per-phase PM flux of :meth:`psi_pm_abc`
+        and the linear inductance model (no saturation).
+
+        Parameters
+        ----------
+        theta : float or ndarray
+            Electrical angle(s), rad, shape ``(...)``.
+        i_abc : ndarray
+            Phase currents, A, shape ``(..., 3)``.
+
+        Returns
+        -------
+        ndarray
+            N, shape ``(...)``.
+
+        Raises
+        ------
+        InputError
+            ``theta`` or ``i_abc`` not finite real numbers, or ``i_abc`` without 3 phases last.
+        """
+        src = "linsense.Motor.force_abc"
+        th = reals(theta, src, "theta", "angles in rad")
+        i = reals(i_abc, src, "i_abc", "phase currents in A")
+        if i.ndim < 1 or i.shape[-1] != 3:
+            raise InputError(src, "i_abc", f"expected the 3 phase currents on the last axis, shape {i.shape}")
+        dL = self.inductance.L_abc(th, 1)
+        pm = np.sum(i * self.psi_pm_abc(th, 1), axis=-1)
+        rel = 0.5 * np.einsum("...j,...jk,...k->...", i, dL, i)
+        return 2.0 * np.pi / self.pole_pitch * (pm + rel)
 
     def theta_of_x(self, x: np.ndarray | float) -> np.ndarray:
         """Electrical angle (rad) of a position (m).
@@ -507,6 +628,8 @@ def motor_from_toml(text: str, source: str, base_dir: Path | None = None) -> Mot
         ),
         source=source,
         saturation=saturation,
+        pm_phases=PmPhases(tuple(float(g) for g in doc.pm_flux.scale_abc),
+                           tuple(math.radians(d) for d in doc.pm_flux.shift_deg_abc)),
     )
 
 
@@ -700,7 +823,9 @@ def check_plausible(motor: Motor) -> None:
     Raises
     ------
     InputError
-        Naming the key, the value, the range (:data:`PLAUSIBLE`) and the likely mistake.
+        Naming the key, the value, the range (:data:`PLAUSIBLE`; the per-phase magnet flux of
+        ``[pm_flux]``: :data:`linsense.plausible.KINDS` ``flux_scale`` and ``flux_shift``) and the
+        likely mistake.
     """
     for key, value in (("motor.pole_pitch", motor.pole_pitch), ("motor.R_s", motor.R_s),
                        ("motor.force_constant", motor.force_constant), ("motor.mass", motor.mass)):
@@ -721,6 +846,13 @@ def check_plausible(motor: Motor) -> None:
             f"{what} = {L_self:g} H with R_s = {motor.R_s:g} ohm is an electrical time constant of "
             f"{L_self / motor.R_s:.3g} s, beyond the {MAX_TIME_CONSTANT:g} s of real linear motors. "
             "Did you type mH? Motor files are in SI units (H)."))
+    p = motor.pm_phases
+    for k in range(3):
+        for name, kind, value in (("scale_abc", "flux_scale", float(p.scale[k])),
+                                  ("shift_deg_abc", "flux_shift", math.degrees(p.shift[k]))):
+            msg = implausible(kind, value)
+            if msg:
+                raise InputError(motor.source or _API, f"pm_flux.{name}[{k}]", f"phase {PHASES[k]}: {msg}")
 
 
 def check_motor(motor: Motor) -> None:
@@ -821,8 +953,15 @@ def motor_to_toml(motor: Motor, table: str | None = None) -> str:
                   f"q_drop = {float(sat.q_drop)!r}", f"q_current = {float(sat.q_current)!r}  # A"]
         if sat.magnet_current is not None:
             lines.append(f"magnet_current = {float(sat.magnet_current)!r}  # A")
+    p = motor.pm_phases
+    if motor.pm_harmonics or not p.balanced:
+        lines += ["", "[pm_flux]"]
+    if not p.balanced:
+        lines += [f"scale_abc = [{', '.join(repr(float(g)) for g in p.scale)}]  # of psi_pm, A, B, C",
+                  f"shift_deg_abc = [{', '.join(repr(float(math.degrees(d))) for d in p.shift)}]  "
+                  "# electrical degrees"]
     if motor.pm_harmonics:
-        lines += ["", "[pm_flux]", "harmonics = ["]
+        lines.append("harmonics = [")
         lines += [
             f"  {{ order = {int(h.order)}, amplitude = {float(h.amplitude)!r}, "
             f"phase_deg = {float(math.degrees(h.phase))!r} }},"

@@ -189,6 +189,10 @@ class PmHarmonicEntry(BaseModel):
     phase_deg: float = 0.0  # electrical degrees
 
 
+#: the phases A, B, C, in the order of the per-phase keys of ``[pm_flux]``
+PHASES = ("A", "B", "C")
+
+
 class PmFluxSection(BaseModel):
     """The ``[pm_flux]`` section.
 
@@ -196,9 +200,19 @@ class PmFluxSection(BaseModel):
     ----------
     harmonics : list of PmHarmonicEntry
         The PM flux harmonics (none by default).
+    scale_abc : list of float
+        The end effect on the magnets' flux: each phase's PM flux-linkage amplitude relative to
+        ``psi_pm``, phases A, B, C (default balanced, ``[1, 1, 1]``), dimensionless
+        (docs/motor-files.md, "End effect on the magnets' flux"; docs/theory.md).
+    shift_deg_abc : list of float
+        Each phase's PM flux phase advance, electrical degrees (default ``[0, 0, 0]``).
     """
     model_config = _STRICT
     harmonics: list[PmHarmonicEntry] = Field(default_factory=list)
+    scale_abc: list[float] = Field(default_factory=lambda: [1.0, 1.0, 1.0], min_length=3,
+                                   max_length=3)  # -, relative to psi_pm, phases A, B, C
+    shift_deg_abc: list[float] = Field(default_factory=lambda: [0.0, 0.0, 0.0], min_length=3,
+                                       max_length=3)  # electrical degrees, phases A, B, C
 
     @model_validator(mode="after")
     def _one_entry_per_order(self) -> PmFluxSection:

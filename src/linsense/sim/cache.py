@@ -73,4 +73,6 @@ def _fingerprint(motor: Motor) -> str:
     h.update(np.ascontiguousarray(motor.inductance.b).tobytes())
     if motor.saturation is not None:
         h.update(repr(motor.saturation.key()).encode())
+    if not motor.pm_phases.balanced:  # (a balanced motor keeps the fingerprint it had before)
+        h.update(repr(motor.pm_phases).encode())
     return h.hexdigest()

@@ -110,6 +110,11 @@ def fill_plant(cfg, motor, tol: float = 1e-12, lab: tuple | None = None) -> None
         cfg.pm_order[j] = h.order
         cfg.pm_amp[j] = h.amplitude
         cfg.pm_phase[j] = h.phase
+    # the end effect on the magnets' flux (ls_sim.h: 1 + pm_dscale[k], pm_shift[k]); a balanced
+    # motor writes zeros, the plant's balanced path (bit for bit the traces before it existed)
+    for k in range(3):
+        cfg.pm_dscale[k] = float(motor.pm_phases.scale[k]) - 1.0
+        cfg.pm_shift[k] = float(motor.pm_phases.shift[k])
     cfg.mass = motor.mass
     cfg.visc = motor.friction.viscous
     cfg.coulomb = motor.friction.coulomb
