@@ -114,11 +114,7 @@ def _say_metrics(m: dict) -> None:
 def _simulate_pil(scenario: str, out: str | None, others: list[str], check: bool, as_json: bool) -> None:
     """``simulate --pil``: the closed loop with the firmware under QEMU (:mod:`linsense.firmware.pil`);
     metrics.json of that run, timing.json, pil.json (both runs' metrics and how they differ)."""
-    import tempfile
-
-    from linsense.firmware.pil import closed_loop
-    from linsense.io import output_set, split_timing
-    from linsense.sim.to_folder import write_metrics
+    from linsense.firmware.pil import closed_loop_to
 
     if scenario == "-":
         raise InputError("--pil", "", "runs a scenario file or a packaged example's name, not standard input")
@@ -128,18 +124,9 @@ def _simulate_pil(scenario: str, out: str | None, others: list[str], check: bool
         c.data_on_stdout()
     path = c.example("scenarios", scenario, "SCENARIO")
     scenario_arg(path)  # (bad input refused before anything is built)
-    out = c.default_out(out, scenario, "simulate")
-    with tempfile.TemporaryDirectory(prefix="linsense-pil-") as tmp:
-        rec = closed_loop(path, tmp)
-    metrics, timing = split_timing(rec.pop("metrics_pil"))
-    host, _ = split_timing(rec.pop("metrics_host"))
-    rec.pop("wall_s")  # (the run's wall time is timing.json's wall_s)
-    timing["qemu_cpu_s"] = rec.pop("qemu_cpu_s")
-    rec["metrics_host"] = host
-    with output_set(out, "simulate") as s:
-        write_metrics(s, metrics, timing)
-        s.write("pil.json", json.dumps(rec, indent=1, sort_keys=True) + "\n")
-    c.files_report(s.files)
+    done = closed_loop_to(c.default_out(out, scenario, "simulate"), path)
+    metrics, timing, rec = done.metrics, done.timing, done.record
+    c.files_report(done.files)
     _say_metrics({**metrics, "wall_s": timing.get("wall_s"),
                   "realtime_factor": timing.get("realtime_factor")})
     same = ("every output of every step identical to the host build's" if rec["identical_steps"]
@@ -148,10 +135,9 @@ def _simulate_pil(scenario: str, out: str | None, others: list[str], check: bool
     c.say(f"{metrics['scenario']}: the drive on the Cortex-M4F under QEMU ({rec['steps']} steps, "
           f"{timing['wall_s']:.1f} s wall, libm {rec['libm']}): {same}")
     c.elapsed()
-    ok = bool(metrics["stable"]) and bool(rec["pass"])
     if as_json:
-        c.emit_json("simulate", s.files, ok, metrics=metrics, timing=timing, pil=rec)
-    if check and not ok:
+        c.emit_json("simulate", done.files, done.ok, metrics=metrics, timing=timing, pil=rec)
+    if check and not done.ok:
         why = "not stable: " + str(metrics["unstable_reason"]) if not metrics["stable"] else \
             "the firmware's run differs from the host build's"
         click.echo(f"linsense: {why}", err=True)

@@ -109,7 +109,7 @@ def _build(b, out: Path, pil, drive_writer) -> _Loop:
     host recorder."""
     import cffi
 
-    from linsense._ctrl import ffi
+    from linsense.ctrl import ffi
 
     w = drive_writer(ffi, "pil_closed")
     cases = '\nstatic const pil_case pil_cases[] = {{"closed", &pil_closed_drive}};\n'
@@ -125,7 +125,7 @@ def _build(b, out: Path, pil, drive_writer) -> _Loop:
 
 def _runner(lp: _Loop, remote: bool) -> Callable:
     """``run_closed_loop``'s time loop: the host recorder's, or the firmware's under QEMU."""
-    from linsense._ctrl import ffi
+    from linsense.ctrl import ffi
 
     out, rffi, rlib = lp.out, lp.rffi, lp.rlib
     tag = "pil" if remote else "host"
@@ -138,10 +138,11 @@ def _runner(lp: _Loop, remote: bool) -> Callable:
         ptrs = [addr(p) for p in (cfg, drv, cmds)]
         if not remote:
             return rlib.pil_record(*ptrs, n_cmds, n_steps, addr(o), addr(res), *paths)
-        q = subprocess.Popen(lp.pil.qemu_cmd(lp.elf), cwd=out, stdout=subprocess.DEVNULL)
-        st = rlib.pil_remote(*ptrs, n_cmds, n_steps, addr(o), addr(res), *paths,
-                             str(out / "closed.in").encode(), str(out / "closed.m4f.out").encode())
-        q.wait(timeout=60)
+        with open(out / "closed.qemu.err", "wb") as err:  # (its words said after the run)
+            q = subprocess.Popen(lp.pil.qemu_cmd(lp.elf), cwd=out, stdout=subprocess.DEVNULL, stderr=err)
+            st = rlib.pil_remote(*ptrs, n_cmds, n_steps, addr(o), addr(res), *paths,
+                                 str(out / "closed.in").encode(), str(out / "closed.m4f.out").encode())
+            q.wait(timeout=60)
         return st
 
     runner.__name__ = f"the {tag} run"
@@ -155,7 +156,7 @@ def _runner(lp: _Loop, remote: bool) -> Callable:
 def _run(lp: _Loop, remote: bool) -> tuple:
     """One closed loop (the scenario's drive copied) through the package's loop, its time loop the
     host recorder's or the firmware's under QEMU: its RawRun, metrics and wall time."""
-    from linsense._ctrl import ffi
+    from linsense.ctrl import ffi
     from linsense.sim.core import BLOCKS, run_closed_loop
     from linsense.sim.simulation import finish_metrics, run_metrics
 
@@ -210,6 +211,8 @@ def run_pil(scenario: str | Path, out: str | Path, *, duration: float | None = N
         same_steps = np.array_equal(pil.read_out(out / "closed.host.steps"),
                                     pil.read_out(out / "closed.pil.steps"))
     cpu = c1.children_user - c0.children_user + c1.children_system - c0.children_system
+    for line in (out / "closed.qemu.err").read_text(encoding="utf-8", errors="replace").splitlines():
+        say(line)  # (the firmware's semihosted words)
     steps = fw.steps_done
     say(f"pil_closed: {sc.name}: {steps} steps ({steps / b.setup.f_pwm:.3g} s simulated) with the drive on "
         f"the Cortex-M4F under QEMU: {wall:.1f} s wall, QEMU {cpu:.1f} s CPU; libm: {LIBM}")
@@ -307,4 +310,75 @@ def closed_loop(scenario: str | Path, out: str | Path, *, duration: float | None
                          f"{exc}") from None
 
 
-__all__ = ["LIBM", "TIMING", "TOOLS", "closed_loop", "metric_differences", "run_pil", "source_tree"]
+@dataclass
+class PilOutput:
+    """What :func:`closed_loop_to` ran and wrote.
+
+    Parameters
+    ----------
+    metrics : dict
+        ``metrics.json``: the firmware's run (without the timing).
+    timing : dict
+        ``timing.json``: its timing and QEMU's CPU time (``qemu_cpu_s``).
+    record : dict
+        ``pil.json``: :func:`closed_loop`'s record without the timing, the host run's metrics
+        without theirs.
+    files : list of Path
+        The files written.
+    """
+
+    metrics: dict
+    timing: dict
+    record: dict
+    files: list[Path] = field(default_factory=list)
+
+    @property
+    def ok(self) -> bool:
+        """The firmware's run stable and identical to the host build's."""
+        return bool(self.metrics["stable"]) and bool(self.record["pass"])
+
+
+def closed_loop_to(out: str | Path, scenario: str | Path, *, duration: float | None = None) -> PilOutput:
+    """Run :func:`closed_loop` in a temporary folder and write its output set (what ``linsense
+    simulate SCENARIO --pil`` writes).
+
+    Parameters
+    ----------
+    out : str or Path
+        The folder: missing, empty or an earlier output of linsense; ``metrics.json`` (the
+        firmware's run), ``timing.json`` and ``pil.json`` (both runs and how they differ).
+    scenario : str or Path
+        The scenario file.
+    duration : float or None, optional
+        Simulated time in s (default: the scenario's).
+
+    Returns
+    -------
+    PilOutput
+        The metrics, timing, record and files written.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        As :func:`closed_loop`.
+    """
+    import tempfile
+
+    from linsense.io import output_set, split_timing
+    from linsense.sim.to_folder import write_metrics
+
+    with tempfile.TemporaryDirectory(prefix="linsense-pil-") as tmp:
+        rec = closed_loop(scenario, tmp, duration=duration)
+    metrics, timing = split_timing(rec.pop("metrics_pil"))
+    host, _ = split_timing(rec.pop("metrics_host"))
+    rec.pop("wall_s")  # (the run's wall time is timing.json's wall_s)
+    timing["qemu_cpu_s"] = rec.pop("qemu_cpu_s")
+    rec["metrics_host"] = host
+    with output_set(out, "simulate") as s:
+        write_metrics(s, metrics, timing)
+        s.write("pil.json", json.dumps(rec, indent=1, sort_keys=True) + "\n")
+    return PilOutput(metrics, timing, rec, list(s.files))
+
+
+__all__ = ["LIBM", "TIMING", "TOOLS", "PilOutput", "closed_loop", "closed_loop_to", "metric_differences",
+           "run_pil", "source_tree"]

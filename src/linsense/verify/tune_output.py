@@ -124,7 +124,7 @@ def tune_to(out: str | Path, motor: str, *, figure: CertificateFigure | None = N
         figures); None: no figure.
     say : callable, optional
         Called with each line of the report and each file written.
-    **kwargs
+    **kwargs : dict
         :func:`~linsense.verify.tuning.tune`'s other arguments (``fmt``, ``quick``, ``verify``,
         ``unverified``, ``scenario``, ``drive``, ...; not ``out`` nor ``ready``).
 

@@ -279,9 +279,8 @@ def tune(motor: str, *, scenario: Scenario | None = None, source: str | None = N
          refusal: Callable[[InputError], InputError] = _as_given) -> TuneResult:
     """Design the drive for a motor, make its scenario or C header, and verify it in the simulator.
 
-    Nothing is written: the caller writes :attr:`TuneResult.text` (and the certificate,
-    :meth:`TuneResult.certificate_doc`), as :func:`~linsense.verify.tune_output.tune_to` does.
-    Every refusal comes before the certificate runs.
+    Nothing is written (:func:`~linsense.verify.tune_output.tune_to` writes the text and the
+    certificate). Every refusal comes before the certificate runs.
 
     Parameters
     ----------
