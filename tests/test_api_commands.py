@@ -1,7 +1,8 @@
-"""The Python API of the commands: ``linsense.sim.simulate_to``, ``linsense.verify.tune`` and
-``linsense.firmware.verified_export.export_firmware`` write
-and return what ``linsense simulate`` and ``linsense tune`` write, byte for byte (timing aside); the
-command line is a thin layer over them."""
+"""The Python API of the commands: ``linsense.sim.simulate_to``, ``linsense.verify.tune_to``,
+``linsense.sweep.sweep_to``, ``linsense.firmware.pil.closed_loop_to`` and
+``linsense.firmware.verified_export.export_firmware`` write and return what ``linsense simulate``,
+``tune``, ``sweep`` and ``simulate --pil`` write, byte for byte (timing aside); the command line is a
+thin layer over them."""
 
 from __future__ import annotations
 
@@ -94,7 +95,8 @@ def test_tune_certificate_as_the_cli_writes_it(run_cli, tmp_path):
 
 
 @pytest.mark.parametrize(("module", "function", "most"), [
-    ("cli/tune.py", "tune", 70), ("cli/runs.py", "simulate", 45),
+    ("cli/tune.py", "tune", 45), ("cli/runs.py", "simulate", 45), ("cli/runs.py", "sweep_cmd", 30),
+    ("cli/runs.py", "_simulate_pil", 32), ("cli/models.py", "lut", 36),
     ("verify/tuning.py", "tune", 80), ("sim/to_folder.py", "simulate_to", 80)])
 def test_the_commands_are_thin_over_their_api(module, function, most):
     """The commands parse, call the API and write; the API's functions stay readable (lines from
@@ -177,3 +179,114 @@ def test_calibrate_to_writes_what_the_cli_writes(run_cli, tmp_path):
     for name in set(names) - {"timing.json", ".linsense-set.json"}:
         assert (tmp_path / "cli" / name).read_bytes() == (tmp_path / "api" / name).read_bytes(), name
     assert done.completed and done.metrics["points_done"] == 8 and "wall_s" in done.timing
+
+
+def test_tune_to_writes_what_the_cli_writes(run_cli, tmp_path):
+    """``linsense.verify.tune_to`` writes the scenario and its certificate's files as ``linsense tune
+    --quick`` does (the JSON byte for byte but its wall time), the figure drawn by the function given;
+    a certificate of another output is refused before anything runs, a stale one deleted."""
+    import json
+
+    from linsense.errors import InputError
+    from linsense.report.verify_figures import write_certificate_figure
+    from linsense.verify import tune_to
+
+    (tmp_path / "cli").mkdir()
+    r = run_cli("tune", "--motor", "small30", "--quick", "--out", tmp_path / "cli" / "q.toml")
+    assert r.code in (0, 1), r.err
+    res = tune_to(tmp_path / "api" / "q.toml", "small30", quick=True, figure=write_certificate_figure)
+    assert [f.name for f in res.files] == ["q.toml", "q.verification.json", "q.verification.png"]
+    assert res.passed == (r.code == 0)
+    for name in ("q.toml", "q.verification.json"):
+        cli, api = ((tmp_path / d / name).read_text() for d in ("cli", "api"))
+        if name.endswith(".json"):
+            cli, api = ({k: v for k, v in json.loads(t).items() if k != "wall_s"} for t in (cli, api))
+        assert cli == api, name
+    with pytest.raises(InputError, match="this is the certificate of q.toml"):
+        tune_to(tmp_path / "api" / "q.h", "small30", fmt="c", verify=False, unverified=True)
+    res = tune_to(tmp_path / "api" / "q.toml", "small30", verify=False)
+    assert res.files == [tmp_path / "api" / "q.toml"]
+    assert not (tmp_path / "api" / "q.verification.json").exists()
+
+
+def test_sweep_to_writes_what_the_cli_writes(run_cli, tmp_path):
+    """``linsense.sweep.sweep_to`` writes the results, the summary and the study's figure as
+    ``linsense sweep`` does, and counts the runs as its ``--json`` says them."""
+    import json
+
+    from linsense.report.sweep_figures import write_sweep_figure
+    from linsense.sweep import sweep_to
+
+    base = _toml(tmp_path / "s.toml", duration=0.1)
+    spec = tmp_path / "w.toml"
+    spec.write_text(f'[sweep]\nname = "w"\nscenario = "{base}"\nstudy = "stability-map"\nsampling = "grid"\n'
+                    '[[axis]]\nkey = "reference.position_mm"\nvalues = [0.5, 1.0]\n'
+                    '[[axis]]\nkey = "observer.bandwidth_hz"\nvalues = [30.0]\n')
+    r = run_cli("sweep", spec, "--out", tmp_path / "cli", "--no-progress", "--json")
+    assert r.code == 0, r.err
+    done = sweep_to(tmp_path / "api", spec, figure=write_sweep_figure)
+    assert [f.name for f in done.files] == ["results.parquet", "summary.txt", "stability-map.png"]
+    for f in done.files:
+        assert (tmp_path / "cli" / f.name).read_bytes() == f.read_bytes(), f.name
+    doc = json.loads(r.out)
+    assert (doc["stable"], doc["not_stable"], doc["refused"], doc["failed_runs"], doc["summary"]) == (
+        done.stable, done.not_stable, done.refused, done.failed_runs, done.summary)
+    assert not sweep_to(tmp_path / "api2", spec).files[2:]  # (no figure given: none drawn)
+
+
+@pytest.mark.parametrize("f_inj", [1.0, 0.5, 2e7, -3.0, float("nan"), 5e-324])
+def test_lut_f_inj_refused_by_the_table(run_cli, tmp_path, f_inj):
+    """``lut --f-inj`` is refused by the table's own check (``table_frequency``, which ``build_lut``
+    runs): the command only names the option."""
+    from linsense.compensation.lut import build_lut, table_frequency
+    from linsense.errors import InputError
+    from linsense.model.motor import load_motor
+
+    r = run_cli("lut", "--motor", "ecce2010", "--f-inj", repr(f_inj), "--out", tmp_path / "l.csv")
+    with pytest.raises(InputError) as api:
+        build_lut(load_motor("ecce2010"), 16, f_inj)
+    assert r.code == 2 and r.err.strip() == f"linsense: error: --f-inj: {api.value.message}"
+    with pytest.raises(InputError) as direct:
+        table_frequency(f_inj, "--f-inj", "")
+    assert direct.value.message == api.value.message
+
+
+def test_pil_closed_is_a_thin_wrapper():
+    """tools/pil_closed.py calls the package's loop (``linsense.firmware.pil.run_pil``): it runs no
+    loop, builds nothing and compares nothing of its own."""
+    import ast
+
+    path = Path(linsense.sim.__file__).parents[3] / "tools" / "pil_closed.py"
+    if not path.is_file():
+        pytest.skip("not a source tree")
+    text = path.read_text(encoding="utf-8")
+    tree = ast.parse(text)
+    assert [n.name for n in tree.body if isinstance(n, ast.FunctionDef)] == ["main"]
+    assert len(text.splitlines()) <= 40 and "run_pil" in text
+    for word in ("run_closed_loop", "build_replay", "qemu", "mkfifo"):
+        assert word not in text, word
+
+
+def _pil_ready() -> bool:
+    import shutil
+
+    from linsense.firmware.pil import TOOLS, source_tree
+
+    return source_tree() is not None and all(shutil.which(t) for t in TOOLS)
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not _pil_ready(), reason="needs a source tree, the ARM compiler and QEMU (make tools)")
+def test_closed_loop_to_writes_what_the_cli_writes(run_cli, tmp_path):
+    """``linsense.firmware.pil.closed_loop_to`` and ``linsense simulate --pil`` write the same
+    metrics.json and pil.json; the firmware's run is the host build's, bit for bit."""
+    from linsense.firmware.pil import closed_loop_to
+
+    p = _toml(tmp_path / "s.toml", duration=0.05)
+    r = run_cli("simulate", p, "--pil", "--out", tmp_path / "cli")
+    assert r.code == 0, r.err
+    done = closed_loop_to(tmp_path / "api", p)
+    assert done.record["pass"] and done.record["identical_steps"]
+    assert sorted(f.name for f in done.files) == ["metrics.json", "pil.json", "timing.json"]
+    for name in ("metrics.json", "pil.json"):
+        assert (tmp_path / "cli" / name).read_bytes() == (tmp_path / "api" / name).read_bytes(), name

@@ -41,7 +41,8 @@ PATHS = {
         ("linsense.sim.metrics", "compute_metrics", "metrics from every PWM period"),
     ),
     "tune": (
-        ("linsense.cli.tune", "tune", "the command: options -> verify.tune"),
+        ("linsense.cli.tune", "tune", "the command: options -> verify.tune_to"),
+        ("linsense.verify.tune_output", "tune_to", "the output, the certificate's files beside it"),
         ("linsense.verify.tuning", "tune", "design, scenario or header, certificate"),
         ("linsense.tune.drive_design", "design_drive", "the design, composed once"),
         ("linsense.tune.design", "design", "every gain, limit and trip"),

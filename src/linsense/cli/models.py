@@ -3,8 +3,6 @@
 
 from __future__ import annotations
 
-import math
-
 import click
 
 from linsense.cli import _common as c
@@ -48,22 +46,13 @@ def model(motor_spec: str, points: int, out: str | None) -> None:
 def lut(motor_spec: str, points: int, fmt: str, symbol: str | None, f_inj: float | None, quad: float | None,
         injection: str, out: str | None) -> None:
     """Export the compensation LUT Psi_LUT(theta) = atan(-L_dq/L_q) as CSV, JSON or a C header."""
-    from linsense.compensation.lut import build_lut, export
+    from linsense.compensation.lut import build_lut, export, table_frequency
     from linsense.ctrl import drive_default_cfg
     from linsense.io import write_atomic
-    from linsense.limits import MAX_F_INJ, MIN_F_INJ
-    from linsense.plausible import slip
     from linsense.tune.design import observable_error_gain
 
-    if f_inj is not None and not (f_inj > 0 and math.isfinite(f_inj)):
-        raise InputError("--f-inj", "", f"must be a positive frequency in Hz, got {f_inj!r}")
-    if f_inj is not None and not MIN_F_INJ <= f_inj <= MAX_F_INJ:
-        slipped = slip("injection_frequency", f_inj)  # (kHz typed for Hz: 1 was a table at 1 Hz)
-        why = (f"is below the lower limit of {MIN_F_INJ:g} Hz (an HF injection: the design's lowest, "
-               "f_pwm / 4 of a 500 Hz PWM" if f_inj < MIN_F_INJ else
-               f"is beyond the limit of {MAX_F_INJ:g} Hz (half of a 1 MHz PWM")
-        raise InputError("--f-inj", "", f"{f_inj:g} Hz {why}; {docs('limits')})"
-                         + (f"; {slipped}" if slipped else ""))
+    if f_inj is not None:  # (refused as the table refuses it, at the option)
+        table_frequency(f_inj, "--f-inj", "")
     if symbol is not None:  # (checked, never rewritten: 'my lut!' was my_lut, int was int_t)
         if fmt != "c":
             raise InputError("--symbol", "", f"names the C header's array: only with --format c (not {fmt})")

@@ -114,11 +114,7 @@ def _say_metrics(m: dict) -> None:
 def _simulate_pil(scenario: str, out: str | None, others: list[str], check: bool, as_json: bool) -> None:
     """``simulate --pil``: the closed loop with the firmware under QEMU (:mod:`linsense.firmware.pil`);
     metrics.json of that run, timing.json, pil.json (both runs' metrics and how they differ)."""
-    import tempfile
-
-    from linsense.firmware.pil import closed_loop
-    from linsense.io import output_set, split_timing
-    from linsense.sim.to_folder import write_metrics
+    from linsense.firmware.pil import closed_loop_to
 
     if scenario == "-":
         raise InputError("--pil", "", "runs a scenario file or a packaged example's name, not standard input")
@@ -128,18 +124,9 @@ def _simulate_pil(scenario: str, out: str | None, others: list[str], check: bool
         c.data_on_stdout()
     path = c.example("scenarios", scenario, "SCENARIO")
     scenario_arg(path)  # (bad input refused before anything is built)
-    out = c.default_out(out, scenario, "simulate")
-    with tempfile.TemporaryDirectory(prefix="linsense-pil-") as tmp:
-        rec = closed_loop(path, tmp)
-    metrics, timing = split_timing(rec.pop("metrics_pil"))
-    host, _ = split_timing(rec.pop("metrics_host"))
-    rec.pop("wall_s")  # (the run's wall time is timing.json's wall_s)
-    timing["qemu_cpu_s"] = rec.pop("qemu_cpu_s")
-    rec["metrics_host"] = host
-    with output_set(out, "simulate") as s:
-        write_metrics(s, metrics, timing)
-        s.write("pil.json", json.dumps(rec, indent=1, sort_keys=True) + "\n")
-    c.files_report(s.files)
+    done = closed_loop_to(c.default_out(out, scenario, "simulate"), path)
+    metrics, timing, rec = done.metrics, done.timing, done.record
+    c.files_report(done.files)
     _say_metrics({**metrics, "wall_s": timing.get("wall_s"),
                   "realtime_factor": timing.get("realtime_factor")})
     same = ("every output of every step identical to the host build's" if rec["identical_steps"]
@@ -148,10 +135,9 @@ def _simulate_pil(scenario: str, out: str | None, others: list[str], check: bool
     c.say(f"{metrics['scenario']}: the drive on the Cortex-M4F under QEMU ({rec['steps']} steps, "
           f"{timing['wall_s']:.1f} s wall, libm {rec['libm']}): {same}")
     c.elapsed()
-    ok = bool(metrics["stable"]) and bool(rec["pass"])
     if as_json:
-        c.emit_json("simulate", s.files, ok, metrics=metrics, timing=timing, pil=rec)
-    if check and not ok:
+        c.emit_json("simulate", done.files, done.ok, metrics=metrics, timing=timing, pil=rec)
+    if check and not done.ok:
         why = "not stable: " + str(metrics["unstable_reason"]) if not metrics["stable"] else \
             "the firmware's run differs from the host build's"
         click.echo(f"linsense: {why}", err=True)
@@ -446,42 +432,28 @@ def sweep_cmd(sweep_file: str, out: str | None, workers: int | None, scheduler: 
               no_progress: bool, restart: bool, check: bool, as_json: bool) -> None:
     """Run a sweep (SWEEP_FILE: a file or a packaged example's name such as injection): a base
     scenario with keys varied, on local worker threads or a dask.distributed cluster."""
-    from linsense.io import write_atomic, write_atomic_with
-    from linsense.sweep import load_sweep, sweep
-    from linsense.sweep.study_summary import summary_line
+    from linsense.sweep import load_sweep
+    from linsense.sweep.sweep_folder import sweep_to
 
     if as_json:
         c.data_on_stdout()
     sw = load_sweep(c.example("sweeps", sweep_file, "SWEEP_FILE"))
     out = c.default_out(out, sweep_file, "sweep")
-    df = sweep(sw, out, workers=workers, scheduler=scheduler, processes=processes,
-               progress=not no_progress and c.progress(), restart=restart)
-    out_dir = Path(out)
-    axes = [a.key for a in sw.spec.axis]
-    relative = {a.key: a.relative for a in sw.spec.axis}
-    files = [write_atomic_with(out_dir / "results.parquet", lambda f: df.to_parquet(f, index=False))]
-    study = sw.spec.sweep.study
-    line = summary_line(study, df, axes)
-    files.append(write_atomic(out_dir / "summary.txt", f"{sw.name}: {line}\n"))
-    if study:
-        from linsense.report.figures import save_png  # (matplotlib: only for a study's figure)
-        from linsense.report.sweep_figures import FIGURES
-
-        files.append(save_png(FIGURES[study](df, axes, relative), out_dir / f"{study}.png", 110))
-    c.files_report(files)
-    c.say(f"{sw.name}: {line}")
-    import pandas as pd
-
-    refused = df["error"].notna() if "error" in df else pd.Series(False, index=df.index)
-    stable = df["stable"].fillna(False).astype(bool) & ~refused
-    failed = [int(r) for r in df.loc[~stable, "run"]] if "run" in df else [int(i) for i in df.index[~stable]]
+    figure = None
+    if sw.spec.sweep.study:  # (matplotlib: only for a study's figure)
+        from linsense.report.sweep_figures import write_sweep_figure as figure
+    done = sweep_to(out, sw, workers=workers, scheduler=scheduler, processes=processes,
+                    progress=not no_progress and c.progress(), restart=restart, figure=figure)
+    c.files_report(done.files)
+    c.say(f"{done.name}: {done.summary}")
+    failed, n = done.failed_runs, len(done.rows)
     c.elapsed()
     if as_json:
-        c.emit_json("sweep", files, not failed, name=sw.name, study=study, axes=axes, runs=len(df),
-                    stable=int(stable.sum()), not_stable=int((~stable & ~refused).sum()),
-                    refused=int(refused.sum()), failed_runs=failed, summary=line)
+        c.emit_json("sweep", done.files, not failed, name=done.name, study=done.study, axes=done.axes, runs=n,
+                    stable=done.stable, not_stable=done.not_stable, refused=done.refused, failed_runs=failed,
+                    summary=done.summary)
     if check and failed:
-        click.echo(f"linsense: {len(failed)} of {len(df)} sweep points not stable or refused (runs "
+        click.echo(f"linsense: {len(failed)} of {n} sweep points not stable or refused (runs "
                    f"{', '.join(map(str, failed[:20]))}{', ...' if len(failed) > 20 else ''})", err=True)
         raise click.exceptions.Exit(1)
 

@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from linsense._check import choice, instance, integer, path_arg, reals
+from linsense._check import brief, choice, instance, integer, is_real, path_arg, reals
 from linsense._check import real as real_arg
 from linsense.analysis.hf import psi_lut, psi_lut_resistive
 from linsense.compensation.stamp import data_digest, stamp_comment, stamp_macros
@@ -125,15 +125,53 @@ def _table_args(src: str, points, f_inj, quad, needs_f: bool = False) -> int:
     """A table's ``points`` (returned as an int), ``f_inj`` (None allowed unless ``needs_f``) and
     ``quad`` checked (the API refuses what the CLI refuses: 4.5 points, 10**9 points, a complex or
     negative frequency were accepted, the second until memory ran out)."""
-    from linsense.limits import MAX_F_INJ, MAX_POINTS, MIN_F_INJ
+    from linsense.limits import MAX_POINTS
 
     points = integer(points, src, "points", 4, MAX_POINTS)
     if f_inj is not None or needs_f:
-        what = "a frequency in Hz (docs/limits.md)"
-        real_arg(f_inj, src, "f_inj", MIN_F_INJ, MAX_F_INJ, what=what if needs_f else f"None or {what}",
-                 kind="injection_frequency")
+        table_frequency(f_inj, src, "f_inj")
     real_arg(quad, src, "quad", 0.0, 1.0, high_open=True, what="a number")
     return points
+
+
+def table_frequency(f_inj, source: str, key: str) -> float:
+    """A table's injection frequency checked: a positive number of Hz within
+    :data:`~linsense.limits.MIN_F_INJ` .. :data:`~linsense.limits.MAX_F_INJ` (what ``lut --f-inj``
+    refuses, by this function).
+
+    Parameters
+    ----------
+    f_inj : object
+        The frequency, Hz.
+    source, key : str
+        Where it was given, for the message (``"--f-inj", ""`` for the option).
+
+    Returns
+    -------
+    float
+        ``float(f_inj)``.
+
+    Raises
+    ------
+    linsense.errors.InputError
+        Not a positive number, or outside the range (saying why the range, and the slip of unit
+        that brings it within: kHz typed for Hz made a table at 1 Hz).
+    """
+    from linsense.limits import MAX_F_INJ, MIN_F_INJ
+    from linsense.plausible import slip
+    from linsense.version import docs
+
+    if not (is_real(f_inj) and f_inj > 0 and math.isfinite(f_inj)):
+        raise InputError(source, key, f"must be a positive frequency in Hz, got {brief(f_inj)}")
+    f = float(f_inj)
+    if not MIN_F_INJ <= f <= MAX_F_INJ:
+        slipped = slip("injection_frequency", f)
+        why = (f"is below the lower limit of {MIN_F_INJ:g} Hz (an HF injection: the design's lowest, "
+               "f_pwm / 4 of a 500 Hz PWM" if f < MIN_F_INJ else
+               f"is beyond the limit of {MAX_F_INJ:g} Hz (half of a 1 MHz PWM")
+        raise InputError(source, key, f"{f:g} Hz {why}; {docs('limits')})"
+                         + (f"; {slipped}" if slipped else ""))
+    return f
 
 
 def build_lut(motor, points: int, f_inj: float | None = None, quad: float = 0.0,

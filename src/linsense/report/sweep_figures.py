@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -192,3 +193,31 @@ def injection(df: pd.DataFrame, axes: list[str], relative: dict | None = None) -
 
 
 FIGURES = {"stability-map": stability_map, "lut-robustness": lut_robustness, "injection": injection}
+
+
+def write_sweep_figure(study: str, df: pd.DataFrame, axes: list[str], relative: dict,
+                       path: str | Path) -> Path:
+    """Draw a built-in study's figure and save it (the ``figure`` of
+    :func:`linsense.sweep.sweep_folder.sweep_to`).
+
+    Parameters
+    ----------
+    study : str
+        The study (a key of :data:`FIGURES`).
+    df : pandas.DataFrame
+        The sweep's rows.
+    axes : list of str
+        The swept keys.
+    relative : dict
+        Key -> whether the axis is a factor of the base value.
+    path : str or Path
+        The PNG.
+
+    Returns
+    -------
+    Path
+        The file written.
+    """
+    from linsense.report.figures import save_png
+
+    return save_png(FIGURES[study](df, axes, relative), path, 110)

@@ -3,6 +3,8 @@ off-nominal plants' errors, the steps and the trajectory (docs/tuning.md, "The c
 
 from __future__ import annotations
 
+from pathlib import Path
+
 from matplotlib.figure import Figure
 
 from linsense.verify import criteria as C
@@ -191,3 +193,27 @@ def _blank_empty(ax, rows: list[dict], quick: bool) -> None:
             a.set_axis_off()
             note = "not run (--quick)" if quick else f"no trace to show\n{faulted}"
             a.text(0.5, 0.5, note, ha="center", va="center", transform=a.transAxes, fontsize=8, wrap=True)
+
+
+def write_certificate_figure(res, path: str | Path) -> Path:
+    """Draw a tuned drive's certificate and save it (the ``figure`` of
+    :func:`linsense.verify.tune_output.tune_to`).
+
+    Parameters
+    ----------
+    res : linsense.verify.tuning.TuneResult
+        The result, with its certificate.
+    path : str or Path
+        The PNG (``<stem>.verification.png``).
+
+    Returns
+    -------
+    Path
+        The file written.
+    """
+    from linsense.report.figures import save_png
+
+    cert = res.certificate
+    fig = certificate_figure(cert.rows, f"{res.motor.name}: {cert.verdict()}", quick=cert.quick,
+                             calibrations=cert.extra.get("calibrations"))
+    return save_png(fig, path, 100)

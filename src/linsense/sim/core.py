@@ -345,7 +345,7 @@ def run_closed_loop(cfg, drive, n_steps: int, commands=(), *, signals=None, bloc
     runner : callable or None, optional
         The time loop: ``runner(cfg, drive, cmds, n_cmds, n_steps, out, res) -> status``, the
         arguments and the status of ``ls_sim_run`` (the default). The processor in the loop gives
-        one whose drive runs on the Cortex-M4F under QEMU (``tools/pil_closed.py``).
+        one whose drive runs on the Cortex-M4F under QEMU (:func:`linsense.firmware.pil.run_pil`).
 
     Returns
     -------

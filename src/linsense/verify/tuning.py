@@ -94,6 +94,8 @@ class TuneResult:
         Why a C header was not made ("" when it was).
     warnings : list of str
         The design's warnings.
+    files : list of Path
+        The files written (:func:`~linsense.verify.tune_output.tune_to`; :func:`tune` writes none).
     """
 
     made: DriveDesign
@@ -107,6 +109,7 @@ class TuneResult:
     unverified: str = ""
     refused: str = ""
     warnings: list[str] = field(default_factory=list)
+    files: list[Path] = field(default_factory=list)
 
     @property
     def passed(self) -> bool | None:
@@ -276,8 +279,8 @@ def tune(motor: str, *, scenario: Scenario | None = None, source: str | None = N
          refusal: Callable[[InputError], InputError] = _as_given) -> TuneResult:
     """Design the drive for a motor, make its scenario or C header, and verify it in the simulator.
 
-    Nothing is written: the caller writes :attr:`TuneResult.text` (and the certificate,
-    :meth:`TuneResult.certificate_doc`). Every refusal comes before the certificate runs.
+    Nothing is written (:func:`~linsense.verify.tune_output.tune_to` writes the text and the
+    certificate). Every refusal comes before the certificate runs.
 
     Parameters
     ----------
