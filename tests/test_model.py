@@ -162,7 +162,7 @@ def test_4theta_harmonics_appear_as_6theta_ripple(L4, M4):
     np.testing.assert_allclose(d[:, 0, 1], -k * np.sin(6 * th), atol=1e-17)
 
 
-# ---------------------------------------------------------------------- issue 23: an even number of positions
+# ---------------------------------------------------------------------- an even number of positions
 @pytest.mark.parametrize("n", [8, 10, 12, 36, 64, 124, 126])
 def test_an_even_table_is_interpolated_with_its_nyquist_cosine(n):
     """N equally spaced positions, N even, are passed through as by a real DFT: the orders up to N / 2,

@@ -72,7 +72,7 @@ harmonics = [ { order = 5, amplitude = 0.03, phase_deg = 10.0 } ]
     assert m2.friction == m.friction and m2.pm_harmonics == m.pm_harmonics
 
 
-# ---------------------------------------------------------------------- issue 39: the magnets' flux per phase
+# ---------------------------------------------------------------------- the magnets' flux per phase
 _IND = "\n[inductance]\nL0 = 2.75e-3\nL2 = -0.317e-3\nM0 = -0.92e-3\nM2 = -0.317e-3\ndM0 = -0.47e-3\n"
 
 
@@ -171,7 +171,7 @@ def test_shipped_examples_load(path):
     check_motor(m)
 
 
-# ---------------------------------------------------------------------- issue 23: long tables, slips of unit
+# ---------------------------------------------------------------------- long tables, slips of unit
 def test_a_long_table_is_fitted_up_to_the_order_limit(ecce):
     """8,000 positions (interpolated exactly, minutes and GBs) are fitted to order 63 in blocks: the
     same series as lstsq, the motor's within 1e-15 H; scattered positions too."""
@@ -211,14 +211,14 @@ def test_slips_of_unit(edits, key, words):
     if key is None:
         check_plausible(motor_from_toml(text, "m.toml"))
         return
-    with pytest.raises(InputError) as exc:  # (by the Motor's constructor: one validated path, issue 37)
+    with pytest.raises(InputError) as exc:  # (by the Motor's constructor: one validated path)
         motor_from_toml(text, "m.toml")
     assert exc.value.key == key
     for w in words:
         assert w in str(exc.value), (w, str(exc.value))
 
 
-# ------------------------------------------------------------------- issue 23: one spelling per harmonic key
+# ------------------------------------------------------------------- one spelling per harmonic key
 PRESET_TEXT = (Path(__file__).resolve().parents[1] / "src/linsense/model/presets/ecce2010.toml").read_text()
 
 
@@ -257,7 +257,7 @@ def test_a_harmonic_key_as_documented_is_read():
     assert m.inductance.params["L4"] == 0.01e-3 and m.inductance.params["M6"] == 0.02e-3
 
 
-# ---------------------------------------------------------------------- issue 23: plain numbers
+# ---------------------------------------------------------------------- plain numbers
 def test_numpy_scalars_are_written_as_plain_numbers(ecce, tmp_path):
     """A motor whose values are numpy scalars (as a fit gives them) wrote ``R_s = np.float64(9.0)``, not
     TOML: plain numbers, and the file loads back to the same motor."""
@@ -294,7 +294,7 @@ def test_a_duplicate_position_is_named_as_a_plain_number(ecce, tmp_path):
 @pytest.mark.parametrize("name", ['a "quoted" name', "back\\slash", "both \\\" ends \\"])
 def test_motor_to_toml_writes_any_name_as_a_string(ecce, tmp_path, name):
     """A name with a quote or a backslash wrote a motor file that did not load
-    back (issue 23): it is a TOML string now, and reads back as it was."""
+    back: it is a TOML string now, and reads back as it was."""
     import dataclasses
 
     path = tmp_path / "m.toml"

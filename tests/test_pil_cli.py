@@ -1,4 +1,4 @@
-"""`linsense simulate --pil` (issue 26, point 4): the drive on the Cortex-M4F under QEMU, the plant on
+"""`linsense simulate --pil`: the drive on the Cortex-M4F under QEMU, the plant on
 the host; its metrics equal the host's, its refusals are one line (docs/firmware.md, "Processor in
 the loop")."""
 
