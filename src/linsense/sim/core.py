@@ -318,6 +318,11 @@ def _call_interruptible(call, stop) -> tuple[int, float]:
                     done.wait(0.05)
                 except KeyboardInterrupt:
                     pass
+            if started:  # (then let the thread end: it only returns from work(), the C loop done)
+                try:
+                    worker.join(1.0)
+                except KeyboardInterrupt:
+                    pass
             raise
     else:
         work()
