@@ -14,13 +14,19 @@ reads them) and ``-ffp-contract=off``:
   ``ls_drive_step``); the worst step by the upper estimate;
 * bit for bit: the replay's outputs against the closed loop's own, every output of every step.
 
-Usage: ``python tools/bench_builds.py [NAME ...] [--size-only]`` (every candidate without names);
-about 3 minutes per candidate's cycles. Prints one line per candidate; exit 1 when a replay differs.
+With ``--profile N``, each candidate's N costliest functions of the step (nominal cycles and
+instructions per replayed step, the mean over every step; :func:`profile`): where a layout spends its
+cycles, piece by piece (docs/firmware.md, "The cost on the target").
+
+Usage: ``python tools/bench_builds.py [NAME ...] [--size-only] [--profile N]`` (every candidate
+without names); about 3 minutes per candidate's cycles. Prints one line per candidate; exit 1 when a
+replay differs.
 """
 
 from __future__ import annotations
 
 import argparse
+import bisect
 import re
 import subprocess
 import sys
@@ -132,10 +138,39 @@ def cycles(out: Path, rec: Path, names: list[tuple[str, int]],
     return int(counts[:, 2].max()), same
 
 
+def profile(out: Path, elf: Path, steps: int) -> list[tuple[str, float, float]]:
+    """(function, nominal cycles, instructions) per replayed step of the image's functions that the
+    steps ran, costliest first: the executions of tools/bench_pil.py's count (``hits.txt``, written
+    by :func:`cycles`) priced by its model (its ``COSTS``), each instruction given to the function
+    symbol that holds it."""
+    syms = []
+    nm = subprocess.run(["arm-none-eabi-nm", "-S", str(elf)], check=True, capture_output=True, text=True)
+    for ln in nm.stdout.splitlines():
+        f = ln.split()
+        if len(f) == 4 and f[2] in "tTW":
+            syms.append((int(f[0], 16) & ~1, int(f[1], 16), f[3]))
+    syms.sort()
+    starts = [a for a, _, _ in syms]
+    tot: dict[str, list[float]] = {}
+    for ln in (out / "hits.txt").read_text().split("\n"):
+        if not ln:
+            continue
+        a, hits, taken = (int(v, 16) if i == 0 else int(v) for i, v in enumerate(ln.split()))
+        i = bisect.bisect_right(starts, a) - 1
+        name = syms[i][2] if i >= 0 and a < syms[i][0] + syms[i][1] else "?"
+        bn, _, tn, _ = bench_pil.COSTS[a]
+        acc = tot.setdefault(name, [0.0, 0.0])
+        acc[0] += (bn * hits + tn * taken) / steps
+        acc[1] += hits / steps
+    return sorted(((k, c, n) for k, (c, n) in tot.items()), key=lambda r: -r[1])
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("names", nargs="*", help=f"candidates (default all: {', '.join(CANDIDATES)})")
     ap.add_argument("--size-only", action="store_true")
+    ap.add_argument("--profile", type=int, default=0, metavar="N",
+                    help="print each candidate's N costliest functions per step")
     a = ap.parse_args(argv)
     unknown = [n for n in a.names if n not in CANDIDATES]
     if unknown:
@@ -158,6 +193,11 @@ def main(argv=None) -> int:
             line += (f", worst step {worst} cycles (upper) = {pct:.1f} % of the period, "
                      f"{'bit for bit' if same else 'DIFFERS from the host'}")
         print(line, flush=True)
+        if a.profile and not a.size_only:
+            steps = sum(n for _, n in names)
+            for fn, cyc, ins in profile(out, out / "pil_replay_m4f.elf", steps)[:a.profile]:
+                print(f"bench_builds:   {fn:40s} {cyc:7.1f} cycles, {ins:7.1f} instructions per step "
+                      "(nominal, mean)")
     print(f"bench_builds: budgets: library <= {LIMIT} bytes (tools/check_mcu.sh), worst step <= "
           f"{bench_pil.BUDGET:,.0f} cycles (tools/bench_pil.py)")
     return 0 if ok else 1

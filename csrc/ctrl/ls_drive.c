@@ -324,7 +324,7 @@ ls_status ls_drive_init(ls_drive *d, const ls_drive_cfg *cfg)
 #else
 #define LS_DRIVE_COLD
 #endif
-static void startup_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd);
+static void startup_step(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas, ls_cmd *LS_RESTRICT cmd);
 
 /* The step table: which function runs ls_drive_step, by mode (rows) and injection shape (columns).
  * The columns are cfg.inject.shape, the rotating injection split by its fundamental separation:
@@ -580,7 +580,8 @@ ls_status ls_drive_step_to(ls_drive *d, ls_pos target)
 /* LS_MODE_STARTUP: the step's opening, one step of the sequence (ls_drive_startup.c), then its
  * end: a failure turns the outputs off, the end enters LS_MODE_SENSORLESS_LUT with the reference
  * aligned at the estimate from the next step on (no jump). */
-static LS_DRIVE_COLD void startup_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
+static LS_DRIVE_COLD void startup_step(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas,
+                                       ls_cmd *LS_RESTRICT cmd)
 {
     ls_drive_io io;
     ls_startup_phase ph;

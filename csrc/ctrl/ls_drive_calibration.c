@@ -20,7 +20,7 @@
  * sensorless observer's equilibrium error against the encoder vanishes, reached at the rate k_int
  * whatever the local saliency (adapting on the observer's own error instead would scale the loop
  * gain by L_q/(L_q - L_d), up to 13 for ecce2010, and let the observer slip). */
-static void sequence_step(ls_drive *d)
+static void sequence_step(ls_drive *LS_RESTRICT d)
 {
     const ls_cal_cfg *c = &d->cfg.cal;
     ls_pos target;
@@ -96,7 +96,7 @@ static void sequence_step(ls_drive *d)
     }
 }
 
-void ls_drive_calibration_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
+void ls_drive_calibration_step_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas, ls_cmd *LS_RESTRICT cmd)
 {
     ls_drive_io io;
     if (!ls_drive_enc_open_(d, meas, cmd, &io)) {

@@ -37,6 +37,17 @@
 #include "linsense/ls_drive.h"
 #include "linsense/ls_math.h"
 
+/* The step's objects are distinct (the drive, its measurements, its command and the step's values
+ * ls_drive_io: ls_drive_step's contract, linsense/ls_drive.h): the step path declares its pointers
+ * restrict, so that a store through one does not make the compiler reload what it read through
+ * another (the same arithmetic, fewer loads: docs/firmware.md, "The cost on the target"). MSVC's C
+ * compiler spells it __restrict unless it compiles C11 or later. */
+#if defined(_MSC_VER) && !defined(__clang__) && !defined(__STDC_VERSION__)
+#define LS_RESTRICT __restrict
+#else
+#define LS_RESTRICT restrict
+#endif
+
 /* One step's values, written by the pieces below in the order of the step. */
 typedef struct {
     LS_REAL i_a, i_b;     /* A, the measured currents in alpha-beta (Clarke) */
@@ -55,27 +66,35 @@ typedef struct {
 } ls_drive_io;
 
 /* A step of the table (ls_drive.c): one PWM period of a mode with an injection shape. */
-typedef void (*ls_drive_step_fn)(ls_drive *d, const ls_meas *meas, ls_cmd *cmd);
-void ls_drive_off_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd);         /* ls_drive_off.c */
-void ls_drive_sensorless_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd);  /* ls_drive_sensorless.c */
-void ls_drive_rotating_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd);    /* ls_drive_rotating.c */
-void ls_drive_square_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd);      /* ls_drive_square.c */
-void ls_drive_sensored_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd);    /* ls_drive_sensored.c */
-void ls_drive_calibration_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd); /* ls_drive_calibration.c */
+typedef void (*ls_drive_step_fn)(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas, ls_cmd *LS_RESTRICT cmd);
+/* ls_drive_off.c */
+void ls_drive_off_step_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas, ls_cmd *LS_RESTRICT cmd);
+/* ls_drive_sensorless.c */
+void ls_drive_sensorless_step_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas, ls_cmd *LS_RESTRICT cmd);
+/* ls_drive_rotating.c */
+void ls_drive_rotating_step_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas, ls_cmd *LS_RESTRICT cmd);
+/* ls_drive_square.c */
+void ls_drive_square_step_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas, ls_cmd *LS_RESTRICT cmd);
+/* ls_drive_sensored.c */
+void ls_drive_sensored_step_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas, ls_cmd *LS_RESTRICT cmd);
+/* ls_drive_calibration.c */
+void ls_drive_calibration_step_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas, ls_cmd *LS_RESTRICT cmd);
 /* LS_MODE_STARTUP's HF chain after ls_drive_open_ (ls_drive_startup.c): returns the sequence's
  * phase after the step (LS_SU_FAILED also for a non-finite output, with LS_FAULT_NONFINITE
  * latched); writes cmd unless it fails. ls_drive.c's step of the mode handles the end. */
-ls_startup_phase ls_drive_startup_run_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd, ls_drive_io *io);
+ls_startup_phase ls_drive_startup_run_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas,
+                                       ls_cmd *LS_RESTRICT cmd,
+                                       ls_drive_io *LS_RESTRICT io);
 
 /* Outputs off (ls_drive_parts.c): every command field cleared, then mode and fault; controllers
  * reset. */
-void ls_drive_disable_(ls_drive *d, ls_cmd *cmd, uint32_t fault);
+void ls_drive_disable_(ls_drive *LS_RESTRICT d, ls_cmd *LS_RESTRICT cmd, uint32_t fault);
 /* ... after a fault or in LS_MODE_OFF, reporting the estimate and the reference. */
-void ls_drive_disable_report_(ls_drive *d, ls_cmd *cmd, uint32_t fault);
+void ls_drive_disable_report_(ls_drive *LS_RESTRICT d, ls_cmd *LS_RESTRICT cmd, uint32_t fault);
 
 /* --------------------------------------------------------------------------- calibration */
 /* psi_cal's cosine and sine, exactly (|psi_cal| <= pi/4). */
-static inline void ls_drive_cal_cs_(ls_drive *d)
+static inline void ls_drive_cal_cs_(ls_drive *LS_RESTRICT d)
 {
 #ifdef LS_REAL_DOUBLE
     d->cal_c = cos(d->psi_cal);
@@ -86,7 +105,7 @@ static inline void ls_drive_cal_cs_(ls_drive *d)
 }
 
 /* A new averaging window of the calibration (ls_drive_calibration.c). */
-static inline void ls_drive_cal_window_reset_(ls_drive *d)
+static inline void ls_drive_cal_window_reset_(ls_drive *LS_RESTRICT d)
 {
     d->cal_hold = 0u;
     d->cal_sum_err = LS_R(0.0);
@@ -115,7 +134,8 @@ static inline void ls_drive_cal_window_reset_(ls_drive *d)
 
 /* The opening of every step: the protection on the measurements (and the latched faults: outputs
  * off, false) and Clarke (io->i_a, io->i_b). */
-static inline bool ls_drive_open_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd, ls_drive_io *io)
+static inline bool ls_drive_open_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas, ls_cmd *LS_RESTRICT cmd,
+                                  ls_drive_io *LS_RESTRICT io)
 {
     const uint32_t fault = ls_protect_check_power(&d->prot, meas->i_abc, meas->v_dc);
     if (fault != LS_FAULT_NONE) {
@@ -130,37 +150,41 @@ static inline bool ls_drive_open_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd,
 /* The sensorless steps' opening: ls_drive_open_, the reference at the estimate after a mode change
  * (then the move or step commanded with it), and the estimated axis (io->c, io->s: the HF estimate
  * of the previous step). */
-LS_DRIVE_PART bool ls_drive_est_open_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd, ls_drive_io *io);
+LS_DRIVE_PART bool ls_drive_est_open_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas, ls_cmd *LS_RESTRICT cmd,
+                                      ls_drive_io *LS_RESTRICT io);
 
 /* The encoder modes' opening (LS_MODE_SENSORED, LS_MODE_CALIBRATION): an invalid encoder trips
  * LS_FAULT_ENCODER; ls_drive_open_; the encoder's position checked, after a mode change every
  * estimate and the reference started at it (then the move or step commanded with it), its
  * tracking loop, and the frame (io->c, io->s) at its angle. */
-LS_DRIVE_PART bool ls_drive_enc_open_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd, ls_drive_io *io);
+LS_DRIVE_PART bool ls_drive_enc_open_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas, ls_cmd *LS_RESTRICT cmd,
+                                      ls_drive_io *LS_RESTRICT io);
 
 /* The HF observer on the demodulated error (counted once the injection has reached its
  * amplitude) and its plausibility check; true: a fault tripped, the drive disabled and reported in
  * cmd (the step ends). Else the estimate is the step's position and speed (io->pos, io->omega). */
-LS_DRIVE_PART bool ls_drive_observe_(ls_drive *d, ls_cmd *cmd, ls_drive_io *io, LS_REAL err);
+LS_DRIVE_PART bool ls_drive_observe_(ls_drive *LS_RESTRICT d, ls_cmd *LS_RESTRICT cmd, ls_drive_io *LS_RESTRICT io,
+                                     LS_REAL err);
 
 /* The demodulator on the step's HF currents (io->ihf_a, io->ihf_b) in the frame (io->c, io->s) at
  * the angle theta (of that frame, in [0, 2 pi)), with the table when it is on; returns the error
  * (rad; ls_demod_step_cs_norm). */
-LS_DRIVE_PART LS_REAL ls_drive_demod_(ls_drive *d, const ls_drive_io *io, LS_REAL theta);
+LS_DRIVE_PART LS_REAL ls_drive_demod_(ls_drive *LS_RESTRICT d, const ls_drive_io *LS_RESTRICT io, LS_REAL theta);
 
 /* The sensorless modes' position reference and control at the estimate (io->pos, io->omega) ->
  * force -> q-current reference (io->i_q_ref; the reference's position io->x_ref). */
-LS_DRIVE_PART void ls_drive_force_(ls_drive *d, ls_drive_io *io);
+LS_DRIVE_PART void ls_drive_force_(ls_drive *LS_RESTRICT d, ls_drive_io *LS_RESTRICT io);
 
 /* The encoder modes' position reference and control at the encoder (io->pos, io->omega) -> force
  * -> io->i_q_ref (plus dither, A: the calibration's), with the HF observer slaved to the encoder
  * carrying the speed PI's load (a change to a sensorless mode with load_ff starts from it). */
-LS_DRIVE_PART void ls_drive_enc_force_(ls_drive *d, ls_drive_io *io, bool dithered, LS_REAL dither);
+LS_DRIVE_PART void ls_drive_enc_force_(ls_drive *LS_RESTRICT d, ls_drive_io *LS_RESTRICT io, bool dithered,
+                                       LS_REAL dither);
 
 /* What follows the residual model's measured resistance scale k_r (ls_dtres_adapt): the
  * demodulator's tables' resistance correction (ls_demod.h) and the current PI's zero on the
  * winding's R/L pole (ki = R_s w_c: linsense.tune.design.current_gains). */
-static inline void ls_drive_follow_r_(ls_drive *d)
+static inline void ls_drive_follow_r_(ls_drive *LS_RESTRICT d)
 {
     d->demod.k_r = d->dtres.k_r;
     d->cur.ki_ts = d->cur.cfg.ki * d->cur.ts * d->dtres.k_r;
@@ -172,22 +196,23 @@ static inline void ls_drive_follow_r_(ls_drive *d)
  * resistance scales measured from the period's current change (dtres.cfg.adapt; the resistance's
  * passed to the demodulator's tables); or the interpolation (dtres.cfg.forward false).
  * Call before the modulator's step. */
-LS_DRIVE_PART void ls_drive_residual_(ls_drive *d, const ls_meas *meas, const ls_drive_io *io, LS_REAL i_res[2]);
+LS_DRIVE_PART void ls_drive_residual_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas,
+                                      const ls_drive_io *LS_RESTRICT io, LS_REAL i_res[2]);
 
 /* The fundamental of the measured currents (sep: io->if_a, io->if_b), and their HF part (bpf:
  * io->ihf_a, io->ihf_b) less what the dead-time residual drove (ls_dtres.h; in the step's frame). */
-LS_DRIVE_PART void ls_drive_hf_(ls_drive *d, const ls_meas *meas, ls_drive_io *io);
+LS_DRIVE_PART void ls_drive_hf_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas, ls_drive_io *LS_RESTRICT io);
 
 /* Current control in the step's frame (io->c, io->s) of the fundamental currents: the currents
  * (io->i_d, io->i_q) and the voltages (io->v_d, io->v_q) there, and the fundamental voltage in
  * alpha-beta (io->v_a, io->v_b) at the angle advanced over the computation delay (small-angle
  * rotation by delay_ts omega), to which the step adds its injection. */
-LS_DRIVE_PART void ls_drive_current_(ls_drive *d, LS_REAL v_dc, ls_drive_io *io);
+LS_DRIVE_PART void ls_drive_current_(ls_drive *LS_RESTRICT d, LS_REAL v_dc, ls_drive_io *LS_RESTRICT io);
 
 /* The injection's next sample (io->v_hf) added to the fundamental voltage (io->v_a, io->v_b): on
  * the d-axis of the step's frame, with the elliptical injection's component on its q-axis, or the
  * rotating vector in the stationary frame. */
-static inline void ls_drive_inject_(ls_drive *d, ls_drive_io *io)
+static inline void ls_drive_inject_(ls_drive *LS_RESTRICT d, ls_drive_io *LS_RESTRICT io)
 {
     io->v_hf = ls_inject_step(&d->inj);
     if (d->cfg.inject.shape != LS_INJ_ROTATING) {
@@ -202,7 +227,9 @@ static inline void ls_drive_inject_(ls_drive *d, ls_drive_io *io)
 /* The command (every field exactly once): the drive's own fields from d, the step's from io, and
  * what differs between the modes as arguments (LS_MODE_STARTUP then clears cal_index and
  * psi_cal). */
-static inline void ls_drive_cmd_(ls_cmd *cmd, const ls_drive *d, const ls_drive_io *io, ls_mode mode, LS_REAL v_fb,
+static inline void ls_drive_cmd_(ls_cmd *LS_RESTRICT cmd, const ls_drive *LS_RESTRICT d,
+                                 const ls_drive_io *LS_RESTRICT io,
+                                 ls_mode mode, LS_REAL v_fb,
                                  LS_REAL i_d_ref, bool cal_done)
 {
     cmd->duty[0] = io->duty[0];
@@ -237,10 +264,13 @@ static inline void ls_drive_cmd_(ls_cmd *cmd, const ls_drive *d, const ls_drive_
  * non-finite v_a or v_b makes every duty NaN, the zero-sequence offset being Inf - Inf; the
  * positions are finite by ls_pos_norm), so a non-finite duty trips LS_FAULT_NONFINITE and turns
  * the outputs off; else the command. */
-LS_DRIVE_PART void ls_drive_cmd_out_(ls_cmd *cmd, ls_drive *d, const ls_drive_io *io, bool cal_done);
+LS_DRIVE_PART void ls_drive_cmd_out_(ls_cmd *LS_RESTRICT cmd, ls_drive *LS_RESTRICT d,
+                                     const ls_drive_io *LS_RESTRICT io,
+                                     bool cal_done);
 
 /* The end of the steps that modulate with ls_mod_step_finite: the modulator, then the command. */
-LS_DRIVE_PART void ls_drive_close_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd, ls_drive_io *io, bool cal_done);
+LS_DRIVE_PART void ls_drive_close_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas, ls_cmd *LS_RESTRICT cmd,
+                                   ls_drive_io *LS_RESTRICT io, bool cal_done);
 
 #if !defined(LS_DRIVE_SHARED_PARTS)
 #include "ls_drive_parts.h"

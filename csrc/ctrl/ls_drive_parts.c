@@ -6,7 +6,7 @@
 #include "ls_drive_internal.h"
 
 /* --------------------------------------------------------------------------- outputs off */
-void ls_drive_disable_(ls_drive *d, ls_cmd *cmd, uint32_t fault)
+void ls_drive_disable_(ls_drive *LS_RESTRICT d, ls_cmd *LS_RESTRICT cmd, uint32_t fault)
 {
     memset(cmd, 0, sizeof *cmd);
     cmd->mode = d->starting ? LS_MODE_STARTUP : d->mode;
@@ -17,7 +17,7 @@ void ls_drive_disable_(ls_drive *d, ls_cmd *cmd, uint32_t fault)
     d->w_ref = LS_R(0.0);
 }
 
-void ls_drive_disable_report_(ls_drive *d, ls_cmd *cmd, uint32_t fault)
+void ls_drive_disable_report_(ls_drive *LS_RESTRICT d, ls_cmd *LS_RESTRICT cmd, uint32_t fault)
 {
     ls_drive_disable_(d, cmd, fault);
     cmd->pos_est = d->obs.pos;

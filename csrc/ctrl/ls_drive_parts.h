@@ -7,7 +7,7 @@
 
 /* --------------------------------------------------------------------------- openings */
 /* After a mode change, once the reference is aligned: the move or step commanded with it. */
-static inline void pending_command(ls_drive *d)
+static inline void pending_command(ls_drive *LS_RESTRICT d)
 {
     if (d->align) {
         if (d->pending) {
@@ -22,7 +22,8 @@ static inline void pending_command(ls_drive *d)
     }
 }
 
-LS_DRIVE_PART bool ls_drive_est_open_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd, ls_drive_io *io)
+LS_DRIVE_PART bool ls_drive_est_open_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas, ls_cmd *LS_RESTRICT cmd,
+                                      ls_drive_io *LS_RESTRICT io)
 {
     if (!ls_drive_open_(d, meas, cmd, io)) {
         return false;
@@ -54,7 +55,7 @@ static inline ls_pos enc_pos(int32_t count, int32_t per_period, LS_REAL k_count)
  * (int64_t: no overflow whatever the counts; |jump| <= max as one unsigned comparison), except at
  * the first step of the mode (d->align: there is no last sample), and its position pe within
  * +-LS_POS_PERIOD_MAX periods (beyond only with enc_counts < 128). */
-static inline bool enc_plausible(ls_drive *d, int32_t count, ls_pos pe)
+static inline bool enc_plausible(ls_drive *LS_RESTRICT d, int32_t count, ls_pos pe)
 {
     const int64_t jump = (int64_t)count - (int64_t)d->enc_prev;
     const bool ok = d->align || (uint64_t)(jump + d->enc_jump_max) <= (uint64_t)(2 * d->enc_jump_max);
@@ -62,7 +63,8 @@ static inline bool enc_plausible(ls_drive *d, int32_t count, ls_pos pe)
     return ok && pe.period <= LS_POS_PERIOD_MAX && pe.period >= -LS_POS_PERIOD_MAX;
 }
 
-LS_DRIVE_PART bool ls_drive_enc_open_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd, ls_drive_io *io)
+LS_DRIVE_PART bool ls_drive_enc_open_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas, ls_cmd *LS_RESTRICT cmd,
+                                      ls_drive_io *LS_RESTRICT io)
 {
     const ls_drive_cfg *cfg = &d->cfg;
     ls_pos pe;
@@ -95,7 +97,8 @@ LS_DRIVE_PART bool ls_drive_enc_open_(ls_drive *d, const ls_meas *meas, ls_cmd *
 }
 
 /* --------------------------------------------------------------------------- HF path and estimation */
-LS_DRIVE_PART void ls_drive_residual_(ls_drive *d, const ls_meas *meas, const ls_drive_io *io, LS_REAL i_res[2])
+LS_DRIVE_PART void ls_drive_residual_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas,
+                                      const ls_drive_io *LS_RESTRICT io, LS_REAL i_res[2])
 {
     LS_REAL v_err[2];
     if (d->dtres.cfg.forward) {
@@ -120,7 +123,7 @@ LS_DRIVE_PART void ls_drive_residual_(ls_drive *d, const ls_meas *meas, const ls
     }
 }
 
-LS_DRIVE_PART void ls_drive_hf_(ls_drive *d, const ls_meas *meas, ls_drive_io *io)
+LS_DRIVE_PART void ls_drive_hf_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas, ls_drive_io *LS_RESTRICT io)
 {
     if (d->cfg.sep.type == LS_BIQUAD_NOTCH) {
         io->if_a = ls_biquad_step_notch(&d->sep[0], io->i_a);
@@ -140,13 +143,14 @@ LS_DRIVE_PART void ls_drive_hf_(ls_drive *d, const ls_meas *meas, ls_drive_io *i
     }
 }
 
-LS_DRIVE_PART LS_REAL ls_drive_demod_(ls_drive *d, const ls_drive_io *io, LS_REAL theta)
+LS_DRIVE_PART LS_REAL ls_drive_demod_(ls_drive *LS_RESTRICT d, const ls_drive_io *LS_RESTRICT io, LS_REAL theta)
 {
     return ls_demod_step_cs_norm(&d->demod, io->ihf_a, io->ihf_b, theta, io->c, io->s, d->inj.c, d->inj.s,
                                  LS_R(0.0));
 }
 
-LS_DRIVE_PART bool ls_drive_observe_(ls_drive *d, ls_cmd *cmd, ls_drive_io *io, LS_REAL err)
+LS_DRIVE_PART bool ls_drive_observe_(ls_drive *LS_RESTRICT d, ls_cmd *LS_RESTRICT cmd, ls_drive_io *LS_RESTRICT io,
+                                     LS_REAL err)
 {
     const LS_REAL e_obs = d->inj.amp >= d->cfg.inject.amplitude ? err : LS_R(0.0);
     ls_observer_step_finite(&d->obs, e_obs, d->f_ref);
@@ -162,7 +166,7 @@ LS_DRIVE_PART bool ls_drive_observe_(ls_drive *d, ls_cmd *cmd, ls_drive_io *io, 
 
 /* --------------------------------------------------------------------------- force and current */
 /* The force constant at theta with its ripple (cfg.ripple_order != 0), N/A. */
-static inline LS_REAL ripple_kf(const ls_drive *d, LS_REAL theta)
+static inline LS_REAL ripple_kf(const ls_drive *LS_RESTRICT d, LS_REAL theta)
 {
     const ls_drive_cfg *cfg = &d->cfg;
     LS_REAL c, s;
@@ -172,7 +176,7 @@ static inline LS_REAL ripple_kf(const ls_drive *d, LS_REAL theta)
 
 /* The current reference of force f at theta, clamped to i_max, and the force it makes (d->f_ref,
  * the observer's): f / K_f, or with cfg.ripple_order the force constant's ripple divided out. */
-static inline LS_REAL force_current(ls_drive *d, LS_REAL f, LS_REAL theta)
+static inline LS_REAL force_current(ls_drive *LS_RESTRICT d, LS_REAL f, LS_REAL theta)
 {
     const ls_drive_cfg *cfg = &d->cfg;
     LS_REAL i_q;
@@ -187,7 +191,7 @@ static inline LS_REAL force_current(ls_drive *d, LS_REAL f, LS_REAL theta)
     return i_q;
 }
 
-LS_DRIVE_PART void ls_drive_force_(ls_drive *d, ls_drive_io *io)
+LS_DRIVE_PART void ls_drive_force_(ls_drive *LS_RESTRICT d, ls_drive_io *LS_RESTRICT io)
 {
     LS_REAL v_ff, a_ff, x_err, f;
     ls_traj_step(&d->traj, &io->x_ref, &v_ff, &a_ff);
@@ -199,7 +203,8 @@ LS_DRIVE_PART void ls_drive_force_(ls_drive *d, ls_drive_io *io)
     io->i_q_ref = force_current(d, f, io->pos.theta);
 }
 
-LS_DRIVE_PART void ls_drive_enc_force_(ls_drive *d, ls_drive_io *io, bool dithered, LS_REAL dither)
+LS_DRIVE_PART void ls_drive_enc_force_(ls_drive *LS_RESTRICT d, ls_drive_io *LS_RESTRICT io, bool dithered,
+                                       LS_REAL dither)
 {
     LS_REAL v_ff, a_ff, x_err, f, kf = d->cfg.force_constant;
     ls_traj_step(&d->traj, &io->x_ref, &v_ff, &a_ff);
@@ -219,7 +224,7 @@ LS_DRIVE_PART void ls_drive_enc_force_(ls_drive *d, ls_drive_io *io, bool dither
     d->f_ref = io->i_q_ref * kf;
 }
 
-LS_DRIVE_PART void ls_drive_current_(ls_drive *d, LS_REAL v_dc, ls_drive_io *io)
+LS_DRIVE_PART void ls_drive_current_(ls_drive *LS_RESTRICT d, LS_REAL v_dc, ls_drive_io *LS_RESTRICT io)
 {
     const LS_REAL c = io->c, s = io->s;
     const LS_REAL v_lim = v_dc * (LS_R(1.0) / LS_SQRT3) - d->v_hf_max;
@@ -236,7 +241,9 @@ LS_DRIVE_PART void ls_drive_current_(ls_drive *d, LS_REAL v_dc, ls_drive_io *io)
 }
 
 /* --------------------------------------------------------------------------- close */
-LS_DRIVE_PART void ls_drive_cmd_out_(ls_cmd *cmd, ls_drive *d, const ls_drive_io *io, bool cal_done)
+LS_DRIVE_PART void ls_drive_cmd_out_(ls_cmd *LS_RESTRICT cmd, ls_drive *LS_RESTRICT d,
+                                     const ls_drive_io *LS_RESTRICT io,
+                                     bool cal_done)
 {
     if (!LS_ISFINITE(io->duty[0] + io->duty[1] + io->duty[2])) {
         ls_protect_trip(&d->prot, LS_FAULT_NONFINITE);
@@ -246,7 +253,8 @@ LS_DRIVE_PART void ls_drive_cmd_out_(ls_cmd *cmd, ls_drive *d, const ls_drive_io
     ls_drive_cmd_(cmd, d, io, d->mode, io->omega * d->inv_kx, d->i_d_ref, cal_done);
 }
 
-LS_DRIVE_PART void ls_drive_close_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd, ls_drive_io *io, bool cal_done)
+LS_DRIVE_PART void ls_drive_close_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas, ls_cmd *LS_RESTRICT cmd,
+                                   ls_drive_io *LS_RESTRICT io, bool cal_done)
 {
     (void)ls_mod_step_finite(&d->mod, io->v_a, io->v_b, meas->v_dc, meas->i_abc, io->duty);
     ls_drive_cmd_out_(cmd, d, io, cal_done);

@@ -9,7 +9,7 @@
  *   - no encoder, calibration or elliptical branches (sensorless only). */
 #include "ls_drive_internal.h"
 
-void ls_drive_rotating_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
+void ls_drive_rotating_step_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas, ls_cmd *LS_RESTRICT cmd)
 {
     ls_drive_io io;
     LS_REAL err;

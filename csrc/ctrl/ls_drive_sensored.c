@@ -12,7 +12,7 @@
  * the demodulator finds no level and the estimate beside the encoder is the encoder's position. */
 #include "ls_drive_internal.h"
 
-void ls_drive_sensored_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
+void ls_drive_sensored_step_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas, ls_cmd *LS_RESTRICT cmd)
 {
     ls_drive_io io;
     if (!ls_drive_enc_open_(d, meas, cmd, &io)) {

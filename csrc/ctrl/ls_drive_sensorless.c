@@ -9,7 +9,7 @@
  * the estimated d-axis (rotating: in the stationary frame). */
 #include "ls_drive_internal.h"
 
-void ls_drive_sensorless_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
+void ls_drive_sensorless_step_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas, ls_cmd *LS_RESTRICT cmd)
 {
     ls_drive_io io;
     if (!ls_drive_est_open_(d, meas, cmd, &io)) {

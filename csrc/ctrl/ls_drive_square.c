@@ -12,7 +12,7 @@
  * (ls_drive_sensored.c, ls_drive_calibration.c), without the two measures above. */
 #include "ls_drive_internal.h"
 
-void ls_drive_square_step_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd)
+void ls_drive_square_step_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas, ls_cmd *LS_RESTRICT cmd)
 {
     const ls_drive_cfg *cfg = &d->cfg;
     ls_drive_io io;

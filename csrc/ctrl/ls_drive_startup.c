@@ -9,7 +9,9 @@
  * pulses the estimate is turned by pi if they say so. Returns the sequence's phase after the step
  * (LS_SU_FAILED also for a non-finite output, with LS_FAULT_NONFINITE latched); writes cmd
  * unless it fails. io: the step's values, opened (ls_drive_open_). */
-ls_startup_phase ls_drive_startup_run_(ls_drive *d, const ls_meas *meas, ls_cmd *cmd, ls_drive_io *io)
+ls_startup_phase ls_drive_startup_run_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas,
+                                       ls_cmd *LS_RESTRICT cmd,
+                                       ls_drive_io *LS_RESTRICT io)
 {
     const ls_drive_cfg *cfg = &d->cfg;
     ls_startup *su = &d->su;

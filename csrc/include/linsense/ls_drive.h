@@ -324,6 +324,8 @@ ls_status ls_drive_move_to(ls_drive *d, ls_pos target);
 /* Step the reference to target (as ls_drive_move_to, without the profile). */
 ls_status ls_drive_step_to(ls_drive *d, ls_pos target);
 /* One PWM period: the step of the active mode and injection shape (which one: the step table in
- * csrc/ctrl/ls_drive.c; the files of the drive: csrc/ctrl/ls_drive_internal.h). */
+ * csrc/ctrl/ls_drive.c; the files of the drive: csrc/ctrl/ls_drive_internal.h).
+ * d, meas and cmd are three distinct objects that do not overlap (the step reads and writes them
+ * as such: restrict inside the library). */
 void ls_drive_step(ls_drive *d, const ls_meas *meas, ls_cmd *cmd);
 #endif /* LINSENSE_LS_DRIVE_H */
