@@ -496,9 +496,6 @@ def test_the_source_names_no_issue_numbers():
 READER_TEXT = ("README.md", ".importlinter", "docs", "tools", "tests")
 #: the kinds of file read there
 READER_SUFFIXES = (".md", ".py", ".ipynb", ".sh", ".c", ".js", ".css", "")
-#: files that still name tracker numbers while they are being rewritten on other branches; an entry
-#: that no longer names one fails the test, so that the list only shrinks
-READER_PENDING = frozenset({"docs/firmware.md", "tools/bench_pil.py"})
 
 
 def test_the_docs_tools_and_tests_name_no_issue_numbers():
@@ -515,16 +512,13 @@ def test_the_docs_tools_and_tests_name_no_issue_numbers():
     for name in READER_TEXT:
         path = root / name
         files += sorted(path.rglob("*")) if path.is_dir() else [path] if path.is_file() else []
-    found, pending = [], set()
+    found = []
     for f in files:
         rel = f.relative_to(root).as_posix()
         if not f.is_file() or f.suffix not in READER_SUFFIXES or "__pycache__" in f.parts:
             continue
         text = f.read_text(encoding="utf-8", errors="replace")
         hits = [text.count("\n", 0, m.start()) + 1 for m in number.finditer(text)]
-        if hits and rel in READER_PENDING:
-            pending.add(rel)
-        elif hits:
+        if hits:
             found.append(f"{rel}:{hits}")
     assert not found, found
-    assert pending == READER_PENDING, f"clean now, drop: {sorted(READER_PENDING - pending)}"

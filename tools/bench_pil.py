@@ -30,7 +30,7 @@ result dependencies not modelled), nominal and upper:
   VDIV, VSQRT                                                           14
   VLDR, VSTR                                                            2
   VLDM, VSTM, VPUSH, VPOP                                               1 + N single registers
-The budget (issue 26): at most 25 % of the 16 kHz period on a 168 MHz M4F, 2,625 cycles, in every
+The budget: at most 25 % of the 16 kHz period on a 168 MHz M4F, 2,625 cycles, in every
 mode by the upper estimate (the worst step) of the build for speed (-O2, the firmware flags); the
 library's code at most 32 kB in the build for size (tools/check_mcu.sh's -Os image). Both builds are
 counted; the -Os build's cycles are printed for information (no single build meets both budgets:
