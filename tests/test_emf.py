@@ -138,3 +138,22 @@ def test_speed_limit_is_the_running_blocks_bound():
         bounds.append(float(b))
     assert bounds[0] > math.radians(3.0) > bounds[2]
     assert bounds[1] == pytest.approx(math.radians(3.0), rel=2e-3)
+
+
+@pytest.mark.parametrize("r_s, l_d", [(9.0, 1e-9), (0.0, 3.5e-3)])
+def test_noise_bound_is_the_low_passed_noise(r_s, l_d):
+    """``b_noise`` is three standard deviations of the low-passed EMF from a white current noise
+    (docs/theory.md, "The bound and the low-speed limit"): each of its two terms alone (the
+    resistive drop with a negligible inductance, the inductive one without resistance) against the
+    block run on pure noise (no voltage, standstill, the estimate at 0)."""
+    sigma = 0.01
+    state, _ = ctrl.emf_init(_cfg(l_d, l_d, r_s, i_noise=sigma))
+    noise = np.random.default_rng(11).normal(0.0, sigma, (60000, 2))
+    v, i = ctrl.ffi.new("LS_REAL[2]", [0.0, 0.0]), ctrl.ffi.new("LS_REAL[2]")
+    e_d = np.empty(len(noise))
+    for k, (a, b) in enumerate(noise):
+        i[0], i[1] = a, b
+        ctrl.lib.ls_emf_step(state, v, i, 1.0, 0.0, 0.0, 1.0)
+        e_d[k] = state.e_d
+    got = float(e_d[2000:].std())
+    assert got == pytest.approx(state.b_noise / 3.0, rel=0.04)
