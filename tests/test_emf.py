@@ -18,7 +18,7 @@ import pytest
 
 from linsense import ctrl
 from linsense.analysis.emf import emf_speed_limit
-from linsense.errors import ConfigError
+from linsense.errors import ConfigError, InputError
 from linsense.model.motor import load_motor
 
 FS = 16000.0
@@ -157,3 +157,13 @@ def test_noise_bound_is_the_low_passed_noise(r_s, l_d):
         e_d[k] = state.e_d
     got = float(e_d[2000:].std())
     assert got == pytest.approx(state.b_noise / 3.0, rel=0.04)
+
+
+@pytest.mark.parametrize("kw, name", [({"eps_max": math.pi / 2}, "eps_max"), ({"eps_max": 0.0}, "eps_max"),
+                                      ({"i_mag": -1.0}, "i_mag"), ({"k_r": 0.0}, "k_r")])
+def test_speed_limit_refuses_arguments_the_c_function_reads_as_never(kw, name):
+    """``ls_emf_omega_min`` answers "no speed" (LS_REAL_MAX) for a bound of pi/2 or more, a negative
+    current or a zero resistance scale: the design must hear a refusal, not an infinite speed."""
+    args = {"i_mag": 2.0, "eps_max": math.radians(3.0), "k_r": 1.0} | kw
+    with pytest.raises(InputError, match=name):
+        emf_speed_limit("ecce2010", v_dc=72.0, f_pwm=FS, dead_time=0.8e-6, f_lpf=200.0, **args)
