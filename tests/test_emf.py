@@ -18,7 +18,7 @@ import pytest
 
 from linsense import ctrl
 from linsense.analysis.emf import emf_speed_limit
-from linsense.errors import ConfigError
+from linsense.errors import ConfigError, InputError
 from linsense.model.motor import load_motor
 
 FS = 16000.0
@@ -138,3 +138,70 @@ def test_speed_limit_is_the_running_blocks_bound():
         bounds.append(float(b))
     assert bounds[0] > math.radians(3.0) > bounds[2]
     assert bounds[1] == pytest.approx(math.radians(3.0), rel=2e-3)
+
+
+@pytest.mark.parametrize("r_s, l_d", [(9.0, 1e-9), (0.0, 3.5e-3)])
+def test_noise_bound_is_the_low_passed_noise(r_s, l_d):
+    """``b_noise`` is three standard deviations of the low-passed EMF from a white current noise
+    (docs/theory.md, "The bound and the low-speed limit"): each of its two terms alone (the
+    resistive drop with a negligible inductance, the inductive one without resistance) against the
+    block run on pure noise (no voltage, standstill, the estimate at 0)."""
+    sigma = 0.01
+    state, _ = ctrl.emf_init(_cfg(l_d, l_d, r_s, i_noise=sigma))
+    noise = np.random.default_rng(11).normal(0.0, sigma, (60000, 2))
+    v, i = ctrl.ffi.new("LS_REAL[2]", [0.0, 0.0]), ctrl.ffi.new("LS_REAL[2]")
+    e_d = np.empty(len(noise))
+    for k, (a, b) in enumerate(noise):
+        i[0], i[1] = a, b
+        ctrl.lib.ls_emf_step(state, v, i, 1.0, 0.0, 0.0, 1.0)
+        e_d[k] = state.e_d
+    got = float(e_d[2000:].std())
+    assert got == pytest.approx(state.b_noise / 3.0, rel=0.04)
+
+
+@pytest.mark.parametrize("kw, name", [({"eps_max": math.pi / 2}, "eps_max"), ({"eps_max": 0.0}, "eps_max"),
+                                      ({"i_mag": -1.0}, "i_mag"), ({"k_r": 0.0}, "k_r")])
+def test_speed_limit_refuses_arguments_the_c_function_reads_as_never(kw, name):
+    """``ls_emf_omega_min`` answers "no speed" (LS_REAL_MAX) for a bound of pi/2 or more, a negative
+    current or a zero resistance scale: the design must hear a refusal, not an infinite speed."""
+    args = {"i_mag": 2.0, "eps_max": math.radians(3.0), "k_r": 1.0} | kw
+    with pytest.raises(InputError, match=name):
+        emf_speed_limit("ecce2010", v_dc=72.0, f_pwm=FS, dead_time=0.8e-6, f_lpf=200.0, **args)
+
+
+@pytest.mark.parametrize("v0", [1.0, -1.0])
+def test_on_the_c_plant_both_directions(v0):
+    """The block on the C plant (average model, ecce2010 with its end effect, the mover prescribed
+    at +-1 m/s, the voltages of a 2 A q current applied open loop): with the estimate leading by
+    0.01 rad it reads eps = -0.01 rad in both directions (the sign of the EMF, the estimated frame
+    and the half-period correction, which alone is worth 0.2 deg here, against the simulator's own
+    conventions), the end effect's ripple within its 0.3 deg peak."""
+    from linsense.model.frames import T_CLARKE, T_CLARKE_INV
+    from linsense.sim import core
+
+    motor = load_motor("ecce2010")
+    l_d, l_q = _means(motor.inductance)
+    setup = core.PlantSetup(fidelity="average", v_dc=300.0, f_pwm=FS, dead_time=0.0, i_noise=0.0, adc_bits=0,
+                            motion="prescribed", v0=v0, x0=0.01, x_min=-10.0, x_max=10.0)
+    cfg = core.sim_cfg(motor, setup)
+    n, T, err = 3200, 1.0 / FS, 0.01
+    w = 2 * np.pi * v0 / motor.pole_pitch
+    thm = 2 * np.pi * 0.01 / motor.pole_pitch + w * T * (np.arange(n) + 0.5)
+    vd, vq = -w * l_q * 2.0, motor.R_s * 2.0 + w * motor.psi_pm
+    v_ab = math.sin(w * T / 2) / (w * T / 2) * np.stack([np.cos(thm) * vd - np.sin(thm) * vq,
+                                                         np.sin(thm) * vd + np.cos(thm) * vq], axis=1)
+    run = core.run_open_loop(cfg, np.full(n, T), v_ab @ T_CLARKE_INV.T + 150.0)
+    i_ab = run.arrays["i_abc"] @ T_CLARKE.T
+    theta = 2 * np.pi * run.arrays["x"] / motor.pole_pitch + err
+    state, _ = ctrl.emf_init(_cfg(l_d, l_q, motor.R_s, u_err=0.0, i_noise=0.0))
+    v, i = ctrl.ffi.new("LS_REAL[2]"), ctrl.ffi.new("LS_REAL[2]")
+    eps = []
+    for j in range(n + 1):
+        if j:
+            v[0], v[1] = v_ab[j - 1]
+        i[0], i[1] = i_ab[j]
+        eps.append(ctrl.lib.ls_emf_step(state, v, i, math.cos(theta[j]), math.sin(theta[j]), w, 1.0))
+    eps = np.array(eps[n // 2:])
+    assert abs(np.hypot(*i_ab[-1]) - 2.0) < 0.1
+    assert abs(eps.mean() + err) < 1e-3
+    assert np.abs(eps + err).max() < math.radians(0.35)

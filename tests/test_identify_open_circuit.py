@@ -11,7 +11,10 @@ import pytest
 
 from linsense.errors import InputError
 from linsense.identify.open_circuit import phase_values_of_line, pm_phases_from_emf
+from linsense.model.frames import T_CLARKE_INV
 from linsense.model.motor import PmHarmonic, PmPhases
+from linsense.sim import core
+from linsense.sim.plant import fill_plant
 from test_sim_accuracy import UNBALANCED, motor
 
 V = 0.5  # m/s
@@ -41,7 +44,7 @@ def test_phase_to_star_gives_each_phase(periods):
 
 def test_line_to_line_gives_the_sequences_the_plant_sees():
     """Without the star point the zero sequence is lost; the positive and negative sequences (all
-    that acts on the plant, docs/theory.md section 9) are exact, and a set without zero sequence is
+    that acts on the plant, docs/theory.md section 10) are exact, and a set without zero sequence is
     recovered phase by phase."""
     m = motor("unbalanced")
     theta, e, omega = _emf(m)
@@ -64,6 +67,25 @@ def test_noise_and_a_varying_speed():
     got = pm_phases_from_emf(theta, e, omega, m.psi_pm)
     np.testing.assert_allclose(got.scale, UNBALANCED.scale, atol=1e-3)
     np.testing.assert_allclose(got.shift, UNBALANCED.shift, atol=math.radians(0.1))
+
+
+def test_round_trip_through_the_c_plant():
+    """A motor file's imbalance (every phase off, A included) -> the C plant's open-circuit back-EMF
+    (``omega`` times its alpha-beta PM flux derivative, as the simulator configures it) -> its
+    line-to-line voltages -> the identification: the positive and negative sequences come back, so
+    the motor file, the plant and the identification agree on the keys' signs and phases."""
+    keys = PmPhases((0.95, 1.0, 1.04), (math.radians(2.0), math.radians(-1.0), math.radians(0.5)))
+    m = dataclasses.replace(motor("harmonic"), pm_phases=keys)
+    cfg = core.sim_cfg(m, core.PlantSetup())
+    fill_plant(cfg, m)
+    theta = np.linspace(-1.0, -1.0 + 4 * np.pi, 720, endpoint=False)
+    omega = -2 * np.pi * V / m.pole_pitch  # (moving backwards: the EMF's sign follows)
+    e_ab = omega * np.array([core.plant_eval(cfg, t)["dlambda_pm"] for t in theta])
+    e = e_ab @ T_CLARKE_INV.T
+    got = pm_phases_from_emf(theta, e - np.roll(e, -1, axis=1), omega, m.psi_pm, line_to_line=True)
+    for x, y in zip(_sequences(got), _sequences(keys), strict=True):
+        assert abs(x - y) < 1e-9
+    assert abs(_sequences(keys)[1]) > 0.01  # (an imbalance the check sees)
 
 
 @pytest.mark.parametrize("change, key, words", [

@@ -23,8 +23,8 @@ ls_status ls_emf_init(ls_emf *e, const ls_emf_cfg *cfg)
     a = LS_R(1.0) - ls_exp(-(LS_TWO_PI * cfg->f_lpf * ts));
     /* the low-passed EMF's noise from a white current noise sigma per sample and axis: the
      * inductive drop l_d fs (i1 - i0) through the low-pass, sum of its squared impulse response
-     * a^2 + a^3 / (2 - a), and the resistive drop r_s (i0 + i1) / 2, sum a / (2 - a) / 2 (the sums'
-     * square roots added: a bound) */
+     * a^2 + a^3 / (2 - a), and the resistive drop r_s (i0 + i1) / 2, sum (a^2 + a (2 - a)) / 4 =
+     * a / 2 (the sums' square roots added: a bound) */
     q = a / (LS_R(2.0) - a);
     e->cfg = *cfg;
     e->alpha = a;
@@ -33,7 +33,7 @@ ls_status ls_emf_init(ls_emf *e, const ls_emf_cfg *cfg)
     e->w_c = LS_TWO_PI * cfg->f_lpf;
     e->w_rip = LS_R(0.5) * LS_R(1.41421356237) * e->w_c;
     e->b_noise = LS_R(3.0) * cfg->i_noise *
-                 (e->l_fs * a * LS_SQRT(LS_R(1.0) + q) + cfg->r_s * LS_SQRT(LS_R(0.5) * q));
+                 (e->l_fs * a * LS_SQRT(LS_R(1.0) + q) + cfg->r_s * LS_SQRT(LS_R(0.5) * a));
     if (!LS_ISFINITE4(e->alpha, e->l_fs, e->half_ts, e->b_noise) || !LS_ISFINITE2(e->w_c, e->w_rip) ||
         !(a > LS_R(0.0))) {
         return LS_ERR_PARAM; /* (an inductance or a noise so large that the products overflow) */

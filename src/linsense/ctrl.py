@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from linsense._check import brief, closest_key
+from linsense._check import brief, closest_key, real
 from linsense._ctrl import ffi, lib
 from linsense._digest import source_digest
 from linsense.errors import ConfigError, InputError
@@ -313,7 +313,14 @@ def emf_omega_min(values: dict, i_mag: float, psi: float, eps_max: float, k_r: f
     ------
     ConfigError
         ``ls_emf_init`` refuses ``values``.
+    InputError
+        ``i_mag``, ``eps_max`` or ``k_r`` out of their ranges.
     """
+    # (the C function answers LS_REAL_MAX, "never", for these too: refused here, not read as never)
+    i_mag = real(i_mag, "emf_omega_min", "i_mag", 0.0, what="a current in A")
+    eps_max = real(eps_max, "emf_omega_min", "eps_max", 0.0, 0.5 * math.pi, low_open=True, high_open=True,
+                   what="an angle in rad")
+    k_r = real(k_r, "emf_omega_min", "k_r", 0.0, low_open=True, what="a resistance scale")
     state, _ = emf_init(values)
     w = float(lib.ls_emf_omega_min(state, i_mag, psi, eps_max, k_r))
     return math.inf if w >= float(np.finfo(REAL).max) else w

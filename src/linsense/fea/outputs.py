@@ -10,6 +10,7 @@ import numpy as np
 import tomli_w
 
 from linsense.fea.solver import Result
+from linsense.model.frames import PHASE_ANGLE
 
 COLUMNS = ("L_A", "L_B", "L_C", "M_AB", "M_BC", "M_CA")
 
@@ -81,8 +82,6 @@ def force_constant(res: Result) -> float | None:
     return None
 
 
-#: rad, the phases' electrical angles relative to A (B lags, C leads: linsense.model.frames)
-_PHASE_ANGLE = np.array([0.0, -2.0 * np.pi / 3.0, 2.0 * np.pi / 3.0])
 #: digits the per-phase magnet flux is written with: 1e-6 of the amplitude, 1e-4 electrical degrees
 #: (the FEA's own error is far larger: a coarse and a default mesh differ by about 1e-3)
 _SCALE_DIGITS, _SHIFT_DIGITS = 6, 4
@@ -114,7 +113,7 @@ def pm_phases(res: Result) -> tuple[tuple[float, ...], tuple[float, ...]] | None
         return None
     scale, shift = [], []
     for k in range(3):
-        u = theta + _PHASE_ANGLE[k]
+        u = theta + PHASE_ANGLE[k]
         (a, b), *_ = np.linalg.lstsq(np.column_stack([np.cos(u), -np.sin(u)]), pm[:, k], rcond=None)
         scale.append(round(float(math.hypot(a, b) / res.psi_pm_amplitude), _SCALE_DIGITS))
         shift.append(round(math.degrees(math.atan2(b, a)), _SHIFT_DIGITS) + 0.0)  # (no -0.0)

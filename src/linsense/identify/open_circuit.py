@@ -17,13 +17,12 @@ import numpy as np
 
 from linsense._check import real, reals
 from linsense.errors import InputError
+from linsense.model.frames import PHASE_ANGLE
 from linsense.model.motor import PmPhases
 from linsense.model.motor_schema import PHASES
 from linsense.plausible import implausible
 
 _SRC = "linsense.identify.open_circuit.pm_phases_from_emf"
-#: rad, the phases' electrical angles relative to A (B lags, C leads: linsense.model.frames)
-_PHASE_ANGLE = np.array([0.0, -2.0 * np.pi / 3.0, 2.0 * np.pi / 3.0])
 #: rad, the largest gap the positions may leave in the electrical period (modulo 2 pi)
 _GAP_MAX = math.radians(45.0)
 
@@ -104,7 +103,7 @@ def pm_phases_from_emf(theta: np.ndarray, e: np.ndarray, omega: np.ndarray | flo
     dpsi = (phase_values_of_line(v) if line_to_line else v) / w[:, None]  # Wb/rad
     scale, shift = [], []
     for k in range(3):
-        u = th + _PHASE_ANGLE[k]
+        u = th + PHASE_ANGLE[k]
         (re, im), *_ = np.linalg.lstsq(np.column_stack([-np.sin(u), -np.cos(u)]), dpsi[:, k], rcond=None)
         scale.append(float(math.hypot(re, im) / psi))
         shift.append(float(math.atan2(im, re)))

@@ -24,6 +24,9 @@ _S3 = np.sqrt(3.0) / 2.0
 T_CLARKE = (2.0 / 3.0) * np.array([[1.0, -0.5, -0.5], [0.0, _S3, -_S3]])
 #: Inverse Clarke for zero-sequence-free quantities, alpha-beta -> abc (3 x 2).
 T_CLARKE_INV = np.array([[1.0, 0.0], [-0.5, _S3], [-0.5, -_S3]])
+#: The phases' electrical angles, rad (A, B, C): phase k's back-EMF, PM flux or balanced current is
+#: a function of ``theta + PHASE_ANGLE[k]`` (B lags A by 2 pi/3, C leads it).
+PHASE_ANGLE = np.array([0.0, -2.0 * np.pi / 3.0, 2.0 * np.pi / 3.0])
 
 
 #: the module, named in the messages of its functions' argument checks

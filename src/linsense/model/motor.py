@@ -19,6 +19,7 @@ from linsense import examples
 from linsense._check import brief, closest_key, instance, real, reals
 from linsense.errors import InputError, ModelError
 from linsense.io import csv_rows, folder_of, parse_toml, read_csv_table, read_text_file
+from linsense.model.frames import PHASE_ANGLE
 from linsense.model.inductance import DERIVED_COLUMNS, ENTRIES, InductanceModel, derived_columns
 from linsense.model.motor_schema import (
     PHASES,
@@ -34,8 +35,6 @@ from linsense.plausible import KINDS, implausible, slip
 
 #: Saliency |L_q - L_d| below this fraction of (L_d + L_q)/2 counts as vanished.
 MIN_SALIENCY_RATIO = 0.01
-#: rad, the phases' electrical angles relative to A: B lags, C leads (linsense.model.frames)
-_PHASE_ANGLE = np.array([0.0, -2.0 * np.pi / 3.0, 2.0 * np.pi / 3.0])
 #: the source a motor built in Python (without one) is named by in messages
 _API = "linsense.Motor"
 #: Columns a tabulated inductance file must have (others, e.g. those of ``linsense model``, are allowed).
@@ -225,7 +224,7 @@ class Motor:
         if isinstance(derivative, bool) or derivative not in (0, 1):
             raise InputError(src, "derivative", f"expected 0 or 1, got {brief(derivative)}")
         p = self.pm_phases
-        u = th[..., None] + _PHASE_ANGLE + np.asarray(p.shift, dtype=float)
+        u = th[..., None] + PHASE_ANGLE + np.asarray(p.shift, dtype=float)
         if derivative == 0:
             out = np.cos(u)
             for h in self.pm_harmonics:
