@@ -172,6 +172,20 @@ def test_import_loads_no_c_extension_and_no_matplotlib(module):
     assert r.returncode == 0, r.stderr
 
 
+@pytest.mark.parametrize("package", ["linsense.sim", "linsense.scenario", "linsense.studies", "linsense.verify",
+                                     "linsense.sweep", "linsense.firmware", "linsense.identify", "linsense.fea",
+                                     "linsense.reproduce", "linsense.cli"])
+def test_a_package_import_loads_no_table_or_cluster_library(package):
+    """``import linsense.sweep`` (or any package) leaves pandas, pyarrow and dask to the functions
+    that use them: the package's re-export of ``sweep_to`` once loaded pandas and pyarrow (68 MB,
+    and make bench's peak RSS of every later child, which is forked from the bench's process)."""
+    code = (f"import sys, {package}\n"
+            "bad = [m for m in ('pandas', 'pyarrow', 'dask') if m in sys.modules]\n"
+            "assert not bad, bad\n")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+
+
 def test_only_the_binding_and_the_simulator_import_the_c_extension():
     # the compiled extension (linsense._ctrl, not a module import-linter sees) is reached through the
     # binding (linsense.ctrl), the simulator's own calls (linsense.sim) and limits' lazy read of C's sizes

@@ -15,7 +15,6 @@ from typing import TYPE_CHECKING
 from linsense.io import write_atomic, write_atomic_with
 from linsense.sweep.engine import sweep
 from linsense.sweep.spec import SweepSpec, as_sweep
-from linsense.sweep.study_summary import summary_line
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -111,6 +110,8 @@ def sweep_to(out: str | Path, spec: SweepSpec | str | Path | dict, *, workers: i
     out_dir = Path(out)
     axes = [a.key for a in sw.spec.axis]
     study = sw.spec.sweep.study
+    from linsense.sweep.study_summary import summary_line  # (pandas: not on `import linsense.sweep`)
+
     line = summary_line(study, df, axes)
     files = [write_atomic_with(out_dir / "results.parquet", lambda f: df.to_parquet(f, index=False)),
              write_atomic(out_dir / "summary.txt", f"{sw.name}: {line}\n")]
