@@ -252,3 +252,20 @@ class MissingExtraError(LinsenseError, ImportError):
         message = (f"{feature} needs {names}, {what}: pip install -e '.[{extras}]' in linsense's source "
                    f"tree (make install installs every extra)")
         super().__init__(message.replace("\n", " "), name=self.modules[0] if self.modules else None)
+
+
+def as_given(exc: InputError) -> InputError:
+    """A refusal as it was made: the default ``refusal`` of the commands' APIs (the command line
+    passes one that names the option typed).
+
+    Parameters
+    ----------
+    exc : InputError
+        The refusal.
+
+    Returns
+    -------
+    InputError
+        ``exc`` itself.
+    """
+    return exc

@@ -23,6 +23,21 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
+#: what reports a line of a command's API (its report, a warning, a detail): ``print``, a logger's
+#: method, ``list.append`` or :func:`quiet`
+Say = Callable[[str], object]
+
+
+def quiet(_: str) -> None:
+    """Say nothing: the default ``say`` (and ``warn``, ``detail``) of the commands' APIs.
+
+    Parameters
+    ----------
+    _ : str
+        The line, dropped.
+    """
+
+
 #: a number written with a decimal comma ("1,5", "-0,25e-3"): refused by name, not as "not a number"
 _DECIMAL_COMMA = re.compile(r"\s*[+-]?\d*,\d+([eE][+-]?\d+)?\s*")
 

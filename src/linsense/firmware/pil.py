@@ -30,6 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from linsense.errors import InputError
+from linsense.io import quiet
 
 #: the programs the closed loop needs, and the Debian packages that bring them (``make tools``)
 TOOLS = {"arm-none-eabi-gcc": "gcc-arm-none-eabi libnewlib-arm-none-eabi",
@@ -40,10 +41,6 @@ LIBM = "newlib on the target, glibc on the host"
 TIMING = ("wall_s", "realtime_factor")
 #: the source tree's harness the loop builds with: the cross builds and the drive's C initializer
 _HARNESS = ("tools/pil.py", "tools/pil_cgen.py", "csrc/pil", "csrc/sim")
-
-
-def _quiet(_: str) -> None:
-    """Say nothing."""
 
 
 def source_tree() -> Path | None:
@@ -174,7 +171,7 @@ def _run(lp: _Loop, remote: bool) -> tuple:
 
 
 def run_pil(scenario: str | Path, out: str | Path, *, duration: float | None = None,
-            say: Callable[[str], object] = _quiet) -> dict:
+            say: Callable[[str], object] = quiet) -> dict:
     """The closed loop with the drive on the Cortex-M4F under QEMU and on the host; ``out/pil.json``.
 
     Parameters

@@ -13,9 +13,9 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from linsense.errors import InputError
+from linsense.errors import InputError, as_given
 from linsense.firmware.project import FirmwareExport, firmware_files, write_firmware
-from linsense.io import working_folder
+from linsense.io import Say, quiet, working_folder
 from linsense.tune.design import DriveData
 from linsense.tune.export import c_config_name, scenario_dict
 from linsense.verify.certificate import (
@@ -26,17 +26,6 @@ from linsense.verify.certificate import (
     motor_ref,
     prepare,
 )
-
-Say = Callable[[str], object]
-
-
-def _quiet(_: str) -> None:
-    """Say nothing (the default of ``say`` and ``warn``)."""
-
-
-def _as_given(exc: InputError) -> InputError:
-    """A refusal as it is (the default of ``refusal``)."""
-    return exc
 
 
 @dataclass
@@ -70,8 +59,8 @@ class ExportResult:
 def export_firmware(folder: str | Path, motor, drive: DriveData | None = None, *, motor_spec: str,
                     source: str | None = None, name: str | None = None, table: str | None = None,
                     table_via: tuple[str, str, str] | None = None, unverified: bool = False,
-                    say: Say = _quiet, warn: Say = _quiet,
-                    refusal: Callable[[InputError], InputError] = _as_given) -> ExportResult:
+                    say: Say = quiet, warn: Say = quiet,
+                    refusal: Callable[[InputError], InputError] = as_given) -> ExportResult:
     """Design the drive, prove it with the quick certificate and write the firmware folder.
 
     docs/firmware.md, "Export"; the command ``linsense firmware export`` wraps it.

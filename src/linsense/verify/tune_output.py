@@ -15,17 +15,13 @@ from collections.abc import Callable
 from pathlib import Path
 
 from linsense.errors import InputError
-from linsense.io import NAME_MAX, working_folder, write_atomic
-from linsense.verify.tuning import Say, TuneResult, tune
+from linsense.io import NAME_MAX, Say, quiet, working_folder, write_atomic
+from linsense.verify.tuning import TuneResult, tune
 
 __all__ = ["certificate_paths", "own_certificate", "tune_to"]
 
 #: ``figure(result, path)`` draws the certificate's figure (``<stem>.verification.png``) into ``path``
 CertificateFigure = Callable[[TuneResult, Path], object]
-
-
-def _quiet(_: str) -> None:
-    """Say nothing."""
 
 
 def certificate_paths(out: str | Path) -> tuple[Path, Path]:
@@ -106,7 +102,7 @@ def _write_certificate(res: TuneResult, out: str, figure: CertificateFigure | No
         say(str(png_path))
 
 
-def tune_to(out: str | Path, motor: str, *, figure: CertificateFigure | None = None, say: Say = _quiet,
+def tune_to(out: str | Path, motor: str, *, figure: CertificateFigure | None = None, say: Say = quiet,
             **kwargs) -> TuneResult:
     """Design and verify the drive for a motor (:func:`~linsense.verify.tuning.tune`), and write the
     scenario or C header to ``out`` with its certificate's files beside it.

@@ -14,8 +14,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from linsense.errors import InputError
-from linsense.io import working_folder
+from linsense.errors import InputError, as_given
+from linsense.io import Say, quiet, working_folder
 from linsense.model.motor import Motor, load_motor, names_a_path
 from linsense.scenario.load import Scenario, scenario_from_dict
 from linsense.sim.build import build, compensation_of, drive_data, resolve_motor
@@ -51,19 +51,6 @@ __all__ = ["FORMATS", "TuneResult", "design_lines", "motor_pitch", "scenario_tab
 
 #: what :func:`tune` writes: a complete scenario, or an ``ls_drive_cfg`` set-up header
 FORMATS = ("toml", "c")
-
-
-#: what reports a line: the report, a warning, a detail
-Say = Callable[[str], object]
-
-
-def _quiet(_: str) -> None:
-    """Say nothing."""
-
-
-def _as_given(exc: InputError) -> InputError:
-    """A refusal as it was made."""
-    return exc
 
 
 @dataclass
@@ -274,9 +261,9 @@ def _same_believed_motor(sc: Scenario, motor: Motor, motor_spec: str) -> None:
 def tune(motor: str, *, scenario: Scenario | None = None, source: str | None = None,
          drive: dict | None = None, fmt: str = "toml", name: str | None = None, polarity: float | None = None,
          current_noise: float = 0.01, table: str | None = None, quick: bool = False, verify: bool = True,
-         unverified: bool = False, out: str | Path = "-", say: Say = _quiet, warn: Say = _quiet,
-         detail: Say = _quiet, ready: Callable[[TuneResult], object] | None = None,
-         refusal: Callable[[InputError], InputError] = _as_given) -> TuneResult:
+         unverified: bool = False, out: str | Path = "-", say: Say = quiet, warn: Say = quiet,
+         detail: Say = quiet, ready: Callable[[TuneResult], object] | None = None,
+         refusal: Callable[[InputError], InputError] = as_given) -> TuneResult:
     """Design the drive for a motor, make its scenario or C header, and verify it in the simulator.
 
     Nothing is written (:func:`~linsense.verify.tune_output.tune_to` writes the text and the
@@ -348,7 +335,7 @@ def tune(motor: str, *, scenario: Scenario | None = None, source: str | None = N
     if fmt == "c":  # (the header waits for the verdict: made only for a drive that passed)
         return _header(res, cert_run, name, unverified, say, ready)
     res.text = scenario_toml(made, motor, Path(out), base, working_folder(), table=table_abs)
-    (ready or _quiet)(res)
+    (ready or quiet)(res)
     res.certificate = None if cert_run is None else _certify(cert_run, say)
     return res
 
