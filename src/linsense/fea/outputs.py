@@ -10,7 +10,7 @@ import numpy as np
 import tomli_w
 
 from linsense.fea.solver import Result
-from linsense.model.frames import PHASE_ANGLE
+from linsense.model.frames import phase_fundamentals
 
 COLUMNS = ("L_A", "L_B", "L_C", "M_AB", "M_BC", "M_CA")
 
@@ -111,13 +111,10 @@ def pm_phases(res: Result) -> tuple[tuple[float, ...], tuple[float, ...]] | None
     theta, _, pm = table(res)
     if not res.psi_pm_amplitude > 0 or theta.size < 3:
         return None
-    scale, shift = [], []
-    for k in range(3):
-        u = theta + PHASE_ANGLE[k]
-        (a, b), *_ = np.linalg.lstsq(np.column_stack([np.cos(u), -np.sin(u)]), pm[:, k], rcond=None)
-        scale.append(round(float(math.hypot(a, b) / res.psi_pm_amplitude), _SCALE_DIGITS))
-        shift.append(round(math.degrees(math.atan2(b, a)), _SHIFT_DIGITS) + 0.0)  # (no -0.0)
-    return tuple(scale), tuple(shift)
+    amplitude, delta = phase_fundamentals(theta, pm)
+    scale = tuple(round(a / res.psi_pm_amplitude, _SCALE_DIGITS) for a in amplitude)
+    shift = tuple(round(math.degrees(d), _SHIFT_DIGITS) + 0.0 for d in delta)  # (+ 0.0: no -0.0)
+    return scale, shift
 
 
 def motor_toml(res: Result, table_file: str = "inductances.csv") -> str:

@@ -17,7 +17,7 @@ import numpy as np
 
 from linsense._check import real, reals
 from linsense.errors import InputError
-from linsense.model.frames import PHASE_ANGLE
+from linsense.model.frames import phase_fundamentals
 from linsense.model.motor import PmPhases
 from linsense.model.motor_schema import PHASES
 from linsense.plausible import implausible
@@ -101,12 +101,8 @@ def pm_phases_from_emf(theta: np.ndarray, e: np.ndarray, omega: np.ndarray | flo
                          f"least one electrical period (360 deg, gaps of at most {math.degrees(_GAP_MAX):g} "
                          "deg)")
     dpsi = (phase_values_of_line(v) if line_to_line else v) / w[:, None]  # Wb/rad
-    scale, shift = [], []
-    for k in range(3):
-        u = th + PHASE_ANGLE[k]
-        (re, im), *_ = np.linalg.lstsq(np.column_stack([-np.sin(u), -np.cos(u)]), dpsi[:, k], rcond=None)
-        scale.append(float(math.hypot(re, im) / psi))
-        shift.append(float(math.atan2(im, re)))
+    amplitude, shift = phase_fundamentals(th, dpsi, derivative=True)
+    scale = [a / psi for a in amplitude]
     for k in range(3):
         for kind, value in (("flux_scale", scale[k]), ("flux_shift", math.degrees(shift[k]))):
             msg = implausible(kind, value)

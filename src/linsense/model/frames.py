@@ -13,6 +13,8 @@ A matrix ``L`` mapping currents to flux linkages transforms as ``L_ab = T L_abc 
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from linsense._check import reals
@@ -27,6 +29,40 @@ T_CLARKE_INV = np.array([[1.0, 0.0], [-0.5, _S3], [-0.5, -_S3]])
 #: The phases' electrical angles, rad (A, B, C): phase k's back-EMF, PM flux or balanced current is
 #: a function of ``theta + PHASE_ANGLE[k]`` (B lags A by 2 pi/3, C leads it).
 PHASE_ANGLE = np.array([0.0, -2.0 * np.pi / 3.0, 2.0 * np.pi / 3.0])
+
+
+def phase_fundamentals(theta: np.ndarray, values: np.ndarray, derivative: bool = False
+                       ) -> tuple[list[float], list[float]]:
+    """Each phase's fundamental ``A_k cos(theta + PHASE_ANGLE[k] + delta_k)`` by least squares.
+
+    The per-phase PM flux of the motor file's ``[pm_flux]`` (docs/theory.md section 10), fitted to
+    the flux (the FEA) or to its derivative in theta (an open-circuit back-EMF over the speed).
+    Inputs are not checked here: the callers have.
+
+    Parameters
+    ----------
+    theta : ndarray, shape (N,)
+        Electrical positions, rad.
+    values : ndarray, shape (N, 3)
+        Phases A, B, C at the positions.
+    derivative : bool, optional
+        ``values`` are ``d/d theta`` of the waveform.
+
+    Returns
+    -------
+    amplitude : list of float
+        ``A_k``, in ``values``' unit.
+    delta : list of float
+        ``delta_k``, rad.
+    """
+    amplitude, delta = [], []
+    for k in range(3):
+        u = theta + PHASE_ANGLE[k]
+        basis = [-np.sin(u), -np.cos(u)] if derivative else [np.cos(u), -np.sin(u)]
+        (c, s), *_ = np.linalg.lstsq(np.column_stack(basis), values[:, k], rcond=None)
+        amplitude.append(math.hypot(c, s))
+        delta.append(math.atan2(s, c))
+    return amplitude, delta
 
 
 #: the module, named in the messages of its functions' argument checks
