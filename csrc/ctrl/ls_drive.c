@@ -100,6 +100,24 @@ void ls_drive_default_cfg(ls_drive_cfg *c)
     c->dtres.adapt_r = true;
     c->dtres.l_ea = LS_DEF_L_EA;
     c->dtres.l_eb = LS_DEF_L_EB;
+    c->emf_on = LS_DEF_EMF_ON > 0; /* (the default speed cap stays below the band: off) */
+    c->emf.fs = fs;
+    c->emf.r_s = r_s;
+    c->emf.l_d = l_d;
+    c->emf.l_q = l_q;
+    c->emf.f_lpf = LS_DEF_EMF_LPF;
+    c->emf.omega_max = c->obs.omega_max;
+    c->emf.err_r = LS_DEF_EMF_ERR_R;
+    c->emf.err_l = LS_DEF_EMF_ERR_L;
+    c->emf.u_err = LS_DEF_EMF_U_ERR;
+    c->emf.i_noise = LS_DEF_EMF_I_NOISE;
+    c->fuse.fs = fs;
+    c->fuse.pole_pitch = tau;
+    c->fuse.v_lo = LS_DEF_HAND_V_LO;
+    c->fuse.v_hi = LS_DEF_HAND_V_HI;
+    c->fuse.v_on = LS_DEF_INJ_V_ON;
+    c->fuse.v_off = LS_DEF_INJ_V_OFF;
+    c->fuse.t_settle = LS_DEF_HAND_T_SETTLE;
     c->prot.i_max = LS_R(6.0);
     c->prot.v_dc_min = LS_DEF_V_DC_MIN;
     c->prot.v_dc_max = LS_DEF_V_DC_MAX;
@@ -199,6 +217,12 @@ static bool modules_agree(const ls_drive_cfg *cfg)
         cfg->enc_obs.pole_pitch != cfg->pole_pitch || cfg->traj.pole_pitch != cfg->pole_pitch) {
         return false;
     }
+    /* the EMF estimate and its hand-over: the pulsating or elliptical injection's sensorless step
+     * (ls_drive_speed.c), in the drive's pitch and rate */
+    if (cfg->emf_on && (cfg->inject.shape != LS_INJ_PULSATING || cfg->emf.fs != cfg->fs ||
+                        cfg->fuse.fs != cfg->fs || cfg->fuse.pole_pitch != cfg->pole_pitch)) {
+        return false;
+    }
     /* every module samples at the drive rate */
     return cfg->inject.fs == cfg->fs && cfg->bpf.fs == cfg->fs && cfg->sep.fs == cfg->fs &&
            cfg->demod.fs == cfg->fs && cfg->obs.fs == cfg->fs && cfg->enc_obs.fs == cfg->fs &&
@@ -236,6 +260,10 @@ static ls_status init_blocks(ls_drive *d, const ls_drive_cfg *cfg)
     st |= ls_mod_init(&d->mod, &cfg->mod);
     if (cfg->hf_dtres) {
         st |= cfg->dtres.fs == cfg->fs ? ls_dtres_init(&d->dtres, &cfg->dtres) : LS_ERR_PARAM;
+    }
+    if (cfg->emf_on) {
+        st |= ls_emf_init(&d->emf, &cfg->emf);
+        st |= ls_fuse_init(&d->fuse, &cfg->fuse);
     }
     if (cfg->startup.pairs != 0u) { /* LS_MODE_STARTUP configured */
         st |= cfg->startup.fs == cfg->fs && cfg->startup.v_pulse <= LS_DRIVE_V_DC_MAX
@@ -332,27 +360,30 @@ static void startup_step(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT mea
  *   ROT    LS_INJ_ROTATING with sep the notch at bpf's f0 and q (sep = 1 - bpf: no band-pass needed)
  *   ROTX   LS_INJ_ROTATING with another sep
  *   SQUARE LS_INJ_SQUARE (at fs/2)
+ *   SPEED  LS_INJ_PULSATING with cfg.emf_on (the EMF estimate and the hand-over)
  *
- *   mode                        PULSE        ROT         ROTX         SQUARE       file
- *   LS_MODE_OFF                 off          off         off          off          ls_drive_off.c
- *   LS_MODE_SENSORED            sensored     sensored    sensored     sensored     ls_drive_sensored.c
- *   LS_MODE_SENSORLESS_LUT      sensorless   rotating    sensorless   square       ls_drive_sensorless.c,
- *   LS_MODE_SENSORLESS_NOLUT    sensorless   rotating    sensorless   square         _rotating.c, _square.c
- *   LS_MODE_CALIBRATION         calibration  calibration calibration  calibration  ls_drive_calibration.c
- *   LS_MODE_STARTUP             startup      startup     startup      startup      ls_drive_startup.c
+ *   mode                      PULSE       ROT         ROTX        SQUARE      SPEED       file
+ *   LS_MODE_OFF               off         off         off         off         off         ls_drive_off.c
+ *   LS_MODE_SENSORED          sensored    sensored    sensored    sensored    sensored    ls_drive_sensored.c
+ *   LS_MODE_SENSORLESS_LUT    sensorless  rotating    sensorless  square      speed       ls_drive_sensorless.c,
+ *   LS_MODE_SENSORLESS_NOLUT  sensorless  rotating    sensorless  square      speed         _rotating.c,
+ *                                                                                           _square.c, _speed.c
+ *   LS_MODE_CALIBRATION       calibration calibration calibration calibration calibration ls_drive_calibration.c
+ *   LS_MODE_STARTUP           startup     startup     startup     startup     startup     ls_drive_startup.c
  *
  * mode_set picks the entry (d->path = row * LS_DRIVE_COLS + column) when the mode changes; while
  * LS_MODE_STARTUP runs, d->mode holds LS_MODE_OFF (d->starting set, cmd.mode reports
  * LS_MODE_STARTUP) and the entry is the start-up's row. */
-enum { LS_DRIVE_PULSE = 0, LS_DRIVE_ROT = 1, LS_DRIVE_ROTX = 2, LS_DRIVE_SQUARE = 3, LS_DRIVE_COLS = 4 };
-#define LS_DRIVE_ROW(f) {f, f, f, f}
+enum { LS_DRIVE_PULSE = 0, LS_DRIVE_ROT = 1, LS_DRIVE_ROTX = 2, LS_DRIVE_SQUARE = 3, LS_DRIVE_SPEED = 4,
+       LS_DRIVE_COLS = 5 };
+#define LS_DRIVE_ROW(f) {f, f, f, f, f}
 static const ls_drive_step_fn step_table[LS_MODE_STARTUP + 1][LS_DRIVE_COLS] = {
     [LS_MODE_OFF] = LS_DRIVE_ROW(ls_drive_off_step_),
     [LS_MODE_SENSORED] = LS_DRIVE_ROW(ls_drive_sensored_step_),
     [LS_MODE_SENSORLESS_LUT] = {ls_drive_sensorless_step_, ls_drive_rotating_step_, ls_drive_sensorless_step_,
-                                ls_drive_square_step_},
+                                ls_drive_square_step_, ls_drive_speed_step_},
     [LS_MODE_SENSORLESS_NOLUT] = {ls_drive_sensorless_step_, ls_drive_rotating_step_, ls_drive_sensorless_step_,
-                                  ls_drive_square_step_},
+                                  ls_drive_square_step_, ls_drive_speed_step_},
     [LS_MODE_CALIBRATION] = LS_DRIVE_ROW(ls_drive_calibration_step_),
     [LS_MODE_STARTUP] = LS_DRIVE_ROW(startup_step),
 };
@@ -382,7 +413,7 @@ static unsigned step_column(const ls_drive_cfg *c)
         return c->sep.type == LS_BIQUAD_NOTCH && c->sep.f0 == c->bpf.f0 && c->sep.q == c->bpf.q ? LS_DRIVE_ROT
                                                                                             : LS_DRIVE_ROTX;
     }
-    return LS_DRIVE_PULSE;
+    return c->emf_on ? LS_DRIVE_SPEED : LS_DRIVE_PULSE;
 }
 
 /* The mode and what it runs (the step table's entry; LS_MODE_STARTUP's row while d->starting). */
@@ -428,6 +459,10 @@ void ls_drive_reset(ls_drive *d, ls_pos p)
     ls_mod_reset(&d->mod);
     dtres_reset(d, false);
     ls_protect_reset(&d->prot);
+    if (d->cfg.emf_on) {
+        ls_emf_reset(&d->emf);
+        ls_fuse_reset(&d->fuse);
+    }
     d->starting = false;
     mode_set(d, LS_MODE_OFF);
     ls_startup_reset(&d->su);
@@ -488,6 +523,10 @@ ls_status ls_drive_set_mode(ls_drive *d, ls_mode mode)
     /* the modulator's history and the residual model start again (the outputs may have been off) */
     ls_mod_reset(&d->mod);
     dtres_reset(d, true);
+    if (d->cfg.emf_on) { /* (the EMF's filters and the hand-over start again: the injection on) */
+        ls_emf_reset(&d->emf);
+        ls_fuse_reset(&d->fuse);
+    }
     d->w_ref = LS_R(0.0); /* (its back-EMF: the sensorless steps' trajectory sets it) */
     /* LS_MODE_STARTUP runs with mode OFF and starting set (the step table's start-up row); it
      * enters LS_MODE_SENSORLESS_LUT, aligned, when it is done */

@@ -39,6 +39,17 @@
 #define LS_DEF_TRAJ_A_STEP LS_R(4.1887902) /* m/s^2, a step command's acceleration */
 #define LS_DEF_DITHER_AMP LS_R(0.4) /* A, calibration dither */
 #define LS_DEF_DITHER_FREQ LS_R(55.0) /* Hz, calibration dither frequency */
+#define LS_DEF_EMF_ON LS_R(0.0) /* -, 1: the EMF estimate and the hand-over on */
+#define LS_DEF_EMF_LPF LS_R(300.0) /* Hz, the EMF's low-pass */
+#define LS_DEF_EMF_ERR_R LS_R(0.05) /* -, the resistance's uncertainty of the EMF's bound */
+#define LS_DEF_EMF_ERR_L LS_R(0.1) /* -, the q inductance's */
+#define LS_DEF_EMF_U_ERR LS_R(0.3072) /* V, the inverter's voltage error of the EMF's bound */
+#define LS_DEF_EMF_I_NOISE LS_R(0.01) /* A, the current noise of the EMF's bound */
+#define LS_DEF_HAND_V_LO LS_R(0.385584517) /* m/s, the HF error alone up to it */
+#define LS_DEF_HAND_V_HI LS_R(0.771169035) /* m/s, the EMF error alone from it */
+#define LS_DEF_INJ_V_ON LS_R(0.783821617) /* m/s, the injection back in below it */
+#define LS_DEF_INJ_V_OFF LS_R(0.90139486) /* m/s, the injection out above it */
+#define LS_DEF_HAND_T_SETTLE LS_R(0.00265258238) /* s, the demodulator's settling after a fade */
 #define LS_DEF_STARTUP_ERR_LOCK LS_R(0.2) /* rad, the lock is accepted within it */
 #define LS_DEF_STARTUP_T_QUIET LS_R(0.012) /* s, the injection ramp-down before the pulses, with a margin */
 #define LS_DEF_STARTUP_V_PULSE LS_R(37.4) /* V, pulse amplitude (to 0.1 V) */

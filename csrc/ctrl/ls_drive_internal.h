@@ -9,6 +9,8 @@
  *                          rotating one whose sep is not 1 - bpf)
  *   ls_drive_rotating.c    LS_MODE_SENSORLESS_LUT/NOLUT, rotating injection with sep = 1 - bpf
  *   ls_drive_square.c      LS_MODE_SENSORLESS_LUT/NOLUT, square wave at fs/2
+ *   ls_drive_speed.c       LS_MODE_SENSORLESS_LUT/NOLUT, pulsating or elliptical injection with the EMF
+ *                          estimate and the hand-over (cfg.emf_on)
  *   ls_drive_sensored.c    LS_MODE_SENSORED (every shape)
  *   ls_drive_calibration.c LS_MODE_CALIBRATION (every shape) and its sequence
  *   ls_drive_startup.c     LS_MODE_STARTUP (its HF chain; ls_drive.c handles its end)
@@ -73,6 +75,8 @@ void ls_drive_off_step_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas
 void ls_drive_sensorless_step_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas, ls_cmd *LS_RESTRICT cmd);
 /* ls_drive_rotating.c */
 void ls_drive_rotating_step_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas, ls_cmd *LS_RESTRICT cmd);
+/* ls_drive_speed.c */
+void ls_drive_speed_step_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas, ls_cmd *LS_RESTRICT cmd);
 /* ls_drive_square.c */
 void ls_drive_square_step_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas, ls_cmd *LS_RESTRICT cmd);
 /* ls_drive_sensored.c */

@@ -189,6 +189,8 @@ _RULES = {
 
 #: the injection's largest share of the linear range at the under-voltage limit (ls_drive_init's)
 V_INJ_SHARE_MAX = float(lib.LS_DRIVE_V_INJ_SHARE_MAX)
+#: the EMF low-pass corner's largest share of the sampling rate (ls_emf_init's)
+EMF_FLPF_FS_MAX = float(lib.LS_EMF_FLPF_FS_MAX)
 #: the largest ``|ripple_c| + |ripple_s|`` ls_drive_init accepts
 RIPPLE_MAX = float(lib.LS_DRIVE_RIPPLE_MAX)
 #: the most start-up pulse pairs ls_startup_init accepts

@@ -26,7 +26,8 @@
  *                            d-axis: with inject_sensored, cmd.pos_est is the HF estimate beside the
  *                            encoder, its position plus the error demodulated there with the table
  *                            when there is one: where a sensorless observer would settle)
- *   LS_MODE_SENSORLESS_LUT   HF observer with the compensation table (cfg.demod.comp required)
+ *   LS_MODE_SENSORLESS_LUT   HF observer with the compensation table (cfg.demod.comp required);
+ *                            with cfg.emf_on the EMF estimate takes over at speed (ls_fuse.h)
  *   LS_MODE_SENSORLESS_NOLUT HF observer without compensation (the paper's unstable case)
  *   LS_MODE_CALIBRATION      encoder closes the position loop; at each of cal.points positions of
  *                            one electrical period (move, settle, adapt) the HF injection and the
@@ -49,6 +50,8 @@
 #include "linsense/ls_current.h"
 #include "linsense/ls_demod.h"
 #include "linsense/ls_dtres.h"
+#include "linsense/ls_emf.h"
+#include "linsense/ls_fuse.h"
 #include "linsense/ls_inject.h"
 #include "linsense/ls_lut.h"
 #include "linsense/ls_mod.h"
@@ -172,6 +175,13 @@ typedef struct {
                                i_d_near replaces i_d_inj, [0, near_out] */
     LS_REAL near_out;       /* rad, ... above which i_d_inj returns (the hysteresis), < pi/6; 0: no
                                such schedule (i_d_inj everywhere) */
+    bool emf_on;            /**< unit: -, the sensorless modes with the pulsating or elliptical injection:
+                                 the EMF estimate beside the HF one, handed over on the speed and the
+                                 injection faded out at speed (emf, fuse; docs/theory.md, "The
+                                 hand-over"); not with the rotating vector or the square wave */
+    ls_emf_cfg emf;         /* the EMF estimate (with emf_on; emf.fs = fs) */
+    ls_fuse_cfg fuse;       /* the hand-over band and the injection's fade (with emf_on; fuse.fs = fs,
+                               fuse.pole_pitch = pole_pitch) */
     ls_startup_cfg startup; /* start-up with the magnet polarity (startup.pairs = 0: none, and
                                LS_MODE_STARTUP refused); startup.fs = fs */
     int32_t ripple_order;   /**< unit: -, the order n (per electrical period) of the force constant's
@@ -246,6 +256,8 @@ typedef struct {
     ls_mod mod;
     ls_dtres dtres;
     ls_protect prot;
+    ls_emf emf;          /* the EMF estimate (cfg.emf_on) */
+    ls_fuse fuse;        /* the hand-over and the injection's fade (cfg.emf_on) */
     LS_REAL f_ref;       /* N, force reference of the last step */
     LS_REAL w_ref;       /* rad/s, the trajectory's electrical speed at the sensorless modes' last
                             step (0 in the others): the dead-time residual model's back-EMF

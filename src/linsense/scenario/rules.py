@@ -348,6 +348,22 @@ def compensation_of(mode: str, compensation: str | None) -> str:
 
 
 #: the rules between keys, section by section, in the order their refusals take
+def _check_handover(f: ScenarioSchema) -> None:
+    """The EMF estimate's shape and the hand-over's order: ``handover_v_lo < handover_v_hi <=
+    inject_v_on < inject_v_off`` (ls_fuse_init's, named by key)."""
+    obs = f.observer
+    if obs.emf and f.injection.shape != "pulsating":
+        raise KeyProblem("observer.emf", f"only with shape = \"pulsating\" (the {f.injection.shape} "
+                         "injection's step has no EMF estimate), got true")
+    order = (("handover_v_hi", "handover_v_lo", False), ("inject_v_on", "handover_v_hi", True),
+             ("inject_v_off", "inject_v_on", False))
+    for key, below, equal in order:
+        v, lo = getattr(obs, key), getattr(obs, below)
+        if v < lo or (v == lo and not equal):
+            raise KeyProblem(f"observer.{key}", f"must be {'at least' if equal else 'above'} "
+                             f"observer.{below} = {lo:g} m/s, got {v:g}")
+
+
 CHECKS: tuple[Callable[[ScenarioSchema], None], ...] = (
-    _check_rates, _check_overrides, _check_lut_file, _check_injection, _check_mode, _check_observer_gains,
-    _check_controller, _check_travel, _check_bus, _check_amplitude)
+    _check_rates, _check_overrides, _check_lut_file, _check_injection, _check_handover, _check_mode,
+    _check_observer_gains, _check_controller, _check_travel, _check_bus, _check_amplitude)

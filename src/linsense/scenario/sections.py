@@ -324,6 +324,39 @@ class ObserverSection(BaseModel):
     force_max: Positive = Field(
         _c(_C.obs.force_max), description="clamp of the observer's load estimate (mech)",
         json_schema_extra={"unit": "N", "default_note": "designed: `K_f i_max` ({ecce2010} for ecce2010)"})
+    # the EMF estimate beside the HF one, handed over on the speed (ls_drive_cfg.emf_on, emf, fuse)
+    emf: bool = Field(
+        bool(_C.emf_on), description="the EMF estimate beside the HF one: the observer's error moves from "
+        "the HF error to the EMF error across the hand-over band and the injection fades out above it "
+        "(docs/theory.md, \"The hand-over\"); pulsating and elliptical injections only",
+        json_schema_extra={"unit": "bool", "default_note": "designed: on when the speed cap reaches "
+                           "`handover_v_lo`"})
+    emf_lpf_hz: Positive = Field(
+        _c(_C.emf.f_lpf), description="the EMF's low-pass in the estimated frame",
+        json_schema_extra={"kind": "bandwidth", "unit": "Hz",
+                           "default_note": "designed: `demod_lpf_hz`, at most "
+                           "{linsense.ctrl.EMF_FLPF_FS_MAX} `f_pwm`"})
+    handover_v_lo: Positive = Field(
+        _c(_C.fuse.v_lo), description="the speed up to which the HF error alone drives the observer",
+        json_schema_extra={"unit": "m/s", "default_note": "designed: `handover_v_hi` / "
+                           "{linsense.tune.handover.BAND_RATIO}"})
+    handover_v_hi: Positive = Field(
+        _c(_C.fuse.v_hi), description="the speed from which the EMF error alone does (> `handover_v_lo`)",
+        json_schema_extra={"unit": "m/s", "default_note": "designed: where the EMF's error bound is within "
+                           "{linsense.tune.handover.EPS_HAND_DEG} deg"})
+    inject_v_on: Positive = Field(
+        _c(_C.fuse.v_on), description="the injection fades back in below this speed (>= `handover_v_hi`)",
+        json_schema_extra={"unit": "m/s", "default_note": "designed: `handover_v_hi` + `a_max` (ramp + "
+                           "settling)"})
+    inject_v_off: Positive = Field(
+        _c(_C.fuse.v_off), description="the injection fades out above this speed (> `inject_v_on`)",
+        json_schema_extra={"unit": "m/s", "default_note": "designed: "
+                           "{linsense.tune.handover.HYSTERESIS} `inject_v_on`"})
+    handover_settle_s: float = Field(
+        _c(_C.fuse.t_settle), ge=0.0, lt=1.0, description="after a fade, the time at full injection "
+        "amplitude before the HF error counts again (the demodulator's filters refilled)",
+        json_schema_extra={"kind": "time", "unit": "s", "default_note": "designed: "
+                           "{linsense.tune.handover.SETTLE_TAUS} / (2 pi `demod_lpf_hz`)"})
 
 
 class ModelOverride(BaseModel):

@@ -52,6 +52,7 @@ from linsense.sim.refusal import explain, given_keys
 from linsense.tune.cfgmap import Values
 from linsense.tune.design import DriveData, mean_dq
 from linsense.tune.drive_design import design_drive
+from linsense.tune.handover import HANDOVER_KEYS
 
 #: the names other modules import from here (the checks, the cache and the tables live in their
 #: own modules: linsense.sim.checks, .cache, .drive_tables, .drive_cfg)
@@ -841,7 +842,7 @@ def calibration_timing(f_inj: float, dither_a: float, dither_hz: float, demod_lp
 DESIGNED = {
     "injection": ("amplitude", "frequency", "ramp_rate"),
     "observer": ("demod_lpf_hz", "gain_schedule", "hf_delay_s", "omega_max", "type", "bandwidth_hz",
-                 "force_max"),
+                 "force_max", *(k.split(".", 1)[1] for k in HANDOVER_KEYS)),
     "controller": ("speed_bandwidth_hz", "current_bandwidth_hz", "friction_coulomb", "friction_viscous",
                    "friction_band", "ripple_order", "ripple_cos", "ripple_sin", "v_max", "step_a_max",
                    "kp_x"),

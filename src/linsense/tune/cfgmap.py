@@ -27,7 +27,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from linsense.analysis.emf import ERR_L as HANDOVER_ERR_L
+from linsense.analysis.emf import ERR_R as HANDOVER_ERR_R
+from linsense.analysis.emf import I_NOISE as HANDOVER_I_NOISE
+from linsense.analysis.emf import inverter_voltage_error
 from linsense.tune.design import current_gains, speed_gains, startup_lock_gain
+from linsense.tune.handover import DT_RESIDUAL_DTC
 from linsense.tune.injection import (
     SQUARE_DTC_BAND,
     SQUARE_DTC_LEAD,
@@ -493,6 +498,31 @@ ROWS: tuple[Row, ...] = (
     Row("dtres.l_d", ("controller.model.L_d", "controller.model.motor"), "H"),
     Row("dtres.l_q", ("controller.model.L_q", "controller.model.motor"), "H"),
     Row("hf_delay", ("observer.hf_delay_s",), "s"),
+    Row("emf_on", ("observer.emf",), "-", kind="bool", c=False, blame=False,
+        doc="the key (`tune -c` writes it after the fields)"),
+    _fs("emf.fs"),
+    Row("emf.r_s", ("controller.model.R_s", "controller.model.motor"), "ohm"),
+    Row("emf.l_d", ("controller.model.L_d", "controller.model.motor"), "H"),
+    Row("emf.l_q", ("controller.model.L_q", "controller.model.motor"), "H"),
+    Row("emf.f_lpf", ("observer.emf_lpf_hz",), "Hz"),
+    Row("emf.omega_max", ("observer.omega_max",), "rad/s"),
+    Row("emf.err_r", ("observer.emf",), "-", lambda v: HANDOVER_ERR_R, scale=None, blame=False,
+        doc="`linsense.analysis.emf.ERR_R`"),
+    Row("emf.err_l", ("observer.emf",), "-", lambda v: HANDOVER_ERR_L, scale=None, blame=False,
+        doc="`linsense.analysis.emf.ERR_L`"),
+    Row("emf.u_err", ("inverter.v_dc", "inverter.f_pwm", "inverter.dead_time"), "V",
+        lambda v: inverter_voltage_error(v["inverter.v_dc"], v["inverter.f_pwm"], v["inverter.dead_time"],
+                                         DT_RESIDUAL_DTC), scale=None,
+        doc="`inverter_voltage_error(v_dc, f_pwm, dead_time, DT_RESIDUAL_DTC)`"),
+    Row("emf.i_noise", ("observer.emf",), "A", lambda v: HANDOVER_I_NOISE, scale=None, blame=False,
+        doc="`linsense.analysis.emf.I_NOISE`"),
+    _fs("fuse.fs"),
+    _pitch("fuse.pole_pitch"),
+    Row("fuse.v_lo", ("observer.handover_v_lo",), "m/s"),
+    Row("fuse.v_hi", ("observer.handover_v_hi",), "m/s"),
+    Row("fuse.v_on", ("observer.inject_v_on",), "m/s"),
+    Row("fuse.v_off", ("observer.inject_v_off",), "m/s"),
+    Row("fuse.t_settle", ("observer.handover_settle_s",), "s"),
     Row("dtres.l_ea", ("observer.dead_time_model", "controller.model.motor"), "H", _end(0), scale=None,
         blame=False, doc="the model's end anisotropy with the forward model, else 0"),
     Row("dtres.l_eb", ("observer.dead_time_model", "controller.model.motor"), "H", _end(1), scale=None,

@@ -41,7 +41,25 @@ def default_values() -> list[tuple[str, float, str]]:
     d, dz = made.drive, made.design
     l_d, l_q = mean_dq(m)
     l_ea, l_eb = end_anisotropy(m)
-    return _drive_values(m, d, dz, l_d, l_q, l_ea, l_eb) + _startup_values(made.startup)
+    return _drive_values(m, d, dz, l_d, l_q, l_ea, l_eb) + _handover_values(made.handover) + \
+        _startup_values(made.startup)
+
+
+def _handover_values(h) -> list:
+    """The EMF estimate's and the hand-over's defaults (:mod:`linsense.tune.handover`)."""
+    return [
+        ("LS_DEF_EMF_ON", 1.0 if h.on else 0.0, "-, 1: the EMF estimate and the hand-over on"),
+        ("LS_DEF_EMF_LPF", h.f_lpf, "Hz, the EMF's low-pass"),
+        ("LS_DEF_EMF_ERR_R", h.err_r, "-, the resistance's uncertainty of the EMF's bound"),
+        ("LS_DEF_EMF_ERR_L", h.err_l, "-, the q inductance's"),
+        ("LS_DEF_EMF_U_ERR", h.u_err, "V, the inverter's voltage error of the EMF's bound"),
+        ("LS_DEF_EMF_I_NOISE", h.i_noise, "A, the current noise of the EMF's bound"),
+        ("LS_DEF_HAND_V_LO", h.v_lo, "m/s, the HF error alone up to it"),
+        ("LS_DEF_HAND_V_HI", h.v_hi, "m/s, the EMF error alone from it"),
+        ("LS_DEF_INJ_V_ON", h.v_on, "m/s, the injection back in below it"),
+        ("LS_DEF_INJ_V_OFF", h.v_off, "m/s, the injection out above it"),
+        ("LS_DEF_HAND_T_SETTLE", h.t_settle, "s, the demodulator's settling after a fade"),
+    ]
 
 
 def _drive_values(m, d: DriveData, dz, l_d: float, l_q: float, l_ea: float, l_eb: float) -> list:

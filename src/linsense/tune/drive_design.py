@@ -17,7 +17,15 @@ from linsense.analysis.hf import mean_dq
 from linsense.model.motor import Motor
 from linsense.scenario.bounds import V_DC_MAX_FRACTION, V_DC_MIN_FRACTION
 from linsense.scenario.keys import checked
-from linsense.tune.design import Design, DriveData, design, uncompensated_speed_factor
+from linsense.tune.design import (
+    INJ_RAMP_TIME,
+    Design,
+    DriveData,
+    DriveInputs,
+    design,
+    uncompensated_speed_factor,
+)
+from linsense.tune.handover import HandoverDesign, design_handover
 from linsense.tune.startup import StartupDesign, design_startup
 
 #: the keys whose values are the inputs as given (the drive data, the application, the motor
@@ -54,6 +62,9 @@ class DriveDesign:
     table_fit : tuple of str
         What the table's end-effect fit says: its line and a doubt ("" for none); empty without a
         table.
+    handover : HandoverDesign or None
+        The hand-over band and the injection's fade (:func:`~linsense.tune.handover.design_handover`;
+        None: a design given without its motor).
     """
 
     motor: Motor | None
@@ -64,6 +75,7 @@ class DriveDesign:
     k_est: float = 1.0
     table: object = None
     table_fit: tuple = field(default_factory=tuple)
+    handover: HandoverDesign | None = None
 
     @functools.cached_property
     def model(self) -> Motor:
@@ -166,6 +178,8 @@ class DriveDesign:
                          "controller.model.R_s": m.R_s, "controller.model.psi_pm": m.psi_pm})
         if self.startup is not None:
             keys.update({f"startup.{k}": v for k, v in self.startup.scenario_keys(digits=None).items()})
+        if self.handover is not None:
+            keys.update(self.handover.scenario_keys())
         return dict(checked(keys))
 
     @property
@@ -240,7 +254,11 @@ def design_drive(motor: Motor, drive: DriveData | None = None, *, source: str = 
                             v_inj=dz.v_inj, polarity=polarity, current_noise=current_noise,
                             ramp_rate=dz.inj_ramp_rate, source=source)
     k_est = uncompensated_speed_factor(motor) if uncompensated else 1.0
-    out = DriveDesign(motor, d, dz, su, uncompensated, k_est)
+    hand = design_handover(motor, v_dc=d.v_dc, f_pwm=d.f_pwm, dead_time=d.dead_time,
+                           i_mag=DriveInputs(motor, d).force_need / motor.force_constant,
+                           demod_lpf=dz.demod_lpf, ramp_time=INJ_RAMP_TIME, a_max=d.a_max, v_cap=dz.v_cap,
+                           shape=d.shape)
+    out = DriveDesign(motor, d, dz, su, uncompensated, k_est, handover=hand)
     if table is not None:
         from linsense.compensation.measured import fit_report, read_measured_table
 

@@ -30,6 +30,7 @@ from linsense.tune.design import (
     gain_schedule,
 )
 from linsense.tune.drive_design import GIVEN_KEYS, DriveDesign
+from linsense.tune.handover import HANDOVER_KEYS
 
 
 def end_stops(pole_pitch: float, travel: float) -> dict:
@@ -189,6 +190,11 @@ def _put_observer(obs: dict, keys: dict, table: str | None) -> None:
         _put(keys, obs, "observer.force_max")
     else:
         obs.pop("force_max", None)
+    # the EMF estimate and its hand-over where the design runs it (else the keys' default: off)
+    for k in HANDOVER_KEYS:
+        obs.pop(k.split(".", 1)[1], None)
+    if keys.get("observer.emf"):
+        _put(keys, obs, *HANDOVER_KEYS)
 
 
 def _put_controller(con: dict, keys: dict) -> None:
@@ -542,6 +548,7 @@ static inline void {fn}(ls_drive_cfg *cfg, const ls_lut *comp, const ls_lut *gai
 {body}
     cfg->obs.type = {v.field("obs.type")};
     cfg->load_ff = {"true" if v.field("load_ff") else "false"}; /* the observer's load estimate fed forward */
+    cfg->emf_on = {"true" if v.field("emf_on") else "false"}; /* the EMF estimate, the hand-over at speed */
     ls_observer_gains(&cfg->obs, {bw}); /* the library's rule for the bandwidth (Hz) */
     cfg->demod.comp = comp;
     cfg->demod.gain_table = gain;
