@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from linsense import ctrl
-from linsense.analysis.emf import emf_speed_limit
+from linsense.analysis.emf import emf_pm_compensation, emf_speed_limit
 from linsense.errors import ConfigError, InputError
 from linsense.model.motor import load_motor
 
@@ -28,7 +28,8 @@ GL_X, GL_W = np.polynomial.legendre.leggauss(8)
 
 def _cfg(l_d: float, l_q: float, r_s: float, **kw) -> dict:
     return {"fs": FS, "r_s": r_s, "l_d": l_d, "l_q": l_q, "f_lpf": 200.0, "omega_max": 2000.0, "err_r": 0.05,
-            "err_l": 0.1, "u_err": 0.3, "i_noise": 0.01} | kw
+            "err_l": 0.1, "u_err": 0.3, "i_noise": 0.01, "psi_pm": 0.0, "pm_shift": 0.0, "neg_re": 0.0,
+            "neg_im": 0.0} | kw
 
 
 def _means(model) -> tuple[float, float]:
@@ -109,13 +110,24 @@ def test_the_end_effect_costs_its_anisotropy():
 
 @pytest.mark.parametrize("field, value", [("fs", 0.0), ("r_s", -1.0), ("l_d", 0.0), ("l_q", float("nan")),
                                           ("f_lpf", 1000.0), ("omega_max", 5000.0), ("err_r", 0.95),
-                                          ("err_l", -0.1), ("u_err", -1.0), ("i_noise", float("inf"))])
+                                          ("err_l", -0.1), ("u_err", -1.0), ("i_noise", float("inf")),
+                                          ("psi_pm", -0.1), ("pm_shift", 0.6), ("neg_re", 0.5),
+                                          ("neg_im", float("nan"))])
 def test_init_refuses_each_bad_field(field, value):
     with pytest.raises(ConfigError, match=rf"ls_emf: {field} = .*allowed: ") as exc:
         ctrl.emf_init(_cfg(3e-3, 4e-3, 9.0) | {field: value})
     assert exc.value.status == ctrl.lib.LS_ERR_PARAM
     if field == "f_lpf":
         assert f"{float(ctrl.lib.LS_EMF_FLPF_FS_MAX):g} fs" in str(exc.value)
+    if field == "neg_re":
+        assert "not a three-phase motor" in str(exc.value)
+
+
+def test_init_names_an_imbalance_without_a_flux():
+    """A negative sequence with ``psi_pm`` 0: neither field alone is wrong, the pair is; both named."""
+    with pytest.raises(ConfigError, match=r"ls_emf: psi_pm = 0.*neg_im = 0.01") as exc:
+        ctrl.emf_init(_cfg(3e-3, 4e-3, 9.0) | {"neg_im": 0.01})
+    assert "neg_re" not in str(exc.value).split("allowed")[0]
 
 
 def test_speed_limit_is_the_running_blocks_bound():
@@ -131,7 +143,8 @@ def test_speed_limit_is_the_running_blocks_bound():
     for k in (0.8, 1.0, 1.25):
         state, _ = ctrl.emf_init({"fs": FS, "r_s": motor.R_s, "l_d": lim.l_d, "l_q": lim.l_q, "f_lpf": 200.0,
                                   "omega_max": float(ctrl.lib.LS_EMF_OMEGA_TS_MAX) * FS, "err_r": 0.05,
-                                  "err_l": 0.1, "u_err": lim.u_err, "i_noise": 0.01})
+                                  "err_l": 0.1, "u_err": lim.u_err, "i_noise": 0.01}
+                                 | emf_pm_compensation(motor).cfg())
         st, _, _ = _run(motor, model, k * lim.omega_min, 0.0, (0.0, 2.0))
         # the running block's bound at the design's (mean) inductances: its own state's bound recomputed
         b = ctrl.lib.ls_emf_bound(state, st.mag, math.hypot(st.i_d, st.i_q), 0.0, k * lim.omega_min, 1.0)
