@@ -242,7 +242,8 @@ static void test_imbalance(void)
                 flip.pm_shift = -cfg.pm_shift;
                 LS_CHECK(ls_emf_init(&e, &flip) == LS_OK);
                 run_imb(&e, &p, &cases[a], &mean, &pp, &worst);
-                LS_CHECK(fabs(arg_p) < 1e-3 || fabs(mean + p.err - 2.0 * arg_p) < 0.1 * fabs(arg_p) + n_mag * fabs(p.err));
+                LS_CHECK(fabs(arg_p) < 1e-3 ||
+                         fabs(mean + p.err - 2.0 * arg_p) < 0.1 * fabs(arg_p) + n_mag * fabs(p.err));
             }
         }
     }
@@ -386,11 +387,17 @@ static LS_REAL hostile(void)
     }
     return (LS_REAL)((lcg() - 0.5) * 200.0);
 }
-static void test_hostile(void)
+static void test_hostile(int imbalanced)
 {
     ls_emf_cfg cfg = base_cfg(1.3 * L_D);
     ls_emf e;
     long k, bad = 0;
+    if (imbalanced) { /* the compensation's path too */
+        cfg.psi_pm = (LS_REAL)PSI;
+        cfg.pm_shift = (LS_REAL)0.05;
+        cfg.neg_re = (LS_REAL)0.3;
+        cfg.neg_im = (LS_REAL)-0.2;
+    }
     LS_CHECK(ls_emf_init(&e, &cfg) == LS_OK);
     for (k = 0; k < 200000; ++k) {
         LS_REAL v[2], i[2];
@@ -501,7 +508,8 @@ int main(void)
     test_low_speed();
     test_step();
     test_nonfinite();
-    test_hostile();
+    test_hostile(0);
+    test_hostile(1);
     test_refusals();
     return ls_test_report("test_emf");
 }
