@@ -19,6 +19,14 @@ ls_status ls_emf_init(ls_emf *e, const ls_emf_cfg *cfg)
         cfg->err_l > LS_EMF_ERR_REL_MAX || cfg->u_err < LS_R(0.0) || cfg->i_noise < LS_R(0.0)) {
         return LS_ERR_PARAM;
     }
+    /* the magnets' imbalance: a finite flux, a ratio below LS_EMF_NEG_MAX with a flux to scale it, a
+     * bounded phase (the two comparisons refuse NaN and infinities themselves; k_neg below is then
+     * at most psi_pm LS_EMF_NEG_MAX: finite) */
+    if (!LS_ISFINITE(cfg->psi_pm) || cfg->psi_pm < LS_R(0.0) || !(LS_FABS(cfg->pm_shift) <= LS_EMF_PM_SHIFT_MAX) ||
+        !(cfg->neg_re * cfg->neg_re + cfg->neg_im * cfg->neg_im < LS_EMF_NEG_MAX * LS_EMF_NEG_MAX) ||
+        ((cfg->neg_re != LS_R(0.0) || cfg->neg_im != LS_R(0.0)) && !(cfg->psi_pm > LS_R(0.0)))) {
+        return LS_ERR_PARAM;
+    }
     ts = LS_R(1.0) / cfg->fs;
     a = LS_R(1.0) - ls_exp(-(LS_TWO_PI * cfg->f_lpf * ts));
     /* the low-passed EMF's noise from a white current noise sigma per sample and axis: the
@@ -34,6 +42,11 @@ ls_status ls_emf_init(ls_emf *e, const ls_emf_cfg *cfg)
     e->w_rip = LS_R(0.5) * LS_R(1.41421356237) * e->w_c;
     e->b_noise = LS_R(3.0) * cfg->i_noise *
                  (e->l_fs * a * LS_SQRT(LS_R(1.0) + q) + cfg->r_s * LS_SQRT(LS_R(0.5) * a));
+    /* the negative sequence's flux psi_pm e^{j pm_shift} n (docs/theory.md section 10) */
+    ls_sincos_full(cfg->pm_shift, &e->c_pm, &e->s_pm);
+    e->k_neg[0] = cfg->psi_pm * (e->c_pm * cfg->neg_re - e->s_pm * cfg->neg_im);
+    e->k_neg[1] = cfg->psi_pm * (e->c_pm * cfg->neg_im + e->s_pm * cfg->neg_re);
+    e->pm_comp = cfg->pm_shift != LS_R(0.0) || cfg->neg_re != LS_R(0.0) || cfg->neg_im != LS_R(0.0);
     if (!LS_ISFINITE4(e->alpha, e->l_fs, e->half_ts, e->b_noise) || !LS_ISFINITE2(e->w_c, e->w_rip) ||
         !(a > LS_R(0.0))) {
         return LS_ERR_PARAM; /* (an inductance or a noise so large that the products overflow) */
@@ -131,6 +144,13 @@ LS_REAL ls_emf_step(ls_emf *e, const LS_REAL v_ab[2], const LS_REAL i_ab[2], LS_
     sd = d * (LS_R(1.0) - d * d * LS_R(0.166666667));
     cm = c * cd + s * sd;
     sm = s * cd - c * sd;
+    if (e->pm_comp) {
+        /* the magnets' negative sequence, predicted at the period's middle and taken out:
+         * e_ab += j w k_neg e^{-j theta_m},  k_neg e^{-j theta_m} = (kr cm + ki sm) + j (ki cm - kr sm) */
+        const LS_REAL kr = e->k_neg[0], ki = e->k_neg[1];
+        ea += w * (kr * sm - ki * cm);
+        eb += w * (kr * cm + ki * sm);
+    }
     ed = cm * ea + sm * eb;
     eq = cm * eb - sm * ea;
     id = cm * ima + sm * imb;
@@ -147,7 +167,13 @@ LS_REAL ls_emf_step(ls_emf *e, const LS_REAL v_ab[2], const LS_REAL i_ab[2], LS_
         e->bound = LS_R(0.5) * LS_PI;
         return e->eps;
     }
-    e->eps = ls_atan2(-sg * e->e_d, sg * e->e_q);
+    if (e->pm_comp) {
+        /* the positive sequence's axis leads by pm_shift: (x, y) turned by -pm_shift */
+        const LS_REAL x = sg * e->e_q, y = -sg * e->e_d;
+        e->eps = ls_atan2(y * e->c_pm - x * e->s_pm, x * e->c_pm + y * e->s_pm);
+    } else {
+        e->eps = ls_atan2(-sg * e->e_d, sg * e->e_q);
+    }
     {
         /* the current's parts along and across the EMF */
         const LS_REAL um = LS_R(1.0) / e->mag;

@@ -28,6 +28,10 @@ static ls_emf_cfg base_cfg(double l_q)
     c.err_l = (LS_REAL)0.1;
     c.u_err = (LS_REAL)0.5;
     c.i_noise = (LS_REAL)0.005;
+    c.psi_pm = 0; /* balanced: no compensation */
+    c.pm_shift = 0;
+    c.neg_re = 0;
+    c.neg_im = 0;
     return c;
 }
 
@@ -105,6 +109,145 @@ static void test_steady_state(void)
         }
     }
     printf("steady state: worst |eps - true| %.3g rad\n", worst);
+}
+
+/* The magnets' imbalance (docs/theory.md section 10): phase k links g_k PSI cos(theta - 2 pi k/3 +
+ * delta_k); the plant's EMF is each phase's period mean, Clarke-transformed as the drive does
+ * (amplitude-invariant; the zero sequence drops out). The block configured from the sequences
+ * P = (1/3) sum c_k, N = (1/3) sum c_k a^k (c_k = g_k e^{j delta_k}, a = e^{j 2 pi/3}) recovers the
+ * error within the balanced tolerance plus the second-order |n| |err| over a whole electrical period;
+ * unconfigured it shows the 2 theta ripple (through its low-pass) and the offset arg P; the
+ * compensation's sign flipped doubles the ripple. */
+typedef struct {
+    double g[3], delta[3];
+} pm_imb;
+
+/* the imbalance's EMF less the balanced one, period mean ending at sample k (alpha-beta) */
+static void imb_extra(const plant *p, const pm_imb *m, long k, double out[2])
+{
+    const double T = 1.0 / FS, th = p->omega * T * (double)k + p->th0, thm = th - 0.5 * p->omega * T;
+    const double x = 0.5 * p->omega * T, sinc = x == 0.0 ? 1.0 : sin(x) / x;
+    double e[3];
+    int j;
+    for (j = 0; j < 3; ++j) {
+        const double u = thm - 2.0 * PI * j / 3.0;
+        /* d/dt [g psi cos(u + delta)] - the balanced phase's, the period's mean */
+        e[j] = -p->omega * PSI * sinc * (m->g[j] * sin(u + m->delta[j]) - sin(u));
+    }
+    out[0] = (2.0 / 3.0) * (e[0] - 0.5 * (e[1] + e[2]));
+    out[1] = (e[1] - e[2]) / sqrt(3.0);
+}
+
+static void imb_cfg(const pm_imb *m, ls_emf_cfg *c, double *n_mag, double *arg_p)
+{
+    double pr = 0, pi_ = 0, nr = 0, ni = 0, p2, qr, qi;
+    int j;
+    for (j = 0; j < 3; ++j) {
+        const double a = 2.0 * PI * j / 3.0;
+        pr += m->g[j] * cos(m->delta[j]) / 3.0;
+        pi_ += m->g[j] * sin(m->delta[j]) / 3.0;
+        nr += m->g[j] * cos(m->delta[j] + a) / 3.0;
+        ni += m->g[j] * sin(m->delta[j] + a) / 3.0;
+    }
+    /* n = conj(N) / P = conj(N) conj(P) / |P|^2 */
+    p2 = pr * pr + pi_ * pi_;
+    qr = (nr * pr - ni * pi_) / p2;
+    qi = -(nr * pi_ + ni * pr) / p2;
+    c->psi_pm = (LS_REAL)(PSI * sqrt(p2));
+    c->pm_shift = (LS_REAL)atan2(pi_, pr);
+    c->neg_re = (LS_REAL)qr;
+    c->neg_im = (LS_REAL)qi;
+    *n_mag = sqrt(qr * qr + qi * qi);
+    *arg_p = atan2(pi_, pr);
+}
+
+/* eps over the last electrical period after settling: its mean and peak-to-peak, and the largest
+ * |eps + err| */
+static void run_imb(ls_emf *e, const plant *p, const pm_imb *m, double *mean, double *pp, double *worst)
+{
+    const long n_per = (long)ceil(2.0 * PI / fabs(p->omega) * FS), n0 = 3200;
+    long k;
+    double lo = 1e9, hi = -1e9, sum = 0.0;
+    *worst = 0.0;
+    for (k = 0; k < n0 + n_per; ++k) {
+        LS_REAL v[2], i[2], c, s;
+        double x[2];
+        sample(p, k, v, i, &c, &s);
+        imb_extra(p, m, k, x);
+        v[0] = (LS_REAL)((double)v[0] + x[0]);
+        v[1] = (LS_REAL)((double)v[1] + x[1]);
+        ls_emf_step(e, v, i, c, s, (LS_REAL)p->omega, (LS_REAL)1.0);
+        if (k >= n0) {
+            lo = fmin(lo, (double)e->eps);
+            hi = fmax(hi, (double)e->eps);
+            sum += (double)e->eps;
+            *worst = fmax(*worst, fabs((double)e->eps + p->err));
+        }
+    }
+    *mean = sum / (double)n_per;
+    *pp = hi - lo;
+}
+
+static void test_imbalance(void)
+{
+    static const pm_imb cases[3] = {{{1.0, 0.96, 1.0}, {0.0, 0.0, 0.0}},
+                                    {{1.0, 1.0, 1.0}, {0.0, 1.5 * PI / 180.0, 0.0}},
+                                    {{0.92, 1.0, 0.97}, {-1.0 * PI / 180.0, 0.0, 2.0 * PI / 180.0}}};
+    static const double speeds[3] = {-700.0, 300.0, 1500.0};
+    static const double errs[3] = {0.0, 0.01, -0.3};
+    int a, b, d;
+    double worst_on = 0.0;
+    for (a = 0; a < 3; ++a) {
+        for (b = 0; b < 3; ++b) {
+            for (d = 0; d < 3; ++d) {
+                ls_emf_cfg cfg = base_cfg(1.3 * L_D), flip;
+                ls_emf e;
+                plant p;
+                double n_mag, arg_p, mean, pp, worst, h2, x;
+                p.omega = speeds[b];
+                p.th0 = 0.7;
+                p.i_d = 0.0;
+                p.i_q = 2.0 * (p.omega > 0 ? 1.0 : -1.0);
+                p.l_q = 1.3 * L_D;
+                p.err = errs[d];
+                imb_cfg(&cases[a], &cfg, &n_mag, &arg_p);
+                /* compensated: the balanced tolerance and the second-order term (the negative
+                 * sequence predicted at an angle off by err: |n| 2 sin(|err| / 2)) */
+                LS_CHECK(ls_emf_init(&e, &cfg) == LS_OK);
+                run_imb(&e, &p, &cases[a], &mean, &pp, &worst);
+                LS_CHECK(worst <= tol_of(&p) + n_mag * fabs(p.err));
+                if (p.err == 0.0) {
+                    worst_on = fmax(worst_on, worst);
+                }
+                /* not compensated: the offset arg P and the ripple 2 |n| through the low-pass at 2 w */
+                {
+                    ls_emf_cfg off = base_cfg(1.3 * L_D);
+                    LS_CHECK(ls_emf_init(&e, &off) == LS_OK);
+                }
+                run_imb(&e, &p, &cases[a], &mean, &pp, &worst);
+                x = 2.0 * fabs(p.omega) / FS;
+                h2 = (double)e.alpha / sqrt(1.0 - 2.0 * (1.0 - (double)e.alpha) * cos(x) +
+                                            (1.0 - (double)e.alpha) * (1.0 - (double)e.alpha));
+                LS_CHECK(pp > 0.8 * 2.0 * n_mag * h2 && pp < 1.2 * 2.0 * n_mag * h2);
+                LS_CHECK_NEAR(mean, -p.err + arg_p, 0.1 * n_mag + tol_of(&p) + n_mag * fabs(p.err));
+                /* the compensation's sign flipped (a mutation): the ripple doubles */
+                flip = cfg;
+                flip.neg_re = -cfg.neg_re;
+                flip.neg_im = -cfg.neg_im;
+                LS_CHECK(ls_emf_init(&e, &flip) == LS_OK);
+                run_imb(&e, &p, &cases[a], &mean, &pp, &worst);
+                LS_CHECK(n_mag < 1e-3 || pp > 1.6 * 2.0 * n_mag * h2);
+                /* the shift's sign flipped: the offset 2 arg P */
+                flip = cfg;
+                flip.pm_shift = -cfg.pm_shift;
+                LS_CHECK(ls_emf_init(&e, &flip) == LS_OK);
+                run_imb(&e, &p, &cases[a], &mean, &pp, &worst);
+                LS_CHECK(fabs(arg_p) < 1e-3 ||
+                         fabs(mean + p.err - 2.0 * arg_p) < 0.1 * fabs(arg_p) + n_mag * fabs(p.err));
+            }
+        }
+    }
+    printf("imbalance compensated, no estimation error: worst |eps - true| %.3g rad\n", worst_on);
 }
 
 /* The trust bound: falls as the speed rises; at ls_emf_omega_min's speed for 3 deg it is 3 deg. */
@@ -244,11 +387,17 @@ static LS_REAL hostile(void)
     }
     return (LS_REAL)((lcg() - 0.5) * 200.0);
 }
-static void test_hostile(void)
+static void test_hostile(int imbalanced)
 {
     ls_emf_cfg cfg = base_cfg(1.3 * L_D);
     ls_emf e;
     long k, bad = 0;
+    if (imbalanced) { /* the compensation's path too */
+        cfg.psi_pm = (LS_REAL)PSI;
+        cfg.pm_shift = (LS_REAL)0.05;
+        cfg.neg_re = (LS_REAL)0.3;
+        cfg.neg_im = (LS_REAL)-0.2;
+    }
     LS_CHECK(ls_emf_init(&e, &cfg) == LS_OK);
     for (k = 0; k < 200000; ++k) {
         LS_REAL v[2], i[2];
@@ -276,7 +425,7 @@ static void test_hostile(void)
 static void test_refusals(void)
 {
     ls_emf e;
-    ls_emf_cfg c;
+    ls_emf_cfg c = base_cfg(1.2 * L_D);
     LS_CHECK(ls_emf_init(NULL, &c) == LS_ERR_NULL);
     LS_CHECK(ls_emf_init(&e, NULL) == LS_ERR_NULL);
 #define REFUSE(field, value)                                                                    \
@@ -303,12 +452,32 @@ static void test_refusals(void)
     REFUSE(u_err, -0.1);
     REFUSE(i_noise, -1e-3);
     REFUSE(i_noise, INFINITY);
+    REFUSE(psi_pm, -0.1);
+    REFUSE(psi_pm, NAN);
+    REFUSE(pm_shift, 0.53);
+    REFUSE(pm_shift, -INFINITY);
+    REFUSE(neg_re, 0.5);
+    REFUSE(neg_im, -0.5);
+    REFUSE(neg_re, NAN);
+    /* a ratio without a flux to scale it */
+    c = base_cfg(1.2 * L_D);
+    c.neg_im = (LS_REAL)0.01;
+    LS_CHECK(ls_emf_init(&e, &c) == LS_ERR_PARAM);
+    c.psi_pm = (LS_REAL)PSI;
+    LS_CHECK(ls_emf_init(&e, &c) == LS_OK);
+    c.neg_re = (LS_REAL)0.35;
+    c.neg_im = (LS_REAL)0.35; /* |n| = 0.495 */
+    LS_CHECK(ls_emf_init(&e, &c) == LS_OK);
+    c.neg_re = (LS_REAL)0.36; /* |n| = 0.502 */
+    LS_CHECK(ls_emf_init(&e, &c) == LS_ERR_PARAM);
 #undef REFUSE
     c = base_cfg(1.2 * L_D);
     c.f_lpf = (LS_REAL)(0.05 * FS);
     c.omega_max = (LS_REAL)(0.25 * FS);
     c.r_s = 0;
     c.err_r = c.err_l = c.u_err = c.i_noise = 0;
+    c.pm_shift = LS_EMF_PM_SHIFT_MAX;
+    c.psi_pm = (LS_REAL)PSI;
     LS_CHECK(ls_emf_init(&e, &c) == LS_OK); /* the limits themselves are allowed */
 }
 
@@ -335,10 +504,12 @@ int main(void)
 {
     test_atan2();
     test_steady_state();
+    test_imbalance();
     test_low_speed();
     test_step();
     test_nonfinite();
-    test_hostile();
+    test_hostile(0);
+    test_hostile(1);
     test_refusals();
     return ls_test_report("test_emf");
 }

@@ -184,6 +184,11 @@ _RULES = {
         "err_l": f"relative uncertainty of l_q, 0 .. {_lim(lib.LS_EMF_ERR_REL_MAX)}",
         "u_err": "V, the inverter's voltage error bound, >= 0",
         "i_noise": "A rms per sample, >= 0",
+        "psi_pm": "Wb, the magnets' positive-sequence flux, >= 0; > 0 when neg_re or neg_im is not 0",
+        "pm_shift": f"rad, the positive sequence's phase, |pm_shift| <= {_lim(lib.LS_EMF_PM_SHIFT_MAX)}",
+        "neg_re": f"the negative sequence over the positive, |n| < {_lim(lib.LS_EMF_NEG_MAX)} (beyond: not a "
+                  "three-phase motor)",
+        "neg_im": f"the negative sequence over the positive, |n| < {_lim(lib.LS_EMF_NEG_MAX)}",
     },
 }
 
@@ -252,7 +257,9 @@ def emf_init(values: dict):
     library, or :class:`ConfigError` naming each field ``ls_emf_init`` refuses.
 
     A field is named when it alone, put into a configuration the library accepts (the given
-    sampling rate, unit inductances, no uncertainty), is refused; else every field is named.
+    sampling rate, unit inductances, no uncertainty, a magnet flux without imbalance), is refused;
+    else each field whose accepted value alone makes the given configuration accepted (a pair that
+    only fails together, such as an imbalance without a magnet flux); else every field.
 
     Parameters
     ----------
@@ -284,9 +291,13 @@ def emf_init(values: dict):
         return state, cfg
     fs = vals["fs"] if math.isfinite(vals["fs"]) and vals["fs"] > 0 else 16000.0
     good = dict.fromkeys(EMF_FIELDS, 0.0) | {"fs": fs, "l_d": 1.0e-3, "l_q": 1.0e-3, "f_lpf": 0.01 * fs,
-                                              "omega_max": 0.01 * fs}
-    blamed = {k: v for k, v in vals.items()
-              if lib.ls_emf_init(ffi.new("ls_emf *"), ffi.new("ls_emf_cfg *", good | {k: v})) != lib.LS_OK}
+                                              "omega_max": 0.01 * fs, "psi_pm": 1.0}
+
+    def accepted(v: dict) -> bool:
+        return lib.ls_emf_init(ffi.new("ls_emf *"), ffi.new("ls_emf_cfg *", v)) == lib.LS_OK
+
+    blamed = ({k: v for k, v in vals.items() if not accepted(good | {k: v})}
+              or {k: v for k, v in vals.items() if accepted(vals | {k: good[k]})})
     raise config_error("ls_emf", blamed or vals, status)
 
 

@@ -24,7 +24,19 @@
  *   perp = err_r k_r r_s i_perp + err_l l_q |omega| i_par + u_err (i_perp / |i| + rip) + b_noise,
  *   rip  = sqrt 2 w_c / (2 (w_c + 6 |omega|))   (>= half the low-pass's gain at 6 omega),
  * and the true EMF's angle differs from e's by at most atan(perp / (|e| - par)) <= perp / (|e| -
- * par): the bound (pi / 2 when |e| <= par or beyond). psi_pm enters neither eps nor the bound.
+ * par): the bound (pi / 2 when |e| <= par or beyond). psi_pm enters neither eps nor the bound
+ * (balanced).
+ * The magnets' imbalance (docs/theory.md, "The end effect on the magnets' flux"): phases linking
+ * unequal magnet flux make the EMF jw psi_pm P (e^{j theta} - n e^{-j theta}) (alpha-beta as a complex
+ * number; the zero sequence drives no current with the floating star point and the Clarke transform
+ * of the currents and of the commanded voltages holds none), P the positive sequence (1 balanced),
+ * n = conj(N) / P the negative sequence's ratio to it (0 balanced). Read raw, eps then carries an
+ * offset arg P and a ripple |n| at 2 theta; with the motor file's values in the cfg (psi_pm = |P|
+ * times the file's psi_pm, pm_shift = arg P, neg = n) the step adds the negative sequence's EMF
+ * predicted at the estimated angle, jw psi_pm e^{j pm_shift} n e^{-j theta_m}, to e_ab before the
+ * frame turn and the low-pass, and turns (sg e_q, -sg e_d) by -pm_shift before the atan2: what is
+ * left is |n| times the estimate's own error (second order) and the flux's harmonics. All four at 0:
+ * the balanced block, bit for bit.
  * ls_emf_omega_min inverts it for the design: the speed above which the bound holds (the hand-over).
  */
 #ifndef LINSENSE_LS_EMF_H
@@ -42,6 +54,15 @@
 /* The largest relative uncertainty of r_s and l_q (err_r, err_l): below 1 (at 1 the model is
  * nothing). */
 #define LS_EMF_ERR_REL_MAX LS_R(0.9)
+/* The largest negative sequence of the magnets' flux relative to the positive one (|n|, refused at
+ * and above): a motor that unbalanced (as if one phase linked no magnet flux at all: scale (0, 1, 1)
+ * gives |n| = 0.5) is not a three-phase motor, and the compensation's second-order residual
+ * |n| |theta_err| is no longer small. */
+#define LS_EMF_NEG_MAX LS_R(0.5)
+/* The largest phase of the magnets' positive sequence (|pm_shift|, rad): 30 deg; the end effect
+ * moves the phases' axes by a few degrees, a positive sequence this far off means the motor file's
+ * phase order or position origin is wrong. */
+#define LS_EMF_PM_SHIFT_MAX LS_R(0.523598776)
 
 typedef struct {
     LS_REAL fs;        /**< unit: Hz, sampling rate (one step per PWM period), > 0 */
@@ -58,6 +79,13 @@ typedef struct {
     LS_REAL u_err;     /**< unit: V, bound of the inverter's voltage error (the dead time's residual
                             after compensation, the bus measurement's error), >= 0 */
     LS_REAL i_noise;   /**< unit: A, rms white noise of a current sample per axis, >= 0 */
+    LS_REAL psi_pm;    /**< unit: Wb, the magnets' positive-sequence flux linkage |P| psi_pm (the motor
+                            file's psi_pm when balanced), >= 0; > 0 when neg_re or neg_im is not 0 */
+    LS_REAL pm_shift;  /**< unit: rad, the magnets' positive sequence's phase advance arg P (electrical),
+                            |pm_shift| <= LS_EMF_PM_SHIFT_MAX; 0 balanced */
+    LS_REAL neg_re;    /**< unit: -, real part of n = conj(N) / P, the magnets' negative sequence
+                            relative to the positive one; |n| < LS_EMF_NEG_MAX; 0 balanced */
+    LS_REAL neg_im;    /**< unit: -, imaginary part of n; 0 balanced */
 } ls_emf_cfg;
 
 typedef struct {
@@ -68,6 +96,9 @@ typedef struct {
     LS_REAL b_noise;     /**< unit: V, 3 sigma of the low-passed EMF from i_noise */
     LS_REAL w_rip;       /**< unit: rad/s, sqrt 2 w_c / 2 (the ripple's attenuation: w_rip / (w_c + 6 |omega|)) */
     LS_REAL w_c;         /**< unit: rad/s, 2 pi f_lpf */
+    LS_REAL k_neg[2];    /**< unit: Wb, psi_pm e^{j pm_shift} n (re, im): the negative sequence's flux */
+    LS_REAL c_pm, s_pm;  /**< unit: -, cos and sin of pm_shift */
+    bool pm_comp;        /**< unit: -, the imbalance is compensated (a field of it is not 0) */
     LS_REAL i0[2];       /**< unit: A, the currents at the start of the period (alpha-beta) */
     bool primed;         /**< unit: -, i0 holds a sample (false: the first step only stores it) */
     LS_REAL e_d, e_q;    /**< unit: V, the low-passed EMF in the estimated frame */

@@ -1,6 +1,10 @@
 """The EMF observer's low-speed limit: the speed above which its position error is bounded
 (docs/theory.md, "The EMF observer at speed"; the C block ``ls_emf``, ``linsense/ls_emf.h``).
 
+The magnets' imbalance (the motor file's ``[pm_flux] scale_abc, shift_deg_abc``) is compensated in the
+block from the motor file: :func:`emf_pm_compensation` gives its four configuration fields
+(docs/theory.md, "The end effect on the magnets' flux").
+
 The bound is the C library's (``ls_emf_bound``, inverted by ``ls_emf_omega_min`` through the
 binding): the model's uncertainties (resistance, q inductance, the inverter's voltage error, the
 current noise) against the EMF ``omega psi_pm`` at a current on the q-axis. The later design of the
@@ -22,10 +26,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from linsense._check import real
+from linsense.model.frames import phase_sequences
 from linsense.model.motor import Motor, as_motor
 
-__all__ = ["EmfSpeedLimit", "emf_speed_limit", "inverter_voltage_error", "ERR_R", "ERR_L", "DT_RESIDUAL",
-           "I_NOISE", "EPS_MAX"]
+__all__ = ["EmfPmCompensation", "emf_pm_compensation", "EmfSpeedLimit", "emf_speed_limit",
+           "inverter_voltage_error", "ERR_R", "ERR_L", "DT_RESIDUAL", "I_NOISE", "EPS_MAX"]
 
 #: relative uncertainty of the winding's resistance after the online estimate (ls_dtres's k_r)
 ERR_R = 0.05
@@ -37,6 +42,75 @@ DT_RESIDUAL = 1.0
 I_NOISE = 0.01
 #: the position-error bound the EMF estimate is trusted within, rad (3 electrical degrees)
 EPS_MAX = math.radians(3.0)
+
+
+@dataclass(frozen=True)
+class EmfPmCompensation:
+    """The magnets' imbalance as the EMF block compensates it (``ls_emf_cfg``'s ``psi_pm``,
+    ``pm_shift``, ``neg_re``, ``neg_im``; docs/theory.md section 10).
+
+    The back-EMF in alpha-beta is ``j w psi_pm e^{j pm_shift} (e^{j theta} - n e^{-j theta})``.
+
+    Attributes
+    ----------
+    psi_pm : float
+        The positive sequence's flux linkage ``|P| psi_pm``, Wb.
+    pm_shift : float
+        Its phase advance ``arg P``, electrical rad (what a raw EMF angle is offset by).
+    neg_re : float
+        Real part of ``n = conj(N) / P``, the negative sequence relative to the positive one,
+        dimensionless (``|n|`` rad is the raw EMF angle's ripple at ``2 theta``).
+    neg_im : float
+        Imaginary part of ``n``, dimensionless.
+    """
+
+    psi_pm: float
+    pm_shift: float
+    neg_re: float
+    neg_im: float
+
+    @property
+    def neg_mag(self) -> float:
+        """``|n|``: the uncompensated angle's ripple at ``2 theta``, rad (peak)."""
+        return math.hypot(self.neg_re, self.neg_im)
+
+    def cfg(self) -> dict[str, float]:
+        """The four ``ls_emf_cfg`` fields, by name.
+
+        Returns
+        -------
+        dict
+            ``psi_pm`` (Wb), ``pm_shift`` (rad), ``neg_re``, ``neg_im`` (dimensionless).
+        """
+        return {"psi_pm": self.psi_pm, "pm_shift": self.pm_shift, "neg_re": self.neg_re,
+                "neg_im": self.neg_im}
+
+
+def emf_pm_compensation(motor: Motor | str) -> EmfPmCompensation:
+    """The EMF block's compensation of the motor's magnet imbalance, from its motor file.
+
+    The sequences ``P``, ``N`` of the per-phase flux amplitude and phase
+    (:func:`linsense.model.frames.phase_sequences`; the harmonics are not compensated); balanced:
+    ``psi_pm`` the motor's and the other three 0 (the block then runs as without the fields, bit for
+    bit).
+
+    Parameters
+    ----------
+    motor : Motor or str
+        The motor (or a preset name or file).
+
+    Returns
+    -------
+    EmfPmCompensation
+        The four configuration fields.
+    """
+    m = as_motor(motor, "emf_pm_compensation")
+    p, n = phase_sequences(np.asarray(m.pm_phases.scale), np.asarray(m.pm_phases.shift))
+    if m.pm_phases.balanced:
+        return EmfPmCompensation(psi_pm=m.psi_pm, pm_shift=0.0, neg_re=0.0, neg_im=0.0)
+    ratio = n.conjugate() / p
+    return EmfPmCompensation(psi_pm=abs(p) * m.psi_pm, pm_shift=math.atan2(p.imag, p.real),
+                             neg_re=ratio.real, neg_im=ratio.imag)
 
 
 @dataclass(frozen=True)
@@ -149,7 +223,7 @@ def emf_speed_limit(motor: Motor | str, *, v_dc: float, f_pwm: float, dead_time:
     u_err = inverter_voltage_error(v_dc, f_pwm, dead_time, dt_residual)
     values = {"fs": f_pwm, "r_s": m.R_s, "l_d": l_d, "l_q": l_q, "f_lpf": f_lpf,
               "omega_max": float(ctrl.lib.LS_EMF_OMEGA_TS_MAX) * f_pwm, "err_r": err_r, "err_l": err_l,
-              "u_err": u_err, "i_noise": i_noise}
+              "u_err": u_err, "i_noise": i_noise} | emf_pm_compensation(m).cfg()
     w = ctrl.emf_omega_min(values, i_mag, m.psi_pm, eps_max, k_r)
     return EmfSpeedLimit(omega_min=w, v_min=w * m.pole_pitch / (2.0 * np.pi), l_d=l_d, l_q=l_q,
                          psi_pm=m.psi_pm, u_err=u_err)

@@ -65,6 +65,33 @@ def phase_fundamentals(theta: np.ndarray, values: np.ndarray, derivative: bool =
     return amplitude, delta
 
 
+def phase_sequences(scale: np.ndarray, shift: np.ndarray) -> tuple[complex, complex]:
+    """The positive and negative sequences of three phases' fundamentals of unequal amplitude and
+    phase (docs/theory.md section 10, "Sequences").
+
+    Phase ``k`` is ``scale[k] cos(theta + PHASE_ANGLE[k] + shift[k])`` (times a common amplitude);
+    with ``c_k = scale[k] e^{j shift[k]}`` and ``a = e^{j 2 pi/3}`` the amplitude-invariant space
+    vector (:data:`T_CLARKE`) of the three is ``P e^{j theta} + conj(N) e^{-j theta}``,
+    ``P = (1/3) sum c_k``, ``N = (1/3) sum c_k a^k``; the zero sequence is not in it. Inputs are not
+    checked here: the callers have (:class:`linsense.model.motor.PmPhases`).
+
+    Parameters
+    ----------
+    scale : array_like, shape (3,)
+        Amplitudes of phases A, B, C, dimensionless (balanced: 1).
+    shift : array_like, shape (3,)
+        Phase advances of phases A, B, C, rad (balanced: 0).
+
+    Returns
+    -------
+    P, N : complex
+        The positive sequence (1 balanced) and the negative sequence (0 balanced).
+    """
+    c = np.asarray(scale, dtype=float) * np.exp(1j * np.asarray(shift, dtype=float))
+    # a^k = exp(-j PHASE_ANGLE[k]) (B at -2 pi/3: a^1 = e^{j 2 pi/3})
+    return complex(c.sum() / 3.0), complex((c * np.exp(-1j * PHASE_ANGLE)).sum() / 3.0)
+
+
 #: the module, named in the messages of its functions' argument checks
 _SRC = "linsense.model.frames"
 
