@@ -231,3 +231,24 @@ def test_bad_record(run_cli, tmp_path, case):
     for w in words:
         assert w in lines[0], (w, lines[0])
     assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.csv", "bench.csv"]
+
+
+def test_example_record_is_the_generators(run_cli, tmp_path):
+    """src/linsense/examples/bench/ecce2010_emf_1pct_seed1.csv is what bench-emulate writes for the
+    command of docs/identify.md; identified with the example bench file it gives the balanced
+    ecce2010 within Z_MAX standard errors (docs/identify.md quotes these numbers)."""
+    example = ROOT / "src/linsense/examples/bench/ecce2010_emf_1pct_seed1.csv"
+    out = tmp_path / "e.csv"
+    r = run_cli("bench-emulate", "--motor", "ecce2010", "--open-circuit", "--speed", 0.5, "--periods", 1.25,
+                "--rate", 2000, "--noise", 0.01, "--seed", 1, "--out", out)
+    assert r.code == 0, r.err
+    assert out.read_bytes() == example.read_bytes()
+    r = run_cli("identify", "ecce2010_56_1pct_seed1", "--motor", "ecce2010",
+                "--emf", "ecce2010_emf_1pct_seed1", "--out", tmp_path / "id")
+    assert r.code == 0, r.err
+    assert ("scale_abc [1.0006, 0.9979, 0.9997], shift_deg_abc [+0.027, +0.083, -0.043] +- 0.047 deg"
+            in r.out), r.out
+    got = load_motor(tmp_path / "id" / "motor.toml").pm_phases
+    s = json.loads((tmp_path / "id" / "fit.json").read_text())["open_circuit"]["stderr"]
+    assert np.all(np.abs(np.array(got.scale) - 1.0) < Z_MAX * np.array(s))
+    assert np.all(np.abs(np.array(got.shift)) < Z_MAX * np.array(s))
