@@ -252,3 +252,26 @@ def test_example_record_is_the_generators(run_cli, tmp_path):
     s = json.loads((tmp_path / "id" / "fit.json").read_text())["open_circuit"]["stderr"]
     assert np.all(np.abs(np.array(got.scale) - 1.0) < Z_MAX * np.array(s))
     assert np.all(np.abs(np.array(got.shift)) < Z_MAX * np.array(s))
+
+
+@pytest.mark.parametrize("args, key, words", [
+    (dict(rec=None), "rec", ["EmfRecord"]),
+    (dict(pole_pitch=56.0), "pole_pitch", ["56", "mm"]),
+    (dict(pole_pitch=float("nan")), "pole_pitch", ["nan"]),
+    (dict(psi_pm=-1.0), "psi_pm", ["-1"]),
+    (dict(cut=True), "rec", ["(N, 3)"]),
+])
+def test_api_refusals(args, key, words):
+    """The API refuses what the command refuses, in one InputError naming the argument."""
+    from linsense.errors import InputError
+
+    m = _motor()
+    rec = emulate_emf(m, 0.5, 1.5, 4e3)
+    if args.pop("cut", False):
+        rec = dataclasses.replace(rec, position=rec.position[:-1])
+    kw = dict(rec=rec, pole_pitch=m.pole_pitch, psi_pm=m.psi_pm) | args
+    with pytest.raises(InputError) as exc:
+        pm_phases_from_record(**kw)
+    assert exc.value.key == key
+    for w in words:
+        assert w in str(exc.value), (w, str(exc.value))

@@ -240,11 +240,15 @@ def emulate_emf(motor, speed: float = 0.5, periods: float = 2.0, rate: float = 1
     InputError
         An argument out of range, naming it.
     """
+    import numbers
+
     from linsense._check import real
     from linsense.limits import MAX_TABLE_ROWS
     from linsense.plausible import KINDS
 
     src = f"{_SRC}.emulate_emf"
+    if isinstance(seed, bool) or not isinstance(seed, numbers.Integral) or seed < 0:
+        raise InputError(src, "seed", f"must be an integer >= 0, got {seed!r}")
     v = real(speed, src, "speed", what="a finite speed in m/s")
     if v == 0.0:
         raise InputError(src, "speed", "the back-EMF needs the mover moving: give a nonzero speed in m/s")
@@ -298,6 +302,7 @@ def pm_phases_from_record(rec: EmfRecord, pole_pitch: float, psi_pm: float) -> O
     InputError
         Naming the record, the row or columns, the value and what is needed.
     """
+    rec, pole_pitch, psi_pm = _record_args(rec, pole_pitch, psi_pm)
     src, cols = rec.source, ", ".join(rec.columns)
     theta = 2.0 * math.pi * np.asarray(rec.position) / pole_pitch
     _check_travel(rec, theta, pole_pitch)
@@ -323,6 +328,29 @@ def pm_phases_from_record(rec: EmfRecord, pole_pitch: float, psi_pm: float) -> O
         speed=float(np.mean(speed)), samples=int(theta.size), periods=float(np.ptp(theta) / (2.0 * math.pi)),
         positive=complex(c.sum() / 3.0), negative=complex((c * a).sum() / 3.0),
         line_to_line=rec.line_to_line, source=src)
+
+
+def _record_args(rec, pole_pitch, psi_pm) -> tuple[EmfRecord, float, float]:
+    """:func:`pm_phases_from_record`'s arguments checked (one InputError naming the one at fault):
+    a record of finite samples of matching shapes, a positive pole pitch and flux linkage."""
+    from linsense._check import instance, real, reals
+    from linsense.plausible import check
+
+    src = f"{_SRC}.pm_phases_from_record"
+    instance(rec, src, "rec", EmfRecord, "an EmfRecord (read_emf_csv, emulate_emf)")
+    t = reals(rec.time, src, "rec.time", "sample times in s", ndim=1)
+    x = reals(rec.position, src, "rec.position", "positions in m", ndim=1)
+    v = reals(rec.voltage, src, "rec.voltage", "voltages in V", ndim=2)
+    if not (x.shape == t.shape and v.shape == (t.size, 3) and t.size >= 2):
+        raise InputError(src, "rec", f"expected time (N,), position (N,) and voltage (N, 3), N >= 2; got "
+                         f"{t.shape}, {x.shape}, {v.shape}")
+    if np.any(np.diff(t) <= 0.0):
+        raise InputError(src, "rec.time", "the sample times must increase")
+    pole_pitch = real(pole_pitch, src, "pole_pitch", 0.0, low_open=True, what="a pole pitch in m",
+                      kind="pole_pitch")
+    check(src, "pole_pitch", pole_pitch, "pole_pitch")  # (the motor file's plausible range: not mm)
+    psi_pm = real(psi_pm, src, "psi_pm", 0.0, low_open=True, what="a flux linkage in Wb")
+    return rec, pole_pitch, psi_pm
 
 
 def _check_travel(rec: EmfRecord, theta: np.ndarray, pole_pitch: float) -> None:
