@@ -421,7 +421,7 @@ def _check_noise(rec: EmfRecord, stderr: np.ndarray, sigma: np.ndarray, speed: f
         raise InputError(rec.source, f"columns {', '.join(rec.columns)}",
                          f"speed too low for the record's noise: at {abs(speed):.4g} m/s phase "
                          f"{PHASES[k]}'s back-EMF of {emf[k]:.4g} V peak against {sigma[k]:.3g} V rms of "
-                         f"noise over {stderr.size and rec.time.size} samples leaves a standard error of "
+                         f"noise over {rec.time.size} samples leaves a standard error of "
                          f"{math.degrees(stderr[k]):.3g} deg on its shift (at most "
                          f"{math.degrees(STDERR_MAX):g} deg): record at least {need:.3g} m/s with as many "
                          f"samples, or {math.ceil(rec.time.size * (stderr[k] / STDERR_MAX) ** 2):,} "
