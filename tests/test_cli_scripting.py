@@ -278,6 +278,7 @@ def test_every_example_is_in_the_wheel():
 def test_every_example_resolves_by_name(tmp_path):
     from linsense.fea.geometry import load_geometry
     from linsense.identify.bench import read_bench_csv
+    from linsense.identify.emf_record import read_emf_csv
     from linsense.model.motor import load_motor
     from linsense.scenario.load import load_scenario
     from linsense.sweep import load_sweep
@@ -292,8 +293,9 @@ def test_every_example_resolves_by_name(tmp_path):
         assert load_sweep(examples.resolve("sweeps", name)).scenario_path.is_file()
     for name in examples.names("fea"):
         load_geometry(examples.resolve("fea", name))
-    for name in examples.names("bench"):
-        read_bench_csv(examples.resolve("bench", name))
+    for name in examples.names("bench"):  # (HF bench files, and open-circuit records: time_s first)
+        path = examples.resolve("bench", name)
+        (read_emf_csv if Path(path).read_text().startswith("time_s") else read_bench_csv)(path)
     assert examples.names("firmware") == [] and "firmware/main.c" in examples.files()
     # a file that exists wins over a name; a folder of that name does not hide it (a sweep's --out
     # named after the sweep, run again from the same place)

@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+import math
+
 import click
 
 from linsense.cli import _common as c
@@ -117,17 +119,51 @@ def plot(motor_spec: str, points: int, out: str | None, as_json: bool) -> None:
 @click.option("--current", default=1.0, show_default=True, type=float, callback=c.finite(0.0, True),
               help="nominal current amplitude, A peak (each row: random phase, 0.8..1.2 times this)")
 @click.option("--amplitude-only", is_flag=True, help="write magnitudes only (I, VA, VB, VC), as the paper")
+@click.option("--open-circuit", is_flag=True,
+              help="write an open-circuit back-EMF record instead (mover pushed at --speed, winding open)")
+@click.option("--speed", default=0.5, show_default=True, type=float, callback=c.finite(-math.inf, True),
+              help="with --open-circuit: the mover's speed, m/s")
+@click.option("--periods", default=2.0, show_default=True, type=float, callback=c.finite(0.0, True),
+              help="with --open-circuit: electrical periods travelled")
+@click.option("--rate", default=10e3, show_default=True, type=float, callback=c.finite(0.0, True),
+              help="with --open-circuit: sampling rate, Hz")
+@click.option("--line-to-line", is_flag=True,
+              help="with --open-circuit: record VAB, VBC, VCA (no star point)")
 @c.out_option("bench-emulate", "motor", folder=False, ext=".csv", dash=True)
-def bench_emulate(motor_spec: str, positions: int, noise: float, seed: int, freq_hz: float, current: float,
-                  amplitude_only: bool, out: str | None) -> None:
-    """Emulate the bench test (each phase fed in turn at N positions) on a motor model (CSV)."""
+@click.pass_context
+def bench_emulate(ctx: click.Context, motor_spec: str, positions: int, noise: float, seed: int,
+                  freq_hz: float, current: float, amplitude_only: bool, open_circuit: bool, speed: float,
+                  periods: float, rate: float, line_to_line: bool, out: str | None) -> None:
+    """Emulate the bench test (each phase fed in turn at N positions) on a motor model (CSV), or
+    with --open-circuit its back-EMF record (the magnets' flux per phase)."""
     from linsense.identify.bench import bench_to_csv, emulate_bench
+    from linsense.identify.emf_record import emf_to_csv, emulate_emf
     from linsense.io import write_atomic
 
+    _one_test(ctx, open_circuit)
     motor = c.load(motor_spec)
-    data = emulate_bench(motor, positions, noise, seed, freq_hz, current, amplitude_only)
-    write_atomic(c.default_out(out, motor_spec, "bench-emulate", ".csv"), bench_to_csv(data))
+    if open_circuit:
+        text = emf_to_csv(emulate_emf(motor, speed, periods, rate, noise, seed, line_to_line))
+    else:
+        text = bench_to_csv(emulate_bench(motor, positions, noise, seed, freq_hz, current, amplitude_only))
+    write_atomic(c.default_out(out, motor_spec, "bench-emulate", ".csv"), text)
     c.elapsed()
+
+
+#: bench-emulate's options of each test (the others are refused with it)
+_HF_OPTIONS = {"positions": "--positions", "freq_hz": "--freq", "current": "--current",
+               "amplitude_only": "--amplitude-only"}
+_OC_OPTIONS = {"speed": "--speed", "periods": "--periods", "rate": "--rate", "line_to_line": "--line-to-line"}
+
+
+def _one_test(ctx: click.Context, open_circuit: bool) -> None:
+    """Refuse an option of the other test than the one emulated (it would be ignored)."""
+    wrong = _HF_OPTIONS if open_circuit else _OC_OPTIONS
+    for param, option in wrong.items():
+        if ctx.get_parameter_source(param) == click.core.ParameterSource.COMMANDLINE:
+            test, alt = (("the HF bench test", "") if open_circuit
+                         else ("--open-circuit", ", or add --open-circuit"))
+            raise click.UsageError(f"{option} is for {test}: drop it{alt}")
 
 
 @click.command(short_help="Identify the HF inductance model from a bench file.",
@@ -148,10 +184,13 @@ def bench_emulate(motor_spec: str, positions: int, noise: float, seed: int, freq
               help="phase resistance, ohm, for amplitude-only data (0 neglects it as the paper does)")
 @click.option("--name", default=None, help="motor name in motor.toml (default: the bench file name)")
 @click.option("--points", default=360, show_default=True, callback=c.points, help="length of lut_fit.csv")
+@click.option("--emf", "emf", default=None, type=click.Path(dir_okay=False),
+              help="open-circuit back-EMF record (CSV): the magnets' flux per phase, [pm_flux] scale_abc, "
+                   "shift_deg_abc")
 @c.json_option
 def identify(bench: str, out: str | None, harmonics: int, motor_spec: str | None, pole_pitch_mm: float | None,
              force_constant: float | None, mass: float | None, resistance: float | None, name: str | None,
-             points: int, as_json: bool) -> None:
+             points: int, emf: str | None, as_json: bool) -> None:
     """Identify the HF inductance model from a bench file (a file or a packaged example's name):
     motor.toml, tables, LUTs, fit.json and figures."""
     from linsense.identify.identification import fit_report, render_outputs, summary_lines
@@ -162,12 +201,13 @@ def identify(bench: str, out: str | None, harmonics: int, motor_spec: str | None
     if as_json:
         c.data_on_stdout()
     bench = c.example("bench", bench, "BENCH")
+    emf = c.example("bench", emf, "--emf") if emf is not None else None
     out = c.default_out(out, bench, "identify")
     base = c.load(motor_spec) if motor_spec is not None else None
     ident = run_identify(
         bench, base=base, harmonics=harmonics,
         pole_pitch=None if pole_pitch_mm is None else pole_pitch_mm * 1e-3,
-        force_constant=force_constant, mass=mass, resistance=resistance, name=name, points=points,
+        force_constant=force_constant, mass=mass, resistance=resistance, name=name, points=points, emf=emf,
     )
     files = {**render_outputs(ident), **identify_figure_files(ident)}
     with output_set(out, "identify") as s:

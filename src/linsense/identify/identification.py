@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import json
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -19,6 +19,7 @@ from linsense.analysis.model_table import table_to_csv
 from linsense.compensation.lut import Lut, build_lut, export
 from linsense.errors import InputError
 from linsense.identify.bench import BenchData, read_bench_csv
+from linsense.identify.emf_record import OpenCircuitFit, pm_phases_from_record, read_emf_csv
 from linsense.identify.fit import PITCH_RESIDUAL_SHARE, T_SIGNIFICANT, FitResult, best_pitch, fit_inductances
 from linsense.identify.measured_outputs import measured_columns, measured_lut_csv
 from linsense.identify.process import MeasuredTable, process_bench
@@ -55,6 +56,8 @@ class Identification:
         Where the pole pitch, force constant and mass came from.
     warnings : list of str
         What was assumed or ignored.
+    open_circuit : OpenCircuitFit or None
+        The magnets' flux per phase from the open-circuit back-EMF record, if one was given.
     """
 
     data: BenchData
@@ -67,6 +70,7 @@ class Identification:
     resistance_source: str
     motor_sources: dict[str, str]
     warnings: list[str] = field(default_factory=list)
+    open_circuit: OpenCircuitFit | None = None
 
 
 def _motor_name(name: str | None, bench: str) -> str:
@@ -84,6 +88,7 @@ def identify(
     resistance: float | None = None,
     name: str | None = None,
     points: int = 360,
+    emf: str | Path | None = None,
 ) -> Identification:
     """Identify the HF model of a motor from a bench file.
 
@@ -105,6 +110,9 @@ def identify(
         Motor name (default: the bench file's stem).
     points : int
         Length of the LUT built from the fit.
+    emf : path, optional
+        An open-circuit back-EMF record (docs/identify.md): the motor's ``[pm_flux] scale_abc,
+        shift_deg_abc`` come from it (else from ``base``, else balanced).
 
     Returns
     -------
@@ -119,6 +127,7 @@ def identify(
     src = str(bench)
     tau, k_f, m, sources = _mechanics(base, pole_pitch, force_constant, mass, resistance)
     data = read_bench_csv(bench)
+    record = read_emf_csv(emf) if emf is not None else None
     table, R_s, r_note, r_used, warnings = _processed(data, tau, base, resistance)
     warnings = table.warnings + warnings
 
@@ -132,6 +141,11 @@ def identify(
         pm_harmonics=base.pm_harmonics if base is not None else (), source=f"{src} (fitted model)",
         pm_phases=base.pm_phases if base is not None else PmPhases(),
     )
+    oc = None
+    if record is not None:
+        oc = pm_phases_from_record(record, tau, motor.psi_pm)
+        motor = replace(motor, pm_phases=oc.phases)
+        warnings += _against_force_constant(oc, k_f, sources["force_constant"])
     check_plausible(motor)  # (the rest of the table, as the written motor.toml is loaded)
     if base is not None:
         warnings += _against_base(motor, base)
@@ -141,7 +155,7 @@ def identify(
     return Identification(
         data=data, table=table, fit=fit, motor=motor, measured=measured, psi_measured=psi_meas,
         lut_fit=build_lut(motor, points), resistance_source=r_note, motor_sources=sources,
-        warnings=warnings,
+        warnings=warnings, open_circuit=oc,
     )
 
 
@@ -247,6 +261,24 @@ def _against_base(motor: Motor, base: Motor) -> list[str]:
             f"{_bench_units(high)}? A bench file is in Hz, A and V peak (docs/identify.md)"]
 
 
+#: the back-EMF's positive sequence this share off the force constant's psi_pm is said: the force
+#: constant given is not this motor's (an imbalance of the end phases moves it by a few per cent)
+PSI_PM_WARN = 0.1
+
+
+def _against_force_constant(oc: OpenCircuitFit, k_f: float, given: str) -> list[str]:
+    """A warning when the record's positive sequence ``|P|`` is more than :data:`PSI_PM_WARN` off 1:
+    the scales are relative to the ``psi_pm`` of the force constant given, which the back-EMF then
+    contradicts (the force constant it implies, ``|P| cos(arg P) k_f``, is named)."""
+    p = abs(oc.positive)
+    if abs(p - 1.0) <= PSI_PM_WARN:
+        return []
+    k_emf = p * np.cos(np.angle(oc.positive)) * k_f
+    return [f"the back-EMF of {Path(oc.source).name} links {p:.3g} times the psi_pm of the force constant "
+            f"{k_f:.4g} N/A ({given}): scale_abc carries it; is that this motor's force constant? The "
+            f"thrust per q ampere it implies is {k_emf:.4g} N/A"]
+
+
 def _check_fitted(model: InductanceModel, src: str) -> None:
     """Refuse a fitted model outside the range of real linear motors, naming the bench file's units
     that explain it: its mean self-inductance 1000 times off is a frequency in kHz or voltages in mV
@@ -325,6 +357,40 @@ def fit_report(ident: Identification) -> dict:
             "measured_minus_fit_max_rad": float(np.max(np.abs(lut_diff))),
         },
         "warnings": list(ident.warnings),
+        **({"open_circuit": open_circuit_report(ident.open_circuit)} if ident.open_circuit else {}),
+    }
+
+
+def open_circuit_report(oc: OpenCircuitFit) -> dict:
+    """The ``open_circuit`` entry of ``fit.json``: the record's magnets' flux per phase, its
+    standard errors and sequences (SI units, rad).
+
+    Parameters
+    ----------
+    oc : OpenCircuitFit
+        The fit of the record.
+
+    Returns
+    -------
+    dict
+        ``source``, ``form``, ``samples``, ``periods``, ``speed_m_s``, ``noise_rms_v``, ``scale_abc``,
+        ``shift_abc_rad``, ``stderr`` (rad, and relative for the scales), ``positive``, ``negative``.
+    """
+    return {
+        "source": oc.source,
+        "form": "line-to-line" if oc.line_to_line else "phase-to-star",
+        "samples": oc.samples,
+        "periods": oc.periods,
+        "speed_m_s": oc.speed,
+        "noise_rms_v": oc.noise_rms,
+        "scale_abc": list(oc.phases.scale),
+        "shift_abc_rad": list(oc.phases.shift),
+        "stderr": list(oc.stderr),
+        "positive": {"magnitude": abs(oc.positive), "angle_rad": float(np.angle(oc.positive))},
+        "negative": {"magnitude": abs(oc.negative), "angle_rad": float(np.angle(oc.negative))},
+        "method": "least squares of each phase's back-EMF over the speed against the fundamental (with an "
+                  "offset and the harmonics as nuisance terms); the standard error of a phase's shift "
+                  "(and relative scale) is sigma sqrt(2 mean(1/omega^2)/N) / A_k, sigma the noise",
     }
 
 
@@ -382,4 +448,11 @@ def summary_lines(ident: Identification) -> list[str]:
                  f"(|t| > {T_SIGNIFICANT:g})")
     lines.append(f"reciprocity error: max {100 * t.reciprocity_max:.2f} %, "
                  f"RMS {100 * t.reciprocity_rms:.2f} %")
+    oc = ident.open_circuit
+    if oc is not None:
+        scale = ", ".join(f"{g:.4f}" for g in oc.phases.scale)
+        shift = ", ".join(f"{np.degrees(d):+.3f}" for d in oc.phases.shift)
+        lines.append(f"magnets' flux per phase ({Path(oc.source).name}, {oc.periods:.3g} periods at "
+                     f"{oc.speed:.3g} m/s): scale_abc [{scale}], shift_deg_abc [{shift}] "
+                     f"+- {np.degrees(max(oc.stderr)):.2g} deg")
     return lines

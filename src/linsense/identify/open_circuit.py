@@ -48,7 +48,7 @@ def phase_values_of_line(e_line: np.ndarray) -> np.ndarray:
 
 
 def pm_phases_from_emf(theta: np.ndarray, e: np.ndarray, omega: np.ndarray | float, psi_pm: float,
-                       line_to_line: bool = False) -> PmPhases:
+                       line_to_line: bool = False, orders: int = 1) -> PmPhases:
     """Each phase's PM flux amplitude and phase from its open-circuit back-EMF.
 
     Least squares of ``e_k / omega = d/d theta [A_k cos(theta - 2 pi k/3 + delta_k)]`` (the
@@ -69,6 +69,10 @@ def pm_phases_from_emf(theta: np.ndarray, e: np.ndarray, omega: np.ndarray | flo
         The motor's PM flux linkage, Wb (``force_constant pole_pitch / (3 pi)``).
     line_to_line : bool, optional
         Whether ``e`` holds line-to-line voltages.
+    orders : int, optional
+        Fit an offset and the harmonics 2 .. ``orders`` beside the fundamental, so that a part of a
+        period does not let them leak into it (:func:`~linsense.model.frames.phase_fundamentals`;
+        1: the fundamental alone, exact over whole periods).
 
     Returns
     -------
@@ -101,7 +105,7 @@ def pm_phases_from_emf(theta: np.ndarray, e: np.ndarray, omega: np.ndarray | flo
                          f"least one electrical period (360 deg, gaps of at most {math.degrees(_GAP_MAX):g} "
                          "deg)")
     dpsi = (phase_values_of_line(v) if line_to_line else v) / w[:, None]  # Wb/rad
-    amplitude, shift = phase_fundamentals(th, dpsi, derivative=True)
+    amplitude, shift = phase_fundamentals(th, dpsi, derivative=True, orders=orders)
     scale = [a / psi for a in amplitude]
     for k in range(3):
         for kind, value in (("flux_scale", scale[k]), ("flux_shift", math.degrees(shift[k]))):

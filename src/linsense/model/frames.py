@@ -31,7 +31,7 @@ T_CLARKE_INV = np.array([[1.0, 0.0], [-0.5, _S3], [-0.5, -_S3]])
 PHASE_ANGLE = np.array([0.0, -2.0 * np.pi / 3.0, 2.0 * np.pi / 3.0])
 
 
-def phase_fundamentals(theta: np.ndarray, values: np.ndarray, derivative: bool = False
+def phase_fundamentals(theta: np.ndarray, values: np.ndarray, derivative: bool = False, orders: int = 1
                        ) -> tuple[list[float], list[float]]:
     """Each phase's fundamental ``A_k cos(theta + PHASE_ANGLE[k] + delta_k)`` by least squares.
 
@@ -47,6 +47,10 @@ def phase_fundamentals(theta: np.ndarray, values: np.ndarray, derivative: bool =
         Phases A, B, C at the positions.
     derivative : bool, optional
         ``values`` are ``d/d theta`` of the waveform.
+    orders : int, optional
+        With more than 1, an offset and the harmonics 2 .. ``orders`` are fitted beside the
+        fundamental (and dropped), so that they do not leak into it over a part of a period; 1 fits
+        the fundamental alone (exact over whole periods of equally spaced samples).
 
     Returns
     -------
@@ -56,10 +60,13 @@ def phase_fundamentals(theta: np.ndarray, values: np.ndarray, derivative: bool =
         ``delta_k``, rad.
     """
     amplitude, delta = [], []
+    n = np.arange(2, orders + 1)
+    extra = [np.ones_like(theta), *np.cos(np.outer(n, theta)), *np.sin(np.outer(n, theta))]
+    extra = extra if orders > 1 else []
     for k in range(3):
         u = theta + PHASE_ANGLE[k]
         basis = [-np.sin(u), -np.cos(u)] if derivative else [np.cos(u), -np.sin(u)]
-        (c, s), *_ = np.linalg.lstsq(np.column_stack(basis), values[:, k], rcond=None)
+        (c, s, *_), *_ = np.linalg.lstsq(np.column_stack(basis + extra), values[:, k], rcond=None)
         amplitude.append(math.hypot(c, s))
         delta.append(math.atan2(s, c))
     return amplitude, delta
