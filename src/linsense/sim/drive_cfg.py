@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from operator import attrgetter
 
+from linsense.analysis.emf import emf_pm_compensation
 from linsense.analysis.hf import end_anisotropy
 from linsense.ctrl import drive_default_cfg, ffi, lib
 from linsense.model.motor import Motor
@@ -75,6 +76,7 @@ def drive_values(sc: Scenario, motor: Motor, model_motor: Motor, known: dict) ->
         "motor.pole_pitch": motor.pole_pitch,
         "model.end_anisotropy": lambda v: memo(("end_anisotropy", model_key),
                                                lambda: end_anisotropy(model_motor)),
+        "model.emf_pm": lambda v: memo(("emf_pm", model_key), lambda: emf_pm_compensation(model_motor).cfg()),
         "model.rotating": rotating,
         "model.square_schedule": square_schedule,
     })

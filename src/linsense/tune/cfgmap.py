@@ -516,6 +516,9 @@ ROWS: tuple[Row, ...] = (
         doc="`inverter_voltage_error(v_dc, f_pwm, dead_time, DT_RESIDUAL_DTC)`"),
     Row("emf.i_noise", ("observer.emf",), "A", lambda v: HANDOVER_I_NOISE, scale=None, blame=False,
         doc="`linsense.analysis.emf.I_NOISE`"),
+    *(Row(f"emf.{k}", ("controller.model.motor",), u, (lambda v, k=k: v["model.emf_pm"][k]), scale=None,
+          blame=False, doc="the motor file's `[pm_flux]` (`emf_pm_compensation`)")
+      for k, u in (("psi_pm", "Wb"), ("pm_shift", "rad"), ("neg_re", "-"), ("neg_im", "-"))),
     _fs("fuse.fs"),
     _pitch("fuse.pole_pitch"),
     Row("fuse.v_lo", ("observer.handover_v_lo",), "m/s"),

@@ -10,6 +10,7 @@ import numpy as np
 import tomli_w
 
 from linsense._check import instance
+from linsense.analysis.emf import emf_pm_compensation
 from linsense.analysis.hf import end_anisotropy
 from linsense.compensation.lut import (
     build_lut,
@@ -342,7 +343,8 @@ def design_values(dd: DriveDesign) -> Values:
         The keys, derived values and fields.
     """
     keys = dd.scenario_keys(uncompensated=False)
-    derived = {"model.end_anisotropy": lambda v: end_anisotropy(dd.model)}
+    derived = {"model.end_anisotropy": lambda v: end_anisotropy(dd.model),
+               "model.emf_pm": lambda v: emf_pm_compensation(dd.model).cfg()}
     fields = {} if dd.startup is None else {"startup.err_lock": dd.startup.err_lock}  # (rad: no round trip)
     return Values(keys.__getitem__, derived, fields)
 
