@@ -192,6 +192,13 @@ class DriveDesign:
             The warnings, the design's first.
         """
         out = list(self.design.warnings) + (list(self.startup.warnings) if self.startup is not None else [])
+        h = self.handover
+        if h is not None and h.on:  # (the injection fades out at speed: its room matters up to v_off)
+            out = [w for w in out if not w.startswith("the bus leaves room for the fundamental")]
+            if h.v_off > self.design.headroom_speed:
+                out.append(f"the injection fades out at {h.v_off:.3g} m/s, above the "
+                           f"{self.design.headroom_speed:.3g} m/s up to which the bus leaves the fundamental "
+                           "room beside it at i_max: the current loop saturates between them")
         if self.table is not None:  # (the file's table's cost is moot: the drive runs the measured one)
             out = [w for w in out if not w.startswith("the motor file's table costs")]
             out += [f"{self.table.source}: {self.table_fit[1]}"] if self.table_fit[1] else []
@@ -257,7 +264,7 @@ def design_drive(motor: Motor, drive: DriveData | None = None, *, source: str = 
     hand = design_handover(motor, v_dc=d.v_dc, f_pwm=d.f_pwm, dead_time=d.dead_time,
                            i_mag=DriveInputs(motor, d).force_need / motor.force_constant,
                            demod_lpf=dz.demod_lpf, ramp_time=INJ_RAMP_TIME, a_max=d.a_max, v_cap=dz.v_cap,
-                           shape=d.shape)
+                           shape=d.shape, headroom=dz.headroom_speed)
     out = DriveDesign(motor, d, dz, su, uncompensated, k_est, handover=hand)
     if table is not None:
         from linsense.compensation.measured import fit_report, read_measured_table

@@ -129,7 +129,7 @@ def emf_harmonic_ripple(motor: Motor) -> float:
 
 def design_handover(motor: Motor, *, v_dc: float, f_pwm: float, dead_time: float, i_mag: float,
                     demod_lpf: float, ramp_time: float, a_max: float, v_cap: float, shape: str,
-                    i_noise: float = I_NOISE) -> HandoverDesign:
+                    headroom: float = math.inf, i_noise: float = I_NOISE) -> HandoverDesign:
     """The hand-over band and the injection's fade for a drive (module docstring).
 
     Parameters
@@ -150,6 +150,9 @@ def design_handover(motor: Motor, *, v_dc: float, f_pwm: float, dead_time: float
         The speed-reference cap, m/s.
     shape : str
         The injection's shape (the EMF estimate runs with the pulsating and elliptical ones).
+    headroom : float, optional
+        The speed up to which the fundamental fits beside the injection at ``i_max``, m/s: the
+        injection fades out by then where the band allows (``v_off >= HYSTERESIS v_hi``).
     i_noise : float, optional
         Current noise, A rms.
 
@@ -173,6 +176,9 @@ def design_handover(motor: Motor, *, v_dc: float, f_pwm: float, dead_time: float
     v_lo = v_hi / BAND_RATIO
     v_on = v_hi + a_max * (ramp_time + t_settle)
     v_off = HYSTERESIS * v_on
+    if v_off > headroom:  # (off before the fundamental needs the injection's voltage, where it can)
+        v_off = max(headroom, v_hi * HYSTERESIS)
+        v_on = max(v_hi, v_off / HYSTERESIS)
     on = shape == "pulsating" and math.isfinite(v_emf) and v_cap > v_lo
     if ripple > EPS_HAND:
         why = (f"the magnets' flux harmonics ripple the EMF estimate by {math.degrees(ripple):.2g} deg, "

@@ -10,6 +10,7 @@ the certificate, above the simulator, because it runs the simulator; the design 
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -38,6 +39,7 @@ from linsense.tune.export import (
     scenario_dict,
     scenario_toml,
 )
+from linsense.tune.handover import BAND_RATIO
 from linsense.verify.certificate import (
     VERIFIED_BY,
     Certificate,
@@ -47,7 +49,7 @@ from linsense.verify.certificate import (
     prepare,
 )
 
-__all__ = ["FORMATS", "TuneResult", "design_lines", "motor_pitch", "scenario_table", "tune"]
+__all__ = ["FORMATS", "TuneResult", "design_lines", "handover_line", "motor_pitch", "scenario_table", "tune"]
 
 #: what :func:`tune` writes: a complete scenario, or an ``ls_drive_cfg`` set-up header
 FORMATS = ("toml", "c")
@@ -343,7 +345,7 @@ def tune(motor: str, *, scenario: Scenario | None = None, source: str | None = N
 def _report(made: DriveDesign, m: Motor, dd: DriveData, say: Callable, warn: Callable, mode: str) -> None:
     """Say the design, its start-up and its warnings (and that the certificate judges the sensorless
     drive, not the scenario's control ``mode``, when it runs)."""
-    for line in design_lines(made.design, m.name, dd):
+    for line in design_lines(made.design, m.name, dd, made.handover):
         say(line)
     if made.startup is not None:
         for line in made.startup.lines():
@@ -384,7 +386,34 @@ def motor_pitch(dd: DriveData, dz) -> float:
     return dz.v_cap * OVERSPEED_MARGIN / dz.omega_trip if dz.omega_trip else float("nan")
 
 
-def design_lines(dz, motor_name: str, dd) -> list[str]:
+def handover_line(hand, dz) -> str:
+    """The hand-over's line of the design (what sets the band, the fade and the speed cap).
+
+    Parameters
+    ----------
+    hand : HandoverDesign
+        The hand-over (:func:`linsense.tune.handover.design_handover`).
+    dz : Design
+        The design (its speed cap and the bus's room beside the injection).
+
+    Returns
+    -------
+    str
+        The line.
+    """
+    if not hand.on:
+        why = (hand.limit if not math.isfinite(hand.v_emf) or hand.limit.startswith("the magnets")
+               else f"the speed cap {dz.v_cap:.3g} m/s stays below the band's start {hand.v_lo:.3g} m/s "
+               f"({hand.limit})")
+        return f"  hand-over      off: {why}"
+    return (f"  hand-over      the HF estimate alone up to {hand.v_lo:.3g} m/s, the EMF estimate alone from "
+            f"{hand.v_hi:.3g} m/s ({hand.limit}; v_lo = v_hi / {BAND_RATIO:g}), its low-pass "
+            f"{hand.f_lpf:.4g} Hz; the injection fades out above {hand.v_off:.3g} m/s and back in below "
+            f"{hand.v_on:.3g} m/s (settled {hand.t_settle * 1e3:.2g} ms before v_hi at a_max), leaving the "
+            f"fundamental the whole bus (the speed cap {dz.v_cap:.3g} m/s)")
+
+
+def design_lines(dz, motor_name: str, dd, hand=None) -> list[str]:
     """The design as a person reads it.
 
     Parameters
@@ -395,6 +424,8 @@ def design_lines(dz, motor_name: str, dd) -> list[str]:
         The motor's name.
     dd : DriveData
         The drive data.
+    hand : HandoverDesign or None, optional
+        The hand-over (:attr:`linsense.tune.drive_design.DriveDesign.handover`); None: no line.
 
     Returns
     -------
@@ -422,6 +453,7 @@ def design_lines(dz, motor_name: str, dd) -> list[str]:
         + f" (limited by {dz.limits.get('observer', '')})"
         + (f"; the HF path's delay {dz.hf_delay * 1e3:.3g} ms compensated (1 / f_inj)"
            if dz.hf_delay > 0 else ""),
+        *([handover_line(hand, dz)] if hand is not None else []),
         f"  speed loop     {dz.speed_bw:.4g} Hz ({dz.limits.get('speed loop', '')}): "
         f"kp {dz.speed_kp:.4g} N s/m, "
         f"ki {dz.speed_ki:.4g} N/m"
