@@ -10,6 +10,7 @@ from pathlib import Path
 
 import pytest
 
+from linsense import ctrl
 from linsense.scenario.keys import _sections
 from linsense.scenario.load import ScenarioFile, scenario_from_dict
 from linsense.sim.build import build
@@ -121,14 +122,12 @@ def test_refusal_search_reads_the_mapping():
 
 
 def _field(cfg, path: str):
-    for part in path.split("."):
-        cfg = getattr(cfg, part)
-    return cfg
+    return ctrl.cfg_get(cfg, path)
 
 
 def _header_values(text: str) -> list[tuple[str, float]]:
     out = []
-    for m in re.finditer(r"^    cfg->([\w.]+) = (?:LS_R\(([^)]*)\)|(\d+)u);$", text, re.M):
+    for m in re.finditer(r"^    cfg->([\w.\[\]]+) = (?:LS_R\(([^)]*)\)|(\d+)u);$", text, re.M):
         out.append((m.group(1), float(m.group(2) or m.group(3))))
     return out
 

@@ -79,32 +79,37 @@ def test_a_table_of_another_motor_or_drive_is_refused_in_one_line(run_cli, tmp_p
     assert not (tmp_path / "fw").exists()
 
 
-#: a motor whose EMF estimate the design leaves off (its magnets' 5th harmonic)
-HARMONIC = Path(__file__).parents[1] / "src/linsense/examples/motors/harmonic.toml"
-FAST = ('motor = "HARMONIC"\n[scenario]\nduration = 1.0\n[reference]\ntype = "trajectory"\n'
-        'waypoints_mm = [100.0]\nv_max = 1.2\na_max = 3.0\n')
+#: a motor whose EMF estimate the design leaves off (L_q i_max / psi_pm = 2.5: an L_q error of 10 %
+#: turns its angle by 14 deg), so that the HF estimate carries every speed
+HF_ONLY = Path(__file__).parents[1] / "src/linsense/examples/motors/class/m20_hv.toml"
+FAST = ('motor = "HF_ONLY"\n[scenario]\nduration = 1.0\n[reference]\ntype = "trajectory"\n'
+        'waypoints_mm = [100.0]\nv_max = 1.2\na_max = 3.0\n[inverter]\nv_dc = 300.0\nf_pwm = 8000.0\n'
+        'dead_time = 1.5e-6\n[controller]\ni_max = 2.0\n')
+#: its drive (src/linsense/examples/motors/class/drives.toml) as tune's options
+HF_ONLY_DRIVE = ("--v-dc", "300", "--f-pwm", "8000", "--dead-time", "1.5e-6", "--i-max", "2")
 
 
 def test_only_a_verified_drive_is_written_for_the_firmware(run_cli, tmp_path):
-    """A drive asked for 1.2 m/s on the harmonic motor (its EMF estimate carries the magnets' 5th
-    harmonic, so the HF estimate carries every speed, and its move's error crosses 3 deg below 1
-    m/s) fails the quick certificate: firmware export and tune --format c write nothing and exit 1
-    naming the failed check and the speed; --unverified writes it, the reason in the header's
-    comment and in the JSON."""
+    """A drive asked for 1.2 m/s on m20_hv (the design leaves its EMF estimate off: the HF estimate
+    carries every speed, and its move's error crosses 3 deg near 0.5 m/s) fails the quick
+    certificate: firmware export and tune --format c write nothing and exit 1 naming the failed
+    check and the speed; --unverified writes it, the reason in the header's comment and in the
+    JSON."""
     sc = tmp_path / "fast.toml"
-    sc.write_text(FAST.replace("HARMONIC", HARMONIC.as_posix()))
-    r = run_cli("firmware", "export", tmp_path / "fw", "--motor", HARMONIC, "--scenario", sc)
+    sc.write_text(FAST.replace("HF_ONLY", HF_ONLY.as_posix()))
+    r = run_cli("firmware", "export", tmp_path / "fw", "--motor", HF_ONLY, "--scenario", sc)
     assert r.code == 1 and not (tmp_path / "fw").exists()
     assert "not written" in r.err and "moves at v_max" in r.err and "crosses 3 deg at" in r.err, r.err
-    r = run_cli("firmware", "export", tmp_path / "fw", "--motor", HARMONIC, "--scenario", sc,
+    r = run_cli("firmware", "export", tmp_path / "fw", "--motor", HF_ONLY, "--scenario", sc,
                 "--unverified", "--json")
     assert r.code == 0, r.err
     doc = json.loads(r.out)
     assert doc["ok"] is False and "moves at v_max" in doc["unverified"] and doc["certificate"] == "quick"
-    hdr = (tmp_path / "fw" / "ls_cfg_harmonic_example.h").read_text()
+    hdr = (tmp_path / "fw" / "ls_cfg_m20_hv.h").read_text()
     assert "NOT VERIFIED: written with --unverified" in hdr and "moves at v_max" in hdr
     out = tmp_path / "c.h"
-    r = run_cli("tune", "--motor", HARMONIC, "--v-max", "1.2", "--a-max", "3", "--quick", "--format", "c",
+    r = run_cli("tune", "--motor", HF_ONLY, *HF_ONLY_DRIVE, "--v-max", "1.2", "--a-max", "3", "--quick",
+                "--format", "c",
                 "--out", out)
     assert r.code == 1 and not out.exists() and "not written" in r.err
     # (the certificate is printed; its files are written with a header only: a refusal leaves an

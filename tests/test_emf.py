@@ -29,7 +29,7 @@ GL_X, GL_W = np.polynomial.legendre.leggauss(8)
 def _cfg(l_d: float, l_q: float, r_s: float, **kw) -> dict:
     return {"fs": FS, "r_s": r_s, "l_d": l_d, "l_q": l_q, "f_lpf": 200.0, "omega_max": 2000.0, "err_r": 0.05,
             "err_l": 0.1, "u_err": 0.3, "i_noise": 0.01, "psi_pm": 0.0, "pm_shift": 0.0, "neg_re": 0.0,
-            "neg_im": 0.0} | kw
+            "neg_im": 0.0, "harm_order": [0, 0], "harm_re": [0.0, 0.0], "harm_im": [0.0, 0.0]} | kw
 
 
 def _means(model) -> tuple[float, float]:

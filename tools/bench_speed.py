@@ -15,8 +15,9 @@ The bus-limited speed is linsense.tune.design.bus_speed at the under-voltage lim
 where the back-EMF, R_s i and omega L_q i take the linear range V_dc,min / sqrt(3).
 
 The targets (peak <= 3 deg, <= 1 deg at rest at 0.8 of the bus-limited speed) are printed beside
-the numbers; missing them is not a failure here (the HF estimate alone carries the position today:
-these are the numbers before the EMF observer's fusion, not built yet). Exit 1 only when a run errors.
+the numbers; missing them is not a failure here (a motor whose EMF estimate the design leaves off,
+m20_hv, keeps the HF estimate's speed: docs/tuning.md, "The speed range"). Exit 1 only when a run
+errors.
 
     .venv/bin/python tools/bench_speed.py                       # every motor, the whole grid
     .venv/bin/python tools/bench_speed.py --quick               # ecce2010 and small30, five speeds

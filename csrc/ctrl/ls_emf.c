@@ -3,6 +3,37 @@
 #include "linsense/ls_dtres.h"
 #include "linsense/ls_math.h"
 
+/* The flux harmonics' fields: each order 0 (none) or n mod 3 != 0 up to LS_EMF_HARM_ORDER_MAX,
+ * its coefficient finite and at most LS_EMF_HARM_MAX psi_pm (0 without an order). */
+static bool harmonics_ok(const ls_emf_cfg *cfg)
+{
+    int k;
+    for (k = 0; k < LS_EMF_HARM_N; ++k) {
+        const uint32_t n = cfg->harm_order[k];
+        const LS_REAL re = cfg->harm_re[k], im = cfg->harm_im[k];
+        const LS_REAL lim = LS_EMF_HARM_MAX * cfg->psi_pm;
+        if (!LS_ISFINITE2(re, im) || n > LS_EMF_HARM_ORDER_MAX || (n != 0u && (n % 3u == 0u || n == 1u)) ||
+            (n == 0u && (re != LS_R(0.0) || im != LS_R(0.0))) || !(re * re + im * im <= lim * lim)) {
+            return false;
+        }
+    }
+    return true;
+}
+
+/* z^n for the unit complex z = (c, s), n >= 1 (n - 1 products). */
+static void unit_power(LS_REAL c, LS_REAL s, uint32_t n, LS_REAL *pc, LS_REAL *ps)
+{
+    LS_REAL a = c, b = s;
+    uint32_t k;
+    for (k = 1u; k < n; ++k) {
+        const LS_REAL t = a * c - b * s;
+        b = a * s + b * c;
+        a = t;
+    }
+    *pc = a;
+    *ps = b;
+}
+
 ls_status ls_emf_init(ls_emf *e, const ls_emf_cfg *cfg)
 {
     LS_REAL ts, a, q;
@@ -27,6 +58,9 @@ ls_status ls_emf_init(ls_emf *e, const ls_emf_cfg *cfg)
         ((cfg->neg_re != LS_R(0.0) || cfg->neg_im != LS_R(0.0)) && !(cfg->psi_pm > LS_R(0.0)))) {
         return LS_ERR_PARAM;
     }
+    if (!harmonics_ok(cfg)) {
+        return LS_ERR_PARAM;
+    }
     ts = LS_R(1.0) / cfg->fs;
     a = LS_R(1.0) - ls_exp(-(LS_TWO_PI * cfg->f_lpf * ts));
     /* the low-passed EMF's noise from a white current noise sigma per sample and axis: the
@@ -47,6 +81,15 @@ ls_status ls_emf_init(ls_emf *e, const ls_emf_cfg *cfg)
     e->k_neg[0] = cfg->psi_pm * (e->c_pm * cfg->neg_re - e->s_pm * cfg->neg_im);
     e->k_neg[1] = cfg->psi_pm * (e->c_pm * cfg->neg_im + e->s_pm * cfg->neg_re);
     e->pm_comp = cfg->pm_shift != LS_R(0.0) || cfg->neg_re != LS_R(0.0) || cfg->neg_im != LS_R(0.0);
+    e->harm_on = false;
+    {
+        int k;
+        for (k = 0; k < LS_EMF_HARM_N; ++k) {
+            const uint32_t n = cfg->harm_order[k];
+            e->harm_m[k] = n == 0u ? LS_R(0.0) : (n % 3u == 1u ? (LS_REAL)n : -(LS_REAL)n);
+            e->harm_on = e->harm_on || n != 0u;
+        }
+    }
     if (!LS_ISFINITE4(e->alpha, e->l_fs, e->half_ts, e->b_noise) || !LS_ISFINITE2(e->w_c, e->w_rip) ||
         !(a > LS_R(0.0))) {
         return LS_ERR_PARAM; /* (an inductance or a noise so large that the products overflow) */
@@ -150,6 +193,23 @@ LS_REAL ls_emf_step(ls_emf *e, const LS_REAL v_ab[2], const LS_REAL i_ab[2], LS_
         const LS_REAL kr = e->k_neg[0], ki = e->k_neg[1];
         ea += w * (kr * sm - ki * cm);
         eb += w * (kr * cm + ki * sm);
+    }
+    if (e->harm_on) {
+        /* the magnets' flux harmonics, predicted at the period's middle and taken out:
+         * e_ab -= j w m c e^{j m theta_m}, m = s n */
+        int k;
+        for (k = 0; k < LS_EMF_HARM_N; ++k) {
+            const LS_REAL m = e->harm_m[k];
+            if (m != LS_R(0.0)) {
+                LS_REAL pc, ps, qr, qi;
+                unit_power(cm, sm, g->harm_order[k], &pc, &ps);
+                ps = m < LS_R(0.0) ? -ps : ps;
+                qr = g->harm_re[k] * pc - g->harm_im[k] * ps;
+                qi = g->harm_re[k] * ps + g->harm_im[k] * pc;
+                ea += w * m * qi;
+                eb -= w * m * qr;
+            }
+        }
     }
     ed = cm * ea + sm * eb;
     eq = cm * eb - sm * ea;

@@ -32,6 +32,9 @@ static ls_emf_cfg base_cfg(double l_q)
     c.pm_shift = 0;
     c.neg_re = 0;
     c.neg_im = 0;
+    c.harm_order[0] = c.harm_order[1] = 0u; /* no harmonics */
+    c.harm_re[0] = c.harm_re[1] = 0;
+    c.harm_im[0] = c.harm_im[1] = 0;
     return c;
 }
 
@@ -500,11 +503,141 @@ static void test_atan2(void)
     LS_CHECK(ls_atan2((LS_REAL)NAN, 1) != ls_atan2((LS_REAL)NAN, 1));
 }
 
+/* The magnets' flux harmonics: each phase links psi a_h cos(n_h u + phi_h) more, u = theta - 2 pi j /
+ * 3; the block with the slots filled (c = psi a e^{j s phi}, s = +1 for n mod 3 = 1, -1 for 2)
+ * takes their EMF out; without, the estimate ripples at 6 theta by about sum n a. */
+typedef struct {
+    unsigned n[2];
+    double a[2], phi[2];
+} pm_harm;
+
+static void harm_extra(const plant *p, const pm_harm *h, long k, double out[2])
+{
+    const double T = 1.0 / FS, th = p->omega * T * (double)k + p->th0, thm = th - 0.5 * p->omega * T;
+    double e[3] = {0.0, 0.0, 0.0};
+    int j, q;
+    for (j = 0; j < 3; ++j) {
+        const double u = thm - 2.0 * PI * j / 3.0;
+        for (q = 0; q < 2; ++q) {
+            const double x = 0.5 * p->omega * T * h->n[q], sinc = x == 0.0 ? 1.0 : sin(x) / x;
+            /* the period's mean of d/dt [psi a cos(n u + phi)] */
+            e[j] += -p->omega * PSI * h->a[q] * h->n[q] * sinc * sin(h->n[q] * u + h->phi[q]);
+        }
+    }
+    out[0] = (2.0 / 3.0) * (e[0] - 0.5 * (e[1] + e[2]));
+    out[1] = (e[1] - e[2]) / sqrt(3.0);
+}
+
+static void run_harm(ls_emf *e, const plant *p, const pm_harm *h, double *pp, double *worst)
+{
+    const long n_per = (long)ceil(2.0 * PI / fabs(p->omega) * FS), n0 = 3200;
+    long k;
+    double lo = 1e9, hi = -1e9;
+    *worst = 0.0;
+    for (k = 0; k < n0 + n_per; ++k) {
+        LS_REAL v[2], i[2], c, s;
+        double x[2];
+        sample(p, k, v, i, &c, &s);
+        harm_extra(p, h, k, x);
+        v[0] = (LS_REAL)((double)v[0] + x[0]);
+        v[1] = (LS_REAL)((double)v[1] + x[1]);
+        ls_emf_step(e, v, i, c, s, (LS_REAL)p->omega, (LS_REAL)1.0);
+        if (k >= n0) {
+            lo = fmin(lo, (double)e->eps);
+            hi = fmax(hi, (double)e->eps);
+            *worst = fmax(*worst, fabs((double)e->eps + p->err));
+        }
+    }
+    *pp = hi - lo;
+}
+
+static void test_harmonics(void)
+{
+    static const pm_harm cases[2] = {{{5u, 7u}, {0.02, 0.01}, {0.3, -0.5}}, {{7u, 11u}, {0.015, 0.004}, {1.0, 2.0}}};
+    static const double speeds[3] = {-700.0, 300.0, 1200.0};
+    int a, b;
+    for (a = 0; a < 2; ++a) {
+        for (b = 0; b < 3; ++b) {
+            const pm_harm *h = &cases[a];
+            ls_emf_cfg cfg = base_cfg(1.3 * L_D), bad;
+            ls_emf e;
+            plant p;
+            double pp_on, worst_on, pp_off, worst_off, pp_bad, worst_bad, sum_na = 0.0, resid = 0.0;
+            int q;
+            p.omega = speeds[b];
+            p.th0 = 0.7;
+            p.i_d = 0.0;
+            p.i_q = 2.0 * (p.omega > 0 ? 1.0 : -1.0);
+            p.l_q = 1.3 * L_D;
+            p.err = 0.0;
+            cfg.psi_pm = (LS_REAL)PSI;
+            for (q = 0; q < 2; ++q) {
+                const double sg = h->n[q] % 3u == 1u ? 1.0 : -1.0;
+                const double x = 0.5 * fabs(p.omega) / FS * h->n[q];
+                cfg.harm_order[q] = h->n[q];
+                cfg.harm_re[q] = (LS_REAL)(PSI * h->a[q] * cos(sg * h->phi[q]));
+                cfg.harm_im[q] = (LS_REAL)(PSI * h->a[q] * sin(sg * h->phi[q]));
+                sum_na += h->n[q] * h->a[q];
+                resid += h->n[q] * h->a[q] * (1.0 - sin(x) / x); /* (the block takes the middle's value) */
+            }
+            LS_CHECK(ls_emf_init(&e, &cfg) == LS_OK);
+            run_harm(&e, &p, h, &pp_on, &worst_on);
+            LS_CHECK(worst_on <= tol_of(&p) + 1.2 * resid);
+            {
+                ls_emf_cfg off = base_cfg(1.3 * L_D);
+                LS_CHECK(ls_emf_init(&e, &off) == LS_OK);
+            }
+            run_harm(&e, &p, h, &pp_off, &worst_off);
+            LS_CHECK(pp_off > 5.0 * pp_on && worst_off > 20.0 * worst_on && worst_off < sum_na);
+            /* mutations: the coefficient's sign, or the sequence (the conjugate phase) */
+            bad = cfg;
+            bad.harm_re[0] = -cfg.harm_re[0];
+            bad.harm_im[0] = -cfg.harm_im[0];
+            LS_CHECK(ls_emf_init(&e, &bad) == LS_OK);
+            run_harm(&e, &p, h, &pp_bad, &worst_bad);
+            LS_CHECK(worst_bad > 3.0 * worst_on && worst_bad > 0.5 * worst_off);
+            bad = cfg;
+            bad.harm_im[0] = -cfg.harm_im[0];
+            bad.harm_im[1] = -cfg.harm_im[1];
+            LS_CHECK(ls_emf_init(&e, &bad) == LS_OK);
+            run_harm(&e, &p, h, &pp_bad, &worst_bad);
+            LS_CHECK(worst_bad > 3.0 * worst_on);
+            if (b == 2) {
+                printf("harmonics (%u, %u) at %g rad/s: worst %.2e rad compensated, %.2e without\n", h->n[0], h->n[1],
+                       p.omega, worst_on, worst_off);
+            }
+        }
+    }
+    /* refusals: a triplen or order 1, beyond the largest order, a coefficient without an order or
+     * beyond LS_EMF_HARM_MAX psi_pm, a non-finite one */
+    {
+        ls_emf e;
+        ls_emf_cfg c = base_cfg(1.3 * L_D);
+        c.psi_pm = (LS_REAL)PSI;
+        c.harm_order[0] = 3u;
+        c.harm_re[0] = (LS_REAL)(0.01 * PSI);
+        LS_CHECK(ls_emf_init(&e, &c) == LS_ERR_PARAM);
+        c.harm_order[0] = 1u;
+        LS_CHECK(ls_emf_init(&e, &c) == LS_ERR_PARAM);
+        c.harm_order[0] = LS_EMF_HARM_ORDER_MAX + 1u;
+        LS_CHECK(ls_emf_init(&e, &c) == LS_ERR_PARAM);
+        c.harm_order[0] = 0u;
+        LS_CHECK(ls_emf_init(&e, &c) == LS_ERR_PARAM);
+        c.harm_order[0] = 5u;
+        LS_CHECK(ls_emf_init(&e, &c) == LS_OK);
+        c.harm_re[0] = (LS_REAL)(0.3 * PSI);
+        LS_CHECK(ls_emf_init(&e, &c) == LS_ERR_PARAM);
+        c.harm_re[0] = (LS_REAL)NAN;
+        LS_CHECK(ls_emf_init(&e, &c) == LS_ERR_PARAM);
+    }
+}
+
 int main(void)
 {
     test_atan2();
     test_steady_state();
     test_imbalance();
+    test_harmonics();
     test_low_speed();
     test_step();
     test_nonfinite();

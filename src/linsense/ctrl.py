@@ -250,6 +250,25 @@ def observer_gains(f_bw: float, mech: bool) -> tuple[float, ...]:
 
 #: the fields of ``ls_emf_cfg``, in declaration order
 EMF_FIELDS = tuple(name for name, _ in ffi.typeof("ls_emf_cfg").fields)
+#: the array fields of ``ls_emf_cfg`` (the flux harmonics' slots) and their lengths
+EMF_ARRAYS = {name: f.type.length for name, f in ffi.typeof("ls_emf_cfg").fields if f.type.kind == "array"}
+
+
+def _emf_value(source: str, key: str, value: Any):
+    """One ``ls_emf_cfg`` field's value: a number, or for an array field a sequence of its length
+    (integers for an unsigned field's, such as the harmonics' orders)."""
+    n = EMF_ARRAYS.get(key)
+    if n is None:
+        return _number(value, source, key)
+    seq = list(value) if isinstance(value, (list, tuple, np.ndarray)) else None
+    if seq is None or len(seq) != n:
+        raise InputError(source, key, f"expected {n} numbers, got {_show(value)}")
+    out = [_number(v, source, f"{key}[{i}]") for i, v in enumerate(seq)]
+    if key == "harm_order":
+        if not all(float(v).is_integer() and 0 <= v < 2**32 for v in out):
+            raise InputError(source, key, f"expected {n} whole numbers >= 0, got {_show(value)}")
+        out = [int(v) for v in out]
+    return out
 
 
 def emf_init(values: dict):
@@ -283,14 +302,15 @@ def emf_init(values: dict):
     if missing or unknown:
         raise InputError("emf_init", (missing or unknown)[0],
                          f"{'missing' if missing else 'unknown'}: the fields are {', '.join(EMF_FIELDS)}")
-    vals = {k: _number(v, "emf_init", k) for k, v in values.items()}
+    vals = {k: _emf_value("emf_init", k, v) for k, v in values.items()}
     state = ffi.new("ls_emf *")
     cfg = ffi.new("ls_emf_cfg *", vals)
     status = lib.ls_emf_init(state, cfg)
     if status == lib.LS_OK:
         return state, cfg
     fs = vals["fs"] if math.isfinite(vals["fs"]) and vals["fs"] > 0 else 16000.0
-    good = dict.fromkeys(EMF_FIELDS, 0.0) | {"fs": fs, "l_d": 1.0e-3, "l_q": 1.0e-3, "f_lpf": 0.01 * fs,
+    good = dict.fromkeys(EMF_FIELDS, 0.0) | {k: [0] * n for k, n in EMF_ARRAYS.items()}
+    good |= {"fs": fs, "l_d": 1.0e-3, "l_q": 1.0e-3, "f_lpf": 0.01 * fs,
                                               "omega_max": 0.01 * fs, "psi_pm": 1.0}
 
     def accepted(v: dict) -> bool:
@@ -532,7 +552,7 @@ def cfg_fields(ctype: str = "ls_drive_cfg") -> tuple[str, ...]:
     Returns
     -------
     tuple of str
-        Dotted paths (``"obs.mass"``), in declaration order.
+        Dotted paths (``"obs.mass"``; an array's items ``"emf.harm_re[0]"``), in declaration order.
     """
     def walk(t, prefix: str) -> list[str]:
         out = []
@@ -541,6 +561,8 @@ def cfg_fields(ctype: str = "ls_drive_cfg") -> tuple[str, ...]:
                 out += walk(f.type, f"{prefix}{name}.")
             elif f.type.kind in ("primitive", "enum"):
                 out.append(prefix + name)
+            elif f.type.kind == "array" and f.type.item.kind in ("primitive", "enum"):
+                out += [f"{prefix}{name}[{i}]" for i in range(f.type.length)]
         return out
 
     return tuple(walk(ffi.typeof(ctype), ""))
@@ -571,7 +593,10 @@ def cfg_get(cfg, path: str):
     """
     obj = cfg
     for part in path.split("."):
-        obj = getattr(obj, part)
+        name, _, index = part.partition("[")
+        obj = getattr(obj, name)
+        if index:
+            obj = obj[int(index[:-1])]
     return obj
 
 
@@ -591,7 +616,26 @@ def cfg_set(cfg, path: str, value) -> None:
     obj = cfg
     for part in head:
         obj = getattr(obj, part)
-    setattr(obj, last, value)
+    set_member(obj, last, value)
+
+
+def set_member(obj, member: str, value) -> None:
+    """Set a struct's member, or an item of its array member (``"harm_re[0]"``).
+
+    Parameters
+    ----------
+    obj : cdata
+        The struct.
+    member : str
+        The member's name, with ``[i]`` for an array's item.
+    value : object
+        The value.
+    """
+    name, _, index = member.partition("[")
+    if index:
+        getattr(obj, name)[int(index[:-1])] = value
+    else:
+        setattr(obj, name, value)
 
 
 def cfg_copy(cfg):

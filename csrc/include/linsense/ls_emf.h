@@ -63,6 +63,13 @@
  * moves the phases' axes by a few degrees, a positive sequence this far off means the motor file's
  * phase order or position origin is wrong. */
 #define LS_EMF_PM_SHIFT_MAX LS_R(0.523598776)
+/* The magnets' flux harmonics the block compensates (docs/theory.md, "The hand-over"): at most
+ * LS_EMF_HARM_N of them (a motor file's largest two: the 5th and 7th of a flat magnet), each of an
+ * order n with n mod 3 != 0 (a triplen is zero sequence, which the star winding does not see) up to
+ * LS_EMF_HARM_ORDER_MAX, and a coefficient |c| below LS_EMF_HARM_MAX psi_pm. */
+#define LS_EMF_HARM_N 2
+#define LS_EMF_HARM_ORDER_MAX 25u
+#define LS_EMF_HARM_MAX LS_R(0.2)
 
 typedef struct {
     LS_REAL fs;        /**< unit: Hz, sampling rate (one step per PWM period), > 0 */
@@ -86,6 +93,14 @@ typedef struct {
     LS_REAL neg_re;    /**< unit: -, real part of n = conj(N) / P, the magnets' negative sequence
                             relative to the positive one; |n| < LS_EMF_NEG_MAX; 0 balanced */
     LS_REAL neg_im;    /**< unit: -, imaginary part of n; 0 balanced */
+    uint32_t harm_order[LS_EMF_HARM_N]; /**< unit: -, the orders n of the magnets' flux harmonics
+                            compensated (0: none), n mod 3 != 0, n <= LS_EMF_HARM_ORDER_MAX: their
+                            flux vector c e^{j s n theta} (alpha-beta; s = +1 for n mod 3 = 1, -1 for
+                            n mod 3 = 2) and EMF j omega s n c e^{j s n theta} are taken out of e_ab */
+    LS_REAL harm_re[LS_EMF_HARM_N]; /**< unit: Wb, real part of c: psi_pm a cos(s phi) for the motor
+                            file's harmonic a cos(n u + phi) of each phase's flux */
+    LS_REAL harm_im[LS_EMF_HARM_N]; /**< unit: Wb, imaginary part of c: psi_pm a sin(s phi); |c| <=
+                            LS_EMF_HARM_MAX psi_pm */
 } ls_emf_cfg;
 
 typedef struct {
@@ -99,6 +114,8 @@ typedef struct {
     LS_REAL k_neg[2];    /**< unit: Wb, psi_pm e^{j pm_shift} n (re, im): the negative sequence's flux */
     LS_REAL c_pm, s_pm;  /**< unit: -, cos and sin of pm_shift */
     bool pm_comp;        /**< unit: -, the imbalance is compensated (a field of it is not 0) */
+    LS_REAL harm_m[LS_EMF_HARM_N]; /**< unit: -, s n of each harmonic (0: none) */
+    bool harm_on;        /**< unit: -, a harmonic is compensated */
     LS_REAL i0[2];       /**< unit: A, the currents at the start of the period (alpha-beta) */
     bool primed;         /**< unit: -, i0 holds a sample (false: the first step only stores it) */
     LS_REAL e_d, e_q;    /**< unit: V, the low-passed EMF in the estimated frame */

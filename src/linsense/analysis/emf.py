@@ -62,37 +62,52 @@ class EmfPmCompensation:
         dimensionless (``|n|`` rad is the raw EMF angle's ripple at ``2 theta``).
     neg_im : float
         Imaginary part of ``n``, dimensionless.
+    harm_order : tuple of int
+        The orders of the flux harmonics compensated (``ls_emf_cfg.harm_order``: the largest EMF
+        harmonics ``n a``, at most ``LS_EMF_HARM_N``; 0: an empty slot).
+    harm_re : tuple of float
+        Their flux vectors' coefficients' real parts ``psi_pm a cos(s phi)``, Wb.
+    harm_im : tuple of float
+        Imaginary parts ``psi_pm a sin(s phi)``, Wb (``s`` = +1 for ``n mod 3 = 1``, -1 for 2).
+    residual : float
+        The angle ripple the harmonics left out make, rad (``asin`` of the sum of their ``n a``).
     """
 
     psi_pm: float
     pm_shift: float
     neg_re: float
     neg_im: float
+    harm_order: tuple = ()
+    harm_re: tuple = ()
+    harm_im: tuple = ()
+    residual: float = 0.0
 
     @property
     def neg_mag(self) -> float:
         """``|n|``: the uncompensated angle's ripple at ``2 theta``, rad (peak)."""
         return math.hypot(self.neg_re, self.neg_im)
 
-    def cfg(self) -> dict[str, float]:
-        """The four ``ls_emf_cfg`` fields, by name.
+    def cfg(self) -> dict[str, object]:
+        """The ``ls_emf_cfg`` fields of the magnets (the imbalance's four, the harmonics' slots), by name.
 
         Returns
         -------
         dict
-            ``psi_pm`` (Wb), ``pm_shift`` (rad), ``neg_re``, ``neg_im`` (dimensionless).
+            ``psi_pm`` (Wb), ``pm_shift`` (rad), ``neg_re``, ``neg_im`` (dimensionless),
+            ``harm_order``, ``harm_re``, ``harm_im`` (lists of ``LS_EMF_HARM_N``).
         """
         return {"psi_pm": self.psi_pm, "pm_shift": self.pm_shift, "neg_re": self.neg_re,
-                "neg_im": self.neg_im}
+                "neg_im": self.neg_im, "harm_order": list(self.harm_order), "harm_re": list(self.harm_re),
+                "harm_im": list(self.harm_im)}
 
 
 def emf_pm_compensation(motor: Motor | str) -> EmfPmCompensation:
     """The EMF block's compensation of the motor's magnet imbalance, from its motor file.
 
     The sequences ``P``, ``N`` of the per-phase flux amplitude and phase
-    (:func:`linsense.model.frames.phase_sequences`; the harmonics are not compensated); balanced:
-    ``psi_pm`` the motor's and the other three 0 (the block then runs as without the fields, bit for
-    bit).
+    (:func:`linsense.model.frames.phase_sequences`), and the flux harmonics with the largest EMF
+    (:class:`EmfPmCompensation`); balanced without harmonics: ``psi_pm`` the motor's and the others
+    0 (the block then runs as without the fields, bit for bit).
 
     Parameters
     ----------
@@ -106,11 +121,30 @@ def emf_pm_compensation(motor: Motor | str) -> EmfPmCompensation:
     """
     m = as_motor(motor, "emf_pm_compensation")
     p, n = phase_sequences(np.asarray(m.pm_phases.scale), np.asarray(m.pm_phases.shift))
+    harm = _harmonics(m, m.psi_pm if m.pm_phases.balanced else abs(p) * m.psi_pm)
     if m.pm_phases.balanced:
-        return EmfPmCompensation(psi_pm=m.psi_pm, pm_shift=0.0, neg_re=0.0, neg_im=0.0)
+        return EmfPmCompensation(m.psi_pm, 0.0, 0.0, 0.0, *harm)
     ratio = n.conjugate() / p
-    return EmfPmCompensation(psi_pm=abs(p) * m.psi_pm, pm_shift=math.atan2(p.imag, p.real),
-                             neg_re=ratio.real, neg_im=ratio.imag)
+    return EmfPmCompensation(abs(p) * m.psi_pm, math.atan2(p.imag, p.real), ratio.real, ratio.imag, *harm)
+
+
+def _harmonics(m: Motor, psi: float) -> tuple:
+    """The flux harmonics' slots (the largest ``n a`` of the orders the star winding sees), their
+    coefficients ``psi a e^{j s phi}`` and the ripple of those left out (docs/theory.md, "The
+    hand-over")."""
+    from linsense import ctrl  # (the binding: the slots' count and limits are the C header's)
+
+    slots, top = int(ctrl.lib.LS_EMF_HARM_N), int(ctrl.lib.LS_EMF_HARM_ORDER_MAX)
+    seen = sorted((h for h in m.pm_harmonics if h.order % 3 != 0 and h.amplitude != 0.0),
+                  key=lambda h: -abs(h.order * h.amplitude))
+    used = [h for h in seen if h.order <= top][:slots]
+    left = sum(abs(h.order * h.amplitude) for h in seen if h not in used)
+    order, re, im = [0] * slots, [0.0] * slots, [0.0] * slots
+    for k, h in enumerate(used):
+        sg = 1.0 if h.order % 3 == 1 else -1.0
+        order[k], re[k], im[k] = int(h.order), psi * h.amplitude * math.cos(sg * h.phase), \
+            psi * h.amplitude * math.sin(sg * h.phase)
+    return tuple(order), tuple(re), tuple(im), math.asin(min(left, 1.0))
 
 
 @dataclass(frozen=True)

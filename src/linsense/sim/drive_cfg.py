@@ -7,7 +7,7 @@ from operator import attrgetter
 
 from linsense.analysis.emf import emf_pm_compensation
 from linsense.analysis.hf import end_anisotropy
-from linsense.ctrl import drive_default_cfg, ffi, lib
+from linsense.ctrl import drive_default_cfg, ffi, lib, set_member
 from linsense.model.motor import Motor
 from linsense.scenario.load import Scenario
 from linsense.sim.cache import memo, motor_key
@@ -127,7 +127,7 @@ def fill(v: Values):
             for part in head:
                 obj = getattr(obj, part)
             structs[head] = obj
-        setattr(obj, member, getattr(lib, value) if row.kind == "enum" else value)
+        set_member(obj, member, getattr(lib, value) if row.kind == "enum" else value)
     lib.ls_observer_gains(ffi.addressof(d, "obs"), v["observer.bandwidth_hz"])
     if v["observer.k1"] is not None:
         d.obs.k1, d.obs.k2 = v["observer.k1"], v["observer.k2"]

@@ -16,7 +16,8 @@ a computed value). The table is read by:
 Rules read their inputs from a :class:`Values`: the scenario's keys (dotted, in the scenario's
 units; ``controller.model.*`` hold what the controller believes: the override or the motor model's
 value) and a few derived values the simulator and the tune exporter each supply (``motor.pole_pitch``,
-``model.end_anisotropy``, ...). This module holds no C library (enums are written as their C names).
+``model.end_anisotropy``, ...). Of the C library it reads only the EMF block's count of harmonic slots
+(``EMF_ARRAYS``); enums are written as their C names.
 """
 
 from __future__ import annotations
@@ -31,6 +32,7 @@ from linsense.analysis.emf import ERR_L as HANDOVER_ERR_L
 from linsense.analysis.emf import ERR_R as HANDOVER_ERR_R
 from linsense.analysis.emf import I_NOISE as HANDOVER_I_NOISE
 from linsense.analysis.emf import inverter_voltage_error
+from linsense.ctrl import EMF_ARRAYS
 from linsense.tune.design import current_gains, speed_gains, startup_lock_gain
 from linsense.tune.handover import DT_RESIDUAL_DTC
 from linsense.tune.injection import (
@@ -318,6 +320,13 @@ def _end(i: int) -> Callable[[Values], float]:
     return lambda v: v["model.end_anisotropy"][i] if _forward(v) else 0.0
 
 
+def _harmonic(k: str, i: int, unit: str) -> Row:
+    # the EMF block's slot i of the magnets' flux harmonics (linsense.analysis.emf.emf_pm_compensation)
+    return Row(f"emf.{k}[{i}]", ("controller.model.motor",), unit, lambda v: v["model.emf_pm"][k][i],
+               scale=None, kind="count" if k == "harm_order" else "real", blame=False,
+               doc="the motor file's `[pm_flux]` harmonics (`emf_pm_compensation`)")
+
+
 def _fs(field: str) -> Row:
     return Row(field, ("inverter.f_pwm",), "Hz", kind="fs", blame=field == "fs")
 
@@ -519,6 +528,8 @@ ROWS: tuple[Row, ...] = (
     *(Row(f"emf.{k}", ("controller.model.motor",), u, (lambda v, k=k: v["model.emf_pm"][k]), scale=None,
           blame=False, doc="the motor file's `[pm_flux]` (`emf_pm_compensation`)")
       for k, u in (("psi_pm", "Wb"), ("pm_shift", "rad"), ("neg_re", "-"), ("neg_im", "-"))),
+    *(_harmonic(k, i, u) for i in range(EMF_ARRAYS["harm_order"]) for k, u in (("harm_re", "Wb"),
+                                                                                ("harm_im", "Wb"))),
     _fs("fuse.fs"),
     _pitch("fuse.pole_pitch"),
     Row("fuse.v_lo", ("observer.handover_v_lo",), "m/s"),
@@ -553,6 +564,7 @@ ROWS: tuple[Row, ...] = (
     _startup("startup.t_settle", "startup.t_settle", "s"),
     # (counts last: tune -c writes them after the reals)
     Row("ripple_order", ("controller.ripple_order",), "-", kind="count"),
+    *(_harmonic("harm_order", i, "-") for i in range(EMF_ARRAYS["harm_order"])),
 )
 
 #: field -> its row

@@ -107,11 +107,13 @@ class HandoverDesign:
 
 
 def emf_harmonic_ripple(motor: Motor) -> float:
-    """The EMF estimate's angle ripple from the magnets' flux harmonics, rad.
+    """The EMF estimate's angle ripple from the magnets' flux harmonics it does not compensate, rad.
 
     A harmonic ``a cos(k theta + phi)`` of the flux makes an EMF harmonic ``k a`` of the fundamental
     EMF (the derivative), which the estimated frame sees at ``(k -+ 1) theta``: the angle moves by
-    up to ``asin(sum k a)`` (docs/theory.md, "The hand-over"). The block models the fundamental only.
+    up to ``asin(sum k a)`` over those the block leaves out (it compensates the largest
+    ``LS_EMF_HARM_N``: :func:`linsense.analysis.emf.emf_pm_compensation`; docs/theory.md, "The
+    hand-over").
 
     Parameters
     ----------
@@ -123,8 +125,9 @@ def emf_harmonic_ripple(motor: Motor) -> float:
     float
         rad (0 for a sinusoidal flux; pi / 2 when the sum reaches 1).
     """
-    total = sum(abs(h.order * h.amplitude) for h in motor.pm_harmonics if h.order % 3 != 0)
-    return math.asin(min(total, 1.0))
+    from linsense.analysis.emf import emf_pm_compensation
+
+    return emf_pm_compensation(motor).residual
 
 
 def design_handover(motor: Motor, *, v_dc: float, f_pwm: float, dead_time: float, i_mag: float,
