@@ -44,19 +44,14 @@ void ls_drive_square_step_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT m
      * u = |i| cos(phi) (the unit vector (c, s) rotated by the current's), |i|^3 cos(3 phi) =
      * u (4 u^2 - 3 |i|^2). Decided on i_d_inj, the schedule's far current, not on the reference
      * it sets: the angle then does not jump when the schedule switches (docs/tuning.md, "Why the
-     * rotating vector and the square wave cycle"). A zero vector (|i|^6 not above 0): the d-axis. */
+     * rotating vector and the square wave cycle"). A zero vector (|i|^6 not above 0, i_d_inj = 0
+     * without a force: no design gives a schedule there) keeps the last decision. */
     if (d->near_c3_out > LS_R(0.0)) {
-        LS_REAL i_d = cfg->i_d_inj;
-        LS_REAL i_q = io.i_q_ref;
-        LS_REAL n2 = i_d * i_d + i_q * i_q;
-        LS_REAL n6 = n2 * n2 * n2;
-        LS_REAL u, p2;
-        if (!(n6 > LS_R(0.0))) {
-            i_d = n2 = n6 = LS_R(1.0);
-            i_q = LS_R(0.0);
-        }
-        u = io.c * i_d - io.s * i_q;
-        p2 = u * (LS_R(4.0) * u * u - LS_R(3.0) * n2);
+        const LS_REAL i_d = cfg->i_d_inj, i_q = io.i_q_ref;
+        const LS_REAL n2 = i_d * i_d + i_q * i_q;
+        const LS_REAL n6 = n2 * n2 * n2;
+        const LS_REAL u = io.c * i_d - io.s * i_q;
+        LS_REAL p2 = u * (LS_R(4.0) * u * u - LS_R(3.0) * n2);
         p2 *= p2;
         if (p2 < d->near_c3_in * d->near_c3_in * n6) {
             d->i_d_ref = cfg->i_d_near;
