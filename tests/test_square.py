@@ -101,8 +101,8 @@ def test_current_schedule_keeps_every_phase_out_of_the_relay_band():
 
 #: Square-wave holds that cycled (0.30-2.1 deg p-p) while the d-current schedule followed the
 #: estimated d-axis, the schedule's no-load zeros: under a force the current vector turns by
-#: atan(i_q / i_d) and a phase's fundamental current crossed zero outside the schedule (issue 39;
-#: docs/tuning.md, "Why the rotating vector and the square wave cycle"). Motor, load (N), position
+#: atan(i_q / i_d) and a phase's fundamental current crossed zero outside the schedule
+#: (docs/tuning.md, "Why the rotating vector and the square wave cycle"). Motor, load (N), position
 #: (electrical deg, on the 96-position hold grid), p-p (deg) measured before.
 _LOADED_SQUARE_HOLDS = (
     ("ecce2010", 15.0, 110.14, 0.73),
