@@ -6,7 +6,8 @@
  *     (ls_mod_step_ripple_finite, cfg.mod.l_ripple), which knows when a small phase current loses
  *     the dead time at one edge only, in step with the square wave;
  *   - the d-current schedule: i_d_near instead of i_d_inj near the six positions where the
- *     estimated d-axis is normal to a phase axis (cfg.near_in, cfg.near_out, with hysteresis);
+ *     current reference's vector (i_d_inj, i_q_ref) is normal to a phase axis (cfg.near_in,
+ *     cfg.near_out, with hysteresis; at no load the estimated d-axis);
  *   - no residual model, encoder, calibration or elliptical branches (sensorless only).
  * The square wave in the sensored and calibration modes runs those modes' steps
  * (ls_drive_sensored.c, ls_drive_calibration.c), without the two measures above. */
@@ -35,13 +36,26 @@ void ls_drive_square_step_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT m
     /* position reference and control -> force -> current reference */
     ls_drive_force_(d, &io);
 
-    /* the d-current schedule: |cos(3 theta_est)| = |sin(3 e)|, e the distance to the nearest
-     * position where the d-axis is normal to a phase axis (pi/6 + k pi/3), with hysteresis */
+    /* the d-current schedule, keyed to the current reference's vector (i_d_inj, i_q_ref) in the
+     * estimated frame, at the angle phi = theta_est + atan2(i_q_ref, i_d_inj): a phase's current
+     * crosses zero where its axis is normal to that vector (phi = pi/6 + k pi/3), at no load where
+     * the d-axis is, under a force turned by atan(i_q / i_d). |cos(3 phi)| = |sin(3 e)|, e the
+     * distance to the nearest of those positions, with hysteresis; without trigonometry, squared:
+     * u = |i| cos(phi) (the unit vector (c, s) rotated by the current's), |i|^3 cos(3 phi) =
+     * u (4 u^2 - 3 |i|^2). Decided on i_d_inj, the schedule's far current, not on the reference
+     * it sets: the angle then does not jump when the schedule switches (docs/tuning.md, "Why the
+     * rotating vector and the square wave cycle"). A zero vector (|i|^6 not above 0, i_d_inj = 0
+     * without a force: no design gives a schedule there) keeps the last decision. */
     if (d->near_c3_out > LS_R(0.0)) {
-        const LS_REAL a3 = LS_FABS(io.c * (LS_R(4.0) * io.c * io.c - LS_R(3.0)));
-        if (a3 < d->near_c3_in) {
+        const LS_REAL i_d = cfg->i_d_inj, i_q = io.i_q_ref;
+        const LS_REAL n2 = i_d * i_d + i_q * i_q;
+        const LS_REAL n6 = n2 * n2 * n2;
+        const LS_REAL u = io.c * i_d - io.s * i_q;
+        LS_REAL p2 = u * (LS_R(4.0) * u * u - LS_R(3.0) * n2);
+        p2 *= p2;
+        if (p2 < d->near_c3_in * d->near_c3_in * n6) {
             d->i_d_ref = cfg->i_d_near;
-        } else if (a3 > d->near_c3_out) {
+        } else if (p2 > d->near_c3_out * d->near_c3_out * n6) {
             d->i_d_ref = cfg->i_d_inj;
         }
     }

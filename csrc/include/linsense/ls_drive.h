@@ -168,9 +168,10 @@ typedef struct {
                                square wave's current change (docs/firmware.md), |i_d_inj| < i_max */
     LS_REAL i_d_near;       /* A, the square wave's sensorless step only (ls_drive_square.c): the
                                d-current reference while injecting near the six positions per period
-                               where the estimated d-axis is normal to a phase axis (theta = pi/6 + k
-                               pi/3), whose phase current then lies in the dead time's relay band
-                               (docs/theory.md); |i_d_near| < i_max */
+                               where the current reference's vector (i_d_inj, i_q_ref) in the
+                               estimated frame is normal to a phase axis (at no load the d-axis:
+                               theta = pi/6 + k pi/3), whose phase current then lies in the dead
+                               time's relay band (docs/theory.md); |i_d_near| < i_max */
     LS_REAL near_in;        /* rad, electrical angle from the nearest of those positions below which
                                i_d_near replaces i_d_inj, [0, near_out] */
     LS_REAL near_out;       /* rad, ... above which i_d_inj returns (the hysteresis), < pi/6; 0: no
@@ -291,7 +292,8 @@ typedef struct {
     int64_t enc_jump_max; /* -, largest plausible count change per step (>= 1) */
     LS_REAL i_d_ref;     /* A, d-current reference (cfg.i_d_inj with hf_on, else 0; i_d_near near the
                             positions of cfg.near_in) */
-    LS_REAL near_c3_in;  /* -, sin(3 near_in): |cos(3 theta_est)| below it is near */
+    LS_REAL near_c3_in;  /* -, sin(3 near_in): |cos(3 phi)| below it is near, phi the angle of the
+                            current reference's vector (ls_drive_square.c) */
     LS_REAL near_c3_out; /* -, sin(3 near_out) (0: no schedule) */
     uint8_t path;        /* the step that runs: its entry in the step table (csrc/ctrl/ls_drive.c),
                             by mode and injection shape */

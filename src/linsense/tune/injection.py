@@ -249,6 +249,11 @@ def square_current_schedule(l_avg: float, R_s: float, v_inj: float, f_pwm: float
 
     ``l_avg`` (H) is the inductance of the compensation's ripple model, ``(L_d + L_q) / 2``.
 
+    The design is that of a no-load hold, where the current vector is the d-axis; the firmware
+    keys the distance ``e`` to the current reference's vector ``(i_d_inj, i_q_ref)`` (ls_drive_square.c),
+    whose zeros a force turns by ``atan(i_q / i_d_inj)`` (docs/tuning.md, "Why the rotating vector
+    and the square wave cycle").
+
     Parameters
     ----------
     l_avg : float
