@@ -206,7 +206,7 @@ def test_hover_in_the_band_and_at_v_off(name, v_max):
             r = _run(spec, base, case)
             assert r["fault"] == 0
             cruise = np.abs(np.abs(r["v"]) - v_c) < 0.02 * v_c
-            assert cruise.sum() / base["inverter"]["f_pwm"] * v_c >= 5.0 * tau  # (a cruise over 5 pitches at least)
+            assert cruise.sum() / base["inverter"]["f_pwm"] * v_c >= 5.0 * tau  # (5 pitches at least)
             toggles = int(np.abs(np.diff(r["inject"])).sum())
             print(f"{name} hover at {where} ({v_c:.3f} m/s), load {sign:+g}: {toggles} changes of the flag, "
                   f"peak {np.abs(r['err_deg']).max():.2f} deg, cruise |v_est| "
