@@ -97,6 +97,11 @@ Each line: the claim [where it is written]: the test that asserts it.
   psi_rot within 0.44 deg at 16 of 16 positions [theory.md "Rotating-vector injection"]:
   test_injection_shapes.py::test_rotating_with_its_table_holds_everywhere,
   ::test_rotating_without_table_follows_the_model
+* the hand-over: jump <= 0.11 / 0.12 deg, transient <= 0.61 / 0.33 deg, offset's move <= 0.24 / 0.31
+  deg, peak 1.62 / 1.34 deg (ecce2010 / m60_pos20k; asserted as the bounds 0.3, 1, 0.5 and 2 deg);
+  hovering at v_off the flag changes twice per move; 34.4 V of fundamental at 1.4 m/s, 1.12 m/s
+  without the EMF estimate [theory.md "11. The hand-over"]: test_handover.py (bounds asserted,
+  the measured values in its docstrings)
 * the metrics' definitions [simulator.md "Metrics"]:
   test_sim_metrics.py::test_metrics_equal_the_reference_from_the_docs (tests/ref_metrics.py)
 """
