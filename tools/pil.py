@@ -67,7 +67,7 @@ def _hold(name: str, duration: float, mode: str, injection: dict | None = None, 
 
 
 #: name -> scenario (a file of the examples, or a dict); every mode and injection shape of the
-#: drive's step table (csrc/ctrl/ls_drive.c) that a scenario can run
+#: drive's step table (csrc/ctrl/ls_drive.c) that a scenario can run, the SPEED column included
 def cases(quick: bool = False) -> list[tuple[str, object]]:
     d = 0.1 if quick else 0.2  # s of each hold (3,200 steps at 16 kHz)
     fig13 = ("fig13", {"file": SCEN / "fig13_trajectory_switching.toml",
@@ -87,7 +87,52 @@ def cases(quick: bool = False) -> list[tuple[str, object]]:
         _hold("calibration", d, "calibration"),
         # (the start-up needs the saturated plant: its polarity pulses see nothing on the linear one)
         _hold("startup", 0.5 if quick else 0.6, "startup", saturation={"enabled": True}),
+        speed_case(quick),
     ]
+
+
+#: the speed case's drive: ecce2010 designed by ``linsense tune --v-max`` for this speed (m/s) and
+#: acceleration (m/s^2): its hand-over band (about 0.39-0.77 m/s, the injection off from 0.90 m/s)
+#: lies inside the move
+SPEED_V, SPEED_A = 1.0, 4.0
+
+
+def speed_case(quick: bool = False) -> tuple[str, dict]:
+    """The whole speed range (``observer.emf``: the step table's SPEED column, ls_drive_speed.c): a
+    move at :data:`SPEED_V` designed as ``linsense tune --motor ecce2010 --v-max 1`` designs it
+    (:func:`linsense.tune.drive_design.design_drive`, written out by
+    :func:`linsense.tune.export.scenario_dict`), against a 20 N load, through the hand-over band up
+    to the speed where the injection is off and back (the quick set: the way out alone).
+
+    Parameters
+    ----------
+    quick : bool, optional
+        The way out alone (0.6 s) instead of out and back (1.55 s).
+
+    Returns
+    -------
+    tuple of (str, dict)
+        The case's name and scenario.
+    """
+    from linsense.model.motor import load_motor
+    from linsense.tune.design import DriveData
+    from linsense.tune.drive_design import design_drive
+    from linsense.tune.export import scenario_dict
+
+    made = design_drive(load_motor("ecce2010"), DriveData(v_max=SPEED_V, a_max=SPEED_A), source="ecce2010",
+                        analyse=False, startup=False)
+    x0 = 14.2
+    base = {"scenario": {"name": "speed", "duration": 0.6 if quick else 1.55, "seed": 1},
+            "inverter": {"fidelity": "switching"},
+            "reference": {"type": "trajectory", "waypoints_mm": [300.0] if quick else [350.0, x0],
+                          "at": 0.02, "v_max": SPEED_V, "a_max": SPEED_A, "dwell": 0.05},
+            "initial": {"position_mm": x0, "load_balanced": True},
+            "load": {"type": "constant", "force": 20.0}}
+    data = scenario_dict(made, motor_ref="ecce2010", base=base)
+    if not data.get("observer", {}).get("emf"):
+        raise SystemExit("pil: the speed case's design has no EMF observer (observer.emf): it would not run "
+                         "the SPEED step")
+    return "speed", data
 
 
 def _scenario(spec):
