@@ -220,18 +220,18 @@ fuzztest: tools
 	fi
 
 # Cortex-M4F cross build of the library: warning-free, float only, no libc beyond math/string, its
-# code at most 32 kB (tools/check_mcu.sh); then the exported firmware (library and example) built
+# code at most 32 kB in the shipped build, -Os -flto (tools/check_mcu.sh); then the exported firmware (library and example) built
 # by CMake with csrc/cmake/arm-none-eabi-m4f.cmake (as copied into the export)
 mcu: tools example-export cmake-tool
 	tools/check_mcu.sh build/arm
 	cmake -S $(EXPORT) -B $(EXAMPLE)/m4f -DCMAKE_TOOLCHAIN_FILE=$(abspath $(EXPORT))/cmake/arm-none-eabi-m4f.cmake >/dev/null
 	$(call cmake_build,$(EXAMPLE)/m4f)
-	@arm-none-eabi-size $(EXAMPLE)/m4f/firmware_example | awk 'NR == 2 {print "mcu: the exported firmware built by CMake for the Cortex-M4F (-Os): firmware_example text " $$1 " data " $$2 " bss " $$3 " bytes"}'
+	@arm-none-eabi-size $(EXAMPLE)/m4f/firmware_example | awk 'NR == 2 {print "mcu: the exported firmware built by CMake for the Cortex-M4F (MinSizeRel, -Os -flto): firmware_example text " $$1 " data " $$2 " bss " $$3 " bytes"}'
 
 # Processor in the loop (docs/firmware.md, "Processor in the loop"): tools/pil.py records the host's
 # closed loop of the Fig. 13 trajectory and a hold in every mode and injection shape (the drive's
 # inputs at ls_drive_step), replays them on the Cortex-M4F build (csrc/pil/: start-up, semihosting,
-# mps2-an386 linker script; -O2 and -Os, newlib) under qemu-system-arm and on the host build
+# mps2-an386 linker script; -O2 and the shipped -Os -flto, newlib) under qemu-system-arm and on the host build
 # (glibc), and fails unless they agree bit for bit on every output of every step; then
 # tools/pil_closed.py closes the loop through the target: 1 s of the Fig. 13 trajectory with the
 # plant on the host and the drive under QEMU, one exchange per PWM period, identical to the host's

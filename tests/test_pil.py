@@ -83,7 +83,8 @@ def test_compare_fails_on_a_sign_of_zero(tmp_path):
 
 
 def test_the_replays_are_the_host_and_the_target_at_two_optimisations():
-    assert pil.REPLAYS == {"host": ("host", "-O2"), "m4f": ("m4f", "-O2"), "m4f_os": ("m4f", "-Os")}
+    assert pil.REPLAYS == {"host": ("host", "-O2"), "m4f": ("m4f", "-O2"), "m4f_os": ("m4f", pil.SHIPPED)}
+    assert pil.SHIPPED.split()[0] == "-Os" and "-flto" in pil.SHIPPED.split()  # (the toolchain file's)
     assert pil.TARGETS == ["m4f", "m4f_os"] and pil.BOUND == 0.0
 
 

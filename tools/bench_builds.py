@@ -42,9 +42,9 @@ import pil  # noqa: E402
 CTRL = ROOT / "csrc" / "ctrl"
 #: the files the step runs through (its modes' steps, their pieces, the per-step functions the
 #: headers do not inline); the others are initialisation and configuration
-HOT = ("ls_drive_parts", "ls_drive_sensorless", "ls_drive_sensored", "ls_drive_calibration",
-       "ls_drive_rotating", "ls_drive_square", "ls_drive_startup", "ls_drive_off", "ls_dtres", "ls_traj",
-       "ls_lut", "ls_startup", "ls_pos", "ls_math")
+HOT = ("ls_drive_parts", "ls_drive_sensorless", "ls_drive_speed", "ls_emf", "ls_drive_sensored",
+       "ls_drive_calibration", "ls_drive_rotating", "ls_drive_square", "ls_drive_startup", "ls_drive_off",
+       "ls_dtres", "ls_traj", "ls_lut", "ls_startup", "ls_pos", "ls_math")
 SHARED = "-DLS_DRIVE_SHARED_PARTS"
 #: name -> (options of the cold files, of the hot files (:data:`HOT`), of the link)
 CANDIDATES = {

@@ -15,12 +15,12 @@ import sys
 
 OFF, SENSORED, LUT, NOLUT, CAL, STARTUP = range(6)
 PRESETS = range(8)
-N_FIELDS = 86  # fuzz_drive.c FIELDS; then enc_counts, cal.period, startup.pairs, the types
+N_FIELDS = 104  # fuzz_drive.c FIELDS; then enc_counts, cal.period, startup.pairs, the types
 SCALE = {1: 0x00, 8: 0x10, 64: 0x20, 256: 0x30}
 
 
-def header(preset=0, flags=0, tables=0, cal=0, n_ovr=0, load=0, plant=0):
-    return bytes([preset, flags, tables, cal, n_ovr, load & 0xFF, plant, 0])
+def header(preset=0, flags=0, tables=0, cal=0, n_ovr=0, load=0, plant=0, speed=0):
+    return bytes([preset, flags, tables, cal, n_ovr, load & 0xFF, plant, speed])
 
 
 def ovr(field, kind, value):
@@ -95,6 +95,13 @@ def seeds():
     s["ovr_kp_huge"] = header(n_ovr=2) + ovr(29, 1, 14) + ovr(30, 1, 10) + mode(SENSORED) + run(64, 8)
     s["ovr_denormal_l"] = header(n_ovr=2) + ovr(51, 0, 1) + ovr(52, 0, 1) + mode(LUT) + run(64, 8)
     s["ovr_enc_coarse"] = header(n_ovr=1) + ovr(N_FIELDS, 0, 6) + mode(SENSORED) + run(64, 8)
+    # the SPEED step (h[7]: emf_on, a band the moves cross, the magnets' imbalance compensated)
+    for p, sp in ((0, 1), (1, 3), (0, 7)):
+        s[f"speed{sp}_preset{p}"] = (
+            header(p, speed=sp) + mode(LUT) + rec(3, 0, pos_plain(3, 0.5), 255, 64) + run()
+            + rec(3, 0, pos_plain(0, 0.0), 255, 64) + run()
+        )
+    s["speed_nolut_load"] = header(1, load=40, speed=3) + mode(NOLUT) + rec(3, 0, pos_plain(-3, 0.2), 255, 64)
     return s
 
 

@@ -10,8 +10,8 @@
    bit for bit).
 2. build the replay (csrc/pil/pil_replay.c) for the host (cc, -O2, -ffp-contract=off as the
    extension, glibc) and for the Cortex-M4F (arm-none-eabi-gcc, the firmware flags of
-   tools/check_mcu.sh, at -O2 and at -Os, newlib-nano, with the harness: startup_m4.c,
-   pil_io_semihost.c, mps2_an386.ld): :data:`REPLAYS`.
+   tools/check_mcu.sh, at -O2 and in the shipped build (-Os -flto), newlib-nano, with the harness:
+   startup_m4.c, pil_io_semihost.c, mps2_an386.ld): :data:`REPLAYS`.
 3. run them (the target under ``qemu-system-arm -M mps2-an386`` with semihosting) and compare every
    output of every step: the host replay with the closed loop's own outputs (the recording is
    complete) and both target builds with the host, floats and integers alike (:data:`BOUND`: bit for
@@ -67,7 +67,7 @@ def _hold(name: str, duration: float, mode: str, injection: dict | None = None, 
 
 
 #: name -> scenario (a file of the examples, or a dict); every mode and injection shape of the
-#: drive's step table (csrc/ctrl/ls_drive.c) that a scenario can run
+#: drive's step table (csrc/ctrl/ls_drive.c) that a scenario can run, the SPEED column included
 def cases(quick: bool = False) -> list[tuple[str, object]]:
     d = 0.1 if quick else 0.2  # s of each hold (3,200 steps at 16 kHz)
     fig13 = ("fig13", {"file": SCEN / "fig13_trajectory_switching.toml",
@@ -87,7 +87,52 @@ def cases(quick: bool = False) -> list[tuple[str, object]]:
         _hold("calibration", d, "calibration"),
         # (the start-up needs the saturated plant: its polarity pulses see nothing on the linear one)
         _hold("startup", 0.5 if quick else 0.6, "startup", saturation={"enabled": True}),
+        speed_case(quick),
     ]
+
+
+#: the speed case's drive: ecce2010 designed by ``linsense tune --v-max`` for this speed (m/s) and
+#: acceleration (m/s^2): its hand-over band (about 0.39-0.77 m/s, the injection off from 0.90 m/s)
+#: lies inside the move
+SPEED_V, SPEED_A = 1.0, 4.0
+
+
+def speed_case(quick: bool = False) -> tuple[str, dict]:
+    """The whole speed range (``observer.emf``: the step table's SPEED column, ls_drive_speed.c): a
+    move at :data:`SPEED_V` designed as ``linsense tune --motor ecce2010 --v-max 1`` designs it
+    (:func:`linsense.tune.drive_design.design_drive`, written out by
+    :func:`linsense.tune.export.scenario_dict`), against a 20 N load, through the hand-over band up
+    to the speed where the injection is off and back (the quick set: the way out alone).
+
+    Parameters
+    ----------
+    quick : bool, optional
+        The way out alone (0.6 s) instead of out and back (1.55 s).
+
+    Returns
+    -------
+    tuple of (str, dict)
+        The case's name and scenario.
+    """
+    from linsense.model.motor import load_motor
+    from linsense.tune.design import DriveData
+    from linsense.tune.drive_design import design_drive
+    from linsense.tune.export import scenario_dict
+
+    made = design_drive(load_motor("ecce2010"), DriveData(v_max=SPEED_V, a_max=SPEED_A), source="ecce2010",
+                        analyse=False, startup=False)
+    x0 = 14.2
+    base = {"scenario": {"name": "speed", "duration": 0.6 if quick else 1.55, "seed": 1},
+            "inverter": {"fidelity": "switching"},
+            "reference": {"type": "trajectory", "waypoints_mm": [300.0] if quick else [350.0, x0],
+                          "at": 0.02, "v_max": SPEED_V, "a_max": SPEED_A, "dwell": 0.05},
+            "initial": {"position_mm": x0, "load_balanced": True},
+            "load": {"type": "constant", "force": 20.0}}
+    data = scenario_dict(made, motor_ref="ecce2010", base=base)
+    if not data.get("observer", {}).get("emf"):
+        raise SystemExit("pil: the speed case's design has no EMF observer (observer.emf): it would not run "
+                         "the SPEED step")
+    return "speed", data
 
 
 def _scenario(spec):
@@ -200,6 +245,8 @@ def _toolchain_flags(var: str) -> list[str]:
 
 
 ARM, ARM_LINK = _toolchain_flags("CMAKE_C_FLAGS_INIT"), _toolchain_flags("CMAKE_EXE_LINKER_FLAGS_INIT")
+#: the shipped build's optimisation (the toolchain file's MinSizeRel: -Os with link-time optimisation)
+SHIPPED = " ".join(_toolchain_flags("CMAKE_C_FLAGS_MINSIZEREL_INIT"))
 
 
 def build_replay(out: Path, tag: str, target: str, opt: str = "-O2", defines: tuple = ()) -> Path:
@@ -215,7 +262,7 @@ def build_replay(out: Path, tag: str, target: str, opt: str = "-O2", defines: tu
         return exe
     exe = out / f"pil_replay_{tag}.elf"
     arm = os.environ.get("ARM_CC", "arm-none-eabi-gcc")
-    subprocess.run([arm, *WARN, *ARM, opt, "-ffp-contract=off", "-DPIL_TARGET", *inc,
+    subprocess.run([arm, *WARN, *ARM, *opt.split(), "-ffp-contract=off", "-DPIL_TARGET", *inc,
                     str(PIL / "pil_replay.c"), str(PIL / "pil_io_semihost.c"), str(PIL / "startup_m4.c"),
                     *srcs, "-nostartfiles", *ARM_LINK, f"-T{PIL / 'mps2_an386.ld'}",
                     f"-Wl,-Map={out / f'pil_replay_{tag}.map'}", "-lm", "-o", str(exe)],
@@ -224,8 +271,9 @@ def build_replay(out: Path, tag: str, target: str, opt: str = "-O2", defines: tu
 
 
 #: the replays: tag -> (target, optimisation); the host's as the extension (glibc), the target's at the
-#: firmware flags' -O2 and at -Os (the size tools/check_mcu.sh holds to 32 kB), newlib-nano
-REPLAYS = {"host": ("host", "-O2"), "m4f": ("m4f", "-O2"), "m4f_os": ("m4f", "-Os")}
+#: firmware flags' -O2 and in the shipped build (:data:`SHIPPED`, the size tools/check_mcu.sh holds to
+#: 32 kB; the harness link-time optimised with the library), newlib-nano
+REPLAYS = {"host": ("host", "-O2"), "m4f": ("m4f", "-O2"), "m4f_os": ("m4f", SHIPPED)}
 #: the target builds, each compared with the host's
 TARGETS = [t for t, (target, _) in REPLAYS.items() if target != "host"]
 
@@ -313,8 +361,8 @@ def compare(out: Path, names: list[tuple[str, int]]) -> bool:
             verdicts.append(f"{_summary(dif)} ({REPLAYS[t][1]})")
         modes = sorted({int(m) for m in r["host"][:, 5]})
         print(f"pil: {name:16s} {steps:6d} steps, modes {modes}: target/host " + ", ".join(verdicts))
-    print(f"pil: largest |target - host| per output over {total} steps, -O2 and -Os (newlib on the target, "
-          "glibc on the host): " + ", ".join(f"{k} {v:.3g}" for k, v in worst.items()))
+    print(f"pil: largest |target - host| per output over {total} steps, -O2 and {SHIPPED} (newlib on the "
+          "target, glibc on the host): " + ", ".join(f"{k} {v:.3g}" for k, v in worst.items()))
     return ok
 
 

@@ -80,7 +80,7 @@ void ls_drive_speed_step_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT me
     applied_voltage(d, meas->v_dc, v_ab);
     i_ab[0] = io.i_a;
     i_ab[1] = io.i_b;
-    e_emf = ls_emf_step(&d->emf, v_ab, i_ab, io.c, io.s, d->obs.omega, d->dtres.k_r);
+    e_emf = ls_emf_step_eps(&d->emf, v_ab, i_ab, io.c, io.s, d->obs.omega, d->dtres.k_r);
     e_hf = hf_error(d, meas, &io);
     err = ls_fuse_step(&d->fuse, d->obs.omega, d->inj.on && d->inj.amp >= d->cfg.inject.amplitude, e_hf,
                        LS_ISFINITE(e_emf) ? e_emf : LS_R(0.0));

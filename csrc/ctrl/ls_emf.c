@@ -152,11 +152,11 @@ LS_REAL ls_emf_omega_min(const ls_emf *e, LS_REAL i_mag, LS_REAL psi, LS_REAL ep
     return hi;
 }
 
-LS_REAL ls_emf_step(ls_emf *e, const LS_REAL v_ab[2], const LS_REAL i_ab[2], LS_REAL c, LS_REAL s,
-                    LS_REAL omega, LS_REAL k_r)
+LS_REAL ls_emf_step_eps(ls_emf *e, const LS_REAL v_ab[2], const LS_REAL i_ab[2], LS_REAL c, LS_REAL s,
+                        LS_REAL omega, LS_REAL k_r)
 {
     const ls_emf_cfg *g = &e->cfg;
-    LS_REAL w, r, ima, imb, ea, eb, d, cd, sd, cm, sm, ed, eq, id, iq, sg, ipar, iperp;
+    LS_REAL w, r, ima, imb, ea, eb, d, cd, sd, cm, sm, ed, eq, id, iq, sg;
     if (!LS_ISFINITE4(v_ab[0], v_ab[1], i_ab[0], i_ab[1]) || !LS_ISFINITE4(c, s, omega, k_r)) {
         e->primed = false;
         return e->eps;
@@ -224,7 +224,6 @@ LS_REAL ls_emf_step(ls_emf *e, const LS_REAL v_ab[2], const LS_REAL i_ab[2], LS_
     /* (no EMF, or filters overflowed by hostile inputs until the caller resets: no angle, no trust) */
     if (!(e->mag > LS_R(0.0) && e->mag <= LS_REAL_MAX)) {
         e->eps = LS_R(0.0);
-        e->bound = LS_R(0.5) * LS_PI;
         return e->eps;
     }
     if (e->pm_comp) {
@@ -234,12 +233,27 @@ LS_REAL ls_emf_step(ls_emf *e, const LS_REAL v_ab[2], const LS_REAL i_ab[2], LS_
     } else {
         e->eps = ls_atan2(-sg * e->e_d, sg * e->e_q);
     }
-    {
-        /* the current's parts along and across the EMF */
-        const LS_REAL um = LS_R(1.0) / e->mag;
-        ipar = LS_FABS(e->i_d * e->e_d + e->i_q * e->e_q) * um;
-        iperp = LS_FABS(e->i_q * e->e_d - e->i_d * e->e_q) * um;
-        e->bound = ls_emf_bound(e, e->mag, ipar, iperp, w, k_r);
-    }
     return e->eps;
+}
+
+LS_REAL ls_emf_step(ls_emf *e, const LS_REAL v_ab[2], const LS_REAL i_ab[2], LS_REAL c, LS_REAL s,
+                    LS_REAL omega, LS_REAL k_r)
+{
+    const bool primed0 = e->primed;
+    const LS_REAL eps = ls_emf_step_eps(e, v_ab, i_ab, c, s, omega, k_r);
+    /* (the filters moved: a step of a primed block with finite inputs; else the bound stays) */
+    if (!primed0 || !e->primed) {
+        return eps;
+    }
+    if (!(e->mag > LS_R(0.0) && e->mag <= LS_REAL_MAX)) {
+        e->bound = LS_R(0.5) * LS_PI;
+    } else {
+        /* the current's parts along and across the EMF, at the step's clamped speed and scale */
+        const LS_REAL um = LS_R(1.0) / e->mag;
+        const LS_REAL ipar = LS_FABS(e->i_d * e->e_d + e->i_q * e->e_q) * um;
+        const LS_REAL iperp = LS_FABS(e->i_q * e->e_d - e->i_d * e->e_q) * um;
+        e->bound = ls_emf_bound(e, e->mag, ipar, iperp, ls_clamp(omega, -e->cfg.omega_max, e->cfg.omega_max),
+                                k_r);
+    }
+    return eps;
 }

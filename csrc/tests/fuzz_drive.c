@@ -18,7 +18,9 @@
  *     h[5]  the plant's load force, (int8) h[5] / 4 N
  *     h[6]  bits 0..3 the plant's current-sensor noise, 2 mA rms per unit; bits 4..5 the sample rate
  *           (16, 20, 10, 32 kHz; every module follows)
- *     h[7]  reserved
+ *     h[7]  bit 0 toggle emf_on (the SPEED step with the pulsating or elliptical injection); bit 1 a
+ *           hand-over band of 0.04-0.14 m/s (the default moves' 0.2 m/s cross it); bit 2 the magnets' imbalance
+ *           compensated (emf.psi_pm, pm_shift, neg_re, neg_im)
  *   override record, 6 bytes: field, kind, value (4 bytes, big-endian)
  *     field < N_FIELDS: an LS_REAL field of ls_drive_cfg (FIELDS) set to the value decoded by
  *     rd_real (kind & 0x10: multiplied into the preset's value instead); then the integer fields
@@ -173,7 +175,11 @@ static const size_t FIELDS[] = {
     FIELD(mod.l_ripple), FIELD(i_d_near), FIELD(near_in), FIELD(near_out), FIELD(hf_delay), FIELD(dtres.l_ea),
     FIELD(dtres.l_eb), FIELD(pos.speed.out_min), FIELD(pos.speed.out_max), FIELD(startup.t_lock),
     FIELD(startup.err_lock), FIELD(startup.t_quiet), FIELD(startup.v_pulse), FIELD(startup.t_pulse),
-    FIELD(startup.t_rest), FIELD(startup.i_min), FIELD(startup.t_settle), FIELD(startup.lock_gain)};
+    FIELD(startup.t_rest), FIELD(startup.i_min), FIELD(startup.t_settle), FIELD(startup.lock_gain),
+    FIELD(emf.r_s), FIELD(emf.l_d), FIELD(emf.l_q), FIELD(emf.f_lpf), FIELD(emf.omega_max), FIELD(emf.err_r),
+    FIELD(emf.err_l), FIELD(emf.u_err), FIELD(emf.i_noise), FIELD(emf.psi_pm), FIELD(emf.pm_shift),
+    FIELD(emf.neg_re), FIELD(emf.neg_im), FIELD(fuse.v_lo), FIELD(fuse.v_hi), FIELD(fuse.v_off), FIELD(fuse.v_on),
+    FIELD(fuse.t_settle)};
 #define N_FIELDS (sizeof FIELDS / sizeof FIELDS[0])
 #define N_OVR_KINDS (N_FIELDS + 4u)
 
@@ -182,7 +188,7 @@ static void set_fs(ls_drive_cfg *c, LS_REAL fs)
 {
     c->fs = c->inject.fs = c->bpf.fs = c->sep.fs = c->demod.fs = c->obs.fs = c->enc_obs.fs = fs;
     c->current.fs = c->traj.fs = c->prot.fs = c->pos.speed.fs = c->dtres.fs = c->mod.f_pwm = fs;
-    c->startup.fs = fs;
+    c->startup.fs = c->emf.fs = c->fuse.fs = fs;
 }
 
 static void preset(ls_drive_cfg *c, const uint8_t h[HDR])
@@ -277,6 +283,23 @@ static void preset(ls_drive_cfg *c, const uint8_t h[HDR])
     }
     if ((h[3] & 63u) != 0u) {
         c->cal.points = (uint32_t)(h[3] & 63u) + 1u;
+    }
+    /* the whole speed range (ls_drive_speed.c): the EMF estimate and the hand-over; a band low
+     * enough for the plant's moves (0.2 m/s by default) to cross it, the magnets' imbalance
+     * compensated (the values of an end phase a few per cent weak) */
+    c->emf_on ^= (h[7] & 1u) != 0u;
+    if (h[7] & 2u) {
+        c->fuse.v_lo = LS_R(0.04);
+        c->fuse.v_hi = LS_R(0.08);
+        c->fuse.v_on = LS_R(0.10);
+        c->fuse.v_off = LS_R(0.14);
+        c->fuse.t_settle = LS_R(0.001);
+    }
+    if (h[7] & 4u) {
+        c->emf.psi_pm = c->current.psi_pm;
+        c->emf.pm_shift = LS_R(0.009);
+        c->emf.neg_re = LS_R(0.013);
+        c->emf.neg_im = LS_R(-0.008);
     }
 }
 
