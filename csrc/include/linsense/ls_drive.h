@@ -42,6 +42,15 @@
  *                            turned by pi when they say so), HF relock, then LS_MODE_SENSORLESS_LUT
  *                            by itself with the reference at the estimate (no jump); su holds the
  *                            decision; a failed start-up trips LS_FAULT_OBSERVER
+ *   LS_MODE_COMMISSION       the end-effect table learned without a sensor (ls_drive_commission.c;
+ *                            cfg.emf_on, cal.table, cal.learn and demod.comp over cal.table
+ *                            required): the sensorless step of cfg.emf_on with the injection kept
+ *                            on at every speed; while the estimated speed is at least fuse.v_hi
+ *                            (the EMF error alone drives the observer) the demodulator's error
+ *                            with the table is learned into it at the estimated angle, forward and
+ *                            backward apart (cal.learn) and the table their mean; the caller moves
+ *                            the mover back and forth (ls_drive_move_to); cmd.cal_index counts the
+ *                            points seen cal.t_hold in both directions, cmd.cal_done when all are
  */
 #ifndef LINSENSE_LS_DRIVE_H
 #define LINSENSE_LS_DRIVE_H
@@ -93,7 +102,8 @@ typedef enum {
     LS_MODE_SENSORLESS_LUT = 2,
     LS_MODE_SENSORLESS_NOLUT = 3,
     LS_MODE_CALIBRATION = 4,
-    LS_MODE_STARTUP = 5
+    LS_MODE_STARTUP = 5,
+    LS_MODE_COMMISSION = 6
 } ls_mode;
 
 typedef struct {
@@ -112,6 +122,12 @@ typedef struct {
                             of acting as a relay on the near-zero force current (0: none), >= 0 */
     LS_REAL dither_freq; /* Hz, its frequency (well above the position loop, below the demodulator
                             low-pass; its motion is amp K_f / (m w^2)), > 0 if dither_amp > 0 */
+    float *learn;     /**< unit: rad and s, LS_MODE_COMMISSION: caller-owned work of 4 points floats,
+                           the table's forward estimate, its backward estimate (rad), then the time
+                           each point was seen moving forward, backward (s; linear weights); NULL:
+                           no commissioning. There cal.k_int (1/s) is the estimates' rate
+                           (k_int / fs < 1) and cal.t_hold (s) the time each point needs in each
+                           direction */
 } ls_cal_cfg;
 
 typedef struct {
