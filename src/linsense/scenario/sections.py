@@ -161,10 +161,13 @@ class InverterSection(BaseModel):
 class ControlSection(BaseModel):
     """The ``[control]`` section of a scenario file; its keys are in docs/simulator.md."""
     model_config = _STRICT
-    mode: Literal["sensorless_lut", "sensorless_nolut", "sensored", "calibration", "startup"] = Field(
+    mode: Literal["sensorless_lut", "sensorless_nolut", "sensored", "calibration", "startup",
+                  "commission"] = Field(
         "sensorless_lut", description="`sensorless_lut`, `sensorless_nolut`, `sensored`, `calibration` (the "
         "firmware's LUT calibration; `linsense calibrate` runs it), `startup` (start-up from an unknown "
-        "position with the magnet polarity, then `sensorless_lut`; `[startup]` below)")
+        "position with the magnet polarity, then `sensorless_lut`; `[startup]` below), `commission` (the "
+        "table learned without a sensor at speed against the EMF estimate, `observer.emf = true`; "
+        "`[calibration]`'s `points`, `k_int` and `t_hold`; `linsense commission` runs it)")
     fs: Positive | None = Field(None, description="must equal `inverter.f_pwm` (one controller step per PWM "
                                 "period)", json_schema_extra={"unit": "Hz", "default_note": "= `f_pwm`"})
     delay_comp: NonNegative = Field(_c(_C.delay_comp), description="voltage-angle advance",

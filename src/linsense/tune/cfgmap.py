@@ -208,7 +208,7 @@ def _rotating(v: Values) -> bool:
 
 
 def _calibrating(v: Values) -> bool:
-    return v["control.mode"] == "calibration"
+    return v["control.mode"] in ("calibration", "commission")
 
 
 def _measures(v: Values) -> bool:

@@ -1,0 +1,272 @@
+"""Sensorless commissioning of the end-effect table in the simulator: ``linsense commission``.
+
+The drive runs ``LS_MODE_COMMISSION`` (``csrc/ctrl/ls_drive_commission.c``, docs/tuning.md,
+"Commissioning without a sensor"): the mover goes back and forth over the travel at a speed above
+the hand-over band's top ``v_hi`` (where the EMF estimate alone drives the observer), the HF
+demodulator runs beside it with the table being learned, and the drive learns the table from the
+HF error against the EMF position, the forward and backward estimates apart and the table their
+mean. No encoder is read. The result is a :class:`~linsense.studies.calibrate.Calibration` (the
+table, the plant's own for comparison, the stamp), written in ``calibrate``'s formats by
+:func:`commission_to`.
+
+Refused before the run (:class:`~linsense.errors.InputError`), naming what is needed: a motor
+without saliency (``L_q / L_d`` below :data:`SALIENCY_MIN`), a drive whose design leaves the EMF
+estimate off, too little travel (the accelerations to the speed and back plus
+:data:`PERIODS_AT_SPEED` electrical periods at speed), a load the drive cannot hold while it
+accelerates.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from linsense.analysis.hf import psi_lut
+from linsense.compensation.lut import build_lut
+from linsense.compensation.measured import end_effect_fit, table_stamp
+from linsense.ctrl import ffi
+from linsense.errors import InputError
+from linsense.io import output_set, split_timing
+from linsense.model.motor import Motor
+from linsense.scenario.load import Scenario, scenario_from_dict
+from linsense.sim.build import build, designed, resolve_motor
+from linsense.sim.core import run_closed_loop
+from linsense.sim.metrics import fault_reason
+from linsense.sim.to_folder import write_metrics
+from linsense.studies.calibrate import Calibration, _drive_of_scenario, lut_csv, measured_json
+from linsense.tune.design import mean_dq
+
+__all__ = ["SALIENCY_MIN", "SPEED_OVER_V_HI", "PERIODS_AT_SPEED", "commission", "commission_to",
+           "CommissionOutput"]
+
+#: -, the least mean L_q / L_d: below it the HF error is too weak to learn a table from
+SALIENCY_MIN = 1.05
+#: -, the commissioning speed over the hand-over band's top (the EMF estimate alone, with margin
+#: for the speed's ripple)
+SPEED_OVER_V_HI = 1.3
+#: -, electrical periods at speed each way, at least
+PERIODS_AT_SPEED = 1.0
+#: -, the force the drive may use to accelerate and hold the load, of K_f i_max
+FORCE_SHARE = 0.8
+#: s, simulated motion, at most (issue 39: <= 10 s)
+DURATION_MAX = 10.0
+#: 1/s and s: the estimates' rate and the time each point needs in each direction (5 time constants)
+K_INT = 125.0
+T_HOLD = 5.0 / K_INT
+#: m/s, the speed caps the band is designed for, the first the bus allows
+CAPS = (2.0, 1.5, 1.0, 0.7)
+#: s, the HF lock before the first move
+T_START = 0.1
+
+
+@dataclass
+class CommissionOutput:
+    """What :func:`commission_to` made: the commissioning (a Calibration), metrics, files."""
+
+    calibration: Calibration
+    metrics: dict
+    timing: dict
+    files: list[Path] = field(default_factory=list)
+
+    @property
+    def completed(self) -> bool:
+        """Whether every point was seen in both directions without a fault."""
+        return bool(self.calibration.completed)
+
+
+def _refuse(source: str, key: str, message: str):
+    raise InputError(source, key, message)
+
+
+def commission(motor: Motor | str | None = None, *, scenario: Scenario | None = None,
+               plant: Motor | None = None,
+               speed: float | None = None, stroke_mm: float | None = None, load: float = 0.0,
+               points: int = 56, fidelity: str = "switching", a_max: float | None = None,
+               source: str = "<commission>") -> Calibration:
+    """Learn the end-effect table without a sensor (module docstring).
+
+    Parameters
+    ----------
+    motor : Motor or str or None
+        The motor the drive believes in (a preset name or file); None with ``scenario``.
+    scenario : Scenario or None, optional
+        The drive (its drive keys kept, as ``calibrate``'s); its ``[travel]`` bounds the stroke.
+    plant : Motor or None, optional
+        The motor the drive runs on where it differs (an off-nominal plant).
+    speed : float or None, optional
+        Commissioning speed, m/s; None: :data:`SPEED_OVER_V_HI` ``v_hi``.
+    stroke_mm : float or None, optional
+        The back-and-forth stroke, mm; None: the scenario's travel less 10 % at each end, else the
+        least travel needed plus 3 pole pitches.
+    load : float, optional
+        Constant load opposing positive motion, N.
+    points : int, optional
+        Table points over one electrical period.
+    fidelity : str, optional
+        ``"switching"`` (default, with the drive's dead time) or ``"average"``.
+    a_max : float or None, optional
+        Acceleration, m/s^2; None: what :data:`FORCE_SHARE` of the force limit leaves after the load.
+    source : str, optional
+        Name for messages.
+
+    Returns
+    -------
+    Calibration
+        The learned table against the plant's own, ``metrics`` (``max_diff_deg``, ``end_effect_k``,
+        ``sim_s``...) and the stamp.
+
+    Raises
+    ------
+    InputError
+        The refusals of the module docstring, one line naming what is needed.
+    """
+    if motor is None and scenario is None:
+        motor = "ecce2010"
+    if scenario is not None:
+        data = _drive_of_scenario(scenario)
+        source = scenario.source
+        base_dir = scenario.base_dir
+    else:
+        data = {"motor": motor if isinstance(motor, str) else "ecce2010"}
+        base_dir = None
+    obj = motor if isinstance(motor, Motor) else None
+    data.setdefault("inverter", {})["fidelity"] = fidelity
+    data["scenario"] = {"name": "commission", "duration": DURATION_MAX}
+    data["load"] = {"type": "constant", "force": float(load)}
+    data.setdefault("initial", {})["load_balanced"] = True
+    # the design for a cap above the band: its hand-over (v_hi), with the EMF estimate on
+    def probe(cap: float) -> Scenario:
+        return scenario_from_dict({**data, "control": {**data.get("control", {}), "mode": "sensorless_lut"},
+                                   "reference": {"type": "hold", "v_max": cap}}, source, base_dir)
+
+    model = obj if obj is not None else resolve_motor(probe(1.0))
+    l_d, l_q = mean_dq(model)
+    if l_q / l_d < SALIENCY_MIN:
+        _refuse(source, "motor", f"L_q / L_d = {l_q / l_d:.3f} is below {SALIENCY_MIN:g}: without saliency "
+                "there is no HF error to learn a table from")
+    d = None
+    for cap in CAPS:  # (the first cap the bus allows: the band designed for it)
+        try:
+            d = designed(probe(cap), model).spec
+            break
+        except InputError:
+            continue
+    if d is None:
+        _refuse(source, "inverter.v_dc", f"the bus allows none of {', '.join(map(str, CAPS))} m/s: no speed "
+                "to commission at")
+    if not d.observer.emf:
+        _refuse(source, "observer.emf", "the design leaves the EMF estimate off for this motor and drive "
+                "(its error bound stays above 3 deg at every speed the bus allows, or flux harmonics): "
+                "commissioning needs it trustworthy at speed")
+    v_hi = float(d.observer.handover_v_hi)
+    v = float(speed) if speed is not None else SPEED_OVER_V_HI * v_hi
+    if v <= v_hi:
+        _refuse(source, "speed", f"{v:g} m/s is not above the hand-over band's top {v_hi:.3g} m/s, where "
+                "the EMF estimate alone is trusted")
+    f_max = float(d.controller.i_max) * model.force_constant
+    f_acc = FORCE_SHARE * f_max - abs(load)
+    if f_acc <= 0.0:
+        _refuse(source, "load", f"{abs(load):g} N leaves nothing of {FORCE_SHARE:g} K_f i_max = "
+                f"{FORCE_SHARE * f_max:.3g} N to accelerate with: the drive cannot hold it at speed")
+    a = float(a_max) if a_max is not None else min(10.0, f_acc / model.mass)
+    if model.mass * a > f_acc:
+        _refuse(source, "a_max", f"{a:g} m/s^2 needs {model.mass * a:.3g} N beside the load's "
+                f"{abs(load):g} N: more than {FORCE_SHARE:g} K_f i_max = {FORCE_SHARE * f_max:.3g} N")
+    need = v * v / a + PERIODS_AT_SPEED * model.pole_pitch  # m: to the speed and back, and at speed
+    tr = scenario.spec.travel if scenario is not None else None
+    if stroke_mm is None:
+        stroke = (0.8 * (tr.max_mm - tr.min_mm) / 1e3 if tr is not None and scenario is not None
+                  and {"min_mm", "max_mm"} & tr.model_fields_set else need + 3.0 * model.pole_pitch)
+    else:
+        stroke = float(stroke_mm) / 1e3
+    if stroke < need:
+        _refuse(source, "travel", f"{stroke * 1e3:.1f} mm of stroke is too little: {need * 1e3:.1f} mm "
+                f"needed at {v:.3g} m/s and {a:.3g} m/s^2 (v^2/a to the speed and back, and "
+                f"{PERIODS_AT_SPEED:g} electrical period of {model.pole_pitch * 1e3:g} mm at speed)")
+    x0 = (tr.min_mm / 1e3 + 0.1 * (tr.max_mm - tr.min_mm) / 1e3
+          if tr is not None and {"min_mm", "max_mm"} & tr.model_fields_set else 0.0)
+    leg = stroke / v + v / a
+    legs = int((DURATION_MAX - T_START - 1e-3) / leg)
+    wps = [1e3 * (x0 + (stroke if k % 2 == 0 else 0.0)) for k in range(legs)]
+    data["initial"]["position_mm"] = 1e3 * x0
+    data["control"] = {**data.get("control", {}), "mode": "commission"}
+    data.setdefault("observer", {})["emf"] = True
+    data["reference"] = {"type": "trajectory", "waypoints_mm": wps, "v_max": v, "a_max": a, "dwell": 0.0,
+                         "at": T_START}
+    data["calibration"] = {"points": int(points), "k_int": K_INT, "t_hold": T_HOLD}
+    data["record"] = {"decimate": 64}
+    sc = scenario_from_dict(data, source, base_dir)
+    b = build(sc, obj) if plant is None else build(sc, plant, model=model)
+    lut = b.extra["cal_table"]
+    start = np.array(lut.table, dtype=float)
+    raw = run_closed_loop(b.cfg, b.drive.state, b.n_steps, b.commands)
+    return _result(b, raw, model, lut, start, points, v, a, stroke, load)
+
+
+def _result(b, raw, model: Motor, lut, start: np.ndarray, points: int, v: float, a: float, stroke: float,
+            load: float) -> Calibration:
+    """The commissioning's Calibration: the learned table against the plant's own."""
+    s = b.scenario.spec
+    inj = s.injection
+    theta = 2.0 * np.pi * np.arange(points) / points
+    table = np.array(lut.table, dtype=float)
+    true = build_lut(b.motor, points, f_inj=inj.frequency, quad=inj.quadrature, injection=inj.shape).values
+    done = int(b.drive.state.cal_index)
+    learn = np.frombuffer(ffi.buffer(lut.learn), dtype=np.float32)
+    fwd, bwd = learn[:points].astype(float), learn[points:2 * points].astype(float)
+    _, k, rms = end_effect_fit(model, table, inj.shape, inj.frequency, inj.quadrature)
+    metrics = {
+        "completed": bool(done == points and raw.fault == 0),
+        "points": int(points),
+        "points_done": done,
+        "max_diff_deg": round(float(np.degrees(np.max(np.abs(table - true)))), 6),
+        "start_diff_deg": round(float(np.degrees(np.max(np.abs(start - true)))), 6),
+        "max_diff_eq12_deg": round(float(np.degrees(np.max(np.abs(table - psi_lut(b.motor, theta))))), 6),
+        "direction_diff_deg": round(float(np.degrees(np.max(np.abs(fwd - bwd)))), 6),
+        "time_min_s": round(float(np.min(learn[2 * points:])), 6),
+        "time_mean_s": round(float(np.mean(learn[2 * points:])), 6),
+        "end_effect_k": round(float(k), 6),
+        "end_effect_fit_rms_deg": round(float(np.degrees(rms)), 6),
+        "speed_m_s": round(v, 6), "a_max_m_s2": round(a, 6), "stroke_mm": round(stroke * 1e3, 3),
+        "v_hi_m_s": round(float(s.observer.handover_v_hi), 6),
+        "load_n": float(load), "fidelity": s.inverter.fidelity, "dead_time_s": float(s.inverter.dead_time),
+        "v_dc": float(s.inverter.v_dc), "injection_shape": inj.shape, "f_inj_hz": float(inj.frequency),
+        "injection_quad": float(inj.quadrature), "v_inj": float(inj.amplitude),
+        "fault": fault_reason(raw.fault),
+        "sim_s": round(raw.steps_done / s.inverter.f_pwm, 6),
+        "wall_s": round(raw.wall_s, 6),
+        "motor": b.motor.name,
+    }
+    stamp = table_stamp(model, inj.shape, inj.frequency, inj.quadrature, points)
+    return Calibration(theta, table, true, psi_lut(b.motor, theta), metrics, b.motor, stamp)
+
+
+def commission_to(out: str | Path, motor=None, **kwargs) -> CommissionOutput:
+    """Commission (:func:`commission`) and write ``calibrate``'s output set: ``lut_measured.csv``,
+    ``lut_measured.json`` (when complete: ``linsense tune --table`` and ``observer.lut_model =
+    "measured"`` read it), ``metrics.json``, ``timing.json``.
+
+    Parameters
+    ----------
+    out : str or Path
+        The folder: missing, empty or an earlier output of linsense.
+    motor : Motor or str or None
+        As :func:`commission`'s.
+    **kwargs
+        :func:`commission`'s keywords.
+
+    Returns
+    -------
+    CommissionOutput
+        The commissioning, its metrics and the files written.
+    """
+    cal = commission(motor, **kwargs)
+    metrics, timing = split_timing(cal.metrics)
+    with output_set(out, "commission") as s:
+        s.write("lut_measured.csv", lut_csv(cal))
+        if cal.completed:
+            s.write("lut_measured.json", measured_json(cal))
+        write_metrics(s, metrics, timing)
+    return CommissionOutput(cal, metrics, timing, list(s.files))
