@@ -50,7 +50,7 @@ SPEED_OVER_V_HI = 1.3
 PERIODS_AT_SPEED = 1.0
 #: -, the force the drive may use to accelerate and hold the load, of K_f i_max
 FORCE_SHARE = 0.8
-#: s, simulated motion, at most (issue 39: <= 10 s)
+#: s, simulated motion, at most
 DURATION_MAX = 10.0
 #: 1/s and s: the estimates' rate and the time each point needs in each direction (5 time constants)
 K_INT = 125.0
@@ -63,7 +63,19 @@ T_START = 0.1
 
 @dataclass
 class CommissionOutput:
-    """What :func:`commission_to` made: the commissioning (a Calibration), metrics, files."""
+    """What :func:`commission_to` made.
+
+    Parameters
+    ----------
+    calibration : Calibration
+        The commissioning (its table, stamp and metrics).
+    metrics : dict
+        ``metrics.json`` (without the timing).
+    timing : dict
+        ``timing.json``.
+    files : list of Path
+        The files written.
+    """
 
     calibration: Calibration
     metrics: dict
@@ -254,7 +266,7 @@ def commission_to(out: str | Path, motor=None, **kwargs) -> CommissionOutput:
         The folder: missing, empty or an earlier output of linsense.
     motor : Motor or str or None
         As :func:`commission`'s.
-    **kwargs
+    **kwargs : dict
         :func:`commission`'s keywords.
 
     Returns
