@@ -135,6 +135,7 @@ void ls_drive_default_cfg(ls_drive_cfg *c)
     c->cal.period = 0;
     c->cal.dither_amp = LS_DEF_DITHER_AMP;
     c->cal.dither_freq = LS_DEF_DITHER_FREQ; /* not a submultiple of the injection (50 Hz would be) */
+    c->cal.slope = LS_R(1.0); /* the pulsating injection's (linsense designs the elliptical one's) */
     /* start-up (ls_startup.h): the design of linsense.tune.startup for ecce2010 with the FEA's
      * 1.31 %/A of a thin back iron and this drive, 10 mA rms of current noise and a 12-bit ADC: 2.8 A
      * at the end of a 7-period pulse, pairs for a decision 6 sigma clear (docs/tuning.md); the lock's
@@ -522,9 +523,16 @@ ls_status ls_drive_set_mode(ls_drive *d, ls_mode mode)
                                 stable rate (k_int ts < 1) */
         if (!d->cfg.emf_on || d->cfg.cal.table == NULL || d->cfg.cal.learn == NULL || d->cfg.demod.comp == NULL ||
             d->cfg.demod.comp->table != d->cfg.cal.table || d->cfg.demod.comp->len != d->cfg.cal.points ||
-            !(d->cfg.cal.k_int * d->ts < LS_R(1.0))) {
+            !(d->cfg.cal.k_int * d->ts < LS_R(1.0)) || !(d->cfg.cal.slope > LS_R(0.0)) ||
+            !(d->cfg.cal.slope <= LS_DRIVE_CAL_SLOPE_MAX) ||
+            !(LS_DRIVE_LEARN_CRUISE * d->cfg.traj.v_max > d->cfg.fuse.v_hi)) { /* (a cruise above the
+                                                                                   band: else none) */
             return LS_ERR_PARAM;
         }
+        d->learn_w = LS_DRIVE_LEARN_CRUISE * d->cfg.traj.v_max * d->kx;
+        d->learn_inv_s = LS_R(1.0) / d->cfg.cal.slope;
+        d->learn_kd = d->cfg.hf_delay / d->cfg.demod.gain; /* (|gain| >= 1 / LS_DEMOD_GAIN_MAX: finite) */
+        d->cal_timer = 0u;
         ls_drive_learn_reset_(d);
         break;
     default:

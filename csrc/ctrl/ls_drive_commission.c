@@ -11,12 +11,18 @@
  * f, rate cal.k_int), and writes the table at those points as the mean of the forward and backward
  * estimates.
  *
- * Why two estimates, not one integrator: what follows the speed's sign (the HF path's delay, the
- * demodulator's low-pass lag, the EMF estimate's odd errors) moves each direction's equilibrium by
- * +-b; one integrator visited in turns would wander by the rate times each pass's time around the
- * mean, the two estimates settle each at its own equilibrium and their mean is the mean whatever the
- * time spent in each direction. The demodulator reads the mean, so its ratio stays small (the
- * product's sin 2 delta / 2 ~ delta) and the mean is a fixed point whatever the ratio's scale. */
+ * The ratio's slope in the table's error is cal.slope (s: 1 for the pulsating injection, less for
+ * the elliptical one), so P = T(theta_est) + (ratio + hf_delay omega / gain) / s: the HF path's delay
+ * (which the observer adds to the HF error) taken out, the nominal gain's share of it.
+ *
+ * Why two estimates, not one integrator: what follows the speed's sign (the rest of the HF path's
+ * delay, the demodulator's low-pass lag, the EMF estimate's odd errors) moves each direction's
+ * equilibrium by +-b; one integrator visited in turns would wander by the rate times each pass's
+ * time around the mean, the two estimates settle each at its own equilibrium and their mean is the
+ * mean whatever the time spent in each direction. b grows with the speed: the learning runs at the
+ * moves' cruise only (|omega| >= LS_DRIVE_LEARN_CRUISE traj.v_max, and above fuse.v_hi: learn_w;
+ * the trajectory's acceleration nil for cal.t_settle), one speed both ways. The demodulator reads the mean, so its ratio stays small (the product's
+ * sin 2 delta / 2 ~ delta) and the mean is a fixed point even where s is not the motor's. */
 #include "ls_drive_internal.h"
 
 void ls_drive_learn_reset_(ls_drive *d)
@@ -52,17 +58,30 @@ void ls_drive_learn_(ls_drive *LS_RESTRICT d)
 {
     const uint32_t n = d->cfg.cal.points;
     const LS_REAL omega = d->obs.omega;
-    const LS_REAL theta = d->obs.pos.theta; /* (the step's estimate: in [0, 2 pi)) */
+    LS_REAL theta = d->obs.pos.theta - d->cfg.hf_delay * omega; /* (see below) */
     float *LS_RESTRICT e = d->cfg.cal.learn;
     float *est, *oth, *t_dir, *t_oth;
     const float *tab = d->cfg.cal.table;
     LS_REAL u, f, p, err;
     uint32_t k, k1;
-    /* at speed only (the EMF error alone: the weight's unclamped value at least 1), with a valid HF
-     * signal */
-    if (!d->demod.valid || (LS_FABS(omega) - d->fuse.w_lo) * d->fuse.inv_band < LS_R(1.0)) {
+    /* at the cruise only, cal.t_settle after the acceleration (cal_timer: steps since), above the
+     * band (the EMF error alone), with a valid HF signal */
+    if (!d->traj.active || LS_FABS(d->traj.a_out) > LS_DRIVE_LEARN_A_CRUISE * d->traj.acc) {
+        d->cal_timer = 0u;
         return;
     }
+    if (d->cal_timer < d->cal_n_settle) {
+        d->cal_timer++;
+        return;
+    }
+    if (!d->demod.valid || !(LS_FABS(omega) >= d->learn_w)) {
+        return;
+    }
+    /* the angle the demodulated ratio belongs to: the HF path's delay ago (else each direction's
+     * estimate lies shifted by +-omega hf_delay, and their mean is the table smoothed, by 4 % of its
+     * 2 theta harmonic at 1 m/s on ecce2010); in [0, 2 pi) again (|omega hf_delay| < 2 pi: omega <=
+     * omega_max, hf_delay <= 0.1 s) */
+    theta = theta < LS_R(0.0) ? theta + LS_TWO_PI : (theta >= LS_TWO_PI ? theta - LS_TWO_PI : theta);
     u = theta * (LS_REAL)n * (LS_R(1.0) / LS_TWO_PI);
     if (!(u >= LS_R(0.0) && u < (LS_REAL)n)) { /* (u rounded up to n: the first point) */
         u = LS_R(0.0);
@@ -75,7 +94,8 @@ void ls_drive_learn_(ls_drive *LS_RESTRICT d)
     t_dir = omega > LS_R(0.0) ? e + 2u * n : e + 3u * n;
     t_oth = omega > LS_R(0.0) ? e + 3u * n : e + 2u * n;
     /* where the table should be (the open-loop estimate) less where this direction's estimate is */
-    p = (LS_REAL)tab[k] + f * ((LS_REAL)tab[k1] - (LS_REAL)tab[k]) + d->demod.ratio;
+    p = (LS_REAL)tab[k] + f * ((LS_REAL)tab[k1] - (LS_REAL)tab[k]) +
+        (d->demod.ratio + d->learn_kd * omega) * d->learn_inv_s;
     err = p - ((LS_REAL)est[k] + f * ((LS_REAL)est[k1] - (LS_REAL)est[k]));
     err *= d->cfg.cal.k_int * d->ts;
     learn_point(d, k, LS_R(1.0) - f, err, est, t_dir, t_oth, oth);

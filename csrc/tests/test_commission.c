@@ -40,8 +40,10 @@ static void setup(ls_drive *d, ls_drive_cfg *cfg)
     cfg->cal.points = N;
     cfg->cal.table = g_table;
     cfg->cal.learn = g_learn;
-    cfg->cal.k_int = LS_R(100.0);
-    cfg->cal.t_hold = LS_R(0.05);
+    cfg->cal.k_int = LS_R(400.0);
+    cfg->cal.t_hold = LS_R(0.03);
+    cfg->cal.slope = LS_R(1.0); /* (the pulsating injection's) */
+    cfg->cal.t_settle = LS_R(0.02);
     LS_CHECK(ls_drive_init(d, cfg) == LS_OK);
 }
 
@@ -68,6 +70,15 @@ static void test_refusals(void)
     bad = cfg; bad.cal.points = N - 1u; /* not the demodulator's table's length */
     LS_CHECK(ls_drive_init(&d, &bad) == LS_OK && ls_drive_set_mode(&d, LS_MODE_COMMISSION) == LS_ERR_PARAM);
     bad = cfg; bad.cal.k_int = bad.fs; /* k_int ts = 1: the estimates would overshoot */
+    LS_CHECK(ls_drive_init(&d, &bad) == LS_OK && ls_drive_set_mode(&d, LS_MODE_COMMISSION) == LS_ERR_PARAM);
+    bad = cfg; bad.cal.slope = LS_R(0.0);
+    LS_CHECK(ls_drive_init(&d, &bad) == LS_OK && ls_drive_set_mode(&d, LS_MODE_COMMISSION) == LS_ERR_PARAM);
+    bad = cfg; bad.cal.slope = LS_DRIVE_CAL_SLOPE_MAX * LS_R(1.01);
+    LS_CHECK(ls_drive_init(&d, &bad) == LS_OK && ls_drive_set_mode(&d, LS_MODE_COMMISSION) == LS_ERR_PARAM);
+    bad = cfg; bad.cal.slope = (LS_REAL)NAN;
+    LS_CHECK(ls_drive_init(&d, &bad) == LS_OK && ls_drive_set_mode(&d, LS_MODE_COMMISSION) == LS_ERR_PARAM);
+    /* a cruise that never leaves the band: nothing to learn */
+    bad = cfg; bad.traj.v_max = cfg.fuse.v_hi;
     LS_CHECK(ls_drive_init(&d, &bad) == LS_OK && ls_drive_set_mode(&d, LS_MODE_COMMISSION) == LS_ERR_PARAM);
     LS_CHECK(d.mode == LS_MODE_OFF);
 }
@@ -118,7 +129,7 @@ static void test_learning(double start_share)
     setup(&d, &cfg);
     before = worst_deg();
     tp_init(&p, 0.0);
-    t = commission(&d, &p, 0.0, 0.2, 12.0, &c);
+    t = commission(&d, &p, 0.0, 0.3, 12.0, &c);
     after = worst_deg();
     for (i = 0; i < 2u * N; ++i) {
         t_min = fmin(t_min, (double)g_learn[2u * N + i]);
@@ -129,7 +140,7 @@ static void test_learning(double start_share)
     LS_CHECK(c.fault == 0);
     LS_CHECK(c.cal_done && c.cal_index == N);
     LS_CHECK(t_min >= (double)cfg.cal.t_hold);
-    LS_CHECK(after < 0.3);
+    LS_CHECK(after < 0.1); /* (measured 0.02-0.04: the test plant has no dead time) */
     LS_CHECK(start_share == 1.0 || after < 0.5 * before); /* (it learned: not the start left as it was) */
 }
 

@@ -194,6 +194,10 @@ _RULES = {
 
 #: the injection's largest share of the linear range at the under-voltage limit (ls_drive_init's)
 V_INJ_SHARE_MAX = float(lib.LS_DRIVE_V_INJ_SHARE_MAX)
+#: -, LS_MODE_COMMISSION's largest cal.slope (ls_drive.h)
+CAL_SLOPE_MAX = float(lib.LS_DRIVE_CAL_SLOPE_MAX)
+#: -, LS_MODE_COMMISSION learns at |v| >= this share of the trajectory's v_max (ls_drive.h)
+LEARN_CRUISE = float(lib.LS_DRIVE_LEARN_CRUISE)
 #: the EMF low-pass corner's largest share of the sampling rate (ls_emf_init's)
 EMF_FLPF_FS_MAX = float(lib.LS_EMF_FLPF_FS_MAX)
 #: the largest ``|ripple_c| + |ripple_s|`` ls_drive_init accepts

@@ -87,6 +87,16 @@
 /* -, the injection's largest share of the linear modulation range at the under-voltage limit,
  * inject.amplitude sqrt(3) / prot.v_dc_min (below it: the fundamental gets the rest) */
 #define LS_DRIVE_V_INJ_SHARE_MAX LS_R(0.8)
+/* -, LS_MODE_COMMISSION: the largest cal.slope (the pulsating injection's is 1) */
+#define LS_DRIVE_CAL_SLOPE_MAX LS_R(2.0)
+/* -, LS_MODE_COMMISSION learns where the estimated speed is at least this share of traj.v_max
+ * (the cruise of the moves: both directions at one speed, so that what follows the speed cancels
+ * in their mean) */
+#define LS_DRIVE_LEARN_CRUISE LS_R(0.95)
+/* -, ... and where the trajectory cruises: its acceleration output (low-passed) below this share of
+ * its acceleration, for cal.t_settle (the speed loop and the EMF estimate settled after the
+ * acceleration) */
+#define LS_DRIVE_LEARN_A_CRUISE LS_R(1.0e-3)
 
 /* Whether an injection of `amplitude` (V, peak) leaves the fundamental its share of the linear range
  * at the under-voltage limit `v_dc_min` (V): ls_drive_init refuses a configuration where it does not
@@ -126,8 +136,12 @@ typedef struct {
                            the table's forward estimate, its backward estimate (rad), then the time
                            each point was seen moving forward, backward (s; linear weights); NULL:
                            no commissioning. There cal.k_int (1/s) is the estimates' rate
-                           (k_int / fs < 1) and cal.t_hold (s) the time each point needs in each
-                           direction */
+                           (k_int / fs < 1), cal.t_hold (s) the time each point needs in each
+                           direction and cal.t_settle (s) the wait after each acceleration */
+    LS_REAL slope;    /**< unit: -, LS_MODE_COMMISSION: the demodulated ratio's change per rad of the
+                           table's error, -d ratio / d psi at the table (1 for the pulsating
+                           injection, 0.2-0.5 for the elliptical one at kappa 0.9: the design's,
+                           linsense.studies.commission.ratio_slope), in (0, LS_DRIVE_CAL_SLOPE_MAX] */
 } ls_cal_cfg;
 
 typedef struct {
@@ -301,6 +315,10 @@ typedef struct {
     uint32_t cal_n_max;    /* -, steps beyond cal.t_max: the first n with n ts > t_max */
     uint32_t cal_acc;    /* -, the dither's phase, 2^32 per period */
     uint32_t cal_inc;    /* -, its step per period: dither_freq / fs 2^32 */
+    LS_REAL learn_w;     /**< unit: rad/s, LS_MODE_COMMISSION learns at |omega| >= it: fuse.v_hi and
+                              LS_DRIVE_LEARN_CRUISE traj.v_max, the larger, as electrical speeds */
+    LS_REAL learn_inv_s; /**< unit: -, 1 / cal.slope */
+    LS_REAL learn_kd;    /**< unit: s, hf_delay / demod.gain: the HF path's delay in the ratio per rad/s */
     LS_REAL cal_amp;     /* A, the dither's amplitude now: cal.dither_amp while settling and
                             adapting, else 0 */
     int32_t enc_prev;    /* -, encoder count of the last sample (encoder modes) */

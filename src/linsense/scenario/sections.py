@@ -31,6 +31,7 @@ from typing import Annotated, Literal
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from linsense.ctrl import (
+    CAL_SLOPE_MAX,
     STARTUP_PAIRS_MAX,
     STARTUP_PULSE_STEPS_MIN,
     STARTUP_REST_STEPS_MIN,
@@ -98,6 +99,12 @@ class CalibrationSection(BaseModel):
     dither_hz: Positive = Field(
         _c(_C.cal.dither_freq), description="frequency of the dither",
         json_schema_extra={"unit": "Hz", "default_note": "designed ({ecce2010} for ecce2010)"})
+    slope: float = Field(
+        _c(_C.cal.slope), gt=0.0, le=CAL_SLOPE_MAX, description="`commission` only: the demodulated "
+        "ratio's change per rad of the table's error, -d ratio / d psi (1 for the pulsating injection, "
+        "0.2-0.5 for the elliptical one at kappa 0.9)",
+        json_schema_extra={"unit": "-", "default_note": "`linsense commission` designs it "
+                           "(`linsense.studies.commission.ratio_slope`)"})
 
 
 class StartupSection(BaseModel):

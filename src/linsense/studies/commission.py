@@ -23,10 +23,10 @@ from pathlib import Path
 
 import numpy as np
 
-from linsense.analysis.hf import psi_lut
+from linsense.analysis.hf import demod_ratio, psi_lut, psi_lut_resistive
 from linsense.compensation.lut import build_lut
 from linsense.compensation.measured import end_effect_fit, table_stamp
-from linsense.ctrl import ffi
+from linsense.ctrl import CAL_SLOPE_MAX, ffi
 from linsense.errors import InputError
 from linsense.io import output_set, split_timing
 from linsense.model.motor import Motor
@@ -52,9 +52,12 @@ PERIODS_AT_SPEED = 1.0
 FORCE_SHARE = 0.8
 #: s, simulated motion, at most
 DURATION_MAX = 10.0
-#: 1/s and s: the estimates' rate and the time each point needs in each direction (5 time constants)
-K_INT = 125.0
-T_HOLD = 5.0 / K_INT
+#: 1/s, s and s: the estimates' rate (the table's mean follows at K_INT / 2 where cal.slope is the
+#: motor's), the time each point needs in each direction (6 time constants of the mean) and the wait
+#: after each acceleration before learning (the speed loop and the EMF estimate settled)
+K_INT = 400.0
+T_HOLD = 12.0 / K_INT
+T_SETTLE = 0.02
 #: m/s, the speed caps the band is designed for, the first the bus allows
 CAPS = (2.0, 1.5, 1.0, 0.7)
 #: s, the HF lock before the first move
@@ -96,7 +99,7 @@ def commission(motor: Motor | str | None = None, *, scenario: Scenario | None = 
                plant: Motor | None = None,
                speed: float | None = None, stroke_mm: float | None = None, load: float = 0.0,
                points: int = 56, fidelity: str = "switching", a_max: float | None = None,
-               source: str = "<commission>") -> Calibration:
+               quad: float | None = None, source: str = "<commission>") -> Calibration:
     """Learn the end-effect table without a sensor (module docstring).
 
     Parameters
@@ -120,6 +123,8 @@ def commission(motor: Motor | str | None = None, *, scenario: Scenario | None = 
         ``"switching"`` (default, with the drive's dead time) or ``"average"``.
     a_max : float or None, optional
         Acceleration, m/s^2; None: what :data:`FORCE_SHARE` of the force limit leaves after the load.
+    quad : float or None, optional
+        The injection's kappa; None: the scenario's, else the design's.
     source : str, optional
         Name for messages.
 
@@ -145,6 +150,8 @@ def commission(motor: Motor | str | None = None, *, scenario: Scenario | None = 
         base_dir = None
     obj = motor if isinstance(motor, Motor) else None
     data.setdefault("inverter", {})["fidelity"] = fidelity
+    if quad is not None:
+        data.setdefault("injection", {})["quadrature"] = float(quad)
     data["scenario"] = {"name": "commission", "duration": DURATION_MAX}
     data["load"] = {"type": "constant", "force": float(load)}
     data.setdefault("initial", {})["load_balanced"] = True
@@ -186,7 +193,8 @@ def commission(motor: Motor | str | None = None, *, scenario: Scenario | None = 
     if model.mass * a > f_acc:
         _refuse(source, "a_max", f"{a:g} m/s^2 needs {model.mass * a:.3g} N beside the load's "
                 f"{abs(load):g} N: more than {FORCE_SHARE:g} K_f i_max = {FORCE_SHARE * f_max:.3g} N")
-    need = v * v / a + PERIODS_AT_SPEED * model.pole_pitch  # m: to the speed and back, and at speed
+    # m: to the speed and back, the settling at speed, and the periods learned at speed
+    need = v * v / a + v * T_SETTLE + PERIODS_AT_SPEED * model.pole_pitch
     tr = scenario.spec.travel if scenario is not None else None
     if stroke_mm is None:
         stroke = (0.8 * (tr.max_mm - tr.min_mm) / 1e3 if tr is not None and scenario is not None
@@ -195,8 +203,9 @@ def commission(motor: Motor | str | None = None, *, scenario: Scenario | None = 
         stroke = float(stroke_mm) / 1e3
     if stroke < need:
         _refuse(source, "travel", f"{stroke * 1e3:.1f} mm of stroke is too little: {need * 1e3:.1f} mm "
-                f"needed at {v:.3g} m/s and {a:.3g} m/s^2 (v^2/a to the speed and back, and "
-                f"{PERIODS_AT_SPEED:g} electrical period of {model.pole_pitch * 1e3:g} mm at speed)")
+                f"needed at {v:.3g} m/s and {a:.3g} m/s^2 (v^2/a to the speed and back, {T_SETTLE:g} s "
+                f"settling and {PERIODS_AT_SPEED:g} electrical period of {model.pole_pitch * 1e3:g} mm "
+                f"at speed)")
     x0 = (tr.min_mm / 1e3 + 0.1 * (tr.max_mm - tr.min_mm) / 1e3
           if tr is not None and {"min_mm", "max_mm"} & tr.model_fields_set else 0.0)
     leg = stroke / v + v / a
@@ -207,7 +216,10 @@ def commission(motor: Motor | str | None = None, *, scenario: Scenario | None = 
     data.setdefault("observer", {})["emf"] = True
     data["reference"] = {"type": "trajectory", "waypoints_mm": wps, "v_max": v, "a_max": a, "dwell": 0.0,
                          "at": T_START}
-    data["calibration"] = {"points": int(points), "k_int": K_INT, "t_hold": T_HOLD}
+    inj = d.injection
+    slope = ratio_slope(model, inj.amplitude, inj.frequency, inj.quadrature)
+    data["calibration"] = {"points": int(points), "k_int": K_INT, "t_hold": T_HOLD, "t_settle": T_SETTLE,
+                           "slope": slope}
     data["record"] = {"decimate": 64}
     sc = scenario_from_dict(data, source, base_dir)
     b = build(sc, obj) if plant is None else build(sc, plant, model=model)
@@ -215,6 +227,37 @@ def commission(motor: Motor | str | None = None, *, scenario: Scenario | None = 
     start = np.array(lut.table, dtype=float)
     raw = run_closed_loop(b.cfg, b.drive.state, b.n_steps, b.commands)
     return _result(b, raw, model, lut, start, points, v, a, stroke, load)
+
+
+def ratio_slope(motor: Motor, v_inj: float, f_inj: float, quad: float, n: int = 72) -> float:
+    """The demodulated ratio's mean change per rad of the table's error, ``-d ratio / d psi`` at the
+    motor's table (``ls_cal_cfg.slope``): 1 for the pulsating injection, less for the elliptical one.
+
+    :func:`linsense.analysis.hf.demod_ratio` at no estimation error, differentiated in the
+    compensation angle at the resistance-aware table (docs/theory.md, the product demodulator).
+    Only the learning's rate depends on it: the learned table's mean is a fixed point whatever it
+    is (``csrc/ctrl/ls_drive_commission.c``).
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor the drive believes in.
+    v_inj, f_inj, quad : float
+        The injection's amplitude (V), frequency (Hz) and kappa.
+    n : int, optional
+        Positions over the period.
+
+    Returns
+    -------
+    float
+        The mean slope over the period, in (0, ``CAL_SLOPE_MAX``].
+    """
+    theta = 2.0 * np.pi * np.arange(n) / n
+    psi = psi_lut_resistive(motor, theta, f_inj, quad)
+    h = 1e-3
+    s = (demod_ratio(motor, theta, 0.0, v_inj, f_inj, psi - h, quad=quad)
+         - demod_ratio(motor, theta, 0.0, v_inj, f_inj, psi + h, quad=quad)) / (2.0 * h)
+    return float(min(max(np.mean(s), 1e-3), CAL_SLOPE_MAX))
 
 
 def _result(b, raw, model: Motor, lut, start: np.ndarray, points: int, v: float, a: float, stroke: float,
