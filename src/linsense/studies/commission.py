@@ -35,7 +35,14 @@ from linsense.sim.build import build, designed, resolve_motor
 from linsense.sim.core import run_closed_loop
 from linsense.sim.metrics import fault_reason
 from linsense.sim.to_folder import write_metrics
-from linsense.studies.calibrate import Calibration, _drive_of_scenario, lut_csv, measured_json
+from linsense.studies.calibrate import (
+    Calibration,
+    _drive_data,
+    _drive_of_scenario,
+    _set_drive,
+    lut_csv,
+    measured_json,
+)
 from linsense.tune.design import mean_dq
 
 __all__ = ["SALIENCY_MIN", "SPEED_OVER_V_HI", "PERIODS_AT_SPEED", "commission", "commission_to",
@@ -53,10 +60,10 @@ FORCE_SHARE = 0.8
 #: s, simulated motion, at most
 DURATION_MAX = 10.0
 #: 1/s, s and s: the estimates' rate (the table's mean follows at K_INT / 2 where cal.slope is the
-#: motor's), the time each point needs in each direction (6 time constants of the mean) and the wait
+#: motor's), the time each point needs in each direction (5 time constants of the mean) and the wait
 #: after each acceleration before learning (the speed loop and the EMF estimate settled)
-K_INT = 400.0
-T_HOLD = 12.0 / K_INT
+K_INT = 500.0
+T_HOLD = 10.0 / K_INT
 T_SETTLE = 0.02
 #: m/s, the speed caps the band is designed for, the first the bus allows
 CAPS = (2.0, 1.5, 1.0, 0.7)
@@ -99,7 +106,8 @@ def commission(motor: Motor | str | None = None, *, scenario: Scenario | None = 
                plant: Motor | None = None,
                speed: float | None = None, stroke_mm: float | None = None, load: float = 0.0,
                points: int = 56, fidelity: str = "switching", a_max: float | None = None,
-               quad: float | None = None, source: str = "<commission>") -> Calibration:
+               quad: float | None = None, route: str = "pulsating", drive: dict | None = None,
+               source: str = "<commission>") -> Calibration:
     """Learn the end-effect table without a sensor (module docstring).
 
     Parameters
@@ -124,7 +132,15 @@ def commission(motor: Motor | str | None = None, *, scenario: Scenario | None = 
     a_max : float or None, optional
         Acceleration, m/s^2; None: what :data:`FORCE_SHARE` of the force limit leaves after the load.
     quad : float or None, optional
-        The injection's kappa; None: the scenario's, else the design's.
+        The drive's injection's kappa; None: the scenario's, else the design's.
+    route : str, optional
+        ``"pulsating"`` (default): a drive with the elliptical injection learns with the pulsating one
+        and its table is the model's for the end effect that fits what was learned (:func:`_carried`);
+        ``"direct"``: the drive's own injection learns its own table.
+    drive : dict or None, optional
+        Drive data over the scenario's or the design's defaults, by
+        :class:`~linsense.tune.design.DriveData` name (``v_dc``, ``f_pwm``, ``dead_time``, ``i_max``,
+        ``v_inj``, ``f_inj``, ``quad``; SI units; ``v_max`` and ``a_max`` are the commissioning's own).
     source : str, optional
         Name for messages.
 
@@ -149,6 +165,8 @@ def commission(motor: Motor | str | None = None, *, scenario: Scenario | None = 
         data = {"motor": motor if isinstance(motor, str) else "ecce2010"}
         base_dir = None
     obj = motor if isinstance(motor, Motor) else None
+    given = _drive_data(drive, None, source)  # (an unknown key refused)
+    _set_drive(data, {k: v for k, v in given.items() if k not in ("v_max", "a_max")})
     data.setdefault("inverter", {})["fidelity"] = fidelity
     if quad is not None:
         data.setdefault("injection", {})["quadrature"] = float(quad)
@@ -165,16 +183,14 @@ def commission(motor: Motor | str | None = None, *, scenario: Scenario | None = 
     if l_q / l_d < SALIENCY_MIN:
         _refuse(source, "motor", f"L_q / L_d = {l_q / l_d:.3f} is below {SALIENCY_MIN:g}: without saliency "
                 "there is no HF error to learn a table from")
-    d = None
-    for cap in CAPS:  # (the first cap the bus allows: the band designed for it)
-        try:
-            d = designed(probe(cap), model).spec
-            break
-        except InputError:
-            continue
-    if d is None:
-        _refuse(source, "inverter.v_dc", f"the bus allows none of {', '.join(map(str, CAPS))} m/s: no speed "
-                "to commission at")
+    d = _design(probe, model, source)
+    drive_inj = d.injection  # (the drive's injection: its table is the one wanted)
+    if route not in ("pulsating", "direct"):
+        _refuse(source, "route", f"{route!r}: \"pulsating\" or \"direct\"")
+    carried = route == "pulsating" and drive_inj.shape == "pulsating" and drive_inj.quadrature > 0.0
+    if carried:  # (learned with the pulsating injection, carried to the drive's by the fitted end effect)
+        data.setdefault("injection", {})["quadrature"] = 0.0
+        d = _design(probe, model, source)
     if not d.observer.emf:
         _refuse(source, "observer.emf", "the design leaves the EMF estimate off for this motor and drive "
                 "(its error bound stays above 3 deg at every speed the bus allows, or flux harmonics): "
@@ -226,7 +242,47 @@ def commission(motor: Motor | str | None = None, *, scenario: Scenario | None = 
     lut = b.extra["cal_table"]
     start = np.array(lut.table, dtype=float)
     raw = run_closed_loop(b.cfg, b.drive.state, b.n_steps, b.commands)
-    return _result(b, raw, model, lut, start, points, v, a, stroke, load)
+    cal = _result(b, raw, model, lut, start, points, v, a, stroke, load)
+    cal.metrics["route"] = "pulsating" if carried else "direct"
+    return _carried(cal, model, drive_inj) if carried else cal
+
+
+def _design(probe, model: Motor, source: str):
+    """The design for the first cap of :data:`CAPS` the bus allows (its hand-over band)."""
+    for cap in CAPS:
+        try:
+            return designed(probe(cap), model).spec
+        except InputError:
+            continue
+    return _refuse(source, "inverter.v_dc", f"the bus allows none of {', '.join(map(str, CAPS))} m/s: no "
+                   "speed to commission at")
+
+
+def _carried(cal: Calibration, model: Motor, inj) -> Calibration:
+    """A table learned with the pulsating injection carried to the drive's elliptical one: the model's
+    table (:func:`linsense.compensation.lut.build_lut`) of the motor whose end effect fits the learned
+    table (:func:`linsense.compensation.measured.end_effect_fit`), compared with the plant's own for
+    the drive's injection; the learned table's departure from its fit kept in the metrics.
+
+    The elliptical table follows the position error nearly one to one (about 0.8 of it on ecce2010 at
+    kappa 0.9, against 0.07-0.3 for the pulsating one), so learned directly it carries the EMF
+    estimate's error at speed; the pulsating table learned, the EMF's error weighs 3-10 times less."""
+    m = cal.metrics
+    points = m["points"]
+    fit, k, rms = end_effect_fit(model, cal.psi_measured, "pulsating", inj.frequency, 0.0)
+    table = build_lut(fit, points, f_inj=inj.frequency, quad=inj.quadrature, injection=inj.shape).values
+    true = build_lut(cal.motor, points, f_inj=inj.frequency, quad=inj.quadrature, injection=inj.shape).values
+    start = build_lut(model, points, f_inj=inj.frequency, quad=inj.quadrature, injection=inj.shape).values
+    m.update({
+        "learned_diff_deg": m["max_diff_deg"], "learned_start_diff_deg": m["start_diff_deg"],
+        "learned_quad": 0.0,
+        "max_diff_deg": round(float(np.degrees(np.max(np.abs(table - true)))), 6),
+        "start_diff_deg": round(float(np.degrees(np.max(np.abs(start - true)))), 6),
+        "injection_quad": float(inj.quadrature), "f_inj_hz": float(inj.frequency),
+        "v_inj": float(inj.amplitude),
+    })
+    stamp = table_stamp(model, inj.shape, inj.frequency, inj.quadrature, points)
+    return Calibration(cal.theta, table, true, cal.psi_eq12, m, cal.motor, stamp)
 
 
 def ratio_slope(motor: Motor, v_inj: float, f_inj: float, quad: float, n: int = 72) -> float:
