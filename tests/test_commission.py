@@ -78,3 +78,36 @@ def test_learned_on_an_off_nominal_plant(case, tmp_path):
     assert met["max_diff_deg"] < 0.3
     assert abs(met["end_effect_k"] - 1.25) < 0.05
     assert np.all(np.isfinite(cal.psi_measured))
+
+
+@pytest.mark.parametrize("motor", ["harmonic", "m20_hv"])
+def test_motor_whose_emf_estimate_the_design_leaves_off_refused(motor):
+    """harmonic (flux harmonics) and m20_hv on its drive: the design's hand-over is off."""
+    from importlib.resources import files
+
+    if motor == "harmonic":
+        m, drive = load_motor(str(files("linsense.examples").joinpath("motors/harmonic.toml"))), None
+    else:
+        m = load_motor(str(files("linsense.examples").joinpath("motors/class/m20_hv.toml")))
+        drive = _class_drive("m20_hv")
+    with pytest.raises(InputError, match="leaves the EMF estimate off"):
+        commission(m, drive=drive)
+
+
+def test_cli_writes_calibrate_formats_that_tune_reads(run_cli, tmp_path, monkeypatch):
+    """`linsense commission` once (the average inverter: the CLI's path, not the numbers), its
+    lut_measured.json read by `linsense tune --table`; a refusal is exit code 2 and one line."""
+    import json
+
+    monkeypatch.chdir(tmp_path)
+    r = run_cli("commission", "--motor", "ecce2010", "--fidelity", "average", "--out", "c")
+    assert r.code == 0, r.err
+    for name in ("lut_measured.csv", "lut_measured.json", "metrics.json"):
+        assert (tmp_path / "c" / name).is_file()
+    met = json.loads((tmp_path / "c" / "metrics.json").read_text())
+    assert met["completed"] and met["max_diff_deg"] < 0.3
+    r = run_cli("tune", "--motor", "ecce2010", "--table", "c/lut_measured.json", "--out", "t", "--no-verify")
+    assert r.code == 0, r.err
+    assert 'lut_model = "measured"' in (tmp_path / "t").read_text()
+    r = run_cli("commission", "--motor", "ecce2010", "--stroke", "50", "--out", "d")
+    assert r.code == 2 and "too little" in r.err and len(r.err.strip().splitlines()) == 1
