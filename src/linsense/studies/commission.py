@@ -247,6 +247,20 @@ def commission(motor: Motor | str | None = None, *, scenario: Scenario | None = 
     return _carried(cal, model, drive_inj) if carried else cal
 
 
+def _cruise_error(raw, v: float) -> dict:
+    """The estimate's error (the EMF estimate's, the observer's error there) at the cruise, each
+    direction: its mean and its largest departure, electrical deg (what the table learned against it
+    carries: the means' half difference cancels, their half sum does not)."""
+    err, vel = raw.arrays.get("theta_err"), raw.arrays.get("v")
+    out = {}
+    for name, sel in (("fwd", None if vel is None else vel > 0.97 * v),
+                      ("bwd", None if vel is None else vel < -0.97 * v)):
+        e = np.array([]) if err is None or sel is None else np.degrees(np.ravel(err)[np.ravel(sel)])
+        out[f"cruise_err_{name}_mean_deg"] = round(float(np.mean(e)), 4) if e.size else None
+        out[f"cruise_err_{name}_peak_deg"] = round(float(np.max(np.abs(e))), 4) if e.size else None
+    return out
+
+
 def _design(probe, model: Motor, source: str):
     """The design for the first cap of :data:`CAPS` the bus allows (its hand-over band)."""
     for cap in CAPS:
@@ -336,6 +350,7 @@ def _result(b, raw, model: Motor, lut, start: np.ndarray, points: int, v: float,
         "start_diff_deg": round(float(np.degrees(np.max(np.abs(start - true)))), 6),
         "max_diff_eq12_deg": round(float(np.degrees(np.max(np.abs(table - psi_lut(b.motor, theta))))), 6),
         "direction_diff_deg": round(float(np.degrees(np.max(np.abs(fwd - bwd)))), 6),
+        **_cruise_error(raw, v),
         "time_min_s": round(float(np.min(learn[2 * points:])), 6),
         "time_mean_s": round(float(np.mean(learn[2 * points:])), 6),
         "end_effect_k": round(float(k), 6),
