@@ -48,13 +48,14 @@ def test_unknown_route_refused():
 
 
 @pytest.mark.slow
+@pytest.mark.parametrize("k_e", [1.25, 0.75])
 @pytest.mark.parametrize("case", ["ecce2010", "ecce2010_imbalance", "m60_pos20k"])
-def test_learned_on_an_off_nominal_plant(case, tmp_path):
-    """dM0 +25 % (the plant's end effect a quarter stronger than the motor file's), the switching
-    inverter with the drive's dead time: the table the drive is given (its elliptical injection's,
-    by the pulsating route) within 0.3 deg of the plant's own, in <= 10 s of simulated motion; with
-    phase B's magnets 4 % weak too (the EMF estimate's imbalance). Measured: 4.39 -> 0.11 deg
-    (6.1 s), 4.39 -> 0.18 deg (6.1 s), 2.98 -> 0.18 deg (8.2 s)."""
+def test_learned_on_an_off_nominal_plant(case, k_e, tmp_path):
+    """dM0 +-25 % (the plant's end effect a quarter off the motor file's), the switching inverter with
+    the drive's dead time: the table the drive is given (its elliptical injection's, by the pulsating
+    route) within 0.3 deg of the plant's own, in <= 10 s of simulated motion; with phase B's magnets
+    4 % weak too (the EMF estimate's imbalance). Measured (+25 % / -25 %): ecce2010 0.13 / 0.007 deg
+    (6.1 s), with the imbalance 0.14 / 0.055, m60_pos20k 0.14 / 0.051 (8.2 s)."""
     from importlib.resources import files
 
     drive = None
@@ -69,14 +70,14 @@ def test_learned_on_an_off_nominal_plant(case, tmp_path):
         drive = _class_drive("m60_pos20k")
     else:
         m = load_motor("ecce2010")
-    cal = commission(m, plant=perturbed(m, 1.0, 1.0, 1.25), drive=drive)
+    cal = commission(m, plant=perturbed(m, 1.0, 1.0, k_e), drive=drive)
     met = cal.metrics
     assert met["completed"] and met["fault"] == "none"
     assert met["route"] == "pulsating" and met["injection_quad"] > 0.0
     assert met["sim_s"] <= 10.0 + 1e-9
     assert met["start_diff_deg"] > 2.0  # (the design's table is off the plant's)
     assert met["max_diff_deg"] < 0.3
-    assert abs(met["end_effect_k"] - 1.25) < 0.05
+    assert abs(met["end_effect_k"] - k_e) < 0.03
     assert np.all(np.isfinite(cal.psi_measured))
 
 
@@ -117,9 +118,8 @@ def test_cli_writes_calibrate_formats_that_tune_reads(run_cli, tmp_path, monkeyp
 def test_certificate_tolerance_has_a_sensorless_route():
     """The certificate's "table measured on dM0 +-25 %" with route "commission": the table comes from
     the commissioning with the drive under test's bus, PWM, dead time and injection, stamped for it.
-    Measured (ecce2010, switching): dM0 +25 % 0.11 deg (calibrate: 0.20), dM0 -25 % 0.36 deg
-    (calibrate: 0.31): the elliptical table's sensitivity to the fitted scale (4.4 deg per 25 %)
-    amplifies the learned pulsating table's 0.22 deg."""
+    Measured (ecce2010, switching): dM0 +25 % 0.13 deg (calibrate: 0.20), dM0 -25 % 0.007 deg
+    (calibrate: 0.31)."""
     from linsense.tune.design import DriveData
     from linsense.tune.drive_design import design_drive
     from linsense.tune.export import scenario_dict
@@ -129,7 +129,7 @@ def test_certificate_tolerance_has_a_sensorless_route():
     m = load_motor(spec)
     made = design_drive(m, DriveData(), source=spec, analyse=False, startup=False)
     base = scenario_dict(made, motor_ref=spec)
-    for plant, bound in (("dM0 +25 %", 0.3), ("dM0 -25 %", 0.45)):
+    for plant, bound in (("dM0 +25 %", 0.3), ("dM0 -25 %", 0.3)):
         cal = calibrate_plant(m, spec, base, ".", plant, None, "commission")
         s = calibration_summary(cal, m)
         assert s["completed"] and s["max_diff_deg"] < bound < s["file_diff_deg"]
