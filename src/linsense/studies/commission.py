@@ -165,23 +165,10 @@ def commission(motor: Motor | str | None = None, *, scenario: Scenario | None = 
     """
     if motor is None and scenario is None:
         motor = "ecce2010"
-    if scenario is not None:
-        data = _drive_of_scenario(scenario)
-        source = scenario.source
-        base_dir = scenario.base_dir
-    else:
-        data = {"motor": motor if isinstance(motor, str) else "ecce2010"}
-        base_dir = None
+    if route not in ("pulsating", "direct"):
+        _refuse(source, "route", f"{route!r}: \"pulsating\" or \"direct\"")
+    data, source, base_dir = _base_data(motor, scenario, drive, fidelity, quad, load, source)
     obj = motor if isinstance(motor, Motor) else None
-    given = _drive_data(drive, None, source)  # (an unknown key refused)
-    _set_drive(data, {k: v for k, v in given.items() if k not in ("v_max", "a_max")})
-    data.setdefault("inverter", {})["fidelity"] = fidelity
-    if quad is not None:
-        data.setdefault("injection", {})["quadrature"] = float(quad)
-
-    data["scenario"] = {"name": "commission", "duration": DURATION_MAX}
-    data["load"] = {"type": "constant", "force": float(load)}
-    data.setdefault("initial", {})["load_balanced"] = True
     # the design for a cap above the band: its hand-over (v_hi), with the EMF estimate on
     def probe(cap: float) -> Scenario:
         return scenario_from_dict({**data, "control": {**data.get("control", {}), "mode": "sensorless_lut"},
@@ -194,8 +181,6 @@ def commission(motor: Motor | str | None = None, *, scenario: Scenario | None = 
                 "there is no HF error to learn a table from")
     d = _design(probe, model, source)
     drive_inj = d.injection  # (the drive's injection: its table is the one wanted)
-    if route not in ("pulsating", "direct"):
-        _refuse(source, "route", f"{route!r}: \"pulsating\" or \"direct\"")
     carried = route == "pulsating" and drive_inj.shape == "pulsating" and drive_inj.quadrature > 0.0
     if carried:  # (learned with the pulsating injection, carried to the drive's by the fitted end effect)
         data.setdefault("injection", {})["quadrature"] = 0.0
@@ -211,30 +196,8 @@ def commission(motor: Motor | str | None = None, *, scenario: Scenario | None = 
                 "the EMF estimate alone is trusted")
     i_d = D_SHARE * float(d.controller.i_max) if d_current is None else float(d_current)
     data.setdefault("injection", {})["d_current"] = i_d
-    f_max = float(d.controller.i_max) * model.force_constant
-    f_acc = FORCE_SHARE * f_max - abs(load)
-    if f_acc <= 0.0:
-        _refuse(source, "load", f"{abs(load):g} N leaves nothing of {FORCE_SHARE:g} K_f i_max = "
-                f"{FORCE_SHARE * f_max:.3g} N to accelerate with: the drive cannot hold it at speed")
-    a = float(a_max) if a_max is not None else min(10.0, f_acc / model.mass)
-    if model.mass * a > f_acc:
-        _refuse(source, "a_max", f"{a:g} m/s^2 needs {model.mass * a:.3g} N beside the load's "
-                f"{abs(load):g} N: more than {FORCE_SHARE:g} K_f i_max = {FORCE_SHARE * f_max:.3g} N")
-    # m: to the speed and back, the settling at speed, and the periods learned at speed
-    need = v * v / a + v * T_SETTLE + PERIODS_AT_SPEED * model.pole_pitch
-    tr = scenario.spec.travel if scenario is not None else None
-    if stroke_mm is None:
-        stroke = (0.8 * (tr.max_mm - tr.min_mm) / 1e3 if tr is not None and scenario is not None
-                  and {"min_mm", "max_mm"} & tr.model_fields_set else need + 3.0 * model.pole_pitch)
-    else:
-        stroke = float(stroke_mm) / 1e3
-    if stroke < need:
-        _refuse(source, "travel", f"{stroke * 1e3:.1f} mm of stroke is too little: {need * 1e3:.1f} mm "
-                f"needed at {v:.3g} m/s and {a:.3g} m/s^2 (v^2/a to the speed and back, {T_SETTLE:g} s "
-                f"settling and {PERIODS_AT_SPEED:g} electrical period of {model.pole_pitch * 1e3:g} mm "
-                f"at speed)")
-    x0 = (tr.min_mm / 1e3 + 0.1 * (tr.max_mm - tr.min_mm) / 1e3
-          if tr is not None and {"min_mm", "max_mm"} & tr.model_fields_set else 0.0)
+    a = _acceleration(d, model, load, a_max, source)
+    stroke, x0 = _stroke(scenario, stroke_mm, v, a, model, source)
     leg = stroke / v + v / a
     legs = int((DURATION_MAX - T_START - 1e-3) / leg)
     wps = [1e3 * (x0 + (stroke if k % 2 == 0 else 0.0)) for k in range(legs)]
@@ -256,6 +219,62 @@ def commission(motor: Motor | str | None = None, *, scenario: Scenario | None = 
     cal = _result(b, raw, model, lut, start, points, v, a, stroke, load)
     cal.metrics["route"] = "pulsating" if carried else "direct"
     return _carried(cal, model, drive_inj) if carried else cal
+
+
+def _base_data(motor, scenario: Scenario | None, drive: dict | None, fidelity: str, quad: float | None,
+               load: float, source: str) -> tuple[dict, str, object]:
+    """The scenario keys of the drive to commission (the scenario's drive keys, else the motor's;
+    the drive data and kappa over them), its run and load; the source and folder for messages."""
+    if scenario is not None:
+        data = _drive_of_scenario(scenario)
+        source, base_dir = scenario.source, scenario.base_dir
+    else:
+        data = {"motor": motor if isinstance(motor, str) else "ecce2010"}
+        base_dir = None
+    given = _drive_data(drive, None, source)  # (an unknown key refused)
+    _set_drive(data, {k: v for k, v in given.items() if k not in ("v_max", "a_max")})
+    data.setdefault("inverter", {})["fidelity"] = fidelity
+    if quad is not None:
+        data.setdefault("injection", {})["quadrature"] = float(quad)
+    data["scenario"] = {"name": "commission", "duration": DURATION_MAX}
+    data["load"] = {"type": "constant", "force": float(load)}
+    data.setdefault("initial", {})["load_balanced"] = True
+    return data, source, base_dir
+
+
+def _acceleration(d, model: Motor, load: float, a_max: float | None, source: str) -> float:
+    """The commissioning's acceleration, m/s^2, refusing a load the drive cannot hold at speed."""
+    f_max = float(d.controller.i_max) * model.force_constant
+    f_acc = FORCE_SHARE * f_max - abs(load)
+    if f_acc <= 0.0:
+        _refuse(source, "load", f"{abs(load):g} N leaves nothing of {FORCE_SHARE:g} K_f i_max = "
+                f"{FORCE_SHARE * f_max:.3g} N to accelerate with: the drive cannot hold it at speed")
+    a = float(a_max) if a_max is not None else min(10.0, f_acc / model.mass)
+    if model.mass * a > f_acc:
+        _refuse(source, "a_max", f"{a:g} m/s^2 needs {model.mass * a:.3g} N beside the load's "
+                f"{abs(load):g} N: more than {FORCE_SHARE:g} K_f i_max = {FORCE_SHARE * f_max:.3g} N")
+    return a
+
+
+def _stroke(scenario: Scenario | None, stroke_mm: float | None, v: float, a: float, model: Motor,
+            source: str) -> tuple[float, float]:
+    """The stroke and its start, m (the scenario's travel less 10 % at each end where it gives one),
+    refusing too little travel."""
+    # m: to the speed and back, the settling at speed, and the periods learned at speed
+    need = v * v / a + v * T_SETTLE + PERIODS_AT_SPEED * model.pole_pitch
+    tr = scenario.spec.travel if scenario is not None else None
+    bounded = tr is not None and bool({"min_mm", "max_mm"} & tr.model_fields_set)
+    if stroke_mm is None:
+        stroke = 0.8 * (tr.max_mm - tr.min_mm) / 1e3 if bounded else need + 3.0 * model.pole_pitch
+    else:
+        stroke = float(stroke_mm) / 1e3
+    if stroke < need:
+        _refuse(source, "travel", f"{stroke * 1e3:.1f} mm of stroke is too little: {need * 1e3:.1f} mm "
+                f"needed at {v:.3g} m/s and {a:.3g} m/s^2 (v^2/a to the speed and back, {T_SETTLE:g} s "
+                f"settling and {PERIODS_AT_SPEED:g} electrical period of {model.pole_pitch * 1e3:g} mm "
+                f"at speed)")
+    x0 = tr.min_mm / 1e3 + 0.1 * (tr.max_mm - tr.min_mm) / 1e3 if bounded else 0.0
+    return stroke, x0
 
 
 def _cruise_error(raw, v: float) -> dict:
