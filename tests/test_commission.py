@@ -103,7 +103,7 @@ def test_cli_writes_calibrate_formats_that_tune_reads(run_cli, tmp_path, monkeyp
     monkeypatch.chdir(tmp_path)
     r = run_cli("commission", "--motor", "ecce2010", "--fidelity", "average", "--out", "c")
     assert r.code == 0, r.err
-    for name in ("lut_measured.csv", "lut_measured.json", "metrics.json"):
+    for name in ("lut_measured.csv", "lut_measured.json", "metrics.json", "commission.png"):
         assert (tmp_path / "c" / name).is_file()
     met = json.loads((tmp_path / "c" / "metrics.json").read_text())
     assert met["completed"] and met["max_diff_deg"] < 0.3

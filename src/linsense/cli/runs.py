@@ -354,6 +354,7 @@ def commission(motor_spec: str | None, scenario_path: str | None, speed: float |
     linsense tune --table and observer.lut_model = "measured", metrics.json). Refused (exit code 2)
     before the run: too little travel, a load the drive cannot hold at speed, no saliency, no EMF
     estimate in the design. Exit code 1 if it does not complete."""
+    from linsense.report.figures import fig_commission, save_png
     from linsense.studies.commission import commission_to
 
     if as_json:
@@ -365,7 +366,8 @@ def commission(motor_spec: str | None, scenario_path: str | None, speed: float |
     out = c.default_out(out, scenario_path or motor_spec, "commission")
     done = commission_to(out, motor, scenario=sc, speed=speed, stroke_mm=stroke_mm, load=load,
                          points=positions, fidelity=fidelity, route=route, drive=drive,
-                         source=motor_spec or "<commission>")
+                         source=motor_spec or "<commission>",
+                         figure=lambda cal, path: save_png(fig_commission(cal, cal.motor), path))
     m = done.calibration.metrics
     c.files_report(done.files)
     show = c.show

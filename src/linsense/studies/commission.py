@@ -18,6 +18,7 @@ accelerates.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -46,7 +47,7 @@ from linsense.studies.calibrate import (
 from linsense.tune.design import mean_dq
 
 __all__ = ["SALIENCY_MIN", "SPEED_OVER_V_HI", "PERIODS_AT_SPEED", "commission", "commission_to",
-           "CommissionOutput"]
+           "CommissionOutput", "Commissioning", "ratio_slope"]
 
 #: -, the least mean L_q / L_d: below it the HF error is too weak to learn a table from
 SALIENCY_MIN = 1.05
@@ -74,6 +75,23 @@ D_SHARE = 0.4
 CAPS = (2.0, 1.5, 1.0, 0.7)
 #: s, the HF lock before the first move
 T_START = 0.1
+
+
+@dataclass
+class Commissioning(Calibration):
+    """A commissioning's table (a :class:`~linsense.studies.calibrate.Calibration`: the table the
+    drive is given against the plant's own) with what was learned on the pulsating route.
+
+    Attributes
+    ----------
+    psi_learned : ndarray or None
+        The table learned with the pulsating injection, rad (None on the direct route).
+    psi_learned_plant : ndarray or None
+        The plant's own table for that injection, rad.
+    """
+
+    psi_learned: np.ndarray | None = None  # rad, learned with the pulsating injection (pulsating route)
+    psi_learned_plant: np.ndarray | None = None  # rad, the plant's own table for it
 
 
 @dataclass
@@ -326,7 +344,8 @@ def _carried(cal: Calibration, model: Motor, inj) -> Calibration:
         "v_inj": float(inj.amplitude),
     })
     stamp = table_stamp(model, inj.shape, inj.frequency, inj.quadrature, points)
-    return Calibration(cal.theta, table, true, cal.psi_eq12, m, cal.motor, stamp)
+    return Commissioning(cal.theta, table, true, cal.psi_eq12, m, cal.motor, stamp,
+                         psi_learned=cal.psi_measured, psi_learned_plant=cal.psi_model)
 
 
 def ratio_slope(motor: Motor, v_inj: float, f_inj: float, quad: float, n: int = 72) -> float:
@@ -396,10 +415,11 @@ def _result(b, raw, model: Motor, lut, start: np.ndarray, points: int, v: float,
         "motor": b.motor.name,
     }
     stamp = table_stamp(model, inj.shape, inj.frequency, inj.quadrature, points)
-    return Calibration(theta, table, true, psi_lut(b.motor, theta), metrics, b.motor, stamp)
+    return Commissioning(theta, table, true, psi_lut(b.motor, theta), metrics, b.motor, stamp)
 
 
-def commission_to(out: str | Path, motor=None, **kwargs) -> CommissionOutput:
+def commission_to(out: str | Path, motor=None, figure: Callable[[Calibration, Path], object] | None = None,
+                  **kwargs) -> CommissionOutput:
     """Commission (:func:`commission`) and write ``calibrate``'s output set: ``lut_measured.csv``,
     ``lut_measured.json`` (when complete: ``linsense tune --table`` and ``observer.lut_model =
     "measured"`` read it), ``metrics.json``, ``timing.json``.
@@ -410,6 +430,9 @@ def commission_to(out: str | Path, motor=None, **kwargs) -> CommissionOutput:
         The folder: missing, empty or an earlier output of linsense.
     motor : Motor or str or None
         As :func:`commission`'s.
+    figure : callable or None, optional
+        ``figure(commissioning, path)`` draws ``commission.png`` (e.g.
+        :func:`linsense.report.figures.fig_commission` saved); None: no figure.
     **kwargs : dict
         :func:`commission`'s keywords.
 
@@ -425,4 +448,6 @@ def commission_to(out: str | Path, motor=None, **kwargs) -> CommissionOutput:
         if cal.completed:
             s.write("lut_measured.json", measured_json(cal))
         write_metrics(s, metrics, timing)
+        if figure is not None:
+            figure(cal, s.path("commission.png"))
     return CommissionOutput(cal, metrics, timing, list(s.files))
