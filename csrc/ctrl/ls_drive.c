@@ -135,6 +135,7 @@ void ls_drive_default_cfg(ls_drive_cfg *c)
     c->cal.period = 0;
     c->cal.dither_amp = LS_DEF_DITHER_AMP;
     c->cal.dither_freq = LS_DEF_DITHER_FREQ; /* not a submultiple of the injection (50 Hz would be) */
+    c->cal.slope = LS_R(1.0); /* the pulsating injection's (linsense designs the elliptical one's) */
     /* start-up (ls_startup.h): the design of linsense.tune.startup for ecce2010 with the FEA's
      * 1.31 %/A of a thin back iron and this drive, 10 mA rms of current noise and a 12-bit ADC: 2.8 A
      * at the end of a 7-period pulse, pairs for a decision 6 sigma clear (docs/tuning.md); the lock's
@@ -370,6 +371,7 @@ static void startup_step(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT mea
  *                                                                                           _square.c, _speed.c
  *   LS_MODE_CALIBRATION       calibration calibration calibration calibration calibration ls_drive_calibration.c
  *   LS_MODE_STARTUP           startup     startup     startup     startup     startup     ls_drive_startup.c
+ *   LS_MODE_COMMISSION        (off)       (off)       (off)       (off)       commission  ls_drive_commission.c
  *
  * mode_set picks the entry (d->path = row * LS_DRIVE_COLS + column) when the mode changes; while
  * LS_MODE_STARTUP runs, d->mode holds LS_MODE_OFF (d->starting set, cmd.mode reports
@@ -377,7 +379,7 @@ static void startup_step(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT mea
 enum { LS_DRIVE_PULSE = 0, LS_DRIVE_ROT = 1, LS_DRIVE_ROTX = 2, LS_DRIVE_SQUARE = 3, LS_DRIVE_SPEED = 4,
        LS_DRIVE_COLS = 5 };
 #define LS_DRIVE_ROW(f) {f, f, f, f, f}
-static const ls_drive_step_fn step_table[LS_MODE_STARTUP + 1][LS_DRIVE_COLS] = {
+static const ls_drive_step_fn step_table[LS_MODE_COMMISSION + 1][LS_DRIVE_COLS] = {
     [LS_MODE_OFF] = LS_DRIVE_ROW(ls_drive_off_step_),
     [LS_MODE_SENSORED] = LS_DRIVE_ROW(ls_drive_sensored_step_),
     [LS_MODE_SENSORLESS_LUT] = {ls_drive_sensorless_step_, ls_drive_rotating_step_, ls_drive_sensorless_step_,
@@ -386,13 +388,16 @@ static const ls_drive_step_fn step_table[LS_MODE_STARTUP + 1][LS_DRIVE_COLS] = {
                                   ls_drive_square_step_, ls_drive_speed_step_},
     [LS_MODE_CALIBRATION] = LS_DRIVE_ROW(ls_drive_calibration_step_),
     [LS_MODE_STARTUP] = LS_DRIVE_ROW(startup_step),
+    /* (ls_drive_set_mode refuses the mode without cfg.emf_on: the other columns never run) */
+    [LS_MODE_COMMISSION] = {ls_drive_off_step_, ls_drive_off_step_, ls_drive_off_step_, ls_drive_off_step_,
+                            ls_drive_commission_step_},
 };
 
 /* Every mode x shape has its step (ls_drive_init refuses to run with a hole in the table). */
 static bool step_table_complete(void)
 {
     unsigned r, c;
-    for (r = 0; r <= (unsigned)LS_MODE_STARTUP; r++) {
+    for (r = 0; r <= (unsigned)LS_MODE_COMMISSION; r++) {
         for (c = 0; c < (unsigned)LS_DRIVE_COLS; c++) {
             if (step_table[r][c] == NULL) {
                 return false;
@@ -422,7 +427,8 @@ static void mode_set(ls_drive *d, ls_mode mode)
     const unsigned row = d->starting ? (unsigned)LS_MODE_STARTUP : (unsigned)mode;
     d->mode = mode;
     d->hf_on = mode == LS_MODE_SENSORLESS_LUT || mode == LS_MODE_SENSORLESS_NOLUT ||
-               mode == LS_MODE_CALIBRATION || (mode == LS_MODE_SENSORED && d->cfg.inject_sensored);
+               mode == LS_MODE_CALIBRATION || mode == LS_MODE_COMMISSION ||
+               (mode == LS_MODE_SENSORED && d->cfg.inject_sensored);
     d->v_hf_max = d->hf_on ? d->cfg.inject.amplitude : LS_R(0.0);
     d->i_d_ref = d->hf_on ? d->cfg.i_d_inj : LS_R(0.0);
     d->path = (uint8_t)(row * LS_DRIVE_COLS + step_column(&d->cfg));
@@ -513,13 +519,29 @@ ls_status ls_drive_set_mode(ls_drive *d, ls_mode mode)
         d->psi_cal = LS_R(0.0);
         ls_drive_cal_cs_(d);
         break;
+    case LS_MODE_COMMISSION: /* the EMF estimate, the work, the demodulator reading the table learned, a
+                                stable rate (k_int ts < 1) */
+        if (!d->cfg.emf_on || d->cfg.cal.table == NULL || d->cfg.cal.learn == NULL || d->cfg.demod.comp == NULL ||
+            d->cfg.demod.comp->table != d->cfg.cal.table || d->cfg.demod.comp->len != d->cfg.cal.points ||
+            !(d->cfg.cal.k_int * d->ts < LS_R(1.0)) || !(d->cfg.cal.slope > LS_R(0.0)) ||
+            !(d->cfg.cal.slope <= LS_DRIVE_CAL_SLOPE_MAX) ||
+            !(LS_DRIVE_LEARN_CRUISE * d->cfg.traj.v_max > d->cfg.fuse.v_hi)) { /* (a cruise above the
+                                                                                   band: else none) */
+            return LS_ERR_PARAM;
+        }
+        d->learn_w = LS_DRIVE_LEARN_CRUISE * d->cfg.traj.v_max * d->kx;
+        d->learn_inv_s = LS_R(1.0) / d->cfg.cal.slope;
+        d->learn_kd = d->cfg.hf_delay / d->cfg.demod.gain; /* (|gain| >= 1 / LS_DEMOD_GAIN_MAX: finite) */
+        d->cal_timer = 0u;
+        ls_drive_learn_reset_(d);
+        break;
     default:
         return LS_ERR_PARAM;
     }
     /* the table in sensorless_lut, and for the HF estimate beside the encoder in sensored mode
      * (inject_sensored) when there is one; not without LUT, nor while calibrating it */
     ls_demod_set_comp(&d->demod, mode == LS_MODE_SENSORLESS_LUT || mode == LS_MODE_SENSORED ||
-                                     mode == LS_MODE_STARTUP);
+                                     mode == LS_MODE_STARTUP || mode == LS_MODE_COMMISSION);
     /* the modulator's history and the residual model start again (the outputs may have been off) */
     ls_mod_reset(&d->mod);
     dtres_reset(d, true);

@@ -11,6 +11,7 @@
  *   ls_drive_square.c      LS_MODE_SENSORLESS_LUT/NOLUT, square wave at fs/2
  *   ls_drive_speed.c       LS_MODE_SENSORLESS_LUT/NOLUT, pulsating or elliptical injection with the EMF
  *                          estimate and the hand-over (cfg.emf_on)
+ *   ls_drive_commission.c  LS_MODE_COMMISSION (cfg.emf_on: ls_drive_speed.c's step, its learning)
  *   ls_drive_sensored.c    LS_MODE_SENSORED (every shape)
  *   ls_drive_calibration.c LS_MODE_CALIBRATION (every shape) and its sequence
  *   ls_drive_startup.c     LS_MODE_STARTUP (its HF chain; ls_drive.c handles its end)
@@ -77,6 +78,16 @@ void ls_drive_sensorless_step_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRI
 void ls_drive_rotating_step_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas, ls_cmd *LS_RESTRICT cmd);
 /* ls_drive_speed.c */
 void ls_drive_speed_step_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas, ls_cmd *LS_RESTRICT cmd);
+/* ... its body; commission: LS_MODE_COMMISSION's (the injection kept on, ls_drive_learn_ after the
+ * observer) */
+void ls_drive_speed_run_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas, ls_cmd *LS_RESTRICT cmd,
+                         bool commission);
+/* ls_drive_commission.c: LS_MODE_COMMISSION's step, and its learning of the step's demodulated
+ * error into cal.table (called by ls_drive_speed_run_ after the observer) */
+void ls_drive_commission_step_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas, ls_cmd *LS_RESTRICT cmd);
+void ls_drive_learn_(ls_drive *LS_RESTRICT d);
+/* LS_MODE_COMMISSION's estimates start at the table (cal.learn's first two rows), its times at 0 */
+void ls_drive_learn_reset_(ls_drive *d);
 /* ls_drive_square.c */
 void ls_drive_square_step_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas, ls_cmd *LS_RESTRICT cmd);
 /* ls_drive_sensored.c */

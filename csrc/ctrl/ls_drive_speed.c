@@ -70,7 +70,8 @@ static bool observe(ls_drive *LS_RESTRICT d, ls_cmd *LS_RESTRICT cmd, ls_drive_i
     return false;
 }
 
-void ls_drive_speed_step_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas, ls_cmd *LS_RESTRICT cmd)
+void ls_drive_speed_run_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas, ls_cmd *LS_RESTRICT cmd,
+                         bool commission)
 {
     ls_drive_io io;
     LS_REAL v_ab[2], i_ab[2], e_emf, e_hf, err;
@@ -87,8 +88,10 @@ void ls_drive_speed_step_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT me
     if (observe(d, cmd, &io, err)) {
         return;
     }
-    /* the injection: faded out above the band, back in below it; the voltage it keeps */
-    if (d->fuse.inject != d->inj.on) {
+    if (commission) { /* the injection kept on; the table learned at speed (ls_drive_commission.c) */
+        ls_drive_learn_(d);
+    } else if (d->fuse.inject != d->inj.on) { /* the injection: faded out above the band, back in
+                                                 below it; the voltage it keeps */
         if (d->fuse.inject && !(d->inj.amp > LS_R(0.0))) {
             hf_restart(d);
         }
@@ -100,4 +103,9 @@ void ls_drive_speed_step_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT me
     ls_drive_current_(d, meas->v_dc, &io);
     ls_drive_inject_(d, &io);
     ls_drive_close_(d, meas, cmd, &io, false);
+}
+
+void ls_drive_speed_step_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas, ls_cmd *LS_RESTRICT cmd)
+{
+    ls_drive_speed_run_(d, meas, cmd, false);
 }

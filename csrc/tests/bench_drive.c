@@ -6,7 +6,9 @@
  * 2800 steps are the whole start-up, beyond it the drive holds in sensorless LUT mode).
  * 4 LS_MODE_SENSORED with the HF estimate beside the encoder (inject_sensored), 5
  * LS_MODE_CALIBRATION (12 points of period 1, the default injection), 6 LS_MODE_SENSORED with the
- * square wave beside the encoder (4 and 6: ls_drive_sensored.c, 5: ls_drive_calibration.c).
+ * square wave beside the encoder (4 and 6: ls_drive_sensored.c, 5: ls_drive_calibration.c), 7
+ * LS_MODE_COMMISSION (the default injection, emf_on, a 0.4 m move at 1 m/s: the learning runs at
+ * its cruise; ls_drive_commission.c).
  * G = 1: with a gain table (rotating, square); R = 1: without the dead-time residual model, 2: with
  * its interpolating model (dtres.forward false) instead of the forward one.
  * so that only the instructions executed inside ls_drive_step are counted (tools/bench.sh). */
@@ -88,6 +90,30 @@ int main(int argc, char **argv)
         cfg.cal.table = cal_table;
         cfg.cal.period = 1;
     }
+    if (shape == 7) { /* LS_MODE_COMMISSION: its table the demodulator's, started at the model's */
+        static float com_table[LS_LUT_ECCE2010_Q_LEN], com_learn[4u * LS_LUT_ECCE2010_Q_LEN];
+        static ls_lut com_lut;
+        ls_lut_cfg lcom = {com_table, LS_LUT_ECCE2010_Q_LEN};
+        unsigned i;
+        for (i = 0; i < LS_LUT_ECCE2010_Q_LEN; ++i) {
+            com_table[i] = ls_lut_ecce2010_q[i];
+        }
+        if (ls_lut_init(&com_lut, &lcom) != LS_OK) {
+            return 2;
+        }
+        cfg.emf_on = true;
+        cfg.demod.comp = &com_lut;
+        cfg.cal.points = LS_LUT_ECCE2010_Q_LEN;
+        cfg.cal.table = com_table;
+        cfg.cal.learn = com_learn;
+        cfg.cal.k_int = LS_R(500.0);
+        cfg.cal.t_hold = LS_R(0.02);
+        cfg.cal.t_settle = LS_R(0.02);
+        cfg.cal.slope = LS_R(0.33);
+        cfg.traj.v_max = LS_R(1.0);
+        cfg.traj.a_max = LS_R(10.0);
+        cfg.pos.v_max = LS_R(1.2);
+    }
     if (ls_drive_init(&d, &cfg) != LS_OK) {
         return 2;
     }
@@ -102,6 +128,11 @@ int main(int argc, char **argv)
             return 2;
         }
         ls_drive_move_to(&d, tp_pos_of_m(0.020, p.tau));
+    } else if (shape == 7) {
+        if (ls_drive_set_mode(&d, LS_MODE_COMMISSION) != LS_OK) {
+            return 2;
+        }
+        ls_drive_move_to(&d, tp_pos_of_m(0.400, p.tau));
     } else if (shape == 5) {
         tp_init(&p, 0.056 + 0.001);
         if (ls_drive_set_mode(&d, LS_MODE_CALIBRATION) != LS_OK) {

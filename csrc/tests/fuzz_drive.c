@@ -20,14 +20,16 @@
  *           (16, 20, 10, 32 kHz; every module follows)
  *     h[7]  bit 0 toggle emf_on (the SPEED step with the pulsating or elliptical injection); bit 1 a
  *           hand-over band of 0.04-0.14 m/s (the default moves' 0.2 m/s cross it); bit 2 the magnets' imbalance
- *           compensated (emf.psi_pm, pm_shift, neg_re, neg_im)
+ *           compensated (emf.psi_pm, pm_shift, neg_re, neg_im); bit 3 LS_MODE_COMMISSION's
+ *           configuration over the rest (emf_on, cal.learn, demod.comp over cal.table at cal.points
+ *           when 4..64, traj.v_max 1 m/s; set_mode refuses what does not fit); bits 4..7 reserved
  *   override record, 6 bytes: field, kind, value (4 bytes, big-endian)
  *     field < N_FIELDS: an LS_REAL field of ls_drive_cfg (FIELDS) set to the value decoded by
  *     rd_real (kind & 0x10: multiplied into the preset's value instead); then the integer fields
  *     enc_counts, cal.period, startup.pairs, and obs.type/pos.type/demod.method/sep.type/
  *     inject.shape/bpf.type from kind
  *   step record, 8 bytes: op, arg, value (4 bytes, big-endian), n, meas
- *     op & 15: 0, 10..15 none; 1 ls_drive_set_mode(arg % 6); 2 set_position, 3 move_to, 4 step_to,
+ *     op & 15: 0, 10..15 none; 1 ls_drive_set_mode(arg % 7); 2 set_position, 3 move_to, 4 step_to,
  *       6 ls_drive_reset (a position, rd_pos); 5 ls_drive_set_load (rd_real); 7 the held encoder
  *       count (arg & 1: set to the value, else moved by its low 16 bits); 8 for this record's steps,
  *       measurement arg % 4 (i_a, i_b, i_c, v_dc) is the value (rd_real: NaN, Inf, huge ...);
@@ -513,6 +515,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     static const double x0_opt[4] = {0.0, 0.014, 0.0767, -0.163};
     static const unsigned n_scale[4] = {1u, 8u, 64u, 256u};
     float cal_tab[N_CAL];
+    float learn_tab[4u * N_CAL];
+    ls_lut learn_lut;
     reader r;
     ls_lut comp, gain, comp_r, gain_r;
     ls_lut_cfg lc;
@@ -561,6 +565,17 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         rd_bytes(&r, o, OVR);
         override(&cfg, o);
     }
+    if ((h[7] & 8u) != 0u) { /* LS_MODE_COMMISSION: its table the demodulator's */
+        cfg.emf_on = true;
+        cfg.cal.learn = learn_tab;
+        cfg.cal.table = cal_tab;
+        cfg.traj.v_max = LS_R(1.0);
+        lc.table = cal_tab;
+        lc.len = cfg.cal.points;
+        if (cfg.cal.points >= 4u && cfg.cal.points <= N_CAL && ls_lut_init(&learn_lut, &lc) == LS_OK) {
+            cfg.demod.comp = &learn_lut;
+        }
+    }
     if (ls_drive_init(&d, &cfg) != LS_OK) {
         /* a refused configuration: the drive must refuse to run, and every setter (on it, or on no
          * drive) must say so and change nothing */
@@ -607,7 +622,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         meas = rec[7];
         switch (op & 15u) {
         case 1:
-            (void)ls_drive_set_mode(&d, (ls_mode)(arg % 6u));
+            (void)ls_drive_set_mode(&d, (ls_mode)(arg % 7u));
             break;
         case 2: /* set_position, move_to, step_to */
         case 3:

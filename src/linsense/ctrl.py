@@ -194,6 +194,10 @@ _RULES = {
 
 #: the injection's largest share of the linear range at the under-voltage limit (ls_drive_init's)
 V_INJ_SHARE_MAX = float(lib.LS_DRIVE_V_INJ_SHARE_MAX)
+#: -, LS_MODE_COMMISSION's largest cal.slope (ls_drive.h)
+CAL_SLOPE_MAX = float(lib.LS_DRIVE_CAL_SLOPE_MAX)
+#: -, LS_MODE_COMMISSION learns at |v| >= this share of the trajectory's v_max (ls_drive.h)
+LEARN_CRUISE = float(lib.LS_DRIVE_LEARN_CRUISE)
 #: the EMF low-pass corner's largest share of the sampling rate (ls_emf_init's)
 EMF_FLPF_FS_MAX = float(lib.LS_EMF_FLPF_FS_MAX)
 #: the largest ``|ripple_c| + |ripple_s|`` ls_drive_init accepts
@@ -367,7 +371,8 @@ _ENUMS = {
     ("ls_drive", "mode"): {"off": lib.LS_MODE_OFF, "sensored": lib.LS_MODE_SENSORED,
                            "sensorless_lut": lib.LS_MODE_SENSORLESS_LUT,
                            "sensorless_nolut": lib.LS_MODE_SENSORLESS_NOLUT,
-                           "calibration": lib.LS_MODE_CALIBRATION, "startup": lib.LS_MODE_STARTUP},
+                           "calibration": lib.LS_MODE_CALIBRATION, "startup": lib.LS_MODE_STARTUP,
+                           "commission": lib.LS_MODE_COMMISSION},
 }
 
 
@@ -918,6 +923,42 @@ class Lut:
         out = np.empty_like(flat)
         lib.ls_py_lut_run(self.ptr, _p(flat), flat.size, _p(out))
         return out.reshape(t.shape)
+
+
+class LearnedLut(Lut):
+    """A :class:`Lut` the drive writes: ``LS_MODE_COMMISSION``'s table (``cfg.cal.table``, which
+    ``cfg.demod.comp`` reads), with its work ``cfg.cal.learn`` (4 ``len`` floats).
+
+    Parameters
+    ----------
+    values : array_like, shape (N,)
+        The table it starts from, rad.
+
+    Attributes
+    ----------
+    table : ndarray of float32
+        The table as the drive leaves it (read it after the run).
+    learn : cdata ``float[4 N]``
+        The forward and backward estimates, rad, then the time each point was seen moving forward,
+        backward, s (``ls_drive.h``, ``ls_cal_cfg.learn``).
+    """
+
+    def __init__(self, values: Any) -> None:
+        super().__init__(values)
+        self.table.setflags(write=True)  # (the drive writes it: LS_MODE_COMMISSION)
+        self.learn = ffi.new("float[]", 4 * self.len)
+
+    def attach(self, cfg: Any) -> None:
+        """Point ``cfg.cal`` (an ``ls_drive_cfg *``) at the table and its work, ``cal.points`` its length.
+
+        Parameters
+        ----------
+        cfg : cdata ``ls_drive_cfg *``
+            The configuration, before ``ls_drive_init``.
+        """
+        cfg.cal.table = ffi.cast("float *", self._buf)
+        cfg.cal.learn = self.learn
+        cfg.cal.points = self.len
 
 
 def make_lut(values: Any) -> Lut:

@@ -42,6 +42,15 @@
  *                            turned by pi when they say so), HF relock, then LS_MODE_SENSORLESS_LUT
  *                            by itself with the reference at the estimate (no jump); su holds the
  *                            decision; a failed start-up trips LS_FAULT_OBSERVER
+ *   LS_MODE_COMMISSION       the end-effect table learned without a sensor (ls_drive_commission.c;
+ *                            cfg.emf_on, cal.table, cal.learn and demod.comp over cal.table
+ *                            required): the sensorless step of cfg.emf_on with the injection kept
+ *                            on at every speed; while the estimated speed is at least fuse.v_hi
+ *                            (the EMF error alone drives the observer) the demodulator's error
+ *                            with the table is learned into it at the estimated angle, forward and
+ *                            backward apart (cal.learn) and the table their mean; the caller moves
+ *                            the mover back and forth (ls_drive_move_to); cmd.cal_index counts the
+ *                            points seen cal.t_hold in both directions, cmd.cal_done when all are
  */
 #ifndef LINSENSE_LS_DRIVE_H
 #define LINSENSE_LS_DRIVE_H
@@ -78,6 +87,16 @@
 /* -, the injection's largest share of the linear modulation range at the under-voltage limit,
  * inject.amplitude sqrt(3) / prot.v_dc_min (below it: the fundamental gets the rest) */
 #define LS_DRIVE_V_INJ_SHARE_MAX LS_R(0.8)
+/* -, LS_MODE_COMMISSION: the largest cal.slope (the pulsating injection's is 1) */
+#define LS_DRIVE_CAL_SLOPE_MAX LS_R(2.0)
+/* -, LS_MODE_COMMISSION learns where the estimated speed is at least this share of traj.v_max
+ * (the cruise of the moves: both directions at one speed, so that what follows the speed cancels
+ * in their mean) */
+#define LS_DRIVE_LEARN_CRUISE LS_R(0.95)
+/* -, ... and where the trajectory cruises: its acceleration output (low-passed) below this share of
+ * its acceleration, for cal.t_settle (the speed loop and the EMF estimate settled after the
+ * acceleration) */
+#define LS_DRIVE_LEARN_A_CRUISE LS_R(1.0e-3)
 
 /* Whether an injection of `amplitude` (V, peak) leaves the fundamental its share of the linear range
  * at the under-voltage limit `v_dc_min` (V): ls_drive_init refuses a configuration where it does not
@@ -93,7 +112,8 @@ typedef enum {
     LS_MODE_SENSORLESS_LUT = 2,
     LS_MODE_SENSORLESS_NOLUT = 3,
     LS_MODE_CALIBRATION = 4,
-    LS_MODE_STARTUP = 5
+    LS_MODE_STARTUP = 5,
+    LS_MODE_COMMISSION = 6
 } ls_mode;
 
 typedef struct {
@@ -112,6 +132,16 @@ typedef struct {
                             of acting as a relay on the near-zero force current (0: none), >= 0 */
     LS_REAL dither_freq; /* Hz, its frequency (well above the position loop, below the demodulator
                             low-pass; its motion is amp K_f / (m w^2)), > 0 if dither_amp > 0 */
+    float *learn;     /**< unit: rad and s, LS_MODE_COMMISSION: caller-owned work of 4 points floats,
+                           the table's forward estimate, its backward estimate (rad), then the time
+                           each point was seen moving forward, backward (s; linear weights); NULL:
+                           no commissioning. There cal.k_int (1/s) is the estimates' rate
+                           (k_int / fs < 1), cal.t_hold (s) the time each point needs in each
+                           direction and cal.t_settle (s) the wait after each acceleration */
+    LS_REAL slope;    /**< unit: -, LS_MODE_COMMISSION: the demodulated ratio's change per rad of the
+                           table's error, -d ratio / d psi at the table (1 for the pulsating
+                           injection, 0.2-0.5 for the elliptical one at kappa 0.9: the design's,
+                           linsense.studies.commission.ratio_slope), in (0, LS_DRIVE_CAL_SLOPE_MAX] */
 } ls_cal_cfg;
 
 typedef struct {
@@ -286,6 +316,10 @@ typedef struct {
     uint32_t cal_n_max;    /* -, steps beyond cal.t_max: the first n with n ts > t_max */
     uint32_t cal_acc;    /* -, the dither's phase, 2^32 per period */
     uint32_t cal_inc;    /* -, its step per period: dither_freq / fs 2^32 */
+    LS_REAL learn_w;     /**< unit: rad/s, LS_MODE_COMMISSION learns at |omega| >= it: fuse.v_hi and
+                              LS_DRIVE_LEARN_CRUISE traj.v_max, the larger, as electrical speeds */
+    LS_REAL learn_inv_s; /**< unit: -, 1 / cal.slope */
+    LS_REAL learn_kd;    /**< unit: s, hf_delay / demod.gain: the HF path's delay in the ratio per rad/s */
     LS_REAL cal_amp;     /* A, the dither's amplitude now: cal.dither_amp while settling and
                             adapting, else 0 */
     int32_t enc_prev;    /* -, encoder count of the last sample (encoder modes) */

@@ -319,6 +319,73 @@ def calibrate(motor_spec: str | None, scenario_path: str | None, positions: int,
         raise click.exceptions.Exit(1)
 
 
+@click.command(short_help="Learn the end-effect table without a sensor.",
+               epilog=c.see("tuning"))
+@click.option("--motor", "motor_spec", default=None,
+              help=c.MOTOR_HELP + "; with --scenario it must be the scenario's motor")
+@click.option("--scenario", "scenario_path", default=None,
+              help="the drive to commission (a file or a packaged example's name): its motor, bus, PWM, dead "
+                   "time, injection and gains; its [travel] bounds the stroke")
+@click.option("--speed", default=None, type=float, callback=c.finite(0.0, True),
+              help="commissioning speed, m/s (default: 1.3 times the hand-over band's top, where the EMF "
+                   "estimate alone is trusted)")
+@click.option("--stroke", "stroke_mm", default=None, type=float, callback=c.finite(0.0, True),
+              help="the back-and-forth stroke, mm (default: the scenario's travel, else what the speed needs "
+                   "and three pole pitches)")
+@click.option("--load", default=0.0, show_default=True, type=float, callback=c.finite(-math.inf, False),
+              help="constant load force, N (opposing positive motion when > 0)")
+@click.option("--positions", default=56, show_default=True, type=click.IntRange(4, 4096),
+              help="table points over one electrical period")
+@click.option("--fidelity", type=click.Choice(["switching", "average"]), default="switching",
+              show_default=True, help="inverter model, with the drive's dead time")
+@click.option("--route", type=click.Choice(["pulsating", "direct"]), default="pulsating", show_default=True,
+              help="pulsating: an elliptical drive learns with the pulsating injection and gets the model's "
+                   "table of the end effect that fits; direct: the drive's own injection learns its table")
+@drive_options
+@c.out_option("commission", "scenario's or motor", folder=True)
+@c.json_option
+def commission(motor_spec: str | None, scenario_path: str | None, speed: float | None,
+               stroke_mm: float | None, load: float, positions: int, fidelity: str, route: str,
+               out: str | None, as_json: bool, **drive) -> None:
+    """Learn the end-effect table without a sensor (docs/tuning.md, "Commissioning without a sensor"):
+    the mover runs back and forth at a speed where the EMF estimate is trusted, the HF demodulator
+    beside it, and the drive (LS_MODE_COMMISSION) learns the table from the HF error against the EMF
+    position, both directions averaged; calibrate's outputs (lut_measured.csv, lut_measured.json for
+    linsense tune --table and observer.lut_model = "measured", metrics.json). Refused (exit code 2)
+    before the run: too little travel, a load the drive cannot hold at speed, no saliency, no EMF
+    estimate in the design. Exit code 1 if it does not complete."""
+    from linsense.report.figures import fig_commission, save_png
+    from linsense.studies.commission import commission_to
+
+    if as_json:
+        c.data_on_stdout()
+    if motor_spec is None and scenario_path is None:
+        raise click.UsageError("give --motor or --scenario (the drive to commission)")
+    sc = scenario_arg(scenario_path, "--scenario") if scenario_path is not None else None
+    motor = c.load(motor_spec) if motor_spec is not None and sc is None else None
+    out = c.default_out(out, scenario_path or motor_spec, "commission")
+    done = commission_to(out, motor, scenario=sc, speed=speed, stroke_mm=stroke_mm, load=load,
+                         points=positions, fidelity=fidelity, route=route, drive=drive,
+                         source=motor_spec or "<commission>",
+                         figure=lambda cal, path: save_png(fig_commission(cal, cal.motor), path))
+    m = done.calibration.metrics
+    c.files_report(done.files)
+    show = c.show
+    c.say(f"{m['motor']}: {m['points_done']}/{m['points']} points both ways at {m['speed_m_s']:.3g} m/s "
+          f"(band top {m['v_hi_m_s']:.3g} m/s) over {m['stroke_mm']:.0f} mm, {m['fidelity']}, "
+          f"{m['dead_time_s'] * 1e6:g} us, route {m['route']}: max |table - plant's| "
+          f"{show(m['max_diff_deg'], 'deg', '.3g')} (the design's "
+          f"{show(m['start_diff_deg'], 'deg', '.3g')}), "
+          f"end-effect scale {m['end_effect_k']:.3f}; {m['sim_s']} s simulated")
+    c.elapsed()
+    if as_json:
+        c.emit_json("commission", done.files, done.completed, metrics=done.metrics, timing=done.timing)
+    if not done.completed:
+        click.echo(f"linsense: commissioning did not complete ({m['points_done']} of {m['points']} points, "
+                   f"fault {m['fault']})", err=True)
+        raise click.exceptions.Exit(1)
+
+
 def failed_claims(metrics: dict) -> list[str]:
     """The claims of a reproduction's ``metrics.json`` that do not hold (the paper's and those
     beyond it), as ``claim: paper ..., ours ...`` lines; [] for a model-only run."""
@@ -458,4 +525,4 @@ def sweep_cmd(sweep_file: str, out: str | None, workers: int | None, scheduler: 
         raise click.exceptions.Exit(1)
 
 
-COMMANDS = [simulate, calibrate, reproduce, fea, sweep_cmd]
+COMMANDS = [simulate, calibrate, commission, reproduce, fea, sweep_cmd]

@@ -266,6 +266,52 @@ def write_model_figures(motor, lut, out_dir: str | Path) -> list[Path]:
     return [save_png(fig, out / name) for name, fig in figs.items()]
 
 
+def fig_commission(cal, motor) -> Figure:
+    """The commissioning's table against the plant's own (docs/tuning.md, "Commissioning without a
+    sensor"): the table the drive is given and, on the pulsating route, the table learned with the
+    pulsating injection, with their differences from the plant's.
+
+    Parameters
+    ----------
+    cal : linsense.studies.commission.Commissioning
+        The commissioning.
+    motor : Motor
+        The plant's motor.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
+    m = cal.metrics
+    fig = Figure(figsize=(7.5, 5.6), layout="constrained")
+    top, bot = fig.subplots(2, 1, sharex=True, height_ratios=(2, 1))
+    th = np.degrees(cal.theta)
+    top.plot(th, np.degrees(cal.psi_model), "b-", lw=1.2,
+             label=f"the plant's own (kappa {m['injection_quad']:g})")
+    top.plot(th, np.degrees(cal.psi_measured), "o", ms=4, mfc="none", color="C3",
+             label="the drive's, commissioned")
+    bot.plot(th, np.degrees(cal.psi_measured - cal.psi_model), "o-", ms=3, color="C3", lw=0.8,
+             label="the drive's - the plant's")
+    learned = getattr(cal, "psi_learned", None)
+    if learned is not None:
+        top.plot(th, np.degrees(cal.psi_learned_plant), "-", color="0.5", lw=1.0,
+                 label="the plant's own, pulsating")
+        top.plot(th, np.degrees(learned), "x", ms=4, color="C2", label="learned, pulsating")
+        bot.plot(th, np.degrees(learned - cal.psi_learned_plant), "x-", ms=3, color="C2", lw=0.8,
+                 label="learned - the plant's, pulsating")
+    top.set_ylabel("Ψ_LUT (electrical deg)")
+    bot.set_ylabel("difference (deg)")
+    bot.set_xlabel("position θ (electrical deg)")
+    top.legend(fontsize=7)
+    bot.legend(fontsize=7)
+    top.set_title(f"Commissioning without a sensor, {m['motor']}: {m['fidelity']} inverter, dead time "
+                  f"{m['dead_time_s'] * 1e6:g} µs, {m['speed_m_s']:.3g} m/s, {m['sim_s']:.3g} s\nroute "
+                  f"{m['route']}, scale {m['end_effect_k']:.3f}; max |table - plant's| "
+                  f"{m['max_diff_deg']:.2f} deg", fontsize=8)
+    return fig
+
+
 def fig_calibration(cal, motor) -> Figure:
     """The calibration's measured table against the model.
 

@@ -133,7 +133,7 @@ def _check_mode(f: ScenarioSchema) -> None:
     """The observer's compensation and the start-up keys against ``control.mode``."""
     ctl = f.control
     comp = f.observer.compensation
-    if ctl.mode in ("sensorless_lut", "startup") and comp == "none":
+    if ctl.mode in ("sensorless_lut", "startup", "commission") and comp == "none":
         raise KeyProblem("observer.compensation",
                          f"\"none\" contradicts control.mode = \"{ctl.mode}\" "
                          "(use mode = \"sensorless_nolut\")")
@@ -143,7 +143,10 @@ def _check_mode(f: ScenarioSchema) -> None:
                          "only used by control.mode = \"startup\"")
     if ctl.mode == "startup":
         _check_startup(f)
-    if ctl.mode not in ("sensorless_lut", "sensored", "startup") and comp == "lut":
+    if ctl.mode == "commission" and not f.observer.emf:
+        raise KeyProblem("control.mode", "\"commission\" learns the table at speed against the EMF estimate: "
+                         "it needs observer.emf = true")
+    if ctl.mode not in ("sensorless_lut", "sensored", "startup", "commission") and comp == "lut":
         raise KeyProblem("observer.compensation", f"\"lut\" is only used by control.mode = "
                         f"\"sensorless_lut\" (or \"sensored\", for the HF observer beside the encoder), "
                         f"got mode = {ctl.mode!r}")
@@ -344,7 +347,7 @@ def compensation_of(mode: str, compensation: str | None) -> str:
     """
     if compensation is not None:
         return compensation
-    return "lut" if mode in ("sensorless_lut", "sensored", "startup") else "none"
+    return "lut" if mode in ("sensorless_lut", "sensored", "startup", "commission") else "none"
 
 
 #: the rules between keys, section by section, in the order their refusals take

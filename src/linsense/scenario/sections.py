@@ -31,6 +31,7 @@ from typing import Annotated, Literal
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from linsense.ctrl import (
+    CAL_SLOPE_MAX,
     STARTUP_PAIRS_MAX,
     STARTUP_PULSE_STEPS_MIN,
     STARTUP_REST_STEPS_MIN,
@@ -98,6 +99,12 @@ class CalibrationSection(BaseModel):
     dither_hz: Positive = Field(
         _c(_C.cal.dither_freq), description="frequency of the dither",
         json_schema_extra={"unit": "Hz", "default_note": "designed ({ecce2010} for ecce2010)"})
+    slope: float = Field(
+        _c(_C.cal.slope), gt=0.0, le=CAL_SLOPE_MAX, description="`commission` only: the demodulated "
+        "ratio's change per rad of the table's error, -d ratio / d psi (1 for the pulsating injection, "
+        "0.2-0.5 for the elliptical one at kappa 0.9)",
+        json_schema_extra={"unit": "-", "default_note": "`linsense commission` designs it "
+                           "(`linsense.studies.commission.ratio_slope`)"})
 
 
 class StartupSection(BaseModel):
@@ -161,10 +168,13 @@ class InverterSection(BaseModel):
 class ControlSection(BaseModel):
     """The ``[control]`` section of a scenario file; its keys are in docs/simulator.md."""
     model_config = _STRICT
-    mode: Literal["sensorless_lut", "sensorless_nolut", "sensored", "calibration", "startup"] = Field(
+    mode: Literal["sensorless_lut", "sensorless_nolut", "sensored", "calibration", "startup",
+                  "commission"] = Field(
         "sensorless_lut", description="`sensorless_lut`, `sensorless_nolut`, `sensored`, `calibration` (the "
         "firmware's LUT calibration; `linsense calibrate` runs it), `startup` (start-up from an unknown "
-        "position with the magnet polarity, then `sensorless_lut`; `[startup]` below)")
+        "position with the magnet polarity, then `sensorless_lut`; `[startup]` below), `commission` (the "
+        "table learned without a sensor at speed against the EMF estimate, `observer.emf = true`; "
+        "`[calibration]`'s `points`, `k_int` and `t_hold`; `linsense commission` runs it)")
     fs: Positive | None = Field(None, description="must equal `inverter.f_pwm` (one controller step per PWM "
                                 "period)", json_schema_extra={"unit": "Hz", "default_note": "= `f_pwm`"})
     delay_comp: NonNegative = Field(_c(_C.delay_comp), description="voltage-angle advance",

@@ -23,7 +23,7 @@ from fractions import Fraction
 from pathlib import Path
 
 from linsense import examples
-from linsense.ctrl import ConfigError, Drive, ffi
+from linsense.ctrl import ConfigError, Drive, LearnedLut, ffi
 from linsense.errors import InputError, LinsenseError, ModelError
 from linsense.model.motor import Motor, load_motor, motor_path, names_a_path, preset_names
 from linsense.model.saturation import Saturation
@@ -166,7 +166,11 @@ def build(sc: Scenario, motor: Motor | None = None, trace_in_memory: bool = True
     d = fill(v)
     calibrating = sc.spec.control.mode == "calibration"
     cal_table = calibration_table(d, sc.spec.calibration.points) if calibrating else None
-    drive = make_drive(sc, model_motor, known, v, d, user_keys, stamp_motor)
+    learning = sc.spec.control.mode == "commission"
+    drive = make_drive(sc, model_motor, known, v, d, user_keys, stamp_motor,
+                       learn_points=sc.spec.calibration.points if learning else None)
+    if learning:  # (the table the drive learns, read back from it: docs/tuning.md, "Commissioning")
+        cal_table = drive.comp
     check_units(sc, motor.pole_pitch, user_keys, believed(model_motor))  # (after the C library's limits)
     start_drive(sc, drive, motor, setup)
     cmds, moves = reference_commands(sc)
@@ -429,7 +433,7 @@ def plant(sc: Scenario, motor: Motor, sat: Saturation | None) -> tuple[PlantSetu
 
 
 def make_drive(sc: Scenario, model_motor: Motor, known: dict, v: Values, d, user_keys: set[str],
-               stamp_motor: Motor | None = None) -> Drive:
+               stamp_motor: Motor | None = None, learn_points: int | None = None) -> Drive:
     """The drive over a configuration, with its tables (:func:`linsense.sim.drive_tables.drive_tables`).
 
     A refusal of ``ls_drive_init`` (the C library's own checks, the last line) names the one field
@@ -451,6 +455,10 @@ def make_drive(sc: Scenario, model_motor: Motor, known: dict, v: Values, d, user
         The dotted keys the file gives.
     stamp_motor : Motor or None, optional
         The motor a measured table's stamp must name (default ``model_motor``).
+    learn_points : int or None, optional
+        ``control.mode = "commission"``: the table the drive learns has this many points, starting
+        from the drive's own table resampled (a :class:`~linsense.ctrl.LearnedLut`, the drive's
+        ``comp``, ``cfg.cal.table`` and ``cfg.cal.learn``).
 
     Returns
     -------
@@ -464,13 +472,29 @@ def make_drive(sc: Scenario, model_motor: Motor, known: dict, v: Values, d, user
     """
     try:
         t = drive_tables(sc, model_motor, known["R_s"], v, stamp_motor)
-        return Drive(d, comp=t.comp, gain_table=t.gain_table, comp_r=t.comp_r, gain_r=t.gain_r)
+        comp = t.comp
+        if learn_points is not None and comp is not None:
+            comp = LearnedLut(_resampled(comp.table, learn_points))
+            comp.attach(d)
+        return Drive(d, comp=comp, gain_table=t.gain_table, comp_r=t.comp_r, gain_r=t.gain_r)
     except ConfigError as exc:
         told = explain(d, user_keys, lambda k: value_of(sc.spec, k))
         if told is not None:
             raise InputError(sc.source, *told) from None
         sections = sorted({_SECTION.get(k.split(".")[0] if k != "pos.speed" else k, k) for k in exc.fields})
         raise InputError(sc.source, ",".join(sections), f"refused by the controller library: {exc}") from None
+
+
+def _resampled(table, points: int):
+    """A periodic table (values at ``2 pi k / N``) at ``points`` points by its linear interpolation
+    (the drive's, ``ls_lut.h``)."""
+    import numpy as np
+
+    t = np.asarray(table, dtype=float)
+    u = np.arange(points) * (t.size / points)
+    k = np.floor(u).astype(int) % t.size
+    f = u - np.floor(u)
+    return (1.0 - f) * t[k] + f * t[(k + 1) % t.size]
 
 
 def start_drive(sc: Scenario, drive: Drive, motor: Motor, setup: PlantSetup) -> None:

@@ -36,6 +36,7 @@ MODES = {
     "sensorless_nolut": lib.LS_MODE_SENSORLESS_NOLUT,
     "calibration": lib.LS_MODE_CALIBRATION,
     "startup": lib.LS_MODE_STARTUP,
+    "commission": lib.LS_MODE_COMMISSION,
 }
 #: Recorded signals: name -> values per sample.
 SIGNALS = {

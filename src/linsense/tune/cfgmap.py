@@ -210,7 +210,7 @@ def _rotating(v: Values) -> bool:
 
 
 def _calibrating(v: Values) -> bool:
-    return v["control.mode"] == "calibration"
+    return v["control.mode"] in ("calibration", "commission")
 
 
 def _measures(v: Values) -> bool:
@@ -548,6 +548,7 @@ ROWS: tuple[Row, ...] = (
     _cal("cal.k_int", ("calibration.k_int",), "1/s"),
     _cal("cal.t_settle", ("calibration.t_settle", "controller.kp_x"), "s"),
     _cal("cal.t_hold", ("calibration.t_hold", "calibration.k_int"), "s"),
+    _cal("cal.slope", ("calibration.slope",), "-"),
     _cal("cal.tol", ("calibration.tol_deg",), "rad", conv="deg"),
     _cal("cal.t_max", ("calibration.t_max", "calibration.t_hold", "calibration.k_int"), "s"),
     _cal("cal.dither_amp", ("calibration.dither_a",), "A", c=True),

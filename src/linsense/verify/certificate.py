@@ -391,8 +391,9 @@ def _calibration_base(base: dict, motor_spec: str, travel: float | None, tau: fl
 
 
 def calibrate_plant(motor: Motor, motor_spec: str, base: dict, base_dir: str, plant: str,
-                    travel: float | None = None):
-    """The firmware's calibration (paper Fig. 9) with the drive under test on an off-nominal plant.
+                    travel: float | None = None, route: str = "calibrate"):
+    """The firmware's calibration (paper Fig. 9) with the drive under test on an off-nominal plant,
+    or its sensorless commissioning (``route = "commission"``).
 
     Parameters
     ----------
@@ -408,6 +409,10 @@ def calibrate_plant(motor: Motor, motor_spec: str, base: dict, base_dir: str, pl
         A key of :data:`~linsense.verify.criteria.OFF_NOMINAL`.
     travel : float or None, optional
         The stroke, m.
+    route : str, optional
+        ``"calibrate"`` (default: with the encoder) or ``"commission"`` (without: the drive's bus,
+        PWM, dead time, current limit and injection commissioned by
+        :func:`linsense.studies.commission.commission`, its stroke the travel's).
 
     Returns
     -------
@@ -418,10 +423,28 @@ def calibrate_plant(motor: Motor, motor_spec: str, base: dict, base_dir: str, pl
     from linsense.studies.calibrate import calibrate
     from linsense.verify.cases import off_nominal_motor
 
+    if route == "commission":
+        return _commission_plant(motor, base, plant, travel)
     sc = scenario_from_dict(_calibration_base(base, motor_spec, travel, motor.pole_pitch),
                             source=f"the certificate's calibration on {plant}", base_dir=base_dir)
     return calibrate(scenario=sc, plant=off_nominal_motor(motor, plant), positions=C.CAL_POSITIONS,
                      load=0.0, fidelity="switching")
+
+
+def _commission_plant(motor: Motor, base: dict, plant: str, travel: float | None):
+    """The sensorless commissioning of an off-nominal plant with the drive under test's bus, PWM,
+    dead time, current limit and injection (its table's stamp is that drive's)."""
+    from linsense.studies.commission import commission
+    from linsense.verify.cases import off_nominal_motor
+
+    keys = {"v_dc": ("inverter", "v_dc"), "f_pwm": ("inverter", "f_pwm"),
+            "dead_time": ("inverter", "dead_time"), "i_max": ("controller", "i_max"),
+            "v_inj": ("injection", "amplitude"),
+            "f_inj": ("injection", "frequency"), "quad": ("injection", "quadrature")}
+    drive = {k: base.get(sec, {}).get(key) for k, (sec, key) in keys.items()}
+    return commission(motor, plant=off_nominal_motor(motor, plant), points=C.CAL_POSITIONS, drive=drive,
+                      stroke_mm=None if travel is None else 0.8 * travel * 1e3,
+                      source=f"the certificate's commissioning on {plant}")
 
 
 def calibration_summary(cal, motor: Motor) -> dict:
@@ -488,7 +511,8 @@ def _file_table_notes(rows: list[dict], calibrations: dict) -> list[str]:
 
 
 def prepare(motor: Motor, motor_spec: str, base: dict, base_dir: str, *, v_max: float, a_max: float,
-            load: float, travel: float | None = None, quick: bool = False, workers: int | None = None):
+            load: float, travel: float | None = None, quick: bool = False, workers: int | None = None,
+            table_route: str = "calibrate"):
     """The certificate's runs, each kind built once here; a callable that runs them.
 
     So that a configuration any of them refuses ends in one InputError before anything runs or is
@@ -519,6 +543,9 @@ def prepare(motor: Motor, motor_spec: str, base: dict, base_dir: str, *, v_max: 
         Only the quick checks.
     workers : int or None, optional
         Worker threads (default: one per core).
+    table_route : str, optional
+        How the off-nominal plants' tables are measured: ``"calibrate"`` (the encoder) or
+        ``"commission"`` (without a sensor, :func:`calibrate_plant`).
 
     Returns
     -------
@@ -546,7 +573,8 @@ def prepare(motor: Motor, motor_spec: str, base: dict, base_dir: str, *, v_max: 
 
         t0 = time.perf_counter()
         cals = dict(zip(calibrated, thread_map(
-            lambda p: calibrate_plant(motor, motor_spec, base, base_dir, p, travel), calibrated, workers,
+            lambda p: calibrate_plant(motor, motor_spec, base, base_dir, p, travel, table_route), calibrated,
+            workers,
             "linsense-calibrate"), strict=True))
         summaries = {p: calibration_summary(cal, motor) for p, cal in cals.items()}
         with tempfile.TemporaryDirectory(prefix="linsense-cert-") as tmp:

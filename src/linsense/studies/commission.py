@@ -1,0 +1,453 @@
+"""Sensorless commissioning of the end-effect table in the simulator: ``linsense commission``.
+
+The drive runs ``LS_MODE_COMMISSION`` (``csrc/ctrl/ls_drive_commission.c``, docs/tuning.md,
+"Commissioning without a sensor"): the mover goes back and forth over the travel at a speed above
+the hand-over band's top ``v_hi`` (where the EMF estimate alone drives the observer), the HF
+demodulator runs beside it with the table being learned, and the drive learns the table from the
+HF error against the EMF position, the forward and backward estimates apart and the table their
+mean. No encoder is read. The result is a :class:`~linsense.studies.calibrate.Calibration` (the
+table, the plant's own for comparison, the stamp), written in ``calibrate``'s formats by
+:func:`commission_to`.
+
+Refused before the run (:class:`~linsense.errors.InputError`), naming what is needed: a motor
+without saliency (``L_q / L_d`` below :data:`SALIENCY_MIN`), a drive whose design leaves the EMF
+estimate off, too little travel (the accelerations to the speed and back plus
+:data:`PERIODS_AT_SPEED` electrical periods at speed), a load the drive cannot hold while it
+accelerates.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from linsense.analysis.hf import demod_ratio, psi_lut, psi_lut_resistive
+from linsense.compensation.lut import build_lut
+from linsense.compensation.measured import end_effect_fit, table_stamp
+from linsense.ctrl import CAL_SLOPE_MAX, ffi
+from linsense.errors import InputError
+from linsense.io import output_set, split_timing
+from linsense.model.motor import Motor
+from linsense.scenario.load import Scenario, scenario_from_dict
+from linsense.sim.build import build, designed, resolve_motor
+from linsense.sim.core import run_closed_loop
+from linsense.sim.metrics import fault_reason
+from linsense.sim.to_folder import write_metrics
+from linsense.studies.calibrate import (
+    Calibration,
+    _drive_data,
+    _drive_of_scenario,
+    _set_drive,
+    lut_csv,
+    measured_json,
+)
+from linsense.tune.design import mean_dq
+
+__all__ = ["SALIENCY_MIN", "SPEED_OVER_V_HI", "PERIODS_AT_SPEED", "commission", "commission_to",
+           "CommissionOutput", "Commissioning", "ratio_slope"]
+
+#: -, the least mean L_q / L_d: below it the HF error is too weak to learn a table from
+SALIENCY_MIN = 1.05
+#: -, the commissioning speed over the hand-over band's top (the EMF estimate alone, with margin
+#: for the speed's ripple)
+SPEED_OVER_V_HI = 1.3
+#: -, electrical periods at speed each way, at least
+PERIODS_AT_SPEED = 1.0
+#: -, the force the drive may use to accelerate and hold the load, of K_f i_max
+FORCE_SHARE = 0.8
+#: s, simulated motion, at most
+DURATION_MAX = 10.0
+#: 1/s, s and s: the estimates' rate (the table's mean follows at K_INT / 2 where cal.slope is the
+#: motor's), the time each point needs in each direction (5 time constants of the mean) and the wait
+#: after each acceleration before learning (the speed loop and the EMF estimate settled)
+K_INT = 500.0
+T_HOLD = 10.0 / K_INT
+T_SETTLE = 0.02
+#: -, the d-current while commissioning, of i_max: it keeps the phase currents off zero, where the
+#: dead time biases the HF current in a way that follows the position (ecce2010, dM0 -25 %,
+#: switching: the learned table 0.22 deg off with none, 0.16 with 0.2 i_max, 0.10 with 0.4; 0.013
+#: with no dead time at all)
+D_SHARE = 0.4
+#: m/s, the speed caps the band is designed for, the first the bus allows
+CAPS = (2.0, 1.5, 1.0, 0.7)
+#: s, the HF lock before the first move
+T_START = 0.1
+
+
+@dataclass
+class Commissioning(Calibration):
+    """A commissioning's table (a :class:`~linsense.studies.calibrate.Calibration`: the table the
+    drive is given against the plant's own) with what was learned on the pulsating route.
+
+    Attributes
+    ----------
+    psi_learned : ndarray or None
+        The table learned with the pulsating injection, rad (None on the direct route).
+    psi_learned_plant : ndarray or None
+        The plant's own table for that injection, rad.
+    """
+
+    psi_learned: np.ndarray | None = None  # rad, learned with the pulsating injection (pulsating route)
+    psi_learned_plant: np.ndarray | None = None  # rad, the plant's own table for it
+
+
+@dataclass
+class CommissionOutput:
+    """What :func:`commission_to` made.
+
+    Parameters
+    ----------
+    calibration : Calibration
+        The commissioning (its table, stamp and metrics).
+    metrics : dict
+        ``metrics.json`` (without the timing).
+    timing : dict
+        ``timing.json``.
+    files : list of Path
+        The files written.
+    """
+
+    calibration: Calibration
+    metrics: dict
+    timing: dict
+    files: list[Path] = field(default_factory=list)
+
+    @property
+    def completed(self) -> bool:
+        """Whether every point was seen in both directions without a fault."""
+        return bool(self.calibration.completed)
+
+
+def _refuse(source: str, key: str, message: str):
+    raise InputError(source, key, message)
+
+
+def commission(motor: Motor | str | None = None, *, scenario: Scenario | None = None,
+               plant: Motor | None = None,
+               speed: float | None = None, stroke_mm: float | None = None, load: float = 0.0,
+               points: int = 56, fidelity: str = "switching", a_max: float | None = None,
+               quad: float | None = None, route: str = "pulsating", drive: dict | None = None,
+               d_current: float | None = None, source: str = "<commission>") -> Calibration:
+    """Learn the end-effect table without a sensor (module docstring).
+
+    Parameters
+    ----------
+    motor : Motor or str or None
+        The motor the drive believes in (a preset name or file); None with ``scenario``.
+    scenario : Scenario or None, optional
+        The drive (its drive keys kept, as ``calibrate``'s); its ``[travel]`` bounds the stroke.
+    plant : Motor or None, optional
+        The motor the drive runs on where it differs (an off-nominal plant).
+    speed : float or None, optional
+        Commissioning speed, m/s; None: :data:`SPEED_OVER_V_HI` ``v_hi``.
+    stroke_mm : float or None, optional
+        The back-and-forth stroke, mm; None: the scenario's travel less 10 % at each end, else the
+        least travel needed plus 3 pole pitches.
+    load : float, optional
+        Constant load opposing positive motion, N.
+    points : int, optional
+        Table points over one electrical period.
+    fidelity : str, optional
+        ``"switching"`` (default, with the drive's dead time) or ``"average"``.
+    a_max : float or None, optional
+        Acceleration, m/s^2; None: what :data:`FORCE_SHARE` of the force limit leaves after the load.
+    quad : float or None, optional
+        The drive's injection's kappa; None: the scenario's, else the design's.
+    route : str, optional
+        ``"pulsating"`` (default): a drive with the elliptical injection learns with the pulsating one
+        and its table is the model's for the end effect that fits what was learned (:func:`_carried`);
+        ``"direct"``: the drive's own injection learns its own table.
+    d_current : float or None, optional
+        The d-current while commissioning, A (``injection.d_current``); None: :data:`D_SHARE`
+        ``i_max``.
+    drive : dict or None, optional
+        Drive data over the scenario's or the design's defaults, by
+        :class:`~linsense.tune.design.DriveData` name (``v_dc``, ``f_pwm``, ``dead_time``, ``i_max``,
+        ``v_inj``, ``f_inj``, ``quad``; SI units; ``v_max`` and ``a_max`` are the commissioning's own).
+    source : str, optional
+        Name for messages.
+
+    Returns
+    -------
+    Calibration
+        The learned table against the plant's own, ``metrics`` (``max_diff_deg``, ``end_effect_k``,
+        ``sim_s``...) and the stamp.
+
+    Raises
+    ------
+    InputError
+        The refusals of the module docstring, one line naming what is needed.
+    """
+    if motor is None and scenario is None:
+        motor = "ecce2010"
+    if route not in ("pulsating", "direct"):
+        _refuse(source, "route", f"{route!r}: \"pulsating\" or \"direct\"")
+    data, source, base_dir = _base_data(motor, scenario, drive, fidelity, quad, load, source)
+    obj = motor if isinstance(motor, Motor) else None
+    # the design for a cap above the band: its hand-over (v_hi), with the EMF estimate on
+    def probe(cap: float) -> Scenario:
+        return scenario_from_dict({**data, "control": {**data.get("control", {}), "mode": "sensorless_lut"},
+                                   "reference": {"type": "hold", "v_max": cap}}, source, base_dir)
+
+    model = obj if obj is not None else resolve_motor(probe(1.0))
+    l_d, l_q = mean_dq(model)
+    if l_q / l_d < SALIENCY_MIN:
+        _refuse(source, "motor", f"L_q / L_d = {l_q / l_d:.3f} is below {SALIENCY_MIN:g}: without saliency "
+                "there is no HF error to learn a table from")
+    d = _design(probe, model, source)
+    drive_inj = d.injection  # (the drive's injection: its table is the one wanted)
+    carried = route == "pulsating" and drive_inj.shape == "pulsating" and drive_inj.quadrature > 0.0
+    if carried:  # (learned with the pulsating injection, carried to the drive's by the fitted end effect)
+        data.setdefault("injection", {})["quadrature"] = 0.0
+        d = _design(probe, model, source)
+    if not d.observer.emf:
+        _refuse(source, "observer.emf", "the design leaves the EMF estimate off for this motor and drive "
+                "(its error bound stays above 3 deg at every speed the bus allows, or flux harmonics): "
+                "commissioning needs it trustworthy at speed")
+    v_hi = float(d.observer.handover_v_hi)
+    v = float(speed) if speed is not None else SPEED_OVER_V_HI * v_hi
+    if v <= v_hi:
+        _refuse(source, "speed", f"{v:g} m/s is not above the hand-over band's top {v_hi:.3g} m/s, where "
+                "the EMF estimate alone is trusted")
+    i_d = D_SHARE * float(d.controller.i_max) if d_current is None else float(d_current)
+    data.setdefault("injection", {})["d_current"] = i_d
+    a = _acceleration(d, model, load, a_max, source)
+    stroke, x0 = _stroke(scenario, stroke_mm, v, a, model, source)
+    leg = stroke / v + v / a
+    legs = int((DURATION_MAX - T_START - 1e-3) / leg)
+    wps = [1e3 * (x0 + (stroke if k % 2 == 0 else 0.0)) for k in range(legs)]
+    data["initial"]["position_mm"] = 1e3 * x0
+    data["control"] = {**data.get("control", {}), "mode": "commission"}
+    data.setdefault("observer", {})["emf"] = True
+    data["reference"] = {"type": "trajectory", "waypoints_mm": wps, "v_max": v, "a_max": a, "dwell": 0.0,
+                         "at": T_START}
+    inj = d.injection
+    slope = ratio_slope(model, inj.amplitude, inj.frequency, inj.quadrature)
+    data["calibration"] = {"points": int(points), "k_int": K_INT, "t_hold": T_HOLD, "t_settle": T_SETTLE,
+                           "slope": slope}
+    data["record"] = {"decimate": 64}
+    sc = scenario_from_dict(data, source, base_dir)
+    b = build(sc, obj) if plant is None else build(sc, plant, model=model)
+    lut = b.extra["cal_table"]
+    start = np.array(lut.table, dtype=float)
+    raw = run_closed_loop(b.cfg, b.drive.state, b.n_steps, b.commands)
+    cal = _result(b, raw, model, lut, start, points, v, a, stroke, load)
+    cal.metrics["route"] = "pulsating" if carried else "direct"
+    return _carried(cal, model, drive_inj) if carried else cal
+
+
+def _base_data(motor, scenario: Scenario | None, drive: dict | None, fidelity: str, quad: float | None,
+               load: float, source: str) -> tuple[dict, str, object]:
+    """The scenario keys of the drive to commission (the scenario's drive keys, else the motor's;
+    the drive data and kappa over them), its run and load; the source and folder for messages."""
+    if scenario is not None:
+        data = _drive_of_scenario(scenario)
+        source, base_dir = scenario.source, scenario.base_dir
+    else:
+        data = {"motor": motor if isinstance(motor, str) else "ecce2010"}
+        base_dir = None
+    given = _drive_data(drive, None, source)  # (an unknown key refused)
+    _set_drive(data, {k: v for k, v in given.items() if k not in ("v_max", "a_max")})
+    data.setdefault("inverter", {})["fidelity"] = fidelity
+    if quad is not None:
+        data.setdefault("injection", {})["quadrature"] = float(quad)
+    data["scenario"] = {"name": "commission", "duration": DURATION_MAX}
+    data["load"] = {"type": "constant", "force": float(load)}
+    data.setdefault("initial", {})["load_balanced"] = True
+    return data, source, base_dir
+
+
+def _acceleration(d, model: Motor, load: float, a_max: float | None, source: str) -> float:
+    """The commissioning's acceleration, m/s^2, refusing a load the drive cannot hold at speed."""
+    f_max = float(d.controller.i_max) * model.force_constant
+    f_acc = FORCE_SHARE * f_max - abs(load)
+    if f_acc <= 0.0:
+        _refuse(source, "load", f"{abs(load):g} N leaves nothing of {FORCE_SHARE:g} K_f i_max = "
+                f"{FORCE_SHARE * f_max:.3g} N to accelerate with: the drive cannot hold it at speed")
+    a = float(a_max) if a_max is not None else min(10.0, f_acc / model.mass)
+    if model.mass * a > f_acc:
+        _refuse(source, "a_max", f"{a:g} m/s^2 needs {model.mass * a:.3g} N beside the load's "
+                f"{abs(load):g} N: more than {FORCE_SHARE:g} K_f i_max = {FORCE_SHARE * f_max:.3g} N")
+    return a
+
+
+def _stroke(scenario: Scenario | None, stroke_mm: float | None, v: float, a: float, model: Motor,
+            source: str) -> tuple[float, float]:
+    """The stroke and its start, m (the scenario's travel less 10 % at each end where it gives one),
+    refusing too little travel."""
+    # m: to the speed and back, the settling at speed, and the periods learned at speed
+    need = v * v / a + v * T_SETTLE + PERIODS_AT_SPEED * model.pole_pitch
+    tr = scenario.spec.travel if scenario is not None else None
+    bounded = tr is not None and bool({"min_mm", "max_mm"} & tr.model_fields_set)
+    if stroke_mm is None:
+        stroke = 0.8 * (tr.max_mm - tr.min_mm) / 1e3 if bounded else need + 3.0 * model.pole_pitch
+    else:
+        stroke = float(stroke_mm) / 1e3
+    if stroke < need:
+        _refuse(source, "travel", f"{stroke * 1e3:.1f} mm of stroke is too little: {need * 1e3:.1f} mm "
+                f"needed at {v:.3g} m/s and {a:.3g} m/s^2 (v^2/a to the speed and back, {T_SETTLE:g} s "
+                f"settling and {PERIODS_AT_SPEED:g} electrical period of {model.pole_pitch * 1e3:g} mm "
+                f"at speed)")
+    x0 = tr.min_mm / 1e3 + 0.1 * (tr.max_mm - tr.min_mm) / 1e3 if bounded else 0.0
+    return stroke, x0
+
+
+def _cruise_error(raw, v: float) -> dict:
+    """The estimate's error (the EMF estimate's, the observer's error there) at the cruise, each
+    direction: its mean and its largest departure, electrical deg (what the table learned against it
+    carries: the means' half difference cancels, their half sum does not)."""
+    err, vel = raw.arrays.get("theta_err"), raw.arrays.get("v")
+    out = {}
+    for name, sel in (("fwd", None if vel is None else vel > 0.97 * v),
+                      ("bwd", None if vel is None else vel < -0.97 * v)):
+        e = np.array([]) if err is None or sel is None else np.degrees(np.ravel(err)[np.ravel(sel)])
+        out[f"cruise_err_{name}_mean_deg"] = round(float(np.mean(e)), 4) if e.size else None
+        out[f"cruise_err_{name}_peak_deg"] = round(float(np.max(np.abs(e))), 4) if e.size else None
+    return out
+
+
+def _design(probe, model: Motor, source: str):
+    """The design for the first cap of :data:`CAPS` the bus allows (its hand-over band)."""
+    for cap in CAPS:
+        try:
+            return designed(probe(cap), model).spec
+        except InputError:
+            continue
+    return _refuse(source, "inverter.v_dc", f"the bus allows none of {', '.join(map(str, CAPS))} m/s: no "
+                   "speed to commission at")
+
+
+def _carried(cal: Calibration, model: Motor, inj) -> Calibration:
+    """A table learned with the pulsating injection carried to the drive's elliptical one: the model's
+    table (:func:`linsense.compensation.lut.build_lut`) of the motor whose end effect fits the learned
+    table (:func:`linsense.compensation.measured.end_effect_fit`), compared with the plant's own for
+    the drive's injection; the learned table's departure from its fit kept in the metrics.
+
+    The elliptical table follows the position error nearly one to one (about 0.8 of it on ecce2010 at
+    kappa 0.9, against 0.07-0.3 for the pulsating one), so learned directly it carries the EMF
+    estimate's error at speed; the pulsating table learned, the EMF's error weighs 3-10 times less."""
+    m = cal.metrics
+    points = m["points"]
+    fit, k, rms = end_effect_fit(model, cal.psi_measured, "pulsating", inj.frequency, 0.0)
+    table = build_lut(fit, points, f_inj=inj.frequency, quad=inj.quadrature, injection=inj.shape).values
+    true = build_lut(cal.motor, points, f_inj=inj.frequency, quad=inj.quadrature, injection=inj.shape).values
+    start = build_lut(model, points, f_inj=inj.frequency, quad=inj.quadrature, injection=inj.shape).values
+    m.update({
+        "learned_diff_deg": m["max_diff_deg"], "learned_start_diff_deg": m["start_diff_deg"],
+        "learned_quad": 0.0,
+        "max_diff_deg": round(float(np.degrees(np.max(np.abs(table - true)))), 6),
+        "start_diff_deg": round(float(np.degrees(np.max(np.abs(start - true)))), 6),
+        "injection_quad": float(inj.quadrature), "f_inj_hz": float(inj.frequency),
+        "v_inj": float(inj.amplitude),
+    })
+    stamp = table_stamp(model, inj.shape, inj.frequency, inj.quadrature, points)
+    return Commissioning(cal.theta, table, true, cal.psi_eq12, m, cal.motor, stamp,
+                         psi_learned=cal.psi_measured, psi_learned_plant=cal.psi_model)
+
+
+def ratio_slope(motor: Motor, v_inj: float, f_inj: float, quad: float, n: int = 72) -> float:
+    """The demodulated ratio's mean change per rad of the table's error, ``-d ratio / d psi`` at the
+    motor's table (``ls_cal_cfg.slope``): 1 for the pulsating injection, less for the elliptical one.
+
+    :func:`linsense.analysis.hf.demod_ratio` at no estimation error, differentiated in the
+    compensation angle at the resistance-aware table (docs/theory.md, the product demodulator).
+    Only the learning's rate depends on it: the learned table's mean is a fixed point whatever it
+    is (``csrc/ctrl/ls_drive_commission.c``).
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor the drive believes in.
+    v_inj, f_inj, quad : float
+        The injection's amplitude (V), frequency (Hz) and kappa.
+    n : int, optional
+        Positions over the period.
+
+    Returns
+    -------
+    float
+        The mean slope over the period, in (0, ``CAL_SLOPE_MAX``].
+    """
+    theta = 2.0 * np.pi * np.arange(n) / n
+    psi = psi_lut_resistive(motor, theta, f_inj, quad)
+    h = 1e-3
+    s = (demod_ratio(motor, theta, 0.0, v_inj, f_inj, psi - h, quad=quad)
+         - demod_ratio(motor, theta, 0.0, v_inj, f_inj, psi + h, quad=quad)) / (2.0 * h)
+    return float(min(max(np.mean(s), 1e-3), CAL_SLOPE_MAX))
+
+
+def _result(b, raw, model: Motor, lut, start: np.ndarray, points: int, v: float, a: float, stroke: float,
+            load: float) -> Calibration:
+    """The commissioning's Calibration: the learned table against the plant's own."""
+    s = b.scenario.spec
+    inj = s.injection
+    theta = 2.0 * np.pi * np.arange(points) / points
+    table = np.array(lut.table, dtype=float)
+    true = build_lut(b.motor, points, f_inj=inj.frequency, quad=inj.quadrature, injection=inj.shape).values
+    done = int(b.drive.state.cal_index)
+    learn = np.frombuffer(ffi.buffer(lut.learn), dtype=np.float32)
+    fwd, bwd = learn[:points].astype(float), learn[points:2 * points].astype(float)
+    _, k, rms = end_effect_fit(model, table, inj.shape, inj.frequency, inj.quadrature)
+    metrics = {
+        "completed": bool(done == points and raw.fault == 0),
+        "points": int(points),
+        "points_done": done,
+        "max_diff_deg": round(float(np.degrees(np.max(np.abs(table - true)))), 6),
+        "start_diff_deg": round(float(np.degrees(np.max(np.abs(start - true)))), 6),
+        "max_diff_eq12_deg": round(float(np.degrees(np.max(np.abs(table - psi_lut(b.motor, theta))))), 6),
+        "direction_diff_deg": round(float(np.degrees(np.max(np.abs(fwd - bwd)))), 6),
+        **_cruise_error(raw, v),
+        "time_min_s": round(float(np.min(learn[2 * points:])), 6),
+        "time_mean_s": round(float(np.mean(learn[2 * points:])), 6),
+        "end_effect_k": round(float(k), 6),
+        "end_effect_fit_rms_deg": round(float(np.degrees(rms)), 6),
+        "speed_m_s": round(v, 6), "a_max_m_s2": round(a, 6), "stroke_mm": round(stroke * 1e3, 3),
+        "v_hi_m_s": round(float(s.observer.handover_v_hi), 6),
+        "load_n": float(load), "fidelity": s.inverter.fidelity, "dead_time_s": float(s.inverter.dead_time),
+        "v_dc": float(s.inverter.v_dc), "injection_shape": inj.shape, "f_inj_hz": float(inj.frequency),
+        "injection_quad": float(inj.quadrature), "v_inj": float(inj.amplitude),
+        "fault": fault_reason(raw.fault),
+        "sim_s": round(raw.steps_done / s.inverter.f_pwm, 6),
+        "wall_s": round(raw.wall_s, 6),
+        "motor": b.motor.name,
+    }
+    stamp = table_stamp(model, inj.shape, inj.frequency, inj.quadrature, points)
+    return Commissioning(theta, table, true, psi_lut(b.motor, theta), metrics, b.motor, stamp)
+
+
+def commission_to(out: str | Path, motor=None, figure: Callable[[Calibration, Path], object] | None = None,
+                  **kwargs) -> CommissionOutput:
+    """Commission (:func:`commission`) and write ``calibrate``'s output set: ``lut_measured.csv``,
+    ``lut_measured.json`` (when complete: ``linsense tune --table`` and ``observer.lut_model =
+    "measured"`` read it), ``metrics.json``, ``timing.json``.
+
+    Parameters
+    ----------
+    out : str or Path
+        The folder: missing, empty or an earlier output of linsense.
+    motor : Motor or str or None
+        As :func:`commission`'s.
+    figure : callable or None, optional
+        ``figure(commissioning, path)`` draws ``commission.png`` (e.g.
+        :func:`linsense.report.figures.fig_commission` saved); None: no figure.
+    **kwargs : dict
+        :func:`commission`'s keywords.
+
+    Returns
+    -------
+    CommissionOutput
+        The commissioning, its metrics and the files written.
+    """
+    cal = commission(motor, **kwargs)
+    metrics, timing = split_timing(cal.metrics)
+    with output_set(out, "commission") as s:
+        s.write("lut_measured.csv", lut_csv(cal))
+        if cal.completed:
+            s.write("lut_measured.json", measured_json(cal))
+        write_metrics(s, metrics, timing)
+        if figure is not None:
+            figure(cal, s.path("commission.png"))
+    return CommissionOutput(cal, metrics, timing, list(s.files))
