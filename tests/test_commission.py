@@ -81,13 +81,20 @@ def test_learned_on_an_off_nominal_plant(case, k_e, tmp_path):
     assert np.all(np.isfinite(cal.psi_measured))
 
 
-@pytest.mark.parametrize("motor", ["harmonic", "m20_hv"])
+@pytest.mark.parametrize("motor", ["harmonics", "m20_hv"])
 def test_motor_whose_emf_estimate_the_design_leaves_off_refused(motor):
-    """harmonic (flux harmonics) and m20_hv on its drive: the design's hand-over is off."""
+    """A motor with more flux harmonics than the EMF block's slots take (a 5th, 7th and 11th: the 7th's
+    4 deg left) and m20_hv on its drive: the design's hand-over is off."""
+    import dataclasses
     from importlib.resources import files
 
-    if motor == "harmonic":
-        m, drive = load_motor(str(files("linsense.examples").joinpath("motors/harmonic.toml"))), None
+    from linsense.model.motor import PmHarmonic
+
+    if motor == "harmonics":
+        m = load_motor(str(files("linsense.examples").joinpath("motors/harmonic.toml")))
+        m = dataclasses.replace(m, pm_harmonics=(PmHarmonic(5, 0.02, 0.0), PmHarmonic(7, 0.01, 0.0),
+                                                 PmHarmonic(11, 0.02, 0.0)))
+        drive = None
     else:
         m = load_motor(str(files("linsense.examples").joinpath("motors/class/m20_hv.toml")))
         drive = _class_drive("m20_hv")
@@ -134,3 +141,27 @@ def test_certificate_tolerance_has_a_sensorless_route():
         s = calibration_summary(cal, m)
         assert s["completed"] and s["max_diff_deg"] < bound < s["file_diff_deg"]
         assert cal.stamp.quad == base["injection"]["quadrature"]
+
+
+def test_tune_passes_its_table_route_to_the_certificate(run_cli, tmp_path, monkeypatch):
+    """`linsense tune --table-route commission` measures the off-nominal plants' tables by the
+    commissioning (the route reaches ``calibrate_plant``; the default is the calibration), and the
+    certificate's note names the command that measured them. The runs themselves are replaced by a
+    stop: what is checked is the route."""
+    import linsense.verify.certificate as cert
+
+    seen = []
+
+    def stop(motor, spec, base, base_dir, plant, travel, route):
+        seen.append(route)
+        raise RuntimeError("stop here")
+
+    monkeypatch.setattr(cert, "calibrate_plant", stop)
+    for args, want in (((), "calibrate"), (("--table-route", "commission"), "commission")):
+        seen.clear()
+        with pytest.raises(RuntimeError, match="stop here"):
+            run_cli("tune", "--motor", "ecce2010", "--out", tmp_path / "t.toml", *args)
+        assert seen and set(seen) == {want}, seen
+    assert cert._file_table_notes([], {}, "commission") == []
+    r = run_cli("tune", "--motor", "ecce2010", "--table-route", "encoder", "--out", tmp_path / "u.toml")
+    assert r.code == 2 and "--table-route" in r.err

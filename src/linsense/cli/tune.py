@@ -49,11 +49,16 @@ from linsense.version import docs
               "header is written only for a verified drive, or with --unverified)")
 @click.option("--unverified", is_flag=True, help="--format c: write the header even if the certificate "
               "fails, with the reason in its comment and in the JSON")
+@click.option("--table-route", type=click.Choice(["calibrate", "commission"]), default="calibrate",
+              show_default=True, help="how the certificate measures the table of a motor off by its end "
+              "effect: the firmware's calibration (an encoder) or the sensorless commissioning "
+              "(linsense commission)")
 @c.out_option("tune", "motor", folder=False, ext=".toml or .h", dash=True)
 @c.json_option
 def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: float | None,
          current_noise: float, name: str | None, v_max, a_max, load, travel, shape, table_path,
-         quick: bool, no_verify: bool, unverified: bool, out: str | None, as_json: bool, **drive) -> None:
+         quick: bool, no_verify: bool, unverified: bool, table_route: str, out: str | None, as_json: bool,
+         **drive) -> None:
     """Design the drive for a motor: injection, current loop, demodulator, observer, speed and
     position loops, limits and trips; print the design and its margins; write a
     scenario or a C header; then verify it in the simulator (switching inverter with dead time) and
@@ -81,7 +86,7 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
     res = tune_to(out, motor_spec, figure=write_certificate_figure, say=c.say, scenario=sc,
                   source=scenario_path, drive=vars(given), fmt=fmt, name=name, polarity=polarity,
                   current_noise=current_noise, table=table_path, quick=quick, verify=not no_verify,
-                  unverified=unverified, warn=c.warn, detail=c.detail,
+                  unverified=unverified, warn=c.warn, detail=c.detail, table_route=table_route,
                   refusal=lambda exc: _refusal(exc, typed, sc, scenario_path))
     cert = res.certificate
     verification = None if cert is None else {k: v for k, v in cert.as_dict().items() if k != "runs"}

@@ -494,9 +494,9 @@ def calibration_summary(cal, motor: Motor) -> dict:
     }
 
 
-def _file_table_notes(rows: list[dict], calibrations: dict) -> list[str]:
+def _file_table_notes(rows: list[dict], calibrations: dict, route: str = "calibrate") -> list[str]:
     """The cost of the motor file's table on the plants whose table the certificate measured (for
-    information: not judged)."""
+    information: not judged), naming the command that measured it (``route``)."""
     out = []
     for plant, (_, _, k_e) in C.OFF_NOMINAL.items():
         rs = [r for r in rows if r["plant"] == plant and r["table"] == "design" and "err_deg" in r]
@@ -506,7 +506,7 @@ def _file_table_notes(rows: list[dict], calibrations: dict) -> list[str]:
         per10 = e / (abs(k_e - 1.0) * 10.0)
         out.append(f"  info  {plant} with the motor file's table: |x - target| <= {e:.3g} deg at no load "
                    f"({per10:.2g} deg per 10 % of dM0; the bound is {C.HOLD_ERR_DEG:g} deg): measure the "
-                   f"table on the machine (linsense calibrate), as this certificate did")
+                   f"table on the machine (linsense {route}), as this certificate did")
     return out
 
 
@@ -585,7 +585,8 @@ def prepare(motor: Motor, motor_spec: str, base: dict, base_dir: str, *, v_max: 
                              "inductance model, not the saturation data", "run", "verify the linear plant "
                              "(a scenario without [saturation]) for the tolerances", 0, 0))
         return Certificate(cks, rows, time.perf_counter() - t0, quick,
-                           extra={"calibrations": summaries}, notes=_file_table_notes(rows, summaries))
+                           extra={"calibrations": summaries, "table_route": table_route},
+                           notes=_file_table_notes(rows, summaries, table_route))
 
     return run
 

@@ -265,7 +265,8 @@ def tune(motor: str, *, scenario: Scenario | None = None, source: str | None = N
          current_noise: float = 0.01, table: str | None = None, quick: bool = False, verify: bool = True,
          unverified: bool = False, out: str | Path = "-", say: Say = quiet, warn: Say = quiet,
          detail: Say = quiet, ready: Callable[[TuneResult], object] | None = None,
-         refusal: Callable[[InputError], InputError] = as_given) -> TuneResult:
+         refusal: Callable[[InputError], InputError] = as_given, table_route: str = "calibrate",
+         ) -> TuneResult:
     """Design the drive for a motor, make its scenario or C header, and verify it in the simulator.
 
     Nothing is written (:func:`~linsense.verify.tune_output.tune_to` writes the text and the
@@ -289,14 +290,14 @@ def tune(motor: str, *, scenario: Scenario | None = None, source: str | None = N
     table : str or None, optional
         A measured compensation table (``lut_measured.json``) in place of the motor's (default the
         scenario's measured table, if any).
-    quick, verify, unverified : bool, optional
+    quick, verify, unverified, table_route : bool, bool, bool, str, optional
         The quick certificate (the nominal plant only); run the certificate; ``c``: make the header
-        even if the certificate fails or is not run, saying why in it.
+        even if it fails or is not run, saying why in it; how it measures the tables of the motors
+        off by their end effect (``"calibrate"``: the encoder; ``"commission"``: without a sensor).
     out : str or pathlib.Path, optional
         Where the scenario will be written (its relative paths are made relative to it).
     say, warn, detail : callable, optional
-        Called with each line of the report, each warning and each detail (the motor file read), as
-        the work goes.
+        Called with each line of the report, each warning and each detail (the motor file read).
     ready, refusal : callable, optional
         Called with the result once its text is made (a scenario before the certificate runs, a
         header after it); maps a refusal of the drive data to the input the user typed.
@@ -325,11 +326,10 @@ def tune(motor: str, *, scenario: Scenario | None = None, source: str | None = N
         made, sc_dict = _designed(m, dd, motor, base, src, given, say)
     except InputError as exc:  # (the drive data refused: named at the input the user typed)
         raise refusal(exc) from None
-    cert_run = None
-    if verify:  # (its runs are built before anything is made: a refusal leaves no file)
-        cert_run = prepare(m, motor_ref(motor), certificate_base(sc_dict), str(base_dir or working_folder()),
-                           v_max=dd.v_max, a_max=dd.a_max, load=made.design.load, travel=dd.travel,
-                           quick=quick)
+    # (the certificate's runs are built before anything is made: a refusal leaves no file)
+    cert_run = prepare(m, motor_ref(motor), certificate_base(sc_dict), str(base_dir or working_folder()),
+                       v_max=dd.v_max, a_max=dd.a_max, load=made.design.load, travel=dd.travel, quick=quick,
+                       table_route=table_route) if verify else None
     mode = (base or {}).get("control", {}).get("mode", "sensorless_lut")
     _report(made, m, dd, say, warn, mode if verify else "")
     res = TuneResult(made, m, dd, fmt, None, sc_dict, digest=design_digest(m, dd, 256, made.table),
