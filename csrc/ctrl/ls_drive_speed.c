@@ -80,7 +80,14 @@ void ls_drive_speed_step_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT me
     applied_voltage(d, meas->v_dc, v_ab);
     i_ab[0] = io.i_a;
     i_ab[1] = io.i_b;
-    e_emf = ls_emf_step_eps(&d->emf, v_ab, i_ab, io.c, io.s, d->obs.omega, d->dtres.k_r);
+    /* the EMF's filters every period; its angle (a square root and an atan2) only where the hand-over
+     * can weigh it: ls_fuse_step uses eps_emf, and observe the magnitude, only with |omega| > w_lo
+     * (below, the HF error alone, bit for bit as with the angle every period) */
+    if (ls_emf_update(&d->emf, v_ab, i_ab, io.c, io.s, d->obs.omega, d->dtres.k_r) &&
+        LS_FABS(d->obs.omega) > d->fuse.w_lo) {
+        (void)ls_emf_angle(&d->emf, d->obs.omega);
+    }
+    e_emf = d->emf.eps; /* (below w_lo not weighed: the angle of an earlier step, or 0) */
     e_hf = hf_error(d, meas, &io);
     err = ls_fuse_step(&d->fuse, d->obs.omega, d->inj.on && d->inj.amp >= d->cfg.inject.amplitude, e_hf,
                        LS_ISFINITE(e_emf) ? e_emf : LS_R(0.0));

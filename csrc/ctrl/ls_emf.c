@@ -152,20 +152,20 @@ LS_REAL ls_emf_omega_min(const ls_emf *e, LS_REAL i_mag, LS_REAL psi, LS_REAL ep
     return hi;
 }
 
-LS_REAL ls_emf_step_eps(ls_emf *e, const LS_REAL v_ab[2], const LS_REAL i_ab[2], LS_REAL c, LS_REAL s,
-                        LS_REAL omega, LS_REAL k_r)
+bool ls_emf_update(ls_emf *e, const LS_REAL v_ab[2], const LS_REAL i_ab[2], LS_REAL c, LS_REAL s, LS_REAL omega,
+                   LS_REAL k_r)
 {
     const ls_emf_cfg *g = &e->cfg;
-    LS_REAL w, r, ima, imb, ea, eb, d, cd, sd, cm, sm, ed, eq, id, iq, sg;
+    LS_REAL w, r, ima, imb, ea, eb, d, cd, sd, cm, sm, ed, eq, id, iq;
     if (!LS_ISFINITE4(v_ab[0], v_ab[1], i_ab[0], i_ab[1]) || !LS_ISFINITE4(c, s, omega, k_r)) {
         e->primed = false;
-        return e->eps;
+        return false;
     }
     if (!e->primed) {
         e->i0[0] = i_ab[0];
         e->i0[1] = i_ab[1];
         e->primed = true;
-        return e->eps;
+        return false;
     }
     w = ls_clamp(omega, -g->omega_max, g->omega_max);
     k_r = ls_clamp(k_r, LS_DTRES_KR_MIN, LS_DTRES_KR_MAX);
@@ -219,8 +219,14 @@ LS_REAL ls_emf_step_eps(ls_emf *e, const LS_REAL v_ab[2], const LS_REAL i_ab[2],
     e->e_q += e->alpha * (eq - e->e_q);
     e->i_d += e->alpha * (id - e->i_d);
     e->i_q += e->alpha * (iq - e->i_q);
+    return true;
+}
+
+LS_REAL ls_emf_angle(ls_emf *e, LS_REAL omega)
+{
+    /* (the sign of the clamped speed is omega's) */
+    const LS_REAL sg = omega < LS_R(0.0) ? LS_R(-1.0) : LS_R(1.0);
     e->mag = LS_SQRT(e->e_d * e->e_d + e->e_q * e->e_q);
-    sg = w < LS_R(0.0) ? LS_R(-1.0) : LS_R(1.0);
     /* (no EMF, or filters overflowed by hostile inputs until the caller resets: no angle, no trust) */
     if (!(e->mag > LS_R(0.0) && e->mag <= LS_REAL_MAX)) {
         e->eps = LS_R(0.0);
@@ -234,6 +240,15 @@ LS_REAL ls_emf_step_eps(ls_emf *e, const LS_REAL v_ab[2], const LS_REAL i_ab[2],
         e->eps = ls_atan2(-sg * e->e_d, sg * e->e_q);
     }
     return e->eps;
+}
+
+LS_REAL ls_emf_step_eps(ls_emf *e, const LS_REAL v_ab[2], const LS_REAL i_ab[2], LS_REAL c, LS_REAL s,
+                        LS_REAL omega, LS_REAL k_r)
+{
+    /* (the two parts called, not inlined: an inlined copy of the filters let GCC 12's x86-64 SLP
+     * vectoriser fuse a multiply and an add-subtract into vfmsubadd despite -ffp-contract=off, and
+     * the extension then rounded otherwise than the firmware) */
+    return ls_emf_update(e, v_ab, i_ab, c, s, omega, k_r) ? ls_emf_angle(e, omega) : e->eps;
 }
 
 LS_REAL ls_emf_step(ls_emf *e, const LS_REAL v_ab[2], const LS_REAL i_ab[2], LS_REAL c, LS_REAL s,
