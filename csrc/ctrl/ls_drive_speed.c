@@ -38,7 +38,9 @@ static void hf_restart(ls_drive *LS_RESTRICT d)
 static inline LS_REAL hf_error(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas, ls_drive_io *LS_RESTRICT io)
 {
     if (d->inj.on || d->inj.amp > LS_R(0.0)) {
-        ls_drive_hf_(d, meas, io);
+        /* the residual's inductance and resistance scales held where the EMF error is weighed (above
+         * w_lo: the HF error's share falls across the band, and the EMF uses k_r held) */
+        ls_drive_hf_(d, meas, io, !(LS_FABS(d->obs.omega) > d->fuse.w_lo));
         return ls_drive_demod_(d, io, d->obs.pos.theta) + d->cfg.hf_delay * d->obs.omega;
     }
     if (d->cfg.sep.type == LS_BIQUAD_NOTCH) {
