@@ -82,10 +82,11 @@ void ls_drive_speed_step_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT me
     applied_voltage(d, meas->v_dc, v_ab);
     i_ab[0] = io.i_a;
     i_ab[1] = io.i_b;
-    /* the EMF's filters every period; its angle (a square root and an atan2) only where the hand-over
+    /* (the inputs finite: the measurements checked by ls_drive_est_open_, the duties, the estimate and
+     * k_r by the step's final check and their bounds) the EMF's filters every period; its angle (a square root and an atan2) only where the hand-over
      * can weigh it: ls_fuse_step uses eps_emf, and observe the magnitude, only with |omega| > w_lo
      * (below, the HF error alone, bit for bit as with the angle every period) */
-    if (ls_emf_update(&d->emf, v_ab, i_ab, io.c, io.s, d->obs.omega, d->dtres.k_r) &&
+    if (ls_emf_update_finite(&d->emf, v_ab, i_ab, io.c, io.s, d->obs.omega, d->dtres.k_r) &&
         LS_FABS(d->obs.omega) > d->fuse.w_lo) {
         (void)ls_emf_angle(&d->emf, d->obs.omega);
     }

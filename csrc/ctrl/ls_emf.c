@@ -155,12 +155,18 @@ LS_REAL ls_emf_omega_min(const ls_emf *e, LS_REAL i_mag, LS_REAL psi, LS_REAL ep
 bool ls_emf_update(ls_emf *e, const LS_REAL v_ab[2], const LS_REAL i_ab[2], LS_REAL c, LS_REAL s, LS_REAL omega,
                    LS_REAL k_r)
 {
-    const ls_emf_cfg *g = &e->cfg;
-    LS_REAL w, r, ima, imb, ea, eb, d, cd, sd, cm, sm, ed, eq, id, iq;
     if (!LS_ISFINITE4(v_ab[0], v_ab[1], i_ab[0], i_ab[1]) || !LS_ISFINITE4(c, s, omega, k_r)) {
         e->primed = false;
         return false;
     }
+    return ls_emf_update_finite(e, v_ab, i_ab, c, s, omega, k_r);
+}
+
+bool ls_emf_update_finite(ls_emf *e, const LS_REAL v_ab[2], const LS_REAL i_ab[2], LS_REAL c, LS_REAL s,
+                          LS_REAL omega, LS_REAL k_r)
+{
+    const ls_emf_cfg *g = &e->cfg;
+    LS_REAL w, r, ima, imb, ea, eb, d, cd, sd, cm, sm, ed, eq, id, iq;
     if (!e->primed) {
         e->i0[0] = i_ab[0];
         e->i0[1] = i_ab[1];
@@ -211,10 +217,13 @@ bool ls_emf_update(ls_emf *e, const LS_REAL v_ab[2], const LS_REAL i_ab[2], LS_R
             }
         }
     }
+    /* (x + (-s) y is x - s y bit for bit; written so, GCC 12's x86-64 SLP vectoriser does not pair
+     * the two rows into an add-subtract it then fuses with the products into vfmsubadd, despite
+     * -ffp-contract=off: the extension would round otherwise than the firmware) */
     ed = cm * ea + sm * eb;
-    eq = cm * eb - sm * ea;
+    eq = cm * eb + (-sm) * ea;
     id = cm * ima + sm * imb;
-    iq = cm * imb - sm * ima;
+    iq = cm * imb + (-sm) * ima;
     e->e_d += e->alpha * (ed - e->e_d);
     e->e_q += e->alpha * (eq - e->e_q);
     e->i_d += e->alpha * (id - e->i_d);
@@ -245,9 +254,6 @@ LS_REAL ls_emf_angle(ls_emf *e, LS_REAL omega)
 LS_REAL ls_emf_step_eps(ls_emf *e, const LS_REAL v_ab[2], const LS_REAL i_ab[2], LS_REAL c, LS_REAL s,
                         LS_REAL omega, LS_REAL k_r)
 {
-    /* (the two parts called, not inlined: an inlined copy of the filters let GCC 12's x86-64 SLP
-     * vectoriser fuse a multiply and an add-subtract into vfmsubadd despite -ffp-contract=off, and
-     * the extension then rounded otherwise than the firmware) */
     return ls_emf_update(e, v_ab, i_ab, c, s, omega, k_r) ? ls_emf_angle(e, omega) : e->eps;
 }
 

@@ -639,7 +639,7 @@ static void test_harmonics(void)
 static void test_split(void)
 {
     ls_emf_cfg cfg = base_cfg(1.5 * L_D);
-    ls_emf a, b;
+    ls_emf a, b, f;
     plant p;
     long k;
     int bad = 0;
@@ -654,6 +654,7 @@ static void test_split(void)
     p.err = 0.05;
     LS_CHECK(ls_emf_init(&a, &cfg) == LS_OK);
     LS_CHECK(ls_emf_init(&b, &cfg) == LS_OK);
+    LS_CHECK(ls_emf_init(&f, &cfg) == LS_OK);
     for (k = 0; k < 2000; ++k) {
         LS_REAL v[2], i[2], c, s, ea, eb;
         const bool want = (k / 50) % 3 != 1; /* (50 periods of every 150 without the angle) */
@@ -666,6 +667,9 @@ static void test_split(void)
             (void)ls_emf_angle(&b, (LS_REAL)p.omega);
         }
         eb = b.eps;
+        /* (the unguarded update: the same filters on finite inputs) */
+        (void)ls_emf_update_finite(&f, v, i, c, s, (LS_REAL)p.omega, LS_R(1.1));
+        bad += f.e_d != b.e_d || f.e_q != b.e_q || f.i_d != b.i_d || f.i_q != b.i_q || f.primed != b.primed;
         bad += a.e_d != b.e_d || a.e_q != b.e_q || a.i_d != b.i_d || a.i_q != b.i_q;
         if (want) {
             bad += ea != eb || a.mag != b.mag || a.eps != b.eps;
