@@ -98,7 +98,7 @@ LS_DRIVE_PART bool ls_drive_enc_open_(ls_drive *LS_RESTRICT d, const ls_meas *LS
 
 /* --------------------------------------------------------------------------- HF path and estimation */
 LS_DRIVE_PART void ls_drive_residual_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas,
-                                      const ls_drive_io *LS_RESTRICT io, LS_REAL i_res[2])
+                                      const ls_drive_io *LS_RESTRICT io, LS_REAL i_res[2], bool adapt)
 {
     LS_REAL v_err[2];
     if (d->dtres.cfg.forward) {
@@ -108,7 +108,7 @@ LS_DRIVE_PART void ls_drive_residual_(ls_drive *LS_RESTRICT d, const ls_meas *LS
         ls_dtres_phase_g(&d->dtres, io->c, io->s, d->w_ref * d->cfg.current.psi_pm, li, g, ge);
         if (ls_mod_residual(&d->mod, meas->i_abc, meas->v_dc, g, ge, d->dtres.cfg.r_s * d->dtres.k_r, v_err,
                             i_end, i_drop) &&
-            d->dtres.cfg.adapt) {
+            d->dtres.cfg.adapt && adapt) {
             /* (k_r held while the angle is not the motor's: the start-up, the table off) */
             ls_dtres_adapt(&d->dtres, d->mod.i_prev, meas->i_abc, i_end, i_drop,
                            !d->starting && d->mode != LS_MODE_SENSORLESS_NOLUT);
@@ -123,7 +123,8 @@ LS_DRIVE_PART void ls_drive_residual_(ls_drive *LS_RESTRICT d, const ls_meas *LS
     }
 }
 
-LS_DRIVE_PART void ls_drive_hf_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas, ls_drive_io *LS_RESTRICT io)
+LS_DRIVE_PART void ls_drive_hf_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas, ls_drive_io *LS_RESTRICT io,
+                                bool adapt)
 {
     if (d->cfg.sep.type == LS_BIQUAD_NOTCH) {
         io->if_a = ls_biquad_step_notch(&d->sep[0], io->i_a);
@@ -134,7 +135,7 @@ LS_DRIVE_PART void ls_drive_hf_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTR
     }
     if (d->cfg.hf_dtres) { /* (bpf is then the band-pass: not with the square wave, ls_drive_init) */
         LS_REAL i_res[2];
-        ls_drive_residual_(d, meas, io, i_res);
+        ls_drive_residual_(d, meas, io, i_res, adapt);
         io->ihf_a = ls_biquad_step_bp(&d->bpf[0], io->i_a - i_res[0]);
         io->ihf_b = ls_biquad_step_bp(&d->bpf[1], io->i_b - i_res[1]);
     } else {

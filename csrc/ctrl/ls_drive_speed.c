@@ -38,7 +38,9 @@ static void hf_restart(ls_drive *LS_RESTRICT d)
 static inline LS_REAL hf_error(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas, ls_drive_io *LS_RESTRICT io)
 {
     if (d->inj.on || d->inj.amp > LS_R(0.0)) {
-        ls_drive_hf_(d, meas, io);
+        /* the residual's inductance and resistance scales held where the EMF error is weighed (above
+         * w_lo: the HF error's share falls across the band, and the EMF uses k_r held) */
+        ls_drive_hf_(d, meas, io, !(LS_FABS(d->obs.omega) > d->fuse.w_lo));
         return ls_drive_demod_(d, io, d->obs.pos.theta) + d->cfg.hf_delay * d->obs.omega;
     }
     if (d->cfg.sep.type == LS_BIQUAD_NOTCH) {
@@ -81,7 +83,15 @@ void ls_drive_speed_run_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT mea
     applied_voltage(d, meas->v_dc, v_ab);
     i_ab[0] = io.i_a;
     i_ab[1] = io.i_b;
-    e_emf = ls_emf_step_eps(&d->emf, v_ab, i_ab, io.c, io.s, d->obs.omega, d->dtres.k_r);
+    /* (the inputs finite: the measurements checked by ls_drive_est_open_, the duties, the estimate and
+     * k_r by the step's final check and their bounds) the EMF's filters every period; its angle (a square root and an atan2) only where the hand-over
+     * can weigh it: ls_fuse_step uses eps_emf, and observe the magnitude, only with |omega| > w_lo
+     * (below, the HF error alone, bit for bit as with the angle every period) */
+    if (ls_emf_update_finite(&d->emf, v_ab, i_ab, io.c, io.s, d->obs.omega, d->dtres.k_r) &&
+        LS_FABS(d->obs.omega) > d->fuse.w_lo) {
+        (void)ls_emf_angle(&d->emf, d->obs.omega);
+    }
+    e_emf = d->emf.eps; /* (below w_lo not weighed: the angle of an earlier step, or 0) */
     e_hf = hf_error(d, meas, &io);
     err = ls_fuse_step(&d->fuse, d->obs.omega, d->inj.on && d->inj.amp >= d->cfg.inject.amplitude, e_hf,
                        LS_ISFINITE(e_emf) ? e_emf : LS_R(0.0));

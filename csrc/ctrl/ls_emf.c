@@ -152,20 +152,26 @@ LS_REAL ls_emf_omega_min(const ls_emf *e, LS_REAL i_mag, LS_REAL psi, LS_REAL ep
     return hi;
 }
 
-LS_REAL ls_emf_step_eps(ls_emf *e, const LS_REAL v_ab[2], const LS_REAL i_ab[2], LS_REAL c, LS_REAL s,
-                        LS_REAL omega, LS_REAL k_r)
+bool ls_emf_update(ls_emf *e, const LS_REAL v_ab[2], const LS_REAL i_ab[2], LS_REAL c, LS_REAL s, LS_REAL omega,
+                   LS_REAL k_r)
 {
-    const ls_emf_cfg *g = &e->cfg;
-    LS_REAL w, r, ima, imb, ea, eb, d, cd, sd, cm, sm, ed, eq, id, iq, sg;
     if (!LS_ISFINITE4(v_ab[0], v_ab[1], i_ab[0], i_ab[1]) || !LS_ISFINITE4(c, s, omega, k_r)) {
         e->primed = false;
-        return e->eps;
+        return false;
     }
+    return ls_emf_update_finite(e, v_ab, i_ab, c, s, omega, k_r);
+}
+
+bool ls_emf_update_finite(ls_emf *e, const LS_REAL v_ab[2], const LS_REAL i_ab[2], LS_REAL c, LS_REAL s,
+                          LS_REAL omega, LS_REAL k_r)
+{
+    const ls_emf_cfg *g = &e->cfg;
+    LS_REAL w, r, ima, imb, ea, eb, d, cd, sd, cm, sm, ed, eq, id, iq;
     if (!e->primed) {
         e->i0[0] = i_ab[0];
         e->i0[1] = i_ab[1];
         e->primed = true;
-        return e->eps;
+        return false;
     }
     w = ls_clamp(omega, -g->omega_max, g->omega_max);
     k_r = ls_clamp(k_r, LS_DTRES_KR_MIN, LS_DTRES_KR_MAX);
@@ -211,16 +217,25 @@ LS_REAL ls_emf_step_eps(ls_emf *e, const LS_REAL v_ab[2], const LS_REAL i_ab[2],
             }
         }
     }
+    /* (x + (-s) y is x - s y bit for bit; written so, GCC 12's x86-64 SLP vectoriser does not pair
+     * the two rows into an add-subtract it then fuses with the products into vfmsubadd, despite
+     * -ffp-contract=off: the extension would round otherwise than the firmware) */
     ed = cm * ea + sm * eb;
-    eq = cm * eb - sm * ea;
+    eq = cm * eb + (-sm) * ea;
     id = cm * ima + sm * imb;
-    iq = cm * imb - sm * ima;
+    iq = cm * imb + (-sm) * ima;
     e->e_d += e->alpha * (ed - e->e_d);
     e->e_q += e->alpha * (eq - e->e_q);
     e->i_d += e->alpha * (id - e->i_d);
     e->i_q += e->alpha * (iq - e->i_q);
+    return true;
+}
+
+LS_REAL ls_emf_angle(ls_emf *e, LS_REAL omega)
+{
+    /* (the sign of the clamped speed is omega's) */
+    const LS_REAL sg = omega < LS_R(0.0) ? LS_R(-1.0) : LS_R(1.0);
     e->mag = LS_SQRT(e->e_d * e->e_d + e->e_q * e->e_q);
-    sg = w < LS_R(0.0) ? LS_R(-1.0) : LS_R(1.0);
     /* (no EMF, or filters overflowed by hostile inputs until the caller resets: no angle, no trust) */
     if (!(e->mag > LS_R(0.0) && e->mag <= LS_REAL_MAX)) {
         e->eps = LS_R(0.0);
@@ -234,6 +249,12 @@ LS_REAL ls_emf_step_eps(ls_emf *e, const LS_REAL v_ab[2], const LS_REAL i_ab[2],
         e->eps = ls_atan2(-sg * e->e_d, sg * e->e_q);
     }
     return e->eps;
+}
+
+LS_REAL ls_emf_step_eps(ls_emf *e, const LS_REAL v_ab[2], const LS_REAL i_ab[2], LS_REAL c, LS_REAL s,
+                        LS_REAL omega, LS_REAL k_r)
+{
+    return ls_emf_update(e, v_ab, i_ab, c, s, omega, k_r) ? ls_emf_angle(e, omega) : e->eps;
 }
 
 LS_REAL ls_emf_step(ls_emf *e, const LS_REAL v_ab[2], const LS_REAL i_ab[2], LS_REAL c, LS_REAL s,

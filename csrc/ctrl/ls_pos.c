@@ -3,6 +3,22 @@
 
 #include "linsense/ls_pos.h"
 
+/* floor(q), bit for bit as LS_FLOOR's for every q (a signed zero aside, which the caller's
+ * k * 2 pi subtraction and period count do not see): the conversion to int32_t only where |q| < 2^30
+ * (in range), beyond q itself (a float there is an integer; a double beyond the positions' range
+ * saturates in the caller either way; NaN stays NaN). No libm call: newlib's floorf costs about 20
+ * cycles and a call on a Cortex-M4F, on every step of a move longer than a pole pitch (ls_traj's
+ * reference). */
+static LS_REAL floor_(LS_REAL q)
+{
+    LS_REAL k;
+    if (!(LS_FABS(q) < LS_R(1073741824.0))) {
+        return q;
+    }
+    k = (LS_REAL)(int32_t)q; /* (in range: checked above) */
+    return k > q ? k - LS_R(1.0) : k;
+}
+
 bool ls_pos_norm_full(ls_pos *p)
 {
     /* |k| beyond this cannot come back into the range from a period within it */
@@ -24,7 +40,7 @@ bool ls_pos_norm_full(ls_pos *p)
     /* two rounds: a large theta leaves a remainder of a few periods after the first (its
      * rounding), which the second takes exactly */
     for (round = 0; round < 2 && !(th >= LS_R(0.0) && th < LS_TWO_PI); ++round) {
-        k = LS_FLOOR(th / LS_TWO_PI);
+        k = floor_(th / LS_TWO_PI);
         if (!(LS_FABS(k) <= k_lim)) { /* (th / 2 pi is finite: k is too) */
             p->period = k > LS_R(0.0) ? LS_POS_PERIOD_MAX : -LS_POS_PERIOD_MAX;
             p->theta = LS_R(0.0);

@@ -632,6 +632,62 @@ static void test_harmonics(void)
     }
 }
 
+/* ls_emf_update and ls_emf_angle: the filters every period and the angle only on some (as ls_drive
+ * below the hand-over band) give, on the periods the angle is asked for, ls_emf_step_eps's eps and
+ * mag bit for bit; in between eps and mag stay as the last angle left them; a speed reversal's
+ * direction is the angle's omega. */
+static void test_split(void)
+{
+    ls_emf_cfg cfg = base_cfg(1.5 * L_D);
+    ls_emf a, b, f;
+    plant p;
+    long k;
+    int bad = 0;
+    cfg.pm_shift = LS_R(0.05);
+    cfg.neg_re = LS_R(0.02);
+    cfg.psi_pm = (LS_REAL)PSI;
+    p.omega = 300.0;
+    p.th0 = 0.3;
+    p.i_d = 0.2;
+    p.i_q = 1.0;
+    p.l_q = 1.5 * L_D;
+    p.err = 0.05;
+    LS_CHECK(ls_emf_init(&a, &cfg) == LS_OK);
+    LS_CHECK(ls_emf_init(&b, &cfg) == LS_OK);
+    LS_CHECK(ls_emf_init(&f, &cfg) == LS_OK);
+    for (k = 0; k < 2000; ++k) {
+        LS_REAL v[2], i[2], c, s, ea, eb;
+        const bool want = (k / 50) % 3 != 1; /* (50 periods of every 150 without the angle) */
+        if (k == 1000) {
+            p.omega = -p.omega; /* (the other direction: the angle's sign) */
+        }
+        sample(&p, k, v, i, &c, &s);
+        ea = ls_emf_step_eps(&a, v, i, c, s, (LS_REAL)p.omega, LS_R(1.1));
+        if (ls_emf_update(&b, v, i, c, s, (LS_REAL)p.omega, LS_R(1.1)) && want) {
+            (void)ls_emf_angle(&b, (LS_REAL)p.omega);
+        }
+        eb = b.eps;
+        /* (the unguarded update: the same filters on finite inputs) */
+        (void)ls_emf_update_finite(&f, v, i, c, s, (LS_REAL)p.omega, LS_R(1.1));
+        bad += f.e_d != b.e_d || f.e_q != b.e_q || f.i_d != b.i_d || f.i_q != b.i_q || f.primed != b.primed;
+        bad += a.e_d != b.e_d || a.e_q != b.e_q || a.i_d != b.i_d || a.i_q != b.i_q;
+        if (want) {
+            bad += ea != eb || a.mag != b.mag || a.eps != b.eps;
+        }
+    }
+    LS_CHECK(bad == 0);
+    LS_CHECK(a.eps != LS_R(0.0)); /* (the comparison saw an angle) */
+    /* the first step of a reset block only stores its sample: no angle to ask for */
+    ls_emf_reset(&b);
+    {
+        LS_REAL v[2] = {LS_R(1.0), LS_R(0.0)}, i[2] = {LS_R(0.5), LS_R(0.0)};
+        LS_CHECK(!ls_emf_update(&b, v, i, LS_R(1.0), LS_R(0.0), LS_R(100.0), LS_R(1.0)));
+        LS_CHECK(ls_emf_update(&b, v, i, LS_R(1.0), LS_R(0.0), LS_R(100.0), LS_R(1.0)));
+        i[0] = (LS_REAL)NAN;
+        LS_CHECK(!ls_emf_update(&b, v, i, LS_R(1.0), LS_R(0.0), LS_R(100.0), LS_R(1.0)));
+    }
+}
+
 int main(void)
 {
     test_atan2();
@@ -640,6 +696,7 @@ int main(void)
     test_harmonics();
     test_low_speed();
     test_step();
+    test_split();
     test_nonfinite();
     test_hostile(0);
     test_hostile(1);

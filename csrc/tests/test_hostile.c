@@ -463,9 +463,89 @@ static void test_nonfinite_meas(void)
     }
 }
 
+/* ls_pos_norm_full as it was with libm's floor (the reference of its own floor, which takes no libm
+ * call): the same position bit for bit for every theta, any magnitude and sign, every period. */
+static bool norm_ref(ls_pos *p)
+{
+    const LS_REAL k_lim = LS_R(2.0) * (LS_REAL)LS_POS_PERIOD_MAX + LS_R(4.0);
+    LS_REAL th = p->theta, k;
+    int32_t n = p->period;
+    int round;
+    if (th >= LS_R(0.0) && th < LS_TWO_PI && n <= LS_POS_PERIOD_MAX && n >= -LS_POS_PERIOD_MAX) {
+        return false;
+    }
+    if (!LS_ISFINITE(th)) {
+        th = LS_R(0.0);
+    }
+    if (n > LS_POS_PERIOD_MAX || n < -LS_POS_PERIOD_MAX) {
+        p->period = n > 0 ? LS_POS_PERIOD_MAX : -LS_POS_PERIOD_MAX;
+        p->theta = LS_R(0.0);
+        return true;
+    }
+    for (round = 0; round < 2 && !(th >= LS_R(0.0) && th < LS_TWO_PI); ++round) {
+        k = LS_FLOOR(th / LS_TWO_PI);
+        if (!(LS_FABS(k) <= k_lim)) {
+            p->period = k > LS_R(0.0) ? LS_POS_PERIOD_MAX : -LS_POS_PERIOD_MAX;
+            p->theta = LS_R(0.0);
+            return true;
+        }
+        n += (int32_t)k;
+        th -= k * LS_TWO_PI;
+    }
+    if (th >= LS_TWO_PI) {
+        th -= LS_TWO_PI;
+        n += 1;
+    } else if (th < LS_R(0.0)) {
+        th += LS_TWO_PI;
+        n -= 1;
+        if (!(th < LS_TWO_PI)) {
+            th = LS_R(0.0);
+            n += 1;
+        }
+    }
+    if (!(th >= LS_R(0.0) && th < LS_TWO_PI)) {
+        th = LS_R(0.0);
+    }
+    if (n > LS_POS_PERIOD_MAX || n < -LS_POS_PERIOD_MAX) {
+        p->period = n > 0 ? LS_POS_PERIOD_MAX : -LS_POS_PERIOD_MAX;
+        p->theta = LS_R(0.0);
+        return true;
+    }
+    p->period = n;
+    p->theta = th;
+    return false;
+}
+
+static void test_pos_floor(void)
+{
+    static const int32_t periods[] = {0, 3, -3, LS_POS_PERIOD_MAX - 2, -LS_POS_PERIOD_MAX + 2, LS_POS_PERIOD_MAX,
+                                      -LS_POS_PERIOD_MAX};
+    uint32_t x = 12345u;
+    long k, bad = 0;
+    size_t i;
+    for (k = 0; k < 200000; ++k) {
+        LS_REAL th;
+        x = x * 1664525u + 1013904223u;
+        /* a magnitude from 1e-30 to 1e12 (log-uniform), both signs; every 7th an integer multiple of
+         * 2 pi and its neighbours (the floor's steps) */
+        th = (LS_REAL)(pow(10.0, -30.0 + 42.0 * (double)(x >> 8) / 16777216.0) * ((x & 1u) ? -1.0 : 1.0));
+        if (k % 7 == 0) {
+            th = (LS_REAL)(x % 100000u) * LS_TWO_PI * ((x & 2u) ? LS_R(-1.0) : LS_R(1.0));
+            th = (x & 4u) ? (LS_REAL)nextafterf((float)th, 0.0f) : th;
+        }
+        for (i = 0; i < sizeof periods / sizeof periods[0]; ++i) {
+            ls_pos a = mkpos(periods[i], th), b = a;
+            const bool sa = ls_pos_norm_full(&a), sb = norm_ref(&b);
+            bad += sa != sb || a.period != b.period || memcmp(&a.theta, &b.theta, sizeof th) != 0;
+        }
+    }
+    LS_CHECK(bad == 0);
+}
+
 int main(void)
 {
     test_pos();
+    test_pos_floor();
     test_lut_huge_angle();
     test_traj_long_move();
     test_setters_refuse();

@@ -150,6 +150,22 @@ LS_REAL ls_emf_omega_min(const ls_emf *e, LS_REAL i_mag, LS_REAL psi, LS_REAL ep
  * filters as they were and drops the stored current (the next step only stores its sample). */
 LS_REAL ls_emf_step(ls_emf *e, const LS_REAL v_ab[2], const LS_REAL i_ab[2], LS_REAL c, LS_REAL s,
                     LS_REAL omega, LS_REAL k_r);
+/* ls_emf_step_eps in two parts, for a caller that needs the angle only on some periods (ls_drive: where
+ * the hand-over weighs the EMF error, above handover_v_lo). ls_emf_update: the period's filters
+ * (e_d, e_q, i_d, i_q; the inputs as ls_emf_step's); true when they moved (false: a non-finite input,
+ * or the first sample only stored). ls_emf_angle: mag and eps from the filters as they are, omega
+ * giving the direction (rad/s, finite); returns eps (rad). The filters run every period whatever
+ * the caller does with the angle: the angle is ready, bit for bit as ls_emf_step_eps's, on the
+ * first period it is asked for. ls_emf_step_eps = ls_emf_update, then ls_emf_angle when the
+ * filters moved. */
+bool ls_emf_update(ls_emf *e, const LS_REAL v_ab[2], const LS_REAL i_ab[2], LS_REAL c, LS_REAL s, LS_REAL omega,
+                   LS_REAL k_r);
+LS_REAL ls_emf_angle(ls_emf *e, LS_REAL omega);
+/* ls_emf_update without its guard against non-finite inputs, for a caller whose inputs are finite by
+ * construction (ls_drive: it checks its measurements first and its outputs last); the same filters
+ * bit for bit on finite inputs, eight finiteness tests less. */
+bool ls_emf_update_finite(ls_emf *e, const LS_REAL v_ab[2], const LS_REAL i_ab[2], LS_REAL c, LS_REAL s,
+                          LS_REAL omega, LS_REAL k_r);
 /* The same step without the bound (eps, mag and the filters bit for bit as ls_emf_step's; bound left
  * as it was): for a caller that does not use it, such as ls_drive (its hand-over is scheduled on the
  * estimated speed), one square root and four divisions less per step. */
