@@ -319,9 +319,12 @@ def _call_interruptible(call, stop) -> tuple[int, float]:
                     done.wait(0.05)
                 except KeyboardInterrupt:
                     pass
-            if started:  # (then let the thread end: it only returns from work(), the C loop done)
+            # (then let the thread end: it only returns from work(), the C loop done; on a loaded
+            # machine that can take longer than one join's wait)
+            t_end = time.monotonic() + 10.0
+            while started and worker.is_alive() and time.monotonic() < t_end:
                 try:
-                    worker.join(1.0)
+                    worker.join(0.1)
                 except KeyboardInterrupt:
                     pass
             raise
