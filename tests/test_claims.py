@@ -68,8 +68,9 @@ Each line: the claim [where it is written]: the test that asserts it.
 * "Where the design stands" (bandwidths, steps, stiffness, holds, failed checks per test motor)
   [tuning.md]: make bench's (tools/bench_tune.py), not pytest; checked against its output on this
   commit
-* "The speed range today" (usable speed, bus-limited speed, errors at 0.8 of it per motor)
-  [tuning.md]: make bench's (tools/bench_speed.py), not pytest; measured on main at 2245073
+* "The speed range" (usable speed before and after the EMF estimate's hand-over, bus-limited speed,
+  errors at 0.8 of it per motor, the bands) [tuning.md]: make bench's (tools/bench_speed.py), not
+  pytest; before measured on main at 2245073, after on this commit
 * the start-up's design for ecce2010 (37.4 V, 7 periods, 31 mA, 16 pairs, 12.6 mA, 1.56 ms, 70/12/30 ms)
   [tuning.md-490]: here: test_startup_design_table
 * the example scenarios' table (16 rows) [simulator.md "Example scenarios"]: here:
