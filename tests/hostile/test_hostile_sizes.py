@@ -81,6 +81,26 @@ def test_ctrl_c_stops_a_long_run_within_a_second(tmp_path):
     assert not any(t.name == "linsense-sim" for t in threading.enumerate())
 
 
+def test_an_interrupt_inside_the_threads_start_still_waits_for_it(tmp_path, monkeypatch):
+    """An interrupt that lands while ``Thread.start`` waits for the new thread (a loaded machine
+    kept it waiting there: a fresh clone's run saw the thread alive after the interrupt) finds the
+    thread spawned all the same: the run waits for its C loop to stop before raising."""
+    from linsense.sim.simulation import simulate
+
+    (tmp_path / "s.toml").write_text(LONG)
+    start = threading.Thread.start
+
+    def interrupted_start(self) -> None:
+        start(self)
+        if self.name == "linsense-sim":
+            raise KeyboardInterrupt
+
+    monkeypatch.setattr(threading.Thread, "start", interrupted_start)
+    with pytest.raises(KeyboardInterrupt):
+        simulate(tmp_path / "s.toml")
+    assert not any(t.name == "linsense-sim" for t in threading.enumerate())
+
+
 def test_ctrl_c_on_the_command_line(run_cli, tmp_path, monkeypatch):
     """The CLI answers an interrupt with one line and exit 130, and writes nothing."""
     import linsense.sim.stream

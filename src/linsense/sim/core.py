@@ -312,6 +312,16 @@ def _call_interruptible(call, stop) -> tuple[int, float]:
                 pass
         except BaseException:
             stop[0] = 1
+            # an interrupt raised inside start() (Python's interrupt_main is not held back by the
+            # signal mask; a loaded machine can keep start() waiting for the new thread) may come
+            # after the thread was spawned: it then runs, and stops at its first poll
+            t_spawn = time.monotonic() + 2.0
+            while not started and worker.ident is None and time.monotonic() < t_spawn:
+                try:
+                    time.sleep(0.01)
+                except KeyboardInterrupt:
+                    pass
+            started = started or worker.ident is not None
             # the C loop holds pointers into the caller's buffers: wait for it to stop (an event,
             # not Thread.join, which an interrupt can leave believing the thread has ended)
             while started and not done.is_set():
