@@ -162,6 +162,37 @@ static inline bool ls_drive_open_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RES
     return true;
 }
 
+/* The fundamental of the measured currents (sep: io->if_a, io->if_b): a notch at the injection, or
+ * a low-pass (ls_drive_hf_, and the SPEED step while its injection is off). */
+static inline void ls_drive_sep_(ls_drive *LS_RESTRICT d, ls_drive_io *LS_RESTRICT io)
+{
+    if (d->cfg.sep.type == LS_BIQUAD_NOTCH) {
+        io->if_a = ls_biquad_step_notch(&d->sep[0], io->i_a);
+        io->if_b = ls_biquad_step_notch(&d->sep[1], io->i_b);
+    } else {
+        io->if_a = ls_biquad_step(&d->sep[0], io->i_a);
+        io->if_b = ls_biquad_step(&d->sep[1], io->i_b);
+    }
+}
+
+/* The observer on the error err and the plausibility check on it with the signal's validity
+ * (ls_drive_observe_, and the SPEED step's handed-over error); true: a fault tripped, the drive
+ * disabled and reported in cmd (the step ends). Else the estimate is the step's position and
+ * speed (io->pos, io->omega). */
+static inline bool ls_drive_observe_checked_(ls_drive *LS_RESTRICT d, ls_cmd *LS_RESTRICT cmd,
+                                             ls_drive_io *LS_RESTRICT io, LS_REAL err, bool valid)
+{
+    ls_observer_step_finite(&d->obs, err, d->f_ref);
+    ls_protect_check_observer(&d->prot, err, valid, d->obs.omega);
+    if (d->prot.fault != LS_FAULT_NONE) {
+        ls_drive_disable_report_(d, cmd, d->prot.fault);
+        return true;
+    }
+    io->pos = d->obs.pos;
+    io->omega = d->obs.omega;
+    return false;
+}
+
 /* The sensorless steps' opening: ls_drive_open_, the reference at the estimate after a mode change
  * (then the move or step commanded with it), and the estimated axis (io->c, io->s: the HF estimate
  * of the previous step). */

@@ -126,13 +126,7 @@ LS_DRIVE_PART void ls_drive_residual_(ls_drive *LS_RESTRICT d, const ls_meas *LS
 LS_DRIVE_PART void ls_drive_hf_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas, ls_drive_io *LS_RESTRICT io,
                                 bool adapt)
 {
-    if (d->cfg.sep.type == LS_BIQUAD_NOTCH) {
-        io->if_a = ls_biquad_step_notch(&d->sep[0], io->i_a);
-        io->if_b = ls_biquad_step_notch(&d->sep[1], io->i_b);
-    } else {
-        io->if_a = ls_biquad_step(&d->sep[0], io->i_a);
-        io->if_b = ls_biquad_step(&d->sep[1], io->i_b);
-    }
+    ls_drive_sep_(d, io);
     if (d->cfg.hf_dtres) { /* (bpf is then the band-pass: not with the square wave, ls_drive_init) */
         LS_REAL i_res[2];
         ls_drive_residual_(d, meas, io, i_res, adapt);
@@ -154,15 +148,7 @@ LS_DRIVE_PART bool ls_drive_observe_(ls_drive *LS_RESTRICT d, ls_cmd *LS_RESTRIC
                                      LS_REAL err)
 {
     const LS_REAL e_obs = d->inj.amp >= d->cfg.inject.amplitude ? err : LS_R(0.0);
-    ls_observer_step_finite(&d->obs, e_obs, d->f_ref);
-    ls_protect_check_observer(&d->prot, e_obs, d->demod.valid, d->obs.omega);
-    if (d->prot.fault != LS_FAULT_NONE) {
-        ls_drive_disable_report_(d, cmd, d->prot.fault);
-        return true;
-    }
-    io->pos = d->obs.pos;
-    io->omega = d->obs.omega;
-    return false;
+    return ls_drive_observe_checked_(d, cmd, io, e_obs, d->demod.valid);
 }
 
 /* --------------------------------------------------------------------------- force and current */

@@ -43,13 +43,7 @@ static inline LS_REAL hf_error(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRI
         ls_drive_hf_(d, meas, io, !(LS_FABS(d->obs.omega) > d->fuse.w_lo));
         return ls_drive_demod_(d, io, d->obs.pos.theta) + d->cfg.hf_delay * d->obs.omega;
     }
-    if (d->cfg.sep.type == LS_BIQUAD_NOTCH) {
-        io->if_a = ls_biquad_step_notch(&d->sep[0], io->i_a);
-        io->if_b = ls_biquad_step_notch(&d->sep[1], io->i_b);
-    } else {
-        io->if_a = ls_biquad_step(&d->sep[0], io->i_a);
-        io->if_b = ls_biquad_step(&d->sep[1], io->i_b);
-    }
+    ls_drive_sep_(d, io);
     io->ihf_a = LS_R(0.0);
     io->ihf_b = LS_R(0.0);
     return LS_R(0.0);
@@ -61,15 +55,7 @@ static bool observe(ls_drive *LS_RESTRICT d, ls_cmd *LS_RESTRICT cmd, ls_drive_i
 {
     const bool valid = (!d->fuse.hf_used || d->fuse.w >= LS_R(1.0) || d->demod.valid) &&
                        (d->fuse.w <= LS_R(0.0) || d->emf.mag > LS_R(0.0));
-    ls_observer_step_finite(&d->obs, err, d->f_ref);
-    ls_protect_check_observer(&d->prot, err, valid, d->obs.omega);
-    if (d->prot.fault != LS_FAULT_NONE) {
-        ls_drive_disable_report_(d, cmd, d->prot.fault);
-        return true;
-    }
-    io->pos = d->obs.pos;
-    io->omega = d->obs.omega;
-    return false;
+    return ls_drive_observe_checked_(d, cmd, io, err, valid);
 }
 
 void ls_drive_speed_run_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas, ls_cmd *LS_RESTRICT cmd,
