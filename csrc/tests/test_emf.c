@@ -166,7 +166,13 @@ static void imb_cfg(const pm_imb *m, ls_emf_cfg *c, double *n_mag, double *arg_p
 
 /* eps over the last electrical period after settling: its mean and peak-to-peak, and the largest
  * |eps + err| */
-static void run_imb(ls_emf *e, const plant *p, const pm_imb *m, double *mean, double *pp, double *worst)
+/* The block over one period of the steady state after 3200 steps, with the extra EMF extra(p, arg,
+ * k, out) added to the plant's voltage (the magnets' imbalance, their harmonics): the error's mean,
+ * p-p and worst |eps + err| over the period. */
+typedef void (*extra_emf)(const plant *p, const void *arg, long k, double out[2]);
+
+static void run_extra(ls_emf *e, const plant *p, extra_emf extra, const void *arg, double *mean, double *pp,
+                      double *worst)
 {
     const long n_per = (long)ceil(2.0 * PI / fabs(p->omega) * FS), n0 = 3200;
     long k;
@@ -176,7 +182,7 @@ static void run_imb(ls_emf *e, const plant *p, const pm_imb *m, double *mean, do
         LS_REAL v[2], i[2], c, s;
         double x[2];
         sample(p, k, v, i, &c, &s);
-        imb_extra(p, m, k, x);
+        extra(p, arg, k, x);
         v[0] = (LS_REAL)((double)v[0] + x[0]);
         v[1] = (LS_REAL)((double)v[1] + x[1]);
         ls_emf_step(e, v, i, c, s, (LS_REAL)p->omega, (LS_REAL)1.0);
@@ -189,6 +195,16 @@ static void run_imb(ls_emf *e, const plant *p, const pm_imb *m, double *mean, do
     }
     *mean = sum / (double)n_per;
     *pp = hi - lo;
+}
+
+static void imb_extra_any(const plant *p, const void *m, long k, double out[2])
+{
+    imb_extra(p, (const pm_imb *)m, k, out);
+}
+
+static void run_imb(ls_emf *e, const plant *p, const pm_imb *m, double *mean, double *pp, double *worst)
+{
+    run_extra(e, p, imb_extra_any, m, mean, pp, worst);
 }
 
 static void test_imbalance(void)
@@ -528,27 +544,15 @@ static void harm_extra(const plant *p, const pm_harm *h, long k, double out[2])
     out[1] = (e[1] - e[2]) / sqrt(3.0);
 }
 
+static void harm_extra_any(const plant *p, const void *h, long k, double out[2])
+{
+    harm_extra(p, (const pm_harm *)h, k, out);
+}
+
 static void run_harm(ls_emf *e, const plant *p, const pm_harm *h, double *pp, double *worst)
 {
-    const long n_per = (long)ceil(2.0 * PI / fabs(p->omega) * FS), n0 = 3200;
-    long k;
-    double lo = 1e9, hi = -1e9;
-    *worst = 0.0;
-    for (k = 0; k < n0 + n_per; ++k) {
-        LS_REAL v[2], i[2], c, s;
-        double x[2];
-        sample(p, k, v, i, &c, &s);
-        harm_extra(p, h, k, x);
-        v[0] = (LS_REAL)((double)v[0] + x[0]);
-        v[1] = (LS_REAL)((double)v[1] + x[1]);
-        ls_emf_step(e, v, i, c, s, (LS_REAL)p->omega, (LS_REAL)1.0);
-        if (k >= n0) {
-            lo = fmin(lo, (double)e->eps);
-            hi = fmax(hi, (double)e->eps);
-            *worst = fmax(*worst, fabs((double)e->eps + p->err));
-        }
-    }
-    *pp = hi - lo;
+    double mean;
+    run_extra(e, p, harm_extra_any, h, &mean, pp, worst);
 }
 
 static void test_harmonics(void)
