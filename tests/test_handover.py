@@ -33,6 +33,7 @@ import numpy as np
 import pytest
 from linsense._ctrl import ffi, lib
 
+from linsense.ctrl import FUSE_EMF_OFF, FUSE_EMF_ON
 from linsense.model.motor import load_motor
 from linsense.scenario.load import scenario_from_dict
 from linsense.sim.build import build
@@ -85,17 +86,17 @@ def _run(spec: str, base: dict, case, observer: dict | None = None, inverter: di
     stop = ffi.new("int32_t *", 0)  # (kept alive: a struct field does not own it)
     one.stop = out.stop = stop
     assert lib.ls_sim_begin(b.cfg, state) == lib.LS_OK
-    hand = np.zeros((n, 3))
+    hand = np.zeros((n, 4))
     k = 0
     while k < n and not state.ended:
         for f in SIGNALS:
             setattr(one, f, getattr(out, f) + (3 * k if f == "duty" else k))
         assert lib.ls_sim_continue(b.cfg, d, cmds, n_cmds, state, 1, one, res) == lib.LS_OK
-        hand[k] = (d.fuse.inject, d.inj.amp, d.fuse.w)
+        hand[k] = (d.fuse.inject, d.inj.amp, d.fuse.w, d.fuse.emf_run)
         k += 1
     r = {name: a[:k] for name, a in arrays.items()}
-    r.update(inject=hand[:k, 0], amp=hand[:k, 1], w=hand[:k, 2], fault=int(state.fault),
-             v_dc=float(sc["inverter"]["v_dc"]), err_deg=np.degrees(r["theta_err"]))
+    r.update(inject=hand[:k, 0], amp=hand[:k, 1], w=hand[:k, 2], emf_run=hand[:k, 3] > 0,
+             fault=int(state.fault), v_dc=float(sc["inverter"]["v_dc"]), err_deg=np.degrees(r["theta_err"]))
     return r
 
 
@@ -182,6 +183,12 @@ def test_handover_jump_and_transient(name, v_max):
         assert top.any() and r["amp"][top].max() == 0.0  # (faded out at the top speed)
         low = (np.abs(r["v_est"]) < h.v_lo) & (np.abs(r["v"]) > 0.05)
         assert r["amp"][low].min() == pytest.approx(base["injection"]["amplitude"], rel=1e-6)
+        # the EMF estimate idle well below the band (its filters from FUSE_EMF_ON v_lo: the step's
+        # time), running well above that, and weighed only while it runs
+        v_est = np.abs(r["v_est"])
+        assert not r["emf_run"][v_est < 0.9 * FUSE_EMF_OFF * h.v_lo].any()
+        assert r["emf_run"][v_est > 1.1 * FUSE_EMF_ON * h.v_lo].all()
+        assert not (r["w"][~r["emf_run"]] > 0.0).any()
     print(f"{name} at {a:.2f} m/s^2: offset move {worst['move']:.3f}, jump {worst['jump']:.3f}, transient "
           f"{worst['transient']:.3f} deg")
     assert worst["jump"] <= JUMP_MAX_DEG
@@ -256,3 +263,27 @@ def test_the_fade_frees_the_voltage():
     print(f"top speed out: {peaks[True]:.3f} m/s with the EMF estimate, {peaks[False]:.3f} without")
     assert peaks[True] >= 0.99 * v_max
     assert peaks[False] < 0.9 * v_max
+
+
+def test_the_band_leaves_the_emf_filters_time_to_settle():
+    """The EMF estimate's filters are idle below ``FUSE_EMF_ON v_lo`` (the SPEED step's time
+    budget); the design keeps ``v_lo`` where, accelerating at ``a_max``, they have
+    :data:`~linsense.tune.handover.SETTLE_TAUS` time constants of their low-pass before the speed
+    reaches ``v_lo``. ecce2010's application (1 m/s^2) leaves the band where the EMF's bound puts it;
+    at 100 m/s^2 the band moves up to that speed, ``v_hi`` with it, and the design says why."""
+    from linsense.tune.handover import BAND_RATIO, SETTLE_TAUS, design_handover
+
+    motor = load_motor("ecce2010")
+    kw = dict(v_dc=72.0, f_pwm=16e3, dead_time=1e-6, i_mag=2.0, demod_lpf=300.0, ramp_time=0.01,
+              v_cap=3.0, shape="pulsating")
+    slow = design_handover(motor, a_max=1.0, **kw)
+    fast = design_handover(motor, a_max=100.0, **kw)
+    t_emf = SETTLE_TAUS / (2.0 * math.pi * slow.f_lpf)
+    for h, a in ((slow, 1.0), (fast, 100.0)):
+        assert h.on
+        assert (1.0 - FUSE_EMF_ON) * h.v_lo >= a * t_emf * (1.0 - 1e-12)
+        assert h.v_hi >= BAND_RATIO * h.v_lo * (1.0 - 1e-12)
+    assert slow.v_hi == pytest.approx(slow.v_emf) and "settled" not in slow.limit
+    assert fast.v_lo == pytest.approx(100.0 * t_emf / (1.0 - FUSE_EMF_ON))
+    assert fast.v_lo > slow.v_lo and fast.v_hi > slow.v_hi
+    assert "settled" in fast.limit

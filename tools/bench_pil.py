@@ -286,16 +286,24 @@ def code_size() -> tuple[int | None, int | None, int | None, bool]:
 
 def speed_phases(words: np.ndarray) -> list[tuple[str, np.ndarray]]:
     """The speed case's steps (tools/pil.py's :func:`~pil.speed_case`) by the SPEED step's phase: the
-    injection running (the HF chain and the EMF estimate) below the hand-over band and in it (the
-    estimated speed against the design's ``handover_v_lo``), and the injection faded out (the EMF
-    alone, the HF chain idle). The injection runs where the step's HF voltage is not 0 within one
-    injection period (16 steps at 1 kHz and 16 kHz) either side."""
+    injection running with the EMF estimate idle (the estimated speed below ``FUSE_EMF_ON v_lo``:
+    the sensorless step with the hand-over's bookkeeping), with it running (its filters) below the
+    hand-over band and in the band (its angle too)
+    (the estimated speed against the design's ``handover_v_lo``), and the injection faded out (the
+    EMF alone, the HF chain idle). The injection runs where the step's HF voltage is not 0 within one
+    injection period (16 steps at 1 kHz and 16 kHz) either side; the EMF's start and stop have a
+    hysteresis (``FUSE_EMF_OFF v_lo``), so the steps between the two shares of ``v_lo`` may be of
+    either kind: they count with the running ones."""
+    from linsense.ctrl import FUSE_EMF_OFF
+
     v_lo = float(pil.speed_case(True)[1]["observer"]["handover_v_lo"])
     v_hf = words[:, [n for n, _ in pil.OUT_FIELDS].index("v_hf")].view("<f4")
     v_est = words[:, [n for n, _ in pil.OUT_FIELDS].index("v_est")].view("<f4")
     on = np.convolve((v_hf != 0).astype(float), np.ones(33), mode="same") > 0
     band = np.abs(v_est) >= v_lo
-    return [("SPEED below band", on & ~band), ("SPEED in band", on & band), ("SPEED above band", ~on)]
+    idle = np.abs(v_est) < 0.9 * FUSE_EMF_OFF * v_lo  # (the step at the stop counted as running)
+    return [("SPEED EMF idle", on & idle), ("SPEED below band", on & ~idle & ~band),
+            ("SPEED in band", on & band), ("SPEED above band", ~on)]
 
 
 def report(out: Path, names: list, elf: Path, host: Path, opt: str) -> bool:
@@ -353,7 +361,7 @@ def main() -> int:
     host = pil.build_replay(out, "host", "host")
     ok = True
     for opt in ("-O2", pil.SHIPPED):
-        elf = pil.build_replay(out, "m4f", "m4f", opt)
+        elf = pil.build_replay(out, "m4f", "m4f", opt, harness_lto=False)
         ok &= report(out, names, elf, host, opt) or opt != JUDGED
     lib_os, lib_o2, limit, within = code_size()
     if lib_os is None:

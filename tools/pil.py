@@ -249,9 +249,13 @@ ARM, ARM_LINK = _toolchain_flags("CMAKE_C_FLAGS_INIT"), _toolchain_flags("CMAKE_
 SHIPPED = " ".join(_toolchain_flags("CMAKE_C_FLAGS_MINSIZEREL_INIT"))
 
 
-def build_replay(out: Path, tag: str, target: str, opt: str = "-O2", defines: tuple = ()) -> Path:
+def build_replay(out: Path, tag: str, target: str, opt: str = "-O2", defines: tuple = (),
+                 harness_lto: bool = True) -> Path:
     """The replay for the host (-O2 whatever ``opt``) or the Cortex-M4F at ``opt`` (``target`` "host" or
-    "m4f"; an ELF for QEMU), each with its own C library; its outputs go to <case>.<tag>.out."""
+    "m4f"; an ELF for QEMU), each with its own C library; its outputs go to <case>.<tag>.out. With
+    ``harness_lto`` False the harness (the replay, its I/O and start-up) is compiled without link-time
+    optimisation, the library at ``opt``: the replay's call of ``ls_drive_step`` stays a call, which
+    tools/bench_pil.py counts from its entry to its return (an LTO build inlines it otherwise)."""
     srcs = [str(p) for p in sorted((ROOT / "csrc" / "ctrl").glob("*.c"))]
     inc = [f"-I{ROOT / 'csrc/include'}", f"-I{PIL}", f"-I{out}", f'-DPIL_TAG="{tag}"', *defines]
     if target == "host":
@@ -262,8 +266,14 @@ def build_replay(out: Path, tag: str, target: str, opt: str = "-O2", defines: tu
         return exe
     exe = out / f"pil_replay_{tag}.elf"
     arm = os.environ.get("ARM_CC", "arm-none-eabi-gcc")
-    subprocess.run([arm, *WARN, *ARM, *opt.split(), "-ffp-contract=off", "-DPIL_TARGET", *inc,
-                    str(PIL / "pil_replay.c"), str(PIL / "pil_io_semihost.c"), str(PIL / "startup_m4.c"),
+    harness = [str(PIL / s) for s in ("pil_replay.c", "pil_io_semihost.c", "startup_m4.c")]
+    if not harness_lto:
+        for k, src in enumerate(harness):
+            obj = out / f"pil_harness_{tag}_{Path(src).stem}.o"
+            subprocess.run([arm, *WARN, *ARM, *opt.split(), "-fno-lto", "-ffp-contract=off", "-DPIL_TARGET", *inc,
+                            "-c", src, "-o", str(obj)], check=True)
+            harness[k] = str(obj)
+    subprocess.run([arm, *WARN, *ARM, *opt.split(), "-ffp-contract=off", "-DPIL_TARGET", *inc, *harness,
                     *srcs, "-nostartfiles", *ARM_LINK, f"-T{PIL / 'mps2_an386.ld'}",
                     f"-Wl,-Map={out / f'pil_replay_{tag}.map'}", "-lm", "-o", str(exe)],
                    check=True)

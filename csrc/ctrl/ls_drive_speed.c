@@ -6,7 +6,14 @@
  * its duties, less their dead-time compensation) and the currents; the HF chain (residual,
  * band-pass, demodulator) while the injection runs, its error advanced by the HF path's delay; the
  * two errors handed over on the estimated speed (ls_fuse) into the one observer; the injection
- * faded out above the band and back in below it, the voltage it kept given to the fundamental. */
+ * faded out above the band and back in below it, the voltage it kept given to the fundamental.
+ *
+ * What runs where (the time budget; docs/theory.md section 11, "What the SPEED step computes
+ * where"): below LS_FUSE_EMF_ON v_lo (ls_fuse_emf_run) the EMF's filters are idle, the step the
+ * sensorless step with the hand-over's bookkeeping; from there up they run (settled by v_lo, where
+ * the EMF error starts to count: the design's rule), their angle from v_lo; the dead-time residual's
+ * scales are measured below v_lo and held above it. LS_MODE_COMMISSION runs the EMF's filters at every
+ * speed. */
 #include "ls_drive_internal.h"
 
 /* The mean voltage (V, alpha-beta) of the period that has just ended: the duties computed two
@@ -62,20 +69,25 @@ void ls_drive_speed_run_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT mea
                          bool commission)
 {
     ls_drive_io io;
-    LS_REAL v_ab[2], i_ab[2], e_emf, e_hf, err;
+    LS_REAL e_emf, e_hf, err;
     if (!ls_drive_est_open_(d, meas, cmd, &io)) {
         return;
     }
-    applied_voltage(d, meas->v_dc, v_ab);
-    i_ab[0] = io.i_a;
-    i_ab[1] = io.i_b;
-    /* (the inputs finite: the measurements checked by ls_drive_est_open_, the duties, the estimate and
-     * k_r by the step's final check and their bounds) the EMF's filters every period; its angle (a square root and an atan2) only where the hand-over
-     * can weigh it: ls_fuse_step uses eps_emf, and observe the magnitude, only with |omega| > w_lo
-     * (below, the HF error alone, bit for bit as with the angle every period) */
-    if (ls_emf_update_finite(&d->emf, v_ab, i_ab, io.c, io.s, d->obs.omega, d->dtres.k_r) &&
-        LS_FABS(d->obs.omega) > d->fuse.w_lo) {
-        (void)ls_emf_angle(&d->emf, d->obs.omega);
+    if (commission || ls_fuse_emf_run(&d->fuse, d->obs.omega)) {
+        /* (the inputs finite: the measurements checked by ls_drive_est_open_, the duties, the estimate
+         * and k_r by the step's final check and their bounds) the EMF's filters; its angle (a square
+         * root and an atan2) only where the hand-over can weigh it: ls_fuse_step uses eps_emf, and
+         * observe the magnitude, only with |omega| > w_lo */
+        LS_REAL v_ab[2], i_ab[2];
+        applied_voltage(d, meas->v_dc, v_ab);
+        i_ab[0] = io.i_a;
+        i_ab[1] = io.i_b;
+        if (ls_emf_update_finite(&d->emf, v_ab, i_ab, io.c, io.s, d->obs.omega, d->dtres.k_r) &&
+            LS_FABS(d->obs.omega) > d->fuse.w_lo) {
+            (void)ls_emf_angle(&d->emf, d->obs.omega);
+        }
+    } else if (d->emf.primed) { /* (idle: its filters start again from rest when it runs again) */
+        ls_emf_reset(&d->emf);
     }
     e_emf = d->emf.eps; /* (below w_lo not weighed: the angle of an earlier step, or 0) */
     e_hf = hf_error(d, meas, &io);

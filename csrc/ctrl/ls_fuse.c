@@ -22,6 +22,8 @@ ls_status ls_fuse_init(ls_fuse *f, const ls_fuse_cfg *cfg)
     f->inv_band = LS_R(1.0) / ((cfg->v_hi - cfg->v_lo) * kx);
     f->w_off = cfg->v_off * kx;
     f->w_on = cfg->v_on * kx;
+    f->w_emf_on = LS_FUSE_EMF_ON * f->w_lo;
+    f->w_emf_off = LS_FUSE_EMF_OFF * f->w_lo;
     if (!LS_ISFINITE4(f->w_lo, f->inv_band, f->w_off, f->w_on) || !(f->inv_band > LS_R(0.0)) ||
         !(n >= LS_R(0.0)) || !(n < LS_R(4.0e9))) {
         return LS_ERR_PARAM; /* (a pitch so small that the speeds overflow; t_settle fs beyond 32 bits) */
@@ -38,4 +40,5 @@ void ls_fuse_reset(ls_fuse *f)
     f->inject = true;
     f->w = LS_R(0.0);
     f->hf_used = false;
+    f->emf_run = false;
 }

@@ -10,7 +10,8 @@
  * Mutations this test kills (checked by hand, the header edited and the test rebuilt): v_on and
  * v_off swapped in ls_fuse_step (the hysteresis' thresholds), the n_full reset at a fade dropped (the
  * settle counter), the exact "return eps_hf" below the band replaced by the blend (-0.0 and a
- * huge EMF error), the weight's clamp at 1 dropped. */
+ * huge EMF error), the weight's clamp at 1 dropped; in ls_fuse_emf_run the start at w_emf_off, the
+ * stop at w_emf_on, a reset that leaves it running. */
 #include <stdint.h>
 #include <string.h>
 
@@ -342,6 +343,57 @@ static void test_settle(void)
     LS_CHECK(f.hf_used);
 }
 
+/* Where the EMF estimate runs (ls_fuse_emf_run): off after a reset; on only above LS_FUSE_EMF_ON
+ * v_lo, off again only below LS_FUSE_EMF_OFF v_lo, either sign of the speed; a speed sweeping up and
+ * down through both thresholds changes it exactly twice per sweep, one hovering with noise between
+ * them never; a NaN speed keeps it as it is (on stays on, off stays off: it never starts it). */
+static void test_emf_run(void)
+{
+    ls_fuse f;
+    const double on = LS_FUSE_EMF_ON * V_LO, off = LS_FUSE_EMF_OFF * V_LO;
+    uint32_t s = 12345u;
+    int k, changes = 0, sign;
+    bool prev;
+    init_ok(&f);
+    LS_CHECK(!f.emf_run);
+    LS_CHECK(on > off && on < V_LO); /* (the header's constants: on below the band, hysteresis) */
+    for (sign = -1; sign <= 1; sign += 2) {
+        ls_fuse_reset(&f);
+        LS_CHECK(!ls_fuse_emf_run(&f, omega_of(sign * 0.999 * on)));
+        LS_CHECK(ls_fuse_emf_run(&f, omega_of(sign * 1.001 * on)));
+        LS_CHECK(ls_fuse_emf_run(&f, omega_of(sign * 1.001 * off))); /* (between: kept) */
+        LS_CHECK(ls_fuse_emf_run(&f, omega_of(sign * 5.0 * V_HI)));
+        LS_CHECK(!ls_fuse_emf_run(&f, omega_of(sign * 0.999 * off)));
+        LS_CHECK(!ls_fuse_emf_run(&f, omega_of(sign * 0.999 * on))); /* (between: kept) */
+    }
+    /* NaN: kept on, never started */
+    LS_CHECK(ls_fuse_emf_run(&f, omega_of(V_HI)) && ls_fuse_emf_run(&f, (LS_REAL)NAN));
+    ls_fuse_reset(&f);
+    LS_CHECK(!ls_fuse_emf_run(&f, (LS_REAL)NAN));
+    /* sweeps: 0 -> 2 v_lo -> 0, twice: four changes */
+    ls_fuse_reset(&f);
+    prev = f.emf_run;
+    for (k = 0; k < 8000; ++k) {
+        const double ph = (double)(k % 4000) / 2000.0; /* 0..2 */
+        const double v = 2.0 * V_LO * (ph < 1.0 ? ph : 2.0 - ph);
+        const bool now = ls_fuse_emf_run(&f, omega_of(v));
+        changes += now != prev;
+        LS_CHECK(now ? v > 0.9999 * off : v < 1.0001 * on);
+        prev = now;
+    }
+    LS_CHECK(changes == 4);
+    /* hovering between the thresholds with noise: no change */
+    changes = 0;
+    prev = f.emf_run;
+    for (k = 0; k < 20000; ++k) {
+        const double v = 0.5 * (on + off) + 0.45 * (on - off) * noise(&s);
+        const bool now = ls_fuse_emf_run(&f, omega_of(v));
+        changes += now != prev;
+        prev = now;
+    }
+    LS_CHECK(changes == 0);
+}
+
 /* init refuses each bad field (and accepts the edges allowed: v_on = v_hi, t_settle = 0). */
 static void test_refusals(void)
 {
@@ -401,6 +453,7 @@ int main(void)
     test_hysteresis_sweep();
     test_hover();
     test_settle();
+    test_emf_run();
     test_refusals();
     return ls_test_report("test_fuse");
 }

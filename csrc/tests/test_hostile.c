@@ -542,10 +542,47 @@ static void test_pos_floor(void)
     LS_CHECK(bad == 0);
 }
 
+/* ls_pos_add_far (the trajectory's reference) is ls_pos_add bit for bit: offsets of every magnitude
+ * from a start anywhere in its period (the multiples of 2 pi and their neighbours among them: the
+ * rounding edges), at periods in the range and at its ends, and non-finite offsets. */
+static void test_pos_add_far(void)
+{
+    static const int32_t periods[] = {0, 3, -3, LS_POS_PERIOD_MAX - 2, -LS_POS_PERIOD_MAX + 2, LS_POS_PERIOD_MAX,
+                                      -LS_POS_PERIOD_MAX};
+    static const double odd[] = {NAN, INFINITY, -INFINITY, 0.0, -0.0, 1e30, -1e30};
+    uint32_t x = 54321u;
+    long k, bad = 0, far = 0;
+    size_t i;
+    for (k = 0; k < 200000 + (long)(sizeof odd / sizeof odd[0]); ++k) {
+        LS_REAL d, th0;
+        x = x * 1664525u + 1013904223u;
+        th0 = (LS_REAL)((double)(x >> 8) / 16777216.0 * TWO_PI_D);
+        th0 = th0 < LS_TWO_PI ? th0 : LS_R(0.0);
+        x = x * 1664525u + 1013904223u;
+        d = (LS_REAL)(pow(10.0, -30.0 + 42.0 * (double)(x >> 8) / 16777216.0) * ((x & 1u) ? -1.0 : 1.0));
+        if (k % 5 == 0) { /* the start's complement to a multiple of 2 pi, and its neighbours */
+            d = (LS_REAL)(x % 100000u) * LS_TWO_PI * ((x & 2u) ? LS_R(-1.0) : LS_R(1.0)) - th0;
+            d = (x & 4u) ? (LS_REAL)nextafterf((float)d, (x & 8u) ? 1e30f : -1e30f) : d;
+        }
+        if (k >= 200000) {
+            d = (LS_REAL)odd[k - 200000];
+        }
+        for (i = 0; i < sizeof periods / sizeof periods[0]; ++i) {
+            const ls_pos p = mkpos(periods[i], th0);
+            const ls_pos a = ls_pos_add_far(p, d), b = ls_pos_add(p, d);
+            bad += a.period != b.period || memcmp(&a.theta, &b.theta, sizeof a.theta) != 0;
+            far += a.period != p.period;
+        }
+    }
+    LS_CHECK(bad == 0);
+    LS_CHECK(far > 100000); /* (most offsets leave the period) */
+}
+
 int main(void)
 {
     test_pos();
     test_pos_floor();
+    test_pos_add_far();
     test_lut_huge_angle();
     test_traj_long_move();
     test_setters_refuse();

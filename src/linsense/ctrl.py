@@ -200,6 +200,10 @@ CAL_SLOPE_MAX = float(lib.LS_DRIVE_CAL_SLOPE_MAX)
 LEARN_CRUISE = float(lib.LS_DRIVE_LEARN_CRUISE)
 #: the EMF low-pass corner's largest share of the sampling rate (ls_emf_init's)
 EMF_FLPF_FS_MAX = float(lib.LS_EMF_FLPF_FS_MAX)
+#: -, the SPEED step runs the EMF estimate from this share of ``fuse.v_lo`` up (ls_fuse_emf_run)
+FUSE_EMF_ON = float(lib.LS_FUSE_EMF_ON)
+#: -, and stops it below this share of ``fuse.v_lo``
+FUSE_EMF_OFF = float(lib.LS_FUSE_EMF_OFF)
 #: the largest ``|ripple_c| + |ripple_s|`` ls_drive_init accepts
 RIPPLE_MAX = float(lib.LS_DRIVE_RIPPLE_MAX)
 #: the most start-up pulse pairs ls_startup_init accepts

@@ -16,12 +16,21 @@
  * whenever the injection is not at full amplitude, the EMF error alone is used above v_lo, and no
  * error (the observer runs on its model) below it. At a reset the HF error counts as soon as the
  * injection is at full amplitude (the drive's start, as without this block).
+ * Where the EMF estimate runs at all (ls_fuse_emf_run): from LS_FUSE_EMF_ON v_lo up, until the speed
+ * falls below LS_FUSE_EMF_OFF v_lo (hysteresis). Below, its filters are idle (nothing weighs them
+ * there: the step's time, where the HF chain measures the dead-time model's scales); from there up,
+ * they settle before v_lo, where the EMF error starts to count (docs/theory.md, "What the SPEED step
+ * computes where"; the design checks that they have the time: linsense.tune.handover).
  */
 #ifndef LINSENSE_LS_FUSE_H
 #define LINSENSE_LS_FUSE_H
 
 #include "linsense/ls_math.h"
 #include "linsense/ls_types.h"
+
+/* The EMF estimate runs from LS_FUSE_EMF_ON v_lo up and stops below LS_FUSE_EMF_OFF v_lo (-). */
+#define LS_FUSE_EMF_ON LS_R(0.5)
+#define LS_FUSE_EMF_OFF LS_R(0.4)
 
 typedef struct {
     LS_REAL fs;         /**< unit: Hz, sampling rate, > 0 */
@@ -40,17 +49,30 @@ typedef struct {
     LS_REAL inv_band;   /**< unit: s/rad, 1 / (w_hi - w_lo) */
     LS_REAL w_off;      /**< unit: rad/s, v_off as an electrical speed */
     LS_REAL w_on;       /**< unit: rad/s, v_on as an electrical speed */
+    LS_REAL w_emf_on;   /**< unit: rad/s, LS_FUSE_EMF_ON v_lo as an electrical speed */
+    LS_REAL w_emf_off;  /**< unit: rad/s, LS_FUSE_EMF_OFF v_lo as an electrical speed */
     uint32_t n_settle;  /**< unit: steps, t_settle fs (rounded up) */
     uint32_t n_full;    /**< unit: steps, at full injection amplitude since the last fade (n_settle
                              after a reset; saturates at n_settle) */
     bool inject;        /**< unit: -, the injection requested (the hysteresis' state) */
     LS_REAL w;          /**< unit: -, the EMF error's weight of the last step, [0, 1] */
     bool hf_used;       /**< unit: -, the HF error counted in the last step */
+    bool emf_run;       /**< unit: -, the EMF estimate runs (the hysteresis' state of ls_fuse_emf_run;
+                             false after a reset) */
 } ls_fuse;
 
 ls_status ls_fuse_init(ls_fuse *f, const ls_fuse_cfg *cfg);
 /* The injection requested, the HF error counted as soon as the injection is at full amplitude. */
 void ls_fuse_reset(ls_fuse *f);
+
+/* Whether the EMF estimate runs this step, at the estimated electrical speed omega (rad/s): on
+ * above w_emf_on, off again below w_emf_off; call before the EMF's and ls_fuse_step. */
+static inline bool ls_fuse_emf_run(ls_fuse *f, LS_REAL omega)
+{
+    const LS_REAL a = LS_FABS(omega);
+    f->emf_run = f->emf_run ? !(a < f->w_emf_off) : a > f->w_emf_on;
+    return f->emf_run;
+}
 
 /* One step: the estimated electrical speed omega (rad/s), whether the injection is at its full
  * amplitude (hf_full), the HF error and the EMF error (rad, finite); returns the observer's error

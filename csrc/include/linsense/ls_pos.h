@@ -31,6 +31,10 @@ typedef struct {
 bool ls_pos_norm_full(ls_pos *p);
 /* = ls_pos_norm_full on a copy, by value (the slow path of ls_pos_norm: no memory round trip). */
 ls_pos ls_pos_norm_wide(ls_pos p);
+/* = ls_pos_norm_wide, for a theta far outside [0, 2 pi) (ls_pos_add_far): ls_pos_norm_full's first
+ * round (one division, its floor by a range-checked conversion), which leaves theta in range but at
+ * the rounding edges and the range's ends, where it is ls_pos_norm_wide. */
+ls_pos ls_pos_norm_far(ls_pos p);
 
 /* Normalise a target from outside the library: true, with *p normalised, when theta is finite
  * and the position lies within +-LS_POS_PERIOD_MAX periods; false (and *p unchanged) otherwise.
@@ -61,6 +65,18 @@ static inline ls_pos ls_pos_add(ls_pos p, LS_REAL dtheta)
 {
     p.theta += dtheta;
     return ls_pos_norm(p);
+}
+
+/* p + dtheta (rad), normalised, for a dtheta of any size (ls_traj's reference, up to the whole
+ * travel from the move's start): ls_pos_add bit for bit, its usual case far from p in one call
+ * (ls_pos_norm_far) instead of ls_pos_norm_wide's and ls_pos_norm_full's. */
+static inline ls_pos ls_pos_add_far(ls_pos p, LS_REAL dtheta)
+{
+    p.theta += dtheta;
+    if (p.theta >= LS_R(0.0) && p.theta < LS_TWO_PI) {
+        return p;
+    }
+    return ls_pos_norm_far(p);
 }
 
 /* a - b in rad (accurate while the difference itself is moderate, e.g. a position error). Both

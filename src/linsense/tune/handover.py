@@ -7,7 +7,10 @@ ends where the EMF estimate's bound (:func:`linsense.analysis.emf.emf_speed_limi
 uncertainties this drive leaves: the resistance after the online estimate, the q inductance, the
 dead time's residual after the modulator's compensation, the current sensor's noise; it starts
 :data:`BAND_RATIO` times lower (the HF error grows with the speed, the EMF's falls: measured on the
-switching inverter, ecce2010 and small30, docs/tuning.md "The speed range"). The injection fades
+switching inverter, ecce2010 and small30, docs/tuning.md "The speed range"), and no lower than where
+the EMF's filters, idle below ``FUSE_EMF_ON v_lo`` (the SPEED step's time budget: the C library's
+``LS_FUSE_EMF_ON``), settle (:data:`SETTLE_TAUS` time constants of their low-pass) before the speed
+reaches ``v_lo`` at ``a_max``: ``v_lo >= a_max t_emf / (1 - FUSE_EMF_ON)``. The injection fades
 out above the band and back in below it: back in early
 enough that, decelerating at ``a_max``, it is at full amplitude and the demodulator settled before
 the speed reaches ``v_hi`` (``v_on``), and off :data:`HYSTERESIS` above that (``v_off``). The EMF's
@@ -164,19 +167,24 @@ def design_handover(motor: Motor, *, v_dc: float, f_pwm: float, dead_time: float
     HandoverDesign
         The design (``on`` False where the cap stays below the band or the shape has no EMF step).
     """
-    from linsense.ctrl import EMF_FLPF_FS_MAX  # (the C library's limit)
+    from linsense.ctrl import EMF_FLPF_FS_MAX, FUSE_EMF_ON  # (the C library's)
 
     f_lpf = min(demod_lpf, EMF_FLPF_FS_MAX * f_pwm)
     lim = emf_speed_limit(motor, v_dc=v_dc, f_pwm=f_pwm, dead_time=dead_time, i_mag=i_mag, f_lpf=f_lpf,
                           err_r=ERR_R, err_l=ERR_L, dt_residual=DT_RESIDUAL_DTC, i_noise=i_noise,
                           eps_max=EPS_HAND)
     t_settle = SETTLE_TAUS / (2.0 * math.pi * demod_lpf)
+    v_lo_emf = a_max * SETTLE_TAUS / (2.0 * math.pi * f_lpf) / (1.0 - FUSE_EMF_ON)
     v_emf = lim.v_min
     ripple = emf_harmonic_ripple(motor)
     if ripple > EPS_HAND:  # (the block's model knows only the fundamental: no speed makes it good)
         v_emf = math.inf
     v_hi = v_emf if math.isfinite(v_emf) else 1.0e3
     v_lo = v_hi / BAND_RATIO
+    raised = v_lo < v_lo_emf
+    if raised:  # (the EMF's filters settle between FUSE_EMF_ON v_lo and v_lo at a_max)
+        v_lo = v_lo_emf
+        v_hi = max(v_hi, BAND_RATIO * v_lo)
     v_on = v_hi + a_max * (ramp_time + t_settle)
     v_off = HYSTERESIS * v_on
     if v_off > headroom:  # (off before the fundamental needs the injection's voltage, where it can)
@@ -188,6 +196,9 @@ def design_handover(motor: Motor, *, v_dc: float, f_pwm: float, dead_time: float
                f"beyond {math.degrees(EPS_HAND):g} deg: the HF estimate carries every speed")
     elif math.isfinite(v_emf):
         why = f"the EMF estimate's bound within {math.degrees(EPS_HAND):g} deg from {v_emf:.3g} m/s"
+        if raised:
+            why += (f"; the band from {v_lo:.3g} m/s, where the EMF's filters, started at "
+                    f"{FUSE_EMF_ON:g} v_lo, have settled at a_max {a_max:g} m/s^2")
     else:
         why = ("the EMF estimate's bound never within its limit (L_q i / psi_pm large): the HF estimate "
                "carries every speed")
