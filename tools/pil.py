@@ -270,8 +270,8 @@ def build_replay(out: Path, tag: str, target: str, opt: str = "-O2", defines: tu
     if not harness_lto:
         for k, src in enumerate(harness):
             obj = out / f"pil_harness_{tag}_{Path(src).stem}.o"
-            subprocess.run([arm, *WARN, *ARM, *opt.split(), "-fno-lto", "-ffp-contract=off", "-DPIL_TARGET", *inc,
-                            "-c", src, "-o", str(obj)], check=True)
+            subprocess.run([arm, *WARN, *ARM, *opt.split(), "-fno-lto", "-ffp-contract=off", "-DPIL_TARGET",
+                            *inc, "-c", src, "-o", str(obj)], check=True)
             harness[k] = str(obj)
     subprocess.run([arm, *WARN, *ARM, *opt.split(), "-ffp-contract=off", "-DPIL_TARGET", *inc, *harness,
                     *srcs, "-nostartfiles", *ARM_LINK, f"-T{PIL / 'mps2_an386.ld'}",

@@ -100,23 +100,3 @@ ls_pos ls_pos_norm_wide(ls_pos p)
     (void)ls_pos_norm_full(&p);
     return p;
 }
-
-ls_pos ls_pos_norm_far(ls_pos p)
-{
-    const LS_REAL q = p.theta / LS_TWO_PI;
-    /* (false for NaN; the conversion in range: |q| < 2^30) */
-    if (LS_FABS(q) < LS_R(1073741824.0) && p.period <= LS_POS_PERIOD_MAX && p.period >= -LS_POS_PERIOD_MAX) {
-        const LS_REAL k0 = (LS_REAL)(int32_t)q;
-        const LS_REAL k = k0 > q ? k0 - LS_R(1.0) : k0; /* floor(q), as floor_ */
-        const LS_REAL th = p.theta - k * LS_TWO_PI;
-        if (LS_FABS(k) <= LS_R(2.0) * (LS_REAL)LS_POS_PERIOD_MAX + LS_R(4.0) && th >= LS_R(0.0) && th < LS_TWO_PI) {
-            const int32_t n = p.period + (int32_t)k; /* (|k| <= 2 LS_POS_PERIOD_MAX + 4: no overflow) */
-            if (n <= LS_POS_PERIOD_MAX && n >= -LS_POS_PERIOD_MAX) {
-                p.period = n;
-                p.theta = th;
-                return p;
-            }
-        }
-    }
-    return ls_pos_norm_wide(p);
-}
