@@ -58,7 +58,8 @@ F_CPU = 168e6  # Hz
 F_PWM = 16e3  # Hz
 BUDGET = 0.25 * F_CPU / F_PWM  # cycles, 2,625
 JUDGED = "-O2"  # the build the cycle budget is judged on (the build for speed)
-MODES = {0: "off", 1: "sensored", 2: "sensorless_lut", 3: "sensorless_nolut", 4: "calibration", 5: "startup"}
+MODES = {0: "off", 1: "sensored", 2: "sensorless_lut", 3: "sensorless_nolut", 4: "calibration", 5: "startup",
+         6: "commission"}
 
 CONDS = ("eq", "ne", "cs", "cc", "hs", "lo", "mi", "pl", "vs", "vc", "hi", "ls", "ge", "lt", "gt", "le", "al")
 BRANCH = {"b", "bl", "bx", "blx", "cbz", "cbnz"}

@@ -88,6 +88,7 @@ def cases(quick: bool = False) -> list[tuple[str, object]]:
         # (the start-up needs the saturated plant: its polarity pulses see nothing on the linear one)
         _hold("startup", 0.5 if quick else 0.6, "startup", saturation={"enabled": True}),
         speed_case(quick),
+        commission_case(quick),
     ]
 
 
@@ -133,6 +134,42 @@ def speed_case(quick: bool = False) -> tuple[str, dict]:
         raise SystemExit("pil: the speed case's design has no EMF observer (observer.emf): it would not run "
                          "the SPEED step")
     return "speed", data
+
+
+def commission_case(quick: bool = False) -> tuple[str, dict]:
+    """LS_MODE_COMMISSION (ls_drive_commission.c): the speed case's drive with the pulsating injection,
+    as ``linsense commission`` runs it (:mod:`linsense.studies.commission`: its d-current, learning
+    rate, settle and hold times and the ratio's slope), out at ``SPEED_OVER_V_HI`` times the
+    hand-over band's top against a 20 N load (learning over the cruise's 180 mm) and, in
+    the full set, back.
+
+    Parameters
+    ----------
+    quick : bool, optional
+        The way out alone (0.8 s) instead of out and back (1.6 s).
+
+    Returns
+    -------
+    tuple of (str, dict)
+        The case's name and scenario.
+    """
+    from linsense.model.motor import load_motor
+    from linsense.studies import commission as com
+
+    _, data = speed_case(quick)
+    motor = load_motor("ecce2010")
+    inj = data["injection"]
+    v = com.SPEED_OVER_V_HI * float(data["observer"]["handover_v_hi"])
+    x0 = data["initial"]["position_mm"]
+    data["scenario"].update(name="commission", duration=0.8 if quick else 1.6)
+    data["control"] = {**data.get("control", {}), "mode": "commission"}
+    i_d = com.D_SHARE * float(data["controller"]["i_max"])
+    data["injection"] = {**inj, "quadrature": 0.0, "d_current": i_d}
+    data["reference"].update(waypoints_mm=[450.0] if quick else [450.0, x0], v_max=v)
+    slope = com.ratio_slope(motor, float(inj["amplitude"]), float(inj["frequency"]), 0.0)
+    data["calibration"] = {"points": 56, "k_int": com.K_INT, "t_hold": com.T_HOLD, "t_settle": com.T_SETTLE,
+                           "slope": slope}
+    return "commission", data
 
 
 def _scenario(spec):
@@ -210,12 +247,17 @@ def record(out: Path, quick: bool) -> list[tuple[str, int]]:
         drive = ffi.new("ls_drive *")
         ffi.memmove(drive, b.drive.state, ffi.sizeof("ls_drive"))
         c_cmds, n_cmds = _c_commands(b.commands)
+        # (the tables the drive writes are shared with the reference run below: put back after the recorder)
+        saved = [(at, ffi.buffer(ffi.cast("float *", at), ffi.sizeof("float") * n)[:])
+                 for at, n in w.writable()]
         o = ffi.new("ls_sim_out *")  # (every pointer NULL: nothing recorded; the recorder writes files)
         res = ffi.new("ls_sim_result *")
         st = rlib.pil_record(addr(b.cfg), addr(drive), addr(c_cmds), n_cmds, b.n_steps, addr(o), addr(res),
                              str(out / f"{name}.in").encode(), str(out / f"{name}.sim.out").encode())
         if st != 0:
             raise SystemExit(f"pil: recording {name} failed (status {st})")
+        for at, data in saved:
+            ffi.memmove(ffi.cast("float *", at), data, len(data))
         ref = run_closed_loop(b.cfg, b.drive.state, b.n_steps, b.commands, signals=["t"])
         mine = (int(res.steps_done), int(res.fault), float(res.x_end), float(res.v_end))
         theirs = (ref.steps_done, ref.fault, ref.x_end, ref.v_end)

@@ -47,6 +47,9 @@ class DriveWriter:
         self.prefix = prefix
         self.objects: dict[int, str] = {}  # address -> C name
         self.defs: list[str] = []
+        #: the float tables: address -> [C name, definition's values, writable] (one object per address:
+        #: LS_MODE_COMMISSION's demodulator reads through a table the drive writes, const nowhere then)
+        self.tabs: dict[int, list] = {}
 
     def _floats(self, ptr, n: int, writable: bool) -> str:
         addr = int(self.ffi.cast("uintptr_t", ptr))
@@ -54,7 +57,8 @@ class DriveWriter:
             name = f"{self.prefix}_tab{len(self.objects)}"
             self.objects[addr] = name
             vals = ", ".join(_float(ptr[k]) for k in range(n))
-            self.defs.append(f"static {'' if writable else 'const '}float {name}[{n}] = {{{vals}}};")
+            self.tabs[addr] = [name, f"[{n}] = {{{vals}}}", writable, n]
+        self.tabs[addr][2] |= writable
         return self.objects[addr]
 
     def _lut(self, ptr) -> str:
@@ -85,6 +89,8 @@ class DriveWriter:
                 return "(ls_lut *)" + self._lut(v)
             if item == "float" and path.endswith("cal.table"):
                 return self._floats(v, int(parent.points), writable=True)
+            if item == "float" and path.endswith("cal.learn"):  # (LS_MODE_COMMISSION's estimates, 4 points)
+                return self._floats(v, 4 * int(parent.points), writable=True)
             raise ValueError(f"{path}: a pointer to {item} the writer does not know")
         if kind == "enum":
             return str(int(v))
@@ -96,7 +102,13 @@ class DriveWriter:
             return _int(int(v), ctype.cname)
         raise ValueError(f"{path}: a field of kind {kind} the writer does not know")
 
+    def writable(self) -> list[tuple[int, int]]:
+        """(address, floats) of each table the drive writes (after :meth:`drive`): what a run changes."""
+        return [(addr, n) for addr, (_, _, w, n) in self.tabs.items() if w]
+
     def drive(self, state) -> str:
         """The definitions of the case: its tables, then ``static const ls_drive <prefix>_drive``."""
         body = self.value(self.ffi.typeof("ls_drive"), state[0], "drive")
-        return "\n".join(self.defs + [f"static const ls_drive {self.prefix}_drive = {body};"])
+        tabs = [f"static {'' if w else 'const '}float {name}{vals};"
+                for name, vals, w, _ in self.tabs.values()]
+        return "\n".join(tabs + self.defs + [f"static const ls_drive {self.prefix}_drive = {body};"])
