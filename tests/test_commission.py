@@ -54,8 +54,8 @@ def test_learned_on_an_off_nominal_plant(case, k_e, tmp_path):
     """dM0 +-25 % (the plant's end effect a quarter off the motor file's), the switching inverter with
     the drive's dead time: the table the drive is given (its elliptical injection's, by the pulsating
     route) within 0.3 deg of the plant's own, in <= 10 s of simulated motion; with phase B's magnets
-    4 % weak too (the EMF estimate's imbalance). Measured (+25 % / -25 %): ecce2010 0.13 / 0.007 deg
-    (6.1 s), with the imbalance 0.14 / 0.055, m60_pos20k 0.14 / 0.051 (8.2 s)."""
+    4 % weak too (the EMF estimate's imbalance). Measured (+25 % / -25 %): ecce2010 0.13 / 0.011 deg
+    (6.1 s), with the imbalance 0.15 / 0.018, m60_pos20k 0.14 / 0.051 (8.2 s)."""
     from importlib.resources import files
 
     drive = None
@@ -125,7 +125,7 @@ def test_cli_writes_calibrate_formats_that_tune_reads(run_cli, tmp_path, monkeyp
 def test_certificate_tolerance_has_a_sensorless_route():
     """The certificate's "table measured on dM0 +-25 %" with route "commission": the table comes from
     the commissioning with the drive under test's bus, PWM, dead time and injection, stamped for it.
-    Measured (ecce2010, switching): dM0 +25 % 0.13 deg (calibrate: 0.20), dM0 -25 % 0.007 deg
+    Measured (ecce2010, switching): dM0 +25 % 0.13 deg (calibrate: 0.20), dM0 -25 % 0.011 deg
     (calibrate: 0.31)."""
     from linsense.tune.design import DriveData
     from linsense.tune.drive_design import design_drive
