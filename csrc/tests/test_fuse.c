@@ -295,10 +295,10 @@ static void test_settle(void)
     LS_CHECK(f.hf_used); /* (at once after the reset) */
     LS_CHECK_NEAR(out, 0.0, tol());
     /* the fade: above v_off the flag drops, the counter restarts; the fading step itself is still at
-     * full amplitude (hf_full as the drive computes it, before ls_inject_enable) and counts as the
-     * first: the HF error returns after n_settle - 1 further full steps, t_settle less one period */
+     * full amplitude (hf_full as the drive computes it, before ls_inject_enable) but does not count:
+     * the HF error returns after n_settle full steps from the next one, t_settle */
     (void)ls_fuse_step(&f, omega_of(0.6), true, (LS_REAL)0.2, (LS_REAL)-0.2);
-    LS_CHECK(!f.inject && f.n_full == 1u && !f.hf_used);
+    LS_CHECK(!f.inject && f.n_full == 0u && !f.hf_used);
     /* back below v_on with the amplitude not yet full: the EMF alone in the band, nothing below it */
     out = ls_fuse_step(&f, omega_of(0.45), false, (LS_REAL)0.2, (LS_REAL)-0.2);
     LS_CHECK(f.inject && !f.hf_used && f.w == 1 && out == (LS_REAL)-0.2);
@@ -306,15 +306,15 @@ static void test_settle(void)
     LS_CHECK(!f.hf_used && f.w == 1 && out == (LS_REAL)-0.2);
     out = ls_fuse_step(&f, omega_of(0.1), false, (LS_REAL)0.2, (LS_REAL)-0.2);
     LS_CHECK(!f.hf_used && f.w == 0 && out == 0);
-    LS_CHECK(f.n_full == 1u);
-    /* full amplitude: 126 steps ignored, the 127th counts (with the fading step, 128) */
-    for (k = 1u; k < 127u; ++k) {
+    LS_CHECK(f.n_full == 0u);
+    /* full amplitude: 127 steps ignored, the 128th (n_settle) counts */
+    for (k = 1u; k < 128u; ++k) {
         out = ls_fuse_step(&f, omega_of(0.3), true, (LS_REAL)0.2, (LS_REAL)-0.2);
         if (f.hf_used || out != (LS_REAL)-0.2) {
             break;
         }
     }
-    LS_CHECK(k == 127u);
+    LS_CHECK(k == 128u);
     out = ls_fuse_step(&f, omega_of(0.3), true, (LS_REAL)0.2, (LS_REAL)-0.2);
     LS_CHECK(f.hf_used && f.n_full == 128u);
     LS_CHECK_NEAR(out, 0.0, tol());

@@ -81,16 +81,18 @@ static inline LS_REAL ls_fuse_step(ls_fuse *f, LS_REAL omega, bool hf_full, LS_R
 {
     const LS_REAL a = LS_FABS(omega);
     LS_REAL w = ls_clamp((a - f->w_lo) * f->inv_band, LS_R(0.0), LS_R(1.0));
+    if (hf_full && f->n_full < f->n_settle) {
+        f->n_full++;
+    }
     if (f->inject) {
         if (a > f->w_off) {
-            f->inject = false; /* (faded: the HF error waits t_settle at full amplitude again) */
+            /* faded: the HF error waits t_settle at full amplitude again, counted from the next step
+             * (this one, still at full amplitude, does not count) */
+            f->inject = false;
             f->n_full = 0u;
         }
     } else {
         f->inject = a < f->w_on;
-    }
-    if (hf_full && f->n_full < f->n_settle) {
-        f->n_full++;
     }
     f->hf_used = hf_full && f->n_full >= f->n_settle;
     if (!f->hf_used) {
