@@ -8,7 +8,7 @@
  * (in range), beyond q itself (a float there is an integer; a double beyond the positions' range
  * saturates in the caller either way; NaN stays NaN). No libm call: newlib's floorf costs about 20
  * cycles and a call on a Cortex-M4F, on every step of a move longer than a pole pitch (ls_traj's
- * reference). */
+ * reference, in ls_pos_norm_wide). */
 static LS_REAL floor_(LS_REAL q)
 {
     LS_REAL k;
@@ -74,7 +74,6 @@ bool ls_pos_norm_full(ls_pos *p)
     return false;
 }
 
-
 ls_pos ls_pos_norm_wide(ls_pos p)
 {
     /* a step across one end of the period (the usual way out of [0, 2 pi)), with the period
@@ -95,6 +94,23 @@ ls_pos ls_pos_norm_wide(ls_pos p)
                 p.theta = LS_R(0.0);
             }
             return p;
+        }
+        {
+            /* further out (a trajectory's reference: its start plus the distance travelled, many
+             * periods on a long move): ls_pos_norm_full's first round, which leaves theta in range
+             * but at the rounding edges; those, a k beyond the range and a non-finite theta (th is
+             * then NaN) go to ls_pos_norm_full. |k| <= 2 LS_POS_PERIOD_MAX keeps the conversion in
+             * range and the sum free of overflow. */
+            const LS_REAL k = floor_(p.theta / LS_TWO_PI);
+            const LS_REAL th = p.theta - k * LS_TWO_PI;
+            if (th >= LS_R(0.0) && th < LS_TWO_PI && LS_FABS(k) <= LS_R(2.0) * (LS_REAL)LS_POS_PERIOD_MAX) {
+                const int32_t n = p.period + (int32_t)k;
+                if (n <= LS_POS_PERIOD_MAX && n >= -LS_POS_PERIOD_MAX) {
+                    p.period = n;
+                    p.theta = th;
+                    return p;
+                }
+            }
         }
     }
     (void)ls_pos_norm_full(&p);

@@ -29,7 +29,9 @@ typedef struct {
  * saturated. Every float-to-int conversion here is range-checked first. Out of line: the slow
  * path of the per-step ls_pos_norm. */
 bool ls_pos_norm_full(ls_pos *p);
-/* = ls_pos_norm_full on a copy, by value (the slow path of ls_pos_norm: no memory round trip). */
+/* = ls_pos_norm_full on a copy, by value (the slow path of ls_pos_norm: no memory round trip). A
+ * step across one end of the period and a theta many periods out (a trajectory's reference: its
+ * start plus the distance travelled) take short paths, bit for bit ls_pos_norm_full's result. */
 ls_pos ls_pos_norm_wide(ls_pos p);
 
 /* Normalise a target from outside the library: true, with *p normalised, when theta is finite
@@ -61,52 +63,6 @@ static inline ls_pos ls_pos_add(ls_pos p, LS_REAL dtheta)
 {
     p.theta += dtheta;
     return ls_pos_norm(p);
-}
-
-/* = ls_pos_norm_wide, for a theta outside [-pi, 3 pi) (ls_pos_add_far): ls_pos_norm_full's first
- * round inline (one division, its floor by a range-checked conversion), which leaves theta in range
- * but at the rounding edges and the range's ends, where it is ls_pos_norm_wide. */
-static inline ls_pos ls_pos_norm_far(ls_pos p)
-{
-    const LS_REAL q = p.theta / LS_TWO_PI;
-    /* (false for NaN; the conversion in range: |q| < 2^30) */
-    if (LS_FABS(q) < LS_R(1073741824.0) && p.period <= LS_POS_PERIOD_MAX && p.period >= -LS_POS_PERIOD_MAX) {
-        const LS_REAL k0 = (LS_REAL)(int32_t)q;
-        const LS_REAL k = k0 > q ? k0 - LS_R(1.0) : k0; /* floor(q), as ls_pos_norm_full's */
-        const LS_REAL th = p.theta - k * LS_TWO_PI;
-        /* (|k| < 2^30 + 1 and |period| <= LS_POS_PERIOD_MAX: the sum below does not overflow; a k
-         * beyond ls_pos_norm_full's limit leaves n out of the range, which its fallback saturates) */
-        if (th >= LS_R(0.0) && th < LS_TWO_PI) {
-            const int32_t n = p.period + (int32_t)k;
-            if (n <= LS_POS_PERIOD_MAX && n >= -LS_POS_PERIOD_MAX) {
-                p.period = n;
-                p.theta = th;
-                return p;
-            }
-        }
-    }
-    return ls_pos_norm_wide(p);
-}
-
-/* p + dtheta (rad), normalised, for a dtheta of any size (ls_traj's reference, up to the whole
- * travel from the move's start): ls_pos_add bit for bit; a step across one end of the period as
- * ls_pos_add takes it (ls_pos_norm_wide), a theta further out without its two further calls
- * (ls_pos_norm_far). The build for size (-Os) keeps ls_pos_add's one path: 280 bytes less in the
- * shipped build, whose cycles are not the budget's (docs/firmware.md, "The cost on the target"). */
-static inline ls_pos ls_pos_add_far(ls_pos p, LS_REAL dtheta)
-{
-#if defined(__OPTIMIZE_SIZE__)
-    return ls_pos_add(p, dtheta);
-#else
-    p.theta += dtheta;
-    if (p.theta >= LS_R(0.0) && p.theta < LS_TWO_PI) {
-        return p;
-    }
-    if (p.theta >= -LS_PI && p.theta < LS_R(1.5) * LS_TWO_PI) {
-        return ls_pos_norm_wide(p);
-    }
-    return ls_pos_norm_far(p);
-#endif
 }
 
 /* a - b in rad (accurate while the difference itself is moderate, e.g. a position error). Both

@@ -91,7 +91,7 @@ static inline void ls_traj_step(ls_traj *t, ls_pos *x_ref, LS_REAL *v_ref, LS_RE
         *a_ref = t->a_out;
         return;
     }
-    *x_ref = ls_pos_add_far(t->start, t->sign * s * t->kx);
+    *x_ref = ls_pos_add(t->start, t->sign * s * t->kx);
     *v_ref = t->sign * v;
     t->a_out += t->a_k * (t->sign * a - t->a_out);
     *a_ref = t->a_out;
