@@ -66,7 +66,7 @@ HOMES = (
     Home("injection's highest frequency", "src/linsense/scenario/bounds.py", "F_INJ_PWM_DIV = ",
          r"f_pwm / 4\.0\b|\bfrequency \* 4 >|\"<= f_pwm / 4\"|<= f_pwm / 4 = |at most f_pwm / 4 = |"
          r"\(f_pwm / 4\)", "src/"),
-    Home("square wave's d current", "src/linsense/tune/injection.py", "SQUARE_D_FRACTION = ",
+    Home("injection's d current", "src/linsense/tune/injection.py", "INJECTION_D_FRACTION = ",
          r"0\.4 `controller\.i_max`", "src/"),
 )
 

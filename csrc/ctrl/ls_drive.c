@@ -282,13 +282,18 @@ static bool derive(ls_drive *d, const ls_drive_cfg *cfg, LS_REAL enc_jump)
     d->ts = LS_R(1.0) / cfg->fs;
     d->kx = LS_TWO_PI / cfg->pole_pitch;
     d->inv_kx = cfg->pole_pitch / LS_TWO_PI;
+    d->kf = cfg->force_constant;
     d->inv_kf = LS_R(1.0) / cfg->force_constant;
+    d->kf_id = cfg->current.psi_pm > LS_R(0.0) ? (cfg->current.l_d - cfg->current.l_q) / cfg->current.psi_pm
+                                                : LS_R(0.0);
     d->ff_load_k = cfg->load_ff ? LS_R(1.0) / cfg->pos.mass : LS_R(0.0);
     d->integ_keep = cfg->load_ff ? LS_R(0.0) : LS_R(1.0);
     d->delay_ts = cfg->delay_comp * d->ts;
     d->enc_jump_max = enc_jump >= LS_R(1.0) ? (int64_t)(int32_t)enc_jump : 1; /* a one-count change is always plausible */
     d->enc_k = LS_TWO_PI / (LS_REAL)cfg->enc_counts;
-    return LS_ISFINITE4(d->kx, d->inv_kx, d->inv_kf, d->delay_ts) && LS_ISFINITE(d->ff_load_k) &&
+    /* (the d-currents leave at least half the force constant: ls_drive_set_i_d_'s division) */
+    return LS_ISFINITE4(d->kx, d->inv_kx, d->inv_kf, d->delay_ts) && LS_ISFINITE2(d->ff_load_k, d->kf_id) &&
+           !(LS_R(1.0) + d->kf_id * cfg->i_d_inj < LS_R(0.5)) && !(LS_R(1.0) + d->kf_id * cfg->i_d_near < LS_R(0.5)) &&
            d->inv_kx > LS_R(0.0) && d->inv_kf > LS_R(0.0) && LS_ISFINITE(cfg->i_max * cfg->force_constant);
 }
 
@@ -430,7 +435,7 @@ static void mode_set(ls_drive *d, ls_mode mode)
                mode == LS_MODE_CALIBRATION || mode == LS_MODE_COMMISSION ||
                (mode == LS_MODE_SENSORED && d->cfg.inject_sensored);
     d->v_hf_max = d->hf_on ? d->cfg.inject.amplitude : LS_R(0.0);
-    d->i_d_ref = d->hf_on ? d->cfg.i_d_inj : LS_R(0.0);
+    ls_drive_set_i_d_(d, d->hf_on ? d->cfg.i_d_inj : LS_R(0.0));
     d->path = (uint8_t)(row * LS_DRIVE_COLS + step_column(&d->cfg));
 }
 

@@ -107,6 +107,21 @@ void ls_drive_disable_(ls_drive *LS_RESTRICT d, ls_cmd *LS_RESTRICT cmd, uint32_
 /* ... after a fault or in LS_MODE_OFF, reporting the estimate and the reference. */
 void ls_drive_disable_report_(ls_drive *LS_RESTRICT d, ls_cmd *LS_RESTRICT cmd, uint32_t fault);
 
+/* The d-current reference and the force constant with it: a d-current i_d with the saliency adds the
+ * reluctance force (3/2)(pi/tau)(l_d - l_q) i_d i_q to the magnets' (3/2)(pi/tau) psi_pm i_q, so the
+ * force per ampere of q-current is force_constant (1 + kf_id i_d) (cfg.current's model; docs/theory.md,
+ * "The d-current's reluctance force"). Without it a drive that injects with a d-current misjudges
+ * its force by that share: its load estimate takes it up slowly, and a hold under load drifts. The
+ * division only when the reference changes (a mode change; the square wave's schedule). */
+static inline void ls_drive_set_i_d_(ls_drive *LS_RESTRICT d, LS_REAL i_d)
+{
+    if (i_d != d->i_d_ref) {
+        d->i_d_ref = i_d;
+        d->kf = d->cfg.force_constant * (LS_R(1.0) + d->kf_id * i_d);
+        d->inv_kf = LS_R(1.0) / d->kf;
+    }
+}
+
 /* --------------------------------------------------------------------------- calibration */
 /* psi_cal's cosine and sine, exactly (|psi_cal| <= pi/4). */
 static inline void ls_drive_cal_cs_(ls_drive *LS_RESTRICT d)

@@ -158,7 +158,7 @@ static inline LS_REAL ripple_kf(const ls_drive *LS_RESTRICT d, LS_REAL theta)
     const ls_drive_cfg *cfg = &d->cfg;
     LS_REAL c, s;
     ls_sincos_full((LS_REAL)cfg->ripple_order * theta, &c, &s); /* (out of line: the frictionless drives pay no code) */
-    return cfg->force_constant * (LS_R(1.0) + cfg->ripple_c * c + cfg->ripple_s * s);
+    return d->kf * (LS_R(1.0) + cfg->ripple_c * c + cfg->ripple_s * s);
 }
 
 /* The current reference of force f at theta, clamped to i_max, and the force it makes (d->f_ref,
@@ -174,7 +174,7 @@ static inline LS_REAL force_current(ls_drive *LS_RESTRICT d, LS_REAL f, LS_REAL 
         return i_q;
     }
     i_q = ls_clamp(f * d->inv_kf, -cfg->i_max, cfg->i_max);
-    d->f_ref = i_q * cfg->force_constant;
+    d->f_ref = i_q * d->kf;
     return i_q;
 }
 
@@ -193,7 +193,7 @@ LS_DRIVE_PART void ls_drive_force_(ls_drive *LS_RESTRICT d, ls_drive_io *LS_REST
 LS_DRIVE_PART void ls_drive_enc_force_(ls_drive *LS_RESTRICT d, ls_drive_io *LS_RESTRICT io, bool dithered,
                                        LS_REAL dither)
 {
-    LS_REAL v_ff, a_ff, x_err, f, kf = d->cfg.force_constant;
+    LS_REAL v_ff, a_ff, x_err, f, kf = d->kf;
     ls_traj_step(&d->traj, &io->x_ref, &v_ff, &a_ff);
     x_err = ls_pos_diff(io->x_ref, io->pos) * d->inv_kx;
     f = ls_posctrl_step_finite(&d->pos, x_err, io->omega * d->inv_kx, v_ff, a_ff);

@@ -54,9 +54,9 @@ void ls_drive_square_step_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT m
         LS_REAL p2 = u * (LS_R(4.0) * u * u - LS_R(3.0) * n2);
         p2 *= p2;
         if (p2 < d->near_c3_in * d->near_c3_in * n6) {
-            d->i_d_ref = cfg->i_d_near;
+            ls_drive_set_i_d_(d, cfg->i_d_near);
         } else if (p2 > d->near_c3_out * d->near_c3_out * n6) {
-            d->i_d_ref = cfg->i_d_inj;
+            ls_drive_set_i_d_(d, cfg->i_d_inj);
         }
     }
 

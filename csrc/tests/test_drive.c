@@ -503,6 +503,50 @@ static void test_calibration(void)
     LS_CHECK(worst < 0.02 * DEG); /* README.md, docs/theory.md: "within 0.02 deg" (measured 0.010) */
 }
 
+/* The force constant with the d-current (ls_drive_set_i_d_): force_constant (1 + (l_d - l_q) i_d /
+ * psi_pm) while the injection's d-current flows, force_constant without it; the force reference the
+ * observer is given is i_q times it; the square wave's schedule switches it with its reference; a
+ * d-current that would take half the force constant or more is refused. */
+static void test_d_current_force(void)
+{
+    static ls_drive d;
+    ls_drive_cfg cfg;
+    ls_cmd c;
+    ls_meas m;
+    double kf_id, kf_inj;
+    ls_pos p = {0, LS_R(1.0)}, target = {0, LS_R(1.5)};
+    ls_drive_default_cfg(&cfg);
+    cfg.i_d_inj = LS_R(0.9);
+    kf_id = ((double)cfg.current.l_d - (double)cfg.current.l_q) / (double)cfg.current.psi_pm;
+    kf_inj = (double)cfg.force_constant * (1.0 + kf_id * 0.9);
+    LS_CHECK(kf_id < -1e-3); /* (a salient model: the check below is not trivial) */
+    LS_CHECK(ls_drive_init(&d, &cfg) == LS_OK);
+    LS_CHECK_NEAR(d.kf, cfg.force_constant, 1e-6 * cfg.force_constant);
+    LS_CHECK(ls_drive_set_mode(&d, LS_MODE_SENSORLESS_NOLUT) == LS_OK);
+    LS_CHECK_NEAR(d.kf, kf_inj, 1e-6 * kf_inj);
+    LS_CHECK_NEAR(d.inv_kf, 1.0 / kf_inj, 1e-6 / kf_inj);
+    memset(&m, 0, sizeof m);
+    m.v_dc = LS_R(72.0);
+    LS_CHECK(ls_drive_set_position(&d, p) == LS_OK);
+    LS_CHECK(ls_drive_move_to(&d, target) == LS_OK);
+    ls_drive_step(&d, &m, &c);
+    ls_drive_step(&d, &m, &c);
+    LS_CHECK(c.enable && c.fault == LS_FAULT_NONE && fabs((double)c.i_dq_ref[1]) > 1e-3);
+    LS_CHECK_NEAR(c.i_dq_ref[0], 0.9, 1e-6);
+    LS_CHECK_NEAR(d.f_ref, (double)c.i_dq_ref[1] * kf_inj, 1e-5 * fabs(d.f_ref) + 1e-9);
+    /* without the injection: the magnets' force constant again */
+    LS_CHECK(ls_drive_set_mode(&d, LS_MODE_OFF) == LS_OK);
+    LS_CHECK_NEAR(d.kf, cfg.force_constant, 1e-6 * cfg.force_constant);
+    /* refused: a d-current whose reluctance force takes half the force constant (psi_pm made small
+     * for it: 1 + kf_id i_d_inj = 0.45), accepted at 0.55 */
+    cfg.current.psi_pm = (LS_REAL)(((double)cfg.current.l_q - (double)cfg.current.l_d) * 0.9 / 0.55);
+    LS_CHECK(ls_drive_init(&d, &cfg) == LS_ERR_PARAM);
+    cfg.current.psi_pm = (LS_REAL)(((double)cfg.current.l_q - (double)cfg.current.l_d) * 0.9 / 0.45);
+    LS_CHECK(ls_drive_init(&d, &cfg) == LS_OK);
+    LS_CHECK(ls_drive_set_mode(&d, LS_MODE_SENSORLESS_NOLUT) == LS_OK);
+    LS_CHECK_NEAR(d.kf, 0.55 * cfg.force_constant, 1e-5 * cfg.force_constant);
+}
+
 /* The square wave's d-current schedule (ls_drive_cfg.i_d_near, near_in, near_out): i_d_near within
  * near_in of the positions pi/6 + k pi/3, i_d_inj beyond near_out, the last one in between
  * (hysteresis); judged on the estimate the step used. */
@@ -539,6 +583,9 @@ static void test_square_schedule(void)
         ls_drive_step(&d, &m, &c);
         LS_CHECK(c.enable && c.fault == LS_FAULT_NONE);
         LS_CHECK_NEAR(c.i_dq_ref[0], near[k] ? 0.12 : 0.9, 1e-6);
+        /* (the force constant follows the reference: ls_drive_set_i_d_) */
+        LS_CHECK_NEAR(d.kf, (double)cfg.force_constant * (1.0 + (double)d.kf_id * (near[k] ? 0.12 : 0.9)),
+                      1e-5 * (double)cfg.force_constant);
     }
     /* without a schedule (near_out = 0), i_d_inj everywhere */
     cfg.near_in = cfg.near_out = LS_R(0.0);
@@ -596,5 +643,6 @@ int main(void)
     test_observer_loss();
     test_calibration();
     test_square_schedule();
+    test_d_current_force();
     return ls_test_report("test_drive");
 }

@@ -296,7 +296,11 @@ typedef struct {
     LS_REAL ts;          /* s */
     LS_REAL kx;          /* rad/m, 2 pi / tau */
     LS_REAL inv_kx;      /* m/rad, tau / (2 pi) */
-    LS_REAL inv_kf;      /* A/N, 1 / force_constant */
+    LS_REAL kf;          /* N/A, the force constant at i_d_ref: force_constant (1 + kf_id i_d_ref),
+                            with the d-current's reluctance force (ls_drive_set_i_d_) */
+    LS_REAL inv_kf;      /* A/N, 1 / kf */
+    LS_REAL kf_id;       /* 1/A, (l_d - l_q) / psi_pm of cfg.current's model (0 with psi_pm 0): the
+                            force constant's change per ampere of d-current */
     LS_REAL ff_load_k;   /* 1/kg, the load-force estimate's share of the acceleration feed-forward:
                             1 / pos.mass with load_ff, else 0 */
     LS_REAL integ_keep;  /* -, the sensorless step's factor on the speed PI's integrator: 0 with

@@ -214,13 +214,15 @@ class InjectionSection(BaseModel):
         "period on the estimated d-axis (`frequency` is then f_pwm / 2: leave it out), difference "
         "demodulation. Both refuse a non-zero `quadrature` and a given `observer.demod_method`; `square` "
         "refuses `observer.dead_time_residual = true` (docs/firmware.md, \"Injection shapes\")")
-    # A, d-current reference while injecting (default: the design's, 0 except for the square wave,
-    # whose current change the dead time would bias at zero current; docs/firmware.md)
+    # A, d-current reference while injecting (default: the design's, 0 except for the square wave and
+    # the rotating vector, whose HF current the dead time would bias at zero current; docs/tuning.md)
     d_current: float | None = Field(
         None, description="d-current reference while injecting (keeps the phase currents off zero, where the "
-        "dead time acts on the square wave); `|d_current| < i_max`",
+        "dead time acts on the square wave's and the rotating vector's HF current; the drive's force "
+        "constant follows it); `|d_current| < i_max`",
         json_schema_extra={"unit": "A",
-                           "default_note": "0; `square`: {linsense.tune.injection.SQUARE_D_FRACTION} "
+                           "default_note": "0; `square`, `rotating`: "
+                                           "{linsense.tune.injection.INJECTION_D_FRACTION} "
                                            "`controller.i_max`"})
     # the square wave's measures against the dead time where a phase current is small: the
     # compensation with the edges' PWM ripple and the d-current schedule near the positions where

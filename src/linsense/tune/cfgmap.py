@@ -39,8 +39,8 @@ from linsense.tune.injection import (
     SQUARE_DTC_BAND,
     SQUARE_DTC_LEAD,
     SQUARE_SEP_FRACTION,
+    injection_d_current,
     square_current_schedule,
-    square_d_current,
 )
 
 #: unit conversions from a key's unit to its field's: name -> (function, factor for messages)
@@ -222,9 +222,9 @@ def _f_inj(v: Values) -> float:
 
 
 def _i_d_inj(v: Values) -> float:
-    # (the square wave's d-current keeps the phase currents off zero, docs/firmware.md)
+    # (the square wave's and the rotating vector's d-current keeps the phase currents off zero)
     d = v["injection.d_current"]
-    return d if d is not None else square_d_current(v["controller.i_max"]) if _square(v) else 0.0
+    return d if d is not None else injection_d_current(v["controller.i_max"], v["injection.shape"])
 
 
 def _f_notch(v: Values) -> float:
@@ -361,7 +361,8 @@ ROWS: tuple[Row, ...] = (
     Row("inject.shape", ("injection.shape",), "-", lambda v: "LS_INJ_" + v["injection.shape"].upper(),
         scale=None, kind="enum", c=False, blame=False, doc="`LS_INJ_PULSATING`, `_ROTATING`, `_SQUARE`"),
     Row("i_d_inj", ("injection.d_current", "controller.i_max"), "A", _i_d_inj, scale=None, c=False,
-        doc="`d_current`; not given: 0, or `square_d_current(i_max)` " + _SQ),
+        doc="`d_current`; not given: `injection_d_current(i_max, shape)`: 0.4 `i_max` with "
+        "`injection.shape = \"square\"` or `\"rotating\"`, else 0"),
     Row("inject.amplitude", ("injection.amplitude",), "V"),
     Row("inject.freq", ("injection.frequency", "inverter.f_pwm"), "Hz", _f_inj,
         doc="`frequency`; f_pwm / 2 " + _SQ),

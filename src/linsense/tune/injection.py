@@ -32,10 +32,11 @@ SQUARE_SEP_FRACTION = 0.125
 #: the dead-time compensation's current extrapolation with the square wave at f_pwm / 2, in periods:
 #: its change reverses every period, so the next period's middle is ``i - (i - i_prev) / 2``
 SQUARE_DTC_LEAD = -0.5
-#: the square wave's d-current while injecting, as a fraction of the current limit: it keeps the
-#: phase currents off zero, where the dead time would act on the current change in step with the
-#: square wave (measured on the switching model: up to 8 deg of bias without it; docs/firmware.md)
-SQUARE_D_FRACTION = 0.4
+#: the d-current while injecting with the square wave and the rotating vector, as a fraction of the
+#: current limit: it keeps the phase currents off zero, where the dead time would act on the HF
+#: current (the square wave: up to 8 deg of bias without it, docs/firmware.md; the rotating vector:
+#: its holds' cycles, docs/tuning.md, "Why the rotating vector and the square wave cycle")
+INJECTION_D_FRACTION = 0.4
 #: the dead-time compensation's current band with the square wave (A): its edge-ripple model
 #: (ls_mod_step_ripple_finite) knows the sign at each edge, so the smooth sign can be narrow
 SQUARE_DTC_BAND = 0.01
@@ -211,20 +212,26 @@ def injection_tables(motor: Motor, shape: str, n: int, f_inj: float | None) -> t
     raise ValueError(f"shape must be 'rotating' or 'square', got {shape!r}")
 
 
-def square_d_current(i_max: float) -> float:
-    """The square wave's d-current reference while injecting: ``SQUARE_D_FRACTION i_max``.
+def injection_d_current(i_max: float, shape: str) -> float:
+    """The d-current reference while injecting: ``INJECTION_D_FRACTION i_max`` with the square wave
+    and the rotating vector, 0 with the pulsating (elliptical) injection.
+
+    The drive's force constant follows it (the reluctance force of ``(L_d - L_q) i_d i_q``, the
+    firmware's ``ls_drive_set_i_d_``; docs/theory.md, "The d-current's reluctance force").
 
     Parameters
     ----------
     i_max : float
         Current-reference limit, A.
+    shape : str
+        ``"pulsating"``, ``"rotating"`` or ``"square"``.
 
     Returns
     -------
     float
         A.
     """
-    return SQUARE_D_FRACTION * i_max
+    return INJECTION_D_FRACTION * i_max if shape in ("rotating", "square") else 0.0
 
 
 def square_current_schedule(l_avg: float, R_s: float, v_inj: float, f_pwm: float, i_d_far: float,
