@@ -426,6 +426,15 @@ static unsigned step_column(const ls_drive_cfg *c)
     return c->emf_on ? LS_DRIVE_SPEED : LS_DRIVE_PULSE;
 }
 
+void ls_drive_set_i_d_(ls_drive *LS_RESTRICT d, LS_REAL i_d)
+{
+    if (i_d != d->i_d_ref) {
+        d->i_d_ref = i_d;
+        d->kf = d->cfg.force_constant * (LS_R(1.0) + d->kf_id * i_d);
+        d->inv_kf = LS_R(1.0) / d->kf;
+    }
+}
+
 /* The mode and what it runs (the step table's entry; LS_MODE_STARTUP's row while d->starting). */
 static void mode_set(ls_drive *d, ls_mode mode)
 {

@@ -112,15 +112,9 @@ void ls_drive_disable_report_(ls_drive *LS_RESTRICT d, ls_cmd *LS_RESTRICT cmd, 
  * force per ampere of q-current is force_constant (1 + kf_id i_d) (cfg.current's model; docs/theory.md,
  * "The d-current's reluctance force"). Without it a drive that injects with a d-current misjudges
  * its force by that share: its load estimate takes it up slowly, and a hold under load drifts. The
- * division only when the reference changes (a mode change; the square wave's schedule). */
-static inline void ls_drive_set_i_d_(ls_drive *LS_RESTRICT d, LS_REAL i_d)
-{
-    if (i_d != d->i_d_ref) {
-        d->i_d_ref = i_d;
-        d->kf = d->cfg.force_constant * (LS_R(1.0) + d->kf_id * i_d);
-        d->inv_kf = LS_R(1.0) / d->kf;
-    }
-}
+ * division only when the reference changes (a mode change; the square wave's schedule). Out of line:
+ * one copy in a build for size. */
+void ls_drive_set_i_d_(ls_drive *LS_RESTRICT d, LS_REAL i_d);
 
 /* --------------------------------------------------------------------------- calibration */
 /* psi_cal's cosine and sine, exactly (|psi_cal| <= pi/4). */

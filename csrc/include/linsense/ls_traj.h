@@ -60,42 +60,38 @@ void ls_traj_jump(ls_traj *t, ls_pos target);
  * a_lpf); then advance. Inline (every PWM period). */
 static inline void ls_traj_step(ls_traj *t, ls_pos *x_ref, LS_REAL *v_ref, LS_REAL *a_ref)
 {
-    LS_REAL tt, s, v, a;
-    const LS_REAL am = t->acc;
-    if (!t->active) {
-        *x_ref = t->target;
-        *v_ref = LS_R(0.0);
-        t->a_out -= t->a_k * t->a_out;
-        *a_ref = t->a_out;
-        return;
+    if (t->active) {
+        const LS_REAL am = t->acc;
+        const LS_REAL tt = (LS_REAL)t->k * t->ts;
+        if (tt < t->t_total) {
+            LS_REAL s, v, a;
+            if (tt < t->t_acc) {
+                s = LS_R(0.5) * am * tt * tt;
+                v = am * tt;
+                a = am;
+            } else if (tt < t->t_total - t->t_acc) {
+                s = LS_R(0.5) * am * t->t_acc * t->t_acc + t->v_peak * (tt - t->t_acc);
+                v = t->v_peak;
+                a = LS_R(0.0);
+            } else {
+                LS_REAL r = t->t_total - tt;
+                s = t->dist - LS_R(0.5) * am * r * r;
+                v = am * r;
+                a = -am;
+            }
+            *x_ref = ls_pos_add(t->start, t->sign * s * t->kx);
+            *v_ref = t->sign * v;
+            t->a_out += t->a_k * (t->sign * a - t->a_out);
+            *a_ref = t->a_out;
+            t->k++;
+            return;
+        }
+        t->active = false; /* (the move's end: at the target from this step) */
     }
-    tt = (LS_REAL)t->k * t->ts;
-    if (tt < t->t_acc) {
-        s = LS_R(0.5) * am * tt * tt;
-        v = am * tt;
-        a = am;
-    } else if (tt < t->t_total - t->t_acc) {
-        s = LS_R(0.5) * am * t->t_acc * t->t_acc + t->v_peak * (tt - t->t_acc);
-        v = t->v_peak;
-        a = LS_R(0.0);
-    } else if (tt < t->t_total) {
-        LS_REAL r = t->t_total - tt;
-        s = t->dist - LS_R(0.5) * am * r * r;
-        v = am * r;
-        a = -am;
-    } else {
-        t->active = false;
-        *x_ref = t->target;
-        *v_ref = LS_R(0.0);
-        t->a_out -= t->a_k * t->a_out;
-        *a_ref = t->a_out;
-        return;
-    }
-    *x_ref = ls_pos_add(t->start, t->sign * s * t->kx);
-    *v_ref = t->sign * v;
-    t->a_out += t->a_k * (t->sign * a - t->a_out);
+    *x_ref = t->target;
+    *v_ref = LS_R(0.0);
+    t->a_out -= t->a_k * t->a_out;
     *a_ref = t->a_out;
-    t->k++;
 }
 
 #endif /* LINSENSE_LS_TRAJ_H */
