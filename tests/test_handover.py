@@ -287,3 +287,21 @@ def test_the_band_leaves_the_emf_filters_time_to_settle():
     assert fast.v_lo == pytest.approx(100.0 * t_emf / (1.0 - FUSE_EMF_ON))
     assert fast.v_lo > slow.v_lo and fast.v_hi > slow.v_hi
     assert "settled" in fast.limit
+
+
+@pytest.mark.parametrize("shape", ["rotating", "square"])
+def test_the_shapes_without_an_emf_step_say_so(run_cli, tmp_path, shape):
+    """The rotating vector and the square wave have no EMF step: the design's hand-over is off and
+    its line says why (it said the speed cap stayed below the band, with the cap above it)."""
+    from linsense.tune.handover import design_handover
+
+    kw = dict(v_dc=72.0, f_pwm=16e3, dead_time=1e-6, i_mag=2.0, demod_lpf=300.0, ramp_time=0.01, a_max=1.0,
+              v_cap=3.0)
+    h = design_handover(load_motor("ecce2010"), shape=shape, **kw)
+    assert not h.on and h.v_lo < 3.0 and f"the {shape} injection has no EMF step" in h.limit
+    assert design_handover(load_motor("ecce2010"), shape="pulsating", **kw).on
+    r = run_cli("tune", "--motor", "ecce2010", "--v-max", "1.0", "--injection", shape, "--no-verify",
+                "--out", str(tmp_path / "d.toml"))
+    assert r.code == 0, r.err
+    line = next(ln for ln in (r.out + r.err).splitlines() if "hand-over" in ln)
+    assert f"off: the {shape} injection has no EMF step" in line and "stays below" not in line

@@ -202,6 +202,9 @@ def design_handover(motor: Motor, *, v_dc: float, f_pwm: float, dead_time: float
     else:
         why = ("the EMF estimate's bound never within its limit (L_q i / psi_pm large): the HF estimate "
                "carries every speed")
+    if shape != "pulsating":
+        why = (f"the {shape} injection has no EMF step (the firmware's SPEED step is the pulsating "
+               f"injection's): the HF estimate carries every speed")
     u_err = inverter_voltage_error(v_dc, f_pwm, dead_time, DT_RESIDUAL_DTC)
     return HandoverDesign(on, v_lo, v_hi, v_on, v_off, t_settle, f_lpf, ERR_R, ERR_L, u_err, i_noise, v_emf,
                           why)

@@ -402,7 +402,9 @@ def handover_line(hand, dz) -> str:
         The line.
     """
     if not hand.on:
-        why = (hand.limit if not math.isfinite(hand.v_emf) or hand.limit.startswith("the magnets")
+        # (the cap above the band's start: off for another reason, which the design's limit says)
+        why = (hand.limit if not math.isfinite(hand.v_emf) or dz.v_cap > hand.v_lo
+               or hand.limit.startswith("the magnets")
                else f"the speed cap {dz.v_cap:.3g} m/s stays below the band's start {hand.v_lo:.3g} m/s "
                f"({hand.limit})")
         return f"  hand-over      off: {why}"
