@@ -286,15 +286,17 @@ def code_size() -> tuple[int | None, int | None, int | None, bool]:
 
 
 def speed_phases(words: np.ndarray) -> list[tuple[str, np.ndarray]]:
-    """The speed case's steps (tools/pil.py's :func:`~pil.speed_case`) by the SPEED step's phase: the
-    injection running with the EMF estimate idle (the estimated speed below ``FUSE_EMF_ON v_lo``:
-    the sensorless step with the hand-over's bookkeeping), with it running (its filters) below the
-    hand-over band and in the band (its angle too)
-    (the estimated speed against the design's ``handover_v_lo``), and the injection faded out (the
-    EMF alone, the HF chain idle). The injection runs where the step's HF voltage is not 0 within one
-    injection period (16 steps at 1 kHz and 16 kHz) either side; the EMF's start and stop have a
-    hysteresis (``FUSE_EMF_OFF v_lo``), so the steps between the two shares of ``v_lo`` may be of
-    either kind: they count with the running ones."""
+    """The speed case's steps (tools/pil.py's :func:`~pil.speed_case`) by the SPEED step's phase.
+
+    ``SPEED EMF idle``: the injection on and the estimated speed below ``0.9 FUSE_EMF_OFF v_lo``, the
+    EMF estimate's filters idle (the sensorless step with the hand-over's bookkeeping). ``SPEED below
+    band``: the injection on, the EMF estimate running, the speed below the design's
+    ``handover_v_lo``. ``SPEED in band``: the injection on at or above it (the EMF's angle too).
+    ``SPEED above band``: the injection faded out (the EMF alone, the HF chain idle). The injection
+    counts as on where the step's HF voltage is not 0 within one injection period (16 steps at 1 kHz
+    and 16 kHz) either side. The EMF starts at ``FUSE_EMF_ON v_lo`` and stops at ``FUSE_EMF_OFF
+    v_lo``: a step between the two may be either, and counts as running (so does the step at the
+    stop, hence the 0.9)."""
     from linsense.ctrl import FUSE_EMF_OFF
 
     v_lo = float(pil.speed_case(True)[1]["observer"]["handover_v_lo"])

@@ -31,6 +31,17 @@ def _int(v: int, cname: str) -> str:
     return f"{int(v)}{_INT_SUFFIX.get(cname, '')}"
 
 
+class _Table:
+    """A float table of the case: its C name, its initializer (``[n] = {...}``), whether the drive
+    writes it (then not const) and its length. (A plain class: the tests load this file without
+    registering it as a module, which a dataclass needs.)"""
+
+    __slots__ = ("name", "init", "writable", "n")
+
+    def __init__(self, name: str, init: str, writable: bool, n: int):
+        self.name, self.init, self.writable, self.n = name, init, writable, n
+
+
 class DriveWriter:
     """Writes one case's drive and the objects it points to.
 
@@ -47,9 +58,9 @@ class DriveWriter:
         self.prefix = prefix
         self.objects: dict[int, str] = {}  # address -> C name
         self.defs: list[str] = []
-        #: the float tables: address -> [C name, definition's values, writable] (one object per address:
-        #: LS_MODE_COMMISSION's demodulator reads through a table the drive writes, const nowhere then)
-        self.tabs: dict[int, list] = {}
+        #: the float tables by address (one object per address: LS_MODE_COMMISSION's demodulator reads
+        #: through a table the drive writes, const nowhere then)
+        self.tabs: dict[int, _Table] = {}
 
     def _floats(self, ptr, n: int, writable: bool) -> str:
         addr = int(self.ffi.cast("uintptr_t", ptr))
@@ -57,8 +68,8 @@ class DriveWriter:
             name = f"{self.prefix}_tab{len(self.objects)}"
             self.objects[addr] = name
             vals = ", ".join(_float(ptr[k]) for k in range(n))
-            self.tabs[addr] = [name, f"[{n}] = {{{vals}}}", writable, n]
-        self.tabs[addr][2] |= writable
+            self.tabs[addr] = _Table(name, f"[{n}] = {{{vals}}}", writable, n)
+        self.tabs[addr].writable |= writable
         return self.objects[addr]
 
     def _lut(self, ptr) -> str:
@@ -104,11 +115,10 @@ class DriveWriter:
 
     def writable(self) -> list[tuple[int, int]]:
         """(address, floats) of each table the drive writes (after :meth:`drive`): what a run changes."""
-        return [(addr, n) for addr, (_, _, w, n) in self.tabs.items() if w]
+        return [(addr, t.n) for addr, t in self.tabs.items() if t.writable]
 
     def drive(self, state) -> str:
         """The definitions of the case: its tables, then ``static const ls_drive <prefix>_drive``."""
         body = self.value(self.ffi.typeof("ls_drive"), state[0], "drive")
-        tabs = [f"static {'' if w else 'const '}float {name}{vals};"
-                for name, vals, w, _ in self.tabs.values()]
+        tabs = [f"static {'' if t.writable else 'const '}float {t.name}{t.init};" for t in self.tabs.values()]
         return "\n".join(tabs + self.defs + [f"static const ls_drive {self.prefix}_drive = {body};"])
