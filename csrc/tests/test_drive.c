@@ -534,9 +534,58 @@ static void test_d_current_force(void)
     LS_CHECK(c.enable && c.fault == LS_FAULT_NONE && fabs((double)c.i_dq_ref[1]) > 1e-3);
     LS_CHECK_NEAR(c.i_dq_ref[0], 0.9, 1e-6);
     LS_CHECK_NEAR(d.f_ref, (double)c.i_dq_ref[1] * kf_inj, 1e-5 * fabs(d.f_ref) + 1e-9);
+    /* with the force constant's ripple (ripple_order 2, 10 % on cos): the ripple times kf */
+    {
+        ls_drive_cfg rc = cfg;
+        double th;
+        rc.ripple_order = 2;
+        rc.ripple_c = LS_R(0.1);
+        LS_CHECK(ls_drive_init(&d, &rc) == LS_OK);
+        LS_CHECK(ls_drive_set_mode(&d, LS_MODE_SENSORLESS_NOLUT) == LS_OK);
+        LS_CHECK(ls_drive_set_position(&d, p) == LS_OK);
+        LS_CHECK(ls_drive_move_to(&d, target) == LS_OK);
+        ls_drive_step(&d, &m, &c);
+        ls_drive_step(&d, &m, &c);
+        th = (double)c.pos_fb.theta;
+        LS_CHECK(c.fault == LS_FAULT_NONE && fabs((double)c.i_dq_ref[1]) > 1e-3);
+        LS_CHECK_NEAR(d.f_ref, (double)c.i_dq_ref[1] * kf_inj * (1.0 + 0.1 * cos(2.0 * th)),
+                      1e-4 * fabs(d.f_ref) + 1e-9);
+    }
+    /* the encoder's step with the injection beside it (inject_sensored): the same force constant */
+    LS_CHECK(cfg.inject_sensored);
+    LS_CHECK(ls_drive_init(&d, &cfg) == LS_OK);
+    LS_CHECK(ls_drive_set_mode(&d, LS_MODE_SENSORED) == LS_OK);
+    LS_CHECK_NEAR(d.kf, kf_inj, 1e-6 * kf_inj);
+    m.enc_valid = true;
+    m.enc_count = 0;
+    ls_drive_step(&d, &m, &c); /* (aligns to the encoder) */
+    LS_CHECK(ls_drive_move_to(&d, target) == LS_OK);
+    ls_drive_step(&d, &m, &c);
+    ls_drive_step(&d, &m, &c);
+    LS_CHECK(c.enable && c.fault == LS_FAULT_NONE && fabs((double)c.i_dq_ref[1]) > 1e-3);
+    LS_CHECK_NEAR(d.f_ref, (double)c.i_dq_ref[1] * kf_inj, 1e-5 * fabs(d.f_ref) + 1e-9);
     /* without the injection: the magnets' force constant again */
     LS_CHECK(ls_drive_set_mode(&d, LS_MODE_OFF) == LS_OK);
     LS_CHECK_NEAR(d.kf, cfg.force_constant, 1e-6 * cfg.force_constant);
+    /* refused: the square wave's near current beyond half the force constant, and a force at i_max that
+     * overflows with the d-current (a tiny psi_pm) */
+    {
+        ls_drive_cfg bad = cfg;
+        bad.i_d_near = LS_R(0.9);
+        bad.current.psi_pm = (LS_REAL)(((double)cfg.current.l_q - (double)cfg.current.l_d) * 0.9 / 0.55);
+        bad.i_d_inj = LS_R(0.0);
+        LS_CHECK(ls_drive_init(&d, &bad) == LS_ERR_PARAM);
+        bad.i_d_near = LS_R(0.0);
+        LS_CHECK(ls_drive_init(&d, &bad) == LS_OK);
+        bad = cfg;
+        bad.current.l_d = LS_R(10.0);
+        bad.current.l_q = LS_R(0.0);
+        /* (kf_id 1e38 in float, 1e308 in double: finite, and i_max force_constant (1 + 0.9 kf_id) is not) */
+        bad.current.psi_pm = (LS_REAL)(sizeof(LS_REAL) == sizeof(float) ? 1e-37 : 1e-307);
+        LS_CHECK(ls_drive_init(&d, &bad) == LS_ERR_PARAM);
+        bad.i_d_inj = LS_R(0.0); /* (without the d-current the same model is accepted) */
+        LS_CHECK(ls_drive_init(&d, &bad) == LS_OK);
+    }
     /* refused: a d-current whose reluctance force takes half the force constant (psi_pm made small
      * for it: 1 + kf_id i_d_inj = 0.45), accepted at 0.55 */
     cfg.current.psi_pm = (LS_REAL)(((double)cfg.current.l_q - (double)cfg.current.l_d) * 0.9 / 0.55);

@@ -402,9 +402,10 @@ def handover_line(hand, dz) -> str:
         The line.
     """
     if not hand.on:
-        # (the cap above the band's start: off for another reason, which the design's limit says)
+        # (the cap above the band's start, or a shape without an EMF step: off for another reason,
+        # which the design's limit says)
         why = (hand.limit if not math.isfinite(hand.v_emf) or dz.v_cap > hand.v_lo
-               or hand.limit.startswith("the magnets")
+               or hand.limit.startswith("the magnets") or "has no EMF step" in hand.limit
                else f"the speed cap {dz.v_cap:.3g} m/s stays below the band's start {hand.v_lo:.3g} m/s "
                f"({hand.limit})")
         return f"  hand-over      off: {why}"
