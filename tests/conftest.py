@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import signal
+import tomllib
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -11,6 +13,7 @@ from hypothesis import strategies as st
 from linsense.cli import main
 from linsense.model.inductance import InductanceModel
 from linsense.model.motor import Motor, load_motor
+from linsense.tune.design import DriveData
 
 # A run launched in the background of a shell without job control (`cmd &` in a script) starts with
 # SIGINT ignored (POSIX), and its children inherit that: the Ctrl-C tests (tests/hostile) would fail
@@ -20,6 +23,18 @@ if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
     signal.signal(signal.SIGINT, signal.default_int_handler)
 
 ECCE = dict(L0=2.75e-3, L2=-0.317e-3, M0=-0.92e-3, M2=-0.317e-3, dM0=-0.47e-3)
+
+#: the class motors' files and their drives (drives.toml)
+CLASS = Path(__file__).resolve().parents[1] / "src" / "linsense" / "examples" / "motors" / "class"
+
+
+def class_drive(name: str) -> tuple[str, DriveData]:
+    """A shipped motor's spec and drive data: ecce2010 with the defaults, a class motor with its
+    drives.toml entry."""
+    if name == "ecce2010":
+        return "ecce2010", DriveData()
+    data = tomllib.loads((CLASS / "drives.toml").read_text())[name]
+    return str(CLASS / f"{name}.toml"), DriveData(**data)
 
 
 @pytest.fixture(scope="session")

@@ -7,11 +7,9 @@ dead time."""
 
 from __future__ import annotations
 
-import tomllib
-from pathlib import Path
-
 import pytest
 
+from conftest import class_drive
 from linsense.model.motor import load_motor
 from linsense.scenario.load import scenario_from_dict
 from linsense.sim.build import build
@@ -21,14 +19,11 @@ from linsense.tune.injection import INJECTION_D_FRACTION, injection_d_current
 from linsense.verify.case_runs import run_cases
 from linsense.verify.cases import hold_cases
 
-CLASS = Path(__file__).parents[1] / "src" / "linsense" / "examples" / "motors" / "class"
-
 
 def _rotating(name: str):
-    data = tomllib.loads((CLASS / "drives.toml").read_text())
-    spec, dd = (name, {}) if name == "ecce2010" else (str(CLASS / f"{name}.toml"), data[name])
+    spec, dd = class_drive(name)
     m = load_motor(spec)
-    made = design_drive(m, DriveData(**{**dd, "shape": "rotating"}), source=spec, analyse=False,
+    made = design_drive(m, DriveData(**{**vars(dd), "shape": "rotating"}), source=spec, analyse=False,
                         startup=False)
     return spec, m, made, scenario_dict(made, motor_ref=spec)
 

@@ -27,12 +27,12 @@ The measures (the docstrings of the tests say which is which, docs/theory.md the
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
 from linsense._ctrl import ffi, lib
 
+from conftest import class_drive
 from linsense.ctrl import FUSE_EMF_OFF, FUSE_EMF_ON
 from linsense.model.motor import load_motor
 from linsense.scenario.load import scenario_from_dict
@@ -44,7 +44,6 @@ from linsense.tune.export import scenario_dict
 from linsense.verify.case_runs import case_scenario
 from linsense.verify.cases import trajectory_case
 
-CLASS = Path(__file__).resolve().parents[1] / "src" / "linsense" / "examples" / "motors" / "class"
 #: the bounds the whole-speed-range work set itself ("Numbers": hand-over jump and transients), electrical deg
 JUMP_MAX_DEG = 0.3
 TRANSIENT_MAX_DEG = 1.0
@@ -53,18 +52,9 @@ PEAK_DEG = 2.0
 SIGNALS = ("t", "x", "v", "v_est", "theta_err", "duty")
 
 
-def _drive_data(name: str) -> tuple[str, DriveData]:
-    if name == "ecce2010":
-        return "ecce2010", DriveData()
-    import tomllib
-
-    data = tomllib.loads((CLASS / "drives.toml").read_text())[name]
-    return str(CLASS / f"{name}.toml"), DriveData(**data)
-
-
 def _design(name: str, v_max: float):
     """The drive ``tune --v-max v_max`` designs: (motor spec, motor, DriveDesign, scenario dict, a_max)."""
-    spec, dd = _drive_data(name)
+    spec, dd = class_drive(name)
     motor = load_motor(spec)
     made = design_drive(motor, DriveData(**{**vars(dd), "v_max": v_max}), source=spec, analyse=False,
                         startup=False)
