@@ -80,7 +80,7 @@ class HandoverDesign:
     v_emf : float
         The speed from which the EMF bound is within :data:`EPS_HAND`, m/s (inf: never).
     limit : str
-        What sets the band, in words.
+        What sets the band, in words; with the hand-over off, why it is off.
     """
 
     on: bool
@@ -205,6 +205,8 @@ def design_handover(motor: Motor, *, v_dc: float, f_pwm: float, dead_time: float
     if shape != "pulsating":
         why = (f"the {shape} injection has no EMF step (the firmware's SPEED step is the pulsating "
                f"injection's): the HF estimate carries every speed")
+    elif not on and math.isfinite(v_emf):  # (off for the speed cap alone)
+        why = f"the speed cap {v_cap:.3g} m/s stays below the band's start {v_lo:.3g} m/s ({why})"
     u_err = inverter_voltage_error(v_dc, f_pwm, dead_time, DT_RESIDUAL_DTC)
     return HandoverDesign(on, v_lo, v_hi, v_on, v_off, t_settle, f_lpf, ERR_R, ERR_L, u_err, i_noise, v_emf,
                           why)

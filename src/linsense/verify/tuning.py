@@ -10,7 +10,6 @@ the certificate, above the simulator, because it runs the simulator; the design 
 from __future__ import annotations
 
 import dataclasses
-import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -402,13 +401,7 @@ def handover_line(hand, dz) -> str:
         The line.
     """
     if not hand.on:
-        # (the cap above the band's start, or a shape without an EMF step: off for another reason,
-        # which the design's limit says)
-        why = (hand.limit if not math.isfinite(hand.v_emf) or dz.v_cap > hand.v_lo
-               or hand.limit.startswith("the magnets") or "has no EMF step" in hand.limit
-               else f"the speed cap {dz.v_cap:.3g} m/s stays below the band's start {hand.v_lo:.3g} m/s "
-               f"({hand.limit})")
-        return f"  hand-over      off: {why}"
+        return f"  hand-over      off: {hand.limit}"
     return (f"  hand-over      the HF estimate alone up to {hand.v_lo:.3g} m/s, the EMF estimate alone from "
             f"{hand.v_hi:.3g} m/s ({hand.limit}; v_lo = v_hi / {BAND_RATIO:g}), its low-pass "
             f"{hand.f_lpf:.4g} Hz; the injection fades out above {hand.v_off:.3g} m/s and back in below "
