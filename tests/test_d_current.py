@@ -7,13 +7,17 @@ dead time."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import pytest
 
 from conftest import class_drive
+from linsense.errors import InputError
 from linsense.model.motor import load_motor
 from linsense.scenario.load import scenario_from_dict
 from linsense.sim.build import build
 from linsense.tune import DriveData, design_drive
+from linsense.tune.design import check_drive, drive_force_max, rated_load
 from linsense.tune.export import scenario_dict
 from linsense.tune.injection import INJECTION_D_FRACTION, injection_d_current
 from linsense.verify.case_runs import run_cases
@@ -34,8 +38,9 @@ def test_the_rule():
     assert injection_d_current(2.5, "pulsating") == 0.0
 
 
-# (the rated loads of drives.toml, ecce2010's the design's 25 N; the bench's 96 positions: a sparser
-# grid finds marginal holds, e.g. m30_low at 290.6 deg, 10 N, 0.156 deg p-p, between two of these)
+# (the rated loads of drives.toml, ecce2010's the design's 24.8 N, half its force at i_max with the
+# d-current; the bench's 96 positions: a sparser grid finds marginal holds, e.g. m30_low at 290.6 deg,
+# 10 N, 0.156 deg p-p, between two of these)
 @pytest.mark.parametrize("name", ["m20_hv", "ecce2010", "m30_low"])
 def test_rotating_holds_with_the_design_d_current(name):
     """Cycles above 0.15 deg p-p over 96 positions at 0 N and the rated load: none (measured:
@@ -55,3 +60,42 @@ def test_rotating_holds_with_the_design_d_current(name):
     cycling = [(r["load_n"], round(r["position_deg"], 1), round(r["pp_deg"], 3))
                for r in rows if r["pp_deg"] > 0.15]
     assert not cycling, (name, i_max, cycling)
+
+
+def test_the_force_limits_follow_the_d_current():
+    """The design's force at i_max, the position controller's clamp and the speed PI's limits are
+    the force the drive makes while it injects (m20_hv's rotating vector: 9.33 N, not K_f i_max =
+    12 N); the rated load a share of it; the pulsating drive's K_f i_max."""
+    spec, m, made, base = _rotating("m20_hv")
+    st = build(scenario_from_dict(base, source="m20_hv", base_dir="."), motor=m).drive.state
+    f_max = st.kf * st.cfg.i_max  # (the drive's force at i_max while it injects)
+    assert f_max < 0.8 * m.force_constant * st.cfg.i_max
+    for got in (st.cfg.pos.force_max, st.cfg.pos.speed.out_max, -st.cfg.pos.speed.out_min):
+        assert got == pytest.approx(f_max, rel=1e-5)
+    dd = DriveData(**{**vars(class_drive("m20_hv")[1]), "shape": "rotating", "load": None})
+    assert drive_force_max(m, dd) == pytest.approx(f_max, rel=1e-5)
+    assert rated_load(m, dd) == pytest.approx(0.5 * f_max, rel=1e-5)
+    pulsating = dataclasses.replace(dd, shape="pulsating")
+    assert drive_force_max(m, pulsating) == m.force_constant * dd.i_max
+
+
+def test_a_d_current_that_takes_half_the_force_is_refused():
+    """The design refuses what ls_drive_init would (the d-current leaving less than KF_SHARE_MIN of
+    the force constant), naming the largest i_max; and the smallest i_max it asks for a force makes
+    that force with the d-current's share."""
+    spec, dd = class_drive("m20_hv")
+    m = load_motor(spec)
+    rot = dataclasses.replace(dd, shape="rotating")
+    said = (r"i_max: 5 A: the rotating injection's d-current .* leaves 0\.444 of the force constant .* "
+            r"below the 0\.5 the drive accepts: at most 4\.49")
+    with pytest.raises(InputError, match=said):
+        check_drive(m, dataclasses.replace(rot, i_max=5.0))
+    check_drive(m, dataclasses.replace(rot, i_max=4.4))
+    with pytest.raises(InputError, match=r"i_max must be at least 2\.81") as e:
+        check_drive(m, dataclasses.replace(rot, load=11.0))
+    i_min = float(str(e.value).split("at least ")[1].split(" A")[0])
+    need = 11.0 + m.mass * rot.a_max
+    made = drive_force_max(m, dataclasses.replace(rot, load=11.0, i_max=i_min))
+    assert made == pytest.approx(need, rel=1e-3)
+    # (K_f i_max would have asked for 1.93 A, at which the drive makes 7.8 N)
+    assert need / m.force_constant < 0.7 * i_min

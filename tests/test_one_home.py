@@ -37,6 +37,8 @@ class Home:
 HOMES = (
     Home("injection limit", "csrc/include/linsense/ls_drive.h", "#define LS_DRIVE_V_INJ_SHARE_MAX",
          r"sqrt\(3(?:\.0)?\)[^\n]{0,24}\b0\.8\b|LS_SQRT3\s*/\s*[\w>.-]*v_dc_min|v_inj_frac"),
+    Home("d-current force share limit", "csrc/include/linsense/ls_drive.h", "#define LS_DRIVE_KF_SHARE_MIN",
+         r"g_\w+ < LS_R\(0\.5\)|force_share\([^\n]*>=\s*0\.5\b"),
     Home("ripple limit", "csrc/include/linsense/ls_drive.h", "#define LS_DRIVE_RIPPLE_MAX",
          r"ripple_s\)\s*<=\s*LS_R\(|ripple_sin\| must be at most 0\.5|ripple_s\| <= 0\.5"),
     Home("observer pole rule", "csrc/ctrl/ls_observer.c", "void ls_observer_gains",
@@ -104,6 +106,7 @@ def test_the_limits_reach_python_from_the_c_macros():
     lib = ctrl.lib
     assert ctrl.V_INJ_SHARE_MAX == float(lib.LS_DRIVE_V_INJ_SHARE_MAX) == pytest.approx(0.8)
     assert ctrl.RIPPLE_MAX == float(lib.LS_DRIVE_RIPPLE_MAX)
+    assert ctrl.KF_SHARE_MIN == float(lib.LS_DRIVE_KF_SHARE_MIN) == pytest.approx(0.5)
     msg = str(ctrl.config_error("ls_biquad", {"q": 0.0}, lib.LS_ERR_PARAM))
     assert f"{lib.LS_BIQUAD_Q_MIN:g} .. {lib.LS_BIQUAD_Q_MAX:g}" in msg
     assert ctrl.injection_fits(12.0, 40.0) and not ctrl.injection_fits(0.8 * 40.0 / 3**0.5 * 1.001, 40.0)

@@ -194,6 +194,8 @@ _RULES = {
 
 #: the injection's largest share of the linear range at the under-voltage limit (ls_drive_init's)
 V_INJ_SHARE_MAX = float(lib.LS_DRIVE_V_INJ_SHARE_MAX)
+#: -, the least share of the force constant a d-current may leave (ls_drive_init's; ls_drive.h)
+KF_SHARE_MIN = float(lib.LS_DRIVE_KF_SHARE_MIN)
 #: -, LS_MODE_COMMISSION's largest cal.slope (ls_drive.h)
 CAL_SLOPE_MAX = float(lib.LS_DRIVE_CAL_SLOPE_MAX)
 #: -, LS_MODE_COMMISSION learns at |v| >= this share of the trajectory's v_max (ls_drive.h)

@@ -87,6 +87,9 @@
 /* -, the injection's largest share of the linear modulation range at the under-voltage limit,
  * inject.amplitude sqrt(3) / prot.v_dc_min (below it: the fundamental gets the rest) */
 #define LS_DRIVE_V_INJ_SHARE_MAX LS_R(0.8)
+/* -, the least share of the force constant a d-current may leave (1 + kf_id i_d with kf_id =
+ * (current.l_d - current.l_q) / current.psi_pm: the reluctance force; i_d_inj and i_d_near) */
+#define LS_DRIVE_KF_SHARE_MIN LS_R(0.5)
 /* -, LS_MODE_COMMISSION: the largest cal.slope (the pulsating injection's is 1) */
 #define LS_DRIVE_CAL_SLOPE_MAX LS_R(2.0)
 /* -, LS_MODE_COMMISSION learns where the estimated speed is at least this share of traj.v_max

@@ -453,7 +453,10 @@ class ControllerSection(BaseModel):
     current_ki: NonNegative | None = Field(None, description="explicit, with `current_kp`",
                                            json_schema_extra={"unit": "V/(A s)"})
     decouple: bool = Field(True, description="dq decoupling and back-EMF feed-forward")
-    i_max: Positive = Field(_c(_C.i_max), description="current-reference limit; force limit = K_f i_max",
+    i_max: Positive = Field(_c(_C.i_max),
+                            description="current-reference limit; force limit = K_f i_max, less the "
+                                        "rotating or square injection's d-current's share (docs/tuning.md, "
+                                        "\"The force at `i_max`\")",
                             json_schema_extra={"kind": "current", "unit": "A"})
     friction_coulomb: NonNegative = Field(
         0.0, description="Coulomb friction fed forward at the speed reference and in the mech observer's "

@@ -39,6 +39,8 @@ from linsense.tune.injection import (
     SQUARE_DTC_BAND,
     SQUARE_DTC_LEAD,
     SQUARE_SEP_FRACTION,
+    d_current_force_share,
+    deliverable_force,
     injection_d_current,
     square_current_schedule,
 )
@@ -301,8 +303,21 @@ def _speed_gain(i: int) -> Callable[[Values], float]:
     return rule
 
 
+#: what the force at i_max reads (pos.force_max and the speed PI's limits)
+_FORCE_KEYS = ("controller.i_max", "controller.model.force_constant", "injection.shape",
+               "injection.d_current", "controller.model.L_d", "controller.model.L_q",
+               "controller.model.psi_pm")
+
+
+def _i_d_near(v: Values) -> float:
+    return v["model.square_schedule"]["i_d_near"] if _scheduled(v) else 0.0
+
+
 def _force_max(v: Values) -> float:
-    return v["controller.model.force_constant"] * v["controller.i_max"]
+    # (the d-currents' reluctance force: the least force constant of the modes, as ls_drive_init's)
+    model = (v["controller.model.L_d"], v["controller.model.L_q"], v["controller.model.psi_pm"])
+    share = min(d_current_force_share(*model, i_d) for i_d in (_i_d_inj(v), _i_d_near(v)))
+    return deliverable_force(v["controller.model.force_constant"], v["controller.i_max"], share)
 
 
 def _i_band(v: Values) -> float:
@@ -463,18 +478,19 @@ ROWS: tuple[Row, ...] = (
         scale=None, doc="`startup_lock_gain(type, bandwidth_hz, demod_lpf_hz)`"),
     Row("traj.a_max", ("reference.a_max",), "m/s^2"),
     Row("pos.mass", ("controller.model.mass", "motor"), "kg"),
-    Row("pos.force_max", ("controller.i_max", "controller.model.force_constant"), "N", _force_max, scale=None,
-        doc="K_f `i_max`"),
+    Row("pos.force_max", _FORCE_KEYS, "N", _force_max, scale=None,
+        doc="K_f `i_max`, times min(1, 1 + (L_d - L_q) i_d / psi_pm) over the d-currents `i_d_inj`, "
+            "`i_d_near` (their reluctance force)"),
     Row("pos.speed.kp", ("controller.speed_kp", "controller.speed_bandwidth_hz", "controller.model.mass"),
         "N s/m", _speed_gain(0), scale=None,
         doc="`speed_kp`; not given: `speed_gains(speed_bandwidth_hz, mass)`"),
     Row("pos.speed.ki", ("controller.speed_ki", "controller.speed_bandwidth_hz", "controller.model.mass"),
         "N/m", _speed_gain(1), scale=None,
         doc="`speed_ki`; not given: `speed_gains(speed_bandwidth_hz, mass)`"),
-    Row("pos.speed.out_min", ("controller.i_max", "controller.model.force_constant"), "N",
-        lambda v: -v.field("pos.force_max"), scale=None, doc="-K_f `i_max`"),
-    Row("pos.speed.out_max", ("controller.i_max", "controller.model.force_constant"), "N",
-        lambda v: v.field("pos.force_max"), scale=None, doc="K_f `i_max`"),
+    Row("pos.speed.out_min", _FORCE_KEYS, "N",
+        lambda v: -v.field("pos.force_max"), scale=None, doc="-`pos.force_max`"),
+    Row("pos.speed.out_max", _FORCE_KEYS, "N",
+        lambda v: v.field("pos.force_max"), scale=None, doc="`pos.force_max`"),
     _fs("pos.speed.fs"),
     Row("pos.fric_c", ("controller.friction_coulomb",), "N"),
     Row("pos.fric_v", ("controller.friction_viscous",), "N s/m"),

@@ -37,6 +37,12 @@ from linsense.errors import InputError, shown
 from linsense.model.motor import Motor, as_motor
 from linsense.plausible import KINDS, slip
 from linsense.scenario.bounds import DEAD_TIME_SHARE_MAX, F_INJ_PWM_DIV, V_DC_MIN_FRACTION
+from linsense.tune.injection import (
+    INJECTION_D_FRACTION,
+    d_current_force_share,
+    deliverable_force,
+    injection_d_current,
+)
 from linsense.tune.margins import error_gain
 
 #: the stated ratios (docs/tuning.md)
@@ -727,10 +733,11 @@ class DriveInputs:
             Each need with its current.
         """
         m, d = self.motor, self.d
-        if d.load is None:  # (the rated load then is a share of K_f i_max)
-            i_force = m.mass * d.a_max / ((1.0 - RATED_LOAD_FRACTION) * m.force_constant)
+        if d.load is None:  # (the rated load then is a share of the force at i_max)
+            need = m.mass * d.a_max / (1.0 - RATED_LOAD_FRACTION)
         else:
-            i_force = (d.load + m.mass * d.a_max) / m.force_constant
+            need = d.load + m.mass * d.a_max
+        i_force = _current_for_force(need, m, d)
         why = [f"rated load and m a_max: {limit_text(i_force, True)} A"]
         i_inj = 0.0
         if d.v_inj is None and self.v_need <= self.v_bus_top:  # (beyond the bus share no i_max does)
@@ -760,7 +767,7 @@ class DriveInputs:
     def v_bus_speed(self) -> float:
         """The speed beyond which the bus cannot drive the current the application needs, m/s."""
         return fundamental_speed(self.motor, self.d.v_dc / math.sqrt(3.0),
-                                 self.force_need / self.motor.force_constant, self.dq[1])
+                                 self.force_need / drive_force_constant(self.motor, self.d), self.dq[1])
 
     @functools.cached_property
     def k_e(self) -> np.ndarray:
@@ -836,20 +843,54 @@ def _v_inj_says(x: DriveInputs, key: str) -> str:
             f"V): below {limit_text(share * v_uv / math.sqrt(3.0), False)} V")
 
 
+def _current_for_force(force: float, m: Motor, d: DriveData) -> float:
+    """The smallest ``i_max`` at which :func:`drive_force_max` reaches ``force``, A (inf where none
+    does: the d-current's share of the force constant falls with ``i_max``, so that ``K_f i (1 - c i)``
+    peaks at ``K_f / (4 c)``)."""
+    c = max(0.0, 1.0 - force_share(m, dataclasses.replace(d, i_max=1.0)))  # (the share's slope, 1/A)
+    x = force / m.force_constant
+    if c == 0.0 or not math.isfinite(x):
+        return x
+    disc = 1.0 - 4.0 * c * x
+    return (1.0 - math.sqrt(disc)) / (2.0 * c) if disc >= 0.0 else math.inf
+
+
+def _d_current_holds(x: DriveInputs) -> bool:
+    from linsense.ctrl import KF_SHARE_MIN  # (the C library's limit: ls_drive_init)
+    return force_share(x.motor, x.d) >= KF_SHARE_MIN
+
+
+def _d_current_says(x: DriveInputs, key: str) -> str:
+    from linsense.ctrl import KF_SHARE_MIN
+    m, d = x.motor, x.d
+    L_d, L_q = x.dq
+    c = 1.0 - force_share(m, dataclasses.replace(d, i_max=1.0))  # 1/A
+    what = (f"the {d.shape} injection's d-current {INJECTION_D_FRACTION:g} i_max = "
+            f"{injection_d_current(d.i_max, d.shape):.3g} A leaves {force_share(m, d):.3g} of the force "
+            f"constant (L_d {L_d * 1e3:.3g} mH, L_q {L_q * 1e3:.3g} mH, psi_pm {m.psi_pm * 1e3:.3g} mWb: the "
+            f"reluctance force), below the {KF_SHARE_MIN:g} the drive accepts")
+    if key == "shape":
+        return f"{x.show('shape')}: {what}: use the pulsating injection, or i_max at most " \
+               f"{limit_text((1.0 - KF_SHARE_MIN) / c, False)} A"
+    return f"{x.show('i_max')}: {what}: at most {limit_text((1.0 - KF_SHARE_MIN) / c, False)} A, or the " \
+           "pulsating injection"
+
+
 def _force_says(x: DriveInputs, key: str) -> str:
     m, d = x.motor, x.d
-    f_max, ma, load = m.force_constant * d.i_max, m.mass * d.a_max, rated_load(m, d)
-    share = f" = {RATED_LOAD_FRACTION:g} K_f i_max," if d.load is None else ""
+    f_max, ma, load = drive_force_max(m, d), m.mass * d.a_max, rated_load(m, d)
+    kfi = force_max_text(m, d)
+    share = f" = {RATED_LOAD_FRACTION:g} of the force at i_max," if d.load is None else ""
     need = (f"the {x.force_need:.3g} N the application needs (rated load {load:.3g} N{share} + m a_max "
             f"{ma:.3g} N)")
     if key == "i_max":
         i_min, why = x.i_max_min()
-        return (f"{x.show('i_max')}: K_f i_max = {f_max:.3g} N is below {need}: i_max must be at least "
+        return (f"{x.show('i_max')}: {kfi} = {f_max:.3g} N is below {need}: i_max must be at least "
                 f"{limit_text(i_min, True)} A ({why})")
     if key == "load":
-        return (f"{x.show('load')}: {need} is beyond K_f i_max = {f_max:.3g} N: at most "
+        return (f"{x.show('load')}: {need} is beyond {kfi} = {f_max:.3g} N: at most "
                 f"{limit_text(f_max - ma, False)} N at this a_max, or raise i_max")
-    return (f"{x.show('a_max')}: {need} is beyond K_f i_max = {f_max:.3g} N: at most "
+    return (f"{x.show('a_max')}: {need} is beyond {kfi} = {f_max:.3g} N: at most "
             f"{limit_text((f_max - load) / m.mass, False)} m/s^2 with this load and i_max")
 
 
@@ -921,7 +962,7 @@ def _injection_says(x: DriveInputs, key: str) -> str:
 
 def _speed_says(x: DriveInputs, key: str) -> str:
     m, d = x.motor, x.d
-    i_q = x.force_need / m.force_constant
+    i_q = x.force_need / drive_force_constant(m, d)
     why = (f"where the back-EMF, R_s i and omega L_q i at the current the application needs at speed "
            f"({i_q:.3g} A: the load and m a_max) take the whole linear range V_dc / sqrt(3), injection aside")
     if key == "v_dc":
@@ -1010,7 +1051,8 @@ DRIVE_RULES: tuple[Rule, ...] = (
          _f_inj_says),
     Rule(2, ("travel",), lambda x: x.d.travel is None or x.d.travel >= x.motor.pole_pitch, _travel_says),
     Rule(2, ("v_inj",), _v_inj_fits, _v_inj_says),
-    Rule(2, ("i_max", "load", "a_max"), lambda x: x.force_need <= x.motor.force_constant * x.d.i_max,
+    Rule(2, ("i_max", "shape"), _d_current_holds, _d_current_says),
+    Rule(2, ("i_max", "load", "a_max"), lambda x: x.force_need <= drive_force_max(x.motor, x.d),
          _force_says),
     Rule(2, ("i_max", "v_dc"), _bus_drives_i_max, _bus_says),
     # (3) derived quantities
@@ -1451,7 +1493,38 @@ def rated_load(motor: Motor, d: DriveData) -> float:
     float
         N.
     """
-    return d.load if d.load is not None else RATED_LOAD_FRACTION * motor.force_constant * d.i_max
+    return d.load if d.load is not None else RATED_LOAD_FRACTION * drive_force_max(motor, d)
+
+
+def force_share(motor: Motor, d: DriveData) -> float:
+    """The force constant's share with the injection's d-current (:func:`injection_d_current` of
+    ``d.shape``; :func:`~linsense.tune.injection.d_current_force_share` at the mean inductances):
+    1 with the pulsating injection, below 1 with the rotating vector and the square wave on a
+    motor whose ``L_q`` exceeds ``L_d``."""
+    L_d, L_q = mean_dq(motor)
+    return d_current_force_share(L_d, L_q, motor.psi_pm, injection_d_current(d.i_max, d.shape))
+
+
+def drive_force_max(motor: Motor, d: DriveData) -> float:
+    """The force the drive makes at ``i_max`` in every mode, N: ``K_f i_max``, times
+    :func:`force_share` where that is below 1 (the firmware's force constant while it injects)."""
+    return deliverable_force(motor.force_constant, d.i_max, force_share(motor, d))
+
+
+def drive_force_constant(motor: Motor, d: DriveData) -> float:
+    """The force per ampere of q-current in every mode, N/A: ``K_f``, times :func:`force_share` where
+    that is below 1."""
+    return deliverable_force(motor.force_constant, 1.0, force_share(motor, d))
+
+
+def force_max_text(motor: Motor, d: DriveData) -> str:
+    """How a message names :func:`drive_force_max`: ``K_f i_max``, with the d-current's share when it
+    counts."""
+    share = force_share(motor, d)
+    if share >= 1.0:
+        return "K_f i_max"
+    return (f"K_f i_max x {share:.3g} (the share of the force constant that the {d.shape} injection's "
+            f"d-current {INJECTION_D_FRACTION:g} i_max leaves with L_q > L_d)")
 
 
 def bus_speed(motor: Motor, v_dc: float, i_q: float) -> float:
@@ -1508,19 +1581,19 @@ def _limits(dz: Design, motor: Motor, d: DriveData, warnings: list) -> None:
     """The speed cap, the trips and the observer's clamp with their margins over the application
     (docs/tuning.md, "The limits"); the rated load. Fills ``dz`` in place."""
     w_per_v = 2.0 * math.pi / motor.pole_pitch  # electrical rad/s per m/s
-    f_max = motor.force_constant * d.i_max
+    f_max, kfi = drive_force_max(motor, d), force_max_text(motor, d)
     dz.load = rated_load(motor, d)
     dz.force_max = min(f_max, observer_force_max(motor, d.f_pwm))
     if dz.force_max < f_max:  # (a light mover)
         warnings.append(
-            f"the observer's load clamp is {dz.force_max:.3g} N, below K_f i_max = {f_max:.3g} N: a larger "
+            f"the observer's load clamp is {dz.force_max:.3g} N, below {kfi} = {f_max:.3g} N: a larger "
             f"load estimate would move the estimate of this {motor.mass:g} kg mover more than "
             f"{OBSERVER_FORCE_SHARE / 2:g} period per PWM period (ls_observer_init)")
-    need = dz.load + motor.mass * d.a_max  # (within K_f i_max: DRIVE_RULES)
+    need = dz.load + motor.mass * d.a_max  # (within the force at i_max: DRIVE_RULES)
     if need > FORCE_MARGIN * f_max:
         warnings.append(
             f"the application needs {need:.3g} N (load {dz.load:.3g} N + m a_max "
-            f"{motor.mass * d.a_max:.3g} N), over {FORCE_MARGIN:g} of K_f i_max = {f_max:.3g} N: "
+            f"{motor.mass * d.a_max:.3g} N), over {FORCE_MARGIN:g} of {kfi} = {f_max:.3g} N: "
             "raise i_max or lower a_max / the load")
     dz.v_cap = SPEED_CAP_MARGIN * d.v_max
     dz.a_step = min(dz.v_cap * 2.0 * math.pi * dz.speed_bw / STEP_ACCEL_DIV,
@@ -1543,7 +1616,7 @@ def _limits(dz: Design, motor: Motor, d: DriveData, warnings: list) -> None:
         "steps": (f"a move at the speed cap and {dz.a_step:.3g} m/s^2: "
                   + (f"the speed loop's w v_cap / {STEP_ACCEL_DIV:g}"
                      if dz.a_step < STEP_FORCE_SHARE * f_max / motor.mass else
-                     f"{STEP_FORCE_SHARE:g} K_f i_max / m")),
+                     f"{STEP_FORCE_SHARE:g} {kfi} / m")),
     }
 
 

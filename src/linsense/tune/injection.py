@@ -234,6 +234,35 @@ def injection_d_current(i_max: float, shape: str) -> float:
     return INJECTION_D_FRACTION * i_max if shape in ("rotating", "square") else 0.0
 
 
+def d_current_force_share(l_d: float, l_q: float, psi_pm: float, i_d: float) -> float:
+    """The force per ampere of q-current with the d-current ``i_d``, as a share of ``K_f``:
+    ``1 + (L_d - L_q) i_d / psi_pm`` (the reluctance force; the firmware's ``ls_drive_set_i_d_``,
+    ``kf_id``; docs/theory.md, "The d-current's reluctance force"), 1 without magnets' flux.
+
+    Parameters
+    ----------
+    l_d, l_q : float
+        The model's inductances, H.
+    psi_pm : float
+        The magnets' flux linkage, Wb.
+    i_d : float
+        The d-current, A.
+
+    Returns
+    -------
+    float
+        -.
+    """
+    return 1.0 + (l_d - l_q) * i_d / psi_pm if psi_pm > 0.0 else 1.0
+
+
+def deliverable_force(force_constant: float, i_max: float, share: float) -> float:
+    """The force the drive makes at ``i_max`` in every mode, N: ``K_f i_max``, less where the
+    injection's d-current takes a share of the force constant (``share`` below 1:
+    :func:`d_current_force_share`), not more where it adds one (the modes without the injection)."""
+    return force_constant * i_max * min(1.0, share)
+
+
 def square_current_schedule(l_avg: float, R_s: float, v_inj: float, f_pwm: float, i_d_far: float,
                             margin: float = SQUARE_DT_MARGIN) -> dict | None:
     """The square wave's d-current schedule against the dead time (docs/theory.md, "The dead time
