@@ -11,7 +11,8 @@ every V run has peak <= 3 deg and no fault) against the bus-limited speed, and t
 of it.
 
 The bus-limited speed is linsense.tune.design.bus_speed at the under-voltage limit
-(V_DC_MIN_FRACTION V_dc) and the current the application needs (rated load + m a_max, over K_f):
+(V_DC_MIN_FRACTION V_dc) and the current the application needs (rated load + m a_max, over the
+force constant, less the rotating or square injection's d-current's share):
 where the back-EMF, R_s i and omega L_q i take the linear range V_dc,min / sqrt(3).
 
 The targets (peak <= 3 deg, <= 1 deg at rest at 0.8 of the bus-limited speed) are printed beside
@@ -35,7 +36,7 @@ from class_table import shipped
 
 from linsense.errors import InputError
 from linsense.model.motor import load_motor
-from linsense.tune.design import V_DC_MIN_FRACTION, DriveData, DriveInputs, bus_speed
+from linsense.tune.design import V_DC_MIN_FRACTION, DriveData, DriveInputs, bus_speed, drive_force_constant
 from linsense.tune.drive_design import design_drive
 from linsense.tune.export import scenario_dict
 from linsense.verify import criteria as C
@@ -54,7 +55,7 @@ QUICK_MOTORS, QUICK_GRID = ("ecce2010", "small30"), (0.25, 0.5, 0.75, 1.0)
 def bus_limited_speed(motor, dd: DriveData) -> float:
     """The speed at which the fundamental at the application's current takes the minimum bus's
     linear range, m/s."""
-    i_need = DriveInputs(motor, dd).force_need / motor.force_constant
+    i_need = DriveInputs(motor, dd).force_need / drive_force_constant(motor, dd)
     return bus_speed(motor, V_DC_MIN_FRACTION * dd.v_dc, i_need)
 
 

@@ -24,6 +24,7 @@ from linsense.compensation.stamp import data_digest, stamp_comment, stamp_macros
 from linsense.errors import InputError
 from linsense.io import working_folder
 from linsense.model.motor import Motor, names_a_path
+from linsense.scenario.sections import InjectionSection
 from linsense.tune.cfgmap import Values, header_rows
 from linsense.tune.design import (
     DriveData,
@@ -345,6 +346,12 @@ def design_values(dd: DriveDesign) -> Values:
     keys = dd.scenario_keys(uncompensated=False)
     derived = {"model.end_anisotropy": lambda v: end_anisotropy(dd.model),
                "model.emf_pm": lambda v: emf_pm_compensation(dd.model).cfg()}
+    # (the keys the design leaves to the schema's defaults that a field reads: the force limits the
+    # injection's d-current, designed, and the square wave's measures)
+    inj = InjectionSection.model_fields
+    for key in ("d_current", "dead_time_measures"):
+        if f"injection.{key}" not in keys:
+            derived[f"injection.{key}"] = inj[key].default
     fields = {} if dd.startup is None else {"startup.err_lock": dd.startup.err_lock}  # (rad: no round trip)
     return Values(keys.__getitem__, derived, fields)
 
