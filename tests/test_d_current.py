@@ -17,9 +17,9 @@ from linsense.model.motor import load_motor
 from linsense.scenario.load import scenario_from_dict
 from linsense.sim.build import build
 from linsense.tune import DriveData, design_drive
-from linsense.tune.design import check_drive, drive_force_max, rated_load
+from linsense.tune.design import DriveInputs, check_drive, drive_force_max, rated_load
 from linsense.tune.export import scenario_dict
-from linsense.tune.injection import INJECTION_D_FRACTION, injection_d_current
+from linsense.tune.injection import INJECTION_D_FRACTION, deliverable_force, injection_d_current
 from linsense.verify.case_runs import run_cases
 from linsense.verify.cases import hold_cases
 
@@ -63,31 +63,55 @@ def test_rotating_holds_with_the_design_d_current(name):
 
 
 def test_the_force_limits_follow_the_d_current():
-    """The design's force at i_max, the position controller's clamp and the speed PI's limits are
-    the force the drive makes while it injects (m20_hv's rotating vector: 9.33 N, not K_f i_max =
-    12 N); the rated load a share of it; the pulsating drive's K_f i_max."""
+    """The design's force at i_max, the position controller's clamp, the speed PI's limits and the
+    observer's load clamp are the force the drive makes while it injects (m20_hv's rotating vector:
+    9.33 N, not K_f i_max = 12 N); the rated load a share of it; the pulsating drive's K_f i_max."""
     spec, m, made, base = _rotating("m20_hv")
     st = build(scenario_from_dict(base, source="m20_hv", base_dir="."), motor=m).drive.state
     f_max = st.kf * st.cfg.i_max  # (the drive's force at i_max while it injects)
     assert f_max < 0.8 * m.force_constant * st.cfg.i_max
-    for got in (st.cfg.pos.force_max, st.cfg.pos.speed.out_max, -st.cfg.pos.speed.out_min):
+    for got in (st.cfg.pos.force_max, st.cfg.pos.speed.out_max, -st.cfg.pos.speed.out_min,
+                made.design.force_max, st.cfg.obs.force_max):
         assert got == pytest.approx(f_max, rel=1e-5)
     dd = DriveData(**{**vars(class_drive("m20_hv")[1]), "shape": "rotating", "load": None})
     assert drive_force_max(m, dd) == pytest.approx(f_max, rel=1e-5)
     assert rated_load(m, dd) == pytest.approx(0.5 * f_max, rel=1e-5)
     pulsating = dataclasses.replace(dd, shape="pulsating")
     assert drive_force_max(m, pulsating) == m.force_constant * dd.i_max
+    # (more current at speed for the same force: the bus allows less speed)
+    assert DriveInputs(m, dd).v_bus_speed < DriveInputs(m, pulsating).v_bus_speed
+    # (a d-current that adds force does not raise the limit: the modes without the injection)
+    assert deliverable_force(6.0, 2.0, 1.2) == 12.0 and deliverable_force(6.0, 2.0, 0.75) == 9.0
+
+
+def test_a_given_d_current_is_the_one_counted():
+    """A scenario's injection.d_current is the design's and the drive's: 0.5 A at i_max 5 A leaves
+    0.86 of the force constant (the designed 0.4 i_max = 2 A would leave 0.444, refused), and one
+    that leaves too little is refused naming the key and its largest value."""
+    spec, m, made, base = _rotating("m20_hv")
+    base["controller"]["i_max"] = 5.0
+    base.setdefault("protection", {})["i_max"] = 9.0
+    base["injection"]["d_current"] = 0.5
+    st = build(scenario_from_dict(base, source="m20_hv", base_dir="."), motor=m).drive.state
+    assert st.cfg.i_d_inj == pytest.approx(0.5)
+    assert st.cfg.pos.force_max == pytest.approx(st.kf * 5.0, rel=1e-5)
+    assert st.kf == pytest.approx(0.861 * m.force_constant, rel=2e-3)
+    base["injection"]["d_current"] = 2.0
+    with pytest.raises(InputError, match=r"injection\.d_current.*2 A.* leaves 0\.444 of the force constant.*"
+                                         r"\|d_current\| at most 1\.798 A$"):
+        build(scenario_from_dict(base, source="m20_hv", base_dir="."), motor=m)
 
 
 def test_a_d_current_that_takes_half_the_force_is_refused():
     """The design refuses what ls_drive_init would (the d-current leaving less than KF_SHARE_MIN of
-    the force constant), naming the largest i_max; and the smallest i_max it asks for a force makes
-    that force with the d-current's share."""
+    the force constant), naming the largest i_max; the smallest i_max it asks for a force makes
+    that force with the d-current's share (a given load, and the default's share of the force); and
+    a force beyond the peak of K_f i (1 - c i) is said to be beyond every i_max."""
     spec, dd = class_drive("m20_hv")
     m = load_motor(spec)
     rot = dataclasses.replace(dd, shape="rotating")
     said = (r"i_max: 5 A: the rotating injection's d-current .* leaves 0\.444 of the force constant .* "
-            r"below the 0\.5 the drive accepts: at most 4\.49")
+            r"below the 0\.5 the drive accepts: at most 4\.49\d A, or the pulsating injection$")
     with pytest.raises(InputError, match=said):
         check_drive(m, dataclasses.replace(rot, i_max=5.0))
     check_drive(m, dataclasses.replace(rot, i_max=4.4))
@@ -97,5 +121,15 @@ def test_a_d_current_that_takes_half_the_force_is_refused():
     need = 11.0 + m.mass * rot.a_max
     made = drive_force_max(m, dataclasses.replace(rot, load=11.0, i_max=i_min))
     assert made == pytest.approx(need, rel=1e-3)
-    # (K_f i_max would have asked for 1.93 A, at which the drive makes 7.8 N)
+    # (K_f i_max would have asked for 1.93 A, at which the drive makes 9.11 N)
     assert need / m.force_constant < 0.7 * i_min
+    # the default load, half the force at i_max: the rest accelerates the mover
+    with pytest.raises(InputError, match=r"i_max must be at least") as e:
+        check_drive(m, dataclasses.replace(rot, load=None, a_max=30.0))
+    i_min = float(str(e.value).split("at least ")[1].split(" A")[0])
+    made = drive_force_max(m, dataclasses.replace(rot, load=None, i_max=i_min))
+    assert 0.5 * made == pytest.approx(m.mass * 30.0, rel=1e-3)
+    with pytest.raises(InputError, match=r"is below the 20\.6 N .*, and no i_max makes it; with the square "
+                                         r"injection's d-current 0\.4 i_max the force at i_max peaks at "
+                                         r"13\.49 N \(i_max 4\.497 A\): use the pulsating injection"):
+        check_drive(m, dataclasses.replace(dd, shape="square", load=20.0))

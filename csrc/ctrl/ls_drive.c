@@ -293,10 +293,13 @@ static bool derive(ls_drive *d, const ls_drive_cfg *cfg, LS_REAL enc_jump)
     d->enc_k = LS_TWO_PI / (LS_REAL)cfg->enc_counts;
     {
         /* the d-currents leave at least LS_DRIVE_KF_SHARE_MIN of the force constant, and the force
-         * at i_max is finite with either (ls_drive_set_i_d_'s product and division, the force reference's product) */
-        const LS_REAL g_inj = LS_R(1.0) + d->kf_id * cfg->i_d_inj, g_near = LS_R(1.0) + d->kf_id * cfg->i_d_near;
+         * at i_max is finite with either (ls_drive_set_i_d_'s product and division, the force
+         * reference's product) */
+        const LS_REAL g_inj = LS_R(1.0) + d->kf_id * cfg->i_d_inj;
+        const LS_REAL g_near = LS_R(1.0) + d->kf_id * cfg->i_d_near;
         return LS_ISFINITE4(d->kx, d->inv_kx, d->inv_kf, d->delay_ts) && LS_ISFINITE2(d->ff_load_k, d->kf_id) &&
-               !(g_inj < LS_DRIVE_KF_SHARE_MIN) && !(g_near < LS_DRIVE_KF_SHARE_MIN) && d->inv_kx > LS_R(0.0) && d->inv_kf > LS_R(0.0) &&
+               !(g_inj < LS_DRIVE_KF_SHARE_MIN) && !(g_near < LS_DRIVE_KF_SHARE_MIN) && d->inv_kx > LS_R(0.0) &&
+               d->inv_kf > LS_R(0.0) &&
                LS_ISFINITE(cfg->i_max * cfg->force_constant * (g_inj > g_near ? g_inj : g_near));
     }
 }

@@ -335,7 +335,8 @@ class ObserverSection(BaseModel):
                            "({ecce2010} for ecce2010 with its table)"})
     force_max: Positive = Field(
         _c(_C.obs.force_max), description="clamp of the observer's load estimate (mech)",
-        json_schema_extra={"unit": "N", "default_note": "designed: `K_f i_max` ({ecce2010} for ecce2010)"})
+        json_schema_extra={"unit": "N", "default_note": "designed: the force at `i_max`, `K_f i_max` less "
+                           "the rotating or square injection's d-current's share ({ecce2010} for ecce2010)"})
     # the EMF estimate beside the HF one, handed over on the speed (ls_drive_cfg.emf_on, emf, fuse)
     emf: bool = Field(
         bool(_C.emf_on), description="the EMF estimate beside the HF one: the observer's error moves from "
@@ -431,7 +432,7 @@ class ControllerSection(BaseModel):
         description="a step command runs as a minimum-time move at `v_max` and this acceleration "
         "(docs/tuning.md, \"Steps\"); 0: the reference jumps (the paper's step)",
         json_schema_extra={"unit": "m/s^2", "default_note": "designed "
-                           "(`min(v_cap w_v / 3, 0.5 K_f i_max / m)`: "
+                           "(`min(v_cap w_v / 3, 0.5 F_max / m)`, F_max the force at `i_max`: "
                            "{ecce2010} for ecce2010)"})
     # Hz: kp = m w, ki = m w^2 / 4 (the C default's w)
     speed_bandwidth_hz: Positive = Field(

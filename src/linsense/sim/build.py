@@ -50,7 +50,7 @@ from linsense.sim.drive_tables import Tables, drive_tables, measured_model, meas
 from linsense.sim.plant import fill_saturation, lab_fourier
 from linsense.sim.refusal import explain, given_keys
 from linsense.tune.cfgmap import Values
-from linsense.tune.design import DriveData, mean_dq
+from linsense.tune.design import DriveData, drive_force_max, force_max_text, mean_dq
 from linsense.tune.drive_design import design_drive
 from linsense.tune.handover import HANDOVER_KEYS
 
@@ -351,7 +351,8 @@ def validate(sc: Scenario, motor: Motor, known: dict, user_keys: set[str],
 def check_balanced_load(sc: Scenario, motor: Motor) -> None:
     """Refuse a start in equilibrium with a load beyond the force the drive can make.
 
-    ``initial.load_balanced`` with a load force at t = 0 beyond ``K_f controller.i_max``: the current
+    ``initial.load_balanced`` with a load force at t = 0 beyond the force at ``controller.i_max``
+    (:func:`~linsense.tune.design.drive_force_max`, the injection's d-current counted): the current
     reference is clamped at ``i_max`` and the drive cannot balance it (a calibration under such a
     ``--load`` ran and stopped on "fault encoder", blaming the encoder).
 
@@ -368,13 +369,16 @@ def check_balanced_load(sc: Scenario, motor: Motor) -> None:
         Naming the load key that sets the force at t = 0, its value and the largest force.
     """
     s = sc.spec
-    f_load, f_max = initial_load(sc, motor), motor.force_constant * s.controller.i_max
-    if not s.initial.load_balanced or abs(f_load) <= f_max:
+    if not s.initial.load_balanced:
+        return
+    f_load, dd = initial_load(sc, motor), drive_data(sc)  # (the force with the injection's d-current)
+    f_max, kfi = drive_force_max(motor, dd), force_max_text(motor, dd).replace("i_max", "controller.i_max")
+    if abs(f_load) <= f_max:
         return
     ld = s.load
     key = "load.force_after" if ld.type == "step" and ld.time <= 0.0 else "load.force"
     raise InputError(sc.source, key, f"{f_load:g} N at t = 0 (initial.load_balanced = true) is beyond the "
-                     f"force the drive can make to balance it, K_f controller.i_max = {f_max:.4g} N: at most "
+                     f"force the drive can make to balance it, {kfi} = {f_max:.4g} N: at most "
                      f"{f_max:.4g} N in magnitude, or raise controller.i_max")
 
 
@@ -725,7 +729,8 @@ def initial_load(sc: Scenario, motor: Motor) -> float:
 DESIGN_KEYS = {"v_dc": "inverter.v_dc", "f_pwm": "inverter.f_pwm", "dead_time": "inverter.dead_time",
                 "i_max": "controller.i_max", "v_max": "reference.v_max", "a_max": "reference.a_max",
                 "v_inj": "injection.amplitude", "f_inj": "injection.frequency",
-                "quad": "injection.quadrature", "shape": "injection.shape", "motor": "motor"}
+                "quad": "injection.quadrature", "shape": "injection.shape",
+                "d_current": "injection.d_current", "motor": "motor"}
 
 
 def _design_refusal(sc: Scenario, exc: InputError) -> InputError:
@@ -774,7 +779,7 @@ def drive_data(sc: Scenario) -> DriveData:
                      # (the square wave's f_pwm / 2 is not a design choice: the other gains are
                      # designed as for the default frequency)
                      f_inj=inj.frequency if "frequency" in given and inj.shape != "square" else None,
-                     quad=inj.quadrature, shape=inj.shape)
+                     quad=inj.quadrature, shape=inj.shape, d_current=inj.d_current)
 
 
 #: the calibration's own timings follow the drive (docs/simulator.md, "Calibration"): its

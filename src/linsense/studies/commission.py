@@ -45,6 +45,7 @@ from linsense.studies.calibrate import (
     measured_json,
 )
 from linsense.tune.design import mean_dq
+from linsense.tune.injection import d_current_force_share, deliverable_force
 
 __all__ = ["SALIENCY_MIN", "SPEED_OVER_V_HI", "PERIODS_AT_SPEED", "commission", "commission_to",
            "CommissionOutput", "Commissioning", "ratio_slope"]
@@ -214,7 +215,7 @@ def commission(motor: Motor | str | None = None, *, scenario: Scenario | None = 
                 "the EMF estimate alone is trusted")
     i_d = D_SHARE * float(d.controller.i_max) if d_current is None else float(d_current)
     data.setdefault("injection", {})["d_current"] = i_d
-    a = _acceleration(d, model, load, a_max, source)
+    a = _acceleration(d, model, load, a_max, i_d, source)
     stroke, x0 = _stroke(scenario, stroke_mm, v, a, model, source)
     leg = stroke / v + v / a
     legs = int((DURATION_MAX - T_START - 1e-3) / leg)
@@ -260,17 +261,21 @@ def _base_data(motor, scenario: Scenario | None, drive: dict | None, fidelity: s
     return data, source, base_dir
 
 
-def _acceleration(d, model: Motor, load: float, a_max: float | None, source: str) -> float:
-    """The commissioning's acceleration, m/s^2, refusing a load the drive cannot hold at speed."""
-    f_max = float(d.controller.i_max) * model.force_constant
+def _acceleration(d, model: Motor, load: float, a_max: float | None, i_d: float, source: str) -> float:
+    """The commissioning's acceleration, m/s^2, refusing a load the drive cannot hold at speed (its
+    force at i_max with the commissioning's d-current ``i_d``: docs/tuning.md, "The force at i_max")."""
+    L_d, L_q = mean_dq(model)
+    share = d_current_force_share(L_d, L_q, model.psi_pm, i_d)
+    f_max = deliverable_force(model.force_constant, float(d.controller.i_max), share)
+    kfi = "K_f i_max" if share >= 1.0 else f"K_f i_max x {share:.3g} (the d-current {i_d:.3g} A's share)"
     f_acc = FORCE_SHARE * f_max - abs(load)
     if f_acc <= 0.0:
-        _refuse(source, "load", f"{abs(load):g} N leaves nothing of {FORCE_SHARE:g} K_f i_max = "
+        _refuse(source, "load", f"{abs(load):g} N leaves nothing of {FORCE_SHARE:g} {kfi} = "
                 f"{FORCE_SHARE * f_max:.3g} N to accelerate with: the drive cannot hold it at speed")
     a = float(a_max) if a_max is not None else min(10.0, f_acc / model.mass)
     if model.mass * a > f_acc:
         _refuse(source, "a_max", f"{a:g} m/s^2 needs {model.mass * a:.3g} N beside the load's "
-                f"{abs(load):g} N: more than {FORCE_SHARE:g} K_f i_max = {FORCE_SHARE * f_max:.3g} N")
+                f"{abs(load):g} N: more than {FORCE_SHARE:g} {kfi} = {FORCE_SHARE * f_max:.3g} N")
     return a
 
 

@@ -306,7 +306,8 @@ def _speed_gain(i: int) -> Callable[[Values], float]:
 #: what the force at i_max reads (pos.force_max and the speed PI's limits)
 _FORCE_KEYS = ("controller.i_max", "controller.model.force_constant", "injection.shape",
                "injection.d_current", "controller.model.L_d", "controller.model.L_q",
-               "controller.model.psi_pm")
+               "controller.model.psi_pm", "injection.dead_time_measures", "injection.amplitude",
+               "inverter.f_pwm", "controller.model.R_s")  # (the last four: the square wave's i_d_near)
 
 
 def _i_d_near(v: Values) -> float:

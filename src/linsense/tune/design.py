@@ -84,7 +84,7 @@ SPEED_CAP_MARGIN = 1.25  # speed-reference cap over the application's v_max
 #: a step command runs as a minimum-time move at the speed cap and a_step = v_cap w_v / STEP_ACCEL_DIV
 #: (the cap reached in STEP_ACCEL_DIV speed-loop time constants; the PLL's speed lag under it,
 #: 2 a / w_obs, is then 2 / (STEP_ACCEL_DIV RATIO_OBS_SPEED) = 13 % of the cap), at most
-#: STEP_FORCE_SHARE of K_f i_max / m (the rest for the loops and the load); docs/tuning.md, "Steps"
+#: STEP_FORCE_SHARE of the force at i_max / m (the rest for the loops and the load); docs/tuning.md, "Steps"
 STEP_ACCEL_DIV = 3.0
 STEP_FORCE_SHARE = 0.5
 OVERSPEED_MARGIN = 1.6  # over-speed trip over the speed cap
@@ -95,8 +95,8 @@ CURRENT_TRIP_MARGIN = 1.3  # over-current trip over i_max plus the HF current's 
 #: 50 Hz (32 and 21 deg, 5.6 and 3.4 dB) hold and step; 60 Hz (9.6 deg, 1.5 dB) trips
 MARGIN_FLOORS = {"observer": (20.0, 3.0), "motion": (25.0, 6.0)}
 MOVE_TIME_MAX = 60.0  # s, the application's move over two pole pitches (v_max, a_max)
-FORCE_MARGIN = 0.8  # the application's force (load + m a_max) at most this share of K_f i_max
-RATED_LOAD_FRACTION = 0.5  # rated load, of K_f i_max, when the application does not give it
+FORCE_MARGIN = 0.8  # the application's force (load + m a_max) at most this share of the force at i_max
+RATED_LOAD_FRACTION = 0.5  # rated load, of the force at i_max, when the application does not give it
 QUAD = 0.9
 DITHER_CURRENT = 0.16  # of i_max
 # of f_inj: low against the HF band-pass (it leaks less), above the speed loop, not a submultiple
@@ -144,7 +144,7 @@ class DriveData:
     a_max : float
         The application's acceleration (force check, verification), m/s^2.
     load : float or None
-        Rated load, N (None: ``RATED_LOAD_FRACTION K_f i_max``).
+        Rated load, N (None: ``RATED_LOAD_FRACTION`` of :func:`drive_force_max`).
     travel : float or None
         The stroke, m (None: unbounded).
     v_inj : float or None
@@ -156,6 +156,9 @@ class DriveData:
     shape : str
         Injection: ``"pulsating"`` (pulsating or elliptical), ``"rotating"`` or ``"square"`` (at
         f_pwm / 2).
+    d_current : float or None
+        The d-current while injecting, A (None: designed, :func:`injection_d_current`; a scenario's
+        ``injection.d_current``).
 
     Raises
     ------
@@ -170,12 +173,13 @@ class DriveData:
     i_max: float = 2.5  # A, current-reference limit
     v_max: float = 0.2  # m/s, the fastest move the drive must make (speed cap, trips, bus headroom)
     a_max: float = 1.0  # m/s^2, the application's acceleration (force check, verification)
-    load: float | None = None  # N, rated load (None: RATED_LOAD_FRACTION K_f i_max)
+    load: float | None = None  # N, rated load (None: RATED_LOAD_FRACTION of the force at i_max)
     travel: float | None = None  # m, the stroke (None: unbounded)
     v_inj: float | None = None  # V, injection amplitude (None: designed)
     f_inj: float | None = None  # Hz, injection frequency (None: designed)
     quad: float = QUAD  # -, elliptical share on q (0: the paper's pulsating injection)
     shape: str = "pulsating"  # injection: pulsating/elliptical, rotating or square (at f_pwm / 2)
+    d_current: float | None = None  # A, the d-current while injecting (None: designed)
 
     def __post_init__(self) -> None:
         # one validated constructor: DriveData(v_dc="72") was built and design() ended in a
@@ -267,7 +271,8 @@ class Design:
     observer_bw_mech : float
         The mechanical observer's bandwidth (observer.type "mech"), Hz.
     force_max : float
-        ``K_f i_max``: the clamp of the load estimate (observer.force_max), N.
+        The force at ``i_max`` (:func:`drive_force_max`, at most :func:`observer_force_max`): the
+        clamp of the load estimate (observer.force_max), N.
     friction_coulomb : float
         The motor file's Coulomb friction, N, fed forward and in the mechanical observer's model.
     friction_viscous : float
@@ -326,7 +331,7 @@ class Design:
     load_ff: bool = False  # the mechanical observer's load estimate fed forward (observer.load_feedforward)
     observer_bw_pll: float = math.nan  # Hz, the PLL bandwidth by the rules (observer.type "pll")
     observer_bw_mech: float = math.nan  # Hz, the mechanical observer's (observer.type = "mech")
-    force_max: float = math.nan  # N, K_f i_max: the clamp of the load estimate (observer.force_max)
+    force_max: float = math.nan  # N, the force at i_max: the clamp of the load estimate (observer.force_max)
     friction_coulomb: float = 0.0  # N, the motor file's Coulomb friction (controller.friction_coulomb)
     friction_viscous: float = 0.0  # N s/m, its viscous friction (controller.friction_viscous)
     friction_band: float = 1.0e-3  # m/s, the Coulomb force's linear band (controller.friction_band)
@@ -548,7 +553,7 @@ F_PWM_MAX = 1.0e6
 _DEFAULT_DRIVE = DriveData()
 #: units of the drive data in messages
 _UNITS = {"v_dc": "V", "f_pwm": "Hz", "dead_time": "s", "i_max": "A", "v_max": "m/s", "a_max": "m/s^2",
-          "load": "N", "travel": "m", "v_inj": "V", "f_inj": "Hz", "quad": "", "shape": ""}
+          "load": "N", "travel": "m", "v_inj": "V", "f_inj": "Hz", "quad": "", "shape": "", "d_current": "A"}
 
 
 def limit_text(value: float, up: bool) -> str:
@@ -843,16 +848,25 @@ def _v_inj_says(x: DriveInputs, key: str) -> str:
             f"V): below {limit_text(share * v_uv / math.sqrt(3.0), False)} V")
 
 
+def _share_slope(m: Motor, d: DriveData) -> float:
+    """How fast the d-current's share of the force constant falls with ``i_max``, 1/A: ``c`` in
+    ``share = 1 - c i_max`` for the designed d-current (a share of ``i_max``), 0 for a given one or
+    where the share does not fall."""
+    if d.d_current is not None:
+        return 0.0
+    return max(0.0, 1.0 - force_share(m, dataclasses.replace(d, i_max=1.0)))
+
+
 def _current_for_force(force: float, m: Motor, d: DriveData) -> float:
-    """The smallest ``i_max`` at which :func:`drive_force_max` reaches ``force``, A (inf where none
-    does: the d-current's share of the force constant falls with ``i_max``, so that ``K_f i (1 - c i)``
-    peaks at ``K_f / (4 c)``)."""
-    c = max(0.0, 1.0 - force_share(m, dataclasses.replace(d, i_max=1.0)))  # (the share's slope, 1/A)
+    """The smallest ``i_max`` at which :func:`drive_force_max` reaches ``force``, A: ``F / K_f`` over
+    a given d-current's share; with the designed one the share falls with ``i_max``, so ``K_f i (1 -
+    c i)`` peaks at ``K_f / (4 c)`` (inf beyond it)."""
     x = force / m.force_constant
+    c = _share_slope(m, d)
     if c == 0.0 or not math.isfinite(x):
-        return x
+        return x / min(1.0, force_share(m, d)) if d.d_current is not None else x
     disc = 1.0 - 4.0 * c * x
-    return (1.0 - math.sqrt(disc)) / (2.0 * c) if disc >= 0.0 else math.inf
+    return 2.0 * x / (1.0 + math.sqrt(disc)) if disc >= 0.0 else math.inf
 
 
 def _d_current_holds(x: DriveInputs) -> bool:
@@ -864,16 +878,20 @@ def _d_current_says(x: DriveInputs, key: str) -> str:
     from linsense.ctrl import KF_SHARE_MIN
     m, d = x.motor, x.d
     L_d, L_q = x.dq
-    c = 1.0 - force_share(m, dataclasses.replace(d, i_max=1.0))  # 1/A
-    what = (f"the {d.shape} injection's d-current {INJECTION_D_FRACTION:g} i_max = "
-            f"{injection_d_current(d.i_max, d.shape):.3g} A leaves {force_share(m, d):.3g} of the force "
-            f"constant (L_d {L_d * 1e3:.3g} mH, L_q {L_q * 1e3:.3g} mH, psi_pm {m.psi_pm * 1e3:.3g} mWb: the "
-            f"reluctance force), below the {KF_SHARE_MIN:g} the drive accepts")
+    given = d.d_current is not None
+    i_d = injecting_d_current(d)
+    how = "" if given else f"{INJECTION_D_FRACTION:g} i_max = "
+    what = (f"the {d.shape} injection's d-current {how}{i_d:.3g} A leaves {force_share(m, d):.3g} of the "
+            f"force constant (L_d {L_d * 1e3:.3g} mH, L_q {L_q * 1e3:.3g} mH, psi_pm "
+            f"{m.psi_pm * 1e3:.3g} mWb: the reluctance force), below the {KF_SHARE_MIN:g} the drive accepts")
+    # (the share 1 + (L_d - L_q) i_d / psi_pm falls to KF_SHARE_MIN at this d-current)
+    i_d_top = (1.0 - KF_SHARE_MIN) * m.psi_pm / abs(L_q - L_d)
+    if given or key == "d_current":
+        return f"{x.show('d_current')}: {what}: |d_current| at most {limit_text(i_d_top, False)} A"
+    i_top = limit_text(i_d_top / INJECTION_D_FRACTION, False)
     if key == "shape":
-        return f"{x.show('shape')}: {what}: use the pulsating injection, or i_max at most " \
-               f"{limit_text((1.0 - KF_SHARE_MIN) / c, False)} A"
-    return f"{x.show('i_max')}: {what}: at most {limit_text((1.0 - KF_SHARE_MIN) / c, False)} A, or the " \
-           "pulsating injection"
+        return f"{x.show('shape')}: {what}: use the pulsating injection, or i_max at most {i_top} A"
+    return f"{x.show('i_max')}: {what}: at most {i_top} A, or the pulsating injection"
 
 
 def _force_says(x: DriveInputs, key: str) -> str:
@@ -883,13 +901,22 @@ def _force_says(x: DriveInputs, key: str) -> str:
     share = f" = {RATED_LOAD_FRACTION:g} of the force at i_max," if d.load is None else ""
     need = (f"the {x.force_need:.3g} N the application needs (rated load {load:.3g} N{share} + m a_max "
             f"{ma:.3g} N)")
+    c = _share_slope(m, d)
+    # (the designed d-current's share falls with i_max: the force peaks at K_f / (4 c), at 1 / (2 c))
+    peak = "" if c == 0.0 else (
+        f"; with the {d.shape} injection's d-current {INJECTION_D_FRACTION:g} i_max the force at i_max "
+        f"peaks at {m.force_constant / (4.0 * c):.4g} N (i_max {1.0 / (2.0 * c):.4g} A)")
     if key == "i_max":
         i_min, why = x.i_max_min()
+        if not math.isfinite(i_min):
+            return (f"{x.show('i_max')}: {kfi} = {f_max:.3g} N is below {need}, and no i_max makes it{peak}: "
+                    "use the pulsating injection, or lower the load or a_max")
         return (f"{x.show('i_max')}: {kfi} = {f_max:.3g} N is below {need}: i_max must be at least "
                 f"{limit_text(i_min, True)} A ({why})")
+    more = "raise i_max" if c == 0.0 or 2.0 * c * d.i_max < 1.0 else "use the pulsating injection"
     if key == "load":
         return (f"{x.show('load')}: {need} is beyond {kfi} = {f_max:.3g} N: at most "
-                f"{limit_text(f_max - ma, False)} N at this a_max, or raise i_max")
+                f"{limit_text(f_max - ma, False)} N at this a_max, or {more}")
     return (f"{x.show('a_max')}: {need} is beyond {kfi} = {f_max:.3g} N: at most "
             f"{limit_text((f_max - load) / m.mass, False)} m/s^2 with this load and i_max")
 
@@ -1051,9 +1078,9 @@ DRIVE_RULES: tuple[Rule, ...] = (
          _f_inj_says),
     Rule(2, ("travel",), lambda x: x.d.travel is None or x.d.travel >= x.motor.pole_pitch, _travel_says),
     Rule(2, ("v_inj",), _v_inj_fits, _v_inj_says),
-    Rule(2, ("i_max", "shape"), _d_current_holds, _d_current_says),
     Rule(2, ("i_max", "load", "a_max"), lambda x: x.force_need <= drive_force_max(x.motor, x.d),
          _force_says),
+    Rule(2, ("d_current", "i_max", "shape"), _d_current_holds, _d_current_says),
     Rule(2, ("i_max", "v_dc"), _bus_drives_i_max, _bus_says),
     # (3) derived quantities
     Rule(3, _injection_keys, _injection_holds, _injection_says),
@@ -1349,7 +1376,8 @@ def friction_band(motor: Motor, d: DriveData, v_inj: float, f_inj: float, quad: 
     w = 2.0 * math.pi * f_inj
     kappa = quad if d.shape == "pulsating" else 1.0
     i_q = kappa * v_inj / abs(complex(motor.R_s, w * L_q))
-    v_d = motor.force_constant * i_q / (motor.mass * w)
+    kf = motor.force_constant * force_share(motor, d)  # (the d-current's reluctance force counted)
+    v_d = kf * i_q / (motor.mass * w)
     slope = FRICTION_STEP_SHARE * motor.mass * d.f_pwm - friction_steps(motor, d.f_pwm)
     floor = motor.friction.coulomb / slope
     return max(0.5 * math.pi * v_d, floor)
@@ -1479,7 +1507,8 @@ def uncompensated_speed_factor(motor: Motor) -> float:
 
 
 def rated_load(motor: Motor, d: DriveData) -> float:
-    """The rated load: the application's, else :data:`RATED_LOAD_FRACTION` of ``K_f i_max``.
+    """The rated load: the application's, else :data:`RATED_LOAD_FRACTION` of the force at
+    ``i_max`` (:func:`drive_force_max`).
 
     Parameters
     ----------
@@ -1496,35 +1525,102 @@ def rated_load(motor: Motor, d: DriveData) -> float:
     return d.load if d.load is not None else RATED_LOAD_FRACTION * drive_force_max(motor, d)
 
 
+def injecting_d_current(d: DriveData) -> float:
+    """The d-current while the drive injects: ``d.d_current`` given, else the design's
+    (:func:`~linsense.tune.injection.injection_d_current` of ``i_max`` and the shape).
+
+    Parameters
+    ----------
+    d : DriveData
+        The drive.
+
+    Returns
+    -------
+    float
+        A.
+    """
+    return d.d_current if d.d_current is not None else injection_d_current(d.i_max, d.shape)
+
+
 def force_share(motor: Motor, d: DriveData) -> float:
-    """The force constant's share with the injection's d-current (:func:`injection_d_current` of
-    ``d.shape``; :func:`~linsense.tune.injection.d_current_force_share` at the mean inductances):
-    1 with the pulsating injection, below 1 with the rotating vector and the square wave on a
-    motor whose ``L_q`` exceeds ``L_d``."""
+    """The force constant's share with the injection's d-current (docs/tuning.md, "The force at
+    i_max"): 1 with the pulsating injection, below 1 with the rotating vector and the square wave on
+    a motor whose ``L_q`` exceeds ``L_d``.
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor (its mean inductances and magnets' flux, as the controller's model).
+    d : DriveData
+        The drive (:func:`injecting_d_current`).
+
+    Returns
+    -------
+    float
+        ``1 + (L_d - L_q) i_d / psi_pm``
+        (:func:`~linsense.tune.injection.d_current_force_share`), -.
+    """
     L_d, L_q = mean_dq(motor)
-    return d_current_force_share(L_d, L_q, motor.psi_pm, injection_d_current(d.i_max, d.shape))
-
-
-def drive_force_max(motor: Motor, d: DriveData) -> float:
-    """The force the drive makes at ``i_max`` in every mode, N: ``K_f i_max``, times
-    :func:`force_share` where that is below 1 (the firmware's force constant while it injects)."""
-    return deliverable_force(motor.force_constant, d.i_max, force_share(motor, d))
+    return d_current_force_share(L_d, L_q, motor.psi_pm, injecting_d_current(d))
 
 
 def drive_force_constant(motor: Motor, d: DriveData) -> float:
-    """The force per ampere of q-current in every mode, N/A: ``K_f``, times :func:`force_share` where
-    that is below 1."""
+    """The force per ampere of q-current in every mode: ``K_f``, times :func:`force_share` where
+    that is below 1 (the firmware's force constant while it injects; the modes without the
+    injection have ``K_f``).
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor (its ``K_f``, mean inductances and magnets' flux).
+    d : DriveData
+        The drive (its shape, ``i_max`` and d-current: :func:`injecting_d_current`).
+
+    Returns
+    -------
+    float
+        N/A.
+    """
     return deliverable_force(motor.force_constant, 1.0, force_share(motor, d))
 
 
+def drive_force_max(motor: Motor, d: DriveData) -> float:
+    """The force the drive makes at ``i_max`` in every mode, :func:`drive_force_constant` ``i_max``.
+
+    Parameters
+    ----------
+    motor, d : Motor, DriveData
+        As :func:`drive_force_constant`.
+
+    Returns
+    -------
+    float
+        N.
+    """
+    return deliverable_force(motor.force_constant, d.i_max, force_share(motor, d))
+
+
 def force_max_text(motor: Motor, d: DriveData) -> str:
-    """How a message names :func:`drive_force_max`: ``K_f i_max``, with the d-current's share when it
-    counts."""
+    """How a message names :func:`drive_force_max`: ``K_f i_max``, with the d-current's share when
+    it counts.
+
+    Parameters
+    ----------
+    motor, d : Motor, DriveData
+        The motor and the drive whose force it names.
+
+    Returns
+    -------
+    str
+        ``"K_f i_max"``, or with the share: ``"K_f i_max x 0.778 (the share ...)"``.
+    """
     share = force_share(motor, d)
     if share >= 1.0:
         return "K_f i_max"
+    what = (f"{INJECTION_D_FRACTION:g} i_max" if d.d_current is None else "d_current") + \
+        f" = {injecting_d_current(d):.3g} A"
     return (f"K_f i_max x {share:.3g} (the share of the force constant that the {d.shape} injection's "
-            f"d-current {INJECTION_D_FRACTION:g} i_max leaves with L_q > L_d)")
+            f"d-current {what} leaves with L_q > L_d)")
 
 
 def bus_speed(motor: Motor, v_dc: float, i_q: float) -> float:

@@ -257,9 +257,24 @@ def d_current_force_share(l_d: float, l_q: float, psi_pm: float, i_d: float) -> 
 
 
 def deliverable_force(force_constant: float, i_max: float, share: float) -> float:
-    """The force the drive makes at ``i_max`` in every mode, N: ``K_f i_max``, less where the
-    injection's d-current takes a share of the force constant (``share`` below 1:
-    :func:`d_current_force_share`), not more where it adds one (the modes without the injection)."""
+    """The force the drive makes at ``i_max`` in every mode: ``K_f i_max``, less where the
+    injection's d-current takes a share of the force constant (``share`` below 1), not more where
+    it adds one (the modes without the injection make ``K_f i_max``).
+
+    Parameters
+    ----------
+    force_constant : float
+        ``K_f``, N/A.
+    i_max : float
+        The current limit, A.
+    share : float
+        :func:`d_current_force_share` of the injection's d-current, -.
+
+    Returns
+    -------
+    float
+        N.
+    """
     return force_constant * i_max * min(1.0, share)
 
 
