@@ -22,6 +22,7 @@ from linsense.tune.export import scenario_dict
 from linsense.tune.injection import INJECTION_D_FRACTION, deliverable_force, injection_d_current
 from linsense.verify.case_runs import run_cases
 from linsense.verify.cases import hold_cases
+from linsense.verify.tuning import design_lines
 
 
 def _rotating(name: str):
@@ -73,6 +74,9 @@ def test_the_force_limits_follow_the_d_current():
     for got in (st.cfg.pos.force_max, st.cfg.pos.speed.out_max, -st.cfg.pos.speed.out_min,
                 made.design.force_max, st.cfg.obs.force_max):
         assert got == pytest.approx(f_max, rel=1e-5)
+    # (the design print says it, beside the rated load)
+    limits = next(ln for ln in design_lines(made.design, "m20_hv", made.drive) if "limits" in ln)
+    assert f"the force at i_max {f_max:.3g} N, K_f i_max x 0.778 (" in limits, limits
     dd = DriveData(**{**vars(class_drive("m20_hv")[1]), "shape": "rotating", "load": None})
     assert drive_force_max(m, dd) == pytest.approx(f_max, rel=1e-5)
     assert rated_load(m, dd) == pytest.approx(0.5 * f_max, rel=1e-5)

@@ -273,6 +273,10 @@ class Design:
     force_max : float
         The force at ``i_max`` (:func:`drive_force_max`, at most :func:`observer_force_max`): the
         clamp of the load estimate (observer.force_max), N.
+    force_i_max : float
+        The force the drive makes at ``i_max`` in every mode (:func:`drive_force_max`), N.
+    force_i_max_why : str
+        How it is made (:func:`force_max_text`: ``K_f i_max``, or with the d-current's share).
     friction_coulomb : float
         The motor file's Coulomb friction, N, fed forward and in the mechanical observer's model.
     friction_viscous : float
@@ -332,6 +336,8 @@ class Design:
     observer_bw_pll: float = math.nan  # Hz, the PLL bandwidth by the rules (observer.type "pll")
     observer_bw_mech: float = math.nan  # Hz, the mechanical observer's (observer.type = "mech")
     force_max: float = math.nan  # N, the force at i_max: the clamp of the load estimate (observer.force_max)
+    force_i_max: float = math.nan  # N, the force the drive makes at i_max in every mode
+    force_i_max_why: str = "K_f i_max"  # how (force_max_text)
     friction_coulomb: float = 0.0  # N, the motor file's Coulomb friction (controller.friction_coulomb)
     friction_viscous: float = 0.0  # N s/m, its viscous friction (controller.friction_viscous)
     friction_band: float = 1.0e-3  # m/s, the Coulomb force's linear band (controller.friction_band)
@@ -1678,6 +1684,7 @@ def _limits(dz: Design, motor: Motor, d: DriveData, warnings: list) -> None:
     (docs/tuning.md, "The limits"); the rated load. Fills ``dz`` in place."""
     w_per_v = 2.0 * math.pi / motor.pole_pitch  # electrical rad/s per m/s
     f_max, kfi = drive_force_max(motor, d), force_max_text(motor, d)
+    dz.force_i_max, dz.force_i_max_why = f_max, kfi
     dz.load = rated_load(motor, d)
     dz.force_max = min(f_max, observer_force_max(motor, d.f_pwm))
     if dz.force_max < f_max:  # (a light mover)

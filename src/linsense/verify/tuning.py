@@ -460,7 +460,9 @@ def design_lines(dz, motor_name: str, dd, hand=None) -> list[str]:
         f"{dz.omega_trip:.4g} rad/s ({dz.omega_trip * motor_pitch(dd, dz) :.3g} m/s), observer clamp "
         f"{dz.omega_obs:.4g} rad/s, over-current trip {dz.i_trip:.3g} A ({CURRENT_TRIP_MARGIN:g} x (i_max "
         f"+ HF "
-        f"peak)); rated load {dz.load:.3g} N",
+        f"peak)); rated load {dz.load:.3g} N"
+        + ("" if dz.force_i_max_why == "K_f i_max" else
+           f"; the force at i_max {dz.force_i_max:.3g} N, {dz.force_i_max_why}"),
         f"  injection rule {dz.limits.get('injection', '')}",
         f"  calibration    dither {dz.dither_a:.3g} A at {dz.dither_hz:.4g} Hz",
         "  margins (linearised model: phase margin, gain margin up / down, crossover):",
