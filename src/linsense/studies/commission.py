@@ -44,8 +44,7 @@ from linsense.studies.calibrate import (
     lut_csv,
     measured_json,
 )
-from linsense.tune.design import mean_dq
-from linsense.tune.injection import d_current_force_share, deliverable_force
+from linsense.tune.design import DriveData, drive_force_max, force_max_text, mean_dq
 
 __all__ = ["SALIENCY_MIN", "SPEED_OVER_V_HI", "PERIODS_AT_SPEED", "commission", "commission_to",
            "CommissionOutput", "Commissioning", "ratio_slope"]
@@ -264,10 +263,8 @@ def _base_data(motor, scenario: Scenario | None, drive: dict | None, fidelity: s
 def _acceleration(d, model: Motor, load: float, a_max: float | None, i_d: float, source: str) -> float:
     """The commissioning's acceleration, m/s^2, refusing a load the drive cannot hold at speed (its
     force at i_max with the commissioning's d-current ``i_d``: docs/tuning.md, "The force at i_max")."""
-    L_d, L_q = mean_dq(model)
-    share = d_current_force_share(L_d, L_q, model.psi_pm, i_d)
-    f_max = deliverable_force(model.force_constant, float(d.controller.i_max), share)
-    kfi = "K_f i_max" if share >= 1.0 else f"K_f i_max x {share:.3g} (the d-current {i_d:.3g} A's share)"
+    dd = DriveData(i_max=float(d.controller.i_max), shape=d.injection.shape, d_current=i_d)
+    f_max, kfi = drive_force_max(model, dd), force_max_text(model, dd)
     f_acc = FORCE_SHARE * f_max - abs(load)
     if f_acc <= 0.0:
         _refuse(source, "load", f"{abs(load):g} N leaves nothing of {FORCE_SHARE:g} {kfi} = "

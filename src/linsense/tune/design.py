@@ -869,8 +869,8 @@ def _current_for_force(force: float, m: Motor, d: DriveData) -> float:
     c i)`` peaks at ``K_f / (4 c)`` (inf beyond it)."""
     x = force / m.force_constant
     c = _share_slope(m, d)
-    if c == 0.0 or not math.isfinite(x):
-        return x / min(1.0, force_share(m, d)) if d.d_current is not None else x
+    if c == 0.0 or not math.isfinite(x):  # (a share that does not fall with i_max: 1, or a given one's)
+        return x / min(1.0, force_share(m, d))
     disc = 1.0 - 4.0 * c * x
     return 2.0 * x / (1.0 + math.sqrt(disc)) if disc >= 0.0 else math.inf
 
@@ -892,7 +892,7 @@ def _d_current_says(x: DriveInputs, key: str) -> str:
             f"{m.psi_pm * 1e3:.3g} mWb: the reluctance force), below the {KF_SHARE_MIN:g} the drive accepts")
     # (the share 1 + (L_d - L_q) i_d / psi_pm falls to KF_SHARE_MIN at this d-current)
     i_d_top = (1.0 - KF_SHARE_MIN) * m.psi_pm / abs(L_q - L_d)
-    if given or key == "d_current":
+    if given:
         return f"{x.show('d_current')}: {what}: |d_current| at most {limit_text(i_d_top, False)} A"
     i_top = limit_text(i_d_top / INJECTION_D_FRACTION, False)
     if key == "shape":
@@ -1623,8 +1623,8 @@ def force_max_text(motor: Motor, d: DriveData) -> str:
     share = force_share(motor, d)
     if share >= 1.0:
         return "K_f i_max"
-    what = (f"{INJECTION_D_FRACTION:g} i_max" if d.d_current is None else "d_current") + \
-        f" = {injecting_d_current(d):.3g} A"
+    what = ("" if d.d_current is not None else f"{INJECTION_D_FRACTION:g} i_max = ") + \
+        f"{injecting_d_current(d):.3g} A"
     return (f"K_f i_max x {share:.3g} (the share of the force constant that the {d.shape} injection's "
             f"d-current {what} leaves with L_q > L_d)")
 
