@@ -372,7 +372,7 @@ def check_balanced_load(sc: Scenario, motor: Motor) -> None:
     if not s.initial.load_balanced:
         return
     f_load, dd = initial_load(sc, motor), drive_data(sc)  # (the force with the injection's d-current)
-    f_max, kfi = drive_force_max(motor, dd), force_max_text(motor, dd).replace("i_max", "controller.i_max")
+    f_max, kfi = drive_force_max(motor, dd), force_max_text(motor, dd, "controller.i_max")
     if abs(f_load) <= f_max:
         return
     ld = s.load

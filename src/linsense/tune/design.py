@@ -277,6 +277,8 @@ class Design:
         The force the drive makes at ``i_max`` in every mode (:func:`drive_force_max`), N.
     force_i_max_why : str
         How it is made (:func:`force_max_text`: ``K_f i_max``, or with the d-current's share).
+    force_i_max_share : float
+        The share of ``K_f i_max`` it is (:func:`force_share`, at most 1), -.
     friction_coulomb : float
         The motor file's Coulomb friction, N, fed forward and in the mechanical observer's model.
     friction_viscous : float
@@ -338,6 +340,7 @@ class Design:
     force_max: float = math.nan  # N, the force at i_max: the clamp of the load estimate (observer.force_max)
     force_i_max: float = math.nan  # N, the force the drive makes at i_max in every mode
     force_i_max_why: str = "K_f i_max"  # how (force_max_text)
+    force_i_max_share: float = 1.0  # -, its share of K_f i_max (force_share, at most 1)
     friction_coulomb: float = 0.0  # N, the motor file's Coulomb friction (controller.friction_coulomb)
     friction_viscous: float = 0.0  # N s/m, its viscous friction (controller.friction_viscous)
     friction_band: float = 1.0e-3  # m/s, the Coulomb force's linear band (controller.friction_band)
@@ -1606,7 +1609,7 @@ def drive_force_max(motor: Motor, d: DriveData) -> float:
     return deliverable_force(motor.force_constant, d.i_max, force_share(motor, d))
 
 
-def force_max_text(motor: Motor, d: DriveData) -> str:
+def force_max_text(motor: Motor, d: DriveData, i_max_key: str = "i_max") -> str:
     """How a message names :func:`drive_force_max`: ``K_f i_max``, with the d-current's share when
     it counts.
 
@@ -1614,6 +1617,8 @@ def force_max_text(motor: Motor, d: DriveData) -> str:
     ----------
     motor, d : Motor, DriveData
         The motor and the drive whose force it names.
+    i_max_key : str
+        How the current limit is named (a scenario's message: ``"controller.i_max"``).
 
     Returns
     -------
@@ -1622,11 +1627,11 @@ def force_max_text(motor: Motor, d: DriveData) -> str:
     """
     share = force_share(motor, d)
     if share >= 1.0:
-        return "K_f i_max"
-    what = ("" if d.d_current is not None else f"{INJECTION_D_FRACTION:g} i_max = ") + \
+        return f"K_f {i_max_key}"
+    what = ("" if d.d_current is not None else f"{INJECTION_D_FRACTION:g} {i_max_key} = ") + \
         f"{injecting_d_current(d):.3g} A"
-    return (f"K_f i_max x {share:.3g} (the share of the force constant that the {d.shape} injection's "
-            f"d-current {what} leaves with L_q > L_d)")
+    return (f"K_f {i_max_key} x {share:.3g} (the share of the force constant that the {d.shape} "
+            f"injection's d-current {what} leaves with L_q > L_d)")
 
 
 def bus_speed(motor: Motor, v_dc: float, i_q: float) -> float:
@@ -1685,6 +1690,7 @@ def _limits(dz: Design, motor: Motor, d: DriveData, warnings: list) -> None:
     w_per_v = 2.0 * math.pi / motor.pole_pitch  # electrical rad/s per m/s
     f_max, kfi = drive_force_max(motor, d), force_max_text(motor, d)
     dz.force_i_max, dz.force_i_max_why = f_max, kfi
+    dz.force_i_max_share = min(1.0, force_share(motor, d))
     dz.load = rated_load(motor, d)
     dz.force_max = min(f_max, observer_force_max(motor, d.f_pwm))
     if dz.force_max < f_max:  # (a light mover)

@@ -461,7 +461,7 @@ def design_lines(dz, motor_name: str, dd, hand=None) -> list[str]:
         f"{dz.omega_obs:.4g} rad/s, over-current trip {dz.i_trip:.3g} A ({CURRENT_TRIP_MARGIN:g} x (i_max "
         f"+ HF "
         f"peak)); rated load {dz.load:.3g} N"
-        + ("" if dz.force_i_max_why == "K_f i_max" else
+        + ("" if dz.force_i_max_share >= 1.0 else
            f"; the force at i_max {dz.force_i_max:.3g} N, {dz.force_i_max_why}"),
         f"  injection rule {dz.limits.get('injection', '')}",
         f"  calibration    dither {dz.dither_a:.3g} A at {dz.dither_hz:.4g} Hz",
