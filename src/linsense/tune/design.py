@@ -62,6 +62,14 @@ RATIO_OBS_SPEED = 5.0
 #: the integral action; the encoder modes keep the PI)
 RATIO_LPF_MECH = 20.0
 RATIO_SPEED_POS = 2.5
+#: the mechanical observer's bandwidth at most where the q-current that the motion asks per radian of
+#: estimate at it, ``m (2 pi f_obs)^2 (tau / pi) / K_f``, is MOTION_SIGNAL_MAX times the HF error
+#: signal's q-current per radian, ``i_hf / gain`` (docs/tuning.md, "The observer", "A heavy mover on a
+#: weak signal"): beyond, the commanded current's band near the carrier leaks into the demodulated
+#: error and the observer, the speed loop and the current loop close a loop near f_inj / 2.
+#: Measured (switching inverter, holds): 110-265 on the shipped motors, all hold; 1,040 (an 80 mm,
+#: 3 kg, L_q / L_d 1.12 motor) trips within 30 ms, 580 (its observer at 14 Hz) holds
+MOTION_SIGNAL_MAX = 300.0
 SPEED_KI_DIV = 4.0  # speed PI: ki = m w^2 / SPEED_KI_DIV (a double real closed-loop pole)
 #: the HF path's delay in injection periods (docs/tuning.md, "The HF path's delay"): while the HF
 #: current passes the band-pass (group delay 2 Q / w = 0.64 periods at Q = 2) and the sampling,
@@ -279,6 +287,9 @@ class Design:
         How it is made (:func:`force_max_text`: ``K_f i_max``, or with the d-current's share).
     force_i_max_share : float
         The share of ``K_f i_max`` it is (:func:`force_share`, at most 1), -.
+    observer_slowed : float
+        The observer's and the speed loop's bandwidths over their ratio rules' (at most 1: below 1
+        where :func:`motion_signal_bandwidth` limits them), -.
     friction_coulomb : float
         The motor file's Coulomb friction, N, fed forward and in the mechanical observer's model.
     friction_viscous : float
@@ -341,6 +352,7 @@ class Design:
     force_i_max: float = math.nan  # N, the force the drive makes at i_max in every mode
     force_i_max_why: str = "K_f i_max"  # how (force_max_text)
     force_i_max_share: float = 1.0  # -, its share of K_f i_max (force_share, at most 1)
+    observer_slowed: float = 1.0  # -, the observer and speed loop's bandwidth over their rule's
     friction_coulomb: float = 0.0  # N, the motor file's Coulomb friction (controller.friction_coulomb)
     friction_viscous: float = 0.0  # N s/m, its viscous friction (controller.friction_viscous)
     friction_band: float = 1.0e-3  # m/s, the Coulomb force's linear band (controller.friction_band)
@@ -1245,12 +1257,14 @@ def _loops(
     f_lpf = RATIO_LPF * f_inj
     f_pll = f_lpf / RATIO_LPF_OBS
     f_v = f_pll / RATIO_OBS_SPEED
+    gain = L_q / (L_q - L_d)
     f_mech = f_lpf / RATIO_LPF_MECH
     mech = d.shape == "pulsating"  # (the rotating and square injections: the PLL, not yet verified)
+    slow = min(1.0, motion_signal_bandwidth(motor, i_hf, gain) / f_mech) if mech else 1.0
+    f_mech, f_v = slow * f_mech, slow * f_v  # (the speed loop keeps its ratio to the observer)
     f_obs = f_mech if mech else f_pll
     kp_v, ki_v = speed_gains(f_v, motor.mass)  # (the PI's integral: the encoder modes' with load_ff)
     kp_x = 2.0 * math.pi * f_v / RATIO_SPEED_POS
-    gain = L_q / (L_q - L_d)
     k_e = x.k_e
     dz = Design(
         f_inj=f_inj, v_inj=v_inj, quad=d.quad, i_hf=i_hf,
@@ -1272,8 +1286,34 @@ def _loops(
         dead_time_ratio=x.dead_time_ratio,
         inj_ramp_rate=v_inj / INJ_RAMP_TIME,
         s_min=s_min,
+        observer_slowed=slow,
     )
     return dz
+
+
+def motion_signal_bandwidth(motor: Motor, i_hf: float, gain: float) -> float:
+    """The largest mechanical observer's bandwidth for the motor's mover and HF error signal
+    (:data:`MOTION_SIGNAL_MAX`; docs/tuning.md, "A heavy mover on a weak signal").
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor (its mass, pole pitch and force constant).
+    i_hf : float
+        The HF current's amplitude, A.
+    gain : float
+        The demodulator's gain ``L_q / (L_q - L_d)``: the HF error signal is ``i_hf / gain`` per rad.
+
+    Returns
+    -------
+    float
+        Hz: where ``m (2 pi f)^2 (tau / pi) / K_f = MOTION_SIGNAL_MAX i_hf / gain`` (inf without a
+        signal's gain or a mass).
+    """
+    per_rad = motor.mass * motor.pole_pitch / (math.pi * motor.force_constant)  # A per rad at 1 rad/s^2
+    if not (per_rad > 0.0 and math.isfinite(gain) and gain != 0.0):
+        return math.inf
+    return math.sqrt(MOTION_SIGNAL_MAX * i_hf / (abs(gain) * per_rad)) / (2.0 * math.pi)
 
 
 def _analyse(dz: Design, motor: Motor, d: DriveData, warnings: list[str]) -> None:
@@ -1719,8 +1759,14 @@ def _limits(dz: Design, motor: Motor, d: DriveData, warnings: list) -> None:
         "injection": (f"dead-time error {dz.dead_time_ratio:.2g} x the weakest error signal "
                       f"(target {DEAD_TIME_RATIO:g}; bus share {dz.v_inj / d.v_dc:.3g} V_dc)"),
         "observer": (f"the demodulator's low-pass ({dz.demod_lpf:.4g} Hz) / "
-                     f"{RATIO_LPF_MECH if dz.observer_type == 'mech' else RATIO_LPF_OBS:g}"),
-        "speed loop": f"the low-pass / {RATIO_LPF_OBS * RATIO_OBS_SPEED:g}",
+                     f"{RATIO_LPF_MECH if dz.observer_type == 'mech' else RATIO_LPF_OBS:g}"
+                     if dz.observer_slowed >= 1.0 else
+                     f"the heavy mover on a weak HF signal: the q-current the motion asks per rad at "
+                     f"the observer's bandwidth, m w^2 (tau / pi) / K_f, at most {MOTION_SIGNAL_MAX:g} "
+                     f"times the HF error signal's i_hf / gain = {dz.i_hf / abs(dz.demod_gain):.3g} A/rad "
+                     f"(x {dz.observer_slowed:.3g} of the low-pass / {RATIO_LPF_MECH:g})"),
+        "speed loop": f"the low-pass / {RATIO_LPF_OBS * RATIO_OBS_SPEED:g}" + (
+            "" if dz.observer_slowed >= 1.0 else f", x {dz.observer_slowed:.3g} with the observer"),
         "position loop": f"the speed loop's w / {RATIO_SPEED_POS:g}",
         "steps": (f"a move at the speed cap and {dz.a_step:.3g} m/s^2: "
                   + (f"the speed loop's w v_cap / {STEP_ACCEL_DIV:g}"
