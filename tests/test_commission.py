@@ -28,6 +28,41 @@ def test_speed_below_the_band_refused():
         commission("ecce2010", speed=0.3)
 
 
+@pytest.mark.parametrize("kwargs, key, text", [
+    ({"speed": 0.8}, "speed", "its cruise (0.95 of it) is not above the hand-over band's top"),
+    ({"speed": 1000.0}, "speed", "leaves the travel [-1000, 1000] mm"),
+    ({"stroke_mm": 5000.0}, "stroke", "5000 mm of stroke from 0 mm, which leaves the travel"),
+    ({"stroke_mm": 0.3}, "stroke", "did you type m?"),
+    ({"points": 1024}, "positions", "at most"),
+    ({"load": -100.0}, "load", "-100 N leaves nothing"),
+    ({"drive": {"dead_time": 0.8}}, "inverter.dead_time", "did you type us?"),
+    ({"drive": {"i_max": 100.0}}, "controller.i_max", "at most"),
+])
+def test_a_refusal_names_what_was_given(kwargs, key, text):
+    """Refused before the run, naming the option the user gave and its limit: a speed whose cruise
+    is not above the band of the drive designed for it (ls_drive_set_mode's own test, which it
+    reported as an internal refusal), a stroke or a speed's stroke beyond the travel (the run
+    faulted), a table of more points than the motion learns (it ran 10 s and learned none), a load's
+    sign kept, and a drive's bad value named as tune names it (it said the bus allowed no speed)."""
+    with pytest.raises(InputError) as e:
+        commission("ecce2010", **kwargs)
+    assert e.value.key == key and text in str(e.value), str(e.value)
+
+
+def test_a_speed_beyond_the_scenarios_cap_is_refused(tmp_path):
+    """A scenario tuned for a lower speed caps the reference below the commissioning's speed: refused
+    (it ran 10 s, learned nothing, and reported no fault)."""
+    from linsense.scenario.load import load_scenario
+    from linsense.tune.drive_design import design_drive
+
+    dd = design_drive(load_motor("ecce2010"))
+    path = tmp_path / "s.toml"
+    path.write_text(f'motor = "ecce2010"\n[scenario]\nduration = 0.1\n[reference]\ntype = "hold"\n'
+                    f'[controller]\ni_max = {dd.drive.i_max}\nv_max = 0.9\n')
+    with pytest.raises(InputError, match=r"beyond the drive's controller.v_max \(0.9 m/s\)"):
+        commission(scenario=load_scenario(path))
+
+
 def test_motor_without_saliency_refused(monkeypatch):
     import linsense.studies.commission as com
 
@@ -140,6 +175,11 @@ def test_cli_writes_calibrate_formats_that_tune_reads(run_cli, tmp_path, monkeyp
     assert 'lut_model = "measured"' in (tmp_path / "t").read_text()
     r = run_cli("commission", "--motor", "ecce2010", "--stroke", "50", "--out", "d")
     assert r.code == 2 and "too little" in r.err and len(r.err.strip().splitlines()) == 1
+    (tmp_path / "s.toml").write_text('motor = "ecce2010"\n[scenario]\nduration = 0.1\n'
+                                     '[reference]\ntype = "hold"\n')
+    r = run_cli("commission", "--scenario", "s.toml", "--motor", "small30", "--out", "e")
+    assert r.code == 2 and "is not the motor of the scenario" in r.err, r.err
+    assert not (tmp_path / "e").exists()
 
 
 @pytest.mark.slow

@@ -160,6 +160,9 @@ typedef struct {
     uint32_t fault;              /* -, LS_SIM_FAULT_* and the drive's fault bits */
     angle_track ang;             /* rad, -: cos and sin of the mid-period angle */
     ls_sim_carry carry;          /* the inverter's carry into the next period */
+    ls_pos est_pos;              /* -, the drive's estimate for this period's sample (the last step's) */
+    LS_REAL est_v;               /* m/s, its speed */
+    int32_t est_have;            /* -, 1: est_pos holds one */
 } sim_loop;
 
 /* the recording of one call: its samples and the block statistics of the one being recorded */
@@ -225,6 +228,9 @@ LS_SIM_INLINE void loop_load(const ls_sim_state *s, sim_loop *L)
     L->ang.c = s->ang_c;
     L->ang.s = s->ang_s;
     L->ang.left = s->ang_left;
+    L->est_pos = s->est_pos;
+    L->est_v = s->est_v;
+    L->est_have = s->est_have;
 }
 
 /* the locals written back at the end of a call after step k, r samples recorded; the result */
@@ -255,6 +261,9 @@ LS_SIM_INLINE void loop_store(const sim_loop *L, int64_t k, int64_t r, ls_sim_st
     s->ang_c = L->ang.c;
     s->ang_s = L->ang.s;
     s->ang_left = L->ang.left;
+    s->est_pos = L->est_pos;
+    s->est_v = L->est_v;
+    s->est_have = L->est_have;
     res->steps_done = k;
     res->n_rec = r;
     res->fault = L->fault;
@@ -414,7 +423,7 @@ LS_SIM_INLINE ls_status continue_impl(const ls_sim_cfg *c, ls_drive *drive, cons
     const double h = 1.0 / c->f_pwm, tau = c->pole_pitch, kx = 2.0 * LS_SIM_PI / tau;
     int64_t k, k_end;
     ls_meas meas;
-    ls_cmd cmd;
+    ls_cmd cmd, rec;
     ls_sim_maps pm;
     ls_sim_coef q;
     ls_sim_frozen fz;
@@ -441,6 +450,16 @@ LS_SIM_INLINE ls_status continue_impl(const ls_sim_cfg *c, ls_drive *drive, cons
                        &meas);
         ls_drive_step(drive, &meas, &cmd);
         L.fault |= cmd.fault;
+        /* the sample's estimate: the one the drive held for it (the last step's cmd.pos_est, its
+         * estimate for the next sample; every observer steps ahead), against the position now */
+        rec = cmd;
+        if (L.est_have) {
+            rec.pos_est = L.est_pos;
+            rec.v_est = L.est_v;
+        }
+        L.est_pos = cmd.pos_est;
+        L.est_v = cmd.v_est;
+        L.est_have = 1;
         u[0] = L.duty[0]; u[1] = L.duty[1]; u[2] = L.duty[2];
         /* the plant over this period with the duties computed one period earlier, frozen at the
          * mid-period position predicted from the state one period back (exact for a constant
@@ -452,7 +471,7 @@ LS_SIM_INLINE ls_status continue_impl(const ls_sim_cfg *c, ls_drive *drive, cons
         angle_to(&L.ang, th_mid);
         om = kx * (1.5 * L.v - 0.5 * L.v_lag);
         f_start = plant_freeze(c, &q, sat, &L, th_mid, om, &pm, &fz, &sf);
-        record_period(c, out, &rc, &L, &cmd, t, x_mid, u, f_start, tau, kx);
+        record_period(c, out, &rc, &L, &rec, t, x_mid, u, f_start, tau, kx);
         if (L.fault != 0u || cmd.cal_done) { /* a calibration run ends with the calibration */
             s->ended = 1;
             break;

@@ -224,6 +224,9 @@ typedef struct {
     int32_t carry_any;      /* - */
     int32_t ang_left;       /* -, cos/sin tracker of the mid-period angle */
     double ang_th, ang_c, ang_s; /* rad, - , - */
+    ls_pos est_pos;         /* -, the drive's estimate for the next sample (the last step's cmd.pos_est) */
+    LS_REAL est_v;          /* m/s, its speed (the last step's cmd.v_est) */
+    int32_t est_have;       /* -, 1: est_pos holds a step's estimate (0 before the first step) */
 } ls_sim_state;
 
 /* Validate the configuration (LS_ERR_PARAM names nothing; linsense.sim validates first). */

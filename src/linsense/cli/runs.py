@@ -363,7 +363,16 @@ def commission(motor_spec: str | None, scenario_path: str | None, speed: float |
     if motor_spec is None and scenario_path is None:
         raise click.UsageError("give --motor or --scenario (the drive to commission)")
     sc = scenario_arg(scenario_path, "--scenario") if scenario_path is not None else None
-    motor = c.load(motor_spec) if motor_spec is not None and sc is None else None
+    motor = c.load(motor_spec) if motor_spec is not None else None
+    if sc is not None and motor is not None:  # (--motor then names the scenario's motor: checked)
+        from linsense.compensation.stamp import data_digest
+        from linsense.sim.build import resolve_motor
+
+        theirs = resolve_motor(sc)
+        if data_digest(motor=motor) != data_digest(motor=theirs):
+            raise InputError(motor_spec, "--motor", f"{motor.name!r} is not the motor of the scenario "
+                             f"{scenario_path} ({theirs.name!r}): give one of them, or the scenario's own")
+        motor = None
     out = c.default_out(out, scenario_path or motor_spec, "commission")
     done = commission_to(out, motor, scenario=sc, speed=speed, stroke_mm=stroke_mm, load=load,
                          points=positions, fidelity=fidelity, route=route, drive=drive,
@@ -372,12 +381,15 @@ def commission(motor_spec: str | None, scenario_path: str | None, speed: float |
     m = done.calibration.metrics
     c.files_report(done.files)
     show = c.show
-    c.say(f"{m['motor']}: {m['points_done']}/{m['points']} points both ways at {m['speed_m_s']:.3g} m/s "
-          f"(band top {m['v_hi_m_s']:.3g} m/s) over {m['stroke_mm']:.0f} mm, {m['fidelity']}, "
-          f"{m['dead_time_s'] * 1e6:g} us, route {m['route']}: max |table - plant's| "
-          f"{show(m['max_diff_deg'], 'deg', '.3g')} (the design's "
-          f"{show(m['start_diff_deg'], 'deg', '.3g')}), "
-          f"end-effect scale {m['end_effect_k']:.3f}; {m['sim_s']} s simulated")
+    run = (f"{m['points_done']}/{m['points']} points both ways at {m['speed_m_s']:.3g} m/s "
+           f"(band top {m['v_hi_m_s']:.3g} m/s) over {m['stroke_mm']:.0f} mm, {m['fidelity']}, "
+           f"{m['dead_time_s'] * 1e6:g} us, route {m['route']}")
+    if done.completed:
+        c.say(f"{m['motor']}: {run}: max |table - plant's| {show(m['max_diff_deg'], 'deg', '.3g')} (the "
+              f"design's {show(m['start_diff_deg'], 'deg', '.3g')}), end-effect scale "
+              f"{m['end_effect_k']:.3f}; {m['sim_s']} s simulated")
+    else:  # (the table as the run left it is not a commissioned one: no figures of it here)
+        c.say(f"{m['motor']}: NOT commissioned, {run}; fault {m['fault']} after {m['sim_s']} s simulated")
     c.elapsed()
     if as_json:
         c.emit_json("commission", done.files, done.completed, metrics=done.metrics, timing=done.timing)

@@ -289,8 +289,9 @@ def fig_commission(cal, motor) -> Figure:
     th = np.degrees(cal.theta)
     top.plot(th, np.degrees(cal.psi_model), "b-", lw=1.2,
              label=f"the plant's own (kappa {m['injection_quad']:g})")
-    top.plot(th, np.degrees(cal.psi_measured), "o", ms=4, mfc="none", color="C3",
-             label="the drive's, commissioned")
+    done = bool(m.get("completed", True))
+    what = "the drive's, commissioned" if done else "the drive's, as the run left it (NOT commissioned)"
+    top.plot(th, np.degrees(cal.psi_measured), "o", ms=4, mfc="none", color="C3", label=what)
     bot.plot(th, np.degrees(cal.psi_measured - cal.psi_model), "o-", ms=3, color="C3", lw=0.8,
              label="the drive's - the plant's")
     learned = getattr(cal, "psi_learned", None)
@@ -305,7 +306,9 @@ def fig_commission(cal, motor) -> Figure:
     bot.set_xlabel("position θ (electrical deg)")
     top.legend(fontsize=7)
     bot.legend(fontsize=7)
-    top.set_title(f"Commissioning without a sensor, {m['motor']}: {m['fidelity']} inverter, dead time "
+    top.set_title(("" if done else f"DID NOT COMPLETE ({m['points_done']} of {m['points']} points, fault "
+                   f"{m['fault']}): not a commissioned table\n") +
+                  f"Commissioning without a sensor, {m['motor']}: {m['fidelity']} inverter, dead time "
                   f"{m['dead_time_s'] * 1e6:g} µs, {m['speed_m_s']:.3g} m/s, {m['sim_s']:.3g} s\nroute "
                   f"{m['route']}, scale {m['end_effect_k']:.3f}; max |table - plant's| "
                   f"{m['max_diff_deg']:.2f} deg", fontsize=8)

@@ -18,6 +18,7 @@ accelerates.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -27,11 +28,12 @@ import numpy as np
 from linsense.analysis.hf import demod_ratio, psi_lut, psi_lut_resistive
 from linsense.compensation.lut import build_lut
 from linsense.compensation.measured import end_effect_fit, table_stamp
-from linsense.ctrl import CAL_SLOPE_MAX, ffi
+from linsense.ctrl import CAL_SLOPE_MAX, LEARN_CRUISE, ffi
 from linsense.errors import InputError
 from linsense.io import output_set, split_timing
 from linsense.model.motor import Motor
 from linsense.scenario.load import Scenario, scenario_from_dict
+from linsense.scenario.sections import TravelSection
 from linsense.sim.build import build, designed, resolve_motor
 from linsense.sim.core import run_closed_loop
 from linsense.sim.metrics import fault_reason
@@ -66,6 +68,10 @@ DURATION_MAX = 10.0
 K_INT = 500.0
 T_HOLD = 10.0 / K_INT
 T_SETTLE = 0.02
+#: the share of a leg's cruise in which a point's learning counts toward T_HOLD (measured, ecce2010 at
+#: 1 m/s over 345 mm: 56 points learned in 6.1 s, 64 in 7.0 s, 96 not within DURATION_MAX): sets how
+#: many points a commissioning is refused beyond
+LEARN_SHARE = 0.6
 #: -, the d-current while commissioning, of i_max: it keeps the phase currents off zero, where the
 #: dead time biases the HF current in a way that follows the position (ecce2010, dM0 -25 %,
 #: switching: the learned table 0.22 deg off with none, 0.16 with 0.2 i_max, 0.10 with 0.4; 0.013
@@ -215,9 +221,15 @@ def commission(motor: Motor | str | None = None, *, scenario: Scenario | None = 
     i_d = D_SHARE * float(d.controller.i_max) if d_current is None else float(d_current)
     data.setdefault("injection", {})["d_current"] = i_d
     a = _acceleration(d, model, load, a_max, i_d, source)
-    stroke, x0 = _stroke(scenario, stroke_mm, v, a, model, source)
+    stroke, x0 = _stroke(scenario, stroke_mm, v, a, model, source, points)
     leg = stroke / v + v / a
-    legs = int((DURATION_MAX - T_START - 1e-3) / leg)
+    legs = _legs(stroke, v, a)
+    if legs < 2:  # (out and back at least: each point seen both ways)
+        key = "stroke" if stroke_mm is not None else "speed"
+        _refuse(source, key, f"{stroke * 1e3:.0f} mm at {v:.3g} m/s and {a:.3g} m/s^2 takes {leg:.3g} s a "
+                f"way: out and back do not fit in the commissioning's {DURATION_MAX:g} s of motion (at most "
+                f"{1e3 * v * ((DURATION_MAX - T_START) / 2.0 - v / a):.0f} mm of stroke at this speed)")
+    _check_points(points, stroke, v, a, legs, source)
     wps = [1e3 * (x0 + (stroke if k % 2 == 0 else 0.0)) for k in range(legs)]
     data["initial"]["position_mm"] = 1e3 * x0
     data["control"] = {**data.get("control", {}), "mode": "commission"}
@@ -230,6 +242,7 @@ def commission(motor: Motor | str | None = None, *, scenario: Scenario | None = 
                            "slope": slope}
     data["record"] = {"decimate": 64}
     sc = scenario_from_dict(data, source, base_dir)
+    _check_speed(designed(sc, model).spec, v, model.pole_pitch, source)
     b = build(sc, obj) if plant is None else build(sc, plant, model=model)
     lut = b.extra["cal_table"]
     start = np.array(lut.table, dtype=float)
@@ -237,6 +250,62 @@ def commission(motor: Motor | str | None = None, *, scenario: Scenario | None = 
     cal = _result(b, raw, model, lut, start, points, v, a, stroke, load)
     cal.metrics["route"] = "pulsating" if carried else "direct"
     return _carried(cal, model, drive_inj) if carried else cal
+
+
+def _legs(stroke: float, v: float, a: float) -> int:
+    """The legs (one way each) of ``stroke`` at ``v`` and ``a`` within the commissioning's motion."""
+    return int((DURATION_MAX - T_START - 1e-3) / (stroke / v + v / a))
+
+
+def _points_needed(points: int, stroke: float, v: float, a: float) -> tuple[float, float]:
+    """The legs ``points`` need (:func:`_check_points`) and the time each point is seen a leg, s."""
+    cruise = stroke - v * v / a - v * T_SETTLE
+    per_leg = LEARN_SHARE * cruise / (points * v) if cruise > 0.0 else 0.0
+    return (2 * math.ceil(T_HOLD / per_leg) if per_leg > 0.0 else math.inf), per_leg
+
+
+def _points_stroke(points: int, v: float, a: float, base: float, top: float) -> float:
+    """The default stroke without a travel: ``base`` (what the speed needs), lengthened by tenths up
+    to ``top`` (m) until the motion learns ``points`` (else ``base``: :func:`_check_points` says)."""
+    stroke = base
+    while stroke <= top:
+        if _points_needed(points, stroke, v, a)[0] <= _legs(stroke, v, a):
+            return stroke
+        stroke *= 1.1
+    return base
+
+
+def _check_points(points: int, stroke: float, v: float, a: float, legs: int, source: str) -> None:
+    """Refuse a table of more points than the commissioning's motion can learn: each point is seen
+    for ``LEARN_SHARE cruise / (points v)`` a way per leg (the cruise: the stroke less the
+    acceleration, the deceleration and the settling) and needs :data:`T_HOLD` each way."""
+    cruise = stroke - v * v / a - v * T_SETTLE
+    need, per_leg = _points_needed(points, stroke, v, a)
+    if need > legs:
+        most = int(legs // 2 * LEARN_SHARE * cruise / (v * T_HOLD)) if cruise > 0.0 else 0
+        _refuse(source, "positions", f"{points} points need {need} legs of {stroke * 1e3:.0f} mm at "
+                f"{v:.3g} m/s ({T_HOLD:g} s each way at each point, {per_leg * 1e3:.2g} ms a leg); {legs} "
+                f"fit in the commissioning's {DURATION_MAX:g} s of motion: at most {most} points, or a "
+                f"longer stroke")
+
+
+def _check_speed(spec, v: float, pitch: float, source: str) -> None:
+    """Refuse a commissioning speed the drive designed for it cannot cruise at: its cruise not above
+    the hand-over band (``LS_DRIVE_LEARN_CRUISE v``, as ``ls_drive_set_mode`` requires), or beyond
+    the speed cap, the observer's clamp or the over-speed trip a scenario gives."""
+    kx = 2.0 * np.pi / pitch
+    v_hi = float(spec.observer.handover_v_hi)
+    if not LEARN_CRUISE * v > v_hi:
+        _refuse(source, "speed", f"{v:.3g} m/s: its cruise ({LEARN_CRUISE:g} of it) is not above the "
+                f"hand-over band's top {v_hi:.3g} m/s of the drive designed for it, where the EMF estimate "
+                f"alone is trusted: at least {v_hi / LEARN_CRUISE:.3g} m/s")
+    for key, top in (("controller.v_max", float(spec.controller.v_max)),
+                     ("observer.omega_max", float(spec.observer.omega_max) / kx),
+                     ("protection.omega_max", float(spec.protection.omega_max) / kx)):
+        if v > top:
+            _refuse(source, "speed", f"{v:.3g} m/s is beyond the drive's {key} ({top:.3g} m/s): it would "
+                    f"never cruise there; a slower --speed, or a scenario designed for it "
+                    f"(linsense tune --v-max)")
 
 
 def _base_data(motor, scenario: Scenario | None, drive: dict | None, fidelity: str, quad: float | None,
@@ -267,7 +336,7 @@ def _acceleration(d, model: Motor, load: float, a_max: float | None, i_d: float,
     f_max, kfi = drive_force_max(model, dd), force_max_text(model, dd)
     f_acc = FORCE_SHARE * f_max - abs(load)
     if f_acc <= 0.0:
-        _refuse(source, "load", f"{abs(load):g} N leaves nothing of {FORCE_SHARE:g} {kfi} = "
+        _refuse(source, "load", f"{load:g} N leaves nothing of {FORCE_SHARE:g} {kfi} = "
                 f"{FORCE_SHARE * f_max:.3g} N to accelerate with: the drive cannot hold it at speed")
     a = float(a_max) if a_max is not None else min(10.0, f_acc / model.mass)
     if model.mass * a > f_acc:
@@ -277,7 +346,7 @@ def _acceleration(d, model: Motor, load: float, a_max: float | None, i_d: float,
 
 
 def _stroke(scenario: Scenario | None, stroke_mm: float | None, v: float, a: float, model: Motor,
-            source: str) -> tuple[float, float]:
+            source: str, points: int = 56) -> tuple[float, float]:
     """The stroke and its start, m (the scenario's travel less 10 % at each end where it gives one),
     refusing too little travel."""
     # m: to the speed and back, the settling at speed, and the periods learned at speed
@@ -285,15 +354,25 @@ def _stroke(scenario: Scenario | None, stroke_mm: float | None, v: float, a: flo
     tr = scenario.spec.travel if scenario is not None else None
     bounded = tr is not None and bool({"min_mm", "max_mm"} & tr.model_fields_set)
     if stroke_mm is None:
-        stroke = 0.8 * (tr.max_mm - tr.min_mm) / 1e3 if bounded else need + 3.0 * model.pole_pitch
+        stroke = 0.8 * (tr.max_mm - tr.min_mm) / 1e3 if bounded else _points_stroke(
+            points, v, a, need + 3.0 * model.pole_pitch, TravelSection().max_mm / 1e3)
     else:
         stroke = float(stroke_mm) / 1e3
+    key = "stroke" if stroke_mm is not None else "travel"
     if stroke < need:
-        _refuse(source, "travel", f"{stroke * 1e3:.1f} mm of stroke is too little: {need * 1e3:.1f} mm "
+        _refuse(source, key, f"{stroke * 1e3:.1f} mm of stroke is too little: {need * 1e3:.1f} mm "
                 f"needed at {v:.3g} m/s and {a:.3g} m/s^2 (v^2/a to the speed and back, {T_SETTLE:g} s "
                 f"settling and {PERIODS_AT_SPEED:g} electrical period of {model.pole_pitch * 1e3:g} mm "
-                f"at speed)")
+                f"at speed)" + (" (did you type m? the stroke is in mm)" if stroke_mm is not None and
+                                stroke_mm < 10.0 else ""))
     x0 = tr.min_mm / 1e3 + 0.1 * (tr.max_mm - tr.min_mm) / 1e3 if bounded else 0.0
+    lo, hi = (tr.min_mm, tr.max_mm) if tr is not None else (TravelSection().min_mm, TravelSection().max_mm)
+    if 1e3 * (x0 + stroke) > hi or 1e3 * x0 < lo:
+        key = key if stroke_mm is not None or bounded else "speed"  # (the default stroke follows it)
+        lead = f"{v:g} m/s needs {stroke * 1e3:.0f} mm" if key == "speed" else f"{stroke * 1e3:.0f} mm"
+        _refuse(source, key, f"{lead} of stroke from {x0 * 1e3:.0f} mm, which leaves the travel "
+                f"[{lo:g}, {hi:g}] mm (the scenario's [travel], else the simulator's default): at most "
+                f"{hi - 1e3 * x0:.0f} mm")
     return stroke, x0
 
 
@@ -313,13 +392,16 @@ def _cruise_error(raw, v: float) -> dict:
 
 def _design(probe, model: Motor, source: str):
     """The design for the first cap of :data:`CAPS` the bus allows (its hand-over band)."""
+    last = None
     for cap in CAPS:
         try:
             return designed(probe(cap), model).spec
-        except InputError:
-            continue
+        except InputError as exc:
+            last = exc
+    if last is not None and last.key.split(" ")[0] not in ("reference.v_max", "controller.v_max"):
+        raise last  # (not the speed: what the slowest cap's design refused, as tune says it)
     return _refuse(source, "inverter.v_dc", f"the bus allows none of {', '.join(map(str, CAPS))} m/s: no "
-                   "speed to commission at")
+                   f"speed to commission at ({last})")
 
 
 def _carried(cal: Calibration, model: Motor, inj) -> Calibration:

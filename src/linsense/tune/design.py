@@ -70,6 +70,9 @@ RATIO_SPEED_POS = 2.5
 #: Measured (switching inverter, holds): 110-265 on the shipped motors, all hold; 1,040 (an 80 mm,
 #: 3 kg, L_q / L_d 1.12 motor) trips within 30 ms, 580 (its observer at 14 Hz) holds
 MOTION_SIGNAL_MAX = 300.0
+#: the rule slows the observer at most this far (a signal weaker still warns: the start-up's lock gain
+#: and every loop's time scale would follow it)
+MOTION_SLOW_MIN = 0.1
 SPEED_KI_DIV = 4.0  # speed PI: ki = m w^2 / SPEED_KI_DIV (a double real closed-loop pole)
 #: the HF path's delay in injection periods (docs/tuning.md, "The HF path's delay"): while the HF
 #: current passes the band-pass (group delay 2 Q / w = 0.64 periods at Q = 2) and the sampling,
@@ -1261,6 +1264,13 @@ def _loops(
     f_mech = f_lpf / RATIO_LPF_MECH
     mech = d.shape == "pulsating"  # (the rotating and square injections: the PLL, not yet verified)
     slow = min(1.0, motion_signal_bandwidth(motor, i_hf, gain) / f_mech) if mech else 1.0
+    if slow < MOTION_SLOW_MIN:
+        warnings.append(f"the HF error signal i_hf / gain = {i_hf / abs(gain):.3g} A/rad is too weak for "
+                        f"this mover: the observer would be slowed to {slow:.2g} of f_lpf / "
+                        f"{RATIO_LPF_MECH:g} (design rule: {MOTION_SIGNAL_MAX:g} x the signal; "
+                        f"docs/tuning.md, \"The observer\"), "
+                        f"kept at {MOTION_SLOW_MIN:g}: more injection voltage (--v-inj) or saliency")
+        slow = MOTION_SLOW_MIN
     f_mech, f_v = slow * f_mech, slow * f_v  # (the speed loop keeps its ratio to the observer)
     f_obs = f_mech if mech else f_pll
     kp_v, ki_v = speed_gains(f_v, motor.mass)  # (the PI's integral: the encoder modes' with load_ff)
