@@ -67,6 +67,10 @@ def _run(spec: str, base: dict, case, observer: dict | None = None, inverter: di
     sc = case_scenario(case, base, spec)
     sc["record"]["decimate"] = 1
     sc["observer"].update(observer or {})
+    if sc["observer"].get("emf") is False:  # (its band's keys would have no effect: refused)
+        for key in ("emf_lpf_hz", "handover_v_lo", "handover_v_hi", "inject_v_on", "inject_v_off",
+                    "handover_settle_s"):
+            sc["observer"].pop(key, None)
     sc["inverter"].update(inverter or {})
     b = build(scenario_from_dict(sc, source=f"<test_handover: {case.name}>", base_dir="."))
     d, n = b.drive.state, int(b.n_steps)

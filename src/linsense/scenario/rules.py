@@ -273,6 +273,9 @@ def _check_overrides(f: ScenarioSchema) -> None:
     The message names both keys."""
     inj, obs, con, ref, ld, sens = f.injection, f.observer, f.controller, f.reference, f.load, f.sensors
     mode, shape = f.control.mode, inj.shape
+    # (the EMF estimate runs with the pulsating shape, where the file or the design turns it on)
+    emf_off = shape != "pulsating" or (_given(obs, "emf") and not obs.emf)
+    emf_by = "observer.emf = false" if shape == "pulsating" else f"injection.shape = {shape!r}"
     # (the observer's type where the file does not give it: the design's, linsense.tune.design)
     obs_type = obs.type if _given(obs, "type") else ("mech" if shape == "pulsating" else "pll")
     pairs = [  # (key given, the key/setting that overrides it, why)
@@ -314,6 +317,15 @@ def _check_overrides(f: ScenarioSchema) -> None:
          "it is the sensored mode's setting"),
         (f.inverter, "dtc_current_band", not f.inverter.dead_time_compensation,
          "inverter.dead_time_compensation = false", "it is the compensation's band"),
+        (obs, "dead_time_adapt", obs.dead_time_model == "interpolated",
+         "observer.dead_time_model = 'interpolated'", "only the forward model adapts"),
+        (obs, "resistance_adapt", obs.dead_time_model == "interpolated",
+         "observer.dead_time_model = 'interpolated'", "only the forward model adapts"),
+        (f.calibration, "slope", mode != "commission", f"control.mode = {mode!r}",
+         "it is the commissioning's learning slope"),
+        *((obs, key, emf_off, emf_by, "the EMF estimate and its hand-over are off")
+          for key in ("emf_lpf_hz", "handover_v_lo", "handover_v_hi", "inject_v_on", "inject_v_off",
+                      "handover_settle_s")),
     ]
     sections = {id(getattr(f, name)): name for name in type(f).model_fields}
     sections[id(con.model)] = "controller.model"

@@ -351,19 +351,19 @@ class ObserverSection(BaseModel):
                            "{linsense.ctrl.EMF_FLPF_FS_MAX} `f_pwm`"})
     handover_v_lo: Positive = Field(
         _c(_C.fuse.v_lo), description="the speed up to which the HF error alone drives the observer",
-        json_schema_extra={"unit": "m/s", "default_note": "designed: `handover_v_hi` / "
+        json_schema_extra={"kind": "speed", "unit": "m/s", "default_note": "designed: `handover_v_hi` / "
                            "{linsense.tune.handover.BAND_RATIO}"})
     handover_v_hi: Positive = Field(
         _c(_C.fuse.v_hi), description="the speed from which the EMF error alone does (> `handover_v_lo`)",
-        json_schema_extra={"unit": "m/s", "default_note": "designed: where the EMF's error bound is within "
-                           "{linsense.tune.handover.EPS_HAND_DEG} deg"})
+        json_schema_extra={"kind": "speed", "unit": "m/s", "default_note": "designed: where the EMF's error "
+                           "bound is within {linsense.tune.handover.EPS_HAND_DEG} deg"})
     inject_v_on: Positive = Field(
         _c(_C.fuse.v_on), description="the injection fades back in below this speed (>= `handover_v_hi`)",
-        json_schema_extra={"unit": "m/s", "default_note": "designed: `handover_v_hi` + `a_max` (ramp + "
-                           "settling)"})
+        json_schema_extra={"kind": "speed", "unit": "m/s", "default_note": "designed: `handover_v_hi` + "
+                           "`a_max` (ramp + settling)"})
     inject_v_off: Positive = Field(
         _c(_C.fuse.v_off), description="the injection fades out above this speed (> `inject_v_on`)",
-        json_schema_extra={"unit": "m/s", "default_note": "designed: "
+        json_schema_extra={"kind": "speed", "unit": "m/s", "default_note": "designed: "
                            "{linsense.tune.handover.HYSTERESIS} `inject_v_on`"})
     handover_settle_s: float = Field(
         _c(_C.fuse.t_settle), ge=0.0, lt=1.0, description="after a fade, the time at full injection "
