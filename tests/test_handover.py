@@ -300,3 +300,27 @@ def test_the_shapes_without_an_emf_step_say_so(run_cli, tmp_path, shape):
         assert r.code == 0, r.err
         line = next(ln for ln in (r.out + r.err).splitlines() if "hand-over" in ln)
         assert f"off: the {shape} injection has no EMF step" in line and "stays below" not in line, v_max
+
+
+@pytest.mark.parametrize("section, keys, text", [
+    ("observer", {"emf": False, "handover_v_lo": 0.4},
+     "observer.handover_v_lo: 0.4 has no effect with observer.emf"),
+    ("observer", {"emf": False, "emf_lpf_hz": 200.0}, "observer.emf_lpf_hz: 200.0 has no effect"),
+    ("observer", {"dead_time_model": "interpolated", "dead_time_adapt": True},
+     "observer.dead_time_adapt: True has no effect with observer.dead_time_model = 'interpolated'"),
+    ("calibration", {"slope": 0.5},
+     "calibration.slope: 0.5 has no effect with control.mode = 'sensorless_lut'"),
+    ("observer", {"emf": True, "handover_v_lo": 385.0, "handover_v_hi": 771.0, "inject_v_on": 784.0,
+                  "inject_v_off": 901.0}, "did you type mm/s? (385 mm/s is 0.385 m/s)"),
+])
+def test_a_key_of_the_speed_range_that_does_nothing_is_refused(section, keys, text):
+    """No key silently ignored: the EMF's band keys with the EMF estimate off, the adaptation with the
+    interpolated dead-time model, the commissioning's slope in another mode (each ran bit for bit as
+    without it), and a band typed in mm/s (it ran with a band the speed never reached)."""
+    from linsense.errors import InputError
+
+    data = {"motor": "ecce2010", "scenario": {"duration": 0.05}, "reference": {"type": "hold"},
+            section: dict(keys)}
+    with pytest.raises(InputError) as e:
+        build(scenario_from_dict(data, source="s.toml"))
+    assert text in str(e.value), str(e.value)
