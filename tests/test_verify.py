@@ -585,3 +585,17 @@ def test_the_rotating_injection_follows_a_hot_winding(adapt):
         assert err_deg < 1.0, err_deg
     else:
         assert err_deg > C.OFF_ERR_DEG, err_deg
+
+
+def test_a_figure_of_many_faulted_runs_stays_readable():
+    """A drive whose every run trips (a hold of an 80 mm motor on a weak signal before the observer
+    rule: 336 of them) names a few faulted runs in each empty panel and counts the rest: the panels
+    were covered by hundreds of overlapping lines."""
+    from linsense.report.verify_figures import FAULTS_SHOWN, certificate_figure
+
+    rows = [{"case": f"hold {k:.1f} deg, +0 N", "why": "fault: overspeed at 0.03 s", "fault": "overspeed",
+             "kind": "hold", "plant": "nominal", "load_n": 0.0, "passed": False} for k in range(150)]
+    fig = certificate_figure(rows, "faulted", calibrations=None)
+    texts = [t.get_text() for a in fig.axes for t in a.texts]
+    assert texts and all(t.count("\n") <= FAULTS_SHOWN + 1 for t in texts), texts
+    assert all("and 146 more faulted runs" in t for t in texts)
