@@ -599,3 +599,13 @@ def test_a_figure_of_many_faulted_runs_stays_readable():
     texts = [t.get_text() for a in fig.axes for t in a.texts]
     assert texts and all(t.count("\n") <= FAULTS_SHOWN + 1 for t in texts), texts
     assert all("and 146 more faulted runs" in t for t in texts)
+
+
+def test_a_move_failing_below_the_hand_over_band_says_so():
+    """A 40 mm, 150 V motor at 6.4 m/s: its HF estimate crosses 3 deg at 1.04 m/s, its band starts at
+    1.82 m/s; the advice was only 'a --v-max below 1.04', as if the EMF estimate were not there."""
+    from linsense.verify.certificate import _crossing_cause
+
+    text = _crossing_cause(1.04, (1.82, 3.64))
+    assert "below the hand-over band 1.82 - 3.64 m/s" in text and "a --v-max below 1.04 m/s" in text
+    assert "hand-over" not in _crossing_cause(1.04, None) and "hand-over" not in _crossing_cause(2.0, (1.0, 2.0))

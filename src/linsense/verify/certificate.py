@@ -236,8 +236,9 @@ def _single(r: dict, name: str, value: str, bound: str, remedy: str) -> Check:
     return Check(name, r["passed"], value, bound + pp, cause, 1, int(not r["passed"]))
 
 
-def _moves_check(rows: list[dict]) -> Check:
-    """The out-and-back moves over the loads: the worst estimation error moving and at rest."""
+def _moves_check(rows: list[dict], band: tuple[float, float] | None = None) -> Check:
+    """The out-and-back moves over the loads: the worst estimation error moving and at rest (``band``:
+    the hand-over's ``(v_lo, v_hi)``, m/s, where the drive runs the EMF estimate)."""
     ok = [r for r in rows if "peak_err_deg" in r]
     failed = [r for r in rows if not r["passed"]]
     worst = max(ok, key=lambda r: r["peak_err_deg"], default=None)
@@ -255,8 +256,7 @@ def _moves_check(rows: list[dict]) -> Check:
         crossed = [r["err_crosses_at_speed"] for r in failed if r.get("err_crosses_at_speed") is not None]
         cause = (REMEDY["fault"] if "fault" in whys or "did not finish" in whys else
                  REMEDY["limit cycle"] if "limit cycle" in whys else
-                 f"the HF estimate's error grows with the speed and crosses {C.TRAJ_PEAK_ERR_DEG:g} deg at "
-                 f"{min(crossed):.3g} m/s on this drive: a --v-max below it" if crossed else
+                 _crossing_cause(min(crossed), band) if crossed else
                  REMEDY["trajectory"])
     loads = sorted({r["load_n"] for r in rows})
     span = f"{loads[0]:+.3g}..{loads[-1]:+.3g} N" if len(loads) > 1 else f"{loads[0]:+.3g} N" if loads else ""
@@ -278,7 +278,22 @@ def _calibration_check(plant: str, cal: dict | None) -> Check:
                  "" if ok else REMEDY["calibration"], 1, int(not ok))
 
 
-def checks(rows: list[dict], calibrations: dict | None = None) -> list[Check]:
+def _crossing_cause(v_cross: float, band: tuple[float, float] | None) -> str:
+    """What a move whose error crossed the bound at ``v_cross`` (m/s) says: below the hand-over band
+    the HF estimate gives out before the EMF estimate is trusted."""
+    bound = f"{C.TRAJ_PEAK_ERR_DEG:g} deg"
+    if band is not None and v_cross < band[0]:
+        return (f"the HF estimate's error crosses {bound} at {v_cross:.3g} m/s, below the hand-over band "
+                f"{band[0]:.3g} - {band[1]:.3g} m/s (the EMF estimate's bound is within {bound} only from "
+                f"{band[1]:.3g} m/s): between them neither holds {bound} on this drive: a --v-max below "
+                f"{v_cross:.3g} m/s, or less dead time or current noise (docs/tuning.md, "
+                f"\"The speed range\")")
+    return (f"the HF estimate's error grows with the speed and crosses {bound} at {v_cross:.3g} m/s on this "
+            f"drive: a --v-max below it")
+
+
+def checks(rows: list[dict], calibrations: dict | None = None,
+           band: tuple[float, float] | None = None) -> list[Check]:
     """The certificate's checks from the judged runs.
 
     Parameters
@@ -288,6 +303,9 @@ def checks(rows: list[dict], calibrations: dict | None = None) -> list[Check]:
     calibrations : dict or None, optional
         Plant name -> its calibration's summary (:func:`calibration_summary`), for the plants of
         :data:`~linsense.verify.criteria.CALIBRATED`.
+    band : tuple of float or None, optional
+        The hand-over band ``(v_lo, v_hi)``, m/s, where the drive runs the EMF estimate (the moves'
+        advice where the error crosses the bound below it).
 
     Returns
     -------
@@ -315,7 +333,7 @@ def checks(rows: list[dict], calibrations: dict | None = None) -> list[Check]:
                 )
             )
         elif r is (trajectories[0] if trajectories else None):
-            out.append(_moves_check(trajectories))
+            out.append(_moves_check(trajectories, band))
         elif r["kind"] in ("reversal", "move_hold"):
             out.append(_move_check(r, "reversal through zero speed" if r["kind"] == "reversal" else
                                    "hold after the fastest move"))
@@ -579,7 +597,9 @@ def prepare(motor: Motor, motor_spec: str, base: dict, base_dir: str, *, v_max: 
         summaries = {p: calibration_summary(cal, motor) for p, cal in cals.items()}
         with tempfile.TemporaryDirectory(prefix="linsense-cert-") as tmp:
             rows = run_cases(_with_tables(cases, cals, tmp), base, motor_spec, motor, base_dir, workers)
-        cks = checks(rows, summaries)
+        obs = base.get("observer", {})
+        band = (float(obs["handover_v_lo"]), float(obs["handover_v_hi"])) if obs.get("emf") else None
+        cks = checks(rows, summaries, band)
         if saturated and not quick:
             cks.append(Check("holds, off-nominal plants", False, "not run: the tolerances scale the linear "
                              "inductance model, not the saturation data", "run", "verify the linear plant "
