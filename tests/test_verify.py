@@ -610,3 +610,13 @@ def test_a_move_failing_below_the_hand_over_band_says_so():
     assert "below the hand-over band 1.82 - 3.64 m/s" in text and "a --v-max below 1.04 m/s" in text
     assert "hand-over" not in _crossing_cause(1.04, None)
     assert "hand-over" not in _crossing_cause(2.0, (1.0, 2.0))
+
+
+def test_holds_that_all_faulted_say_so_without_nan():
+    """A plant whose every hold tripped: the check said '|x - target| <= nan deg ... cost +nan deg'."""
+    from linsense.verify.certificate import _hold_check
+
+    rows = [{"case": "hold 8.3 deg, +0 N", "why": "fault: overspeed at 0.03 s", "passed": False,
+             "fault": "overspeed"} for _ in range(3)]
+    c = _hold_check("holds, nominal plant", rows, 1.0)
+    assert "nan" not in c.value and "no hold finished (3 of 3 faulted)" in c.value, c.value

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -31,8 +32,10 @@ REMEDY = {
     "settle": "a faster position loop or a higher speed cap (--v-max), within the observer's bandwidth",
     "trajectory": "a smaller speed or acceleration (--v-max, --a-max) or a faster observer",
     "load": "a stiffer position/speed loop, or a smaller load step",
-    "fault": ("see the fault: overspeed -> raise --v-max; overcurrent -> raise --i-max or lower --a-max; "
-              "travel -> the mover reached an end stop: a longer --travel"),
+    "fault": ("see the fault: overspeed in a move -> raise --v-max, in a hold (or at its start) the "
+              "estimate ran away -> the design's margins and its warnings (docs/tuning.md, \"The "
+              "observer\"); overcurrent -> raise --i-max or lower --a-max; travel -> the mover reached an "
+              "end stop: a longer --travel"),
     "calibration": (
         "the firmware's calibration (encoder control, the dither, the table integrated point by point) "
         "stopped on this plant: 'observer' is a point not accepted within calibration.t_max or the HF "
@@ -200,7 +203,8 @@ def _hold_check(name: str, rows: list[dict], lim_err: float, extra_cause: str = 
     failed = [r for r in rows if not r["passed"]]
     e = max((r["err_deg"] for r in ok), default=float("nan"))
     pp = max((r["pp_deg"] for r in ok), default=float("nan"))
-    value = f"|x - target| <= {e:.3g} deg, p-p <= {pp:.3g} deg"
+    value = (f"|x - target| <= {e:.3g} deg, p-p <= {pp:.3g} deg" if ok else
+             f"no hold finished ({len(failed)} of {len(rows)} faulted)")
     if failed:
         worst = failed[0]
         value += f"; e.g. {worst['case']}: {worst['why']}"
@@ -367,7 +371,8 @@ def checks(rows: list[dict], calibrations: dict | None = None,
             else "",
         )
         e = max((r.get("err_deg", float("nan")) for r in rs), default=float("nan"))
-        c.value += f"; cost {e - e_nom:+.3g} deg over nominal"
+        if math.isfinite(e - e_nom):  # (no cost where a hold of either plant did not finish)
+            c.value += f"; cost {e - e_nom:+.3g} deg over nominal"
         if not c.passed and not c.cause:
             c.cause = _cause(rs)
         out.append(c)
