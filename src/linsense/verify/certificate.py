@@ -602,9 +602,7 @@ def prepare(motor: Motor, motor_spec: str, base: dict, base_dir: str, *, v_max: 
         summaries = {p: calibration_summary(cal, motor) for p, cal in cals.items()}
         with tempfile.TemporaryDirectory(prefix="linsense-cert-") as tmp:
             rows = run_cases(_with_tables(cases, cals, tmp), base, motor_spec, motor, base_dir, workers)
-        obs = base.get("observer", {})
-        band = (float(obs["handover_v_lo"]), float(obs["handover_v_hi"])) if obs.get("emf") else None
-        cks = checks(rows, summaries, band)
+        cks = checks(rows, summaries, _band(base))
         if saturated and not quick:
             cks.append(Check("holds, off-nominal plants", False, "not run: the tolerances scale the linear "
                              "inductance model, not the saturation data", "run", "verify the linear plant "
@@ -614,6 +612,13 @@ def prepare(motor: Motor, motor_spec: str, base: dict, base_dir: str, *, v_max: 
                            notes=_file_table_notes(rows, summaries, table_route))
 
     return run
+
+
+def _band(base: dict) -> tuple[float, float] | None:
+    """The hand-over band ``(v_lo, v_hi)`` (m/s) of a designed scenario's keys, or None without the
+    EMF estimate."""
+    obs = base.get("observer", {})
+    return (float(obs["handover_v_lo"]), float(obs["handover_v_hi"])) if obs.get("emf") else None
 
 
 def _build_each_kind(cases: list, calibrated: list[str], motor: Motor, motor_spec: str, base: dict,
