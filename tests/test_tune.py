@@ -295,3 +295,19 @@ def test_a_v_max_beyond_the_pwm_rate_is_named(tmp_path):
     assert e.value.key == "v_max" and "at most 5.092 m/s" in str(e.value), str(e.value)
     assert "did you type" not in str(e.value)
     design(m, dataclasses.replace(dd, v_max=5.0), analyse=False)
+
+
+def test_no_speed_cap_warning_where_the_injection_fades_out_first():
+    """The same motor at 12 kHz: the speed cap (8 m/s) is beyond the 5.82 m/s the bus drives beside
+    the injection, but the injection fades out at 4.33 m/s: the warning was wrong there."""
+    from linsense.model.motor import motor_from_toml
+    from linsense.tune.drive_design import design_drive
+
+    m = motor_from_toml('[motor]\nname = "h40"\nR_s = 3.5\npole_pitch = 0.04\nforce_constant = 12.0\n'
+                        'mass = 1.0\n[inductance]\nL0 = 4.5e-3\nL2 = -7.9e-4\nM0 = -1.5e-3\nM2 = -7.9e-4\n'
+                        'dM0 = -4.5e-4\n', "h40.toml")
+    dd = DriveData(v_dc=150.0, f_pwm=12000.0, dead_time=1e-6, i_max=3.0, v_max=6.4, a_max=10.0)
+    made = design_drive(m, dd, analyse=False, startup=False)
+    assert made.handover.on and made.handover.v_off < made.design.headroom_speed < made.design.v_cap
+    assert any(w.startswith("the speed cap ") for w in made.design.warnings)
+    assert not any(w.startswith("the speed cap ") for w in made.warnings), made.warnings

@@ -195,7 +195,8 @@ class DriveDesign:
         out = list(self.design.warnings) + (list(self.startup.warnings) if self.startup is not None else [])
         h = self.handover
         if h is not None and h.on:  # (the injection fades out at speed: its room matters up to v_off)
-            out = [w for w in out if not w.startswith("the bus leaves room for the fundamental")]
+            out = [w for w in out if not w.startswith(("the bus leaves room for the fundamental",
+                                                        "the speed cap "))]
             if h.v_off > self.design.headroom_speed:
                 out.append(f"the injection fades out at {h.v_off:.3g} m/s, above the "
                            f"{self.design.headroom_speed:.3g} m/s up to which the bus leaves the fundamental "
