@@ -311,3 +311,16 @@ def test_no_speed_cap_warning_where_the_injection_fades_out_first():
     assert made.handover.on and made.handover.v_off < made.design.headroom_speed < made.design.v_cap
     assert any(w.startswith("the speed cap ") for w in made.design.warnings)
     assert not any(w.startswith("the speed cap ") for w in made.warnings), made.warnings
+
+
+@pytest.mark.parametrize("args, text", [
+    (("--no-verify", "--quick"), "--quick shapes the certificate, which --no-verify does not run"),
+    (("--no-verify", "--table-route", "commission"), "--table-route shapes the certificate"),
+    (("--no-verify", "--load", "0"), "must be a finite number > 0, got 0.0"),
+])
+def test_tune_options_that_would_do_nothing_are_refused(run_cli, tmp_path, args, text):
+    """--quick and --table-route with --no-verify wrote the same bytes as without them; --load 0 passed
+    the option's '>= 0' and was refused by the design as 'a force > 0 N'."""
+    r = run_cli("tune", "--motor", "ecce2010", *args, "--out", str(tmp_path / "t.toml"))
+    assert r.code == 2 and text in r.err and len(r.err.strip().splitlines()) == 1, r.err
+    assert not (tmp_path / "t.toml").exists()

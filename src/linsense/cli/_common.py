@@ -346,7 +346,8 @@ def finite(minimum: float, strict: bool):
         ok = math.isfinite(value) and (value > minimum if strict else value >= minimum)
         if not ok:
             op = ">" if strict else ">="
-            raise click.BadParameter(f"must be a finite number {op} {minimum:g}, got {value!r}")
+            bound = f" {op} {minimum:g}" if math.isfinite(minimum) else ""
+            raise click.BadParameter(f"must be a finite number{bound}, got {value!r}")
         return value
 
     return check

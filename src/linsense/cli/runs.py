@@ -177,7 +177,7 @@ def application_options(f):
                      help="the application's top speed, m/s (default 0.2): speed cap, trips, verification"),
         click.option("--a-max", type=float, default=None, callback=c.finite(0.0, True),
                      help="the application's acceleration, m/s^2 (default 1)"),
-        click.option("--load", type=float, default=None, callback=c.finite(0.0, False),
+        click.option("--load", type=float, default=None, callback=c.finite(0.0, True),
                      help="the rated load force, N (default half the force at i_max: K_f i_max, less the "
                           "share the rotating or square injection's d-current takes): verification's loads"),
         click.option("--travel", type=float, default=None, callback=c.finite(0.0, True),

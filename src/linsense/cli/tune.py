@@ -72,6 +72,9 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
     if fmt == "c" and no_verify and not unverified:
         raise click.UsageError("--format c writes a header only for a verified drive: drop --no-verify "
                                "(or give --unverified to write it unverified)")
+    if no_verify and (quick or table_route != "calibrate"):  # (not ignored: they shape the certificate)
+        raise click.UsageError(f"{'--quick' if quick else '--table-route'} shapes the certificate, which "
+                               "--no-verify does not run: drop one of them")
     if unverified and fmt != "c":
         raise click.UsageError("--unverified is for --format c (a scenario is written whatever the "
                                "certificate says)")
