@@ -324,3 +324,21 @@ def test_tune_options_that_would_do_nothing_are_refused(run_cli, tmp_path, args,
     r = run_cli("tune", "--motor", "ecce2010", *args, "--out", str(tmp_path / "t.toml"))
     assert r.code == 2 and text in r.err and len(r.err.strip().splitlines()) == 1, r.err
     assert not (tmp_path / "t.toml").exists()
+
+
+def test_a_scenarios_emf_off_is_kept(run_cli, tmp_path):
+    """tune --scenario over a scenario with observer.emf = false: it came out with emf = true and the
+    designed band (a key the file gives, replaced without a word); now kept, and the print says so."""
+    r = run_cli("tune", "--motor", "ecce2010", "--v-max", "1.0", "--no-verify", "--out",
+                str(tmp_path / "a.toml"))
+    assert r.code == 0, r.err
+    text = (tmp_path / "a.toml").read_text()
+    assert "emf = true" in text and "handover_v_lo" in text
+    lines = [ln for ln in text.splitlines() if not ln.startswith(("emf_lpf_hz", "handover_", "inject_v_"))]
+    (tmp_path / "b.toml").write_text("\n".join(lines).replace("emf = true", "emf = false") + "\n")
+    r = run_cli("tune", "--motor", "ecce2010", "--scenario", str(tmp_path / "b.toml"), "--v-max", "1.0",
+                "--no-verify", "--out", str(tmp_path / "c.toml"))
+    assert r.code == 0, r.err
+    out = (tmp_path / "c.toml").read_text()
+    assert "emf = false" in out and "handover_v_lo" not in out
+    assert "observer.emf = false in the scenario" in r.out

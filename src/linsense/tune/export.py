@@ -192,10 +192,14 @@ def _put_observer(obs: dict, keys: dict, table: str | None) -> None:
         _put(keys, obs, "observer.force_max")
     else:
         obs.pop("force_max", None)
-    # the EMF estimate and its hand-over where the design runs it (else the keys' default: off)
+    # the EMF estimate and its hand-over where the design runs it (else the keys' default: off; a
+    # scenario's own emf = false kept)
+    off = obs.get("emf") is False
     for k in HANDOVER_KEYS:
         obs.pop(k.split(".", 1)[1], None)
-    if keys.get("observer.emf"):
+    if off:
+        obs["emf"] = False
+    elif keys.get("observer.emf"):
         _put(keys, obs, *HANDOVER_KEYS)
 
 

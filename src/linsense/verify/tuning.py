@@ -185,6 +185,10 @@ def _designed(m: Motor, dd: DriveData, motor: str, base: dict | None, src: str, 
     mode = (base or {}).get("control", {}).get("mode", "sensorless_lut")
     no_table = compensation_of(mode, (base or {}).get("observer", {}).get("compensation")) == "none"
     made = design_drive(m, dd, source=src, uncompensated=no_table, **given)
+    if (base or {}).get("observer", {}).get("emf") is False and made.handover is not None:
+        # (the scenario's choice, kept: its band is not designed, the HF estimate carries every speed)
+        made.handover = dataclasses.replace(made.handover, on=False, limit="observer.emf = false in the "
+                                            "scenario: the HF estimate carries every speed")
     if made.table is not None:
         if made.table.note:
             say(f"  table          {made.table.note}")
