@@ -469,10 +469,14 @@ def design_lines(dz, motor_name: str, dd, hand=None) -> list[str]:
            f"; the force at i_max {dz.force_i_max:.3g} N, {dz.force_i_max_why}"),
         f"  injection rule {dz.limits.get('injection', '')}",
         f"  calibration    dither {dz.dither_a:.3g} A at {dz.dither_hz:.4g} Hz",
-        "  margins (linearised model: phase margin, gain margin up / down, crossover):",
+        "  margins (linearised model: phase margin, gain margin up / down (none: no gain limits it), "
+        "crossover):",
     ]
+    def gm(v) -> str:  # (None: no phase crossing, no gain limits the loop that way)
+        return "none" if v is None else f"{v} dB"
+
     for k, m in dz.margins.items():
-        lines.append(f"    {k:48s} {m['pm_deg']} deg, {m['gm_up_db']} dB / {m['gm_down_db']} dB, "
+        lines.append(f"    {k:48s} {m['pm_deg']} deg, {gm(m['gm_up_db'])} / {gm(m['gm_down_db'])}, "
                      f"{m['crossover_hz']} Hz")
     if dz.tolerances:
         lines.append("  tolerances (model: worst hold error with the nominal LUT; scheduled error gain):")
