@@ -1030,6 +1030,16 @@ def _speed_says(x: DriveInputs, key: str) -> str:
 CLAMP_OVER_V_MAX = SPEED_CAP_MARGIN * OVERSPEED_MARGIN * OBSERVER_SPEED_MARGIN
 
 
+def _injection_text(dz: Design, d: DriveData) -> str:
+    """The design print's injection rule: the dead time's error against the signal, and where it is
+    over the target, that the injection is at the largest it may be."""
+    over = dz.dead_time_ratio > DEAD_TIME_RATIO * (1.0 + 1e-9) and d.v_inj is None
+    why = (f": over the target, the injection at its largest allowed, {INJ_BUS_MAX:.3g} V_dc or "
+           f"{INJ_CURRENT_MAX:g} i_max of HF current; refused beyond {DEAD_TIME_RATIO_MAX:g}" if over else "")
+    return (f"dead-time error {dz.dead_time_ratio:.2g} x the weakest error signal (target "
+            f"{DEAD_TIME_RATIO:g}; bus share {dz.v_inj / d.v_dc:.3g} V_dc{why})")
+
+
 def _clamp_fits(x: DriveInputs) -> bool:
     """The observer's clamp, ``CLAMP_OVER_V_MAX v_max`` as an electrical speed, within the controller
     library's largest angle per PWM period (``LS_EMF_OMEGA_TS_MAX f_pwm``: the EMF block's period
@@ -1800,8 +1810,7 @@ def _limits(dz: Design, motor: Motor, d: DriveData, warnings: list) -> None:
         warnings.append(f"the speed cap {dz.v_cap:.3g} m/s ({SPEED_CAP_MARGIN:g} v_max) is beyond the "
                         f"{dz.headroom_speed:.3g} m/s up to which the bus drives i_max beside the injection")
     dz.limits = {
-        "injection": (f"dead-time error {dz.dead_time_ratio:.2g} x the weakest error signal "
-                      f"(target {DEAD_TIME_RATIO:g}; bus share {dz.v_inj / d.v_dc:.3g} V_dc)"),
+        "injection": _injection_text(dz, d),
         "observer": (f"the demodulator's low-pass ({dz.demod_lpf:.4g} Hz) / "
                      f"{RATIO_LPF_MECH if dz.observer_type == 'mech' else RATIO_LPF_OBS:g}"
                      if dz.observer_slowed >= 1.0 else
