@@ -257,3 +257,16 @@ def test_installed_entry_point_has_no_traceback(tmp_path):
     assert p.returncode == 2
     assert "Traceback" not in p.stderr and len(p.stderr.strip().splitlines()) == 1
     assert "motor.R_s" in p.stderr and "[1, 2]" in p.stderr
+
+
+def test_a_folder_given_as_a_scenario_is_named_so(run_cli, tmp_path, monkeypatch):
+    """`--scenario adir` (a folder) said "unknown scenario 'adir': no such file"; a folder named as a
+    packaged example still runs the example."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "adir").mkdir()
+    (tmp_path / "fig13_trajectory").mkdir()
+    r = run_cli("tune", "--motor", "ecce2010", "--scenario", "adir", "--no-verify", "--out", "x.toml")
+    assert r.code == 2 and "adir: is a folder, not a scenario file" in r.err, r.err
+    from linsense.examples import resolve
+
+    assert resolve("scenarios", "fig13_trajectory") != "fig13_trajectory"

@@ -203,6 +203,8 @@ def resolve(kind: str, spec: str | Path, key: str = "", extra: tuple[str, ...] =
     p = path(kind, s)
     if p is not None:
         return str(p)
+    if Path(s).is_dir():  # (a folder where a file was meant: said so, as a motor's is)
+        raise InputError(s, "", f"is a folder, not a {WHAT[kind]} file")
     if Path(s).suffix or any(sep in s for sep in "/\\"):  # (a path, not a name: the file is missing)
         raise InputError(s, "", f"no such {WHAT[kind]} file ({listing(kind, extra)})")
     raise InputError(key or WHAT[kind], "", unknown(kind, s, extra))
