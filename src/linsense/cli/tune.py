@@ -16,6 +16,24 @@ from linsense.errors import InputError
 from linsense.version import docs
 
 
+def _check_options(as_json: bool, out: str | None, fmt: str, no_verify: bool, unverified: bool, quick: bool,
+                   table_route: str, name: str | None) -> None:
+    """Refuse the options that contradict each other or would do nothing (one line, exit code 2)."""
+    if as_json and out == "-":
+        raise click.UsageError("--json and --out - both write to standard output: give --out a file")
+    if fmt == "c" and no_verify and not unverified:
+        raise click.UsageError("--format c writes a header only for a verified drive: drop --no-verify "
+                               "(or give --unverified to write it unverified)")
+    if no_verify and (quick or table_route != "calibrate"):  # (not ignored: they shape the certificate)
+        raise click.UsageError(f"{'--quick' if quick else '--table-route'} shapes the certificate, which "
+                               "--no-verify does not run: drop one of them")
+    if unverified and fmt != "c":
+        raise click.UsageError("--unverified is for --format c (a scenario is written whatever the "
+                               "certificate says)")
+    if name is not None and fmt != "c":  # (not ignored with a scenario)
+        raise click.UsageError("--name names the C header's symbols: only with --format c")
+
+
 @click.command(short_help="Design the drive for a motor and verify it.",
                epilog=c.see("tuning"))
 @click.option("--motor", "motor_spec", required=True, help=c.MOTOR_HELP)
@@ -67,19 +85,7 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
     from linsense.report.verify_figures import write_certificate_figure
     from linsense.verify.tune_output import tune_to
 
-    if as_json and out == "-":
-        raise click.UsageError("--json and --out - both write to standard output: give --out a file")
-    if fmt == "c" and no_verify and not unverified:
-        raise click.UsageError("--format c writes a header only for a verified drive: drop --no-verify "
-                               "(or give --unverified to write it unverified)")
-    if no_verify and (quick or table_route != "calibrate"):  # (not ignored: they shape the certificate)
-        raise click.UsageError(f"{'--quick' if quick else '--table-route'} shapes the certificate, which "
-                               "--no-verify does not run: drop one of them")
-    if unverified and fmt != "c":
-        raise click.UsageError("--unverified is for --format c (a scenario is written whatever the "
-                               "certificate says)")
-    if name is not None and fmt != "c":  # (not ignored with a scenario)
-        raise click.UsageError("--name names the C header's symbols: only with --format c")
+    _check_options(as_json, out, fmt, no_verify, unverified, quick, table_route, name)
     if as_json or out == "-":
         c.data_on_stdout()  # (stdout carries the file itself, or the JSON summary)
     out = c.default_out(out, motor_spec, "tune", ".h" if fmt == "c" else ".toml")
