@@ -317,10 +317,12 @@ def test_no_speed_cap_warning_where_the_injection_fades_out_first():
     (("--no-verify", "--quick"), "--quick shapes the certificate, which --no-verify does not run"),
     (("--no-verify", "--table-route", "commission"), "--table-route shapes the certificate"),
     (("--no-verify", "--load", "0"), "must be a finite number > 0, got 0.0"),
+    (("--no-verify", "--unverified", "--format", "c"), "--format c writes a C header, not a .toml file"),
 ])
 def test_tune_options_that_would_do_nothing_are_refused(run_cli, tmp_path, args, text):
     """--quick and --table-route with --no-verify wrote the same bytes as without them; --load 0 passed
-    the option's '>= 0' and was refused by the design as 'a force > 0 N'."""
+    the option's '>= 0' and was refused by the design as 'a force > 0 N'; --format c wrote a C header
+    into t.toml."""
     r = run_cli("tune", "--motor", "ecce2010", *args, "--out", str(tmp_path / "t.toml"))
     assert r.code == 2 and text in r.err and len(r.err.strip().splitlines()) == 1, r.err
     assert not (tmp_path / "t.toml").exists()

@@ -32,6 +32,10 @@ def _check_options(as_json: bool, out: str | None, fmt: str, no_verify: bool, un
                                "certificate says)")
     if name is not None and fmt != "c":  # (not ignored with a scenario)
         raise click.UsageError("--name names the C header's symbols: only with --format c")
+    ext = {"c": ".toml", "toml": ".h"}[fmt]  # (the other format's extension: the file would mislead)
+    if out not in (None, "-") and out.endswith(ext):
+        what, own = ("a C header", ".h") if fmt == "c" else ("a scenario", ".toml")
+        raise click.UsageError(f"--out {out}: --format {fmt} writes {what}, not a {ext} file: name it {own}")
 
 
 @click.command(short_help="Design the drive for a motor and verify it.",

@@ -1204,7 +1204,7 @@ def _slip(x: DriveInputs, key: str, rules: tuple[Rule, ...]) -> str:
         return ""
     kind, unit = _KIND[key]
     to_si = KINDS[kind].sizes()[unit] if unit else 1.0
-    if KINDS[kind].holds(getattr(x.d, key) * to_si):  # (a plausible value: its unit is not the doubt;
+    if KINDS[kind].holds(getattr(x.d, key)):  # (a plausible value, SI in d: its unit is not the doubt;
         return ""                                      # "16 mV" for a 16 V injection misled)
 
     def ok(v: float) -> bool:
