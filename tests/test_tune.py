@@ -3,7 +3,6 @@ on the switching inverter, and the scenario and C outputs."""
 
 from __future__ import annotations
 
-import dataclasses
 import subprocess
 import tomllib
 from pathlib import Path
@@ -277,24 +276,26 @@ def test_the_designed_observer_is_the_mechanical_one_with_its_load_fed_forward()
     assert "observer.load_feedforward" in str(e.value) and "mech" in str(e.value)
 
 
-def test_a_v_max_beyond_the_pwm_rate_is_named(tmp_path):
-    """A 40 mm, 150 V motor at 6.4 m/s on 8 kHz PWM: the observer's clamp (2.5 v_max) turns the angle
-    by more than the controller library's 0.25 rad per period; tune named the designed
-    observer.omega_max and ls_drive_init's emf.omega_max. Now --v-max, its largest value and the PWM
-    rate that would take it; no unit slip is suggested for a plausible value (it said "did you type
-    mm/s? (6.4 mm/s is 0.0064 m/s)")."""
-    from linsense.errors import InputError
-    from linsense.model.motor import motor_from_toml
-
-    m = motor_from_toml('[motor]\nname = "h40"\nR_s = 3.5\npole_pitch = 0.04\nforce_constant = 12.0\n'
-                        'mass = 1.0\n[inductance]\nL0 = 4.5e-3\nL2 = -7.9e-4\nM0 = -1.5e-3\nM2 = -7.9e-4\n'
-                        'dM0 = -4.5e-4\n', "h40.toml")
-    dd = DriveData(v_dc=150.0, f_pwm=8000.0, dead_time=1e-6, i_max=3.0, v_max=6.4, a_max=10.0)
-    with pytest.raises(InputError) as e:
-        design(m, dd, analyse=False)
-    assert e.value.key == "v_max" and "at most 5.092 m/s" in str(e.value), str(e.value)
-    assert "did you type" not in str(e.value)
-    design(m, dataclasses.replace(dd, v_max=5.0), analyse=False)
+def test_a_v_max_beyond_the_pwm_rate_is_named(run_cli, tmp_path):
+    """A 40 mm, 150 V motor at 6.4 m/s on 8 kHz PWM with the EMF estimate: the observer's clamp
+    (2.5 v_max) turns the angle by more than the controller library's 0.25 rad per period; tune named
+    the designed observer.omega_max and ls_drive_init's emf.omega_max. Now --v-max, its largest value
+    and the PWM rate that would take it; no unit slip is suggested for a plausible value (it said "did
+    you type mm/s? (6.4 mm/s is 0.0064 m/s)"). The rotating vector (no EMF step) is not held to it."""
+    motor = tmp_path / "h40.toml"
+    motor.write_text('[motor]\nname = "h40"\nR_s = 3.5\npole_pitch = 0.04\nforce_constant = 12.0\n'
+                     'mass = 1.0\n[inductance]\nL0 = 4.5e-3\nL2 = -7.9e-4\nM0 = -1.5e-3\nM2 = -7.9e-4\n'
+                     'dM0 = -4.5e-4\n')
+    drive = ("--v-dc", "150", "--f-pwm", "8000", "--dead-time", "1e-6", "--i-max", "3", "--a-max", "10",
+             "--no-verify")
+    r = run_cli("tune", "--motor", str(motor), *drive, "--v-max", "6.4", "--out", str(tmp_path / "a.toml"))
+    assert r.code == 2 and "v_max: 6.4 m/s is beyond" in r.err and "at most 5.092 m/s" in r.err, r.err
+    assert "did you type" not in r.err and "omega_max" not in r.err
+    r = run_cli("tune", "--motor", str(motor), *drive, "--v-max", "5", "--out", str(tmp_path / "b.toml"))
+    assert r.code == 0, r.err
+    r = run_cli("tune", "--motor", str(motor), *drive, "--v-max", "6.4", "--injection", "rotating",
+                "--out", str(tmp_path / "c.toml"))
+    assert r.code == 0, r.err
 
 
 def test_no_speed_cap_warning_where_the_injection_fades_out_first():

@@ -448,15 +448,18 @@ LS_SIM_INLINE ls_status continue_impl(const ls_sim_cfg *c, ls_drive *drive, cons
         /* sample at the carrier peak, run the controller; its duties act next period */
         ls_sim_measure(c, &q, L.i, L.x, drive->mode == LS_MODE_SENSORED || drive->mode == LS_MODE_CALIBRATION, &L.rng,
                        &meas);
+        if (!L.est_have) { /* (the run's first sample: the observer's estimate before any step) */
+            L.est_pos = drive->obs.pos;
+            L.est_v = ls_observer_speed(&drive->obs);
+            L.est_have = 1;
+        }
         ls_drive_step(drive, &meas, &cmd);
         L.fault |= cmd.fault;
         /* the sample's estimate: the one the drive held for it (the last step's cmd.pos_est, its
          * estimate for the next sample; every observer steps ahead), against the position now */
         rec = cmd;
-        if (L.est_have) {
-            rec.pos_est = L.est_pos;
-            rec.v_est = L.est_v;
-        }
+        rec.pos_est = L.est_pos;
+        rec.v_est = L.est_v;
         L.est_pos = cmd.pos_est;
         L.est_v = cmd.v_est;
         L.est_have = 1;

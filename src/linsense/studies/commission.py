@@ -266,13 +266,14 @@ def _points_needed(points: int, stroke: float, v: float, a: float) -> tuple[floa
 
 def _points_stroke(points: int, v: float, a: float, base: float, top: float) -> float:
     """The default stroke without a travel: ``base`` (what the speed needs), lengthened by tenths up
-    to ``top`` (m) until the motion learns ``points`` (else ``base``: :func:`_check_points` says)."""
-    stroke = base
+    to ``top`` (m) until the motion learns ``points`` (else the longest: :func:`_check_points` says)."""
+    stroke, longest = base, base
     while stroke <= top:
         if _points_needed(points, stroke, v, a)[0] <= _legs(stroke, v, a):
             return stroke
+        longest = stroke
         stroke *= 1.1
-    return base
+    return longest  # (none fits: the longest, whose refusal names the most points any stroke learns)
 
 
 def _check_points(points: int, stroke: float, v: float, a: float, legs: int, source: str) -> None:

@@ -1025,11 +1025,6 @@ def _speed_says(x: DriveInputs, key: str) -> str:
             f"at most {limit_text(x.v_bus_speed, False)} m/s, or raise v_dc")
 
 
-#: the observer's speed clamp over the application's v_max (the speed cap, the over-speed trip and the
-#: clamp's margins, _limits)
-CLAMP_OVER_V_MAX = SPEED_CAP_MARGIN * OVERSPEED_MARGIN * OBSERVER_SPEED_MARGIN
-
-
 def _injection_text(dz: Design, d: DriveData) -> str:
     """The design print's injection rule: the dead time's error against the signal, and where it is
     over the target, that the injection is at the largest it may be."""
@@ -1038,32 +1033,6 @@ def _injection_text(dz: Design, d: DriveData) -> str:
            f"{INJ_CURRENT_MAX:g} i_max of HF current; refused beyond {DEAD_TIME_RATIO_MAX:g}" if over else "")
     return (f"dead-time error {dz.dead_time_ratio:.2g} x the weakest error signal (target "
             f"{DEAD_TIME_RATIO:g}; bus share {dz.v_inj / d.v_dc:.3g} V_dc{why})")
-
-
-def _clamp_fits(x: DriveInputs) -> bool:
-    """The observer's clamp, ``CLAMP_OVER_V_MAX v_max`` as an electrical speed, within the controller
-    library's largest angle per PWM period (``LS_EMF_OMEGA_TS_MAX f_pwm``: the EMF block's period
-    model, whose cfg takes the clamp)."""
-    from linsense.ctrl import lib
-
-    w = 2.0 * math.pi * CLAMP_OVER_V_MAX * x.d.v_max / x.motor.pole_pitch
-    return w <= float(lib.LS_EMF_OMEGA_TS_MAX) * x.d.f_pwm
-
-
-def _clamp_says(x: DriveInputs, key: str) -> str:
-    from linsense.ctrl import lib
-
-    per = float(lib.LS_EMF_OMEGA_TS_MAX)
-    v_top = per * x.d.f_pwm * x.motor.pole_pitch / (2.0 * math.pi * CLAMP_OVER_V_MAX)
-    f_min = 2.0 * math.pi * CLAMP_OVER_V_MAX * x.d.v_max / x.motor.pole_pitch / per
-    why = (f"the observer's speed clamp, {CLAMP_OVER_V_MAX:g} v_max (the speed cap, the over-speed trip and "
-           f"the clamp's margins), may turn the electrical angle by at most {per:g} rad per PWM period "
-           f"(the EMF estimate's period model)")
-    if key == "f_pwm":
-        return f"{x.show('f_pwm')} is too slow for v_max = {x.d.v_max:g} m/s ({why}): at least {f_min:.4g} Hz"
-    return (f"{x.show('v_max')} is beyond what {x.d.f_pwm:g} Hz PWM allows on a {x.motor.pole_pitch * 1e3:g} "
-            f"mm pole pitch ({why}): at most {limit_text(v_top, False)} m/s, or a PWM rate of at least "
-            f"{f_min:.4g} Hz")
 
 
 def _move_keys(x: DriveInputs) -> tuple[str, ...]:
@@ -1151,7 +1120,6 @@ DRIVE_RULES: tuple[Rule, ...] = (
     Rule(3, _injection_keys, _injection_holds, _injection_says),
     Rule(3, ("i_max", "v_dc", "v_inj"), lambda x: x.v_avail > x.motor.R_s * x.d.i_max, _bus_says),
     Rule(3, ("v_max", "v_dc"), lambda x: x.d.v_max <= x.v_bus_speed, _speed_says),
-    Rule(3, ("v_max", "f_pwm"), _clamp_fits, _clamp_says),
     Rule(3, _move_keys, _move_holds, _move_says),
     Rule(3, ("motor",), lambda x: bool(np.all(x.k_e > 0.0)), _error_gain_says),
 )

@@ -370,8 +370,9 @@ def checks(rows: list[dict], calibrations: dict | None = None,
             if any(not r["passed"] and "limit cycle" not in r["why"] for r in rs) and not measured
             else "",
         )
-        e = max((r.get("err_deg", float("nan")) for r in rs), default=float("nan"))
-        if math.isfinite(e - e_nom):  # (no cost where a hold of either plant did not finish)
+        e = max((r["err_deg"] for r in rs if "err_deg" in r), default=float("nan"))
+        # (no cost where a hold did not finish: its error is unknown)
+        if all("err_deg" in r for r in rs) and math.isfinite(e - e_nom):
             c.value += f"; cost {e - e_nom:+.3g} deg over nominal"
         if not c.passed and not c.cause:
             c.cause = _cause(rs)

@@ -10,6 +10,7 @@ the certificate, above the simulator, because it runs the simulator; the design 
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -28,6 +29,7 @@ from linsense.tune.design import (
     RATIO_LPF,
     SPEED_CAP_MARGIN,
     DriveData,
+    limit_text,
 )
 from linsense.tune.drive_design import DriveDesign, design_drive
 from linsense.tune.export import (
@@ -196,8 +198,30 @@ def _designed(m: Motor, dd: DriveData, motor: str, base: dict | None, src: str, 
     table = given["table"]
     sc_dict = scenario_dict(made, motor_ref=motor, base=base,
                             table=None if table is None else str(Path(table).resolve()))
+    _check_clamp(sc_dict, m, dd, src)
     build(scenario_from_dict(sc_dict, src, working_folder()))
     return made, sc_dict
+
+
+def _check_clamp(sc: dict, m: Motor, dd: DriveData, src: str) -> None:
+    """Refuse, naming ``v_max``, a design whose observer clamp (``observer.omega_max``: the speed cap,
+    the over-speed trip and the clamp's margins over ``v_max``, wider without the table) the EMF
+    estimate's period model cannot take (``LS_EMF_OMEGA_TS_MAX f_pwm``; the C library refused it
+    naming ``observer.omega_max`` and ``emf.omega_max``, keys the user never gave)."""
+    from linsense.ctrl import lib
+
+    obs = sc.get("observer", {})
+    w, f_pwm = float(obs.get("omega_max", 0.0)), float(sc["inverter"]["f_pwm"])
+    per = float(lib.LS_EMF_OMEGA_TS_MAX)
+    if not obs.get("emf") or w <= per * f_pwm:
+        return
+    ratio = w / (2.0 * math.pi * dd.v_max / m.pole_pitch)  # (the clamp over v_max, electrical)
+    raise InputError(src, "v_max", f"{dd.v_max:g} m/s is beyond what {f_pwm:g} Hz PWM allows on a "
+                     f"{m.pole_pitch * 1e3:g} mm pole pitch: the observer's speed clamp, {ratio:.3g} v_max "
+                     f"(the speed cap, the over-speed trip and their margins), may turn the electrical angle "
+                     f"by at most {per:g} rad per PWM period with the EMF estimate on: at most "
+                     f"{limit_text(dd.v_max * per * f_pwm / w, False)} m/s, or a PWM rate of at least "
+                     f"{w / per:.4g} Hz")
 
 
 def _scenario_base(scenario: Scenario, base: dict, table: str | None,
