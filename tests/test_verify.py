@@ -620,3 +620,17 @@ def test_holds_that_all_faulted_say_so_without_nan():
              "fault": "overspeed"} for _ in range(3)]
     c = _hold_check("holds, nominal plant", rows, 1.0)
     assert "nan" not in c.value and "no hold finished (3 of 3 faulted)" in c.value, c.value
+
+
+def test_a_square_wave_drive_is_not_told_to_try_the_square_wave():
+    """The limit cycle's remedy named the square wave to a drive that runs it (a helper's L -10 %
+    hold on a square-wave design)."""
+    from linsense.verify.certificate import REMEDY, Check, _for_shape
+
+    def one() -> Check:
+        return Check("holds, L -10 %", False, "limit cycle", "0.15 deg p-p", REMEDY["limit cycle"], 48, 1)
+
+    assert "--injection square" in _for_shape([one()], {"injection": {"shape": "pulsating"}})[0].cause
+    sq = _for_shape([one()], {"injection": {"shape": "square"}})[0].cause
+    assert "--injection square" not in sq
+    assert "more injection voltage (--v-inj), less dead time, or lower" in sq
