@@ -226,3 +226,16 @@ def test_tune_passes_its_table_route_to_the_certificate(run_cli, tmp_path, monke
     assert cert._file_table_notes([], {}, "commission") == []
     r = run_cli("tune", "--motor", "ecce2010", "--table-route", "encoder", "--out", tmp_path / "u.toml")
     assert r.code == 2 and "--table-route" in r.err
+
+
+def test_the_d_current_clears_the_hf_current():
+    """small30 (nominal plant, switching, defaults): its 0.4 i_max of d-current, 1 A, sat under its
+    1.08 A HF peak and its table came out 0.67 deg off (the cruise error -2.2 / +2.2 deg); the
+    d-current is at least 1.5 times the peak now, the table within 0.3 deg."""
+    from linsense.studies.commission import D_OVER_HF
+
+    cal = commission("small30")
+    m = cal.metrics
+    assert m["completed"] and m["max_diff_deg"] < 0.3, m
+    assert abs(m["cruise_err_fwd_mean_deg"]) < 1.0 and abs(m["cruise_err_bwd_mean_deg"]) < 1.0
+    assert D_OVER_HF >= 1.5
