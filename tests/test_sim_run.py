@@ -177,3 +177,17 @@ def test_paper_fig11_fig12_qualitatively():
     assert av3["stable"] is False and f"{av3['limit_cycle_mm']:.2f}" == "0.41", av3["limit_cycle_mm"]
     # without the table the estimate carries the uncompensated bias
     assert sw6["max_abs_err_deg"] > 18.0 and got[("step6_lut", "switching")]["max_abs_err_deg"] < 5.0
+
+
+def test_a_load_beyond_the_drive_at_the_first_step_is_named():
+    """A load of 1e9 N: the mover left the travel in the first period and the refusal named no key
+    ("the configuration cannot run")."""
+    from linsense.errors import InputError
+    from linsense.scenario.load import scenario_from_dict
+
+    sc = scenario_from_dict({"motor": "ecce2010", "scenario": {"duration": 0.35},
+                             "reference": {"type": "hold"}, "load": {"type": "constant", "force": 1e9}},
+                            "l.toml")
+    with pytest.raises(InputError) as e:
+        linsense.simulate(sc)
+    assert e.value.key == "load.force" and "1e+09 N against the 50 N" in str(e.value), str(e.value)

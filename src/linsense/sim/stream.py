@@ -751,6 +751,22 @@ def run_metrics(b: Built, raw, arrays: dict | None = None) -> dict:
     )
 
 
+def _load_at_zero(b, first: str) -> None:
+    """A travel trip at the first step under a load beyond anything the drive makes (``K_f i_max``):
+    the load is named (it said only "the configuration cannot run")."""
+    s = b.scenario.spec
+    ld = s.load
+    if first != "travel" or ld.type not in ("constant", "step"):
+        return
+    key, f = "load.force", abs(ld.force)
+    if ld.type == "step" and ld.time <= 0.0 and abs(ld.force_after) > f:
+        key, f = "load.force_after", abs(ld.force_after)
+    f_max = b.motor.force_constant * float(s.controller.i_max)
+    if f > f_max:
+        raise InputError(b.scenario.source, key, f"{f:g} N against the {f_max:.4g} N the drive makes at "
+                         f"controller.i_max (K_f i_max): the mover leaves the travel in the first period")
+
+
 def finish_metrics(b: Built, raw, m: dict, block: int) -> None:
     """Complete the metrics of a run in place.
 
@@ -788,6 +804,7 @@ def finish_metrics(b: Built, raw, m: dict, block: int) -> None:
                              f"sensor: {sens.current_noise:g} A rms of noise and {offset:g} A of offset "
                              f"against the over-current trip protection.i_max = {s.protection.i_max:.3g} A "
                              "(designed)")
+        _load_at_zero(b, first)
         raise InputError(sc.source, _FAULT_KEYS.get(first, ""),
                          f"the drive trips at t = 0 ({m['fault']}): the configuration cannot run")
     if s.control.mode == "calibration" and not raw.fault:
