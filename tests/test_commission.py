@@ -30,11 +30,13 @@ def test_speed_below_the_band_refused():
 
 @pytest.mark.parametrize("kwargs, key, text", [
     ({"speed": 0.8}, "speed", "its cruise (0.95 of it) is not above the hand-over band's top"),
-    ({"speed": 1000.0}, "speed", "leaves the travel [-1000, 1000] mm"),
-    ({"stroke_mm": 5000.0}, "stroke", "5000 mm of stroke from 0 mm, which leaves the travel"),
+    ({"speed": 1000.0}, "speed", "beyond what the 72 V bus allows"),
+    ({"stroke_mm": 5000.0}, "stroke", "5000 mm of stroke from 0 mm, beyond the travel [-1000, 1000] mm"),
+    ({"stroke_mm": 1000.0}, "stroke", "less 2 pole pitches of room at its end: at most 888 mm"),
     ({"stroke_mm": 0.3}, "stroke", "did you type m?"),
     ({"points": 1024}, "positions", "at most"),
     ({"load": -100.0}, "load", "-100 N leaves nothing"),
+    ({"speed": 2.0, "load": 30.0}, "load", "needs more voltage than the 72 V bus leaves beside"),
     ({"drive": {"dead_time": 0.8}}, "inverter.dead_time", "did you type us?"),
     ({"drive": {"i_max": 100.0}}, "controller.i_max", "at most"),
 ])
@@ -43,7 +45,8 @@ def test_a_refusal_names_what_was_given(kwargs, key, text):
     is not above the band of the drive designed for it (ls_drive_set_mode's own test, which it
     reported as an internal refusal), a stroke or a speed's stroke beyond the travel (the run
     faulted), a table of more points than the motion learns (it ran 10 s and learned none), a load's
-    sign kept, and a drive's bad value named as tune names it (it said the bus allowed no speed)."""
+    sign kept, a load the bus cannot drive at speed beside the injection, and a drive's bad value named
+    as tune names it (it said the bus allowed no speed)."""
     with pytest.raises(InputError) as e:
         commission("ecce2010", **kwargs)
     assert e.value.key == key and text in str(e.value), str(e.value)
@@ -154,7 +157,7 @@ def test_motor_whose_emf_estimate_the_design_leaves_off_refused(motor):
     else:
         m = load_motor(str(files("linsense.examples").joinpath("motors/class/m20_hv.toml")))
         drive = _class_drive("m20_hv")
-    with pytest.raises(InputError, match="leaves the EMF estimate off"):
+    with pytest.raises(InputError, match="the design leaves it off for this motor"):
         commission(m, drive=drive)
 
 
@@ -239,3 +242,18 @@ def test_the_d_current_clears_the_hf_current():
     assert m["completed"] and m["max_diff_deg"] < 0.3, m
     assert abs(m["cruise_err_fwd_mean_deg"]) < 1.0 and abs(m["cruise_err_bwd_mean_deg"]) < 1.0
     assert D_OVER_HF >= 1.5
+
+
+def test_an_output_folder_it_would_not_replace_is_refused_before_the_run(tmp_path, monkeypatch):
+    """A non-empty folder that is not a linsense output: refused after a 10 s run before."""
+    import linsense.studies.commission as com
+
+    (tmp_path / "other").mkdir()
+    (tmp_path / "other" / "mine.txt").write_text("x")
+    ran = []
+    monkeypatch.setattr(com, "commission", lambda *a, **k: ran.append(1))
+    from linsense.errors import OutputError
+
+    with pytest.raises(OutputError, match="not a linsense output folder"):
+        com.commission_to(tmp_path / "other", "ecce2010")
+    assert not ran and (tmp_path / "other" / "mine.txt").read_text() == "x"

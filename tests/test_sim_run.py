@@ -191,3 +191,5 @@ def test_a_load_beyond_the_drive_at_the_first_step_is_named():
     with pytest.raises(InputError) as e:
         linsense.simulate(sc)
     assert e.value.key == "load.force" and "1e+09 N against the 50 N" in str(e.value), str(e.value)
+    with pytest.raises(InputError, match="-1e"):  # (its sign kept)
+        linsense.simulate(sc.replace(load={"force": -1e9}))

@@ -317,6 +317,7 @@ def test_no_speed_cap_warning_where_the_injection_fades_out_first():
 @pytest.mark.parametrize("args, text", [
     (("--no-verify", "--quick"), "--quick shapes the certificate, which --no-verify does not run"),
     (("--no-verify", "--table-route", "commission"), "--table-route shapes the certificate"),
+    (("--no-verify", "--table-route", "calibrate"), "--table-route shapes the certificate"),
     (("--no-verify", "--load", "0"), "must be a finite number > 0, got 0.0"),
     (("--no-verify", "--unverified", "--format", "c"), "--format c writes a C header, not a .toml file"),
 ])

@@ -328,8 +328,9 @@ def calibrate(motor_spec: str | None, scenario_path: str | None, positions: int,
               help="the drive to commission (a file or a packaged example's name): its motor, bus, PWM, dead "
                    "time, injection and gains; its [travel] bounds the stroke")
 @click.option("--speed", default=None, type=float, callback=c.finite(0.0, True),
-              help="commissioning speed, m/s (default: 1.3 times the hand-over band's top, where the EMF "
-                   "estimate alone is trusted)")
+              help="commissioning speed, m/s (default: 1.3 times the hand-over band's top of the drive "
+                   "designed for the first of 2, 1.5, 1, 0.7 m/s the bus allows; its cruise must be above "
+                   "the band of the drive designed for the speed itself)")
 @click.option("--stroke", "stroke_mm", default=None, type=float, callback=c.finite(0.0, True),
               help="the back-and-forth stroke, mm (default: the scenario's travel, else what the speed needs "
                    "and three pole pitches)")

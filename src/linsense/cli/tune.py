@@ -24,7 +24,7 @@ def _check_options(as_json: bool, out: str | None, fmt: str, no_verify: bool, un
     if fmt == "c" and no_verify and not unverified:
         raise click.UsageError("--format c writes a header only for a verified drive: drop --no-verify "
                                "(or give --unverified to write it unverified)")
-    if no_verify and (quick or table_route != "calibrate"):  # (not ignored: they shape the certificate)
+    if no_verify and (quick or table_route is not None):  # (not ignored: they shape the certificate)
         raise click.UsageError(f"{'--quick' if quick else '--table-route'} shapes the certificate, which "
                                "--no-verify does not run: drop one of them")
     if unverified and fmt != "c":
@@ -33,7 +33,7 @@ def _check_options(as_json: bool, out: str | None, fmt: str, no_verify: bool, un
     if name is not None and fmt != "c":  # (not ignored with a scenario)
         raise click.UsageError("--name names the C header's symbols: only with --format c")
     ext = {"c": ".toml", "toml": ".h"}[fmt]  # (the other format's extension: the file would mislead)
-    if out not in (None, "-") and out.endswith(ext):
+    if out not in (None, "-") and out.lower().endswith(ext):
         what, own = ("a C header", ".h") if fmt == "c" else ("a scenario", ".toml")
         raise click.UsageError(f"--out {out}: --format {fmt} writes {what}, not a {ext} file: name it {own}")
 
@@ -71,9 +71,9 @@ def _check_options(as_json: bool, out: str | None, fmt: str, no_verify: bool, un
               "header is written only for a verified drive, or with --unverified)")
 @click.option("--unverified", is_flag=True, help="--format c: write the header even if the certificate "
               "fails, with the reason in its comment and in the JSON")
-@click.option("--table-route", type=click.Choice(["calibrate", "commission"]), default="calibrate",
-              show_default=True, help="how the certificate measures the table of a motor off by its end "
-              "effect: the firmware's calibration (an encoder) or the sensorless commissioning "
+@click.option("--table-route", type=click.Choice(["calibrate", "commission"]), default=None,
+              help="how the certificate measures the table of a motor off by its end effect: the "
+              "firmware's calibration (an encoder; the default) or the sensorless commissioning "
               "(linsense commission)")
 @c.out_option("tune", "motor", folder=False, ext=".toml or .h", dash=True)
 @c.json_option
@@ -99,7 +99,7 @@ def tune(motor_spec: str, scenario_path: str | None, quad, fmt: str, polarity: f
     res = tune_to(out, motor_spec, figure=write_certificate_figure, say=c.say, scenario=sc,
                   source=scenario_path, drive=vars(given), fmt=fmt, name=name, polarity=polarity,
                   current_noise=current_noise, table=table_path, quick=quick, verify=not no_verify,
-                  unverified=unverified, warn=c.warn, detail=c.detail, table_route=table_route,
+                  unverified=unverified, warn=c.warn, detail=c.detail, table_route=table_route or "calibrate",
                   refusal=lambda exc: _refusal(exc, typed, sc, scenario_path))
     cert = res.certificate
     verification = None if cert is None else {k: v for k, v in cert.as_dict().items() if k != "runs"}

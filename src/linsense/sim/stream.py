@@ -756,13 +756,13 @@ def _load_at_zero(b, first: str) -> None:
     the load is named (it said only "the configuration cannot run")."""
     s = b.scenario.spec
     ld = s.load
-    if first != "travel" or ld.type not in ("constant", "step"):
+    if first != "travel" or ld.type not in ("constant", "step", "incline"):
         return
-    key, f = "load.force", abs(ld.force)
-    if ld.type == "step" and ld.time <= 0.0 and abs(ld.force_after) > f:
-        key, f = "load.force_after", abs(ld.force_after)
+    key, f = "load.force", ld.force
+    if ld.type == "step" and ld.time <= 0.0:
+        key, f = "load.force_after", ld.force_after  # (the load from t = 0)
     f_max = b.motor.force_constant * float(s.controller.i_max)
-    if f > f_max:
+    if abs(f) > f_max:
         raise InputError(b.scenario.source, key, f"{f:g} N against the {f_max:.4g} N the drive makes at "
                          f"controller.i_max (K_f i_max): the mover leaves the travel in the first period")
 

@@ -46,7 +46,15 @@ from linsense.studies.calibrate import (
     lut_csv,
     measured_json,
 )
-from linsense.tune.design import DriveData, drive_force_max, force_max_text, mean_dq
+from linsense.tune.design import (
+    RATED_LOAD_FRACTION,
+    DriveData,
+    drive_force_constant,
+    drive_force_max,
+    force_max_text,
+    fundamental_speed,
+    mean_dq,
+)
 
 __all__ = ["SALIENCY_MIN", "SPEED_OVER_V_HI", "PERIODS_AT_SPEED", "commission", "commission_to",
            "CommissionOutput", "Commissioning", "ratio_slope"]
@@ -82,6 +90,12 @@ D_SHARE = 0.4
 #: deg off, the estimate's cruise error -2.2 / +2.2 deg; 1.62 A: 0.15 deg, -0.3 / +0.4; 0.5 A, under
 #: the peak but crossing it cleanly: 0.03; none: 0.11)
 D_OVER_HF = 1.5
+#: pole pitches of room kept before the travel's end (a move's end overshoots a little: a stroke to
+#: the end stop itself faulted `travel`)
+END_ROOM_PITCHES = 2.0
+#: m/s^2, the commissioning's acceleration without a load that limits it (and within the design's
+#: force rule: the rated load and m a_max within the force at i_max)
+A_DEFAULT = 10.0
 #: m/s, the speed caps the band is designed for, the first the bus allows
 CAPS = (2.0, 1.5, 1.0, 0.7)
 #: s, the HF lock before the first move
@@ -214,19 +228,15 @@ def commission(motor: Motor | str | None = None, *, scenario: Scenario | None = 
     if carried:  # (learned with the pulsating injection, carried to the drive's by the fitted end effect)
         data.setdefault("injection", {})["quadrature"] = 0.0
         d = _design(probe, model, source)
-    if not d.observer.emf:
-        _refuse(source, "observer.emf", "the design leaves the EMF estimate off for this motor and drive "
-                "(its error bound stays above 3 deg at every speed the bus allows, or flux harmonics): "
-                "commissioning needs it trustworthy at speed")
-    v_hi = float(d.observer.handover_v_hi)
-    v = float(speed) if speed is not None else SPEED_OVER_V_HI * v_hi
-    if v <= v_hi:
-        _refuse(source, "speed", f"{v:g} m/s is not above the hand-over band's top {v_hi:.3g} m/s, where "
-                "the EMF estimate alone is trusted")
+    _check_emf(d, data, source)
+    v = float(speed) if speed is not None else SPEED_OVER_V_HI * float(d.observer.handover_v_hi)
     i_d = _d_current(d, model) if d_current is None else float(d_current)
     data.setdefault("injection", {})["d_current"] = i_d
     a = _acceleration(d, model, load, a_max, i_d, source)
-    stroke, x0 = _stroke(scenario, stroke_mm, v, a, model, source, points)
+    _check_speed(_speed_design(data, v, a, model, source, base_dir), v, model.pole_pitch, source)
+    _check_bus(d, model, load, v, i_d, source)
+    by_load = a_max is None and load != 0.0 and a < A_DEFAULT  # (the load sets the acceleration)
+    stroke, x0 = _stroke(scenario, stroke_mm, v, a, model, source, points, by_load)
     leg = stroke / v + v / a
     legs = _legs(stroke, v, a)
     if legs < 2:  # (out and back at least: each point seen both ways)
@@ -247,7 +257,6 @@ def commission(motor: Motor | str | None = None, *, scenario: Scenario | None = 
                            "slope": slope}
     data["record"] = {"decimate": 64}
     sc = scenario_from_dict(data, source, base_dir)
-    _check_speed(designed(sc, model).spec, v, model.pole_pitch, source)
     b = build(sc, obj) if plant is None else build(sc, plant, model=model)
     lut = b.extra["cal_table"]
     start = np.array(lut.table, dtype=float)
@@ -293,6 +302,35 @@ def _points_stroke(points: int, v: float, a: float, base: float, top: float) -> 
     return longest  # (none fits: the longest, whose refusal names the most points any stroke learns)
 
 
+def _check_bus(d, model: Motor, load: float, v: float, i_d: float, source: str) -> None:
+    """Refuse a load the bus cannot drive at the commissioning's speed beside the injection, which
+    stays on (the mover never reached its cruise against 35 N on ecce2010 at 1 m/s)."""
+    dd = DriveData(i_max=float(d.controller.i_max), shape=d.injection.shape, d_current=i_d)
+    i_q = abs(load) / drive_force_constant(model, dd)
+    v_avail = float(d.inverter.v_dc) / math.sqrt(3.0) - float(d.injection.amplitude)
+    top = fundamental_speed(model, v_avail, i_q, mean_dq(model)[1]) if i_q > 0.0 else math.inf
+    if v > top:
+        v_dc = float(d.inverter.v_dc)
+        _refuse(source, "load", f"{load:g} N at {v:.3g} m/s needs more voltage than the {v_dc:g} V bus "
+                f"leaves beside the injection ({v_avail:.3g} V for R_s i, the back-EMF and omega L_q i): at "
+                f"most {top:.3g} m/s with it, a smaller load or a larger bus")
+
+
+def _check_emf(d, data: dict, source: str) -> None:
+    """Refuse a drive without the EMF estimate, saying why it is off."""
+    if d.observer.emf:
+        return
+    shape = d.injection.shape
+    if data.get("observer", {}).get("emf") is False:
+        why = "the scenario turns it off (observer.emf = false)"
+    elif shape != "pulsating":
+        why = f"the {shape} injection has no EMF step (the pulsating or elliptical one has)"
+    else:
+        why = ("the design leaves it off for this motor and drive: its error bound stays above 3 deg at "
+               "every speed the bus allows, or flux harmonics")
+    _refuse(source, "observer.emf", f"no EMF estimate: {why}; commissioning needs it trustworthy at speed")
+
+
 def _check_points(points: int, stroke: float, v: float, a: float, legs: int, source: str) -> None:
     """Refuse a table of more points than the commissioning's motion can learn: each point is seen
     for ``LEARN_SHARE cruise / (points v)`` a way per leg (the cruise: the stroke less the
@@ -304,26 +342,45 @@ def _check_points(points: int, stroke: float, v: float, a: float, legs: int, sou
         _refuse(source, "positions", f"{points} points need {need} legs of {stroke * 1e3:.0f} mm at "
                 f"{v:.3g} m/s ({T_HOLD:g} s each way at each point, {per_leg * 1e3:.2g} ms a leg); {legs} "
                 f"fit in the commissioning's {DURATION_MAX:g} s of motion: at most {most} points, or a "
-                f"longer stroke")
+                f"longer stroke (the travel allowing) or a lower speed")
+
+
+def _speed_design(data: dict, v: float, a: float, model: Motor, source: str, base_dir):
+    """The drive designed for the commissioning's speed and acceleration (its band and caps); a
+    refusal of the speed named at ``speed``, the user's option."""
+    at_speed = {**data, "control": {**data.get("control", {}), "mode": "sensorless_lut"},
+                "reference": {"type": "hold", "v_max": v, "a_max": a}}
+    try:
+        return designed(scenario_from_dict(at_speed, source, base_dir), model).spec
+    except InputError as exc:
+        if exc.key.split(" ")[0] not in ("reference.v_max", "controller.v_max"):
+            raise
+        return _refuse(source, "speed", f"{v:g} m/s: {exc.message}")
 
 
 def _check_speed(spec, v: float, pitch: float, source: str) -> None:
     """Refuse a commissioning speed the drive designed for it cannot cruise at: its cruise not above
     the hand-over band (``LS_DRIVE_LEARN_CRUISE v``, as ``ls_drive_set_mode`` requires), or beyond
-    the speed cap, the observer's clamp or the over-speed trip a scenario gives."""
+    the speed cap, the observer's clamp or the over-speed trip a scenario gives; a scenario whose caps
+    leave no such speed is named itself."""
     kx = 2.0 * np.pi / pitch
-    v_hi = float(spec.observer.handover_v_hi)
-    if not LEARN_CRUISE * v > v_hi:
-        _refuse(source, "speed", f"{v:.3g} m/s: its cruise ({LEARN_CRUISE:g} of it) is not above the "
-                f"hand-over band's top {v_hi:.3g} m/s of the drive designed for it, where the EMF estimate "
-                f"alone is trusted: at least {v_hi / LEARN_CRUISE:.3g} m/s")
-    for key, top in (("controller.v_max", float(spec.controller.v_max)),
-                     ("observer.omega_max", float(spec.observer.omega_max) / kx),
-                     ("protection.omega_max", float(spec.protection.omega_max) / kx)):
-        if v > top:
-            _refuse(source, "speed", f"{v:.3g} m/s is beyond the drive's {key} ({top:.3g} m/s): it would "
-                    f"never cruise there; a slower --speed, or a scenario designed for it "
-                    f"(linsense tune --v-max)")
+    v_min = float(spec.observer.handover_v_hi) / LEARN_CRUISE
+    band = f"the hand-over band's top {v_min * LEARN_CRUISE:.3g} m/s"
+    caps = (("controller.v_max", float(spec.controller.v_max)),
+            ("observer.omega_max", float(spec.observer.omega_max) / kx),
+            ("protection.omega_max", float(spec.protection.omega_max) / kx))
+    key, top = min(caps, key=lambda c: c[1])
+    if not v >= v_min:
+        _refuse(source, "speed", f"{v:.3g} m/s: its cruise ({LEARN_CRUISE:g} of it) is not above {band} of "
+                f"the drive designed for it, where the EMF estimate alone is trusted: at least "
+                f"{v_min:.3g} m/s")
+    if top < v_min:  # (a scenario's own cap: the designed ones follow the speed)
+        _refuse(source, key, f"{top:.3g} m/s is below {v_min:.3g} m/s, where the cruise ({LEARN_CRUISE:g} "
+                f"of the speed) is above {band}: commission a scenario designed for that speed (linsense "
+                f"tune --v-max {SPEED_OVER_V_HI * v_min * LEARN_CRUISE:.3g})")
+    if v > top:
+        _refuse(source, "speed", f"{v:.3g} m/s is beyond the drive's {key} ({top:.3g} m/s): it would never "
+                f"cruise there; at most {top:.3g} m/s, or a scenario designed for it (linsense tune --v-max)")
 
 
 def _base_data(motor, scenario: Scenario | None, drive: dict | None, fidelity: str, quad: float | None,
@@ -356,7 +413,9 @@ def _acceleration(d, model: Motor, load: float, a_max: float | None, i_d: float,
     if f_acc <= 0.0:
         _refuse(source, "load", f"{load:g} N leaves nothing of {FORCE_SHARE:g} {kfi} = "
                 f"{FORCE_SHARE * f_max:.3g} N to accelerate with: the drive cannot hold it at speed")
-    a = float(a_max) if a_max is not None else min(10.0, f_acc / model.mass)
+    # (the design's own rule: its rated load, RATED_LOAD_FRACTION of the force, and m a_max within it)
+    a = float(a_max) if a_max is not None else min(A_DEFAULT, f_acc / model.mass,
+                                                   0.99 * (1.0 - RATED_LOAD_FRACTION) * f_max / model.mass)
     if model.mass * a > f_acc:
         _refuse(source, "a_max", f"{a:g} m/s^2 needs {model.mass * a:.3g} N beside the load's "
                 f"{abs(load):g} N: more than {FORCE_SHARE:g} {kfi} = {FORCE_SHARE * f_max:.3g} N")
@@ -364,7 +423,7 @@ def _acceleration(d, model: Motor, load: float, a_max: float | None, i_d: float,
 
 
 def _stroke(scenario: Scenario | None, stroke_mm: float | None, v: float, a: float, model: Motor,
-            source: str, points: int = 56) -> tuple[float, float]:
+            source: str, points: int = 56, by_load: bool = False) -> tuple[float, float]:
     """The stroke and its start, m (the scenario's travel less 10 % at each end where it gives one),
     refusing too little travel."""
     # m: to the speed and back, the settling at speed, and the periods learned at speed
@@ -373,7 +432,8 @@ def _stroke(scenario: Scenario | None, stroke_mm: float | None, v: float, a: flo
     bounded = tr is not None and bool({"min_mm", "max_mm"} & tr.model_fields_set)
     if stroke_mm is None:
         stroke = 0.8 * (tr.max_mm - tr.min_mm) / 1e3 if bounded else _points_stroke(
-            points, v, a, need + 3.0 * model.pole_pitch, TravelSection().max_mm / 1e3)
+            points, v, a, need + 3.0 * model.pole_pitch,
+            TravelSection().max_mm / 1e3 - END_ROOM_PITCHES * model.pole_pitch)
     else:
         stroke = float(stroke_mm) / 1e3
     key = "stroke" if stroke_mm is not None else "travel"
@@ -385,12 +445,16 @@ def _stroke(scenario: Scenario | None, stroke_mm: float | None, v: float, a: flo
                                 stroke_mm < 10.0 else ""))
     x0 = tr.min_mm / 1e3 + 0.1 * (tr.max_mm - tr.min_mm) / 1e3 if bounded else 0.0
     lo, hi = (tr.min_mm, tr.max_mm) if tr is not None else (TravelSection().min_mm, TravelSection().max_mm)
-    if 1e3 * (x0 + stroke) > hi or 1e3 * x0 < lo:
-        key = key if stroke_mm is not None or bounded else "speed"  # (the default stroke follows it)
-        lead = f"{v:g} m/s needs {stroke * 1e3:.0f} mm" if key == "speed" else f"{stroke * 1e3:.0f} mm"
-        _refuse(source, key, f"{lead} of stroke from {x0 * 1e3:.0f} mm, which leaves the travel "
-                f"[{lo:g}, {hi:g}] mm (the scenario's [travel], else the simulator's default): at most "
-                f"{hi - 1e3 * x0:.0f} mm")
+    room = END_ROOM_PITCHES * model.pole_pitch * 1e3  # (the end of a move overshoots a little: kept)
+    if 1e3 * (x0 + stroke) > hi - room or 1e3 * x0 < lo:
+        # (the default stroke follows the speed, and the acceleration the load leaves)
+        key = key if stroke_mm is not None or bounded else "load" if by_load else "speed"
+        lead = {"speed": f"{v:g} m/s needs {stroke * 1e3:.0f} mm",
+                "load": f"the acceleration the load leaves, {a:.3g} m/s^2, needs {stroke * 1e3:.0f} mm"}.get(
+                    key, f"{stroke * 1e3:.0f} mm")
+        _refuse(source, key, f"{lead} of stroke from {x0 * 1e3:.0f} mm, beyond the travel [{lo:g}, {hi:g}] "
+                f"mm (the scenario's [travel], else the simulator's default) less {END_ROOM_PITCHES:g} pole "
+                f"pitches of room at its end: at most {hi - room - 1e3 * x0:.0f} mm")
     return stroke, x0
 
 
@@ -543,9 +607,9 @@ def commission_to(out: str | Path, motor=None, figure: Callable[[Calibration, Pa
     CommissionOutput
         The commissioning, its metrics and the files written.
     """
-    cal = commission(motor, **kwargs)
-    metrics, timing = split_timing(cal.metrics)
-    with output_set(out, "commission") as s:
+    with output_set(out, "commission") as s:  # (the folder checked before the run, not after it)
+        cal = commission(motor, **kwargs)
+        metrics, timing = split_timing(cal.metrics)
         s.write("lut_measured.csv", lut_csv(cal))
         if cal.completed:
             s.write("lut_measured.json", measured_json(cal))

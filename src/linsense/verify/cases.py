@@ -418,7 +418,25 @@ def all_cases(tau: float, v_max: float, a_max: float, load_rated: float, quick: 
     if travel is not None:
         stops = end_stops(tau, travel)
         cases = [dataclasses.replace(c, sections={**c.sections, "travel": stops}) for c in cases]
+    else:  # (unbounded: a move longer than the runs' +-10 m gets end stops beyond it)
+        cases = [_room(c, tau) for c in cases]
     return cases
+
+
+#: mm, the end stops of an unbounded stroke's runs (the certificate's base scenario)
+UNBOUNDED_MM = 1e4
+
+
+def _room(case: Case, tau: float) -> Case:
+    """``case`` with end stops 20 pole pitches beyond its farthest position where that passes
+    :data:`UNBOUNDED_MM` (a fast move's distance grows with v_max^2 / a_max: 25 m at 5 m/s)."""
+    ref, init = case.sections.get("reference", {}), case.sections.get("initial", {})
+    far = max([abs(float(w)) for w in ref.get("waypoints_mm") or []] +
+              [abs(float(ref.get("position_mm") or 0.0)), abs(float(init.get("position_mm") or 0.0))])
+    if far + 20.0 * tau * 1e3 <= UNBOUNDED_MM:
+        return case
+    span = far + 20.0 * tau * 1e3
+    return dataclasses.replace(case, sections={**case.sections, "travel": {"min_mm": -span, "max_mm": span}})
 
 
 def off_nominal_motor(motor: Motor, name: str) -> Motor:

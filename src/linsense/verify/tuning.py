@@ -221,7 +221,7 @@ def _check_clamp(sc: dict, m: Motor, dd: DriveData, src: str) -> None:
                      f"(the speed cap, the over-speed trip and their margins), may turn the electrical angle "
                      f"by at most {per:g} rad per PWM period with the EMF estimate on: at most "
                      f"{limit_text(dd.v_max * per * f_pwm / w, False)} m/s, or a PWM rate of at least "
-                     f"{w / per:.4g} Hz")
+                     f"{limit_text(w / per, True)} Hz")
 
 
 def _scenario_base(scenario: Scenario, base: dict, table: str | None,
