@@ -18,6 +18,9 @@ from linsense.tune import DriveData, design
 
 ROOT = Path(__file__).parents[1]
 SMALL = ROOT / "src/linsense/examples" / "motors" / "small30.toml"
+#: a 40 mm, L_q / L_d 1.46 motor of a helper's (negative end effect), driven at 150 V in the tests
+H40 = ('[motor]\nname = "h40"\nR_s = 3.5\npole_pitch = 0.04\nforce_constant = 12.0\nmass = 1.0\n'
+       '[inductance]\nL0 = 4.5e-3\nL2 = -7.9e-4\nM0 = -1.5e-3\nM2 = -7.9e-4\ndM0 = -4.5e-4\n')
 
 
 def test_scenario_without_gains_gets_the_design_for_its_motor():
@@ -283,9 +286,7 @@ def test_a_v_max_beyond_the_pwm_rate_is_named(run_cli, tmp_path):
     and the PWM rate that would take it; no unit slip is suggested for a plausible value (it said "did
     you type mm/s? (6.4 mm/s is 0.0064 m/s)"). The rotating vector (no EMF step) is not held to it."""
     motor = tmp_path / "h40.toml"
-    motor.write_text('[motor]\nname = "h40"\nR_s = 3.5\npole_pitch = 0.04\nforce_constant = 12.0\n'
-                     'mass = 1.0\n[inductance]\nL0 = 4.5e-3\nL2 = -7.9e-4\nM0 = -1.5e-3\nM2 = -7.9e-4\n'
-                     'dM0 = -4.5e-4\n')
+    motor.write_text(H40)
     drive = ("--v-dc", "150", "--f-pwm", "8000", "--dead-time", "1e-6", "--i-max", "3", "--a-max", "10",
              "--no-verify")
     r = run_cli("tune", "--motor", str(motor), *drive, "--v-max", "6.4", "--out", str(tmp_path / "a.toml"))
@@ -304,9 +305,7 @@ def test_no_speed_cap_warning_where_the_injection_fades_out_first():
     from linsense.model.motor import motor_from_toml
     from linsense.tune.drive_design import design_drive
 
-    m = motor_from_toml('[motor]\nname = "h40"\nR_s = 3.5\npole_pitch = 0.04\nforce_constant = 12.0\n'
-                        'mass = 1.0\n[inductance]\nL0 = 4.5e-3\nL2 = -7.9e-4\nM0 = -1.5e-3\nM2 = -7.9e-4\n'
-                        'dM0 = -4.5e-4\n', "h40.toml")
+    m = motor_from_toml(H40, "h40.toml")
     dd = DriveData(v_dc=150.0, f_pwm=12000.0, dead_time=1e-6, i_max=3.0, v_max=6.4, a_max=10.0)
     made = design_drive(m, dd, analyse=False, startup=False)
     assert made.handover.on and made.handover.v_off < made.design.headroom_speed < made.design.v_cap

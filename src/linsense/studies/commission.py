@@ -96,6 +96,8 @@ END_ROOM_PITCHES = 2.0
 #: m/s^2, the commissioning's acceleration without a load that limits it (and within the design's
 #: force rule: the rated load and m a_max within the force at i_max)
 A_DEFAULT = 10.0
+#: the scenario keys of a design's refusal that are about the speed asked for
+SPEED_KEYS = ("reference.v_max", "controller.v_max")
 #: m/s, the speed caps the band is designed for, the first the bus allows
 CAPS = (2.0, 1.5, 1.0, 0.7)
 #: s, the HF lock before the first move
@@ -232,9 +234,10 @@ def commission(motor: Motor | str | None = None, *, scenario: Scenario | None = 
     v = float(speed) if speed is not None else SPEED_OVER_V_HI * float(d.observer.handover_v_hi)
     i_d = _d_current(d, model) if d_current is None else float(d_current)
     data.setdefault("injection", {})["d_current"] = i_d
-    a = _acceleration(d, model, load, a_max, i_d, source)
+    dd = DriveData(i_max=float(d.controller.i_max), shape=d.injection.shape, d_current=i_d)
+    a = _acceleration(dd, model, load, a_max, source)
     _check_speed(_speed_design(data, v, a, model, source, base_dir), v, model.pole_pitch, source)
-    _check_bus(d, model, load, v, i_d, source)
+    _check_bus(d, dd, model, load, v, source)
     by_load = a_max is None and load != 0.0 and a < A_DEFAULT  # (the load sets the acceleration)
     stroke, x0 = _stroke(scenario, stroke_mm, v, a, model, source, points, by_load)
     leg = stroke / v + v / a
@@ -283,9 +286,14 @@ def _legs(stroke: float, v: float, a: float) -> int:
     return int((DURATION_MAX - T_START - 1e-3) / (stroke / v + v / a))
 
 
+def _cruise(stroke: float, v: float, a: float) -> float:
+    """A leg's cruise, m: the stroke less the acceleration, the deceleration and the settling."""
+    return stroke - v * v / a - v * T_SETTLE
+
+
 def _points_needed(points: int, stroke: float, v: float, a: float) -> tuple[float, float]:
     """The legs ``points`` need (:func:`_check_points`) and the time each point is seen a leg, s."""
-    cruise = stroke - v * v / a - v * T_SETTLE
+    cruise = _cruise(stroke, v, a)
     per_leg = LEARN_SHARE * cruise / (points * v) if cruise > 0.0 else 0.0
     return (2 * math.ceil(T_HOLD / per_leg) if per_leg > 0.0 else math.inf), per_leg
 
@@ -302,10 +310,9 @@ def _points_stroke(points: int, v: float, a: float, base: float, top: float) -> 
     return longest  # (none fits: the longest, whose refusal names the most points any stroke learns)
 
 
-def _check_bus(d, model: Motor, load: float, v: float, i_d: float, source: str) -> None:
+def _check_bus(d, dd: DriveData, model: Motor, load: float, v: float, source: str) -> None:
     """Refuse a load the bus cannot drive at the commissioning's speed beside the injection, which
-    stays on (the mover never reached its cruise against 35 N on ecce2010 at 1 m/s)."""
-    dd = DriveData(i_max=float(d.controller.i_max), shape=d.injection.shape, d_current=i_d)
+    stays on (``d``: the design's scenario, ``dd``: the commissioning's drive data)."""
     i_q = abs(load) / drive_force_constant(model, dd)
     v_avail = float(d.inverter.v_dc) / math.sqrt(3.0) - float(d.injection.amplitude)
     top = fundamental_speed(model, v_avail, i_q, mean_dq(model)[1]) if i_q > 0.0 else math.inf
@@ -335,7 +342,7 @@ def _check_points(points: int, stroke: float, v: float, a: float, legs: int, sou
     """Refuse a table of more points than the commissioning's motion can learn: each point is seen
     for ``LEARN_SHARE cruise / (points v)`` a way per leg (the cruise: the stroke less the
     acceleration, the deceleration and the settling) and needs :data:`T_HOLD` each way."""
-    cruise = stroke - v * v / a - v * T_SETTLE
+    cruise = _cruise(stroke, v, a)
     need, per_leg = _points_needed(points, stroke, v, a)
     if need > legs:
         most = int(legs // 2 * LEARN_SHARE * cruise / (v * T_HOLD)) if cruise > 0.0 else 0
@@ -353,7 +360,7 @@ def _speed_design(data: dict, v: float, a: float, model: Motor, source: str, bas
     try:
         return designed(scenario_from_dict(at_speed, source, base_dir), model).spec
     except InputError as exc:
-        if exc.key.split(" ")[0] not in ("reference.v_max", "controller.v_max"):
+        if exc.key.split(" ")[0] not in SPEED_KEYS:
             raise
         return _refuse(source, "speed", f"{v:g} m/s: {exc.message}")
 
@@ -404,10 +411,9 @@ def _base_data(motor, scenario: Scenario | None, drive: dict | None, fidelity: s
     return data, source, base_dir
 
 
-def _acceleration(d, model: Motor, load: float, a_max: float | None, i_d: float, source: str) -> float:
+def _acceleration(dd: DriveData, model: Motor, load: float, a_max: float | None, source: str) -> float:
     """The commissioning's acceleration, m/s^2, refusing a load the drive cannot hold at speed (its
-    force at i_max with the commissioning's d-current ``i_d``: docs/tuning.md, "The force at i_max")."""
-    dd = DriveData(i_max=float(d.controller.i_max), shape=d.injection.shape, d_current=i_d)
+    force at i_max with the commissioning's d-current, ``dd``: docs/tuning.md, "The force at i_max")."""
     f_max, kfi = drive_force_max(model, dd), force_max_text(model, dd)
     f_acc = FORCE_SHARE * f_max - abs(load)
     if f_acc <= 0.0:
@@ -480,7 +486,7 @@ def _design(probe, model: Motor, source: str):
             return designed(probe(cap), model).spec
         except InputError as exc:
             last = exc
-    if last is not None and last.key.split(" ")[0] not in ("reference.v_max", "controller.v_max"):
+    if last is not None and last.key.split(" ")[0] not in SPEED_KEYS:
         raise last  # (not the speed: what the slowest cap's design refused, as tune says it)
     return _refuse(source, "inverter.v_dc", f"the bus allows none of {', '.join(map(str, CAPS))} m/s: no "
                    f"speed to commission at ({last})")

@@ -19,7 +19,7 @@ from linsense.sim.build import build
 from linsense.sim.core import run_closed_loop
 from linsense.sim.metrics import fault_reason
 from linsense.verify import criteria as C
-from linsense.verify.cases import Case, off_nominal_motor
+from linsense.verify.cases import UNBOUNDED_MM, Case, off_nominal_motor
 
 _SIGNALS = ("t", "x", "theta_err")
 _BLOCKS = ("x_min", "x_max", "x_mean", "err_min", "err_max", "err_mean")
@@ -72,7 +72,7 @@ def case_scenario(case: Case, base: dict, motor_spec: str) -> dict:
     f_pwm = float(sc["inverter"].get("f_pwm", 16000.0))
     sc.setdefault("record", {})["decimate"] = max(1, int(round(f_pwm / 2000.0)))  # 0.5 ms blocks
     if "travel" not in case.sections:  # (no stroke given: no end stops)
-        sc["travel"] = {"min_mm": -1e4, "max_mm": 1e4}
+        sc["travel"] = {"min_mm": -UNBOUNDED_MM, "max_mm": UNBOUNDED_MM}
     return sc
 
 

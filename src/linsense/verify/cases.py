@@ -19,6 +19,9 @@ from linsense.sim.build import trapezoid_time
 from linsense.tune.export import end_stops
 from linsense.verify import criteria as C
 
+#: mm, the end stops of an unbounded stroke's runs (a longer move gets its own: _room)
+UNBOUNDED_MM = 1e4
+
 
 @dataclass(frozen=True)
 class Case:
@@ -423,8 +426,6 @@ def all_cases(tau: float, v_max: float, a_max: float, load_rated: float, quick: 
     return cases
 
 
-#: mm, the end stops of an unbounded stroke's runs (the certificate's base scenario)
-UNBOUNDED_MM = 1e4
 
 
 def _room(case: Case, tau: float) -> Case:

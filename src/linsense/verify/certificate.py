@@ -16,7 +16,7 @@ from linsense.model.motor import Motor
 from linsense.verify import criteria as C
 from linsense.verify.case_runs import MOVES as C_MOVES
 from linsense.verify.case_runs import run_cases
-from linsense.verify.cases import all_cases
+from linsense.verify.cases import UNBOUNDED_MM, all_cases
 
 #: the likely cause of a failed check and what to change
 REMEDY = {
@@ -409,7 +409,8 @@ def _calibration_base(base: dict, motor_spec: str, travel: float | None, tau: fl
     sc.setdefault("controller", {}).setdefault("model", {})["motor"] = motor_spec
     for key in ("lut_model", "lut_file", "compensation"):
         sc.get("observer", {}).pop(key, None)
-    sc["travel"] = end_stops(tau, travel) if travel is not None else {"min_mm": -1e4, "max_mm": 1e4}
+    sc["travel"] = (end_stops(tau, travel) if travel is not None else
+                    {"min_mm": -UNBOUNDED_MM, "max_mm": UNBOUNDED_MM})
     sc["reference"] = {"type": "hold"}
     return sc
 
