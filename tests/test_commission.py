@@ -2,6 +2,7 @@
 refusals before the run, each naming what is needed, and one run on ecce2010 (switching inverter,
 dead time) whose learned table is compared with the plant's own."""
 
+import math
 from pathlib import Path
 
 import numpy as np
@@ -50,6 +51,28 @@ def test_a_refusal_names_what_was_given(kwargs, key, text):
     with pytest.raises(InputError) as e:
         commission("ecce2010", **kwargs)
     assert e.value.key == key and text in str(e.value), str(e.value)
+
+
+def test_a_table_too_coarse_for_the_motor_is_refused(monkeypatch):
+    """A table whose points the firmware's interpolation reads off the motor's own by more than the
+    bound is refused before the run, naming the least count within it (4 points ran and wrote a table
+    9.3 deg off at its points with an end effect of 1.68 x: the learning fits the interpolation)."""
+    import linsense.studies.commission as com
+    from linsense.compensation.measured import FIT_RMS_WARN_DEG, interpolation_error
+
+    seen, check = [], com._check_resolution
+    monkeypatch.setattr(com, "_check_resolution", lambda *a: (seen.append(a), check(*a)))
+    with pytest.raises(InputError) as e:
+        commission("ecce2010", points=12)
+    assert e.value.key == "positions" and "off this motor's table by up to 3.5 deg" in str(e.value)
+    least = int(str(e.value).rsplit("at least ", 1)[1].split()[0])
+    motor, _, inj, read_at, _ = seen[0]
+
+    def err(n):
+        return math.degrees(interpolation_error(motor, n, inj.shape, inj.frequency, inj.quadrature, read_at))
+
+    assert err(least) <= FIT_RMS_WARN_DEG < err(least - 1)
+    check(motor, least, inj, read_at, "t")  # (the count it names passes)
 
 
 def test_a_speed_beyond_the_scenarios_cap_is_refused(tmp_path):

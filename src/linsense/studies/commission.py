@@ -27,7 +27,7 @@ import numpy as np
 
 from linsense.analysis.hf import demod_ratio, psi_lut, psi_lut_resistive
 from linsense.compensation.lut import build_lut
-from linsense.compensation.measured import end_effect_fit, table_stamp
+from linsense.compensation.measured import FIT_RMS_WARN_DEG, end_effect_fit, interpolation_error, table_stamp
 from linsense.ctrl import CAL_SLOPE_MAX, LEARN_CRUISE, ffi
 from linsense.errors import InputError
 from linsense.io import output_set, split_timing
@@ -226,6 +226,7 @@ def commission(motor: Motor | str | None = None, *, scenario: Scenario | None = 
                 "there is no HF error to learn a table from")
     d = _design(probe, model, source)
     drive_inj = d.injection  # (the drive's injection: its table is the one wanted)
+    _check_resolution(model, points, drive_inj, int(d.observer.lut_points), source)
     carried = route == "pulsating" and drive_inj.shape == "pulsating" and drive_inj.quadrature > 0.0
     if carried:  # (learned with the pulsating injection, carried to the drive's by the fitted end effect)
         data.setdefault("injection", {})["quadrature"] = 0.0
@@ -363,6 +364,28 @@ def _speed_design(data: dict, v: float, a: float, model: Motor, source: str, bas
         if exc.key.split(" ")[0] not in SPEED_KEYS:
             raise
         return _refuse(source, "speed", f"{v:g} m/s: {exc.message}")
+
+
+def _check_resolution(model: Motor, points: int, inj, read_at: int, source: str) -> None:
+    """Refuse a table too coarse for the motor: the model's table at ``points``, read with the
+    firmware's linear interpolation at the drive's ``read_at`` points, off its own by more than
+    :data:`~linsense.compensation.measured.FIT_RMS_WARN_DEG` (``calibrate`` warns of it; here the
+    learning fits the interpolation over the whole period, so a coarse table's very points, and the end
+    effect fitted to them, are off too: 9.3 deg and 1.68 x at 4 points on ecce2010, 0.14 deg and 1.01 x
+    at 28)."""
+    def err(n: int) -> float:
+        return math.degrees(interpolation_error(model, n, inj.shape, inj.frequency, inj.quadrature, read_at))
+
+    if points >= read_at or err(points) <= FIT_RMS_WARN_DEG:
+        return
+    lo, hi = points, read_at  # (the least count within the bound, by bisection: the error falls with n)
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        lo, hi = (lo, mid) if err(mid) <= FIT_RMS_WARN_DEG else (mid, hi)
+    _refuse(source, "positions", f"{points}: the firmware's linear interpolation between {points} points "
+            f"is off this motor's table by up to {err(points):.2g} deg (bound {FIT_RMS_WARN_DEG:g} deg), and "
+            f"the learning fits that interpolation, so the table's points and the end effect it says are "
+            f"off too: at least {hi} points")
 
 
 def _check_speed(spec, v: float, pitch: float, source: str) -> None:
