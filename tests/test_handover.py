@@ -312,6 +312,15 @@ def test_the_shapes_without_an_emf_step_say_so(run_cli, tmp_path, shape):
      "calibration.slope: 0.5 has no effect with control.mode = 'sensorless_lut'"),
     ("observer", {"emf": True, "handover_v_lo": 385.0, "handover_v_hi": 771.0, "inject_v_on": 784.0,
                   "inject_v_off": 901.0}, "did you type mm/s? (385 mm/s is 0.385 m/s)"),
+    # (one key in mm/s is named itself, not the next key of the order; a key given against a
+    # designed one is the one named; a band beyond the observer's clamp never hands over)
+    ("observer", {"emf": True, "handover_v_lo": 400.0, "handover_v_hi": 0.8},
+     "observer.handover_v_lo: 400 m/s is outside the range of linear motors [0, 20] m/s: did you type mm/s?"),
+    ("observer", {"emf": True, "handover_v_lo": 0.4, "handover_v_hi": 5.0},
+     "observer.handover_v_hi: must be at most observer.inject_v_on = "),
+    ("observer", {"emf": True, "handover_v_lo": 3.0, "handover_v_hi": 4.0, "inject_v_on": 4.0,
+                  "inject_v_off": 4.5},
+     "observer.handover_v_lo: 3 m/s must be below the speed of the observer's clamp"),
 ])
 def test_a_key_of_the_speed_range_that_does_nothing_is_refused(section, keys, text):
     """No key silently ignored: the EMF's band keys with the EMF estimate off, the adaptation with the

@@ -22,7 +22,7 @@ from linsense.ctrl import (
     V_INJ_SHARE_MAX,
     injection_fits,
 )
-from linsense.plausible import slip
+from linsense.plausible import implausible, slip
 from linsense.scenario.bounds import DEAD_TIME_SHARE_MAX, F_INJ_PWM_DIV, V_DC_MAX_FRACTION, V_DC_MIN_FRACTION
 from linsense.scenario.sections import ScenarioSchema
 from linsense.validation import KeyProblem
@@ -370,13 +370,21 @@ def _check_handover(f: ScenarioSchema) -> None:
     if obs.emf and f.injection.shape != "pulsating":
         raise KeyProblem("observer.emf", f"only with shape = \"pulsating\" (the {f.injection.shape} "
                          "injection's step has no EMF estimate), got true")
-    order = (("handover_v_hi", "handover_v_lo", False), ("inject_v_on", "handover_v_hi", True),
-             ("inject_v_off", "inject_v_on", False))
-    for key, below, equal in order:
+    keys = ("handover_v_lo", "handover_v_hi", "inject_v_on", "inject_v_off")
+    for key in keys:  # (a speed in mm/s first: the order would blame the next key)
+        wrong = implausible("speed", getattr(obs, key)) if _given(obs, key) else None
+        if wrong is not None:
+            raise KeyProblem(f"observer.{key}", wrong)
+    for k, (below, key) in enumerate(zip(keys, keys[1:], strict=False)):
         v, lo = getattr(obs, key), getattr(obs, below)
-        if v < lo or (v == lo and not equal):
-            raise KeyProblem(f"observer.{key}", f"must be {'at least' if equal else 'above'} "
-                             f"observer.{below} = {lo:g} m/s, got {v:g}")
+        equal = k == 1  # (the injection may fade back in at the band's top)
+        if v > lo or (v == lo and equal):
+            continue
+        if _given(obs, below) and not _given(obs, key):  # (the key given is the one named)
+            raise KeyProblem(f"observer.{below}", f"must be {'at most' if equal else 'below'} "
+                             f"observer.{key} = {v:g} m/s (not given: the design's; give it too), got {lo:g}")
+        raise KeyProblem(f"observer.{key}", f"must be {'at least' if equal else 'above'} "
+                         f"observer.{below} = {lo:g} m/s, got {v:g}")
 
 
 CHECKS: tuple[Callable[[ScenarioSchema], None], ...] = (

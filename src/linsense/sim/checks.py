@@ -562,13 +562,15 @@ def _check_stroke(sc: Scenario, user_keys: set[str]) -> None:
 def _check_relations(sc: Scenario, kinds: dict[str, str], tau: float, user_keys: set[str]) -> None:
     """Refuse a frequency or electrical speed the file gives that breaks its relation to another
     (:func:`check_units`), naming the likely slip of unit."""
-    from linsense.plausible import KINDS, slip
+    from linsense.plausible import KINDS, implausible, slip
 
     s = sc.spec
     for key, holds, rule in _relations(s, tau):
         value = _value_at(s, key)
         if key in user_keys and not holds(value):
-            hint = slip(kinds[key], value, ok=holds)
+            # (no unit to blame for a plausible speed: 3 m/s is no 3 mm/s typed)
+            plain = kinds[key] == "speed" and implausible("speed", value) is None
+            hint = "" if plain else slip(kinds[key], value, ok=holds)
             unit = KINDS[kinds[key]].unit
             raise InputError(sc.source, key,
                              f"{value:g} {unit} must be {rule}" + (f"; {hint}" if hint else ""))
@@ -582,6 +584,7 @@ def _relations(s, tau: float) -> list[tuple[str, Callable[[float], bool], str]]:
     lpf, v_max = s.observer.demod_lpf_hz, s.controller.v_max
     w_top = 2.0 * math.pi * v_max / tau
     v_lin, i_max = s.inverter.v_dc / math.sqrt(3.0), s.controller.i_max
+    v_clamp = s.observer.omega_max * tau / (2.0 * math.pi)  # m/s
     speed = (f"the electrical speed of controller.v_max = {v_max:g} m/s, 2 pi v_max / pole pitch = "
              f"{w_top:.4g} rad/s")
     return [
@@ -605,6 +608,10 @@ def _relations(s, tau: float) -> list[tuple[str, Callable[[float], bool], str]]:
         ("inverter.dtc_current_band", lambda v: v < i_max,
          f"below controller.i_max = {i_max:g} A (a band beyond the current reference leaves the "
          "compensation a slope, no sign)"),
+        ("observer.handover_v_lo", lambda v: not s.observer.emf or v < v_clamp,
+         f"below the speed of the observer's clamp, observer.omega_max = {s.observer.omega_max:.4g} rad/s, "
+         f"{v_clamp:.3g} m/s (the estimate never reaches a band above it: the EMF estimate would never "
+         "take over)"),
         ("observer.hf_delay_s", lambda v: v * f_inj <= 10.0,
          f"at most ten injection periods, {10.0 / f_inj:g} s (the HF path's delay is about one)"),
     ]
