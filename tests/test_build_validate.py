@@ -85,7 +85,7 @@ def test_position_and_feedforward_refused_before_the_plant(no_work):
 
 
 @pytest.mark.parametrize("load, key", [({"force": 1e300}, "load.force"),
-                                       ({"type": "step", "force": 1.0, "force_after": -1e39, "time": 0.0},
+                                       ({"type": "step", "force_after": -1e39, "time": 0.0},
                                         "load.force_after")])
 def test_balanced_load_beyond_the_drive_refused_before_the_drive(no_work, load, key):
     """A start in equilibrium with a force LS_REAL cannot hold was a ConfigError of ls_drive_set_load

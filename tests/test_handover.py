@@ -314,6 +314,8 @@ def test_the_shapes_without_an_emf_step_say_so(run_cli, tmp_path, shape):
                   "inject_v_off": 901.0}, "did you type mm/s? (385 mm/s is 0.385 m/s)"),
     # (one key in mm/s is named itself, not the next key of the order; a key given against a
     # designed one is the one named; a band beyond the observer's clamp never hands over)
+    ("load", {"type": "step", "force": 10.0, "force_after": 20.0},
+     "load.force: 10.0 has no effect with load.type = 'step' at load.time = 0"),
     ("observer", {"emf": True, "handover_v_lo": 400.0, "handover_v_hi": 0.8},
      "observer.handover_v_lo: 400 m/s is outside the range of linear motors [0, 20] m/s: did you type mm/s?"),
     ("observer", {"emf": True, "handover_v_lo": 0.4, "handover_v_hi": 5.0},

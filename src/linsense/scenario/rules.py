@@ -310,6 +310,8 @@ def _check_overrides(f: ScenarioSchema) -> None:
         (ref, "at", ref.type == "hold", "reference.type = 'hold'", "a hold commands nothing"),
         (ld, "force_after", ld.type != "step", f"load.type = {ld.type!r}", "only a step load changes"),
         (ld, "time", ld.type != "step", f"load.type = {ld.type!r}", "only a step load changes"),
+        (ld, "force", ld.type == "step" and ld.time == 0.0, "load.type = 'step' at load.time = 0",
+         "force_after acts from the start"),
         (ld, "incline_deg", ld.type != "incline", f"load.type = {ld.type!r}",
          "only the incline adds m g sin"),
         (sens, "adc_range", sens.adc_bits == 0, "sensors.adc_bits = 0 (ideal)", "nothing is quantised"),
