@@ -3,6 +3,7 @@ refusals before the run, each naming what is needed, and one run on ecce2010 (sw
 dead time) whose learned table is compared with the plant's own."""
 
 import math
+from importlib.resources import files
 from pathlib import Path
 
 import numpy as np
@@ -56,23 +57,28 @@ def test_a_refusal_names_what_was_given(kwargs, key, text):
 def test_a_table_too_coarse_for_the_motor_is_refused(monkeypatch):
     """A table whose points the firmware's interpolation reads off the motor's own by more than the
     bound is refused before the run, naming the least count within it (4 points ran and wrote a table
-    9.3 deg off at its points with an end effect of 1.68 x: the learning fits the interpolation)."""
+    9.3 deg off at its points with an end effect of 1.68 x: the learning fits the interpolation);
+    without --positions the default grows to that count (the shipped harmonic.toml needs 62)."""
     import linsense.studies.commission as com
     from linsense.compensation.measured import FIT_RMS_WARN_DEG, interpolation_error
 
-    seen, check = [], com._check_resolution
-    monkeypatch.setattr(com, "_check_resolution", lambda *a: (seen.append(a), check(*a)))
+    seen, pick = [], com._table_points
+    monkeypatch.setattr(com, "_table_points", lambda *a: (seen.append(a), pick(*a))[1])
     with pytest.raises(InputError) as e:
         commission("ecce2010", points=12)
     assert e.value.key == "positions" and "off this motor's table by up to 3.5 deg" in str(e.value)
     least = int(str(e.value).rsplit("at least ", 1)[1].split()[0])
     motor, _, inj, read_at, _ = seen[0]
 
-    def err(n):
-        return math.degrees(interpolation_error(motor, n, inj.shape, inj.frequency, inj.quadrature, read_at))
+    def err(n, m=motor):
+        return math.degrees(interpolation_error(m, n, inj.shape, inj.frequency, inj.quadrature, read_at))
 
     assert err(least) <= FIT_RMS_WARN_DEG < err(least - 1)
-    check(motor, least, inj, read_at, "t")  # (the count it names passes)
+    assert pick(motor, least, inj, read_at, "t") == least  # (the count it names passes)
+    assert pick(motor, None, inj, read_at, "t") == com.POINTS_DEFAULT  # (ecce2010: 56 within the bound)
+    harmonic = load_motor(str(files("linsense.examples").joinpath("motors/harmonic.toml")))
+    grown = pick(harmonic, None, inj, read_at, "t")
+    assert grown > com.POINTS_DEFAULT and err(grown, harmonic) <= FIT_RMS_WARN_DEG
 
 
 def test_a_speed_beyond_the_scenarios_cap_is_refused(tmp_path):

@@ -336,8 +336,9 @@ def calibrate(motor_spec: str | None, scenario_path: str | None, positions: int,
                    "and three pole pitches)")
 @click.option("--load", default=0.0, show_default=True, type=float, callback=c.finite(-math.inf, False),
               help="constant load force, N (opposing positive motion when > 0)")
-@click.option("--positions", default=56, show_default=True, type=click.IntRange(4, 4096),
-              help="table points over one electrical period")
+@click.option("--positions", default=None, type=click.IntRange(4, 4096),
+              help="table points over one electrical period (default: 56, more where the motor's table needs "
+                   "them to be read within 0.5 deg)")
 @click.option("--fidelity", type=click.Choice(["switching", "average"]), default="switching",
               show_default=True, help="inverter model, with the drive's dead time")
 @click.option("--route", type=click.Choice(["pulsating", "direct"]), default="pulsating", show_default=True,
@@ -347,7 +348,7 @@ def calibrate(motor_spec: str | None, scenario_path: str | None, positions: int,
 @c.out_option("commission", "scenario's or motor", folder=True)
 @c.json_option
 def commission(motor_spec: str | None, scenario_path: str | None, speed: float | None,
-               stroke_mm: float | None, load: float, positions: int, fidelity: str, route: str,
+               stroke_mm: float | None, load: float, positions: int | None, fidelity: str, route: str,
                out: str | None, as_json: bool, **drive) -> None:
     """Learn the end-effect table without a sensor (docs/tuning.md, "Commissioning without a sensor"):
     the mover runs back and forth at a speed where the EMF estimate is trusted, the HF demodulator

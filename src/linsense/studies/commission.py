@@ -80,6 +80,8 @@ T_SETTLE = 0.02
 #: 1 m/s over 345 mm: 56 points learned in 6.1 s, 64 in 7.0 s, 96 not within DURATION_MAX): sets how
 #: many points a commissioning is refused beyond
 LEARN_SHARE = 0.6
+#: the table's points when none are given (more where the motor's table needs them: _table_points)
+POINTS_DEFAULT = 56
 #: -, the d-current while commissioning, of i_max: it keeps the phase currents off zero, where the
 #: dead time biases the HF current in a way that follows the position (ecce2010, dM0 -25 %,
 #: switching: the learned table 0.22 deg off with none, 0.16 with 0.2 i_max, 0.10 with 0.4; 0.013
@@ -155,7 +157,7 @@ def _refuse(source: str, key: str, message: str):
 def commission(motor: Motor | str | None = None, *, scenario: Scenario | None = None,
                plant: Motor | None = None,
                speed: float | None = None, stroke_mm: float | None = None, load: float = 0.0,
-               points: int = 56, fidelity: str = "switching", a_max: float | None = None,
+               points: int | None = None, fidelity: str = "switching", a_max: float | None = None,
                quad: float | None = None, route: str = "pulsating", drive: dict | None = None,
                d_current: float | None = None, source: str = "<commission>") -> Calibration:
     """Learn the end-effect table without a sensor (module docstring).
@@ -175,8 +177,9 @@ def commission(motor: Motor | str | None = None, *, scenario: Scenario | None = 
         least travel needed plus 3 pole pitches.
     load : float, optional
         Constant load opposing positive motion, N.
-    points : int, optional
-        Table points over one electrical period.
+    points : int or None, optional
+        Table points over one electrical period; None: :data:`POINTS_DEFAULT`, more where the motor's
+        table needs them (:func:`_table_points`).
     fidelity : str, optional
         ``"switching"`` (default, with the drive's dead time) or ``"average"``.
     a_max : float or None, optional
@@ -226,12 +229,12 @@ def commission(motor: Motor | str | None = None, *, scenario: Scenario | None = 
                 "there is no HF error to learn a table from")
     d = _design(probe, model, source)
     drive_inj = d.injection  # (the drive's injection: its table is the one wanted)
-    _check_resolution(model, points, drive_inj, int(d.observer.lut_points), source)
     carried = route == "pulsating" and drive_inj.shape == "pulsating" and drive_inj.quadrature > 0.0
     if carried:  # (learned with the pulsating injection, carried to the drive's by the fitted end effect)
         data.setdefault("injection", {})["quadrature"] = 0.0
         d = _design(probe, model, source)
     _check_emf(d, data, source)
+    points = _table_points(model, points, drive_inj, int(d.observer.lut_points), source)
     v = float(speed) if speed is not None else SPEED_OVER_V_HI * float(d.observer.handover_v_hi)
     i_d = _d_current(d, model) if d_current is None else float(d_current)
     data.setdefault("injection", {})["d_current"] = i_d
@@ -366,26 +369,30 @@ def _speed_design(data: dict, v: float, a: float, model: Motor, source: str, bas
         return _refuse(source, "speed", f"{v:g} m/s: {exc.message}")
 
 
-def _check_resolution(model: Motor, points: int, inj, read_at: int, source: str) -> None:
-    """Refuse a table too coarse for the motor: the model's table at ``points``, read with the
-    firmware's linear interpolation at the drive's ``read_at`` points, off its own by more than
-    :data:`~linsense.compensation.measured.FIT_RMS_WARN_DEG` (``calibrate`` warns of it; here the
-    learning fits the interpolation over the whole period, so a coarse table's very points, and the end
-    effect fitted to them, are off too: 9.3 deg and 1.68 x at 4 points on ecce2010, 0.14 deg and 1.01 x
-    at 28)."""
+def _table_points(model: Motor, points: int | None, inj, read_at: int, source: str) -> int:
+    """The table's points: ``points``, refused where too coarse for the motor, or (None)
+    :data:`POINTS_DEFAULT`, more where the motor's table needs them. Too coarse: the model's table
+    at that count, read with the firmware's linear interpolation at the drive's ``read_at`` points,
+    off its own by more than :data:`~linsense.compensation.measured.FIT_RMS_WARN_DEG` (``calibrate``
+    warns of it; here the learning fits the interpolation over the whole period, so a coarse table's
+    very points, and the end effect fitted to them, are off too: 9.3 deg and 1.68 x at 4 points on
+    ecce2010, 0.14 deg and 1.01 x at 28)."""
     def err(n: int) -> float:
         return math.degrees(interpolation_error(model, n, inj.shape, inj.frequency, inj.quadrature, read_at))
 
-    if points >= read_at or err(points) <= FIT_RMS_WARN_DEG:
-        return
-    lo, hi = points, read_at  # (the least count within the bound, by bisection: the error falls with n)
+    n = POINTS_DEFAULT if points is None else int(points)
+    if n >= read_at or err(n) <= FIT_RMS_WARN_DEG:
+        return n
+    lo, hi = n, read_at  # (the least count within the bound, by bisection: the error falls with n)
     while hi - lo > 1:
         mid = (lo + hi) // 2
         lo, hi = (lo, mid) if err(mid) <= FIT_RMS_WARN_DEG else (mid, hi)
-    _refuse(source, "positions", f"{points}: the firmware's linear interpolation between {points} points "
-            f"is off this motor's table by up to {err(points):.2g} deg (bound {FIT_RMS_WARN_DEG:g} deg), and "
-            f"the learning fits that interpolation, so the table's points and the end effect it says are "
-            f"off too: at least {hi} points")
+    if points is None:
+        return hi
+    return _refuse(source, "positions", f"{n}: the firmware's linear interpolation between {n} points is off "
+                   f"this motor's table by up to {err(n):.2g} deg (bound {FIT_RMS_WARN_DEG:g} deg), and the "
+                   f"learning fits that interpolation, so the table's points and the end effect it says are "
+                   f"off too: at least {hi} points")
 
 
 def _check_speed(spec, v: float, pitch: float, source: str) -> None:
@@ -452,7 +459,7 @@ def _acceleration(dd: DriveData, model: Motor, load: float, a_max: float | None,
 
 
 def _stroke(scenario: Scenario | None, stroke_mm: float | None, v: float, a: float, model: Motor,
-            source: str, points: int = 56, by_load: bool = False) -> tuple[float, float]:
+            source: str, points: int = POINTS_DEFAULT, by_load: bool = False) -> tuple[float, float]:
     """The stroke and its start, m (the scenario's travel less 10 % at each end where it gives one),
     refusing too little travel."""
     # m: to the speed and back, the settling at speed, and the periods learned at speed
