@@ -541,10 +541,10 @@ ls_status ls_drive_set_mode(ls_drive *d, ls_mode mode)
         ls_drive_cal_cs_(d);
         break;
     case LS_MODE_COMMISSION: /* the EMF estimate, the work, the demodulator reading the table learned, a
-                                stable rate (k_int ts < 1) */
+                                stable rate (k_int 2 ts < 1: it learns every other step) */
         if (!d->cfg.emf_on || d->cfg.cal.table == NULL || d->cfg.cal.learn == NULL || d->cfg.demod.comp == NULL ||
             d->cfg.demod.comp->table != d->cfg.cal.table || d->cfg.demod.comp->len != d->cfg.cal.points ||
-            !(d->cfg.cal.k_int * d->ts < LS_R(1.0)) || !(d->cfg.cal.slope > LS_R(0.0)) ||
+            !(d->cfg.cal.k_int * d->ts < LS_R(0.5)) || !(d->cfg.cal.slope > LS_R(0.0)) ||
             !(d->cfg.cal.slope <= LS_DRIVE_CAL_SLOPE_MAX) ||
             !(LS_DRIVE_LEARN_CRUISE * d->cfg.traj.v_max > d->cfg.fuse.v_hi)) { /* (a cruise above the
                                                                                    band: else none) */
@@ -554,6 +554,7 @@ ls_status ls_drive_set_mode(ls_drive *d, ls_mode mode)
         d->learn_inv_s = LS_R(1.0) / d->cfg.cal.slope;
         d->learn_kd = d->cfg.hf_delay / d->cfg.demod.gain; /* (|gain| >= 1 / LS_DEMOD_GAIN_MAX: finite) */
         d->cal_timer = 0u;
+        d->learn_turn = 0u;
         ls_drive_learn_reset_(d);
         break;
     default:

@@ -104,7 +104,7 @@ void ls_drive_calibration_step_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTR
     }
     /* the fundamental, and the HF current less what the dead-time residual drove (ls_dtres.h); the
      * band-pass, or the square wave's first difference */
-    ls_drive_hf_(d, meas, &io, true);
+    ls_drive_hf_(d, meas, &io, LS_DRIVE_RES_ADAPT);
     /* demodulated at psi_cal (by its cosine and sine); the HF axis is the encoder's: theta_err = 0
      * (the position is normalised already) */
     (void)ls_demod_step_psi(&d->demod, io.ihf_a, io.ihf_b, d->enc.pos.theta, io.c, io.s, d->inj.c, d->inj.s,

@@ -22,7 +22,12 @@
  * mean whatever the time spent in each direction. b grows with the speed: the learning runs at the
  * moves' cruise only (|omega| >= LS_DRIVE_LEARN_CRUISE traj.v_max, and above fuse.v_hi: learn_w;
  * the trajectory's acceleration nil for cal.t_settle), one speed both ways. The demodulator reads the mean, so its ratio stays small (the product's
- * sin 2 delta / 2 ~ delta) and the mean is a fixed point even where s is not the motor's. */
+ * sin 2 delta / 2 ~ delta) and the mean is a fixed point even where s is not the motor's.
+ *
+ * The learning runs every other step, two periods' worth at a time, and the EMF's angle in the steps
+ * between (the observer holds the last EMF error for one period): each is a step's work, and the two
+ * in one step would leave the commissioning's step over the time budget (docs/firmware.md). The
+ * residual of the dead time is the interpolated one here (ls_drive_speed.c). */
 #include "ls_drive_internal.h"
 
 void ls_drive_learn_reset_(ls_drive *d)
@@ -45,7 +50,7 @@ static void learn_point(ls_drive *LS_RESTRICT d, uint32_t k, LS_REAL w, LS_REAL 
                         float *LS_RESTRICT t_dir, const float *LS_RESTRICT t_other, const float *LS_RESTRICT other)
 {
     const LS_REAL t0 = (LS_REAL)t_dir[k];
-    const LS_REAL t1 = t0 + w * d->ts;
+    const LS_REAL t1 = t0 + w * (LS_R(2.0) * d->ts); /* (two periods: it learns every other step) */
     est[k] = (float)((LS_REAL)est[k] + w * a_err);
     t_dir[k] = (float)t1;
     if (t0 < d->cfg.cal.t_hold && !(t1 < d->cfg.cal.t_hold) && !((LS_REAL)t_other[k] < d->cfg.cal.t_hold)) {
@@ -97,7 +102,7 @@ void ls_drive_learn_(ls_drive *LS_RESTRICT d)
     p = (LS_REAL)tab[k] + f * ((LS_REAL)tab[k1] - (LS_REAL)tab[k]) +
         (d->demod.ratio + d->learn_kd * omega) * d->learn_inv_s;
     err = p - ((LS_REAL)est[k] + f * ((LS_REAL)est[k1] - (LS_REAL)est[k]));
-    err *= d->cfg.cal.k_int * d->ts;
+    err *= d->cfg.cal.k_int * (LS_R(2.0) * d->ts);
     learn_point(d, k, LS_R(1.0) - f, err, est, t_dir, t_oth, oth);
     learn_point(d, k1, f, err, est, t_dir, t_oth, oth);
 }

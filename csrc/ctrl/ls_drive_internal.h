@@ -249,17 +249,22 @@ static inline void ls_drive_follow_r_(ls_drive *LS_RESTRICT d)
  * ls_dtres.h): the modulator's forward model of the period with the inductance model at the angle
  * (io->c, io->s), its voltage error through the R-L model, and the model's inductance and
  * resistance scales measured from the period's current change (dtres.cfg.adapt; the resistance's
- * passed to the demodulator's tables); or the interpolation (dtres.cfg.forward false). adapt false
- * holds both scales this period (the SPEED step where the EMF estimate is weighed: the sums'
- * products and the periodic solve not computed). Call before the modulator's step. */
+ * passed to the demodulator's tables); or the interpolation (dtres.cfg.forward false). model: the
+ * configured model with its scales measured (LS_DRIVE_RES_ADAPT), held (LS_DRIVE_RES_HOLD: the SPEED
+ * step while a move runs), or the interpolation with both held (LS_DRIVE_RES_INTERP: the SPEED step
+ * where the EMF estimate runs, and LS_MODE_COMMISSION); the time budget, docs/theory.md section 11.
+ * Call before the modulator's step. */
+#define LS_DRIVE_RES_INTERP 0u
+#define LS_DRIVE_RES_HOLD 1u
+#define LS_DRIVE_RES_ADAPT 2u
 LS_DRIVE_PART void ls_drive_residual_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas,
-                                      const ls_drive_io *LS_RESTRICT io, LS_REAL i_res[2], bool adapt);
+                                      const ls_drive_io *LS_RESTRICT io, LS_REAL i_res[2], unsigned model);
 
 /* The fundamental of the measured currents (sep: io->if_a, io->if_b), and their HF part (bpf:
  * io->ihf_a, io->ihf_b) less what the dead-time residual drove (ls_dtres.h; in the step's frame;
- * adapt: ls_drive_residual_'s). */
+ * model: ls_drive_residual_'s). */
 LS_DRIVE_PART void ls_drive_hf_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas, ls_drive_io *LS_RESTRICT io,
-                                bool adapt);
+                                unsigned model);
 
 /* Current control in the step's frame (io->c, io->s) of the fundamental currents: the currents
  * (io->i_d, io->i_q) and the voltages (io->v_d, io->v_q) there, and the fundamental voltage in

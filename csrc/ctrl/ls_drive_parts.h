@@ -98,17 +98,19 @@ LS_DRIVE_PART bool ls_drive_enc_open_(ls_drive *LS_RESTRICT d, const ls_meas *LS
 
 /* --------------------------------------------------------------------------- HF path and estimation */
 LS_DRIVE_PART void ls_drive_residual_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas,
-                                      const ls_drive_io *LS_RESTRICT io, LS_REAL i_res[2], bool adapt)
+                                      const ls_drive_io *LS_RESTRICT io, LS_REAL i_res[2], unsigned model)
 {
-    LS_REAL v_err[2];
-    if (d->dtres.cfg.forward) {
+    LS_REAL v_err[2], li[3];
+    const LS_REAL *li_step = NULL; /* (the interpolation's: none) */
+    if (d->dtres.cfg.forward && model != LS_DRIVE_RES_INTERP) {
         /* the back-EMF at the trajectory's speed, not the estimate's: no loop from the estimate
          * through the residual back into it (a hold's limit cycle otherwise, docs/firmware.md) */
-        LS_REAL li[3], g[6], ge[3], i_end[3], i_drop[3];
+        LS_REAL g[6], ge[3], i_end[3], i_drop[3];
+        const bool fit = d->dtres.cfg.adapt && model == LS_DRIVE_RES_ADAPT; /* (the end currents are for it) */
         ls_dtres_phase_g(&d->dtres, io->c, io->s, d->w_ref * d->cfg.current.psi_pm, li, g, ge);
         if (ls_mod_residual(&d->mod, meas->i_abc, meas->v_dc, g, ge, d->dtres.cfg.r_s * d->dtres.k_r, v_err,
-                            i_end, i_drop) &&
-            d->dtres.cfg.adapt && adapt) {
+                            fit ? i_end : NULL, i_drop) &&
+            fit) {
             /* (k_r held while the angle is not the motor's: the start-up, the table off) */
             ls_dtres_adapt(&d->dtres, d->mod.i_prev, meas->i_abc, i_end, i_drop,
                            !d->starting && d->mode != LS_MODE_SENSORLESS_NOLUT);
@@ -116,20 +118,20 @@ LS_DRIVE_PART void ls_drive_residual_(ls_drive *LS_RESTRICT d, const ls_meas *LS
                 ls_drive_follow_r_(d);
             }
         }
-        ls_dtres_step(&d->dtres, v_err, io->c, io->s, li, i_res);
+        li_step = li;
     } else {
         (void)ls_mod_residual_interp(&d->mod, meas->i_abc, meas->v_dc, d->dtres.k_rip, v_err);
-        ls_dtres_step(&d->dtres, v_err, io->c, io->s, NULL, i_res);
     }
+    ls_dtres_step(&d->dtres, v_err, io->c, io->s, li_step, i_res);
 }
 
 LS_DRIVE_PART void ls_drive_hf_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas, ls_drive_io *LS_RESTRICT io,
-                                bool adapt)
+                                unsigned model)
 {
     ls_drive_sep_(d, io);
     if (d->cfg.hf_dtres) { /* (bpf is then the band-pass: not with the square wave, ls_drive_init) */
         LS_REAL i_res[2];
-        ls_drive_residual_(d, meas, io, i_res, adapt);
+        ls_drive_residual_(d, meas, io, i_res, model);
         io->ihf_a = ls_biquad_step_bp(&d->bpf[0], io->i_a - i_res[0]);
         io->ihf_b = ls_biquad_step_bp(&d->bpf[1], io->i_b - i_res[1]);
     } else {

@@ -23,7 +23,7 @@ void ls_drive_rotating_step_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT
     io.ihf_b = io.i_b - io.if_b;
     if (d->cfg.hf_dtres) {
         LS_REAL i_res[2];
-        ls_drive_residual_(d, meas, &io, i_res, true);
+        ls_drive_residual_(d, meas, &io, i_res, LS_DRIVE_RES_ADAPT);
         io.ihf_a -= i_res[0];
         io.ihf_b -= i_res[1];
     }

@@ -20,7 +20,7 @@ void ls_drive_sensored_step_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT
     }
     /* the fundamental, and the HF current less what the dead-time residual drove (ls_dtres.h); the
      * band-pass, or the square wave's first difference */
-    ls_drive_hf_(d, meas, &io, true);
+    ls_drive_hf_(d, meas, &io, LS_DRIVE_RES_ADAPT);
     {
         /* with the table, at the encoder's angle */
         const LS_REAL err = ls_drive_demod_(d, &io, d->enc.pos.theta);

@@ -17,7 +17,7 @@ void ls_drive_sensorless_step_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRI
     }
     /* fundamental separation of the measured currents, and HF band-pass of the currents less what
      * the dead-time residual drove */
-    ls_drive_hf_(d, meas, &io, true);
+    ls_drive_hf_(d, meas, &io, LS_DRIVE_RES_ADAPT);
 
     /* HF demodulation and observer, on the axis the injection used */
     {

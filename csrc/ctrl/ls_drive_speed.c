@@ -11,9 +11,13 @@
  * What runs where (the time budget; docs/theory.md section 11, "What the SPEED step computes
  * where"): below LS_FUSE_EMF_ON v_lo (ls_fuse_emf_run) the EMF's filters are idle, the step the
  * sensorless step with the hand-over's bookkeeping; from there up they run (settled by v_lo, where
- * the EMF error starts to count: the design's rule), their angle from v_lo; the dead-time residual's
- * scales are measured below v_lo and held above it. LS_MODE_COMMISSION runs the EMF's filters at every
- * speed. */
+ * the EMF error starts to count: the design's rule), their angle from v_lo. The dead-time residual is
+ * the forward model where the EMF's filters are idle, its scales measured while the trajectory holds
+ * and held through a move, and the interpolated one where they run (the HF error's share falls across
+ * the band, and the EMF uses k_r held): each of the forward model, its adaptation and the EMF's filters
+ * is a quarter of the step, and the three in one step are over the time budget. LS_MODE_COMMISSION
+ * runs the EMF's filters at every speed, so the interpolated residual, and its learning takes turns
+ * with the EMF's angle. */
 #include "ls_drive_internal.h"
 
 /* The mean voltage (V, alpha-beta) of the period that has just ended: the duties computed two
@@ -42,12 +46,15 @@ static void hf_restart(ls_drive *LS_RESTRICT d)
 
 /* The HF error of the step (the HF chain runs while the injection does; else only the fundamental's
  * separation, and no error). */
-static inline LS_REAL hf_error(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas, ls_drive_io *LS_RESTRICT io)
+static inline LS_REAL hf_error(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas, ls_drive_io *LS_RESTRICT io,
+                               bool emf_run)
 {
     if (d->inj.on || d->inj.amp > LS_R(0.0)) {
-        /* the residual's inductance and resistance scales held where the EMF error is weighed (above
-         * w_lo: the HF error's share falls across the band, and the EMF uses k_r held) */
-        ls_drive_hf_(d, meas, io, !(LS_FABS(d->obs.omega) > d->fuse.w_lo));
+        /* where the EMF estimate runs, the residual by interpolation; below, the forward model. Its
+         * inductance and resistance scales measured while the trajectory holds (the hold's accuracy;
+         * held through a move and where the EMF estimate runs, which uses k_r held) */
+        ls_drive_hf_(d, meas, io, emf_run ? LS_DRIVE_RES_INTERP
+                                          : (d->traj.active ? LS_DRIVE_RES_HOLD : LS_DRIVE_RES_ADAPT));
         return ls_drive_demod_(d, io, d->obs.pos.theta) + d->cfg.hf_delay * d->obs.omega;
     }
     ls_drive_sep_(d, io);
@@ -70,10 +77,15 @@ void ls_drive_speed_run_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT mea
 {
     ls_drive_io io;
     LS_REAL e_emf, e_hf, err;
+    bool emf_run;
     if (!ls_drive_est_open_(d, meas, cmd, &io)) {
         return;
     }
-    if (commission || ls_fuse_emf_run(&d->fuse, d->obs.omega)) {
+    emf_run = commission || ls_fuse_emf_run(&d->fuse, d->obs.omega);
+    if (commission) { /* (the learning and the EMF's angle take turns: ls_drive_commission.c) */
+        d->learn_turn ^= 1u;
+    }
+    if (emf_run) {
         /* (the inputs finite: the measurements checked by ls_drive_est_open_, the duties, the estimate
          * and k_r by the step's final check and their bounds) the EMF's filters; its angle (a square
          * root and an atan2) only where the hand-over can weigh it: ls_fuse_step uses eps_emf, and
@@ -83,21 +95,23 @@ void ls_drive_speed_run_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT mea
         i_ab[0] = io.i_a;
         i_ab[1] = io.i_b;
         if (ls_emf_update_finite(&d->emf, v_ab, i_ab, io.c, io.s, d->obs.omega, d->dtres.k_r) &&
-            LS_FABS(d->obs.omega) > d->fuse.w_lo) {
+            LS_FABS(d->obs.omega) > d->fuse.w_lo && !(commission && d->learn_turn != 0u)) {
             (void)ls_emf_angle(&d->emf, d->obs.omega);
         }
     } else if (d->emf.primed) { /* (idle: its filters start again from rest when it runs again) */
         ls_emf_reset(&d->emf);
     }
     e_emf = d->emf.eps; /* (below w_lo not weighed: the angle of an earlier step, or 0) */
-    e_hf = hf_error(d, meas, &io);
+    e_hf = hf_error(d, meas, &io, emf_run);
     err = ls_fuse_step(&d->fuse, d->obs.omega, d->inj.on && d->inj.amp >= d->cfg.inject.amplitude, e_hf,
                        LS_ISFINITE(e_emf) ? e_emf : LS_R(0.0));
     if (observe(d, cmd, &io, err)) {
         return;
     }
     if (commission) { /* the injection kept on; the table learned at speed (ls_drive_commission.c) */
-        ls_drive_learn_(d);
+        if (d->learn_turn != 0u) {
+            ls_drive_learn_(d);
+        }
     } else if (d->fuse.inject != d->inj.on) { /* the injection: faded out above the band, back in
                                                  below it; the voltage it keeps */
         if (d->fuse.inject && !(d->inj.amp > LS_R(0.0))) {

@@ -23,7 +23,7 @@ ls_startup_phase ls_drive_startup_run_(ls_drive *LS_RESTRICT d, const ls_meas *L
     ls_sincos(d->obs.pos.theta, &io->c, &io->s);
     c_est = io->c;
     s_est = io->s;
-    ls_drive_hf_(d, meas, io, true);
+    ls_drive_hf_(d, meas, io, LS_DRIVE_RES_ADAPT);
     io->v_hf = LS_R(0.0);
     {
         const LS_REAL err = ls_drive_demod_(d, io, d->obs.pos.theta);

@@ -327,6 +327,8 @@ typedef struct {
                               LS_DRIVE_LEARN_CRUISE traj.v_max, the larger, as electrical speeds */
     LS_REAL learn_inv_s; /**< unit: -, 1 / cal.slope */
     LS_REAL learn_kd;    /**< unit: s, hf_delay / demod.gain: the HF path's delay in the ratio per rad/s */
+    uint32_t learn_turn; /**< unit: -, LS_MODE_COMMISSION: 1 in a step that may learn (two periods' worth),
+                              0 in one that takes the EMF's angle; they alternate (the time budget) */
     LS_REAL cal_amp;     /* A, the dither's amplitude now: cal.dither_amp while settling and
                             adapting, else 0 */
     int32_t enc_prev;    /* -, encoder count of the last sample (encoder modes) */

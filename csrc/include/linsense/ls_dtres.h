@@ -82,16 +82,16 @@ void ls_dtres_resistance_(ls_dtres *r);
 void ls_dtres_response_step_(ls_dtres *r);
 
 /* v_ab: the voltage error of the period that has just ended (V, alpha-beta); (c, s): cos and sin
- * of the estimated angle; li: with cfg.forward, the model's inverse inductance L_ab^-1 at that
- * angle (1/H, [aa, bb, ab]: ls_dtres_phase_g; scaled here by k_l as this period's ls_dtres_adapt
- * left it; not read without cfg.forward, may then be NULL).
+ * of the estimated angle; li: with the forward model, the model's inverse inductance L_ab^-1 at
+ * that angle (1/H, [aa, bb, ab]: ls_dtres_phase_g; scaled here by k_l as this period's
+ * ls_dtres_adapt left it); NULL with the interpolated one (the voltage turned into the frame).
  * Writes the modelled current at this sample into i_ab (A, alpha-beta). Inline (called every PWM
  * period). */
 static inline void ls_dtres_step(ls_dtres *r, const LS_REAL v_ab[2], LS_REAL c, LS_REAL s, const LS_REAL li[3],
                                  LS_REAL i_ab[2])
 {
     LS_REAL v_d, v_q;
-    if (r->cfg.forward) {
+    if (li != NULL) {
         /* the input through the inverse inductance (the saliency and the end effect's anisotropy),
          * turned into the frame and scaled per axis as b_d L_d and b_q L_q (the exact first-order
          * step without the end effect): v_dq <- diag(L_d, L_q) R' k_l L_ab^-1 v_ab (R' L_ab^-1 R =
@@ -153,7 +153,8 @@ static inline void ls_dtres_phase_g(const ls_dtres *r, LS_REAL c, LS_REAL s, LS_
  * p - i0 = k_l (a - k_r b) with a = (p - i0 + drop) / k_l (the volt-seconds through the
  * inductance, per unit of k_l) and b = drop / (k_l k_r) (the drop per unit of k_l k_r); m = i1 - i0
  * the measured change. k_l <- <m, c> / <c, c> with c = a - k_r b (the products over the phases,
- * weighted by k_l^2, low-passed over 1 / LS_DTRES_KL_RATE periods), every period. k_r: m fitted
+ * weighted by k_l^2, low-passed over 1 / LS_DTRES_KL_RATE periods; k_l taken from them every period
+ * without the k_r fit, else with each of its solves). k_r: m fitted
  * as x a - y b by least squares (k_r = y / x) on the products in alpha-beta, low-passed over
  * 1 / LS_DTRES_KR_RATE periods, after each of m, a and b has lost its slow part (a first-order
  * high-pass at LS_DTRES_HP_RATE per period): the fit reads the injection's changes, not the
@@ -189,10 +190,62 @@ static inline LS_REAL ls_dtres_hp_(LS_REAL *hp, LS_REAL x)
     return x - *hp;
 }
 
+/* k_l from its sums (ls_dtres_adapt's: every period without the k_r fit, else with each solve). */
+static inline void ls_dtres_kl_(ls_dtres *r)
+{
+    if (r->s[6] > LS_R(1e-12)) { /* (A^2: below, no current has changed yet) */
+        const LS_REAL kl = r->s[5] / r->s[6];
+        /* (NaN goes to the lower bound) */
+        r->k_l = kl > LS_DTRES_KL_MIN ? (kl < LS_DTRES_KL_MAX ? kl : LS_DTRES_KL_MAX) : LS_DTRES_KL_MIN;
+    }
+}
+
+/* ls_dtres_adapt's periodic solve for k_r from the sums (n_solve back to 0), and k_l's. */
+static inline void ls_dtres_solve_(ls_dtres *r)
+{
+    ls_dtres_kl_(r);
+    const LS_REAL saa = r->s[0], sab = r->s[1], sbb = r->s[2], sma = r->s[3], smb = r->s[4];
+    const LS_REAL det = saa * sbb - sab * sab;
+    LS_REAL kr = r->k_r;
+    r->n_solve = 0u;
+    if (det > LS_DTRES_KR_COND * saa * sbb && saa > LS_R(1e-12)) {
+        /* min |m - x a + y b|^2: [saa -sab; -sab sbb] [x; y] = [sma; -smb], k_r = y / x */
+        const LS_REAL xs = sbb * sma - sab * smb, ys = sab * sma - saa * smb;
+        if (xs > LS_R(0.0)) {
+            kr = ys / xs; /* (NaN goes to the lower bound) */
+        }
+    }
+    /* at most LS_DTRES_KR_STEP per solve: the tables and the PI follow a ramp, not the first solves'
+     * scatter (NaN stays NaN: the bounds below) */
+    kr = kr > r->k_r + LS_DTRES_KR_STEP ? r->k_r + LS_DTRES_KR_STEP
+                                          : (kr < r->k_r - LS_DTRES_KR_STEP ? r->k_r - LS_DTRES_KR_STEP : kr);
+    r->k_r = kr > LS_DTRES_KR_MIN ? (kr < LS_DTRES_KR_MAX ? kr : LS_DTRES_KR_MAX) : LS_DTRES_KR_MIN;
+    if (LS_FABS(r->k_r - r->k_r_resp) > LS_DTRES_KR_RESP) {
+        r->k_r_resp = r->k_r; /* (the response follows over the next four periods) */
+        r->resp_stage = 1u;
+    }
+}
+
 static inline void ls_dtres_adapt(ls_dtres *r, const LS_REAL i0[3], const LS_REAL i1[3], const LS_REAL i_pred[3],
                                   const LS_REAL i_drop[3], bool fit_r)
 {
-    const LS_REAL k3 = LS_R(0.57735026919), ul = LS_R(1.0) / r->k_l, ub = ul / r->k_r;
+    LS_REAL k3, ul, ub;
+    fit_r = fit_r && r->cfg.adapt_r;
+    /* a period that solves for k_r or moves the response on adds nothing to the sums (each of the
+     * three is a step's work: the time budget; the sums lose 1 period in 16, 5 while the response
+     * follows) */
+    if (fit_r && r->n_solve + 1u >= LS_DTRES_SOLVE_EVERY) {
+        ls_dtres_solve_(r);
+        return;
+    }
+    if (r->resp_stage != 0u) {
+        r->n_solve += fit_r ? 1u : 0u;
+        ls_dtres_response_step_(r);
+        return;
+    }
+    k3 = LS_R(0.57735026919);
+    ul = LS_R(1.0) / r->k_l;
+    ub = ul / r->k_r;
     {
         /* k_l: <m, p - i0> k_l and <p - i0, p - i0> = <m, c> k_l^2 and <c, c> k_l^2 (each period
          * weighted by the change the model predicted), over the phases */
@@ -201,7 +254,6 @@ static inline void ls_dtres_adapt(ls_dtres *r, const LS_REAL i0[3], const LS_REA
         r->s[5] += LS_DTRES_KL_RATE * ((m0 * p0 + m1 * p1 + m2 * p2) * r->k_l - r->s[5]);
         r->s[6] += LS_DTRES_KL_RATE * ((p0 * p0 + p1 * p1 + p2 * p2) - r->s[6]);
     }
-    fit_r = fit_r && r->cfg.adapt_r;
     if (fit_r) {
         /* m, a and b in alpha-beta: alpha = x_a, beta = (x_b - x_c) / sqrt 3, each less its slow
          * part (written out in scalars: a loop over an array kept it in memory, 80 cycles on a
@@ -220,35 +272,10 @@ static inline void ls_dtres_adapt(ls_dtres *r, const LS_REAL i0[3], const LS_REA
         r->s[3] += LS_DTRES_KR_RATE * (m_a * a_a + m_b * a_b - r->s[3]);
         r->s[4] += LS_DTRES_KR_RATE * (m_a * b_a + m_b * b_b - r->s[4]);
     }
-    if (r->s[6] > LS_R(1e-12)) { /* (A^2: below, no current has changed yet) */
-        const LS_REAL kl = r->s[5] / r->s[6];
-        /* (NaN goes to the lower bound) */
-        r->k_l = kl > LS_DTRES_KL_MIN ? (kl < LS_DTRES_KL_MAX ? kl : LS_DTRES_KL_MAX) : LS_DTRES_KL_MIN;
-    }
-    if (fit_r && ++r->n_solve >= LS_DTRES_SOLVE_EVERY) { /* (the sums move over 1 / KR_RATE) */
-        const LS_REAL saa = r->s[0], sab = r->s[1], sbb = r->s[2], sma = r->s[3], smb = r->s[4];
-        const LS_REAL det = saa * sbb - sab * sab;
-        LS_REAL kr = r->k_r;
-        r->n_solve = 0u;
-        if (det > LS_DTRES_KR_COND * saa * sbb && saa > LS_R(1e-12)) {
-            /* min |m - x a + y b|^2: [saa -sab; -sab sbb] [x; y] = [sma; -smb], k_r = y / x */
-            const LS_REAL xs = sbb * sma - sab * smb, ys = sab * sma - saa * smb;
-            if (xs > LS_R(0.0)) {
-                kr = ys / xs; /* (NaN goes to the lower bound) */
-            }
-        }
-        /* at most LS_DTRES_KR_STEP per solve: the tables and the PI follow a ramp, not the first
-         * solves' scatter (NaN stays NaN: the bounds below) */
-        kr = kr > r->k_r + LS_DTRES_KR_STEP ? r->k_r + LS_DTRES_KR_STEP
-                                              : (kr < r->k_r - LS_DTRES_KR_STEP ? r->k_r - LS_DTRES_KR_STEP : kr);
-        r->k_r = kr > LS_DTRES_KR_MIN ? (kr < LS_DTRES_KR_MAX ? kr : LS_DTRES_KR_MAX) : LS_DTRES_KR_MIN;
-        if (LS_FABS(r->k_r - r->k_r_resp) > LS_DTRES_KR_RESP) {
-            r->k_r_resp = r->k_r; /* (the response follows over the next four periods) */
-            r->resp_stage = 1u;
-        }
-    } else if (r->resp_stage != 0u) {
-        ls_dtres_response_step_(r);
+    if (fit_r) {
+        r->n_solve++; /* (the sums move over 1 / KR_RATE) */
+    } else {
+        ls_dtres_kl_(r);
     }
 }
-
 #endif /* LINSENSE_LS_DTRES_H */

@@ -80,10 +80,19 @@ static inline bool ls_fuse_emf_run(ls_fuse *f, LS_REAL omega)
 static inline LS_REAL ls_fuse_step(ls_fuse *f, LS_REAL omega, bool hf_full, LS_REAL eps_hf, LS_REAL eps_emf)
 {
     const LS_REAL a = LS_FABS(omega);
-    LS_REAL w = ls_clamp((a - f->w_lo) * f->inv_band, LS_R(0.0), LS_R(1.0));
+    LS_REAL w;
     if (hf_full && f->n_full < f->n_settle) {
         f->n_full++;
     }
+#ifndef __OPTIMIZE_SIZE__ /* (the build for speed: the time budget; the same numbers) */
+    if (f->inject && !(a > f->w_lo)) { /* below the band, injecting (w_off > w_lo): the HF error alone,
+                                          as the general path below computes it */
+        f->hf_used = hf_full && f->n_full >= f->n_settle;
+        f->w = LS_R(0.0);
+        return f->hf_used ? eps_hf : LS_R(0.0);
+    }
+#endif
+    w = ls_clamp((a - f->w_lo) * f->inv_band, LS_R(0.0), LS_R(1.0));
     if (f->inject) {
         if (a > f->w_off) {
             /* faded: the HF error waits t_settle at full amplitude again, counted from the next step

@@ -170,6 +170,49 @@ static inline void ls_mod_error_ab_(const ls_mod_hist *h, LS_REAL e0, LS_REAL e1
     v_ab[1] = v_dc * (e1 - e2) * (LS_R(1.0) / LS_SQRT3);
 }
 
+/* ls_mod_residual's inputs with the legs in the order of their duties (a the largest: the legs o0, o1,
+ * o2 of the period) and its outputs in that order. */
+typedef struct {
+    LS_REAL gaa, gbb, gcc, gab, gac, gbc; /* 1/H, G's entries */
+    LS_REAL ia, ib, ic;                   /* A, the start currents */
+    LS_REAL ja, jb, jc;                   /* A, their change over the period */
+    LS_REAL ea, eb, ec;                   /* A/s, the back-EMF's share */
+    LS_REAL da, db, dc;                   /* -, the duties */
+} ls_mod_fwd_in_;
+
+/* The legs' order by duty (o0 the largest; ties as ls_mod_residual has always sorted them) as one of
+ * six: 0 (0 1 2), 1 (0 2 1), 2 (2 0 1), 3 (1 0 2), 4 (1 2 0), 5 (2 1 0). */
+static inline unsigned ls_mod_order_(LS_REAL d0, LS_REAL d1, LS_REAL d2)
+{
+    if (d1 > d0) {
+        return d2 > d0 ? (d2 > d1 ? 5u : 4u) : 3u;
+    }
+    return d2 > d1 ? (d2 > d0 ? 2u : 1u) : 0u;
+}
+
+/* The sorted inputs of the order (o0, o1, o2). */
+#define LS_MOD_GATHER_(x, A, B, C)                                                                             \
+    do {                                                                                                       \
+        (x).gaa = g[A];                                                                                        \
+        (x).gbb = g[B];                                                                                        \
+        (x).gcc = g[C];                                                                                        \
+        (x).gab = g[(A) + (B) + 2];                                                                            \
+        (x).gac = g[(A) + (C) + 2];                                                                            \
+        (x).gbc = g[(B) + (C) + 2];                                                                            \
+        (x).ia = m->i_prev[A];                                                                                 \
+        (x).ib = m->i_prev[B];                                                                                 \
+        (x).ic = m->i_prev[C];                                                                                 \
+        (x).ja = i_abc[A] - (x).ia;                                                                            \
+        (x).jb = i_abc[B] - (x).ib;                                                                            \
+        (x).jc = i_abc[C] - (x).ic;                                                                            \
+        (x).ea = ge[A];                                                                                        \
+        (x).eb = ge[B];                                                                                        \
+        (x).ec = ge[C];                                                                                        \
+        (x).da = h->d[A];                                                                                      \
+        (x).db = h->d[B];                                                                                      \
+        (x).dc = h->d[C];                                                                                      \
+    } while (0)
+
 /* The dead-time voltage error, net of the compensation, that the inverter left in the PWM period
  * that has just ended, by a forward model of that period: call with the currents sampled at its
  * end (i_abc), before ls_mod_step (i_prev is then the period's start current; its duties are the
@@ -188,24 +231,33 @@ static inline void ls_mod_error_ab_(const ls_mod_hist *h, LS_REAL e0, LS_REAL e1
  * with the motor's saliency and end effect (docs/simulator.md, "Dead time and the closed loop").
  * The leg's duty error is c - t_dead f_pwm (L_on + L_off - 1), L = 1 where the current at the edge
  * flows out (c: the compensation it carried); a leg that does not switch (d = 0 or 1) has none.
- * Writes the alpha-beta voltage error (V), the end currents the model predicts and the resistive
- * drop within that prediction (A, phases; for ls_dtres_adapt; the back-EMF's share is in i_end, not
- * in i_drop) and returns true, or writes 0 and returns false without the previous step's currents.
- * i_abc, v_dc, g and ge must be finite. (Used by ls_drive with hf_dtres; see linsense/ls_dtres.h.) */
+ * Writes the alpha-beta voltage error (V) and, where i_end is not NULL, the end currents the model
+ * predicts and the resistive drop within that prediction (A, phases; for ls_dtres_adapt; the
+ * back-EMF's share is in i_end, not in i_drop), and returns true, or writes 0 and returns false
+ * without the previous step's currents. i_abc, v_dc, g and ge must be finite. (Used by ls_drive with
+ * hf_dtres; see linsense/ls_dtres.h.) The build for speed gathers the legs in their order from
+ * constant places (one of six orders: no address computed per value); the build for size by index:
+ * the same values, so the same numbers. */
 static inline bool ls_mod_residual(const ls_mod *m, const LS_REAL i_abc[3], LS_REAL v_dc, const LS_REAL g[6],
                                    const LS_REAL ge[3], LS_REAL r_s, LS_REAL v_ab[2], LS_REAL i_end[3],
                                    LS_REAL i_drop[3])
 {
     const ls_mod_hist *h = &m->hist[m->newest ^ 1u];
+    ls_mod_fwd_in_ x;
     LS_REAL e[3];
-    int o0 = 0, o1 = 1, o2 = 2;
+    int o0, o1, o2;
     if (!m->have_prev) {
         v_ab[0] = v_ab[1] = LS_R(0.0);
-        i_end[0] = i_end[1] = i_end[2] = LS_R(0.0);
-        i_drop[0] = i_drop[1] = i_drop[2] = LS_R(0.0);
+        if (i_end != NULL) {
+            i_end[0] = i_end[1] = i_end[2] = LS_R(0.0);
+            i_drop[0] = i_drop[1] = i_drop[2] = LS_R(0.0);
+        }
         return false;
     }
-    /* the legs by duty: o0 the largest, o2 the smallest */
+#ifdef __OPTIMIZE_SIZE__
+    o0 = 0; /* the legs by duty: o0 the largest, o2 the smallest */
+    o1 = 1;
+    o2 = 2;
     if (h->d[1] > h->d[0]) {
         o0 = 1;
         o1 = 0;
@@ -218,25 +270,37 @@ static inline bool ls_mod_residual(const ls_mod *m, const LS_REAL i_abc[3], LS_R
             o0 = 2;
         }
     }
+    LS_MOD_GATHER_(x, o0, o1, o2);
+#else
+    const unsigned order = ls_mod_order_(h->d[0], h->d[1], h->d[2]);
+    o0 = order == 2u || order == 5u ? 2 : (order >= 3u ? 1 : 0);
+    o2 = order == 4u || order == 5u ? 0 : (order == 1u || order == 2u ? 1 : 2);
+    o1 = 3 - o0 - o2;
+    switch (order) {
+    case 0u: LS_MOD_GATHER_(x, 0, 1, 2); break;
+    case 1u: LS_MOD_GATHER_(x, 0, 2, 1); break;
+    case 2u: LS_MOD_GATHER_(x, 2, 0, 1); break;
+    case 3u: LS_MOD_GATHER_(x, 1, 0, 2); break;
+    case 4u: LS_MOD_GATHER_(x, 1, 2, 0); break;
+    default: LS_MOD_GATHER_(x, 2, 1, 0); break;
+    }
+#endif
     {
-        /* in the sorted order (a = o0, b = o1, c = o2): G's entries (diagonal g[k], off-diagonal
-         * g[k + j + 2]), the start currents and their change over the period */
+        /* in the sorted order (a = o0, b = o1, c = o2) */
         const LS_REAL T = m->t_pwm;
         const LS_REAL kv = LS_R(2.0) / LS_R(3.0) * v_dc, kr = LS_R(2.0) / LS_R(3.0) * r_s;
         const LS_REAL kd = kv * m->cfg.dead_time; /* a whole dead time's volt-seconds, per unit of G */
-        const LS_REAL gaa = g[o0], gbb = g[o1], gcc = g[o2];
-        const LS_REAL gab = g[o0 + o1 + 2], gac = g[o0 + o2 + 2], gbc = g[o1 + o2 + 2];
-        const LS_REAL ia = m->i_prev[o0], ib = m->i_prev[o1], ic = m->i_prev[o2];
-        const LS_REAL ja = i_abc[o0] - ia, jb = i_abc[o1] - ib, jc = i_abc[o2] - ic;
+        const LS_REAL gaa = x.gaa, gbb = x.gbb, gcc = x.gcc, gab = x.gab, gac = x.gac, gbc = x.gbc;
+        const LS_REAL ia = x.ia, ib = x.ib, ic = x.ic, ja = x.ja, jb = x.jb, jc = x.jc;
         /* the resistive drop (A) to time t: (r_k + s_k t) t, the current linear between the samples */
         const LS_REAL kh = LS_R(0.5) * kr * m->cfg.f_pwm;
         const LS_REAL ra = kr * (gaa * ia + gab * ib + gac * ic), rb = kr * (gab * ia + gbb * ib + gbc * ic);
         const LS_REAL rc = kr * (gac * ia + gbc * ib + gcc * ic);
         /* with the back-EMF's share (A/s) */
-        const LS_REAL qa = ra + ge[o0], qb = rb + ge[o1], qc = rc + ge[o2];
+        const LS_REAL qa = ra + x.ea, qb = rb + x.eb, qc = rc + x.ec;
         const LS_REAL sa = kh * (gaa * ja + gab * jb + gac * jc), sb = kh * (gab * ja + gbb * jb + gbc * jc);
         const LS_REAL sc = kh * (gac * ja + gbc * jb + gcc * jc);
-        const LS_REAL da = h->d[o0], db = h->d[o1], dc = h->d[o2];
+        const LS_REAL da = x.da, db = x.db, dc = x.dc;
         /* the segments: all low before the first edge and after the last ((1 - da) T / 2 each), a
          * alone high (u1, twice), a and b high (u2, twice), all high (u3); the edges at t1 .. t6 */
         const LS_REAL u1 = LS_R(0.5) * (da - db) * T, u2 = LS_R(0.5) * (db - dc) * T, u3 = dc * T;
@@ -267,13 +331,17 @@ static inline bool ls_mod_residual(const ls_mod *m, const LS_REAL i_abc[3], LS_R
                  ? LS_R(1.0)
                  : LS_R(0.0);
         la = l1 + l6 - LS_R(1.0);
-        /* the end currents the model predicts (ls_dtres_adapt) */
-        i_end[o0] = ia - (qa + sa * T) * T + LS_R(2.0) * (ka * gaa + kb * gac) - kd * (gaa * la + gab * lb + gac * lc);
-        i_end[o1] = ib - (qb + sb * T) * T + LS_R(2.0) * (ka * gab + kb * gbc) - kd * (gab * la + gbb * lb + gbc * lc);
-        i_end[o2] = ic - (qc + sc * T) * T + LS_R(2.0) * (ka * gac + kb * gcc) - kd * (gac * la + gbc * lb + gcc * lc);
-        i_drop[o0] = (ra + sa * T) * T;
-        i_drop[o1] = (rb + sb * T) * T;
-        i_drop[o2] = (rc + sc * T) * T;
+        if (i_end != NULL) { /* the end currents the model predicts (ls_dtres_adapt) */
+            i_end[o0] = ia - (qa + sa * T) * T + LS_R(2.0) * (ka * gaa + kb * gac) -
+                        kd * (gaa * la + gab * lb + gac * lc);
+            i_end[o1] = ib - (qb + sb * T) * T + LS_R(2.0) * (ka * gab + kb * gbc) -
+                        kd * (gab * la + gbb * lb + gbc * lc);
+            i_end[o2] = ic - (qc + sc * T) * T + LS_R(2.0) * (ka * gac + kb * gcc) -
+                        kd * (gac * la + gbc * lb + gcc * lc);
+            i_drop[o0] = (ra + sa * T) * T;
+            i_drop[o1] = (rb + sb * T) * T;
+            i_drop[o2] = (rc + sc * T) * T;
+        }
         e[o0] = la;
         e[o1] = lb;
         e[o2] = lc;
