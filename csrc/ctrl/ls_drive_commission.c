@@ -46,8 +46,8 @@ void ls_drive_learn_reset_(ls_drive *d)
 
 /* One point's share of the step: its estimate moved by a w err, its time by w ts; the point counted
  * when its time in this direction reaches cal.t_hold and the other's has; the table the mean. */
-static void learn_point(ls_drive *LS_RESTRICT d, uint32_t k, LS_REAL w, LS_REAL a_err, float *LS_RESTRICT est,
-                        float *LS_RESTRICT t_dir, const float *LS_RESTRICT t_other, const float *LS_RESTRICT other)
+static inline void learn_point(ls_drive *LS_RESTRICT d, uint32_t k, LS_REAL w, LS_REAL a_err, float *LS_RESTRICT est,
+                               float *LS_RESTRICT t_dir, const float *LS_RESTRICT t_other, const float *LS_RESTRICT other)
 {
     const LS_REAL t0 = (LS_REAL)t_dir[k];
     const LS_REAL t1 = t0 + w * (LS_R(2.0) * d->ts); /* (two periods: it learns every other step) */

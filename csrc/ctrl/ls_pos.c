@@ -101,9 +101,7 @@ ls_pos ls_pos_norm_wide(ls_pos p)
              * but at the rounding edges; those, a k beyond the range and a non-finite theta (th is
              * then NaN) go to ls_pos_norm_full. |k| <= 2 LS_POS_PERIOD_MAX keeps the conversion in
              * range and the sum free of overflow. */
-            /* (times 1 / 2 pi, not a division: where its rounding gives the neighbouring k, theta
-             * leaves [0, 2 pi) and ls_pos_norm_full takes it) */
-            const LS_REAL k = floor_(p.theta * (LS_R(1.0) / LS_TWO_PI));
+            const LS_REAL k = floor_(p.theta / LS_TWO_PI);
             const LS_REAL th = p.theta - k * LS_TWO_PI;
             if (th >= LS_R(0.0) && th < LS_TWO_PI && LS_FABS(k) <= LS_R(2.0) * (LS_REAL)LS_POS_PERIOD_MAX) {
                 const int32_t n = p.period + (int32_t)k;
