@@ -250,13 +250,15 @@ static inline void ls_drive_follow_r_(ls_drive *LS_RESTRICT d)
  * (io->c, io->s), its voltage error through the R-L model, and the model's inductance and
  * resistance scales measured from the period's current change (dtres.cfg.adapt; the resistance's
  * passed to the demodulator's tables); or the interpolation (dtres.cfg.forward false). model: the
- * configured model with its scales measured (LS_DRIVE_RES_ADAPT), held (LS_DRIVE_RES_HOLD: the SPEED
- * step while a move runs), or the interpolation with both held (LS_DRIVE_RES_INTERP: the SPEED step
- * where the EMF estimate runs, and LS_MODE_COMMISSION); the time budget, docs/theory.md section 11.
- * Call before the modulator's step. */
+ * configured model with its scales measured (LS_DRIVE_RES_ADAPT; LS_DRIVE_RES_SPREAD: the SPEED step's
+ * hold, the solve and the response each in a period of their own, ls_dtres_adapt's spread), held
+ * (LS_DRIVE_RES_HOLD: the SPEED step while a move runs), or the interpolation with both held
+ * (LS_DRIVE_RES_INTERP: the SPEED step where the EMF estimate runs, and LS_MODE_COMMISSION); the
+ * time budget, docs/theory.md section 11. Call before the modulator's step. */
 #define LS_DRIVE_RES_INTERP 0u
 #define LS_DRIVE_RES_HOLD 1u
 #define LS_DRIVE_RES_ADAPT 2u
+#define LS_DRIVE_RES_SPREAD 3u
 LS_DRIVE_PART void ls_drive_residual_(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRICT meas,
                                       const ls_drive_io *LS_RESTRICT io, LS_REAL i_res[2], unsigned model);
 

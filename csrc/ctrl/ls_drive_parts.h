@@ -106,14 +106,14 @@ LS_DRIVE_PART void ls_drive_residual_(ls_drive *LS_RESTRICT d, const ls_meas *LS
         /* the back-EMF at the trajectory's speed, not the estimate's: no loop from the estimate
          * through the residual back into it (a hold's limit cycle otherwise, docs/firmware.md) */
         LS_REAL g[6], ge[3], i_end[3], i_drop[3];
-        const bool fit = d->dtres.cfg.adapt && model == LS_DRIVE_RES_ADAPT; /* (the end currents are for it) */
+        const bool fit = d->dtres.cfg.adapt && model >= LS_DRIVE_RES_ADAPT; /* (the end currents are for it) */
         ls_dtres_phase_g(&d->dtres, io->c, io->s, d->w_ref * d->cfg.current.psi_pm, li, g, ge);
         if (ls_mod_residual(&d->mod, meas->i_abc, meas->v_dc, g, ge, d->dtres.cfg.r_s * d->dtres.k_r, v_err,
                             fit ? i_end : NULL, i_drop) &&
             fit) {
             /* (k_r held while the angle is not the motor's: the start-up, the table off) */
             ls_dtres_adapt(&d->dtres, d->mod.i_prev, meas->i_abc, i_end, i_drop,
-                           !d->starting && d->mode != LS_MODE_SENSORLESS_NOLUT);
+                           !d->starting && d->mode != LS_MODE_SENSORLESS_NOLUT, model == LS_DRIVE_RES_SPREAD);
             if (d->dtres.n_solve == 0u) { /* (k_r solved for) */
                 ls_drive_follow_r_(d);
             }

@@ -54,7 +54,7 @@ static inline LS_REAL hf_error(ls_drive *LS_RESTRICT d, const ls_meas *LS_RESTRI
          * inductance and resistance scales measured while the trajectory holds (the hold's accuracy;
          * held through a move and where the EMF estimate runs, which uses k_r held) */
         ls_drive_hf_(d, meas, io, emf_run ? LS_DRIVE_RES_INTERP
-                                          : (d->traj.active ? LS_DRIVE_RES_HOLD : LS_DRIVE_RES_ADAPT));
+                                          : (d->traj.active ? LS_DRIVE_RES_HOLD : LS_DRIVE_RES_SPREAD));
         return ls_drive_demod_(d, io, d->obs.pos.theta) + d->cfg.hf_delay * d->obs.omega;
     }
     ls_drive_sep_(d, io);

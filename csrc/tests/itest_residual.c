@@ -256,7 +256,7 @@ static void dtres_model(void)
                     p[k] = i0[k] + (LS_REAL)a * d.k_l - drop[k];
                     i1[k] = i0[k] + (LS_REAL)(0.8 * a - 0.8 * 1.3 * b + dc * (k - 1));
                 }
-                ls_dtres_adapt(&d, i0, i1, p, drop, pass < 2);
+                ls_dtres_adapt(&d, i0, i1, p, drop, pass < 2, false);
             }
             if (pass == 0) {
                 LS_CHECK_NEAR(d.k_l, 0.8, 0.01);

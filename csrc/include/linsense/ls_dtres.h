@@ -153,8 +153,8 @@ static inline void ls_dtres_phase_g(const ls_dtres *r, LS_REAL c, LS_REAL s, LS_
  * p - i0 = k_l (a - k_r b) with a = (p - i0 + drop) / k_l (the volt-seconds through the
  * inductance, per unit of k_l) and b = drop / (k_l k_r) (the drop per unit of k_l k_r); m = i1 - i0
  * the measured change. k_l <- <m, c> / <c, c> with c = a - k_r b (the products over the phases,
- * weighted by k_l^2, low-passed over 1 / LS_DTRES_KL_RATE periods; k_l taken from them every period
- * without the k_r fit, else with each of its solves). k_r: m fitted
+ * weighted by k_l^2, low-passed over 1 / LS_DTRES_KL_RATE periods), every period (spread: with each
+ * solve of k_r where k_r is fitted). k_r: m fitted
  * as x a - y b by least squares (k_r = y / x) on the products in alpha-beta, low-passed over
  * 1 / LS_DTRES_KR_RATE periods, after each of m, a and b has lost its slow part (a first-order
  * high-pass at LS_DTRES_HP_RATE per period): the fit reads the injection's changes, not the
@@ -200,10 +200,9 @@ static inline void ls_dtres_kl_(ls_dtres *r)
     }
 }
 
-/* ls_dtres_adapt's periodic solve for k_r from the sums (n_solve back to 0), and k_l's. */
+/* ls_dtres_adapt's periodic solve for k_r from the sums (n_solve back to 0). */
 static inline void ls_dtres_solve_(ls_dtres *r)
 {
-    ls_dtres_kl_(r);
     const LS_REAL saa = r->s[0], sab = r->s[1], sbb = r->s[2], sma = r->s[3], smb = r->s[4];
     const LS_REAL det = saa * sbb - sab * sab;
     LS_REAL kr = r->k_r;
@@ -227,18 +226,19 @@ static inline void ls_dtres_solve_(ls_dtres *r)
 }
 
 static inline void ls_dtres_adapt(ls_dtres *r, const LS_REAL i0[3], const LS_REAL i1[3], const LS_REAL i_pred[3],
-                                  const LS_REAL i_drop[3], bool fit_r)
+                                  const LS_REAL i_drop[3], bool fit_r, bool spread)
 {
     LS_REAL k3, ul, ub;
     fit_r = fit_r && r->cfg.adapt_r;
-    /* a period that solves for k_r or moves the response on adds nothing to the sums (each of the
-     * three is a step's work: the time budget; the sums lose 1 period in 16, 5 while the response
-     * follows) */
-    if (fit_r && r->n_solve + 1u >= LS_DTRES_SOLVE_EVERY) {
+    /* spread: a period that solves for k_r (and takes k_l) or moves the response on adds nothing to
+     * the sums, and k_l waits for the solve (each is a step's work: the SPEED step's time budget; the
+     * sums lose 1 period in 16, 5 while the response follows) */
+    if (spread && fit_r && r->n_solve + 1u >= LS_DTRES_SOLVE_EVERY) {
+        ls_dtres_kl_(r);
         ls_dtres_solve_(r);
         return;
     }
-    if (r->resp_stage != 0u) {
+    if (spread && r->resp_stage != 0u) {
         r->n_solve += fit_r ? 1u : 0u;
         ls_dtres_response_step_(r);
         return;
@@ -272,10 +272,15 @@ static inline void ls_dtres_adapt(ls_dtres *r, const LS_REAL i0[3], const LS_REA
         r->s[3] += LS_DTRES_KR_RATE * (m_a * a_a + m_b * a_b - r->s[3]);
         r->s[4] += LS_DTRES_KR_RATE * (m_a * b_a + m_b * b_b - r->s[4]);
     }
-    if (fit_r) {
-        r->n_solve++; /* (the sums move over 1 / KR_RATE) */
-    } else {
-        ls_dtres_kl_(r);
+    if (spread && fit_r) {
+        r->n_solve++;
+        return;
+    }
+    ls_dtres_kl_(r);
+    if (fit_r && ++r->n_solve >= LS_DTRES_SOLVE_EVERY) { /* (the sums move over 1 / KR_RATE) */
+        ls_dtres_solve_(r);
+    } else if (r->resp_stage != 0u) {
+        ls_dtres_response_step_(r);
     }
 }
 #endif /* LINSENSE_LS_DTRES_H */
