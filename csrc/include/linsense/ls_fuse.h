@@ -85,8 +85,8 @@ static inline LS_REAL ls_fuse_step(ls_fuse *f, LS_REAL omega, bool hf_full, LS_R
         f->n_full++;
     }
 #ifndef __OPTIMIZE_SIZE__ /* (the build for speed: the time budget; the same numbers) */
-    if (f->inject && !(a > f->w_lo)) { /* below the band, injecting (w_off > w_lo): the HF error alone,
-                                          as the general path below computes it */
+    if (f->inject && a <= f->w_lo) { /* below the band, injecting (w_off > w_lo): the HF error alone,
+                                        as the general path below computes it (NaN takes that path) */
         f->hf_used = hf_full && f->n_full >= f->n_settle;
         f->w = LS_R(0.0);
         return f->hf_used ? eps_hf : LS_R(0.0);
