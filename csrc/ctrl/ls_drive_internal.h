@@ -255,6 +255,7 @@ static inline void ls_drive_follow_r_(ls_drive *LS_RESTRICT d)
  * (LS_DRIVE_RES_HOLD: the SPEED step while a move runs), or the interpolation with both held
  * (LS_DRIVE_RES_INTERP: the SPEED step where the EMF estimate runs, and LS_MODE_COMMISSION); the
  * time budget, docs/theory.md section 11. Call before the modulator's step. */
+/* (in this order: the two from LS_DRIVE_RES_ADAPT up measure the scales, ls_drive_residual_) */
 #define LS_DRIVE_RES_INTERP 0u
 #define LS_DRIVE_RES_HOLD 1u
 #define LS_DRIVE_RES_ADAPT 2u

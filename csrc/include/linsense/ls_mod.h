@@ -254,28 +254,13 @@ static inline bool ls_mod_residual(const ls_mod *m, const LS_REAL i_abc[3], LS_R
         }
         return false;
     }
-#ifdef __OPTIMIZE_SIZE__
-    o0 = 0; /* the legs by duty: o0 the largest, o2 the smallest */
-    o1 = 1;
-    o2 = 2;
-    if (h->d[1] > h->d[0]) {
-        o0 = 1;
-        o1 = 0;
-    }
-    if (h->d[2] > h->d[o1]) {
-        o2 = o1;
-        o1 = 2;
-        if (h->d[2] > h->d[o0]) {
-            o1 = o0;
-            o0 = 2;
-        }
-    }
-    LS_MOD_GATHER_(x, o0, o1, o2);
-#else
-    const unsigned order = ls_mod_order_(h->d[0], h->d[1], h->d[2]);
+    const unsigned order = ls_mod_order_(h->d[0], h->d[1], h->d[2]); /* o0 the largest duty, o2 the smallest */
     o0 = order == 2u || order == 5u ? 2 : (order >= 3u ? 1 : 0);
     o2 = order == 4u || order == 5u ? 0 : (order == 1u || order == 2u ? 1 : 2);
     o1 = 3 - o0 - o2;
+#ifdef __OPTIMIZE_SIZE__
+    LS_MOD_GATHER_(x, o0, o1, o2);
+#else
     switch (order) {
     case 0u: LS_MOD_GATHER_(x, 0, 1, 2); break;
     case 1u: LS_MOD_GATHER_(x, 0, 2, 1); break;

@@ -372,14 +372,16 @@ def _check_handover(f: ScenarioSchema) -> None:
     if obs.emf and f.injection.shape != "pulsating":
         raise KeyProblem("observer.emf", f"only with shape = \"pulsating\" (the {f.injection.shape} "
                          "injection's step has no EMF estimate), got true")
-    keys = ("handover_v_lo", "handover_v_hi", "inject_v_on", "inject_v_off")
-    for key in keys:  # (a speed in mm/s first: the order would blame the next key)
+    # a speed in mm/s first, on its own key: the order below would blame the next key
+    for key in ("handover_v_lo", "handover_v_hi", "inject_v_on", "inject_v_off"):
         wrong = implausible("speed", getattr(obs, key)) if _given(obs, key) else None
         if wrong is not None:
             raise KeyProblem(f"observer.{key}", wrong)
-    for k, (below, key) in enumerate(zip(keys, keys[1:], strict=False)):
+    # (key, the key it must exceed, equal allowed: the injection may fade back in at the band's top)
+    order = (("handover_v_hi", "handover_v_lo", False), ("inject_v_on", "handover_v_hi", True),
+             ("inject_v_off", "inject_v_on", False))
+    for key, below, equal in order:
         v, lo = getattr(obs, key), getattr(obs, below)
-        equal = k == 1  # (the injection may fade back in at the band's top)
         if v > lo or (v == lo and equal):
             continue
         if _given(obs, below) and not _given(obs, key):  # (the key given is the one named)

@@ -381,7 +381,8 @@ def _table_points(model: Motor, points: int | None, inj, read_at: int, source: s
         return math.degrees(interpolation_error(model, n, inj.shape, inj.frequency, inj.quadrature, read_at))
 
     n = POINTS_DEFAULT if points is None else int(points)
-    if n >= read_at or err(n) <= FIT_RMS_WARN_DEG:
+    e_n = err(n) if n < read_at else 0.0
+    if e_n <= FIT_RMS_WARN_DEG:
         return n
     lo, hi = n, read_at  # (the least count within the bound, by bisection: the error falls with n)
     while hi - lo > 1:
@@ -390,7 +391,7 @@ def _table_points(model: Motor, points: int | None, inj, read_at: int, source: s
     if points is None:
         return hi
     return _refuse(source, "positions", f"{n}: the firmware's linear interpolation between {n} points is off "
-                   f"this motor's table by up to {err(n):.2g} deg (bound {FIT_RMS_WARN_DEG:g} deg), and the "
+                   f"this motor's table by up to {e_n:.2g} deg (bound {FIT_RMS_WARN_DEG:g} deg), and the "
                    f"learning fits that interpolation, so the table's points and the end effect it says are "
                    f"off too: at least {hi} points")
 
