@@ -10,10 +10,13 @@ linsense.verify.case_runs). Per motor and V: the peak estimation error while mov
 every V run has peak <= 3 deg and no fault) against the bus-limited speed, and the errors at 0.8
 of it.
 
-The bus-limited speed is linsense.tune.design.bus_speed at the under-voltage limit
-(V_DC_MIN_FRACTION V_dc) and the current the application needs (rated load + m a_max, over the
-force constant, less the rotating or square injection's d-current's share):
-where the back-EMF, R_s i and omega L_q i take the linear range V_dc,min / sqrt(3).
+The bus-limited speed is the design's own bound on v_max (linsense.tune.design.DriveInputs.v_bus_speed,
+what `linsense tune` accepts): at the bus V_dc and the current the application needs (the rated load
+as a scenario's design takes it, half the force at i_max, + m a_max, over the force constant, less the
+rotating or square injection's d-current's share), where the
+steady-state voltage (the back-EMF with R_s i_q on one axis, omega L_q i_q normal to them;
+linsense.tune.design.fundamental_speed) takes the linear range V_dc / sqrt(3). The same at the
+under-voltage trip's bus (V_DC_MIN_FRACTION V_dc) is printed beside it, for information.
 
 The targets (peak <= 3 deg, <= 1 deg at rest at 0.8 of the bus-limited speed) are printed beside
 the numbers; missing them is not a failure here (a motor whose EMF estimate the design leaves off,
@@ -28,6 +31,8 @@ errors.
 from __future__ import annotations
 
 import argparse
+import dataclasses
+import math
 import time
 import traceback
 from pathlib import Path
@@ -36,12 +41,20 @@ from class_table import shipped
 
 from linsense.errors import InputError
 from linsense.model.motor import load_motor
-from linsense.tune.design import V_DC_MIN_FRACTION, DriveData, DriveInputs, bus_speed, drive_force_constant
+from linsense.plausible import KINDS
+from linsense.tune.design import (
+    SPEED_CAP_MARGIN,
+    V_DC_MIN_FRACTION,
+    DriveData,
+    DriveInputs,
+    bus_speed,
+    drive_force_constant,
+)
 from linsense.tune.drive_design import design_drive
 from linsense.tune.export import scenario_dict
 from linsense.verify import criteria as C
 from linsense.verify.case_runs import run_cases
-from linsense.verify.cases import move_distance, trajectory_case
+from linsense.verify.cases import move_distance, trajectory_case, with_room
 from linsense.verify.certificate import motor_ref
 
 ROOT = Path(__file__).parents[1]
@@ -53,8 +66,17 @@ QUICK_MOTORS, QUICK_GRID = ("ecce2010", "small30"), (0.25, 0.5, 0.75, 1.0)
 
 
 def bus_limited_speed(motor, dd: DriveData) -> float:
-    """The speed at which the fundamental at the application's current takes the minimum bus's
-    linear range, m/s."""
+    """The speed at which the fundamental at the application's current takes the bus's linear range,
+    m/s: the design's own bound on ``v_max`` (``DriveInputs.v_bus_speed``) as the runs' scenarios
+    check it (``linsense.sim.build.drive_data``: a scenario carries no rated load, the design takes
+    half the force at ``i_max``; what ``linsense tune`` then accepts), within the speed cap's
+    plausible range (``SPEED_CAP_MARGIN v_max`` at most the speed of linear motors, 20 m/s)."""
+    top = KINDS["speed"].high / SPEED_CAP_MARGIN  # (a speed cap beyond linear motors' speeds: refused)
+    return min(DriveInputs(motor, dataclasses.replace(dd, load=None)).v_bus_speed, top)
+
+
+def under_voltage_speed(motor, dd: DriveData) -> float:
+    """The same at the under-voltage trip's bus (``V_DC_MIN_FRACTION V_dc``), m/s: for information."""
     i_need = DriveInputs(motor, dd).force_need / drive_force_constant(motor, dd)
     return bus_speed(motor, V_DC_MIN_FRACTION * dd.v_dc, i_need)
 
@@ -71,7 +93,8 @@ def run_speed(spec: str, dd0: DriveData, v: float, workers: int | None) -> dict:
     base = scenario_dict(made, motor_ref=spec)
     tau = motor.pole_pitch
     d = max(PITCHES * tau, move_distance(tau, v, dd.a_max))
-    cases = [trajectory_case(tau, v, dd.a_max, f * made.design.load, d) for f in C.TRAJ_LOADS_QUICK]
+    cases = [with_room(trajectory_case(tau, v, dd.a_max, f * made.design.load, d), tau)
+             for f in C.TRAJ_LOADS_QUICK]
     rows = run_cases(cases, base, spec, motor, str(ROOT), workers)
     faults = [f"{r['why'].removeprefix('fault: ')} ({r['load_n']:+.3g} N)" for r in rows
               if r["fault"] != "none" or r["why"] == "did not finish"]
@@ -148,9 +171,11 @@ def main() -> int:
     summary, errors = [], []
     for name in names:
         spec, dd = motors[name]
-        v_bus = bus_limited_speed(load_motor(motor_ref(spec)), dd)
+        motor = load_motor(motor_ref(spec))
+        v_bus, v_uv = bus_limited_speed(motor, dd), under_voltage_speed(motor, dd)
         v_target = round(TARGET_SHARE * v_bus, 3)
-        speeds = sorted({v for v in grid if v < v_bus} | {v_target, round(v_bus, 3)})
+        top = math.floor(v_bus * 1e3) / 1e3  # (rounded down: tune refuses a v_max beyond v_bus)
+        speeds = sorted({v for v in grid if v < top} | {v_target, top})
         results = []
         for v in speeds:
             if not run_and_print(name, spec, dd, v, "*" if v == v_target else " ", args.workers, results):
@@ -164,15 +189,17 @@ def main() -> int:
                 errors.append(f"{name} at {v:g} m/s")
                 break
         at = dict(results).get(v_target, {})
-        summary.append((name, usable(results), v_bus, v_target, at))
-    print(f"\n{'motor':11s} {'usable m/s':>10s} {'v_bus m/s':>9s} {'share':>5s}   at 0.8 v_bus: "
+        summary.append((name, usable(results), v_bus, v_uv, v_target, at))
+    print(f"\n{'motor':11s} {'usable m/s':>10s} {'v_bus m/s':>9s} {'share':>5s} {'v_uv m/s':>8s}   "
+          "at 0.8 v_bus: "
           f"{'V':>5s} {'peak':>6s} {'rest':>6s}  (target <= {C.TRAJ_PEAK_ERR_DEG:g} / <= "
           f"{C.TRAJ_REST_ERR_DEG:g} deg, no fault)")
-    for name, v_ok, v_bus, v_target, at in summary:
+    for name, v_ok, v_bus, v_uv, v_target, at in summary:
         fig = ("refused" if "refused" in at else "error" if not at else
                f"{at['peak']:6.2f} {at['rest']:6.2f}  {'fault: ' + at['fault'] if at['fault'] else ''}")
         fig = fig.replace("   nan", "     -")
-        print(f"{name:11s} {v_ok:10.3g} {v_bus:9.3g} {v_ok / v_bus:5.0%}   {'':13s} {v_target:5.3g} {fig}")
+        print(f"{name:11s} {v_ok:10.3g} {v_bus:9.3g} {v_ok / v_bus:5.0%} {v_uv:8.3g}   {'':13s} "
+              f"{v_target:5.3g} {fig}")
     if errors:
         print(f"bench_speed: FAIL, runs that errored: {'; '.join(errors)}")
         return 1

@@ -118,8 +118,10 @@ CASES = {
                            ["at most"], ["dead_time:", "saliency is too"]),
     "scenario, a_max 1e6": (simulate(section("reference", "a_max = 1e6")), "reference.a_max",
                             ["at most 16.66 m/s^2"], ["load:"]),
+    "scenario, v_max 10": (simulate(section("reference", "v_max = 10")), "reference.v_max",
+                           ["2.22 m/s"], ["--v-max"]),
     "scenario, v_max 100": (simulate(section("reference", "v_max = 100")), "reference.v_max",
-                            ["2.85 m/s"], ["--v-max"]),
+                            ["its speed cap, 1.25 v_max = 125 m/s", "at most 16 m/s"], ["--v-max"]),
     "scenario, dead time 3 us": (simulate(section("inverter", "dead_time = 3e-6")), "inverter.dead_time",
                                  ["at most 1.696e-06 s"],
                                  ["at this bus", "refused by the design (dead_time"]),
@@ -206,7 +208,8 @@ API = {
     "v_dc subnormal": (dict(v_dc=5e-324), "v_dc"),
     "f_pwm subnormal": (dict(f_pwm=5e-324), "f_pwm"),
     "a_max 1e300": (dict(a_max=1e300), "a_max"),
-    "v_max and a_max 1e300": (dict(v_max=1e300, a_max=1e300), "a_max"),
+    # (v_max's own range, its speed cap within linear motors' speeds, runs first: stage 1)
+    "v_max and a_max 1e300": (dict(v_max=1e300, a_max=1e300), "v_max"),
     "i_max 1e300": (dict(i_max=1e300, load=1.0), "i_max"),
     # (found by tests/properties/test_prop_design.py: the designed f_inj beyond 500 kHz, named as
     # "linsense.analysis.hf: f_inj")

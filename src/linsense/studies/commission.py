@@ -316,15 +316,23 @@ def _points_stroke(points: int, v: float, a: float, base: float, top: float) -> 
 
 def _check_bus(d, dd: DriveData, model: Motor, load: float, v: float, source: str) -> None:
     """Refuse a load the bus cannot drive at the commissioning's speed beside the injection, which
-    stays on (``d``: the design's scenario, ``dd``: the commissioning's drive data)."""
+    stays on, with the commissioning's d-current (``d``: the design's scenario, ``dd``: the
+    commissioning's drive data): the steady-state voltage of the cruise
+    (:func:`~linsense.tune.design.fundamental_speed`)."""
     i_q = abs(load) / drive_force_constant(model, dd)
+    i_d = float(dd.d_current or 0.0)
+    v_hi = float(d.observer.handover_v_hi)
+    l_d, l_q = mean_dq(model)
     v_avail = float(d.inverter.v_dc) / math.sqrt(3.0) - float(d.injection.amplitude)
-    top = fundamental_speed(model, v_avail, i_q, mean_dq(model)[1]) if i_q > 0.0 else math.inf
+    top = fundamental_speed(model, v_avail, i_q, l_q, i_d=i_d, L_d=l_d)
     if v > top:
         v_dc = float(d.inverter.v_dc)
         _refuse(source, "load", f"{load:g} N at {v:.3g} m/s needs more voltage than the {v_dc:g} V bus "
-                f"leaves beside the injection ({v_avail:.3g} V for R_s i, the back-EMF and omega L_q i): at "
-                f"most {top:.3g} m/s with it, a smaller load or a larger bus")
+                f"leaves beside the injection ({v_avail:.3g} V for the back-EMF with R_s i_q, omega L_q i_q "
+                f"and the commissioning's d-current of {i_d:.3g} A): at most {top:.3g} m/s with it"
+                + (f" (--speed between the hand-over band's top, {v_hi:.3g} m/s, and it)" if top > v_hi
+                   else "")
+                + ", a smaller load or a larger bus")
 
 
 def _check_emf(d, data: dict, source: str) -> None:
@@ -366,7 +374,8 @@ def _speed_design(data: dict, v: float, a: float, model: Motor, source: str, bas
     except InputError as exc:
         if exc.key.split(" ")[0] not in SPEED_KEYS:
             raise
-        return _refuse(source, "speed", f"{v:g} m/s: {exc.message}")
+        said = exc.message if exc.message.startswith(f"{v:g} m/s") else f"{v:g} m/s: {exc.message}"
+        return _refuse(source, "speed", said)
 
 
 def _table_points(model: Motor, points: int | None, inj, read_at: int, source: str) -> int:

@@ -254,7 +254,8 @@ class Design:
     margins : dict
         Loop margins by loop and case (:func:`margins`); empty when not analysed.
     headroom_speed : float
-        Speed up to which the fundamental fits beside the injection, m/s.
+        Speed up to which the fundamental at the application's current (its load and m a_max) fits
+        beside the injection, m/s.
     dead_time_ratio : float
         ``T_d f_pwm V_dc / (V_inj s_min)``, dimensionless.
     inj_ramp_rate : float
@@ -337,7 +338,7 @@ class Design:
     k_e_min: float  # local error gain over the period, relative
     k_e_max: float
     margins: dict = field(default_factory=dict)
-    headroom_speed: float = math.nan  # m/s, speed up to which the fundamental fits beside the injection
+    headroom_speed: float = math.nan  # m/s, up to which the application's current fits beside the injection
     dead_time_ratio: float = math.nan  # -, T_d f_pwm V_dc / (V_inj s_min)
     inj_ramp_rate: float = math.nan  # V/s, the injection's ramp (V_inj / INJ_RAMP_TIME)
     s_min: float = math.nan  # -, lowest (L_q - L_d)/(L_q + L_d) over the period
@@ -796,7 +797,8 @@ class DriveInputs:
     def v_bus_speed(self) -> float:
         """The speed beyond which the bus cannot drive the current the application needs, m/s."""
         return fundamental_speed(self.motor, self.d.v_dc / math.sqrt(3.0),
-                                 self.force_need / drive_force_constant(self.motor, self.d), self.dq[1])
+                                 self.force_need / drive_force_constant(self.motor, self.d), self.dq[1],
+                                 i_d=injecting_d_current(self.d), L_d=self.dq[0])
 
     @functools.cached_property
     def k_e(self) -> np.ndarray:
@@ -1014,11 +1016,13 @@ def _injection_says(x: DriveInputs, key: str) -> str:
 def _speed_says(x: DriveInputs, key: str) -> str:
     m, d = x.motor, x.d
     i_q = x.force_need / drive_force_constant(m, d)
-    why = (f"where the back-EMF, R_s i and omega L_q i at the current the application needs at speed "
-           f"({i_q:.3g} A: the load and m a_max) take the whole linear range V_dc / sqrt(3), injection aside")
+    share = f", {RATED_LOAD_FRACTION:g} of the force at i_max where none is given" if d.load is None else ""
+    why = (f"where the back-EMF with R_s i, and omega L_q i, at the current the application needs at speed "
+           f"({i_q:.3g} A: the rated load {rated_load(m, d):.3g} N{share}, and m a_max "
+           f"{m.mass * d.a_max:.3g} N) take the whole linear range V_dc / sqrt(3), injection aside")
     if key == "v_dc":
-        w = 2.0 * math.pi * d.v_max / m.pole_pitch
-        v_min = math.sqrt(3.0) * math.hypot(m.R_s * i_q, w * (x.dq[1] * i_q + m.psi_pm))
+        v_min = math.sqrt(3.0) * _fundamental_voltage(m, d.v_max, i_q, x.dq[1], injecting_d_current(d),
+                                                     x.dq[0])
         return (f"{x.show('v_dc')} allows {x.v_bus_speed:.3g} m/s, below v_max = {d.v_max:g} m/s ({why}): at "
                 f"least {limit_text(v_min, True)} V")
     return (f"{x.show('v_max')} is beyond what the {d.v_dc:g} V bus allows, {x.v_bus_speed:.3g} m/s ({why}): "
@@ -1095,6 +1099,11 @@ DRIVE_RULES: tuple[Rule, ...] = (
     Rule(1, ("travel",), lambda x: x.d.travel is None or x.d.travel <= KINDS["stroke"].high,
          lambda x, k: f"{x.d.travel * 1e3:g} mm is beyond the strokes of linear-motor axes: at most "
                       f"{KINDS['stroke'].high * 1e3:g} mm"),
+    Rule(1, ("v_max",), lambda x: not x.d.v_max * SPEED_CAP_MARGIN > KINDS["speed"].high,
+         lambda x, k: f"{x.show('v_max')}: its speed cap, {SPEED_CAP_MARGIN:g} v_max = "
+                      f"{SPEED_CAP_MARGIN * x.d.v_max:.4g} m/s, is beyond the speeds of {KINDS['speed'].of} "
+                      f"({KINDS['speed'].high:g} m/s): at most "
+                      f"{limit_text(KINDS['speed'].high / SPEED_CAP_MARGIN, False)} m/s"),
     _own_range("v_inj", _positive, "must be positive"),
     _own_range("f_inj", lambda v: math.isfinite(v) and v >= F_INJ_MIN / 8.0,
                f"must be at least {F_INJ_MIN / 8.0:g} Hz (the bandwidths of the loops follow it)"),
@@ -1245,12 +1254,14 @@ def _injection_and_bus(
     )
     if i_hf > d.i_max:
         warnings.append(f"the HF current ({i_hf:.2f} A) exceeds i_max ({d.i_max:g} A): lower v_inj")
-    # the fundamental beside the injection: R i + (omega L i, back-EMF) at i_max
-    headroom = fundamental_speed(motor, x.v_avail, d.i_max, L_q)
+    # the fundamental beside the injection, at the current the application needs at speed (its load
+    # and m a_max; a step's i_max may saturate the current loop for a moment, as on any bus)
+    i_app = x.force_need / drive_force_constant(motor, d)
+    headroom = fundamental_speed(motor, x.v_avail, i_app, L_q, i_d=injecting_d_current(d), L_d=x.dq[0])
     if headroom < d.v_max:
         warnings.append(
-            f"the bus leaves room for the fundamental up to {headroom:.3g} m/s at i_max, below "
-            f"v_max = {d.v_max:g} m/s"
+            f"the bus leaves room for the fundamental up to {headroom:.3g} m/s at the application's "
+            f"{i_app:.3g} A, below v_max = {d.v_max:g} m/s"
         )
     if x.k_e.min() < 0.3:
         warnings.append(
@@ -1696,9 +1707,10 @@ def force_max_text(motor: Motor, d: DriveData, i_max_key: str = "i_max") -> str:
             f"injection's d-current {what} leaves with L_q > L_d)")
 
 
-def bus_speed(motor: Motor, v_dc: float, i_q: float) -> float:
-    """The speed beyond which the bus cannot drive ``i_q``: where ``|R_s i + j w (L_q i + psi_pm)|``
-    reaches the linear range ``V_dc / sqrt(3)`` (no voltage left for an injection).
+def bus_speed(motor: Motor, v_dc: float, i_q: float, i_d: float = 0.0) -> float:
+    """The speed beyond which the bus cannot drive ``i_q`` (and ``i_d``): where the steady-state
+    voltage (:func:`fundamental_speed`) reaches the linear range ``V_dc / sqrt(3)`` (no voltage left
+    for an injection).
 
     Parameters
     ----------
@@ -1708,18 +1720,35 @@ def bus_speed(motor: Motor, v_dc: float, i_q: float) -> float:
         Bus voltage, V.
     i_q : float
         The q current, A.
+    i_d : float, optional
+        The d current, A (a d-current the drive keeps: the rotating vector's, the square wave's).
 
     Returns
     -------
     float
-        m/s (0 where ``R_s i_q`` alone takes the range).
+        m/s (0 where ``R_s |i|`` alone takes the range).
     """
-    return fundamental_speed(motor, v_dc / math.sqrt(3.0), i_q, mean_dq(motor)[1])
+    L_d, L_q = mean_dq(motor)
+    return fundamental_speed(motor, v_dc / math.sqrt(3.0), i_q, L_q, i_d=i_d, L_d=L_d)
 
 
-def fundamental_speed(motor: Motor, v_avail: float, i_q: float, L_q: float) -> float:
-    """The speed at which ``|R_s i + j w (L_q i + psi_pm)|`` reaches ``v_avail``: up to it the
-    voltage drives ``i_q`` (the bus's linear range, or what the injection leaves of it).
+def _fundamental_voltage(motor: Motor, v: float, i_q: float, L_q: float, i_d: float = 0.0,
+                         L_d: float = 0.0) -> float:
+    """The steady-state voltage amplitude (V) that drives ``i_d``, ``i_q`` at the speed ``v`` (m/s):
+    :func:`fundamental_speed`'s ``|(v_d, v_q)|``, its inverse."""
+    w = 2.0 * math.pi * v / motor.pole_pitch
+    return math.hypot(motor.R_s * i_d - w * L_q * i_q, motor.R_s * i_q + w * (L_d * i_d + motor.psi_pm))
+
+
+def fundamental_speed(motor: Motor, v_avail: float, i_q: float, L_q: float, i_d: float = 0.0,
+                      L_d: float = 0.0) -> float:
+    """The speed at which the steady-state voltage of the currents reaches ``v_avail``: up to it the
+    voltage drives them (the bus's linear range, or what the injection leaves of it).
+
+    The voltage in the rotor frame (docs/theory.md, the machine's equations, at constant current):
+    ``v_d = R_s i_d - w L_q i_q`` and ``v_q = R_s i_q + w (L_d i_d + psi_pm)``. The back-EMF and
+    ``R_s i_q`` lie on the same axis and add; ``w L_q i_q`` is normal to them. The speed solves
+    ``v_d^2 + v_q^2 = v_avail^2``, a quadratic in ``w``.
 
     Parameters
     ----------
@@ -1731,19 +1760,27 @@ def fundamental_speed(motor: Motor, v_avail: float, i_q: float, L_q: float) -> f
         The q current, A.
     L_q : float
         The mean q inductance, H.
+    i_d : float, optional
+        The d current, A.
+    L_d : float, optional
+        The mean d inductance, H (used with ``i_d``).
 
     Returns
     -------
     float
-        m/s (0 where ``R_s i_q`` alone takes ``v_avail``).
+        m/s (0 where ``R_s |i|`` alone takes ``v_avail``; inf where no speed brings the voltage to it).
     """
     w_per_v = 2.0 * math.pi / motor.pole_pitch  # electrical rad/s per m/s
-    v_r = motor.R_s * i_q
-    if max(abs(v_avail), abs(v_r)) < 1e150:
-        root = math.sqrt(max(v_avail**2 - v_r**2, 0.0))
-    else:  # (the squares overflow: an OverflowError traceback with a_max = 1e300)
-        root = math.sqrt(max(v_avail - v_r, 0.0)) * math.sqrt(max(v_avail + v_r, 0.0))
-    return w_per_v**-1 * root / (L_q * i_q + motor.psi_pm)
+    # (scaled by the largest voltage: no square overflows with a_max = 1e300, whose current is huge)
+    k = max(abs(v_avail), motor.R_s * math.hypot(i_d, i_q), 1e-30)
+    a, c = motor.R_s * i_d / k, motor.R_s * i_q / k  # v_d, v_q at standstill
+    b, e = -L_q * i_q / k, (L_d * i_d + motor.psi_pm) / k  # their change per rad/s
+    q2, q1, q0 = b * b + e * e, a * b + c * e, a * a + c * c - (v_avail / k) ** 2
+    if q0 >= 0.0:
+        return 0.0
+    if q2 <= 0.0:
+        return math.inf
+    return (-q1 + math.sqrt(q1 * q1 - q2 * q0)) / q2 / w_per_v
 
 
 def _limits(dz: Design, motor: Motor, d: DriveData, warnings: list) -> None:
@@ -1776,7 +1813,8 @@ def _limits(dz: Design, motor: Motor, d: DriveData, warnings: list) -> None:
     dz.i_trip = CURRENT_TRIP_MARGIN * (d.i_max + i_hf_peak)
     if dz.v_cap > dz.headroom_speed:
         warnings.append(f"the speed cap {dz.v_cap:.3g} m/s ({SPEED_CAP_MARGIN:g} v_max) is beyond the "
-                        f"{dz.headroom_speed:.3g} m/s up to which the bus drives i_max beside the injection")
+                        f"{dz.headroom_speed:.3g} m/s up to which the bus drives the application's current "
+                        "beside the injection")
     dz.limits = {
         "injection": _injection_text(dz, d),
         "observer": (f"the demodulator's low-pass ({dz.demod_lpf:.4g} Hz) / "

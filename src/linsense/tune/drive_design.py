@@ -200,7 +200,8 @@ class DriveDesign:
             if h.v_off > self.design.headroom_speed:
                 out.append(f"the injection fades out at {h.v_off:.3g} m/s, above the "
                            f"{self.design.headroom_speed:.3g} m/s up to which the bus leaves the fundamental "
-                           "room beside it at i_max: the current loop saturates between them")
+                           "room beside it at the application's current: the current loop saturates "
+                           "between them")
         if self.table is not None:  # (the file's table's cost is moot: the drive runs the measured one)
             out = [w for w in out if not w.startswith("the motor file's table costs")]
             out += [f"{self.table.source}: {self.table_fit[1]}"] if self.table_fit[1] else []

@@ -157,7 +157,8 @@ def design_handover(motor: Motor, *, v_dc: float, f_pwm: float, dead_time: float
     shape : str
         The injection's shape (the EMF estimate runs with the pulsating and elliptical ones).
     headroom : float, optional
-        The speed up to which the fundamental fits beside the injection at ``i_max``, m/s: the
+        The speed up to which the fundamental at the application's current fits beside the
+        injection, m/s: the
         injection fades out by then where the band allows (``v_off >= HYSTERESIS v_hi``).
     i_noise : float, optional
         Current noise, A rms.

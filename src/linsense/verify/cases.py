@@ -19,7 +19,7 @@ from linsense.sim.build import trapezoid_time
 from linsense.tune.export import end_stops
 from linsense.verify import criteria as C
 
-#: mm, the end stops of an unbounded stroke's runs (a longer move gets its own: _room)
+#: mm, the end stops of an unbounded stroke's runs (a longer move gets its own: with_room)
 UNBOUNDED_MM = 1e4
 
 
@@ -422,15 +422,28 @@ def all_cases(tau: float, v_max: float, a_max: float, load_rated: float, quick: 
         stops = end_stops(tau, travel)
         cases = [dataclasses.replace(c, sections={**c.sections, "travel": stops}) for c in cases]
     else:  # (unbounded: a move longer than the runs' +-10 m gets end stops beyond it)
-        cases = [_room(c, tau) for c in cases]
+        cases = [with_room(c, tau) for c in cases]
     return cases
 
 
 
 
-def _room(case: Case, tau: float) -> Case:
+def with_room(case: Case, tau: float) -> Case:
     """``case`` with end stops 20 pole pitches beyond its farthest position where that passes
-    :data:`UNBOUNDED_MM` (a fast move's distance grows with v_max^2 / a_max: 25 m at 5 m/s)."""
+    :data:`UNBOUNDED_MM` (a fast move's distance grows with v_max^2 / a_max: 25 m at 5 m/s).
+
+    Parameters
+    ----------
+    case : Case
+        A run without end stops of its own.
+    tau : float
+        Pole pitch, m.
+
+    Returns
+    -------
+    Case
+        ``case``, or a copy with a ``[travel]`` section wide enough for it.
+    """
     ref, init = case.sections.get("reference", {}), case.sections.get("initial", {})
     far = max([abs(float(w)) for w in ref.get("waypoints_mm") or []] +
               [abs(float(ref.get("position_mm") or 0.0)), abs(float(init.get("position_mm") or 0.0))])

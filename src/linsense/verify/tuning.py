@@ -461,7 +461,7 @@ def design_lines(dz, motor_name: str, dd, hand=None) -> list[str]:
         f"{dd.dead_time * 1e6:g} us dead time, "
         f"i_max {dd.i_max:g} A",
         (f"  injection      {dz.v_inj:.4g} V at {dz.f_inj:g} Hz on d, kappa {dz.quad:g} on q: HF current "
-         f"{dz.i_hf:.3g} A; fundamental fits up to {dz.headroom_speed:.3g} m/s at i_max"
+         f"{dz.i_hf:.3g} A; fundamental fits up to {dz.headroom_speed:.3g} m/s at the application's current"
          if dd.shape == "pulsating" else
          f"  injection      {dd.shape}, {dz.v_inj:.4g} V"
          f"{' at f_pwm / 2' if dd.shape == 'square' else f' at {dz.f_inj:g} Hz'} (the loops below are "
