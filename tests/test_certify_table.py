@@ -185,3 +185,25 @@ def test_the_bus_limited_speed_is_where_the_plant_runs_out_of_voltage(name):
     assert r.metrics["fault"] == "none"
     assert top < 0.98 * dd.v_max  # (the voltage, not the reference, limits the speed)
     assert float(r.v.max()) == pytest.approx(top, rel=0.02)
+
+
+def test_tunes_rated_load_goes_into_the_scenario_it_writes(run_cli, tmp_path):
+    """`tune --load` is the application's rated load; the scenario it writes carries it
+    (``controller.rated_load``), so that the simulator's own design of that scenario takes the same
+    load: m45_24v at 24 V with 10 N (the default would be half the force at i_max, 16 N) accepts
+    `--v-max 2.3` (its bus allows 2.33 m/s with 10 N, 2.19 with 16 N), and `simulate` runs the file
+    (it refused it: "2.15 A: the load and m a_max", a load the user had not given)."""
+    motor = CLASS_DIR / "m45_24v.toml"
+    drive = ["--motor", motor, "--v-dc", "24", "--f-pwm", "10000", "--dead-time", "0.5e-6", "--i-max", "4",
+             "--a-max", "1", "--no-verify"]
+    out = tmp_path / "t.toml"
+    r = run_cli("tune", *drive, "--load", "10", "--v-max", "2.3", "--out", out)
+    assert r.code == 0, r.err
+    assert tomllib.loads(out.read_text())["controller"]["rated_load"] == 10.0
+    r = run_cli("simulate", out, "--out", tmp_path / "sim")
+    assert r.code == 0, r.err
+    r = run_cli("tune", *drive, "--load", "10", "--v-max", "2.4", "--out", out)
+    assert r.code == 2 and "2.33 m/s" in r.err and "the rated load 10 N" in r.err, r.err
+    r = run_cli("tune", *drive, "--v-max", "2.3", "--out", tmp_path / "u.toml")
+    assert r.code == 2 and "2.19 m/s" in r.err, r.err
+    assert "0.5 of the force at i_max where none is given" in r.err, r.err

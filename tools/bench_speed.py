@@ -11,9 +11,8 @@ every V run has peak <= 3 deg and no fault) against the bus-limited speed, and t
 of it.
 
 The bus-limited speed is the design's own bound on v_max (linsense.tune.design.DriveInputs.v_bus_speed,
-what `linsense tune` accepts): at the bus V_dc and the current the application needs (the rated load
-as a scenario's design takes it, half the force at i_max, + m a_max, over the force constant, less the
-rotating or square injection's d-current's share), where the
+what `linsense tune` accepts): at the bus V_dc and the current the application needs (its rated load
++ m a_max, over the force constant, less the rotating or square injection's d-current's share), where the
 steady-state voltage (the back-EMF with R_s i_q on one axis, omega L_q i_q normal to them;
 linsense.tune.design.fundamental_speed) takes the linear range V_dc / sqrt(3). The same at the
 under-voltage trip's bus (V_DC_MIN_FRACTION V_dc) is printed beside it, for information.
@@ -31,7 +30,6 @@ errors.
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import math
 import time
 import traceback
@@ -67,12 +65,11 @@ QUICK_MOTORS, QUICK_GRID = ("ecce2010", "small30"), (0.25, 0.5, 0.75, 1.0)
 
 def bus_limited_speed(motor, dd: DriveData) -> float:
     """The speed at which the fundamental at the application's current takes the bus's linear range,
-    m/s: the design's own bound on ``v_max`` (``DriveInputs.v_bus_speed``) as the runs' scenarios
-    check it (``linsense.sim.build.drive_data``: a scenario carries no rated load, the design takes
-    half the force at ``i_max``; what ``linsense tune`` then accepts), within the speed cap's
-    plausible range (``SPEED_CAP_MARGIN v_max`` at most the speed of linear motors, 20 m/s)."""
+    m/s: the design's own bound on ``v_max`` (``DriveInputs.v_bus_speed``, what ``linsense tune``
+    accepts), within the speed cap's plausible range (``SPEED_CAP_MARGIN v_max`` at most the speed of
+    linear motors, 20 m/s)."""
     top = KINDS["speed"].high / SPEED_CAP_MARGIN  # (a speed cap beyond linear motors' speeds: refused)
-    return min(DriveInputs(motor, dataclasses.replace(dd, load=None)).v_bus_speed, top)
+    return min(DriveInputs(motor, dd).v_bus_speed, top)
 
 
 def under_voltage_speed(motor, dd: DriveData) -> float:

@@ -97,6 +97,7 @@ KINDS: dict[str, Kind] = {
     "voltage": Kind("V", 1.0, 1500.0, (("mV", 1e-3), ("kV", 1e3)), "drives of linear motors"),
     "current": Kind("A", 0.0, 1000.0, (("mA", 1e-3), ("kA", 1e3)), "drives of linear motors"),
     "speed": Kind("m/s", 0.0, 20.0, (("mm/s", 1e-3),), "linear motors"),
+    "force": Kind("N", 0.0, 1e5, (("kN", 1e3),), "linear motors"),
     "angular_speed": Kind("rad/s", 0.0, 1e7, (("Hz", 2.0 * math.pi),), "electrical speeds"),
     "angle_error": Kind("rad", 0.0, math.pi, (("deg", _DEG),), "electrical angle errors"),
     "angle": Kind("deg", 0.0, 360.0, (("rad", 1.0 / _DEG),), "electrical angles over one period"),

@@ -775,6 +775,7 @@ def drive_data(sc: Scenario) -> DriveData:
     inj, given = s.injection, s.injection.model_fields_set
     return DriveData(v_dc=s.inverter.v_dc, f_pwm=s.inverter.f_pwm, dead_time=s.inverter.dead_time,
                      i_max=s.controller.i_max, v_max=s.reference.v_max, a_max=s.reference.a_max,
+                     load=s.controller.rated_load,
                      v_inj=inj.amplitude if "amplitude" in given else None,
                      # (the square wave's f_pwm / 2 is not a design choice: the other gains are
                      # designed as for the default frequency)

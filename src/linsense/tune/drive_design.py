@@ -33,7 +33,7 @@ from linsense.tune.startup import StartupDesign, design_startup
 #: file's friction): a scenario holds them as they are; the rest are computed (written to 6 digits)
 GIVEN_KEYS = frozenset({
     "inverter.v_dc", "inverter.f_pwm", "inverter.dead_time", "controller.i_max", "reference.v_max",
-    "reference.a_max", "controller.friction_coulomb", "controller.friction_viscous",
+    "reference.a_max", "controller.friction_coulomb", "controller.friction_viscous", "controller.rated_load",
 })
 
 
@@ -170,6 +170,8 @@ class DriveDesign:
             "controller.friction_band": dz.friction_band, "controller.ripple_order": dz.ripple_order,
             "controller.ripple_cos": dz.ripple_cos, "controller.ripple_sin": dz.ripple_sin,
         }
+        if d.load is not None:  # (the application's rated load: the scenario's design takes it too)
+            keys["controller.rated_load"] = d.load
         if self.motor is not None:  # (the controller believes the motor: its own parameters)
             m = self.model
             L_d, L_q = mean_dq(m)

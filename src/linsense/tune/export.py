@@ -212,6 +212,8 @@ def _put_controller(con: dict, keys: dict) -> None:
          "controller.v_max", "controller.step_a_max")
     if con.get("position_type", "p") == "p":
         _put(keys, con, "controller.kp_x")
+    if "controller.rated_load" in keys:  # (the application's, given: the scenario's design takes it)
+        _put(keys, con, "controller.rated_load")
     # the motor file's friction and thrust ripple, fed forward (only where it has them: the keys'
     # defaults are none)
     for k in ("friction_coulomb", "friction_viscous", "friction_band", "ripple_order", "ripple_cos",
