@@ -335,3 +335,29 @@ def test_a_key_of_the_speed_range_that_does_nothing_is_refused(section, keys, te
     with pytest.raises(InputError) as e:
         build(scenario_from_dict(data, source="s.toml"))
     assert text in str(e.value), str(e.value)
+
+
+@pytest.mark.parametrize("band, refused", [((0.002, 0.004), True), ((0.05, 0.1), True),
+                                           ((0.075, 0.15), False)])
+def test_a_band_given_where_the_emf_cannot_be_trusted_is_refused(band, refused):
+    """A hand-made band whose top lies below the speed where the EMF estimate's error bound is within
+    45 deg (ecce2010 on the switching inverter, a 1 m/s move at 4 m/s^2: 0.14 m/s) is refused before
+    the run, naming ``observer.handover_v_hi`` and that speed; such bands faulted over-speed in the
+    move (2-4 mm/s ran to 180 deg; 0.1 m/s and below, every one measured). A band at 0.075-0.15 m/s,
+    far below the design's (0.40-0.79), runs (3.7 deg)."""
+    import linsense
+    from linsense.errors import InputError
+
+    data = {"motor": "ecce2010", "scenario": {"name": "band", "duration": 1.5},
+            "inverter": {"fidelity": "switching"},
+            "observer": {"emf": True, "handover_v_lo": band[0], "handover_v_hi": band[1]},
+            "reference": {"type": "trajectory", "waypoints_mm": [300.0], "v_max": 1.0, "a_max": 4.0}}
+    if refused:
+        with pytest.raises(InputError) as exc:
+            linsense.simulate(data)
+        assert exc.value.key == "observer.handover_v_hi", str(exc.value)
+        assert "below 0.14 m/s, where the EMF estimate's error bound" in str(exc.value), str(exc.value)
+        assert "at least 0.14 m/s" in str(exc.value), str(exc.value)
+    else:
+        r = linsense.simulate(data)
+        assert r.metrics["fault"] == "none" and r.metrics["max_abs_err_deg"] < 5.0, r.metrics

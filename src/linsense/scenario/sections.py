@@ -354,7 +354,9 @@ class ObserverSection(BaseModel):
         json_schema_extra={"kind": "speed", "unit": "m/s", "default_note": "designed: `handover_v_hi` / "
                            "{linsense.tune.handover.BAND_RATIO}"})
     handover_v_hi: Positive = Field(
-        _c(_C.fuse.v_hi), description="the speed from which the EMF error alone does (> `handover_v_lo`)",
+        _c(_C.fuse.v_hi), description="the speed from which the EMF error alone does (> `handover_v_lo`; "
+        "refused below the speed where the EMF's error bound is within `linsense.tune.handover.EPS_TRUST`: "
+        "the estimate ran away there)",
         json_schema_extra={"kind": "speed", "unit": "m/s", "default_note": "designed: where the EMF's error "
                            "bound is within {linsense.tune.handover.EPS_HAND_DEG} deg"})
     inject_v_on: Positive = Field(

@@ -887,6 +887,29 @@ def _drive_design(motor: Motor, dd: DriveData, source: str, no_table: bool) -> t
     return made, made.scenario_keys()
 
 
+def _check_band_trusted(sc: Scenario, made, changes: dict, given_obs: set) -> None:
+    """Refuse a hand-over band given by hand whose top the EMF estimate's error bound cannot trust:
+    below the design's ``v_trust`` (:data:`linsense.tune.handover.EPS_TRUST`), the EMF error there
+    can take the estimate anywhere (a band at 2-4 mm/s on ecce2010 ran to 180 deg and an over-speed
+    fault)."""
+    h = made.handover
+    emf = changes.get("observer", {}).get("emf", sc.spec.observer.emf)
+    if h is None or not emf or "handover_v_hi" not in given_obs:
+        return
+    if sc.spec.observer.handover_v_hi >= h.v_trust:
+        return
+    from linsense.tune.handover import EPS_HAND_DEG, EPS_TRUST
+
+    v = sc.spec.observer.handover_v_hi
+    raise InputError(sc.source, "observer.handover_v_hi",
+                     f"{v:g} m/s is below {h.v_trust:.3g} m/s, where the EMF estimate's error bound at the "
+                     f"drive's current is within {math.degrees(EPS_TRUST):g} deg: above the band the EMF "
+                     "error alone drives the observer, and below that speed it can take the estimate "
+                     "anywhere "
+                     f"(the design's band ends at {h.v_emf:.3g} m/s, where the bound is within "
+                     f"{EPS_HAND_DEG:g} deg): at least {h.v_trust:.3g} m/s, or leave the band to the design")
+
+
 def designed(sc: Scenario, motor: Motor) -> Scenario:
     """``sc`` with every gain it leaves unset taken from the design for its motor and drive.
 
@@ -939,6 +962,7 @@ def designed(sc: Scenario, motor: Motor) -> Scenario:
         if k in given["controller"]:
             want["controller"].pop(k.replace("_kp", "_bandwidth_hz"))
     changes = {sec: {k: v for k, v in vals.items() if k not in given[sec]} for sec, vals in want.items()}
+    _check_band_trusted(sc, made, changes, given["observer"])
     if s.control.mode == "calibration":  # its own timings follow the drive as it runs
         def run(sec: str, key: str):
             return changes.get(sec, {}).get(key, getattr(getattr(s, sec), key))

@@ -27,7 +27,7 @@ from linsense.analysis.emf import ERR_L, ERR_R, I_NOISE, emf_speed_limit, invert
 from linsense.model.motor import Motor
 
 __all__ = ["HandoverDesign", "HANDOVER_KEYS", "design_handover", "emf_harmonic_ripple", "EPS_HAND",
-           "EPS_HAND_DEG", "BAND_RATIO", "HYSTERESIS", "DT_RESIDUAL_DTC", "SETTLE_TAUS"]
+           "EPS_HAND_DEG", "BAND_RATIO", "HYSTERESIS", "DT_RESIDUAL_DTC", "SETTLE_TAUS", "EPS_TRUST"]
 
 #: rad, the EMF estimate's bound at the band's top (its weight is 1 from there)
 EPS_HAND = math.radians(3.0)
@@ -42,6 +42,11 @@ HYSTERESIS = 1.15
 DT_RESIDUAL_DTC = 0.25
 #: -, the demodulator's settling after the injection is back, in time constants of its low-pass
 SETTLE_TAUS = 5.0
+#: rad, the EMF estimate's bound beyond which a band given by hand is refused: its error can then take
+#: the estimate anywhere (ecce2010's drive with a band at 2-4 mm/s: 180 deg and an over-speed fault
+#: 0.65 s into a move); the bound is a worst case (measured about a third of it), so a hand-made band
+#: well below the design's (3 deg) is still accepted
+EPS_TRUST = math.radians(45.0)
 
 
 #: the scenario keys of the design (:meth:`HandoverDesign.scenario_keys`), in its order
@@ -79,6 +84,9 @@ class HandoverDesign:
         The current noise, A rms.
     v_emf : float
         The speed from which the EMF bound is within :data:`EPS_HAND`, m/s (inf: never).
+    v_trust : float
+        The speed from which it is within :data:`EPS_TRUST`, m/s (inf: never): a band's top given by
+        hand must reach it.
     limit : str
         What sets the band, in words; with the hand-over off, why it is off.
     """
@@ -95,6 +103,7 @@ class HandoverDesign:
     u_err: float
     i_noise: float
     v_emf: float
+    v_trust: float
     limit: str
 
     def scenario_keys(self) -> dict[str, object]:
@@ -174,6 +183,9 @@ def design_handover(motor: Motor, *, v_dc: float, f_pwm: float, dead_time: float
     lim = emf_speed_limit(motor, v_dc=v_dc, f_pwm=f_pwm, dead_time=dead_time, i_mag=i_mag, f_lpf=f_lpf,
                           err_r=ERR_R, err_l=ERR_L, dt_residual=DT_RESIDUAL_DTC, i_noise=i_noise,
                           eps_max=EPS_HAND)
+    v_trust = emf_speed_limit(motor, v_dc=v_dc, f_pwm=f_pwm, dead_time=dead_time, i_mag=i_mag, f_lpf=f_lpf,
+                              err_r=ERR_R, err_l=ERR_L, dt_residual=DT_RESIDUAL_DTC, i_noise=i_noise,
+                              eps_max=EPS_TRUST).v_min
     t_settle = SETTLE_TAUS / (2.0 * math.pi * demod_lpf)
     v_lo_emf = a_max * SETTLE_TAUS / (2.0 * math.pi * f_lpf) / (1.0 - FUSE_EMF_ON)
     v_emf = lim.v_min
@@ -210,4 +222,4 @@ def design_handover(motor: Motor, *, v_dc: float, f_pwm: float, dead_time: float
         why = f"the speed cap {v_cap:.3g} m/s stays below the band's start {v_lo:.3g} m/s ({why})"
     u_err = inverter_voltage_error(v_dc, f_pwm, dead_time, DT_RESIDUAL_DTC)
     return HandoverDesign(on, v_lo, v_hi, v_on, v_off, t_settle, f_lpf, ERR_R, ERR_L, u_err, i_noise, v_emf,
-                          why)
+                          v_trust, why)
