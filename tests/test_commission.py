@@ -40,8 +40,8 @@ def test_speed_below_the_band_refused():
     ({"points": 1024}, "positions", "at most"),
     ({"load": -100.0}, "load", "-100 N leaves nothing"),
     ({"speed": 1.5, "load": 30.0}, "load", "needs more voltage than the 72 V bus leaves beside"),
-    ({"speed": 2.0, "load": 30.0}, "speed", "2 m/s is beyond what the 72 V bus allows, 1.84 m/s"),
-    ({"load": 35.0}, "load", "d-current of 1 A): at most 0.913 m/s with it (--speed between"),
+    ({"speed": 2.0, "load": 30.0}, "speed", "2 m/s is beyond what the 72 V bus allows, 1.67 m/s (where"),
+    ({"load": 35.0}, "load", "d-current of 1 A): at most 0.913 m/s with it (a --speed up to it whose"),
     ({"drive": {"dead_time": 0.8}}, "inverter.dead_time", "did you type us?"),
     ({"drive": {"i_max": 100.0}}, "controller.i_max", "at most"),
 ])

@@ -118,7 +118,7 @@ RANGE = {
     "bus tiny": ("[inverter]\nv_dc = 1e-30", ["inverter.v_dc", "1e-30"]),
     "current limit huge": ("[controller]\ni_max = 1e30", ["controller.i_max", "1e+30", "R_s i_max"]),
     "trajectory speed huge": ("[reference]\nv_max = 1e30",
-                              ["reference.v_max", "1e+30", "speeds of linear motors", "at most 16 m/s"]),
+                              ["reference.v_max", "1e+30", "speeds of linear motors", "at most 2.221 m/s"]),
     "trajectory acceleration huge": ("[reference]\na_max = 1e30", ["reference.a_max", "1e+30", "K_f i_max"]),
     # the sensors (before: accepted, then "protection.i_max: the drive trips at t = 0")
     "sensor noise": ("[sensors]\ncurrent_noise = 1e30",

@@ -459,7 +459,8 @@ class ControllerSection(BaseModel):
         None, description="the application's rated load the design takes: its speed limit on "
         "`reference.v_max` (the current the load and `m a_max` need) and its force check (`linsense tune "
         "--load` writes it)", json_schema_extra={"kind": "force", "unit": "N",
-                                                 "default_note": "half the force at `i_max`"})
+                                                 "default_note": "half the force at `i_max` (less the "
+                                                 "rotating or square injection's d-current's share)"})
     decouple: bool = Field(True, description="dq decoupling and back-EMF feed-forward")
     i_max: Positive = Field(_c(_C.i_max),
                             description="current-reference limit; force limit = K_f i_max, less the "

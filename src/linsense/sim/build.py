@@ -730,7 +730,7 @@ DESIGN_KEYS = {"v_dc": "inverter.v_dc", "f_pwm": "inverter.f_pwm", "dead_time": 
                 "i_max": "controller.i_max", "v_max": "reference.v_max", "a_max": "reference.a_max",
                 "v_inj": "injection.amplitude", "f_inj": "injection.frequency",
                 "quad": "injection.quadrature", "shape": "injection.shape",
-                "d_current": "injection.d_current", "motor": "motor"}
+                "d_current": "injection.d_current", "load": "controller.rated_load", "motor": "motor"}
 
 
 def _design_refusal(sc: Scenario, exc: InputError) -> InputError:
@@ -888,13 +888,14 @@ def _drive_design(motor: Motor, dd: DriveData, source: str, no_table: bool) -> t
 
 
 def _check_band_trusted(sc: Scenario, made, changes: dict, given_obs: set) -> None:
-    """Refuse a hand-over band given by hand whose top the EMF estimate's error bound cannot trust:
-    below the design's ``v_trust`` (:data:`linsense.tune.handover.EPS_TRUST`), the EMF error there
-    can take the estimate anywhere (a band at 2-4 mm/s on ecce2010 ran to 180 deg and an over-speed
-    fault)."""
+    """Refuse a hand-over band given by hand, in a mode where the estimate closes the loop, whose top
+    the EMF estimate's error bound cannot trust: below the design's ``v_trust``
+    (:data:`linsense.tune.handover.EPS_TRUST`), the EMF error there can take the estimate anywhere (a
+    band at 2-4 mm/s on ecce2010 ran to 180 deg and an over-speed fault)."""
     h = made.handover
     emf = changes.get("observer", {}).get("emf", sc.spec.observer.emf)
-    if h is None or not emf or "handover_v_hi" not in given_obs:
+    steers = sc.spec.control.mode in ("sensorless_lut", "sensorless_nolut", "commission")
+    if h is None or not emf or not steers or "handover_v_hi" not in given_obs:
         return
     if sc.spec.observer.handover_v_hi >= h.v_trust:
         return

@@ -1013,13 +1013,29 @@ def _injection_says(x: DriveInputs, key: str) -> str:
             f"{d.f_pwm:g} Hz{more}")
 
 
+def _cap_says(x: DriveInputs, key: str) -> str:
+    """The speed cap beyond linear motors' speeds; the bus's own limit beside it where it is lower
+    (else a user at the cap's limit met the bus's refusal next)."""
+    top = KINDS["speed"].high / SPEED_CAP_MARGIN
+    try:
+        bus = x.v_bus_speed
+    except (ArithmeticError, ValueError):  # (absurd inputs, refused by their own rules next)
+        bus = math.inf
+    more = f", what the {x.d.v_dc:g} V bus allows at the application's current" if bus < top else ""
+    return (f"{x.show('v_max')}: its speed cap, {SPEED_CAP_MARGIN:g} v_max = "
+            f"{SPEED_CAP_MARGIN * x.d.v_max:.4g} m/s, is beyond the speeds of {KINDS['speed'].of} "
+            f"({KINDS['speed'].high:g} m/s): at most {limit_text(min(top, bus), False)} m/s{more}")
+
+
 def _speed_says(x: DriveInputs, key: str) -> str:
     m, d = x.motor, x.d
     i_q = x.force_need / drive_force_constant(m, d)
     share = f", {RATED_LOAD_FRACTION:g} of the force at i_max where none is given" if d.load is None else ""
+    i_d = injecting_d_current(d)
+    with_d = f", with the {d.shape} injection's d-current {i_d:.3g} A" if i_d else ""
     why = (f"where the back-EMF with R_s i, and omega L_q i, at the current the application needs at speed "
            f"({i_q:.3g} A: the rated load {rated_load(m, d):.3g} N{share}, and m a_max "
-           f"{m.mass * d.a_max:.3g} N) take the whole linear range V_dc / sqrt(3), injection aside")
+           f"{m.mass * d.a_max:.3g} N{with_d}) take the whole linear range V_dc / sqrt(3), injection aside")
     if key == "v_dc":
         v_min = math.sqrt(3.0) * _fundamental_voltage(m, d.v_max, i_q, x.dq[1], injecting_d_current(d),
                                                      x.dq[0])
@@ -1099,11 +1115,7 @@ DRIVE_RULES: tuple[Rule, ...] = (
     Rule(1, ("travel",), lambda x: x.d.travel is None or x.d.travel <= KINDS["stroke"].high,
          lambda x, k: f"{x.d.travel * 1e3:g} mm is beyond the strokes of linear-motor axes: at most "
                       f"{KINDS['stroke'].high * 1e3:g} mm"),
-    Rule(1, ("v_max",), lambda x: not x.d.v_max * SPEED_CAP_MARGIN > KINDS["speed"].high,
-         lambda x, k: f"{x.show('v_max')}: its speed cap, {SPEED_CAP_MARGIN:g} v_max = "
-                      f"{SPEED_CAP_MARGIN * x.d.v_max:.4g} m/s, is beyond the speeds of {KINDS['speed'].of} "
-                      f"({KINDS['speed'].high:g} m/s): at most "
-                      f"{limit_text(KINDS['speed'].high / SPEED_CAP_MARGIN, False)} m/s"),
+    Rule(1, ("v_max",), lambda x: not x.d.v_max * SPEED_CAP_MARGIN > KINDS["speed"].high, _cap_says),
     _own_range("v_inj", _positive, "must be positive"),
     _own_range("f_inj", lambda v: math.isfinite(v) and v >= F_INJ_MIN / 8.0,
                f"must be at least {F_INJ_MIN / 8.0:g} Hz (the bandwidths of the loops follow it)"),
@@ -1757,7 +1769,7 @@ def fundamental_speed(motor: Motor, v_avail: float, i_q: float, L_q: float, i_d:
     v_avail : float
         The voltage amplitude available, V.
     i_q : float
-        The q current, A.
+        The q current, A (> 0 the motoring bound, the callers' |i_q|; < 0 regenerating, a higher speed).
     L_q : float
         The mean q inductance, H.
     i_d : float, optional
