@@ -381,3 +381,22 @@ def test_a_band_given_in_a_mode_the_estimate_does_not_steer_is_not_refused():
                            "reference": {"type": "trajectory", "waypoints_mm": [200.0], "v_max": 1.0,
                                          "a_max": 4.0}})
     assert r.metrics["fault"] == "none", r.metrics
+
+
+def test_a_band_the_design_leaves_off_is_refused_not_ignored():
+    """Hand-over keys in a file that does not say ``observer.emf``, on a drive whose design leaves the
+    EMF estimate off (the default 0.2 m/s: its cap below the band), were silently ignored (the HF drive
+    ran); refused, naming the first key given and why the estimate is off."""
+    import linsense
+    from linsense.errors import InputError
+
+    data = {"motor": "ecce2010", "scenario": {"name": "band", "duration": 1.0},
+            "observer": {"handover_v_lo": 0.5, "handover_v_hi": 0.7},
+            "reference": {"type": "trajectory", "waypoints_mm": [100.0]}}
+    with pytest.raises(InputError) as exc:
+        linsense.simulate(data)
+    assert exc.value.key == "observer.handover_v_lo", str(exc.value)
+    assert "has no effect: the design leaves the EMF estimate off (the speed cap 0.25 m/s" in str(exc.value)
+    data["observer"].update(emf=True, handover_v_lo=0.4)  # (on, and a cap that reaches the band)
+    data["reference"]["v_max"] = 1.0
+    assert linsense.simulate(data).metrics["fault"] == "none"

@@ -887,6 +887,21 @@ def _drive_design(motor: Motor, dd: DriveData, source: str, no_table: bool) -> t
     return made, made.scenario_keys()
 
 
+def _check_band_used(sc: Scenario, made, changes: dict, given_obs: set) -> None:
+    """Refuse hand-over keys the file gives where the design leaves the EMF estimate off (the file
+    does not say ``observer.emf``; the schema refuses them beside an explicit ``emf = false``): they
+    would be silently ignored (a band given with the default 0.2 m/s ran the HF drive)."""
+    h = made.handover
+    keys = [k.split(".", 1)[1] for k in HANDOVER_KEYS if k != "observer.emf"]
+    given = [k for k in keys if k in given_obs]
+    if not given or "emf" in given_obs or changes.get("observer", {}).get("emf", sc.spec.observer.emf):
+        return
+    why = h.limit if h is not None else "the design has no hand-over"
+    raise InputError(sc.source, f"observer.{given[0]}",
+                     f"{getattr(sc.spec.observer, given[0]):g} has no effect: the design leaves the EMF "
+                     f"estimate off ({why}); set observer.emf = true, or leave the band out")
+
+
 def _check_band_trusted(sc: Scenario, made, changes: dict, given_obs: set) -> None:
     """Refuse a hand-over band given by hand, in a mode where the estimate closes the loop, whose top
     the EMF estimate's error bound cannot trust: below the design's ``v_trust``
@@ -963,6 +978,7 @@ def designed(sc: Scenario, motor: Motor) -> Scenario:
         if k in given["controller"]:
             want["controller"].pop(k.replace("_kp", "_bandwidth_hz"))
     changes = {sec: {k: v for k, v in vals.items() if k not in given[sec]} for sec, vals in want.items()}
+    _check_band_used(sc, made, changes, given["observer"])
     _check_band_trusted(sc, made, changes, given["observer"])
     if s.control.mode == "calibration":  # its own timings follow the drive as it runs
         def run(sec: str, key: str):
