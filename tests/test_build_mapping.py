@@ -60,7 +60,7 @@ def test_docs_keys_table_has_every_key_with_its_meaning():
     gen = _gen_docs()
     rows = gen.keys_table().splitlines()[2:]
     keys = _leaf_fields()
-    assert len(rows) == len(keys) == 143
+    assert len(rows) == len(keys) == 144
     for key, field in keys:
         assert field.description, f"{key}: no description (its meaning in docs/simulator.md)"
     names = [r.split(" | ")[0].strip("| `").split("] ")[-1] for r in rows]
