@@ -207,3 +207,17 @@ def test_tunes_rated_load_goes_into_the_scenario_it_writes(run_cli, tmp_path):
     r = run_cli("tune", *drive, "--v-max", "2.3", "--out", tmp_path / "u.toml")
     assert r.code == 2 and "2.19 m/s" in r.err, r.err
     assert "0.5 of the force at i_max where none is given" in r.err, r.err
+
+
+def test_travel_beside_a_scenarios_own_is_compared(run_cli, tmp_path):
+    """`tune --scenario S --travel X` where S has its own [travel] of another stroke: the certificate
+    judged moves of X with end stops at X while the scenario written kept S's (100 mm against 500):
+    refused, naming both; the same stroke is accepted."""
+    sc = tmp_path / "s.toml"
+    sc.write_text('motor = "ecce2010"\n[scenario]\nduration = 1.0\n[reference]\ntype = "hold"\n'
+                  "[travel]\nmin_mm = 0.0\nmax_mm = 100.0\n")
+    base = ["tune", "--motor", "ecce2010", "--scenario", sc, "--no-verify", "--out", tmp_path / "t.toml"]
+    r = run_cli(*base, "--travel", "500")
+    assert r.code == 2 and "travel: 500 mm beside the scenario's [travel], 0 to 100 mm" in r.err, r.err
+    assert not (tmp_path / "t.toml").exists()
+    assert run_cli(*base, "--travel", "100").code == 0

@@ -268,6 +268,16 @@ def _drive_of(scenario: Scenario | None, drive: dict | None) -> DriveData:
         if key not in names:
             raise InputError("drive", key, f"{val!r}: not a drive datum (one of {', '.join(names)})")
         setattr(dd, key, val)
+    tr = None if scenario is None else scenario.spec.travel
+    if dd.travel is not None and tr is not None and {"min_mm", "max_mm"} & tr.model_fields_set:
+        stroke = (tr.max_mm - tr.min_mm) * 1e-3
+        if abs(dd.travel - stroke) > 1e-9 * max(stroke, 1.0):
+            # (the certificate's moves and end stops follow --travel, the scenario written keeps its own)
+            raise InputError(scenario.source, "travel",
+                             f"{dd.travel * 1e3:g} mm beside the scenario's [travel], {tr.min_mm:g} to "
+                             f"{tr.max_mm:g} mm ({stroke * 1e3:g} mm of stroke): the certificate would judge "
+                             "moves the written scenario's end stops do not hold; give the scenario's "
+                             "stroke, or leave --travel out")
     return dd
 
 
