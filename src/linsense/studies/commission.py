@@ -240,11 +240,7 @@ def commission(motor: Motor | str | None = None, *, scenario: Scenario | None = 
     i_d = _d_current(d, model) if d_current is None else float(d_current)
     data.setdefault("injection", {})["d_current"] = i_d
     dd = DriveData(i_max=float(d.controller.i_max), shape=d.injection.shape, d_current=i_d)
-    # the rated load the run's design holds its speed and band to: the commissioning's load where it is
-    # larger than the design's default, half the force at i_max (the band's EMF bound then covers the
-    # commissioning's d-current too; with the load alone it was 0.72 m/s on ecce2010 and the table 0.2
-    # deg off instead of 0.02)
-    data.setdefault("controller", {})["rated_load"] = max(abs(float(load)), rated_load(model, dd))
+    data.setdefault("controller", {})["rated_load"] = _rated_load(model, dd, load)
     a = _acceleration(dd, model, load, a_max, source)
     _check_speed(_speed_design(data, v, a, model, source, base_dir), v, model.pole_pitch, source)
     _check_bus(d, dd, model, load, v, source)
@@ -277,6 +273,14 @@ def commission(motor: Motor | str | None = None, *, scenario: Scenario | None = 
     cal = _result(b, raw, model, lut, start, points, v, a, stroke, load)
     cal.metrics["route"] = "pulsating" if carried else "direct"
     return _carried(cal, model, drive_inj) if carried else cal
+
+
+def _rated_load(model: Motor, dd: DriveData, load: float) -> float:
+    """The rated load the run's design holds its speed and band to, N: the commissioning's load where
+    it is larger than the design's default, half the force at i_max (the band's EMF bound then covers
+    the commissioning's d-current too; with the load alone the band fell to 0.72 m/s on ecce2010 and
+    its table came 0.20 deg off instead of 0.023)."""
+    return max(abs(float(load)), rated_load(model, dd))
 
 
 def _d_current(d, model: Motor) -> float:
