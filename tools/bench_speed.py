@@ -45,9 +45,6 @@ from linsense.tune.design import (
     V_DC_MIN_FRACTION,
     DriveData,
     DriveInputs,
-    bus_speed,
-    drive_force_constant,
-    injecting_d_current,
 )
 from linsense.tune.drive_design import design_drive
 from linsense.tune.export import scenario_dict
@@ -75,8 +72,7 @@ def bus_limited_speed(motor, dd: DriveData) -> float:
 
 def under_voltage_speed(motor, dd: DriveData) -> float:
     """The same at the under-voltage trip's bus (``V_DC_MIN_FRACTION V_dc``), m/s: for information."""
-    i_need = DriveInputs(motor, dd).force_need / drive_force_constant(motor, dd)
-    return bus_speed(motor, V_DC_MIN_FRACTION * dd.v_dc, i_need, injecting_d_current(dd))
+    return DriveInputs(motor, dd).speed_driven(V_DC_MIN_FRACTION * dd.v_dc / math.sqrt(3.0))
 
 
 def run_speed(spec: str, dd0: DriveData, v: float, workers: int | None) -> dict:

@@ -887,14 +887,14 @@ def _drive_design(motor: Motor, dd: DriveData, source: str, no_table: bool) -> t
     return made, made.scenario_keys()
 
 
-def _check_band_used(sc: Scenario, made, changes: dict, given_obs: set) -> None:
+def _check_band_used(sc: Scenario, made, emf: bool, given_obs: set) -> None:
     """Refuse hand-over keys the file gives where the design leaves the EMF estimate off (the file
     does not say ``observer.emf``; the schema refuses them beside an explicit ``emf = false``): they
     would be silently ignored (a band given with the default 0.2 m/s ran the HF drive)."""
     h = made.handover
     keys = [k.split(".", 1)[1] for k in HANDOVER_KEYS if k != "observer.emf"]
     given = [k for k in keys if k in given_obs]
-    if not given or "emf" in given_obs or changes.get("observer", {}).get("emf", sc.spec.observer.emf):
+    if not given or "emf" in given_obs or emf:
         return
     why = h.limit if h is not None else "the design has no hand-over"
     raise InputError(sc.source, f"observer.{given[0]}",
@@ -902,13 +902,12 @@ def _check_band_used(sc: Scenario, made, changes: dict, given_obs: set) -> None:
                      f"estimate off ({why}); set observer.emf = true, or leave the band out")
 
 
-def _check_band_trusted(sc: Scenario, made, changes: dict, given_obs: set) -> None:
+def _check_band_trusted(sc: Scenario, made, emf: bool, given_obs: set) -> None:
     """Refuse a hand-over band given by hand, in a mode where the estimate closes the loop, whose top
     the EMF estimate's error bound cannot trust: below the design's ``v_trust``
     (:data:`linsense.tune.handover.EPS_TRUST`), the EMF error there can take the estimate anywhere (a
     band at 2-4 mm/s on ecce2010 ran to 180 deg and an over-speed fault)."""
     h = made.handover
-    emf = changes.get("observer", {}).get("emf", sc.spec.observer.emf)
     steers = sc.spec.control.mode in ("sensorless_lut", "sensorless_nolut", "commission")
     if h is None or not emf or not steers or "handover_v_hi" not in given_obs:
         return
@@ -978,8 +977,9 @@ def designed(sc: Scenario, motor: Motor) -> Scenario:
         if k in given["controller"]:
             want["controller"].pop(k.replace("_kp", "_bandwidth_hz"))
     changes = {sec: {k: v for k, v in vals.items() if k not in given[sec]} for sec, vals in want.items()}
-    _check_band_used(sc, made, changes, given["observer"])
-    _check_band_trusted(sc, made, changes, given["observer"])
+    emf = changes.get("observer", {}).get("emf", s.observer.emf)  # (as the run will have it)
+    _check_band_used(sc, made, emf, given["observer"])
+    _check_band_trusted(sc, made, emf, given["observer"])
     if s.control.mode == "calibration":  # its own timings follow the drive as it runs
         def run(sec: str, key: str):
             return changes.get(sec, {}).get(key, getattr(getattr(s, sec), key))

@@ -794,11 +794,33 @@ class DriveInputs:
         return r_i / (1.0 / math.sqrt(3.0) - share)
 
     @property
+    def i_need(self) -> float:
+        """The q current the application needs at speed (:attr:`force_need` over the drive's force
+        constant), A."""
+        return self.force_need / drive_force_constant(self.motor, self.d)
+
+    def speed_driven(self, v_avail: float) -> float:
+        """The speed up to which ``v_avail`` (V) drives :attr:`i_need`, with the injection's d-current
+        (:func:`fundamental_speed`), m/s.
+
+        Parameters
+        ----------
+        v_avail : float
+            The voltage amplitude available, V.
+
+        Returns
+        -------
+        float
+            m/s.
+        """
+        L_d, L_q = self.dq
+        return fundamental_speed(self.motor, v_avail, self.i_need, L_q, i_d=injecting_d_current(self.d),
+                                 L_d=L_d)
+
+    @property
     def v_bus_speed(self) -> float:
         """The speed beyond which the bus cannot drive the current the application needs, m/s."""
-        return fundamental_speed(self.motor, self.d.v_dc / math.sqrt(3.0),
-                                 self.force_need / drive_force_constant(self.motor, self.d), self.dq[1],
-                                 i_d=injecting_d_current(self.d), L_d=self.dq[0])
+        return self.speed_driven(self.d.v_dc / math.sqrt(3.0))
 
     @functools.cached_property
     def k_e(self) -> np.ndarray:
@@ -1029,16 +1051,14 @@ def _cap_says(x: DriveInputs, key: str) -> str:
 
 def _speed_says(x: DriveInputs, key: str) -> str:
     m, d = x.motor, x.d
-    i_q = x.force_need / drive_force_constant(m, d)
+    i_q, i_d = x.i_need, injecting_d_current(d)
     share = f", {RATED_LOAD_FRACTION:g} of the force at i_max where none is given" if d.load is None else ""
-    i_d = injecting_d_current(d)
     with_d = f", with the {d.shape} injection's d-current {i_d:.3g} A" if i_d else ""
     why = (f"where the back-EMF with R_s i, and omega L_q i, at the current the application needs at speed "
            f"({i_q:.3g} A: the rated load {rated_load(m, d):.3g} N{share}, and m a_max "
            f"{m.mass * d.a_max:.3g} N{with_d}) take the whole linear range V_dc / sqrt(3), injection aside")
     if key == "v_dc":
-        v_min = math.sqrt(3.0) * _fundamental_voltage(m, d.v_max, i_q, x.dq[1], injecting_d_current(d),
-                                                     x.dq[0])
+        v_min = math.sqrt(3.0) * _fundamental_voltage(m, d.v_max, i_q, x.dq[1], i_d, x.dq[0])
         return (f"{x.show('v_dc')} allows {x.v_bus_speed:.3g} m/s, below v_max = {d.v_max:g} m/s ({why}): at "
                 f"least {limit_text(v_min, True)} V")
     return (f"{x.show('v_max')} is beyond what the {d.v_dc:g} V bus allows, {x.v_bus_speed:.3g} m/s ({why}): "
@@ -1253,9 +1273,9 @@ def design(
 def _injection_and_bus(
     motor: Motor, d: DriveData, x: DriveInputs, warnings: list[str]
 ) -> tuple[float, float]:
-    """The HF current of the injection and the speed the bus leaves room for at ``i_max``; the
-    dead time's, HF current's, bus's and error gain's warnings appended to ``warnings``."""
-    L_q = x.dq[1]
+    """The HF current of the injection and the speed up to which the bus leaves room beside it for the
+    application's current; the dead time's, HF current's, bus's and error gain's warnings appended to
+    ``warnings``."""
     f_inj, v_inj = x.f_inj, x.v_inj
     if d.v_inj is not None and x.dead_time_ratio > DEAD_TIME_RATIO_MAX:
         warnings.append(f"the given injection leaves the dead time's voltage error "
@@ -1268,12 +1288,11 @@ def _injection_and_bus(
         warnings.append(f"the HF current ({i_hf:.2f} A) exceeds i_max ({d.i_max:g} A): lower v_inj")
     # the fundamental beside the injection, at the current the application needs at speed (its load
     # and m a_max; a step's i_max may saturate the current loop for a moment, as on any bus)
-    i_app = x.force_need / drive_force_constant(motor, d)
-    headroom = fundamental_speed(motor, x.v_avail, i_app, L_q, i_d=injecting_d_current(d), L_d=x.dq[0])
+    headroom = x.speed_driven(x.v_avail)
     if headroom < d.v_max:
         warnings.append(
             f"the bus leaves room for the fundamental up to {headroom:.3g} m/s at the application's "
-            f"{i_app:.3g} A, below v_max = {d.v_max:g} m/s"
+            f"{x.i_need:.3g} A, below v_max = {d.v_max:g} m/s"
         )
     if x.k_e.min() < 0.3:
         warnings.append(

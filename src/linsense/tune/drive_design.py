@@ -23,7 +23,6 @@ from linsense.tune.design import (
     DriveData,
     DriveInputs,
     design,
-    drive_force_constant,
     uncompensated_speed_factor,
 )
 from linsense.tune.handover import HandoverDesign, design_handover
@@ -267,7 +266,7 @@ def design_drive(motor: Motor, drive: DriveData | None = None, *, source: str = 
                             ramp_rate=dz.inj_ramp_rate, source=source)
     k_est = uncompensated_speed_factor(motor) if uncompensated else 1.0
     hand = design_handover(motor, v_dc=d.v_dc, f_pwm=d.f_pwm, dead_time=d.dead_time,
-                           i_mag=DriveInputs(motor, d).force_need / drive_force_constant(motor, d),
+                           i_mag=DriveInputs(motor, d).i_need,
                            demod_lpf=dz.demod_lpf, ramp_time=INJ_RAMP_TIME, a_max=d.a_max, v_cap=dz.v_cap,
                            shape=d.shape, headroom=dz.headroom_speed)
     out = DriveDesign(motor, d, dz, su, uncompensated, k_est, handover=hand)

@@ -182,12 +182,10 @@ def design_handover(motor: Motor, *, v_dc: float, f_pwm: float, dead_time: float
     from linsense.ctrl import EMF_FLPF_FS_MAX, FUSE_EMF_ON  # (the C library's)
 
     f_lpf = min(demod_lpf, EMF_FLPF_FS_MAX * f_pwm)
-    lim = emf_speed_limit(motor, v_dc=v_dc, f_pwm=f_pwm, dead_time=dead_time, i_mag=i_mag, f_lpf=f_lpf,
-                          err_r=ERR_R, err_l=ERR_L, dt_residual=DT_RESIDUAL_DTC, i_noise=i_noise,
-                          eps_max=EPS_HAND)
-    v_trust = emf_speed_limit(motor, v_dc=v_dc, f_pwm=f_pwm, dead_time=dead_time, i_mag=i_mag, f_lpf=f_lpf,
-                              err_r=ERR_R, err_l=ERR_L, dt_residual=DT_RESIDUAL_DTC, i_noise=i_noise,
-                              eps_max=EPS_TRUST).v_min
+    errors = {"v_dc": v_dc, "f_pwm": f_pwm, "dead_time": dead_time, "i_mag": i_mag, "f_lpf": f_lpf,
+              "err_r": ERR_R, "err_l": ERR_L, "dt_residual": DT_RESIDUAL_DTC, "i_noise": i_noise}
+    lim = emf_speed_limit(motor, eps_max=EPS_HAND, **errors)
+    v_trust = emf_speed_limit(motor, eps_max=EPS_TRUST, **errors).v_min
     t_settle = SETTLE_TAUS / (2.0 * math.pi * demod_lpf)
     v_lo_emf = a_max * SETTLE_TAUS / (2.0 * math.pi * f_lpf) / (1.0 - FUSE_EMF_ON)
     v_emf = lim.v_min
