@@ -78,8 +78,13 @@ def test_scenario_dict_writes_the_design_keys(made):
     keys = made.scenario_keys()
     assert made.startup is not None  # (ecce2010 has saturation data)
     sc = _flat(scenario_dict(made, motor_ref="ecce2010", base={"control": {"mode": "startup"}}))
-    own = {"motor", "scenario.name", "scenario.duration", "reference.type", "control.mode"}
+    own = {"motor", "scenario.name", "scenario.duration", "reference.type", "control.mode",
+           "inverter.fidelity"}
     assert set(sc) - own <= set(keys), set(sc) - own - set(keys)
+    # the inverter model the certificate judged: simulating the file shows the verified drive
+    assert sc["inverter.fidelity"] == "switching"
+    given = scenario_dict(made, motor_ref="ecce2010", base={"inverter": {"fidelity": "average"}})
+    assert given["inverter"]["fidelity"] == "average"
     for key in set(sc) - own:
         assert sc[key] == written(keys, key), key
     assert {k for k in keys if k.startswith("startup.")} <= set(sc)

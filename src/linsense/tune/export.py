@@ -102,7 +102,8 @@ def scenario_dict(made: DriveDesign, *, motor_ref: str = "", base: dict | None =
 
     ``base`` (a scenario's given keys, or a 2 s hold) with the design's keys
     (:meth:`~linsense.tune.drive_design.DriveDesign.scenario_keys`) written over it; the start-up
-    fills ``[startup]`` when the scenario's mode is "startup".
+    fills ``[startup]`` when the scenario's mode is "startup"; ``inverter.fidelity`` is "switching"
+    (the model the certificate judges, with the dead time) unless the scenario gives one.
 
     Parameters
     ----------
@@ -138,6 +139,9 @@ def scenario_dict(made: DriveDesign, *, motor_ref: str = "", base: dict | None =
     sc.setdefault("scenario", {"name": "tuned", "duration": 2.0})
     sc.setdefault("reference", {"type": "hold"})
     put(sc.setdefault("inverter", {}), "inverter.v_dc", "inverter.f_pwm", "inverter.dead_time")
+    # the inverter model the certificate judged the drive on (with its dead time), so that simulating
+    # the file shows the drive that was verified; a fidelity the scenario gives is kept
+    sc["inverter"].setdefault("fidelity", "switching")
     _put_injection(sc.setdefault("injection", {}), keys)
     _put_observer(sc.setdefault("observer", {}), keys, table)
     _put_controller(sc.setdefault("controller", {}), keys)
