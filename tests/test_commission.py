@@ -34,8 +34,7 @@ def test_speed_below_the_band_refused():
     ({"speed": 0.8}, "speed", "its cruise (0.95 of it) is not above the hand-over band's top"),
     ({"speed": 5.0}, "speed", "5 m/s is beyond what the 72 V bus allows"),
     ({"speed": 1000.0}, "speed", "its speed cap, 1.25 v_max = 1250 m/s, is beyond the speeds of linear"),
-    ({"stroke_mm": 5000.0}, "stroke", "5000 mm of stroke from 0 mm, beyond the travel [-1000, 1000] mm"),
-    ({"stroke_mm": 1000.0}, "stroke", "less 2 pole pitches of room at its end: at most 888 mm"),
+    ({"stroke_mm": 5000.0}, "stroke", "takes 5.09 s a way: out and back do not fit"),
     ({"stroke_mm": 0.3}, "stroke", "did you type m?"),
     ({"points": 1024}, "positions", "at most"),
     ({"load": -100.0}, "load", "-100 N leaves nothing"),
@@ -98,6 +97,46 @@ def test_a_speed_beyond_the_scenarios_cap_is_refused(tmp_path):
                     f'[controller]\ni_max = {dd.drive.i_max}\nv_max = 0.9\n')
     with pytest.raises(InputError, match=r"beyond the drive's controller.v_max \(0.9 m/s\)"):
         commission(scenario=load_scenario(path))
+
+
+def test_a_stroke_beyond_the_scenarios_travel_is_refused(tmp_path):
+    """A scenario's [travel] bounds the stroke (its end stops less 2 pole pitches of room); without
+    one the run's end stops follow the stroke (the simulator's default +-1 m had refused the default
+    speed's own stroke on fast motors, whose suggestions were then refused in turn)."""
+    from linsense.scenario.load import load_scenario
+
+    path = tmp_path / "s.toml"
+    path.write_text('motor = "ecce2010"\n[scenario]\nduration = 0.1\n[reference]\ntype = "hold"\n'
+                    '[travel]\nmin_mm = -1000.0\nmax_mm = 1000.0\n')
+    with pytest.raises(InputError) as e:
+        commission(scenario=load_scenario(path), stroke_mm=1800.0)
+    assert e.value.key == "stroke"
+    assert "less 2 pole pitches of room at its end: at most 1688 mm" in str(e.value)
+
+
+def test_the_default_speed_is_above_its_own_designs_band(monkeypatch):
+    """Without --speed the speed follows the band of the drive designed for it (the band rises with
+    the speed cap and the acceleration's current): a motor whose first-cap design put the speed below
+    its own band (2.49 against 2.53 m/s) was refused on a speed the user never gave."""
+    import linsense.studies.commission as com
+
+    tops = iter([2.53, 3.2, 3.2])
+    seen = []
+
+    class Spec:  # (the band's top of each design asked for)
+        def __init__(self, top):
+            self.observer = type("O", (), {"handover_v_hi": top})()
+
+    def design(data, v, a, model, source, base_dir):
+        seen.append(v)
+        return Spec(next(tops))
+
+    monkeypatch.setattr(com, "_speed_design", design)
+    v = com._default_speed({}, 2.49, 10.0, None, "t", None)
+    assert seen == pytest.approx([2.49, com.SPEED_OVER_V_HI * 2.53, com.SPEED_OVER_V_HI * 3.2])
+    assert v == pytest.approx(com.SPEED_OVER_V_HI * 3.2) and v * com.LEARN_CRUISE >= 3.2
+    assert com._up(2.6583) == pytest.approx(2.66) and com._up(2.66000001) == pytest.approx(2.67)
+    assert com._up(0.0013341) == pytest.approx(0.00134)
 
 
 def test_motor_without_saliency_refused(monkeypatch):
@@ -217,6 +256,38 @@ def test_cli_writes_calibrate_formats_that_tune_reads(run_cli, tmp_path, monkeyp
     r = run_cli("commission", "--scenario", "s.toml", "--motor", "small30", "--out", "e")
     assert r.code == 2 and "is not the motor of the scenario" in r.err, r.err
     assert not (tmp_path / "e").exists()
+
+
+def test_cli_a_table_off_the_plants_is_not_commissioned(run_cli, tmp_path, monkeypatch):
+    """A run that completes with its table beyond the bound of the simulated plant's (the direct
+    route on a 25 mm, L_q / L_d 1.15 motor: 2.38 deg, reported with exit code 0) is exit code 1, says
+    so, and writes no lut_measured.json for a scenario to read (the bound lowered here under
+    ecce2010's 0.02 deg, the average inverter: the CLI's path)."""
+    import json
+
+    import linsense.studies.commission as com
+
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(com, "TABLE_BOUND_DEG", 0.001)
+    r = run_cli("commission", "--motor", "ecce2010", "--fidelity", "average", "--out", "c")
+    assert r.code == 1 and "off the simulated plant's (a commissioning is held to 0.001 deg)" in r.err, r.err
+    assert not (tmp_path / "c" / "lut_measured.json").exists()
+    assert json.loads((tmp_path / "c" / "metrics.json").read_text())["table_bound_deg"] == 0.001
+
+
+def test_where_the_estimate_was_lost():
+    """A run that lost the motor says when and at what speed (the first sample beyond LOST_DEG);
+    one that never did says None."""
+    from types import SimpleNamespace
+
+    from linsense.studies.commission import LOST_DEG, _lost
+
+    t = np.linspace(0.0, 1.0, 11)
+    err = np.radians(np.where(t > 0.55, LOST_DEG + 10.0, 5.0))
+    raw = SimpleNamespace(arrays={"t": t, "v": -t, "theta_err": err})
+    assert _lost(raw) == {"lost_at_s": 0.6, "lost_speed_m_s": -0.6}
+    raw.arrays["theta_err"] = np.radians(np.full(11, LOST_DEG - 1.0))
+    assert _lost(raw) == {"lost_at_s": None, "lost_speed_m_s": None}
 
 
 @pytest.mark.slow

@@ -356,9 +356,10 @@ def commission(motor_spec: str | None, scenario_path: str | None, speed: float |
     position, both directions averaged; calibrate's outputs (lut_measured.csv, lut_measured.json for
     linsense tune --table and observer.lut_model = "measured", metrics.json). Refused (exit code 2)
     before the run: too little travel, a load the drive cannot hold at speed, no saliency, no EMF
-    estimate in the design. Exit code 1 if it does not complete."""
+    estimate in the design. Exit code 1 if it does not complete (and where the estimate was lost), or
+    if its table is more than 0.3 deg off the simulated plant's own."""
     from linsense.report.figures import fig_commission, save_png
-    from linsense.studies.commission import commission_to
+    from linsense.studies.commission import LOST_DEG, commission_to
 
     if as_json:
         c.data_on_stdout()
@@ -396,8 +397,21 @@ def commission(motor_spec: str | None, scenario_path: str | None, speed: float |
     if as_json:
         c.emit_json("commission", done.files, done.completed, metrics=done.metrics, timing=done.timing)
     if not done.completed:
+        lost = ("" if m.get("lost_at_s") is None else
+                f"; the estimate was lost at {m['lost_at_s']:.3g} s, the mover at "
+                f"{m['lost_speed_m_s']:.3g} m/s (its error beyond {LOST_DEG:g} deg): the HF estimate, which "
+                f"carries the drive below the hand-over band and through the reversals "
+                f"({m['injection_shape']} injection, the commissioning's d-current), did not hold it")
         click.echo(f"linsense: commissioning did not complete ({m['points_done']} of {m['points']} points, "
-                   f"fault {m['fault']})", err=True)
+                   f"fault {m['fault']}){lost}", err=True)
+        raise click.exceptions.Exit(1)
+    if m["max_diff_deg"] > m["table_bound_deg"]:
+        click.echo(f"linsense: the table learned is {m['max_diff_deg']:.3g} deg off the simulated plant's "
+                   f"(a commissioning is held to {m['table_bound_deg']:g} deg): not a commissioned table"
+                   + (" (the direct route learns with the drive's own injection, whose HF error at the "
+                      "cruise it then carries: the pulsating route does not)"
+                      if m["route"] == "direct" else ""),
+                   err=True)
         raise click.exceptions.Exit(1)
 
 

@@ -10,6 +10,7 @@ directly (no pyplot state, no backend switch) and returns it; :func:`png_bytes` 
 from __future__ import annotations
 
 import io
+import math
 from dataclasses import replace
 from pathlib import Path
 
@@ -290,7 +291,10 @@ def fig_commission(cal, motor) -> Figure:
     top.plot(th, np.degrees(cal.psi_model), "b-", lw=1.2,
              label=f"the plant's own (kappa {m['injection_quad']:g})")
     done = bool(m.get("completed", True))
-    what = "the drive's, commissioned" if done else "the drive's, as the run left it (NOT commissioned)"
+    off = done and m["max_diff_deg"] > m.get("table_bound_deg", math.inf)  # (completed, the table off)
+    what = ("the drive's, as the run left it (NOT commissioned)" if not done else
+            "the drive's, learned (NOT commissioned: off the plant's)" if off else
+            "the drive's, commissioned")
     top.plot(th, np.degrees(cal.psi_measured), "o", ms=4, mfc="none", color="C3", label=what)
     bot.plot(th, np.degrees(cal.psi_measured - cal.psi_model), "o-", ms=3, color="C3", lw=0.8,
              label="the drive's - the plant's")
@@ -306,8 +310,11 @@ def fig_commission(cal, motor) -> Figure:
     bot.set_xlabel("position θ (electrical deg)")
     top.legend(fontsize=7)
     bot.legend(fontsize=7)
-    top.set_title(("" if done else f"DID NOT COMPLETE ({m['points_done']} of {m['points']} points, fault "
-                   f"{m['fault']}): not a commissioned table\n") +
+    head = (f"DID NOT COMPLETE ({m['points_done']} of {m['points']} points, fault {m['fault']}): not a "
+            "commissioned table\n" if not done else
+            f"NOT WITHIN {m.get('table_bound_deg', 0.0):g} deg of the plant's table: not a commissioned "
+            "table\n" if off else "")
+    top.set_title(head +
                   f"Commissioning without a sensor, {m['motor']}: {m['fidelity']} inverter, dead time "
                   f"{m['dead_time_s'] * 1e6:g} µs, {m['speed_m_s']:.3g} m/s, {m['sim_s']:.3g} s\nroute "
                   f"{m['route']}, scale {m['end_effect_k']:.3f}; max |table - plant's| "

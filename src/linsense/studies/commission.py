@@ -96,6 +96,13 @@ D_OVER_HF = 1.5
 #: pole pitches of room kept before the travel's end (a move's end overshoots a little: a stroke to
 #: the end stop itself faulted `travel`)
 END_ROOM_PITCHES = 2.0
+#: electrical deg: the estimate's error beyond which the HF estimate has lost the motor (its error
+#: signal, sin 2e, turns towards the wrong equilibrium): where a run that did not complete lost it
+LOST_DEG = 45.0
+#: electrical deg: the table's distance from the simulated plant's own a commissioning is held to
+TABLE_BOUND_DEG = 0.3
+#: the rounds of the default speed's fixed point (:func:`_default_speed`)
+DEFAULT_SPEED_ROUNDS = 4
 #: m/s^2, the commissioning's acceleration without a load that limits it (and within the design's
 #: force rule: the rated load and m a_max within the force at i_max)
 A_DEFAULT = 10.0
@@ -242,10 +249,12 @@ def commission(motor: Motor | str | None = None, *, scenario: Scenario | None = 
     dd = DriveData(i_max=float(d.controller.i_max), shape=d.injection.shape, d_current=i_d)
     data.setdefault("controller", {})["rated_load"] = _rated_load(model, dd, load)
     a = _acceleration(dd, model, load, a_max, source)
+    v = v if speed is not None else _default_speed(data, v, a, model, source, base_dir)
     _check_speed(_speed_design(data, v, a, model, source, base_dir), v, model.pole_pitch, source)
     _check_bus(d, dd, model, load, v, source)
     by_load = a_max is None and load != 0.0 and a < A_DEFAULT  # (the load sets the acceleration)
     stroke, x0 = _stroke(scenario, stroke_mm, v, a, model, source, points, by_load)
+    _set_travel(data, scenario, stroke, x0, model)
     leg = stroke / v + v / a
     legs = _legs(stroke, v, a)
     if legs < 2:  # (out and back at least: each point seen both ways)
@@ -414,6 +423,14 @@ def _table_points(model: Motor, points: int | None, inj, read_at: int, source: s
                    f"off too: at least {hi} points")
 
 
+def _up(x: float) -> float:
+    """``x`` rounded up to three significant digits: a least value, printed, that is not below it."""
+    if not x > 0.0:
+        return x
+    unit = 10.0 ** (math.floor(math.log10(x)) - 2)
+    return math.ceil(x / unit) * unit
+
+
 def _check_speed(spec, v: float, pitch: float, source: str) -> None:
     """Refuse a commissioning speed the drive designed for it cannot cruise at: its cruise not above
     the hand-over band (``LS_DRIVE_LEARN_CRUISE v``, as ``ls_drive_set_mode`` requires), or beyond
@@ -429,7 +446,7 @@ def _check_speed(spec, v: float, pitch: float, source: str) -> None:
     if not v >= v_min:
         _refuse(source, "speed", f"{v:.3g} m/s: its cruise ({LEARN_CRUISE:g} of it) is not above {band} of "
                 f"the drive designed for it, where the EMF estimate alone is trusted: at least "
-                f"{v_min:.3g} m/s")
+                f"{_up(v_min):.3g} m/s")
     if top < v_min:  # (a scenario's own cap: the designed ones follow the speed)
         _refuse(source, key, f"{top:.3g} m/s is below {v_min:.3g} m/s, where the cruise ({LEARN_CRUISE:g} "
                 f"of the speed) is above {band}: commission a scenario designed for that speed (linsense "
@@ -477,18 +494,53 @@ def _acceleration(dd: DriveData, model: Motor, load: float, a_max: float | None,
     return a
 
 
+def _default_speed(data: dict, v: float, a: float, model: Motor, source: str, base_dir) -> float:
+    """The default commissioning speed, m/s: :data:`SPEED_OVER_V_HI` times the band's top of the drive
+    designed for that speed and the commissioning's acceleration. ``v`` is that of the first cap's
+    design at the application's acceleration; the band rises with the speed cap and the current of
+    the acceleration (h20-class motors: 2.49 m/s from the first cap, whose own design's band tops at
+    2.53), so the speed follows it for a few rounds (:func:`_check_speed` then says where it does
+    not settle)."""
+    for _ in range(DEFAULT_SPEED_ROUNDS):
+        top = float(_speed_design(data, v, a, model, source, base_dir).observer.handover_v_hi)
+        if v * LEARN_CRUISE >= top:
+            return v
+        v = SPEED_OVER_V_HI * top
+    return v
+
+
+def _set_travel(data: dict, scenario: Scenario | None, stroke: float, x0: float, model: Motor) -> None:
+    """Without a travel the scenario bounds, the run's end stops follow the stroke where it is longer
+    than the simulator's default travel allows (the machine's travel is then the user's to know: the
+    message gives the stroke)."""
+    if _bounded(scenario):
+        return
+    room = END_ROOM_PITCHES * model.pole_pitch * 1e3
+    lo, hi = TravelSection().min_mm, TravelSection().max_mm
+    if 1e3 * (x0 + stroke) + room > hi:
+        data["travel"] = {"min_mm": lo, "max_mm": 1e3 * (x0 + stroke) + 2.0 * room}
+
+
+def _bounded(scenario: Scenario | None) -> bool:
+    """Whether the scenario gives a ``[travel]`` bound."""
+    tr = scenario.spec.travel if scenario is not None else None
+    return tr is not None and bool({"min_mm", "max_mm"} & tr.model_fields_set)
+
+
 def _stroke(scenario: Scenario | None, stroke_mm: float | None, v: float, a: float, model: Motor,
             source: str, points: int = POINTS_DEFAULT, by_load: bool = False) -> tuple[float, float]:
-    """The stroke and its start, m (the scenario's travel less 10 % at each end where it gives one),
-    refusing too little travel."""
+    """The stroke and its start, m (the scenario's travel less 10 % at each end where it gives one,
+    else what the speed and the points need, any length: :func:`_set_travel`), refusing too little
+    travel."""
     # m: to the speed and back, the settling at speed, and the periods learned at speed
     need = v * v / a + v * T_SETTLE + PERIODS_AT_SPEED * model.pole_pitch
     tr = scenario.spec.travel if scenario is not None else None
-    bounded = tr is not None and bool({"min_mm", "max_mm"} & tr.model_fields_set)
+    bounded = _bounded(scenario)
     if stroke_mm is None:
+        # (without a bounded travel: up to the longest whose out and back fit in the motion)
+        longest = v * ((DURATION_MAX - T_START - 1e-3) / 2.0 - v / a)
         stroke = 0.8 * (tr.max_mm - tr.min_mm) / 1e3 if bounded else _points_stroke(
-            points, v, a, need + 3.0 * model.pole_pitch,
-            TravelSection().max_mm / 1e3 - END_ROOM_PITCHES * model.pole_pitch)
+            points, v, a, need + 3.0 * model.pole_pitch, max(longest, need + 3.0 * model.pole_pitch))
     else:
         stroke = float(stroke_mm) / 1e3
     key = "stroke" if stroke_mm is not None else "travel"
@@ -501,7 +553,7 @@ def _stroke(scenario: Scenario | None, stroke_mm: float | None, v: float, a: flo
     x0 = tr.min_mm / 1e3 + 0.1 * (tr.max_mm - tr.min_mm) / 1e3 if bounded else 0.0
     lo, hi = (tr.min_mm, tr.max_mm) if tr is not None else (TravelSection().min_mm, TravelSection().max_mm)
     room = END_ROOM_PITCHES * model.pole_pitch * 1e3  # (the end of a move overshoots a little: kept)
-    if 1e3 * (x0 + stroke) > hi - room or 1e3 * x0 < lo:
+    if bounded and (1e3 * (x0 + stroke) > hi - room or 1e3 * x0 < lo):
         # (the default stroke follows the speed, and the acceleration the load leaves)
         key = key if stroke_mm is not None or bounded else "load" if by_load else "speed"
         lead = {"speed": f"{v:g} m/s needs {stroke * 1e3:.0f} mm",
@@ -511,6 +563,19 @@ def _stroke(scenario: Scenario | None, stroke_mm: float | None, v: float, a: flo
                 f"mm (the scenario's [travel], else the simulator's default) less {END_ROOM_PITCHES:g} pole "
                 f"pitches of room at its end: at most {hi - room - 1e3 * x0:.0f} mm")
     return stroke, x0
+
+
+def _lost(raw) -> dict:
+    """Where the estimate was first lost (its error beyond :data:`LOST_DEG`): the time (s) and the
+    mover's speed there (m/s), None where it never was."""
+    err, vel, t = raw.arrays.get("theta_err"), raw.arrays.get("v"), raw.arrays.get("t")
+    if err is None or vel is None or t is None:
+        return {"lost_at_s": None, "lost_speed_m_s": None}
+    over = np.flatnonzero(np.abs(np.degrees(np.ravel(err))) > LOST_DEG)
+    if over.size == 0:
+        return {"lost_at_s": None, "lost_speed_m_s": None}
+    k = int(over[0])
+    return {"lost_at_s": round(float(np.ravel(t)[k]), 6), "lost_speed_m_s": round(float(np.ravel(vel)[k]), 6)}
 
 
 def _cruise_error(raw, v: float) -> dict:
@@ -614,6 +679,7 @@ def _result(b, raw, model: Motor, lut, start: np.ndarray, points: int, v: float,
     _, k, rms = end_effect_fit(model, table, inj.shape, inj.frequency, inj.quadrature)
     metrics = {
         "completed": bool(done == points and raw.fault == 0),
+        "table_bound_deg": TABLE_BOUND_DEG,
         "points": int(points),
         "points_done": done,
         "max_diff_deg": round(float(np.degrees(np.max(np.abs(table - true)))), 6),
@@ -621,6 +687,7 @@ def _result(b, raw, model: Motor, lut, start: np.ndarray, points: int, v: float,
         "max_diff_eq12_deg": round(float(np.degrees(np.max(np.abs(table - psi_lut(b.motor, theta))))), 6),
         "direction_diff_deg": round(float(np.degrees(np.max(np.abs(fwd - bwd)))), 6),
         **_cruise_error(raw, v),
+        **_lost(raw),
         "time_min_s": round(float(np.min(learn[2 * points:])), 6),
         "time_mean_s": round(float(np.mean(learn[2 * points:])), 6),
         "end_effect_k": round(float(k), 6),
@@ -642,8 +709,9 @@ def _result(b, raw, model: Motor, lut, start: np.ndarray, points: int, v: float,
 def commission_to(out: str | Path, motor=None, figure: Callable[[Calibration, Path], object] | None = None,
                   **kwargs) -> CommissionOutput:
     """Commission (:func:`commission`) and write ``calibrate``'s output set: ``lut_measured.csv``,
-    ``lut_measured.json`` (when complete: ``linsense tune --table`` and ``observer.lut_model =
-    "measured"`` read it), ``metrics.json``, ``timing.json``.
+    ``lut_measured.json`` (when complete and within :data:`TABLE_BOUND_DEG` of the simulated plant's
+    table: ``linsense tune --table`` and ``observer.lut_model = "measured"`` read it),
+    ``metrics.json``, ``timing.json``.
 
     Parameters
     ----------
@@ -666,7 +734,7 @@ def commission_to(out: str | Path, motor=None, figure: Callable[[Calibration, Pa
         cal = commission(motor, **kwargs)
         metrics, timing = split_timing(cal.metrics)
         s.write("lut_measured.csv", lut_csv(cal))
-        if cal.completed:
+        if cal.completed and cal.metrics["max_diff_deg"] <= TABLE_BOUND_DEG:  # (none off the plant's)
             s.write("lut_measured.json", measured_json(cal))
         write_metrics(s, metrics, timing)
         if figure is not None:
