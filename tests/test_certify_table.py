@@ -142,6 +142,21 @@ def test_a_v_max_beyond_the_bus_is_refused_naming_the_bus_limited_speed(run_cli,
     assert r.code == 2 and "2.22 m/s" in r.err and not (tmp_path / "fw").exists()
 
 
+def test_a_v_max_refusal_names_the_pwms_limit_where_it_is_lower(run_cli, tmp_path):
+    """Beyond the bus's speed, and the observer's clamp at that speed beyond what the PWM rate lets
+    the EMF estimate turn per period: the refusal names both (a 20 mm motor at 72 V / 16 kHz was
+    told 13.93 m/s, what the bus allows, and then refused at 13.93 with 5.09), and the PWM's value
+    is accepted (ecce2010 at 300 V, 8 kHz: 12.08 m/s by the bus, 7.13 by the PWM)."""
+    out = tmp_path / "t.toml"
+    drive = ("--motor", "ecce2010", "--v-dc", "300", "--f-pwm", "8000", "--out", out)
+    r = run_cli("tune", *drive, "--v-max", "15")
+    assert r.code == 2 and "at most 12.08 m/s, or raise v_dc; and at most 7.13 m/s at 8000 Hz PWM" in r.err
+    r = run_cli("tune", *drive, "--v-max", "7.13", "--no-verify")
+    assert r.code == 0, r.err
+    r = run_cli("tune", *drive, "--v-max", "7.2", "--no-verify")
+    assert r.code == 2 and "at most 7.13 m/s" in r.err, r.err
+
+
 CLASS_DIR = Path(linsense.__file__).parent / "examples" / "motors" / "class"
 
 

@@ -634,3 +634,17 @@ def test_a_square_wave_drive_is_not_told_to_try_the_square_wave():
     sq = _for_shape([one()], {"injection": {"shape": "square"}})[0].cause
     assert "--injection square" not in sq
     assert "more injection voltage (--v-inj), less dead time, or lower" in sq
+
+
+def test_the_crossing_speed_is_where_the_error_first_exceeds_the_bound():
+    """A move's error that grew at speed stays over the bound while the mover slows to the reversal:
+    the speed named is the first block's over it, not the slowest one's (a 20 mm motor was told its
+    HF error crossed 3 deg at 0.019 m/s, where it first did at 1.6 m/s)."""
+    from linsense.verify.case_runs import speed_profile
+
+    t = np.linspace(0.0, 1.0, 101)
+    x = np.where(t < 0.5, t * t, 0.25 + (t - 0.5) - (t - 0.5) ** 2)  # (up to 1 m/s at 0.5 s, then down)
+    err = np.where(t >= 0.4, 4.0, 1.0)  # (over 3 deg from 0.8 m/s on, and while slowing)
+    got = speed_profile(t, x, x, err, 0.02)
+    assert got["err_crosses_at_speed"] == pytest.approx(0.8, abs=0.03)
+    assert speed_profile(t, x, x, np.ones_like(t), 0.02)["err_crosses_at_speed"] is None

@@ -822,6 +822,26 @@ class DriveInputs:
         """The speed beyond which the bus cannot drive the current the application needs, m/s."""
         return self.speed_driven(self.d.v_dc / math.sqrt(3.0))
 
+    @property
+    def v_pwm_speed(self) -> float:
+        """The speed beyond which the observer's speed clamp (the speed cap, the over-speed trip and
+        their margins over ``v_max``, with the table) turns the electrical angle by more than the EMF
+        estimate's period model takes per PWM period (``LS_EMF_OMEGA_TS_MAX``), m/s: the design's
+        own refusal beyond it comes after the bus's (``linsense tune``), so the bus's names it."""
+        from linsense.ctrl import lib
+
+        clamp = SPEED_CAP_MARGIN * OVERSPEED_MARGIN * OBSERVER_SPEED_MARGIN
+        return float(lib.LS_EMF_OMEGA_TS_MAX) * self.d.f_pwm * self.motor.pole_pitch / (2.0 * math.pi * clamp)
+
+    def _pwm_says(self, top: float) -> str:
+        """The PWM's limit beside a refusal's ``top`` where it is lower ('' otherwise)."""
+        pwm, clamp = self.v_pwm_speed, SPEED_CAP_MARGIN * OVERSPEED_MARGIN * OBSERVER_SPEED_MARGIN
+        if not pwm < top:
+            return ""
+        return (f"; and at most {limit_text(pwm, False)} m/s at {self.d.f_pwm:g} Hz PWM with the EMF "
+                f"estimate on (the observer's speed clamp, {clamp:g} v_max, within the EMF estimate's "
+                "largest turn of the angle per period)")
+
     @functools.cached_property
     def k_e(self) -> np.ndarray:
         """The local error gain over the period with the nominal demodulator gain (:func:`error_gain`)."""
@@ -1046,7 +1066,8 @@ def _cap_says(x: DriveInputs, key: str) -> str:
     more = f", what the {x.d.v_dc:g} V bus allows at the application's current" if bus < top else ""
     return (f"{x.show('v_max')}: its speed cap, {SPEED_CAP_MARGIN:g} v_max = "
             f"{SPEED_CAP_MARGIN * x.d.v_max:.4g} m/s, is beyond the speeds of {KINDS['speed'].of} "
-            f"({KINDS['speed'].high:g} m/s): at most {limit_text(min(top, bus), False)} m/s{more}")
+            f"({KINDS['speed'].high:g} m/s): at most {limit_text(min(top, bus), False)} m/s{more}"
+            f"{x._pwm_says(min(top, bus))}")
 
 
 def _speed_says(x: DriveInputs, key: str) -> str:
@@ -1062,7 +1083,7 @@ def _speed_says(x: DriveInputs, key: str) -> str:
         return (f"{x.show('v_dc')} allows {x.v_bus_speed:.3g} m/s, below v_max = {d.v_max:g} m/s ({why}): at "
                 f"least {limit_text(v_min, True)} V")
     return (f"{x.show('v_max')} is beyond what the {d.v_dc:g} V bus allows, {x.v_bus_speed:.3g} m/s ({why}): "
-            f"at most {limit_text(x.v_bus_speed, False)} m/s, or raise v_dc")
+            f"at most {limit_text(x.v_bus_speed, False)} m/s, or raise v_dc{x._pwm_says(x.v_bus_speed)}")
 
 
 def _injection_text(dz: Design, d: DriveData) -> str:
