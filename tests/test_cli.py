@@ -146,7 +146,8 @@ BAD_MOTORS = {
     # (L0 up with it: the 3x3 matrix stays positive definite, the saliency does not move)
     "saliency changes sign": (edit(edit(BASE, "dM0 = -0.47e-3", "dM0 = -1.0e-3"),
                                    "L0 = 2.75e-3", "L0 = 3.75e-3"),
-                              ["inductance", "saliency", "changes sign", "36.5..83.5", "216.5..263.5"]),
+                              ["inductance", "saliency", "changes sign", "36.5..83.5", "216.5..263.5",
+                               "it is the end effect's: dM0 = -0.001 H", "at most 0.000675 H in magnitude"]),
 }
 
 

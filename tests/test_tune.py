@@ -149,6 +149,21 @@ def test_tune_refuses_an_impossible_drive(tmp_path, capsys):
     assert not (tmp_path / "x.toml").exists()
 
 
+def test_a_mass_typed_in_grams_is_named(run_cli, tmp_path):
+    """The force the application needs names the motor's mass beside m a_max, and asks about grams
+    from 100 kg: a 350 g mover typed as 350 was refused on the default i_max alone (116.7 A needed),
+    a value the user never gave, with nothing pointing at the mass."""
+    from importlib.resources import files
+
+    text = (files("linsense.model") / "presets" / "ecce2010.toml").read_text()
+    path = tmp_path / "m.toml"
+    path.write_text(text.replace("mass = 1.5 ", "mass = 350 "))
+    r = run_cli("tune", "--motor", path, "--out", tmp_path / "x.toml", "--no-verify")
+    assert r.code == 2 and "the motor's mass 350 kg (did you type g?" in r.err, r.err
+    r = run_cli("tune", "--motor", "ecce2010", "--a-max", "1000", "--out", tmp_path / "x.toml", "--no-verify")
+    assert r.code == 2 and "a_max" in r.err and "the motor's mass 1.5 kg)" in r.err, r.err
+
+
 def test_review_regressions(tmp_path, capsys):
     """Cases a review found: a sensored scenario without injection still builds; an injection at
     f_pwm / 4 (no room for the demodulator's zeros at 2 f_inj) still runs; an injection the drive

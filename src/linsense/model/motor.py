@@ -891,8 +891,33 @@ def check_motor(motor: Motor) -> None:
         raise ModelError(
             motor.source or _API, "inductance",
             f"saliency L_q - L_d vanishes or changes sign at theta = {_intervals_deg(theta, bad)} "
-            f"(range {sal.min():.3g} .. {sal.max():.3g} H): HF sensorless control impossible there",
+            f"(range {sal.min():.3g} .. {sal.max():.3g} H): HF sensorless control impossible there"
+            + _end_effect_room(motor.inductance, theta),
         )
+
+
+def _end_effect_room(ind: InductanceModel, theta: np.ndarray) -> str:
+    """Where the end effect (eq. 3's dM0: the mean of M_BC and M_CA beyond M_AB) is what takes the
+    saliency's sign away and the motor without it keeps one: the largest dM0 of its sign that does,
+    for the message ('' otherwise)."""
+    a, b = np.array(ind.a, dtype=float), np.array(ind.b, dtype=float)
+    d_m0 = 0.5 * (a[4, 0] + a[5, 0]) - a[3, 0]
+
+    def keeps(k: float) -> bool:  # (the saliency of one sign, dM0 scaled by k)
+        ak = a.copy()
+        ak[4, 0] += (k - 1.0) * d_m0
+        ak[5, 0] += (k - 1.0) * d_m0
+        L_dq = InductanceModel(ak, b).L_dq(theta)
+        sal, mean = L_dq[..., 1, 1] - L_dq[..., 0, 0], 0.5 * (L_dq[..., 1, 1] + L_dq[..., 0, 0])
+        return bool(np.all((1.0 if np.mean(sal) >= 0 else -1.0) * sal > MIN_SALIENCY_RATIO * mean))
+
+    if d_m0 == 0.0 or not keeps(0.0):
+        return ""
+    lo, hi = 0.0, 1.0  # (the largest share of dM0 that keeps it, by bisection)
+    for _ in range(40):
+        lo, hi = ((lo + hi) / 2.0, hi) if keeps((lo + hi) / 2.0) else (lo, (lo + hi) / 2.0)
+    return (f"; it is the end effect's: dM0 = {d_m0:.3g} H (the mean of M_BC and M_CA beyond M_AB) is too "
+            f"large for this saliency: at most {lo * abs(d_m0):.3g} H in magnitude")
 
 
 def _toml_str(text: str) -> str:

@@ -62,6 +62,9 @@ def _check_injection(f: ScenarioSchema) -> None:
     dead-time residual, frequency); the d-axis current below the current limit."""
     inv = f.inverter
     inj = f.injection
+    wrong = implausible("pwm_frequency", inv.f_pwm) if "f_pwm" in inv.model_fields_set else None
+    if wrong is not None:  # (before the injection's rules, which read it: f_pwm = 20 said "f_inj <= 5 Hz")
+        raise KeyProblem("inverter.f_pwm", wrong)
     if inj.shape != "pulsating":
         if "quadrature" in inj.model_fields_set and inj.quadrature != 0.0:
             raise KeyProblem("injection.quadrature", f"only with shape = \"pulsating\" (the {inj.shape} "

@@ -106,6 +106,7 @@ CURRENT_TRIP_MARGIN = 1.3  # over-current trip over i_max plus the HF current's 
 #: 50 Hz (32 and 21 deg, 5.6 and 3.4 dB) hold and step; 60 Hz (9.6 deg, 1.5 dB) trips
 MARGIN_FLOORS = {"observer": (20.0, 3.0), "motion": (25.0, 6.0)}
 MOVE_TIME_MAX = 60.0  # s, the application's move over two pole pitches (v_max, a_max)
+MASS_SLIP_KG = 100.0  # a motor file's mass from which a refusal asks whether grams were typed
 FORCE_MARGIN = 0.8  # the application's force (load + m a_max) at most this share of the force at i_max
 RATED_LOAD_FRACTION = 0.5  # rated load, of the force at i_max, when the application does not give it
 QUAD = 0.9
@@ -967,8 +968,9 @@ def _force_says(x: DriveInputs, key: str) -> str:
     f_max, ma, load = drive_force_max(m, d), m.mass * d.a_max, rated_load(m, d)
     kfi = force_max_text(m, d)
     share = f" = {RATED_LOAD_FRACTION:g} of the force at i_max," if d.load is None else ""
+    slip = " (did you type g? the motor file's mass is in kg)" if m.mass >= MASS_SLIP_KG else ""
     need = (f"the {x.force_need:.3g} N the application needs (rated load {load:.3g} N{share} + m a_max "
-            f"{ma:.3g} N)")
+            f"{ma:.3g} N, the motor's mass {m.mass:g} kg{slip})")
     c = _share_slope(m, d)
     # (the designed d-current's share falls with i_max: the force peaks at K_f / (4 c), at 1 / (2 c))
     peak = "" if c == 0.0 else (
