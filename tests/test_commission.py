@@ -183,8 +183,8 @@ def test_learned_on_an_off_nominal_plant(case, k_e, tmp_path):
     """dM0 +-25 % (the plant's end effect a quarter off the motor file's), the switching inverter with
     the drive's dead time: the table the drive is given (its elliptical injection's, by the pulsating
     route) within 0.3 deg of the plant's own, in <= 10 s of simulated motion; with phase B's magnets
-    4 % weak too (the EMF estimate's imbalance). Measured (+25 % / -25 %): ecce2010 0.010 / 0.075 deg
-    (6.1 s), with the imbalance 0.053 / 0.10, m60_pos20k 0.16 / 0.088 (6.8 s)."""
+    4 % weak too (the EMF estimate's imbalance). Measured (+25 % / -25 %): ecce2010 0.026 / 0.0087 deg
+    (6.1 s), with the imbalance 0.11 / 0.086, m60_pos20k 0.14 / 0.088 (6.8 s)."""
     from importlib.resources import files
 
     drive = None

@@ -112,7 +112,7 @@ RANGE = {
     "PWM far too fast": ("[inverter]\nf_pwm = 1e7", ["inverter.f_pwm", "1e+07", "125000"]),
     "PWM beyond the library": ("[inverter]\nf_pwm = 2e6\ndead_time = 0.0",
                                ["inverter.f_pwm", "2e+06", "1e+06"]),
-    "PWM too slow": ("[inverter]\nf_pwm = 100.0", ["inverter.f_pwm", "100", "f_pwm / 4"]),
+    "PWM too slow": ("[inverter]\nf_pwm = 100.0", ["inverter.f_pwm", "100", "[500, 1e+06] Hz"]),
     # the design's rules (before: "dead_time:", "a_max:", "load:", "inverter.v_dc" for i_max)
     "bus huge": ("[inverter]\nv_dc = 1e30", ["inverter.v_dc", "1e+30", "at most 338.3 V"]),
     "bus tiny": ("[inverter]\nv_dc = 1e-30", ["inverter.v_dc", "1e-30"]),
