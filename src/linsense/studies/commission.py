@@ -32,6 +32,7 @@ from linsense.ctrl import CAL_SLOPE_MAX, LEARN_CRUISE, ffi
 from linsense.errors import InputError
 from linsense.io import output_set, split_timing
 from linsense.model.motor import Motor
+from linsense.plausible import KINDS
 from linsense.scenario.load import Scenario, scenario_from_dict
 from linsense.scenario.sections import TravelSection
 from linsense.sim.build import build, designed, resolve_motor
@@ -114,6 +115,9 @@ DEFAULT_SPEED_ROUNDS = 4
 #: m/s^2, the commissioning's acceleration without a load that limits it (and within the design's
 #: force rule: the rated load and m a_max within the force at i_max)
 A_DEFAULT = 10.0
+#: m/s^2, the least acceleration the commissioning halves its own down to (the design's default
+#: application's, 1 m/s^2, whose band the EMF check before the run is about)
+A_MIN = 1.0
 #: the scenario keys of a design's refusal that are about the speed asked for
 SPEED_KEYS = ("reference.v_max", "controller.v_max")
 #: m/s, the speed caps the band is designed for, the first the bus allows
@@ -257,10 +261,7 @@ def commission(motor: Motor | str | None = None, *, scenario: Scenario | None = 
     dd = DriveData(i_max=float(d.controller.i_max), shape=d.injection.shape, d_current=i_d)
     data.setdefault("controller", {})["rated_load"] = _rated_load(model, dd, load)
     a = _acceleration(dd, model, load, a_max, source)
-    v = v if speed is not None else _default_speed(data, v, a, model, source, base_dir)
-    spec = _speed_design(data, v, a, model, source, base_dir)
-    _check_speed(spec, v, model.pole_pitch, source)
-    _widen_band(data, spec)
+    v, a = _speed_and_acceleration(data, v, speed, a, a_max is None, model, source, base_dir)
     _check_bus(d, dd, model, load, v, source)
     by_load = a_max is None and load != 0.0 and a < A_DEFAULT  # (the load sets the acceleration)
     stroke, x0 = _stroke(scenario, stroke_mm, v, a, model, source, points, by_load)
@@ -498,7 +499,7 @@ def _acceleration(dd: DriveData, model: Motor, load: float, a_max: float | None,
     # (the design's own rule: its rated load, RATED_LOAD_FRACTION of the force, and m a_max within it)
     a = float(a_max) if a_max is not None else min(A_DEFAULT, f_acc / model.mass,
                                                    0.99 * (1.0 - RATED_LOAD_FRACTION) * f_max / model.mass)
-    if model.mass * a > f_acc:
+    if model.mass * a > f_acc * (1.0 + 1e-9):  # (f_acc / m times m: one rounding step over it)
         _refuse(source, "a_max", f"{a:g} m/s^2 needs {model.mass * a:.3g} N beside the load's "
                 f"{abs(load):g} N: more than {FORCE_SHARE:g} {kfi} = {FORCE_SHARE * f_max:.3g} N")
     return a
@@ -512,11 +513,51 @@ def _default_speed(data: dict, v: float, a: float, model: Motor, source: str, ba
     2.53), so the speed follows it for a few rounds (:func:`_check_speed` then says where it does
     not settle)."""
     for _ in range(DEFAULT_SPEED_ROUNDS):
-        top = float(_speed_design(data, v, a, model, source, base_dir).observer.handover_v_hi)
-        if v * LEARN_CRUISE >= top:
+        spec = _speed_design(data, v, a, model, source, base_dir)
+        top = float(spec.observer.handover_v_hi)
+        if v * LEARN_CRUISE >= top or _never(spec):  # (no band to follow)
             return v
         v = SPEED_OVER_V_HI * top
     return v
+
+
+def _never(spec) -> bool:
+    """Whether the design's band never starts: its EMF bound never within the band's limit (the band's
+    top the design's placeholder, beyond the speeds of linear motors)."""
+    return float(spec.observer.handover_v_hi) > KINDS["speed"].high
+
+
+def _speed_and_acceleration(data: dict, v: float, speed: float | None, a: float, own_a: bool, model: Motor,
+                            source: str, base_dir) -> tuple[float, float]:
+    """The commissioning's speed (``speed``, else :func:`_default_speed` from ``v``) and acceleration,
+    checked against the drive designed for them (:func:`_check_speed`), whose band the run takes
+    (:func:`_widen_band`). Where that design leaves the EMF estimate off, its bound never
+    within the band's limit at the current of the acceleration beside the rated load (a heavy mover:
+    a 15 kg one at 8.2 m/s^2 near i_max, whose band top came back as the design's "never" and was
+    offered as a speed of 1300 m/s), or where the default speed, 1.3 times that band's top, is beyond
+    what the bus allows, the commissioning's own acceleration (``own_a``) is halved down to
+    :data:`A_MIN`; refused if the estimate stays off."""
+    while True:
+        halve = own_a and a / 2.0 >= A_MIN
+        try:
+            vv = float(speed) if speed is not None else _default_speed(data, v, a, model, source, base_dir)
+            spec = _speed_design(data, vv, a, model, source, base_dir)
+        except InputError as exc:  # (the default speed, the band's at this current, beyond the bus)
+            if speed is not None or not halve or exc.key != "speed":
+                raise
+            a /= 2.0
+            continue
+        if not _never(spec) or not halve:
+            break
+        a /= 2.0
+    if _never(spec):
+        _refuse(source, "speed" if speed is not None else "motor",
+                f"the drive designed for {vv:.3g} m/s at the commissioning's {a:.3g} m/s^2 leaves the EMF "
+                f"estimate off: its error bound at the current of m a = {model.mass * a:.3g} N beside the "
+                f"rated load is never within the band's limit, and commissioning needs it trusted at speed")
+    _check_speed(spec, vv, model.pole_pitch, source)
+    _widen_band(data, spec)
+    return vv, a
 
 
 def _widen_band(data: dict, spec) -> None:
