@@ -4,8 +4,10 @@ envelope, force.
 Drawn from bins of whole injection periods (:func:`linsense.sim.stream.plot_bin`, at most 2,000
 bins): the position and the error as their min-max envelope over every PWM period of a bin (the
 block statistics) with the bin mean, the phase currents as their fundamental (the middle of each
-bin's min-max envelope: the HF swing and the PWM ripple cancel) and the HF current as half that
-envelope's width. Envelopes come from every PWM period, not from the recorded samples, so a
+bin's min-max envelope: the HF swing and the PWM ripple cancel) and the HF current as half the
+envelope's width over each injection period, less the fundamental's change across it, averaged over
+the bin (:func:`linsense.sim.stream.hf_envelope`: the bin's own width holds the fundamental's swing
+at speed). Envelopes come from every PWM period, not from the recorded samples, so a
 decimated trace never aliases (the 1 kHz injection sampled every 16 periods at 16 kHz would look
 constant). The force has no block statistics: it is drawn as the bin mean of the samples only when
 they resolve the injection (4 samples per injection period or more).
@@ -105,10 +107,11 @@ def sim_figure(data) -> Figure:
     ax.legend(loc="upper right", fontsize=7, ncol=3)
 
     ax = axes[3]
+    i_hf = b["i_hf"] if "i_hf" in b else 0.5 * (i_hi - i_lo)  # (per injection period: linsense.sim.stream)
     for k, (ph, color) in enumerate(_PHASES):
-        ax.plot(t, 0.5 * (i_hi[:, k] - i_lo[:, k]), color=color, lw=1.0, label=f"$i_{ph}$")
+        ax.plot(t, i_hf[:, k], color=color, lw=1.0, label=f"$i_{ph}$")
     ax.set_ylim(bottom=0.0)
-    ax.set_ylabel("HF current,\nhalf peak-to-peak (A)")
+    ax.set_ylabel("HF and ripple current,\nhalf p-p per injection\nperiod (A)")
     ax.legend(loc="upper right", fontsize=7, ncol=3)
 
     ax = axes[4]
