@@ -164,6 +164,19 @@ def test_a_mass_typed_in_grams_is_named(run_cli, tmp_path):
     assert r.code == 2 and "a_max" in r.err and "the motor's mass 1.5 kg)" in r.err, r.err
 
 
+def test_a_scenario_of_another_motor_is_said(run_cli, tmp_path):
+    """tune --motor A --scenario S, S written for motor B: B's drive data are designed for A, and
+    tune says so (it did without a word); S's own motor gives no such line."""
+    path = tmp_path / "s.toml"
+    path.write_text('motor = "ecce2010"\n[scenario]\nduration = 0.1\n[reference]\ntype = "hold"\n'
+                    "[inverter]\nv_dc = 96.0\n")
+    r = run_cli("tune", "--motor", "small30", "--scenario", path, "--out", tmp_path / "a.toml", "--no-verify")
+    assert r.code == 0 and "was written for the motor 'ecce2010'" in r.err and "'small30' (--motor)" in r.err
+    r = run_cli("tune", "--motor", "ecce2010", "--scenario", path, "--out", tmp_path / "b.toml",
+                "--no-verify")
+    assert r.code == 0 and "was written for the motor" not in r.err, r.err
+
+
 def test_review_regressions(tmp_path, capsys):
     """Cases a review found: a sensored scenario without injection still builds; an injection at
     f_pwm / 4 (no room for the demodulator's zeros at 2 f_inj) still runs; an injection the drive

@@ -281,6 +281,20 @@ def _drive_of(scenario: Scenario | None, drive: dict | None) -> DriveData:
     return dd
 
 
+def _other_motor(sc: Scenario | None, motor: Motor) -> str:
+    """What tune says when the scenario was written for another motor than ``motor`` ('' when it was
+    not): its drive data and keys, chosen for that motor, are designed here for this one (tune
+    --motor k62 --scenario of k48 designed the 24 V motor on the 100 V, 4 A, 40 N drive without a
+    word; the scenario it writes names --motor)."""
+    if sc is None:
+        return ""
+    theirs = resolve_motor(sc, check=False)
+    if motor_key(theirs) == motor_key(motor):
+        return ""
+    return (f"the scenario {sc.source} was written for the motor {theirs.name!r}: its drive data and keys "
+            f"(bus, PWM, dead time, i_max, rated load, speed) are designed here for {motor.name!r} (--motor)")
+
+
 def _same_believed_motor(sc: Scenario, motor: Motor, motor_spec: str) -> None:
     """Refuse a scenario whose drive believes in another motor (``controller.model.motor``) than the
     one tune designs it for: tune designs and certifies the drive believing in ``motor`` (the
@@ -369,8 +383,11 @@ def tune(motor: str, *, scenario: Scenario | None = None, source: str | None = N
                        table_route=table_route) if verify else None
     mode = (base or {}).get("control", {}).get("mode", "sensorless_lut")
     _report(made, m, dd, say, warn, mode if verify else "")
+    other = _other_motor(scenario, m)
+    if other:
+        warn(other)
     res = TuneResult(made, m, dd, fmt, None, sc_dict, digest=design_digest(m, dd, 256, made.table),
-                     warnings=list(made.warnings))
+                     warnings=list(made.warnings) + ([other] if other else []))
     if fmt == "c":  # (the header waits for the verdict: made only for a drive that passed)
         return _header(res, cert_run, name, unverified, say, ready)
     res.text = scenario_toml(made, motor, Path(out), base, working_folder(), table=table_abs)
