@@ -389,7 +389,7 @@ def commission(motor_spec: str | None, scenario_path: str | None, speed: float |
            f"{m['dead_time_s'] * 1e6:g} us, route {m['route']}")
     if done.completed:
         c.say(f"{m['motor']}: {run}: max |table - plant's| {show(m['max_diff_deg'], 'deg', '.3g')} (the "
-              f"design's {show(m['start_diff_deg'], 'deg', '.3g')}), end-effect scale "
+              f"motor file's table: {show(m['start_diff_deg'], 'deg', '.3g')}), end-effect scale "
               f"{m['end_effect_k']:.3f}; {m['sim_s']} s simulated")
     else:  # (the table as the run left it is not a commissioned one: no figures of it here)
         c.say(f"{m['motor']}: NOT commissioned, {run}; fault {m['fault']} after {m['sim_s']} s simulated")
