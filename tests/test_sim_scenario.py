@@ -161,3 +161,14 @@ def test_motor_path_relative_to_scenario(tmp_path):
     from linsense.sim.build import resolve_motor
 
     assert resolve_motor(load_scenario(tmp_path / "s.toml")).source.endswith("m.toml")
+
+
+def test_a_faulted_runs_line_shows_no_limit_cycle(run_cli, tmp_path):
+    """After a fault the run's end is where it stopped: its line said "limit cycle 3.31e+03 deg" for
+    a mover that had run into its end stop."""
+    path = tmp_path / "f.toml"
+    path.write_text('motor = "ecce2010"\n[scenario]\nname = "f"\nduration = 0.3\n[reference]\ntype = "step"\n'
+                    'position_mm = 3.0\nat = 0.05\n[travel]\nmax_mm = 1.0\n')
+    r = run_cli("simulate", path, "--out", tmp_path / "o")
+    assert r.code == 0 and "(fault travel)" in r.out and "(where the fault stopped it)" in r.out, r.out
+    assert "limit cycle" not in r.out.splitlines()[-1]

@@ -97,16 +97,18 @@ def simulate(scenario: str, out: str | None, fidelity: str | None, trace_fmt: st
 def _say_metrics(m: dict) -> None:
     """The run's one-line report."""
     show = c.show
+    # (after a fault the run's end is where it stopped, not a settled hold: no limit cycle to show)
+    end = (f"final x {m['final_position_mm']} mm (where the fault stopped it); " if m["fault"] != "none" else
+           f"final x {m['final_position_mm']} mm, limit cycle {show(m['limit_cycle_deg'], 'deg', '.3g')} "
+           f"({m['limit_cycle_mm']} mm), overshoot {show(m['overshoot_deg'], 'deg', '.3g')} "
+           f"({m['overshoot_mm']} mm); ")
     c.say(
         f"{m['scenario']}: "
         f"{'stable' if m['stable'] else 'not stable: ' + str(m['unstable_reason'])} (fault {m['fault']}); "
         f"max |err| {show(m['max_abs_err_deg'], 'deg')} "
         f"(transient {show(m['transient_max_err_deg'], 'deg')}, "
         f"steady {show(m['steady_max_err_deg'], 'deg')}, bias {show(m['bias_deg'], 'deg')}); "
-        f"final x {m['final_position_mm']} mm, limit cycle {show(m['limit_cycle_deg'], 'deg', '.3g')} "
-        f"({m['limit_cycle_mm']} mm), overshoot {show(m['overshoot_deg'], 'deg', '.3g')} "
-        f"({m['overshoot_mm']} mm); "
-        f"{m['sim_s']} s simulated in {m['wall_s']} s "
+        f"{end}{m['sim_s']} s simulated in {m['wall_s']} s "
         f"({m['realtime_factor']}x real time)"
     )
 
