@@ -13,6 +13,7 @@ from pathlib import Path
 
 from linsense.io import working_folder
 from linsense.model.motor import Motor
+from linsense.tune.design import SPEED_CAP_MARGIN
 from linsense.verify import criteria as C
 from linsense.verify.case_runs import MOVES as C_MOVES
 from linsense.verify.case_runs import run_cases
@@ -283,8 +284,10 @@ def _calibration_check(plant: str, cal: dict | None) -> Check:
 
 
 def _crossing_cause(v_cross: float, band: tuple[float, float] | None) -> str:
-    """What a move whose error crossed the bound at ``v_cross`` (m/s) says: below the hand-over band
-    the HF estimate gives out before the EMF estimate is trusted."""
+    """What a move whose error crossed the bound at ``v_cross`` (m/s) says, by where it crossed: below
+    the hand-over band the HF estimate gives out before the EMF estimate is trusted; inside it the
+    two are weighed together (a lower --v-max there only moved the crossing: keep the cap below the
+    band); above it the EMF estimate carries alone; without a band the HF estimate carries all."""
     bound = f"{C.TRAJ_PEAK_ERR_DEG:g} deg"
     if band is not None and v_cross < band[0]:
         return (f"the HF estimate's error crosses {bound} at {v_cross:.3g} m/s, below the hand-over band "
@@ -292,6 +295,17 @@ def _crossing_cause(v_cross: float, band: tuple[float, float] | None) -> str:
                 f"{band[1]:.3g} m/s): between them neither holds {bound} on this drive: a --v-max below "
                 f"{v_cross:.3g} m/s, or less dead time or current noise (docs/tuning.md, "
                 f"\"The speed range\")")
+    if band is not None and v_cross <= band[1]:  # (inside the band: the two estimates weighed together)
+        return (f"the error crosses {bound} at {v_cross:.3g} m/s, inside the hand-over band {band[0]:.3g} - "
+                f"{band[1]:.3g} m/s, where the HF and EMF estimates are weighed together (the EMF's there: "
+                f"the magnets' flux harmonics and imbalance, the dead time): a --v-max lower than the band "
+                f"needs leaves the EMF estimate off, its speed cap ({SPEED_CAP_MARGIN:g} v_max) below "
+                f"{band[0]:.3g} m/s (--v-max under {band[0] / SPEED_CAP_MARGIN:.3g}), the HF estimate then "
+                f"carrying alone within its own reach")
+    if band is not None:  # (above the band: the EMF estimate alone)
+        return (f"the error crosses {bound} at {v_cross:.3g} m/s, above the hand-over band, where the EMF "
+                f"estimate carries alone (its errors: the magnets' flux harmonics and imbalance, R_s, L_q, "
+                f"the dead time; docs/theory.md, section 9): a --v-max below it")
     return (f"the HF estimate's error grows with the speed and crosses {bound} at {v_cross:.3g} m/s on this "
             f"drive: a --v-max below it")
 
