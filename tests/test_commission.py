@@ -36,6 +36,7 @@ def test_speed_below_the_band_refused():
     ({"speed": 1000.0}, "speed", "its speed cap, 1.25 v_max = 1250 m/s, is beyond the speeds of linear"),
     ({"stroke_mm": 5000.0}, "stroke", "takes 5.09 s a way: out and back do not fit"),
     ({"stroke_mm": 0.3}, "stroke", "did you type m?"),
+    ({"stroke_mm": 0.278}, "stroke", "0.278 mm of stroke is too little"),  # (it said "0.3 mm")
     ({"points": 1024}, "positions", "at most"),
     ({"load": -100.0}, "load", "-100 N leaves nothing"),
     ({"speed": 1.5, "load": 30.0}, "load", "needs more voltage than the 72 V bus leaves beside"),

@@ -608,7 +608,7 @@ def _stroke(scenario: Scenario | None, stroke_mm: float | None, v: float, a: flo
         stroke = float(stroke_mm) / 1e3
     key = "stroke" if stroke_mm is not None else "travel"
     if stroke < need:
-        _refuse(source, key, f"{stroke * 1e3:.1f} mm of stroke is too little: {need * 1e3:.1f} mm "
+        _refuse(source, key, f"{stroke * 1e3:.4g} mm of stroke is too little: {need * 1e3:.1f} mm "
                 f"needed at {v:.3g} m/s and {a:.3g} m/s^2 (v^2/a to the speed and back, {T_SETTLE:g} s "
                 f"settling and {PERIODS_AT_SPEED:g} electrical period of {model.pole_pitch * 1e3:g} mm "
                 f"at speed)" + (" (did you type m? the stroke is in mm)" if stroke_mm is not None and
