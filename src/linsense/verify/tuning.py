@@ -382,10 +382,7 @@ def tune(motor: str, *, scenario: Scenario | None = None, source: str | None = N
                        v_max=dd.v_max, a_max=dd.a_max, load=made.design.load, travel=dd.travel, quick=quick,
                        table_route=table_route) if verify else None
     mode = (base or {}).get("control", {}).get("mode", "sensorless_lut")
-    _report(made, m, dd, say, warn, mode if verify else "")
-    other = _other_motor(scenario, m)
-    if other:
-        warn(other)
+    _report(made, m, dd, say, warn, mode if verify else "", other := _other_motor(scenario, m))
     res = TuneResult(made, m, dd, fmt, None, sc_dict, digest=design_digest(m, dd, 256, made.table),
                      warnings=list(made.warnings) + ([other] if other else []))
     if fmt == "c":  # (the header waits for the verdict: made only for a drive that passed)
@@ -396,9 +393,11 @@ def tune(motor: str, *, scenario: Scenario | None = None, source: str | None = N
     return res
 
 
-def _report(made: DriveDesign, m: Motor, dd: DriveData, say: Callable, warn: Callable, mode: str) -> None:
-    """Say the design, its start-up and its warnings (and that the certificate judges the sensorless
-    drive, not the scenario's control ``mode``, when it runs)."""
+def _report(made: DriveDesign, m: Motor, dd: DriveData, say: Callable, warn: Callable, mode: str,
+            other: str = "") -> None:
+    """Say the design, its start-up and its warnings, ``other`` the scenario's other motor's
+    (:func:`_other_motor`; and that the certificate judges the sensorless drive, not the scenario's
+    control ``mode``, when it runs)."""
     for line in design_lines(made.design, m.name, dd, made.handover):
         say(line)
     if made.startup is not None:
@@ -407,7 +406,7 @@ def _report(made: DriveDesign, m: Motor, dd: DriveData, say: Callable, warn: Cal
     else:
         say("  start-up       not designed: no saturation data (--polarity, or [saturation] polarity "
             "in the motor file)")
-    for w in made.warnings:
+    for w in [*made.warnings, *([other] if other else [])]:
         warn(w)
     if mode not in ("", "sensorless_lut"):
         say(f"  (the certificate judges the designed sensorless drive with its table, not control.mode = "
