@@ -108,7 +108,8 @@ TABLE_BOUND_DEG = 0.3
 #: whose first reversal lost the motor learned nothing. Measured (switching, default drives or the
 #: motors' own): at 0.5 three of ten motors (a 25 mm L_q / L_d 1.15 one at 48 V, a 55 mm one at
 #: 200 V, m30_low at 72 V) lost it at the first reversal; at 0.25 they learn within 0.073, 0.025 and
-#: 0.010 deg, the others within 0.21 deg as before (0.15 and 0.2 alike, m30_low 0.15 / 0.09)
+#: 0.010 deg, the others within 0.25 deg as before (0.15 and 0.2 alike, m30_low 0.15 / 0.09;
+#: docs/tuning.md, "Commissioning without a sensor")
 V_LO_SHARE = 0.25
 #: the rounds of the default speed's fixed point (:func:`_default_speed`)
 DEFAULT_SPEED_ROUNDS = 4
