@@ -271,3 +271,25 @@ def test_a_folder_given_as_a_scenario_is_named_so(run_cli, tmp_path, monkeypatch
     from linsense.examples import resolve
 
     assert resolve("scenarios", "fig13_trajectory") != "fig13_trajectory"
+
+
+def test_lut_says_eq12_is_not_the_firmwares_default_injections_table(run_cli, tmp_path):
+    """`lut --format c` without --f-inj writes eq. 12, the paper's pulsating injection's table; the
+    firmware's default injection is elliptical (kappa 0.9), whose table kappa moves 3-4 x (ecce2010:
+    -3.4..3.6 deg against -9.0..13.7 with R_s neglected): said on stderr; `--quad` without `--f-inj`
+    gives that R_s = 0 table (it was refused as "kappa changes nothing", and build_lut ignored it)."""
+    from linsense.analysis.hf import psi_lut, psi_lut_resistive, table_model
+    from linsense.compensation.lut import build_lut
+    from linsense.model.motor import load_motor
+
+    m = load_motor("ecce2010")
+    th = 2.0 * np.pi * np.arange(8) / 8
+    got = build_lut(m, 8, quad=0.9).values
+    m0, f0 = table_model(m, None)
+    np.testing.assert_allclose(got, psi_lut_resistive(m0, th, f0, quad=0.9))
+    assert np.max(np.abs(got)) > 2.5 * np.max(np.abs(psi_lut(m, th)))
+    r = run_cli("lut", "--motor", "ecce2010", "--format", "c", "--out", tmp_path / "a.h")
+    assert r.code == 0 and "eq. 12's table is the paper's pulsating injection's" in r.err, r.err
+    for extra in (("--f-inj", "1000"), ("--quad", "0.9")):
+        r = run_cli("lut", "--motor", "ecce2010", "--format", "c", *extra, "--out", tmp_path / "b.h")
+        assert r.code == 0 and r.err == "", r.err

@@ -69,8 +69,10 @@ def test_tune_out_dash_is_valid_toml_and_the_report_goes_to_stderr(run_cli, tmp_
 
 def test_lut_and_model_out_dash_write_the_data_alone(run_cli, tmp_path):
     os.chdir(tmp_path)
-    r = run_cli("lut", "--motor", "small30", "--format", "c", "--out", "-")
+    r = run_cli("lut", "--motor", "small30", "--format", "c", "--f-inj", "1000", "--out", "-")
     assert r.code == 0 and r.err == "" and r.out.lstrip().startswith(("/*", "//", "#"))
+    r = run_cli("lut", "--motor", "small30", "--format", "c", "--out", "-")  # (eq. 12: said on stderr)
+    assert r.code == 0 and "eq. 12's table" in r.err and r.out.lstrip().startswith(("/*", "//", "#"))
     r = run_cli("model", "--motor", "harmonic", "--points", 8, "--out", "-")
     assert r.code == 0 and r.err == "" and len(r.out.splitlines()) == 9
 

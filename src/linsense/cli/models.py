@@ -39,8 +39,9 @@ def model(motor_spec: str, points: int, out: str | None) -> None:
               help="injection frequency in Hz: include the winding resistance (exact zero of the "
                    "demodulated error; default: the paper's eq. 12, which neglects it)")
 @click.option("--quad", type=float, default=None, callback=c.quad,
-              help="with --f-inj: the injection's q-axis share kappa (elliptical injection, 0 = the "
-                   "paper's pulsating one; default: the firmware's, ls_drive_default_cfg)")
+              help="the injection's q-axis share kappa (elliptical injection, 0 = the paper's pulsating "
+                   "one; default: the firmware's, ls_drive_default_cfg, with --f-inj, else 0: eq. 12; "
+                   "without --f-inj R_s is neglected)")
 @click.option("--injection", type=click.Choice(["pulsating", "rotating", "square"]), default="pulsating",
               show_default=True, help="rotating: the table of the rotating-vector estimate; square: of the "
                                       f"square wave at --f-inj, e.g. f_pwm/2 ({docs('theory')})")
@@ -61,25 +62,37 @@ def lut(motor_spec: str, points: int, fmt: str, symbol: str | None, f_inj: float
         from linsense.compensation.lut import LUT_SUFFIX_CHARS, c_symbol
 
         c_symbol(symbol, "--symbol", longest_suffix=LUT_SUFFIX_CHARS)
-    if quad is not None and f_inj is None:
-        raise InputError("--quad", "", "only with --f-inj (eq. 12 neglects R_s, where kappa changes nothing)")
     if quad is not None and injection != "pulsating":
         raise InputError("--quad", "", f"only with --injection pulsating (the {injection} injection has no "
                          "q-axis share)")
     firmware = drive_default_cfg()  # (the firmware's injection: its kappa and frequency; the cfg is
     # kept whole: a member of a freed cffi struct reads garbage)
-    if quad is None:
-        quad = round(float(firmware.inject.quad), 6) if f_inj is not None else 0.0
+    f_fw, q_fw = float(firmware.inject.freq), round(float(firmware.inject.quad), 6)
+    note, quad = _eq12_note(quad is None and f_inj is None and injection == "pulsating" and fmt == "c", f_fw,
+                            q_fw), quad if quad is not None else q_fw if f_inj is not None else 0.0
     motor = c.load(motor_spec)
     # (a motor the HF observer cannot hold is refused as tune and simulate refuse it)
-    observable_error_gain(motor, f_inj or float(firmware.inject.freq), quad if f_inj else 0.0, motor_spec)
+    observable_error_gain(motor, f_inj or f_fw, quad, motor_spec)
     if fmt == "c" and symbol is None:
         from linsense.compensation.lut import default_lut_symbol
 
         default_lut_symbol(motor.name, motor.source, "motor.name")
+    c.warn(note) if note else None  # (after the refusals: one line where it is refused)
     out = c.default_out(out, motor_spec, "lut", {"csv": ".csv", "json": ".json", "c": ".h"}[fmt])
     write_atomic(out, export(build_lut(motor, points, f_inj, quad=quad, injection=injection), fmt, symbol))
     c.elapsed()
+
+
+def _eq12_note(eq12: bool, f_fw: float, q_fw: float) -> str:
+    """What ``lut --format c`` says of the default table, eq. 12 (``eq12``): the paper's pulsating
+    injection's, not the firmware's default elliptical one (kappa ``q_fw`` at ``f_fw`` Hz), whose table kappa
+    moves by 3-4 times (ecce2010: -3.4..3.6 deg against -16.5..6.9 at kappa 0.9 and 1 kHz; the
+    docs had called eq. 12's header "the firmware's table")."""
+    if not eq12:
+        return ""
+    return (f"eq. 12's table is the paper's pulsating injection's (kappa 0, R_s neglected); the firmware's "
+            f"default injection is elliptical (kappa {q_fw:g} at {f_fw:g} Hz), whose table is --f-inj "
+            f"{f_fw:g} (linsense tune writes the drive's own)")
 
 
 @click.command(short_help="Draw the paper's model figures (PNG).",

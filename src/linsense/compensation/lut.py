@@ -178,7 +178,9 @@ def build_lut(motor, points: int, f_inj: float | None = None, quad: float = 0.0,
               injection: str = "pulsating") -> Lut:
     """Psi_LUT of ``motor`` sampled at ``points`` positions over one electrical period.
 
-    Without ``f_inj`` this is eq. (12); with it (Hz), the resistance-aware angle of
+    Without ``f_inj`` this is eq. (12) (with ``quad``: the elliptical injection's table with R_s
+    neglected, which kappa moves as much as eq. 12's: -2.5 against -8.3 deg on a motor of the class);
+    with it (Hz), the resistance-aware angle of
     :func:`~linsense.analysis.hf.psi_lut_resistive` for that injection frequency and the
     injection's quadrature share ``quad`` (0: pulsating, as the paper). ``injection="rotating"``:
     the rotating-vector injection's table as the drive reads it, ``psi_rot`` against the position
@@ -236,8 +238,14 @@ def build_lut(motor, points: int, f_inj: float | None = None, quad: float = 0.0,
 
         values = psi_square(motor, theta, f_inj)
         prov = {**prov, "injection": "square", "f_inj": f_inj, "lut_model": "with R_s at f_inj"}
-    elif f_inj is None:
+    elif f_inj is None and not quad:
         values = psi_lut(motor, theta)
+    elif f_inj is None:  # (the elliptical injection's table without R_s: kappa moves it as much as R_s)
+        from linsense.analysis.hf import table_model
+
+        m0, f0 = table_model(motor, None)
+        values = psi_lut_resistive(m0, theta, f0, quad=quad)
+        prov = {**prov, "lut_model": "R_s = 0", "inject_quad": quad}
     else:
         values = psi_lut_resistive(motor, theta, f_inj, quad=quad)
         prov = {**prov, "f_inj": f_inj, "lut_model": "with R_s at f_inj"}
