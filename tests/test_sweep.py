@@ -81,6 +81,11 @@ AB = '[[axis]]\nkey = "a.b"\n'
     (HEAD + AB + 'values = ["x"]\nrelative = true\n', ["factors"]),
     ('[sweep]\nscenaro = "b.toml"\n' + AB + "values = [1]\n", ["sweep.scenaro", "did you mean 'scenario'"]),
     (HEAD + AB + "values = [1]\nlog = true\n", ["axis"]),
+    # (a misspelt key refused every run, and the sweep ended with exit code 0: "4 runs: ... 4 refused")
+    (HEAD + '[[axis]]\nkey = "reference.positon_mm"\nvalues = [1]\n',
+     ["axis.0.key", "did you mean 'reference.position_mm'"]),
+    (HEAD + 'set = { "duration" = 0.3 }\n[[axis]]\nkey = "reference.position_mm"\nvalues = [1]\n',
+     ["sweep.set.duration", "did you mean 'scenario.duration'"]),
 ])
 def test_bad_sweep_files_name_the_key(run_cli, tmp_path, text, words):
     (tmp_path / "s.toml").write_text(text)
