@@ -139,6 +139,8 @@ def test_scenario_kappa_and_frequency_are_used(tmp_path, run_cli):
         out = tmp_path / f"out_{q:g}"
         r = run_cli("calibrate", "--scenario", _scenario(tmp_path, q), "--positions", 14, "--out", out)
         assert r.code == 0, r.err
+        # (the summary names the injection: kappa 0.9 was called "pulsating")
+        assert ("elliptical injection" if q else "pulsating injection") in r.out, r.out
         m = json.loads((out / "metrics.json").read_text())
         assert m["injection_quad"] == pytest.approx(q) and m["f_inj_hz"] == 1250.0
         assert (m["v_dc"], m["f_pwm_hz"], m["dead_time_s"]) == (60.0, 20000.0, 0.0)

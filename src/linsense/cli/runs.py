@@ -307,9 +307,12 @@ def calibrate(motor_spec: str | None, scenario_path: str | None, positions: int,
     c.files_report(done.files)
     m = cal.metrics
     show = c.show
+    # (the library's pulsating shape with a q-axis share is the elliptical injection: so named)
+    shape = m["injection_shape"]
+    shape = "elliptical" if shape == "pulsating" and m["injection_quad"] else shape
     c.say(f"{m['motor']}: {m['points_done']}/{m['points']} points, load {m['load_n']:g} N, "
           f"{m['fidelity']}, {m['v_dc']:g} V, {m['f_pwm_hz']:g} Hz PWM, {m['dead_time_s'] * 1e6:g} us; "
-          f"{m['injection_shape']} injection {m['v_inj']:.3g} V at {m['f_inj_hz']:g} Hz, kappa "
+          f"{shape} injection {m['v_inj']:.3g} V at {m['f_inj_hz']:g} Hz, kappa "
           f"{m['injection_quad']:g}: "
           f"max |measured - model with R_s| {show(m['max_diff_deg'], 'deg', '.3g')}, against eq. 12 "
           f"{show(m['max_diff_eq12_deg'], 'deg', '.3g')}; {m['sim_s']} s simulated in {m['wall_s']} s")
