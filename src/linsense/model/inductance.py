@@ -358,6 +358,36 @@ class InductanceModel:
         Ldq = self.L_dq(theta)
         return ab_to_dq_matrix(self.L_ab(theta, 1), theta) + J.T @ Ldq + Ldq @ J
 
+    @property
+    def end_effect(self) -> float:
+        """The end effect ``dM0`` as the coefficients hold it (eq. 3: the constant part of ``M_BC`` and
+        ``M_CA`` beyond ``M_AB``), H; any model, a table's Fourier form too."""
+        return _dm0(self.a)
+
+    def scaled(self, k_inductance: float = 1.0, k_end_effect: float = 1.0,
+               description: str | None = None) -> InductanceModel:
+        """The model with every coefficient scaled by ``k_inductance`` and then its end effect
+        (:attr:`end_effect`) by ``k_end_effect``: the constants of ``M_BC`` and ``M_CA`` moved by
+        ``(k_end_effect - 1) dM0``. Any model (its Fourier form: the eq. 3 parameters are not kept).
+
+        Parameters
+        ----------
+        k_inductance, k_end_effect : float, optional
+            Factors, dimensionless.
+        description : str or None, optional
+            The new model's (None: this one's).
+
+        Returns
+        -------
+        InductanceModel
+            The scaled model.
+        """
+        a, b = np.array(self.a) * k_inductance, np.array(self.b) * k_inductance
+        d_m0 = _dm0(a)
+        a[4, 0] += (k_end_effect - 1.0) * d_m0
+        a[5, 0] += (k_end_effect - 1.0) * d_m0
+        return InductanceModel(a, b, description=self.description if description is None else description)
+
     def without_end_effect(self) -> InductanceModel:
         """The same model with the end-effect removed (``dM0 = 0``), for paper Fig. 5.
 
@@ -380,6 +410,11 @@ class InductanceModel:
             int(k[1:]): (p[k], p[f"M{k[1:]}"]) for k in p if k.startswith("L") and k[1:] not in ("0", "2")
         }
         return InductanceModel.from_params(p["L0"], p["L2"], p["M0"], p["M2"], 0.0, harm)
+
+
+def _dm0(a: np.ndarray) -> float:
+    """``dM0`` of the cosine coefficients ``a`` (:attr:`InductanceModel.end_effect`), H."""
+    return 0.5 * (a[4, 0] + a[5, 0]) - a[3, 0]
 
 
 def entry_matrices(entries: np.ndarray) -> np.ndarray:

@@ -882,11 +882,7 @@ def check_motor(motor: Motor) -> None:
             f"3x3 phase inductance matrix not positive definite at theta = {_intervals_deg(theta, bad)} "
             f"(smallest eigenvalue {eig_min.min():.3g} H): no real winding has it",
         )
-    L_dq = motor.inductance.L_dq(theta)
-    sal = L_dq[..., 1, 1] - L_dq[..., 0, 0]
-    L_mean = 0.5 * (L_dq[..., 1, 1] + L_dq[..., 0, 0])
-    sign = 1.0 if np.mean(sal) >= 0 else -1.0
-    bad = sign * sal <= MIN_SALIENCY_RATIO * L_mean
+    bad, sal = _saliency_lost(motor.inductance, theta)
     if bad.any():
         raise ModelError(
             motor.source or _API, "inductance",
@@ -896,20 +892,24 @@ def check_motor(motor: Motor) -> None:
         )
 
 
+def _saliency_lost(ind: InductanceModel, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Where the saliency ``L_q - L_d`` of ``ind`` at ``theta`` leaves its mean's sign or falls within
+    :data:`MIN_SALIENCY_RATIO` of the mean inductance (bool), and the saliency (H)."""
+    L_dq = ind.L_dq(theta)
+    sal = L_dq[..., 1, 1] - L_dq[..., 0, 0]
+    L_mean = 0.5 * (L_dq[..., 1, 1] + L_dq[..., 0, 0])
+    sign = 1.0 if np.mean(sal) >= 0 else -1.0
+    return sign * sal <= MIN_SALIENCY_RATIO * L_mean, sal
+
+
 def _end_effect_room(ind: InductanceModel, theta: np.ndarray) -> str:
     """Where the end effect (eq. 3's dM0: the mean of M_BC and M_CA beyond M_AB) is what takes the
     saliency's sign away and the motor without it keeps one: the largest dM0 of its sign that does,
     for the message ('' otherwise)."""
-    a, b = np.array(ind.a, dtype=float), np.array(ind.b, dtype=float)
-    d_m0 = 0.5 * (a[4, 0] + a[5, 0]) - a[3, 0]
+    d_m0 = ind.end_effect
 
     def keeps(k: float) -> bool:  # (the saliency of one sign, dM0 scaled by k)
-        ak = a.copy()
-        ak[4, 0] += (k - 1.0) * d_m0
-        ak[5, 0] += (k - 1.0) * d_m0
-        L_dq = InductanceModel(ak, b).L_dq(theta)
-        sal, mean = L_dq[..., 1, 1] - L_dq[..., 0, 0], 0.5 * (L_dq[..., 1, 1] + L_dq[..., 0, 0])
-        return bool(np.all((1.0 if np.mean(sal) >= 0 else -1.0) * sal > MIN_SALIENCY_RATIO * mean))
+        return not _saliency_lost(ind.scaled(k_end_effect=k), theta)[0].any()
 
     if d_m0 == 0.0 or not keeps(0.0):
         return ""

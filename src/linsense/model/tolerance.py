@@ -9,10 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 
-import numpy as np
-
 from linsense._check import instance, real
-from linsense.model.inductance import InductanceModel
 from linsense.model.motor import Motor, as_motor
 
 
@@ -55,10 +52,6 @@ def perturbed(motor: Motor, k_inductance: float = 1.0, k_resistance: float = 1.0
     k_end_effect = real(k_end_effect, src, "k_end_effect", what="a finite factor")
     instance(label, src, "label", str, "a str")
     ind = motor.inductance
-    a, b = np.array(ind.a) * k_inductance, np.array(ind.b) * k_inductance
-    d_m0 = 0.5 * (a[4, 0] + a[5, 0]) - a[3, 0]
-    a[4, 0] += (k_end_effect - 1.0) * d_m0
-    a[5, 0] += (k_end_effect - 1.0) * d_m0
-    new = InductanceModel(a, b, description=f"{ind.description} ({label})" if label else ind.description)
+    new = ind.scaled(k_inductance, k_end_effect, f"{ind.description} ({label})" if label else None)
     name = f"{motor.name} ({label})" if label else motor.name
     return dataclasses.replace(motor, name=name, R_s=motor.R_s * k_resistance, inductance=new)
