@@ -133,7 +133,7 @@ def test_the_default_speed_is_above_its_own_designs_band(monkeypatch):
         return Spec(next(tops))
 
     monkeypatch.setattr(com, "_speed_design", design)
-    v = com._default_speed({}, 2.49, 10.0, None, "t", None)
+    v, _ = com._default_speed({}, 2.49, 10.0, None, "t", None)
     assert seen == pytest.approx([2.49, com.SPEED_OVER_V_HI * 2.53, com.SPEED_OVER_V_HI * 3.2])
     assert v == pytest.approx(com.SPEED_OVER_V_HI * 3.2) and v * com.LEARN_CRUISE >= 3.2
     assert com._up(2.6583) == pytest.approx(2.66) and com._up(2.66000001) == pytest.approx(2.67)

@@ -77,7 +77,8 @@ def lut(motor_spec: str, points: int, fmt: str, symbol: str | None, f_inj: float
         from linsense.compensation.lut import default_lut_symbol
 
         default_lut_symbol(motor.name, motor.source, "motor.name")
-    c.warn(note) if note else None  # (after the refusals: one line where it is refused)
+    if note:  # (after the refusals: one line where it is refused)
+        c.warn(note)
     out = c.default_out(out, motor_spec, "lut", {"csv": ".csv", "json": ".json", "c": ".h"}[fmt])
     write_atomic(out, export(build_lut(motor, points, f_inj, quad=quad, injection=injection), fmt, symbol))
     c.elapsed()

@@ -307,9 +307,7 @@ def calibrate(motor_spec: str | None, scenario_path: str | None, positions: int,
     c.files_report(done.files)
     m = cal.metrics
     show = c.show
-    # (the library's pulsating shape with a q-axis share is the elliptical injection: so named)
-    shape = m["injection_shape"]
-    shape = "elliptical" if shape == "pulsating" and m["injection_quad"] else shape
+    shape = _injection_name(m)
     c.say(f"{m['motor']}: {m['points_done']}/{m['points']} points, load {m['load_n']:g} N, "
           f"{m['fidelity']}, {m['v_dc']:g} V, {m['f_pwm_hz']:g} Hz PWM, {m['dead_time_s'] * 1e6:g} us; "
           f"{shape} injection {m['v_inj']:.3g} V at {m['f_inj_hz']:g} Hz, kappa "
@@ -406,7 +404,7 @@ def commission(motor_spec: str | None, scenario_path: str | None, speed: float |
                 f"; the estimate was lost at {m['lost_at_s']:.3g} s, the mover at "
                 f"{m['lost_speed_m_s']:.3g} m/s (its error beyond {LOST_DEG:g} deg): the HF estimate, which "
                 f"carries the drive below the hand-over band and through the reversals "
-                f"({m['injection_shape']} injection, the commissioning's d-current), did not hold it")
+                f"({_injection_name(m)} injection, the commissioning's d-current), did not hold it")
         click.echo(f"linsense: commissioning did not complete ({m['points_done']} of {m['points']} points, "
                    f"fault {m['fault']}){lost}", err=True)
         raise click.exceptions.Exit(1)
@@ -418,6 +416,13 @@ def commission(motor_spec: str | None, scenario_path: str | None, speed: float |
                       if m["route"] == "direct" else ""),
                    err=True)
         raise click.exceptions.Exit(1)
+
+
+def _injection_name(m: dict) -> str:
+    """A run's injection as a person names it (``injection_shape``, ``injection_quad`` of its metrics):
+    the library's pulsating shape with a q-axis share is the elliptical injection."""
+    shape = m["injection_shape"]
+    return "elliptical" if shape == "pulsating" and m["injection_quad"] else shape
 
 
 def failed_claims(metrics: dict) -> list[str]:

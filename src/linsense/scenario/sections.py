@@ -583,6 +583,11 @@ class TravelSection(BaseModel):
     max_mm: float = Field(1000.0, description="leaving the travel stops the run (fault `travel`)",
                           json_schema_extra={"unit": "mm"})
 
+    @property
+    def bounded(self) -> bool:
+        """Whether the file gives a bound (``min_mm`` or ``max_mm``), not the simulator's defaults."""
+        return bool({"min_mm", "max_mm"} & self.model_fields_set)
+
 
 class ProtectionSection(BaseModel):
     """The ``[protection]`` section of a scenario file; its keys are in docs/simulator.md."""

@@ -506,20 +506,21 @@ def _acceleration(dd: DriveData, model: Motor, load: float, a_max: float | None,
     return a
 
 
-def _default_speed(data: dict, v: float, a: float, model: Motor, source: str, base_dir) -> float:
+def _default_speed(data: dict, v: float, a: float, model: Motor, source: str,
+                   base_dir) -> tuple[float, object]:
     """The default commissioning speed, m/s: :data:`SPEED_OVER_V_HI` times the band's top of the drive
-    designed for that speed and the commissioning's acceleration. ``v`` is that of the first cap's
-    design at the application's acceleration; the band rises with the speed cap and the current of
-    the acceleration (h20-class motors: 2.49 m/s from the first cap, whose own design's band tops at
-    2.53), so the speed follows it for a few rounds (:func:`_check_speed` then says where it does
-    not settle)."""
+    designed for that speed and the commissioning's acceleration, and that design. ``v`` is that of
+    the first cap's design at the application's acceleration; the band rises with the speed cap and
+    the current of the acceleration (h20-class motors: 2.49 m/s from the first cap, whose own design's
+    band tops at 2.53), so the speed follows it for a few rounds (:func:`_check_speed` then says where
+    it does not settle)."""
     for _ in range(DEFAULT_SPEED_ROUNDS):
         spec = _speed_design(data, v, a, model, source, base_dir)
         top = float(spec.observer.handover_v_hi)
         if v * LEARN_CRUISE >= top or _never(spec):  # (no band to follow)
-            return v
+            return v, spec
         v = SPEED_OVER_V_HI * top
-    return v
+    return v, _speed_design(data, v, a, model, source, base_dir)
 
 
 def _never(spec) -> bool:
@@ -540,9 +541,9 @@ def _speed_and_acceleration(data: dict, v: float, speed: float | None, a: float,
     :data:`A_MIN`; refused if the estimate stays off."""
     while True:
         halve = own_a and a / 2.0 >= A_MIN
-        try:
-            vv = float(speed) if speed is not None else _default_speed(data, v, a, model, source, base_dir)
-            spec = _speed_design(data, vv, a, model, source, base_dir)
+        try:  # (the default speed's last design is the one at it: not designed again)
+            vv, spec = ((float(speed), _speed_design(data, float(speed), a, model, source, base_dir))
+                        if speed is not None else _default_speed(data, v, a, model, source, base_dir))
         except InputError as exc:  # (the default speed, the band's at this current, beyond the bus)
             if speed is not None or not halve or exc.key != "speed":
                 raise
@@ -587,8 +588,7 @@ def _set_travel(data: dict, scenario: Scenario | None, stroke: float, x0: float,
 
 def _bounded(scenario: Scenario | None) -> bool:
     """Whether the scenario gives a ``[travel]`` bound."""
-    tr = scenario.spec.travel if scenario is not None else None
-    return tr is not None and bool({"min_mm", "max_mm"} & tr.model_fields_set)
+    return scenario is not None and scenario.spec.travel is not None and scenario.spec.travel.bounded
 
 
 def _stroke(scenario: Scenario | None, stroke_mm: float | None, v: float, a: float, model: Motor,

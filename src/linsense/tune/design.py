@@ -100,6 +100,8 @@ STEP_ACCEL_DIV = 3.0
 STEP_FORCE_SHARE = 0.5
 OVERSPEED_MARGIN = 1.6  # over-speed trip over the speed cap
 OBSERVER_SPEED_MARGIN = 1.25  # observer speed clamp over the over-speed trip
+#: the observer's speed clamp over v_max (with the table): the three margins above
+CLAMP_OVER_V_MAX = SPEED_CAP_MARGIN * OVERSPEED_MARGIN * OBSERVER_SPEED_MARGIN
 CURRENT_TRIP_MARGIN = 1.3  # over-current trip over i_max plus the HF current's peak
 #: the margins below which the design warns: (phase, deg; gain upward, dB), per loop. Set against
 #: the switching simulation of ecce2010 at 1 kHz (docs/tuning.md, "Margins"): observers of 40 and
@@ -831,17 +833,17 @@ class DriveInputs:
         own refusal beyond it comes after the bus's (``linsense tune``), so the bus's names it."""
         from linsense.ctrl import lib
 
-        clamp = SPEED_CAP_MARGIN * OVERSPEED_MARGIN * OBSERVER_SPEED_MARGIN
-        return float(lib.LS_EMF_OMEGA_TS_MAX) * self.d.f_pwm * self.motor.pole_pitch / (2.0 * math.pi * clamp)
+        return (float(lib.LS_EMF_OMEGA_TS_MAX) * self.d.f_pwm * self.motor.pole_pitch
+                / (2.0 * math.pi * CLAMP_OVER_V_MAX))
 
     def _pwm_says(self, top: float) -> str:
         """The PWM's limit beside a refusal's ``top`` where it is lower ('' otherwise)."""
-        pwm, clamp = self.v_pwm_speed, SPEED_CAP_MARGIN * OVERSPEED_MARGIN * OBSERVER_SPEED_MARGIN
+        pwm = self.v_pwm_speed
         if not pwm < top:
             return ""
         return (f"; and at most {limit_text(pwm, False)} m/s at {self.d.f_pwm:g} Hz PWM with the EMF "
-                f"estimate on (the observer's speed clamp, {clamp:g} v_max, within the EMF estimate's "
-                "largest turn of the angle per period)")
+                f"estimate on (the observer's speed clamp, {CLAMP_OVER_V_MAX:g} v_max, within the EMF "
+                "estimate's largest turn of the angle per period)")
 
     @functools.cached_property
     def k_e(self) -> np.ndarray:

@@ -269,7 +269,7 @@ def _drive_of(scenario: Scenario | None, drive: dict | None) -> DriveData:
             raise InputError("drive", key, f"{val!r}: not a drive datum (one of {', '.join(names)})")
         setattr(dd, key, val)
     tr = None if scenario is None else scenario.spec.travel
-    if dd.travel is not None and tr is not None and {"min_mm", "max_mm"} & tr.model_fields_set:
+    if dd.travel is not None and tr is not None and tr.bounded:
         stroke = (tr.max_mm - tr.min_mm) * 1e-3
         if abs(dd.travel - stroke) > 1e-9 * max(stroke, 1.0):
             # (the certificate's moves and end stops follow --travel, the scenario written keeps its own)
